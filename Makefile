@@ -1,0 +1,48 @@
+# floorscan: `make run` runs the workflow on the default target, `make test` runs the tests.
+# Both create .venv from the pinned, hashed environment.lock when it is missing or stale.
+SHELL := /bin/bash
+PYTHON ?= $(shell command -v python3.11 || command -v python3)
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.floorscan-installed
+CORES ?= 2
+
+.PHONY: run test report bench lock sysdeps clean-results
+
+run: $(STAMP)
+	$(BIN)/snakemake --cores $(CORES)
+	$(BIN)/snakemake --cores $(CORES) --report results/report.html
+	@echo "Outputs: results/<dataset>/   Report: results/report.html"
+
+report: $(STAMP)
+	$(BIN)/snakemake --cores $(CORES) --report results/report.html
+
+test: $(STAMP)
+	$(BIN)/python -m pytest
+
+bench: $(STAMP)
+	$(BIN)/python -m benchmarks
+
+# Open3D's wheel links libusb-1.0 (Debian package libusb-1.0-0).
+sysdeps:
+	@if ldconfig -p | grep -q 'libusb-1.0.so.0'; then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+		echo "Installing libusb-1.0-0 (needed by Open3D)"; \
+		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libusb-1.0-0 >/dev/null; \
+	else \
+		echo "Open3D needs the shared library libusb-1.0. Install it first, e.g. 'sudo apt-get install libusb-1.0-0'" >&2; exit 1; \
+	fi
+
+$(STAMP): environment.lock pyproject.toml | sysdeps
+	@[ -n "$(PYTHON)" ] || { echo "Python 3.11 is needed (python3.11 or python3 on PATH)" >&2; exit 1; }
+	[ -x $(BIN)/python ] || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install -q --require-hashes -r environment.lock
+	$(BIN)/python -m pip install -q --no-deps --no-build-isolation -e .
+	touch $(STAMP)
+
+# Recompile the lock after editing requirements.in (needs uv: pip install uv).
+lock:
+	uv pip compile --python-version 3.11 --python-platform x86_64-manylinux_2_31 --generate-hashes requirements.in -o environment.lock
+
+clean-results:
+	rm -rf results

@@ -1,0 +1,22 @@
+# floorscan: scan selection and wall extraction for indoor floor plans.
+# Run: snakemake --cores 2            (default target: the datasets in config `target`)
+#      snakemake --cores 2 --config target='[intel]'
+from snakemake.utils import min_version, validate
+
+min_version("9.14.8")
+
+
+configfile: "config/config.yaml"
+
+
+validate(config, "workflow/schemas/config.schema.yaml")
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/ingest.smk"
+
+
+rule all:
+    default_target: True
+    input:
+        all_outputs(),

@@ -1,0 +1,251 @@
+"""Ingest: read a recording into the scan and pose tables (thesis sections 3.2 and 3.5).
+
+Three formats are read, each by its own module:
+
+- ``rosbag`` (:mod:`floorscan.ingest.rosbag`): ROS1 ``.bag`` files and ROS2 bag folders
+  through rosbags' ``AnyReader``; scans from ``sensor_msgs/LaserScan`` or
+  ``sensor_msgs/PointCloud2``; poses from a pose topic, odometry or the TF tree.
+- ``carmen`` (:mod:`floorscan.ingest.carmen`): ``FLASER`` and ``ROBOTLASER1`` lines of a
+  CARMEN log (plain or gzip), with the corrected pose on each line.
+- ``pcd`` (:mod:`floorscan.ingest.pcd`): a folder of ``.pcd`` scans in the map frame plus
+  a CSV of scan locations (the thesis's synthetic layout, section 4.1).
+
+Every reader yields :class:`Scan` records in recording order plus a pose stream; the
+writer :func:`write_recording` streams the points to ``scans.parquet`` one batch at a
+time, so memory grows with the largest scan, not with the recording.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+from pathlib import Path
+from typing import Any, Iterable, Iterator, Mapping
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from floorscan.io import POSE_STREAM, SCAN_INDEX, SCANS, InputError, atomic_path, write_table
+
+log = logging.getLogger(__name__)
+
+
+@dataclasses.dataclass(frozen=True)
+class Scan:
+    """One scan of a recording.
+
+    Attributes
+    ----------
+    t_ns : int
+        Time of the scan, nanoseconds since the Unix epoch (header stamp).
+    frame : str
+        Frame of the points (the scanner frame).
+    points : (N, 3) float32 ndarray
+        Valid returns in the scanner frame, metres.
+    n_dropped : int
+        Returns dropped as invalid (NaN, inf, or outside the range limits).
+    """
+
+    t_ns: int
+    frame: str
+    points: np.ndarray
+    n_dropped: int
+
+
+@dataclasses.dataclass
+class Recording:
+    """A recording opened for ingest: a scan iterator and its pose stream.
+
+    ``scans`` is consumed once. ``pose_stream`` is filled by the time ``scans`` is
+    exhausted (a bag reader may read poses first); it has the columns of
+    :data:`floorscan.io.POSE_STREAM`.
+    """
+
+    scans: Iterator[Scan]
+    pose_stream: pd.DataFrame | None = None
+    source: str = ""
+    notes: list[str] = dataclasses.field(default_factory=list)
+
+
+def open_recording(dataset: Mapping[str, Any], cfg: Mapping[str, Any], max_gap_s: float) -> Recording:
+    """Open the recording a dataset entry names.
+
+    Parameters
+    ----------
+    dataset : mapping
+        The dataset's config entry: ``format`` (rosbag, carmen, pcd), ``path`` and the
+        format's options (see ``workflow/schemas/config.schema.yaml``).
+    cfg : mapping
+        The ``ingest`` config section.
+    max_gap_s : float
+        The pose stage's gap limit; a TF chain leaves out samples inside a longer gap
+        of any of its links, so the gap stays visible in the pose stream.
+
+    Raises
+    ------
+    InputError
+        The path is missing, or the format cannot be read (message names the file).
+    """
+    fmt = dataset["format"]
+    path = Path(dataset["path"])
+    if not path.exists():
+        raise InputError(f"{path}: recording not found (dataset format {fmt!r})")
+    if fmt == "rosbag":
+        from floorscan.ingest.rosbag import open_bag
+
+        return open_bag(path, dataset, max_gap_s=max_gap_s)
+    if fmt == "carmen":
+        from floorscan.ingest.carmen import open_carmen
+
+        return open_carmen(path, dataset, cfg)
+    if fmt == "pcd":
+        from floorscan.ingest.pcd import open_pcd_folder
+
+        return open_pcd_folder(path, dataset, cfg)
+    raise InputError(f"{path}: unsupported dataset format {fmt!r}; expected rosbag, carmen or pcd")
+
+
+def write_recording(
+    recording: Recording,
+    scans_path: str | Path,
+    index_path: str | Path,
+    pose_stream_path: str | Path,
+    sensor_height_m: float = 0.0,
+    metadata: Mapping[str, str] | None = None,
+) -> pd.DataFrame:
+    """Stream a recording's scans to Parquet and write its index and pose stream.
+
+    Scans get ``scan_id`` 0..N-1 in recording order. ``sensor_height_m`` is added to
+    the pose stream's z. All three files are written atomically: on any error none
+    of them is left behind.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The scan index (columns of :data:`floorscan.io.SCAN_INDEX`).
+
+    Raises
+    ------
+    InputError
+        No scans, or scan timestamps going backwards.
+    """
+    rows: list[tuple[int, int, int, int, str]] = []
+    meta = {k.encode(): str(v).encode() for k, v in (metadata or {}).items()}
+    with atomic_path(scans_path) as tmp:
+        with pq.ParquetWriter(tmp, SCANS.with_metadata(meta), compression="zstd") as writer:
+            last_t = None
+            for scan_id, scan in enumerate(recording.scans):
+                if last_t is not None and scan.t_ns < last_t:
+                    raise InputError(
+                        f"{recording.source}: scan timestamps go backwards at scan {scan_id} "
+                        f"({scan.t_ns} ns after {last_t} ns); expected non-decreasing stamps"
+                    )
+                last_t = scan.t_ns
+                pts = np.asarray(scan.points, dtype=np.float32).reshape(-1, 3)
+                n = len(pts)
+                rows.append((scan_id, int(scan.t_ns), n, int(scan.n_dropped), scan.frame))
+                if n:
+                    writer.write_table(
+                        pa.table(
+                            {
+                                "scan_id": pa.array(np.full(n, scan_id, np.int32)),
+                                "x": pa.array(pts[:, 0]),
+                                "y": pa.array(pts[:, 1]),
+                                "z": pa.array(pts[:, 2]),
+                            },
+                            schema=SCANS,
+                        )
+                    )
+        if not rows:
+            raise InputError(f"{recording.source}: no scans found")
+        index = pd.DataFrame(rows, columns=["scan_id", "t_ns", "n_points", "n_dropped", "frame"])
+        stream = recording.pose_stream
+        if stream is None or stream.empty:
+            raise InputError(f"{recording.source}: no poses found for the pose source")
+        stream = stream.copy()
+        stream["z"] = stream["z"].astype(np.float64) + float(sensor_height_m)
+        write_table(index, index_path, schema=SCAN_INDEX, metadata=metadata)
+        write_table(stream, pose_stream_path, schema=POSE_STREAM, metadata=metadata)
+    return index
+
+
+def laser_scan_points(
+    ranges: np.ndarray,
+    angle_min: float,
+    angle_increment: float,
+    range_min: float,
+    range_max: float,
+) -> tuple[np.ndarray, int]:
+    """Convert a planar range scan to points in the scanner frame.
+
+    Parameters
+    ----------
+    ranges : (B,) float ndarray
+        Range of each beam, metres; beam i points at ``angle_min + i * angle_increment``
+        radians, counter-clockwise from the scanner's +x.
+    range_min, range_max : float
+        Valid range interval, metres, inclusive.
+
+    Returns
+    -------
+    points : (N, 3) float32 ndarray
+        Valid returns (z = 0), metres.
+    n_dropped : int
+        Beams dropped: NaN, inf, or outside ``[range_min, range_max]``.
+    """
+    r = np.asarray(ranges, dtype=np.float64)
+    angles = angle_min + angle_increment * np.arange(r.size)
+    with np.errstate(invalid="ignore"):
+        ok = np.isfinite(r) & (r >= range_min) & (r <= range_max)
+    pts = np.zeros((int(ok.sum()), 3), dtype=np.float32)
+    pts[:, 0] = r[ok] * np.cos(angles[ok])
+    pts[:, 1] = r[ok] * np.sin(angles[ok])
+    return pts, int(r.size - ok.sum())
+
+
+def filter_points(
+    points: np.ndarray, range_min: float | None = None, range_max: float | None = None
+) -> tuple[np.ndarray, int]:
+    """Drop non-finite points and points outside a range interval (distance from origin).
+
+    Parameters
+    ----------
+    points : (N, 3) float ndarray
+        Points in the scanner frame, metres.
+
+    Returns
+    -------
+    points : (M, 3) float32 ndarray
+    n_dropped : int
+    """
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    ok = np.isfinite(p).all(axis=1)
+    if range_min is not None or range_max is not None:
+        with np.errstate(invalid="ignore"):
+            d = np.linalg.norm(p, axis=1)
+        if range_min is not None:
+            ok &= d >= range_min
+        if range_max is not None:
+            ok &= d <= range_max
+    return p[ok].astype(np.float32), int(len(p) - ok.sum())
+
+
+def yaw_from_quaternion(qx, qy, qz, qw):
+    """Yaw (rotation about +z, radians in (-pi, pi]) of quaternions (x, y, z, w)."""
+    qx, qy, qz, qw = (np.asarray(v, dtype=np.float64) for v in (qx, qy, qz, qw))
+    return np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+
+
+def pose_stream_frame(t_ns: Iterable[int], x, y, z, yaw) -> pd.DataFrame:
+    """Build a pose stream table (columns of :data:`floorscan.io.POSE_STREAM`)."""
+    return pd.DataFrame(
+        {
+            "t_ns": np.asarray(list(t_ns) if not isinstance(t_ns, np.ndarray) else t_ns, dtype=np.int64),
+            "x": np.asarray(x, dtype=np.float64),
+            "y": np.asarray(y, dtype=np.float64),
+            "z": np.asarray(z, dtype=np.float64),
+            "yaw": np.asarray(yaw, dtype=np.float64),
+        }
+    )

@@ -1,0 +1,375 @@
+"""ROS1 and ROS2 bag reader (rosbags ``AnyReader``).
+
+Scans come from one topic carrying ``sensor_msgs/LaserScan`` or
+``sensor_msgs/PointCloud2``, stamped with their header stamp (the bag's receive time
+when the stamp is zero). Poses come from one of (dataset option ``pose.source``):
+
+- ``topic``: ``geometry_msgs/PoseWithCovarianceStamped`` (``/amcl_pose``, the thesis's
+  case, section 3.5), ``geometry_msgs/PoseStamped`` or ``nav_msgs/Odometry``: the pose of
+  ``pose.base_frame``; a static transform from it to the scan frame found on
+  ``/tf_static`` (or a constant one on ``/tf``) is applied;
+- ``tf``: the chain of transforms from ``pose.fixed_frame`` to the scan frame on ``/tf``
+  and ``/tf_static`` (several publishers), each link interpolated at the union of the
+  moving links' stamps, linearly in translation and by slerp in rotation, as tf2 does.
+
+ROS2 bags that store no message definitions are read with the Humble typestore.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections import defaultdict
+from pathlib import Path
+from typing import Any, Iterator, Mapping
+
+import numpy as np
+from scipy.spatial.transform import Rotation, Slerp
+
+from floorscan.ingest import (
+    Recording,
+    Scan,
+    filter_points,
+    laser_scan_points,
+    pose_stream_frame,
+)
+from floorscan.io import InputError
+
+log = logging.getLogger(__name__)
+
+SCAN_TYPES = ("sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCloud2")
+POSE_TYPES = (
+    "geometry_msgs/msg/PoseWithCovarianceStamped",
+    "geometry_msgs/msg/PoseStamped",
+    "nav_msgs/msg/Odometry",
+)
+TF_TOPICS = ("/tf", "/tf_static")
+#: A scanner tilted more than this (degrees) cannot be treated as planar.
+MAX_TILT_DEG = 10.0
+
+
+def _reader(path: Path):
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    return AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+
+
+def _stamp_ns(header, bag_t: int) -> int:
+    t = int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
+    return t if t > 0 else int(bag_t)
+
+
+def _topics(reader) -> dict[str, str]:
+    out: dict[str, str] = {}
+    for c in reader.connections:
+        out.setdefault(c.topic, c.msgtype)
+    return out
+
+
+def _connections(reader, path: Path, topic: str, allowed: tuple[str, ...], what: str):
+    topics = _topics(reader)
+    if topic not in topics:
+        listing = ", ".join(f"{t} ({m})" for t, m in sorted(topics.items()))
+        raise InputError(f"{path}: no topic {topic!r} for {what}; topics in the bag: {listing}")
+    conns = [c for c in reader.connections if c.topic == topic]
+    bad = sorted({c.msgtype for c in conns if c.msgtype not in allowed})
+    if bad:
+        raise InputError(
+            f"{path}: topic {topic!r} carries {', '.join(bad)}; expected one of {', '.join(allowed)} for {what}"
+        )
+    return conns
+
+
+def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float = 0.5) -> Recording:
+    """Open a ROS1 ``.bag`` or ROS2 bag folder as a :class:`~floorscan.ingest.Recording`.
+
+    Parameters
+    ----------
+    path : Path
+        The bag file (ROS1) or folder (ROS2).
+    dataset : mapping
+        ``scan_topic``, ``pose`` (``source``, ``topic``, ``fixed_frame``, ``base_frame``),
+        optional ``range_min_m`` / ``range_max_m`` (tighten the message's limits).
+    max_gap_s : float
+        TF chains: samples inside a gap longer than this in any moving link are left
+        out of the pose stream, so the pose stage sees the gap.
+
+    Raises
+    ------
+    InputError
+        Unreadable/corrupt bag, missing topic (the message lists the bag's topics),
+        unsupported message type, no path between the TF frames, pose stamps unsorted
+        or duplicated.
+    """
+    scan_topic = dataset["scan_topic"]
+    pose_cfg = dataset["pose"]
+    rmin_cfg = dataset.get("range_min_m")
+    rmax_cfg = dataset.get("range_max_m")
+    try:
+        with _reader(path) as reader:
+            scan_conns = _connections(reader, path, scan_topic, SCAN_TYPES, "scans")
+            first = next(reader.messages(connections=scan_conns), None)
+            if first is None:
+                raise InputError(f"{path}: topic {scan_topic!r} has no messages")
+            c0, _, raw0 = first
+            scan_frame = reader.deserialize(raw0, c0.msgtype).header.frame_id.lstrip("/")
+            source = pose_cfg["source"]
+            if source == "topic":
+                if "topic" not in pose_cfg:
+                    raise InputError(f"{path}: pose.source 'topic' needs pose.topic (e.g. /amcl_pose)")
+                stream = _pose_topic_stream(reader, path, pose_cfg, scan_frame)
+            elif source == "tf":
+                stream = _tf_stream(reader, path, pose_cfg["fixed_frame"], scan_frame, max_gap_s)
+            else:
+                raise InputError(f"{path}: pose.source {source!r} is not available for bags; use topic or tf")
+    except InputError:
+        raise
+    except Exception as e:  # rosbags raises several reader/deserialization errors
+        raise InputError(f"{path}: cannot read the bag, truncated or corrupt ({type(e).__name__}: {e})") from None
+
+    def _scans() -> Iterator[Scan]:
+        try:
+            with _reader(path) as reader:
+                conns = [c for c in reader.connections if c.topic == scan_topic]
+                for i, (c, bag_t, raw) in enumerate(reader.messages(connections=conns)):
+                    msg = reader.deserialize(raw, c.msgtype)
+                    t_ns = _stamp_ns(msg.header, bag_t)
+                    frame = msg.header.frame_id.lstrip("/")
+                    if c.msgtype.endswith("LaserScan"):
+                        rmin = max(float(msg.range_min), rmin_cfg if rmin_cfg is not None else 0.0)
+                        rmax = min(float(msg.range_max), rmax_cfg if rmax_cfg is not None else np.inf)
+                        pts, dropped = laser_scan_points(
+                            np.asarray(msg.ranges), float(msg.angle_min), float(msg.angle_increment), rmin, rmax
+                        )
+                    else:
+                        pts, dropped = filter_points(pointcloud2_xyz(msg, path, scan_topic), rmin_cfg, rmax_cfg)
+                    yield Scan(t_ns, frame, pts, dropped)
+        except InputError:
+            raise
+        except Exception as e:
+            raise InputError(
+                f"{path}: cannot read scans on {scan_topic!r}, truncated or corrupt bag ({type(e).__name__}: {e})"
+            ) from None
+
+    return Recording(scans=_scans(), pose_stream=stream, source=f"{path} {scan_topic}")
+
+
+_PC2_DTYPES = {1: "i1", 2: "u1", 3: "i2", 4: "u2", 5: "i4", 6: "u4", 7: "f4", 8: "f8"}
+
+
+def pointcloud2_xyz(msg, path: Path | str = "", topic: str = "") -> np.ndarray:
+    """The ``x, y, z`` fields of a ``sensor_msgs/PointCloud2`` as an (N, 3) float64 array.
+
+    Handles any point step, field offsets, endianness and organised clouds
+    (height > 1). Non-finite points are returned as they are (the caller drops and
+    counts them).
+
+    Raises
+    ------
+    InputError
+        The message has no float x, y or z field.
+    """
+    fields = {f.name: f for f in msg.fields}
+    missing = [n for n in "xyz" if n not in fields]
+    if missing:
+        raise InputError(
+            f"{path}: PointCloud2 on {topic!r} lacks fields {missing}; expected x, y, z "
+            f"(fields: {sorted(fields)})"
+        )
+    order = ">" if msg.is_bigendian else "<"
+    names, formats, offsets = [], [], []
+    for n in "xyz":
+        f = fields[n]
+        if f.datatype not in _PC2_DTYPES:
+            raise InputError(f"{path}: PointCloud2 field {n!r} on {topic!r} has unknown datatype {f.datatype}")
+        names.append(n)
+        formats.append(order + _PC2_DTYPES[f.datatype])
+        offsets.append(int(f.offset))
+    dt = np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": int(msg.point_step)})
+    n_points = int(msg.width) * int(msg.height)
+    data = np.asarray(msg.data, dtype=np.uint8)
+    if msg.row_step and msg.height > 1 and msg.row_step != msg.width * msg.point_step:
+        rows = data.reshape(int(msg.height), int(msg.row_step))[:, : int(msg.width) * int(msg.point_step)]
+        data = np.ascontiguousarray(rows).reshape(-1)
+    if data.size < n_points * msg.point_step:
+        raise InputError(f"{path}: PointCloud2 on {topic!r} has {data.size} bytes for {n_points} points")
+    arr = np.frombuffer(data[: n_points * int(msg.point_step)].tobytes(), dtype=dt, count=n_points)
+    return np.stack([arr["x"], arr["y"], arr["z"]], axis=1).astype(np.float64)
+
+
+def _pose_topic_stream(reader, path: Path, pose_cfg: Mapping[str, Any], scan_frame: str):
+    topic = pose_cfg["topic"]
+    conns = _connections(reader, path, topic, POSE_TYPES, "poses")
+    t, xyz, quat = [], [], []
+    for c, bag_t, raw in reader.messages(connections=conns):
+        msg = reader.deserialize(raw, c.msgtype)
+        pose = msg.pose if c.msgtype.endswith("PoseStamped") else msg.pose.pose
+        t.append(_stamp_ns(msg.header, bag_t))
+        xyz.append((pose.position.x, pose.position.y, pose.position.z))
+        q = pose.orientation
+        quat.append((q.x, q.y, q.z, q.w))
+    if not t:
+        raise InputError(f"{path}: pose topic {topic!r} has no messages")
+    t = np.asarray(t, dtype=np.int64)
+    _check_sorted(t, f"{path}: pose topic {topic!r} header stamps")
+    rot = Rotation.from_quat(np.asarray(quat, dtype=np.float64))
+    trans = np.asarray(xyz, dtype=np.float64)
+    # mount of the scanner on the base: a constant transform base_frame -> scan_frame
+    edges = _read_tf(reader, path)
+    base = pose_cfg.get("base_frame", "base_link")
+    mount = _static_chain(edges, base, scan_frame)
+    if mount is not None:
+        m_rot, m_t = mount
+        trans = trans + rot.apply(m_t)
+        rot = rot * m_rot
+    else:
+        log.info("%s: no static transform %s -> %s; the scanner is taken to be at the pose", path, base, scan_frame)
+    return _planar(t, rot, trans, f"{path}: pose of {scan_frame!r} from {topic!r}")
+
+
+def _check_sorted(t: np.ndarray, what: str) -> None:
+    d = np.diff(t)
+    if np.any(d < 0):
+        i = int(np.flatnonzero(d < 0)[0]) + 1
+        raise InputError(f"{what} are not sorted (message {i}: {t[i]} ns after {t[i - 1]} ns); expected increasing stamps")
+    if np.any(d == 0):
+        i = int(np.flatnonzero(d == 0)[0]) + 1
+        raise InputError(f"{what} have a duplicate stamp {t[i]} ns (message {i}); expected strictly increasing stamps")
+
+
+def _planar(t, rot: Rotation, trans, what: str):
+    """Pose stream of a chain of 3D poses, refusing a tilted scanner."""
+    mat = rot.as_matrix()
+    tilt = np.degrees(np.arccos(np.clip(mat[:, 2, 2], -1.0, 1.0)))
+    if np.max(tilt) > MAX_TILT_DEG:
+        raise InputError(
+            f"{what}: the scanner is tilted {np.max(tilt):.1f} deg from level; floorscan expects a level "
+            f"scanner (tilt under {MAX_TILT_DEG} deg)"
+        )
+    yaw = np.arctan2(mat[:, 1, 0], mat[:, 0, 0])
+    return pose_stream_frame(t, trans[:, 0], trans[:, 1], trans[:, 2], yaw)
+
+
+class _Edge:
+    """Samples of one TF link parent -> child: stamps, translations, rotations."""
+
+    def __init__(self, parent: str, child: str):
+        self.parent, self.child = parent, child
+        self.t: list[int] = []
+        self.trans: list[tuple[float, float, float]] = []
+        self.quat: list[tuple[float, float, float, float]] = []
+        self.static = False
+
+    def finish(self) -> None:
+        t = np.asarray(self.t, dtype=np.int64)
+        order = np.argsort(t, kind="stable")
+        t, trans, quat = t[order], np.asarray(self.trans)[order], np.asarray(self.quat)[order]
+        keep = np.r_[t[1:] != t[:-1], True]  # duplicate stamps: the last one wins, as in tf2
+        self.t_arr, self.trans_arr = t[keep], trans[keep]
+        self.rot = Rotation.from_quat(quat[keep])
+        # a link that never changes is static, whichever topic carried it
+        if not self.static and len(self.t_arr) > 0:
+            same = np.allclose(self.trans_arr, self.trans_arr[0], atol=1e-9) and np.allclose(
+                (self.rot * self.rot[0].inv()).magnitude(), 0.0, atol=1e-9
+            )
+            self.static = bool(same)
+        if self.static:
+            self.t_arr, self.trans_arr, self.rot = self.t_arr[-1:], self.trans_arr[-1:], self.rot[-1:]
+
+    def at(self, t: np.ndarray) -> tuple[Rotation, np.ndarray]:
+        if self.static:
+            return Rotation.from_quat(np.repeat(self.rot.as_quat(), len(t), axis=0)), np.repeat(
+                self.trans_arr, len(t), axis=0
+            )
+        tt = t.astype(np.float64)
+        ts = self.t_arr.astype(np.float64)
+        trans = np.stack([np.interp(tt, ts, self.trans_arr[:, k]) for k in range(3)], axis=1)
+        rot = Slerp(ts, self.rot)(np.clip(tt, ts[0], ts[-1])) if len(ts) > 1 else self.rot
+        return rot, trans
+
+
+def _read_tf(reader, path: Path) -> dict[tuple[str, str], _Edge]:
+    conns = [c for c in reader.connections if c.topic in TF_TOPICS]
+    edges: dict[tuple[str, str], _Edge] = {}
+    for c, bag_t, raw in reader.messages(connections=conns):
+        msg = reader.deserialize(raw, c.msgtype)
+        for tr in msg.transforms:
+            key = (tr.header.frame_id.lstrip("/"), tr.child_frame_id.lstrip("/"))
+            e = edges.get(key)
+            if e is None:
+                e = edges[key] = _Edge(*key)
+            e.static |= c.topic == "/tf_static"
+            e.t.append(_stamp_ns(tr.header, bag_t))
+            v, q = tr.transform.translation, tr.transform.rotation
+            e.trans.append((v.x, v.y, v.z))
+            e.quat.append((q.x, q.y, q.z, q.w))
+    for e in edges.values():
+        e.finish()
+    return edges
+
+
+def _chain(edges: dict[tuple[str, str], _Edge], fixed: str, frame: str, path: Path) -> list[_Edge]:
+    parents: dict[str, list[_Edge]] = defaultdict(list)
+    for e in edges.values():
+        parents[e.child].append(e)
+    chain, cur, seen = [], frame, set()
+    while cur != fixed:
+        ps = parents.get(cur, [])
+        if len(ps) > 1:
+            raise InputError(
+                f"{path}: TF frame {cur!r} has several parents {[p.parent for p in ps]}; expected a tree"
+            )
+        if not ps or cur in seen:
+            frames = sorted({f for k in edges for f in k})
+            raise InputError(
+                f"{path}: no TF chain from {fixed!r} to the scan frame {frame!r} (stops at {cur!r}); "
+                f"frames on /tf and /tf_static: {frames}"
+            )
+        seen.add(cur)
+        chain.append(ps[0])
+        cur = ps[0].parent
+    return chain[::-1]
+
+
+def _static_chain(edges, base: str, frame: str):
+    if base == frame:
+        return Rotation.identity(), np.zeros(3)
+    try:
+        chain = _chain(edges, base, frame, Path())
+    except InputError:
+        return None
+    if not all(e.static for e in chain):
+        return None
+    rot, trans = Rotation.identity(), np.zeros(3)
+    for e in chain:
+        trans = trans + rot.apply(e.trans_arr[0])
+        rot = rot * e.rot[0]
+    return rot, trans
+
+
+def _tf_stream(reader, path: Path, fixed: str, frame: str, max_gap_s: float):
+    edges = _read_tf(reader, path)
+    if not edges:
+        raise InputError(f"{path}: pose.source is 'tf' but the bag has no /tf or /tf_static messages")
+    chain = _chain(edges, fixed, frame, path)
+    moving = [e for e in chain if not e.static]
+    if not moving:
+        raise InputError(f"{path}: the TF chain {fixed!r} -> {frame!r} never changes; the scanner does not move")
+    lo = max(e.t_arr[0] for e in moving)
+    hi = min(e.t_arr[-1] for e in moving)
+    t = np.unique(np.concatenate([e.t_arr for e in moving]))
+    keep = (t >= lo) & (t <= hi)
+    gap_ns = int(max_gap_s * 1e9)
+    for e in moving:
+        d = np.diff(e.t_arr)
+        for i in np.flatnonzero(d > gap_ns):
+            keep &= ~((t > e.t_arr[i]) & (t < e.t_arr[i + 1]))
+    t = t[keep]
+    if t.size == 0:
+        raise InputError(f"{path}: the moving TF links {[(e.parent, e.child) for e in moving]} do not overlap in time")
+    rot, trans = Rotation.identity(len(t)), np.zeros((len(t), 3))
+    for e in chain:
+        r_e, t_e = e.at(t)
+        trans = trans + rot.apply(t_e)
+        rot = rot * r_e
+    return _planar(t, rot, trans, f"{path}: TF chain {fixed!r} -> {frame!r}")

@@ -1,0 +1,171 @@
+"""Tables on disk: the schemas every stage reads and writes, and atomic writes.
+
+Every stage of the workflow exchanges Parquet files (pyarrow) with the explicit
+schemas below, and geometry as WKB (little-endian, 2D) or GeoJSON. Writers go to a
+temporary name in the target folder and rename, so a crash never leaves a half file.
+
+Units are in the column names where they are not obvious: ``t_ns`` is nanoseconds
+since the Unix epoch, ``*_m`` metres, ``*_rad`` radians, ``area_m2`` square metres.
+Point coordinates ``x, y, z`` are always metres.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import tempfile
+from pathlib import Path
+from typing import Iterator, Mapping
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+#: Points of every scan in the scanner frame (ingest output ``scans.parquet``).
+SCANS = pa.schema(
+    [("scan_id", pa.int32()), ("x", pa.float32()), ("y", pa.float32()), ("z", pa.float32())]
+)
+#: Points of the kept scans in the map frame (``registered.parquet``).
+REGISTERED = SCANS
+#: One row per scan of the recording (``scan_index.parquet``).
+SCAN_INDEX = pa.schema(
+    [
+        ("scan_id", pa.int32()),
+        ("t_ns", pa.int64()),
+        ("n_points", pa.int32()),
+        ("n_dropped", pa.int32()),
+        ("frame", pa.string()),
+    ]
+)
+#: The localizer's raw pose stream in the map frame (``pose_stream.parquet``).
+POSE_STREAM = pa.schema(
+    [
+        ("t_ns", pa.int64()),
+        ("x", pa.float64()),
+        ("y", pa.float64()),
+        ("z", pa.float64()),
+        ("yaw", pa.float64()),
+    ]
+)
+#: The scanner pose of every scan at its timestamp (``poses.parquet``). Rows with
+#: ``valid`` false have NaN pose and a non-empty ``reason``.
+POSES = pa.schema(
+    [
+        ("scan_id", pa.int32()),
+        ("t_ns", pa.int64()),
+        ("x", pa.float64()),
+        ("y", pa.float64()),
+        ("z", pa.float64()),
+        ("yaw", pa.float64()),
+        ("valid", pa.bool_()),
+        ("reason", pa.string()),
+    ]
+)
+
+
+class InputError(ValueError):
+    """Bad input: the message names the file, topic or field and what was expected."""
+
+
+def _tmp_path(path: Path) -> Path:
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    return Path(tmp)
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; rename it to ``path`` on success.
+
+    On an exception the temporary file is removed and ``path`` is left untouched,
+    so a failed stage leaves no half-written output.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = _tmp_path(path)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+        raise
+
+
+def table_from_frame(df: pd.DataFrame, schema: pa.Schema) -> pa.Table:
+    """Convert ``df`` to a table with exactly ``schema`` (column order and dtypes).
+
+    Raises
+    ------
+    KeyError
+        When a column of the schema is missing from ``df``.
+    """
+    missing = [n for n in schema.names if n not in df.columns]
+    if missing:
+        raise KeyError(f"columns {missing} missing; expected {schema.names}")
+    return pa.Table.from_pandas(df[schema.names], schema=schema, preserve_index=False)
+
+
+def write_table(
+    table: pa.Table | pd.DataFrame,
+    path: str | os.PathLike,
+    schema: pa.Schema | None = None,
+    metadata: Mapping[str, str] | None = None,
+) -> None:
+    """Write a Parquet file atomically (zstd), optionally casting to ``schema``.
+
+    ``metadata`` is stored as key/value strings in the file's schema metadata
+    (used for units and provenance, e.g. the dataset name).
+    """
+    if isinstance(table, pd.DataFrame):
+        table = (
+            table_from_frame(table, schema)
+            if schema is not None
+            else pa.Table.from_pandas(table, preserve_index=False)
+        )
+    elif schema is not None:
+        table = table.select(schema.names).cast(schema)
+    if metadata:
+        merged = dict(table.schema.metadata or {})
+        merged.update({k.encode(): str(v).encode() for k, v in metadata.items()})
+        table = table.replace_schema_metadata(merged)
+    with atomic_path(path) as tmp:
+        pq.write_table(table, tmp, compression="zstd")
+
+
+def read_table(path: str | os.PathLike, columns: list[str] | None = None) -> pd.DataFrame:
+    """Read a Parquet file into a DataFrame (no index)."""
+    return pq.read_table(path, columns=columns).to_pandas()
+
+
+def write_json(obj: object, path: str | os.PathLike) -> None:
+    """Write JSON atomically, sorted keys, 2-space indent."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(obj, indent=2, sort_keys=True, default=_json_default) + "\n")
+
+
+def _json_default(o: object) -> object:
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    raise TypeError(f"not JSON serializable: {type(o).__name__}")
+
+
+def split_by_scan(df: pd.DataFrame) -> dict[int, np.ndarray]:
+    """Group a points table (``scan_id, x, y, z``) into ``{scan_id: (N, 3) float64}``.
+
+    Scans keep the order of first appearance; arrays are new (the frame is not
+    mutated).
+    """
+    if df.empty:
+        return {}
+    ids = df["scan_id"].to_numpy()
+    xyz = df[["x", "y", "z"]].to_numpy(dtype=np.float64)
+    order = np.argsort(ids, kind="stable")
+    ids_sorted = ids[order]
+    starts = np.flatnonzero(np.r_[True, ids_sorted[1:] != ids_sorted[:-1]])
+    ends = np.r_[starts[1:], len(ids_sorted)]
+    return {int(ids_sorted[s]): xyz[order[s:e]] for s, e in zip(starts, ends)}

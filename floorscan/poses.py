@@ -1,0 +1,116 @@
+"""Pose of each scan at its timestamp (thesis section 3.5, Algorithm 3 step 1).
+
+The localizer (AMCL in the thesis) reports poses at its own rate, not synchronized with
+the scans. Each scan's pose is interpolated between the two poses around its stamp:
+linearly in position and along the shorter arc in yaw. Nothing is extrapolated: a scan
+before the first or after the last pose, or between two poses further apart than
+``max_gap_s``, gets no pose and is dropped with its reason.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from floorscan.io import InputError
+
+#: Reasons a scan has no pose.
+BEFORE = "before_pose_stream"
+AFTER = "after_pose_stream"
+GAP = "pose_gap"
+
+
+def wrap_angle(a):
+    """Wrap angles (radians) to [-pi, pi)."""
+    return (np.asarray(a, dtype=np.float64) + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def interpolate_poses(
+    stream: pd.DataFrame, t_ns: np.ndarray, max_gap_s: float = 0.5, source: str = "pose stream"
+) -> pd.DataFrame:
+    """Interpolate a pose stream at the given times.
+
+    Parameters
+    ----------
+    stream : DataFrame
+        Columns ``t_ns`` (int64, strictly increasing), ``x``, ``y``, ``z`` (metres) and
+        ``yaw`` (radians), in the map frame.
+    t_ns : (S,) int64 ndarray
+        Query times (scan stamps), nanoseconds.
+    max_gap_s : float
+        Largest time between the two bracketing poses, seconds.
+    source : str
+        Name of the stream in error messages (e.g. the file).
+
+    Returns
+    -------
+    DataFrame
+        S rows: ``t_ns``, ``x``, ``y``, ``z``, ``yaw`` (wrapped to [-pi, pi); NaN when
+        there is no pose), ``valid`` (bool), ``reason`` ("" or one of
+        ``before_pose_stream``, ``after_pose_stream``, ``pose_gap``). A query equal to a
+        stream stamp gets that pose exactly.
+
+    Raises
+    ------
+    InputError
+        Empty stream, unsorted or duplicate stream stamps, or no query time within
+        the stream's span (the stream does not overlap the scans).
+    """
+    ts = stream["t_ns"].to_numpy(dtype=np.int64)
+    if ts.size == 0:
+        raise InputError(f"{source}: the pose stream is empty")
+    d = np.diff(ts)
+    if np.any(d <= 0):
+        i = int(np.flatnonzero(d <= 0)[0]) + 1
+        kind = "duplicate" if d[i - 1] == 0 else "unsorted"
+        raise InputError(
+            f"{source}: {kind} t_ns at row {i} ({ts[i]} after {ts[i - 1]}); expected strictly increasing stamps"
+        )
+    q = np.asarray(t_ns, dtype=np.int64)
+    n = q.size
+    out = {k: np.full(n, np.nan) for k in ("x", "y", "z", "yaw")}
+    reason = np.full(n, "", dtype=object)
+    # index of the first stream stamp >= query
+    hi = np.searchsorted(ts, q, side="left")
+    exact = (hi < ts.size) & (ts[np.minimum(hi, ts.size - 1)] == q)
+    before = (hi == 0) & ~exact
+    after = hi >= ts.size
+    reason[before] = BEFORE
+    reason[after] = AFTER
+    inner = ~(before | after | exact)
+    lo_i = np.clip(hi - 1, 0, ts.size - 1)
+    hi_i = np.clip(hi, 0, ts.size - 1)
+    gap = inner & ((ts[hi_i] - ts[lo_i]) > int(round(max_gap_s * 1e9)))
+    reason[gap] = GAP
+    ok = inner & ~gap
+    cols = {k: stream[k].to_numpy(dtype=np.float64) for k in ("x", "y", "z", "yaw")}
+    if exact.any():
+        for k in cols:
+            out[k][exact] = cols[k][hi_i[exact]]
+    if ok.any():
+        a, b = lo_i[ok], hi_i[ok]
+        w = (q[ok] - ts[a]).astype(np.float64) / (ts[b] - ts[a]).astype(np.float64)
+        for k in ("x", "y", "z"):
+            out[k][ok] = cols[k][a] + w * (cols[k][b] - cols[k][a])
+        dyaw = wrap_angle(cols["yaw"][b] - cols["yaw"][a])  # shorter arc
+        out["yaw"][ok] = cols["yaw"][a] + w * dyaw
+    valid = ok | exact
+    out["yaw"][valid] = wrap_angle(out["yaw"][valid])
+    if n and not valid.any() and not gap.any():
+        raise InputError(
+            f"{source}: the pose stream [{ts[0]}, {ts[-1]}] ns does not overlap the scans "
+            f"[{q.min()}, {q.max()}] ns"
+        )
+    return pd.DataFrame(
+        {"t_ns": q, **out, "valid": valid, "reason": reason.astype(str)}
+    )
+
+
+def scan_poses(scan_index: pd.DataFrame, stream: pd.DataFrame, max_gap_s: float, source: str) -> pd.DataFrame:
+    """The pose of every scan of ``scan_index`` (columns of :data:`floorscan.io.POSES`).
+
+    See :func:`interpolate_poses` for the rules and errors.
+    """
+    poses = interpolate_poses(stream, scan_index["t_ns"].to_numpy(), max_gap_s=max_gap_s, source=source)
+    poses.insert(0, "scan_id", scan_index["scan_id"].to_numpy(dtype=np.int32))
+    return poses

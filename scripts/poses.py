@@ -1,0 +1,12 @@
+"""Stage poses: the pose of each scan at its timestamp (thesis Algorithm 3 step 1)."""
+from floorscan.io import POSES, read_table, write_table
+from floorscan.poses import scan_poses
+from floorscan.workflow import stage_log
+
+with stage_log(snakemake) as log:
+    index = read_table(snakemake.input.index)
+    stream = read_table(snakemake.input.pose_stream)
+    poses = scan_poses(index, stream, snakemake.params.cfg["max_gap_s"], snakemake.input.pose_stream)
+    write_table(poses, snakemake.output.poses, schema=POSES)
+    counts = poses.loc[~poses["valid"], "reason"].value_counts().to_dict()
+    log.info("%d of %d scans have a pose; dropped: %s", poses["valid"].sum(), len(poses), counts or "none")

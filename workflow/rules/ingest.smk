@@ -1,0 +1,67 @@
+# Stages 1-2: read the recording (ingest) and interpolate a pose per scan (poses).
+stage_schema_check("ingest", "../schemas/ingest.schema.yaml")
+stage_schema_check("poses", "../schemas/poses.schema.yaml")
+
+
+def recording_input(wildcards):
+    """The recording a dataset reads: its path, or the simulated one for synthetic data."""
+    ds = DATASETS[wildcards.dataset]
+    if ds["format"] == "synthetic":
+        if ds.get("recording", "bag") == "pcd":
+            return f"results/{wildcards.dataset}/sim/pcd"
+        return f"results/{wildcards.dataset}/sim/recording.bag"
+    return ds["path"]
+
+
+def ingest_dataset(wildcards):
+    """The dataset entry as ingest reads it; synthetic datasets read their simulation."""
+    ds = dataset_config(wildcards)
+    if ds["format"] == "synthetic":
+        if ds.get("recording", "bag") == "pcd":
+            ds.update(format="pcd", path=recording_input(wildcards), locations="locations.csv")
+        else:
+            ds.update(
+                format="rosbag",
+                path=recording_input(wildcards),
+                scan_topic="/scan",
+                pose={"source": "topic", "topic": "/amcl_pose", "base_frame": "base_link"},
+            )
+    return ds
+
+
+rule ingest:
+    input:
+        recording_input,
+    output:
+        scans="results/{dataset}/scans.parquet",
+        index="results/{dataset}/scan_index.parquet",
+        pose_stream="results/{dataset}/pose_stream.parquet",
+    params:
+        dataset=ingest_dataset,
+        cfg=stage_config("ingest"),
+        max_gap_s=config["poses"]["max_gap_s"],
+    log:
+        log_path("ingest"),
+    benchmark:
+        benchmark_path("ingest")
+    script:
+        "../../scripts/ingest.py"
+
+
+rule poses:
+    input:
+        index="results/{dataset}/scan_index.parquet",
+        pose_stream="results/{dataset}/pose_stream.parquet",
+    output:
+        poses="results/{dataset}/poses.parquet",
+    params:
+        cfg=stage_config("poses"),
+    log:
+        log_path("poses"),
+    benchmark:
+        benchmark_path("poses")
+    script:
+        "../../scripts/poses.py"
+
+
+FINAL_OUTPUTS.append("results/{dataset}/poses.parquet")
