@@ -29,6 +29,11 @@ def ingest_dataset(wildcards):
     return ds
 
 
+def pose_gap_limit(wildcards):
+    """The poses stage's gap limit for this dataset (TF chains keep their gaps visible)."""
+    return stage_config("poses")(wildcards)["max_gap_s"]
+
+
 rule ingest:
     input:
         recording_input,
@@ -39,7 +44,7 @@ rule ingest:
     params:
         dataset=ingest_dataset,
         cfg=stage_config("ingest"),
-        max_gap_s=config["poses"]["max_gap_s"],
+        max_gap_s=pose_gap_limit,
     log:
         log_path("ingest"),
     benchmark:

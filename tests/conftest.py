@@ -1,0 +1,196 @@
+"""Shared fixtures: tiny recordings written in every format floorscan reads.
+
+The reference trajectory: the base drives along +x at ``SPEED`` m/s while turning at
+``YAW_RATE`` rad/s, from (1, 2) with yaw 0.2 rad, for ``DURATION`` s. The laser sits
+``MOUNT_X`` m ahead of and ``MOUNT_Z`` m above ``base_link``. Scans at 10 Hz; poses at
+10 Hz with a phase offset (not synchronized with the scans, as AMCL in thesis 3.5).
+"""
+
+from __future__ import annotations
+
+import gzip
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+SHARED_DATA = (REPO / ".." / "shared" / "data").resolve()
+needs_shared = pytest.mark.skipif(
+    not SHARED_DATA.is_dir(), reason=f"real recordings not found at {SHARED_DATA} (../shared/data)"
+)
+
+T0_NS = 1_700_000_000_000_000_000
+SPEED = 0.5
+YAW_RATE = 0.1
+YAW0 = 0.2
+X0, Y0 = 1.0, 2.0
+DURATION = 2.0
+MOUNT_X, MOUNT_Z = 0.1, 0.3
+N_BEAMS = 181
+
+
+def base_pose(t_s):
+    """Exact base_link pose (x, y, yaw) at time t_s seconds after T0: constant speed and turn rate."""
+    t = np.asarray(t_s, dtype=np.float64)
+    yaw = YAW0 + YAW_RATE * t
+    # integral of v*(cos, sin)(yaw0 + w t)
+    x = X0 + SPEED / YAW_RATE * (np.sin(yaw) - math.sin(YAW0))
+    y = Y0 - SPEED / YAW_RATE * (np.cos(yaw) - math.cos(YAW0))
+    return x, y, yaw
+
+
+def laser_pose(t_s):
+    x, y, yaw = base_pose(t_s)
+    return x + MOUNT_X * np.cos(yaw), y + MOUNT_X * np.sin(yaw), yaw
+
+
+def scan_ranges(i: int) -> np.ndarray:
+    """Ranges of scan i: 181 beams over 180 deg with a NaN, an inf and two out-of-range beams."""
+    r = np.linspace(1.0, 3.0, N_BEAMS).astype(np.float32) + 0.01 * i
+    r[0] = np.nan
+    r[1] = np.inf
+    r[2] = 0.01  # below range_min 0.05
+    r[3] = 40.0  # above range_max 30
+    return r
+
+
+def _time(ts, t_ns):
+    Time = ts.types["builtin_interfaces/msg/Time"]
+    return Time(sec=int(t_ns // 1_000_000_000), nanosec=int(t_ns % 1_000_000_000))
+
+
+def _header(ts, t_ns, frame, ros1):
+    Header = ts.types["std_msgs/msg/Header"]
+    if ros1:
+        return Header(seq=0, stamp=_time(ts, t_ns), frame_id=frame)
+    return Header(stamp=_time(ts, t_ns), frame_id=frame)
+
+
+def _quat(yaw):
+    return 0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)
+
+
+def write_bag(
+    path: Path,
+    ros2: bool = False,
+    pointcloud: bool = False,
+    pose_offset_s: float = 0.05,
+    pose_shift_s: float = 0.0,
+    n_scans: int = 20,
+    amcl_order: str = "sorted",
+) -> Path:
+    """Write a tiny bag: /scan, /amcl_pose, /odom, /tf (map->odom, odom->base_link), /tf_static.
+
+    ``pose_shift_s`` moves every pose stamp (to build non-overlapping streams);
+    ``amcl_order`` "duplicate" or "unsorted" breaks the /amcl_pose stamps.
+    """
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS2_HUMBLE if ros2 else Stores.ROS1_NOETIC)
+    if "tf2_msgs/msg/TFMessage" not in ts.types:  # the Noetic store lacks tf2_msgs
+        from rosbags.typesys import get_types_from_msg
+
+        ts.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", "tf2_msgs/msg/TFMessage"))
+    T = ts.types
+    ser = ts.serialize_cdr if ros2 else ts.serialize_ros1
+    if ros2:
+        from rosbags.rosbag2 import Writer
+
+        writer = Writer(path, version=9)
+    else:
+        from rosbags.rosbag1 import Writer
+
+        writer = Writer(path)
+    msgs = []  # (t_ns, topic, msg)
+    for i in range(n_scans):
+        t = T0_NS + int(i * 0.1e9)
+        if pointcloud:
+            r = scan_ranges(i)
+            ang = -math.pi / 2 + np.arange(N_BEAMS) * math.pi / (N_BEAMS - 1)
+            xyz = np.stack([r * np.cos(ang), r * np.sin(ang), np.full(N_BEAMS, 0.5, np.float32)], 1).astype("<f4")
+            fields = [
+                T["sensor_msgs/msg/PointField"](name=n, offset=4 * k, datatype=7, count=1)
+                for k, n in enumerate("xyz")
+            ]
+            msg = T["sensor_msgs/msg/PointCloud2"](
+                header=_header(ts, t, "laser", not ros2), height=1, width=N_BEAMS, fields=fields,
+                is_bigendian=False, point_step=12, row_step=12 * N_BEAMS,
+                data=np.frombuffer(xyz.tobytes(), np.uint8), is_dense=False,
+            )
+        else:
+            msg = T["sensor_msgs/msg/LaserScan"](
+                header=_header(ts, t, "laser", not ros2), angle_min=-math.pi / 2, angle_max=math.pi / 2,
+                angle_increment=math.pi / (N_BEAMS - 1), time_increment=0.0, scan_time=0.1,
+                range_min=0.05, range_max=30.0, ranges=scan_ranges(i), intensities=np.zeros(0, np.float32),
+            )
+        msgs.append((t, "/scan", msg))
+    n_pose = int(round(DURATION / 0.1)) + 2
+    stamps = [T0_NS + int((pose_offset_s - 0.1 + k * 0.1 + pose_shift_s) * 1e9) for k in range(n_pose)]
+    header_stamps = list(stamps)  # /amcl_pose header stamps; the bag's own times stay sorted
+    if amcl_order == "duplicate":
+        header_stamps[5] = header_stamps[4]
+    elif amcl_order == "unsorted":
+        header_stamps[5], header_stamps[6] = header_stamps[6], header_stamps[5]
+    Pose, Point, Q = T["geometry_msgs/msg/Pose"], T["geometry_msgs/msg/Point"], T["geometry_msgs/msg/Quaternion"]
+    Vec = T["geometry_msgs/msg/Vector3"]
+    for k, t in enumerate(stamps):
+        x, y, yaw = base_pose((t - T0_NS) / 1e9)
+        pose = Pose(position=Point(x=float(x), y=float(y), z=0.0), orientation=Q(*_quat(float(yaw))))
+        cov = np.zeros(36)
+        msgs.append((t, "/amcl_pose", T["geometry_msgs/msg/PoseWithCovarianceStamped"](
+            header=_header(ts, header_stamps[k], "map", not ros2),
+            pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=cov))))
+        msgs.append((t, "/odom", T["nav_msgs/msg/Odometry"](
+            header=_header(ts, t, "odom", not ros2), child_frame_id="base_link",
+            pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=cov),
+            twist=T["geometry_msgs/msg/TwistWithCovariance"](
+                twist=T["geometry_msgs/msg/Twist"](linear=Vec(x=0.0, y=0.0, z=0.0), angular=Vec(x=0.0, y=0.0, z=0.0)),
+                covariance=cov))))
+        tf = []
+        for parent, child, (tx, ty, tyaw) in (("map", "odom", (0.0, 0.0, 0.0)), ("odom", "base_link", (x, y, yaw))):
+            tf.append(T["geometry_msgs/msg/TransformStamped"](
+                header=_header(ts, t, parent, not ros2), child_frame_id=child,
+                transform=T["geometry_msgs/msg/Transform"](
+                    translation=Vec(x=float(tx), y=float(ty), z=0.0), rotation=Q(*_quat(float(tyaw))))))
+        msgs.append((t, "/tf", T["tf2_msgs/msg/TFMessage"](transforms=tf)))
+    static = T["tf2_msgs/msg/TFMessage"](transforms=[T["geometry_msgs/msg/TransformStamped"](
+        header=_header(ts, T0_NS, "base_link", not ros2), child_frame_id="laser",
+        transform=T["geometry_msgs/msg/Transform"](
+            translation=Vec(x=MOUNT_X, y=0.0, z=MOUNT_Z), rotation=Q(0.0, 0.0, 0.0, 1.0)))])
+    msgs.append((T0_NS - 1, "/tf_static", static))
+    msgs.sort(key=lambda m: m[0])
+    with writer:
+        conns = {}
+        for t, topic, msg in msgs:
+            if topic not in conns:
+                conns[topic] = writer.add_connection(topic, msg.__msgtype__, typestore=ts)
+            writer.write(conns[topic], t, ser(msg, msg.__msgtype__))
+    return path
+
+
+@pytest.fixture(scope="session")
+def ros1_bag(tmp_path_factory) -> Path:
+    return write_bag(tmp_path_factory.mktemp("bags") / "tiny.bag")
+
+
+@pytest.fixture(scope="session")
+def ros2_bag(tmp_path_factory) -> Path:
+    return write_bag(tmp_path_factory.mktemp("bags2") / "tiny_ros2", ros2=True)
+
+
+def write_carmen(path: Path, lines: list[str]) -> Path:
+    data = "\n".join(lines) + "\n"
+    if path.suffix == ".gz":
+        with gzip.open(path, "wt") as f:
+            f.write(data)
+    else:
+        path.write_text(data)
+    return path
+
+
+def flaser_line(ranges, pose, t_s) -> str:
+    r = " ".join(f"{v:.3f}" for v in ranges)
+    x, y, th = pose
+    return f"FLASER {len(ranges)} {r} {x} {y} {th} {x} {y} {th} {t_s} pippo {t_s}"
