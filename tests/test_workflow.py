@@ -1,0 +1,76 @@
+"""The whole workflow on the embedded default dataset, checked on real numbers.
+
+The workflow files are copied to a temporary folder and run there with
+``snakemake --cores 2``, so the test never touches the repository's ``results/``.
+"""
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import REPO, SHARED_DATA
+from floorscan.io import read_table
+
+SNAKEMAKE = Path(sys.executable).with_name("snakemake")
+
+pytestmark = [pytest.mark.workflow, pytest.mark.slow]
+
+
+def copy_workflow(dest: Path) -> Path:
+    dest.mkdir(parents=True)
+    for name in ("Snakefile", "workflow", "config", "scripts"):
+        src = REPO / name
+        if src.is_dir():
+            shutil.copytree(src, dest / name)
+        else:
+            shutil.copy2(src, dest / name)
+    # keep the shipped relative paths to ../shared/data valid from the copy
+    if SHARED_DATA.is_dir() and not (dest.parent / "shared").exists():
+        (dest.parent / "shared").symlink_to(SHARED_DATA.parent)
+    return dest
+
+
+def snakemake(workdir: Path, *args, timeout=900):
+    return subprocess.run(
+        [str(SNAKEMAKE), "--cores", "2", *args], cwd=workdir, capture_output=True, text=True, timeout=timeout
+    )
+
+
+@pytest.fixture(scope="module")
+def default_run(tmp_path_factory):
+    root = tmp_path_factory.mktemp("wf")
+    wd = copy_workflow(root / "floorscan")
+    res = snakemake(wd)
+    assert res.returncode == 0, res.stderr[-4000:]
+    return wd
+
+
+def test_default_target_runs_and_writes_consistent_tables(default_run):
+    wd = default_run
+    import yaml
+
+    cfg = yaml.safe_load((wd / "config" / "config.yaml").read_text())
+    for ds in cfg["target"]:
+        out = wd / "results" / ds
+        index = read_table(out / "scan_index.parquet")
+        poses = read_table(out / "poses.parquet")
+        scans = read_table(out / "scans.parquet")
+        assert len(index) > 100
+        assert index["n_points"].sum() == len(scans)
+        assert poses["scan_id"].tolist() == index["scan_id"].tolist()
+        assert poses["valid"].mean() > 0.95
+        assert np.isfinite(poses.loc[poses["valid"], ["x", "y", "yaw"]].to_numpy()).all()
+        # every rule logs and benchmarks
+        for stage in ("ingest", "poses"):
+            assert (out / "logs" / f"{stage}.log").stat().st_size > 0
+            assert (out / "benchmarks" / f"{stage}.tsv").read_text().startswith("s\t")
+
+
+def test_rerun_of_one_stage(default_run):
+    res = snakemake(default_run, "-R", "poses")
+    assert res.returncode == 0, res.stderr[-3000:]
+    assert "poses" in res.stderr and "ingest" not in res.stderr.split("Job stats")[-1].split("Reasons")[0]
