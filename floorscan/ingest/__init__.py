@@ -135,6 +135,7 @@ def write_recording(
     meta = {k.encode(): str(v).encode() for k, v in (metadata or {}).items()}
     with atomic_path(scans_path) as tmp:
         with pq.ParquetWriter(tmp, SCANS.with_metadata(meta), compression="zstd") as writer:
+            batch = _Batch(writer)
             last_t = None
             for scan_id, scan in enumerate(recording.scans):
                 if last_t is not None and scan.t_ns < last_t:
@@ -147,17 +148,8 @@ def write_recording(
                 n = len(pts)
                 rows.append((scan_id, int(scan.t_ns), n, int(scan.n_dropped), scan.frame))
                 if n:
-                    writer.write_table(
-                        pa.table(
-                            {
-                                "scan_id": pa.array(np.full(n, scan_id, np.int32)),
-                                "x": pa.array(pts[:, 0]),
-                                "y": pa.array(pts[:, 1]),
-                                "z": pa.array(pts[:, 2]),
-                            },
-                            schema=SCANS,
-                        )
-                    )
+                    batch.add(scan_id, pts)
+            batch.flush()
         if not rows:
             raise InputError(f"{recording.source}: no scans found")
         index = pd.DataFrame(rows, columns=["scan_id", "t_ns", "n_points", "n_dropped", "frame"])
@@ -169,6 +161,35 @@ def write_recording(
         write_table(index, index_path, schema=SCAN_INDEX, metadata=metadata)
         write_table(stream, pose_stream_path, schema=POSE_STREAM, metadata=metadata)
     return index
+
+
+class _Batch:
+    """Collects scans and writes them as row groups of about ``ROW_GROUP_POINTS`` points."""
+
+    ROW_GROUP_POINTS = 1 << 20
+
+    def __init__(self, writer: pq.ParquetWriter):
+        self.writer = writer
+        self.ids: list[np.ndarray] = []
+        self.pts: list[np.ndarray] = []
+        self.n = 0
+
+    def add(self, scan_id: int, pts: np.ndarray) -> None:
+        self.ids.append(np.full(len(pts), scan_id, np.int32))
+        self.pts.append(pts)
+        self.n += len(pts)
+        if self.n >= self.ROW_GROUP_POINTS:
+            self.flush()
+
+    def flush(self) -> None:
+        if not self.n:
+            return
+        p = np.concatenate(self.pts)
+        table = pa.table(
+            {"scan_id": np.concatenate(self.ids), "x": p[:, 0], "y": p[:, 1], "z": p[:, 2]}, schema=SCANS
+        )
+        self.writer.write_table(table, row_group_size=len(p))
+        self.ids, self.pts, self.n = [], [], 0
 
 
 def laser_scan_points(
