@@ -69,6 +69,10 @@ class InputError(ValueError):
     """Bad input: the message names the file, topic or field and what was expected."""
 
 
+_UMASK = os.umask(0)
+os.umask(_UMASK)
+
+
 def _tmp_path(path: Path) -> Path:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
@@ -87,6 +91,8 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     tmp = _tmp_path(path)
     try:
         yield tmp
+        if tmp.is_file():  # mkstemp makes files private (0600); give them the usual umask mode
+            tmp.chmod(0o666 & ~_UMASK)
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
