@@ -1,0 +1,852 @@
+"""Registration: every kept scan in one map frame, refined by planar ICP (thesis 3.2.2, 3.5).
+
+Algorithm 3 of the thesis, steps 2-6 (step 1, pose interpolation, is the ``poses`` stage):
+
+2. keep every n-th scan (``every_n``) among the scans that pass the per-scan checks;
+3. apply the localizer's pose (``map_point = Rz(yaw) @ p + (x, y, z)``);
+4. fitness of the scan against each of the previous ``n_previous`` kept scans under the
+   pose alone; drop the scan when the mean is below ``min_prior_fitness``;
+5. refine the pose by ICP against the previous kept scans (merged, voxel-downsampled);
+6. drop the scan when the mean fitness after ICP is below ``min_icp_fitness``.
+
+Fitness and inlier RMSE are Open3D's definitions (``evaluate_registration``): the
+fraction of *source* points whose nearest target point is within the correspondence
+distance, and the RMS distance of those pairs. They are computed here with one
+:class:`scipy.spatial.cKDTree` per kept scan, built once and reused by the next
+``n_previous`` scans (Open3D rebuilds its KD-tree on every call); a unit test checks the
+numbers against ``open3d.pipelines.registration.evaluate_registration``.
+
+ICP is constrained to the rover's planar motion (x, y, yaw; z, roll and pitch stay as the
+pose says) for 2D and 3D scans. Open3D's ICP estimates all six degrees of freedom and
+offers no way to fix some of them; for 2D scans its point-to-plane variant is degenerate
+(normals of a planar point set are vertical), and projecting a 6-DoF result onto SE(2)
+is not the constrained optimum for 3D scans. So correspondences come from the cached
+KD-tree and each iteration solves the planar problem in closed form: the 2D Kabsch /
+Umeyama solution for point-to-point (exact for 3D pairs too, since the z residual does
+not depend on x, y, yaw), a 3x3 linearised least-squares step for point-to-plane
+(Chen & Medioni 1992; Low 2004). For 2D scans point-to-point gives the same result as
+Open3D's ``registration_icp`` (tested).
+
+Drop reasons (``reason`` column; kept scans have ``""``, or ``"anchor"`` for a scan kept
+without a reference):
+
+- ``no_pose:<reason>``: the poses table has no valid pose (reason from ``poses``);
+- ``duplicate``: same timestamp as the previous scan, or exactly the same points;
+- ``too_few_points``: fewer than ``min_points`` points;
+- ``pose_jump``: the pose moved faster than ``max_speed_m_s`` or turned faster than
+  ``max_turn_rate_rad_s`` since the last plausible pose;
+- ``not_sampled``: skipped by the every-n-th rule (not a failure);
+- ``low_prior_fitness`` / ``low_icp_fitness``: steps 4 and 6;
+- ``icp_failed``: ICP found fewer than 3 correspondences.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+from collections import Counter, deque
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+from scipy.spatial import cKDTree
+
+from floorscan.io import InputError
+
+log = logging.getLogger(__name__)
+
+#: One row per scan of ``scan_index`` (``registration.parquet``).
+REGISTRATION = pa.schema(
+    [
+        ("scan_id", pa.int32()),
+        ("t_ns", pa.int64()),
+        ("kept", pa.bool_()),
+        ("reason", pa.string()),
+        ("fitness_prior", pa.float64()),
+        ("fitness_icp", pa.float64()),
+        ("inlier_rmse_m", pa.float64()),
+        ("dx_m", pa.float64()),
+        ("dy_m", pa.float64()),
+        ("dyaw_rad", pa.float64()),
+        ("x_m", pa.float64()),
+        ("y_m", pa.float64()),
+        ("z_m", pa.float64()),
+        ("yaw_rad", pa.float64()),
+    ]
+)
+
+#: Config key behind each failure reason, for the "every scan dropped" error.
+REASON_THRESHOLD = {
+    "too_few_points": "min_points",
+    "pose_jump": "max_speed_m_s / max_turn_rate_rad_s",
+    "low_prior_fitness": "min_prior_fitness",
+    "low_icp_fitness": "min_icp_fitness",
+    "icp_failed": "icp_max_correspondence_m",
+    "duplicate": "(duplicate scans: no threshold)",
+    "no_pose": "(poses stage: no valid pose)",
+}
+
+
+class RegistrationError(ValueError):
+    """No scan could be registered; the message counts the drops per reason and names
+    the config threshold responsible for most of them."""
+
+
+@dataclass(frozen=True)
+class RegistrationConfig:
+    """Parameters of the ``register`` stage; keys and defaults match
+    ``workflow/schemas/register.schema.yaml`` (a test checks they agree).
+
+    See the schema for each key's description, bounds and the reasons for the defaults.
+    """
+
+    mode: str = "pose"
+    every_n: int = 5
+    n_previous: int = 5
+    min_points: int = 30
+    fitness_max_correspondence_m: float = 0.15
+    min_prior_fitness: float = 0.15
+    min_icp_fitness: float = 0.25
+    icp_method: str = "point_to_point"
+    icp_max_correspondence_m: tuple[float, ...] = (0.3, 0.15)
+    icp_max_iterations: int = 30
+    icp_tolerance_m: float = 1e-5
+    voxel_size_m: float = 0.05
+    normal_neighbours: int = 10
+    max_reference_distance_m: float = 8.0
+    reference_pose: str = "localizer"
+    max_speed_m_s: float = 2.0
+    max_turn_rate_rad_s: float = 3.0
+    pose_jump_slack_m: float = 0.1
+    pose_jump_slack_rad: float = 0.1
+
+    @classmethod
+    def from_mapping(cls, cfg: Mapping[str, Any] | None) -> "RegistrationConfig":
+        """Build from a config dict (the ``register`` section), rejecting unknown keys.
+
+        Raises
+        ------
+        InputError
+            On an unknown key or a value outside its range.
+        """
+        cfg = dict(cfg or {})
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(cfg) - names)
+        if unknown:
+            raise InputError(f"config register: unknown keys {unknown}; known: {sorted(names)}")
+        if "icp_max_correspondence_m" in cfg and not isinstance(cfg["icp_max_correspondence_m"], (int, float)):
+            cfg["icp_max_correspondence_m"] = tuple(float(v) for v in cfg["icp_max_correspondence_m"])
+        out = cls(**cfg)
+        out.check()
+        return out
+
+    def check(self) -> None:
+        """Raise :class:`InputError` naming the key when a value is out of range."""
+        if self.mode not in ("pose", "odometry"):
+            raise InputError(f"config register.mode: expected 'pose' or 'odometry', got {self.mode!r}")
+        if self.reference_pose not in ("localizer", "registered"):
+            raise InputError(
+                "config register.reference_pose: expected 'localizer' or 'registered', "
+                f"got {self.reference_pose!r}"
+            )
+        if self.icp_method not in ("point_to_point", "point_to_plane"):
+            raise InputError(
+                "config register.icp_method: expected 'point_to_point' or 'point_to_plane', "
+                f"got {self.icp_method!r}"
+            )
+        for key in ("every_n", "n_previous", "icp_max_iterations"):
+            if int(getattr(self, key)) < 1:
+                raise InputError(f"config register.{key}: expected >= 1, got {getattr(self, key)}")
+        if self.normal_neighbours < 3:
+            raise InputError(f"config register.normal_neighbours: expected >= 3, got {self.normal_neighbours}")
+        for key in ("min_prior_fitness", "min_icp_fitness"):
+            v = getattr(self, key)
+            if not 0.0 <= v <= 1.0:
+                raise InputError(f"config register.{key}: expected 0..1, got {v}")
+        for key in (
+            "fitness_max_correspondence_m",
+            "icp_tolerance_m",
+            "max_reference_distance_m",
+            "max_speed_m_s",
+            "max_turn_rate_rad_s",
+        ):
+            if not getattr(self, key) > 0:
+                raise InputError(f"config register.{key}: expected > 0, got {getattr(self, key)}")
+        d = self.icp_max_correspondence_m
+        if isinstance(d, (int, float)) or len(d) == 0 or any(not v > 0 for v in d):
+            raise InputError(
+                f"config register.icp_max_correspondence_m: expected a non-empty list of "
+                f"distances > 0 (metres, coarse to fine), got {d!r}"
+            )
+        for key in ("voxel_size_m", "pose_jump_slack_m", "pose_jump_slack_rad", "min_points"):
+            if getattr(self, key) < 0:
+                raise InputError(f"config register.{key}: expected >= 0, got {getattr(self, key)}")
+
+
+@dataclass
+class RegistrationResult:
+    """Output of :func:`register_scans`.
+
+    Attributes
+    ----------
+    registered : pandas.DataFrame
+        ``scan_id`` int32, ``x, y, z`` float32: points of the kept scans in the map frame
+        (metres), in scan order.
+    table : pandas.DataFrame
+        One row per scan of the scan index, columns of :data:`REGISTRATION`.
+    summary : dict
+        Counts per reason, drop fractions per threshold, median corrections.
+    """
+
+    registered: pd.DataFrame
+    table: pd.DataFrame
+    summary: dict
+
+
+# --------------------------------------------------------------------------- geometry
+
+
+def wrap_angle(a: np.ndarray | float) -> np.ndarray | float:
+    """Wrap angles (radians) to [-pi, pi)."""
+    return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def transform_points(points: np.ndarray, x: float, y: float, z: float, yaw: float) -> np.ndarray:
+    """Apply a planar pose to points: ``Rz(yaw) @ p + (x, y, z)``.
+
+    Parameters
+    ----------
+    points : (N, 3) float ndarray
+        Points in the scanner frame, metres.
+    x, y, z : float
+        Scanner position in the map frame, metres.
+    yaw : float
+        Heading, radians CCW from +x.
+
+    Returns
+    -------
+    (N, 3) float64 ndarray
+        New array of points in the map frame.
+    """
+    c, s = math.cos(yaw), math.sin(yaw)
+    p = np.asarray(points, dtype=np.float64)
+    out = np.empty((len(p), 3), dtype=np.float64)
+    out[:, 0] = c * p[:, 0] - s * p[:, 1] + x
+    out[:, 1] = s * p[:, 0] + c * p[:, 1] + y
+    out[:, 2] = p[:, 2] + z
+    return out
+
+
+def voxel_downsample(points: np.ndarray, voxel_size: float) -> np.ndarray:
+    """Mean of the points in each occupied voxel (cubes of side ``voxel_size``).
+
+    Deterministic (voxels in lexicographic order of their integer keys), same result as
+    Open3D's ``voxel_down_sample`` up to point order. ``voxel_size <= 0`` returns a copy.
+
+    Parameters
+    ----------
+    points : (N, 3) float ndarray
+        Metres.
+    voxel_size : float
+        Voxel side, metres.
+
+    Returns
+    -------
+    (M, 3) float64 ndarray, M <= N
+    """
+    p = np.asarray(points, dtype=np.float64)
+    if voxel_size <= 0 or len(p) == 0:
+        return p.copy()
+    keys = np.floor(p / voxel_size).astype(np.int64)
+    keys -= keys.min(axis=0)
+    span = keys.max(axis=0) + 1
+    if float(span[0]) * float(span[1]) * float(span[2]) < 2**62:  # pack into one int64 key
+        flat = (keys[:, 0] * span[1] + keys[:, 1]) * span[2] + keys[:, 2]
+        _, inverse, counts = np.unique(flat, return_inverse=True, return_counts=True)
+    else:
+        _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    sums = np.zeros((len(counts), 3))
+    np.add.at(sums, inverse, p)
+    return sums / counts[:, None]
+
+
+def normals_2d(points: np.ndarray, tree: cKDTree, k: int) -> np.ndarray:
+    """Unit normals in the xy plane of a 2D scan or map, from PCA of k nearest neighbours.
+
+    Open3D's ``estimate_normals`` returns the plane normal (z) for coplanar points, which
+    is useless for 2D point-to-plane ICP; this is its 2D counterpart.
+
+    Parameters
+    ----------
+    points : (N, 3) float64 ndarray
+        Points (z ignored), metres; ``tree`` is built on their xy (or xyz with z = 0).
+    tree : scipy.spatial.cKDTree
+    k : int
+        Neighbours per point (including itself).
+
+    Returns
+    -------
+    (N, 3) float64 ndarray
+        Normals with z = 0.
+    """
+    k = int(min(k, len(points)))
+    _, idx = tree.query(points, k=k)
+    nb = points[np.asarray(idx).reshape(len(points), k)][:, :, :2]
+    nb = nb - nb.mean(axis=1, keepdims=True)
+    cov = np.einsum("nki,nkj->nij", nb, nb)
+    _, vecs = np.linalg.eigh(cov)
+    n = np.zeros((len(points), 3))
+    n[:, :2] = vecs[:, :, 0]
+    return n
+
+
+def normals_3d(points: np.ndarray, k: int) -> np.ndarray:
+    """Unit normals of a 3D point cloud (Open3D ``estimate_normals``, k nearest neighbours).
+
+    Returns
+    -------
+    (N, 3) float64 ndarray
+    """
+    import open3d as o3d
+
+    pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.asarray(points, dtype=np.float64)))
+    pc.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(knn=int(k)))
+    return np.asarray(pc.normals).copy()
+
+
+def fitness_against(
+    source_map: np.ndarray, tree: cKDTree, max_distance: float
+) -> tuple[float, float, int]:
+    """Open3D-style fitness and inlier RMSE of points against a target's KD-tree.
+
+    Parameters
+    ----------
+    source_map : (N, 3) float64 ndarray
+        Source points already in the target's frame, metres.
+    tree : scipy.spatial.cKDTree
+        KD-tree of the target points (built once per target and reused).
+    max_distance : float
+        Maximum correspondence distance, metres.
+
+    Returns
+    -------
+    fitness : float
+        Fraction of source points with a target point within ``max_distance`` (0..1).
+    inlier_rmse : float
+        RMS distance of those pairs, metres (NaN without any).
+    n_inliers : int
+    """
+    if len(source_map) == 0:
+        return 0.0, math.nan, 0
+    d, _ = tree.query(source_map, k=1, distance_upper_bound=max_distance)
+    ok = d <= max_distance
+    n = int(ok.sum())
+    rmse = float(np.sqrt(np.mean(d[ok] ** 2))) if n else math.nan
+    return n / len(source_map), rmse, n
+
+
+def _kabsch_2d(src: np.ndarray, dst: np.ndarray) -> tuple[float, float, float]:
+    """Rigid 2D transform (tx, ty, theta) minimising sum ||dst - (R src + t)||^2 (Umeyama)."""
+    ms, md = src.mean(axis=0), dst.mean(axis=0)
+    a, b = src - ms, dst - md
+    sxx = float(np.sum(a[:, 0] * b[:, 0]) + np.sum(a[:, 1] * b[:, 1]))
+    sxy = float(np.sum(a[:, 0] * b[:, 1]) - np.sum(a[:, 1] * b[:, 0]))
+    th = math.atan2(sxy, sxx)
+    c, s = math.cos(th), math.sin(th)
+    tx = md[0] - (c * ms[0] - s * ms[1])
+    ty = md[1] - (s * ms[0] + c * ms[1])
+    return tx, ty, th
+
+
+def _point_to_plane_2d(src: np.ndarray, dst: np.ndarray, nrm: np.ndarray) -> tuple[float, float, float]:
+    """One linearised point-to-plane step for planar motion (tx, ty, theta) (Low 2004).
+
+    Minimises sum (n . (R src + t - dst))^2 with R ~ I + theta [[0,-1],[1,0]] (z rows of
+    the rotation are identity, so z enters only through the normal's z component).
+    """
+    jac = np.column_stack([nrm[:, 0], nrm[:, 1], nrm[:, 1] * src[:, 0] - nrm[:, 0] * src[:, 1]])
+    r = np.einsum("ij,ij->i", nrm, dst - src)
+    a = jac.T @ jac
+    # Tiny Levenberg damping keeps a degenerate geometry (one straight wall) solvable:
+    # the unobservable direction stays put instead of exploding.
+    a += np.eye(3) * (1e-9 * max(np.trace(a), 1e-12))
+    tx, ty, th = np.linalg.solve(a, jac.T @ r)
+    return float(tx), float(ty), float(th)
+
+
+def icp_planar(
+    source: np.ndarray,
+    target: np.ndarray,
+    tree: cKDTree,
+    init: tuple[float, float, float, float],
+    max_distance: float,
+    *,
+    method: str = "point_to_point",
+    normals: np.ndarray | None = None,
+    max_iterations: int = 30,
+    tolerance: float = 1e-5,
+) -> tuple[tuple[float, float, float, float], int]:
+    """ICP constrained to x, y, yaw (planar rover; z, roll, pitch fixed), thesis 3.2.2.
+
+    Each iteration pairs every transformed source point with its nearest target point
+    within ``max_distance`` (cached KD-tree) and solves the planar problem in closed form.
+
+    Parameters
+    ----------
+    source : (N, 3) float64 ndarray
+        Source points in the scanner frame, metres.
+    target : (M, 3) float64 ndarray
+        Target points in the map frame, metres; ``tree`` is their KD-tree.
+    tree : scipy.spatial.cKDTree
+    init : tuple of float
+        Initial pose (x, y, z, yaw): metres, radians. z is kept.
+    max_distance : float
+        Maximum correspondence distance, metres.
+    method : {"point_to_point", "point_to_plane"}
+    normals : (M, 3) float64 ndarray, optional
+        Target normals, required for point-to-plane.
+    max_iterations : int
+    tolerance : float
+        Stop when the step moves no source point (within the scan's extent) by more
+        than this, metres.
+
+    Returns
+    -------
+    pose : tuple of float
+        Refined (x, y, z, yaw).
+    n_correspondences : int
+        Pairs in the last iteration (0: ICP failed, the initial pose is returned).
+
+    Raises
+    ------
+    ValueError
+        For point-to-plane without ``normals``.
+    """
+    if method == "point_to_plane" and normals is None:
+        raise ValueError("point_to_plane ICP needs target normals")
+    x, y, z, yaw = (float(v) for v in init)
+    src = np.asarray(source, dtype=np.float64)
+    extent = float(np.max(np.abs(src[:, :2]))) if len(src) else 1.0
+    n_corr = 0
+    for _ in range(int(max_iterations)):
+        cur = transform_points(src, x, y, z, yaw)
+        d, idx = tree.query(cur, k=1, distance_upper_bound=max_distance)
+        ok = d <= max_distance
+        n_corr = int(ok.sum())
+        if n_corr < 3:
+            return (float(init[0]), float(init[1]), float(init[2]), float(init[3])), 0
+        q, p = cur[ok], target[idx[ok]]
+        if method == "point_to_point":
+            tx, ty, th = _kabsch_2d(q[:, :2], p[:, :2])
+        else:
+            tx, ty, th = _point_to_plane_2d(q, p, normals[idx[ok]])
+        # compose the step (applied in the map frame) with the current pose
+        c, s = math.cos(th), math.sin(th)
+        x, y = c * x - s * y + tx, s * x + c * y + ty
+        yaw = float(wrap_angle(yaw + th))
+        if math.hypot(tx, ty) + abs(th) * extent < tolerance:
+            break
+    return (x, y, z, yaw), n_corr
+
+
+# --------------------------------------------------------------------------- screening
+
+
+def _check_columns(df: pd.DataFrame, name: str, columns: list[str]) -> None:
+    missing = [c for c in columns if c not in df.columns]
+    if missing:
+        raise InputError(f"{name}: columns {missing} missing; expected {columns}")
+
+
+def screen_scans(
+    index: pd.DataFrame,
+    clouds: Mapping[int, np.ndarray],
+    poses: pd.DataFrame | None,
+    cfg: RegistrationConfig,
+) -> np.ndarray:
+    """Per-scan checks before sampling: missing pose, duplicate, too few points, pose jump.
+
+    Parameters
+    ----------
+    index : pandas.DataFrame
+        ``scan_id``, ``t_ns`` sorted by ``scan_id`` (recording order).
+    clouds : mapping of int to (N, 3) ndarray
+        Points of each scan (scanner frame); absent scans have no points.
+    poses : pandas.DataFrame or None
+        Aligned with ``index`` (same order): ``x, y, z, yaw, valid, reason``. None in
+        odometry mode (no pose checks).
+    cfg : RegistrationConfig
+
+    Returns
+    -------
+    (S,) object ndarray
+        Reason per scan, ``""`` for scans that pass.
+    """
+    n = len(index)
+    reasons = np.full(n, "", dtype=object)
+    t = index["t_ns"].to_numpy(np.int64)
+    sizes = np.array([len(clouds.get(int(s), ())) for s in index["scan_id"]])
+    if poses is not None:
+        valid = poses["valid"].to_numpy(bool)
+        for i in np.flatnonzero(~valid):
+            r = str(poses["reason"].iloc[i]) or "invalid"
+            reasons[i] = f"no_pose:{r}"
+    prev_digest = None
+    for i, sid in enumerate(index["scan_id"].to_numpy()):
+        pts = clouds.get(int(sid))
+        digest = None
+        if pts is not None and len(pts):
+            digest = (len(pts), hash(np.ascontiguousarray(pts, dtype=np.float64).tobytes()))
+        if reasons[i] == "":
+            if i > 0 and t[i] == t[i - 1]:
+                reasons[i] = "duplicate"
+            elif sizes[i] < max(cfg.min_points, 1):
+                reasons[i] = "too_few_points"
+            elif digest is not None and digest == prev_digest:
+                reasons[i] = "duplicate"
+        prev_digest = digest
+    if poses is None:
+        return reasons
+    # pose jump: against the last plausible pose (a single outlier drops one scan; after
+    # a relocalisation the scans resume once the jump fits the speed limit)
+    px, py, pyaw = (poses[c].to_numpy(np.float64) for c in ("x", "y", "yaw"))
+    last = None
+    for i in range(n):
+        if reasons[i].startswith("no_pose") or reasons[i] == "duplicate":
+            continue
+        if last is not None:
+            dt = (t[i] - t[last]) * 1e-9
+            dist = math.hypot(px[i] - px[last], py[i] - py[last])
+            turn = abs(float(wrap_angle(pyaw[i] - pyaw[last])))
+            if (
+                dt < 0
+                or dist > cfg.max_speed_m_s * dt + cfg.pose_jump_slack_m
+                or turn > cfg.max_turn_rate_rad_s * dt + cfg.pose_jump_slack_rad
+            ):
+                if reasons[i] == "":
+                    reasons[i] = "pose_jump"
+                continue
+        last = i
+    return reasons
+
+
+# --------------------------------------------------------------------------- main loop
+
+
+@dataclass
+class _Kept:
+    scan_id: int
+    pose: tuple[float, float, float, float]
+    points: np.ndarray  # map frame, float64
+    tree: cKDTree
+
+
+def _mean_fitness(
+    pts_map: np.ndarray, refs: list[_Kept], max_distance: float
+) -> tuple[float, float]:
+    """Mean fitness over the references and the pooled inlier RMSE."""
+    fits, sq, cnt = [], 0.0, 0
+    for r in refs:
+        f, rmse, k = fitness_against(pts_map, r.tree, max_distance)
+        fits.append(f)
+        if k:
+            sq += rmse**2 * k
+            cnt += k
+    return float(np.mean(fits)), (math.sqrt(sq / cnt) if cnt else math.nan)
+
+
+def _align_poses(index: pd.DataFrame, poses: pd.DataFrame) -> pd.DataFrame:
+    _check_columns(poses, "poses.parquet", ["scan_id", "x", "y", "z", "yaw", "valid", "reason"])
+    if poses["scan_id"].duplicated().any():
+        raise InputError("poses.parquet: scan_id is not unique")
+    p = poses.set_index("scan_id").reindex(index["scan_id"].to_numpy())
+    missing = p["valid"].isna()
+    if missing.any():
+        raise InputError(
+            f"poses.parquet: no row for {int(missing.sum())} scans of scan_index.parquet "
+            f"(first scan_id {int(p.index[missing.to_numpy()][0])}); expected one row per scan"
+        )
+    p = p.reset_index()
+    p["valid"] = p["valid"].astype(bool) & np.isfinite(p[["x", "y", "z", "yaw"]].to_numpy(float)).all(axis=1)
+    p["reason"] = p["reason"].fillna("").astype(str)
+    return p
+
+
+def register_scans(
+    scans: pd.DataFrame,
+    scan_index: pd.DataFrame,
+    poses: pd.DataFrame | None = None,
+    config: RegistrationConfig | Mapping[str, Any] | None = None,
+) -> RegistrationResult:
+    """Register the scans of a recording into the map frame (thesis Algorithm 3, steps 2-6).
+
+    Parameters
+    ----------
+    scans : pandas.DataFrame
+        ``scan_id, x, y, z``: points in the scanner frame, metres (``scans.parquet``).
+    scan_index : pandas.DataFrame
+        ``scan_id, t_ns``: one row per scan (``scan_index.parquet``).
+    poses : pandas.DataFrame, optional
+        ``scan_id, x, y, z, yaw, valid, reason`` (``poses.parquet``): scanner pose in the
+        map frame per scan. Required in ``mode="pose"``, ignored in ``mode="odometry"``
+        (scan-to-scan ICP from the first usable scan, which defines the map frame).
+    config : RegistrationConfig or mapping, optional
+        The ``register`` config section; defaults from :class:`RegistrationConfig`.
+
+    Returns
+    -------
+    RegistrationResult
+        Registered points of the kept scans, one table row per scan, a summary.
+
+    Raises
+    ------
+    InputError
+        When a table lacks a column, a point is not finite, the poses do not cover the scan
+        index, or poses are missing in pose mode.
+    RegistrationError
+        When no scan could be registered: the message gives the count per reason and the
+        threshold that dropped most scans.
+
+    Notes
+    -----
+    The ICP target is the union of the previous ``n_previous`` kept scans (refined poses,
+    voxel-downsampled to ``voxel_size_m``): a local map is denser and has fewer
+    one-sided gaps than a single scan, and the sequential chain of the thesis
+    ("sequentially register every two pointclouds") becomes a sliding window that
+    drifts less. Fitness (steps 4 and 6) is the mean over those scans individually, as in
+    the thesis. References further than ``max_reference_distance_m`` from the scan (by its
+    pose) are ignored; a scan without any reference is kept as a new ``anchor`` (the first
+    one always is), so a stretch of drops cannot lock out the rest of the recording.
+    For 3D scans (z not constant) fitness, references and ICP use the scan downsampled to
+    ``voxel_size_m`` (a 16-beam scan has ~30k points); 2D scans use all their points for
+    fitness. There is no randomness: the same input gives the same output.
+    """
+    cfg = config if isinstance(config, RegistrationConfig) else RegistrationConfig.from_mapping(config)
+    cfg.check()
+    _check_columns(scans, "scans.parquet", ["scan_id", "x", "y", "z"])
+    _check_columns(scan_index, "scan_index.parquet", ["scan_id", "t_ns"])
+    index = scan_index[["scan_id", "t_ns"]].sort_values("scan_id", kind="stable").reset_index(drop=True)
+    if index["scan_id"].duplicated().any():
+        raise InputError("scan_index.parquet: scan_id is not unique")
+    from floorscan.io import split_by_scan
+
+    bad = ~np.isfinite(scans[["x", "y", "z"]].to_numpy(np.float64)).all(axis=1)
+    if bad.any():
+        raise InputError(
+            f"scans.parquet: {int(bad.sum())} points with non-finite x, y or z (first in scan "
+            f"{int(scans['scan_id'].to_numpy()[bad][0])}); expected finite metres"
+        )
+    clouds = split_by_scan(scans)
+    odometry = cfg.mode == "odometry"
+    if not odometry:
+        if poses is None:
+            raise InputError("register: mode 'pose' needs poses.parquet (or set mode: odometry)")
+        aligned = _align_poses(index, poses)
+    else:
+        aligned = None
+
+    n = len(index)
+    reasons = screen_scans(index, clouds, aligned, cfg)
+    usable = np.flatnonzero(reasons == "")
+    sampled = usable[:: cfg.every_n]
+    not_sampled = np.setdiff1d(usable, sampled)
+    reasons[not_sampled] = "not_sampled"
+
+    kept = np.zeros(n, dtype=bool)
+    fit_prior = np.full(n, np.nan)
+    fit_icp = np.full(n, np.nan)
+    rmse = np.full(n, np.nan)
+    corr = np.full((n, 3), np.nan)
+    final = np.full((n, 4), np.nan)
+    if aligned is not None:
+        ok = aligned["valid"].to_numpy(bool)
+        final[ok] = aligned.loc[ok, ["x", "y", "z", "yaw"]].to_numpy(np.float64)
+
+    window: deque[_Kept] = deque(maxlen=cfg.n_previous)
+    t = index["t_ns"].to_numpy(np.int64)
+    sids = index["scan_id"].to_numpy()
+    velocity = np.zeros(3)  # odometry motion model: (vx, vy, vyaw) in the map frame per s
+    last_t: int | None = None
+    n_anchor = 0
+    for i in sampled:
+        sid = int(sids[i])
+        pts = clouds[sid]
+        if np.ptp(pts[:, 2]) > 0:  # 3D scan: fitness, references and ICP on the voxel grid
+            pts = voxel_downsample(pts, cfg.voxel_size_m)
+        if odometry:
+            if window:
+                lx, ly, lz, lyaw = window[-1].pose
+                dt = (t[i] - last_t) * 1e-9
+                prior = (lx + velocity[0] * dt, ly + velocity[1] * dt, lz, lyaw + velocity[2] * dt)
+            else:
+                prior = (0.0, 0.0, 0.0, 0.0)
+        else:
+            prior = tuple(float(v) for v in final[i])
+        refs = [
+            r
+            for r in window
+            if math.hypot(r.pose[0] - prior[0], r.pose[1] - prior[1]) <= cfg.max_reference_distance_m
+        ] if not odometry else list(window)
+        pose = prior
+        if refs:
+            pts_prior = transform_points(pts, *prior)
+            if not odometry:
+                fit_prior[i], _ = _mean_fitness(pts_prior, refs, cfg.fitness_max_correspondence_m)
+                if fit_prior[i] < cfg.min_prior_fitness:
+                    reasons[i] = "low_prior_fitness"
+                    continue
+            target = voxel_downsample(np.concatenate([r.points for r in refs]), cfg.voxel_size_m)
+            ttree = cKDTree(target)
+            nrm = None
+            if cfg.icp_method == "point_to_plane":
+                planar = bool(np.ptp(target[:, 2]) < 1e-9)
+                nrm = normals_2d(target, ttree, cfg.normal_neighbours) if planar else normals_3d(target, cfg.normal_neighbours)
+            src = voxel_downsample(pts, cfg.voxel_size_m)
+            for dist in cfg.icp_max_correspondence_m:  # coarse to fine
+                pose, n_corr = icp_planar(
+                    src, target, ttree, pose, dist,
+                    method=cfg.icp_method, normals=nrm,
+                    max_iterations=cfg.icp_max_iterations, tolerance=cfg.icp_tolerance_m,
+                )
+                if n_corr == 0:
+                    break
+            if n_corr == 0:
+                reasons[i] = "icp_failed"
+                continue
+            pts_map = transform_points(pts, *pose)
+            fit_icp[i], rmse[i] = _mean_fitness(pts_map, refs, cfg.fitness_max_correspondence_m)
+            corr[i] = (pose[0] - prior[0], pose[1] - prior[1], float(wrap_angle(pose[3] - prior[3])))
+            if fit_icp[i] < cfg.min_icp_fitness:
+                reasons[i] = "low_icp_fitness"
+                continue
+        else:
+            pts_map = transform_points(pts, *prior)
+            corr[i] = 0.0
+            reasons[i] = "anchor"
+            n_anchor += 1
+        if odometry and window:
+            dt = (t[i] - last_t) * 1e-9
+            lx, ly, _, lyaw = window[-1].pose
+            if dt > 0:
+                velocity = np.array([pose[0] - lx, pose[1] - ly, float(wrap_angle(pose[3] - lyaw))]) / dt
+        kept[i] = True
+        if reasons[i] != "anchor":
+            reasons[i] = ""
+        final[i] = pose
+        last_t = int(t[i])
+        if not odometry and cfg.reference_pose == "localizer":
+            ref_pose, ref_pts = prior, (pts_prior if refs else pts_map)
+        else:
+            ref_pose, ref_pts = pose, pts_map
+        window.append(_Kept(sid, ref_pose, ref_pts, cKDTree(ref_pts)))
+
+    if odometry:
+        final[~kept] = np.nan
+
+    table = pd.DataFrame(
+        {
+            "scan_id": sids.astype(np.int32),
+            "t_ns": t,
+            "kept": kept,
+            "reason": reasons.astype(str),
+            "fitness_prior": fit_prior,
+            "fitness_icp": fit_icp,
+            "inlier_rmse_m": rmse,
+            "dx_m": corr[:, 0],
+            "dy_m": corr[:, 1],
+            "dyaw_rad": corr[:, 2],
+            "x_m": final[:, 0],
+            "y_m": final[:, 1],
+            "z_m": final[:, 2],
+            "yaw_rad": final[:, 3],
+        }
+    )
+    summary = summarize(table, cfg)
+    _raise_if_nothing_registered(table, cfg, summary)
+    keep_ids = sids[kept]
+    parts = [transform_points(clouds[int(s)], *final[np.flatnonzero(sids == s)[0]]) for s in keep_ids]
+    registered = pd.DataFrame(
+        {
+            "scan_id": np.repeat(keep_ids.astype(np.int32), [len(p) for p in parts]),
+            **{
+                c: (np.concatenate(parts)[:, k] if parts else np.empty(0)).astype(np.float32)
+                for k, c in enumerate("xyz")
+            },
+        }
+    )
+    log.info(
+        "register (%s): %d scans, %d sampled, %d kept (%d anchors); drops %s",
+        cfg.mode, n, len(sampled), int(kept.sum()), n_anchor, summary["counts"],
+    )
+    return RegistrationResult(registered=registered, table=table, summary=summary)
+
+
+def summarize(table: pd.DataFrame, cfg: RegistrationConfig | None = None) -> dict:
+    """Counts per reason, fraction dropped by each threshold, median corrections.
+
+    Drop fractions are given twice: of all scans (``fraction_of_scans``) and of the
+    scans that reached the check (``fraction_of_checked``: sampled scans for the fitness
+    thresholds, i.e. those passing the prior check for ``low_icp_fitness``).
+
+    Returns
+    -------
+    dict
+        JSON-serialisable.
+    """
+    reasons = table["reason"].str.replace(r"^no_pose:.*", "no_pose", regex=True)
+    counts = dict(sorted(Counter(reasons).items()))
+    n = len(table)
+    sampled = int(table["kept"].sum() + reasons.isin(["low_prior_fitness", "low_icp_fitness", "icp_failed"]).sum())
+    n_prior = int((reasons == "low_prior_fitness").sum())
+    n_icp = int((reasons == "low_icp_fitness").sum())
+    checked_prior = int(table["fitness_prior"].notna().sum())
+    checked_icp = int(table["fitness_icp"].notna().sum())
+    registered = table["kept"] & table["fitness_icp"].notna()
+    dxy = np.hypot(table.loc[registered, "dx_m"], table.loc[registered, "dy_m"])
+    dyaw = np.abs(table.loc[registered, "dyaw_rad"])
+    out = {
+        "n_scans": n,
+        "n_sampled": sampled,
+        "n_kept": int(table["kept"].sum()),
+        "n_registered": int(registered.sum()),
+        "counts": counts,
+        "fraction_of_scans": {k: v / n for k, v in counts.items()} if n else {},
+        "fraction_of_checked": {
+            "low_prior_fitness": n_prior / checked_prior if checked_prior else 0.0,
+            "low_icp_fitness": n_icp / checked_icp if checked_icp else 0.0,
+        },
+        "median_fitness_prior": float(table["fitness_prior"].median()) if checked_prior else math.nan,
+        "median_fitness_icp": float(table["fitness_icp"].median()) if checked_icp else math.nan,
+        "median_correction_m": float(np.median(dxy)) if len(dxy) else math.nan,
+        "median_correction_rad": float(np.median(dyaw)) if len(dyaw) else math.nan,
+        "p90_correction_m": float(np.percentile(dxy, 90)) if len(dxy) else math.nan,
+    }
+    if cfg is not None:
+        out["config"] = dataclasses.asdict(cfg)
+    return out
+
+
+def _raise_if_nothing_registered(table: pd.DataFrame, cfg: RegistrationConfig, summary: dict) -> None:
+    counts = summary["counts"]
+    failures = {k: v for k, v in counts.items() if k not in ("", "anchor", "not_sampled")}
+    n_kept = summary["n_kept"]
+    checked = int(table["fitness_icp"].notna().sum() + (table["reason"] == "low_prior_fitness").sum())
+    if n_kept > 0 and not (summary["n_registered"] == 0 and checked > 0):
+        return
+    if not failures:
+        raise RegistrationError(f"register: no scans to register ({len(table)} scans in the index)")
+    worst = max(failures, key=lambda k: failures[k])
+    key = REASON_THRESHOLD.get(worst, worst)
+    value = ""
+    for part in key.split(" / "):
+        if hasattr(cfg, part):
+            value += f" register.{part}={getattr(cfg, part)}"
+    raise RegistrationError(
+        f"register: no scan could be registered ({n_kept} kept without a reference) of "
+        f"{len(table)}; drops per reason {failures}; most were dropped by '{worst}' "
+        f"(threshold{value if value else ' register.' + key})"
+    )

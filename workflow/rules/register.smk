@@ -1,0 +1,40 @@
+# Registration (issue 4; thesis sections 3.2.2, 3.5, Algorithm 3 steps 2-6): every kept
+# scan in the map frame, from the localizer's pose refined by planar ICP.
+stage_schema_check("register", "../schemas/register.schema.yaml")
+
+
+def register_inputs(wildcards):
+    """Scans and index; the poses too unless the dataset registers in `odometry` mode."""
+    inputs = {
+        "scans": f"results/{wildcards.dataset}/scans.parquet",
+        "index": f"results/{wildcards.dataset}/scan_index.parquet",
+    }
+    if stage_config("register")(wildcards)["mode"] == "pose":
+        inputs["poses"] = f"results/{wildcards.dataset}/poses.parquet"
+    return inputs
+
+
+rule register:
+    input:
+        unpack(register_inputs),
+    output:
+        registered="results/{dataset}/registered.parquet",
+        registration="results/{dataset}/registration.parquet",
+        figure=report(
+            "results/{dataset}/figures/registered_map.png",
+            caption="../report/registered_map.rst",
+            category="Registration",
+        ),
+    params:
+        cfg=stage_config("register"),
+    log:
+        log_path("register"),
+    benchmark:
+        benchmark_path("register")
+    script:
+        "../../scripts/register.py"
+
+
+FINAL_OUTPUTS.extend(
+    ["results/{dataset}/registration.parquet", "results/{dataset}/figures/registered_map.png"]
+)
