@@ -1,0 +1,236 @@
+"""Figures of the scan selection (thesis Figs 5.6, 5.7, 5.8), matplotlib Agg.
+
+- :func:`plot_coverage_vs_scans`: covered area against number of scans, per ordering
+  (Fig. 5.6), with the 99 % point of each ordering marked.
+- :func:`coverage_vs_clusters` / :func:`plot_coverage_vs_clusters`: the greedy
+  ``cluster_hull`` coverage curve for several numbers of KMeans clusters (Fig. 5.7).
+- :func:`selection_timing` / :func:`plot_selection_time`: time to order n scans, the
+  lazy greedy against the reference Algorithm 1 (Fig. 5.8). The reference is
+  O(n^2) and is timed only up to ``reference_max_scans`` (default 150: about 1-2 s on
+  a 2D recording), so the figure stage stays a few seconds on a 300-scan dataset.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, fields
+from typing import Mapping, Sequence
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from floorscan.hulls import HullParams, cluster_hulls, kept_scan_ids, scan_coverage  # noqa: E402
+from floorscan.io import atomic_path  # noqa: E402
+from floorscan.selection import (  # noqa: E402
+    ORDERINGS,
+    SelectParams,
+    greedy_coverage,
+    greedy_reference,
+    k_for_fraction,
+)
+
+_STYLE = {
+    "cluster_hull": dict(color="C0", lw=2.0),
+    "convex_hull": dict(color="C1", lw=1.5),
+    "random": dict(color="C2", lw=1.2),
+    "sequential": dict(color="C3", lw=1.2),
+    "motion_filter": dict(color="C4", lw=1.2),
+}
+
+
+@dataclass(frozen=True)
+class FigureParams:
+    """The ``figure_*`` keys of the ``select`` config section.
+
+    Attributes
+    ----------
+    figure_k_clusters : tuple of int
+        Cluster counts of Fig. 5.7 (1 = convex hull).
+    figure_max_scans : int
+        Figs 5.7/5.8 use at most this many scans, evenly spaced in recording order.
+    figure_reference_max_scans : int
+        Fig. 5.8 times the reference greedy only up to this many scans.
+    """
+
+    figure_k_clusters: tuple[int, ...] = (1, 2, 5, 10, 20)
+    figure_max_scans: int = 1000
+    figure_reference_max_scans: int = 150
+
+    @classmethod
+    def from_config(cls, cfg: Mapping | None) -> "FigureParams":
+        """Take the ``figure_*`` keys of the select config (others ignored)."""
+        names = {f.name for f in fields(cls)}
+        kw = {k: v for k, v in dict(cfg or {}).items() if k in names}
+        if "figure_k_clusters" in kw:
+            kw["figure_k_clusters"] = tuple(int(k) for k in kw["figure_k_clusters"])
+        return cls(**kw)
+
+
+def _save(fig, path: str | os.PathLike) -> None:
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=120, bbox_inches="tight")
+    plt.close(fig)
+
+
+def plot_coverage_vs_scans(orderings: Mapping[str, pd.DataFrame], path: str | os.PathLike, title: str = "") -> None:
+    """Fig. 5.6: cumulative covered area (m^2) against number of scans per ordering.
+
+    ``orderings`` maps ordering name -> frame with ``rank, covered_area_m2``.
+    The point where each ordering reaches 99 % of its final area is marked.
+    """
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for name in [o for o in ORDERINGS if o in orderings] + [o for o in orderings if o not in ORDERINGS]:
+        o = orderings[name].sort_values("rank")
+        cov = o["covered_area_m2"].to_numpy()
+        n = np.arange(1, len(cov) + 1)
+        k99 = k_for_fraction(o, 0.99)
+        ax.plot(n, cov, label=f"{name} (99 % at {k99})", **_STYLE.get(name, {}))
+        if k99:
+            ax.plot([k99], [cov[k99 - 1]], "o", color=_STYLE.get(name, {}).get("color"), ms=5)
+    ax.set_xscale("log")
+    ax.set_xlabel("number of scans")
+    ax.set_ylabel("covered area (cluster hulls), m²")
+    ax.set_title(f"Coverage by ordering {title}".strip())
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    _save(fig, path)
+
+
+def _spaced(ids: np.ndarray, max_scans: int) -> np.ndarray:
+    if len(ids) <= max_scans:
+        return ids
+    return ids[np.unique(np.linspace(0, len(ids) - 1, max_scans).round().astype(int))]
+
+
+def coverage_vs_clusters(
+    registered: pd.DataFrame,
+    scan_ids: Sequence[int],
+    k_values: Sequence[int],
+    hull_params: HullParams = HullParams(),
+    raster_m: float = 0.05,
+) -> dict[int, pd.DataFrame]:
+    """Greedy ``cluster_hull`` ordering for each number of clusters (Fig. 5.7).
+
+    Parameters
+    ----------
+    registered : DataFrame
+        Map-frame points ``scan_id, x, y`` (metres).
+    scan_ids : sequence of int
+        The scans to order.
+    k_values : sequence of int
+        KMeans cluster counts; 1 gives the convex hull.
+    hull_params : HullParams
+        The other hull parameters (``k_clusters`` is replaced).
+    raster_m : float
+        Coverage raster cell, metres.
+
+    Returns
+    -------
+    dict k -> ordering frame (``rank, scan_id, covered_area_m2, gain_m2``).
+    """
+    ids = np.asarray(scan_ids, dtype=np.int64)
+    sub = registered[np.isin(registered["scan_id"].to_numpy(), ids)]
+    out = {}
+    for k in k_values:
+        p = HullParams(**{**hull_params.as_dict(), "k_clusters": int(k)})
+        h = cluster_hulls(sub, p, scan_ids=ids)
+        sid, geoms = scan_coverage(h, ids)
+        out[int(k)] = greedy_coverage(sid, geoms, raster_m)
+    return out
+
+
+def plot_coverage_vs_clusters(curves: Mapping[int, pd.DataFrame], path: str | os.PathLike, title: str = "") -> None:
+    """Fig. 5.7: covered area against number of scans, one curve per cluster count."""
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    cmap = plt.get_cmap("viridis")
+    for i, (k, o) in enumerate(sorted(curves.items())):
+        cov = o["covered_area_m2"].to_numpy()
+        label = f"k = {k}" + (" (convex hull)" if k == 1 else "") + f", final {cov[-1]:.0f} m²" if len(cov) else ""
+        ax.plot(np.arange(1, len(cov) + 1), cov, color=cmap(i / max(len(curves) - 1, 1)), label=label)
+    ax.set_xscale("log")
+    ax.set_xlabel("number of scans (greedy cluster_hull ordering)")
+    ax.set_ylabel("covered area, m²")
+    ax.set_title(f"Coverage by number of KMeans clusters {title}".strip())
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    _save(fig, path)
+
+
+def selection_timing(
+    scan_ids: Sequence[int],
+    geometries: Sequence,
+    sizes: Sequence[int],
+    reference_max_scans: int = 150,
+    raster_m: float = 0.05,
+) -> pd.DataFrame:
+    """Time the lazy and the reference greedy on the first n scans (Fig. 5.8).
+
+    Returns
+    -------
+    DataFrame
+        ``n_scans``, ``fast_s``, ``reference_s`` (NaN above ``reference_max_scans``),
+        ``identical`` (bool, orderings equal; NA when the reference was not run).
+    """
+    ids = np.asarray(scan_ids, dtype=np.int64)
+    geoms = np.asarray(geometries, dtype=object)
+    rows = []
+    for n in sizes:
+        n = int(min(n, len(ids)))
+        t0 = time.perf_counter()
+        fast = greedy_coverage(ids[:n], geoms[:n], raster_m)
+        fast_s = time.perf_counter() - t0
+        ref_s, same = np.nan, pd.NA
+        if n <= reference_max_scans:
+            t0 = time.perf_counter()
+            ref = greedy_reference(ids[:n], geoms[:n], raster_m)
+            ref_s = time.perf_counter() - t0
+            same = bool(np.array_equal(fast["scan_id"].to_numpy(), ref["scan_id"].to_numpy()))
+        rows.append({"n_scans": n, "fast_s": fast_s, "reference_s": ref_s, "identical": same})
+    return pd.DataFrame(rows)
+
+
+def plot_selection_time(timing: pd.DataFrame, path: str | os.PathLike, title: str = "") -> None:
+    """Fig. 5.8: selection time against number of scans, lazy vs reference greedy."""
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    ax.plot(timing["n_scans"], timing["fast_s"], "o-", label="lazy greedy (production)")
+    ref = timing.dropna(subset=["reference_s"])
+    ax.plot(ref["n_scans"], ref["reference_s"], "s-", label="Algorithm 1 reference")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("number of scans")
+    ax.set_ylabel("selection time, s")
+    ax.set_title(f"Greedy selection time {title}".strip())
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    _save(fig, path)
+
+
+def selection_figures(
+    registered: pd.DataFrame,
+    registration: pd.DataFrame,
+    hulls: pd.DataFrame,
+    orderings: Mapping[str, pd.DataFrame],
+    hull_params: HullParams,
+    select_params: SelectParams,
+    params: FigureParams,
+    out_coverage: str | os.PathLike,
+    out_clusters: str | os.PathLike,
+    out_timing: str | os.PathLike,
+    title: str = "",
+) -> pd.DataFrame:
+    """Write the three selection figures; returns the Fig. 5.8 timing table."""
+    plot_coverage_vs_scans(orderings, out_coverage, title)
+    ids = _spaced(kept_scan_ids(registration), params.figure_max_scans)
+    curves = coverage_vs_clusters(registered, ids, params.figure_k_clusters, hull_params, select_params.raster_m)
+    plot_coverage_vs_clusters(curves, out_clusters, title)
+    sid, geoms = scan_coverage(hulls, ids)
+    sizes = sorted({int(s) for s in np.unique(np.geomspace(10, max(len(ids), 10), 8).round())} | {len(ids)})
+    sizes = [s for s in sizes if 0 < s <= len(ids)]
+    timing = selection_timing(sid, geoms, sizes, params.figure_reference_max_scans, select_params.raster_m)
+    plot_selection_time(timing, out_timing, title)
+    return timing

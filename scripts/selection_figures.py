@@ -1,0 +1,26 @@
+"""Figures of the select stage: thesis Figs 5.6, 5.7 and 5.8."""
+from pathlib import Path
+
+from floorscan.figures_selection import FigureParams, selection_figures
+from floorscan.hulls import HullParams
+from floorscan.io import read_table
+from floorscan.selection import SelectParams
+from floorscan.workflow import stage_log
+
+with stage_log(snakemake) as log:
+    cfg = dict(snakemake.params.cfg)
+    fig_params = FigureParams.from_config(cfg)
+    timing = selection_figures(
+        registered=read_table(snakemake.input.registered),
+        registration=read_table(snakemake.input.registration),
+        hulls=read_table(snakemake.input.hulls),
+        orderings={Path(p).stem: read_table(p) for p in snakemake.input.orderings},
+        hull_params=HullParams.from_config(snakemake.params.hulls_cfg),
+        select_params=SelectParams.from_config(cfg),
+        params=fig_params,
+        out_coverage=snakemake.output.coverage,
+        out_clusters=snakemake.output.clusters,
+        out_timing=snakemake.output.timing,
+        title=snakemake.wildcards.dataset,
+    )
+    log.info("selection time:\n%s", timing.to_string(index=False))

@@ -1,0 +1,153 @@
+"""Coverage hulls (floorscan.hulls; thesis section 3.3.2, Algorithm 2)."""
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import shapely
+import yaml
+
+from floorscan import hulls as fh
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def frame(points_by_scan: dict[int, np.ndarray]) -> pd.DataFrame:
+    parts = []
+    for sid, p in points_by_scan.items():
+        p = np.asarray(p, dtype=np.float64).reshape(-1, 2)
+        parts.append(pd.DataFrame({"scan_id": np.int32(sid), "x": p[:, 0].astype(np.float32),
+                                   "y": p[:, 1].astype(np.float32), "z": np.float32(0)}))
+    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(
+        {"scan_id": np.zeros(0, np.int32), "x": np.zeros(0, np.float32), "y": np.zeros(0, np.float32),
+         "z": np.zeros(0, np.float32)})
+
+
+def l_shape(step: float = 0.05) -> np.ndarray:
+    """Grid points filling an L: [0,4]x[0,1] and [0,1]x[0,4] (area 7 m^2; convex hull 11.5)."""
+    g = np.arange(0, 4 + step / 2, step)
+    xx, yy = np.meshgrid(g, g)
+    p = np.column_stack([xx.ravel(), yy.ravel()])
+    return p[(p[:, 1] <= 1 + 1e-9) | (p[:, 0] <= 1 + 1e-9)]
+
+
+def test_l_shape_convex_vs_cluster_hull_area():
+    pts = {0: l_shape()}
+    convex = fh.convex_hulls(frame(pts))
+    assert convex["cluster"].tolist() == [fh.CONVEX_CLUSTER]
+    assert convex["area_m2"].iloc[0] == pytest.approx(11.5, abs=1e-4)  # hull (0,0)(4,0)(4,1)(1,4)(0,4)
+    h = fh.cluster_hulls(frame(pts), fh.HullParams(k_clusters=10, seed=3))
+    assert len(h) == 10 and (h["area_m2"] > 0).all()
+    _, cov = fh.scan_coverage(h)
+    # cluster hulls follow the L (area 7): thin gaps between clusters are lost, and only
+    # a cluster straddling the inner corner spills a small triangle outside
+    assert 6.3 < cov[0].area < 7.05
+    ell = shapely.union_all([shapely.box(0, 0, 4, 1), shapely.box(0, 0, 1, 4)])
+    assert cov[0].difference(ell).area < 0.05
+
+
+def test_k1_is_the_convex_hull():
+    pts = {4: l_shape(0.1)}
+    one = fh.cluster_hulls(frame(pts), fh.HullParams(k_clusters=1))
+    assert one["area_m2"].sum() == pytest.approx(11.5, abs=1e-4)
+
+
+def test_outlier_is_not_covered():
+    g = np.arange(0, 1.0001, 0.02)
+    xx, yy = np.meshgrid(g, g)
+    blob = np.column_stack([xx.ravel(), yy.ravel()])
+    pts = {1: np.vstack([blob, [[30.0, 0.5]]])}
+    assert fh.convex_hulls(frame(pts))["area_m2"].iloc[0] > 14.0  # the outlier inflates the hull
+    h = fh.cluster_hulls(frame(pts), fh.HullParams(k_clusters=10, seed=0))
+    total = fh.scan_coverage(h)[1][0].area
+    assert 0.8 < total <= 1.0 + 1e-6
+
+
+def test_radius_rules_and_labels():
+    p = l_shape(0.1)
+    near = fh.cluster_labels(p, fh.HullParams(radius_rule="nearest_centre", seed=1), scan_id=7)
+    glob = fh.cluster_labels(p, fh.HullParams(radius_rule="global_min", seed=1), scan_id=7)
+    tight = fh.cluster_labels(p, fh.HullParams(radius_factor=0.25, seed=1), scan_id=7)
+    assert near.shape == (len(p),) and set(np.unique(near)) <= set(range(-1, 10))
+    # the global radius is the smallest per-centre radius: it keeps a subset
+    assert np.all((glob == -1) | (glob == near))
+    assert (glob >= 0).sum() <= (near >= 0).sum()
+    assert (tight >= 0).sum() < (near >= 0).sum()
+    # same centres for the same seed, so a point kept by both has the same label
+    assert np.array_equal(near, fh.cluster_labels(p, fh.HullParams(seed=1), scan_id=7))
+
+
+def test_degenerate_scans_have_zero_area_and_do_not_crash():
+    pts = {
+        0: np.array([[0.0, 0.0], [1.0, 1.0]]),  # 2 points
+        1: np.column_stack([np.linspace(0, 5, 40), 2 * np.linspace(0, 5, 40)]),  # collinear
+        2: np.array([[3.0, 3.0]] * 20),  # one distinct point repeated
+        3: l_shape(0.2),
+    }
+    ids = [0, 1, 2, 3, 9]  # 9: kept but no points
+    h = fh.cluster_hulls(frame(pts), fh.HullParams(k_clusters=10), scan_ids=ids)
+    per = h.groupby("scan_id")["area_m2"].sum()
+    assert per.loc[[0, 1, 2, 9]].tolist() == [0.0, 0.0, 0.0, 0.0]
+    assert per.loc[3] > 5.0
+    assert sorted(h["scan_id"].unique()) == ids
+    assert h.loc[h["area_m2"] == 0, "geometry"].map(lambda g: g.is_empty and g.geom_type == "Polygon").all()
+    c = fh.convex_hulls(frame(pts), scan_ids=ids)
+    assert c["scan_id"].tolist() == ids
+    assert c["area_m2"].tolist()[:3] == [0.0, 0.0, 0.0] and c["area_m2"].iloc[4] == 0.0
+    empty = fh.cluster_hulls(frame({}), scan_ids=[5])
+    assert empty["area_m2"].tolist() == [0.0]
+
+
+def test_seeded_determinism_and_independence_of_other_scans():
+    rng = np.random.default_rng(0)
+    pts = {s: rng.uniform(0, 10, (600, 2)) for s in range(4)}
+    p = fh.HullParams(sample_size=200, seed=11)
+    a = fh.to_table(fh.cluster_hulls(frame(pts), p))
+    b = fh.to_table(fh.cluster_hulls(frame(pts), p))
+    assert a.equals(b)
+    alone = fh.to_table(fh.cluster_hulls(frame({2: pts[2]}), p))
+    sub = a.filter(np.asarray(a["scan_id"]) == 2)
+    assert sub["geometry"].to_pylist() == alone["geometry"].to_pylist()
+
+
+def test_wkb_table_roundtrip_little_endian_2d():
+    h = fh.cluster_hulls(frame({0: l_shape(0.2)}), fh.HullParams(k_clusters=3))
+    t = fh.to_table(h)
+    assert t.schema.equals(fh.HULLS)
+    wkb = t["geometry"].to_pylist()
+    assert all(w[0] == 1 for w in wkb)  # little endian
+    back = fh.from_table(t.to_pandas())
+    assert np.allclose(shapely.area(back["geometry"].to_numpy()), h["area_m2"])
+    assert not shapely.has_z(back["geometry"].to_numpy()).any()
+    with pytest.raises(KeyError, match="hulls.parquet"):
+        fh.from_table(t.to_pandas().drop(columns="area_m2"), "hulls.parquet")
+
+
+def test_compute_hulls_counts_and_kept_only():
+    pts = {0: l_shape(0.2), 1: l_shape(0.2) + 10, 2: np.array([[0.0, 0.0]])}
+    registration = pd.DataFrame({"scan_id": [0, 1, 2, 3], "kept": [True, False, True, True]})
+    cluster, convex, counts = fh.compute_hulls(frame(pts), registration, fh.HullParams(k_clusters=4))
+    assert sorted(cluster["scan_id"].unique()) == [0, 2, 3]
+    assert convex["scan_id"].tolist() == [0, 2, 3]
+    assert counts["n_scans"] == 3 and counts["n_no_points"] == 1 and counts["n_zero_area"] == 2
+    assert counts["n_points_ignored"] == len(pts[1])
+    with pytest.raises(KeyError, match="registration.parquet"):
+        fh.compute_hulls(frame(pts), registration.drop(columns="kept"))
+
+
+def test_bad_input_errors():
+    with pytest.raises(ValueError, match=r"\(N, 2\)"):
+        fh.cluster_labels(np.zeros((5, 3)))
+    with pytest.raises(ValueError, match="NaN"):
+        fh.cluster_labels(np.array([[0.0, np.nan], [1, 1], [2, 2]]), scan_id=4)
+    with pytest.raises(ValueError, match="unknown hulls config keys"):
+        fh.HullParams.from_config({"k": 3})
+    with pytest.raises(ValueError, match="k_clusters"):
+        fh.HullParams(k_clusters=0)
+
+
+def test_schema_defaults_match_dataclass():
+    schema = yaml.safe_load((REPO / "workflow/schemas/hulls.schema.yaml").read_text())
+    defaults = {k: v["default"] for k, v in schema["properties"].items()}
+    assert defaults == fh.HullParams().as_dict()

@@ -1,0 +1,255 @@
+"""Scan orderings (floorscan.selection; thesis section 3.3, Algorithm 1) and figures."""
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import shapely
+import yaml
+from shapely.geometry import box
+
+from floorscan import hulls as fh
+from floorscan import selection as fs
+
+REPO = Path(__file__).resolve().parents[1]
+DATA = REPO.parent / "shared" / "data"
+INTEL_LOG = DATA / "radish" / "intel-corrected.log.gz"
+
+
+# ----------------------------------------------------------------------------------
+# synthetic 2D scans: numpy ray casting against a Shapely floor plan
+# ----------------------------------------------------------------------------------
+def _building():
+    """Two rooms (10 x 6, 6 x 6 m) joined by a 1.2 m door, and a corridor below."""
+    return shapely.union_all([box(0, 0, 10, 6), box(11, 0, 17, 6), box(10, 2.4, 11, 3.6),
+                              box(0, -3, 17, -1), box(4, -1, 5.2, 0)])
+
+
+def _walls(free):
+    rings = [free.exterior, *free.interiors]
+    return np.concatenate([np.column_stack([np.asarray(r.coords)[:-1], np.asarray(r.coords)[1:]]) for r in rings])
+
+
+def raycast_scans(n_scans: int, seed: int = 0, n_beams: int = 360, max_range_m: float = 8.0):
+    """Registered 2D scans along a path through :func:`_building` and their poses:
+    (registered points frame, registration frame)."""
+    rng = np.random.default_rng(seed)
+    free = _building()
+    segs = _walls(free)
+    path = np.array([[1, -2], [16, -2], [16, -2], [4.6, -2], [4.6, 3], [9, 3], [14, 3], [14, 5]], float)
+    s = np.linspace(0, 1, n_scans)
+    seglen = np.hypot(*np.diff(path, axis=0).T)
+    cum = np.r_[0, np.cumsum(seglen)] / seglen.sum()
+    i = np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(seglen) - 1)
+    f = np.where(seglen[i] > 0, (s - cum[i]) / np.maximum(cum[i + 1] - cum[i], 1e-12), 0)
+    xy = path[i] + (path[i + 1] - path[i]) * f[:, None] + rng.normal(0, 0.05, (n_scans, 2))
+    yaw = rng.uniform(-np.pi, np.pi, n_scans)
+    frames = []
+    for sid in range(n_scans):
+        ang = yaw[sid] + np.linspace(-np.pi, np.pi, n_beams, endpoint=False)
+        d = np.column_stack([np.cos(ang), np.sin(ang)])
+        p0 = segs[:, :2] - xy[sid]
+        e = segs[:, 2:] - segs[:, :2]
+        den = d[:, :1] * e[None, :, 1] - d[:, 1:] * e[None, :, 0]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (p0[None, :, 0] * e[None, :, 1] - p0[None, :, 1] * e[None, :, 0]) / den
+            u = (p0[None, :, 0] * d[:, 1:] - p0[None, :, 1] * d[:, :1]) / den
+        t = np.where((den != 0) & (t > 1e-9) & (u >= 0) & (u <= 1), t, np.inf).min(axis=1)
+        t = t + rng.normal(0, 0.01, t.shape)
+        ok = t < max_range_m
+        pts = xy[sid] + d[ok] * t[ok, None]
+        frames.append(pd.DataFrame({"scan_id": np.int32(sid), "x": pts[:, 0].astype(np.float32),
+                                    "y": pts[:, 1].astype(np.float32), "z": np.float32(0)}))
+    registration = pd.DataFrame({
+        "scan_id": np.arange(n_scans, dtype=np.int32),
+        "t_ns": (np.arange(n_scans) * 250_000_000).astype(np.int64),
+        "kept": True, "x_m": xy[:, 0], "y_m": xy[:, 1], "yaw_rad": yaw,
+    })
+    return pd.concat(frames, ignore_index=True), registration
+
+
+@pytest.fixture(scope="module")
+def synthetic():
+    registered, registration = raycast_scans(60, seed=2)
+    hulls = fh.cluster_hulls(registered, fh.HullParams(seed=0))
+    convex = fh.convex_hulls(registered)
+    ids, geoms = fh.scan_coverage(hulls)
+    return registered, registration, hulls, convex, ids, geoms
+
+
+# ----------------------------------------------------------------------------------
+def test_raster_counts_cells_by_centre():
+    sq = box(0.01, 0.01, 1.01, 2.01)
+    holed = box(0, 0, 2, 2).difference(box(0.5, 0.5, 1.5, 1.5))
+    cov = fs.RasterCoverage(np.array([sq, shapely.Polygon(), holed, shapely.MultiPolygon([box(5, 5, 6, 6), box(7, 5, 7.5, 6)])], dtype=object), 0.1)
+    assert cov.counts.tolist() == [200, 0, 300, 150]
+    assert len(np.unique(cov.cells_of(2))) == 300
+    assert cov.gains([0, 2]).tolist() == [200, 300]
+    cov.add(2)
+    # box(0.01..1.01, 0.01..2.01) minus holed square's cells
+    assert cov.gains([0]).tolist() == [200 - 150]
+
+
+def test_greedy_hand_geometry_ties_and_zero_area_last():
+    ids = [5, 3, 8, 0, 1]
+    geoms = [box(0, 0, 2, 2), box(1, 0, 3, 2), box(10, 0, 11, 1), shapely.Polygon(),
+             shapely.LineString([(0, 0), (5, 5)]).buffer(0)]  # empty after buffer(0): zero area
+    for fn in (fs.greedy_coverage, fs.greedy_reference):
+        o = fn(ids, geoms, raster_m=0.1)
+        # 5 and 3 tie at 4 m^2: lowest id (3) first; then 5 adds 2, 8 adds 1; empties last by id
+        assert o["scan_id"].tolist() == [3, 5, 8, 0, 1]
+        assert o["gain_m2"].round(9).tolist() == [4.0, 2.0, 1.0, 0.0, 0.0]
+        assert o["covered_area_m2"].round(9).tolist() == [4.0, 6.0, 7.0, 7.0, 7.0]
+        assert o["rank"].tolist() == [0, 1, 2, 3, 4]
+
+
+def test_fast_greedy_equals_reference_on_synthetic_scans(synthetic):
+    *_, ids, geoms = synthetic
+    stats = {}
+    fast = fs.greedy_coverage(ids, geoms, 0.05, stats=stats)
+    ref = fs.greedy_reference(ids, geoms, 0.05)
+    pd.testing.assert_frame_equal(fast, ref)
+    assert stats["evaluations"] < len(ids) * (len(ids) + 1) / 2  # lazy did less work
+    assert fast["covered_area_m2"].iloc[-1] == pytest.approx(shapely.union_all(geoms).area, rel=0.03)
+
+
+def test_raster_greedy_picks_what_exact_algorithm1_picks(synthetic):
+    """The raster greedy and thesis Algorithm 1 on exact Shapely unions pick the same
+    first scans; afterwards only near-tied scans (gains within the raster's error) may
+    swap, and the covered areas stay within 1 %."""
+    *_, ids, geoms = synthetic
+    exact = fs.greedy_exact(ids, geoms, max_scans=12)
+    raster = fs.greedy_coverage(ids, geoms, 0.02)
+    assert raster["scan_id"].tolist()[:8] == exact["scan_id"].tolist()[:8]
+    along = [shapely.union_all(geoms[np.isin(ids, raster["scan_id"].to_numpy()[:k])]).area for k in range(1, 13)]
+    assert np.allclose(along, exact["covered_area_m2"], rtol=0.01)
+
+
+def _intel_registered(step: int = 3):
+    reg = REPO / "results" / "intel" / "registered.parquet"
+    rgn = REPO / "results" / "intel" / "registration.parquet"
+    if reg.exists() and rgn.exists():
+        from floorscan.io import read_table
+
+        registered, registration = read_table(reg), read_table(rgn)
+        keep = registration.loc[registration["kept"], "scan_id"].to_numpy()[::step]
+        return registered[registered["scan_id"].isin(keep)], registration
+    if not INTEL_LOG.exists():
+        pytest.skip(f"real recording {INTEL_LOG} absent (../shared/data not mounted)")
+    from floorscan.ingest.carmen import parse_carmen
+
+    scans, _ = parse_carmen(INTEL_LOG)
+    frames, rows = [], []
+    for sid, s in list(enumerate(scans))[::step]:
+        x, y, th = s["pose"]
+        p = np.asarray(s["points"], dtype=np.float64)
+        c, si = np.cos(th), np.sin(th)
+        frames.append(pd.DataFrame({"scan_id": np.int32(sid), "x": (x + c * p[:, 0] - si * p[:, 1]).astype(np.float32),
+                                    "y": (y + si * p[:, 0] + c * p[:, 1]).astype(np.float32), "z": np.float32(0)}))
+        rows.append({"scan_id": sid, "t_ns": int(s["t_s"] * 1e9), "kept": True, "x_m": x, "y_m": y, "yaw_rad": th})
+    return pd.concat(frames, ignore_index=True), pd.DataFrame(rows)
+
+
+@pytest.mark.realdata
+@pytest.mark.slow
+def test_fast_greedy_equals_reference_on_intel():
+    registered, _ = _intel_registered(step=3)  # ~300 scans of the Intel Research Lab
+    hulls = fh.cluster_hulls(registered, fh.HullParams())
+    ids, geoms = fh.scan_coverage(hulls)
+    assert len(ids) > 250
+    fast = fs.greedy_coverage(ids, geoms, 0.1)
+    ref = fs.greedy_reference(ids, geoms, 0.1)
+    pd.testing.assert_frame_equal(fast, ref)
+    assert fast["covered_area_m2"].iloc[-1] > 100.0
+
+
+def test_motion_filter_hand_poses():
+    t = np.array([0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 6.0, 6.1, 6.2])
+    x = np.array([0.0, 0.10, 0.25, 0.40, 0.40, 0.40, 0.41, 0.41, np.nan, 0.41])
+    yaw = np.deg2rad([0, 0, 0, 0, 0.5, 1.5, 1.5, 1.5, 1.5, 1.5])
+    kept = fs.motion_filter_mask((t * 1e9).astype(np.int64), x, np.zeros_like(x), yaw)
+    # 0 first; 2 moved 0.25 m; 5 turned 1.5 deg; 7 after 5.4 s; 8 has no pose
+    assert np.flatnonzero(kept).tolist() == [0, 2, 5, 7]
+    poses = pd.DataFrame({"scan_id": np.arange(10)[::-1], "t_ns": (t * 1e9).astype(np.int64)[::-1],
+                          "x_m": x[::-1], "y_m": 0.0, "yaw_rad": yaw[::-1]})
+    poses["scan_id"] = np.arange(10)[::-1]
+    assert fs.motion_filter_order(poses).tolist() == [0, 2, 5, 7, 1, 3, 4, 6, 8, 9]
+    # thresholds are configurable; yaw wraps at +-pi (179.8 -> -179.8 deg is 0.4 deg)
+    wrap = fs.motion_filter_mask(np.array([0, 1, 2]), np.zeros(3), np.zeros(3), np.deg2rad([179.8, -179.8, -178.0]))
+    assert wrap.tolist() == [True, False, True]
+    loose = fs.motion_filter_mask((t[:8] * 1e9).astype(np.int64), x[:8], np.zeros(8), yaw[:8],
+                                  max_distance_m=1.0, max_angle_rad=1.0, max_time_s=10.0)
+    assert np.flatnonzero(loose).tolist() == [0]
+
+
+def test_coverage_fraction_and_first_k():
+    o = pd.DataFrame({"rank": [0, 1, 2, 3], "scan_id": [7, 2, 9, 4],
+                      "covered_area_m2": [4.0, 6.0, 7.0, 7.0], "gain_m2": [4.0, 2.0, 1.0, 0.0]})
+    assert fs.k_for_fraction(o, 0.5) == 1
+    assert fs.k_for_fraction(o, 0.85) == 2  # 5.95 m^2
+    assert fs.k_for_fraction(o, 0.9) == 3  # 6.3 m^2
+    assert fs.k_for_fraction(o, 1.0) == 3
+    assert fs.first_k(o, fraction=0.85).tolist() == [7, 2]
+    assert fs.first_k(o, count=3).tolist() == [7, 2, 9]
+    assert fs.first_k(o, count=10).tolist() == [7, 2, 9, 4]
+    with pytest.raises(ValueError, match="exactly one"):
+        fs.first_k(o, count=2, fraction=0.5)
+    with pytest.raises(ValueError, match="fraction"):
+        fs.first_k(o, fraction=1.5)
+    s = fs.summarize({"x": o})
+    assert s[["k_90", "k_95", "k_99"]].iloc[0].tolist() == [3, 3, 3]
+
+
+def test_random_and_sequential_orders():
+    ids = np.arange(50)[::-1]
+    a, b = fs.random_order(ids, 4), fs.random_order(ids, 4)
+    assert np.array_equal(a, b) and sorted(a.tolist()) == list(range(50))
+    assert not np.array_equal(a, fs.random_order(ids, 5))
+    assert fs.sequential_order([3, 1, 2], [30, 10, 10]).tolist() == [1, 2, 3]
+
+
+def test_select_stage_all_orderings(synthetic):
+    _, registration, hulls, convex, ids, _ = synthetic
+    h = fh.from_table(fh.to_table(hulls).to_pandas())  # as read from hulls.parquet
+    c = fh.to_table(convex).to_pandas()  # WKB geometry is accepted as well
+    orderings, summary = fs.select_stage(h, c, registration, fs.SelectParams())
+    assert list(orderings) == list(fs.ORDERINGS)
+    finals = []
+    for name, o in orderings.items():
+        assert sorted(o["scan_id"].tolist()) == sorted(ids.tolist()), name
+        assert (np.diff(o["covered_area_m2"]) >= 0).all()
+        finals.append(o["covered_area_m2"].iloc[-1])
+    assert np.ptp(finals) < 1e-9  # the same union, counted on the same raster
+    s = summary.set_index("ordering")
+    assert s.loc["cluster_hull", "k_90"] < s.loc["sequential", "k_90"]
+    assert (s["k_90"] <= s["k_95"]).all() and (s["k_95"] <= s["k_99"]).all()
+    assert s.loc["sequential", "k_99"] <= len(ids)
+    # the motion filter keeps scans 0.35 m apart: it keeps nearly all, in recording order
+    assert orderings["motion_filter"]["scan_id"].iloc[0] == 0
+
+
+def test_schema_defaults_match_dataclasses():
+    from floorscan.figures_selection import FigureParams
+
+    schema = yaml.safe_load((REPO / "workflow/schemas/select.schema.yaml").read_text())
+    defaults = {k: v["default"] for k, v in schema["properties"].items()}
+    fig = {k: list(v) if isinstance(v, tuple) else v for k, v in FigureParams().__dict__.items()}
+    assert defaults == {**fs.SelectParams().as_dict(), **fig}
+    with pytest.raises(ValueError, match="unknown select config keys"):
+        fs.SelectParams.from_config({"tile": 3})
+
+
+def test_figures(synthetic, tmp_path):
+    from floorscan.figures_selection import FigureParams, selection_figures
+
+    registered, registration, hulls, convex, ids, _ = synthetic
+    orderings, _ = fs.select_stage(hulls, convex, registration)
+    out = [tmp_path / f"{n}.png" for n in ("cov", "clu", "time")]
+    timing = selection_figures(registered, registration, hulls, orderings, fh.HullParams(), fs.SelectParams(),
+                               FigureParams(figure_k_clusters=(1, 10), figure_reference_max_scans=30),
+                               *out, title="synthetic")
+    assert all(p.stat().st_size > 10_000 for p in out)
+    assert timing["n_scans"].max() == len(ids)
+    ran = timing.dropna(subset=["reference_s"])
+    assert len(ran) >= 2 and ran["identical"].all()
