@@ -9,6 +9,9 @@ min_version("9.14.8")
 configfile: "config/config.yaml"
 
 
+report: "workflow/report/workflow.rst"
+
+
 validate(config, "workflow/schemas/config.schema.yaml")
 
 
@@ -17,6 +20,8 @@ include: "workflow/rules/simulate.smk"
 include: "workflow/rules/ingest.smk"
 include: "workflow/rules/register.smk"
 include: "workflow/rules/select.smk"
+include: "workflow/rules/walls.smk"
+include: "workflow/rules/score.smk"
 
 
 rule all:

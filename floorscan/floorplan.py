@@ -1,0 +1,704 @@
+"""Floor plan: one wall per wall from the wall segments of many scans, and its exports.
+
+Wall extraction runs per scan, so one wall of the building is seen by many scans and
+appears as many overlapping segments (thesis section 5.1 names this duplicate
+problem). :func:`merge_segments` merges the segments that describe one wall face;
+:func:`pair_faces` pairs the two faces of a wall (parallel, 5 to 40 cm apart,
+overlapping) into one wall with its thickness; :func:`build_floorplan` does both.
+The plan is written as GeoJSON (people, GIS, the scorer), SVG (a browser), DXF (CAD,
+ezdxf) and IFC (BIM, IfcOpenShell: an ``IfcWall`` per wall in an
+``IfcBuildingStorey``), the thesis's purpose (Chapter 1). Every file is written
+atomically (:func:`floorscan.io.atomic_path`).
+
+Coordinates are metres in the map frame of the recording (a local frame, no CRS).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import logging
+import os
+import uuid
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+import numpy as np
+import pandas as pd
+
+from floorscan.io import atomic_path
+
+log = logging.getLogger(__name__)
+
+#: Columns of :attr:`FloorPlan.walls`.
+WALL_COLUMNS = [
+    "wall_id", "x0", "y0", "x1", "y1", "length_m", "thickness_m", "height_m",
+    "paired", "n_faces", "n_segments", "n_inliers",
+]  # fmt: skip
+#: Columns of :attr:`FloorPlan.faces`.
+FACE_COLUMNS = ["face_id", "wall_id", "x0", "y0", "x1", "y1", "length_m", "n_segments", "n_inliers"]
+
+
+@dataclass(frozen=True)
+class FloorplanParams:
+    """Merge and pairing parameters (config section ``floorplan``).
+
+    Attributes
+    ----------
+    merge_angle_deg : float
+        Segments of one face differ in direction by at most this, degrees.
+    merge_distance_m : float
+        ... and the ends of the shorter lie within this of the longer's line, metres.
+    merge_gap_m : float
+        ... and they overlap or leave a gap of at most this along the line, metres.
+    max_passes : int
+        Merge passes (merged faces may touch faces they did not touch before).
+    pair_angle_deg : float
+        Two faces of one wall differ in direction by at most this, degrees.
+    pair_min_m, pair_max_m : float
+        Distance between the two faces of one wall (its thickness), metres.
+    pair_min_overlap : float
+        The two faces overlap along the wall by at least this fraction of the
+        shorter face.
+    default_thickness_m : float
+        Thickness of a wall of which one face was seen, metres.
+    wall_height_m : float
+        Height of every wall (IFC extrusion, GeoJSON ``height_m``), metres.
+    min_length_m : float
+        Merged faces shorter than this are dropped, metres.
+    """
+
+    merge_angle_deg: float = 3.0
+    merge_distance_m: float = 0.05
+    merge_gap_m: float = 0.3
+    max_passes: int = 3
+    pair_angle_deg: float = 3.0
+    pair_min_m: float = 0.05
+    pair_max_m: float = 0.40
+    pair_min_overlap: float = 0.5
+    default_thickness_m: float = 0.10
+    wall_height_m: float = 2.5
+    min_length_m: float = 0.3
+
+    def __post_init__(self):
+        if not self.pair_min_m < self.pair_max_m:
+            raise ValueError(
+                f"floorplan.pair_min_m ({self.pair_min_m}) must be below pair_max_m ({self.pair_max_m})"
+            )
+
+
+def params_from_config(cfg: Mapping[str, Any] | None) -> FloorplanParams:
+    """:class:`FloorplanParams` of the ``floorplan`` config section.
+
+    Raises
+    ------
+    KeyError
+        For a key the class does not know.
+    """
+    values = dict(cfg or {})
+    names = {f.name for f in dataclasses.fields(FloorplanParams)}
+    unknown = sorted(set(values) - names)
+    if unknown:
+        raise KeyError(f"unknown floorplan config keys {unknown}; expected {sorted(names)}")
+    return FloorplanParams(**values)
+
+
+@dataclass
+class FloorPlan:
+    """A merged floor plan.
+
+    Attributes
+    ----------
+    walls : pandas.DataFrame
+        One row per wall (:data:`WALL_COLUMNS`): axis ``x0, y0, x1, y1`` (centre
+        line, metres), ``thickness_m``, ``height_m``, ``paired`` (both faces seen).
+    faces : pandas.DataFrame
+        One row per merged face (:data:`FACE_COLUMNS`), ``wall_id`` of its wall.
+    """
+
+    walls: pd.DataFrame
+    faces: pd.DataFrame
+
+    def footprints(self):
+        """Wall polygons (shapely), the axis buffered by half the thickness, flat ends."""
+        import shapely
+
+        lines = shapely.linestrings(
+            np.stack([self.walls[["x0", "y0"]].to_numpy(), self.walls[["x1", "y1"]].to_numpy()], axis=1)
+        ) if len(self.walls) else np.array([], dtype=object)
+        return shapely.buffer(lines, self.walls["thickness_m"].to_numpy() / 2.0, cap_style="flat")
+
+
+# --------------------------------------------------------------------------------------
+# Merge
+# --------------------------------------------------------------------------------------
+
+
+def _axial_angle(seg: np.ndarray) -> np.ndarray:
+    return np.mod(np.arctan2(seg[:, 3] - seg[:, 1], seg[:, 2] - seg[:, 0]), np.pi)
+
+
+def _angle_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    d = np.abs(a - b) % np.pi
+    return np.minimum(d, np.pi - d)
+
+
+def _candidate_pairs(seg: np.ndarray, distance: float) -> tuple[np.ndarray, np.ndarray]:
+    """Index pairs (i < j) of segments closer than ``distance`` (shapely STRtree)."""
+    import shapely
+
+    if len(seg) < 2:
+        return np.empty(0, np.int64), np.empty(0, np.int64)
+    lines = shapely.linestrings(np.stack([seg[:, :2], seg[:, 2:]], axis=1))
+    tree = shapely.STRtree(lines)
+    i, j = tree.query(lines, predicate="dwithin", distance=distance)
+    keep = i < j
+    return i[keep], j[keep]
+
+
+def _line_geometry(seg: np.ndarray, i: np.ndarray, j: np.ndarray):
+    """For pairs (i, j): the longer one's unit direction/normal/midpoint, and the
+    shorter one's endpoints, as arrays."""
+    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    swap = length[i] < length[j]
+    a = np.where(swap, j, i)  # longer
+    b = np.where(swap, i, j)  # shorter
+    d = (seg[a, 2:] - seg[a, :2]) / np.maximum(length[a], 1e-12)[:, None]
+    n = np.stack([-d[:, 1], d[:, 0]], axis=1)
+    return a, b, d, n, length
+
+
+def _union_find(n: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Connected component label (0..) of each of ``n`` nodes given edges (i, j)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    g = coo_matrix((np.ones(len(i)), (i, j)), shape=(n, n))
+    _, labels = connected_components(g, directed=False)
+    return labels
+
+
+def fit_segments(seg: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """One segment fitted to several (weighted total least squares over their lengths).
+
+    Each segment counts as its weight spread evenly along it: the line minimises the
+    weighted sum of squared distances of those masses (centroid ``m = sum w_i m_i /
+    sum w_i``; direction the major axis of ``sum w_i [(m_i - m)(m_i - m)^T + L_i^2 / 12
+    d_i d_i^T]``). The extent is the union of the segments' projections on it.
+
+    Parameters
+    ----------
+    seg : (M, 4) float ndarray
+        Segments ``x0, y0, x1, y1``, metres.
+    weights : (M,) float ndarray
+        Positive weights (e.g. inlier counts).
+
+    Returns
+    -------
+    (4,) float64 ndarray
+        The merged segment, metres.
+    """
+    seg = np.asarray(seg, dtype=np.float64)
+    w = np.asarray(weights, dtype=np.float64)
+    if len(seg) == 1:
+        return seg[0].copy()
+    mid = 0.5 * (seg[:, :2] + seg[:, 2:])
+    vec = seg[:, 2:] - seg[:, :2]
+    length = np.hypot(vec[:, 0], vec[:, 1])
+    d = vec / np.maximum(length, 1e-12)[:, None]
+    m = (w[:, None] * mid).sum(axis=0) / w.sum()
+    r = mid - m
+    cov = np.einsum("i,ij,ik->jk", w, r, r) + np.einsum("i,ij,ik->jk", w * length**2 / 12.0, d, d)
+    phi = 0.5 * np.arctan2(2.0 * cov[0, 1], cov[0, 0] - cov[1, 1])
+    u = np.array([np.cos(phi), np.sin(phi)])
+    t = np.concatenate([(seg[:, :2] - m) @ u, (seg[:, 2:] - m) @ u])
+    a, b = m + t.min() * u, m + t.max() * u
+    return np.array([a[0], a[1], b[0], b[1]])
+
+
+def merge_segments(
+    segments: np.ndarray, weights: np.ndarray, params: FloorplanParams = FloorplanParams()
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Merge the segments that describe one wall face into one segment.
+
+    Two segments belong to one face when their directions differ by at most
+    ``merge_angle_deg``, both ends of the shorter are within ``merge_distance_m`` of
+    the longer's line, and along that line they overlap or leave a gap of at most
+    ``merge_gap_m``. Faces are the connected groups of this relation (so a chain of
+    pairwise-close segments is one face) and each is fitted by :func:`fit_segments`.
+    This is repeated (``max_passes``) on the merged faces until nothing changes.
+    Source: the duplicate problem of thesis section 5.1; the rule is ours.
+
+    Parameters
+    ----------
+    segments : (M, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    weights : (M,) float ndarray
+        Weight of each segment in the fit (inlier count).
+    params : FloorplanParams
+
+    Returns
+    -------
+    faces : (F, 4) float64 ndarray
+        Merged segments.
+    face_weights : (F,) float64 ndarray
+        Sum of the member weights.
+    labels : (M,) int64 ndarray
+        Face of each input segment.
+    """
+    seg = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
+    w = np.asarray(weights, dtype=np.float64).reshape(-1)
+    if len(seg) != len(w):
+        raise ValueError(f"{len(seg)} segments but {len(w)} weights")
+    labels = np.arange(len(seg))
+    cur, cur_w = seg, w
+    for _ in range(max(1, params.max_passes)):
+        i, j = _candidate_pairs(cur, max(params.merge_gap_m, params.merge_distance_m))
+        if len(i):
+            ang = _angle_diff(_axial_angle(cur[i]), _axial_angle(cur[j]))
+            a, b, d, n, length = _line_geometry(cur, i, j)
+            dist = np.maximum(
+                np.abs(np.einsum("ij,ij->i", cur[b, :2] - cur[a, :2], n)),
+                np.abs(np.einsum("ij,ij->i", cur[b, 2:] - cur[a, :2], n)),
+            )
+            ta = np.zeros(len(a)), length[a]
+            tb0 = np.einsum("ij,ij->i", cur[b, :2] - cur[a, :2], d)
+            tb1 = np.einsum("ij,ij->i", cur[b, 2:] - cur[a, :2], d)
+            gap = np.maximum(np.minimum(tb0, tb1) - ta[1], ta[0] - np.maximum(tb0, tb1))
+            ok = (
+                (ang <= np.radians(params.merge_angle_deg))
+                & (dist <= params.merge_distance_m)
+                & (gap <= params.merge_gap_m)
+            )
+            i, j = i[ok], j[ok]
+        if len(i) == 0:
+            break
+        group = _union_find(len(cur), i, j)
+        new = np.array([fit_segments(cur[group == g], cur_w[group == g]) for g in range(group.max() + 1)])
+        new_w = np.bincount(group, weights=cur_w)
+        labels = group[labels]
+        cur, cur_w = new, new_w
+    return cur, cur_w, labels
+
+
+# --------------------------------------------------------------------------------------
+# Pairing
+# --------------------------------------------------------------------------------------
+
+
+def pair_faces(
+    faces: np.ndarray, weights: np.ndarray, params: FloorplanParams = FloorplanParams()
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pair the two faces of a wall into one wall with its thickness.
+
+    Two faces are one wall when their directions differ by at most
+    ``pair_angle_deg``, the distance between their lines (measured from the longer
+    face's line to the shorter's midpoint) is in ``[pair_min_m, pair_max_m]``, and
+    they overlap along the wall by at least ``pair_min_overlap`` of the shorter.
+    Pairs are taken greedily, nearest first, each face in at most one pair. The
+    wall's axis is the line halfway between the two faces (direction the
+    length-weighted axial mean), its extent the union of both faces' projections,
+    its thickness their distance. An unpaired face becomes a wall whose axis is the
+    face itself (which side the wall body lies on is not known) with
+    ``default_thickness_m``.
+
+    Parameters
+    ----------
+    faces : (F, 4) float ndarray
+        Merged faces ``x0, y0, x1, y1``, metres.
+    weights : (F,) float ndarray
+    params : FloorplanParams
+
+    Returns
+    -------
+    axes : (W, 4) float64 ndarray
+        Wall axes, metres.
+    thickness : (W,) float64 ndarray
+        Metres.
+    wall_of_face : (F,) int64 ndarray
+        Wall of each face.
+    """
+    faces = np.asarray(faces, dtype=np.float64).reshape(-1, 4)
+    nf = len(faces)
+    wall_of_face = np.full(nf, -1, dtype=np.int64)
+    axes, thick = [], []
+    i, j = _candidate_pairs(faces, params.pair_max_m)
+    if len(i):
+        ang = _angle_diff(_axial_angle(faces[i]), _axial_angle(faces[j]))
+        a, b, d, n, length = _line_geometry(faces, i, j)
+        midb = 0.5 * (faces[b, :2] + faces[b, 2:])
+        dist = np.abs(np.einsum("ij,ij->i", midb - faces[a, :2], n))
+        tb0 = np.einsum("ij,ij->i", faces[b, :2] - faces[a, :2], d)
+        tb1 = np.einsum("ij,ij->i", faces[b, 2:] - faces[a, :2], d)
+        overlap = np.minimum(length[a], np.maximum(tb0, tb1)) - np.maximum(0.0, np.minimum(tb0, tb1))
+        ok = (
+            (ang <= np.radians(params.pair_angle_deg))
+            & (dist >= params.pair_min_m)
+            & (dist <= params.pair_max_m)
+            & (overlap >= params.pair_min_overlap * np.minimum(length[a], length[b]))
+        )
+        order = np.lexsort((j[ok], i[ok], dist[ok]))
+        for p, q in zip(i[ok][order], j[ok][order]):
+            if wall_of_face[p] >= 0 or wall_of_face[q] >= 0:
+                continue
+            axis, t = _axis_between(faces[p], faces[q])
+            wall_of_face[[p, q]] = len(axes)
+            axes.append(axis)
+            thick.append(t)
+    for f in range(nf):
+        if wall_of_face[f] < 0:
+            wall_of_face[f] = len(axes)
+            axes.append(faces[f].copy())
+            thick.append(params.default_thickness_m)
+    return np.array(axes).reshape(-1, 4), np.array(thick, dtype=np.float64), wall_of_face
+
+
+def _axis_between(f: np.ndarray, g: np.ndarray) -> tuple[np.ndarray, float]:
+    """Centre line between two near-parallel faces and their distance (metres)."""
+    lf, lg = np.hypot(*(f[2:] - f[:2])), np.hypot(*(g[2:] - g[:2]))
+    af, ag = np.arctan2(*(f[2:] - f[:2])[::-1]), np.arctan2(*(g[2:] - g[:2])[::-1])
+    # Length-weighted axial mean of the two directions.
+    phi = 0.5 * np.arctan2(lf * np.sin(2 * af) + lg * np.sin(2 * ag), lf * np.cos(2 * af) + lg * np.cos(2 * ag))
+    u = np.array([np.cos(phi), np.sin(phi)])
+    n = np.array([-u[1], u[0]])
+    of, og = n @ (0.5 * (f[:2] + f[2:])), n @ (0.5 * (g[:2] + g[2:]))
+    pts = np.array([f[:2], f[2:], g[:2], g[2:]])
+    t = pts @ u
+    off = 0.5 * (of + og)
+    a, b = off * n + t.min() * u, off * n + t.max() * u
+    return np.array([a[0], a[1], b[0], b[1]]), float(abs(of - og))
+
+
+# --------------------------------------------------------------------------------------
+# Floor plan
+# --------------------------------------------------------------------------------------
+
+
+def build_floorplan(segments: pd.DataFrame, params: FloorplanParams = FloorplanParams()) -> FloorPlan:
+    """The floor plan of wall segments from many scans: merged faces, paired walls.
+
+    Parameters
+    ----------
+    segments : pandas.DataFrame
+        ``x0, y0, x1, y1`` (metres) and optionally ``n_inliers`` (merge weights;
+        else the segment lengths are the weights), e.g. a
+        ``walls/{ordering}/{extractor}/k{k}.parquet`` table.
+    params : FloorplanParams
+
+    Returns
+    -------
+    FloorPlan
+
+    Raises
+    ------
+    KeyError
+        When a coordinate column is missing.
+    """
+    missing = [c for c in ("x0", "y0", "x1", "y1") if c not in segments.columns]
+    if missing:
+        raise KeyError(f"wall segments lack columns {missing}; expected x0, y0, x1, y1")
+    seg = segments[["x0", "y0", "x1", "y1"]].to_numpy(dtype=np.float64)
+    finite = np.isfinite(seg).all(axis=1)
+    if not finite.all():
+        log.warning("dropping %d wall segments with non-finite coordinates", int((~finite).sum()))
+    seg = seg[finite]
+    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    w = (
+        segments["n_inliers"].to_numpy(dtype=np.float64)[finite]
+        if "n_inliers" in segments.columns
+        else length
+    )
+    w = np.where(w > 0, w, np.maximum(length, 1e-6))
+    faces, face_w, labels = merge_segments(seg, w, params)
+    n_seg = np.bincount(labels, minlength=len(faces))
+    flen = np.hypot(faces[:, 2] - faces[:, 0], faces[:, 3] - faces[:, 1]) if len(faces) else np.empty(0)
+    keep = flen >= params.min_length_m
+    faces, face_w, n_seg, flen = faces[keep], face_w[keep], n_seg[keep], flen[keep]
+    axes, thick, wall_of_face = pair_faces(faces, face_w, params)
+    nw = len(axes)
+    faces_df = pd.DataFrame(
+        {
+            "face_id": np.arange(len(faces), dtype=np.int32),
+            "wall_id": wall_of_face.astype(np.int32),
+            "x0": faces[:, 0], "y0": faces[:, 1], "x1": faces[:, 2], "y1": faces[:, 3],
+            "length_m": flen,
+            "n_segments": n_seg.astype(np.int32),
+            "n_inliers": np.round(face_w).astype(np.int64),
+        }  # fmt: skip
+    )
+    walls = pd.DataFrame(
+        {
+            "wall_id": np.arange(nw, dtype=np.int32),
+            "x0": axes[:, 0], "y0": axes[:, 1], "x1": axes[:, 2], "y1": axes[:, 3],
+            "length_m": np.hypot(axes[:, 2] - axes[:, 0], axes[:, 3] - axes[:, 1]),
+            "thickness_m": thick,
+            "height_m": np.full(nw, params.wall_height_m),
+            "paired": np.bincount(wall_of_face, minlength=nw) == 2,
+            "n_faces": np.bincount(wall_of_face, minlength=nw).astype(np.int32),
+            "n_segments": np.bincount(wall_of_face, weights=n_seg, minlength=nw).astype(np.int32),
+            "n_inliers": np.round(np.bincount(wall_of_face, weights=face_w, minlength=nw)).astype(np.int64),
+        }  # fmt: skip
+    )
+    log.info(
+        "%d segments -> %d faces -> %d walls (%d with both faces)",
+        len(seg), len(faces), nw, int(walls["paired"].sum()),
+    )
+    return FloorPlan(walls=walls[WALL_COLUMNS], faces=faces_df[FACE_COLUMNS])
+
+
+# --------------------------------------------------------------------------------------
+# Exports
+# --------------------------------------------------------------------------------------
+
+
+def floorplan_geojson(plan: FloorPlan) -> dict:
+    """GeoJSON FeatureCollection (metres, map frame) of a floor plan.
+
+    Features, with property ``kind`` as in the ground truth ``walls.geojson``:
+    ``axis`` (LineString centre line; ``wall_id``, ``thickness_m``, ``height_m``,
+    ``length_m``, ``paired``, ``n_segments``), ``footprint`` (Polygon of the wall;
+    ``wall_id``, ``thickness_m``), ``face`` (LineString merged face; ``face_id``,
+    ``wall_id``, ``n_segments``, ``n_inliers``).
+    """
+    import shapely
+
+    feats = []
+    for w, poly in zip(plan.walls.itertuples(index=False), plan.footprints()):
+        props = {
+            "wall_id": int(w.wall_id), "thickness_m": round(float(w.thickness_m), 4),
+            "height_m": float(w.height_m), "length_m": round(float(w.length_m), 4),
+            "paired": bool(w.paired), "n_segments": int(w.n_segments),
+        }  # fmt: skip
+        feats.append(_feature("axis", {"type": "LineString", "coordinates": [[w.x0, w.y0], [w.x1, w.y1]]}, props))
+        geom = json.loads(shapely.to_geojson(poly)) if not poly.is_empty else None
+        if geom is not None:
+            feats.append(
+                _feature("footprint", geom, {"wall_id": int(w.wall_id), "thickness_m": props["thickness_m"]})
+            )
+    for f in plan.faces.itertuples(index=False):
+        props = {
+            "face_id": int(f.face_id), "wall_id": int(f.wall_id),
+            "n_segments": int(f.n_segments), "n_inliers": int(f.n_inliers),
+        }  # fmt: skip
+        feats.append(_feature("face", {"type": "LineString", "coordinates": [[f.x0, f.y0], [f.x1, f.y1]]}, props))
+    return {"type": "FeatureCollection", "features": feats}
+
+
+def _feature(kind: str, geometry: dict, props: dict) -> dict:
+    geometry = _round_coords(geometry)
+    return {"type": "Feature", "geometry": geometry, "properties": {"kind": kind, **props}}
+
+
+def _round_coords(geom: dict) -> dict:
+    def r(c):
+        return [r(x) for x in c] if isinstance(c, (list, tuple)) else round(float(c), 5)
+
+    return {**geom, "coordinates": r(geom["coordinates"])}
+
+
+def write_geojson(plan: FloorPlan, path: str | os.PathLike) -> None:
+    """Write :func:`floorplan_geojson` atomically."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(floorplan_geojson(plan), indent=1) + "\n")
+
+
+def write_svg(plan: FloorPlan, path: str | os.PathLike, px_per_m: float = 40.0, title: str = "") -> None:
+    """Write the floor plan as SVG: wall polygons (grey) and axes (red), 1 unit = 1 m.
+
+    The y axis points up as in the map frame (a flip transform); the drawing is
+    ``px_per_m`` pixels per metre.
+    """
+    polys = plan.footprints()
+    if len(plan.walls):
+        xs = plan.walls[["x0", "x1"]].to_numpy()
+        ys = plan.walls[["y0", "y1"]].to_numpy()
+        pad = 0.5 + float(plan.walls["thickness_m"].max())
+        xmin, xmax, ymin, ymax = xs.min() - pad, xs.max() + pad, ys.min() - pad, ys.max() + pad
+    else:
+        xmin, xmax, ymin, ymax = 0.0, 1.0, 0.0, 1.0
+    w, h = xmax - xmin, ymax - ymin
+    out = [
+        '<?xml version="1.0" encoding="UTF-8"?>',
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{w * px_per_m:.0f}" height="{h * px_per_m:.0f}" '
+        f'viewBox="{xmin:.3f} {-ymax:.3f} {w:.3f} {h:.3f}">',
+        f"<title>{_xml(title or 'floor plan')}</title>",
+        '<g transform="scale(1,-1)">',
+        '<g id="walls" fill="#9a9a9a" stroke="#333" stroke-width="0.01">',
+    ]
+    for poly in polys:
+        if poly.is_empty:
+            continue
+        pts = " ".join(f"{x:.4f},{y:.4f}" for x, y in np.asarray(poly.exterior.coords)[:-1])
+        out.append(f'<polygon points="{pts}"/>')
+    out.append("</g>")
+    out.append('<g id="axes" stroke="#c00" stroke-width="0.02" fill="none">')
+    for r in plan.walls.itertuples(index=False):
+        out.append(
+            f'<line x1="{r.x0:.4f}" y1="{r.y0:.4f}" x2="{r.x1:.4f}" y2="{r.y1:.4f}">'
+            f"<title>wall {r.wall_id}: {r.length_m:.2f} m x {r.thickness_m:.2f} m</title></line>"
+        )
+    out += ["</g>", "</g>", "</svg>"]
+    with atomic_path(path) as tmp:
+        tmp.write_text("\n".join(out) + "\n")
+
+
+def _xml(s: str) -> str:
+    return s.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+
+
+def write_dxf(plan: FloorPlan, path: str | os.PathLike) -> None:
+    """Write the floor plan as DXF R2010 (ezdxf), units metres.
+
+    Layers: ``WALL_AXIS`` (a LINE per wall centre line), ``WALL_OUTLINE`` (a closed
+    LWPOLYLINE per wall polygon), ``WALL_FACE`` (a LINE per merged face).
+    """
+    import ezdxf
+    from ezdxf import units
+
+    logging.getLogger("ezdxf").setLevel(logging.WARNING)  # its INFO lines would flood the stage log
+    doc = ezdxf.new("R2010")
+    doc.units = units.M
+    for name, color in (("WALL_AXIS", 1), ("WALL_OUTLINE", 7), ("WALL_FACE", 3)):
+        doc.layers.add(name, color=color)
+    msp = doc.modelspace()
+    for r, poly in zip(plan.walls.itertuples(index=False), plan.footprints()):
+        msp.add_line((r.x0, r.y0), (r.x1, r.y1), dxfattribs={"layer": "WALL_AXIS"})
+        if not poly.is_empty:
+            coords = [tuple(p) for p in np.asarray(poly.exterior.coords)[:-1]]
+            msp.add_lwpolyline(coords, close=True, dxfattribs={"layer": "WALL_OUTLINE"})
+    for f in plan.faces.itertuples(index=False):
+        msp.add_line((f.x0, f.y0), (f.x1, f.y1), dxfattribs={"layer": "WALL_FACE"})
+    with atomic_path(path) as tmp:
+        doc.saveas(tmp)
+
+
+def write_ifc(plan: FloorPlan, path: str | os.PathLike, name: str = "floorscan") -> None:
+    """Write the floor plan as IFC4 (IfcOpenShell API), units metres.
+
+    IfcProject > IfcSite > IfcBuilding > IfcBuildingStorey (elevation 0) containing an
+    ``IfcWall`` per wall: a body (``add_wall_representation``: the rectangle
+    length x thickness centred on the axis, extruded by ``height_m``), an axis
+    representation (Plan/Axis), its placement at the axis start along the axis
+    direction, and the quantities ``Qto_WallBaseQuantities`` Length, Width, Height.
+    GlobalIds derive from ``name`` and the creation order (same plan, same ids).
+
+    Raises
+    ------
+    ImportError
+        When ifcopenshell is not installed (``pip install ifcopenshell``).
+    """
+    try:
+        import ifcopenshell.api.aggregate
+        import ifcopenshell.api.context
+        import ifcopenshell.api.geometry
+        import ifcopenshell.api.project
+        import ifcopenshell.api.pset
+        import ifcopenshell.api.root
+        import ifcopenshell.api.spatial
+        import ifcopenshell.api.unit
+    except ImportError as e:  # pragma: no cover
+        raise ImportError("writing IFC needs ifcopenshell: pip install ifcopenshell") from e
+
+    def api(usecase, *args, **kwargs):  # "root.create_entity" -> ifcopenshell.api.root.create_entity
+        module, func = usecase.split(".")
+        return getattr(getattr(ifcopenshell.api, module), func)(*args, **kwargs)
+
+    model = ifcopenshell.api.project.create_file(version="IFC4")
+    project = api("root.create_entity", model, ifc_class="IfcProject", name=name)
+    length_u = api("unit.add_si_unit", model, unit_type="LENGTHUNIT")
+    area_u = api("unit.add_si_unit", model, unit_type="AREAUNIT")
+    volume_u = api("unit.add_si_unit", model, unit_type="VOLUMEUNIT")
+    api("unit.assign_unit", model, units=[length_u, area_u, volume_u])
+    model3d = api("context.add_context", model, context_type="Model")
+    body = api(
+        "context.add_context", model, context_type="Model", context_identifier="Body",
+        target_view="MODEL_VIEW", parent=model3d,
+    )  # fmt: skip
+    plan_ctx = api("context.add_context", model, context_type="Plan")
+    axis_ctx = api(
+        "context.add_context", model, context_type="Plan", context_identifier="Axis",
+        target_view="GRAPH_VIEW", parent=plan_ctx,
+    )  # fmt: skip
+    site = api("root.create_entity", model, ifc_class="IfcSite", name="Site")
+    building = api("root.create_entity", model, ifc_class="IfcBuilding", name="Building")
+    storey = api("root.create_entity", model, ifc_class="IfcBuildingStorey", name="Storey 0")
+    api("aggregate.assign_object", model, relating_object=project, products=[site])
+    api("aggregate.assign_object", model, relating_object=site, products=[building])
+    api("aggregate.assign_object", model, relating_object=building, products=[storey])
+    storey.Elevation = 0.0
+    walls = []
+    for r in plan.walls.itertuples(index=False):
+        p0, p1 = np.array([r.x0, r.y0]), np.array([r.x1, r.y1])
+        length = float(np.linalg.norm(p1 - p0))
+        if length <= 0:
+            continue
+        u = (p1 - p0) / length
+        wall = api("root.create_entity", model, ifc_class="IfcWall", name=f"Wall {r.wall_id}")
+        rep = api(
+            "geometry.add_wall_representation", model, context=body, length=length,
+            height=float(r.height_m), thickness=float(r.thickness_m), offset=-float(r.thickness_m) / 2.0,
+        )  # fmt: skip
+        api("geometry.assign_representation", model, product=wall, representation=rep)
+        axis = api("geometry.add_axis_representation", model, context=axis_ctx, axis=[(0.0, 0.0), (length, 0.0)])
+        api("geometry.assign_representation", model, product=wall, representation=axis)
+        matrix = np.array(
+            [[u[0], -u[1], 0.0, p0[0]], [u[1], u[0], 0.0, p0[1]], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
+        )
+        api("geometry.edit_object_placement", model, product=wall, matrix=matrix, is_si=True)
+        qto = api("pset.add_qto", model, product=wall, name="Qto_WallBaseQuantities")
+        api(
+            "pset.edit_qto", model, qto=qto,
+            properties={"Length": length, "Width": float(r.thickness_m), "Height": float(r.height_m)},
+        )  # fmt: skip
+        walls.append(wall)
+    if walls:
+        api("spatial.assign_container", model, relating_structure=storey, products=walls)
+    # Stable GlobalIds (from the project name and creation order), so a rerun gives
+    # the same ids and BIM tools see the same walls, not new ones.
+    import ifcopenshell.guid
+
+    ns = uuid.uuid5(uuid.NAMESPACE_URL, f"floorscan:{name}")
+    for i, entity in enumerate(model.by_type("IfcRoot")):
+        entity.GlobalId = ifcopenshell.guid.compress(uuid.uuid5(ns, str(i)).hex)
+    with atomic_path(path) as tmp:
+        model.write(str(tmp), format=".ifc")
+
+
+def write_floorplan(
+    segments: pd.DataFrame, cfg: Mapping[str, Any] | None, outputs: Mapping[str, str | os.PathLike], name: str = ""
+) -> FloorPlan:
+    """Build the floor plan of ``segments`` and write it (stage ``floorplan``).
+
+    Parameters
+    ----------
+    segments : pandas.DataFrame
+        Wall segments (``walls/{ordering}/{extractor}/k{k}.parquet``).
+    cfg : mapping
+        The ``floorplan`` config section.
+    outputs : mapping
+        Paths by format: any of ``geojson``, ``svg``, ``dxf``, ``ifc``.
+    name : str
+        Title of the SVG and name of the IFC project.
+
+    Returns
+    -------
+    FloorPlan
+
+    Raises
+    ------
+    KeyError
+        For an unknown output format or config key.
+    """
+    writers = {"geojson": write_geojson, "svg": write_svg, "dxf": write_dxf, "ifc": write_ifc}
+    unknown = sorted(set(outputs) - set(writers))
+    if unknown:
+        raise KeyError(f"unknown floor plan formats {unknown}; expected {sorted(writers)}")
+    plan = build_floorplan(segments, params_from_config(cfg))
+    for fmt, path in outputs.items():
+        if fmt == "svg":
+            write_svg(plan, path, title=name)
+        elif fmt == "ifc":
+            write_ifc(plan, path, name=name or "floorscan")
+        else:
+            writers[fmt](plan, path)
+    return plan

@@ -1,0 +1,888 @@
+"""Wall extraction: wall segments of one scan by iterative RANSAC or clustering RANSAC.
+
+A scan's registered points (map frame, metres, ``z`` = height above the floor) are
+reduced to 2D wall points (:func:`scan_points_2d`) and then fitted with lines:
+
+* :func:`ransac`, thesis section 5.3 / Algorithm 4: fit a line by RANSAC, remove its
+  inliers, repeat until fewer than ``min_points`` points remain or ``max_lines``
+  lines were found. It tends to find several candidates for one wall (section 5.3).
+* :func:`cluster_ransac`, thesis section 3.4: a normal for every point, a projection
+  along the normals under which the points of one wall fall together, MeanShift
+  clustering of the projection, and a single RANSAC per cluster.
+
+Both turn a fitted line into wall segments with the same rules
+(:func:`_segments_on_line`): the ends are the extent of the inliers along the line,
+a line is split where its inliers leave a gap wider than ``max_gap_m`` (a wall with
+a door is two segments), and segments with fewer than ``min_inliers`` points or
+shorter than ``min_length_m`` are dropped.
+
+The walls of a scan depend only on its points, the extractor parameters and the
+seed: the random generator of scan ``s`` is ``numpy.random.default_rng((seed, s))``,
+so the walls of a scan do not change with the ordering or the number of scans used.
+
+Per-scan problems never raise: :func:`extract_walls` returns no walls for such a scan
+and a reason in its status table (see :data:`REASONS`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import time
+import warnings
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+
+log = logging.getLogger(__name__)
+
+#: Extractor names (config ``walls.extractors``, wildcard ``{extractor}``).
+EXTRACTORS = ("ransac", "cluster_ransac")
+
+#: Wall segments of scans (``walls/{extractor}/per_scan.parquet`` and
+#: ``walls/{ordering}/{extractor}/k{k}.parquet``).
+WALLS = pa.schema(
+    [
+        ("scan_id", pa.int32()),
+        ("x0", pa.float64()),
+        ("y0", pa.float64()),
+        ("x1", pa.float64()),
+        ("y1", pa.float64()),
+        ("n_inliers", pa.int32()),
+        ("rmse_m", pa.float64()),
+    ]
+)
+#: One row per scan of ``registered.parquet`` (``walls/{extractor}/scan_status.parquet``).
+SCAN_STATUS = pa.schema(
+    [
+        ("scan_id", pa.int32()),
+        ("n_points", pa.int32()),
+        ("n_walls", pa.int32()),
+        ("reason", pa.string()),
+        ("time_s", pa.float64()),
+    ]
+)
+#: Reasons a scan gives no walls ("" when it gave walls).
+REASONS = (
+    "non_finite_coordinates",  # a NaN/inf coordinate: the scan is corrupt, not used
+    "no_points_in_height_band",  # 3D scan with no point between the band's heights
+    "too_few_points",  # fewer than min_points wall points
+    "no_wall_found",  # no line with min_inliers inliers and min_length_m
+)
+
+_SEGMENT_COLUMNS = ["x0", "y0", "x1", "y1", "n_inliers", "rmse_m"]
+
+
+@dataclass(frozen=True)
+class RansacParams:
+    """RANSAC and segment parameters (config ``walls.ransac``), used by both extractors.
+
+    Attributes
+    ----------
+    threshold_m : float
+        A point is an inlier of a line when closer than this, metres.
+    iterations : int
+        Line hypotheses (pairs of points) tried per RANSAC run.
+    refine_iterations : int
+        Least-squares refits of the best hypothesis on its inliers.
+    min_points : int
+        Iterative RANSAC stops when fewer points remain; a scan with fewer wall
+        points gives no walls (reason ``too_few_points``).
+    max_lines : int
+        Iterative RANSAC stops after this many lines (``ransac`` only).
+    min_inliers : int
+        Fewest inliers of a line and of each of its segments.
+    min_length_m : float
+        Shortest wall segment kept, metres.
+    max_gap_m : float
+        A line is split into segments where consecutive inliers (along the line)
+        are further apart than this, metres.
+    """
+
+    threshold_m: float = 0.03
+    iterations: int = 200
+    refine_iterations: int = 2
+    min_points: int = 20
+    max_lines: int = 30
+    min_inliers: int = 15
+    min_length_m: float = 0.3
+    max_gap_m: float = 0.5
+
+
+@dataclass(frozen=True)
+class ClusterParams:
+    """Clustering parameters of :func:`cluster_ransac` (config ``walls.cluster_ransac``).
+
+    Attributes
+    ----------
+    normal_radius_m : float
+        Neighbourhood radius of the normal estimation, metres.
+    normal_max_nn : int
+        At most this many neighbours within the radius (Open3D hybrid search).
+    angle_bandwidth_rad : float
+        MeanShift bandwidth of the normal direction, radians.
+    offset_bandwidth_m : float or None
+        MeanShift bandwidth of the offset along the normal, metres; None estimates it
+        per direction with :func:`sklearn.cluster.estimate_bandwidth`.
+    min_cluster_points : int
+        Clusters with fewer points are not fitted; MeanShift seeds need a third of it
+        (``min_bin_freq = min_cluster_points // 3``).
+    bin_seeding : bool
+        Seed MeanShift on a grid of the bandwidth's size (much faster).
+    meanshift : {"numpy", "sklearn"}
+        MeanShift implementation: :func:`mean_shift` (same algorithm vectorised,
+        needs ``bin_seeding``) or :class:`sklearn.cluster.MeanShift`.
+    """
+
+    normal_radius_m: float = 0.25
+    normal_max_nn: int = 20
+    angle_bandwidth_rad: float = 0.1
+    offset_bandwidth_m: float | None = 0.05
+    min_cluster_points: int = 15
+    bin_seeding: bool = True
+    meanshift: str = "numpy"
+
+    def __post_init__(self):
+        if self.meanshift not in ("numpy", "sklearn"):
+            raise ValueError(f"cluster_ransac.meanshift must be 'numpy' or 'sklearn', got {self.meanshift!r}")
+        if self.meanshift == "numpy" and not self.bin_seeding:
+            raise ValueError("cluster_ransac.meanshift 'numpy' needs bin_seeding true")
+
+
+@dataclass(frozen=True)
+class ScanParams:
+    """How a scan becomes 2D wall points (config ``walls``: height band and grid).
+
+    Attributes
+    ----------
+    min_height_m, max_height_m : float
+        Height band (above the floor) kept of 3D scans, metres.
+    planar_tolerance_m : float
+        A scan whose finite ``z`` values span at most this is 2D and passes unchanged
+        (a 2D scanner has one height whatever it is); otherwise it is 3D.
+    grid_m : float
+        3D scans only: after the band cut and the projection to (x, y), keep one
+        point (the mean) per grid cell of this size, metres; 0 keeps all points.
+    """
+
+    min_height_m: float = 0.5
+    max_height_m: float = 2.0
+    planar_tolerance_m: float = 0.01
+    grid_m: float = 0.02
+
+
+def params_from_config(cfg: Mapping[str, Any]) -> tuple[ScanParams, RansacParams, ClusterParams]:
+    """The parameter objects of the ``walls`` config section (defaults filled in).
+
+    Raises
+    ------
+    KeyError
+        When the section has a key the parameter classes do not know.
+    ValueError
+        For a height band that is not [min, max] with min < max.
+    """
+    band = cfg.get("height_band_m", [ScanParams.min_height_m, ScanParams.max_height_m])
+    if len(band) != 2 or not float(band[0]) < float(band[1]):
+        raise ValueError(f"walls.height_band_m must be [min, max] with min < max, got {band!r}")
+    scan = ScanParams(
+        min_height_m=float(band[0]),
+        max_height_m=float(band[1]),
+        planar_tolerance_m=float(cfg.get("planar_tolerance_m", ScanParams.planar_tolerance_m)),
+        grid_m=float(cfg.get("grid_m", ScanParams.grid_m)),
+    )
+    return scan, _dataclass_from(RansacParams, cfg.get("ransac")), _dataclass_from(
+        ClusterParams, cfg.get("cluster_ransac")
+    )
+
+
+def _dataclass_from(cls, values):
+    values = dict(values or {})
+    names = {f.name for f in dataclasses.fields(cls)}
+    unknown = sorted(set(values) - names)
+    if unknown:
+        raise KeyError(f"unknown {cls.__name__} keys {unknown}; expected {sorted(names)}")
+    return cls(**values)
+
+
+# --------------------------------------------------------------------------------------
+# Scan points
+# --------------------------------------------------------------------------------------
+
+
+def scan_points_2d(xyz: np.ndarray, params: ScanParams = ScanParams()) -> tuple[np.ndarray, str]:
+    """The 2D wall points of one scan, or a reason why it has none.
+
+    Rule for 2D against 3D: a scan whose ``z`` values span at most
+    ``planar_tolerance_m`` came from a 2D scanner and passes unchanged (its single
+    height may be anywhere, e.g. 0.3 m). Otherwise the scan is 3D: points with
+    ``min_height_m <= z <= max_height_m`` are kept (above furniture, below the
+    ceiling), projected to (x, y) and thinned to one mean point per ``grid_m`` cell.
+
+    Parameters
+    ----------
+    xyz : (N, 3) float ndarray
+        Scan points in the map frame, metres; ``z`` is height above the floor.
+    params : ScanParams
+
+    Returns
+    -------
+    points : (M, 2) float64 ndarray
+        Wall points (x, y), metres; empty when ``reason`` is not "".
+    reason : str
+        "" or one of :data:`REASONS` (``non_finite_coordinates``,
+        ``no_points_in_height_band``).
+    """
+    xyz = np.asarray(xyz, dtype=np.float64)
+    if xyz.ndim != 2 or xyz.shape[1] < 2:
+        raise ValueError(f"scan points must be (N, 3), got shape {xyz.shape}")
+    empty = np.empty((0, 2))
+    if len(xyz) == 0:
+        return empty, ""
+    if not np.isfinite(xyz).all():
+        return empty, "non_finite_coordinates"
+    if xyz.shape[1] == 2:
+        return xyz.copy(), ""
+    z = xyz[:, 2]
+    if float(z.max() - z.min()) <= params.planar_tolerance_m:
+        return xyz[:, :2].copy(), ""
+    band = (z >= params.min_height_m) & (z <= params.max_height_m)
+    pts = xyz[band, :2]
+    if len(pts) == 0:
+        return empty, "no_points_in_height_band"
+    if params.grid_m > 0:
+        cell = np.floor(pts / params.grid_m).astype(np.int64)
+        _, inverse, counts = np.unique(cell, axis=0, return_inverse=True, return_counts=True)
+        inverse = inverse.ravel()
+        sums = np.zeros((len(counts), 2))
+        np.add.at(sums, inverse, pts)
+        pts = sums / counts[:, None]
+    return pts, ""
+
+
+# --------------------------------------------------------------------------------------
+# Lines and segments
+# --------------------------------------------------------------------------------------
+
+
+def fit_line(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Total least squares line through 2D points (principal axis of their covariance).
+
+    Parameters
+    ----------
+    points : (N, 2) float ndarray, N >= 2
+        Points, metres.
+
+    Returns
+    -------
+    centroid : (2,) float64 ndarray
+        A point of the line (the points' mean), metres.
+    direction : (2,) float64 ndarray
+        Unit direction of the line; the normal is ``(-direction[1], direction[0])``.
+    """
+    c = points.mean(axis=0)
+    d = points - c
+    sxx, syy, sxy = (d[:, 0] ** 2).sum(), (d[:, 1] ** 2).sum(), (d[:, 0] * d[:, 1]).sum()
+    phi = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)  # angle of the major axis
+    return c, np.array([np.cos(phi), np.sin(phi)])
+
+
+def _best_line(points: np.ndarray, rng: np.random.Generator, params: RansacParams):
+    """One RANSAC run: the line with most inliers among ``iterations`` point pairs,
+    refit by total least squares on its inliers. Returns (inlier mask, centroid,
+    direction) or None when no hypothesis is possible."""
+    n = len(points)
+    if n < 2:
+        return None
+    i = rng.integers(0, n, size=params.iterations)
+    j = rng.integers(0, n - 1, size=params.iterations)
+    j = j + (j >= i)  # j != i
+    d = points[j] - points[i]
+    length = np.hypot(d[:, 0], d[:, 1])
+    ok = length > 1e-9
+    if not ok.any():
+        return None
+    normals = np.stack([-d[ok, 1], d[ok, 0]], axis=1) / length[ok, None]
+    offsets = np.einsum("ij,ij->i", normals, points[i[ok]])
+    best_count, best = -1, 0
+    chunk = max(1, 2_000_000 // n)
+    for s in range(0, len(normals), chunk):
+        dist = np.abs(points @ normals[s : s + chunk].T - offsets[s : s + chunk])
+        counts = (dist < params.threshold_m).sum(axis=0)
+        k = int(np.argmax(counts))
+        if counts[k] > best_count:
+            best_count, best = int(counts[k]), s + k
+    normal, offset = normals[best], offsets[best]
+    mask = np.abs(points @ normal - offset) < params.threshold_m
+    c, direction = points[mask].mean(axis=0), np.array([normal[1], -normal[0]])
+    for _ in range(params.refine_iterations):
+        if mask.sum() < 2:
+            break
+        c, direction = fit_line(points[mask])
+        normal = np.array([-direction[1], direction[0]])
+        new = np.abs((points - c) @ normal) < params.threshold_m
+        if new.sum() < 2 or np.array_equal(new, mask):
+            mask = new if new.sum() >= 2 else mask
+            break
+        mask = new
+    return mask, c, direction
+
+
+def _segments_on_line(points: np.ndarray, direction: np.ndarray, params: RansacParams) -> list[tuple]:
+    """Split the inliers of a line at gaps wider than ``max_gap_m`` and fit each piece.
+
+    Each piece with at least ``min_inliers`` points is refit by total least squares;
+    its ends are the extent of its points along the refit line; it is kept when at
+    least ``min_length_m`` long. Returns tuples (x0, y0, x1, y1, n_inliers, rmse_m).
+    """
+    t = points @ direction
+    order = np.argsort(t, kind="stable")
+    ts = t[order]
+    cuts = np.flatnonzero(np.diff(ts) > params.max_gap_m) + 1
+    out = []
+    for piece in np.split(order, cuts):
+        if len(piece) < max(params.min_inliers, 2):
+            continue
+        p = points[piece]
+        c, d = fit_line(p)
+        if d @ direction < 0:
+            d = -d
+        u = (p - c) @ d
+        lo, hi = float(u.min()), float(u.max())
+        if hi - lo < params.min_length_m:
+            continue
+        resid = (p - c) @ np.array([-d[1], d[0]])
+        a, b = c + lo * d, c + hi * d
+        out.append((a[0], a[1], b[0], b[1], len(piece), float(np.sqrt(np.mean(resid**2)))))
+    return out
+
+
+def _frame(rows: list[tuple]) -> pd.DataFrame:
+    df = pd.DataFrame(rows, columns=_SEGMENT_COLUMNS)
+    return df.astype({c: "float64" for c in _SEGMENT_COLUMNS if c != "n_inliers"} | {"n_inliers": "int32"})
+
+
+def ransac(points: np.ndarray, params: RansacParams = RansacParams(), seed=0) -> pd.DataFrame:
+    """Wall segments of one scan by iterative RANSAC (thesis section 5.3, Algorithm 4).
+
+    Repeat: the best of ``iterations`` lines through two random points (most points
+    closer than ``threshold_m``), refit by total least squares on its inliers
+    (``refine_iterations`` times), split into segments (:func:`_segments_on_line`),
+    remove its inliers. The segment ends come from all points of the scan near the
+    line (:func:`_claimed_segments`), so a corner point claimed by the first of two
+    walls still ends the second one. Stop when fewer than ``min_points`` points
+    remain, the best line has fewer than ``min_inliers`` inliers, or ``max_lines``
+    lines were found.
+    Fischler and Bolles (1981), Random sample consensus.
+
+    Parameters
+    ----------
+    points : (N, 2) float ndarray
+        Wall points of one scan (map frame), metres. Not modified.
+    params : RansacParams
+    seed : int, sequence of int or numpy.random.Generator
+        Seeds the generator (``numpy.random.default_rng(seed)``); same seed, same walls.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per wall segment: ``x0, y0, x1, y1`` (metres), ``n_inliers`` (int32),
+        ``rmse_m`` (RMS distance of its inliers to it, metres); in order of discovery.
+    """
+    rng = np.random.default_rng(seed)
+    all_pts = np.asarray(points, dtype=np.float64)
+    alive = np.arange(len(all_pts))  # indices of the points not yet claimed by a line
+    remaining = all_pts
+    rows: list[tuple] = []
+    n_lines = 0
+    while len(remaining) >= params.min_points and n_lines < params.max_lines:
+        found = _best_line(remaining, rng, params)
+        if found is None:
+            break
+        mask, c, direction = found
+        if mask.sum() < params.min_inliers:
+            break
+        claimed = np.zeros(len(all_pts), dtype=bool)
+        claimed[alive[mask]] = True
+        rows += _claimed_segments(all_pts, c, direction, claimed, params)
+        alive = alive[~mask]
+        remaining = all_pts[alive]
+        n_lines += 1
+    return _frame(rows)
+
+
+# --------------------------------------------------------------------------------------
+# Clustering RANSAC (section 3.4)
+# --------------------------------------------------------------------------------------
+
+
+def point_normals(points: np.ndarray, radius_m: float = 0.25, max_nn: int = 20) -> np.ndarray:
+    """In-plane unit normals of 2D points from their neighbourhoods (Open3D).
+
+    Open3D's ``estimate_normals`` on points embedded at z = 0 returns the z axis for
+    every point (for planar data the smallest-variance direction is always z; checked
+    with Open3D 0.19 and tested). So the neighbourhood covariances are taken from
+    Open3D (``estimate_covariances`` with ``KDTreeSearchParamHybrid(radius_m,
+    max_nn)``, the same search ``estimate_normals`` uses) and the normal is the
+    eigenvector of the smallest eigenvalue of their in-plane 2x2 block (closed form).
+
+    Normals are axial (a line has no preferred side): they are folded into the
+    canonical half-plane, angle in [0, pi). The clustering of :func:`cluster_ransac`
+    only uses sign-free quantities, so no scanner position is needed.
+
+    Parameters
+    ----------
+    points : (N, 2) float ndarray
+        Points, metres.
+    radius_m : float
+        Neighbourhood radius, metres.
+    max_nn : int
+        At most this many neighbours.
+
+    Returns
+    -------
+    (N, 2) float64 ndarray
+        Unit normals with angle in [0, pi); NaN for points without a neighbour
+        (isotropic neighbourhood).
+    """
+    import open3d as o3d
+
+    pts = np.asarray(points, dtype=np.float64)
+    pcd = o3d.geometry.PointCloud()
+    pcd.points = o3d.utility.Vector3dVector(np.c_[pts, np.zeros(len(pts))])
+    pcd.estimate_covariances(o3d.geometry.KDTreeSearchParamHybrid(radius=radius_m, max_nn=max_nn))
+    cov = np.asarray(pcd.covariances)
+    sxx, syy, sxy = cov[:, 0, 0], cov[:, 1, 1], cov[:, 0, 1]
+    # Major axis angle phi of the 2x2 covariance; the normal is perpendicular to it.
+    phi = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)
+    theta = np.mod(phi + 0.5 * np.pi, np.pi)
+    normals = np.stack([np.cos(theta), np.sin(theta)], axis=1)
+    spread = np.hypot(sxx - syy, 2.0 * sxy)  # eigenvalue difference
+    normals[spread <= 1e-12] = np.nan
+    return normals
+
+
+def mean_shift(x: np.ndarray, bandwidth: float, min_bin_freq: int = 1, max_iter: int = 300) -> np.ndarray:
+    """Flat-kernel mean shift with bin seeding, vectorised over the seeds.
+
+    The algorithm of :class:`sklearn.cluster.MeanShift` with ``bin_seeding=True,
+    cluster_all=True`` (Comaniciu and Meer 2002), step for step: seeds are the grid
+    cells of size ``bandwidth`` holding at least ``min_bin_freq`` points (all points
+    when every point has its own cell); each seed moves to the mean of the points
+    within ``bandwidth`` until it moves less than ``1e-3 * bandwidth``; the modes,
+    by decreasing number of points within, drop any later mode within ``bandwidth``;
+    each point gets the label of its nearest mode. scikit-learn does the same one
+    seed and one neighbour query at a time, with about 1 ms of input validation per
+    query: 30 to 150 ms per scan here against about 1 ms (benchmarks/bench_walls.py);
+    a test checks that both give the same clusters.
+
+    Parameters
+    ----------
+    x : (N, d) float ndarray
+    bandwidth : float
+        Kernel radius, in the units of ``x``.
+    min_bin_freq : int
+    max_iter : int
+
+    Returns
+    -------
+    (N,) int64 ndarray
+        Cluster labels 0.. (most populated mode first); all -1 when no cell holds
+        ``min_bin_freq`` points.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    if x.ndim == 1:
+        x = x[:, None]
+    if len(x) == 0:
+        return np.empty(0, dtype=np.int64)
+    cells, counts = np.unique(np.round(x / bandwidth), axis=0, return_counts=True)
+    seeds = cells[counts >= min_bin_freq] * bandwidth
+    if len(seeds) == len(x):
+        seeds = x.copy()
+    if len(seeds) == 0:
+        return np.full(len(x), -1, dtype=np.int64)
+    r2, stop = bandwidth**2, 1e-3 * bandwidth
+    means = seeds.astype(np.float64)
+    within = np.zeros(len(means), dtype=np.int64)
+    active = np.ones(len(means), dtype=bool)
+    xx = (x**2).sum(axis=1)
+    for _ in range(max_iter):
+        idx = np.flatnonzero(active)
+        if len(idx) == 0:
+            break
+        m = means[idx]
+        d2 = (m**2).sum(axis=1)[:, None] - 2.0 * m @ x.T + xx[None, :]
+        w = d2 <= r2
+        cnt = w.sum(axis=1)
+        within[idx] = cnt
+        moved = cnt > 0
+        new = (w[moved].astype(np.float64) @ x) / cnt[moved, None]
+        shift = np.sqrt(((new - m[moved]) ** 2).sum(axis=1))
+        means[idx[moved]] = new
+        done = np.zeros(len(idx), dtype=bool)
+        done[~moved] = True
+        done[np.flatnonzero(moved)[shift <= stop]] = True
+        active[idx[done]] = False
+    keep = within > 0
+    if not keep.any():
+        return np.full(len(x), -1, dtype=np.int64)
+    centers, n_in = means[keep], within[keep]
+    # Decreasing (points within, centre) as sklearn sorts its (centre, count) items.
+    order = np.lexsort(tuple(centers[:, k] for k in range(centers.shape[1] - 1, -1, -1)) + (n_in,))[::-1]
+    centers = centers[order]
+    unique = np.ones(len(centers), dtype=bool)
+    for i in range(len(centers)):
+        if unique[i]:
+            near = ((centers - centers[i]) ** 2).sum(axis=1) <= r2
+            unique[near] = False
+            unique[i] = True
+    centers = centers[unique]
+    d2 = ((x[:, None, :] - centers[None, :, :]) ** 2).sum(axis=2)
+    return np.argmin(d2, axis=1).astype(np.int64)
+
+
+def _mean_shift(
+    x: np.ndarray, bandwidth: float | None, bin_seeding: bool, min_bin_freq: int, backend: str = "numpy"
+) -> np.ndarray:
+    """MeanShift labels of ``x`` (N, d) (flat kernel, every point labelled).
+
+    ``backend`` "numpy" is :func:`mean_shift` (needs ``bin_seeding``), "sklearn" is
+    :class:`sklearn.cluster.MeanShift`. ``bandwidth`` None estimates it with
+    ``sklearn.cluster.estimate_bandwidth(quantile=0.1)``. With ``bin_seeding`` the
+    seeds are the grid cells (size ``bandwidth``) holding at least ``min_bin_freq``
+    points; when there is none, every label is -1.
+    """
+    from sklearn.cluster import MeanShift, estimate_bandwidth, get_bin_seeds
+    from threadpoolctl import threadpool_limits
+
+    if bandwidth is None:
+        bandwidth = float(estimate_bandwidth(x, quantile=0.1)) if len(x) > 1 else 0.0
+        if not bandwidth > 0:
+            return np.zeros(len(x), dtype=np.int64)
+    if backend == "numpy" and bin_seeding:
+        return mean_shift(x, bandwidth, min_bin_freq)
+    # One thread: the nearest-neighbour queries of MeanShift on a few hundred points
+    # were 20x slower with a thread pool on a shared 2-core machine (measured).
+    with warnings.catch_warnings(), threadpool_limits(1):
+        warnings.simplefilter("ignore")  # "binning data failed ... using all points"
+        seeds = None
+        if bin_seeding:
+            # sklearn's MeanShift fails ("max() arg is an empty sequence") when no bin
+            # holds min_bin_freq points: then no cluster is dense enough.
+            seeds = get_bin_seeds(x, bandwidth, min_bin_freq)
+            if len(seeds) == 0:
+                return np.full(len(x), -1, dtype=np.int64)
+        return MeanShift(bandwidth=bandwidth, seeds=seeds, cluster_all=True).fit_predict(x)
+
+
+def wall_signature(points: np.ndarray, normals: np.ndarray, angle_labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The projection of cluster_ransac: each point moved along its wall's normal.
+
+    For a direction cluster (points whose normals agree, label ``angle_labels``) with
+    mean normal n_c (axial mean: half the angle of the mean of doubled angles) and
+    centroid c, every point p of the cluster projects to ``rho = n_c . (p - c)``: the
+    point slides along the normal onto the normal axis through c. All points of one
+    straight wall land on one value of rho (the wall's signed distance from c),
+    whatever their position along the wall; two parallel walls (e.g. the two faces of
+    a 20 cm wall, or the two sides of a corridor) land at rho values that differ by
+    their distance, so a 1D MeanShift on rho separates them; walls of other
+    directions are in other direction clusters. This is the Hough (theta, rho) of
+    the tangent line, with two changes against smearing: rho uses the cluster's mean
+    normal instead of the point's own (with a per-point normal an angle error e moves
+    rho by e times the distance of p along the wall from the foot point, e.g.
+    0.02 rad * 10 m = 0.2 m, across parallel neighbours), and the origin is the
+    cluster centroid, not the map origin (the lever arm of the small error left in
+    the mean normal is then the scan's size, not the distance to the map origin).
+
+    Parameters
+    ----------
+    points : (N, 2) float ndarray
+    normals : (N, 2) float ndarray
+        Unit normals (axial), NaN allowed for points without a normal.
+    angle_labels : (N,) int ndarray
+        Direction cluster of each point, -1 for none.
+
+    Returns
+    -------
+    rho : (N,) float64 ndarray
+        Offset along the cluster normal from the cluster centroid, metres (NaN where
+        the label is -1).
+    cluster_normals : (L, 2) float64 ndarray
+        Mean unit normal of direction cluster 0..L-1.
+    """
+    labels = np.asarray(angle_labels)
+    n_lab = int(labels.max()) + 1 if len(labels) and labels.max() >= 0 else 0
+    theta2 = 2.0 * np.arctan2(normals[:, 1], normals[:, 0])
+    cluster_normals = np.full((n_lab, 2), np.nan)
+    rho = np.full(len(points), np.nan)
+    for lab in range(n_lab):
+        m = labels == lab
+        t = theta2[m]
+        t = t[np.isfinite(t)]
+        if len(t) == 0:
+            continue
+        phi = 0.5 * np.arctan2(np.sin(t).mean(), np.cos(t).mean())
+        cluster_normals[lab] = (np.cos(phi), np.sin(phi))
+        rho[m] = (points[m] - points[m].mean(axis=0)) @ cluster_normals[lab]
+    return rho, cluster_normals
+
+
+def cluster_ransac(
+    points: np.ndarray,
+    params: RansacParams = RansacParams(),
+    cluster: ClusterParams = ClusterParams(),
+    seed=0,
+) -> pd.DataFrame:
+    """Wall segments of one scan by clustering RANSAC (thesis section 3.4).
+
+    1. A normal per point (:func:`point_normals`, Open3D neighbourhoods).
+    2. MeanShift (flat kernel, bin seeding: scikit-learn's algorithm, by default in
+       its vectorised form :func:`mean_shift`) of the normal directions: each point's axial angle theta in [0, pi)
+       is embedded as ``0.5 * (cos 2 theta, sin 2 theta)`` (no wrap-around at 0 / pi;
+       distances are about angle differences in radians), bandwidth
+       ``angle_bandwidth_rad``.
+    3. Within each direction cluster, the points are projected along the cluster's
+       normal to ``rho`` (:func:`wall_signature`) and clustered by a 1D MeanShift,
+       bandwidth ``offset_bandwidth_m``: one cluster per wall line.
+    4. One RANSAC (:func:`_best_line` with the ``params`` of :func:`ransac`) per
+       cluster with at least ``min_cluster_points`` points, turned into segments by
+       :func:`_claimed_segments` as in :func:`ransac` (ends from all points of the
+       scan near the line, so corner points with mixed normals still end the wall).
+
+    Parameters
+    ----------
+    points : (N, 2) float ndarray
+        Wall points of one scan (map frame), metres. Not modified.
+    params : RansacParams
+        RANSAC and segment parameters (``max_lines`` is not used).
+    cluster : ClusterParams
+    seed : int, sequence of int or numpy.random.Generator
+
+    Returns
+    -------
+    pandas.DataFrame
+        As :func:`ransac`, ordered by cluster (direction, then offset).
+    """
+    rng = np.random.default_rng(seed)
+    pts = np.asarray(points, dtype=np.float64)
+    if len(pts) < max(params.min_points, 3):
+        return _frame([])
+    normals = point_normals(pts, cluster.normal_radius_m, cluster.normal_max_nn)
+    has_normal = np.isfinite(normals[:, 0])
+    labels = np.full(len(pts), -1)
+    if has_normal.sum() >= cluster.min_cluster_points:
+        theta2 = 2.0 * np.arctan2(normals[has_normal, 1], normals[has_normal, 0])
+        emb = 0.5 * np.stack([np.cos(theta2), np.sin(theta2)], axis=1)
+        labels[has_normal] = _mean_shift(
+            emb, cluster.angle_bandwidth_rad, cluster.bin_seeding,
+            max(1, cluster.min_cluster_points // 3), cluster.meanshift,
+        )
+    rho, _ = wall_signature(pts, normals, labels)
+    rows: list[tuple] = []
+    for lab in np.unique(labels[labels >= 0]):
+        members = np.flatnonzero(labels == lab)
+        if len(members) < cluster.min_cluster_points:
+            continue
+        sub = _mean_shift(
+            rho[members, None], cluster.offset_bandwidth_m, cluster.bin_seeding,
+            max(1, cluster.min_cluster_points // 3), cluster.meanshift,
+        )
+        for s in np.unique(sub[sub >= 0]):
+            idx = members[sub == s]
+            if len(idx) < cluster.min_cluster_points:
+                continue
+            found = _best_line(pts[idx], rng, params)
+            if found is None:
+                continue
+            mask, c, direction = found
+            if mask.sum() < params.min_inliers:
+                continue
+            claimed = np.zeros(len(pts), dtype=bool)
+            claimed[idx[mask]] = True
+            rows += _claimed_segments(pts, c, direction, claimed, params)
+    return _frame(rows)
+
+
+def _claimed_segments(pts, c, direction, claimed, params) -> list[tuple]:
+    """Segments of a line found by RANSAC, with ends from all points of the scan.
+
+    The points of the whole scan within ``threshold_m`` of the line (centroid ``c``,
+    unit ``direction``) are split at gaps wider than ``max_gap_m``; a piece is this
+    line's when at least ``min_inliers`` of its points were ``claimed`` by it (its
+    RANSAC inliers). Points near a corner, claimed by the other wall or left out of a
+    cluster for their mixed normal, so still extend the segment to the corner.
+    """
+    normal = np.array([-direction[1], direction[0]])
+    cand = np.flatnonzero(np.abs((pts - c) @ normal) < params.threshold_m)
+    t = pts[cand] @ direction
+    order = np.argsort(t, kind="stable")
+    cuts = np.flatnonzero(np.diff(t[order]) > params.max_gap_m) + 1
+    rows = []
+    for piece in np.split(cand[order], cuts):
+        if claimed[piece].sum() >= params.min_inliers:
+            rows += _segments_on_line(pts[piece], direction, params)
+    return rows
+
+
+# --------------------------------------------------------------------------------------
+# All scans of a dataset
+# --------------------------------------------------------------------------------------
+
+
+def extract_scan(
+    xyz: np.ndarray,
+    extractor: str,
+    scan: ScanParams,
+    params: RansacParams,
+    cluster: ClusterParams,
+    seed,
+) -> tuple[pd.DataFrame, str, int]:
+    """Wall segments of one scan with ``extractor``; never raises on bad points.
+
+    Returns
+    -------
+    segments : pandas.DataFrame
+        As :func:`ransac`.
+    reason : str
+        "" when segments were found, else one of :data:`REASONS`.
+    n_points : int
+        Wall points the extractor saw.
+    """
+    if extractor not in EXTRACTORS:
+        raise ValueError(f"unknown extractor {extractor!r}; expected one of {EXTRACTORS}")
+    pts, reason = scan_points_2d(xyz, scan)
+    if reason:
+        return _frame([]), reason, 0
+    if len(pts) < params.min_points:
+        return _frame([]), "too_few_points", len(pts)
+    if extractor == "ransac":
+        seg = ransac(pts, params, seed)
+    else:
+        seg = cluster_ransac(pts, params, cluster, seed)
+    return seg, ("" if len(seg) else "no_wall_found"), len(pts)
+
+
+def extract_walls(
+    points: pd.DataFrame, extractor: str, cfg: Mapping[str, Any]
+) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Wall segments of every scan of a registered points table (stage ``scan_walls``).
+
+    Parameters
+    ----------
+    points : pandas.DataFrame
+        ``registered.parquet``: ``scan_id, x, y, z`` (map frame, metres, z above floor).
+    extractor : {"ransac", "cluster_ransac"}
+    cfg : mapping
+        The ``walls`` config section (``seed``, ``height_band_m``, ``planar_tolerance_m``,
+        ``grid_m``, ``ransac``, ``cluster_ransac``). Scan ``s`` uses the generator
+        ``numpy.random.default_rng((seed, s))``, independent of the other scans.
+
+    Returns
+    -------
+    walls : pandas.DataFrame
+        Schema :data:`WALLS`, rows ordered by scan_id then discovery.
+    status : pandas.DataFrame
+        Schema :data:`SCAN_STATUS`: one row per scan, ``reason`` "" or one of
+        :data:`REASONS`, ``time_s`` wall-clock seconds of the extraction.
+
+    Raises
+    ------
+    KeyError
+        When ``points`` lacks a column or ``cfg`` has an unknown key.
+    ValueError
+        For an unknown extractor.
+    """
+    from floorscan.io import split_by_scan
+
+    missing = [c for c in ("scan_id", "x", "y", "z") if c not in points.columns]
+    if missing:
+        raise KeyError(f"registered points lack columns {missing}; expected scan_id, x, y, z")
+    if extractor not in EXTRACTORS:
+        raise ValueError(f"unknown extractor {extractor!r}; expected one of {EXTRACTORS}")
+    scan_p, ransac_p, cluster_p = params_from_config(cfg)
+    seed = int(cfg.get("seed", 0))
+    if extractor == "cluster_ransac":  # import before timing the first scan
+        import open3d  # noqa: F401
+        import sklearn.cluster  # noqa: F401
+    walls, status = [], []
+    for scan_id, xyz in sorted(split_by_scan(points).items()):
+        t0 = time.perf_counter()
+        seg, reason, n_pts = extract_scan(xyz, extractor, scan_p, ransac_p, cluster_p, (seed, scan_id))
+        dt = time.perf_counter() - t0
+        seg.insert(0, "scan_id", scan_id)
+        walls.append(seg)
+        status.append((scan_id, n_pts, len(seg), reason, dt))
+    walls_df = (
+        pd.concat(walls, ignore_index=True) if walls else _frame([]).assign(scan_id=[])
+    )[WALLS.names]
+    walls_df = walls_df.astype({"scan_id": "int32", "n_inliers": "int32"})
+    status_df = pd.DataFrame(status, columns=SCAN_STATUS.names).astype(
+        {"scan_id": "int32", "n_points": "int32", "n_walls": "int32", "reason": "str", "time_s": "float64"}
+    )
+    counts = status_df.loc[status_df.reason != "", "reason"].value_counts().to_dict()
+    log.info(
+        "%s: %d scans, %d wall segments, %.3f s/scan, scans without walls: %s",
+        extractor, len(status_df), len(walls_df), status_df.time_s.mean() if len(status_df) else 0.0,
+        counts or "none",
+    )
+    return walls_df, status_df
+
+
+def parse_k(k: str | int) -> int | None:
+    """``"all"`` -> None, ``"15"`` or 15 -> 15.
+
+    Raises
+    ------
+    ValueError
+        For anything else or k < 1.
+    """
+    if str(k) == "all":
+        return None
+    try:
+        v = int(k)
+    except (TypeError, ValueError):
+        raise ValueError(f"k must be a positive integer or 'all', got {k!r}") from None
+    if v < 1:
+        raise ValueError(f"k must be a positive integer or 'all', got {k!r}")
+    return v
+
+
+def first_k_walls(walls: pd.DataFrame, ordering: pd.DataFrame, k: str | int) -> tuple[pd.DataFrame, list[int]]:
+    """The wall segments of the first ``k`` scans of an ordering (stage ``walls``).
+
+    Parameters
+    ----------
+    walls : pandas.DataFrame
+        Per-scan wall segments (schema :data:`WALLS`).
+    ordering : pandas.DataFrame
+        ``orderings/{ordering}.parquet``: ``rank`` (0-based), ``scan_id``.
+    k : int, str
+        Number of scans; ``"all"`` or a k larger than the number of ranked scans
+        takes all of them.
+
+    Returns
+    -------
+    segments : pandas.DataFrame
+        Rows of ``walls`` whose scan is among the first k, in rank order (then the
+        per-scan order).
+    scan_ids : list of int
+        The first k scans, in rank order.
+
+    Raises
+    ------
+    KeyError
+        When ``ordering`` lacks ``rank`` or ``scan_id``.
+    """
+    for c in ("rank", "scan_id"):
+        if c not in ordering.columns:
+            raise KeyError(f"ordering lacks column {c!r}; expected rank, scan_id")
+    kk = parse_k(k)
+    ids = ordering.sort_values("rank", kind="stable")["scan_id"].astype(int).tolist()
+    ids = ids if kk is None else ids[:kk]
+    pos = {s: i for i, s in enumerate(ids)}
+    sel = walls[walls["scan_id"].isin(pos)].copy()
+    sel["_pos"] = sel["scan_id"].map(pos)
+    sel = sel.sort_values("_pos", kind="stable").drop(columns="_pos").reset_index(drop=True)
+    return sel[WALLS.names], ids

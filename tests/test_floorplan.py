@@ -1,0 +1,165 @@
+"""Floor plan: duplicates merge, faces pair into thick walls, exports reopen with their tools."""
+
+import json
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from floorscan.floorplan import (
+    FloorplanParams,
+    build_floorplan,
+    fit_segments,
+    merge_segments,
+    pair_faces,
+    write_floorplan,
+)
+from floorscan.walls import cluster_ransac, ransac
+from test_walls import ROOM, match, raycast
+
+REPO = Path(__file__).resolve().parents[1]
+BOX = [(-1, -2, 5, -2), (5, -2, 5, 2.2), (5, 2.2, -1, 2.2), (-1, 2.2, -1, -2)]
+THICK = [(0, 0, 4, 0), (4, 0, 4, 0.2), (4, 0.2, 0, 0.2), (0, 0.2, 0, 0)]  # a 4 m x 20 cm wall
+
+
+def scans_segments(walls, origins, extractor):
+    out = []
+    for sid, o in enumerate(origins):
+        pts = raycast(walls, o, seed=sid)
+        df = ransac(pts, seed=sid) if extractor == "ransac" else cluster_ransac(pts, seed=sid)
+        out.append(df.assign(scan_id=sid))
+    return pd.concat(out, ignore_index=True)
+
+
+def test_fit_segments_weighted_line_and_union_extent():
+    two_faces = np.array([[0.0, 0.0, 2.0, 0.0], [2.0, 0.02, 0.0, 0.02]])  # opposite directions
+    np.testing.assert_allclose(fit_segments(two_faces, [1, 1]), [0, 0.01, 2, 0.01], atol=1e-12)
+    np.testing.assert_allclose(fit_segments(two_faces, [3, 1]), [0, 0.005, 2, 0.005], atol=1e-12)
+    collinear = np.array([[0.0, 1.0, 2.0, 3.0], [1.0, 2.0, 3.0, 4.0]])  # on y = x + 1
+    np.testing.assert_allclose(fit_segments(collinear, [5, 1]), [0, 1, 3, 4], atol=1e-12)
+
+
+def test_merge_keeps_apart_what_is_not_one_face():
+    seg = np.array(
+        [
+            [0, 0, 2, 0], [2.2, 0.0, 4, 0.0],  # collinear, 0.2 m gap: one face
+            [0, 1, 2, 1],  # parallel 1 m away
+            [5, 0, 5, 2],  # perpendicular
+            [7, 0, 9, 0],  # collinear but 3 m away
+            [0, 0.5, 2, 0.5 + 2 * np.tan(np.radians(10))],  # 10 degrees off
+        ],
+        dtype=float,
+    )  # fmt: skip
+    faces, w, labels = merge_segments(seg, np.ones(6))
+    assert len(faces) == 5
+    assert labels[0] == labels[1] and len(set(labels[1:].tolist())) == 5
+    np.testing.assert_allclose(faces[labels[0]], [0, 0, 4, 0], atol=1e-12)
+    assert w[labels[0]] == 2
+
+
+@pytest.mark.parametrize("extractor", ["ransac", "cluster_ransac"])
+def test_duplicates_from_several_scans_merge_to_one_wall_each(extractor):
+    segs = scans_segments(ROOM, [(1.0, 1.0), (3.0, 2.0), (2.0, 5.0), (1.2, 3.5)], extractor)
+    assert len(segs) >= 16
+    plan = build_floorplan(segs, FloorplanParams())
+    assert len(plan.walls) == 4 and len(plan.faces) == 4
+    assert plan.walls["n_segments"].sum() == len(segs)
+    for wall in ROOM:
+        ang, perp, ends = min((match(r, wall) for r in plan.faces[["x0", "y0", "x1", "y1"]].to_numpy()), key=lambda m: m[1])
+        assert ang < 0.5 and perp < 0.01 and ends < 0.05
+    assert (plan.walls["thickness_m"] == 0.10).all() and not plan.walls["paired"].any()
+
+
+@pytest.mark.parametrize("extractor", ["ransac", "cluster_ransac"])
+def test_two_faces_pair_into_one_wall_with_its_thickness(extractor):
+    segs = scans_segments(BOX + THICK, [(2, 1.2), (2, -1.0), (1, 1.5), (3, -1.5)], extractor)
+    plan = build_floorplan(segs, FloorplanParams())
+    paired = plan.walls[plan.walls["paired"]]
+    assert len(paired) == 1 and len(plan.walls) == 5
+    w = paired.iloc[0]
+    assert abs(w.thickness_m - 0.20) < 0.01
+    np.testing.assert_allclose([w.y0, w.y1], [0.10, 0.10], atol=0.01)
+    np.testing.assert_allclose(sorted([w.x0, w.x1]), [0.0, 4.0], atol=0.05)
+
+
+def test_pairing_range_and_overlap():
+    faces = np.array([[0, 0, 4, 0], [0, 0.3, 4, 0.3], [0, 5, 4, 5], [3.5, 5.2, 8, 5.2]], dtype=float)
+    axes, thick, wall_of_face = pair_faces(faces, np.ones(4), FloorplanParams())
+    assert wall_of_face[0] == wall_of_face[1] and wall_of_face[2] != wall_of_face[3]  # 0.5 m overlap < half of 4 m
+    np.testing.assert_allclose(thick, [0.3, 0.1, 0.1])
+    np.testing.assert_allclose(axes[0], [0, 0.15, 4, 0.15], atol=1e-12)
+    _, _, w2 = pair_faces(faces, np.ones(4), FloorplanParams(pair_max_m=0.25))
+    assert len(set(w2.tolist())) == 4
+
+
+def test_exports_reopen_with_ifcopenshell_and_ezdxf(tmp_path):
+    import ezdxf
+    import ifcopenshell
+    import ifcopenshell.util.element as ue
+
+    segs = scans_segments(BOX + THICK, [(2, 1.2), (2, -1.0), (1, 1.5), (3, -1.5)], "ransac")
+    out = {f: tmp_path / f"plan.{f}" for f in ("geojson", "svg", "dxf", "ifc")}
+    plan = write_floorplan(segs, {"wall_height_m": 2.7}, out, name="test")
+    n = len(plan.walls)
+    assert n == 5
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(p.name for p in out.values())  # no temp files
+
+    model = ifcopenshell.open(str(out["ifc"]))
+    walls = model.by_type("IfcWall")
+    assert len(walls) == n
+    assert all(ue.get_container(w).is_a("IfcBuildingStorey") for w in walls)
+    q = sorted((ue.get_psets(w)["Qto_WallBaseQuantities"]["Length"], ue.get_psets(w)["Qto_WallBaseQuantities"]["Width"]) for w in walls)
+    np.testing.assert_allclose(q, sorted(zip(plan.walls.length_m, plan.walls.thickness_m)), atol=1e-6)
+    assert {ue.get_psets(w)["Qto_WallBaseQuantities"]["Height"] for w in walls} == {2.7}
+    assert model.by_type("IfcProject")[0].Name == "test"
+    write_floorplan(segs, {"wall_height_m": 2.7}, {"ifc": tmp_path / "again.ifc"}, name="test")
+    again = ifcopenshell.open(str(tmp_path / "again.ifc"))
+    assert [w.GlobalId for w in again.by_type("IfcWall")] == [w.GlobalId for w in walls]  # stable ids
+
+    doc = ezdxf.readfile(out["dxf"])
+    msp = doc.modelspace()
+    assert len(msp.query('LINE[layer=="WALL_AXIS"]')) == n
+    outlines = msp.query('LWPOLYLINE[layer=="WALL_OUTLINE"]')
+    assert len(outlines) == n and all(p.closed for p in outlines)
+    assert len(msp.query('LINE[layer=="WALL_FACE"]')) == len(plan.faces)
+
+    gj = json.loads(out["geojson"].read_text())
+    kinds = pd.Series([f["properties"]["kind"] for f in gj["features"]]).value_counts().to_dict()
+    assert kinds == {"axis": n, "footprint": n, "face": len(plan.faces)}
+    thick = [f["properties"]["thickness_m"] for f in gj["features"] if f["properties"]["kind"] == "axis"]
+    assert sorted(thick)[-1] == pytest.approx(0.20, abs=0.01) and sorted(thick)[0] == 0.10
+    areas = [f for f in gj["features"] if f["properties"]["kind"] == "footprint"]
+    assert areas[0]["geometry"]["type"] == "Polygon"
+
+    svg = ET.parse(out["svg"]).getroot()
+    ns = {"s": "http://www.w3.org/2000/svg"}
+    assert len(svg.findall(".//s:polygon", ns)) == n and len(svg.findall(".//s:line", ns)) == n
+
+
+def test_empty_segments_write_an_empty_plan(tmp_path):
+    empty = pd.DataFrame({c: pd.Series(dtype="float64") for c in ("x0", "y0", "x1", "y1", "rmse_m")})
+    out = {f: tmp_path / f"e.{f}" for f in ("geojson", "svg", "dxf", "ifc")}
+    plan = write_floorplan(empty.assign(n_inliers=pd.Series(dtype="int32")), None, out)
+    assert len(plan.walls) == 0
+    assert json.loads(out["geojson"].read_text())["features"] == []
+    import ifcopenshell
+
+    assert len(ifcopenshell.open(str(out["ifc"])).by_type("IfcWall")) == 0
+
+
+def test_bad_config_and_columns_are_named():
+    with pytest.raises(KeyError, match="merge_angle"):
+        write_floorplan(pd.DataFrame(), {"merge_angel_deg": 3}, {})
+    with pytest.raises(KeyError, match="x0"):
+        build_floorplan(pd.DataFrame({"a": [1]}))
+    with pytest.raises(ValueError, match="pair_min_m"):
+        FloorplanParams(pair_min_m=0.5, pair_max_m=0.4)
+
+
+def test_schema_defaults_agree_with_floorplan_params():
+    schema = yaml.safe_load((REPO / "workflow/schemas/floorplan.schema.yaml").read_text())["properties"]
+    defaults = {k: v["default"] for k, v in schema.items()}
+    assert defaults == {f: getattr(FloorplanParams(), f) for f in FloorplanParams.__dataclass_fields__}

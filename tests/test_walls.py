@@ -1,0 +1,271 @@
+"""Wall extraction: known rooms ray-cast with noise in, walls within toleranced numbers out."""
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from floorscan.walls import (
+    ClusterParams,
+    RansacParams,
+    ScanParams,
+    cluster_ransac,
+    extract_walls,
+    mean_shift,
+    first_k_walls,
+    parse_k,
+    point_normals,
+    ransac,
+    scan_points_2d,
+    wall_signature,
+)
+
+REPO = Path(__file__).resolve().parents[1]
+ROOM = [(0, 0, 4, 0), (4, 0, 4, 6), (4, 6, 0, 6), (0, 6, 0, 0)]  # 4 x 6 m room, metres
+
+
+def raycast(segments, origin, n_rays=720, noise=0.01, seed=0, max_range=20.0):
+    """A 2D LIDAR scan at ``origin``: the nearest hit of each of ``n_rays`` rays with the
+    wall segments (K, 4), plus Gaussian range noise (sigma ``noise``, metres)."""
+    rng = np.random.default_rng(seed)
+    seg = np.asarray(segments, float)
+    o = np.asarray(origin, float)
+    ang = np.linspace(0, 2 * np.pi, n_rays, endpoint=False)
+    u = np.stack([np.cos(ang), np.sin(ang)], 1)
+    a, e = seg[:, :2], seg[:, 2:] - seg[:, :2]
+
+    def cross(p, q):
+        return p[..., 0] * q[..., 1] - p[..., 1] * q[..., 0]
+
+    den = cross(u[:, None, :], e[None])
+    ao = a[None] - o
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = cross(ao, e[None]) / den
+        s = cross(ao, u[:, None, :]) / den
+    t = np.where((np.abs(den) > 1e-12) & (t > 1e-9) & (s >= 0) & (s <= 1), t, np.inf)
+    r = t.min(1)
+    ok = r < max_range
+    return o + u[ok] * (r[ok] + rng.normal(0, noise, ok.sum()))[:, None]
+
+
+def extract(extractor, points, seed=0, params=RansacParams()):
+    if extractor == "ransac":
+        return ransac(points, params, seed=seed)
+    return cluster_ransac(points, params, ClusterParams(), seed=seed)
+
+
+def match(segment, truth):
+    """(angle difference in degrees, max distance of the segment's ends to the true
+    line, max distance along the line between matched ends) of a segment and a wall."""
+    s, t = np.asarray(segment, float), np.asarray(truth, float)
+    d = (t[2:] - t[:2]) / np.linalg.norm(t[2:] - t[:2])
+    n = np.array([-d[1], d[0]])
+    u = s[2:] - s[:2]
+    ang = np.degrees(np.arccos(min(1.0, abs(u @ d) / np.linalg.norm(u))))
+    perp = max(abs((s[:2] - t[:2]) @ n), abs((s[2:] - t[:2]) @ n))
+    ends_s = np.sort([(s[:2] - t[:2]) @ d, (s[2:] - t[:2]) @ d])
+    ends_t = np.array([0.0, np.linalg.norm(t[2:] - t[:2])])
+    return ang, perp, float(np.abs(ends_s - ends_t).max())
+
+
+def best_match(df, truth):
+    rows = [match(r, truth) for r in df[["x0", "y0", "x1", "y1"]].to_numpy()]
+    return min(rows, key=lambda m: m[1] + m[0])
+
+
+@pytest.mark.parametrize("extractor", ["ransac", "cluster_ransac"])
+def test_room_walls_within_1cm_and_half_degree(extractor):
+    pts = raycast(ROOM, (1.5, 2.2), noise=0.01, seed=3)
+    df = extract(extractor, pts, seed=7)
+    assert len(df) == 4
+    for wall in ROOM:
+        ang, perp, ends = best_match(df, wall)
+        assert ang < 0.5
+        assert perp < 0.01
+        assert ends < 0.05  # ends: within about two point spacings of the corners
+    assert (df["rmse_m"] > 0.005).all() and (df["rmse_m"] < 0.015).all()  # noise sigma 1 cm
+    assert df["n_inliers"].sum() <= len(pts) + 8  # corner points may end two walls
+
+
+@pytest.mark.parametrize("extractor", ["ransac", "cluster_ransac"])
+def test_wall_with_door_gives_two_segments(extractor):
+    # Bottom wall y=0 has a 0.9 m door from x=1.5 to x=2.4; a corridor wall behind it.
+    walls = [(0, 0, 1.5, 0), (2.4, 0, 4, 0), (4, 0, 4, 6), (4, 6, 0, 6), (0, 6, 0, 0), (-3, -3, 7, -3)]
+    pts = raycast(walls, (2.0, 3.0), n_rays=1440, seed=1)
+    df = extract(extractor, pts, seed=1)
+    on_wall = df[(df[["y0", "y1"]].abs() < 0.02).all(axis=1)]
+    assert len(on_wall) == 2
+    xs = np.sort(on_wall[["x0", "x1"]].to_numpy(), axis=1)
+    xs = xs[np.argsort(xs[:, 0])]
+    np.testing.assert_allclose(xs, [[0.0, 1.5], [2.4, 4.0]], atol=0.03)
+
+
+def test_cluster_ransac_separates_parallel_walls_20cm_apart():
+    rng = np.random.default_rng(0)
+    x = rng.uniform(0, 4, 400)
+    y = np.r_[np.zeros(200), np.full(200, 0.20)] + rng.normal(0, 0.01, 400)
+    df = cluster_ransac(np.c_[x, y], seed=0)
+    assert len(df) == 2
+    ys = np.sort(df[["y0", "y1"]].mean(axis=1).to_numpy())
+    np.testing.assert_allclose(ys, [0.0, 0.20], atol=0.005)
+    np.testing.assert_allclose(np.sort(df["n_inliers"]), [200, 200], atol=6)
+
+
+def test_wall_signature_puts_parallel_walls_at_their_distance():
+    # Far from the origin (x ~ 50 m), where a per-point-normal rho would smear.
+    rng = np.random.default_rng(1)
+    x = rng.uniform(48, 52, 300)
+    pts = np.c_[x, np.r_[np.full(150, 3.0), np.full(150, 3.2)] + rng.normal(0, 0.005, 300)]
+    normals = point_normals(pts, 0.25, 20)
+    rho, cn = wall_signature(pts, normals, np.zeros(300, dtype=int))
+    assert abs(abs(cn[0, 1]) - 1.0) < 1e-3  # normal of a wall along x is +-y
+    assert abs(abs(np.median(rho[150:]) - np.median(rho[:150])) - 0.20) < 0.005
+    assert rho[:150].std() < 0.01 and rho[150:].std() < 0.01  # each wall falls together
+
+
+def test_mean_shift_gives_the_clusters_of_sklearn():
+    from sklearn.cluster import MeanShift
+
+    rng = np.random.default_rng(4)
+    one = np.r_[rng.normal(0, 0.01, 120), rng.normal(0.2, 0.01, 80), rng.normal(1.0, 0.02, 40), rng.uniform(-1, 2, 20)]
+    ang = rng.normal(0, 0.02, 300) + np.repeat([0.3, 1.9, 2.5], 100)
+    two = 0.5 * np.c_[np.cos(2 * ang), np.sin(2 * ang)]
+    for x, bw in ((one[:, None], 0.05), (two, 0.1)):
+        ours = mean_shift(x, bw, min_bin_freq=5)
+        ref = MeanShift(bandwidth=bw, bin_seeding=True, min_bin_freq=5).fit_predict(x)
+        np.testing.assert_array_equal(ours, ref)
+    labels = mean_shift(one[:, None], 0.05, min_bin_freq=5)
+    assert len(np.unique(labels[:240])) == 3 and (labels[:120] == labels[0]).all()
+    assert (mean_shift(np.array([[0.0], [1.0], [2.0]]), 0.1, min_bin_freq=2) == -1).all()
+
+
+def test_open3d_normals_are_z_for_planar_points_so_covariances_are_used():
+    import open3d as o3d
+
+    t = np.linspace(0, 3, 200)
+    pts = np.c_[t, 0.5 * t]  # a line of slope 0.5
+    pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.c_[pts, np.zeros(200)]))
+    pcd.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(radius=0.25, max_nn=20))
+    assert np.allclose(np.abs(np.asarray(pcd.normals)[:, 2]), 1.0)  # useless in-plane
+    n = point_normals(pts, 0.25, 20)
+    expected = np.array([-0.5, 1.0]) / np.hypot(0.5, 1.0)  # angle in [0, pi)
+    np.testing.assert_allclose(n, np.broadcast_to(expected, n.shape), atol=1e-6)
+
+
+@pytest.mark.parametrize("extractor", ["ransac", "cluster_ransac"])
+def test_seeded_determinism_and_input_not_mutated(extractor):
+    pts = raycast(ROOM + [(1, 1, 2, 2)], (3.0, 4.0), seed=2)
+    before = pts.copy()
+    a, b = extract(extractor, pts, seed=11), extract(extractor, pts, seed=11)
+    pd.testing.assert_frame_equal(a, b)
+    np.testing.assert_array_equal(pts, before)
+
+
+def scans_frame(scans):
+    return pd.concat(
+        [pd.DataFrame({"scan_id": s, "x": p[:, 0], "y": p[:, 1], "z": p[:, 2]}) for s, p in scans.items()],
+        ignore_index=True,
+    )
+
+
+def with_z(p, z=0.3):
+    return np.c_[p, np.full(len(p), z)]
+
+
+@pytest.mark.parametrize("extractor", ["ransac", "cluster_ransac"])
+def test_bad_scans_give_counted_reasons_never_a_crash(extractor):
+    good = with_z(raycast(ROOM, (1.0, 1.0), seed=4))
+    nan = good.copy()
+    nan[5, 0] = np.nan
+    line = with_z(np.c_[np.linspace(0, 3, 100), np.full(100, 2.0)])  # all collinear: one wall
+    same = with_z(np.ones((50, 2)))  # all points identical: no line
+    high = np.c_[np.random.default_rng(0).uniform(0, 3, (100, 2)), np.linspace(2.5, 3.0, 100)]
+    scans = {0: good, 1: nan, 2: good[:5], 3: line, 4: same, 5: high}
+    walls, status = extract_walls(scans_frame(scans), extractor, {"seed": 0})
+    st = status.set_index("scan_id")
+    assert st["reason"].to_dict() == {
+        0: "", 1: "non_finite_coordinates", 2: "too_few_points", 3: "",
+        4: "no_wall_found", 5: "no_points_in_height_band",
+    }  # fmt: skip
+    assert st["n_walls"].to_dict() == {0: 4, 1: 0, 2: 0, 3: 1, 4: 0, 5: 0}
+    assert walls.groupby("scan_id").size().to_dict() == {0: 4, 3: 1}
+    seg = walls[walls.scan_id == 3].iloc[0]
+    np.testing.assert_allclose(sorted([seg.x0, seg.x1]), [0.0, 3.0], atol=1e-9)
+    assert walls.dtypes["scan_id"] == np.int32 and walls.dtypes["n_inliers"] == np.int32
+
+
+@pytest.mark.parametrize("extractor", ["ransac", "cluster_ransac"])
+def test_3d_scan_is_cut_to_the_height_band(extractor):
+    rng = np.random.default_rng(6)
+    rings = [with_z(raycast(ROOM, (1.5, 2.2), seed=i), z) for i, z in enumerate(np.arange(0.1, 2.5, 0.2))]
+    floor = np.c_[rng.uniform(0, 4, (3000, 1)), rng.uniform(0, 6, (3000, 1)), rng.normal(0, 0.01, (3000, 1))]
+    ceiling = floor + [0.0, 0.0, 2.6]
+    furniture = np.c_[rng.uniform(1, 3, (500, 2)), np.full((500, 1), 0.4)]  # a table top below the band
+    xyz = np.vstack(rings + [floor, ceiling, furniture])
+    walls, status = extract_walls(scans_frame({0: xyz}), extractor, {"seed": 0})
+    assert status["reason"].tolist() == [""] and len(walls) == 4
+    for wall in ROOM:
+        ang, perp, ends = best_match(walls, wall)
+        assert ang < 0.5 and perp < 0.01 and ends < 0.05
+
+
+def test_walls_of_a_scan_do_not_depend_on_other_scans():
+    scans = {s: with_z(raycast(ROOM, o, seed=s)) for s, o in enumerate([(1, 1), (3, 5), (2, 3)])}
+    all_walls, _ = extract_walls(scans_frame(scans), "ransac", {"seed": 5})
+    one, _ = extract_walls(scans_frame({2: scans[2]}), "ransac", {"seed": 5})
+    pd.testing.assert_frame_equal(all_walls[all_walls.scan_id == 2].reset_index(drop=True), one)
+
+
+def test_scan_points_2d_height_band_and_2d_rule():
+    rng = np.random.default_rng(0)
+    xy = rng.uniform(0, 5, (1000, 2))
+    pts3 = np.c_[xy, rng.uniform(0.0, 3.0, 1000)]
+    out, reason = scan_points_2d(pts3, ScanParams(grid_m=0.0))
+    keep = (pts3[:, 2] >= 0.5) & (pts3[:, 2] <= 2.0)
+    assert reason == "" and np.array_equal(out, xy[keep])
+    flat = np.c_[xy, np.full(1000, 0.2)]  # a 2D scanner 0.2 m above the floor: below the band
+    out, reason = scan_points_2d(flat, ScanParams())
+    assert reason == "" and np.array_equal(out, xy)
+    wall = np.c_[np.repeat(np.linspace(0, 1, 11), 20), np.zeros(220), np.tile(np.linspace(0.6, 1.9, 20), 11)]
+    out, _ = scan_points_2d(wall, ScanParams(grid_m=0.02))  # 20 rings of one wall column -> 1 point
+    assert len(out) == 11
+
+
+def test_bad_walls_config_is_named():
+    with pytest.raises(ValueError, match="height_band_m"):
+        extract_walls(scans_frame({0: with_z(np.zeros((30, 2)))}), "ransac", {"height_band_m": [2.0, 0.5]})
+    with pytest.raises(KeyError, match="treshold_m"):
+        extract_walls(scans_frame({0: with_z(np.zeros((30, 2)))}), "ransac", {"ransac": {"treshold_m": 0.1}})
+    with pytest.raises(ValueError, match="unknown extractor"):
+        extract_walls(scans_frame({0: with_z(np.zeros((30, 2)))}), "hough", {})
+    with pytest.raises(KeyError, match="scan_id"):
+        extract_walls(pd.DataFrame({"x": [1.0]}), "ransac", {})
+
+
+def test_first_k_walls_takes_the_first_k_scans_of_the_ordering():
+    walls = pd.DataFrame(
+        {"scan_id": np.array([0, 1, 1, 2, 3], dtype=np.int32), "x0": [0.0, 1, 2, 3, 4], "y0": 0.0,
+         "x1": 1.0, "y1": 1.0, "n_inliers": np.int32(20), "rmse_m": 0.01}  # fmt: skip
+    )
+    ordering = pd.DataFrame({"rank": [2, 0, 1, 3], "scan_id": [0, 3, 1, 2]})
+    seg, ids = first_k_walls(walls, ordering, "2")
+    assert ids == [3, 1] and seg["scan_id"].tolist() == [3, 1, 1]
+    seg, ids = first_k_walls(walls, ordering, 50)  # k > number of scans: all
+    assert ids == [3, 1, 0, 2] and len(seg) == 5
+    assert first_k_walls(walls, ordering, "all")[1] == ids
+    assert parse_k("all") is None and parse_k("15") == 15
+    for bad in ("0", "x", -1):
+        with pytest.raises(ValueError, match="positive integer"):
+            parse_k(bad)
+
+
+def test_schema_defaults_agree_with_the_parameter_classes():
+    schema = yaml.safe_load((REPO / "workflow/schemas/walls.schema.yaml").read_text())["properties"]
+    for section, cls in (("ransac", RansacParams), ("cluster_ransac", ClusterParams)):
+        defaults = {k: v["default"] for k, v in schema[section]["properties"].items()}
+        assert defaults == {f: getattr(cls(), f) for f in cls.__dataclass_fields__}
+    assert schema["height_band_m"]["default"] == [ScanParams.min_height_m, ScanParams.max_height_m]
+    assert schema["planar_tolerance_m"]["default"] == ScanParams.planar_tolerance_m
+    assert schema["grid_m"]["default"] == ScanParams.grid_m

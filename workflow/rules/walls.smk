@@ -1,0 +1,126 @@
+# Wall extraction and merged floor plans (issue 6; thesis sections 3.4, 5.3, Algorithm 4).
+#
+#   scan_walls: every kept scan once per extractor (walls of a scan depend only on the
+#               scan, the extractor parameters and the seed, never on ordering or k)
+#   walls:      the wall segments of the first k scans of an ordering (a filter)
+#   floorplan:  merged walls of one (ordering, extractor, k) as GeoJSON, SVG, DXF, IFC
+import re
+
+stage_schema_check("walls", "../schemas/walls.schema.yaml")
+stage_schema_check("floorplan", "../schemas/floorplan.schema.yaml")
+
+WALLS_EXTRACT_KEYS = ("seed", "height_band_m", "planar_tolerance_m", "grid_m", "ransac", "cluster_ransac")
+FLOORPLAN_FORMATS = ("geojson", "svg", "dxf", "ifc")
+
+
+def _alternatives(values):
+    return "|".join(re.escape(str(v)) for v in values)
+
+
+def walls_extract_config(wildcards):
+    """The `walls` section without k/orderings/extractors: changing the k list or the
+    orderings must not rerun the (expensive) per-scan extraction."""
+    cfg = stage_config("walls")(wildcards)
+    return {key: cfg[key] for key in WALLS_EXTRACT_KEYS if key in cfg}
+
+
+def walls_k_names():
+    """k wildcard values of config walls.k: 5 -> "5", "all" -> "all" (files k5 ... kall)."""
+    return [str(k) for k in config["walls"]["k"]]
+
+
+def walls_outputs():
+    """Per-dataset final outputs: k-walls tables and floor plans for every configured
+    ordering x extractor x k (patterns keep {dataset})."""
+    w = config["walls"]
+    keys = dict(ordering=w["orderings"], extractor=w["extractors"], k=walls_k_names())
+    walls = expand("results/{{dataset}}/walls/{ordering}/{extractor}/k{k}.parquet", **keys)
+    plans = expand(
+        "results/{{dataset}}/floorplan/{ordering}_{extractor}_k{k}.{fmt}", fmt=FLOORPLAN_FORMATS, **keys
+    )
+    return walls + plans
+
+
+FINAL_OUTPUTS.extend(walls_outputs())
+
+WALLS_CONSTRAINTS = dict(
+    ordering=_alternatives(config["walls"]["orderings"]),
+    extractor=_alternatives(config["walls"]["extractors"]),
+    k="[1-9][0-9]*|all",
+)
+
+
+rule scan_walls:
+    input:
+        points="results/{dataset}/registered.parquet",
+    output:
+        walls="results/{dataset}/walls/{extractor}/per_scan.parquet",
+        status="results/{dataset}/walls/{extractor}/scan_status.parquet",
+    wildcard_constraints:
+        extractor=WALLS_CONSTRAINTS["extractor"],
+    params:
+        cfg=walls_extract_config,
+    log:
+        "results/{dataset}/logs/scan_walls_{extractor}.log",
+    benchmark:
+        "results/{dataset}/benchmarks/scan_walls_{extractor}.tsv"
+    script:
+        "../../scripts/scan_walls.py"
+
+
+def walls_tables(ordering="{ordering}", extractor="{extractor}"):
+    """The k-walls tables of every configured k (patterns keep the other wildcards)."""
+    return expand(
+        "results/{{dataset}}/walls/{ordering}/{extractor}/k{k}.parquet",
+        ordering=ordering, extractor=extractor, k=walls_k_names(),
+    )
+
+
+def walls_run_params(wildcards):
+    """What the `walls` job writes: orderings, extractors and k labels."""
+    w = config["walls"]
+    return {"orderings": list(w["orderings"]), "extractors": list(w["extractors"]), "k": walls_k_names()}
+
+
+# One job per dataset: taking the first k scans of an ordering is a cheap filter, so
+# the 70 tables of the default config come from one process (a job costs ~1 s to start).
+rule walls:
+    input:
+        walls=expand("results/{{dataset}}/walls/{extractor}/per_scan.parquet", extractor=config["walls"]["extractors"]),
+        orderings=expand("results/{{dataset}}/orderings/{ordering}.parquet", ordering=config["walls"]["orderings"]),
+    output:
+        expand(
+            "results/{{dataset}}/walls/{ordering}/{extractor}/k{k}.parquet",
+            ordering=config["walls"]["orderings"], extractor=config["walls"]["extractors"], k=walls_k_names(),
+        ),
+    params:
+        run=walls_run_params,
+    log:
+        log_path("walls"),
+    benchmark:
+        benchmark_path("walls")
+    script:
+        "../../scripts/walls.py"
+
+
+# One job per (ordering, extractor): every k of it, in the four formats.
+rule floorplan:
+    input:
+        walls_tables(),
+    output:
+        expand(
+            "results/{{dataset}}/floorplan/{{ordering}}_{{extractor}}_k{k}.{fmt}",
+            k=walls_k_names(), fmt=FLOORPLAN_FORMATS,
+        ),
+    wildcard_constraints:
+        ordering=WALLS_CONSTRAINTS["ordering"],
+        extractor=WALLS_CONSTRAINTS["extractor"],
+    params:
+        cfg=stage_config("floorplan"),
+        k=walls_k_names(),
+    log:
+        "results/{dataset}/logs/floorplan_{ordering}_{extractor}.log",
+    benchmark:
+        "results/{dataset}/benchmarks/floorplan_{ordering}_{extractor}.tsv"
+    script:
+        "../../scripts/floorplan.py"
