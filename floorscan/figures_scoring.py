@@ -1,0 +1,538 @@
+"""Figures of the scoring stage: the thesis's Chapter 5 figures for every dataset.
+
+- :func:`plot_metrics_vs_k`: correct match, false positive, false negative (section 5.1)
+  and F1 against the number of scans, per ordering (Fig. 5.4);
+- :func:`plot_floorplans`: merged floor plans of the first k scans, orderings side by
+  side (Fig. 5.5);
+- :func:`plot_bitmap_overlay`: inferred (red) over ground-truth (blue) bitmaps, both in
+  purple (Fig. 5.1);
+- :func:`plot_walls_over_points`: wall segments over the registered points
+  (Figs. 5.11, 5.12);
+- :func:`stage_times` / :func:`plot_stage_times`: time and memory per stage from the
+  Snakemake benchmark files (Table 5.1);
+- :func:`plot_wall_extraction`: time per scan and cumulative walls per scan of each
+  extractor (Fig. 5.10).
+
+Matplotlib with the Agg backend; every figure is written atomically
+(:func:`floorscan.io.atomic_path`). On real recordings the walls scored against are a
+*reference* (walls from all kept scans), never called ground truth.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+from matplotlib.collections import LineCollection  # noqa: E402
+
+from floorscan import metrics as M  # noqa: E402
+from floorscan.io import atomic_path  # noqa: E402
+
+DPI = 110
+ORDERING_COLOURS = {
+    "cluster_hull": "tab:red",
+    "convex_hull": "tab:orange",
+    "random": "tab:green",
+    "sequential": "tab:blue",
+    "motion_filter": "tab:purple",
+}
+EXTRACTOR_COLOURS = {"ransac": "tab:blue", "cluster_ransac": "tab:red"}
+#: Stage names recognised in benchmark file names (first token otherwise).
+STAGES = (
+    "ingest", "poses", "simulate", "register", "hulls", "select", "walls",
+    "floorplan", "score",
+)  # fmt: skip
+
+
+def reference_name(reference_kind: str) -> str:
+    """``"ground truth"`` or ``"reference (all scans)"`` for titles and legends."""
+    return "ground truth" if reference_kind == M.GROUND_TRUTH else "reference (all scans)"
+
+
+def _save(fig, path, dpi=DPI) -> None:
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".") or "png")
+    plt.close(fig)
+
+
+def _segments_collection(segments, **kw) -> LineCollection:
+    seg = M.as_segments(segments)
+    return LineCollection(seg.reshape(-1, 2, 2), **kw)
+
+
+def _square(ax) -> None:
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+
+
+# ----------------------------------------------------------------------- Fig. 5.4
+
+
+def plot_metrics_vs_k(metrics: pd.DataFrame, out, tau: float = 0.05) -> None:
+    """Fig. 5.4: metrics against the number of scans, a line per ordering.
+
+    Columns: the thesis's correct match, false positive and false negative (fractions
+    of the map area), the wall-cell correct match (IoU of wall cells) and F1 at ``tau``;
+    a row per extractor. Correct match over the map area stays near 1 because empty
+    cells dominate it, hence the wall-cell version beside it.
+
+    Parameters
+    ----------
+    metrics : pandas.DataFrame
+        ``metrics.parquet`` (:func:`floorscan.metrics.score_dataset`).
+    out : path
+        PNG to write.
+    tau : float
+        Tolerance of the F1 column, metres.
+    """
+    f1 = f"f1_{M.tau_label(tau)}"
+    cols = [
+        ("correct_match", "correct match\n(fraction of map)"),
+        ("false_positive", "false positive\n(fraction of map)"),
+        ("false_negative", "false negative\n(fraction of map)"),
+        ("wall_correct_match", "correct match\n(fraction of wall cells)"),
+        (f1, f"F1 at {M.tau_label(tau)}"),
+    ]
+    extractors = sorted(metrics["extractor"].unique()) if len(metrics) else [""]
+    fig, axes = plt.subplots(
+        len(extractors), len(cols), figsize=(3.2 * len(cols), 2.8 * len(extractors)),
+        squeeze=False,
+    )
+    kind = metrics["reference_kind"].iloc[0] if len(metrics) else M.GROUND_TRUTH
+    for r, ext in enumerate(extractors):
+        sub = metrics[metrics["extractor"] == ext]
+        for c, (col, label) in enumerate(cols):
+            ax = axes[r, c]
+            for ordering, g in sub.groupby("ordering", sort=True):
+                g = g.sort_values("n_scans")
+                ax.plot(
+                    g["n_scans"], g[col], marker="o", ms=3,
+                    color=ORDERING_COLOURS.get(ordering), label=ordering,
+                )
+            ax.set_xscale("log")
+            ticks = sorted(sub["n_scans"].unique())
+            ax.set_xticks(ticks, [str(t) for t in ticks], fontsize=7)
+            ax.minorticks_off()
+            ax.set_title(f"{ext}: {label}" if c == 0 else label, fontsize=9)
+            ax.grid(alpha=0.3)
+            if r == len(extractors) - 1:
+                ax.set_xlabel("number of scans k")
+    axes[0, -1].legend(fontsize=7, loc="lower right")
+    ds = metrics["dataset"].iloc[0] if len(metrics) else ""
+    fig.suptitle(f"{ds}: walls of the first k scans against the {reference_name(kind)}")
+    fig.tight_layout()
+    _save(fig, out)
+
+
+# ----------------------------------------------------------------------- Fig. 5.5
+
+
+def read_geojson_geometries(path) -> list:
+    """Shapely geometries of a GeoJSON FeatureCollection (walls of a floor plan)."""
+    import shapely.geometry
+
+    with open(path, encoding="utf-8") as fh:
+        doc = json.load(fh)
+    out = []
+    for feat in doc.get("features", []):
+        if feat.get("geometry"):
+            out.append(shapely.geometry.shape(feat["geometry"]))
+    return out
+
+
+def _draw_geometry(ax, geom, colour, lw=1.2) -> None:
+    gt = geom.geom_type
+    if gt.startswith("Multi") or gt == "GeometryCollection":
+        for g in geom.geoms:
+            _draw_geometry(ax, g, colour, lw)
+    elif gt == "LineString":
+        x, y = geom.xy
+        ax.plot(x, y, color=colour, lw=lw)
+    elif gt == "Polygon":
+        x, y = geom.exterior.xy
+        ax.fill(x, y, facecolor=colour, edgecolor=colour, alpha=0.6, lw=0.5)
+    elif gt == "Point":
+        ax.plot(geom.x, geom.y, ".", color=colour)
+
+
+def plot_floorplans(panels, reference, reference_kind: str, out, title: str = "") -> None:
+    """Fig. 5.5: merged floor plans side by side over the ground truth (reference).
+
+    Parameters
+    ----------
+    panels : list of (str, list of shapely geometries)
+        Panel title and the floor plan's walls (lines or polygons), metres.
+    reference : (M, 4) array_like
+        Ground-truth or reference wall segments, drawn in light grey.
+    reference_kind : str
+        ``"ground_truth"`` or ``"reference"``, for the legend.
+    out : path
+        PNG to write.
+    """
+    n = max(1, len(panels))
+    fig, axes = plt.subplots(1, n, figsize=(6 * n, 5), squeeze=False)
+    for ax, (name, geoms) in zip(axes[0], panels):
+        ax.add_collection(
+            _segments_collection(reference, colors="0.75", linewidths=3,
+                                 label=reference_name(reference_kind))
+        )
+        for g in geoms:
+            _draw_geometry(ax, g, "black")
+        ax.plot([], [], color="black", label="floor plan walls")
+        ax.set_title(f"{name} ({len(geoms)} walls)", fontsize=10)
+        ax.autoscale()
+        _square(ax)
+        ax.legend(fontsize=7, loc="upper right")
+    fig.suptitle(title)
+    fig.tight_layout()
+    _save(fig, out)
+
+
+# ----------------------------------------------------------------------- Fig. 5.1
+
+
+def overlay_image(inferred: np.ndarray, ground_truth: np.ndarray) -> np.ndarray:
+    """RGB image of two bitmaps (Fig. 5.1): ground truth only blue (false negative),
+    inferred only red (false positive), both purple (correct match), neither white.
+
+    Returns
+    -------
+    (ny, nx, 3) float ndarray
+    """
+    bi = np.asarray(inferred, bool)
+    bg = np.asarray(ground_truth, bool)
+    img = np.ones(bi.shape + (3,))
+    img[bg & ~bi] = (0.1, 0.2, 1.0)
+    img[bi & ~bg] = (1.0, 0.1, 0.1)
+    img[bi & bg] = (0.55, 0.0, 0.65)
+    return img
+
+
+def block_any(bitmap: np.ndarray, factor: int) -> np.ndarray:
+    """Downsample a bool bitmap by ``factor`` (a cell is set if any of its block is), so
+    that walls one cell wide stay visible in a figure; ``factor`` 1 returns a copy."""
+    b = np.asarray(bitmap, bool)
+    if factor <= 1:
+        return b.copy()
+    ny, nx = b.shape
+    py, px = (-ny) % factor, (-nx) % factor
+    b = np.pad(b, ((0, py), (0, px)))
+    return b.reshape(b.shape[0] // factor, factor, b.shape[1] // factor, factor).any(axis=(1, 3))
+
+
+def plot_bitmap_overlay(
+    panels, reference, reference_kind: str, grid: M.Grid, wall_width_m: float, out,
+    title: str = "",
+) -> None:
+    """Fig. 5.1: the inferred bitmap overlaid on the ground-truth (reference) bitmap.
+
+    Parameters
+    ----------
+    panels : list of (str, (M, 4) segments)
+        Panel title and inferred wall segments, metres.
+    reference : (K, 4) segments
+        Ground truth or reference, metres.
+    grid : floorscan.metrics.Grid
+        The scoring grid (the same as ``metrics.parquet``'s).
+    wall_width_m : float
+        Drawn wall width, metres.
+    """
+    bg = M.rasterize_segments(reference, grid, wall_width_m)
+    # About 900 pixels across a panel: larger grids are shown block-reduced (any).
+    factor = max(1, int(np.ceil(max(grid.nx, grid.ny) / 900)))
+    n = max(1, len(panels))
+    fig, axes = plt.subplots(1, n, figsize=(7 * n, 6), squeeze=False, dpi=150)
+    ref = reference_name(reference_kind)
+    for ax, (name, seg) in zip(axes[0], panels):
+        bi = M.rasterize_segments(seg, grid, wall_width_m)
+        m = M.bitmap_metrics(bi, bg)
+        img = overlay_image(block_any(bi, factor), block_any(bg, factor))
+        x0, _, y0, _ = grid.extent
+        step = grid.cell_m * factor
+        extent = (x0, x0 + img.shape[1] * step, y0, y0 + img.shape[0] * step)
+        ax.imshow(img, origin="lower", extent=extent, interpolation="nearest")
+        ax.set_title(
+            f"{name}\nCM {m['correct_match']:.4f}  FP {m['false_positive']:.4f}  "
+            f"FN {m['false_negative']:.4f}  wall-cell CM {m['wall_correct_match']:.3f}",
+            fontsize=9,
+        )
+        _square(ax)
+    handles = [
+        plt.Rectangle((0, 0), 1, 1, color=(0.1, 0.2, 1.0), label=f"{ref} only (FN)"),
+        plt.Rectangle((0, 0), 1, 1, color=(1.0, 0.1, 0.1), label="inferred only (FP)"),
+        plt.Rectangle((0, 0), 1, 1, color=(0.55, 0.0, 0.65), label="both (correct match)"),
+    ]
+    axes[0, -1].legend(handles=handles, fontsize=7, loc="upper right")
+    if factor > 1:
+        title += f" (shown in blocks of {factor} x {factor} cells)"
+    fig.suptitle(title)
+    fig.tight_layout()
+    _save(fig, out, dpi=150)
+
+
+# ------------------------------------------------------------------ Figs. 5.11, 5.12
+
+
+def plot_walls_over_points(points, panels, out, title: str = "") -> None:
+    """Figs. 5.11 and 5.12: wall segments over the registered points, one panel each.
+
+    Parameters
+    ----------
+    points : (N, 2) float ndarray
+        Registered points (map frame, metres), already subsampled for plotting.
+    panels : list of (str, (M, 4) segments)
+        Panel title and wall segments, metres.
+    """
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    n = max(1, len(panels))
+    fig, axes = plt.subplots(1, n, figsize=(6 * n, 5), squeeze=False)
+    for ax, (name, seg) in zip(axes[0], panels):
+        ax.scatter(pts[:, 0], pts[:, 1], s=0.2, c="0.6", linewidths=0, rasterized=True)
+        ax.add_collection(_segments_collection(seg, colors="tab:red", linewidths=1.0))
+        ax.set_title(f"{name} ({len(M.as_segments(seg))} segments)", fontsize=10)
+        ax.autoscale()
+        _square(ax)
+    fig.suptitle(title)
+    fig.tight_layout()
+    _save(fig, out)
+
+
+def subsample_points(points: pd.DataFrame, max_points: int, seed: int, z_band=None):
+    """``(N, 2)`` x, y of at most ``max_points`` points (seeded), optionally only those
+    with z inside ``z_band`` when the points are 3D (any z not 0)."""
+    xyz = points[["x", "y", "z"]].to_numpy(dtype=np.float64)
+    if z_band is not None and len(xyz) and np.any(xyz[:, 2] != 0):
+        xyz = xyz[(xyz[:, 2] >= z_band[0]) & (xyz[:, 2] <= z_band[1])]
+    if len(xyz) > max_points:
+        idx = np.random.default_rng(seed).choice(len(xyz), max_points, replace=False)
+        xyz = xyz[np.sort(idx)]
+    return xyz[:, :2].copy()
+
+
+# ------------------------------------------------------------------------ Table 5.1
+
+
+def read_benchmark(path) -> pd.DataFrame:
+    """A Snakemake benchmark TSV (columns ``s``, ``h:m:s``, ``max_rss``, ...; one row
+    per repeat), with "NA"/"-" as missing."""
+    return pd.read_csv(path, sep="\t", na_values=["NA", "-", ""])
+
+
+def stage_of(name: str) -> str:
+    """Stage of a benchmark file's name relative to the benchmarks folder, e.g.
+    ``walls/sequential/ransac/k5`` or ``walls_sequential_ransac_k5`` -> ``walls``."""
+    for st in STAGES:
+        if name == st or re.match(rf"^{st}[/_.\-]", name):
+            return st
+    return re.split(r"[/_.\-]", name)[0]
+
+
+def stage_times(bench_dir) -> pd.DataFrame:
+    """Table 5.1 from the benchmark files present under ``bench_dir`` (recursive).
+
+    Returns
+    -------
+    pandas.DataFrame
+        A row per stage in pipeline order (unknown stages after, by name): ``stage``,
+        ``n_jobs`` (benchmark files), ``s_total`` (sum over jobs of the mean over
+        repeats, seconds), ``s_max`` (slowest job, seconds), ``max_rss_mb`` (largest
+        resident memory of any job, MB; NaN when not measured). Empty when no file.
+    """
+    bench_dir = Path(bench_dir)
+    rows = []
+    for p in sorted(bench_dir.rglob("*.tsv")) if bench_dir.exists() else []:
+        try:
+            b = read_benchmark(p)
+        except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError):
+            continue
+        if "s" not in b.columns or b.empty:
+            continue
+        name = p.relative_to(bench_dir).with_suffix("").as_posix()
+        rss = pd.to_numeric(b.get("max_rss"), errors="coerce") if "max_rss" in b else None
+        rows.append(
+            {
+                "stage": stage_of(name),
+                "job": name,
+                "s": float(pd.to_numeric(b["s"], errors="coerce").mean()),
+                "max_rss_mb": float(rss.max()) if rss is not None else np.nan,
+            }
+        )
+    cols = ["stage", "n_jobs", "s_total", "s_max", "max_rss_mb"]
+    if not rows:
+        return pd.DataFrame(columns=cols)
+    jobs = pd.DataFrame(rows)
+    agg = jobs.groupby("stage", sort=False).agg(
+        n_jobs=("job", "size"), s_total=("s", "sum"), s_max=("s", "max"),
+        max_rss_mb=("max_rss_mb", "max"),
+    ).reset_index()
+    rank = {s: i for i, s in enumerate(STAGES)}
+    agg["_o"] = [rank.get(s, len(STAGES)) for s in agg["stage"]]
+    return agg.sort_values(["_o", "stage"]).drop(columns="_o").reset_index(drop=True)[cols]
+
+
+def plot_stage_times(table: pd.DataFrame, out, title: str = "") -> None:
+    """Bar charts of total time and peak memory per stage (Table 5.1)."""
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
+    if len(table):
+        y = np.arange(len(table))
+        axes[0].barh(y, table["s_total"], color="tab:blue")
+        axes[0].set_yticks(y, [f"{s} ({n})" for s, n in zip(table["stage"], table["n_jobs"])])
+        axes[0].invert_yaxis()
+        axes[1].barh(y, table["max_rss_mb"].fillna(0), color="tab:orange")
+        axes[1].set_yticks(y, table["stage"])
+        axes[1].invert_yaxis()
+    else:
+        for ax in axes:
+            ax.text(0.5, 0.5, "no benchmark files", ha="center", transform=ax.transAxes)
+    axes[0].set_xlabel("time, all jobs of the stage (s)")
+    axes[1].set_xlabel("peak resident memory of a job (MB)")
+    axes[0].set_title("time per stage (number of jobs)", fontsize=10)
+    axes[1].set_title("memory per stage", fontsize=10)
+    fig.suptitle(title)
+    fig.tight_layout()
+    _save(fig, out)
+
+
+# ----------------------------------------------------------------------- Fig. 5.10
+
+
+def plot_wall_extraction(status: dict, out, title: str = "") -> None:
+    """Fig. 5.10: wall extraction time per scan and cumulative walls, per extractor.
+
+    Parameters
+    ----------
+    status : dict
+        ``{extractor: DataFrame}`` of ``walls/{extractor}/scan_status.parquet``
+        (``scan_id``, ``n_walls``, ``reason``, ``time_s``); scans in recording order.
+    """
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4))
+    for ext, df in sorted(status.items()):
+        df = df.sort_values("scan_id")
+        colour = EXTRACTOR_COLOURS.get(ext)
+        t = pd.to_numeric(df["time_s"], errors="coerce").to_numpy() * 1e3
+        n = pd.to_numeric(df["n_walls"], errors="coerce").fillna(0).to_numpy()
+        axes[0].plot(df["scan_id"], t, ".", ms=2, color=colour,
+                     label=f"{ext} (median {np.nanmedian(t) if len(t) else np.nan:.1f} ms)")
+        axes[1].plot(df["scan_id"], np.cumsum(n), color=colour,
+                     label=f"{ext} ({int(n.sum())} walls)")
+        axes[2].plot(df["scan_id"], n, ".", ms=2, color=colour, label=ext)
+    axes[0].set_ylabel("extraction time per scan (ms)")
+    axes[0].set_yscale("log")
+    axes[1].set_ylabel("cumulative walls extracted")
+    axes[2].set_ylabel("walls per scan")
+    for ax in axes:
+        ax.set_xlabel("scan id (recording order)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle(title)
+    fig.tight_layout()
+    _save(fig, out)
+
+
+# ----------------------------------------------------------------- all figures
+
+
+def make_score_figures(
+    *,
+    dataset: str,
+    metrics: pd.DataFrame,
+    reference: dict,
+    reference_kind: str,
+    walls: dict,
+    floorplans: dict,
+    points: pd.DataFrame,
+    scan_status: dict,
+    bench_dir,
+    outputs: dict,
+    cfg: dict,
+    log=None,
+) -> pd.DataFrame:
+    """Write every scoring figure of a dataset; return the stage-time table.
+
+    Parameters
+    ----------
+    dataset : str
+        Dataset name, for titles.
+    metrics : pandas.DataFrame
+        ``metrics.parquet``.
+    reference : dict
+        ``{extractor: (M, 4) segments}`` the walls were scored against.
+    reference_kind : str
+        ``"ground_truth"`` or ``"reference"``.
+    walls : dict
+        ``{(ordering, extractor, k_label): DataFrame}`` raw wall segments for the
+        figure runs (``cfg["figure_k"]`` and ``"all"``).
+    floorplans : dict
+        ``{(ordering, extractor): list of geometries}`` merged floor plans at
+        ``cfg["figure_k"]``.
+    points : pandas.DataFrame
+        Registered points (``x, y, z``); subsampled here.
+    scan_status : dict
+        ``{extractor: DataFrame}`` wall extraction status per scan.
+    bench_dir : path
+        ``results/{dataset}/benchmarks``.
+    outputs : dict
+        Paths: ``metrics_vs_k``, ``floorplan``, ``bitmap_overlay``,
+        ``walls_over_points_k``, ``walls_over_points_all``, ``stage_times_png``,
+        ``stage_times_tsv``, ``wall_extraction``.
+    cfg : dict
+        The ``score`` config section.
+    """
+    k = str(cfg["figure_k"])
+    tau = cfg["summary_tau_m"]
+    ext_fig = cfg["figure_extractor"]
+    ordering_fig = cfg["figure_ordering"]
+    ref_name = reference_name(reference_kind)
+    extractors = sorted(scan_status) or sorted(reference)
+
+    plot_metrics_vs_k(metrics, outputs["metrics_vs_k"], tau)
+
+    ref_fig = reference.get(ext_fig, next(iter(reference.values())))
+    panels = [
+        (f"{o}, {ext_fig}: first {k} scans", floorplans.get((o, ext_fig), []))
+        for o in cfg["figure_orderings"]
+    ]
+    plot_floorplans(panels, ref_fig, reference_kind, outputs["floorplan"],
+                    f"{dataset}: merged floor plans from the first {k} scans over the {ref_name}")
+
+    all_refs = [M.as_segments(s) for s in reference.values() if len(M.as_segments(s))]
+    grid = M.grid_for(np.vstack(all_refs), cfg["cell_m"], cfg["margin_m"])
+    panels = [
+        (f"{o}, {ext_fig}, first {k} scans", walls.get((o, ext_fig, k), np.zeros((0, 4))))
+        for o in cfg["figure_orderings"]
+    ]
+    plot_bitmap_overlay(panels, ref_fig, reference_kind, grid, cfg["wall_width_m"],
+                        outputs["bitmap_overlay"],
+                        f"{dataset}: inferred walls (red) over the {ref_name} (blue)")
+
+    xy = subsample_points(points, cfg["max_plot_points"], cfg["seed"], cfg["points_z_band_m"])
+    for key, kk, label in (
+        ("walls_over_points_k", k, f"the first {k} scans ({ordering_fig})"),
+        ("walls_over_points_all", "all", "all kept scans"),
+    ):
+        panels = [
+            (f"{e}, {label}", walls.get((ordering_fig, e, kk), np.zeros((0, 4))))
+            for e in extractors
+        ]
+        plot_walls_over_points(xy, panels, outputs[key],
+                               f"{dataset}: walls from {label} over the registered points")
+
+    table = stage_times(bench_dir)
+    with atomic_path(outputs["stage_times_tsv"]) as tmp:
+        table.to_csv(tmp, sep="\t", index=False, float_format="%.3f")
+    plot_stage_times(table, outputs["stage_times_png"], f"{dataset}: time and memory per stage")
+
+    plot_wall_extraction(scan_status, outputs["wall_extraction"],
+                         f"{dataset}: wall extraction per scan, ransac against cluster_ransac")
+    if log is not None:
+        log.info("figures written for %s (%d stages timed)", dataset, len(table))
+    return table

@@ -1,0 +1,971 @@
+"""Scoring inferred walls against the ground truth (or a reference): thesis section 5.1
+bitmap metrics and ISPRS-benchmark-style tolerance metrics.
+
+Two families of metrics compare a set of *inferred* wall segments (the walls extracted
+from the first k scans of an ordering) with a set of *ground-truth* wall segments (the
+simulator's wall faces on synthetic datasets) or, on real recordings, *reference*
+segments (the walls extracted from all kept scans, as the thesis does in section 5.4).
+
+Bitmap metrics (thesis section 5.1)
+    Both segment sets are rasterized on the same grid (:class:`Grid`): a cell is 1 when
+    its centre lies within ``wall_width_m / 2`` of a segment (the cell centre is inside
+    the segment's round-capped buffer), else 0. Several walls on one cell count once.
+    With the error map ``B_E = B_I - B_GT`` (values -1, 0, 1) the thesis defines::
+
+        CorrectMatch  = #[B_E = 0]  / |B_E|
+        FalsePositive = #[B_E = 1]  / |B_E|
+        FalseNegative = #[B_E = -1] / |B_E|
+
+    normalized by the number of cells of the map ``|B_E|``. These follow the thesis
+    exactly, but *CorrectMatch counts the empty cells that both maps leave empty*, which
+    are the vast majority (a 50 x 30 m map at 5 cm has 600 000 cells, its walls perhaps
+    20 000), so CorrectMatch stays near 1 even with no inferred wall at all. We therefore
+    also report the wall-cell-only versions, normalized by the cells that either map
+    marks as wall, ``U = B_I | B_GT``::
+
+        wall_correct_match  = |B_I & B_GT|  / |U|   (intersection over union)
+        wall_false_positive = |B_I & ~B_GT| / |U|
+        wall_false_negative = |~B_I & B_GT| / |U|
+
+    (each triple sums to 1), and the cell precision ``|B_I & B_GT| / |B_I|`` and cell
+    recall ``|B_I & B_GT| / |B_GT|``.
+
+Tolerance metrics (Khoshelham et al. 2017, "The ISPRS benchmark on indoor modelling",
+and Khoshelham et al. 2018, "An evaluation framework for benchmarking indoor
+modelling methods")
+    *precision* (the benchmark's *correctness*): the fraction of inferred wall length
+    lying within ``tau`` of a ground-truth segment, computed exactly, not by sampling:
+    the part of a segment within ``tau`` of another segment is one interval of the first
+    segment's parameter (the distance to a convex set along a line is convex, so its
+    sublevel set is an interval), found by clipping the line against the other
+    segment's capsule (rectangle plus two end disks); the intervals over all nearby
+    segments are then merged. This is the limit of sampling every 1 cm (tested).
+    *recall* (*completeness*): the fraction of the ground truth within ``tau`` of an
+    inferred segment, measured on ground-truth samples every ``sample_step_m`` (default
+    1 cm) deduplicated on a grid of the same size, so that a place of a wall counts once
+    however many overlapping reference segments describe it (real recordings'
+    references are the overlapping walls of all scans); exact sample-to-segment
+    distances. *F1*: the harmonic mean. *median distance*: the median (and mean) of the
+    same samples' distances to the nearest inferred segment.
+
+On real recordings the reference is the union of the walls of all kept scans, and the
+walls of the first k scans are a subset of it: precision is 1 and the false-positive
+fraction 0 by construction there; recall, false negatives and F1 carry the comparison.
+
+Empty inputs never raise: with no inferred wall, precision is NaN (0/0, undefined),
+recall is 0 and F1 is 0 (a floor plan without walls is worthless, and 0 keeps the
+metric-against-k curves continuous); with no ground-truth wall, recall is NaN and F1 is
+0 if walls were inferred (all of them false positives), NaN if neither set has walls.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+
+#: Segments shorter than this (metres) have no length and are ignored.
+MIN_SEGMENT_M = 1e-9
+#: Largest grid a bitmap metric may allocate (cells), a guard against a bad cell size.
+MAX_CELLS = 200_000_000
+
+
+def as_segments(segments) -> np.ndarray:
+    """Return wall segments as a new ``(M, 4)`` float64 array ``x0, y0, x1, y1``.
+
+    Parameters
+    ----------
+    segments : array_like, shape (M, 4), or pandas.DataFrame with columns x0, y0, x1, y1
+        Segment end points in metres (map frame).
+
+    Returns
+    -------
+    (M, 4) float64 ndarray
+        A copy; rows with a NaN or infinite coordinate are dropped.
+
+    Raises
+    ------
+    ValueError
+        When the input does not have 4 columns.
+    """
+    if hasattr(segments, "columns"):
+        missing = [c for c in ("x0", "y0", "x1", "y1") if c not in segments.columns]
+        if missing:
+            raise ValueError(f"wall table lacks columns {missing}; expected x0, y0, x1, y1")
+        arr = segments[["x0", "y0", "x1", "y1"]].to_numpy(dtype=np.float64, copy=True)
+    else:
+        arr = np.array(segments, dtype=np.float64, copy=True)
+        if arr.size == 0:
+            return np.zeros((0, 4))
+    if arr.ndim != 2 or arr.shape[1] != 4:
+        raise ValueError(f"segments must have shape (M, 4) (x0, y0, x1, y1); got {arr.shape}")
+    return arr[np.isfinite(arr).all(axis=1)]
+
+
+def segment_lengths(segments: np.ndarray) -> np.ndarray:
+    """Lengths in metres of ``(M, 4)`` segments, shape ``(M,)``."""
+    s = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
+    return np.hypot(s[:, 2] - s[:, 0], s[:, 3] - s[:, 1])
+
+
+# --------------------------------------------------------------------------- bitmaps
+
+
+@dataclass(frozen=True)
+class Grid:
+    """A raster over the map frame: ``nx`` by ``ny`` square cells of ``cell_m`` metres.
+
+    Cell ``(iy, ix)`` covers ``[x0 + ix * cell_m, x0 + (ix + 1) * cell_m)`` in x (and
+    likewise in y); its centre decides whether it is a wall cell. Arrays on the grid
+    have shape ``(ny, nx)`` with row 0 at the smallest y.
+    """
+
+    x0: float
+    y0: float
+    cell_m: float
+    nx: int
+    ny: int
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (self.ny, self.nx)
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """``(xmin, xmax, ymin, ymax)`` of the grid, for ``matplotlib.imshow``."""
+        return (
+            self.x0,
+            self.x0 + self.nx * self.cell_m,
+            self.y0,
+            self.y0 + self.ny * self.cell_m,
+        )
+
+
+def grid_for(segments, cell_m: float = 0.05, margin_m: float = 1.0) -> Grid:
+    """The grid covering ``segments``' bounds plus ``margin_m`` on every side.
+
+    The origin is snapped to a multiple of ``cell_m`` so that the same ground truth
+    always gives the same grid. Every ordering and k of a dataset is scored on the grid
+    of its ground truth (reference), so the map area ``|B_E|`` is the same for all.
+
+    Parameters
+    ----------
+    segments : (M, 4) array_like
+        Ground-truth (reference) wall segments, metres.
+    cell_m : float
+        Cell size in metres (thesis section 5.1 leaves it open; default 5 cm).
+    margin_m : float
+        Margin around the bounds in metres.
+
+    Raises
+    ------
+    ValueError
+        When ``segments`` is empty, ``cell_m`` is not positive or the grid would exceed
+        :data:`MAX_CELLS` cells.
+    """
+    seg = as_segments(segments)
+    if len(seg) == 0:
+        raise ValueError("cannot build a scoring grid: the ground truth has no wall segment")
+    if not cell_m > 0 or margin_m < 0:
+        raise ValueError(f"cell_m must be > 0 and margin_m >= 0; got {cell_m}, {margin_m}")
+    xs = np.r_[seg[:, 0], seg[:, 2]]
+    ys = np.r_[seg[:, 1], seg[:, 3]]
+    x0 = math.floor((xs.min() - margin_m) / cell_m) * cell_m
+    y0 = math.floor((ys.min() - margin_m) / cell_m) * cell_m
+    nx = int(math.ceil((xs.max() + margin_m - x0) / cell_m - 1e-9))
+    ny = int(math.ceil((ys.max() + margin_m - y0) / cell_m - 1e-9))
+    nx, ny = max(nx, 1), max(ny, 1)
+    if nx * ny > MAX_CELLS:
+        raise ValueError(
+            f"scoring grid of {nx} x {ny} cells exceeds {MAX_CELLS}; increase score.cell_m"
+        )
+    return Grid(float(x0), float(y0), float(cell_m), nx, ny)
+
+
+def _split_long(seg: np.ndarray, max_len: float) -> np.ndarray:
+    """Cut segments into collinear pieces no longer than ``max_len`` (same union)."""
+    lengths = segment_lengths(seg)
+    n = np.maximum(1, np.ceil(lengths / max_len).astype(np.int64))
+    idx = np.repeat(np.arange(len(seg)), n)
+    start = np.arange(len(idx)) - np.repeat(np.cumsum(n) - n, n)
+    t0 = start / n[idx]
+    t1 = (start + 1) / n[idx]
+    p = seg[idx, :2]
+    d = seg[idx, 2:] - seg[idx, :2]
+    return np.column_stack([p + t0[:, None] * d, p + t1[:, None] * d])
+
+
+def rasterize_segments(segments, grid: Grid, width_m: float = 0.10) -> np.ndarray:
+    """Binary wall map: cells whose centre is within ``width_m / 2`` of a segment.
+
+    Equivalent to ``shapely.contains_xy(LineString(seg).buffer(width_m / 2), cx, cy)``
+    on the cell centres (round caps), but vectorized: segments are cut into pieces of at
+    most 0.5 m (the union of their buffers is the same), and the exact point-to-segment
+    distance is computed for the cell centres inside each piece's buffered bounds, in
+    chunks. Parts of segments outside the grid are clipped (not counted). Thesis
+    section 5.1: "If there is one or more wall present, a value of 1 is placed".
+
+    Parameters
+    ----------
+    segments : (M, 4) array_like
+        Wall segments ``x0, y0, x1, y1`` in metres.
+    grid : Grid
+        The raster.
+    width_m : float
+        Drawn wall width in metres (> 0).
+
+    Returns
+    -------
+    (ny, nx) bool ndarray
+        True on wall cells.
+    """
+    if not width_m > 0:
+        raise ValueError(f"width_m must be > 0; got {width_m}")
+    out = np.zeros(grid.shape, dtype=bool)
+    seg = as_segments(segments)
+    if len(seg) == 0:
+        return out
+    half = width_m / 2.0
+    seg = _split_long(seg, 0.5)
+    c = grid.cell_m
+    # Cell index ranges of each piece's buffered bounds (cells whose centre may be in).
+    lo_x = np.floor((np.minimum(seg[:, 0], seg[:, 2]) - half - grid.x0) / c - 0.5)
+    hi_x = np.ceil((np.maximum(seg[:, 0], seg[:, 2]) + half - grid.x0) / c - 0.5)
+    lo_y = np.floor((np.minimum(seg[:, 1], seg[:, 3]) - half - grid.y0) / c - 0.5)
+    hi_y = np.ceil((np.maximum(seg[:, 1], seg[:, 3]) + half - grid.y0) / c - 0.5)
+    lo_x = np.clip(lo_x, 0, grid.nx - 1).astype(np.int64)
+    hi_x = np.clip(hi_x, 0, grid.nx - 1).astype(np.int64)
+    lo_y = np.clip(lo_y, 0, grid.ny - 1).astype(np.int64)
+    hi_y = np.clip(hi_y, 0, grid.ny - 1).astype(np.int64)
+    # Pieces entirely outside the grid have their range collapsed by clipping; the
+    # distance test below rejects their cells, so no special case is needed.
+    w = hi_x - lo_x + 1
+    h = hi_y - lo_y + 1
+    counts = w * h
+    chunk = 2_000_000
+    starts = np.r_[0, np.cumsum(counts)]
+    i = 0
+    flat = out.reshape(-1)
+    while i < len(seg):
+        j = int(np.searchsorted(starts, starts[i] + chunk, side="right")) - 1
+        j = max(j, i + 1)
+        sl = slice(i, j)
+        n = counts[sl]
+        rep = np.repeat(np.arange(i, j), n)
+        local = np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)
+        ix = lo_x[rep] + local % w[rep]
+        iy = lo_y[rep] + local // w[rep]
+        cx = grid.x0 + (ix + 0.5) * c
+        cy = grid.y0 + (iy + 0.5) * c
+        d2 = _point_segment_dist2(cx, cy, seg[rep])
+        hit = d2 <= half * half * (1 + 1e-12)
+        flat[iy[hit] * grid.nx + ix[hit]] = True
+        i = j
+    return out
+
+
+def _point_segment_dist2(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> np.ndarray:
+    """Squared distance from points ``(px, py)`` to the matching rows of ``seg``."""
+    ax, ay, bx, by = seg[:, 0], seg[:, 1], seg[:, 2], seg[:, 3]
+    dx, dy = bx - ax, by - ay
+    l2 = dx * dx + dy * dy
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = ((px - ax) * dx + (py - ay) * dy) / l2
+    t = np.where(l2 > 0, np.clip(t, 0.0, 1.0), 0.0)
+    ex = ax + t * dx - px
+    ey = ay + t * dy - py
+    return ex * ex + ey * ey
+
+
+def error_map(inferred: np.ndarray, ground_truth: np.ndarray) -> np.ndarray:
+    """The thesis's error map ``B_E = B_I - B_GT`` (section 5.1), int8 in {-1, 0, 1}.
+
+    Raises
+    ------
+    ValueError
+        When the two bitmaps differ in shape.
+    """
+    bi = np.asarray(inferred, dtype=bool)
+    bg = np.asarray(ground_truth, dtype=bool)
+    if bi.shape != bg.shape:
+        raise ValueError(f"bitmaps differ in shape: {bi.shape} vs {bg.shape}")
+    return bi.astype(np.int8) - bg.astype(np.int8)
+
+
+def bitmap_metrics(inferred: np.ndarray, ground_truth: np.ndarray) -> dict[str, float]:
+    """Thesis section 5.1 fractions, and their wall-cell-only versions.
+
+    Parameters
+    ----------
+    inferred, ground_truth : (ny, nx) bool ndarray
+        ``B_I`` and ``B_GT`` on the same grid.
+
+    Returns
+    -------
+    dict
+        ``correct_match``, ``false_positive``, ``false_negative``: the thesis's
+        fractions of all map cells (``|B_E|``) with ``B_E`` = 0, 1, -1; they sum to 1 and
+        ``correct_match`` is dominated by cells empty in both maps.
+        ``wall_correct_match`` (IoU), ``wall_false_positive``, ``wall_false_negative``:
+        the same counts over the wall cells ``B_I | B_GT`` only (NaN when neither map has
+        a wall cell). ``cell_precision`` ``|B_I & B_GT| / |B_I|`` and ``cell_recall``
+        ``|B_I & B_GT| / |B_GT|`` (NaN on an empty denominator). ``n_cells``,
+        ``n_inferred_cells``, ``n_gt_cells``, ``n_both_cells`` (counts, as floats).
+    """
+    be = error_map(inferred, ground_truth)
+    n = be.size
+    fp = int(np.count_nonzero(be == 1))
+    fn = int(np.count_nonzero(be == -1))
+    both = int(np.count_nonzero(np.asarray(inferred, bool) & np.asarray(ground_truth, bool)))
+    union = both + fp + fn
+    n_i = both + fp
+    n_g = both + fn
+
+    def ratio(a: int, b: int) -> float:
+        return a / b if b else math.nan
+
+    return {
+        "correct_match": ratio(n - fp - fn, n),
+        "false_positive": ratio(fp, n),
+        "false_negative": ratio(fn, n),
+        "wall_correct_match": ratio(both, union),
+        "wall_false_positive": ratio(fp, union),
+        "wall_false_negative": ratio(fn, union),
+        "cell_precision": ratio(both, n_i),
+        "cell_recall": ratio(both, n_g),
+        "n_cells": float(n),
+        "n_inferred_cells": float(n_i),
+        "n_gt_cells": float(n_g),
+        "n_both_cells": float(both),
+    }
+
+
+# ------------------------------------------------------------------ tolerance metrics
+
+
+def _clip_interval(v0, dv, lo, hi, t_lo, t_hi):
+    """Narrow ``[t_lo, t_hi]`` to the t where ``lo <= v0 + t * dv <= hi``."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ta = (lo - v0) / dv
+        tb = (hi - v0) / dv
+    moving = dv != 0
+    inside = (v0 >= lo) & (v0 <= hi)
+    t_lo = np.where(moving, np.maximum(t_lo, np.minimum(ta, tb)), np.where(inside, t_lo, np.inf))
+    t_hi = np.where(moving, np.minimum(t_hi, np.maximum(ta, tb)), np.where(inside, t_hi, -np.inf))
+    return t_lo, t_hi
+
+
+def _disk_interval(px, py, dx, dy, cx, cy, r):
+    """Parameter interval (within [0, 1]) of ``p + t d`` inside the disk ``(c, r)``."""
+    a = dx * dx + dy * dy
+    ex, ey = px - cx, py - cy
+    b = 2.0 * (dx * ex + dy * ey)
+    cc = ex * ex + ey * ey - r * r
+    disc = b * b - 4.0 * a * cc
+    ok = (disc >= 0) & (a > 0)
+    sq = np.sqrt(np.where(ok, disc, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t0 = np.where(ok, (-b - sq) / (2.0 * a), np.inf)
+        t1 = np.where(ok, (-b + sq) / (2.0 * a), -np.inf)
+    return np.maximum(t0, 0.0), np.minimum(t1, 1.0)
+
+
+def capsule_intervals(a: np.ndarray, b: np.ndarray, tau: float) -> tuple[np.ndarray, np.ndarray]:
+    """Parameter interval of each segment ``a[i]`` within ``tau`` of segment ``b[i]``.
+
+    The set ``{t in [0, 1] : dist(a0 + t (a1 - a0), b) <= tau}`` is an interval, the
+    intersection of the line with the capsule (stadium) of ``b`` (its rectangle of
+    half-width ``tau`` and the disks of radius ``tau`` at its ends), because the
+    capsule is convex.
+
+    Parameters
+    ----------
+    a, b : (P, 4) float64 ndarray
+        Paired segments ``x0, y0, x1, y1`` in metres; ``a`` must have non-zero length.
+    tau : float
+        Tolerance in metres (>= 0).
+
+    Returns
+    -------
+    t_lo, t_hi : (P,) float64 ndarray
+        The interval ends; empty where ``t_lo >= t_hi``.
+    """
+    px, py = a[:, 0], a[:, 1]
+    dx, dy = a[:, 2] - px, a[:, 3] - py
+    bx, by = b[:, 0], b[:, 1]
+    ux, uy = b[:, 2] - bx, b[:, 3] - by
+    lb = np.hypot(ux, uy)
+    safe = lb > 0
+    gx = np.where(safe, ux / np.where(safe, lb, 1.0), 1.0)
+    gy = np.where(safe, uy / np.where(safe, lb, 1.0), 0.0)
+    # The line in b's frame: s along b, n across it.
+    s0 = (px - bx) * gx + (py - by) * gy
+    ds = dx * gx + dy * gy
+    n0 = -(px - bx) * gy + (py - by) * gx
+    dn = -dx * gy + dy * gx
+    zeros = np.zeros_like(px)
+    ones = np.ones_like(px)
+    r_lo, r_hi = _clip_interval(s0, ds, 0.0, lb, zeros, ones)
+    r_lo, r_hi = _clip_interval(n0, dn, -tau, tau, r_lo, r_hi)
+    d0_lo, d0_hi = _disk_interval(px, py, dx, dy, bx, by, tau)
+    d1_lo, d1_hi = _disk_interval(px, py, dx, dy, b[:, 2], b[:, 3], tau)
+    los = np.stack([r_lo, d0_lo, d1_lo])
+    his = np.stack([r_hi, d0_hi, d1_hi])
+    nonempty = his > los
+    t_lo = np.where(nonempty, los, np.inf).min(axis=0)
+    t_hi = np.where(nonempty, his, -np.inf).max(axis=0)
+    return t_lo, t_hi
+
+
+def length_within(segments, others, tau: float) -> np.ndarray:
+    """Length of each segment lying within ``tau`` of any of ``others`` (exact).
+
+    Candidates pairs come from a Shapely STRtree ``dwithin`` query; for each pair the
+    covered parameter interval is :func:`capsule_intervals`; the intervals of a segment
+    are merged (sorted sweep with a running maximum) and their total length returned.
+
+    Parameters
+    ----------
+    segments : (M, 4) array_like
+        Segments to measure, metres.
+    others : (K, 4) array_like
+        Segments to measure against, metres.
+    tau : float
+        Tolerance in metres (>= 0).
+
+    Returns
+    -------
+    (M,) float64 ndarray
+        Covered length per segment in metres (0 where nothing is near), for the rows of
+        ``as_segments(segments)`` (non-finite rows dropped).
+    """
+    if tau < 0:
+        raise ValueError(f"tau must be >= 0; got {tau}")
+    seg = as_segments(segments)
+    oth = as_segments(others)
+    lengths = segment_lengths(seg)
+    covered = np.zeros(len(seg))
+    if len(seg) == 0 or len(oth) == 0:
+        return covered
+    geoms_o = shapely.linestrings(oth.reshape(-1, 2, 2))
+    geoms_s = shapely.linestrings(seg.reshape(-1, 2, 2))
+    tree = shapely.STRtree(geoms_o)
+    si, oi = tree.query(geoms_s, predicate="dwithin", distance=tau * (1 + 1e-9) + 1e-12)
+    keep = lengths[si] > MIN_SEGMENT_M
+    si, oi = si[keep], oi[keep]
+    if len(si) == 0:
+        return covered
+    t_lo, t_hi = capsule_intervals(seg[si], oth[oi], tau)
+    t_lo = np.clip(t_lo, 0.0, 1.0)
+    t_hi = np.clip(t_hi, 0.0, 1.0)
+    ok = t_hi > t_lo
+    si, t_lo, t_hi = si[ok], t_lo[ok], t_hi[ok]
+    if len(si) == 0:
+        return covered
+    order = np.lexsort((t_lo, si))
+    si, t_lo, t_hi = si[order], t_lo[order], t_hi[order]
+    # Offset each segment's intervals by 2 * index so one running max spans all groups.
+    off = 2.0 * si
+    run = np.maximum.accumulate(t_hi + off)
+    prev = np.r_[-np.inf, run[:-1]] - off
+    gain = np.maximum(0.0, t_hi - np.maximum(t_lo, prev))
+    frac = np.bincount(si, weights=gain, minlength=len(seg))
+    return np.minimum(frac, 1.0) * lengths
+
+
+def sample_segments(segments, step_m: float = 0.01) -> tuple[np.ndarray, np.ndarray]:
+    """Points along segments at most ``step_m`` apart, with the length each stands for.
+
+    Each segment of length L is cut into ``n = ceil(L / step_m)`` equal pieces and
+    sampled at the pieces' centres, so the weights ``L / n`` sum to L exactly.
+
+    Returns
+    -------
+    points : (S, 2) float64 ndarray
+        Sample positions, metres.
+    weights : (S,) float64 ndarray
+        Length in metres represented by each sample.
+    """
+    if not step_m > 0:
+        raise ValueError(f"step_m must be > 0; got {step_m}")
+    seg = as_segments(segments)
+    lengths = segment_lengths(seg)
+    keep = lengths > MIN_SEGMENT_M
+    seg, lengths = seg[keep], lengths[keep]
+    if len(seg) == 0:
+        return np.zeros((0, 2)), np.zeros(0)
+    n = np.maximum(1, np.ceil(lengths / step_m - 1e-9).astype(np.int64))
+    idx = np.repeat(np.arange(len(seg)), n)
+    k = np.arange(len(idx)) - np.repeat(np.cumsum(n) - n, n)
+    t = (k + 0.5) / n[idx]
+    pts = seg[idx, :2] + t[:, None] * (seg[idx, 2:] - seg[idx, :2])
+    return pts, (lengths / n)[idx]
+
+
+def nearest_distances(points: np.ndarray, segments, search_m: float = 0.25) -> np.ndarray:
+    """Exact distance in metres from each ``(S, 2)`` point to the nearest segment.
+
+    Segments whose bounding box meets a square of half-side r around the point are
+    found with a Shapely STRtree and their exact distances computed in numpy (chunked),
+    for r = ``search_m``, then 4, 16 and 64 times it for the points still without a
+    segment within r (a segment within r always meets the square, so the result is
+    exact); the last few fall back to ``STRtree.query_nearest``. Querying nearest for
+    every point is slow where many scans' duplicate walls overlap.
+
+    Returns an ``(S,)`` array, all ``inf`` when ``segments`` is empty.
+    """
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    seg = as_segments(segments)
+    if len(pts) == 0:
+        return np.zeros(0)
+    if len(seg) == 0:
+        return np.full(len(pts), np.inf)
+    tree = shapely.STRtree(shapely.linestrings(seg.reshape(-1, 2, 2)))
+    out = np.full(len(pts), np.inf)
+    todo = np.arange(len(pts))
+    for r in (search_m, 4 * search_m, 16 * search_m, 64 * search_m):
+        for start in range(0, len(todo), 20_000):
+            ids = todo[start : start + 20_000]
+            p = pts[ids]
+            boxes = shapely.box(p[:, 0] - r, p[:, 1] - r, p[:, 0] + r, p[:, 1] + r)
+            pi, si = tree.query(boxes)
+            if len(pi) == 0:
+                continue
+            d = np.sqrt(_point_segment_dist2(p[pi, 0], p[pi, 1], seg[si]))
+            best = np.full(len(p), np.inf)
+            np.minimum.at(best, pi, d)
+            out[ids] = best
+        todo = todo[out[todo] > r]
+        if len(todo) == 0:
+            break
+    if len(todo):
+        idx, dist = tree.query_nearest(
+            shapely.points(pts[todo]), return_distance=True, all_matches=False
+        )
+        out[todo[idx[0]]] = dist
+    return out
+
+
+def _f1(p: float, r: float, has_inferred: bool, has_gt: bool) -> float:
+    if not has_inferred and not has_gt:
+        return math.nan
+    if not has_inferred or not has_gt:
+        return 0.0
+    return 2 * p * r / (p + r) if (p + r) > 0 else 0.0
+
+
+def tau_label(tau: float) -> str:
+    """Column suffix for a tolerance: 0.05 -> ``"5cm"``, 0.025 -> ``"2.5cm"``."""
+    return f"{round(tau * 100, 6):g}cm"
+
+
+def dedupe_samples(points: np.ndarray, cell_m: float) -> np.ndarray:
+    """Keep one sample per ``cell_m`` square cell (the first in input order).
+
+    Walls from many scans overlap: a wall seen by 100 scans is 100 near-identical
+    segments. Deduplicating the samples on a grid makes each place of the wall count
+    once (up to the width of the stack of duplicates, a few cells).
+
+    Returns
+    -------
+    (S', 2) float64 ndarray
+        The kept samples, in input order.
+    """
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    if len(pts) == 0:
+        return pts.copy()
+    key = np.floor(pts / cell_m).astype(np.int64)
+    key -= key.min(axis=0)
+    flat = key[:, 0] * (int(key[:, 1].max()) + 1) + key[:, 1]
+    _, first = np.unique(flat, return_index=True)
+    return pts[np.sort(first)]
+
+
+def gt_samples(ground_truth, sample_step_m: float = 0.01) -> np.ndarray:
+    """The deduplicated ground-truth samples of :func:`tolerance_metrics`, ``(S, 2)``."""
+    return dedupe_samples(sample_segments(ground_truth, sample_step_m)[0], sample_step_m)
+
+
+def tolerance_metrics(
+    inferred, ground_truth, taus=(0.05, 0.10), sample_step_m: float = 0.01, samples=None
+) -> dict[str, float]:
+    """Precision (correctness), recall (completeness) and F1 of wall length within
+    each tolerance, and the median distance from the ground truth to the inferred walls.
+
+    Style of the ISPRS benchmark on indoor modelling (Khoshelham et al. 2017, 2018),
+    applied to 2D wall segments; thesis Chapter 6 asks for "more robust error metrics".
+
+    - precision at tau: inferred wall length within tau of a ground-truth segment over
+      the inferred wall length, computed exactly (:func:`length_within`); overlapping
+      inferred segments (the same wall seen by several scans) each count.
+    - recall at tau: the ground truth is sampled every ``sample_step_m`` and the samples
+      deduplicated on a ``sample_step_m`` grid (:func:`dedupe_samples`), so that a place
+      of a wall counts once however many reference segments overlap there (real
+      recordings' references are the overlapping walls of all scans; on the simulator's
+      ground truth this changes nothing but the corners); recall is the fraction of
+      these samples within tau of an inferred segment (exact distances).
+    - median (mean) distance: over the same samples, metres.
+
+    Parameters
+    ----------
+    inferred : (M, 4) array_like or DataFrame
+        Inferred wall segments, metres.
+    ground_truth : (K, 4) array_like or DataFrame
+        Ground-truth (or reference) wall segments, metres.
+    taus : sequence of float
+        Tolerances in metres.
+    sample_step_m : float
+        Spacing and deduplication cell of the ground-truth samples, metres.
+    samples : (S, 2) ndarray, optional
+        ``gt_samples(ground_truth, sample_step_m)``, when already computed.
+
+    Returns
+    -------
+    dict
+        ``precision_<tau>``, ``recall_<tau>``, ``f1_<tau>`` for each tau (suffix from
+        :func:`tau_label`, e.g. ``f1_5cm``); ``median_distance_m`` and
+        ``mean_distance_m`` (NaN without inferred or ground-truth walls);
+        ``inferred_length_m``, ``gt_length_m`` (sums of segment lengths) and
+        ``n_gt_samples``. Empty sets: see the module docstring (precision NaN and F1 0
+        with nothing inferred).
+    """
+    inf = as_segments(inferred)
+    gt = as_segments(ground_truth)
+    len_i = float(segment_lengths(inf).sum())
+    len_g = float(segment_lengths(gt).sum())
+    has_i, has_g = len_i > MIN_SEGMENT_M, len_g > MIN_SEGMENT_M
+    pts = gt_samples(gt, sample_step_m) if samples is None else samples
+    d = nearest_distances(pts, inf) if has_i else np.full(len(pts), np.inf)
+    out: dict[str, float] = {
+        "inferred_length_m": len_i,
+        "gt_length_m": len_g,
+        "n_gt_samples": float(len(pts)),
+    }
+    for tau in taus:
+        lab = tau_label(tau)
+        if has_i:
+            p = float(length_within(inf, gt, tau).sum() / len_i) if has_g else 0.0
+        else:
+            p = math.nan
+        r = float(np.mean(d <= tau)) if has_g and len(pts) else math.nan
+        out[f"precision_{lab}"] = p
+        out[f"recall_{lab}"] = r
+        out[f"f1_{lab}"] = _f1(p, r, has_i, has_g)
+    if has_i and has_g and len(pts):
+        out["median_distance_m"] = float(np.median(d))
+        out["mean_distance_m"] = float(np.mean(d))
+    else:
+        out["median_distance_m"] = math.nan
+        out["mean_distance_m"] = math.nan
+    return out
+
+
+def score_walls(
+    inferred,
+    ground_truth,
+    grid: Grid,
+    wall_width_m: float = 0.10,
+    taus=(0.05, 0.10),
+    sample_step_m: float = 0.01,
+    gt_bitmap: np.ndarray | None = None,
+    samples: np.ndarray | None = None,
+) -> dict[str, float]:
+    """All metrics of one inferred wall set: :func:`bitmap_metrics` on ``grid`` and
+    :func:`tolerance_metrics`.
+
+    ``gt_bitmap`` (the rasterized ground truth on ``grid``) and ``samples``
+    (:func:`gt_samples`) may be passed to avoid recomputing them for every ordering
+    and k.
+    """
+    if gt_bitmap is None:
+        gt_bitmap = rasterize_segments(ground_truth, grid, wall_width_m)
+    bi = rasterize_segments(inferred, grid, wall_width_m)
+    out = bitmap_metrics(bi, gt_bitmap)
+    out.update(tolerance_metrics(inferred, ground_truth, taus, sample_step_m, samples))
+    return out
+
+
+# ----------------------------------------------------------------- dataset scoring
+
+#: Values of the ``reference_kind`` column: what the inferred walls are scored against.
+GROUND_TRUTH = "ground_truth"
+REFERENCE = "reference"
+
+
+def read_wall_faces(path, kind: str = "face") -> np.ndarray:
+    """Ground-truth wall segments of ``kind`` from a ``walls.geojson`` (simulate stage).
+
+    LineString and MultiLineString features whose property ``kind`` equals ``kind`` are
+    split into their straight pieces.
+
+    Returns
+    -------
+    (M, 4) float64 ndarray
+        ``x0, y0, x1, y1`` in metres.
+
+    Raises
+    ------
+    floorscan.io.InputError
+        When the file is not a FeatureCollection or has no feature of ``kind``.
+    """
+    import json
+
+    from floorscan.io import InputError
+
+    with open(path, encoding="utf-8") as fh:
+        doc = json.load(fh)
+    if doc.get("type") != "FeatureCollection":
+        raise InputError(f"{path}: expected a GeoJSON FeatureCollection, got {doc.get('type')!r}")
+    rows: list[np.ndarray] = []
+    for feat in doc.get("features", []):
+        if (feat.get("properties") or {}).get("kind") != kind:
+            continue
+        geom = feat.get("geometry") or {}
+        if geom.get("type") == "LineString":
+            lines = [geom["coordinates"]]
+        elif geom.get("type") == "MultiLineString":
+            lines = geom["coordinates"]
+        else:
+            continue
+        for line in lines:
+            xy = np.asarray(line, dtype=np.float64)[:, :2]
+            if len(xy) >= 2:
+                rows.append(np.column_stack([xy[:-1], xy[1:]]))
+    if not rows:
+        raise InputError(f"{path}: no LineString feature with property kind={kind!r}")
+    return as_segments(np.vstack(rows))
+
+
+def floorplan_wall_count(path) -> int:
+    """Number of walls in a merged floor plan ``.geojson`` (floorplan stage).
+
+    The floor plan has features of kind ``axis`` (centre line) and ``footprint``
+    (polygon) per wall, sharing a ``wall_id``: the count is the number of distinct
+    ``wall_id``; without that property, the features of kind ``axis`` or ``wall`` (or
+    without a kind).
+    """
+    import json
+
+    with open(path, encoding="utf-8") as fh:
+        doc = json.load(fh)
+    props = [feat.get("properties") or {} for feat in doc.get("features", [])]
+    ids = {p["wall_id"] for p in props if "wall_id" in p}
+    if ids:
+        return len(ids)
+    return sum(p.get("kind", "wall") in ("axis", "wall") for p in props)
+
+
+def k_scans(k_label: str, n_kept: int) -> int:
+    """Number of scans behind ``k{k_label}``: ``min(k, n_kept)``, ``n_kept`` for "all"."""
+    if str(k_label) == "all":
+        return int(n_kept)
+    return min(int(k_label), int(n_kept))
+
+
+def score_dataset(
+    runs: list[dict],
+    references: dict[str, np.ndarray],
+    reference_kind: str,
+    cfg: dict,
+    dataset: str = "",
+    log=None,
+):
+    """Score every ordering x extractor x k of a dataset: one row per run.
+
+    Parameters
+    ----------
+    runs : list of dict
+        One per wall file, with keys ``ordering``, ``extractor``, ``k`` (label: "5" or
+        "all"), ``walls`` (DataFrame with x0, y0, x1, y1), ``n_kept`` (scans the
+        ordering ranks, i.e. kept scans) and ``n_floorplan_walls`` (int or None).
+    references : dict
+        ``{extractor: (M, 4) segments}``: what each extractor's walls are scored
+        against. On synthetic datasets every extractor maps to the same ground truth
+        (``sim/walls.geojson`` faces); on real ones to the walls of that extractor from
+        all kept scans.
+    reference_kind : {"ground_truth", "reference"}
+        Written to the ``reference_kind`` column.
+    cfg : dict
+        The ``score`` config section: ``cell_m``, ``wall_width_m``, ``margin_m``,
+        ``taus_m``, ``sample_step_m``.
+    dataset : str
+        Written to the ``dataset`` column.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per run, sorted by ordering, extractor and number of scans.
+
+    Raises
+    ------
+    ValueError
+        When ``reference_kind`` is unknown, a run's extractor has no reference, or the
+        references are all empty (no grid can be built).
+    """
+    import time
+
+    import pandas as pd
+
+    if reference_kind not in (GROUND_TRUTH, REFERENCE):
+        raise ValueError(f"reference_kind must be {GROUND_TRUTH!r} or {REFERENCE!r}")
+    refs = {e: as_segments(s) for e, s in references.items()}
+    nonempty = [s for s in refs.values() if len(s)]
+    if not nonempty:
+        raise ValueError(f"dataset {dataset!r}: every {reference_kind} wall set is empty")
+    # One grid for the whole dataset: the bounds of all references plus the margin.
+    grid = grid_for(np.vstack(nonempty), cfg["cell_m"], cfg["margin_m"])
+    ref_bitmaps: dict[str, np.ndarray] = {}
+    ref_samples: dict[str, np.ndarray] = {}
+    rows = []
+    for run in runs:
+        ext = run["extractor"]
+        if ext not in refs:
+            raise ValueError(f"no {reference_kind} walls for extractor {ext!r}")
+        if ext not in ref_bitmaps:
+            ref_bitmaps[ext] = rasterize_segments(refs[ext], grid, cfg["wall_width_m"])
+            ref_samples[ext] = gt_samples(refs[ext], cfg["sample_step_m"])
+        t0 = time.perf_counter()
+        walls = as_segments(run["walls"])
+        m = score_walls(
+            walls,
+            refs[ext],
+            grid,
+            cfg["wall_width_m"],
+            cfg["taus_m"],
+            cfg["sample_step_m"],
+            gt_bitmap=ref_bitmaps[ext],
+            samples=ref_samples[ext],
+        )
+        n_kept = int(run["n_kept"])
+        n_scans = k_scans(run["k"], n_kept)
+        nfp = run.get("n_floorplan_walls")
+        row = {
+            "dataset": dataset,
+            "reference_kind": reference_kind,
+            "ordering": run["ordering"],
+            "extractor": ext,
+            "k": str(run["k"]),
+            "n_scans": n_scans,
+            "n_scans_kept": n_kept,
+            "scan_fraction": n_scans / n_kept if n_kept else math.nan,
+            "n_segments": int(len(walls)),
+            "n_floorplan_walls": -1 if nfp is None else int(nfp),
+            "cell_m": float(grid.cell_m),
+            "wall_width_m": float(cfg["wall_width_m"]),
+            **m,
+            "score_time_s": time.perf_counter() - t0,
+        }
+        rows.append(row)
+        if log is not None:
+            f1 = m.get(f"f1_{tau_label(cfg['taus_m'][0])}")
+            log.info(
+                "%s %s k=%s: %d segments, F1@%s %.3f, wall CM %.3f",
+                run["ordering"], ext, run["k"], len(walls), tau_label(cfg["taus_m"][0]),
+                f1, m["wall_correct_match"],
+            )
+    df = pd.DataFrame(rows)
+    if not df.empty:
+        df = df.sort_values(["ordering", "extractor", "n_scans", "k"], kind="stable")
+    return df.reset_index(drop=True)
+
+
+def summarize(metrics, tau: float = 0.05, levels=(0.95, 0.99)):
+    """The smallest k reaching a fraction of the all-scan F1, per ordering and extractor.
+
+    For each ordering and extractor, with ``F1_all`` the F1 at ``tau`` of ``k = all``,
+    the first k of the configured grid (in increasing number of scans) whose F1 is at
+    least ``level * F1_all``; the number of scans behind it, that number as a fraction
+    of the scans kept and the reduction factor ``n_scans_kept / n_scans`` (the thesis's
+    claim is a tenfold reduction). F1 is not monotone in k: this is the first k that
+    reaches the level, not a k after which it stays above.
+
+    Parameters
+    ----------
+    metrics : pandas.DataFrame
+        Output of :func:`score_dataset`.
+    tau : float
+        Tolerance of the F1 used, metres.
+    levels : sequence of float
+        Fractions of the all-scan F1.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``dataset, reference_kind, ordering, extractor, n_scans_kept, f1_all``
+        and per level L (as a percentage p): ``k_p``, ``n_scans_p``, ``fraction_p``,
+        ``reduction_p`` (``k_p`` empty, the others NaN, when F1_all is NaN or 0).
+    """
+    import pandas as pd
+
+    col = f"f1_{tau_label(tau)}"
+    if col not in metrics.columns:
+        raise ValueError(f"metrics lack column {col!r}; is tau {tau} in score.taus_m?")
+    rows = []
+    for (ordering, extractor), g in metrics.groupby(["ordering", "extractor"], sort=True):
+        g = g.sort_values("n_scans", kind="stable")
+        all_rows = g[g["k"] == "all"]
+        f1_all = float(all_rows[col].iloc[0]) if len(all_rows) else math.nan
+        n_kept = int(g["n_scans_kept"].iloc[0])
+        row = {
+            "dataset": g["dataset"].iloc[0],
+            "reference_kind": g["reference_kind"].iloc[0],
+            "ordering": ordering,
+            "extractor": extractor,
+            "n_scans_kept": n_kept,
+            "f1_all": f1_all,
+        }
+        for level in levels:
+            p = f"{round(level * 100, 6):g}"
+            hit = g[g[col] >= level * f1_all - 1e-12] if f1_all > 0 else g.iloc[0:0]
+            if len(hit):
+                n = int(hit["n_scans"].iloc[0])
+                row[f"k_{p}"] = str(hit["k"].iloc[0])
+                row[f"n_scans_{p}"] = n
+                row[f"fraction_{p}"] = n / n_kept if n_kept else math.nan
+                row[f"reduction_{p}"] = n_kept / n if n else math.nan
+            else:
+                row[f"k_{p}"] = ""
+                row[f"n_scans_{p}"] = -1
+                row[f"fraction_{p}"] = math.nan
+                row[f"reduction_{p}"] = math.nan
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def summary_markdown(summary, tau: float = 0.05, levels=(0.95, 0.99)) -> str:
+    """The summary table as Markdown, headed by what F1 is measured against."""
+    if summary.empty:
+        return "# Scan reduction summary\n\nNo scored runs.\n"
+    ds = summary["dataset"].iloc[0]
+    kind = summary["reference_kind"].iloc[0]
+    against = (
+        "the simulator's ground-truth walls"
+        if kind == GROUND_TRUTH
+        else "the reference: walls of the same extractor from all kept scans (not ground truth)"
+    )
+    lines = [
+        f"# Scan reduction summary: {ds}",
+        "",
+        f"F1 at tau = {tau_label(tau)} against {against}. For each level, the smallest k "
+        "of the configured grid whose F1 reaches that fraction of the all-scan F1, the "
+        "scans it uses as a fraction of the scans kept, and the reduction factor.",
+        "",
+    ]
+    head = ["ordering", "extractor", "scans kept", "F1 all"]
+    for level in levels:
+        p = f"{round(level * 100, 6):g}"
+        head += [f"k {p}%", f"fraction {p}%", f"reduction {p}%"]
+    lines.append("| " + " | ".join(head) + " |")
+    lines.append("|" + "---|" * len(head))
+    for _, r in summary.iterrows():
+        cells = [r["ordering"], r["extractor"], str(r["n_scans_kept"]), f"{r['f1_all']:.3f}"]
+        for level in levels:
+            p = f"{round(level * 100, 6):g}"
+            k = r[f"k_{p}"] or "-"
+            if k not in ("-", "all"):
+                k = f"{k} ({r[f'n_scans_{p}']})" if str(r[f"n_scans_{p}"]) != k else k
+            cells += [k, f"{r[f'fraction_{p}']:.3f}", f"{r[f'reduction_{p}']:.1f}x"]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"

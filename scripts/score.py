@@ -1,0 +1,44 @@
+"""Stage `score`: metrics of every ordering x extractor x k (thesis section 5.1 and
+ISPRS-style tolerance metrics) and the scan-reduction summary."""
+
+from floorscan import metrics
+from floorscan.io import atomic_path, read_table, write_table
+from floorscan.workflow import stage_log
+
+with stage_log(snakemake) as log:  # noqa: F821
+    smk = snakemake  # noqa: F821
+    cfg = smk.params.cfg
+    kind = smk.params.reference_kind
+    extractors = list(smk.params.extractors)
+    if kind == metrics.GROUND_TRUTH:
+        gt = metrics.read_wall_faces(smk.input.ground_truth, kind="face")
+        references = {e: gt for e in extractors}
+    else:
+        references = {
+            e: metrics.as_segments(read_table(p)) for e, p in zip(extractors, smk.input.reference)
+        }
+    log.info("scoring against the %s: %s", smk.params.reference_label,
+             {e: len(s) for e, s in references.items()})
+    n_kept = {o: len(read_table(p, columns=["scan_id"]))
+              for o, p in zip(smk.params.orderings, smk.input.orderings)}
+    runs = [
+        {
+            "ordering": o,
+            "extractor": e,
+            "k": k,
+            "walls": read_table(wp),
+            "n_kept": n_kept[o],
+            "n_floorplan_walls": metrics.floorplan_wall_count(fp),
+        }
+        for (o, e, k), wp, fp in zip(smk.params.runs, smk.input.walls, smk.input.floorplans)
+    ]
+    table = metrics.score_dataset(runs, references, kind, cfg, smk.wildcards.dataset, log)
+    summary = metrics.summarize(table, cfg["summary_tau_m"], cfg["summary_levels"])
+    meta = {"dataset": smk.wildcards.dataset, "reference_kind": kind,
+            "reference": smk.params.reference_label}
+    write_table(table, smk.output.metrics, metadata=meta)
+    write_table(summary, smk.output.summary, metadata=meta)
+    with atomic_path(smk.output.summary_md) as tmp:
+        tmp.write_text(
+            metrics.summary_markdown(summary, cfg["summary_tau_m"], cfg["summary_levels"])
+        )

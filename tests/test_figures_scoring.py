@@ -1,0 +1,146 @@
+"""Scoring figures from tiny hand-made tables; stage times from a hand-written benchmark."""
+
+import numpy as np
+import pandas as pd
+import pytest
+import shapely
+
+from floorscan import figures_scoring as F
+from floorscan import metrics as M
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+BENCH_HEADER = "s\th:m:s\tmax_rss\tmax_vms\tmax_uss\tmax_pss\tio_in\tio_out\tmean_load\tcpu_time\n"
+
+
+def _is_png(path, min_bytes=5000):
+    data = path.read_bytes()
+    return data[:8] == PNG_MAGIC and len(data) > min_bytes
+
+
+def _metrics():
+    rows = []
+    for o, base in (("sequential", 0.3), ("cluster_hull", 0.6)):
+        for e in ("ransac", "cluster_ransac"):
+            for k, n in (("5", 5), ("15", 15), ("all", 40)):
+                f1 = min(1.0, base + n / 50)
+                rows.append({
+                    "dataset": "toy", "reference_kind": "ground_truth", "ordering": o,
+                    "extractor": e, "k": k, "n_scans": n, "n_scans_kept": 40,
+                    "correct_match": 0.99, "false_positive": 0.004, "false_negative": 0.006,
+                    "wall_correct_match": f1 * 0.8, "f1_5cm": f1,
+                })
+    return pd.DataFrame(rows)
+
+
+def test_stage_times_from_hand_written_benchmarks(tmp_path):
+    b = tmp_path / "benchmarks"
+    (b / "walls").mkdir(parents=True)
+    (b / "ingest.tsv").write_text(BENCH_HEADER + "12.5\t0:00:12\t300.5\t900\t1\t1\t0\t0\t50\t10\n")
+    (b / "walls_sequential_ransac_k5.tsv").write_text(
+        BENCH_HEADER + "2.0\t0:00:02\t100\t500\tNA\tNA\tNA\tNA\tNA\tNA\n"
+    )
+    (b / "walls" / "random_ransac_k10.tsv").write_text(
+        BENCH_HEADER + "3.0\t0:00:03\t150\t500\t-\t-\t-\t-\t-\t-\n"
+        "5.0\t0:00:05\t170\t500\t-\t-\t-\t-\t-\t-\n"  # a repeat: mean 4 s
+    )
+    (b / "register.tsv").write_text(BENCH_HEADER + "40\t0:00:40\tNA\tNA\tNA\tNA\tNA\tNA\tNA\tNA\n")
+    (b / "broken.tsv").write_text("")
+    t = F.stage_times(b)
+    assert t["stage"].tolist() == ["ingest", "register", "walls"]
+    walls = t.set_index("stage").loc["walls"]
+    assert walls["n_jobs"] == 2
+    assert walls["s_total"] == pytest.approx(6.0)
+    assert walls["s_max"] == pytest.approx(4.0)
+    assert walls["max_rss_mb"] == pytest.approx(170.0)
+    assert t.set_index("stage").loc["ingest", "max_rss_mb"] == pytest.approx(300.5)
+    assert np.isnan(t.set_index("stage").loc["register", "max_rss_mb"])
+    out = tmp_path / "stage_times.png"
+    F.plot_stage_times(t, out, "toy")
+    assert _is_png(out)
+    assert F.stage_times(tmp_path / "missing").empty
+
+
+def test_stage_of_names():
+    assert F.stage_of("walls/sequential/ransac/k5") == "walls"
+    assert F.stage_of("select") == "select"
+    assert F.stage_of("score_figures") == "score"
+    assert F.stage_of("custom_thing") == "custom"
+
+
+def test_metrics_vs_k_figure(tmp_path):
+    out = tmp_path / "metrics_vs_k.png"
+    F.plot_metrics_vs_k(_metrics(), out, 0.05)
+    assert _is_png(out, 20000)
+
+
+def test_overlay_colours():
+    bi = np.array([[1, 1, 0]], bool)
+    bg = np.array([[1, 0, 1]], bool)
+    img = F.overlay_image(bi, bg)
+    assert tuple(img[0, 0]) == (0.55, 0.0, 0.65)  # both: purple
+    assert tuple(img[0, 1]) == (1.0, 0.1, 0.1)  # inferred only: red
+    assert tuple(img[0, 2]) == (0.1, 0.2, 1.0)  # ground truth only: blue
+
+
+def test_all_figures_from_tiny_tables(tmp_path):
+    gt = np.array([[0, 0, 10, 0], [10, 0, 10, 6], [10, 6, 0, 6], [0, 6, 0, 0]], float)
+    cols = ["x0", "y0", "x1", "y1"]
+    walls = {}
+    for o in ("sequential", "cluster_hull"):
+        for e in ("ransac", "cluster_ransac"):
+            walls[(o, e, "15")] = pd.DataFrame(gt[:2] + 0.02, columns=cols)
+            walls[(o, e, "all")] = pd.DataFrame(gt, columns=cols)
+    floorplans = {
+        (o, e): [shapely.LineString([(0, 0), (10, 0)]), shapely.box(9.9, 0, 10.1, 6)]
+        for o in ("sequential", "cluster_hull") for e in ("ransac", "cluster_ransac")
+    }
+    rng = np.random.default_rng(0)
+    pts = pd.DataFrame(rng.uniform(0, 10, size=(3000, 3)), columns=["x", "y", "z"])
+    status = {
+        e: pd.DataFrame({"scan_id": np.arange(30), "n_walls": np.arange(30) % 4,
+                         "reason": [""] * 30, "time_s": np.linspace(0.01, 0.05, 30)})
+        for e in ("ransac", "cluster_ransac")
+    }
+    bench = tmp_path / "benchmarks"
+    bench.mkdir()
+    (bench / "hulls.tsv").write_text(BENCH_HEADER + "1.5\t0:00:01\t80\t90\t1\t1\t0\t0\t1\t1\n")
+    names = ["metrics_vs_k", "floorplan", "bitmap_overlay", "walls_over_points_k",
+             "walls_over_points_all", "stage_times_png", "wall_extraction"]
+    outputs = {n: tmp_path / "figures" / f"{n}.png" for n in names}
+    outputs["stage_times_tsv"] = tmp_path / "figures" / "stage_times.tsv"
+    cfg = {"figure_k": 15, "summary_tau_m": 0.05, "figure_extractor": "cluster_ransac",
+           "figure_ordering": "cluster_hull", "figure_orderings": ["sequential", "cluster_hull"],
+           "cell_m": 0.05, "margin_m": 1.0, "wall_width_m": 0.1, "max_plot_points": 1000,
+           "seed": 0, "points_z_band_m": [0.5, 2.0]}
+    table = F.make_score_figures(
+        dataset="toy", metrics=_metrics(), reference={"ransac": gt, "cluster_ransac": gt},
+        reference_kind=M.GROUND_TRUTH, walls=walls, floorplans=floorplans, points=pts,
+        scan_status=status, bench_dir=bench, outputs=outputs, cfg=cfg,
+    )
+    for n in names:
+        assert _is_png(outputs[n]), n
+    assert table["stage"].tolist() == ["hulls"]
+    tsv = pd.read_csv(outputs["stage_times_tsv"], sep="\t")
+    assert tsv.loc[0, "s_total"] == pytest.approx(1.5)
+    assert tsv.loc[0, "max_rss_mb"] == pytest.approx(80.0)
+
+
+def test_subsample_points_is_seeded_and_cuts_the_height_band():
+    rng = np.random.default_rng(2)
+    pts = pd.DataFrame(rng.uniform(0, 3, size=(5000, 3)), columns=["x", "y", "z"])
+    a = F.subsample_points(pts, 500, seed=4, z_band=(0.5, 2.0))
+    b = F.subsample_points(pts, 500, seed=4, z_band=(0.5, 2.0))
+    np.testing.assert_array_equal(a, b)
+    assert a.shape == (500, 2)
+    flat = pts.assign(z=0.0)
+    assert F.subsample_points(flat, 10**6, seed=0, z_band=(0.5, 2.0)).shape == (5000, 2)
+
+
+def test_block_any_keeps_thin_walls():
+    b = np.zeros((5, 7), bool)
+    b[2, :] = True
+    r = F.block_any(b, 2)
+    assert r.shape == (3, 4)
+    assert r[1].all() and not r[0].any() and not r[2].any()
+    np.testing.assert_array_equal(F.block_any(b, 1), b)

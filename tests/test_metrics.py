@@ -1,0 +1,334 @@
+"""Metric code on hand-made bitmaps and segments with known answers (thesis section 5.1,
+ISPRS-style tolerance metrics)."""
+
+import json
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+import shapely
+
+from floorscan import metrics as M
+from floorscan.io import InputError
+
+WALL = [[0.0, 0.0, 10.0, 0.0]]
+
+
+# ------------------------------------------------------------------------- bitmaps
+
+
+def test_thesis_fractions_on_hand_made_bitmaps():
+    bi = np.array([[1, 1, 0], [0, 0, 0], [0, 1, 0]], bool)
+    bg = np.array([[1, 0, 0], [1, 0, 0], [0, 1, 0]], bool)
+    be = M.error_map(bi, bg)
+    assert be.tolist() == [[0, 1, 0], [-1, 0, 0], [0, 0, 0]]
+    m = M.bitmap_metrics(bi, bg)
+    assert m["correct_match"] == pytest.approx(7 / 9)
+    assert m["false_positive"] == pytest.approx(1 / 9)
+    assert m["false_negative"] == pytest.approx(1 / 9)
+    # Wall cells only: union = 4 cells, 2 in both.
+    assert m["wall_correct_match"] == pytest.approx(2 / 4)
+    assert m["wall_false_positive"] == pytest.approx(1 / 4)
+    assert m["wall_false_negative"] == pytest.approx(1 / 4)
+    assert m["cell_precision"] == pytest.approx(2 / 3)
+    assert m["cell_recall"] == pytest.approx(2 / 3)
+    assert m["n_cells"] == 9
+
+
+def test_bitmaps_of_different_shape_raise():
+    with pytest.raises(ValueError, match="shape"):
+        M.error_map(np.zeros((2, 2), bool), np.zeros((2, 3), bool))
+
+
+def test_crossing_walls_on_a_tiny_grid():
+    # 10 x 10 cells of 1 m; a horizontal ground-truth wall through the centres of row 2,
+    # an inferred vertical wall through the centres of column 2: one cell in both.
+    grid = M.Grid(0.0, 0.0, 1.0, 10, 10)
+    bg = M.rasterize_segments([[0.5, 2.5, 9.5, 2.5]], grid, width_m=0.5)
+    bi = M.rasterize_segments([[2.5, 0.5, 2.5, 9.5]], grid, width_m=0.5)
+    assert bg.sum() == 10 and bg[2].all()
+    assert bi.sum() == 10 and bi[:, 2].all()
+    m = M.bitmap_metrics(bi, bg)
+    assert m["false_positive"] == pytest.approx(0.09)
+    assert m["false_negative"] == pytest.approx(0.09)
+    assert m["correct_match"] == pytest.approx(0.82)
+    assert m["wall_correct_match"] == pytest.approx(1 / 19)
+    assert m["wall_false_positive"] == pytest.approx(9 / 19)
+
+
+def test_identical_walls_match_every_wall_cell():
+    gt = [[0, 0, 10, 0], [10, 0, 10, 6], [0, 0, 3, 4.2]]
+    grid = M.grid_for(gt, cell_m=0.05, margin_m=0.5)
+    m = M.score_walls(gt, gt, grid, wall_width_m=0.10)
+    assert m["wall_correct_match"] == 1.0
+    assert m["false_positive"] == 0.0 and m["false_negative"] == 0.0
+    assert m["correct_match"] == 1.0
+
+
+def test_rasterize_equals_shapely_buffer_on_cell_centres():
+    rng = np.random.default_rng(3)
+    seg = rng.uniform(0, 6, size=(12, 4))
+    seg[0] = [1.0, 1.0, 1.0, 1.0]  # a point: its buffer is a disk
+    grid = M.Grid(-0.5, -0.5, 0.05, 140, 140)
+    got = M.rasterize_segments(seg, grid, width_m=0.13)
+    ix, iy = np.meshgrid(np.arange(grid.nx), np.arange(grid.ny))
+    cx = grid.x0 + (ix + 0.5) * grid.cell_m
+    cy = grid.y0 + (iy + 0.5) * grid.cell_m
+    lines = shapely.linestrings(seg.reshape(-1, 2, 2))
+    lines[0] = shapely.Point(1.0, 1.0)
+    buf = shapely.union_all(shapely.buffer(lines, 0.065, quad_segs=64))
+    ref = shapely.contains_xy(buf, cx, cy)
+    # Cells whose centre lies within 0.1 mm of the buffer edge may differ (polygonized
+    # circle); no other cell may.
+    d = shapely.distance(shapely.boundary(buf), shapely.points(cx.ravel(), cy.ravel()))
+    differ = (got != ref).ravel()
+    assert np.all(d[differ] < 1e-4)
+    assert got.sum() > 1000
+
+
+def test_rasterize_clips_walls_outside_the_grid_and_keeps_input():
+    grid = M.Grid(0.0, 0.0, 0.1, 20, 10)
+    seg = np.array([[-5.0, 0.55, 5.0, 0.55], [50.0, 50.0, 60.0, 50.0]])
+    copy = seg.copy()
+    b = M.rasterize_segments(seg, grid, width_m=0.05)
+    assert b.shape == (10, 20)
+    assert b.sum() == 20 and b[5].all()
+    np.testing.assert_array_equal(seg, copy)
+
+
+def test_grid_is_snapped_and_covers_margin():
+    g = M.grid_for([[0.02, 0.03, 10.0, 5.0]], cell_m=0.05, margin_m=1.0)
+    assert g.x0 == pytest.approx(-1.0) and g.y0 == pytest.approx(-1.0)
+    xmin, xmax, ymin, ymax = g.extent
+    assert xmax >= 11.0 - 1e-9 and ymax >= 6.0 - 1e-9
+    assert g.nx == 240 and g.ny == 140
+    with pytest.raises(ValueError, match="no wall segment"):
+        M.grid_for(np.zeros((0, 4)))
+
+
+def test_rasterize_a_50_by_30_m_map_of_many_walls():
+    rng = np.random.default_rng(0)
+    start = rng.uniform([0, 0], [50, 30], size=(3000, 2))
+    ang = rng.uniform(0, np.pi, 3000)
+    seg = np.column_stack([start, start + 3 * np.column_stack([np.cos(ang), np.sin(ang)])])
+    grid = M.grid_for(seg, 0.05, 1.0)
+    b = M.rasterize_segments(seg, grid, 0.10)
+    # 9 km of 10 cm wide walls, overlapping: at most 9000 * 0.1 / 0.0025 cells.
+    assert 0.5 * 360_000 < b.sum() < 1.1 * 360_000
+
+
+# ------------------------------------------------------------- tolerance metrics
+
+
+def test_identical_segments_have_precision_and_recall_one():
+    gt = [[0, 0, 10, 0], [10, 0, 10, 6]]
+    m = M.tolerance_metrics(gt, gt, taus=(0.05, 0.10))
+    for lab in ("5cm", "10cm"):
+        assert m[f"precision_{lab}"] == pytest.approx(1.0)
+        assert m[f"recall_{lab}"] == pytest.approx(1.0)
+        assert m[f"f1_{lab}"] == pytest.approx(1.0)
+    assert m["median_distance_m"] == pytest.approx(0.0, abs=1e-12)
+    assert m["gt_length_m"] == pytest.approx(16.0)
+
+
+def test_a_wall_shifted_3_cm_is_within_5_cm_but_not_2_cm():
+    inferred = [[0, 0.03, 10, 0.03]]
+    m = M.tolerance_metrics(inferred, WALL, taus=(0.02, 0.05))
+    assert m["precision_5cm"] == pytest.approx(1.0)
+    assert m["recall_5cm"] == pytest.approx(1.0)
+    assert m["precision_2cm"] == 0.0
+    assert m["recall_2cm"] == 0.0
+    assert m["f1_2cm"] == 0.0
+    assert m["median_distance_m"] == pytest.approx(0.03)
+
+
+def test_a_missing_wall_halves_recall():
+    gt = [[0, 0, 5, 0], [0, 3, 5, 3]]
+    m = M.tolerance_metrics([[0, 0, 5, 0]], gt, taus=(0.05,))
+    assert m["recall_5cm"] == pytest.approx(0.5)
+    assert m["precision_5cm"] == pytest.approx(1.0)
+    assert m["f1_5cm"] == pytest.approx(2 / 3)
+    # Half the ground truth is 3 m away, half is on the wall: the median lies between.
+    assert 0.0 <= m["median_distance_m"] <= 3.0
+
+
+def test_partial_overlap_counts_the_end_disk():
+    # Inferred 0..4 m, ground truth 2..6 m on the same line: within tau of the ground
+    # truth are x in [2 - tau, 4], i.e. 2 + tau metres of 4.
+    m = M.tolerance_metrics([[0, 0, 4, 0]], [[2, 0, 6, 0]], taus=(0.05,))
+    assert m["precision_5cm"] == pytest.approx(2.05 / 4)
+    assert m["recall_5cm"] == pytest.approx(2.05 / 4)
+
+
+def test_crossing_segment_is_covered_over_two_tau():
+    lw = M.length_within([[0, -1, 0, 1]], [[-1, 0, 1, 0]], 0.05)
+    assert lw[0] == pytest.approx(0.10)
+    # Duplicate and overlapping others do not count twice.
+    lw = M.length_within([[0, 0, 4, 0]], [[0, 0, 3, 0], [1, 0, 4, 0], [1, 0, 4, 0]], 0.01)
+    assert lw[0] == pytest.approx(4.0)
+
+
+def test_exact_lengths_agree_with_dense_sampling():
+    rng = np.random.default_rng(7)
+    gt = rng.uniform(0, 5, size=(15, 4))
+    inferred = gt + rng.normal(0, 0.04, size=gt.shape)
+    tau = 0.05
+    exact = M.length_within(inferred, gt, tau).sum()
+    pts, w = M.sample_segments(inferred, 0.0005)
+    d = M.nearest_distances(pts, gt)
+    sampled = w[d <= tau].sum()
+    assert exact == pytest.approx(sampled, rel=2e-3)
+    assert 0 < exact < M.segment_lengths(inferred).sum()
+
+
+def test_sample_segments_weights_sum_to_length():
+    pts, w = M.sample_segments([[0, 0, 0.025, 0], [0, 0, 3, 4]], 0.01)
+    assert len(pts) == 3 + 500
+    assert w.sum() == pytest.approx(5.025)
+    assert pts[0] == pytest.approx([0.025 / 6, 0])
+
+
+def test_empty_inferred_walls_never_crash():
+    m = M.tolerance_metrics(np.zeros((0, 4)), WALL, taus=(0.05,))
+    assert math.isnan(m["precision_5cm"])
+    assert m["recall_5cm"] == 0.0
+    assert m["f1_5cm"] == 0.0
+    assert math.isnan(m["median_distance_m"])
+    grid = M.grid_for(WALL, 0.05, 1.0)
+    s = M.score_walls(pd.DataFrame(columns=["x0", "y0", "x1", "y1"]), WALL, grid)
+    assert s["false_positive"] == 0.0
+    assert s["wall_correct_match"] == 0.0
+    assert s["false_negative"] == pytest.approx(s["n_gt_cells"] / s["n_cells"])
+
+
+def test_empty_ground_truth_gives_nan_recall():
+    m = M.tolerance_metrics(WALL, [], taus=(0.05,))
+    assert m["precision_5cm"] == 0.0
+    assert math.isnan(m["recall_5cm"])
+    assert m["f1_5cm"] == 0.0
+    assert math.isnan(M.tolerance_metrics([], [], taus=(0.05,))["f1_5cm"])
+
+
+def test_nan_rows_are_dropped_and_bad_shapes_raise():
+    m = M.tolerance_metrics([[0, 0, 10, 0], [np.nan, 0, 1, 1]], WALL, taus=(0.05,))
+    assert m["precision_5cm"] == pytest.approx(1.0)
+    with pytest.raises(ValueError, match=r"\(M, 4\)"):
+        M.as_segments(np.zeros((3, 3)))
+
+
+def test_metrics_are_deterministic_and_do_not_mutate_inputs():
+    rng = np.random.default_rng(1)
+    gt = rng.uniform(0, 8, size=(20, 4))
+    inf = gt + rng.normal(0, 0.03, size=gt.shape)
+    keep = inf.copy()
+    grid = M.grid_for(gt, 0.05, 1.0)
+    a = M.score_walls(inf, gt, grid)
+    b = M.score_walls(inf, gt, grid)
+    assert a == b
+    np.testing.assert_array_equal(inf, keep)
+
+
+# ------------------------------------------------------------------ dataset level
+
+
+def _geojson(tmp_path):
+    doc = {
+        "type": "FeatureCollection",
+        "features": [
+            {"type": "Feature", "properties": {"kind": "face"},
+             "geometry": {"type": "LineString", "coordinates": [[0, 0], [10, 0], [10, 6]]}},
+            {"type": "Feature", "properties": {"kind": "axis", "thickness_m": 0.2},
+             "geometry": {"type": "LineString", "coordinates": [[0, -0.1], [10, -0.1]]}},
+            {"type": "Feature", "properties": {"kind": "footprint"},
+             "geometry": {"type": "Polygon", "coordinates": [[[0, 0], [1, 0], [1, 1], [0, 0]]]}},
+        ],
+    }
+    p = tmp_path / "walls.geojson"
+    p.write_text(json.dumps(doc))
+    return p
+
+
+def test_read_wall_faces_keeps_faces_only(tmp_path):
+    seg = M.read_wall_faces(_geojson(tmp_path))
+    np.testing.assert_allclose(seg, [[0, 0, 10, 0], [10, 0, 10, 6]])
+    with pytest.raises(InputError, match="kind='door'"):
+        M.read_wall_faces(_geojson(tmp_path), kind="door")
+
+
+def test_floorplan_wall_count(tmp_path):
+    def feat(kind, wid, geom):
+        return {"type": "Feature", "properties": {"kind": kind, "wall_id": wid}, "geometry": geom}
+
+    line = {"type": "LineString", "coordinates": [[0, 0], [1, 0]]}
+    poly = {"type": "Polygon", "coordinates": [[[0, 0], [1, 0], [1, 0.1], [0, 0]]]}
+    doc = {"type": "FeatureCollection", "features": [
+        feat("axis", 0, line), feat("footprint", 0, poly), feat("axis", 1, line),
+        feat("footprint", 1, poly), feat("axis", 2, line)]}
+    p = tmp_path / "plan.geojson"
+    p.write_text(json.dumps(doc))
+    assert M.floorplan_wall_count(p) == 3
+    for f in doc["features"]:
+        del f["properties"]["wall_id"]
+    p.write_text(json.dumps(doc))
+    assert M.floorplan_wall_count(p) == 3
+
+
+def test_score_dataset_and_summary(tmp_path):
+    gt = M.read_wall_faces(_geojson(tmp_path))
+    walls = {
+        "5": pd.DataFrame([[0, 0, 5, 0]], columns=["x0", "y0", "x1", "y1"]),
+        "10": pd.DataFrame([[0, 0, 10, 0], [10, 0, 10, 3]], columns=["x0", "y0", "x1", "y1"]),
+        "all": pd.DataFrame([[0, 0, 10, 0], [10, 0, 10, 6]], columns=["x0", "y0", "x1", "y1"]),
+    }
+    runs = [
+        {"ordering": "sequential", "extractor": "ransac", "k": k, "walls": w, "n_kept": 40,
+         "n_floorplan_walls": 2}
+        for k, w in walls.items()
+    ]
+    cfg = {"cell_m": 0.05, "wall_width_m": 0.1, "margin_m": 1.0, "taus_m": [0.05, 0.1],
+           "sample_step_m": 0.01}
+    df = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg, dataset="toy")
+    assert list(df["k"]) == ["5", "10", "all"]
+    assert list(df["n_scans"]) == [5, 10, 40]
+    # End disks: each partial wall covers tau more of the ground truth.
+    assert df["recall_5cm"].tolist() == pytest.approx([5.05 / 16, 13.05 / 16, 1.0])
+    assert (df["reference_kind"] == "ground_truth").all()
+    # The same grid for every run.
+    assert df["n_cells"].nunique() == 1
+    s = M.summarize(df, tau=0.05, levels=(0.8, 0.95))
+    r = s.iloc[0]
+    f1_10 = 2 * 13.05 / 16 / (1 + 13.05 / 16)
+    assert f1_10 > 0.8 and f1_10 < 0.95
+    assert r["k_80"] == "10" and r["n_scans_80"] == 10
+    assert r["fraction_80"] == pytest.approx(0.25) and r["reduction_80"] == pytest.approx(4.0)
+    assert r["k_95"] == "all" and r["fraction_95"] == pytest.approx(1.0)
+    md = M.summary_markdown(s, 0.05, (0.8, 0.95))
+    assert "ground-truth" in md and "| sequential | ransac | 40 |" in md
+
+
+def test_score_dataset_labels_a_reference():
+    ref = np.array([[0.0, 0, 4, 0]])
+    runs = [{"ordering": "random", "extractor": "ransac", "k": "all", "walls": ref,
+             "n_kept": 3, "n_floorplan_walls": None}]
+    cfg = {"cell_m": 0.05, "wall_width_m": 0.1, "margin_m": 0.5, "taus_m": [0.05],
+           "sample_step_m": 0.01}
+    df = M.score_dataset(runs, {"ransac": ref}, M.REFERENCE, cfg)
+    assert df["reference_kind"].iloc[0] == "reference"
+    assert df["f1_5cm"].iloc[0] == pytest.approx(1.0)
+    assert df["n_scans"].iloc[0] == 3 and df["n_floorplan_walls"].iloc[0] == -1
+    with pytest.raises(ValueError, match="empty"):
+        M.score_dataset(runs, {"ransac": np.zeros((0, 4))}, M.REFERENCE, cfg)
+    assert "not ground truth" in M.summary_markdown(M.summarize(df, 0.05, (0.95,)), 0.05, (0.95,))
+
+
+def test_overlapping_reference_walls_count_once_in_recall():
+    # A reference made of 30 copies of wall A (as when every scan sees it) and one of
+    # wall B, both 10 m; the inferred walls cover half of A: recall is 5 of 20 m.
+    a = [[0.0, 0.0, 10.0, 0.0]] * 30
+    b = [[0.0, 5.0, 10.0, 5.0]]
+    m = M.tolerance_metrics([[0, 0, 5, 0]], a + b, taus=(0.05,))
+    assert m["recall_5cm"] == pytest.approx(5.05 / 20, abs=1e-3)
+    assert m["precision_5cm"] == pytest.approx(1.0)
+    pts = M.dedupe_samples(np.array([[0.001, 0.001], [0.002, 0.003], [0.5, 0.5]]), 0.01)
+    np.testing.assert_array_equal(pts, [[0.001, 0.001], [0.5, 0.5]])

@@ -1,0 +1,264 @@
+# Scoring (thesis Chapter 5): metrics of the walls of every ordering x extractor x k
+# against the ground truth (synthetic datasets) or the reference (real recordings: the
+# walls of the same extractor from all kept scans), the scan-reduction summary, and the
+# Chapter 5 figures for the report.
+
+
+stage_schema_check("score", "../schemas/score.schema.yaml")
+
+SCORE_DEFAULT_ORDERINGS = ["cluster_hull", "convex_hull", "random", "sequential", "motion_filter"]
+SCORE_DEFAULT_EXTRACTORS = ["ransac", "cluster_ransac"]
+SCORE_DEFAULT_K = [5, 10, 15, 20, 30, 50, "all"]
+# The figure k is in the figure file names (floorplan_k15.png), so it is global: a
+# per-dataset override of score.figure_k is refused by score_check.
+SCORE_FIGURE_K = config["score"]["figure_k"]
+
+
+def _score_section(stage, wildcards):
+    return stage_config(stage)(wildcards) or {}
+
+
+def score_orderings(wildcards):
+    """The orderings the walls stage extracts (walls.orderings, else select.orderings)."""
+    walls = _score_section("walls", wildcards)
+    if "orderings" in walls:
+        return list(walls["orderings"])
+    return list(_score_section("select", wildcards).get("orderings", SCORE_DEFAULT_ORDERINGS))
+
+
+def score_extractors(wildcards):
+    return list(_score_section("walls", wildcards).get("extractors", SCORE_DEFAULT_EXTRACTORS))
+
+
+def score_ks(wildcards):
+    return [str(k) for k in _score_section("walls", wildcards).get("k", SCORE_DEFAULT_K)]
+
+
+def score_runs(wildcards):
+    """[ordering, extractor, k label] of every wall file scored, in input order."""
+    return [
+        [o, e, k]
+        for o in score_orderings(wildcards)
+        for e in score_extractors(wildcards)
+        for k in score_ks(wildcards)
+    ]
+
+
+def score_reference_kind(wildcards):
+    return "ground_truth" if is_synthetic(wildcards.dataset) else "reference"
+
+
+def score_reference_label(wildcards):
+    """Wording for captions: never call a real recording's reference ground truth."""
+    if is_synthetic(wildcards.dataset):
+        return "the simulator's ground-truth walls (faces of sim/walls.geojson)"
+    return (
+        "the reference, the walls extracted by the same extractor from all kept scans "
+        "(a reference, not ground truth: the building has no architectural plan)"
+    )
+
+
+def _score_reference_inputs(wildcards):
+    ds = wildcards.dataset
+    if is_synthetic(ds):
+        return {"ground_truth": f"results/{ds}/sim/walls.geojson"}
+    cfg = stage_config("score")(wildcards)
+    if cfg.get("reference_source", "per_scan") == "kall":
+        o = cfg.get("figure_ordering", "cluster_hull")
+        refs = [f"results/{ds}/walls/{o}/{e}/kall.parquet" for e in score_extractors(wildcards)]
+    else:
+        refs = [f"results/{ds}/walls/{e}/per_scan.parquet" for e in score_extractors(wildcards)]
+    return {"reference": refs}
+
+
+def score_check(wildcards):
+    """Fail before running when the score config disagrees with the walls config."""
+    cfg = stage_config("score")(wildcards)
+    taus = [float(t) for t in cfg["taus_m"]]
+    if not any(abs(float(cfg["summary_tau_m"]) - t) < 1e-12 for t in taus):
+        raise ValueError(f"score.summary_tau_m {cfg['summary_tau_m']} is not in score.taus_m {taus}")
+    if cfg["figure_k"] != SCORE_FIGURE_K:
+        raise ValueError(
+            f"datasets.{wildcards.dataset}.params.score.figure_k: the figure k names the figure "
+            f"files and cannot be overridden per dataset (global {SCORE_FIGURE_K})"
+        )
+    if str(cfg["figure_k"]) not in score_ks(wildcards):
+        raise ValueError(f"score.figure_k {cfg['figure_k']} is not in walls.k {score_ks(wildcards)}")
+    if "all" not in score_ks(wildcards):
+        raise ValueError("walls.k must contain 'all': the summary compares with the all-scan F1")
+    return cfg
+
+
+def score_inputs(wildcards):
+    ds = wildcards.dataset
+    runs = score_runs(wildcards)
+    return {
+        "walls": [f"results/{ds}/walls/{o}/{e}/k{k}.parquet" for o, e, k in runs],
+        "floorplans": [f"results/{ds}/floorplan/{o}_{e}_k{k}.geojson" for o, e, k in runs],
+        "orderings": [f"results/{ds}/orderings/{o}.parquet" for o in score_orderings(wildcards)],
+        **_score_reference_inputs(wildcards),
+    }
+
+
+def score_figure_runs(wildcards):
+    """[ordering, extractor, k label] of the raw wall files the figures draw."""
+    cfg = score_check(wildcards)
+    k = str(cfg["figure_k"])
+    orderings = list(dict.fromkeys(list(cfg["figure_orderings"]) + [cfg["figure_ordering"]]))
+    runs = []
+    for o in orderings:
+        for e in score_extractors(wildcards):
+            for kk in (k, "all"):
+                runs.append([o, e, kk])
+    return runs
+
+
+def score_figure_floorplans(wildcards):
+    """[ordering, extractor] of the merged floor plans at figure_k (Fig. 5.5)."""
+    cfg = stage_config("score")(wildcards)
+    return [[o, cfg["figure_extractor"]] for o in cfg["figure_orderings"]]
+
+
+def score_figure_inputs(wildcards):
+    ds = wildcards.dataset
+    k = str(stage_config("score")(wildcards)["figure_k"])
+    return {
+        "metrics": f"results/{ds}/metrics.parquet",
+        "walls": [f"results/{ds}/walls/{o}/{e}/k{kk}.parquet" for o, e, kk in score_figure_runs(wildcards)],
+        "floorplans": [
+            f"results/{ds}/floorplan/{o}_{e}_k{k}.geojson" for o, e in score_figure_floorplans(wildcards)
+        ],
+        "registered": f"results/{ds}/registered.parquet",
+        "scan_status": [f"results/{ds}/walls/{e}/scan_status.parquet" for e in score_extractors(wildcards)],
+        **_score_reference_inputs(wildcards),
+    }
+
+
+def score_bench_dir(wildcards):
+    return f"results/{wildcards.dataset}/benchmarks"
+
+
+rule score:
+    input:
+        unpack(score_inputs),
+    output:
+        metrics="results/{dataset}/metrics.parquet",
+        summary="results/{dataset}/summary.parquet",
+        summary_md=report(
+            "results/{dataset}/summary.md",
+            caption="../report/summary.rst",
+            category="Scoring",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "scan reduction summary"},
+        ),
+    params:
+        cfg=score_check,
+        runs=score_runs,
+        orderings=score_orderings,
+        extractors=score_extractors,
+        reference_kind=score_reference_kind,
+        reference_label=score_reference_label,
+    log:
+        log_path("score"),
+    benchmark:
+        benchmark_path("score")
+    script:
+        "../../scripts/score.py"
+
+
+rule score_figures:
+    input:
+        unpack(score_figure_inputs),
+    output:
+        metrics_vs_k=report(
+            "results/{dataset}/figures/metrics_vs_k.png",
+            caption="../report/metrics_vs_k.rst",
+            category="Scoring",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "Fig. 5.4 metrics against k"},
+        ),
+        floorplan=report(
+            f"results/{{dataset}}/figures/floorplan_k{SCORE_FIGURE_K}.png",
+            caption="../report/floorplan.rst",
+            category="Scoring",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "Fig. 5.5 floor plans, first k scans"},
+        ),
+        bitmap_overlay=report(
+            "results/{dataset}/figures/bitmap_overlay.png",
+            caption="../report/bitmap_overlay.rst",
+            category="Scoring",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "Fig. 5.1 bitmap overlay"},
+        ),
+        walls_over_points_k=report(
+            f"results/{{dataset}}/figures/walls_over_points_k{SCORE_FIGURE_K}.png",
+            caption="../report/walls_over_points_k.rst",
+            category="Scoring",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "Fig. 5.11 walls over points, first k scans"},
+        ),
+        walls_over_points_all=report(
+            "results/{dataset}/figures/walls_over_points_all.png",
+            caption="../report/walls_over_points_all.rst",
+            category="Scoring",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "Fig. 5.12 walls over points, all scans"},
+        ),
+        stage_times_png=report(
+            "results/{dataset}/figures/stage_times.png",
+            caption="../report/stage_times.rst",
+            category="Timing",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "Table 5.1 time per stage"},
+        ),
+        stage_times_tsv=report(
+            "results/{dataset}/figures/stage_times.tsv",
+            caption="../report/stage_times.rst",
+            category="Timing",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "Table 5.1 time per stage (table)"},
+        ),
+        wall_extraction=report(
+            "results/{dataset}/figures/wall_extraction.png",
+            caption="../report/wall_extraction.rst",
+            category="Timing",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "Fig. 5.10 wall extraction per scan"},
+        ),
+    params:
+        cfg=score_check,
+        walls_runs=score_figure_runs,
+        floorplan_runs=score_figure_floorplans,
+        extractors=score_extractors,
+        reference_kind=score_reference_kind,
+        reference_label=score_reference_label,
+        bench_dir=score_bench_dir,
+    log:
+        "results/{dataset}/logs/score_figures.log",
+    benchmark:
+        "results/{dataset}/benchmarks/score_figures.tsv"
+    script:
+        "../../scripts/score_figures.py"
+
+
+FINAL_OUTPUTS.extend(
+    [
+        "results/{dataset}/metrics.parquet",
+        "results/{dataset}/summary.parquet",
+        "results/{dataset}/summary.md",
+    ]
+    + [
+        f"results/{{dataset}}/figures/{name}"
+        for name in (
+            "metrics_vs_k.png",
+            f"floorplan_k{SCORE_FIGURE_K}.png",
+            "bitmap_overlay.png",
+            f"walls_over_points_k{SCORE_FIGURE_K}.png",
+            "walls_over_points_all.png",
+            "stage_times.png",
+            "stage_times.tsv",
+            "wall_extraction.png",
+        )
+    ]
+)
