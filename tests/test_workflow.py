@@ -74,3 +74,31 @@ def test_rerun_of_one_stage(default_run):
     res = snakemake(default_run, "-R", "poses")
     assert res.returncode == 0, res.stderr[-3000:]
     assert "poses" in res.stderr and "ingest" not in res.stderr.split("Job stats")[-1].split("Reasons")[0]
+
+
+def test_default_run_selection_walls_and_scores(default_run):
+    """On the demo building the thesis's ordering beats recording order at 15 scans,
+    registration lowers the pose error, and every floor plan format is written."""
+    out = default_run / "results" / "demo"
+    reg = read_table(out / "registration.parquet")
+    truth = read_table(out / "sim" / "true_poses.parquet")
+    poses = read_table(out / "poses.parquet")
+    kept = reg[reg["kept"]].merge(truth, on="t_ns", suffixes=("", "_true"))
+    prior = poses.set_index("scan_id").loc[kept["scan_id"]]
+    err_prior = np.hypot(prior["x"].to_numpy() - kept["x"], prior["y"].to_numpy() - kept["y"])
+    err_reg = np.hypot(kept["x_m"] - kept["x"], kept["y_m"] - kept["y"])
+    assert len(kept) >= 60
+    assert np.sqrt(np.mean(err_reg**2)) < 0.8 * np.sqrt(np.mean(err_prior**2))
+
+    summary = read_table(out / "orderings" / "summary.parquet").set_index("ordering")
+    assert summary.loc["cluster_hull", "k_95"] < summary.loc["sequential", "k_95"] / 2
+
+    m = read_table(out / "metrics.parquet")
+    assert set(m["reference_kind"]) == {"ground_truth"}
+    assert len(m) == 5 * 2 * 7
+    f1 = m.set_index(["ordering", "extractor", "k"])["f1_5cm"]
+    for ext in ("ransac", "cluster_ransac"):
+        assert f1[("cluster_hull", ext, "15")] > f1[("sequential", ext, "15")] + 0.1
+        assert f1[("cluster_hull", ext, "all")] > 0.4
+    for fmt in ("geojson", "svg", "dxf", "ifc"):
+        assert (out / "floorplan" / f"cluster_hull_cluster_ransac_k15.{fmt}").stat().st_size > 500
