@@ -646,20 +646,7 @@ def _register_sequential(sampled, clouds, sids, t, cfg, odometry, out) -> int:
                     reasons[i] = "low_prior_fitness"
                     continue
             target = voxel_downsample(np.concatenate([r.points for r in refs]), cfg.voxel_size_m)
-            ttree = cKDTree(target)
-            nrm = None
-            if cfg.icp_method == "point_to_plane":
-                planar = bool(np.ptp(target[:, 2]) < 1e-9)
-                nrm = normals_2d(target, ttree, cfg.normal_neighbours) if planar else normals_3d(target, cfg.normal_neighbours)
-            src = voxel_downsample(pts, cfg.voxel_size_m)
-            for dist in cfg.icp_max_correspondence_m:  # coarse to fine
-                pose, n_corr = icp_planar(
-                    src, target, ttree, pose, dist,
-                    method=cfg.icp_method, normals=nrm,
-                    max_iterations=cfg.icp_max_iterations, tolerance=cfg.icp_tolerance_m,
-                )
-                if n_corr == 0:
-                    break
+            pose, n_corr = _icp_to_map(voxel_downsample(pts, cfg.voxel_size_m), target, pose, cfg)
             if n_corr == 0:
                 reasons[i] = "icp_failed"
                 continue
