@@ -95,7 +95,7 @@ def test_default_run_selection_walls_and_scores(default_run):
 
     m = read_table(out / "metrics.parquet")
     assert set(m["reference_kind"]) == {"ground_truth"}
-    assert len(m) == 5 * 2 * 7
+    assert len(m) == 5 * 2 * 10
     f1 = m.set_index(["ordering", "extractor", "k"])["f1_5cm"]
     for ext in ("ransac", "cluster_ransac"):
         assert f1[("cluster_hull", ext, "15")] > f1[("sequential", ext, "15")] + 0.1

@@ -8,7 +8,7 @@ stage_schema_check("score", "../schemas/score.schema.yaml")
 
 SCORE_DEFAULT_ORDERINGS = ["cluster_hull", "convex_hull", "random", "sequential", "motion_filter"]
 SCORE_DEFAULT_EXTRACTORS = ["ransac", "cluster_ransac"]
-SCORE_DEFAULT_K = [5, 10, 15, 20, 30, 50, "all"]
+SCORE_DEFAULT_K = [5, 10, 15, 20, 30, 50, 100, 200, 500, "all"]
 # The figure k is in the figure file names (floorplan_k15.png), so it is global: a
 # per-dataset override of score.figure_k is refused by score_check.
 SCORE_FIGURE_K = config["score"]["figure_k"]
