@@ -969,3 +969,20 @@ def summary_markdown(summary, tau: float = 0.05, levels=(0.95, 0.99)) -> str:
             cells += [k, f"{r[f'fraction_{p}']:.3f}", f"{r[f'reduction_{p}']:.1f}x"]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+def load_references(kind: str, extractors, ground_truth=None, reference_paths=()) -> dict:
+    """The walls each extractor is scored against, as ``{extractor: (M, 4) segments}``.
+
+    ``kind`` ground_truth: the ``face`` features of the simulator's ``walls.geojson``
+    (``ground_truth``), the same for every extractor. Otherwise the reference: the
+    walls of each extractor from all kept scans (``reference_paths``, one Parquet
+    table per extractor, in the order of ``extractors``).
+    """
+    extractors = list(extractors)
+    if kind == GROUND_TRUTH:
+        gt = read_wall_faces(ground_truth, kind="face")
+        return {e: gt for e in extractors}
+    from floorscan.io import read_table
+
+    return {e: as_segments(read_table(p)) for e, p in zip(extractors, reference_paths)}

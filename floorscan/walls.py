@@ -398,15 +398,11 @@ def ransac(points: np.ndarray, params: RansacParams = RansacParams(), seed=0) ->
     rows: list[tuple] = []
     n_lines = 0
     while len(remaining) >= params.min_points and n_lines < params.max_lines:
-        found = _best_line(remaining, rng, params)
-        if found is None:
+        fit = _fit_wall(all_pts, alive, rng, params)
+        if fit is None:
             break
-        mask, c, direction = found
-        if mask.sum() < params.min_inliers:
-            break
-        claimed = np.zeros(len(all_pts), dtype=bool)
-        claimed[alive[mask]] = True
-        rows += _claimed_segments(all_pts, c, direction, claimed, params)
+        mask, segments = fit
+        rows += segments
         alive = alive[~mask]
         remaining = all_pts[alive]
         n_lines += 1
@@ -693,16 +689,28 @@ def cluster_ransac(
             idx = members[sub == s]
             if len(idx) < cluster.min_cluster_points:
                 continue
-            found = _best_line(pts[idx], rng, params)
-            if found is None:
-                continue
-            mask, c, direction = found
-            if mask.sum() < params.min_inliers:
-                continue
-            claimed = np.zeros(len(pts), dtype=bool)
-            claimed[idx[mask]] = True
-            rows += _claimed_segments(pts, c, direction, claimed, params)
+            fit = _fit_wall(pts, idx, rng, params)
+            if fit is not None:
+                rows += fit[1]
     return _frame(rows)
+
+
+def _fit_wall(pts: np.ndarray, idx: np.ndarray, rng: np.random.Generator, params: RansacParams):
+    """One RANSAC line on ``pts[idx]``: its inlier mask over ``idx`` and its wall segments.
+
+    Returns None when no line has at least ``params.min_inliers`` inliers. The
+    segments' ends and gaps come from all of ``pts`` near the line (see
+    :func:`_claimed_segments`).
+    """
+    found = _best_line(pts[idx], rng, params)
+    if found is None:
+        return None
+    mask, c, direction = found
+    if mask.sum() < params.min_inliers:
+        return None
+    claimed = np.zeros(len(pts), dtype=bool)
+    claimed[idx[mask]] = True
+    return mask, _claimed_segments(pts, c, direction, claimed, params)
 
 
 def _claimed_segments(pts, c, direction, claimed, params) -> list[tuple]:

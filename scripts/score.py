@@ -10,13 +10,9 @@ with stage_log(snakemake) as log:  # noqa: F821
     cfg = smk.params.cfg
     kind = smk.params.reference_kind
     extractors = list(smk.params.extractors)
-    if kind == metrics.GROUND_TRUTH:
-        gt = metrics.read_wall_faces(smk.input.ground_truth, kind="face")
-        references = {e: gt for e in extractors}
-    else:
-        references = {
-            e: metrics.as_segments(read_table(p)) for e, p in zip(extractors, smk.input.reference)
-        }
+    references = metrics.load_references(
+        kind, extractors, smk.input.get("ground_truth"), smk.input.get("reference", [])
+    )
     log.info("scoring against the %s: %s", smk.params.reference_label,
              {e: len(s) for e, s in references.items()})
     n_kept = {o: len(read_table(p, columns=["scan_id"]))

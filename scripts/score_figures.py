@@ -9,13 +9,9 @@ with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
     kind = smk.params.reference_kind
     extractors = list(smk.params.extractors)
-    if kind == metrics.GROUND_TRUTH:
-        gt = metrics.read_wall_faces(smk.input.ground_truth, kind="face")
-        reference = {e: gt for e in extractors}
-    else:
-        reference = {
-            e: metrics.as_segments(read_table(p)) for e, p in zip(extractors, smk.input.reference)
-        }
+    reference = metrics.load_references(
+        kind, extractors, smk.input.get("ground_truth"), smk.input.get("reference", [])
+    )
     walls = {tuple(r): read_table(p) for r, p in zip(smk.params.walls_runs, smk.input.walls)}
     floorplans = {
         tuple(r): figures_scoring.read_geojson_geometries(p)

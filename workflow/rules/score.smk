@@ -6,32 +6,26 @@
 
 stage_schema_check("score", "../schemas/score.schema.yaml")
 
-SCORE_DEFAULT_ORDERINGS = ["cluster_hull", "convex_hull", "random", "sequential", "motion_filter"]
-SCORE_DEFAULT_EXTRACTORS = ["ransac", "cluster_ransac"]
-SCORE_DEFAULT_K = [5, 10, 15, 20, 30, 50, 100, 200, 500, "all"]
 # The figure k is in the figure file names (floorplan_k15.png), so it is global: a
 # per-dataset override of score.figure_k is refused by score_check.
 SCORE_FIGURE_K = config["score"]["figure_k"]
 
 
-def _score_section(stage, wildcards):
-    return stage_config(stage)(wildcards) or {}
+def _walls_section(wildcards):
+    return stage_config("walls")(wildcards)
 
 
 def score_orderings(wildcards):
-    """The orderings the walls stage extracts (walls.orderings, else select.orderings)."""
-    walls = _score_section("walls", wildcards)
-    if "orderings" in walls:
-        return list(walls["orderings"])
-    return list(_score_section("select", wildcards).get("orderings", SCORE_DEFAULT_ORDERINGS))
+    """The orderings the walls stage extracts (walls.orderings)."""
+    return list(_walls_section(wildcards)["orderings"])
 
 
 def score_extractors(wildcards):
-    return list(_score_section("walls", wildcards).get("extractors", SCORE_DEFAULT_EXTRACTORS))
+    return list(_walls_section(wildcards)["extractors"])
 
 
 def score_ks(wildcards):
-    return [str(k) for k in _score_section("walls", wildcards).get("k", SCORE_DEFAULT_K)]
+    return [str(k) for k in _walls_section(wildcards)["k"]]
 
 
 def score_runs(wildcards):

@@ -46,7 +46,6 @@ FINAL_OUTPUTS.extend(walls_outputs())
 WALLS_CONSTRAINTS = dict(
     ordering=_alternatives(config["walls"]["orderings"]),
     extractor=_alternatives(config["walls"]["extractors"]),
-    k="[1-9][0-9]*|all",
 )
 
 
