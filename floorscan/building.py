@@ -19,7 +19,8 @@ A building file (``config/buildings/<name>.yaml``) looks like::
           - {id: w1, kind: window, segment: 1, offset_m: 2, width_m: 1.5,
              sill_m: 0.9, head_m: 2.1}
     furniture:                 # clutter: boxes standing on the floor (or raised)
-      - {id: desk, center: [3, 2], size: [1.6, 0.8, 0.75], yaw_deg: 0, z_min_m: 0}
+      - {id: desk, center: [3, 2], size: [1.6, 0.8, 0.75], yaw_deg: 0, z_min_m: 0,
+         legs_m: 0.05}         # a table: a 3 cm top on four square legs
     waypoints: [[1.5, -1], [1.5, 4], [6, 4]]   # the rover's path (map frame, m)
 
 Coordinates are metres in the map frame. A wall is a polyline (its centre line, the
@@ -56,6 +57,8 @@ DOOR_HEAD_M = 2.1
 #: How far an opening's cutter reaches beyond each face of its wall, metres. Keeps the
 #: boolean away from coplanar faces; the 2D footprint uses the same cutter.
 _CUT_MARGIN_M = 0.01
+#: Thickness of a table's top (furniture with ``legs_m``), metres.
+TABLE_TOP_M = 0.03
 #: Thickness of the floor and ceiling slabs, metres.
 SLAB_THICKNESS_M = 0.05
 #: Wall segments shorter than this (m) are "zero length".
@@ -67,7 +70,7 @@ _TOP_KEYS = {
 }
 _WALL_KEYS = {"id", "points", "closed", "thickness_m", "openings"}
 _OPENING_KEYS = {"id", "kind", "segment", "offset_m", "width_m", "sill_m", "head_m"}
-_FURNITURE_KEYS = {"id", "center", "size", "yaw_deg", "z_min_m"}
+_FURNITURE_KEYS = {"id", "center", "size", "yaw_deg", "z_min_m", "legs_m"}
 
 
 @dataclass(frozen=True)
@@ -102,22 +105,49 @@ class Wall:
 
 @dataclass(frozen=True)
 class Furniture:
-    """A clutter box: centre (x, y), size (sx, sy, sz), yaw and bottom height (metres)."""
+    """A clutter box: centre (x, y), size (sx, sy, sz), yaw and bottom height (metres).
+
+    With ``legs_m`` > 0 it is a table (desk, chair): a top ``TABLE_TOP_M`` thick at
+    the top of the box on four square legs of side ``legs_m`` in its corners, so a 2D
+    scanner below the top sees four legs, as on a real office floor, not a solid box.
+    """
 
     id: str
     center: tuple[float, float]
     size: tuple[float, float, float]
     yaw_rad: float
     z_min_m: float
+    legs_m: float = 0.0
 
-    def footprint(self) -> Polygon:
-        """The box's outline on the floor plan."""
-        sx, sy = self.size[0] / 2, self.size[1] / 2
+    def _outline(self, cx: float, cy: float, sx: float, sy: float) -> Polygon:
         c, s = math.cos(self.yaw_rad), math.sin(self.yaw_rad)
         corners = [(-sx, -sy), (sx, -sy), (sx, sy), (-sx, sy)]
         return Polygon(
-            [(self.center[0] + c * x - s * y, self.center[1] + s * x + c * y) for x, y in corners]
+            [(self.center[0] + c * (cx + x) - s * (cy + y),
+              self.center[1] + s * (cx + x) + c * (cy + y)) for x, y in corners]
         )
+
+    def section(self, z: float):
+        """The plan outline of the furniture cut at height ``z`` (metres): the box, a
+        table's legs or top, or an empty polygon outside its height."""
+        z0, z1 = self.z_min_m, self.z_min_m + self.size[2]
+        if not z0 <= z <= z1:
+            return Polygon()
+        if self.legs_m > 0 and z < z1 - TABLE_TOP_M:
+            return unary_union(self.legs())
+        return self.footprint()
+
+    def legs(self) -> list[Polygon]:
+        """Outlines of the four legs of a table (empty without ``legs_m``)."""
+        if self.legs_m <= 0:
+            return []
+        h = self.legs_m / 2
+        ox, oy = self.size[0] / 2 - h, self.size[1] / 2 - h
+        return [self._outline(sx * ox, sy * oy, h, h) for sx in (-1, 1) for sy in (-1, 1)]
+
+    def footprint(self) -> Polygon:
+        """The box's outline on the floor plan (a table's: its top)."""
+        return self._outline(0.0, 0.0, self.size[0] / 2, self.size[1] / 2)
 
 
 @dataclass(frozen=True)
@@ -338,7 +368,14 @@ def _parse_furniture(rf: Any, i: int, height: float, source: str) -> Furniture:
             f"{source}: {where}: spans z {z0}..{z0 + size[2]} m, outside floor..ceiling 0..{height}"
         )
     yaw = math.radians(_number(rf.get("yaw_deg", 0.0), source, f"{where}.yaw_deg"))
-    return Furniture(fid, center, size, yaw, z0)  # type: ignore[arg-type]
+    legs = _number(rf.get("legs_m", 0.0), source, f"{where}.legs_m")
+    if legs < 0 or (legs > 0 and (2 * legs > min(size[:2]) or size[2] <= TABLE_TOP_M)):
+        raise InputError(
+            f"{source}: {where}.legs_m: expected 0 (a box) or a leg side > 0 with two legs "
+            f"fitting across the {size[0]} x {size[1]} m top and a height over the "
+            f"{TABLE_TOP_M} m top, got {legs}"
+        )
+    return Furniture(fid, center, size, yaw, z0, legs)  # type: ignore[arg-type]
 
 
 def _parse_waypoints(v: Any, source: str) -> np.ndarray:
@@ -428,8 +465,13 @@ def _extrude(poly, z0: float, z1: float) -> list[trimesh.Trimesh]:
     return out
 
 
-def _furniture_mesh(f: Furniture) -> trimesh.Trimesh:
-    return _extrude(f.footprint(), f.z_min_m, f.z_min_m + f.size[2])[0]
+def _furniture_meshes(f: Furniture) -> list[trimesh.Trimesh]:
+    z0, z1 = f.z_min_m, f.z_min_m + f.size[2]
+    if f.legs_m <= 0:
+        return _extrude(f.footprint(), z0, z1)
+    top = _extrude(f.footprint(), z1 - TABLE_TOP_M, z1)
+    # legs reach 1 mm into the top so the union is one solid
+    return top + [m for leg in f.legs() for m in _extrude(leg, z0, z1 - TABLE_TOP_M + 1e-3)]
 
 
 def wall_mesh(building: Building) -> trimesh.Trimesh:
@@ -494,7 +536,7 @@ def building_mesh(building: Building) -> trimesh.Trimesh:
         Watertight triangle mesh, metres.
     """
     parts = [wall_mesh(building)]
-    parts += [_furniture_mesh(f) for f in building.furniture]
+    parts += [m for f in building.furniture for m in _furniture_meshes(f)]
     outline = building_outline(building)
     if building.floor:
         parts += _extrude(outline, -SLAB_THICKNESS_M, 0.0)
@@ -589,7 +631,79 @@ def wall_faces(building: Building, z: float) -> list[tuple[np.ndarray, np.ndarra
     return faces
 
 
-def ground_truth_walls(building: Building, slice_height_m: float) -> dict:
+#: A face sample is observed when a return lies within this plan distance, metres.
+OBSERVED_RADIUS_M = 0.05
+#: Unobserved runs of a face shorter than this between observed samples count as
+#: observed (the gaps between beams far away), metres.
+OBSERVED_BRIDGE_M = 0.20
+#: Spacing of the face samples tested for observation, metres.
+OBSERVED_STEP_M = 0.01
+
+
+def observed_faces(
+    faces, points_xy: np.ndarray, radius_m: float = OBSERVED_RADIUS_M,
+    bridge_m: float = OBSERVED_BRIDGE_M, step_m: float = OBSERVED_STEP_M,
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The parts of the wall faces that a recording's returns lie on.
+
+    Thesis 5.2: "some walls, although they are present in the CAD model of the
+    building in simulation, are never visible from the point of view of the LIDAR".
+    No method recovers a wall it never saw, so recall is scored against the observed
+    parts (the denominator of completeness, as the ISPRS indoor benchmark restricts
+    its reference to the surveyed area); the whole faces stay in the ground truth.
+
+    Each face is sampled every ``step_m``; a sample is observed when a return lies
+    within ``radius_m`` of it in the plan; unobserved runs shorter than ``bridge_m``
+    between observed samples are filled; each remaining run is a segment.
+
+    Parameters
+    ----------
+    faces : list of ((2,), (2,)) ndarray pairs
+        Wall faces (:func:`wall_faces`), metres.
+    points_xy : (N, 2) float ndarray
+        Plan positions of the returns (map frame, metres), e.g. deduplicated on a
+        1 cm grid.
+    radius_m, bridge_m, step_m : float
+        Metres.
+
+    Returns
+    -------
+    list of ((2,), (2,)) float64 ndarray pairs
+        Observed face segments, in face order.
+    """
+    from scipy.spatial import cKDTree
+
+    pts = np.asarray(points_xy, dtype=np.float64).reshape(-1, 2)
+    if len(pts) == 0:
+        return []
+    tree = cKDTree(pts)
+    out = []
+    for a, b in faces:
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        length = float(np.hypot(*(b - a)))
+        n = max(2, int(math.ceil(length / step_m)) + 1)
+        s = np.linspace(0.0, 1.0, n)
+        samples = a + s[:, None] * (b - a)
+        d, _ = tree.query(samples, distance_upper_bound=radius_m)
+        seen = np.isfinite(d)
+        if not seen.any():
+            continue
+        idx = np.flatnonzero(seen)
+        # fill short unobserved runs between observed samples
+        gaps = np.flatnonzero(np.diff(idx) > 1)
+        for g in gaps:
+            if (idx[g + 1] - idx[g]) * length / (n - 1) < bridge_m:
+                seen[idx[g]: idx[g + 1]] = True
+        edges = np.diff(np.r_[0, seen.astype(np.int8), 0])
+        for i0, i1 in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1):
+            if i1 > i0:
+                out.append((samples[i0].copy(), samples[i1].copy()))
+    return out
+
+
+def ground_truth_walls(
+    building: Building, slice_height_m: float, observed_xy: np.ndarray | None = None
+) -> dict:
     """The ground-truth walls as a GeoJSON FeatureCollection (metres, map frame).
 
     Features carry ``kind``:
@@ -599,6 +713,9 @@ def ground_truth_walls(building: Building, slice_height_m: float) -> dict:
     - ``axis``: LineString, one per wall polyline segment: its centre line, with
       ``wall``, ``thickness_m`` and ``height_m``.
     - ``footprint``: Polygon, the walls cut at the slice height (:func:`wall_footprint`).
+    - ``observed_face``: LineString, the parts of the faces the recording's returns lie
+      on (:func:`observed_faces`), when ``observed_xy`` is given; the reference of
+      recall in scoring.
 
     Parameters
     ----------
@@ -606,6 +723,8 @@ def ground_truth_walls(building: Building, slice_height_m: float) -> dict:
     slice_height_m : float
         Height of the horizontal slice, metres (the 2D scanner's height, so doors are
         gaps and windows with a sill above it are walls; thesis 5.2).
+    observed_xy : (N, 2) float ndarray, optional
+        Plan positions of the recording's returns (map frame, metres).
 
     Returns
     -------
@@ -624,8 +743,14 @@ def ground_truth_walls(building: Building, slice_height_m: float) -> dict:
             f"(0, {building.height_m}) of {building.source}"
         )
     feats: list[dict] = []
-    for i, (a, b) in enumerate(wall_faces(building, slice_height_m)):
+    faces = wall_faces(building, slice_height_m)
+    for i, (a, b) in enumerate(faces):
         feats.append(_feature("LineString", [_xy(a), _xy(b)], kind="face", id=f"face{i}"))
+    if observed_xy is not None:
+        for i, (a, b) in enumerate(observed_faces(faces, observed_xy)):
+            feats.append(
+                _feature("LineString", [_xy(a), _xy(b)], kind="observed_face", id=f"observed{i}")
+            )
     for w in building.walls:
         for k, (a, b) in enumerate(w.segments()):
             feats.append(

@@ -692,6 +692,8 @@ def score_walls(
 #: Values of the ``reference_kind`` column: what the inferred walls are scored against.
 GROUND_TRUTH = "ground_truth"
 REFERENCE = "reference"
+#: Ground-truth feature kind of the observed parts of the faces (recall's reference).
+OBSERVED_FACE = "observed_face"
 
 
 def read_wall_faces(path, kind: str = "face") -> np.ndarray:
@@ -771,6 +773,7 @@ def score_dataset(
     cfg: dict,
     dataset: str = "",
     log=None,
+    recall_references: dict[str, np.ndarray] | None = None,
 ):
     """Score every ordering x extractor x k of a dataset: one row per run.
 
@@ -792,6 +795,13 @@ def score_dataset(
         ``taus_m``, ``sample_step_m``.
     dataset : str
         Written to the ``dataset`` column.
+    recall_references : dict, optional
+        ``{extractor: (M, 4) segments}`` that recall (completeness) and the distances
+        are measured against instead of ``references``: on synthetic datasets the
+        observed faces (:func:`floorscan.building.observed_faces`; thesis 5.2, walls
+        never visible from the LIDAR cannot be recovered). Precision and the bitmap
+        metrics stay against ``references``, and ``recall_all_<tau>`` gives recall
+        against ``references`` too.
 
     Returns
     -------
@@ -818,14 +828,21 @@ def score_dataset(
     grid = grid_for(np.vstack(nonempty), cfg["cell_m"], cfg["margin_m"])
     ref_bitmaps: dict[str, np.ndarray] = {}
     ref_samples: dict[str, np.ndarray] = {}
+    all_samples: dict[str, np.ndarray] = {}
     rows = []
     for run in runs:
         ext = run["extractor"]
         if ext not in refs:
             raise ValueError(f"no {reference_kind} walls for extractor {ext!r}")
+        if recall_references is not None and ext not in recall_references:
+            raise ValueError(f"no recall reference walls for extractor {ext!r}")
         if ext not in ref_bitmaps:
             ref_bitmaps[ext] = rasterize_segments(refs[ext], grid, cfg["wall_width_m"])
-            ref_samples[ext] = gt_samples(refs[ext], cfg["sample_step_m"])
+            all_samples[ext] = gt_samples(refs[ext], cfg["sample_step_m"])
+            ref_samples[ext] = (
+                all_samples[ext] if recall_references is None
+                else gt_samples(as_segments(recall_references[ext]), cfg["sample_step_m"])
+            )
         t0 = time.perf_counter()
         walls = as_segments(run["walls"])
         m = score_walls(
@@ -838,6 +855,11 @@ def score_dataset(
             gt_bitmap=ref_bitmaps[ext],
             samples=ref_samples[ext],
         )
+        if recall_references is not None:
+            d = (nearest_distances(all_samples[ext], walls) if len(walls)
+                 else np.full(len(all_samples[ext]), np.inf))
+            for tau in cfg["taus_m"]:
+                m[f"recall_all_{tau_label(tau)}"] = float(np.mean(d <= tau)) if len(d) else math.nan
         n_kept = int(run["n_kept"])
         n_scans = k_scans(run["k"], n_kept)
         nfp = run.get("n_floorplan_walls")
@@ -969,6 +991,21 @@ def summary_markdown(summary, tau: float = 0.05, levels=(0.95, 0.99)) -> str:
             cells += [k, f"{r[f'fraction_{p}']:.3f}", f"{r[f'reduction_{p}']:.1f}x"]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+def load_recall_references(kind: str, extractors, ground_truth=None, recall_kind: str = OBSERVED_FACE):
+    """What recall is measured against, ``{extractor: (M, 4) segments}``, or None.
+
+    Synthetic datasets (``kind`` ground_truth): the ``recall_kind`` features of
+    ``walls.geojson`` (``observed_face``: the parts of the faces the recording saw,
+    :func:`floorscan.building.observed_faces`); ``face`` gives None (recall against
+    all faces, like precision). Real recordings: None (the reference is already made
+    of what the scans saw).
+    """
+    if kind != GROUND_TRUTH or recall_kind == "face":
+        return None
+    seg = read_wall_faces(ground_truth, kind=recall_kind)
+    return {e: seg for e in extractors}
 
 
 def load_references(kind: str, extractors, ground_truth=None, reference_paths=()) -> dict:

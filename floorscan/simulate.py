@@ -635,7 +635,9 @@ def write_recording(rec: Recording, bag_path: str | os.PathLike, pcd_dir: str | 
     -------
     dict
         Counts: ``n_scans``, ``n_points``, ``n_no_return`` (beams without a return),
-        ``n_pose``, ``n_odom``.
+        ``n_pose``, ``n_odom``; and ``observed_xy``, ``(C, 2)`` float64, the centres of
+        the 1 cm plan cells holding a return (3D: a return in ``OBSERVED_BAND_3D_M``),
+        metres, for :func:`floorscan.building.observed_faces`.
     """
     from rosbags.rosbag1 import Writer
 
@@ -648,6 +650,7 @@ def write_recording(rec: Recording, bag_path: str | os.PathLike, pcd_dir: str | 
         + [(int(t), 2, i) for i, t in enumerate(rec.odom_t_ns)]
     )
     n_points = n_missing = 0
+    cells: list[np.ndarray] = []  # 1 cm plan cells of the returns (observed faces)
     with atomic_path(bag_path) as tmp_bag, _atomic_dir(pcd_dir) as tmp_dir:
         tmp_bag.unlink()  # rosbags refuses to overwrite
         with Writer(tmp_bag) as w:
@@ -681,6 +684,9 @@ def write_recording(rec: Recording, bag_path: str | os.PathLike, pcd_dir: str | 
                 n_missing += int((~valid).sum())
                 w.write(c_scan, t, msgs.scan(k, ranges, pts))
                 map_pts = lidar.to_map(pts, rec.scan_poses[k]).astype(np.float32)
+                cells.append(_plan_cells(map_pts, is_2d))
+                if len(cells) >= 256:
+                    cells = [np.unique(np.concatenate(cells))]
                 (tmp_dir / scan_file_name(k)).write_bytes(pcd_bytes(map_pts, rec.scan_poses[k]))
             flush(np.iinfo(np.int64).max)
         locations = pd.DataFrame(
@@ -694,13 +700,32 @@ def write_recording(rec: Recording, bag_path: str | os.PathLike, pcd_dir: str | 
             }
         )
         locations.to_csv(tmp_dir / "locations.csv", index=False, lineterminator="\n")
+    keys = np.unique(np.concatenate(cells)) if cells else np.zeros(0, np.int64)
+    ij = np.column_stack([keys >> 32, keys & 0xFFFFFFFF]) - 2**30
     return {
+        "observed_xy": (ij + 0.5) * OBSERVED_CELL_M,
         "n_scans": len(rec.scan_t_ns),
         "n_points": n_points,
         "n_no_return": n_missing,
         "n_pose": len(rec.pose_t_ns),
         "n_odom": len(rec.odom_t_ns),
     }
+
+
+#: Plan cell of the returns kept for the observed faces, metres.
+OBSERVED_CELL_M = 0.01
+#: 3D scanners: the returns that observe a wall face lie in this height band above the
+#: floor (the walls stage's default band), metres; a 2D scanner's returns all count.
+OBSERVED_BAND_3D_M = (0.5, 2.0)
+
+
+def _plan_cells(map_pts: np.ndarray, is_2d: bool) -> np.ndarray:
+    """Unique int64 keys of the 1 cm plan cells of one scan's map-frame returns."""
+    p = map_pts
+    if not is_2d:
+        p = p[(p[:, 2] >= OBSERVED_BAND_3D_M[0]) & (p[:, 2] <= OBSERVED_BAND_3D_M[1])]
+    ij = np.floor(p[:, :2].astype(np.float64) / OBSERVED_CELL_M).astype(np.int64) + 2**30
+    return np.unique((ij[:, 0] << 32) | ij[:, 1])
 
 
 def write_stl(mesh, path: str | os.PathLike) -> None:
@@ -776,9 +801,10 @@ def run_simulation(
         (rec.scan_t_ns[-1] - rec.scan_t_ns[0]) / 1e9,
     )
     write_stl(rec.mesh, outputs["stl"])
-    write_json(bld.ground_truth_walls(building, params.sensor_height_m), outputs["walls"])
     write_table(true_poses_frame(rec), outputs["true_poses"], schema=TRUE_POSES,
                 metadata={"dataset": str(name), "frame": "map", "units": "m, rad, ns"})
     counts = write_recording(rec, outputs["bag"], outputs["pcd"])
+    observed = counts.pop("observed_xy")
+    write_json(bld.ground_truth_walls(building, params.sensor_height_m, observed), outputs["walls"])
     log.info("%s: wrote %s", name, counts)
     return counts

@@ -13,8 +13,14 @@ with stage_log(snakemake) as log:  # noqa: F821
     references = metrics.load_references(
         kind, extractors, smk.input.get("ground_truth"), smk.input.get("reference", [])
     )
+    recall_refs = metrics.load_recall_references(
+        kind, extractors, smk.input.get("ground_truth"), cfg["recall_reference"]
+    )
     log.info("scoring against the %s: %s", smk.params.reference_label,
              {e: len(s) for e, s in references.items()})
+    if recall_refs is not None:
+        log.info("recall against the %s features: %s segments", cfg["recall_reference"],
+                 {e: len(s) for e, s in recall_refs.items()})
     n_kept = {o: len(read_table(p, columns=["scan_id"]))
               for o, p in zip(smk.params.orderings, smk.input.orderings)}
     runs = [
@@ -28,7 +34,9 @@ with stage_log(snakemake) as log:  # noqa: F821
         }
         for (o, e, k), wp, fp in zip(smk.params.runs, smk.input.walls, smk.input.floorplans)
     ]
-    table = metrics.score_dataset(runs, references, kind, cfg, smk.wildcards.dataset, log)
+    table = metrics.score_dataset(
+        runs, references, kind, cfg, smk.wildcards.dataset, log, recall_references=recall_refs
+    )
     summary = metrics.summarize(table, cfg["summary_tau_m"], cfg["summary_levels"])
     meta = {"dataset": smk.wildcards.dataset, "reference_kind": kind,
             "reference": smk.params.reference_label}

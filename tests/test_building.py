@@ -84,7 +84,7 @@ def test_ground_truth_equals_a_slice_of_the_mesh(name):
     # the full mesh (furniture, floor, ceiling) slices to the walls plus the furniture
     full = bld.building_mesh(b)
     assert full.is_volume
-    clutter = unary_union([fp, *[f.footprint() for f in b.furniture]])
+    clutter = unary_union([fp, *[f.section(h) for f in b.furniture]])
     assert bld.mesh_section(full, h).symmetric_difference(clutter).area < 1e-6
     # the GeoJSON footprint is that slice, and every face lies on its boundary
     gt = bld.ground_truth_walls(b, h)
@@ -188,3 +188,35 @@ def test_unknown_key_and_missing_file(tmp_path):
         bld.load_building(write(tmp_path, d))
     with pytest.raises(InputError, match="not found"):
         bld.load_building(tmp_path / "nope.yaml")
+
+
+def test_a_table_is_a_top_on_four_legs(tmp_path):
+    d = room(furniture=[{"id": "desk", "center": [1, 1], "size": [1.2, 0.6, 0.75], "legs_m": 0.05}])
+    b = bld.parse_building(d, "t.yaml")
+    desk = b.furniture[0]
+    assert desk.section(0.3).area == pytest.approx(4 * 0.05**2)  # four legs at scanner height
+    assert desk.section(0.74).area == pytest.approx(1.2 * 0.6)  # the top
+    assert desk.section(0.8).is_empty
+    legs = desk.section(0.3)
+    # legs in the corners: their union's bounds are the top's
+    assert legs.bounds == pytest.approx((0.4, 0.7, 1.6, 1.3))
+    full = bld.building_mesh(b)
+    assert full.is_volume
+    assert bld.mesh_section(full, 0.3).area == pytest.approx(bld.wall_footprint(b, 0.3).area + 0.01, rel=1e-6)
+    with pytest.raises(InputError, match=r"legs_m"):
+        bld.parse_building(room(furniture=[{"id": "t", "center": [1, 1], "size": [0.2, 0.2, 0.7],
+                                            "legs_m": 0.15}]), "t.yaml")
+
+
+def test_observed_faces_keep_the_parts_with_returns():
+    faces = [(np.array([0.0, 0.0]), np.array([4.0, 0.0])), (np.array([0.0, 3.0]), np.array([4.0, 3.0]))]
+    # returns every 5 cm on x in [0, 1] and [1.1, 2] (a 10 cm gap: bridged), and [3, 3.5]
+    xs = np.r_[np.arange(0, 1.001, 0.05), np.arange(1.1, 2.001, 0.05), np.arange(3, 3.501, 0.05)]
+    pts = np.c_[xs, np.full(len(xs), 0.02)]
+    obs = bld.observed_faces(faces, pts)
+    assert len(obs) == 2  # the second face saw nothing
+    (a0, b0), (a1, b1) = obs
+    # within 5 cm of a return: a run reaches ~4.6 cm past its last return
+    assert a0[0] == pytest.approx(0.0) and b0[0] == pytest.approx(2.04, abs=0.011)
+    assert a1[0] == pytest.approx(2.96, abs=0.011) and b1[0] == pytest.approx(3.54, abs=0.011)
+    assert bld.observed_faces(faces, np.zeros((0, 2))) == []

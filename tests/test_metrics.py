@@ -332,3 +332,37 @@ def test_overlapping_reference_walls_count_once_in_recall():
     assert m["precision_5cm"] == pytest.approx(1.0)
     pts = M.dedupe_samples(np.array([[0.001, 0.001], [0.002, 0.003], [0.5, 0.5]]), 0.01)
     np.testing.assert_array_equal(pts, [[0.001, 0.001], [0.5, 0.5]])
+
+
+def test_recall_against_observed_faces_precision_against_all(tmp_path):
+    # ground truth: a 10 m and a 6 m face; the recording saw only the first 8 m of the
+    # 10 m face. Walls found: that 8 m and 1 m of clutter.
+    gt = np.array([[0, 0, 10, 0], [10, 0, 10, 6]], float)
+    observed = {"ransac": np.array([[0, 0, 8, 0]], float)}
+    walls = pd.DataFrame([[0, 0, 8, 0], [3, 3, 4, 3]], columns=["x0", "y0", "x1", "y1"])
+    runs = [{"ordering": "random", "extractor": "ransac", "k": "all", "walls": walls,
+             "n_kept": 3, "n_floorplan_walls": 1}]
+    cfg = {"cell_m": 0.05, "wall_width_m": 0.1, "margin_m": 1.0, "taus_m": [0.05],
+           "sample_step_m": 0.01}
+    r = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg, recall_references=observed).iloc[0]
+    assert r["precision_5cm"] == pytest.approx(8 / 9)
+    assert r["recall_5cm"] == pytest.approx(1.0)
+    # against every face: 8 m + the 5 cm end disk of 16 m
+    assert r["recall_all_5cm"] == pytest.approx(8.05 / 16, abs=2e-3)
+    # without recall references there is no recall_all column and recall is against all
+    r2 = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg).iloc[0]
+    assert "recall_all_5cm" not in r2 and r2["recall_5cm"] == pytest.approx(8.05 / 16, abs=2e-3)
+    with pytest.raises(ValueError, match="recall reference"):
+        M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg, recall_references={})
+
+
+def test_load_recall_references(tmp_path):
+    p = _geojson(tmp_path)
+    doc = json.loads(p.read_text())
+    doc["features"].append({"type": "Feature", "properties": {"kind": "observed_face"},
+                            "geometry": {"type": "LineString", "coordinates": [[0, 0], [4, 0]]}})
+    p.write_text(json.dumps(doc))
+    refs = M.load_recall_references(M.GROUND_TRUTH, ["ransac", "cluster_ransac"], p)
+    np.testing.assert_allclose(refs["cluster_ransac"], [[0, 0, 4, 0]])
+    assert M.load_recall_references(M.GROUND_TRUTH, ["ransac"], p, recall_kind="face") is None
+    assert M.load_recall_references(M.REFERENCE, ["ransac"], p) is None

@@ -297,3 +297,17 @@ def test_schema_defaults_equal_the_dataclass_defaults():
         assert set(sprops) == {f.name for f in fields(cls)}
         for f in fields(cls):
             assert sprops[f.name]["default"] == f.default, (key, f.name)
+
+
+def test_observed_faces_are_the_seen_parts_of_the_faces(rec2d):
+    import json
+
+    outs, _ = rec2d
+    gt = json.loads(Path(outs["walls"]).read_text())
+
+    def total(kind):
+        return sum(np.hypot(*np.subtract(*np.array(f["geometry"]["coordinates"])))
+                   for f in gt["features"] if f["properties"]["kind"] == kind)
+
+    # the rover drives inside the 4 x 3 m room: it sees most of it, not the box's shadow
+    assert 0.8 * total("face") < total("observed_face") < total("face")
