@@ -1,0 +1,344 @@
+"""Pose-graph registration: scan-to-scan ICP constraints plus the localizer's poses as
+priors, optimised together with Open3D's pose-graph optimisation.
+
+Thesis section 3.2.2 refines each scan's pose by ICP against earlier scans (Algorithm 3)
+and leaves the combination of the two pose sources open. This module does what SLAM
+back ends do (Lu and Milios 1997; Grisetti et al. 2010, "A tutorial on graph-based
+SLAM"): every sampled scan is a node; ICP between overlapping scans gives relative
+constraints (edges), which are accurate to millimetres but drift when chained; the
+localizer's poses are absolute priors, accurate to centimetres but noisy from scan to
+scan. The optimum keeps the relative geometry of ICP and the mean placement of the
+localizer. Without a localizer (odometry mode) the first scan is held fixed instead.
+
+Edges (:func:`scan_pair_edges`):
+
+- ``sequential``: each scan to the next ``sequential_neighbours`` sampled scans;
+- ``loop``: each scan to up to ``loop_max_per_scan`` nearest scans (by position) within
+  ``loop_radius_m`` that are at least ``loop_min_separation_s`` apart in time, the
+  loop closures that make the map consistent where the path returns.
+
+An edge is kept when, after coarse-to-fine planar ICP (x, y, yaw; the rover is planar,
+thesis 3.2.2), at least ``min_edge_fitness`` of the source scan's points lie within
+``inlier_m`` of the target scan. Loop edges are "uncertain" in Open3D's sense: the
+optimiser's line process may prune one that disagrees with the rest.
+
+Open3D's graph is 6-DoF; z, roll and pitch get an information of ``FIXED_INFORMATION``
+so the solution stays planar. The localizer priors are edges from a fixed anchor node
+(the map origin) to each scan node.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+import pandas as pd
+from scipy.spatial import cKDTree
+
+log = logging.getLogger(__name__)
+
+#: Information (1 / variance) of the degrees of freedom a planar rover does not have
+#: (z, roll, pitch) in the 6-DoF graph.
+FIXED_INFORMATION = 1e8
+
+#: Columns of the edge table of :func:`scan_pair_edges`.
+EDGE_COLUMNS = ["i", "j", "kind", "dx_m", "dy_m", "dyaw_rad", "fitness", "inlier_rmse_m"]
+
+
+@dataclass(frozen=True)
+class GraphParams:
+    """Parameters of the pose graph (config ``register.graph``).
+
+    Attributes
+    ----------
+    sequential_neighbours : int
+        Edges from each sampled scan to this many following sampled scans.
+    loop_radius_m : float
+        Loop-closure candidates: scans whose positions are within this, metres.
+    loop_min_separation_s : float
+        ... and at least this far apart in time, seconds.
+    loop_max_per_scan : int
+        Nearest candidates tried per scan.
+    icp_distances_m : tuple of float
+        Coarse-to-fine maximum correspondence distances of the edge ICP, metres.
+    icp_max_iterations : int
+        Per distance.
+    voxel_size_m : float
+        Voxel downsampling of the scans before the edge ICP, metres (0: none).
+    inlier_m : float
+        A source point is an inlier when its nearest target point is this close, metres.
+    min_edge_fitness : float
+        Inlier fraction an edge needs after ICP.
+    edge_sigma_m, edge_sigma_rad : float
+        Standard deviation of an ICP edge's translation (metres) and yaw (radians).
+    prior_sigma_m, prior_sigma_rad : float
+        Standard deviation of a localizer pose (metres, radians).
+    """
+
+    sequential_neighbours: int = 2
+    loop_radius_m: float = 3.0
+    loop_min_separation_s: float = 3.0
+    loop_max_per_scan: int = 4
+    icp_distances_m: tuple[float, ...] = (0.3, 0.1)
+    icp_max_iterations: int = 20
+    voxel_size_m: float = 0.05
+    inlier_m: float = 0.05
+    min_edge_fitness: float = 0.6
+    edge_sigma_m: float = 0.005
+    edge_sigma_rad: float = 0.002
+    prior_sigma_m: float = 0.05
+    prior_sigma_rad: float = 0.02
+
+    @classmethod
+    def from_mapping(cls, cfg) -> "GraphParams":
+        """From a config mapping (unknown keys raise ``KeyError``)."""
+        import dataclasses
+
+        values = dict(cfg or {})
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(values) - names)
+        if unknown:
+            raise KeyError(f"unknown register.graph keys {unknown}; expected {sorted(names)}")
+        if "icp_distances_m" in values:
+            values["icp_distances_m"] = tuple(float(v) for v in values["icp_distances_m"])
+        return cls(**values)
+
+
+def se2_between(a, b) -> tuple[float, float, float]:
+    """Planar motion (dx, dy, dyaw) from pose ``a`` to pose ``b``, in ``a``'s frame.
+
+    Poses are ``(x, y, z, yaw)`` or ``(x, y, yaw)`` sequences; metres, radians.
+    """
+    ya, yb = a[-1], b[-1]
+    c, s = math.cos(ya), math.sin(ya)
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    return c * dx + s * dy, -s * dx + c * dy, _wrap(yb - ya)
+
+
+def _wrap(a: float) -> float:
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+def _matrix(x: float, y: float, yaw: float) -> np.ndarray:
+    c, s = math.cos(yaw), math.sin(yaw)
+    m = np.eye(4)
+    m[:2, :2] = [[c, -s], [s, c]]
+    m[0, 3], m[1, 3] = x, y
+    return m
+
+
+def _information(sigma_m: float, sigma_rad: float) -> np.ndarray:
+    # Open3D orders a pose increment as (rx, ry, rz, tx, ty, tz).
+    f = FIXED_INFORMATION
+    return np.diag([f, f, 1.0 / sigma_rad**2, 1.0 / sigma_m**2, 1.0 / sigma_m**2, f])
+
+
+def candidate_pairs(
+    poses: np.ndarray, t_s: np.ndarray, params: GraphParams = GraphParams()
+) -> list[tuple[int, int, str]]:
+    """The scan pairs ``(i, j, kind)`` (i < j) that :func:`scan_pair_edges` aligns.
+
+    Parameters
+    ----------
+    poses : (N, >=2) float ndarray
+        Scan positions ``x, y`` first, metres, in time order.
+    t_s : (N,) float ndarray
+        Scan times, seconds.
+    params : GraphParams
+
+    Returns
+    -------
+    list of (int, int, str)
+        ``kind`` is ``"sequential"`` or ``"loop"``; no pair twice.
+    """
+    n = len(poses)
+    pairs: dict[tuple[int, int], str] = {}
+    for i in range(n):
+        for j in range(i + 1, min(n, i + 1 + params.sequential_neighbours)):
+            pairs[(i, j)] = "sequential"
+    if n > 1 and params.loop_max_per_scan > 0:
+        tree = cKDTree(np.asarray(poses, dtype=np.float64)[:, :2])
+        for i, j in sorted(tree.query_pairs(params.loop_radius_m)):
+            if abs(t_s[j] - t_s[i]) < params.loop_min_separation_s or (i, j) in pairs:
+                continue
+            pairs.setdefault((i, j), "loop_candidate")
+        # keep the nearest loop_max_per_scan candidates of each scan
+        loops = [(i, j) for (i, j), k in pairs.items() if k == "loop_candidate"]
+        dist = {p: float(np.hypot(*(poses[p[0], :2] - poses[p[1], :2]))) for p in loops}
+        count = np.zeros(n, dtype=np.int64)
+        for p in sorted(loops, key=lambda p: (dist[p], p)):
+            i, j = p
+            if count[i] < params.loop_max_per_scan and count[j] < params.loop_max_per_scan:
+                pairs[p] = "loop"
+                count[i] += 1
+                count[j] += 1
+            else:
+                del pairs[p]
+    return [(i, j, k) for (i, j), k in sorted(pairs.items())]
+
+
+def scan_pair_edges(
+    clouds: Sequence[np.ndarray],
+    poses: np.ndarray,
+    t_s: np.ndarray,
+    params: GraphParams = GraphParams(),
+) -> pd.DataFrame:
+    """Relative-pose constraints between overlapping scans by planar ICP.
+
+    Each pair of :func:`candidate_pairs` is aligned by coarse-to-fine point-to-point
+    ICP (:func:`floorscan.registration.icp_planar`), source scan ``j`` against target
+    scan ``i`` in ``i``'s scanner frame, starting from the relative pose of ``poses``.
+
+    Parameters
+    ----------
+    clouds : sequence of (N_k, 3) float ndarray
+        Each scan's points in its scanner frame, metres, in time order.
+    poses : (N, 4) float ndarray
+        Initial scanner poses ``x, y, z, yaw`` in the map frame (metres, radians).
+    t_s : (N,) float ndarray
+        Scan times, seconds.
+    params : GraphParams
+
+    Returns
+    -------
+    pandas.DataFrame
+        :data:`EDGE_COLUMNS`, one row per kept edge: ``dx_m, dy_m, dyaw_rad`` is the
+        pose of scan ``j`` in scan ``i``'s frame; ``fitness`` the inlier fraction and
+        ``inlier_rmse_m`` the RMS inlier distance after ICP.
+    """
+    from floorscan.registration import icp_planar, transform_points, voxel_downsample
+
+    poses = np.asarray(poses, dtype=np.float64)
+    pts = [voxel_downsample(np.asarray(c, dtype=np.float64), params.voxel_size_m) for c in clouds]
+    trees: dict[int, cKDTree] = {}
+    rows = []
+    for i, j, kind in candidate_pairs(poses, t_s, params):
+        if len(pts[i]) < 3 or len(pts[j]) < 3:
+            continue
+        if i not in trees:
+            trees[i] = cKDTree(pts[i])
+        rel = se2_between(poses[i], poses[j])
+        pose = (rel[0], rel[1], 0.0, rel[2])
+        ok = True
+        for dist in params.icp_distances_m:
+            pose, n_corr = icp_planar(
+                pts[j], pts[i], trees[i], pose, dist, max_iterations=params.icp_max_iterations
+            )
+            if n_corr == 0:
+                ok = False
+                break
+        if not ok:
+            continue
+        src = transform_points(pts[j], pose[0], pose[1], 0.0, pose[3])
+        d, _ = trees[i].query(src, distance_upper_bound=params.inlier_m)
+        inl = np.isfinite(d)
+        fitness = float(inl.mean())
+        if fitness < params.min_edge_fitness:
+            continue
+        rmse = float(np.sqrt(np.mean(d[inl] ** 2)))
+        rows.append((i, j, kind, pose[0], pose[1], pose[3], fitness, rmse))
+    return pd.DataFrame(rows, columns=EDGE_COLUMNS).astype(
+        {"i": np.int64, "j": np.int64, "kind": str, "dx_m": float, "dy_m": float,
+         "dyaw_rad": float, "fitness": float, "inlier_rmse_m": float}
+    )
+
+
+def optimize_pose_graph(
+    poses: np.ndarray,
+    edges: pd.DataFrame,
+    priors: np.ndarray | None = None,
+    params: GraphParams = GraphParams(),
+) -> tuple[np.ndarray, dict]:
+    """Optimise the scan poses of a pose graph (Open3D, Levenberg-Marquardt).
+
+    Parameters
+    ----------
+    poses : (N, 4) float ndarray
+        Initial poses ``x, y, z, yaw`` (metres, radians); z is passed through.
+    edges : pandas.DataFrame
+        :func:`scan_pair_edges` output.
+    priors : (N, 4) float ndarray, optional
+        Absolute poses (the localizer's); each is a constraint with
+        ``prior_sigma_m`` / ``prior_sigma_rad``. Without priors the first scan is
+        held at its initial pose (odometry mode).
+    params : GraphParams
+
+    Returns
+    -------
+    poses : (N, 4) float64 ndarray
+        Optimised poses.
+    info : dict
+        ``n_edges``, ``n_sequential``, ``n_loop``, ``n_pruned`` (loop edges the line
+        process switched off) and ``n_isolated`` (scans without any edge).
+
+    Raises
+    ------
+    ValueError
+        When the shapes disagree or an edge names a scan out of range.
+    """
+    import open3d as o3d
+
+    reg = o3d.pipelines.registration
+    poses = np.asarray(poses, dtype=np.float64)
+    n = len(poses)
+    if poses.ndim != 2 or poses.shape[1] != 4:
+        raise ValueError(f"poses: expected shape (N, 4), got {poses.shape}")
+    if priors is not None and np.shape(priors) != poses.shape:
+        raise ValueError(f"priors: expected shape {poses.shape}, got {np.shape(priors)}")
+    if len(edges) and (edges["i"].min() < 0 or edges["j"].max() >= n):
+        raise ValueError(f"edges name scans outside 0..{n - 1}")
+    info = {
+        "n_edges": int(len(edges)),
+        "n_sequential": int((edges["kind"] == "sequential").sum()) if len(edges) else 0,
+        "n_loop": int((edges["kind"] == "loop").sum()) if len(edges) else 0,
+        "n_pruned": 0,
+        "n_isolated": int(n - len(np.unique(np.r_[edges["i"], edges["j"]]))) if len(edges) else n,
+    }
+    if n == 0:
+        return poses.copy(), info
+    graph = reg.PoseGraph()
+    anchor = priors is not None
+    offset = 1 if anchor else 0
+    if anchor:
+        graph.nodes.append(reg.PoseGraphNode(np.eye(4)))
+    for p in poses:
+        graph.nodes.append(reg.PoseGraphNode(_matrix(p[0], p[1], p[3])))
+    if anchor:
+        prior_info = _information(params.prior_sigma_m, params.prior_sigma_rad)
+        for k, p in enumerate(np.asarray(priors, dtype=np.float64)):
+            graph.edges.append(reg.PoseGraphEdge(k + 1, 0, _matrix(p[0], p[1], p[3]), prior_info, uncertain=False))
+    edge_info = _information(params.edge_sigma_m, params.edge_sigma_rad)
+    for e in edges.itertuples(index=False):
+        # Open3D: the transformation takes the source node's frame (j) into the target's (i)
+        graph.edges.append(
+            reg.PoseGraphEdge(
+                int(e.j) + offset, int(e.i) + offset, _matrix(e.dx_m, e.dy_m, e.dyaw_rad),
+                edge_info, uncertain=e.kind == "loop",
+            )
+        )
+    n_before = len(graph.edges)
+    option = reg.GlobalOptimizationOption(
+        max_correspondence_distance=params.inlier_m,
+        edge_prune_threshold=0.25,
+        preference_loop_closure=1.0,
+        reference_node=0,
+    )
+    level = o3d.utility.get_verbosity_level()
+    o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
+    try:
+        reg.global_optimization(
+            graph, reg.GlobalOptimizationLevenbergMarquardt(),
+            reg.GlobalOptimizationConvergenceCriteria(), option,
+        )
+    finally:
+        o3d.utility.set_verbosity_level(level)
+    info["n_pruned"] = int(n_before - len(graph.edges))
+    out = poses.copy()
+    for k in range(n):
+        m = np.asarray(graph.nodes[k + offset].pose)
+        out[k, 0], out[k, 1] = m[0, 3], m[1, 3]
+        out[k, 3] = math.atan2(m[1, 0], m[0, 0])
+    return out, info
