@@ -759,6 +759,19 @@ def floorplan_wall_count(path) -> int:
     return sum(p.get("kind", "wall") in ("axis", "wall") for p in props)
 
 
+def floorplan_faces(path) -> np.ndarray:
+    """The merged faces (``kind`` "face") of a floor plan ``.geojson``, ``(F, 4)``
+    metres; empty when the plan has none (a plan without walls is valid)."""
+    from floorscan.io import InputError
+
+    try:
+        return read_wall_faces(path, kind="face")
+    except InputError as exc:
+        if "no LineString feature" in str(exc):
+            return np.zeros((0, 4))
+        raise
+
+
 def k_scans(k_label: str, n_kept: int) -> int:
     """Number of scans behind ``k{k_label}``: ``min(k, n_kept)``, ``n_kept`` for "all"."""
     if str(k_label) == "all":
@@ -782,7 +795,11 @@ def score_dataset(
     runs : list of dict
         One per wall file, with keys ``ordering``, ``extractor``, ``k`` (label: "5" or
         "all"), ``walls`` (DataFrame with x0, y0, x1, y1), ``n_kept`` (scans the
-        ordering ranks, i.e. kept scans) and ``n_floorplan_walls`` (int or None).
+        ordering ranks, i.e. kept scans) and ``n_floorplan_walls`` (int or None);
+        optionally ``floorplan_faces``, the merged faces of the run's floor plan
+        (``(F, 4)`` segments), scored with the same tolerance metrics into the
+        ``plan_precision_<tau>``, ``plan_recall_<tau>`` and ``plan_f1_<tau>`` columns
+        (one wall per wall: the product a user opens, not the per-scan segments).
     references : dict
         ``{extractor: (M, 4) segments}``: what each extractor's walls are scored
         against. On synthetic datasets every extractor maps to the same ground truth
@@ -860,6 +877,12 @@ def score_dataset(
                  else np.full(len(all_samples[ext]), np.inf))
             for tau in cfg["taus_m"]:
                 m[f"recall_all_{tau_label(tau)}"] = float(np.mean(d <= tau)) if len(d) else math.nan
+        plan = run.get("floorplan_faces")
+        if plan is not None:
+            pm = tolerance_metrics(plan, refs[ext], cfg["taus_m"], cfg["sample_step_m"], ref_samples[ext])
+            for tau in cfg["taus_m"]:
+                for what in ("precision", "recall", "f1"):
+                    m[f"plan_{what}_{tau_label(tau)}"] = pm[f"{what}_{tau_label(tau)}"]
         n_kept = int(run["n_kept"])
         n_scans = k_scans(run["k"], n_kept)
         nfp = run.get("n_floorplan_walls")

@@ -31,6 +31,7 @@ with stage_log(snakemake) as log:  # noqa: F821
             "walls": read_table(wp),
             "n_kept": n_kept[o],
             "n_floorplan_walls": metrics.floorplan_wall_count(fp),
+            "floorplan_faces": metrics.floorplan_faces(fp),
         }
         for (o, e, k), wp, fp in zip(smk.params.runs, smk.input.walls, smk.input.floorplans)
     ]

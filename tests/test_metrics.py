@@ -366,3 +366,23 @@ def test_load_recall_references(tmp_path):
     np.testing.assert_allclose(refs["cluster_ransac"], [[0, 0, 4, 0]])
     assert M.load_recall_references(M.GROUND_TRUTH, ["ransac"], p, recall_kind="face") is None
     assert M.load_recall_references(M.REFERENCE, ["ransac"], p) is None
+
+
+def test_floorplan_faces_are_scored_too(tmp_path):
+    gt = np.array([[0, 0, 10, 0]], float)
+    walls = pd.DataFrame([[0, 0.02, 10, 0.02], [0, -0.08, 10, -0.08]], columns=["x0", "y0", "x1", "y1"])
+    plan = np.array([[0, 0.01, 6, 0.01]])  # merged: 6 m of the face, 1 cm off
+    runs = [{"ordering": "random", "extractor": "ransac", "k": "all", "walls": walls,
+             "n_kept": 3, "n_floorplan_walls": 1, "floorplan_faces": plan}]
+    cfg = {"cell_m": 0.05, "wall_width_m": 0.1, "margin_m": 1.0, "taus_m": [0.05],
+           "sample_step_m": 0.01}
+    r = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg).iloc[0]
+    assert r["precision_5cm"] == pytest.approx(0.5)  # the segment 8 cm off is not within 5 cm
+    assert r["plan_precision_5cm"] == pytest.approx(1.0)
+    assert r["plan_recall_5cm"] == pytest.approx(6.05 / 10, abs=2e-3)
+    doc = {"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {"kind": "axis", "wall_id": 0},
+         "geometry": {"type": "LineString", "coordinates": [[0, 0], [1, 0]]}}]}
+    p = tmp_path / "plan.geojson"
+    p.write_text(json.dumps(doc))
+    assert M.floorplan_faces(p).shape == (0, 4)
