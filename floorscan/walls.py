@@ -100,6 +100,16 @@ class RansacParams:
     max_gap_m : float
         A line is split into segments where consecutive inliers (along the line)
         are further apart than this, metres.
+    min_coverage : float
+        A segment is kept when its inliers cover at least this fraction of its length:
+        gaps between consecutive inliers wider than ``coverage_gap_m`` count as
+        uncovered. Rejects "walls" through a few isolated objects, e.g. the legs of a
+        table or chairs (clutter, thesis 2.3), which RANSAC lines up as readily as a
+        wall; a wall is covered nearly everywhere it is seen. Our rule; 0 disables it.
+    coverage_gap_m : float
+        A gap between consecutive inliers is uncovered when wider than this and than
+        3 times both neighbouring gaps, metres: a jump, as between table legs, not the
+        spacing that grows smoothly along a wall seen at a grazing angle.
     """
 
     threshold_m: float = 0.03
@@ -110,6 +120,8 @@ class RansacParams:
     min_inliers: int = 15
     min_length_m: float = 0.3
     max_gap_m: float = 0.5
+    min_coverage: float = 0.6
+    coverage_gap_m: float = 0.10
 
 
 @dataclass(frozen=True)
@@ -330,12 +342,25 @@ def _best_line(points: np.ndarray, rng: np.random.Generator, params: RansacParam
     return mask, c, direction
 
 
+def _uncovered_length(t: np.ndarray, min_gap: float) -> float:
+    """Summed length of the jumps between sorted positions ``t`` (metres): gaps wider
+    than ``min_gap`` and 3 times both neighbouring gaps (see ``RansacParams``)."""
+    g = np.diff(t)
+    if len(g) == 0:
+        return 0.0
+    left = np.r_[0.0, g[:-1]]
+    right = np.r_[g[1:], 0.0]
+    jump = (g > min_gap) & (g > 3.0 * np.maximum(left, right))
+    return float(g[jump].sum())
+
+
 def _segments_on_line(points: np.ndarray, direction: np.ndarray, params: RansacParams) -> list[tuple]:
     """Split the inliers of a line at gaps wider than ``max_gap_m`` and fit each piece.
 
     Each piece with at least ``min_inliers`` points is refit by total least squares;
     its ends are the extent of its points along the refit line; it is kept when at
-    least ``min_length_m`` long. Returns tuples (x0, y0, x1, y1, n_inliers, rmse_m).
+    least ``min_length_m`` long and covered by its inliers over ``min_coverage`` of
+    its length. Returns tuples (x0, y0, x1, y1, n_inliers, rmse_m).
     """
     t = points @ direction
     order = np.argsort(t, kind="stable")
@@ -353,6 +378,10 @@ def _segments_on_line(points: np.ndarray, direction: np.ndarray, params: RansacP
         lo, hi = float(u.min()), float(u.max())
         if hi - lo < params.min_length_m:
             continue
+        if params.min_coverage > 0:
+            uncovered = _uncovered_length(np.sort(u), params.coverage_gap_m)
+            if 1.0 - uncovered / (hi - lo) < params.min_coverage:
+                continue
         resid = (p - c) @ np.array([-d[1], d[0]])
         a, b = c + lo * d, c + hi * d
         out.append((a[0], a[1], b[0], b[1], len(piece), float(np.sqrt(np.mean(resid**2)))))

@@ -269,3 +269,40 @@ def test_schema_defaults_agree_with_the_parameter_classes():
     assert schema["height_band_m"]["default"] == [ScanParams.min_height_m, ScanParams.max_height_m]
     assert schema["planar_tolerance_m"]["default"] == ScanParams.planar_tolerance_m
     assert schema["grid_m"]["default"] == ScanParams.grid_m
+
+
+def _legs(center, size, leg=0.05):
+    """Four square legs of a table (as wall segments: their outlines)."""
+    cx, cy = center
+    sx, sy = size[0] / 2 - leg / 2, size[1] / 2 - leg / 2
+    out = []
+    for x in (cx - sx, cx + sx):
+        for y in (cy - sy, cy + sy):
+            h = leg / 2
+            out += [(x - h, y - h, x + h, y - h), (x + h, y - h, x + h, y + h),
+                    (x + h, y + h, x - h, y + h), (x - h, y + h, x - h, y - h)]
+    return out
+
+
+@pytest.mark.parametrize("extractor", ["ransac", "cluster_ransac"])
+def test_table_legs_give_no_wall_but_the_room_stays(extractor):
+    # a 0.6 x 0.45 m table (a chair) in front of the scanner: its legs line up in pairs
+    walls = ROOM + _legs((1.5, 1.5), (0.6, 0.45))
+    pts = raycast(walls, (1.5, 2.2), n_rays=1440, seed=2, noise=0.005)
+    df = extract(extractor, pts, seed=3)
+    for wall in ROOM:
+        assert best_match(df, wall)[1] < 0.01
+    # every segment lies on a room wall: none through the legs
+    assert len(df) == 4
+    # without the coverage rule a line through the legs appears
+    off = extract(extractor, pts, seed=3, params=RansacParams(min_coverage=0.0))
+    assert len(off) > 4
+
+
+def test_a_wall_seen_at_a_grazing_angle_is_covered():
+    # 1 degree beams along a 10 m wall 1 m away: spacing grows from 2 cm to 1.7 m
+    pts = raycast([(0.0, 1.0, 10.0, 1.0)], (0.0, 0.0), n_rays=360, noise=0.002)
+    pts = pts[pts[:, 0] <= 6.0]  # spacing up to ~0.6 m at the far end
+    df = ransac(pts, RansacParams(min_inliers=5, max_gap_m=1.0), seed=0)
+    assert len(df) == 1
+    assert df["x1"].max() - df["x0"].min() > 5.0
