@@ -17,9 +17,9 @@ Edges (:func:`scan_pair_edges`):
   ``loop_radius_m`` that are at least ``loop_min_separation_s`` apart in time, the
   loop closures that make the map consistent where the path returns.
 
-An edge is kept when, after coarse-to-fine planar ICP (x, y, yaw; the rover is planar,
-thesis 3.2.2), at least ``min_edge_fitness`` of the source scan's points lie within
-``inlier_m`` of the target scan. Loop edges are "uncertain" in Open3D's sense: the
+An edge enters the graph when, after coarse-to-fine planar ICP (x, y, yaw; the rover is
+planar, thesis 3.2.2), at least ``min_edge_fitness`` of the source scan's points lie
+within ``inlier_m`` of the target scan. Loop edges are "uncertain" in Open3D's sense: the
 optimiser's line process may prune one that disagrees with the rest.
 
 Open3D's graph is 6-DoF; z, roll and pitch get an information of ``FIXED_INFORMATION``
@@ -205,9 +205,11 @@ def scan_pair_edges(
     Returns
     -------
     pandas.DataFrame
-        :data:`EDGE_COLUMNS`, one row per kept edge: ``dx_m, dy_m, dyaw_rad`` is the
+        :data:`EDGE_COLUMNS`, one row per pair tried: ``dx_m, dy_m, dyaw_rad`` is the
         pose of scan ``j`` in scan ``i``'s frame; ``fitness`` the inlier fraction and
-        ``inlier_rmse_m`` the RMS inlier distance after ICP.
+        ``inlier_rmse_m`` the RMS inlier distance after ICP (fitness 0 and the initial
+        relative pose when ICP found no correspondences). :func:`optimize_pose_graph`
+        uses the pairs with ``fitness >= min_edge_fitness``.
     """
     from floorscan.registration import icp_planar, transform_points, voxel_downsample
 
@@ -231,14 +233,13 @@ def scan_pair_edges(
                 ok = False
                 break
         if not ok:
+            rows.append((i, j, kind, rel[0], rel[1], rel[2], 0.0, math.nan))
             continue
         src = transform_points(pts[j], pose[0], pose[1], 0.0, pose[3])
         d, _ = trees[i].query(src, distance_upper_bound=params.inlier_m)
         inl = np.isfinite(d)
         fitness = float(inl.mean())
-        if fitness < params.min_edge_fitness:
-            continue
-        rmse = float(np.sqrt(np.mean(d[inl] ** 2)))
+        rmse = float(np.sqrt(np.mean(d[inl] ** 2))) if inl.any() else math.nan
         rows.append((i, j, kind, pose[0], pose[1], pose[3], fitness, rmse))
     return pd.DataFrame(rows, columns=EDGE_COLUMNS).astype(
         {"i": np.int64, "j": np.int64, "kind": str, "dx_m": float, "dy_m": float,
@@ -259,7 +260,7 @@ def optimize_pose_graph(
     poses : (N, 4) float ndarray
         Initial poses ``x, y, z, yaw`` (metres, radians); z is passed through.
     edges : pandas.DataFrame
-        :func:`scan_pair_edges` output.
+        :func:`scan_pair_edges` output; pairs below ``min_edge_fitness`` are ignored.
     priors : (N, 4) float ndarray, optional
         Absolute poses (the localizer's); each is a constraint with
         ``prior_sigma_m`` / ``prior_sigma_rad``. Without priors the first scan is
@@ -290,6 +291,7 @@ def optimize_pose_graph(
         raise ValueError(f"priors: expected shape {poses.shape}, got {np.shape(priors)}")
     if len(edges) and (edges["i"].min() < 0 or edges["j"].max() >= n):
         raise ValueError(f"edges name scans outside 0..{n - 1}")
+    edges = edges[edges["fitness"] >= params.min_edge_fitness]
     info = {
         "n_edges": int(len(edges)),
         "n_sequential": int((edges["kind"] == "sequential").sum()) if len(edges) else 0,
@@ -342,3 +344,55 @@ def optimize_pose_graph(
         out[k, 0], out[k, 1] = m[0, 3], m[1, 3]
         out[k, 3] = math.atan2(m[1, 0], m[0, 0])
     return out, info
+
+
+def refine_poses(
+    clouds: Sequence[np.ndarray],
+    initial: np.ndarray,
+    t_s: np.ndarray,
+    priors: np.ndarray | None,
+    params: GraphParams = GraphParams(),
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+    """Pose-graph registration of a sequence of scans: edges, then optimisation.
+
+    Parameters
+    ----------
+    clouds : sequence of (N_k, 3) float ndarray
+        Scanner-frame points, metres, in time order.
+    initial : (N, 4) float ndarray
+        Initial poses ``x, y, z, yaw`` (metres, radians): the localizer's, or an
+        odometry chain.
+    t_s : (N,) float ndarray
+        Scan times, seconds.
+    priors : (N, 4) float ndarray or None
+        The localizer's poses (None in odometry mode: the first scan is held).
+    params : GraphParams
+
+    Returns
+    -------
+    poses : (N, 4) float64 ndarray
+        Optimised poses.
+    fitness : (N,) float64 ndarray
+        Mean ICP fitness of each scan over the pairs it was tried in (NaN: none).
+    inlier_rmse_m : (N,) float64 ndarray
+        Mean inlier RMSE over its edges in the graph, metres (NaN: none).
+    info : dict
+        :func:`optimize_pose_graph`'s, plus ``n_pairs`` (pairs tried).
+    """
+    initial = np.asarray(initial, dtype=np.float64)
+    n = len(initial)
+    edges = scan_pair_edges(clouds, initial, t_s, params)
+    poses, info = optimize_pose_graph(initial, edges, priors, params)
+    info["n_pairs"] = int(len(edges))
+    both = np.r_[edges["i"].to_numpy(), edges["j"].to_numpy()]
+    fit = np.r_[edges["fitness"].to_numpy(), edges["fitness"].to_numpy()]
+    cnt = np.bincount(both, minlength=n)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        fitness = np.bincount(both, weights=fit, minlength=n) / cnt
+    good = edges["fitness"].to_numpy() >= params.min_edge_fitness
+    gi = np.r_[edges["i"].to_numpy()[good], edges["j"].to_numpy()[good]]
+    gr = np.r_[edges["inlier_rmse_m"].to_numpy()[good], edges["inlier_rmse_m"].to_numpy()[good]]
+    gc = np.bincount(gi, minlength=n)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rmse = np.bincount(gi, weights=gr, minlength=n) / gc
+    return poses, fitness, rmse, info
