@@ -1,14 +1,23 @@
-"""Stage `hulls`: cluster hulls and convex hulls of every kept scan (thesis Algorithm 2)."""
+"""Stage `hulls`, one shard: cluster hulls and convex hulls of the kept scans of a scan
+range (thesis Algorithm 2). scripts/hulls_merge.py concatenates the shards."""
+import json
+
 from floorscan.hulls import HullParams, compute_hulls, to_table
-from floorscan.io import read_table, write_table
+from floorscan.io import write_table
+from floorscan.shards import parse_shard_label, read_scan_range
 from floorscan.workflow import stage_log
 
 with stage_log(snakemake) as log:
     params = HullParams.from_config(snakemake.params.cfg)
+    shard = snakemake.wildcards.shard
+    start, stop = parse_shard_label(shard)
     cluster, convex, counts = compute_hulls(
-        read_table(snakemake.input.registered), read_table(snakemake.input.registration), params
+        read_scan_range(snakemake.input.registered, start, stop),
+        read_scan_range(snakemake.input.registration, start, stop),
+        params,
     )
-    log.info("hulls: %s (params %s)", counts, params.as_dict())
-    meta = {"stage": "hulls", "dataset": snakemake.wildcards.dataset, "units": "metres, m2"}
+    log.info("hulls of %s: %s (params %s)", shard, counts, params.as_dict())
+    meta = {"stage": "hulls", "dataset": snakemake.wildcards.dataset, "units": "metres, m2",
+            "shard": shard, "counts": json.dumps(counts)}
     write_table(to_table(cluster), snakemake.output.hulls, metadata=meta)
     write_table(to_table(convex), snakemake.output.convex, metadata=meta)

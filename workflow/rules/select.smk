@@ -1,26 +1,94 @@
 # Coverage hulls and scan orderings (issue 5; thesis section 3.3, Algorithms 1 and 2).
+import json
+from pathlib import Path
+
 stage_schema_check("hulls", "../schemas/hulls.schema.yaml")
 stage_schema_check("select", "../schemas/select.schema.yaml")
+
+# Shard labels of floorscan.shards.shard_label: scans_<first scan id>-<last scan id>.
+SHARD_LABEL = r"scans_\d+-\d+"
 
 # Must match floorscan.selection.ORDERINGS (kept literal: no package import at parse time).
 SELECT_ORDERINGS = ["cluster_hull", "convex_hull", "random", "sequential", "motion_filter"]
 
 
-rule hulls:
+def hulls_config(wildcards):
+    """The hulls section without shard_scans: how the scans are split into jobs changes
+    no hull, so it must not rerun the shards (and HullParams does not know it)."""
+    return {k: v for k, v in stage_config("hulls")(wildcards).items() if k != "shard_scans"}
+
+
+def hulls_shard_scans(wildcards):
+    return stage_config("hulls")(wildcards)["shard_scans"]
+
+
+def hulls_shards(wildcards):
+    """Inputs of the merge: the plan and the shard files it lists (after the checkpoint)."""
+    plan = checkpoints.hulls_plan.get(dataset=wildcards.dataset).output.plan
+    labels = [s["label"] for s in json.loads(Path(plan).read_text())["shards"]]
+    shard = "results/{dataset}/shards/hulls/{shard}/{name}.parquet"
+    return {
+        "plan": plan,
+        "hulls": [shard.format(dataset=wildcards.dataset, shard=s, name="hulls") for s in labels],
+        "convex": [shard.format(dataset=wildcards.dataset, shard=s, name="convex_hulls") for s in labels],
+    }
+
+
+# Sharding (issue 8): the hulls of a scan depend only on the scan and (seed, scan_id), so
+# the kept scans are split by scan range into shards of <= hulls.shard_scans scans, one
+# job each, concatenated in scan order by `hulls` into the unsharded tables. The number of
+# shards is known only after registration: a checkpoint writes the plan. Plan and merge
+# take well under a second, so on a cluster they run on the submitting host (localrule).
+checkpoint hulls_plan:
+    localrule: True
     input:
         registered="results/{dataset}/registered.parquet",
         registration="results/{dataset}/registration.parquet",
     output:
+        plan="results/{dataset}/shards/hulls/plan.json",
+    params:
+        stage="hulls",
+        shard_scans=hulls_shard_scans,
+    log:
+        log_path("hulls_plan"),
+    benchmark:
+        benchmark_path("hulls_plan")
+    script:
+        "../../scripts/scan_shards.py"
+
+
+rule hulls_shard:
+    input:
+        registered="results/{dataset}/registered.parquet",
+        registration="results/{dataset}/registration.parquet",
+    output:
+        hulls="results/{dataset}/shards/hulls/{shard}/hulls.parquet",
+        convex="results/{dataset}/shards/hulls/{shard}/convex_hulls.parquet",
+    wildcard_constraints:
+        shard=SHARD_LABEL,
+    params:
+        cfg=hulls_config,
+    log:
+        "results/{dataset}/logs/hulls_shard_{shard}.log",
+    benchmark:
+        "results/{dataset}/benchmarks/hulls_shard_{shard}.tsv"
+    script:
+        "../../scripts/hulls.py"
+
+
+rule hulls:
+    localrule: True
+    input:
+        unpack(hulls_shards),
+    output:
         hulls="results/{dataset}/hulls.parquet",
         convex="results/{dataset}/convex_hulls.parquet",
-    params:
-        cfg=stage_config("hulls"),
     log:
         log_path("hulls"),
     benchmark:
         benchmark_path("hulls")
     script:
-        "../../scripts/hulls.py"
+        "../../scripts/hulls_merge.py"
 
 
 rule select:
@@ -70,7 +138,7 @@ rule selection_figures:
         ),
     params:
         cfg=stage_config("select"),
-        hulls_cfg=stage_config("hulls"),
+        hulls_cfg=hulls_config,
     log:
         log_path("selection_figures"),
     benchmark:

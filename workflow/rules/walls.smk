@@ -1,16 +1,21 @@
 # Wall extraction and merged floor plans (issue 6; thesis sections 3.4, 5.3, Algorithm 4).
 #
 #   scan_walls: every kept scan once per extractor (walls of a scan depend only on the
-#               scan, the extractor parameters and the seed, never on ordering or k)
+#               scan, the extractor parameters and the seed, never on ordering or k),
+#               in shards of scans (scan_walls_plan, scan_walls_shard) merged in scan order
 #   walls:      the wall segments of the first k scans of an ordering (a filter)
 #   floorplan:  merged walls of one (ordering, extractor, k) as GeoJSON, SVG, DXF, IFC
+import json
 import re
+from pathlib import Path
 
 stage_schema_check("walls", "../schemas/walls.schema.yaml")
 stage_schema_check("floorplan", "../schemas/floorplan.schema.yaml")
 
 WALLS_EXTRACT_KEYS = ("seed", "height_band_m", "planar_tolerance_m", "grid_m", "ransac", "cluster_ransac")
 FLOORPLAN_FORMATS = ("geojson", "svg", "dxf", "ifc")
+# Shard labels of floorscan.shards.shard_label: scans_<first scan id>-<last scan id>.
+WALLS_SHARD_LABEL = r"scans_\d+-\d+"
 
 
 def _alternatives(values):
@@ -49,22 +54,80 @@ WALLS_CONSTRAINTS = dict(
 )
 
 
-rule scan_walls:
+def walls_shard_scans(wildcards):
+    return stage_config("walls")(wildcards)["shard_scans"]
+
+
+def scan_walls_shards(wildcards):
+    """Inputs of the merge: the plan and the extractor's shard files it lists."""
+    plan = checkpoints.scan_walls_plan.get(dataset=wildcards.dataset).output.plan
+    labels = [s["label"] for s in json.loads(Path(plan).read_text())["shards"]]
+    shard = "results/{dataset}/shards/walls/{extractor}/{shard}/{name}.parquet"
+    files = {
+        name: [shard.format(dataset=wildcards.dataset, extractor=wildcards.extractor, shard=s, name=name) for s in labels]
+        for name in ("per_scan", "scan_status")
+    }
+    return {"plan": plan, "walls": files["per_scan"], "status": files["scan_status"]}
+
+
+# Sharding (issue 8): the walls of a scan depend only on the scan and (seed, scan_id), so
+# the scans are split by scan range into shards of <= walls.shard_scans kept scans, one
+# job each, concatenated in scan order by `scan_walls` into the unsharded tables. The
+# number of shards is known only after registration: a checkpoint writes the plan (one
+# plan for every extractor). Plan and merge take well under a second, so on a cluster
+# they run on the submitting host (localrule).
+checkpoint scan_walls_plan:
+    localrule: True
+    input:
+        registered="results/{dataset}/registered.parquet",
+        registration="results/{dataset}/registration.parquet",
+    output:
+        plan="results/{dataset}/shards/walls/plan.json",
+    params:
+        stage="scan_walls",
+        shard_scans=walls_shard_scans,
+    log:
+        log_path("scan_walls_plan"),
+    benchmark:
+        benchmark_path("scan_walls_plan")
+    script:
+        "../../scripts/scan_shards.py"
+
+
+rule scan_walls_shard:
     input:
         points="results/{dataset}/registered.parquet",
+    output:
+        walls="results/{dataset}/shards/walls/{extractor}/{shard}/per_scan.parquet",
+        status="results/{dataset}/shards/walls/{extractor}/{shard}/scan_status.parquet",
+    wildcard_constraints:
+        extractor=WALLS_CONSTRAINTS["extractor"],
+        shard=WALLS_SHARD_LABEL,
+    params:
+        cfg=walls_extract_config,
+    log:
+        "results/{dataset}/logs/scan_walls_shard_{extractor}_{shard}.log",
+    benchmark:
+        "results/{dataset}/benchmarks/scan_walls_shard_{extractor}_{shard}.tsv"
+    script:
+        "../../scripts/scan_walls.py"
+
+
+rule scan_walls:
+    localrule: True
+    input:
+        unpack(scan_walls_shards),
     output:
         walls="results/{dataset}/walls/{extractor}/per_scan.parquet",
         status="results/{dataset}/walls/{extractor}/scan_status.parquet",
     wildcard_constraints:
         extractor=WALLS_CONSTRAINTS["extractor"],
-    params:
-        cfg=walls_extract_config,
     log:
         "results/{dataset}/logs/scan_walls_{extractor}.log",
     benchmark:
         "results/{dataset}/benchmarks/scan_walls_{extractor}.tsv"
     script:
-        "../../scripts/scan_walls.py"
+        "../../scripts/scan_walls_merge.py"
 
 
 def walls_tables(ordering="{ordering}", extractor="{extractor}"):

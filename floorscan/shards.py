@@ -1,0 +1,261 @@
+"""Shards: the per-scan stages split by scan range into independent jobs.
+
+The hulls of a scan (:mod:`floorscan.hulls`) and its wall segments
+(:mod:`floorscan.walls`) depend only on that scan's points, the stage parameters and
+a random generator seeded with ``(seed, scan_id)``, never on the other scans a job
+processes. So the stages ``hulls`` and ``scan_walls`` can run on contiguous scan id
+ranges (shards) in separate jobs, in parallel on local cores or cluster nodes, and
+the shard tables concatenated in scan order equal the table of one unsharded job.
+
+The number of shards depends on the number of kept scans, which is known only after
+registration, so the workflow computes a shard plan in a Snakemake checkpoint
+(:func:`plan_shards`): the scan id axis ``[first, last]`` is cut into contiguous,
+inclusive ranges holding at most ``shard_scans`` kept scans each, as evenly as
+possible. The ranges cover every scan id (kept or not) exactly once, so each point
+of ``registered.parquet`` falls in exactly one shard. A shard's range is in its file
+name (:func:`shard_label`), so a shard job needs only its inputs and its wildcards.
+
+Why a checkpoint on kept scans rather than fixed ranges of scan ids: the kept scans
+are spread unevenly over the recording (hallways keeps 1017 of 5081 scans), so fixed
+id ranges would give unequal jobs, and a fixed number of shards would split small
+recordings into jobs that cost more to start than to run.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+from pathlib import Path
+from typing import Iterable, Sequence
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from floorscan.io import InputError
+
+_LABEL = re.compile(r"^scans_(\d+)-(\d+)$")
+
+
+def shard_ranges(
+    kept_ids: Iterable[int], shard_scans: int, first: int | None = None, last: int | None = None
+) -> list[tuple[int, int]]:
+    """Cut the scan id axis into ranges of at most ``shard_scans`` kept scans each.
+
+    Parameters
+    ----------
+    kept_ids : iterable of int
+        Ids of the kept scans (any order; duplicates are counted once).
+    shard_scans : int
+        Kept scans per shard at most; 0 means no sharding (one range).
+    first, last : int, optional
+        The ranges cover ``[first, last]`` (inclusive), e.g. every scan id of the
+        recording; default the smallest and largest kept id.
+
+    Returns
+    -------
+    list of (start, stop) int tuples
+        Inclusive, contiguous, ascending: the first starts at ``first``, the last
+        stops at ``last`` and each starts one after the previous one's stop. Their
+        number is ``ceil(K / shard_scans)`` for K kept scans, and the kept scans are
+        split as evenly as possible (sizes differ by at most one, larger first). A
+        range starts at a kept scan (except the first, which starts at ``first``).
+
+    Raises
+    ------
+    ValueError
+        When there is no kept scan, ``shard_scans`` is negative, or ``[first, last]``
+        does not contain every kept id.
+    """
+    kept = np.unique(np.asarray(list(kept_ids), dtype=np.int64))
+    if int(shard_scans) < 0:
+        raise ValueError(f"shard_scans must be >= 0 (0 = one shard), got {shard_scans}")
+    if len(kept) == 0:
+        raise ValueError("no kept scans to shard: every scan was dropped by registration")
+    first = int(kept[0]) if first is None else int(first)
+    last = int(kept[-1]) if last is None else int(last)
+    if first > kept[0] or last < kept[-1]:
+        raise ValueError(
+            f"scan range [{first}, {last}] does not contain every kept scan "
+            f"(kept ids {int(kept[0])}..{int(kept[-1])})"
+        )
+    n = 1 if int(shard_scans) == 0 else math.ceil(len(kept) / int(shard_scans))
+    chunks = np.array_split(kept, n)
+    starts = [first] + [int(c[0]) for c in chunks[1:]]
+    stops = [s - 1 for s in starts[1:]] + [last]
+    return list(zip(starts, stops))
+
+
+def shard_label(start: int, stop: int) -> str:
+    """Name of the shard of scans ``start..stop`` (inclusive): ``scans_000120-000239``."""
+    if not 0 <= int(start) <= int(stop):
+        raise ValueError(f"a shard needs 0 <= start <= stop, got {start}, {stop}")
+    return f"scans_{int(start):06d}-{int(stop):06d}"
+
+
+def parse_shard_label(label: str) -> tuple[int, int]:
+    """``"scans_000120-000239"`` -> ``(120, 239)``; ``ValueError`` for anything else."""
+    m = _LABEL.match(str(label))
+    if not m or int(m.group(1)) > int(m.group(2)):
+        raise ValueError(f"not a shard label scans_<start>-<stop> with start <= stop: {label!r}")
+    return int(m.group(1)), int(m.group(2))
+
+
+def plan_shards(
+    registration: pd.DataFrame,
+    point_scan_ids: np.ndarray | Sequence[int] = (),
+    shard_scans: int = 0,
+    path: str = "registration.parquet",
+) -> dict:
+    """The shard plan of a per-scan stage (the workflow's checkpoint output).
+
+    Parameters
+    ----------
+    registration : DataFrame
+        ``registration.parquet``: a row per scan with ``scan_id`` and ``kept`` (and
+        ``reason``, quoted when no scan is kept).
+    point_scan_ids : (P,) int array_like
+        ``scan_id`` of the points of ``registered.parquet``: the ranges also cover
+        these, so no point falls outside every shard.
+    shard_scans : int
+        Kept scans per shard at most; 0 = one shard.
+    path : str
+        Name of the registration file in error messages.
+
+    Returns
+    -------
+    dict
+        ``shard_scans``, ``n_kept``, ``first``, ``last`` and ``shards``: a list of
+        ``{"label", "start", "stop", "n_kept"}`` in scan order (see
+        :func:`shard_ranges`).
+
+    Raises
+    ------
+    InputError
+        When ``registration`` lacks ``scan_id`` or ``kept``, or keeps no scan.
+    """
+    missing = [c for c in ("scan_id", "kept") if c not in registration.columns]
+    if missing:
+        raise InputError(f"{path}: columns {missing} missing; expected scan_id, kept, ...")
+    ids = registration["scan_id"].to_numpy(dtype=np.int64)
+    kept = np.unique(ids[registration["kept"].to_numpy(dtype=bool)])
+    if len(kept) == 0:
+        reasons = registration["reason"].value_counts().to_dict() if "reason" in registration.columns else {}
+        raise InputError(
+            f"{path}: no kept scan (of {len(ids)}), so no hulls or walls to compute; "
+            f"registration drop reasons: {reasons or 'none recorded'}"
+        )
+    pts = np.asarray(point_scan_ids, dtype=np.int64).ravel()
+    first = int(min(ids.min(), pts.min())) if len(pts) else int(ids.min())
+    last = int(max(ids.max(), pts.max())) if len(pts) else int(ids.max())
+    ranges = shard_ranges(kept, shard_scans, first, last)
+    shards = []
+    for start, stop in ranges:
+        n = int(((kept >= start) & (kept <= stop)).sum())
+        shards.append({"label": shard_label(start, stop), "start": start, "stop": stop, "n_kept": n})
+    return {"shard_scans": int(shard_scans), "n_kept": int(len(kept)), "first": first, "last": last, "shards": shards}
+
+
+def read_scan_range(
+    path: str | os.PathLike, start: int, stop: int, columns: Sequence[str] | None = None
+) -> pd.DataFrame:
+    """The rows of a Parquet table with ``start <= scan_id <= stop``, in file order.
+
+    Reads with a pyarrow filter, so row groups outside the range are skipped.
+    Raises ``InputError`` naming ``path`` when it has no ``scan_id`` column.
+    """
+    names = pq.read_schema(path).names
+    if "scan_id" not in names:
+        raise InputError(f"{path}: no scan_id column; expected {names} to have one")
+    table = pq.read_table(
+        path, columns=list(columns) if columns else None,
+        filters=[("scan_id", ">=", int(start)), ("scan_id", "<=", int(stop))],
+    )
+    return table.to_pandas()
+
+
+def concat_shards(tables: Sequence[pa.Table], labels: Sequence[str], what: str = "shard") -> pa.Table:
+    """Concatenate shard tables in scan order, checking each stays in its range.
+
+    Parameters
+    ----------
+    tables : sequence of pyarrow.Table
+        One table per shard with a ``scan_id`` column, same schema, in the order of
+        ``labels``.
+    labels : sequence of str
+        The shards' labels (:func:`shard_label`): contiguous, ascending ranges.
+    what : str
+        What the tables are, for error messages (e.g. a file pattern).
+
+    Returns
+    -------
+    pyarrow.Table
+        The rows of all shards in order, one chunk per column, without schema
+        metadata (the writer adds the stage's own).
+
+    Raises
+    ------
+    ValueError
+        When the counts differ, the ranges are not contiguous and ascending, a shard
+        has a scan outside its range or its scan ids are not ascending, or the
+        schemas differ.
+    """
+    if len(tables) != len(labels) or not tables:
+        raise ValueError(f"{what}: {len(tables)} tables for {len(labels)} shard labels (need >= 1 each)")
+    ranges = [parse_shard_label(lb) for lb in labels]
+    for (a0, b0), (a1, b1) in zip(ranges, ranges[1:]):
+        if a1 != b0 + 1:
+            raise ValueError(f"{what}: shards {shard_label(a0, b0)} and {shard_label(a1, b1)} are not contiguous")
+    schema = tables[0].schema.remove_metadata()
+    for t, label, (a, b) in zip(tables, labels, ranges):
+        if not t.schema.remove_metadata().equals(schema):
+            raise ValueError(f"{what} {label}: schema {t.schema.remove_metadata()} differs from {schema}")
+        sid = t.column("scan_id").to_numpy()
+        if len(sid) and (sid.min() < a or sid.max() > b):
+            raise ValueError(f"{what} {label}: scan ids {sid.min()}..{sid.max()} outside its range {a}..{b}")
+        if len(sid) > 1 and (np.diff(sid) < 0).any():
+            raise ValueError(f"{what} {label}: scan ids not ascending")
+    merged = pa.concat_tables([t.replace_schema_metadata(None) for t in tables])
+    return merged.combine_chunks()
+
+
+def read_shards(paths: Sequence[str | os.PathLike], plan: dict, what: str = "shard") -> tuple[pa.Table, dict]:
+    """Read the shard files of a plan and concatenate them in scan order.
+
+    Parameters
+    ----------
+    paths : sequence of path
+        One Parquet file per shard, each in a folder named by its label
+        (``.../scans_000000-000339/hulls.parquet``), in plan order.
+    plan : dict
+        The plan (:func:`plan_shards`) the shards were made for.
+    what : str
+        What the files are, for error messages.
+
+    Returns
+    -------
+    table : pyarrow.Table
+        :func:`concat_shards` of the files.
+    counts : dict
+        The sum over shards of the JSON ``counts`` of each file's schema metadata
+        (per-shard drop counts), ``{}`` when the files carry none.
+
+    Raises
+    ------
+    ValueError
+        When the files' labels are not the plan's shards (a stale plan or shard), or
+        as :func:`concat_shards`.
+    """
+    labels = [Path(p).parent.name for p in paths]
+    expected = [s["label"] for s in plan["shards"]]
+    if labels != expected:
+        raise ValueError(f"{what}: shard files {labels} do not match the plan's shards {expected}")
+    tables = [pq.read_table(p) for p in paths]
+    counts: dict = {}
+    for t in tables:
+        for key, value in json.loads((t.schema.metadata or {}).get(b"counts", b"{}")).items():
+            counts[key] = counts.get(key, 0) + value
+    return concat_shards(tables, labels, what), counts
