@@ -45,7 +45,7 @@ log = logging.getLogger(__name__)
 FIXED_INFORMATION = 1e8
 
 #: Columns of the edge table of :func:`scan_pair_edges`.
-EDGE_COLUMNS = ["i", "j", "kind", "dx_m", "dy_m", "dyaw_rad", "fitness", "inlier_rmse_m"]
+EDGE_COLUMNS = ["i", "j", "kind", "dx_m", "dy_m", "dyaw_rad", "fitness_prior", "fitness", "inlier_rmse_m"]
 
 
 @dataclass(frozen=True)
@@ -206,8 +206,9 @@ def scan_pair_edges(
     -------
     pandas.DataFrame
         :data:`EDGE_COLUMNS`, one row per pair tried: ``dx_m, dy_m, dyaw_rad`` is the
-        pose of scan ``j`` in scan ``i``'s frame; ``fitness`` the inlier fraction and
-        ``inlier_rmse_m`` the RMS inlier distance after ICP (fitness 0 and the initial
+        pose of scan ``j`` in scan ``i``'s frame; ``fitness_prior`` the inlier fraction
+        under the initial poses (thesis Algorithm 3 step 3), ``fitness`` the inlier
+        fraction and ``inlier_rmse_m`` the RMS inlier distance after ICP (fitness 0 and the initial
         relative pose when ICP found no correspondences). :func:`optimize_pose_graph`
         uses the pairs with ``fitness >= min_edge_fitness``.
     """
@@ -224,6 +225,10 @@ def scan_pair_edges(
             trees[i] = cKDTree(pts[i])
         rel = se2_between(poses[i], poses[j])
         pose = (rel[0], rel[1], 0.0, rel[2])
+        d0, _ = trees[i].query(
+            transform_points(pts[j], rel[0], rel[1], 0.0, rel[2]), distance_upper_bound=params.inlier_m
+        )
+        fitness_prior = float(np.isfinite(d0).mean())
         ok = True
         for dist in params.icp_distances_m:
             pose, n_corr = icp_planar(
@@ -233,17 +238,17 @@ def scan_pair_edges(
                 ok = False
                 break
         if not ok:
-            rows.append((i, j, kind, rel[0], rel[1], rel[2], 0.0, math.nan))
+            rows.append((i, j, kind, rel[0], rel[1], rel[2], fitness_prior, 0.0, math.nan))
             continue
         src = transform_points(pts[j], pose[0], pose[1], 0.0, pose[3])
         d, _ = trees[i].query(src, distance_upper_bound=params.inlier_m)
         inl = np.isfinite(d)
         fitness = float(inl.mean())
         rmse = float(np.sqrt(np.mean(d[inl] ** 2))) if inl.any() else math.nan
-        rows.append((i, j, kind, pose[0], pose[1], pose[3], fitness, rmse))
+        rows.append((i, j, kind, pose[0], pose[1], pose[3], fitness_prior, fitness, rmse))
     return pd.DataFrame(rows, columns=EDGE_COLUMNS).astype(
         {"i": np.int64, "j": np.int64, "kind": str, "dx_m": float, "dy_m": float,
-         "dyaw_rad": float, "fitness": float, "inlier_rmse_m": float}
+         "dyaw_rad": float, "fitness_prior": float, "fitness": float, "inlier_rmse_m": float}
     )
 
 
@@ -352,7 +357,7 @@ def refine_poses(
     t_s: np.ndarray,
     priors: np.ndarray | None,
     params: GraphParams = GraphParams(),
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
     """Pose-graph registration of a sequence of scans: edges, then optimisation.
 
     Parameters
@@ -372,8 +377,11 @@ def refine_poses(
     -------
     poses : (N, 4) float64 ndarray
         Optimised poses.
+    fitness_prior : (N,) float64 ndarray
+        Mean fitness of each scan under the initial poses over the pairs it was tried
+        in (NaN: none).
     fitness : (N,) float64 ndarray
-        Mean ICP fitness of each scan over the pairs it was tried in (NaN: none).
+        The same after ICP.
     inlier_rmse_m : (N,) float64 ndarray
         Mean inlier RMSE over its edges in the graph, metres (NaN: none).
     info : dict
@@ -385,14 +393,18 @@ def refine_poses(
     poses, info = optimize_pose_graph(initial, edges, priors, params)
     info["n_pairs"] = int(len(edges))
     both = np.r_[edges["i"].to_numpy(), edges["j"].to_numpy()]
-    fit = np.r_[edges["fitness"].to_numpy(), edges["fitness"].to_numpy()]
     cnt = np.bincount(both, minlength=n)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        fitness = np.bincount(both, weights=fit, minlength=n) / cnt
+
+    def per_scan(col: str) -> np.ndarray:
+        v = np.r_[edges[col].to_numpy(), edges[col].to_numpy()]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.bincount(both, weights=v, minlength=n) / cnt
+
+    fitness_prior, fitness = per_scan("fitness_prior"), per_scan("fitness")
     good = edges["fitness"].to_numpy() >= params.min_edge_fitness
     gi = np.r_[edges["i"].to_numpy()[good], edges["j"].to_numpy()[good]]
     gr = np.r_[edges["inlier_rmse_m"].to_numpy()[good], edges["inlier_rmse_m"].to_numpy()[good]]
     gc = np.bincount(gi, minlength=n)
     with np.errstate(invalid="ignore", divide="ignore"):
         rmse = np.bincount(gi, weights=gr, minlength=n) / gc
-    return poses, fitness, rmse, info
+    return poses, fitness_prior, fitness, rmse, info

@@ -128,7 +128,7 @@ def test_same_input_same_output(recording):
 
 def test_bad_input():
     poses = np.zeros((3, 4))
-    edges = pd.DataFrame([(0, 5, "sequential", 0.0, 0.0, 0.0, 1.0, 0.0)], columns=G.EDGE_COLUMNS)
+    edges = pd.DataFrame([(0, 5, "sequential", 0.0, 0.0, 0.0, 1.0, 1.0, 0.0)], columns=G.EDGE_COLUMNS)
     with pytest.raises(ValueError, match="outside 0..2"):
         G.optimize_pose_graph(poses, edges)
     with pytest.raises(ValueError, match="priors"):
@@ -139,7 +139,8 @@ def test_bad_input():
 
 def test_refine_poses_reports_fitness_per_scan(recording):
     truth, clouds, t, priors = recording
-    poses, fitness, rmse, info = G.refine_poses(clouds[:12], priors[:12], t[:12], priors[:12])
+    poses, fit0, fitness, rmse, info = G.refine_poses(clouds[:12], priors[:12], t[:12], priors[:12])
+    assert np.all(fit0 < fitness)  # the priors are 5 cm / 1 degree off
     assert poses.shape == (12, 4)
     # nearest-neighbour distances between 5 cm voxel means: about 1 cm on a wall
     assert np.all(fitness > 0.6) and np.all(rmse < 0.015)
