@@ -15,7 +15,6 @@ Coordinates are metres in the map frame of the recording (a local frame, no CRS)
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import logging
 import os
@@ -95,12 +94,9 @@ def params_from_config(cfg: Mapping[str, Any] | None) -> FloorplanParams:
     KeyError
         For a key the class does not know.
     """
-    values = dict(cfg or {})
-    names = {f.name for f in dataclasses.fields(FloorplanParams)}
-    unknown = sorted(set(values) - names)
-    if unknown:
-        raise KeyError(f"unknown floorplan config keys {unknown}; expected {sorted(names)}")
-    return FloorplanParams(**values)
+    from floorscan.config import dataclass_from_mapping
+
+    return dataclass_from_mapping(FloorplanParams, cfg, "floorplan")
 
 
 @dataclass

@@ -95,16 +95,12 @@ class GraphParams:
     @classmethod
     def from_mapping(cls, cfg) -> "GraphParams":
         """From a config mapping (unknown keys raise ``KeyError``)."""
-        import dataclasses
+        from floorscan.config import dataclass_from_mapping
 
         values = dict(cfg or {})
-        names = {f.name for f in dataclasses.fields(cls)}
-        unknown = sorted(set(values) - names)
-        if unknown:
-            raise KeyError(f"unknown register.graph keys {unknown}; expected {sorted(names)}")
         if "icp_distances_m" in values:
             values["icp_distances_m"] = tuple(float(v) for v in values["icp_distances_m"])
-        return cls(**values)
+        return dataclass_from_mapping(cls, values, "register.graph")
 
 
 def se2_between(a, b) -> tuple[float, float, float]:

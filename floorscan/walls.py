@@ -26,7 +26,6 @@ and a reason in its status table (see :data:`REASONS`).
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import time
 import warnings
@@ -211,12 +210,9 @@ def params_from_config(cfg: Mapping[str, Any]) -> tuple[ScanParams, RansacParams
 
 
 def _dataclass_from(cls, values):
-    values = dict(values or {})
-    names = {f.name for f in dataclasses.fields(cls)}
-    unknown = sorted(set(values) - names)
-    if unknown:
-        raise KeyError(f"unknown {cls.__name__} keys {unknown}; expected {sorted(names)}")
-    return cls(**values)
+    from floorscan.config import dataclass_from_mapping
+
+    return dataclass_from_mapping(cls, values, cls.__name__)
 
 
 # --------------------------------------------------------------------------------------

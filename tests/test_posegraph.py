@@ -133,7 +133,7 @@ def test_bad_input():
         G.optimize_pose_graph(poses, edges)
     with pytest.raises(ValueError, match="priors"):
         G.optimize_pose_graph(poses, edges.iloc[:0], priors=np.zeros((2, 4)))
-    with pytest.raises(KeyError, match="unknown register.graph keys"):
+    with pytest.raises(KeyError, match="unknown register.graph config keys"):
         G.GraphParams.from_mapping({"loop_radius": 3})
 
 
