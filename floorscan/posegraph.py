@@ -181,6 +181,7 @@ def scan_pair_edges(
     poses: np.ndarray,
     t_s: np.ndarray,
     params: GraphParams = GraphParams(),
+    icp_kinds: tuple[str, ...] = ("sequential", "loop"),
 ) -> pd.DataFrame:
     """Relative-pose constraints between overlapping scans by planar ICP.
 
@@ -197,6 +198,10 @@ def scan_pair_edges(
     t_s : (N,) float ndarray
         Scan times, seconds.
     params : GraphParams
+    icp_kinds : tuple of str
+        Pair kinds aligned by ICP; the others keep the relative pose of ``poses``
+        with fitness 1 (odometry mode: the odometry chain is the sequential edges, ICP
+        only closes the loops).
 
     Returns
     -------
@@ -225,6 +230,9 @@ def scan_pair_edges(
             transform_points(pts[j], rel[0], rel[1], 0.0, rel[2]), distance_upper_bound=params.inlier_m
         )
         fitness_prior = float(np.isfinite(d0).mean())
+        if kind not in icp_kinds:
+            rows.append((i, j, kind, rel[0], rel[1], rel[2], fitness_prior, 1.0, 0.0))
+            continue
         ok = True
         for dist in params.icp_distances_m:
             pose, n_corr = icp_planar(
@@ -353,6 +361,7 @@ def refine_poses(
     t_s: np.ndarray,
     priors: np.ndarray | None,
     params: GraphParams = GraphParams(),
+    icp_kinds: tuple[str, ...] = ("sequential", "loop"),
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
     """Pose-graph registration of a sequence of scans: edges, then optimisation.
 
@@ -368,6 +377,8 @@ def refine_poses(
     priors : (N, 4) float ndarray or None
         The localizer's poses (None in odometry mode: the first scan is held).
     params : GraphParams
+    icp_kinds : tuple of str
+        See :func:`scan_pair_edges`.
 
     Returns
     -------
@@ -385,7 +396,7 @@ def refine_poses(
     """
     initial = np.asarray(initial, dtype=np.float64)
     n = len(initial)
-    edges = scan_pair_edges(clouds, initial, t_s, params)
+    edges = scan_pair_edges(clouds, initial, t_s, params, icp_kinds)
     poses, info = optimize_pose_graph(initial, edges, priors, params)
     info["n_pairs"] = int(len(edges))
     both = np.r_[edges["i"].to_numpy(), edges["j"].to_numpy()]

@@ -305,19 +305,89 @@ def test_3d_scans_keep_z_and_recover_planar_pose():
     assert z.min() == pytest.approx(0.4 + scans.loc[scans["scan_id"] == 6, "z"].min(), abs=1e-5)
 
 
-def test_odometry_mode_follows_the_true_path():
+def _relative_to_first(poses_xy_yaw):
+    """(x, y, yaw) rows expressed in the frame of the first row (the odometry map frame)."""
+    p = np.asarray(poses_xy_yaw, dtype=np.float64)
+    c, s = math.cos(-p[0, 2]), math.sin(-p[0, 2])
+    d = p[:, :2] - p[0, :2]
+    yaw = (p[:, 2] - p[0, 2] + np.pi) % (2 * np.pi) - np.pi
+    return np.column_stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1], yaw])
+
+
+@pytest.mark.parametrize("rings", [1, 16], ids=["2d", "3d"])
+def test_odometry_mode_follows_the_true_path(rings):
+    """Pose-free mode: the first scan defines the map frame; the poses of the others
+    relative to it come out within mm (measured max 2.4 mm 2D, 1.8 mm 3D)."""
     true, t = trajectory(25, dt=0.4)
-    scans, index, _ = recording(true, t)
+    z_beams = (0.0,) if rings == 1 else tuple(np.radians(np.linspace(-15, 15, rings)))
+    scans, index, _ = recording(true, t, z_beams=z_beams)
     r = register_scans(scans, index, None, {"mode": "odometry", "every_n": 1})
     tb = r.table[r.table["kept"]]
     assert len(tb) == 25
-    # poses relative to the first scan
-    c, s = math.cos(-true[0, 2]), math.sin(-true[0, 2])
-    d = true[:, :2] - true[0, :2]
-    rel = np.column_stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]])
-    np.testing.assert_allclose(tb[["x_m", "y_m"]].to_numpy(), rel, atol=0.01)
-    np.testing.assert_allclose(tb["yaw_rad"], true[:, 2] - true[0, 2], atol=math.radians(0.2))
-    assert tb["fitness_prior"].isna().all()
+    rel = _relative_to_first(true)
+    np.testing.assert_allclose(tb[["x_m", "y_m"]].to_numpy(), rel[:, :2], atol=0.01)
+    np.testing.assert_allclose(tb["yaw_rad"], rel[:, 2], atol=math.radians(0.2))
+    assert (tb["z_m"] == 0.0).all()
+    # fitness at the constant-velocity prediction (no localizer to screen by): high here
+    assert np.isnan(tb["fitness_prior"].iloc[0]) and (tb["fitness_prior"].iloc[1:] > 0.9).all()
+    assert tb["reason"].iloc[0] == "anchor"
+
+
+def test_constant_velocity_prediction_keeps_turning():
+    """The motion between the last two poses, in the first one's frame, is repeated
+    (scaled by the time ratio): 1 m ahead then a quarter turn -> another metre along
+    the new heading and another quarter turn."""
+    from floorscan.registration import predict_constant_velocity
+
+    p = predict_constant_velocity((0.0, 0.0, 0.5, 0.0), 0, (1.0, 0.0, 0.5, math.pi / 2), 10**9, 2 * 10**9)
+    np.testing.assert_allclose(p[:3], (1.0, 1.0, 0.5), atol=1e-12)
+    assert abs(abs(p[3]) - math.pi) < 1e-12
+    half = predict_constant_velocity((0.0, 0.0, 0.0, 0.0), 0, (0.2, 0.0, 0.0, 0.0), 10**9, 15 * 10**8)
+    np.testing.assert_allclose(half, (0.3, 0.0, 0.0, 0.0), atol=1e-12)
+    assert predict_constant_velocity((0, 0, 0, 0), 5, (1.0, 2.0, 0.0, 0.3), 5, 9) == (1.0, 2.0, 0.0, 0.3)
+
+
+def test_odometry_drops_a_failed_scan_and_goes_on_from_the_prediction():
+    """A scan that matches nothing (its points 100 m away) is dropped as icp_failed and
+    has no pose; the chain continues from the constant-velocity prediction, so the
+    scans after it are still registered within 1 cm. every_n=3: all usable scans feed
+    the odometry, only every third is kept, the others still get their pose."""
+    true, t = trajectory(25, dt=0.4)
+    scans, index, _ = recording(true, t)
+    far = scans["scan_id"] == 12
+    scans.loc[far, "x"] += 100.0
+    r = register_scans(scans, index, None, {"mode": "odometry", "every_n": 3})
+    tb = r.table.set_index("scan_id")
+    assert tb.loc[12, "reason"] == "icp_failed" and not tb.loc[12, "kept"] and np.isnan(tb.loc[12, "x_m"])
+    assert r.summary["counts"] == {"": 7, "anchor": 1, "icp_failed": 1, "not_sampled": 16}
+    assert list(tb.index[tb["kept"]]) == [0, 3, 6, 9, 15, 18, 21, 24]
+    rel = _relative_to_first(true)
+    ok = tb["x_m"].notna().to_numpy()
+    assert ok.sum() == 24  # every scan but the failed one has a pose
+    err = np.hypot(tb["x_m"].to_numpy()[ok] - rel[ok, 0], tb["y_m"].to_numpy()[ok] - rel[ok, 1])
+    assert err.max() < 0.01
+
+
+def test_scan_clouds_drop_floor_and_ceiling_from_3d_icp():
+    """3D scans: the ICP cloud keeps the walls (vertical normals) on the coarse grid and
+    none of the floor; 2D scans keep every point for fitness."""
+    from floorscan.registration import scan_clouds
+
+    g = np.arange(-3.0, 3.0, 0.05)
+    gx, gy = np.meshgrid(g, g)
+    floor = np.column_stack([gx.ravel(), gy.ravel(), np.full(gx.size, -0.4)])
+    h = np.arange(-0.4, 2.0, 0.05)
+    wx, wz = np.meshgrid(g, h)
+    wall = np.column_stack([wx.ravel(), np.full(wx.size, 3.0), wz.ravel()])
+    cfg = RegistrationConfig()
+    c = scan_clouds(np.concatenate([floor, wall]), cfg)
+    assert len(c.icp) > 100
+    assert np.all(np.abs(c.icp[:, 1] - 3.0) < 0.1)  # wall points only
+    assert np.isclose(c.fit_source[:, 2], -0.4, atol=0.15).sum() > 100  # fitness keeps the floor
+    assert len(c.fit_target) > len(c.fit_source)  # finer reference grid
+    flat = np.column_stack([np.arange(50.0), np.zeros(50), np.zeros(50)])
+    c2 = scan_clouds(flat, cfg)
+    np.testing.assert_array_equal(c2.fit_source, flat)
 
 
 def test_bad_input_errors():
@@ -340,7 +410,8 @@ def test_schema_defaults_match_dataclass():
     defaults = {k: v["default"] for k, v in schema["properties"].items()}
     import dataclasses
 
-    code = {f.name: f.default for f in dataclasses.fields(RegistrationConfig)}
+    code = {f.name: f.default if f.default is not dataclasses.MISSING else f.default_factory()
+            for f in dataclasses.fields(RegistrationConfig)}
     code["icp_max_correspondence_m"] = list(code["icp_max_correspondence_m"])
     assert defaults == code
     assert schema["additionalProperties"] is False
@@ -372,10 +443,11 @@ def test_radish_icp_corrections_are_small(name, tmp_path):
     """SLAM-corrected poses: the ICP corrections have median < 2 cm and < 0.5 degree."""
     ingest_cfg = {"carmen_max_range_m": 32.0} if name == "orebro" else {}
     scans, index, poses = _ingest(tmp_path, {"format": "carmen", "path": str(SHARED_DATA / "radish" / RADISH[name])}, ingest_cfg)
-    cfg = {"every_n": 1}
-    if name == "orebro":  # stamps are synthetic (scan index x 0.1 s): no speed check, and
-        # no time window either, so the thesis's sequential references (map: 4.5 cm median)
-        cfg.update(max_speed_m_s=100.0, max_turn_rate_rad_s=100.0, reference="previous")
+    # as in config/config.yaml: the logs are thinned SLAM keyframes whose poses are
+    # already corrected, so the thesis's sequential references
+    cfg = {"every_n": 1, "reference": "previous"}
+    if name == "orebro":  # stamps are synthetic (scan index x 0.1 s): no speed check
+        cfg.update(max_speed_m_s=100.0, max_turn_rate_rad_s=100.0)
     r = register_scans(scans, index, poses, cfg)
     s = r.summary
     assert s["median_correction_m"] < 0.02
@@ -416,18 +488,18 @@ def _straight_walls(points_xy, seed=0, n_lines=6, band=0.15):
 @pytest.mark.slow
 def test_trace0_registered_walls_are_straight(tmp_path):
     """trace0 (poses via TF): the six longest walls of the registered map are straight:
-    each longer than 7 m and, on average, >= 50 % of the map within 15 cm of a wall lies
-    within 5 cm of its line (measured with reference: map 0.54, sixth wall 7.2 m;
-    reference: previous 0.49; the localizer poses alone 0.46; a smeared map with 0.3 m
-    position noise 0.37)."""
+    five are longer than 7 m and, on average, >= 60 % of the map within 15 cm of a wall
+    lies within 5 cm of its line (measured with reference: graph 0.67; map 0.54;
+    previous 0.49; the localizer poses alone 0.46; a smeared map with 0.3 m position
+    noise 0.37)."""
     ds = {"format": "rosbag", "path": str(SHARED_DATA / "uob-pioneer/trace0.bag"), "scan_topic": "/base_scan",
           "pose": {"source": "tf", "fixed_frame": "map"}}
     scans, index, poses = _ingest(tmp_path, ds)
     r = register_scans(scans, index, poses, {})
     xy = r.registered[["x", "y"]].to_numpy(np.float64)
     walls = _straight_walls(xy)
-    assert min(length for length, _ in walls) > 7.0
-    assert np.mean([thin for _, thin in walls]) >= 0.50
+    assert sum(length > 7.0 for length, _ in walls) >= 5
+    assert np.mean([thin for _, thin in walls]) >= 0.60
     assert r.summary["n_kept"] >= 0.95 * r.summary["n_sampled"]
 
 
@@ -474,7 +546,7 @@ def test_map_registration_reduces_amcl_like_pose_error():
     since the previous scans carry nearly the same error)."""
     scans, index, poses, true = _simulated_demo()
     before = _rms_errors(pd.DataFrame({"kept": True, "x_m": poses["x"], "y_m": poses["y"], "yaw_rad": poses["yaw"]}), true)
-    r = register_scans(scans, index, poses, {"every_n": 1})
+    r = register_scans(scans, index, poses, {"every_n": 1, "reference": "map"})
     assert r.summary["n_kept"] == len(index)
     after = _rms_errors(r.table, true)
     assert 0.06 < before[0] < 0.09
@@ -484,7 +556,22 @@ def test_map_registration_reduces_amcl_like_pose_error():
     assert abs(r.table["dx_m"].mean()) < 1e-9 and abs(r.table["dy_m"].mean()) < 1e-9
     assert abs(r.table["dyaw_rad"].mean()) < 1e-9
     seq = _rms_errors(register_scans(scans, index, poses, {"every_n": 1, "reference": "previous"}).table, true)
-    assert seq[0] > 0.9 * before[0]  # why the map is the default
+    assert seq[0] > 0.9 * before[0]  # why the thesis's variant is not the default
+
+
+def test_pose_graph_registration_halves_amcl_like_pose_error():
+    """reference: graph (default): ICP edges keep the scans' relative geometry to
+    millimetres, the localizer's priors place the whole (measured on demo, every 5th
+    scan: 7.6 -> 3.1 cm, 1.08 -> 0.56 degree; the rest is the mean of the localizer's
+    error over a 32 s drive, a rigid offset of 2.5 cm and 0.5 degree)."""
+    scans, index, poses, true = _simulated_demo()
+    before = _rms_errors(pd.DataFrame({"kept": True, "x_m": poses["x"], "y_m": poses["y"], "yaw_rad": poses["yaw"]}), true)
+    r = register_scans(scans, index, poses, {"every_n": 1})
+    assert r.summary["n_kept"] == len(index)
+    after = _rms_errors(r.table, true)
+    assert after[0] < 0.5 * before[0]
+    assert after[1] < 0.65 * before[1]
+    assert r.table["fitness_icp"].median() > 0.7
 
 
 def test_map_references_exclude_the_correlation_window():
@@ -500,3 +587,49 @@ def test_map_references_exclude_the_correlation_window():
     assert list(refs[9]) == [3, 1]
     assert n_fallback == 2  # scans 4 and 5: every other scan is within 3 s
     assert list(refs[4][:2]) in ([3, 5], [5, 3])
+
+
+def _drift(table, reference):
+    """Position error (m) of the kept scans' poses against ``reference`` poses
+    (x, y, yaw per table row) after aligning the first kept pose of each, and the
+    reference's path length (m)."""
+    k = table["kept"].to_numpy() & np.isfinite(reference[:, 0])
+    a = _relative_to_first(table[["x_m", "y_m", "yaw_rad"]].to_numpy()[k])
+    b = _relative_to_first(reference[k])
+    path = float(np.sum(np.hypot(*np.diff(reference[k][:, :2], axis=0).T)))
+    return np.hypot(a[:, 0] - b[:, 0], a[:, 1] - b[:, 1]), path
+
+
+ODOMETRY_DATA = {
+    # measured: kept 192/192, median 0.25 m, final 0.32 m of 32.8 m (1.0 %) against the
+    # localizer (AMCL-like, map -> odom; its own yaw is off by up to 5 degrees between
+    # scans 2 s apart, by pairwise ICP, so part of this is the reference's error)
+    "trace0": ({"format": "rosbag", "path": "uob-pioneer/trace0.bag", "scan_topic": "/base_scan",
+                "pose": {"source": "tf", "fixed_frame": "map"}}, 0.40, 0.55),
+    # measured: kept 72/72, median 0.11 m, final 0.20 m of 8.3 m against wheel odometry
+    "mac_ros2": ({"format": "rosbag", "path": "comprobo-mac/macfirst_floor_take_2", "scan_topic": "/scan",
+                  "pose": {"source": "tf", "fixed_frame": "odom"}}, 0.20, 0.35),
+}
+
+
+@needs_shared
+@pytest.mark.realdata
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(ODOMETRY_DATA))
+def test_odometry_mode_on_real_recordings(name, tmp_path):
+    """Pose-free mode on real recordings (issue 4): every sampled scan kept (>= 95 %),
+    and the path stays close to the recording's own poses, which the odometry never
+    reads (bounds: measured figures plus margin, see ODOMETRY_DATA)."""
+    ds, max_median, max_final = ODOMETRY_DATA[name]
+    ds = dict(ds, path=str(SHARED_DATA / ds["path"]))
+    scans, index, poses = _ingest(tmp_path, ds)
+    r = register_scans(scans, index, None, {"mode": "odometry"})
+    s = r.summary
+    assert s["n_kept"] >= 0.95 * s["n_sampled"] and s["n_sampled"] >= len(index) // 5
+    ref = poses.set_index("scan_id").reindex(r.table["scan_id"])
+    ref = np.where(ref["valid"].fillna(False).to_numpy(bool)[:, None], ref[["x", "y", "yaw"]].to_numpy(float), np.nan)
+    err, path = _drift(r.table, ref)
+    assert path > 5.0
+    assert np.median(err) < max_median
+    assert err[-1] < max_final
+
