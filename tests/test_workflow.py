@@ -77,8 +77,10 @@ def test_rerun_of_one_stage(default_run):
 
 
 def test_default_run_selection_walls_and_scores(default_run):
-    """On the demo building the thesis's ordering beats recording order at 15 scans,
-    registration lowers the pose error, and every floor plan format is written."""
+    """On the demo building registration halves the pose error, the walls from all
+    scans match the ground truth (issue 6: F1 at 5 cm >= 0.9 with both extractors;
+    measured 0.95, the merged floor plan 0.93), the thesis's ordering beats recording
+    order at 15 scans, and every floor plan format is written."""
     out = default_run / "results" / "demo"
     reg = read_table(out / "registration.parquet")
     truth = read_table(out / "sim" / "true_poses.parquet")
@@ -88,7 +90,8 @@ def test_default_run_selection_walls_and_scores(default_run):
     err_prior = np.hypot(prior["x"].to_numpy() - kept["x"], prior["y"].to_numpy() - kept["y"])
     err_reg = np.hypot(kept["x_m"] - kept["x"], kept["y_m"] - kept["y"])
     assert len(kept) >= 60
-    assert np.sqrt(np.mean(err_reg**2)) < 0.8 * np.sqrt(np.mean(err_prior**2))
+    # pose graph: 7.6 -> 3.1 cm
+    assert np.sqrt(np.mean(err_reg**2)) < 0.5 * np.sqrt(np.mean(err_prior**2))
 
     summary = read_table(out / "orderings" / "summary.parquet").set_index("ordering")
     assert summary.loc["cluster_hull", "k_95"] < summary.loc["sequential", "k_95"] / 2
@@ -96,9 +99,13 @@ def test_default_run_selection_walls_and_scores(default_run):
     m = read_table(out / "metrics.parquet")
     assert set(m["reference_kind"]) == {"ground_truth"}
     assert len(m) == 5 * 2 * 10
-    f1 = m.set_index(["ordering", "extractor", "k"])["f1_5cm"]
+    mi = m.set_index(["ordering", "extractor", "k"])
+    f1 = mi["f1_5cm"]
     for ext in ("ransac", "cluster_ransac"):
         assert f1[("cluster_hull", ext, "15")] > f1[("sequential", ext, "15")] + 0.1
-        assert f1[("cluster_hull", ext, "all")] > 0.4
+        assert f1[("cluster_hull", ext, "all")] >= 0.9
+        assert mi.loc[("cluster_hull", ext, "all"), "plan_f1_5cm"] >= 0.88
+        # recall against every face is lower: rooms C and D are only seen through doors
+        assert 0.6 < mi.loc[("cluster_hull", ext, "all"), "recall_all_5cm"] < 0.85
     for fmt in ("geojson", "svg", "dxf", "ifc"):
         assert (out / "floorplan" / f"cluster_hull_cluster_ransac_k15.{fmt}").stat().st_size > 500
