@@ -306,9 +306,16 @@ def plot_walls_over_points(points, panels, out, title: str = "") -> None:
     _save(fig, out)
 
 
-def subsample_points(points: pd.DataFrame, max_points: int, seed: int, z_band=None):
+def subsample_points(points, max_points: int, seed: int, z_band=None, batch_rows: int = 1 << 20):
     """``(N, 2)`` x, y of at most ``max_points`` points (seeded), optionally only those
-    with z inside ``z_band`` when the points are 3D (any z not 0)."""
+    with z inside ``z_band`` when the points are 3D (any z not 0).
+
+    ``points`` is a frame (``x, y, z``) or the path of a Parquet points table, which is
+    read twice in batches of ``batch_rows`` (z to count, then x, y of the drawn rows):
+    the same points as from the whole frame, in memory one batch at a time.
+    """
+    if isinstance(points, (str, Path)):
+        return _subsample_file(points, max_points, seed, z_band, batch_rows)
     xyz = points[["x", "y", "z"]].to_numpy(dtype=np.float64)
     if z_band is not None and len(xyz) and np.any(xyz[:, 2] != 0):
         xyz = xyz[(xyz[:, 2] >= z_band[0]) & (xyz[:, 2] <= z_band[1])]
@@ -316,6 +323,37 @@ def subsample_points(points: pd.DataFrame, max_points: int, seed: int, z_band=No
         idx = np.random.default_rng(seed).choice(len(xyz), max_points, replace=False)
         xyz = xyz[np.sort(idx)]
     return xyz[:, :2].copy()
+
+
+def _subsample_file(path, max_points: int, seed: int, z_band, batch_rows: int) -> np.ndarray:
+    import pyarrow.parquet as pq
+
+    pf = pq.ParquetFile(path)
+    missing = [c for c in ("x", "y", "z") if c not in pf.schema_arrow.names]
+    if missing:
+        raise KeyError(f"{path}: columns {missing} missing; expected x, y, z")
+
+    def z_batches():
+        for b in pf.iter_batches(batch_size=batch_rows, columns=["z"]):
+            yield b.column(0).to_numpy(zero_copy_only=False).astype(np.float64)
+
+    three_d = z_band is not None and any(np.any(z != 0) for z in z_batches())
+    band = (lambda z: (z >= z_band[0]) & (z <= z_band[1])) if three_d else (lambda z: np.ones(len(z), bool))
+    total = sum(int(np.count_nonzero(band(z))) for z in z_batches())
+    chosen = None
+    if total > max_points:
+        chosen = np.sort(np.random.default_rng(seed).choice(total, max_points, replace=False))
+    out, seen = [], 0
+    for b in pf.iter_batches(batch_size=batch_rows, columns=["x", "y", "z"]):
+        x, y, z = (b.column(i).to_numpy(zero_copy_only=False).astype(np.float64) for i in range(3))
+        m = band(z)
+        xy = np.column_stack([x[m], y[m]])
+        if chosen is not None:
+            lo, hi = np.searchsorted(chosen, [seen, seen + len(xy)])
+            xy = xy[chosen[lo:hi] - seen]
+        seen += int(m.sum())
+        out.append(xy)
+    return np.concatenate(out) if out else np.zeros((0, 2))
 
 
 # ------------------------------------------------------------------------ Table 5.1
@@ -449,7 +487,7 @@ def make_score_figures(
     reference_kind: str,
     walls: dict,
     floorplans: dict,
-    points: pd.DataFrame,
+    points,
     scan_status: dict,
     bench_dir,
     outputs: dict,
@@ -474,8 +512,9 @@ def make_score_figures(
     floorplans : dict
         ``{(ordering, extractor): list of geometries}`` merged floor plans at
         ``cfg["figure_k"]``.
-    points : pandas.DataFrame
-        Registered points (``x, y, z``); subsampled here.
+    points : pandas.DataFrame or path
+        Registered points (``x, y, z``), or the path of ``registered.parquet``
+        (read in batches); subsampled here (:func:`subsample_points`).
     scan_status : dict
         ``{extractor: DataFrame}`` wall extraction status per scan.
     bench_dir : path

@@ -15,7 +15,7 @@ from __future__ import annotations
 import os
 import time
 from dataclasses import dataclass, fields
-from typing import Mapping, Sequence
+from typing import Iterable, Mapping, Sequence
 
 import matplotlib
 
@@ -24,8 +24,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from floorscan.hulls import HullParams, cluster_hulls, kept_scan_ids, scan_coverage  # noqa: E402
-from floorscan.io import atomic_path  # noqa: E402
+from floorscan.hulls import HullParams, iter_frame_scans, kept_scan_ids, scan_coverage, scan_hulls  # noqa: E402
+from floorscan.io import atomic_path, iter_scans  # noqa: E402
 from floorscan.selection import (  # noqa: E402
     ORDERINGS,
     SelectParams,
@@ -108,18 +108,21 @@ def _spaced(ids: np.ndarray, max_scans: int) -> np.ndarray:
 
 
 def coverage_vs_clusters(
-    registered: pd.DataFrame,
+    registered: pd.DataFrame | str | os.PathLike | Iterable[tuple[int, np.ndarray]],
     scan_ids: Sequence[int],
     k_values: Sequence[int],
     hull_params: HullParams = HullParams(),
     raster_m: float = 0.05,
+    hulls: pd.DataFrame | None = None,
 ) -> dict[int, pd.DataFrame]:
     """Greedy ``cluster_hull`` ordering for each number of clusters (Fig. 5.7).
 
     Parameters
     ----------
-    registered : DataFrame
-        Map-frame points ``scan_id, x, y`` (metres).
+    registered : DataFrame, path or iterable of (int, (n, >=2) ndarray)
+        Map-frame points ``scan_id, x, y`` (metres): a frame, ``registered.parquet``
+        (streamed scan by scan, :func:`floorscan.io.iter_scans`), or the scans.
+        Read once for all ``k_values``.
     scan_ids : sequence of int
         The scans to order.
     k_values : sequence of int
@@ -128,18 +131,33 @@ def coverage_vs_clusters(
         The other hull parameters (``k_clusters`` is replaced).
     raster_m : float
         Coverage raster cell, metres.
+    hulls : DataFrame, optional
+        The hulls stage's table (made with ``hull_params``): its rows are used for
+        ``k = hull_params.k_clusters`` instead of clustering again (the same hulls:
+        a scan's hulls depend only on the scan, the parameters and the seed).
 
     Returns
     -------
     dict k -> ordering frame (``rank, scan_id, covered_area_m2, gain_m2``).
     """
     ids = np.asarray(scan_ids, dtype=np.int64)
-    sub = registered[np.isin(registered["scan_id"].to_numpy(), ids)]
+    known = {}
+    if hulls is not None:
+        known[int(hull_params.k_clusters)] = hulls[np.isin(hulls["scan_id"].to_numpy(), ids)]
+    todo = [int(k) for k in dict.fromkeys(int(k) for k in k_values) if int(k) not in known]
+    if todo:
+        if isinstance(registered, pd.DataFrame):
+            scans = iter_frame_scans(registered[np.isin(registered["scan_id"].to_numpy(), ids)])
+        elif isinstance(registered, (str, os.PathLike)):
+            scans = iter_scans(registered, ("x", "y"))
+        else:
+            scans = registered
+        params = [HullParams(**{**hull_params.as_dict(), "k_clusters": k}) for k in todo]
+        made, _, _ = scan_hulls(scans, params, scan_ids=ids, convex=False)
+        known.update(zip(todo, made))
     out = {}
     for k in k_values:
-        p = HullParams(**{**hull_params.as_dict(), "k_clusters": int(k)})
-        h = cluster_hulls(sub, p, scan_ids=ids)
-        sid, geoms = scan_coverage(h, ids)
+        sid, geoms = scan_coverage(known[int(k)], ids)
         out[int(k)] = greedy_coverage(sid, geoms, raster_m)
     return out
 
@@ -211,7 +229,7 @@ def plot_selection_time(timing: pd.DataFrame, path: str | os.PathLike, title: st
 
 
 def selection_figures(
-    registered: pd.DataFrame,
+    registered: pd.DataFrame | str | os.PathLike,
     registration: pd.DataFrame,
     hulls: pd.DataFrame,
     orderings: Mapping[str, pd.DataFrame],
@@ -223,10 +241,18 @@ def selection_figures(
     out_timing: str | os.PathLike,
     title: str = "",
 ) -> pd.DataFrame:
-    """Write the three selection figures; returns the Fig. 5.8 timing table."""
+    """Write the three selection figures; returns the Fig. 5.8 timing table.
+
+    ``registered`` is the points frame or the path of ``registered.parquet``
+    (streamed scan by scan: memory follows the largest scan). ``hulls`` (the hulls
+    stage's table, made with ``hull_params``) gives the Fig. 5.7 curve of
+    ``hull_params.k_clusters`` without clustering again.
+    """
     plot_coverage_vs_scans(orderings, out_coverage, title)
     ids = _spaced(kept_scan_ids(registration), params.figure_max_scans)
-    curves = coverage_vs_clusters(registered, ids, params.figure_k_clusters, hull_params, select_params.raster_m)
+    curves = coverage_vs_clusters(
+        registered, ids, params.figure_k_clusters, hull_params, select_params.raster_m, hulls=hulls
+    )
     plot_coverage_vs_clusters(curves, out_clusters, title)
     sid, geoms = scan_coverage(hulls, ids)
     sizes = sorted({int(s) for s in np.unique(np.geomspace(10, max(len(ids), 10), 8).round())} | {len(ids)})

@@ -25,18 +25,34 @@ Per scan, on the map-frame floor coordinates (x, y) only:
    With a single centre (``k_clusters=1``, or a scan with one distinct point) there
    is no centre distance and every point is kept, so ``k_clusters=1`` gives the
    plain convex hull of the scan.
-4. The convex hull of each cluster's kept points (Shapely, vectorised over all
+4. The convex hull of each cluster's kept points (Shapely/GEOS, vectorised over all
    clusters of all scans at once). A cluster with fewer than 3 kept points or only
    collinear points has no area: it is stored as an empty polygon with
    ``area_m2 = 0``.
 
 The scan's coverage is the union of its cluster hulls (:func:`scan_coverage`).
+
+Speed (issue 8). Exact shortcuts, giving the same hulls bit for bit:
+
+- the distinct points of the KMeans sample are counted with one ``lexsort``
+  instead of ``numpy.unique(axis=0)``;
+- the points of a cluster go to GEOS as one LineString (one coordinate sequence)
+  instead of a MultiPoint of point geometries: the convex hull of the same
+  coordinates without a geometry object per point (GEOS's convex hull then costs
+  ~0.1 us a point; creating the point objects cost ~1 us a point). A pre-filter
+  of the points inside the octagon of extreme points (Akl-Toussaint) was measured
+  slower than GEOS's own;
+- KMeans distances as ``dx*dx + dy*dy`` without an (N, k, 2) temporary.
+
+:func:`scan_hulls` runs the stage scan by scan over any iterable of scans (e.g.
+:func:`floorscan.io.iter_scans` streaming ``registered.parquet``), so memory follows
+the largest scan, not the recording.
 """
 
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields
-from typing import Iterable, Mapping
+from typing import Iterable, Iterator, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -124,6 +140,15 @@ def _scan_seed(seed: int, scan_id: int) -> np.random.Generator:
     return np.random.default_rng([int(seed), int(scan_id) & 0xFFFFFFFF])
 
 
+def _n_distinct(xy: np.ndarray) -> int:
+    """Number of distinct rows of an (N, 2) array (``len(np.unique(xy, axis=0))``)."""
+    if len(xy) < 2:
+        return len(xy)
+    o = np.lexsort((xy[:, 1], xy[:, 0]))
+    s = xy[o]
+    return 1 + int(np.count_nonzero((s[1:, 0] != s[:-1, 0]) | (s[1:, 1] != s[:-1, 1])))
+
+
 def cluster_labels(points_xy: np.ndarray, params: HullParams = HullParams(), scan_id: int = 0) -> np.ndarray:
     """Cluster of every point of one scan, -1 for points dropped as outliers.
 
@@ -157,8 +182,7 @@ def cluster_labels(points_xy: np.ndarray, params: HullParams = HullParams(), sca
         raise ValueError(f"scan {scan_id}: points_xy contains NaN or inf")
     rng = _scan_seed(params.seed, scan_id)
     sample = xy if n <= params.sample_size else xy[np.sort(rng.choice(n, params.sample_size, replace=False))]
-    n_distinct = len(np.unique(sample, axis=0))
-    k = min(params.k_clusters, n_distinct)
+    k = min(params.k_clusters, _n_distinct(sample))
     if k <= 1:
         return np.zeros(n, dtype=np.int64)
     km = KMeans(
@@ -169,40 +193,79 @@ def cluster_labels(points_xy: np.ndarray, params: HullParams = HullParams(), sca
         algorithm="lloyd",
     ).fit(sample)
     centres = km.cluster_centers_
-    # nearest centre of every point: (N, k) squared distances
-    d2 = ((xy[:, None, :] - centres[None, :, :]) ** 2).sum(axis=2)
+    # nearest centre of every point: (N, k) squared distances (dx*dx + dy*dy: the same
+    # floats as ((p - c) ** 2).sum(axis=1), without an (N, k, 2) temporary)
+    dx = xy[:, 0:1] - centres[None, :, 0]
+    dy = xy[:, 1:2] - centres[None, :, 1]
+    d2 = dx * dx + dy * dy
     labels = d2.argmin(axis=1)
     cc = np.sqrt(((centres[:, None, :] - centres[None, :, :]) ** 2).sum(axis=2))
     np.fill_diagonal(cc, np.inf)
     nearest = cc.min(axis=1)
     radius = params.radius_factor * (nearest if params.radius_rule == "nearest_centre" else np.full(k, nearest.min()))
-    keep = d2[np.arange(n), labels] <= radius[labels] ** 2
+    keep = d2.min(axis=1) <= radius[labels] ** 2  # the same floats as d2[arange(n), labels]
     return np.where(keep, labels, -1).astype(np.int64)
 
 
-def _hull_geometries(xy: np.ndarray, group: np.ndarray, n_groups: int) -> tuple[np.ndarray, np.ndarray]:
-    """Convex hull per group (vectorised); degenerate hulls become empty polygons.
+class _HullBuilder:
+    """Collects the points of groups (scan clusters) and makes their convex
+    hulls with GEOS in batches: one LineString per group (the group's points as one
+    coordinate sequence; its convex hull is that of the points)."""
 
-    ``group`` in ``0..n_groups-1`` (or -1 = ignore). Returns (geometries, areas).
+    def __init__(self, batch_points: int = 1 << 20):
+        self.batch_points = batch_points
+        self._xy: list[np.ndarray] = []
+        self._n: list[np.ndarray] = []
+        self._pending = 0
+        self.geoms: list[np.ndarray] = []
+
+    def add(self, xy: np.ndarray, labels: np.ndarray, k: int) -> None:
+        """Add the ``k`` groups of one scan: points ``xy`` with ``labels`` in 0..k-1,
+        or -1 (ignored)."""
+        ok = labels >= 0
+        lab = labels[ok]
+        # stable sort of small ints: radix sort for int16 (timsort for int64)
+        order = np.argsort(lab.astype(np.int16) if k < 2**15 else lab, kind="stable")
+        pts = xy[ok][order]
+        counts = np.bincount(lab, minlength=k)
+        self._xy.append(pts)
+        self._n.append(counts)
+        self._pending += len(pts)
+        if self._pending >= self.batch_points:
+            self._flush()
+
+    def _flush(self) -> None:
+        if not self._n:
+            return
+        counts = np.concatenate(self._n)
+        geoms = np.full(len(counts), shapely.Polygon(), dtype=object)
+        line = counts >= 2  # fewer than 2 points: no LineString, and no area anyway
+        if line.any():
+            xy = np.concatenate(self._xy)
+            group = np.repeat(np.arange(len(counts)), counts)
+            sel = line[group]
+            idx = np.searchsorted(np.flatnonzero(line), group[sel])
+            geoms[line] = shapely.convex_hull(shapely.linestrings(xy[sel], indices=idx))
+        self.geoms.append(geoms)
+        self._xy, self._n, self._pending = [], [], 0
+
+    def finish(self) -> tuple[np.ndarray, np.ndarray]:
+        """(geometries, areas) of every group added, in order; a hull without area
+        (fewer than 3 points, collinear) is an empty Polygon with area 0."""
+        self._flush()
+        geoms = np.concatenate(self.geoms) if self.geoms else np.zeros(0, dtype=object)
+        self.geoms = []
+        areas = shapely.area(geoms) if len(geoms) else np.zeros(0)
+        poly = (shapely.get_type_id(geoms) == 3) & (areas > 0) if len(geoms) else np.zeros(0, bool)
+        geoms = np.where(poly, geoms, shapely.Polygon())
+        return geoms, np.where(poly, areas, 0.0).astype(np.float64)
+
+
+def iter_frame_scans(registered: pd.DataFrame) -> Iterator[tuple[int, np.ndarray]]:
+    """The scans of a points frame as ``(scan_id, (n, 2) float64 x, y)``, ascending id.
+
+    Raises ``KeyError`` when ``scan_id``, ``x`` or ``y`` is missing.
     """
-    ok = group >= 0
-    geoms = np.full(n_groups, shapely.Polygon(), dtype=object)
-    if ok.any():
-        g = group[ok]
-        order = np.argsort(g, kind="stable")
-        present = np.unique(g)
-        mp = shapely.multipoints(xy[ok][order], indices=np.searchsorted(present, g[order]))
-        hulls = shapely.convex_hull(mp)
-        geoms[present] = hulls
-    areas = shapely.area(geoms)
-    poly = (shapely.get_type_id(geoms) == 3) & (areas > 0)
-    geoms = np.where(poly, geoms, shapely.Polygon())
-    areas = np.where(poly, areas, 0.0)
-    return geoms, areas
-
-
-def _split(registered: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """scan ids (sorted unique), start offsets, xy sorted by scan (stable)."""
     for col in ("scan_id", "x", "y"):
         if col not in registered.columns:
             raise KeyError(f"registered points: column {col!r} missing; expected scan_id, x, y, z")
@@ -211,7 +274,115 @@ def _split(registered: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, np.ndarray
     ids = ids[order]
     xy = registered[["x", "y"]].to_numpy(dtype=np.float64)[order]
     uniq, starts = np.unique(ids, return_index=True)
-    return uniq, np.r_[starts, len(ids)], xy
+    bounds = np.r_[starts, len(ids)]
+    for i, sid in enumerate(uniq):
+        yield int(sid), xy[bounds[i] : bounds[i + 1]]
+
+
+def _frame(scan_rows: list, cluster_rows: list, geoms: np.ndarray, areas: np.ndarray) -> pd.DataFrame:
+    sid = np.concatenate(scan_rows).astype(np.int32) if scan_rows else np.zeros(0, np.int32)
+    cl = np.concatenate(cluster_rows).astype(np.int32) if cluster_rows else np.zeros(0, np.int32)
+    order = np.argsort(sid, kind="stable")  # scans in id order, clusters in order
+    return pd.DataFrame(
+        {"scan_id": sid[order], "cluster": cl[order], "geometry": geoms[order], "area_m2": areas[order]}
+    )
+
+
+def scan_hulls(
+    scans: Iterable[tuple[int, np.ndarray]],
+    params: Sequence[HullParams] = (HullParams(),),
+    scan_ids: Iterable[int] | None = None,
+    convex: bool = True,
+    batch_points: int = 1 << 20,
+) -> tuple[list[pd.DataFrame], pd.DataFrame | None, dict]:
+    """Cluster hulls (one table per parameter set) and convex hulls, scan by scan.
+
+    Parameters
+    ----------
+    scans : iterable of (int, (n, >=2) float ndarray)
+        ``(scan_id, points)`` of each scan, map frame, metres; only columns 0 and 1
+        (x, y) are used. Consumed once, one scan at a time (e.g.
+        :func:`floorscan.io.iter_scans` or :func:`iter_frame_scans`), so memory holds
+        one scan plus up to ``batch_points`` points waiting for GEOS.
+    params : sequence of HullParams
+        One cluster-hull table per entry (Fig. 5.7 needs several ``k_clusters``).
+    scan_ids : iterable of int, optional
+        The scans to report; a listed scan without points gets one empty row
+        (``cluster=0`` / ``-1``, area 0); points of unlisted scans are ignored.
+        Default: every scan with points.
+    convex : bool
+        Also make the single convex hull per scan (:func:`convex_hulls`).
+    batch_points : int
+        Points handed to GEOS at once.
+
+    Returns
+    -------
+    cluster : list of DataFrame
+        Per entry of ``params``, as :func:`cluster_hulls`.
+    convex : DataFrame or None
+        As :func:`convex_hulls`.
+    counts : dict
+        ``n_scans`` (reported), ``n_points`` (of reported scans), ``n_points_ignored``,
+        ``n_no_points`` (reported scans without points).
+
+    Raises
+    ------
+    ValueError
+        When a scan id comes twice (its points must come together), points are not
+        (n, >=2), or (clustering) not finite.
+    """
+    params = list(params)
+    wanted = None if scan_ids is None else set(int(s) for s in np.asarray(list(scan_ids), dtype=np.int64))
+    builders = [_HullBuilder(batch_points) for _ in params]
+    rows = [([], []) for _ in params]
+    cbuilder = _HullBuilder(batch_points)
+    crows: tuple[list, list] = ([], [])
+    seen: set[int] = set()
+    n_points = n_ignored = 0
+    # one KMeans per scan on <= sample_size points: threads only add overhead and
+    # oversubscribe a shared machine, so run BLAS/OpenMP single-threaded
+    with threadpool_limits(limits=1):
+        for sid, pts in scans:
+            sid = int(sid)
+            if sid in seen:
+                raise ValueError(f"scan {sid}: its points come in two separate runs; expected them together")
+            seen.add(sid)
+            pts = np.asarray(pts)
+            if pts.ndim != 2 or pts.shape[1] < 2:
+                raise ValueError(f"scan {sid}: points must have shape (n, 2) or (n, 3), got {pts.shape}")
+            if wanted is not None and sid not in wanted:
+                n_ignored += len(pts)
+                continue
+            xy = np.ascontiguousarray(pts[:, :2], dtype=np.float64)
+            n_points += len(xy)
+            for p, b, (rs, rc) in zip(params, builders, rows):
+                lab = cluster_labels(xy, p, scan_id=sid)
+                k = max(int(lab.max()) + 1, 1) if len(lab) else 1
+                b.add(xy, lab, k)
+                rs.append(np.full(k, sid))
+                rc.append(np.arange(k))
+            if convex:
+                cbuilder.add(xy, np.zeros(len(xy), dtype=np.int64), 1)
+                crows[0].append(np.array([sid]))
+                crows[1].append(np.array([CONVEX_CLUSTER]))
+    missing = sorted(wanted - seen) if wanted is not None else []
+    out = []
+    for b, (rs, rc) in zip(builders, rows):
+        geoms, areas = b.finish()
+        rs = rs + [np.array([s]) for s in missing]
+        rc = rc + [np.array([0]) for _ in missing]
+        out.append(_frame(rs, rc, np.r_[geoms, np.full(len(missing), shapely.Polygon(), dtype=object)],
+                          np.r_[areas, np.zeros(len(missing))]))
+    conv = None
+    if convex:
+        geoms, areas = cbuilder.finish()
+        conv = _frame(crows[0] + [np.array([s]) for s in missing],
+                      crows[1] + [np.array([CONVEX_CLUSTER]) for _ in missing],
+                      np.r_[geoms, np.full(len(missing), shapely.Polygon(), dtype=object)],
+                      np.r_[areas, np.zeros(len(missing))])
+    counts = {"n_scans": len(seen) if wanted is None else len(wanted), "n_points": int(n_points), "n_points_ignored": int(n_ignored),
+              "n_no_points": int(len(missing))}
+    return out, conv, counts
 
 
 def cluster_hulls(
@@ -242,61 +413,18 @@ def cluster_hulls(
         float64, sorted by (scan_id, cluster). ``k`` is ``k_clusters``, or fewer for
         a scan with fewer distinct points.
     """
-    uniq, bounds, xy = _split(registered)
-    wanted = uniq if scan_ids is None else np.unique(np.asarray(list(scan_ids), dtype=np.int64))
-    index = {int(s): i for i, s in enumerate(uniq)}
-    group = np.full(len(xy), -1, dtype=np.int64)
-    rows_scan, rows_cluster = [], []
-    offset = 0
-    # one KMeans per scan on <= sample_size points: threads only add overhead and
-    # oversubscribe a shared machine, so run BLAS/OpenMP single-threaded
-    with threadpool_limits(limits=1):
-        labels = {int(sid): cluster_labels(xy[bounds[index[int(sid)]] : bounds[index[int(sid)] + 1]], params, scan_id=int(sid))
-                  for sid in wanted if int(sid) in index}
-    for sid in wanted:
-        i = index.get(int(sid))
-        if i is None:
-            k = 1  # no points: one empty row
-        else:
-            a, b = bounds[i], bounds[i + 1]
-            lab = labels[int(sid)]
-            k = max(int(lab.max()) + 1, 1) if len(lab) else 1
-            group[a:b] = np.where(lab >= 0, lab + offset, -1)
-        rows_scan.append(np.full(k, sid))
-        rows_cluster.append(np.arange(k))
-        offset += k
-    geoms, areas = _hull_geometries(xy, group, offset)
-    return pd.DataFrame(
-        {
-            "scan_id": np.concatenate(rows_scan).astype(np.int32) if rows_scan else np.zeros(0, np.int32),
-            "cluster": np.concatenate(rows_cluster).astype(np.int32) if rows_cluster else np.zeros(0, np.int32),
-            "geometry": geoms,
-            "area_m2": areas.astype(np.float64),
-        }
-    )
+    out, _, _ = scan_hulls(iter_frame_scans(registered), [params], scan_ids, convex=False)
+    return out[0]
 
 
 def convex_hulls(registered: pd.DataFrame, scan_ids: Iterable[int] | None = None) -> pd.DataFrame:
     """One convex hull per scan (the naive coverage of thesis Fig. 3.2a).
 
     Same columns as :func:`cluster_hulls`, ``cluster = -1`` (:data:`CONVEX_CLUSTER`),
-    one row per scan; no outlier removal. Vectorised over all scans.
+    one row per scan; no outlier removal.
     """
-    uniq, bounds, xy = _split(registered)
-    wanted = uniq if scan_ids is None else np.unique(np.asarray(list(scan_ids), dtype=np.int64))
-    pos = np.searchsorted(wanted, uniq)
-    listed = (pos < len(wanted)) & (wanted[np.minimum(pos, len(wanted) - 1)] == uniq)
-    counts = np.diff(bounds)
-    group = np.repeat(np.where(listed, pos, -1), counts)
-    geoms, areas = _hull_geometries(xy, group, len(wanted))
-    return pd.DataFrame(
-        {
-            "scan_id": wanted.astype(np.int32),
-            "cluster": np.full(len(wanted), CONVEX_CLUSTER, dtype=np.int32),
-            "geometry": geoms,
-            "area_m2": areas.astype(np.float64),
-        }
-    )
+    _, conv, _ = scan_hulls(iter_frame_scans(registered), [], scan_ids, convex=True)
+    return conv
 
 
 def scan_coverage(hulls: pd.DataFrame, scan_ids: Iterable[int] | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -380,14 +508,18 @@ def kept_scan_ids(registration: pd.DataFrame, path: str = "registration.parquet"
 
 
 def compute_hulls(
-    registered: pd.DataFrame, registration: pd.DataFrame, params: HullParams = HullParams()
+    registered: pd.DataFrame | Iterable[tuple[int, np.ndarray]],
+    registration: pd.DataFrame,
+    params: HullParams = HullParams(),
 ) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
     """The ``hulls`` stage: cluster hulls and convex hulls of every kept scan.
 
     Parameters
     ----------
-    registered : DataFrame
-        ``registered.parquet``: map-frame points ``scan_id, x, y, z`` (metres).
+    registered : DataFrame or iterable of (int, (n, >=2) ndarray)
+        ``registered.parquet``: map-frame points ``scan_id, x, y, z`` (metres), as a
+        frame, or streamed scan by scan (:func:`floorscan.io.iter_scans`), which
+        keeps memory to one scan.
     registration : DataFrame
         ``registration.parquet``: one row per scan with ``scan_id`` and ``kept``.
     params : HullParams
@@ -403,19 +535,18 @@ def compute_hulls(
         ``n_scans``, ``n_points``, ``n_points_ignored`` (points of scans not kept),
         ``n_no_points`` (kept scans without points), ``n_zero_area`` (kept scans whose
         cluster hulls have no area: < 3 points, collinear), ``n_clusters_zero_area``.
+
+    Raises
+    ------
+    KeyError
+        When ``registration`` lacks ``scan_id`` or ``kept``, or the frame lacks
+        ``scan_id, x, y``.
     """
     ids = kept_scan_ids(registration)
-    present = np.isin(registered["scan_id"].to_numpy(), ids)
-    cluster = cluster_hulls(registered, params, scan_ids=ids)
-    convex = convex_hulls(registered, scan_ids=ids)
+    scans = iter_frame_scans(registered) if isinstance(registered, pd.DataFrame) else registered
+    (cluster,), convex, counts = scan_hulls(scans, [params], ids, convex=True)
     per_scan = cluster.groupby("scan_id")["area_m2"].sum()
-    with_points = np.unique(registered["scan_id"].to_numpy()[present])
-    counts = {
-        "n_scans": int(len(ids)),
-        "n_points": int(present.sum()),
-        "n_points_ignored": int((~present).sum()),
-        "n_no_points": int(len(ids) - len(with_points)),
-        "n_zero_area": int((per_scan <= 0).sum()),
-        "n_clusters_zero_area": int((cluster["area_m2"] <= 0).sum()),
-    }
+    counts["n_scans"] = int(len(ids))
+    counts["n_zero_area"] = int((per_scan <= 0).sum())
+    counts["n_clusters_zero_area"] = int((cluster["area_m2"] <= 0).sum())
     return cluster, convex, counts

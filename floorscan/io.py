@@ -175,3 +175,88 @@ def split_by_scan(df: pd.DataFrame) -> dict[int, np.ndarray]:
     starts = np.flatnonzero(np.r_[True, ids_sorted[1:] != ids_sorted[:-1]])
     ends = np.r_[starts[1:], len(ids_sorted)]
     return {int(ids_sorted[s]): xyz[order[s:e]] for s, e in zip(starts, ends)}
+
+
+def iter_scans(
+    path: str | os.PathLike,
+    columns: tuple[str, ...] = ("x", "y", "z"),
+    scan_range: tuple[int, int] | None = None,
+    batch_rows: int = 1 << 16,
+) -> Iterator[tuple[int, np.ndarray]]:
+    """Stream a points table (``scan_id, x, y, z``) scan by scan.
+
+    Reads ``path`` in record batches, so memory holds one batch and one scan, never
+    the whole recording (issue 8: peak memory follows the largest scan).
+
+    Parameters
+    ----------
+    path : path
+        A Parquet points table, its rows grouped by scan (as ``scans.parquet`` and
+        ``registered.parquet`` are written).
+    columns : tuple of str
+        Point columns returned, in this order.
+    scan_range : (int, int), optional
+        Only scans with ``start <= scan_id <= stop``; row groups outside the range
+        (by their statistics) are not read.
+    batch_rows : int
+        Rows per record batch.
+
+    Yields
+    ------
+    scan_id : int
+    points : (n, len(columns)) float64 ndarray
+        A new array per scan, in file order.
+
+    Raises
+    ------
+    InputError
+        When a column is missing, or a scan's rows are not contiguous (the message
+        names the file and the scan).
+    """
+    pf = pq.ParquetFile(path, pre_buffer=False)  # pre-buffering holds more row groups at once
+    names = pf.schema_arrow.names
+    missing = [c for c in ("scan_id", *columns) if c not in names]
+    if missing:
+        raise InputError(f"{path}: columns {missing} missing; expected scan_id, {', '.join(columns)}")
+    groups = list(range(pf.metadata.num_row_groups))
+    if scan_range is not None:
+        lo, hi = int(scan_range[0]), int(scan_range[1])
+        col = names.index("scan_id")
+        keep = []
+        for g in groups:
+            st = pf.metadata.row_group(g).column(col).statistics
+            if st is not None and st.has_min_max and (st.max < lo or st.min > hi):
+                continue
+            keep.append(g)
+        groups = keep
+    done: set[int] = set()
+    cur, parts = None, []
+    if not groups:
+        return
+    for batch in pf.iter_batches(batch_size=batch_rows, row_groups=groups, columns=["scan_id", *columns]):
+        ids = batch.column(0).to_numpy(zero_copy_only=False)
+        pts = np.empty((len(ids), len(columns)))
+        for i in range(len(columns)):
+            pts[:, i] = batch.column(i + 1).to_numpy(zero_copy_only=False)
+        if scan_range is not None:
+            sel = (ids >= lo) & (ids <= hi)
+            ids, pts = ids[sel], pts[sel]
+        if len(ids) == 0:
+            continue
+        cuts = np.flatnonzero(ids[1:] != ids[:-1]) + 1
+        for a, b in zip(np.r_[0, cuts], np.r_[cuts, len(ids)]):
+            sid = int(ids[a])
+            if sid == cur:
+                parts.append(pts[a:b])
+                continue
+            if cur is not None:
+                done.add(cur)
+                yield cur, np.concatenate(parts)
+            if sid in done:
+                raise InputError(
+                    f"{path}: the rows of scan {sid} are not contiguous; expected the points "
+                    "grouped by scan_id, as the ingest and register stages write them"
+                )
+            cur, parts = sid, [pts[a:b]]
+    if cur is not None:
+        yield cur, np.concatenate(parts)

@@ -258,6 +258,10 @@ class RasterCoverage:
         """Add scan ``j``'s cells to the union."""
         self.covered[self.cells_of(j)] = True
 
+    def reset(self) -> None:
+        """Empty the union (the scans' cells are kept), to order the same scans again."""
+        self.covered[:] = False
+
 
 def _result(scan_ids: np.ndarray, order: Sequence[int], gain_cells: Sequence[int], cell_m2: float) -> pd.DataFrame:
     g = np.asarray(gain_cells, dtype=np.int64)
@@ -271,14 +275,19 @@ def _result(scan_ids: np.ndarray, order: Sequence[int], gain_cells: Sequence[int
     )
 
 
-def _prepare(scan_ids, geometries, raster_m):
+def _prepare(scan_ids, geometries, raster_m, raster=None):
     ids = np.asarray(scan_ids, dtype=np.int64)
     geoms = np.asarray(geometries, dtype=object)
     if ids.shape != geoms.shape or ids.ndim != 1:
         raise ValueError(f"scan_ids {ids.shape} and geometries {geoms.shape} must be 1-D of the same length")
     if len(np.unique(ids)) != len(ids):
         raise ValueError("scan_ids must be unique")
-    return ids, RasterCoverage(geoms, raster_m)
+    if raster is None:
+        return ids, RasterCoverage(geoms, raster_m)
+    if raster.n != len(ids) or raster.raster_m != float(raster_m):
+        raise ValueError(f"raster: {raster.n} scans at {raster.raster_m} m, expected {len(ids)} at {raster_m} m")
+    raster.reset()
+    return ids, raster
 
 
 def _zero_tail(ids: np.ndarray, cov: RasterCoverage) -> list[int]:
@@ -326,13 +335,19 @@ def greedy_reference(scan_ids: Sequence[int], geometries: Sequence, raster_m: fl
 
 
 def greedy_coverage(
-    scan_ids: Sequence[int], geometries: Sequence, raster_m: float = 0.05, stats: dict | None = None
+    scan_ids: Sequence[int],
+    geometries: Sequence,
+    raster_m: float = 0.05,
+    stats: dict | None = None,
+    raster: RasterCoverage | None = None,
 ) -> pd.DataFrame:
     """Greedy maximum coverage with lazy evaluation: the ordering of
     :func:`greedy_reference`, far faster (production greedy of the ``select`` stage).
 
     Parameters and returns as :func:`greedy_reference`; ``stats``, when given, is
-    filled with ``evaluations`` (candidate gains computed) and ``rounds``.
+    filled with ``evaluations`` (candidate gains computed) and ``rounds``;
+    ``raster``, when given, is the :class:`RasterCoverage` of ``geometries`` at
+    ``raster_m``, reused instead of rasterising again (its union is emptied first).
 
     Notes
     -----
@@ -346,7 +361,7 @@ def greedy_coverage(
     the comparison is exact and the two greedies return identical orderings and
     gains.
     """
-    ids, cov = _prepare(scan_ids, geometries, raster_m)
+    ids, cov = _prepare(scan_ids, geometries, raster_m, raster)
     active = np.flatnonzero(cov.counts > 0)
     heap = [(-int(cov.counts[j]), int(ids[j]), int(j), 0) for j in active]  # round-0 gains are exact
     heapq.heapify(heap)
@@ -424,7 +439,11 @@ def greedy_exact(
 
 
 def coverage_along(
-    scan_ids: Sequence[int], geometries: Sequence, order: Sequence[int], raster_m: float = 0.05
+    scan_ids: Sequence[int],
+    geometries: Sequence,
+    order: Sequence[int],
+    raster_m: float = 0.05,
+    raster: RasterCoverage | None = None,
 ) -> pd.DataFrame:
     """Cumulative covered area along a given ordering.
 
@@ -438,6 +457,8 @@ def coverage_along(
         A permutation of ``scan_ids`` (ids, not positions).
     raster_m : float
         Coverage raster cell side, metres.
+    raster : RasterCoverage, optional
+        The raster of ``geometries`` at ``raster_m`` to reuse (its union is emptied).
 
     Returns
     -------
@@ -447,9 +468,10 @@ def coverage_along(
     Raises
     ------
     ValueError
-        When ``order`` is not a permutation of ``scan_ids``.
+        When ``order`` is not a permutation of ``scan_ids``, or ``raster`` is of other
+        scans or another cell size.
     """
-    ids, cov = _prepare(scan_ids, geometries, raster_m)
+    ids, cov = _prepare(scan_ids, geometries, raster_m, raster)
     order = np.asarray(order, dtype=np.int64)
     pos = np.searchsorted(np.sort(ids), order)
     srt = np.argsort(ids, kind="stable")
@@ -686,7 +708,8 @@ def select_orderings(
     res = params.raster_m
     out, secs = {}, {}
     t0 = time.perf_counter()
-    out["cluster_hull"] = greedy_coverage(ids, geoms, res)
+    raster = RasterCoverage(geoms, res)  # once for the five orderings
+    out["cluster_hull"] = greedy_coverage(ids, geoms, res, raster=raster)
     secs["cluster_hull"] = time.perf_counter() - t0
     fixed = {}
     t0 = time.perf_counter()
@@ -707,7 +730,7 @@ def select_orderings(
     )
     secs["motion_filter"] = time.perf_counter() - t0
     for name, order in fixed.items():
-        out[name] = coverage_along(ids, geoms, order, res)
+        out[name] = coverage_along(ids, geoms, order, res, raster=raster)
     area = shapely.area(geoms) if len(geoms) else np.zeros(0)
     return {k: out[k] for k in ORDERINGS}, summarize(
         {k: out[k] for k in ORDERINGS}, secs, zero_area=int((area <= 0).sum())

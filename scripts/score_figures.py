@@ -24,7 +24,7 @@ with stage_log(snakemake) as log:  # noqa: F821
         reference_kind=kind,
         walls=walls,
         floorplans=floorplans,
-        points=read_table(smk.input.registered, columns=["x", "y", "z"]),
+        points=str(smk.input.registered),  # read in batches, not held whole
         scan_status={e: read_table(p) for e, p in zip(extractors, smk.input.scan_status)},
         bench_dir=smk.params.bench_dir,
         outputs=dict(smk.output.items()),

@@ -11,7 +11,7 @@ with stage_log(snakemake) as log:
     cfg = dict(snakemake.params.cfg)
     fig_params = FigureParams.from_config(cfg)
     timing = selection_figures(
-        registered=read_table(snakemake.input.registered),
+        registered=snakemake.input.registered,  # streamed scan by scan
         registration=read_table(snakemake.input.registration),
         hulls=read_table(snakemake.input.hulls),
         orderings={Path(p).stem: read_table(p) for p in snakemake.input.orderings},

@@ -144,3 +144,21 @@ def test_block_any_keeps_thin_walls():
     assert r.shape == (3, 4)
     assert r[1].all() and not r[0].any() and not r[2].any()
     np.testing.assert_array_equal(F.block_any(b, 1), b)
+
+
+def test_subsample_points_from_file_equals_the_frame(tmp_path):
+    from floorscan.io import write_table
+
+    rng = np.random.default_rng(2)
+    pts = pd.DataFrame({"scan_id": np.repeat(np.arange(30, dtype=np.int32), 200),
+                        "x": rng.uniform(0, 10, 6000).astype(np.float32),
+                        "y": rng.uniform(0, 5, 6000).astype(np.float32),
+                        "z": rng.uniform(0, 3, 6000).astype(np.float32)})
+    path = tmp_path / "registered.parquet"
+    write_table(pts, path)
+    for max_points, band in ((500, (0.5, 2.0)), (10**6, (0.5, 2.0)), (700, None)):
+        a = F.subsample_points(pts, max_points, seed=4, z_band=band)
+        b = F.subsample_points(str(path), max_points, seed=4, z_band=band, batch_rows=999)
+        assert np.array_equal(a, b), (max_points, band)
+    assert len(F.subsample_points(str(path), 10**6, seed=0, z_band=(0.5, 2.0))) == int(
+        ((pts["z"] >= 0.5) & (pts["z"] <= 2.0)).sum())

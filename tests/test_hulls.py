@@ -149,5 +149,108 @@ def test_bad_input_errors():
 
 def test_schema_defaults_match_dataclass():
     schema = yaml.safe_load((REPO / "workflow/schemas/hulls.schema.yaml").read_text())
-    defaults = {k: v["default"] for k, v in schema["properties"].items()}
+    # shard_scans is runtime (how the scans are split into jobs), not a hull parameter
+    defaults = {k: v["default"] for k, v in schema["properties"].items() if k != "shard_scans"}
     assert defaults == fh.HullParams().as_dict()
+
+
+# ----------------------------------------------------------------------------------
+# speed-ups (issue 8): the same hulls as the plain formulation, streamed scan by scan
+# ----------------------------------------------------------------------------------
+def _multipoint_hulls(xy: np.ndarray, labels: np.ndarray, k: int) -> np.ndarray:
+    """The hulls as first written: a MultiPoint per cluster, convex hull, degenerate -> empty."""
+    out = np.full(k, shapely.Polygon(), dtype=object)
+    for c in range(k):
+        pts = xy[labels == c]
+        if len(pts):
+            h = shapely.convex_hull(shapely.multipoints(pts))
+            if h.geom_type == "Polygon" and h.area > 0:
+                out[c] = h
+    return out
+
+
+def _scans_3d(n_scans: int, seed: int = 0) -> dict[int, np.ndarray]:
+    """3D-like scans seen from above: wall rings at 16 heights (jittered) and a floor disc."""
+    rng = np.random.default_rng(seed)
+    out = {}
+    for s in range(n_scans):
+        ang = rng.uniform(0, 2 * np.pi, 3000)
+        r = np.minimum(4.0 / np.maximum(np.abs(np.cos(ang)), 1e-9), 2.5 / np.maximum(np.abs(np.sin(ang)), 1e-9))
+        walls = np.column_stack([r * np.cos(ang), r * np.sin(ang)]) + rng.normal(0, 0.01, (3000, 2))
+        floor = rng.uniform(-2.4, 2.4, (1500, 2))
+        out[s] = np.vstack([walls, floor]) + [3.0 * s, 0.0]
+    return out
+
+
+def test_hulls_equal_the_multipoint_formulation():
+    pts = {0: l_shape(0.1), 1: _scans_3d(1, seed=5)[0], 2: np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]])}
+    p = fh.HullParams(k_clusters=6, seed=2)
+    h = fh.cluster_hulls(frame(pts), p)
+    c = fh.convex_hulls(frame(pts))
+    reg = frame(pts)  # float32 on disk: compare on the same coordinates
+    for sid in pts:
+        xy = reg.loc[reg["scan_id"] == sid, ["x", "y"]].to_numpy(np.float64)
+        lab = fh.cluster_labels(xy, p, scan_id=sid)
+        k = int(lab.max()) + 1
+        want = _multipoint_hulls(xy, lab, k)
+        got = h.loc[h["scan_id"] == sid, "geometry"].to_numpy()
+        assert len(got) == k
+        assert shapely.to_wkb(got).tolist() == shapely.to_wkb(want).tolist()
+        whole = _multipoint_hulls(xy, np.zeros(len(xy), int), 1)[0]
+        assert shapely.to_wkb(c.loc[c["scan_id"] == sid, "geometry"].iloc[0]) == shapely.to_wkb(whole)
+    # the 8 x 5 m room, grown by the 1 cm wall noise (at most ~4 sigma along 26 m of walls)
+    assert 40.0 < c["area_m2"].iloc[1] < 40.0 + 26 * 0.04
+    assert c["area_m2"].iloc[2] == 0.0  # collinear
+
+
+def test_n_distinct_matches_unique():
+    rng = np.random.default_rng(1)
+    for xy in (rng.integers(0, 4, (200, 2)).astype(float), np.zeros((0, 2)), np.ones((1, 2)),
+               np.array([[0.0, -0.0], [-0.0, 0.0], [1.0, 0.0]])):
+        assert fh._n_distinct(xy) == len(np.unique(xy, axis=0))
+
+
+def test_scan_hulls_streamed_from_parquet_equal_the_frame(tmp_path):
+    from floorscan.io import iter_scans, write_table
+
+    pts = _scans_3d(5, seed=1)
+    pts[7] = l_shape(0.2)
+    reg = frame(pts)
+    path = tmp_path / "registered.parquet"
+    write_table(reg, path)
+    ids = [0, 2, 3, 7, 9]  # 1 and 4 not kept, 9 kept without points
+    params = [fh.HullParams(k_clusters=k, seed=3) for k in (1, 4, 10)]
+    # batches of 1000 rows: every scan is cut across batches
+    streamed, convex, counts = fh.scan_hulls(iter_scans(path, ("x", "y"), batch_rows=1000), params, ids)
+    for p, got in zip(params, streamed):
+        want = fh.cluster_hulls(reg, p, scan_ids=ids)
+        assert fh.to_table(got).equals(fh.to_table(want))
+    assert fh.to_table(convex).equals(fh.to_table(fh.convex_hulls(reg, scan_ids=ids)))
+    assert counts == {"n_scans": 5, "n_points": 3 * 4500 + len(pts[7]), "n_points_ignored": 2 * 4500,
+                      "n_no_points": 1}
+    # the stage on the stream: same tables and counts as on the frame
+    registration = pd.DataFrame({"scan_id": [0, 1, 2, 3, 4, 7, 9], "kept": [1, 0, 1, 1, 0, 1, 1]}).astype(
+        {"kept": bool})
+    a = fh.compute_hulls(reg, registration, params[1])
+    b = fh.compute_hulls(iter_scans(path, ("x", "y")), registration, params[1])
+    assert fh.to_table(a[0]).equals(fh.to_table(b[0])) and fh.to_table(a[1]).equals(fh.to_table(b[1]))
+    assert a[2] == b[2] and a[2]["n_no_points"] == 1 and a[2]["n_scans"] == 5
+
+
+def test_iter_scans_range_and_non_contiguous_rows(tmp_path):
+    from floorscan.io import InputError, iter_scans, write_table
+
+    reg = frame({3: l_shape(0.5), 5: l_shape(0.5) + 1, 8: l_shape(0.5) + 2})
+    path = tmp_path / "r.parquet"
+    write_table(reg, path)
+    got = dict(iter_scans(path, ("x", "y", "z"), scan_range=(4, 8), batch_rows=7))
+    assert list(got) == [5, 8]
+    assert np.array_equal(got[5], reg.loc[reg["scan_id"] == 5, ["x", "y", "z"]].to_numpy(np.float64))
+    shuffled = pd.concat([reg.iloc[:10], reg.iloc[len(reg) - 5:], reg.iloc[10:len(reg) - 5]])
+    write_table(shuffled, path)
+    with pytest.raises(InputError, match="r.parquet.*scan 3.*not contiguous"):
+        list(iter_scans(path))
+    with pytest.raises(InputError, match="columns \\['w'\\] missing"):
+        list(iter_scans(path, ("x", "w")))
+    with pytest.raises(ValueError, match="scan 3.*two separate runs"):
+        fh.scan_hulls([(3, l_shape(0.5)), (5, l_shape(0.5)), (3, l_shape(0.5))])

@@ -253,3 +253,36 @@ def test_figures(synthetic, tmp_path):
     assert timing["n_scans"].max() == len(ids)
     ran = timing.dropna(subset=["reference_s"])
     assert len(ran) >= 2 and ran["identical"].all()
+
+
+def test_coverage_vs_clusters_streamed_and_reusing_the_stage_hulls(synthetic, tmp_path):
+    from floorscan.figures_selection import coverage_vs_clusters
+    from floorscan.io import write_table
+
+    registered, _, hulls, _, ids, _ = synthetic
+    sub = ids[::3]
+    path = tmp_path / "registered.parquet"
+    write_table(registered, path)
+    ks = (1, 3, 10)
+    plain = {k: fs.greedy_coverage(*fh.scan_coverage(fh.cluster_hulls(registered, fh.HullParams(k_clusters=k)), sub))
+             for k in ks}
+    from_frame = coverage_vs_clusters(registered, sub, ks, fh.HullParams())
+    streamed = coverage_vs_clusters(str(path), sub, ks, fh.HullParams(), hulls=fh.to_table(hulls).to_pandas())
+    for k in ks:
+        assert from_frame[k].equals(plain[k]) and streamed[k].equals(plain[k]), k
+    # fewer clusters cover more (a coarser hull spans the gaps), k=1 is the convex hull
+    final = {k: plain[k]["covered_area_m2"].iloc[-1] for k in ks}
+    assert final[1] > final[3] > final[10] > 0
+
+
+def test_one_raster_reused_for_every_ordering(synthetic):
+    _, _, _, _, ids, geoms = synthetic
+    raster = fs.RasterCoverage(geoms, 0.05)
+    a = fs.greedy_coverage(ids, geoms, 0.05, raster=raster)
+    assert a.equals(fs.greedy_coverage(ids, geoms, 0.05))
+    order = ids[::-1]
+    b = fs.coverage_along(ids, geoms, order, 0.05, raster=raster)  # the union is emptied first
+    assert b.equals(fs.coverage_along(ids, geoms, order, 0.05))
+    assert b["covered_area_m2"].iloc[-1] == pytest.approx(a["covered_area_m2"].iloc[-1], abs=1e-9)
+    with pytest.raises(ValueError, match="raster"):
+        fs.greedy_coverage(ids, geoms, 0.1, raster=raster)

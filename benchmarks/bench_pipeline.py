@@ -1,0 +1,314 @@
+"""End to end: wall-clock time against the recording's duration (the real-time factor),
+and time and peak memory of every stage (issue 8; thesis Table 5.1).
+
+Run: ``.venv/bin/python -m benchmarks pipeline [--datasets hallways hallways3d
+hallways3d_6000] [--cores 2] [--workdir DIR] [--keep]``
+
+For each dataset the workflow runs in a copy of the repository (so ``results/`` of
+the checkout is never touched; ``PYTHONPATH`` points at the copy): first the
+simulate stage alone (it makes the input recording; it is not processing, so it is
+not timed), then everything from ingest to the final outputs, timed. Printed per
+dataset:
+
+- the recording's duration (first to last scan stamp, s), its scans, the largest
+  scan (points) as recorded and as registered, and the bag's size;
+- the end-to-end wall time and the real-time factor = duration / wall time (target
+  on 2 cores: >= 10 on the 3D recordings);
+- a row per stage: jobs, summed and slowest job time from Snakemake's benchmark
+  files (``results/<ds>/benchmarks/*.tsv``), and peak resident memory (RSS) of a
+  job both from those files and from polling every job's process here every 0.2 s
+  (Snakemake samples every 0.5 s for the first 15 s of a job, then every 30 s, so
+  its figure can miss the peak of a long job), and the CPU seconds of its jobs
+  (polled; unlike wall time they do not grow when other processes share the cores).
+
+``hallways3d_6000`` is not in ``config/config.yaml``: the benchmark adds it with a
+``--configfile`` overlay (:data:`EXTRA_DATASETS`): the hallways floor, 3D scanner,
+the rover at 0.248 m/s instead of 0.3, so ~6000 scans over ~600 s.
+
+``--workdir DIR`` keeps the copy in DIR and reuses its simulated recordings (only
+``results/<ds>/sim`` is kept between runs; everything else is rebuilt).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow.parquet as pq
+import yaml
+
+from floorscan.figures_scoring import read_benchmark
+
+REPO = Path(__file__).resolve().parents[1]
+DEFAULT_DATASETS = ("hallways", "hallways3d", "hallways3d_6000")
+#: Datasets the benchmark adds to the config (a --configfile overlay).
+EXTRA_DATASETS = {
+    "hallways3d_6000": {
+        "description": "hallways floor, 3D scanner, slower rover (0.248 m/s): ~6000 scans (benchmark)",
+        "format": "synthetic",
+        "building": "hallways",
+        "scanner": "3d",
+        "seed": 1,
+        "params": {"simulate": {"speed_mps": 0.248}},
+    }
+}
+_IGNORE = shutil.ignore_patterns("results", ".snakemake", ".git", ".venv", "__pycache__", ".pytest_cache")
+_SCRIPT = re.compile(r"\.snakemake/scripts/tmp[^./]*\.([A-Za-z0-9_]+)\.py")
+
+
+def prepare_copy(workdir: Path) -> Path:
+    """Copy the repository's code and config into ``workdir/repo`` (results kept)."""
+    dst = workdir / "repo"
+    dst.mkdir(parents=True, exist_ok=True)
+    for item in REPO.iterdir():
+        if item.name in ("results", ".snakemake", ".git", ".venv", "__pycache__", ".pytest_cache"):
+            continue
+        target = dst / item.name
+        if target.is_dir() and not target.is_symlink():
+            shutil.rmtree(target)
+        elif target.exists() or target.is_symlink():
+            target.unlink()
+        if item.is_dir():
+            shutil.copytree(item, target, ignore=_IGNORE)
+        else:
+            shutil.copy2(item, target)
+    venv = dst / ".venv"
+    if not venv.exists():
+        venv.symlink_to(REPO / ".venv")
+    shared = workdir / "shared"  # datasets refer to ../shared/data
+    if not shared.exists() and (REPO.parent / "shared").exists():
+        shared.symlink_to(REPO.parent / "shared")
+    (dst / "config" / "bench_pipeline.yaml").write_text(yaml.safe_dump({"datasets": EXTRA_DATASETS}))
+    return dst
+
+
+class RssPoller:
+    """Peak RSS (MB) and CPU time (s) of the Snakemake script jobs under a process, by
+    script name (CPU time as last seen, up to ``interval_s`` short of a job's end)."""
+
+    def __init__(self, pid: int, interval_s: float = 0.2):
+        import psutil
+
+        self._psutil = psutil
+        self.root = psutil.Process(pid)
+        self.interval_s = interval_s
+        self.peak: dict[str, float] = {}
+        self._cpu: dict[int, tuple[str, float]] = {}
+        self.total_peak = 0.0
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+
+    def __enter__(self):
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        self._thread.join()
+
+    @property
+    def cpu(self) -> dict[str, float]:
+        """CPU seconds (user + system) summed over the jobs of each script."""
+        out: dict[str, float] = {}
+        for name, sec in self._cpu.values():
+            out[name] = out.get(name, 0.0) + sec
+        return out
+
+    def _run(self):
+        ps = self._psutil
+        while not self._stop.is_set():
+            try:
+                procs = [self.root, *self.root.children(recursive=True)]
+            except ps.Error:
+                break
+            total = 0.0
+            for p in procs:
+                try:
+                    rss = p.memory_info().rss / 2**20
+                    cmd = " ".join(p.cmdline())
+                    t = p.cpu_times()
+                except (ps.Error, OSError):
+                    continue
+                total += rss
+                m = _SCRIPT.search(cmd)
+                if m:
+                    self.peak[m.group(1)] = max(self.peak.get(m.group(1), 0.0), rss)
+                    self._cpu[p.pid] = (m.group(1), t.user + t.system)
+            self.total_peak = max(self.total_peak, total)
+            self._stop.wait(self.interval_s)
+
+
+def snakemake(repo: Path, dataset: str, cores: int, targets: list[str], poll: bool = False):
+    """Run Snakemake in ``repo`` for ``dataset``; returns (seconds, RssPoller or None).
+
+    With ``poll`` (the timed run) only modification times trigger reruns, so a kept
+    simulation is not redone; without it (the simulation), changed parameters or
+    code of the simulate stage do."""
+    cmd = [
+        str(repo / ".venv" / "bin" / "snakemake"), "--cores", str(cores),
+        "--configfile", "config/config.yaml", "config/bench_pipeline.yaml",
+        "--config", f"target=[{dataset}]", "--quiet", "all",
+        *(["--rerun-triggers", "mtime"] if poll else []),
+        *([] if not targets else ["--", *targets]),
+    ]  # fmt: skip
+    env = {**os.environ, "PYTHONPATH": str(repo)}
+    log = repo / f"bench_pipeline_{dataset}.log"
+    t0 = time.perf_counter()
+    with open(log, "w") as fh:
+        proc = subprocess.Popen(cmd, cwd=repo, env=env, stdout=fh, stderr=subprocess.STDOUT)
+        poller = RssPoller(proc.pid) if poll else None
+        if poller:
+            with poller:
+                rc = proc.wait()
+        else:
+            rc = proc.wait()
+    seconds = time.perf_counter() - t0
+    if rc != 0:
+        tail = "\n".join(log.read_text().splitlines()[-30:])
+        raise RuntimeError(f"snakemake failed for {dataset} (exit {rc}); log {log}:\n{tail}")
+    return seconds, poller
+
+
+#: Stages of the table: a benchmark file or script is counted under the longest of
+#: these that its name starts with (``hulls_shard_scans_0-99`` -> ``hulls``).
+STAGES = (
+    "simulate", "ingest", "poses", "register", "hulls", "select", "selection_figures",
+    "scan_walls", "walls", "floorplan", "score", "score_figures",
+)  # fmt: skip
+
+
+def stage_of(name: str) -> str:
+    """Stage of a benchmark file name (``floorplan_random_ransac`` -> ``floorplan``) or a
+    script name (``hulls_merge`` -> ``hulls``); the name itself when none matches."""
+    hits = [st for st in STAGES if name == st or name.startswith(st + "_")]
+    return max(hits, key=len) if hits else name
+
+
+def stage_table(bench_dir: Path, polled: dict[str, float], cpu: dict[str, float] | None = None) -> pd.DataFrame:
+    """A row per stage from the benchmark TSVs: jobs, s_total, s_max, rss_mb (TSV),
+    the polled peak RSS of the stage's jobs (MB) and their polled CPU seconds."""
+    rows = []
+    for p in sorted(bench_dir.rglob("*.tsv")):
+        b = read_benchmark(p)
+        name = p.relative_to(bench_dir).with_suffix("").as_posix().replace("/", "_")
+        rows.append({"job": name, "stage": stage_of(name), "s": float(b["s"].mean()),
+                     "rss_mb": float(pd.to_numeric(b["max_rss"], errors="coerce").max())})
+    jobs = pd.DataFrame(rows)
+    t = jobs.groupby("stage", sort=False).agg(
+        jobs=("job", "size"), s_total=("s", "sum"), s_max=("s", "max"), rss_mb=("rss_mb", "max")
+    )
+    t["rss_polled_mb"] = [
+        max([v for k, v in polled.items() if stage_of(k) == st], default=np.nan) for st in t.index
+    ]
+    cpu = cpu or {}
+    t["cpu_s"] = [sum(v for k, v in cpu.items() if stage_of(k) == st) if cpu else np.nan for st in t.index]
+    for k, v in polled.items():  # scripts of no stage above (e.g. the shard plans)
+        if stage_of(k) not in t.index:
+            t.loc[stage_of(k)] = [0, np.nan, np.nan, np.nan, v, cpu.get(k, np.nan)]
+    order = {st: i for i, st in enumerate(STAGES)}
+    return t.iloc[sorted(range(len(t)), key=lambda i: (order.get(t.index[i], len(STAGES)), t.index[i]))]
+
+
+def largest_scan(path: Path) -> tuple[int, int, int]:
+    """(scans, largest scan's points, total points) of a points table (scan_id column only)."""
+    ids = pq.read_table(path, columns=["scan_id"])["scan_id"].to_numpy()
+    counts = np.bincount(ids - ids.min()) if len(ids) else np.zeros(0, int)
+    counts = counts[counts > 0]
+    return len(counts), int(counts.max(initial=0)), len(ids)
+
+
+def run_dataset(repo: Path, dataset: str, cores: int) -> dict:
+    res = repo / "results" / dataset
+    if res.exists():  # keep the simulated recording only
+        for item in res.iterdir():
+            if item.name != "sim":
+                shutil.rmtree(item) if item.is_dir() else item.unlink()
+    synthetic = (yaml.safe_load((repo / "config/config.yaml").read_text())["datasets"].get(dataset)
+                 or EXTRA_DATASETS.get(dataset, {})).get("format") == "synthetic"
+    t_sim = None
+    if synthetic:
+        t_sim, _ = snakemake(repo, dataset, cores, [f"results/{dataset}/sim/recording.bag"])
+        (res / "benchmarks" / "simulate.tsv").unlink(missing_ok=True)
+    load_before = os.getloadavg()[0]
+    wall, poller = snakemake(repo, dataset, cores, [], poll=True)
+    load_after = os.getloadavg()[0]
+    index = pq.read_table(res / "scan_index.parquet", columns=["t_ns", "n_points"]).to_pandas()
+    duration = (index["t_ns"].max() - index["t_ns"].min()) / 1e9
+    bag = res / "sim" / "recording.bag"
+    kept, largest_reg, reg_points = largest_scan(res / "registered.parquet")
+    return {
+        "dataset": dataset, "duration_s": duration, "scans": len(index),
+        "largest_scan": int(index["n_points"].max()), "points": int(index["n_points"].sum()),
+        "kept": kept, "largest_registered": largest_reg, "registered_points": reg_points,
+        "bag_mb": bag.stat().st_size / 2**20 if bag.exists() else np.nan,
+        "wall_s": wall, "rtf": duration / wall, "simulate_s": t_sim,
+        "stages": stage_table(res / "benchmarks", poller.peak, poller.cpu), "peak_all_jobs_mb": poller.total_peak,
+        "load": (load_before, load_after),
+    }  # fmt: skip
+
+
+def report(r: dict, cores: int) -> None:
+    print(f"\n### {r['dataset']} (--cores {cores})")
+    print(f"recording: {r['duration_s']:.1f} s, {r['scans']} scans, {r['points'] / 1e6:.1f} M points, "
+          f"largest scan {r['largest_scan']} points" + (f", bag {r['bag_mb']:.0f} MB" if np.isfinite(r["bag_mb"]) else ""))
+    print(f"registered: {r['kept']} kept scans, {r['registered_points'] / 1e6:.2f} M points, "
+          f"largest {r['largest_registered']} points")
+    sim = "" if r["simulate_s"] is None else f", it took {r['simulate_s']:.0f} s"
+    print(f"end to end (ingest .. figures; simulate excluded{sim}): "
+          f"{r['wall_s']:.1f} s; real-time factor {r['rtf']:.2f}x (target >= 10x on 3D)")
+    t = r["stages"]
+    cpu = t["cpu_s"].sum()
+    print(f"CPU time of all jobs {cpu:.0f} s (wall x cores = {r['wall_s'] * cores:.0f} s); load average "
+          f"{r['load'][0]:.1f} before, {r['load'][1]:.1f} after: other processes on the machine slow "
+          "every job, the CPU seconds do not depend on them")
+    print(f"peak RSS of all running jobs together: {r['peak_all_jobs_mb']:.0f} MB")
+    print(f"{'stage':<18}{'jobs':>5}{'s total':>10}{'s max':>9}{'CPU s':>8}{'RSS MB':>9}{'polled':>9}")
+    for st, row in t.iterrows():
+        print(f"{st:<18}{int(row['jobs']):>5d}{row['s_total']:>10.1f}{row['s_max']:>9.1f}{row['cpu_s']:>8.1f}"
+              f"{row['rss_mb']:>9.0f}{row['rss_polled_mb']:>9.0f}")
+    print(f"{'sum of jobs':<18}{int(t['jobs'].sum()):>5d}{t['s_total'].sum():>10.1f}{'':>9}{cpu:>8.1f}")
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--datasets", nargs="+", default=list(DEFAULT_DATASETS))
+    ap.add_argument("--cores", type=int, default=2)
+    ap.add_argument("--workdir", type=Path, help="keep the copy here and reuse its simulated recordings")
+    ap.add_argument("--keep", action="store_true", help="do not delete the temporary copy")
+    args = ap.parse_args(argv)
+    workdir = args.workdir or Path(tempfile.mkdtemp(prefix="floorscan-bench-pipeline-"))
+    repo = prepare_copy(workdir)
+    print(f"bench_pipeline: workflow copy {repo}, --cores {args.cores}, datasets {args.datasets}")
+    try:
+        results = []
+        for ds in args.datasets:
+            r = run_dataset(repo, ds, args.cores)
+            report(r, args.cores)
+            results.append(r)
+        print("\n### summary")
+        print(f"{'dataset':<18}{'duration s':>11}{'scans':>7}{'largest':>9}{'wall s':>9}{'RTF':>7}"
+              f"{'CPU s':>8}{'RTF/CPU':>9}{'max job RSS MB':>16}")
+        for r in results:
+            cpu = r["stages"]["cpu_s"].sum()
+            print(f"{r['dataset']:<18}{r['duration_s']:>11.1f}{r['scans']:>7d}{r['largest_scan']:>9d}"
+                  f"{r['wall_s']:>9.1f}{r['rtf']:>7.2f}{cpu:>8.0f}{r['duration_s'] / cpu:>9.2f}"
+                  f"{r['stages']['rss_polled_mb'].max():>16.0f}")
+        print("RTF = recording duration / end-to-end wall time; RTF/CPU = duration / CPU seconds of all jobs "
+              f"(the wall time on an idle machine is at least CPU s / {args.cores})")
+    finally:
+        if args.workdir is None and not args.keep:
+            shutil.rmtree(workdir, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
