@@ -176,7 +176,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--baseline", action="store_true", help="also 3D with icp_voxel_size_3d_m 0.05")
     args = ap.parse_args(argv or [])
     rate = {}
-    print("register, pose mode (default config: reference map, 3 passes)")
+    print("register, pose mode (default config: reference graph: ICP edges + localizer priors)")
     for name, cfg in (("trace0", {"every_n": 1}), ("trace0", {}), ("demo", {})):
         data = load(name)
         if data is None:
