@@ -9,7 +9,9 @@ Algorithm 3 of the thesis, steps 2-6 (step 1, pose interpolation, is the ``poses
 5. refine the pose by ICP against a reference map (merged, voxel-downsampled scans);
 6. drop the scan when the mean fitness after ICP is below ``min_icp_fitness``.
 
-Step 5 departs from the thesis by default (``reference: map``). The thesis registers
+Step 5 departs from the thesis. The default, ``reference: graph``, is a pose graph of
+scan-to-scan ICP edges with the localizer's poses as priors (:func:`_register_graph`,
+:mod:`floorscan.posegraph`). The older ``reference: map`` works as follows. The thesis registers
 "sequentially every two pointclouds" (3.5), i.e. each scan against its predecessors at
 their localizer poses (kept as ``reference: previous``). An AMCL-like localizer error is
 correlated in time (simulated: Gauss-Markov, 2 s correlation time, scans 0.5 s apart),
@@ -48,12 +50,16 @@ not depend on x, y, yaw), a 3x3 linearised least-squares step for point-to-plane
 (Chen & Medioni 1992; Low 2004). For 2D scans point-to-point gives the same result as
 Open3D's ``registration_icp`` (tested).
 
-3D scans (thesis: 2D only; choices made here, see :func:`scan_clouds`): ICP runs on
-the scan on a coarse voxel grid (``icp_voxel_size_3d_m``) without its horizontal
-surfaces (floor and ceiling say nothing about x, y, yaw), fitness on the coarse grid
-against references on the fine one (``voxel_size_m``). Measured on hallways3d (first
-150 sampled scans, pose mode): 1.0 -> 10 scans/s, RMS position error against the
-truth 4.2 -> 4.0 cm (localizer 6.7 cm).
+3D scans (thesis: 2D only; choices made here, see :func:`scan_clouds` and
+:func:`graph_cloud`): horizontal surfaces (floor, ceiling) are dropped from ICP, since
+they say nothing about x, y, yaw and bias planar point-to-point ICP toward zero motion;
+``map``, ``previous`` and odometry also run ICP on a coarse voxel grid
+(``icp_voxel_size_3d_m``), fitness on the coarse grid against references on the fine
+one (``voxel_size_m``). Measured on hallways3d (1017 sampled scans, RMS position / yaw
+error against the truth; localizer 6.92 cm, 1.15 deg): ``graph`` with floor and
+ceiling 8.59 cm, 0.39 deg at 1.4 scans/s, without 1.75 cm, 0.12 deg at 2.8 scans/s;
+``map`` before 4.11 cm, 0.62 deg at 0.7 scans/s (first 150 scans: 1.0 -> 10 scans/s,
+4.2 -> 4.0 cm).
 
 Pose-free mode (``mode: odometry``; the issue's "scan-to-scan ICP odometry from the
 first scan", not in the thesis) follows the practice of LIDAR odometry, KISS-ICP
@@ -72,10 +78,12 @@ scan whose ICP finds no correspondences is ``icp_failed`` and the chain goes on 
 its prediction; one below ``min_icp_fitness`` is dropped as ``low_icp_fitness`` but its
 ICP pose carries the chain and the map (the best estimate there is; continuing from
 predictions into unmapped space loses track). Not-sampled scans get their odometry
-pose in the table and are not kept. Measured (all sampled scans kept; drift after
-aligning the first pose, median / final): trace0 0.25 / 0.32 m of 32.8 m (1.0 %)
-against its localizer; mac_ros2 0.11 / 0.20 m of 8.3 m against its wheel odometry;
-demo 1.5 / 1.7 cm, hallways3d (first 750 scans) 1.5 / 1.4 cm against the truth. The
+pose in the table and are not kept. With ``loop_closure`` the kept scans then go
+through the pose graph (first scan held) so that revisits remove drift. Measured (all
+sampled scans kept; drift after aligning the first pose, median / final; without
+loop closure in brackets): trace0 0.23 / 0.19 m of 32.8 m, 0.6 % (0.25 / 0.32 m)
+against its localizer; mac_ros2 0.09 / 0.22 m of 8.3 m (0.11 / 0.20 m) against its
+wheel odometry; demo 1.2 / 4.8 cm (1.5 / 1.7 cm) against the truth. The
 previous scan-to-scan version kept 27 of 72 scans on mac_ros2 and drifted 1.9 m
 (median) on trace0. Part of trace0's figure is its localizer's: pairwise ICP of
 scans 2 s apart disagrees with the localizer's relative yaw by up to 5 degrees and
@@ -268,6 +276,7 @@ class RegistrationConfig:
             "max_speed_m_s",
             "max_turn_rate_rad_s",
             "odometry_max_correspondence_m",
+            "icp_voxel_size_3d_m",
         ):
             if not getattr(self, key) > 0:
                 raise InputError(f"config register.{key}: expected > 0, got {getattr(self, key)}")
@@ -278,7 +287,7 @@ class RegistrationConfig:
                 f"distances > 0 (metres, coarse to fine), got {d!r}"
             )
         for key in ("voxel_size_m", "pose_jump_slack_m", "pose_jump_slack_rad", "min_points",
-                    "exclude_window_s", "reference_spacing_s", "icp_voxel_size_3d_m",
+                    "exclude_window_s", "reference_spacing_s",
                     "odometry_keyframe_m", "odometry_keyframe_rad"):
             if getattr(self, key) < 0:
                 raise InputError(f"config register.{key}: expected >= 0, got {getattr(self, key)}")
@@ -465,13 +474,52 @@ def scan_clouds(points: np.ndarray, cfg: RegistrationConfig) -> ScanClouds:
     p = np.array(points, dtype=np.float64)
     if len(p) == 0 or np.ptp(p[:, 2]) == 0:
         return ScanClouds(p, p, voxel_downsample(p, cfg.voxel_size_m))
-    coarse = voxel_downsample(p, cfg.icp_voxel_size_3d_m)
-    icp = coarse
+    coarse, vertical, _ = _vertical_voxels(p, cfg)
+    return ScanClouds(coarse, voxel_downsample(p, cfg.voxel_size_m), coarse[vertical])
+
+
+def _vertical_voxels(p: np.ndarray, cfg: RegistrationConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A 3D scan on the ``icp_voxel_size_3d_m`` grid: voxel centroids, which voxels are
+    not horizontal surfaces (normal |z| <= 0.7; all when too few are), and each point's
+    voxel (index into the centroids)."""
+    keys = np.floor(p / cfg.icp_voxel_size_3d_m).astype(np.int64)
+    keys -= keys.min(axis=0)
+    span = keys.max(axis=0) + 1
+    flat = (keys[:, 0] * span[1] + keys[:, 1]) * span[2] + keys[:, 2]
+    _, inverse, counts = np.unique(flat, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    sums = np.zeros((len(counts), 3))
+    np.add.at(sums, inverse, p)
+    coarse = sums / counts[:, None]
+    vertical = np.ones(len(coarse), dtype=bool)
     if len(coarse) > cfg.normal_neighbours:
-        vertical = np.abs(normals_3d(coarse, cfg.normal_neighbours)[:, 2]) <= _MAX_NORMAL_Z
-        if vertical.sum() >= 3:
-            icp = coarse[vertical]
-    return ScanClouds(coarse, voxel_downsample(p, cfg.voxel_size_m), icp)
+        v = np.abs(normals_3d(coarse, cfg.normal_neighbours)[:, 2]) <= _MAX_NORMAL_Z
+        if v.sum() >= 3:
+            vertical = v
+    return coarse, vertical, inverse
+
+
+def graph_cloud(points: np.ndarray, cfg: RegistrationConfig) -> np.ndarray:
+    """The points of a scan the pose graph (``reference: graph``) aligns: all of a 2D
+    scan; of a 3D scan, the points outside horizontal surfaces (see :func:`scan_clouds`:
+    floor and ceiling only bias planar point-to-point ICP toward zero motion).
+
+    Parameters
+    ----------
+    points : (N, 3) float ndarray
+        Scanner frame, metres.
+    cfg : RegistrationConfig
+
+    Returns
+    -------
+    (M, 3) float64 ndarray
+        New array, M <= N.
+    """
+    p = np.array(points, dtype=np.float64)
+    if len(p) == 0 or np.ptp(p[:, 2]) == 0:
+        return p
+    _, vertical, inverse = _vertical_voxels(p, cfg)
+    return p[vertical[inverse]]
 
 
 def fitness_against(
@@ -1373,7 +1421,7 @@ def _register_graph(scans, clouds, sids, t, cfg, out, priors: bool) -> int:
     params = posegraph.GraphParams.from_mapping(cfg.graph)
     init = final[scans].copy()
     t_s = (t[scans] - t[scans[0]]) * 1e-9
-    cl = [clouds[int(sids[i])] for i in scans]
+    cl = [graph_cloud(clouds[int(sids[i])], cfg) for i in scans]
     kinds = ("sequential", "loop") if priors else ("loop",)
     poses, fp, fi, rm, info = posegraph.refine_poses(
         cl, init, t_s, init if priors else None, params, icp_kinds=kinds
