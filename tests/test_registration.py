@@ -460,6 +460,43 @@ def test_radish_icp_corrections_are_small(name, tmp_path):
     assert s["n_kept"] >= (0.85 if name == "orebro" else 0.95) * len(index)
 
 
+@needs_shared
+@pytest.mark.realdata
+@pytest.mark.slow
+def test_freiburg101_corrections_fix_the_logs_own_pose_error(tmp_path):
+    """freiburg101 is the Radish log whose median correction misses the issue's 2 cm
+    (2.15 cm with ``previous``; 1.89 cm with ``graph``, which instead gives intel 2.27 cm).
+    The corrections are the log's own pose error, not ICP noise: they make the map
+    crisper. Mean thinness of the eight longest walls (see :func:`_straight_walls`), all
+    292 scans: log poses 0.628, ``previous`` 0.683. On the 290 scans both references keep:
+    log 0.633, ``previous`` 0.723, ``graph`` 0.619; on intel, aces and orebro, where the
+    corrections are at the noise floor, the three differ by <= 0.03."""
+    scans, index, poses = _ingest(
+        tmp_path, {"format": "carmen", "path": str(SHARED_DATA / "radish" / "freiburg-101-corrected.log.gz")}
+    )
+    r = register_scans(scans, index, poses, {"every_n": 1, "reference": "previous"})
+    s = r.summary
+    assert 0.015 < s["median_correction_m"] < 0.025
+    assert math.degrees(s["median_correction_rad"]) < 0.5
+    assert s["n_kept"] == len(index)
+    from floorscan.io import split_by_scan
+
+    by = split_by_scan(scans)
+    t = r.table.set_index("scan_id")
+    p = poses.set_index("scan_id")
+
+    def mapxy(x, y, yaw):
+        out = []
+        for i in t.index:
+            c, sn = math.cos(yaw[i]), math.sin(yaw[i])
+            out.append(by[int(i)][:, :2] @ np.array([[c, sn], [-sn, c]]) + [x[i], y[i]])
+        return np.concatenate(out)
+
+    thin_log = np.mean([w for _, w in _straight_walls(mapxy(p.x, p.y, p.yaw), n_lines=8)])
+    thin_reg = np.mean([w for _, w in _straight_walls(mapxy(t.x_m, t.y_m, t.yaw_rad), n_lines=8)])
+    assert thin_reg > thin_log + 0.03
+
+
 def _straight_walls(points_xy, seed=0, n_lines=6, band=0.15):
     """The n_lines longest walls by sequential RANSAC (3 cm inliers) on a 2 cm grid of the
     map, refitted by PCA; per wall its length (m) and the fraction of the grid cells within
