@@ -7,9 +7,79 @@ import os
 import numpy as np
 import pandas as pd
 
+#: Largest raster (cells) of :class:`DensityRaster`; a larger extent coarsens the cell.
+MAX_CELLS = 40_000_000
+
+
+class DensityRaster:
+    """Points per cell of a map, accumulated scan by scan (the registered map's figure
+    without holding all its points: issue 8, memory follows the largest scan).
+
+    Parameters
+    ----------
+    lo, hi : (2,) float array-like
+        Corners of the extent, metres (map frame); points outside are clipped to it.
+    cell_m : float
+        Cell side, metres; doubled until the raster has at most :data:`MAX_CELLS` cells.
+    """
+
+    def __init__(self, lo, hi, cell_m: float = 0.05):
+        self.lo = np.asarray(lo, dtype=np.float64)
+        hi = np.asarray(hi, dtype=np.float64)
+        cell = float(cell_m)
+        while True:
+            shape = np.maximum(np.ceil((hi - self.lo) / cell).astype(np.int64), 1)
+            if shape[0] * shape[1] <= MAX_CELLS:
+                break
+            cell *= 2
+        self.cell_m = cell
+        self.nx, self.ny = int(shape[0]), int(shape[1])
+        self.counts = np.zeros(self.nx * self.ny, dtype=np.int64)
+        self._buf: list[np.ndarray] = []
+        self._n = 0
+
+    def add(self, xy: np.ndarray) -> None:
+        """Count points (N, 2+) in metres (x, y first); the array is not modified."""
+        xy = np.asarray(xy, dtype=np.float64)
+        ix = np.clip(((xy[:, 0] - self.lo[0]) / self.cell_m).astype(np.int64), 0, self.nx - 1)
+        iy = np.clip(((xy[:, 1] - self.lo[1]) / self.cell_m).astype(np.int64), 0, self.ny - 1)
+        self._buf.append(iy * self.nx + ix)
+        self._n += len(ix)
+        if self._n >= 4_000_000:
+            self._flush()
+
+    def _flush(self) -> None:
+        if self._buf:
+            self.counts += np.bincount(np.concatenate(self._buf), minlength=len(self.counts))
+            self._buf, self._n = [], 0
+
+    def grid(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Cell edges in x (nx+1,), in y (ny+1,), metres, and counts (ny, nx), cropped
+        to the occupied cells."""
+        self._flush()
+        h = self.counts.reshape(self.ny, self.nx)
+        ex = self.lo[0] + np.arange(self.nx + 1) * self.cell_m
+        ey = self.lo[1] + np.arange(self.ny + 1) * self.cell_m
+        cols, rows = np.flatnonzero(h.any(axis=0)), np.flatnonzero(h.any(axis=1))
+        if len(cols) == 0:
+            return ex[:1], ey[:1], h[:0, :0]
+        return (ex[cols[0]:cols[-1] + 2], ey[rows[0]:rows[-1] + 2],
+                h[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1])
+
+    @classmethod
+    def of_points(cls, xy: np.ndarray, cell_m: float = 0.05) -> "DensityRaster":
+        """The raster of all points ``xy`` (N, 2+), metres, over their extent."""
+        xy = np.asarray(xy, dtype=np.float64)
+        lo = xy[:, :2].min(axis=0) if len(xy) else np.zeros(2)
+        hi = xy[:, :2].max(axis=0) if len(xy) else np.zeros(2)
+        r = cls(lo, hi, cell_m)
+        if len(xy):
+            r.add(xy)
+        return r
+
 
 def plot_registered_map(
-    registered: pd.DataFrame,
+    registered: "pd.DataFrame | DensityRaster",
     registration: pd.DataFrame,
     path: str | os.PathLike,
     *,
@@ -26,8 +96,10 @@ def plot_registered_map(
 
     Parameters
     ----------
-    registered : pandas.DataFrame
-        ``scan_id, x, y, z``: points in the map frame, metres (``registered.parquet``).
+    registered : pandas.DataFrame or DensityRaster
+        ``scan_id, x, y, z``: points in the map frame, metres (``registered.parquet``),
+        or their :class:`DensityRaster` (accumulated while writing them; its cell
+        replaces ``cell_m``).
     registration : pandas.DataFrame
         ``kept, x_m, y_m`` per scan (``registration.parquet``).
     path : path-like
@@ -45,15 +117,15 @@ def plot_registered_map(
 
     from floorscan.io import atomic_path
 
-    xy = registered[["x", "y"]].to_numpy(np.float64)
+    raster = (registered if isinstance(registered, DensityRaster)
+              else DensityRaster.of_points(registered[["x", "y"]].to_numpy(np.float64), cell_m))
+    cell_m = raster.cell_m
     kept = registration[registration["kept"].to_numpy(bool)]
     loc = kept[["x_m", "y_m"]].to_numpy(np.float64)
     fig, ax = plt.subplots(figsize=(8, 8), dpi=120)
-    if len(xy):
-        lo, hi = xy.min(axis=0), xy.max(axis=0)
-        bins = np.maximum(((hi - lo) / cell_m).astype(int), 1)
-        h, ex, ey = np.histogram2d(xy[:, 0], xy[:, 1], bins=bins.tolist(), range=[[lo[0], hi[0]], [lo[1], hi[1]]])
-        h = np.ma.masked_equal(h.T, 0)
+    ex, ey, h = raster.grid()
+    if h.size and h.max() > 0:
+        h = np.ma.masked_equal(h, 0)
         im = ax.pcolormesh(ex, ey, h, cmap="Greys", norm=LogNorm(vmin=1, vmax=max(h.max(), 2)), shading="flat", rasterized=True)
         fig.colorbar(im, ax=ax, shrink=0.6, label=f"points per {cell_m * 100:.0f} cm cell")
     if len(loc):

@@ -103,6 +103,17 @@ class GraphParams:
         return dataclass_from_mapping(cls, values, "register.graph")
 
 
+def _one_openmp_thread():
+    """Context: Open3D's OpenMP loops on one thread (threadpoolctl, a scikit-learn
+    dependency). Its multi-threaded reductions sum in varying order, so the pose graph
+    differed from run to run in the last bits (same input, same output is a house
+    rule); and on the 2-core target one thread costs less CPU (1500 edge ICPs of
+    hallways: 3.1 s with one thread, 4.3 s with two)."""
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=1, user_api="openmp")
+
+
 def se2_between(a, b) -> tuple[float, float, float]:
     """Planar motion (dx, dy, dyaw) from pose ``a`` to pose ``b``, in ``a``'s frame.
 
@@ -186,8 +197,15 @@ def scan_pair_edges(
     """Relative-pose constraints between overlapping scans by planar ICP.
 
     Each pair of :func:`candidate_pairs` is aligned by coarse-to-fine point-to-point
-    ICP (:func:`floorscan.registration.icp_planar`), source scan ``j`` against target
-    scan ``i`` in ``i``'s scanner frame, starting from the relative pose of ``poses``.
+    ICP, source scan ``j`` against target scan ``i`` in ``i``'s scanner frame, starting
+    from the relative pose of ``poses``. The clouds are projected to the xy plane
+    (z = 0) and voxel-downsampled on ``voxel_size_m``; Open3D's ``registration_icp``
+    (point-to-point) on coplanar clouds stays planar (x, y, yaw), and gives the same
+    result as :func:`floorscan.registration.icp_planar` (median difference 0, 95th
+    percentile 0.27 mm over 1500 pairs of hallways) at half the CPU time (single
+    thread: 2.7 vs 5.5 s), since its iterations run in C++. Its convergence criteria stay
+    tight (relative fitness and RMSE 1e-6): 1e-4 moved 5 % of the edges by > 2 cm.
+    Fitness before and after ICP uses a cKDTree of each target scan built once.
 
     Parameters
     ----------
@@ -213,43 +231,60 @@ def scan_pair_edges(
         relative pose when ICP found no correspondences). :func:`optimize_pose_graph`
         uses the pairs with ``fitness >= min_edge_fitness``.
     """
-    from floorscan.registration import icp_planar, transform_points, voxel_downsample
+    import open3d as o3d
 
+    from floorscan.registration import transform_points, voxel_downsample
+
+    reg = o3d.pipelines.registration
     poses = np.asarray(poses, dtype=np.float64)
-    pts = [voxel_downsample(np.asarray(c, dtype=np.float64), params.voxel_size_m) for c in clouds]
+    pts = []
+    for c in clouds:  # the xy projection (z = 0): Open3D's 6-DoF ICP then stays planar
+        p = np.array(c, dtype=np.float64).reshape(-1, 3)
+        p[:, 2] = 0.0
+        pts.append(voxel_downsample(p, params.voxel_size_m))
     trees: dict[int, cKDTree] = {}
+    o3d_clouds: dict[int, object] = {}
+
+    def cloud(k: int):
+        if k not in o3d_clouds:
+            o3d_clouds[k] = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts[k]))
+        return o3d_clouds[k]
+
+    criteria = reg.ICPConvergenceCriteria(1e-6, 1e-6, int(params.icp_max_iterations))
+    estimation = reg.TransformationEstimationPointToPoint()
     rows = []
-    for i, j, kind in candidate_pairs(poses, t_s, params):
-        if len(pts[i]) < 3 or len(pts[j]) < 3:
-            continue
-        if i not in trees:
-            trees[i] = cKDTree(pts[i])
-        rel = se2_between(poses[i], poses[j])
-        pose = (rel[0], rel[1], 0.0, rel[2])
-        d0, _ = trees[i].query(
-            transform_points(pts[j], rel[0], rel[1], 0.0, rel[2]), distance_upper_bound=params.inlier_m
-        )
-        fitness_prior = float(np.isfinite(d0).mean())
-        if kind not in icp_kinds:
-            rows.append((i, j, kind, rel[0], rel[1], rel[2], fitness_prior, 1.0, 0.0))
-            continue
-        ok = True
-        for dist in params.icp_distances_m:
-            pose, n_corr = icp_planar(
-                pts[j], pts[i], trees[i], pose, dist, max_iterations=params.icp_max_iterations
+    with _one_openmp_thread():
+        for i, j, kind in candidate_pairs(poses, t_s, params):
+            if len(pts[i]) < 3 or len(pts[j]) < 3:
+                continue
+            if i not in trees:
+                trees[i] = cKDTree(pts[i])
+            rel = se2_between(poses[i], poses[j])
+            d0, _ = trees[i].query(
+                transform_points(pts[j], rel[0], rel[1], 0.0, rel[2]), distance_upper_bound=params.inlier_m
             )
-            if n_corr == 0:
-                ok = False
-                break
-        if not ok:
-            rows.append((i, j, kind, rel[0], rel[1], rel[2], fitness_prior, 0.0, math.nan))
-            continue
-        src = transform_points(pts[j], pose[0], pose[1], 0.0, pose[3])
-        d, _ = trees[i].query(src, distance_upper_bound=params.inlier_m)
-        inl = np.isfinite(d)
-        fitness = float(inl.mean())
-        rmse = float(np.sqrt(np.mean(d[inl] ** 2))) if inl.any() else math.nan
-        rows.append((i, j, kind, pose[0], pose[1], pose[3], fitness_prior, fitness, rmse))
+            fitness_prior = float(np.isfinite(d0).mean())
+            if kind not in icp_kinds:
+                rows.append((i, j, kind, rel[0], rel[1], rel[2], fitness_prior, 1.0, 0.0))
+                continue
+            T = _matrix(*rel)
+            ok = True
+            for dist in params.icp_distances_m:
+                res = reg.registration_icp(cloud(j), cloud(i), float(dist), T, estimation, criteria)
+                if len(res.correspondence_set) < 3:
+                    ok = False
+                    break
+                T = np.asarray(res.transformation)
+            if not ok:
+                rows.append((i, j, kind, rel[0], rel[1], rel[2], fitness_prior, 0.0, math.nan))
+                continue
+            pose = (float(T[0, 3]), float(T[1, 3]), 0.0, math.atan2(T[1, 0], T[0, 0]))
+            src = transform_points(pts[j], pose[0], pose[1], 0.0, pose[3])
+            d, _ = trees[i].query(src, distance_upper_bound=params.inlier_m)
+            inl = np.isfinite(d)
+            fitness = float(inl.mean())
+            rmse = float(np.sqrt(np.mean(d[inl] ** 2))) if inl.any() else math.nan
+            rows.append((i, j, kind, pose[0], pose[1], pose[3], fitness_prior, fitness, rmse))
     return pd.DataFrame(rows, columns=EDGE_COLUMNS).astype(
         {"i": np.int64, "j": np.int64, "kind": str, "dx_m": float, "dy_m": float,
          "dyaw_rad": float, "fitness_prior": float, "fitness": float, "inlier_rmse_m": float}
@@ -262,7 +297,14 @@ def optimize_pose_graph(
     priors: np.ndarray | None = None,
     params: GraphParams = GraphParams(),
 ) -> tuple[np.ndarray, dict]:
-    """Optimise the scan poses of a pose graph (Open3D, Levenberg-Marquardt).
+    """Optimise the scan poses of a pose graph (Open3D, Gauss-Newton).
+
+    Open3D builds a dense 6N x 6N normal matrix per iteration (300 MB and ~0.1 s for
+    the 1018 nodes of hallways), so iterations are what cost. Its Levenberg-Marquardt
+    needed ~50 of them (9.3 s CPU on hallways); Gauss-Newton converges in a few from
+    the localizer's poses, to the same poses (RMS error vs the truth 1.86 cm, 0.179 deg
+    either way) in 1.1 s. Cutting LM's iterations instead loses accuracy (10: 2.37 cm,
+    0.66 deg). Measured on hallways (1017 sampled scans, 3214 edges).
 
     Parameters
     ----------
@@ -340,10 +382,11 @@ def optimize_pose_graph(
     level = o3d.utility.get_verbosity_level()
     o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
     try:
-        reg.global_optimization(
-            graph, reg.GlobalOptimizationLevenbergMarquardt(),
-            reg.GlobalOptimizationConvergenceCriteria(), option,
-        )
+        with _one_openmp_thread():
+            reg.global_optimization(
+                graph, reg.GlobalOptimizationGaussNewton(),
+                reg.GlobalOptimizationConvergenceCriteria(), option,
+            )
     finally:
         o3d.utility.set_verbosity_level(level)
     info["n_pruned"] = int(n_before - len(graph.edges))

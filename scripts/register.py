@@ -1,17 +1,20 @@
 """Stage register: scans in the map frame, refined by ICP (thesis Algorithm 3 steps 2-6)."""
 from floorscan.figures_registration import plot_registered_map
-from floorscan.io import REGISTERED, read_table, write_table
-from floorscan.registration import REGISTRATION, register_scans
+from floorscan.io import read_table, write_table
+from floorscan.registration import REGISTRATION, register_recording
 from floorscan.workflow import stage_log
 
 with stage_log(snakemake) as log:
     cfg = snakemake.params.cfg
     poses = read_table(snakemake.input.poses) if "poses" in snakemake.input.keys() else None
-    result = register_scans(read_table(snakemake.input.scans), read_table(snakemake.input.index), poses, cfg)
     meta = {"dataset": snakemake.wildcards.dataset, "units": "metres, radians"}
-    write_table(result.registered, snakemake.output.registered, schema=REGISTERED, metadata=meta)
+    # streamed: the points are read scan by scan and written as they are registered
+    result = register_recording(
+        snakemake.input.scans, read_table(snakemake.input.index), poses, cfg,
+        snakemake.output.registered, metadata=meta,
+    )
     write_table(result.table, snakemake.output.registration, schema=REGISTRATION, metadata=meta)
-    plot_registered_map(result.registered, result.table, snakemake.output.figure, title=snakemake.wildcards.dataset)
+    plot_registered_map(result.density, result.table, snakemake.output.figure, title=snakemake.wildcards.dataset)
     s = result.summary
     log.info(
         "kept %d of %d scans (%d sampled); drops %s; dropped of checked %s; median correction %.3f m, %.3f rad",

@@ -388,10 +388,36 @@ def test_scan_clouds_drop_floor_and_ceiling_from_3d_icp():
     flat = np.column_stack([np.arange(50.0), np.zeros(50), np.zeros(50)])
     c2 = scan_clouds(flat, cfg)
     np.testing.assert_array_equal(c2.fit_source, flat)
-    # the pose graph gets the raw wall points, none of the floor
+    # the pose graph gets the wall projected to the xy plane on a 5 cm 2D grid: one
+    # point per 5 cm of wall (120 columns of 6 m; the grid cuts one column in two
+    # halves at most), none of the floor
     g3 = graph_cloud(np.concatenate([floor, wall]), cfg)
-    assert len(g3) == len(wall) and np.all(g3[:, 1] == 3.0)
+    assert 115 <= len(g3) <= 125 and np.allclose(g3[:, 1], 3.0) and np.all(g3[:, 2] == 0.0)
     np.testing.assert_array_equal(graph_cloud(flat, cfg), flat)
+
+
+@pytest.mark.parametrize("z_beams", [(0.0,), tuple(np.radians([-10.0, 0.0, 10.0]))], ids=["2d", "3d"])
+def test_streamed_registration_matches_the_in_memory_one(tmp_path, z_beams):
+    """register_recording (points streamed from a file, written scan by scan) gives the
+    table and points of register_scans, and the density raster counts every point."""
+    from floorscan.io import SCANS, read_table, write_table
+    from floorscan.registration import register_recording
+
+    true, t = trajectory(16)
+    rng = np.random.default_rng(2)
+    err = rng.normal(0, [0.03, 0.03, 0.01], (16, 3))
+    scans, index, poses = recording(true, t, err, seed=3, noise=0.005, z_beams=z_beams)
+    scans = scans[scans["scan_id"] != 4]  # a scan without points: too_few_points
+    write_table(scans, tmp_path / "scans.parquet", schema=SCANS)
+    cfg = {"every_n": 2}
+    a = register_scans(scans, index, poses, cfg)
+    b = register_recording(tmp_path / "scans.parquet", index, poses, cfg, tmp_path / "reg.parquet",
+                           metadata={"dataset": "t"})
+    pd.testing.assert_frame_equal(a.table, b.table)
+    reg = read_table(tmp_path / "reg.parquet")
+    pd.testing.assert_frame_equal(reg, a.registered)
+    assert b.table.loc[4, "reason"] == "too_few_points"
+    assert b.density.grid()[2].sum() == len(reg) and b.registered is None
 
 
 def test_bad_input_errors():
