@@ -29,6 +29,8 @@ so the solution stays planar. The localizer priors are edges from a fixed anchor
 
 from __future__ import annotations
 
+import functools
+
 import logging
 import math
 from dataclasses import dataclass
@@ -76,6 +78,9 @@ class GraphParams:
         Standard deviation of an ICP edge's translation (metres) and yaw (radians).
     prior_sigma_m, prior_sigma_rad : float
         Standard deviation of a localizer pose (metres, radians).
+    workers : int
+        Processes for the edge ICP (the ``register`` rule passes its Snakemake
+        ``threads``). The edges do not depend on it: each pair is aligned alone.
     """
 
     sequential_neighbours: int = 2
@@ -91,6 +96,7 @@ class GraphParams:
     edge_sigma_rad: float = 0.002
     prior_sigma_m: float = 0.05
     prior_sigma_rad: float = 0.02
+    workers: int = 1
 
     @classmethod
     def from_mapping(cls, cfg) -> "GraphParams":
@@ -108,10 +114,18 @@ def _one_openmp_thread():
     dependency). Its multi-threaded reductions sum in varying order, so the pose graph
     differed from run to run in the last bits (same input, same output is a house
     rule); and on the 2-core target one thread costs less CPU (1500 edge ICPs of
-    hallways: 3.1 s with one thread, 4.3 s with two)."""
-    from threadpoolctl import threadpool_limits
+    hallways: 3.1 s with one thread, 4.3 s with two). The controller is made once:
+    ``threadpool_limits`` scans the loaded libraries on every call (4.4 s of 1019 calls
+    on hallways3d)."""
+    return _openmp_controller().limit(limits=1, user_api="openmp")
 
-    return threadpool_limits(limits=1, user_api="openmp")
+
+@functools.lru_cache(maxsize=1)
+def _openmp_controller():
+    import open3d  # noqa: F401  (its OpenMP runtime must be loaded before the scan)
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()
 
 
 def se2_between(a, b) -> tuple[float, float, float]:
@@ -231,17 +245,94 @@ def scan_pair_edges(
         relative pose when ICP found no correspondences). :func:`optimize_pose_graph`
         uses the pairs with ``fitness >= min_edge_fitness``.
     """
-    import open3d as o3d
+    from floorscan.registration import voxel_downsample
 
-    from floorscan.registration import transform_points, voxel_downsample
-
-    reg = o3d.pipelines.registration
     poses = np.asarray(poses, dtype=np.float64)
     pts = []
     for c in clouds:  # the xy projection (z = 0): Open3D's 6-DoF ICP then stays planar
         p = np.array(c, dtype=np.float64).reshape(-1, 3)
         p[:, 2] = 0.0
         pts.append(voxel_downsample(p, params.voxel_size_m))
+    pairs = [(i, j, kind) for i, j, kind in candidate_pairs(poses, t_s, params)
+             if len(pts[i]) >= 3 and len(pts[j]) >= 3]
+    chunks = _chunks(pairs, max(1, int(params.workers)))
+    if len(chunks) <= 1:
+        rows = _pair_rows(pts, poses, pairs, params, icp_kinds)
+    else:
+        rows = _parallel_pair_rows(pts, poses, chunks, params, icp_kinds)
+    return pd.DataFrame(rows, columns=EDGE_COLUMNS).astype(
+        {"i": np.int64, "j": np.int64, "kind": str, "dx_m": float, "dy_m": float,
+         "dyaw_rad": float, "fitness_prior": float, "fitness": float, "inlier_rmse_m": float}
+    )
+
+
+_MIN_PAIRS_PER_WORKER = 200
+
+
+def _chunks(pairs: list, n: int) -> list[list]:
+    """``pairs`` cut into ``n`` contiguous runs of near-equal length (fewer when short:
+    a worker costs ~1 s to start, so each gets at least 200 pairs)."""
+    n = max(1, min(n, len(pairs) // _MIN_PAIRS_PER_WORKER))
+    bounds = np.linspace(0, len(pairs), n + 1).round().astype(int)
+    return [pairs[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
+
+
+def _parallel_pair_rows(pts, poses, chunks, params, icp_kinds) -> list[tuple]:
+    """:func:`_pair_rows` of ``chunks[1:]`` in worker processes and of ``chunks[0]``
+    here; rows in pair order. Each worker is a fresh interpreter
+    (``python -c ... _pair_rows_worker``) fed its pairs and only their clouds through a
+    pipe (pickle): not forked, since Open3D's OpenMP runtime is not safe across fork,
+    and not ``multiprocessing``'s spawn, which re-runs the parent's main script (a
+    Snakemake stage script has no ``__main__`` guard)."""
+    import pickle
+    import subprocess
+    import sys
+
+    procs = []
+    try:
+        for chunk in chunks[1:]:
+            need = sorted({k for i, j, _ in chunk for k in (i, j)})
+            job = pickle.dumps(({k: pts[k] for k in need}, poses, chunk, params, icp_kinds))
+            proc = subprocess.Popen(
+                [sys.executable, "-c", "from floorscan.posegraph import _pair_rows_worker; _pair_rows_worker()"],
+                stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+            )
+            proc.stdin.write(job)
+            proc.stdin.close()
+            procs.append(proc)
+        rows = _pair_rows(pts, poses, chunks[0], params, icp_kinds)
+        for proc in procs:
+            out = proc.stdout.read()
+            if proc.wait() != 0:
+                raise RuntimeError(f"edge ICP worker exited with {proc.returncode}")
+            rows.extend(pickle.loads(out))
+    finally:
+        for proc in procs:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+    return rows
+
+
+def _pair_rows_worker() -> None:
+    """Entry point of an edge ICP worker: a pickled ``_pair_rows`` call on stdin, its
+    rows pickled on stdout."""
+    import pickle
+    import sys
+
+    args = pickle.load(sys.stdin.buffer)
+    sys.stdout.buffer.write(pickle.dumps(_pair_rows(*args)))
+    sys.stdout.buffer.flush()
+
+
+def _pair_rows(pts, poses: np.ndarray, pairs, params: GraphParams, icp_kinds) -> list[tuple]:
+    """The :data:`EDGE_COLUMNS` rows of ``pairs`` (see :func:`scan_pair_edges`);
+    ``pts[k]`` is scan k's projected, downsampled cloud (a list or a dict)."""
+    import open3d as o3d
+
+    from floorscan.registration import transform_points
+
+    reg = o3d.pipelines.registration
     trees: dict[int, cKDTree] = {}
     o3d_clouds: dict[int, object] = {}
 
@@ -254,9 +345,7 @@ def scan_pair_edges(
     estimation = reg.TransformationEstimationPointToPoint()
     rows = []
     with _one_openmp_thread():
-        for i, j, kind in candidate_pairs(poses, t_s, params):
-            if len(pts[i]) < 3 or len(pts[j]) < 3:
-                continue
+        for i, j, kind in pairs:
             if i not in trees:
                 trees[i] = cKDTree(pts[i])
             rel = se2_between(poses[i], poses[j])
@@ -285,10 +374,7 @@ def scan_pair_edges(
             fitness = float(inl.mean())
             rmse = float(np.sqrt(np.mean(d[inl] ** 2))) if inl.any() else math.nan
             rows.append((i, j, kind, pose[0], pose[1], pose[3], fitness_prior, fitness, rmse))
-    return pd.DataFrame(rows, columns=EDGE_COLUMNS).astype(
-        {"i": np.int64, "j": np.int64, "kind": str, "dx_m": float, "dy_m": float,
-         "dyaw_rad": float, "fitness_prior": float, "fitness": float, "inlier_rmse_m": float}
-    )
+    return rows
 
 
 def optimize_pose_graph(

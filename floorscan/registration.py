@@ -389,9 +389,14 @@ def voxel_downsample(points: np.ndarray, voxel_size: float) -> np.ndarray:
     else:
         _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
     inverse = inverse.ravel()
-    sums = np.zeros((len(counts), 3))
-    np.add.at(sums, inverse, p)
+    sums = _group_sums(inverse, p, len(counts))
     return sums / counts[:, None]
+
+
+def _group_sums(inverse: np.ndarray, p: np.ndarray, n: int) -> np.ndarray:
+    """Per-group column sums of ``p`` (``(n, 3)``), summed in row order as ``np.add.at``
+    does (same bits) but ~10x faster (``np.bincount`` per column)."""
+    return np.column_stack([np.bincount(inverse, weights=p[:, i], minlength=n) for i in range(p.shape[1])])
 
 
 def normals_2d(points: np.ndarray, tree: cKDTree, k: int) -> np.ndarray:
@@ -504,8 +509,7 @@ def _vertical_voxels(p: np.ndarray, cfg: RegistrationConfig) -> tuple[np.ndarray
     flat = (keys[:, 0] * span[1] + keys[:, 1]) * span[2] + keys[:, 2]
     _, inverse, counts = np.unique(flat, return_inverse=True, return_counts=True)
     inverse = inverse.ravel()
-    sums = np.zeros((len(counts), 3))
-    np.add.at(sums, inverse, p)
+    sums = _group_sums(inverse, p, len(counts))
     coarse = sums / counts[:, None]
     vertical = np.ones(len(coarse), dtype=bool)
     if len(coarse) > cfg.normal_neighbours:

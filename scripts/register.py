@@ -5,7 +5,9 @@ from floorscan.registration import REGISTRATION, register_recording
 from floorscan.workflow import stage_log
 
 with stage_log(snakemake) as log:
-    cfg = snakemake.params.cfg
+    # the edge ICP runs in the rule's threads (processes); the edges do not depend on it
+    cfg = dict(snakemake.params.cfg)
+    cfg["graph"] = {**(cfg.get("graph") or {}), "workers": snakemake.threads}
     poses = read_table(snakemake.input.poses) if "poses" in snakemake.input.keys() else None
     meta = {"dataset": snakemake.wildcards.dataset, "units": "metres, radians"}
     # streamed: the points are read scan by scan and written as they are registered

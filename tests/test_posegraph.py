@@ -126,6 +126,17 @@ def test_same_input_same_output(recording):
     np.testing.assert_array_equal(pa, pb)
 
 
+def test_edge_icp_in_worker_processes_gives_the_same_edges(recording, edges, monkeypatch):
+    """``workers`` splits the pairs over processes (the register rule's threads); every
+    edge is the single-process one, in the same order."""
+    truth, clouds, t, priors = recording
+    monkeypatch.setattr(G, "_MIN_PAIRS_PER_WORKER", 10)
+    assert len(G._chunks(list(range(len(edges))), 3)) == 3
+    par = G.scan_pair_edges(clouds, priors, t, G.GraphParams(workers=3))
+    assert len(par) == len(edges) > 30
+    pd.testing.assert_frame_equal(par, edges)
+
+
 def test_bad_input():
     poses = np.zeros((3, 4))
     edges = pd.DataFrame([(0, 5, "sequential", 0.0, 0.0, 0.0, 1.0, 1.0, 0.0)], columns=G.EDGE_COLUMNS)

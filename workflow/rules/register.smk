@@ -27,6 +27,8 @@ rule register:
         ),
     params:
         cfg=stage_config("register"),
+    # the pose graph's edge ICP in this many processes (capped at --cores); same result
+    threads: 4
     log:
         log_path("register"),
     benchmark:
