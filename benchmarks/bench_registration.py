@@ -3,8 +3,12 @@
 Run: ``.venv/bin/python -m benchmarks bench_registration`` (or
 ``.venv/bin/python -m benchmarks.bench_registration [--max-3d-scans N] [--baseline]``).
 
-Inputs are the stage inputs under ``results/<dataset>/`` (a dataset whose files are
-missing is skipped with a message):
+Inputs are the stage inputs under ``results/<dataset>/`` (``--results DIR`` for another
+folder; a dataset whose files are missing is skipped with a message):
+
+- the stage as it runs (streamed from the files, default config, a fresh process per
+  run: wall, CPU and peak RSS) on hallways (2D) and hallways3d, with one and two
+  edge-ICP workers;
 
 - pose mode, ``reference: graph`` (default) and ``map``: 2D trace0 (every scan and
   every 5th), demo (RMS error against the simulator's true poses, before = the
@@ -170,12 +174,62 @@ def odometry_row(name, data, cfg, repeat):
     return s["n_sampled"] / dt
 
 
+_STAGE = """
+import json, resource, sys, tempfile, time
+from pathlib import Path
+from floorscan.io import read_table
+from floorscan.registration import register_recording
+d, workers = Path(sys.argv[1]), int(sys.argv[2])
+t0, c0 = time.perf_counter(), time.process_time()
+index = read_table(d / "scan_index.parquet")
+poses = read_table(d / "poses.parquet")
+with tempfile.TemporaryDirectory() as tmp:
+    r = register_recording(d / "scans.parquet", index, poses, {"graph": {"workers": workers}}, Path(tmp) / "r.parquet")
+wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+print(json.dumps({"wall": wall, "cpu": cpu + kids.ru_utime + kids.ru_stime, "n": r.summary["n_sampled"],
+                  "kept": r.summary["n_kept"], "points": int(index["n_points"].sum()),
+                  "rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
+"""
+
+
+def stage_rows(results: Path, datasets=("hallways", "hallways3d")) -> None:
+    """The stage's own path (:func:`register_recording`: scans.parquet streamed,
+    default config) in a fresh process per run, one and two edge-ICP workers."""
+    import json
+    import subprocess
+    import sys
+
+    print(f"register stage (streamed from {results}/<dataset>/scans.parquet, default config)")
+    for name in datasets:
+        d = results / name
+        if not (d / "scans.parquet").exists() or not (d / "poses.parquet").exists():
+            print(f"  ({name}: {d}/scans.parquet or poses.parquet missing, skipped)")
+            continue
+        walls = {}
+        for workers in (1, 2):
+            out = subprocess.run([sys.executable, "-c", _STAGE, str(d), str(workers)], capture_output=True,
+                                 text=True, check=True).stdout
+            m = json.loads(out.strip().splitlines()[-1])
+            walls[workers] = m["wall"]
+            print(f"  {name:12s} workers={workers}  {m['n']:5d} sampled scans of {m['points'] / 1e6:.1f} M points: "
+                  f"{m['wall']:6.1f} s wall, {m['cpu']:6.1f} s CPU, {m['n'] / m['wall']:5.1f} scans/s, "
+                  f"peak RSS {m['rss_mb']:.0f} MB; kept {m['kept']}", flush=True)
+        print(f"  {name:12s} two workers / one: {walls[1] / walls[2]:.2f}x wall")
+
+
 def main(argv: list[str] | None = None) -> None:
+    global RESULTS
     ap = argparse.ArgumentParser(prog="bench_registration")
+    ap.add_argument("--results", type=Path, default=RESULTS,
+                    help="folder of the stage inputs <dataset>/scans.parquet ... (default results/; "
+                         "the pipeline benchmark's --workdir DIR has DIR/repo/results)")
     ap.add_argument("--max-3d-scans", type=int, default=750, help="first scans of hallways3d (default 750)")
     ap.add_argument("--repeat", type=int, default=1, help="runs per case, best taken (default 1)")
     ap.add_argument("--baseline", action="store_true", help="also 3D map with icp_voxel_size_3d_m 0.05")
     args = ap.parse_args(argv or [])
+    RESULTS = args.results
+    stage_rows(RESULTS)
     rate = {}
     data3 = load("hallways3d", args.max_3d_scans)
     name3 = f"hallways3d[:{args.max_3d_scans}]"
