@@ -61,6 +61,7 @@ metric-against-k curves continuous); with no ground-truth wall, recall is NaN an
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -70,6 +71,9 @@ import shapely
 MIN_SEGMENT_M = 1e-9
 #: Largest grid a bitmap metric may allocate (cells), a guard against a bad cell size.
 MAX_CELLS = 200_000_000
+#: Candidate cells per chunk of :func:`rasterize_segments` (bounds its memory: a dozen
+#: arrays of this length).
+RASTER_CHUNK = 500_000
 
 
 def as_segments(segments) -> np.ndarray:
@@ -244,7 +248,7 @@ def rasterize_segments(segments, grid: Grid, width_m: float = 0.10) -> np.ndarra
     w = hi_x - lo_x + 1
     h = hi_y - lo_y + 1
     counts = w * h
-    chunk = 2_000_000
+    chunk = RASTER_CHUNK
     starts = np.r_[0, np.cumsum(counts)]
     i = 0
     flat = out.reshape(-1)
@@ -504,48 +508,143 @@ def sample_segments(segments, step_m: float = 0.01) -> tuple[np.ndarray, np.ndar
     return pts, (lengths / n)[idx]
 
 
-def nearest_distances(points: np.ndarray, segments, search_m: float = 0.25) -> np.ndarray:
-    """Exact distance in metres from each ``(S, 2)`` point to the nearest segment.
+#: Spacing (metres) of the points along segments whose KD-tree gives each query point an
+#: upper bound of its distance to the nearest segment (:func:`nearest_distances`).
+BOUND_STEP_M = 0.1
+#: Query points per chunk of :func:`nearest_distances` (bounds its memory: the pairs of
+#: a chunk are about this times the number of overlapping duplicates of a wall).
+NEAREST_CHUNK = 4096
 
-    Segments whose bounding box meets a square of half-side r around the point are
-    found with a Shapely STRtree and their exact distances computed in numpy (chunked),
-    for r = ``search_m``, then 4, 16 and 64 times it for the points still without a
-    segment within r (a segment within r always meets the square, so the result is
-    exact); the last few fall back to ``STRtree.query_nearest``. Querying nearest for
-    every point is slow where many scans' duplicate walls overlap.
 
-    Returns an ``(S,)`` array, all ``inf`` when ``segments`` is empty.
+def _densify(seg: np.ndarray, step: float) -> np.ndarray:
+    """Points along each segment, both ends included, at most ``step`` apart, ``(Q, 2)``."""
+    n = np.maximum(1, np.ceil(segment_lengths(seg) / step).astype(np.int64))
+    idx = np.repeat(np.arange(len(seg)), n + 1)
+    k = np.arange(len(idx)) - np.repeat(np.cumsum(n + 1) - (n + 1), n + 1)
+    t = k / n[idx]
+    return seg[idx, :2] + t[:, None] * (seg[idx, 2:] - seg[idx, :2])
+
+
+class _SegmentIndex:
+    """Search structures over a fixed set of ``(M, 4)`` segments: a KD-tree (scipy
+    ``cKDTree``) over points at most :data:`BOUND_STEP_M` apart along them, both ends
+    included, and a Shapely STRtree of the segments (built when first needed).
+
+    For a query point at distance ``d`` from the nearest segment, the distance ``u``
+    to the nearest tree point bounds it: ``u - BOUND_STEP_M / 2 <= d <= u`` (every
+    point of a segment is within half a step of a tree point).
     """
-    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-    seg = as_segments(segments)
-    if len(pts) == 0:
-        return np.zeros(0)
-    if len(seg) == 0:
-        return np.full(len(pts), np.inf)
-    tree = shapely.STRtree(shapely.linestrings(seg.reshape(-1, 2, 2)))
-    out = np.full(len(pts), np.inf)
-    todo = np.arange(len(pts))
-    for r in (search_m, 4 * search_m, 16 * search_m, 64 * search_m):
-        for start in range(0, len(todo), 20_000):
-            ids = todo[start : start + 20_000]
-            p = pts[ids]
-            boxes = shapely.box(p[:, 0] - r, p[:, 1] - r, p[:, 0] + r, p[:, 1] + r)
-            pi, si = tree.query(boxes)
+
+    def __init__(self, seg: np.ndarray):
+        from scipy.spatial import cKDTree
+
+        self.seg = seg
+        self.kd = cKDTree(_densify(seg, BOUND_STEP_M)) if len(seg) else None
+        self._tree = None
+
+    @property
+    def tree(self):
+        if self._tree is None:
+            self._tree = shapely.STRtree(shapely.linestrings(self.seg.reshape(-1, 2, 2)))
+        return self._tree
+
+    def upper(self, pts: np.ndarray, limit: float = np.inf) -> np.ndarray:
+        """The upper bound ``u`` of each point's distance, metres; ``inf`` without
+        segments and where ``u > limit`` (a faster query)."""
+        if self.kd is None:
+            return np.full(len(pts), np.inf)
+        return self.kd.query(pts, k=1, distance_upper_bound=limit)[0]
+
+    def exact(self, pts, ids, radius, geoms=None):
+        """Exact distance (numpy) from ``pts[ids]`` to the nearest segment within
+        ``radius`` (per point), ``inf`` where none is; in chunks of
+        :data:`NEAREST_CHUNK` points (``geoms``: ``shapely.points(pts)``, if made)."""
+        out = np.full(len(ids), np.inf)
+        for start in range(0, len(ids), NEAREST_CHUNK):
+            sl = slice(start, start + NEAREST_CHUNK)
+            cid = ids[sl]
+            g = shapely.points(pts[cid]) if geoms is None else geoms[cid]
+            r = np.asarray(radius[sl], dtype=np.float64)
+            pi, si = self.tree.query(g, predicate="dwithin", distance=r * (1 + 1e-9) + 1e-9)
             if len(pi) == 0:
                 continue
-            d = np.sqrt(_point_segment_dist2(p[pi, 0], p[pi, 1], seg[si]))
-            best = np.full(len(p), np.inf)
-            np.minimum.at(best, pi, d)
-            out[ids] = best
-        todo = todo[out[todo] > r]
-        if len(todo) == 0:
-            break
+            order = np.argsort(pi, kind="stable")
+            pi, si = pi[order], si[order]
+            d = np.sqrt(_point_segment_dist2(pts[cid[pi], 0], pts[cid[pi], 1], self.seg[si]))
+            first = np.flatnonzero(np.r_[True, pi[1:] != pi[:-1]])
+            out[start + pi[first]] = np.minimum.reduceat(d, first)
+        return out
+
+
+def _nearest_below(pts, index: _SegmentIndex, bound: np.ndarray, u=None, geoms=None) -> np.ndarray:
+    """``min(bound, exact distance from each point to the nearest segment of index)``.
+
+    Points whose lower bound ``u - BOUND_STEP_M / 2`` exceeds ``bound`` keep
+    ``bound``; the others are measured against the segments within ``min(u, bound)``
+    only (the nearest wall's stack of duplicates, not every segment nearby).
+    """
+    out = np.array(bound, dtype=np.float64, copy=True)
+    if len(pts) == 0 or len(index.seg) == 0:
+        return out
+    if u is None:
+        # Most points are near a wall: a short-range query first, the rest in full.
+        near = 0.25 + 0.5 * BOUND_STEP_M
+        u = index.upper(pts, near)
+        far = np.flatnonzero(np.isinf(u) & (out > near - 0.5 * BOUND_STEP_M))
+        if len(far):
+            u[far] = index.upper(pts[far])
+    todo = np.flatnonzero(u - 0.5 * BOUND_STEP_M <= out * (1 + 1e-9) + 1e-9)
     if len(todo):
-        idx, dist = tree.query_nearest(
-            shapely.points(pts[todo]), return_distance=True, all_matches=False
-        )
-        out[todo[idx[0]]] = dist
+        d = index.exact(pts, todo, np.minimum(u[todo], out[todo]), geoms)
+        out[todo] = np.minimum(out[todo], d)
     return out
+
+
+def _within(pts, index: _SegmentIndex, taus, hit: np.ndarray, u=None, geoms=None) -> np.ndarray:
+    """Whether each point is within each tau of a segment of ``index``, or already was.
+
+    ``hit`` is a ``(T, S)`` bool array (one row per tau), returned updated (a copy):
+    the same as ``hit | (nearest_distances(pts, segments) <= tau)``, but points whose
+    bounds decide it (``u <= tau``, or ``u - BOUND_STEP_M / 2 > tau``) are not
+    measured.
+    """
+    hit = np.array(hit, dtype=bool, copy=True)
+    if len(pts) == 0 or len(index.seg) == 0:
+        return hit
+    u = index.upper(pts, max(taus) + BOUND_STEP_M) if u is None else u
+    for t, tau in enumerate(taus):
+        row = hit[t]
+        row |= u <= tau * (1 - 1e-9)
+        maybe = np.flatnonzero(~row & (u - 0.5 * BOUND_STEP_M <= tau * (1 + 1e-9) + 1e-9))
+        if len(maybe):
+            row[maybe] = index.exact(pts, maybe, np.full(len(maybe), float(tau)), geoms) <= tau
+    return hit
+
+
+def nearest_distances(points: np.ndarray, segments) -> np.ndarray:
+    """Exact distance in metres from each ``(S, 2)`` point to the nearest segment.
+
+    Each point gets an upper bound ``u`` of its distance from a KD-tree over points
+    along the segments; the segments within ``u`` (a Shapely STRtree ``dwithin``
+    query: the nearest wall's overlapping duplicates, not every segment nearby) are
+    then measured exactly in numpy, in chunks of points (:class:`_SegmentIndex`).
+    Walls from many scans overlap a hundredfold, and querying a fixed search square
+    per point, or ``STRtree.query_nearest``, spends its time on them.
+
+    Parameters
+    ----------
+    points : (S, 2) array_like
+        Query points, metres.
+    segments : (M, 4) array_like
+        Segments ``x0, y0, x1, y1``, metres (non-finite rows dropped).
+
+    Returns
+    -------
+    (S,) float64 ndarray
+        Distances in metres, all ``inf`` when ``segments`` is empty.
+    """
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    return _nearest_below(pts, _SegmentIndex(as_segments(segments)), np.full(len(pts), np.inf))
 
 
 def _f1(p: float, r: float, has_inferred: bool, has_gt: bool) -> float:
@@ -638,22 +737,31 @@ def tolerance_metrics(
     has_i, has_g = len_i > MIN_SEGMENT_M, len_g > MIN_SEGMENT_M
     pts = gt_samples(gt, sample_step_m) if samples is None else samples
     d = nearest_distances(pts, inf) if has_i else np.full(len(pts), np.inf)
+    covered = {tau: float(length_within(inf, gt, tau).sum()) if has_i and has_g else 0.0 for tau in taus}
+    return _tolerance_from(len_i, len_g, len(pts), d, covered, taus)
+
+
+def _tolerance_from(len_i: float, len_g: float, n_pts: int, d: np.ndarray, covered: dict, taus) -> dict:
+    """:func:`tolerance_metrics` from its parts: the inferred and ground-truth lengths,
+    the samples' distances ``d`` to the inferred walls and the inferred length within
+    each tau of the ground truth (``covered[tau]``, metres)."""
+    has_i, has_g = len_i > MIN_SEGMENT_M, len_g > MIN_SEGMENT_M
     out: dict[str, float] = {
         "inferred_length_m": len_i,
         "gt_length_m": len_g,
-        "n_gt_samples": float(len(pts)),
+        "n_gt_samples": float(n_pts),
     }
     for tau in taus:
         lab = tau_label(tau)
         if has_i:
-            p = float(length_within(inf, gt, tau).sum() / len_i) if has_g else 0.0
+            p = float(covered[tau] / len_i) if has_g else 0.0
         else:
             p = math.nan
-        r = float(np.mean(d <= tau)) if has_g and len(pts) else math.nan
+        r = float(np.mean(d <= tau)) if has_g and n_pts else math.nan
         out[f"precision_{lab}"] = p
         out[f"recall_{lab}"] = r
         out[f"f1_{lab}"] = _f1(p, r, has_i, has_g)
-    if has_i and has_g and len(pts):
+    if has_i and has_g and n_pts:
         out["median_distance_m"] = float(np.median(d))
         out["mean_distance_m"] = float(np.mean(d))
     else:
@@ -684,6 +792,110 @@ def score_walls(
     bi = rasterize_segments(inferred, grid, wall_width_m)
     out = bitmap_metrics(bi, gt_bitmap)
     out.update(tolerance_metrics(inferred, ground_truth, taus, sample_step_m, samples))
+    return out
+
+
+def _row_keys(seg: np.ndarray) -> list[bytes]:
+    """The bytes of each ``(M, 4)`` float64 row: equal rows, equal keys."""
+    return np.ascontiguousarray(seg, dtype=np.float64).view(np.dtype((np.void, 32))).ravel().tolist()
+
+
+class _GrowingWalls:
+    """Metrics of a growing wall set: the walls of the first k scans of one ordering
+    and extractor, for increasing k.
+
+    The walls of k scans are a subset of those of more scans, and every metric is
+    either a minimum over the walls (the samples' nearest distances), a union of them
+    (the bitmap, the samples within tau) or a sum over them (the length within tau),
+    so a larger set is scored from the smaller set's state and its new walls only;
+    the result is that of :func:`score_walls` from scratch (exact minima and unions,
+    sums in the same order up to the last bits). A set that is not a superset of the
+    previous one is scored from scratch.
+
+    ``samples`` (recall, distances) and ``all_samples`` (``recall_all_<tau>``, or
+    None) are ground-truth samples (:func:`gt_samples`), ``geoms`` and ``all_geoms``
+    their ``shapely.points``.
+    """
+
+    def __init__(self, gt, gt_bitmap, grid, wall_width_m, taus, samples, geoms,
+                 all_samples=None, all_geoms=None):  # fmt: skip
+        self.gt, self.grid, self.width, self.taus = gt, grid, wall_width_m, list(taus)
+        self.gt_bitmap = gt_bitmap
+        self.len_g = float(segment_lengths(gt).sum())
+        self.samples, self.geoms = samples, geoms
+        self.all_samples, self.all_geoms = all_samples, all_geoms
+        self.keys: set[bytes] | None = None
+        self.covered: dict[float, dict[bytes, float]] = {tau: {} for tau in self.taus}
+
+    def _reset(self):
+        self.keys = set()
+        self.d = np.full(len(self.samples), np.inf)
+        if self.all_samples is not None:
+            self.hit_all = np.zeros((len(self.taus), len(self.all_samples)), dtype=bool)
+        self.bitmap = np.zeros(self.grid.shape, dtype=bool)
+
+    def score(self, walls: np.ndarray) -> dict[str, float]:
+        """:func:`score_walls` of ``(M, 4)`` finite ``walls`` (and ``recall_all_<tau>``
+        against ``all_samples`` when given)."""
+        keys = _row_keys(walls)
+        cur = set(keys)
+        if self.keys is None or not self.keys <= cur:
+            self._reset()
+        new = np.fromiter((k not in self.keys for k in keys), dtype=bool, count=len(keys))
+        add = walls[new]
+        if len(add):
+            index = _SegmentIndex(add)
+            self.d = _nearest_below(self.samples, index, self.d, geoms=self.geoms)
+            if self.all_samples is not None:
+                self.hit_all = _within(self.all_samples, index, self.taus, self.hit_all, geoms=self.all_geoms)
+            self.bitmap |= rasterize_segments(add, self.grid, self.width)
+            add_keys = [k for k, n in zip(keys, new) if n]
+            for tau in self.taus:
+                cache = self.covered[tau]
+                todo = [i for i, k in enumerate(add_keys) if k not in cache]
+                if todo:
+                    cov = length_within(add[todo], self.gt, tau)
+                    cache.update(zip((add_keys[i] for i in todo), cov.tolist()))
+        self.keys = cur
+        out = bitmap_metrics(self.bitmap, self.gt_bitmap)
+        len_i = float(segment_lengths(walls).sum())
+        has_i, has_g = len_i > MIN_SEGMENT_M, self.len_g > MIN_SEGMENT_M
+        d = self.d if has_i else np.full(len(self.samples), np.inf)
+        covered = {
+            tau: float(np.array([self.covered[tau][k] for k in keys], dtype=np.float64).sum())
+            if has_i and has_g else 0.0
+            for tau in self.taus
+        }  # fmt: skip
+        out.update(_tolerance_from(len_i, self.len_g, len(self.samples), d, covered, self.taus))
+        if self.all_samples is not None:
+            n = len(self.all_samples)
+            for t, tau in enumerate(self.taus):
+                frac = float(np.mean(self.hit_all[t])) if len(walls) else 0.0
+                out[f"recall_all_{tau_label(tau)}"] = frac if n else math.nan
+        return out
+
+
+def _recall_precision(inferred, gt, taus, samples, geoms) -> dict[str, float]:
+    """``precision_<tau>``, ``recall_<tau>`` and ``f1_<tau>`` of :func:`tolerance_metrics`
+    (same values), without the distances of the samples that tau does not need."""
+    inf = as_segments(inferred)
+    len_i = float(segment_lengths(inf).sum())
+    len_g = float(segment_lengths(gt).sum())
+    has_i, has_g = len_i > MIN_SEGMENT_M, len_g > MIN_SEGMENT_M
+    hit = np.zeros((len(taus), len(samples)), dtype=bool)
+    if has_i:
+        hit = _within(samples, _SegmentIndex(inf), taus, hit, geoms=geoms)
+    out = {}
+    for t, tau in enumerate(taus):
+        lab = tau_label(tau)
+        if has_i:
+            p = float(length_within(inf, gt, tau).sum() / len_i) if has_g else 0.0
+        else:
+            p = math.nan
+        r = float(np.mean(hit[t])) if has_g and len(samples) else math.nan
+        out[f"precision_{lab}"] = p
+        out[f"recall_{lab}"] = r
+        out[f"f1_{lab}"] = _f1(p, r, has_i, has_g)
     return out
 
 
@@ -794,12 +1006,17 @@ def score_dataset(
     ----------
     runs : list of dict
         One per wall file, with keys ``ordering``, ``extractor``, ``k`` (label: "5" or
-        "all"), ``walls`` (DataFrame with x0, y0, x1, y1), ``n_kept`` (scans the
-        ordering ranks, i.e. kept scans) and ``n_floorplan_walls`` (int or None);
-        optionally ``floorplan_faces``, the merged faces of the run's floor plan
-        (``(F, 4)`` segments), scored with the same tolerance metrics into the
-        ``plan_precision_<tau>``, ``plan_recall_<tau>`` and ``plan_f1_<tau>`` columns
-        (one wall per wall: the product a user opens, not the per-scan segments).
+        "all"), ``walls`` (DataFrame with x0, y0, x1, y1, or the path of its Parquet
+        table, read when the run is scored so that one run's walls are in memory at a
+        time), ``n_kept`` (scans the ordering ranks, i.e. kept scans) and
+        ``n_floorplan_walls`` (int or None); optionally ``floorplan_faces``, the merged
+        faces of the run's floor plan (``(F, 4)`` segments), scored with the same
+        tolerance metrics into the ``plan_precision_<tau>``, ``plan_recall_<tau>`` and
+        ``plan_f1_<tau>`` columns (one wall per wall: the product a user opens, not the
+        per-scan segments); or ``floorplan``, the path of the plan's ``.geojson``, from
+        which both are read when the run is scored. Runs of one ordering and extractor
+        in increasing k (each wall set containing the previous one) are scored
+        incrementally, from the new walls only, with the same result.
     references : dict
         ``{extractor: (M, 4) segments}``: what each extractor's walls are scored
         against. On synthetic datasets every extractor maps to the same ground truth
@@ -846,6 +1063,9 @@ def score_dataset(
     ref_bitmaps: dict[str, np.ndarray] = {}
     ref_samples: dict[str, np.ndarray] = {}
     all_samples: dict[str, np.ndarray] = {}
+    ref_geoms: dict[str, np.ndarray] = {}
+    all_geoms: dict[str, np.ndarray] = {}
+    growing: dict[tuple[str, str], _GrowingWalls] = {}
     rows = []
     for run in runs:
         ext = run["extractor"]
@@ -860,32 +1080,38 @@ def score_dataset(
                 all_samples[ext] if recall_references is None
                 else gt_samples(as_segments(recall_references[ext]), cfg["sample_step_m"])
             )
+            ref_geoms[ext] = shapely.points(ref_samples[ext])
+            all_geoms[ext] = (
+                ref_geoms[ext] if recall_references is None else shapely.points(all_samples[ext])
+            )
         t0 = time.perf_counter()
-        walls = as_segments(run["walls"])
-        m = score_walls(
-            walls,
-            refs[ext],
-            grid,
-            cfg["wall_width_m"],
-            cfg["taus_m"],
-            cfg["sample_step_m"],
-            gt_bitmap=ref_bitmaps[ext],
-            samples=ref_samples[ext],
-        )
-        if recall_references is not None:
-            d = (nearest_distances(all_samples[ext], walls) if len(walls)
-                 else np.full(len(all_samples[ext]), np.inf))
-            for tau in cfg["taus_m"]:
-                m[f"recall_all_{tau_label(tau)}"] = float(np.mean(d <= tau)) if len(d) else math.nan
-        plan = run.get("floorplan_faces")
+        walls = run["walls"]
+        if isinstance(walls, (str, os.PathLike)):
+            from floorscan.io import read_table
+
+            walls = read_table(walls, columns=["x0", "y0", "x1", "y1"])
+        walls = as_segments(walls)
+        key = (run["ordering"], ext)
+        if key not in growing:
+            # One state per ordering and extractor: its k grow in the order of runs.
+            growing[key] = _GrowingWalls(
+                refs[ext], ref_bitmaps[ext], grid, cfg["wall_width_m"], cfg["taus_m"],
+                ref_samples[ext], ref_geoms[ext],
+                *((None, None) if recall_references is None else (all_samples[ext], all_geoms[ext])),
+            )  # fmt: skip
+        m = growing[key].score(walls)
+        plan_path = run.get("floorplan")
+        if plan_path is not None:
+            plan, nfp = floorplan_faces(plan_path), floorplan_wall_count(plan_path)
+        else:
+            plan, nfp = run.get("floorplan_faces"), run.get("n_floorplan_walls")
         if plan is not None:
-            pm = tolerance_metrics(plan, refs[ext], cfg["taus_m"], cfg["sample_step_m"], ref_samples[ext])
+            pm = _recall_precision(plan, refs[ext], cfg["taus_m"], ref_samples[ext], ref_geoms[ext])
             for tau in cfg["taus_m"]:
                 for what in ("precision", "recall", "f1"):
                     m[f"plan_{what}_{tau_label(tau)}"] = pm[f"{what}_{tau_label(tau)}"]
         n_kept = int(run["n_kept"])
         n_scans = k_scans(run["k"], n_kept)
-        nfp = run.get("n_floorplan_walls")
         row = {
             "dataset": dataset,
             "reference_kind": reference_kind,

@@ -23,16 +23,9 @@ with stage_log(snakemake) as log:  # noqa: F821
                  {e: len(s) for e, s in recall_refs.items()})
     n_kept = {o: len(read_table(p, columns=["scan_id"]))
               for o, p in zip(smk.params.orderings, smk.input.orderings)}
+    # Paths, not tables: score_dataset reads one run's walls and floor plan at a time.
     runs = [
-        {
-            "ordering": o,
-            "extractor": e,
-            "k": k,
-            "walls": read_table(wp),
-            "n_kept": n_kept[o],
-            "n_floorplan_walls": metrics.floorplan_wall_count(fp),
-            "floorplan_faces": metrics.floorplan_faces(fp),
-        }
+        {"ordering": o, "extractor": e, "k": k, "walls": wp, "n_kept": n_kept[o], "floorplan": fp}
         for (o, e, k), wp, fp in zip(smk.params.runs, smk.input.walls, smk.input.floorplans)
     ]
     table = metrics.score_dataset(

@@ -163,3 +163,64 @@ def test_schema_defaults_agree_with_floorplan_params():
     schema = yaml.safe_load((REPO / "workflow/schemas/floorplan.schema.yaml").read_text())["properties"]
     defaults = {k: v["default"] for k, v in schema.items()}
     assert defaults == {f: getattr(FloorplanParams(), f) for f in FloorplanParams.__dataclass_fields__}
+
+
+def test_candidate_pairs_equal_shapely_dwithin():
+    import shapely
+
+    from floorscan.floorplan import _candidate_pairs
+
+    rng = np.random.default_rng(7)
+    p0 = rng.uniform(0, 6, (300, 2))
+    ang = rng.choice([0.0, np.pi / 2, rng.uniform(0, np.pi)], 300)
+    seg = np.hstack([p0, p0 + rng.uniform(0.1, 2.0, (300, 1)) * np.c_[np.cos(ang), np.sin(ang)]])
+    seg[:20] = seg[20:40] + [0.0, 0.3, 0.0, 0.3]  # parallel pairs exactly 0.3 m apart
+    lines = shapely.linestrings(seg.reshape(-1, 2, 2))
+    for dist in (0.05, 0.3):
+        i, j = shapely.STRtree(lines).query(lines, predicate="dwithin", distance=dist)
+        want = sorted(zip(*(a[i < j] for a in (i, j))))
+        got = list(zip(*_candidate_pairs(seg, dist)))
+        assert got == want and len(want) > 50
+    i, j = _candidate_pairs(seg, 0.3, np.radians(3.0))
+    d = np.abs(np.arctan2(*(seg[i, 2:] - seg[i, :2]).T[::-1]) - np.arctan2(*(seg[j, 2:] - seg[j, :2]).T[::-1])) % np.pi
+    assert (np.minimum(d, np.pi - d) <= np.radians(3.0) + 1e-12).all() and len(i) > 10
+
+
+def test_ifc_wall_placement_and_body(tmp_path):
+    """The walls written as STEP lines: placement, body, axis, and a schema-valid file."""
+    import ifcopenshell
+    import ifcopenshell.util.placement as up
+    import ifcopenshell.validate
+
+    from floorscan.floorplan import FloorPlan, write_ifc
+
+    walls = pd.DataFrame({"wall_id": [0], "x0": [1.0], "y0": [2.0], "x1": [1.0], "y1": [6.0], "length_m": [4.0],
+                          "thickness_m": [0.2], "height_m": [2.7], "paired": [True], "n_faces": [2],
+                          "n_segments": [5], "n_inliers": [100]})
+    write_ifc(FloorPlan(walls=walls, faces=pd.DataFrame()), tmp_path / "w.ifc", name="O'Brien's plan")
+    model = ifcopenshell.open(str(tmp_path / "w.ifc"))
+    log = ifcopenshell.validate.json_logger()
+    ifcopenshell.validate.validate(model, log, express_rules=False)
+    assert log.statements == []
+    assert model.by_type("IfcProject")[0].Name == "O'Brien's plan"
+    (wall,) = model.by_type("IfcWall")
+    m = up.get_local_placement(wall.ObjectPlacement)
+    np.testing.assert_allclose(m[:3, 3], [1.0, 2.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(m[:3, 0], [0.0, 1.0, 0.0], atol=1e-12)  # x along the axis
+    body, axis = wall.Representation.Representations
+    assert (body.RepresentationIdentifier, body.RepresentationType) == ("Body", "SweptSolid")
+    solid = body.Items[0]
+    assert solid.Depth == pytest.approx(2.7) and solid.Position.Location.Coordinates == pytest.approx((0.0, -0.1, 0.0))
+    assert solid.SweptArea.OuterCurve.Points.CoordList[2] == pytest.approx((4.0, 0.2))
+    assert (axis.RepresentationIdentifier, axis.RepresentationType) == ("Axis", "Curve2D")
+
+
+def test_union_find_numbers_components_by_smallest_node():
+    from floorscan.floorplan import _union_find
+
+    # Components {0}, {1, 3, 5} (a chain 5-3-1), {2, 4}, {6}; numbered by smallest node.
+    labels = _union_find(7, np.array([5, 3, 2]), np.array([3, 1, 4]))
+    assert labels.tolist() == [0, 1, 2, 1, 2, 1, 3]
+    chain = np.arange(999)
+    assert (_union_find(1000, chain[::-1], chain[::-1] + 1) == 0).all()
+    assert _union_find(3, np.empty(0, int), np.empty(0, int)).tolist() == [0, 1, 2]

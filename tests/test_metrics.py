@@ -386,3 +386,62 @@ def test_floorplan_faces_are_scored_too(tmp_path):
     p = tmp_path / "plan.geojson"
     p.write_text(json.dumps(doc))
     assert M.floorplan_faces(p).shape == (0, 4)
+
+
+# ------------------------------------------------------- speed paths give the same numbers
+
+
+def _stacked_walls(n_scans, seed):
+    """Walls of a 10 x 6 m room seen by ``n_scans`` scans: noisy duplicates (a stack
+    per wall, as per-scan extraction makes) and a few stray segments."""
+    rng = np.random.default_rng(seed)
+    room = np.array([[0, 0, 10, 0], [10, 0, 10, 6], [10, 6, 0, 6], [0, 6, 0, 0]], dtype=float)
+    rows = []
+    for _ in range(n_scans):
+        w = room[rng.random(4) < 0.7]
+        t = np.sort(rng.uniform(0, 1, (len(w), 2)), axis=1)
+        p0 = w[:, :2] + t[:, :1] * (w[:, 2:] - w[:, :2])
+        p1 = w[:, :2] + t[:, 1:] * (w[:, 2:] - w[:, :2])
+        rows.append(np.hstack([p0, p1]) + rng.normal(0, 0.015, (len(w), 4)))
+        rows.append(rng.uniform([-1, -1, -1, -1], [11, 7, 11, 7], (1, 4)))
+    return np.vstack(rows)
+
+
+def test_nearest_distances_equal_brute_force_on_stacked_duplicates():
+    seg = _stacked_walls(40, seed=3)
+    rng = np.random.default_rng(4)
+    pts = np.vstack([rng.uniform([-30, -30], [40, 36], (300, 2)), rng.uniform([0, -0.1], [10, 0.1], (300, 2))])
+    brute = np.sqrt(
+        M._point_segment_dist2(np.repeat(pts[:, 0], len(seg)), np.repeat(pts[:, 1], len(seg)), np.tile(seg, (len(pts), 1)))
+    ).reshape(len(pts), len(seg)).min(axis=1)
+    np.testing.assert_allclose(M.nearest_distances(pts, seg), brute, rtol=1e-12, atol=1e-12)
+    assert np.isinf(M.nearest_distances(pts[:3], np.zeros((0, 4)))).all()
+
+
+def test_growing_runs_score_as_from_scratch(tmp_path):
+    """score_dataset scores the walls of k scans from those of fewer (subsets) and
+    reads paths; every number equals scoring each wall set on its own."""
+    gt = np.array([[0, 0, 10, 0], [10, 0, 10, 6], [10, 6, 0, 6], [0, 6, 0, 0], [4, 0, 4, 6]], dtype=float)
+    seg = _stacked_walls(30, seed=5)
+    cols = ["x0", "y0", "x1", "y1"]
+    cfg = {"cell_m": 0.05, "wall_width_m": 0.1, "margin_m": 1.0, "taus_m": [0.02, 0.05],
+           "sample_step_m": 0.01}
+    sizes = {"2": 8, "5": 20, "all": len(seg)}
+    runs = []
+    for k, n in sizes.items():
+        path = tmp_path / f"k{k}.parquet"
+        pd.DataFrame(seg[:n], columns=cols).to_parquet(path)
+        runs.append({"ordering": "o", "extractor": "ransac", "k": k, "walls": str(path), "n_kept": 30})
+    runs.append({"ordering": "o", "extractor": "ransac", "k": "1", "walls": pd.DataFrame(seg[:3], columns=cols),
+                 "n_kept": 30})  # not a superset of the previous run: scored from scratch
+    observed = gt[:4]
+    df = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg, recall_references={"ransac": observed})
+    grid = M.grid_for(gt, 0.05, 1.0)
+    samples = M.gt_samples(observed)
+    for n, (_, row) in zip([3, 8, 20, len(seg)], df.iterrows()):
+        want = M.score_walls(seg[:n], gt, grid, 0.1, cfg["taus_m"], 0.01, samples=samples)
+        for key, value in want.items():
+            assert row[key] == pytest.approx(value, rel=1e-12, abs=1e-12, nan_ok=True), key
+        d_all = M.nearest_distances(M.gt_samples(gt), seg[:n])
+        assert row["recall_all_5cm"] == pytest.approx(np.mean(d_all <= 0.05), rel=1e-12)
+    assert df["recall_5cm"].iloc[-1] > 0.9 and df["precision_5cm"].iloc[-1] < 1.0
