@@ -22,6 +22,20 @@ so the walls of a scan do not change with the ordering or the number of scans us
 
 Per-scan problems never raise: :func:`extract_walls` returns no walls for such a scan
 and a reason in its status table (see :data:`REASONS`).
+
+Speed (issue 8). Shortcuts that give the same walls bit for bit (checked on every
+scan of hallways and hallways3d against the plain forms, and in the tests):
+
+- RANSAC inlier counts in cache-sized blocks of hypotheses (:func:`_inlier_counts`),
+  with the same BLAS products;
+- the grid thinning of 3D scans and the MeanShift bins with a 1D int64 cell key
+  instead of ``numpy.unique(axis=0)``, and ``bincount`` sums in point order;
+- the neighbourhood covariances of the normals computed as Open3D computes them
+  (:func:`neighbourhood_covariances`, SciPy k-d tree), so a job does not import
+  Open3D (2.5 s, as Open3D imports scikit-learn); scikit-learn is imported only
+  for ``meanshift: sklearn`` or an estimated bandwidth;
+- no pandas frame per scan: segments stay tuples until one frame per job, and
+  :func:`extract_walls` takes scans streamed from the file (memory: one scan).
 """
 
 from __future__ import annotations
@@ -30,7 +44,7 @@ import logging
 import time
 import warnings
 from dataclasses import dataclass
-from typing import Any, Mapping
+from typing import Any, Iterable, Mapping
 
 import numpy as np
 import pandas as pd
@@ -261,13 +275,32 @@ def scan_points_2d(xyz: np.ndarray, params: ScanParams = ScanParams()) -> tuple[
     if len(pts) == 0:
         return empty, "no_points_in_height_band"
     if params.grid_m > 0:
-        cell = np.floor(pts / params.grid_m).astype(np.int64)
+        pts = _grid_means(pts, params.grid_m)
+    return pts, ""
+
+
+def _grid_means(pts: np.ndarray, grid_m: float) -> np.ndarray:
+    """One mean point per occupied ``grid_m`` cell, cells in (x, y) lexicographic order.
+
+    The cells are numbered by one int64 key ``(cx - min cx) * span_y + (cy - min cy)``
+    whose order is the lexicographic order of (cx, cy), so a 1D ``unique`` replaces
+    ``numpy.unique(cells, axis=0)`` (a sort of structured rows, 6x slower), and the
+    sums come from ``bincount``, which adds in point order as ``numpy.add.at`` did:
+    the same points, bit for bit.
+    """
+    cell = np.floor(pts / grid_m).astype(np.int64)
+    lo = cell.min(axis=0)
+    span = cell.max(axis=0) - lo + 1
+    if float(span[0]) * float(span[1]) < 2.0**62:
+        key = (cell[:, 0] - lo[0]) * int(span[1]) + (cell[:, 1] - lo[1])
+        _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
+    else:  # an extent of > 2**31 cells a side: the int64 key would overflow
         _, inverse, counts = np.unique(cell, axis=0, return_inverse=True, return_counts=True)
         inverse = inverse.ravel()
-        sums = np.zeros((len(counts), 2))
-        np.add.at(sums, inverse, pts)
-        pts = sums / counts[:, None]
-    return pts, ""
+    sums = np.empty((len(counts), 2))
+    sums[:, 0] = np.bincount(inverse, weights=pts[:, 0], minlength=len(counts))
+    sums[:, 1] = np.bincount(inverse, weights=pts[:, 1], minlength=len(counts))
+    return sums / counts[:, None]
 
 
 # --------------------------------------------------------------------------------------
@@ -314,28 +347,43 @@ def _best_line(points: np.ndarray, rng: np.random.Generator, params: RansacParam
         return None
     normals = np.stack([-d[ok, 1], d[ok, 0]], axis=1) / length[ok, None]
     offsets = np.einsum("ij,ij->i", normals, points[i[ok]])
-    best_count, best = -1, 0
-    chunk = max(1, 2_000_000 // n)
-    for s in range(0, len(normals), chunk):
-        dist = np.abs(points @ normals[s : s + chunk].T - offsets[s : s + chunk])
-        counts = (dist < params.threshold_m).sum(axis=0)
-        k = int(np.argmax(counts))
-        if counts[k] > best_count:
-            best_count, best = int(counts[k]), s + k
+    best = int(np.argmax(_inlier_counts(points, normals, offsets, params.threshold_m)))
     normal, offset = normals[best], offsets[best]
     mask = np.abs(points @ normal - offset) < params.threshold_m
-    c, direction = points[mask].mean(axis=0), np.array([normal[1], -normal[0]])
+    c, direction = None, np.array([normal[1], -normal[0]])
     for _ in range(params.refine_iterations):
-        if mask.sum() < 2:
+        if np.count_nonzero(mask) < 2:
             break
         c, direction = fit_line(points[mask])
         normal = np.array([-direction[1], direction[0]])
         new = np.abs((points - c) @ normal) < params.threshold_m
-        if new.sum() < 2 or np.array_equal(new, mask):
-            mask = new if new.sum() >= 2 else mask
+        n_new = np.count_nonzero(new)
+        if n_new < 2 or np.array_equal(new, mask):
+            mask = new if n_new >= 2 else mask
             break
         mask = new
+    if c is None:  # no refit: the line through the inliers' mean
+        c = points[mask].mean(axis=0)
     return mask, c, direction
+
+
+def _inlier_counts(points: np.ndarray, normals: np.ndarray, offsets: np.ndarray, threshold: float) -> np.ndarray:
+    """Points closer than ``threshold`` to each line ``normals[h] . p = offsets[h]``.
+
+    Hypotheses in blocks of about 64k distances (at least 4; the block stays in the CPU cache;
+    16 MB blocks were 3x slower), laid out (hypothesis, point) so the count runs
+    along contiguous memory, with in-place arithmetic. The distances are the same
+    BLAS products as ``points @ normals.T`` (checked bit for bit), so the counts are.
+    """
+    pt = np.ascontiguousarray(points.T)
+    counts = np.empty(len(normals), dtype=np.int64)
+    block = max(4, 65536 // max(len(points), 1))
+    for s in range(0, len(normals), block):
+        dist = normals[s : s + block] @ pt
+        dist -= offsets[s : s + block, None]
+        np.abs(dist, out=dist)
+        counts[s : s + block] = np.count_nonzero(dist < threshold, axis=1)
+    return counts
 
 
 def _uncovered_length(t: np.ndarray, min_gap: float) -> float:
@@ -344,9 +392,10 @@ def _uncovered_length(t: np.ndarray, min_gap: float) -> float:
     g = np.diff(t)
     if len(g) == 0:
         return 0.0
-    left = np.r_[0.0, g[:-1]]
-    right = np.r_[g[1:], 0.0]
-    jump = (g > min_gap) & (g > 3.0 * np.maximum(left, right))
+    near = np.zeros(len(g))  # the larger neighbouring gap (0 beyond the ends)
+    near[1:] = g[:-1]
+    np.maximum(near[:-1], g[1:], out=near[:-1])
+    jump = (g > min_gap) & (g > 3.0 * near)
     return float(g[jump].sum())
 
 
@@ -361,11 +410,12 @@ def _segments_on_line(points: np.ndarray, direction: np.ndarray, params: RansacP
     t = points @ direction
     order = np.argsort(t, kind="stable")
     ts = t[order]
-    cuts = np.flatnonzero(np.diff(ts) > params.max_gap_m) + 1
+    bounds = _piece_bounds(ts, params.max_gap_m)
     out = []
-    for piece in np.split(order, cuts):
-        if len(piece) < max(params.min_inliers, 2):
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        if b - a < max(params.min_inliers, 2):
             continue
+        piece = order[a:b]
         p = points[piece]
         c, d = fit_line(p)
         if d @ direction < 0:
@@ -416,22 +466,25 @@ def ransac(points: np.ndarray, params: RansacParams = RansacParams(), seed=0) ->
         One row per wall segment: ``x0, y0, x1, y1`` (metres), ``n_inliers`` (int32),
         ``rmse_m`` (RMS distance of its inliers to it, metres); in order of discovery.
     """
+    return _frame(_ransac_rows(points, params, seed))
+
+
+def _ransac_rows(points: np.ndarray, params: RansacParams, seed) -> list[tuple]:
+    """:func:`ransac` as a list of (x0, y0, x1, y1, n_inliers, rmse_m) tuples."""
     rng = np.random.default_rng(seed)
     all_pts = np.asarray(points, dtype=np.float64)
     alive = np.arange(len(all_pts))  # indices of the points not yet claimed by a line
-    remaining = all_pts
     rows: list[tuple] = []
     n_lines = 0
-    while len(remaining) >= params.min_points and n_lines < params.max_lines:
+    while len(alive) >= params.min_points and n_lines < params.max_lines:
         fit = _fit_wall(all_pts, alive, rng, params)
         if fit is None:
             break
         mask, segments = fit
         rows += segments
         alive = alive[~mask]
-        remaining = all_pts[alive]
         n_lines += 1
-    return _frame(rows)
+    return rows
 
 
 # --------------------------------------------------------------------------------------
@@ -440,14 +493,16 @@ def ransac(points: np.ndarray, params: RansacParams = RansacParams(), seed=0) ->
 
 
 def point_normals(points: np.ndarray, radius_m: float = 0.25, max_nn: int = 20) -> np.ndarray:
-    """In-plane unit normals of 2D points from their neighbourhoods (Open3D).
+    """In-plane unit normals of 2D points from their neighbourhoods.
 
     Open3D's ``estimate_normals`` on points embedded at z = 0 returns the z axis for
     every point (for planar data the smallest-variance direction is always z; checked
-    with Open3D 0.19 and tested). So the neighbourhood covariances are taken from
-    Open3D (``estimate_covariances`` with ``KDTreeSearchParamHybrid(radius_m,
-    max_nn)``, the same search ``estimate_normals`` uses) and the normal is the
-    eigenvector of the smallest eigenvalue of their in-plane 2x2 block (closed form).
+    with Open3D 0.19 and tested). So the normal comes from the neighbourhood
+    covariance of Open3D's ``estimate_covariances`` with ``KDTreeSearchParamHybrid(
+    radius_m, max_nn)`` (:func:`neighbourhood_covariances`, the same numbers computed
+    with SciPy's k-d tree: importing Open3D costs 2.5 s per job, as it imports
+    scikit-learn) and is the eigenvector of the smallest eigenvalue of the 2x2
+    covariance (closed form).
 
     Normals are axial (a line has no preferred side): they are folded into the
     canonical half-plane, angle in [0, pi). The clustering of :func:`cluster_ransac`
@@ -465,17 +520,10 @@ def point_normals(points: np.ndarray, radius_m: float = 0.25, max_nn: int = 20) 
     Returns
     -------
     (N, 2) float64 ndarray
-        Unit normals with angle in [0, pi); NaN for points without a neighbour
-        (isotropic neighbourhood).
+        Unit normals with angle in [0, pi); NaN for points with fewer than 3
+        neighbours or an isotropic neighbourhood.
     """
-    import open3d as o3d
-
-    pts = np.asarray(points, dtype=np.float64)
-    pcd = o3d.geometry.PointCloud()
-    pcd.points = o3d.utility.Vector3dVector(np.c_[pts, np.zeros(len(pts))])
-    pcd.estimate_covariances(o3d.geometry.KDTreeSearchParamHybrid(radius=radius_m, max_nn=max_nn))
-    cov = np.asarray(pcd.covariances)
-    sxx, syy, sxy = cov[:, 0, 0], cov[:, 1, 1], cov[:, 0, 1]
+    sxx, syy, sxy = neighbourhood_covariances(points, radius_m, max_nn)
     # Major axis angle phi of the 2x2 covariance; the normal is perpendicular to it.
     phi = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)
     theta = np.mod(phi + 0.5 * np.pi, np.pi)
@@ -483,6 +531,62 @@ def point_normals(points: np.ndarray, radius_m: float = 0.25, max_nn: int = 20) 
     spread = np.hypot(sxx - syy, 2.0 * sxy)  # eigenvalue difference
     normals[spread <= 1e-12] = np.nan
     return normals
+
+
+def neighbourhood_covariances(
+    points: np.ndarray, radius_m: float = 0.25, max_nn: int = 20
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Covariance of each point's neighbourhood, as Open3D's ``estimate_covariances``.
+
+    The neighbourhood of a point is its ``max_nn`` nearest points (itself included)
+    closer than ``radius_m`` (squared distance ``< radius_m**2``), nearest first, as
+    Open3D's hybrid search; the covariance is Open3D's ``ComputeCovariance``: sums
+    of x, y, x*x, x*y, y*y accumulated neighbour by neighbour in that order, divided
+    by the count, ``E[xy] - E[x] E[y]``; with fewer than 3 neighbours it is the
+    identity. The same floats as Open3D 0.19 (tested), without importing it.
+
+    Parameters
+    ----------
+    points : (N, 2) float ndarray
+        Points, metres.
+    radius_m : float
+        Neighbourhood radius, metres.
+    max_nn : int
+        At most this many neighbours.
+
+    Returns
+    -------
+    sxx, syy, sxy : (N,) float64 ndarray
+        Covariance entries, square metres.
+    """
+    from scipy.spatial import cKDTree
+
+    pts = np.asarray(points, dtype=np.float64)
+    n = len(pts)
+    if n == 0:
+        return np.zeros(0), np.zeros(0), np.zeros(0)
+    k = int(min(max_nn, n))
+    # slightly wider bound, then the exact rule on squared distances
+    _, idx = cKDTree(pts).query(pts, k=k, distance_upper_bound=radius_m * (1 + 1e-9))
+    idx = np.asarray(idx).reshape(n, k)
+    ok = idx < n
+    idx = np.where(ok, idx, 0)
+    x, y = pts[idx, 0], pts[idx, 1]
+    dx, dy = x - pts[:, 0:1], y - pts[:, 1:2]
+    ok &= dx * dx + dy * dy < radius_m * radius_m
+    # (k, N) layout: a sum over axis 0 adds neighbour after neighbour for every point,
+    # in order, as Open3D does (no pairwise summation: that is for the inner axis);
+    # "+ 0.0" as Open3D's sums start from +0.0 (only the sign of a zero sum differs)
+    x, y = np.where(ok, x, 0.0).T.copy(), np.where(ok, y, 0.0).T.copy()
+    cnt = ok.sum(axis=1)
+    sx, sy = x.sum(axis=0) + 0.0, y.sum(axis=0) + 0.0
+    sxx, sxy, syy = (x * x).sum(axis=0) + 0.0, (x * y).sum(axis=0) + 0.0, (y * y).sum(axis=0) + 0.0
+    m = np.maximum(cnt, 1).astype(np.float64)
+    sx, sy, sxx, sxy, syy = sx / m, sy / m, sxx / m, sxy / m, syy / m
+    cxx, cyy, cxy = sxx - sx * sx, syy - sy * sy, sxy - sx * sy
+    few = cnt < 3
+    cxx[few], cyy[few], cxy[few] = 1.0, 1.0, 0.0
+    return cxx, cyy, cxy
 
 
 def mean_shift(x: np.ndarray, bandwidth: float, min_bin_freq: int = 1, max_iter: int = 300) -> np.ndarray:
@@ -518,7 +622,7 @@ def mean_shift(x: np.ndarray, bandwidth: float, min_bin_freq: int = 1, max_iter:
         x = x[:, None]
     if len(x) == 0:
         return np.empty(0, dtype=np.int64)
-    cells, counts = np.unique(np.round(x / bandwidth), axis=0, return_counts=True)
+    cells, counts = _unique_rows(np.round(x / bandwidth))
     seeds = cells[counts >= min_bin_freq] * bandwidth
     if len(seeds) == len(x):
         seeds = x.copy()
@@ -534,7 +638,12 @@ def mean_shift(x: np.ndarray, bandwidth: float, min_bin_freq: int = 1, max_iter:
         if len(idx) == 0:
             break
         m = means[idx]
-        d2 = (m**2).sum(axis=1)[:, None] - 2.0 * m @ x.T + xx[None, :]
+        # (m**2).sum(1)[:, None] - 2.0 * m @ x.T + xx[None, :], in place (the same
+        # floats: scaling by 2 is exact, so (2 m) @ x.T = 2 (m @ x.T))
+        d2 = m @ x.T
+        d2 *= 2.0
+        np.subtract((m**2).sum(axis=1)[:, None], d2, out=d2)
+        d2 += xx[None, :]
         w = d2 <= r2
         cnt = w.sum(axis=1)
         within[idx] = cnt
@@ -564,6 +673,21 @@ def mean_shift(x: np.ndarray, bandwidth: float, min_bin_freq: int = 1, max_iter:
     return np.argmin(d2, axis=1).astype(np.int64)
 
 
+def _unique_rows(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``numpy.unique(cells, axis=0, return_counts=True)`` for rows of integral floats
+    (grid cells): one int64 key per row in lexicographic order, a 1D ``unique``
+    (a sort of structured rows is several times slower). Other inputs go to numpy."""
+    if cells.shape[1] > 2 or not len(cells) or np.abs(cells).max() >= 2**30:
+        return np.unique(cells, axis=0, return_counts=True)
+    c = cells.astype(np.int64)
+    lo = c.min(axis=0)
+    key = c[:, 0] - lo[0]
+    if c.shape[1] == 2:
+        key = key * (int(c[:, 1].max() - lo[1]) + 1) + (c[:, 1] - lo[1])
+    _, first, counts = np.unique(key, return_index=True, return_counts=True)
+    return cells[first], counts
+
+
 def _mean_shift(
     x: np.ndarray, bandwidth: float | None, bin_seeding: bool, min_bin_freq: int, backend: str = "numpy"
 ) -> np.ndarray:
@@ -575,15 +699,18 @@ def _mean_shift(
     seeds are the grid cells (size ``bandwidth``) holding at least ``min_bin_freq``
     points; when there is none, every label is -1.
     """
-    from sklearn.cluster import MeanShift, estimate_bandwidth, get_bin_seeds
-    from threadpoolctl import threadpool_limits
-
+    # scikit-learn only when used: importing it costs ~1.8 s per job (measured)
     if bandwidth is None:
+        from sklearn.cluster import estimate_bandwidth
+
         bandwidth = float(estimate_bandwidth(x, quantile=0.1)) if len(x) > 1 else 0.0
         if not bandwidth > 0:
             return np.zeros(len(x), dtype=np.int64)
     if backend == "numpy" and bin_seeding:
         return mean_shift(x, bandwidth, min_bin_freq)
+    from sklearn.cluster import MeanShift, get_bin_seeds
+    from threadpoolctl import threadpool_limits
+
     # One thread: the nearest-neighbour queries of MeanShift on a few hundred points
     # were 20x slower with a thread pool on a shared 2-core machine (measured).
     with warnings.catch_warnings(), threadpool_limits(1):
@@ -658,7 +785,7 @@ def cluster_ransac(
 ) -> pd.DataFrame:
     """Wall segments of one scan by clustering RANSAC (thesis section 3.4).
 
-    1. A normal per point (:func:`point_normals`, Open3D neighbourhoods).
+    1. A normal per point (:func:`point_normals`, the neighbourhoods of Open3D's hybrid search).
     2. MeanShift (flat kernel, bin seeding: scikit-learn's algorithm, by default in
        its vectorised form :func:`mean_shift`) of the normal directions: each point's axial angle theta in [0, pi)
        is embedded as ``0.5 * (cos 2 theta, sin 2 theta)`` (no wrap-around at 0 / pi;
@@ -686,10 +813,15 @@ def cluster_ransac(
     pandas.DataFrame
         As :func:`ransac`, ordered by cluster (direction, then offset).
     """
+    return _frame(_cluster_ransac_rows(points, params, cluster, seed))
+
+
+def _cluster_ransac_rows(points: np.ndarray, params: RansacParams, cluster: ClusterParams, seed) -> list[tuple]:
+    """:func:`cluster_ransac` as a list of (x0, y0, x1, y1, n_inliers, rmse_m) tuples."""
     rng = np.random.default_rng(seed)
     pts = np.asarray(points, dtype=np.float64)
     if len(pts) < max(params.min_points, 3):
-        return _frame([])
+        return []
     normals = point_normals(pts, cluster.normal_radius_m, cluster.normal_max_nn)
     has_normal = np.isfinite(normals[:, 0])
     labels = np.full(len(pts), -1)
@@ -717,7 +849,7 @@ def cluster_ransac(
             fit = _fit_wall(pts, idx, rng, params)
             if fit is not None:
                 rows += fit[1]
-    return _frame(rows)
+    return rows
 
 
 def _fit_wall(pts: np.ndarray, idx: np.ndarray, rng: np.random.Generator, params: RansacParams):
@@ -731,7 +863,7 @@ def _fit_wall(pts: np.ndarray, idx: np.ndarray, rng: np.random.Generator, params
     if found is None:
         return None
     mask, c, direction = found
-    if mask.sum() < params.min_inliers:
+    if np.count_nonzero(mask) < params.min_inliers:
         return None
     claimed = np.zeros(len(pts), dtype=bool)
     claimed[idx[mask]] = True
@@ -751,12 +883,20 @@ def _claimed_segments(pts, c, direction, claimed, params) -> list[tuple]:
     cand = np.flatnonzero(np.abs((pts - c) @ normal) < params.threshold_m)
     t = pts[cand] @ direction
     order = np.argsort(t, kind="stable")
-    cuts = np.flatnonzero(np.diff(t[order]) > params.max_gap_m) + 1
+    bounds = _piece_bounds(t[order], params.max_gap_m)
+    cand = cand[order]
     rows = []
-    for piece in np.split(cand[order], cuts):
-        if claimed[piece].sum() >= params.min_inliers:
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        piece = cand[a:b]
+        if b - a >= params.min_inliers and np.count_nonzero(claimed[piece]) >= params.min_inliers:
             rows += _segments_on_line(pts[piece], direction, params)
     return rows
+
+
+def _piece_bounds(ts: np.ndarray, max_gap: float) -> list[int]:
+    """Start of each piece of sorted positions ``ts`` split at gaps wider than
+    ``max_gap``, and the end: pieces are ``ts[b[i]:b[i+1]]`` (as ``numpy.split``)."""
+    return [0, *(np.flatnonzero(np.diff(ts) > max_gap) + 1).tolist(), len(ts)]
 
 
 # --------------------------------------------------------------------------------------
@@ -783,29 +923,37 @@ def extract_scan(
     n_points : int
         Wall points the extractor saw.
     """
+    rows, reason, n_pts = _extract_scan_rows(xyz, extractor, scan, params, cluster, seed)
+    return _frame(rows), reason, n_pts
+
+
+def _extract_scan_rows(xyz, extractor, scan, params, cluster, seed) -> tuple[list[tuple], str, int]:
+    """:func:`extract_scan` with the segments as a list of tuples (no frame per scan)."""
     if extractor not in EXTRACTORS:
         raise ValueError(f"unknown extractor {extractor!r}; expected one of {EXTRACTORS}")
     pts, reason = scan_points_2d(xyz, scan)
     if reason:
-        return _frame([]), reason, 0
+        return [], reason, 0
     if len(pts) < params.min_points:
-        return _frame([]), "too_few_points", len(pts)
+        return [], "too_few_points", len(pts)
     if extractor == "ransac":
-        seg = ransac(pts, params, seed)
+        rows = _ransac_rows(pts, params, seed)
     else:
-        seg = cluster_ransac(pts, params, cluster, seed)
-    return seg, ("" if len(seg) else "no_wall_found"), len(pts)
+        rows = _cluster_ransac_rows(pts, params, cluster, seed)
+    return rows, ("" if rows else "no_wall_found"), len(pts)
 
 
 def extract_walls(
-    points: pd.DataFrame, extractor: str, cfg: Mapping[str, Any]
+    points: pd.DataFrame | Iterable[tuple[int, np.ndarray]], extractor: str, cfg: Mapping[str, Any]
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Wall segments of every scan of a registered points table (stage ``scan_walls``).
 
     Parameters
     ----------
-    points : pandas.DataFrame
-        ``registered.parquet``: ``scan_id, x, y, z`` (map frame, metres, z above floor).
+    points : pandas.DataFrame or iterable of (int, (n, 3) float ndarray)
+        ``registered.parquet``: ``scan_id, x, y, z`` (map frame, metres, z above
+        floor) as a frame, or streamed scan by scan as ``(scan_id, xyz)``
+        (:func:`floorscan.io.iter_scans`; memory then holds one scan, issue 8).
     extractor : {"ransac", "cluster_ransac"}
     cfg : mapping
         The ``walls`` config section (``seed``, ``height_band_m``, ``planar_tolerance_m``,
@@ -825,34 +973,57 @@ def extract_walls(
     KeyError
         When ``points`` lacks a column or ``cfg`` has an unknown key.
     ValueError
-        For an unknown extractor.
+        For an unknown extractor, or a streamed scan id that comes twice.
     """
-    from floorscan.io import split_by_scan
+    if isinstance(points, pd.DataFrame):
+        from floorscan.io import split_by_scan
 
-    missing = [c for c in ("scan_id", "x", "y", "z") if c not in points.columns]
-    if missing:
-        raise KeyError(f"registered points lack columns {missing}; expected scan_id, x, y, z")
+        missing = [c for c in ("scan_id", "x", "y", "z") if c not in points.columns]
+        if missing:
+            raise KeyError(f"registered points lack columns {missing}; expected scan_id, x, y, z")
+        scans: Iterable[tuple[int, np.ndarray]] = split_by_scan(points).items()
+    else:
+        scans = points
     if extractor not in EXTRACTORS:
         raise ValueError(f"unknown extractor {extractor!r}; expected one of {EXTRACTORS}")
     scan_p, ransac_p, cluster_p = params_from_config(cfg)
     seed = int(cfg.get("seed", 0))
     if extractor == "cluster_ransac":  # import before timing the first scan
-        import open3d  # noqa: F401
-        import sklearn.cluster  # noqa: F401
-    walls, status = [], []
-    for scan_id, xyz in sorted(split_by_scan(points).items()):
+        import scipy.spatial  # noqa: F401
+
+        if cluster_p.meanshift == "sklearn" or cluster_p.offset_bandwidth_m is None:
+            import sklearn.cluster  # noqa: F401
+    per_scan: dict[int, list[tuple]] = {}
+    status = []
+    for scan_id, xyz in scans:
+        scan_id = int(scan_id)
+        if scan_id in per_scan:
+            raise ValueError(f"scan {scan_id}: its points come in two separate runs; expected them together")
         t0 = time.perf_counter()
-        seg, reason, n_pts = extract_scan(xyz, extractor, scan_p, ransac_p, cluster_p, (seed, scan_id))
+        rows, reason, n_pts = _extract_scan_rows(xyz, extractor, scan_p, ransac_p, cluster_p, (seed, scan_id))
         dt = time.perf_counter() - t0
-        seg.insert(0, "scan_id", scan_id)
-        walls.append(seg)
-        status.append((scan_id, n_pts, len(seg), reason, dt))
-    walls_df = (
-        pd.concat(walls, ignore_index=True) if walls else _frame([]).assign(scan_id=[])
+        per_scan[scan_id] = rows
+        status.append((scan_id, n_pts, len(rows), reason, dt))
+    ids = sorted(per_scan)
+    rows = [r for s in ids for r in per_scan[s]]
+    n_rows = [len(per_scan[s]) for s in ids]
+    seg = np.array(rows, dtype=np.float64).reshape(-1, len(_SEGMENT_COLUMNS))
+    walls_df = pd.DataFrame(
+        {
+            "scan_id": np.repeat(np.asarray(ids, dtype=np.int32), n_rows),
+            **{c: seg[:, i] for i, c in enumerate(_SEGMENT_COLUMNS) if c != "n_inliers"},
+            "n_inliers": seg[:, _SEGMENT_COLUMNS.index("n_inliers")].astype(np.int32),
+        }
     )[WALLS.names]
-    walls_df = walls_df.astype({"scan_id": "int32", "n_inliers": "int32"})
-    status_df = pd.DataFrame(status, columns=SCAN_STATUS.names).astype(
-        {"scan_id": "int32", "n_points": "int32", "n_walls": "int32", "reason": "str", "time_s": "float64"}
+    status.sort(key=lambda r: r[0])
+    status_df = pd.DataFrame(
+        {
+            "scan_id": np.array([r[0] for r in status], dtype=np.int32),
+            "n_points": np.array([r[1] for r in status], dtype=np.int32),
+            "n_walls": np.array([r[2] for r in status], dtype=np.int32),
+            "reason": pd.array([r[3] for r in status], dtype="str"),
+            "time_s": np.array([r[4] for r in status], dtype=np.float64),
+        }
     )
     counts = status_df.loc[status_df.reason != "", "reason"].value_counts().to_dict()
     log.info(

@@ -1,9 +1,10 @@
 """Stage `hulls`, one shard: cluster hulls and convex hulls of the kept scans of a scan
-range (thesis Algorithm 2). scripts/hulls_merge.py concatenates the shards."""
+range (thesis Algorithm 2), streamed scan by scan (memory holds one scan, issue 8).
+scripts/hulls_merge.py concatenates the shards."""
 import json
 
 from floorscan.hulls import HullParams, compute_hulls, to_table
-from floorscan.io import write_table
+from floorscan.io import iter_scans, write_table
 from floorscan.shards import parse_shard_label, read_scan_range
 from floorscan.workflow import stage_log
 
@@ -12,7 +13,7 @@ with stage_log(snakemake) as log:
     shard = snakemake.wildcards.shard
     start, stop = parse_shard_label(shard)
     cluster, convex, counts = compute_hulls(
-        read_scan_range(snakemake.input.registered, start, stop),
+        iter_scans(snakemake.input.registered, ("x", "y"), scan_range=(start, stop)),
         read_scan_range(snakemake.input.registration, start, stop),
         params,
     )

@@ -14,6 +14,7 @@ with stage_log(snakemake) as log:
         registered=snakemake.input.registered,  # streamed scan by scan
         registration=read_table(snakemake.input.registration),
         hulls=read_table(snakemake.input.hulls),
+        convex_hulls=read_table(snakemake.input.convex),  # the k = 1 curve
         orderings={Path(p).stem: read_table(p) for p in snakemake.input.orderings},
         hull_params=HullParams.from_config(snakemake.params.hulls_cfg),
         select_params=SelectParams.from_config(cfg),

@@ -254,3 +254,17 @@ def test_iter_scans_range_and_non_contiguous_rows(tmp_path):
         list(iter_scans(path, ("x", "w")))
     with pytest.raises(ValueError, match="scan 3.*two separate runs"):
         fh.scan_hulls([(3, l_shape(0.5)), (5, l_shape(0.5)), (3, l_shape(0.5))])
+
+
+def test_nearest_centre_is_argmin_of_the_squared_distances_ties_to_the_first():
+    rng = np.random.default_rng(12)
+    xy = rng.uniform(-5, 5, (3000, 2))
+    centres = rng.uniform(-5, 5, (20, 2))
+    xy[:10] = [20.0, 3.0]  # equidistant from centres (20, 1) and (20, 5): the lower index wins
+    centres[3] = [20.0, 5.0]
+    centres[12] = [20.0, 1.0]
+    d2 = ((xy[:, None, :] - centres[None, :, :]) ** 2).sum(axis=2)
+    labels, best = fh._nearest_centre(xy, centres)
+    np.testing.assert_array_equal(labels, d2.argmin(axis=1))
+    np.testing.assert_array_equal(best, d2.min(axis=1))
+    assert (labels[:10] == 3).all() and best[0] == 4.0

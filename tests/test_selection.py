@@ -248,7 +248,7 @@ def test_figures(synthetic, tmp_path):
     out = [tmp_path / f"{n}.png" for n in ("cov", "clu", "time")]
     timing = selection_figures(registered, registration, hulls, orderings, fh.HullParams(), fs.SelectParams(),
                                FigureParams(figure_k_clusters=(1, 10), figure_reference_max_scans=30),
-                               *out, title="synthetic")
+                               *out, title="synthetic", convex_hulls=convex)
     assert all(p.stat().st_size > 10_000 for p in out)
     assert timing["n_scans"].max() == len(ids)
     ran = timing.dropna(subset=["reference_s"])
@@ -259,7 +259,7 @@ def test_coverage_vs_clusters_streamed_and_reusing_the_stage_hulls(synthetic, tm
     from floorscan.figures_selection import coverage_vs_clusters
     from floorscan.io import write_table
 
-    registered, _, hulls, _, ids, _ = synthetic
+    registered, _, hulls, convex, ids, _ = synthetic
     sub = ids[::3]
     path = tmp_path / "registered.parquet"
     write_table(registered, path)
@@ -268,8 +268,12 @@ def test_coverage_vs_clusters_streamed_and_reusing_the_stage_hulls(synthetic, tm
              for k in ks}
     from_frame = coverage_vs_clusters(registered, sub, ks, fh.HullParams())
     streamed = coverage_vs_clusters(str(path), sub, ks, fh.HullParams(), hulls=fh.to_table(hulls).to_pandas())
+    # k = 1 from the stage's convex hulls (WKB as on disk): the same curve, no hulling
+    reused = coverage_vs_clusters(iter(()), sub, (1, 10), fh.HullParams(), hulls=fh.to_table(hulls).to_pandas(),
+                                  convex=fh.to_table(convex).to_pandas())
     for k in ks:
         assert from_frame[k].equals(plain[k]) and streamed[k].equals(plain[k]), k
+    assert reused[1].equals(plain[1]) and reused[10].equals(plain[10])
     # fewer clusters cover more (a coarser hull spans the gaps), k=1 is the convex hull
     final = {k: plain[k]["covered_area_m2"].iloc[-1] for k in ks}
     assert final[1] > final[3] > final[10] > 0

@@ -154,6 +154,61 @@ def test_open3d_normals_are_z_for_planar_points_so_covariances_are_used():
     np.testing.assert_allclose(n, np.broadcast_to(expected, n.shape), atol=1e-6)
 
 
+def test_covariances_are_open3d_estimate_covariances_bit_for_bit():
+    import open3d as o3d
+
+    from floorscan.walls import neighbourhood_covariances
+
+    rng = np.random.default_rng(8)
+    # two walls, a corner, clutter, an isolated point (< 3 neighbours: identity)
+    t = rng.uniform(0, 3, 400)
+    pts = np.r_[np.c_[t[:200], 0.01 * rng.normal(size=200)], np.c_[0.01 * rng.normal(size=200), t[200:]],
+                rng.uniform(0.5, 2.5, (100, 2)), [[9.0, 9.0]]]
+    for radius, max_nn in ((0.25, 20), (0.1, 5), (0.4, 60)):
+        pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.c_[pts, np.zeros(len(pts))]))
+        pcd.estimate_covariances(o3d.geometry.KDTreeSearchParamHybrid(radius=radius, max_nn=max_nn))
+        ref = np.asarray(pcd.covariances)
+        sxx, syy, sxy = neighbourhood_covariances(pts, radius, max_nn)
+        np.testing.assert_array_equal(sxx, ref[:, 0, 0])
+        np.testing.assert_array_equal(syy, ref[:, 1, 1])
+        np.testing.assert_array_equal(sxy, ref[:, 0, 1])
+    assert (sxx[-1], syy[-1], sxy[-1]) == (1.0, 1.0, 0.0)
+    assert np.isnan(point_normals(pts, 0.25, 20)[-1]).all()
+
+
+def test_fast_grid_means_and_inlier_counts_equal_the_plain_numpy():
+    from floorscan.walls import _grid_means, _inlier_counts, _unique_rows
+
+    rng = np.random.default_rng(9)
+    pts = rng.uniform(-3, 5, (5000, 2))
+    cell = np.floor(pts / 0.02).astype(np.int64)
+    _, inv, counts = np.unique(cell, axis=0, return_inverse=True, return_counts=True)
+    sums = np.zeros((len(counts), 2))
+    np.add.at(sums, inv.ravel(), pts)
+    np.testing.assert_array_equal(_grid_means(pts, 0.02), sums / counts[:, None])
+    for x in (np.round(pts / 0.3), np.round(pts[:, :1] / 0.1)):
+        for a, b in zip(_unique_rows(x), np.unique(x, axis=0, return_counts=True)):
+            np.testing.assert_array_equal(a, b)
+    normals = rng.normal(size=(200, 2))
+    normals /= np.hypot(normals[:, 0], normals[:, 1])[:, None]
+    offsets = rng.uniform(-2, 2, 200)
+    expected = (np.abs(pts @ normals.T - offsets) < 0.03).sum(axis=0)
+    np.testing.assert_array_equal(_inlier_counts(pts, normals, offsets, 0.03), expected)
+    assert expected.max() > 50  # lines through the cloud, not only empty strips
+
+
+@pytest.mark.parametrize("extractor", ["ransac", "cluster_ransac"])
+def test_streamed_scans_give_the_walls_of_the_frame(extractor):
+    scans = {s: with_z(raycast(ROOM, o, seed=s)) for s, o in enumerate([(1, 1), (3, 5), (2, 3)])}
+    frame_walls, frame_status = extract_walls(scans_frame(scans), extractor, {"seed": 3})
+    stream_walls, stream_status = extract_walls(reversed(list(scans.items())), extractor, {"seed": 3})
+    pd.testing.assert_frame_equal(stream_walls, frame_walls)
+    pd.testing.assert_frame_equal(stream_status.drop(columns="time_s"), frame_status.drop(columns="time_s"))
+    assert len(frame_walls) >= 12 and frame_walls.scan_id.is_monotonic_increasing
+    with pytest.raises(ValueError, match="scan 1"):
+        extract_walls([(1, scans[1]), (1, scans[1])], extractor, {"seed": 3})
+
+
 @pytest.mark.parametrize("extractor", ["ransac", "cluster_ransac"])
 def test_seeded_determinism_and_input_not_mutated(extractor):
     pts = raycast(ROOM + [(1, 1, 2, 2)], (3.0, 4.0), seed=2)

@@ -116,6 +116,7 @@ rule selection_figures:
         registered="results/{dataset}/registered.parquet",
         registration="results/{dataset}/registration.parquet",
         hulls="results/{dataset}/hulls.parquet",
+        convex="results/{dataset}/convex_hulls.parquet",
         orderings=expand(
             "results/{{dataset}}/orderings/{ordering}.parquet", ordering=SELECT_ORDERINGS
         ),
