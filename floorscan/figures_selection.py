@@ -58,7 +58,7 @@ class FigureParams:
     """
 
     figure_k_clusters: tuple[int, ...] = (1, 2, 5, 10, 20)
-    figure_max_scans: int = 1000
+    figure_max_scans: int = 300
     figure_reference_max_scans: int = 150
 
     @classmethod
