@@ -1272,3 +1272,36 @@ def load_references(kind: str, extractors, ground_truth=None, reference_paths=()
     from floorscan.io import read_table
 
     return {e: as_segments(read_table(p)) for e, p in zip(extractors, reference_paths)}
+
+
+def score_dataset_parallel(runs: list[dict], references, reference_kind, cfg, dataset="", log=None,
+                           recall_references=None, workers: int = 1):
+    """:func:`score_dataset` with the orderings x extractors split over ``workers``
+    processes (:func:`floorscan.parallel.map_in_processes`; the score rule's
+    ``threads``): each ordering and extractor is scored incrementally over its k in one
+    process, independently of the others, so the table is the same as
+    :func:`score_dataset`'s (tested). ``runs`` must give the walls as paths (or small
+    tables: they are pickled to the workers). The per-run lines are logged here,
+    after the workers finish.
+    """
+    import pandas as pd
+
+    from floorscan.parallel import map_in_processes
+
+    groups: dict[tuple, list[dict]] = {}
+    for run in runs:
+        groups.setdefault((run["ordering"], run["extractor"]), []).append(run)
+    keys = list(groups)
+    n = max(1, min(int(workers), len(keys)))
+    if n == 1:
+        return score_dataset(runs, references, reference_kind, cfg, dataset, log, recall_references)
+    shares = [[r for key in keys[w::n] for r in groups[key]] for w in range(n)]
+    calls = [(share, references, reference_kind, cfg, dataset, None, recall_references) for share in shares]
+    df = pd.concat(map_in_processes(score_dataset, calls), ignore_index=True)
+    df = df.sort_values(["ordering", "extractor", "n_scans", "k"], kind="stable").reset_index(drop=True)
+    if log is not None:
+        tau = tau_label(cfg["taus_m"][0])
+        for r in df.to_dict("records"):
+            log.info("%s %s k=%s: %d segments, F1@%s %.3f, wall CM %.3f", r["ordering"], r["extractor"], r["k"],
+                     r["n_segments"], tau, r[f"f1_{tau}"], r["wall_correct_match"])
+    return df

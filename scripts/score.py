@@ -28,8 +28,10 @@ with stage_log(snakemake) as log:  # noqa: F821
         {"ordering": o, "extractor": e, "k": k, "walls": wp, "n_kept": n_kept[o], "floorplan": fp}
         for (o, e, k), wp, fp in zip(smk.params.runs, smk.input.walls, smk.input.floorplans)
     ]
-    table = metrics.score_dataset(
-        runs, references, kind, cfg, smk.wildcards.dataset, log, recall_references=recall_refs
+    # the orderings x extractors in the rule's threads (processes); same table
+    table = metrics.score_dataset_parallel(
+        runs, references, kind, cfg, smk.wildcards.dataset, log, recall_references=recall_refs,
+        workers=smk.threads,
     )
     summary = metrics.summarize(table, cfg["summary_tau_m"], cfg["summary_levels"])
     meta = {"dataset": smk.wildcards.dataset, "reference_kind": kind,

@@ -307,6 +307,26 @@ def test_score_dataset_and_summary(tmp_path):
     assert "ground-truth" in md and "| sequential | ransac | 40 |" in md
 
 
+def test_score_dataset_in_worker_processes_gives_the_same_table(tmp_path):
+    """Orderings x extractors split over two processes: the same rows, in the same
+    order, except the timing column."""
+    gt = M.read_wall_faces(_geojson(tmp_path))
+    runs = []
+    for o, shift in (("sequential", 0.0), ("random", 0.02), ("cluster_hull", 0.04)):
+        for k, w in (("5", [[0, shift, 5, shift]]), ("all", [[0, shift, 10, shift], [10, 0, 10, 6]])):
+            p = tmp_path / f"{o}_{k}.parquet"
+            pd.DataFrame(w, columns=["x0", "y0", "x1", "y1"], dtype=float).to_parquet(p)
+            runs.append({"ordering": o, "extractor": "ransac", "k": k, "walls": str(p), "n_kept": 40,
+                         "n_floorplan_walls": 2})
+    cfg = {"cell_m": 0.05, "wall_width_m": 0.1, "margin_m": 1.0, "taus_m": [0.05, 0.025],
+           "sample_step_m": 0.01}
+    one = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg, dataset="toy")
+    two = M.score_dataset_parallel(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg, dataset="toy", workers=2)
+    assert len(two) == 6 and list(two["ordering"]) == ["cluster_hull"] * 2 + ["random"] * 2 + ["sequential"] * 2
+    assert two.loc[two["ordering"] == "sequential", "recall_5cm"].tolist() == pytest.approx([5.05 / 16, 1.0])
+    pd.testing.assert_frame_equal(one.drop(columns="score_time_s"), two.drop(columns="score_time_s"))
+
+
 def test_score_dataset_labels_a_reference():
     ref = np.array([[0.0, 0, 4, 0]])
     runs = [{"ordering": "random", "extractor": "ransac", "k": "all", "walls": ref,

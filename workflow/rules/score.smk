@@ -152,6 +152,8 @@ rule score:
         extractors=score_extractors,
         reference_kind=score_reference_kind,
         reference_label=score_reference_label,
+    # orderings x extractors scored in this many processes (capped at --cores); same table
+    threads: 2
     log:
         log_path("score"),
     benchmark:
