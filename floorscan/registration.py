@@ -531,8 +531,9 @@ def graph_cloud(points: np.ndarray, cfg: RegistrationConfig) -> np.ndarray:
     2D scan. Measured on hallways3d (1017 sampled scans of 5081; RMS position / yaw
     error of the kept scans vs the simulator's truth; whole stage, one thread): raw 3D
     points 1.75 cm, 0.12 deg, 569 s CPU, 6.4 GB RSS; projected 1.86 cm, 0.18 deg,
-    35 s CPU, 1.0 GB RSS (with :func:`register_recording` and Open3D's ICP and
-    Gauss-Newton, :mod:`floorscan.posegraph`); the localizer 6.92 cm, 1.15 deg.
+    35 s CPU, 1.0 GB RSS with Open3D's dense Gauss-Newton, 0.56 GB with the sparse
+    planar one (:func:`register_recording`, :mod:`floorscan.posegraph`); the localizer
+    6.92 cm, 1.15 deg.
 
     Parameters
     ----------
