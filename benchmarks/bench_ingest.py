@@ -3,7 +3,10 @@
 Three readings of each recording: the bytes alone (``plain read``), rosbags' raw
 message iteration without deserializing (``raw messages``), and floorscan's full ingest
 (deserialize, convert to points, write Parquet). Recordings: the largest simulated bag
-under ``results/*/sim/recording.bag`` and the real ones in ``../shared/data`` that exist.
+under ``results/*/sim/recording.bag``, the real ones in ``../shared/data`` that exist,
+and any ``--bag PATH`` (a simulated ROS1 bag with ``/scan`` and ``/amcl_pose``, e.g. the
+840 MB 3D bag the pipeline benchmark simulates: ``DIR/repo/results/hallways3d/sim/
+recording.bag`` with ``--workdir DIR``).
 """
 import tempfile
 import time
@@ -56,13 +59,22 @@ def full_ingest(ds: dict) -> tuple[float, int]:
         return time.perf_counter() - t0, len(index)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="bench_ingest")
+    ap.add_argument("--bag", type=Path, action="append", default=[],
+                    help="also a simulated ROS1 bag (/scan, /amcl_pose); repeatable")
+    args = ap.parse_args(argv or [])
     sets = dict(REAL)
     sims = sorted((REPO / "results").glob("*/sim/recording.bag"), key=lambda p: p.stat().st_size)
     if sims:
         sets[f"{sims[-1].parts[-3]} (simulated ROS1)"] = {
             "format": "rosbag", "path": sims[-1], "scan_topic": "/scan",
             "pose": {"source": "topic", "topic": "/amcl_pose"}}
+    for bag in args.bag:
+        sets[f"{bag.parent.parent.name} (--bag)"] = {
+            "format": "rosbag", "path": bag, "scan_topic": "/scan", "pose": {"source": "topic", "topic": "/amcl_pose"}}
     print(f"{'recording':28s} {'MB':>8s} {'scans':>6s} {'plain MB/s':>11s} {'raw msg MB/s':>13s} "
           f"{'ingest MB/s':>12s} {'ingest/plain':>13s}")
     for name, ds in sets.items():
@@ -79,4 +91,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+
+    main(sys.argv[1:])
