@@ -193,6 +193,42 @@ def split_by_scan(df: pd.DataFrame) -> dict[int, np.ndarray]:
     return {int(ids_sorted[s]): xyz[order[s:e]] for s, e in zip(starts, ends)}
 
 
+class ScanRowGroups:
+    """Writes a points table (``scan_id, x, y, z``) scan by scan through a
+    ``pyarrow.parquet.ParquetWriter``, buffered into row groups of about ``rows`` points
+    (the ingest and register stages; :func:`iter_scans` reads them back batch by batch).
+
+    ``add(scan_id, points)`` buffers one scan ((n, 3) metres, cast to the writer's
+    float32 columns); ``flush()`` writes what is buffered (call it once at the end).
+    """
+
+    def __init__(self, writer: pq.ParquetWriter, rows: int = 1 << 20):
+        self.writer = writer
+        self.rows = rows
+        self.ids: list[np.ndarray] = []
+        self.pts: list[np.ndarray] = []
+        self.n = 0
+
+    def add(self, scan_id: int, points: np.ndarray) -> None:
+        pts = np.asarray(points, dtype=np.float32).reshape(-1, 3)
+        self.ids.append(np.full(len(pts), scan_id, np.int32))
+        self.pts.append(pts)
+        self.n += len(pts)
+        if self.n >= self.rows:
+            self.flush()
+
+    def flush(self) -> None:
+        if not self.n:
+            return
+        p = np.concatenate(self.pts)
+        table = pa.table(
+            {"scan_id": np.concatenate(self.ids), "x": p[:, 0], "y": p[:, 1], "z": p[:, 2]},
+            schema=self.writer.schema,
+        )
+        self.writer.write_table(table, row_group_size=len(p))
+        self.ids, self.pts, self.n = [], [], 0
+
+
 def iter_scans(
     path: str | os.PathLike,
     columns: tuple[str, ...] = ("x", "y", "z"),

@@ -44,6 +44,8 @@ import numpy as np
 import pandas as pd
 from scipy.spatial import cKDTree
 
+from floorscan.registration import se2_between, transform_points, voxel_downsample, wrap_angle
+
 log = logging.getLogger(__name__)
 
 #: Information (1 / variance) of the degrees of freedom a planar rover does not have
@@ -134,21 +136,6 @@ def _openmp_controller():
     from threadpoolctl import ThreadpoolController
 
     return ThreadpoolController()
-
-
-def se2_between(a, b) -> tuple[float, float, float]:
-    """Planar motion (dx, dy, dyaw) from pose ``a`` to pose ``b``, in ``a``'s frame.
-
-    Poses are ``(x, y, z, yaw)`` or ``(x, y, yaw)`` sequences; metres, radians.
-    """
-    ya, yb = a[-1], b[-1]
-    c, s = math.cos(ya), math.sin(ya)
-    dx, dy = b[0] - a[0], b[1] - a[1]
-    return c * dx + s * dy, -s * dx + c * dy, _wrap(yb - ya)
-
-
-def _wrap(a: float) -> float:
-    return (a + math.pi) % (2 * math.pi) - math.pi
 
 
 def _matrix(x: float, y: float, yaw: float) -> np.ndarray:
@@ -253,8 +240,6 @@ def scan_pair_edges(
         relative pose when ICP found no correspondences). :func:`optimize_pose_graph`
         uses the pairs with ``fitness >= min_edge_fitness``.
     """
-    from floorscan.registration import voxel_downsample
-
     poses = np.asarray(poses, dtype=np.float64)
     pts = []
     for c in clouds:  # the xy projection (z = 0): Open3D's 6-DoF ICP then stays planar
@@ -302,8 +287,6 @@ def _pair_rows(pts, poses: np.ndarray, pairs, params: GraphParams, icp_kinds) ->
     """The :data:`EDGE_COLUMNS` rows of ``pairs`` (see :func:`scan_pair_edges`);
     ``pts[k]`` is scan k's projected, downsampled cloud (a list or a dict)."""
     import open3d as o3d
-
-    from floorscan.registration import transform_points
 
     reg = o3d.pipelines.registration
     trees: dict[int, cKDTree] = {}
@@ -458,12 +441,8 @@ def optimize_pose_graph(
         x, _ = _gauss_newton(x, ii[keep], jj[keep], z[keep], loop[keep], w_edge, prior, w_prior, mu)
     info["n_pruned"] = int((~keep).sum())
     out = poses.copy()
-    out[:, 0], out[:, 1], out[:, 3] = x[:, 0], x[:, 1], _wrap_array(x[:, 2])
+    out[:, 0], out[:, 1], out[:, 3] = x[:, 0], x[:, 1], wrap_angle(x[:, 2])
     return out, info
-
-
-def _wrap_array(a: np.ndarray) -> np.ndarray:
-    return (a + np.pi) % (2 * np.pi) - np.pi
 
 
 def _edge_residuals(x: np.ndarray, ii: np.ndarray, jj: np.ndarray, z: np.ndarray):
@@ -472,7 +451,7 @@ def _edge_residuals(x: np.ndarray, ii: np.ndarray, jj: np.ndarray, z: np.ndarray
     displacement (dx, dy) from i to j, which the Jacobian reuses."""
     c, s = np.cos(x[ii, 2]), np.sin(x[ii, 2])
     dx, dy = x[jj, 0] - x[ii, 0], x[jj, 1] - x[ii, 1]
-    r = np.column_stack([c * dx + s * dy - z[:, 0], -s * dx + c * dy - z[:, 1], _wrap_array(x[jj, 2] - x[ii, 2] - z[:, 2])])
+    r = np.column_stack([c * dx + s * dy - z[:, 0], -s * dx + c * dy - z[:, 1], wrap_angle(x[jj, 2] - x[ii, 2] - z[:, 2])])
     return r, c, s, dx, dy
 
 
@@ -521,7 +500,7 @@ def _gauss_newton(x0, ii, jj, z, loop, w_edge, prior, w_prior, mu) -> tuple[np.n
         vals = vals * sw[rows[: 12 * e] // 3, row_axis]
         res = (r * sw).ravel()
         if prior is not None:
-            rp = np.column_stack([x[:, :2] - prior[:, :2], _wrap_array(x[:, 2] - prior[:, 2])])
+            rp = np.column_stack([x[:, :2] - prior[:, :2], wrap_angle(x[:, 2] - prior[:, 2])])
             vals = np.r_[vals, prior_vals]
             res = np.r_[res, (rp * w_prior).ravel()]
         jac = sparse.csr_matrix((vals[keep], (rows_k, cols_k)), shape=(n_rows, n_free))

@@ -334,6 +334,17 @@ def wrap_angle(a: np.ndarray | float) -> np.ndarray | float:
     return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
 
 
+def se2_between(a, b) -> tuple[float, float, float]:
+    """Planar motion (dx, dy, dyaw) from pose ``a`` to pose ``b``, in ``a``'s frame.
+
+    Poses are ``(x, y, z, yaw)`` or ``(x, y, yaw)`` sequences; metres, radians.
+    """
+    ya, yb = a[-1], b[-1]
+    c, s = math.cos(ya), math.sin(ya)
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    return c * dx + s * dy, -s * dx + c * dy, float(wrap_angle(yb - ya))
+
+
 def transform_points(points: np.ndarray, x: float, y: float, z: float, yaw: float) -> np.ndarray:
     """Apply a planar pose to points: ``Rz(yaw) @ p + (x, y, z)``.
 
@@ -380,6 +391,12 @@ def voxel_downsample(points: np.ndarray, voxel_size: float) -> np.ndarray:
     p = np.asarray(points, dtype=np.float64)
     if voxel_size <= 0 or len(p) == 0:
         return p.copy()
+    return _voxel_centroids(p, voxel_size)[0]
+
+
+def _voxel_centroids(p: np.ndarray, voxel_size: float) -> tuple[np.ndarray, np.ndarray]:
+    """Centroids of the occupied voxels of ``p`` (N, 3), in lexicographic order of their
+    integer keys, and each point's voxel (index into the centroids)."""
     keys = np.floor(p / voxel_size).astype(np.int64)
     keys -= keys.min(axis=0)
     span = keys.max(axis=0) + 1
@@ -389,8 +406,7 @@ def voxel_downsample(points: np.ndarray, voxel_size: float) -> np.ndarray:
     else:
         _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
     inverse = inverse.ravel()
-    sums = _group_sums(inverse, p, len(counts))
-    return sums / counts[:, None]
+    return _group_sums(inverse, p, len(counts)) / counts[:, None], inverse
 
 
 def _group_sums(inverse: np.ndarray, p: np.ndarray, n: int) -> np.ndarray:
@@ -503,14 +519,7 @@ def _vertical_voxels(p: np.ndarray, cfg: RegistrationConfig) -> tuple[np.ndarray
     """A 3D scan on the ``icp_voxel_size_3d_m`` grid: voxel centroids, which voxels are
     not horizontal surfaces (normal |z| <= 0.7; all when too few are), and each point's
     voxel (index into the centroids)."""
-    keys = np.floor(p / cfg.icp_voxel_size_3d_m).astype(np.int64)
-    keys -= keys.min(axis=0)
-    span = keys.max(axis=0) + 1
-    flat = (keys[:, 0] * span[1] + keys[:, 1]) * span[2] + keys[:, 2]
-    _, inverse, counts = np.unique(flat, return_inverse=True, return_counts=True)
-    inverse = inverse.ravel()
-    sums = _group_sums(inverse, p, len(counts))
-    coarse = sums / counts[:, None]
+    coarse, inverse = _voxel_centroids(p, cfg.icp_voxel_size_3d_m)
     vertical = np.ones(len(coarse), dtype=bool)
     if len(coarse) > cfg.normal_neighbours:
         v = np.abs(normals_3d(coarse, cfg.normal_neighbours)[:, 2]) <= _MAX_NORMAL_Z
@@ -1038,13 +1047,6 @@ def _icp_to_map(src: np.ndarray, target: np.ndarray, init, cfg: RegistrationConf
 # --------------------------------------------------------------------------- odometry
 
 
-def _se2_between(a, b) -> tuple[float, float, float]:
-    """Planar motion (dx, dy, dyaw) from pose ``a`` to pose ``b`` in ``a``'s frame."""
-    c, s = math.cos(a[3]), math.sin(a[3])
-    dx, dy = b[0] - a[0], b[1] - a[1]
-    return c * dx + s * dy, -s * dx + c * dy, float(wrap_angle(b[3] - a[3]))
-
-
 def _se2_compose(a, d) -> tuple[float, float, float, float]:
     """Pose ``a`` (x, y, z, yaw) followed by the planar motion ``d`` in its frame."""
     c, s = math.cos(a[3]), math.sin(a[3])
@@ -1073,7 +1075,7 @@ def predict_constant_velocity(p1, t1: int, p2, t2: int, t3: int) -> tuple[float,
     if t2 <= t1:
         return tuple(float(v) for v in p2)
     k = (t3 - t2) / (t2 - t1)
-    d = _se2_between(p1, p2)
+    d = se2_between(p1, p2)
     return _se2_compose(p2, (k * d[0], k * d[1], k * d[2]))
 
 
@@ -1134,7 +1136,7 @@ def _register_odometry(usable, sampled, clouds, sids, t, cfg, out) -> int:
             low = fi < cfg.min_icp_fitness
             if low and is_sampled[i]:
                 reasons[i] = "low_icp_fitness"
-            d = _se2_between(pred, pose)
+            d = se2_between(pred, pose)
             r_max = float(np.max(np.hypot(src[:, 0], src[:, 1])))
             dev_sq += (math.hypot(d[0], d[1]) + 2.0 * r_max * math.sin(abs(d[2]) / 2.0)) ** 2
             n_dev += 1
@@ -1430,7 +1432,7 @@ def _register_screened(index, aligned, reasons, clouds: "_ScanStore", cfg) -> tu
     _raise_if_nothing_registered(table, cfg, summary)
     log.info(
         "register (%s): %d scans, %d sampled, %d kept (%d anchors); drops %s",
-        cfg.mode, n, len(sampled), int(kept.sum()), n_anchor, summary["counts"],
+        cfg.mode, n, len(sampled), int(kept.sum()), n_anchor, summary["drops"],
     )
     return table, summary
 
@@ -1487,7 +1489,7 @@ def register_recording(
     import pyarrow.parquet as pq
 
     from floorscan.figures_registration import DensityRaster
-    from floorscan.io import REGISTERED, atomic_path, iter_scans, parquet_options
+    from floorscan.io import REGISTERED, ScanRowGroups, atomic_path, iter_scans, parquet_options
 
     cfg = _config(config)
     index = _prepare_index(scan_index)
@@ -1498,29 +1500,6 @@ def register_recording(
     store = _ScanStore(cfg)
     radius = np.zeros(n)
     odometry = cfg.mode == "odometry"
-    counter = {"usable": 0}
-
-    def step(k: int, pts: np.ndarray | None) -> None:
-        if pts is not None and not np.isfinite(pts).all():
-            raise InputError(
-                f"{scans_path}: scan {int(sids[k])} has non-finite x, y or z; expected finite metres"
-            )
-        if screen.step(k, pts) != "":
-            return
-        is_sampled = counter["usable"] % cfg.every_n == 0
-        counter["usable"] += 1
-        if odometry:
-            needs = ("icp",) if cfg.odometry_scans == "all" or is_sampled else ()
-            if is_sampled and cfg.loop_closure:
-                needs += ("graph",)
-        elif is_sampled:
-            needs = ("graph",) if cfg.reference == "graph" else ("clouds",)
-        else:
-            needs = ()
-        if needs:
-            store.add(int(sids[k]), pts, needs)
-        if is_sampled:
-            radius[k] = float(np.max(np.hypot(pts[:, 0], pts[:, 1])))
 
     def walk():
         """(index position, points) in index order; the file's scans are ascending."""
@@ -1542,8 +1521,29 @@ def register_recording(
             yield k, None
             k += 1
 
+    n_usable = 0  # the every-n-th usable scan is sampled (as _register_screened)
     for k, pts in walk():
-        step(k, pts)
+        if pts is not None and not np.isfinite(pts).all():
+            raise InputError(
+                f"{scans_path}: scan {int(sids[k])} has non-finite x, y or z; expected finite metres"
+            )
+        if screen.step(k, pts) != "":
+            continue
+        is_sampled = n_usable % cfg.every_n == 0
+        n_usable += 1
+        if odometry:
+            needs = ("icp",) if cfg.odometry_scans == "all" or is_sampled else ()
+            if is_sampled and cfg.loop_closure:
+                needs += ("graph",)
+        elif is_sampled:
+            needs = ("graph",) if cfg.reference == "graph" else ("clouds",)
+        else:
+            needs = ()
+        if needs:
+            store.add(int(sids[k]), pts, needs)
+        if is_sampled:
+            radius[k] = float(np.max(np.hypot(pts[:, 0], pts[:, 1])))
+
     table, summary = _register_screened(index, aligned, screen.reasons, store, cfg)
     store = None
 
@@ -1560,42 +1560,23 @@ def register_recording(
     schema = REGISTERED
     if metadata:
         schema = schema.with_metadata({str(k): str(v) for k, v in metadata.items()})
-    rows = 1 << 20
     with atomic_path(registered_path) as tmp:
         with pq.ParquetWriter(tmp, schema, **parquet_options(schema)) as writer:
-            buf: list[np.ndarray] = []
-            ids: list[np.ndarray] = []
-            size = 0
-
-            def flush():
-                if not buf:
-                    return
-                p = np.concatenate(buf)
-                arrays = [pa.array(np.concatenate(ids), pa.int32())] + [
-                    pa.array(p[:, c].astype(np.float32)) for c in range(3)
-                ]
-                writer.write_table(pa.Table.from_arrays(arrays, schema=schema), row_group_size=rows)
-                buf.clear()
-                ids.clear()
-
+            out = ScanRowGroups(writer)
             for sid, pts in iter_scans(scans_path):
                 pose = pose_of.get(int(sid))
                 if pose is None:
                     continue
                 q = transform_points(pts, *pose)
                 density.add(q[:, :2])
-                buf.append(q)
-                ids.append(np.full(len(q), sid, dtype=np.int32))
-                size += len(q)
-                if size >= rows:
-                    flush()
-                    size = 0
-            flush()
+                out.add(sid, q)
+            out.flush()
     return RegistrationResult(registered=None, table=table, summary=summary, density=density)
 
 
 def summarize(table: pd.DataFrame, cfg: RegistrationConfig | None = None) -> dict:
-    """Counts per reason, fraction dropped by each threshold, median corrections.
+    """Counts per reason (``counts``: every scan, ``""`` and ``"anchor"`` are kept;
+    ``drops``: the scans not kept), fraction dropped by each threshold, median corrections.
 
     Drop fractions are given twice: of all scans (``fraction_of_scans``) and of the
     scans that reached the check (``fraction_of_checked``: sampled scans for the fitness
@@ -1608,6 +1589,7 @@ def summarize(table: pd.DataFrame, cfg: RegistrationConfig | None = None) -> dic
     """
     reasons = table["reason"].str.replace(r"^no_pose:.*", "no_pose", regex=True)
     counts = dict(sorted(Counter(reasons).items()))
+    drops = dict(sorted(Counter(reasons[~table["kept"].to_numpy(bool)]).items()))
     n = len(table)
     sampled = int(table["kept"].sum() + reasons.isin(["low_prior_fitness", "low_icp_fitness", "icp_failed"]).sum())
     n_prior = int((reasons == "low_prior_fitness").sum())
@@ -1623,6 +1605,7 @@ def summarize(table: pd.DataFrame, cfg: RegistrationConfig | None = None) -> dic
         "n_kept": int(table["kept"].sum()),
         "n_registered": int(registered.sum()),
         "counts": counts,
+        "drops": drops,
         "fraction_of_scans": {k: v / n for k, v in counts.items()} if n else {},
         "fraction_of_checked": {
             "low_prior_fitness": n_prior / checked_prior if checked_prior else 0.0,

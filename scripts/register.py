@@ -18,10 +18,9 @@ with stage_log(snakemake) as log:
     write_table(result.table, snakemake.output.registration, schema=REGISTRATION, metadata=meta)
     plot_registered_map(result.density, result.table, snakemake.output.figure, title=snakemake.wildcards.dataset)
     s = result.summary
-    drops = {r: c for r, c in s["counts"].items() if r not in ("", "anchor")}
     log.info(
         "kept %d of %d scans (%d sampled); dropped by reason %s; fraction of the checked scans each "
         "fitness threshold drops %s; median correction %.3f m, %.3f rad",
-        s["n_kept"], s["n_scans"], s["n_sampled"], drops, s["fraction_of_checked"],
+        s["n_kept"], s["n_scans"], s["n_sampled"], s["drops"], s["fraction_of_checked"],
         s["median_correction_m"], s["median_correction_rad"],
     )

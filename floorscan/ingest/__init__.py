@@ -24,10 +24,9 @@ from typing import Any, Iterable, Iterator, Mapping
 
 import numpy as np
 import pandas as pd
-import pyarrow as pa
 import pyarrow.parquet as pq
 
-from floorscan.io import POSE_STREAM, SCAN_INDEX, SCANS, InputError, atomic_path, parquet_options, write_table
+from floorscan.io import POSE_STREAM, SCAN_INDEX, SCANS, InputError, atomic_path, parquet_options, ScanRowGroups, write_table
 
 log = logging.getLogger(__name__)
 
@@ -135,7 +134,7 @@ def write_recording(
     meta = {k.encode(): str(v).encode() for k, v in (metadata or {}).items()}
     with atomic_path(scans_path) as tmp:
         with pq.ParquetWriter(tmp, SCANS.with_metadata(meta), **parquet_options(SCANS)) as writer:
-            batch = _Batch(writer)
+            batch = ScanRowGroups(writer)
             last_t = None
             for scan_id, scan in enumerate(recording.scans):
                 if last_t is not None and scan.t_ns < last_t:
@@ -161,35 +160,6 @@ def write_recording(
         write_table(index, index_path, schema=SCAN_INDEX, metadata=metadata)
         write_table(stream, pose_stream_path, schema=POSE_STREAM, metadata=metadata)
     return index
-
-
-class _Batch:
-    """Collects scans and writes them as row groups of about ``ROW_GROUP_POINTS`` points."""
-
-    ROW_GROUP_POINTS = 1 << 20
-
-    def __init__(self, writer: pq.ParquetWriter):
-        self.writer = writer
-        self.ids: list[np.ndarray] = []
-        self.pts: list[np.ndarray] = []
-        self.n = 0
-
-    def add(self, scan_id: int, pts: np.ndarray) -> None:
-        self.ids.append(np.full(len(pts), scan_id, np.int32))
-        self.pts.append(pts)
-        self.n += len(pts)
-        if self.n >= self.ROW_GROUP_POINTS:
-            self.flush()
-
-    def flush(self) -> None:
-        if not self.n:
-            return
-        p = np.concatenate(self.pts)
-        table = pa.table(
-            {"scan_id": np.concatenate(self.ids), "x": p[:, 0], "y": p[:, 1], "z": p[:, 2]}, schema=SCANS
-        )
-        self.writer.write_table(table, row_group_size=len(p))
-        self.ids, self.pts, self.n = [], [], 0
 
 
 def laser_scan_points(
