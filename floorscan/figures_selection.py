@@ -24,7 +24,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from floorscan.hulls import HullParams, iter_frame_scans, kept_scan_ids, scan_coverage, scan_hulls  # noqa: E402
+from floorscan.hulls import HullParams, kept_scan_ids, scan_coverage, scan_hulls  # noqa: E402
+from floorscan.io import split_by_scan  # noqa: E402
 from floorscan.io import atomic_path, iter_scans  # noqa: E402
 from floorscan.selection import (  # noqa: E402
     ORDERINGS,
@@ -154,7 +155,7 @@ def coverage_vs_clusters(
     todo = [int(k) for k in dict.fromkeys(int(k) for k in k_values) if int(k) not in known]
     if todo:
         if isinstance(registered, pd.DataFrame):
-            scans = iter_frame_scans(registered[np.isin(registered["scan_id"].to_numpy(), ids)])
+            scans = split_by_scan(registered[np.isin(registered["scan_id"].to_numpy(), ids)], ("x", "y")).items()
         elif isinstance(registered, (str, os.PathLike)):
             scans = iter_scans(registered, ("x", "y"))
         else:

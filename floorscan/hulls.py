@@ -59,6 +59,8 @@ import pandas as pd
 import pyarrow as pa
 import shapely
 
+from floorscan.io import split_by_scan
+
 # scikit-learn (KMeans) and threadpoolctl are imported where used: importing
 # scikit-learn costs ~1.4 s, which the stages that only read hulls (select, the
 # hulls merge) need not pay (issue 8).
@@ -287,24 +289,6 @@ class _HullBuilder:
         return geoms, np.where(poly, areas, 0.0).astype(np.float64)
 
 
-def iter_frame_scans(registered: pd.DataFrame) -> Iterator[tuple[int, np.ndarray]]:
-    """The scans of a points frame as ``(scan_id, (n, 2) float64 x, y)``, ascending id.
-
-    Raises ``KeyError`` when ``scan_id``, ``x`` or ``y`` is missing.
-    """
-    for col in ("scan_id", "x", "y"):
-        if col not in registered.columns:
-            raise KeyError(f"registered points: column {col!r} missing; expected scan_id, x, y, z")
-    ids = registered["scan_id"].to_numpy()
-    order = np.argsort(ids, kind="stable")
-    ids = ids[order]
-    xy = registered[["x", "y"]].to_numpy(dtype=np.float64)[order]
-    uniq, starts = np.unique(ids, return_index=True)
-    bounds = np.r_[starts, len(ids)]
-    for i, sid in enumerate(uniq):
-        yield int(sid), xy[bounds[i] : bounds[i + 1]]
-
-
 def _frame(scan_rows: list, cluster_rows: list, geoms: np.ndarray, areas: np.ndarray) -> pd.DataFrame:
     sid = np.concatenate(scan_rows).astype(np.int32) if scan_rows else np.zeros(0, np.int32)
     cl = np.concatenate(cluster_rows).astype(np.int32) if cluster_rows else np.zeros(0, np.int32)
@@ -328,7 +312,7 @@ def scan_hulls(
     scans : iterable of (int, (n, >=2) float ndarray)
         ``(scan_id, points)`` of each scan, map frame, metres; only columns 0 and 1
         (x, y) are used. Consumed once, one scan at a time (e.g.
-        :func:`floorscan.io.iter_scans` or :func:`iter_frame_scans`), so memory holds
+        :func:`floorscan.io.iter_scans` or :func:`floorscan.io.split_by_scan`), so memory holds
         one scan plus up to ``batch_points`` points waiting for GEOS.
     params : sequence of HullParams
         One cluster-hull table per entry (Fig. 5.7 needs several ``k_clusters``).
@@ -441,7 +425,7 @@ def cluster_hulls(
         float64, sorted by (scan_id, cluster). ``k`` is ``k_clusters``, or fewer for
         a scan with fewer distinct points.
     """
-    out, _, _ = scan_hulls(iter_frame_scans(registered), [params], scan_ids, convex=False)
+    out, _, _ = scan_hulls(split_by_scan(registered, ("x", "y")).items(), [params], scan_ids, convex=False)
     return out[0]
 
 
@@ -451,7 +435,7 @@ def convex_hulls(registered: pd.DataFrame, scan_ids: Iterable[int] | None = None
     Same columns as :func:`cluster_hulls`, ``cluster = -1`` (:data:`CONVEX_CLUSTER`),
     one row per scan; no outlier removal.
     """
-    _, conv, _ = scan_hulls(iter_frame_scans(registered), [], scan_ids, convex=True)
+    _, conv, _ = scan_hulls(split_by_scan(registered, ("x", "y")).items(), [], scan_ids, convex=True)
     return conv
 
 
@@ -571,7 +555,7 @@ def compute_hulls(
         ``scan_id, x, y``.
     """
     ids = kept_scan_ids(registration)
-    scans = iter_frame_scans(registered) if isinstance(registered, pd.DataFrame) else registered
+    scans = split_by_scan(registered, ("x", "y")).items() if isinstance(registered, pd.DataFrame) else registered
     (cluster,), convex, counts = scan_hulls(scans, [params], ids, convex=True)
     per_scan = cluster.groupby("scan_id")["area_m2"].sum()
     counts["n_scans"] = int(len(ids))

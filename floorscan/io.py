@@ -176,21 +176,29 @@ def _json_default(o: object) -> object:
     raise TypeError(f"not JSON serializable: {type(o).__name__}")
 
 
-def split_by_scan(df: pd.DataFrame) -> dict[int, np.ndarray]:
-    """Group a points table (``scan_id, x, y, z``) into ``{scan_id: (N, 3) float64}``.
+def split_by_scan(df: pd.DataFrame, columns: tuple[str, ...] = ("x", "y", "z")) -> dict[int, np.ndarray]:
+    """Group a points table (``scan_id`` and ``columns``) into
+    ``{scan_id: (N, len(columns)) float64}``, in ascending ``scan_id``.
 
-    Scans keep the order of first appearance; arrays are new (the frame is not
-    mutated).
+    Arrays are new (the frame is not mutated); a scan's points keep their row order.
+
+    Raises
+    ------
+    KeyError
+        When ``scan_id`` or one of ``columns`` is missing.
     """
+    missing = [c for c in ("scan_id", *columns) if c not in df.columns]
+    if missing:
+        raise KeyError(f"points table: columns {missing} missing; expected scan_id, {', '.join(columns)}")
     if df.empty:
         return {}
     ids = df["scan_id"].to_numpy()
-    xyz = df[["x", "y", "z"]].to_numpy(dtype=np.float64)
+    pts = df[list(columns)].to_numpy(dtype=np.float64)
     order = np.argsort(ids, kind="stable")
     ids_sorted = ids[order]
     starts = np.flatnonzero(np.r_[True, ids_sorted[1:] != ids_sorted[:-1]])
     ends = np.r_[starts[1:], len(ids_sorted)]
-    return {int(ids_sorted[s]): xyz[order[s:e]] for s, e in zip(starts, ends)}
+    return {int(ids_sorted[s]): pts[order[s:e]] for s, e in zip(starts, ends)}
 
 
 class ScanRowGroups:

@@ -50,6 +50,8 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 
+from floorscan.grid import cell_groups, cell_means
+
 log = logging.getLogger(__name__)
 
 #: Extractor names (config ``walls.extractors``, wildcard ``{extractor}``).
@@ -218,15 +220,13 @@ def params_from_config(cfg: Mapping[str, Any]) -> tuple[ScanParams, RansacParams
         planar_tolerance_m=float(cfg.get("planar_tolerance_m", ScanParams.planar_tolerance_m)),
         grid_m=float(cfg.get("grid_m", ScanParams.grid_m)),
     )
-    return scan, _dataclass_from(RansacParams, cfg.get("ransac")), _dataclass_from(
-        ClusterParams, cfg.get("cluster_ransac")
-    )
-
-
-def _dataclass_from(cls, values):
     from floorscan.config import dataclass_from_mapping
 
-    return dataclass_from_mapping(cls, values, cls.__name__)
+    return (
+        scan,
+        dataclass_from_mapping(RansacParams, cfg.get("ransac"), "RansacParams"),
+        dataclass_from_mapping(ClusterParams, cfg.get("cluster_ransac"), "ClusterParams"),
+    )
 
 
 # --------------------------------------------------------------------------------------
@@ -275,32 +275,8 @@ def scan_points_2d(xyz: np.ndarray, params: ScanParams = ScanParams()) -> tuple[
     if len(pts) == 0:
         return empty, "no_points_in_height_band"
     if params.grid_m > 0:
-        pts = _grid_means(pts, params.grid_m)
+        pts = cell_means(pts, params.grid_m)[0]  # one mean point per occupied cell
     return pts, ""
-
-
-def _grid_means(pts: np.ndarray, grid_m: float) -> np.ndarray:
-    """One mean point per occupied ``grid_m`` cell, cells in (x, y) lexicographic order.
-
-    The cells are numbered by one int64 key ``(cx - min cx) * span_y + (cy - min cy)``
-    whose order is the lexicographic order of (cx, cy), so a 1D ``unique`` replaces
-    ``numpy.unique(cells, axis=0)`` (a sort of structured rows, 6x slower), and the
-    sums come from ``bincount``, which adds in point order as ``numpy.add.at`` did:
-    the same points, bit for bit.
-    """
-    cell = np.floor(pts / grid_m).astype(np.int64)
-    lo = cell.min(axis=0)
-    span = cell.max(axis=0) - lo + 1
-    if float(span[0]) * float(span[1]) < 2.0**62:
-        key = (cell[:, 0] - lo[0]) * int(span[1]) + (cell[:, 1] - lo[1])
-        _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
-    else:  # an extent of > 2**31 cells a side: the int64 key would overflow
-        _, inverse, counts = np.unique(cell, axis=0, return_inverse=True, return_counts=True)
-        inverse = inverse.ravel()
-    sums = np.empty((len(counts), 2))
-    sums[:, 0] = np.bincount(inverse, weights=pts[:, 0], minlength=len(counts))
-    sums[:, 1] = np.bincount(inverse, weights=pts[:, 1], minlength=len(counts))
-    return sums / counts[:, None]
 
 
 # --------------------------------------------------------------------------------------
@@ -622,7 +598,9 @@ def mean_shift(x: np.ndarray, bandwidth: float, min_bin_freq: int = 1, max_iter:
         x = x[:, None]
     if len(x) == 0:
         return np.empty(0, dtype=np.int64)
-    cells, counts = _unique_rows(np.round(x / bandwidth))
+    cells = np.round(x / bandwidth)
+    _, counts, first = cell_groups(cells, first=True)
+    cells = cells[first]
     seeds = cells[counts >= min_bin_freq] * bandwidth
     if len(seeds) == len(x):
         seeds = x.copy()
@@ -671,21 +649,6 @@ def mean_shift(x: np.ndarray, bandwidth: float, min_bin_freq: int = 1, max_iter:
     centers = centers[unique]
     d2 = ((x[:, None, :] - centers[None, :, :]) ** 2).sum(axis=2)
     return np.argmin(d2, axis=1).astype(np.int64)
-
-
-def _unique_rows(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``numpy.unique(cells, axis=0, return_counts=True)`` for rows of integral floats
-    (grid cells): one int64 key per row in lexicographic order, a 1D ``unique``
-    (a sort of structured rows is several times slower). Other inputs go to numpy."""
-    if cells.shape[1] > 2 or not len(cells) or np.abs(cells).max() >= 2**30:
-        return np.unique(cells, axis=0, return_counts=True)
-    c = cells.astype(np.int64)
-    lo = c.min(axis=0)
-    key = c[:, 0] - lo[0]
-    if c.shape[1] == 2:
-        key = key * (int(c[:, 1].max() - lo[1]) + 1) + (c[:, 1] - lo[1])
-    _, first, counts = np.unique(key, return_index=True, return_counts=True)
-    return cells[first], counts
 
 
 def _mean_shift(
@@ -978,9 +941,6 @@ def extract_walls(
     if isinstance(points, pd.DataFrame):
         from floorscan.io import split_by_scan
 
-        missing = [c for c in ("scan_id", "x", "y", "z") if c not in points.columns]
-        if missing:
-            raise KeyError(f"registered points lack columns {missing}; expected scan_id, x, y, z")
         scans: Iterable[tuple[int, np.ndarray]] = split_by_scan(points).items()
     else:
         scans = points
@@ -1007,23 +967,12 @@ def extract_walls(
     ids = sorted(per_scan)
     rows = [r for s in ids for r in per_scan[s]]
     n_rows = [len(per_scan[s]) for s in ids]
-    seg = np.array(rows, dtype=np.float64).reshape(-1, len(_SEGMENT_COLUMNS))
-    walls_df = pd.DataFrame(
-        {
-            "scan_id": np.repeat(np.asarray(ids, dtype=np.int32), n_rows),
-            **{c: seg[:, i] for i, c in enumerate(_SEGMENT_COLUMNS) if c != "n_inliers"},
-            "n_inliers": seg[:, _SEGMENT_COLUMNS.index("n_inliers")].astype(np.int32),
-        }
-    )[WALLS.names]
+    walls_df = _frame(rows)
+    walls_df.insert(0, "scan_id", np.repeat(np.asarray(ids, dtype=np.int32), n_rows))
+    walls_df = walls_df[WALLS.names]
     status.sort(key=lambda r: r[0])
-    status_df = pd.DataFrame(
-        {
-            "scan_id": np.array([r[0] for r in status], dtype=np.int32),
-            "n_points": np.array([r[1] for r in status], dtype=np.int32),
-            "n_walls": np.array([r[2] for r in status], dtype=np.int32),
-            "reason": pd.array([r[3] for r in status], dtype="str"),
-            "time_s": np.array([r[4] for r in status], dtype=np.float64),
-        }
+    status_df = pd.DataFrame(status, columns=SCAN_STATUS.names).astype(
+        {"scan_id": "int32", "n_points": "int32", "n_walls": "int32", "reason": "str", "time_s": "float64"}
     )
     counts = status_df.loc[status_df.reason != "", "reason"].value_counts().to_dict()
     log.info(

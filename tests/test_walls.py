@@ -177,7 +177,15 @@ def test_covariances_are_open3d_estimate_covariances_bit_for_bit():
 
 
 def test_fast_grid_means_and_inlier_counts_equal_the_plain_numpy():
-    from floorscan.walls import _grid_means, _inlier_counts, _unique_rows
+    from floorscan.grid import cell_groups, cell_means
+    from floorscan.walls import _inlier_counts
+
+    def _grid_means(p, cell):
+        return cell_means(p, cell)[0]
+
+    def _unique_rows(cells):
+        _, counts, first = cell_groups(cells, first=True)
+        return cells[first], counts
 
     rng = np.random.default_rng(9)
     pts = rng.uniform(-3, 5, (5000, 2))

@@ -1,0 +1,70 @@
+"""Grouping points by grid cell (voxels, 2D cells), shared by registration, the wall
+extraction and MeanShift's bin seeding.
+
+The cells are numbered by one int64 key (``numpy.ravel_multi_index`` of the cell
+offsets from the minimum), whose order is the lexicographic order of the cells, so a 1D
+``numpy.unique`` replaces ``numpy.unique(cells, axis=0)`` (a sort of structured rows,
+~6x slower); sums come from ``numpy.bincount``, which adds in point order as
+``numpy.add.at`` does: the same floats, bit for bit (tested).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def cell_groups(cells: np.ndarray, first: bool = False):
+    """Group rows of integer grid cells.
+
+    Parameters
+    ----------
+    cells : (N, d) int ndarray
+        Cell indices, N >= 1.
+    first : bool
+        Also return the first row of each group.
+
+    Returns
+    -------
+    inverse : (N,) intp ndarray
+        Each row's group; groups in lexicographic order of their cells.
+    counts : (G,) intp ndarray
+        Rows per group.
+    first_rows : (G,) intp ndarray
+        Only with ``first``: the first row of each group.
+    """
+    c = np.asarray(cells, dtype=np.int64)
+    lo = c.min(axis=0)
+    span = c.max(axis=0) - lo + 1
+    if float(np.prod(span.astype(np.float64))) < 2.0**62:
+        key = np.ravel_multi_index(tuple((c - lo).T), tuple(int(v) for v in span))
+        out = np.unique(key, return_index=first, return_inverse=True, return_counts=True)
+    else:  # an extent beyond the int64 key: sort the rows themselves
+        out = np.unique(c, axis=0, return_index=first, return_inverse=True, return_counts=True)
+    if first:
+        _, first_rows, inverse, counts = out
+        return inverse.ravel(), counts, first_rows
+    _, inverse, counts = out
+    return inverse.ravel(), counts
+
+
+def cell_means(points: np.ndarray, cell_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """Mean of the points in each occupied cell of side ``cell_m``.
+
+    Parameters
+    ----------
+    points : (N, d) float ndarray
+        Metres, N >= 1.
+    cell_m : float
+        Cell side, metres (> 0).
+
+    Returns
+    -------
+    means : (G, d) float64 ndarray
+        One per occupied cell, cells in lexicographic order.
+    inverse : (N,) intp ndarray
+        Each point's cell (row of ``means``).
+    """
+    p = np.asarray(points, dtype=np.float64)
+    inverse, counts = cell_groups(np.floor(p / cell_m).astype(np.int64))
+    sums = np.column_stack([np.bincount(inverse, weights=p[:, i], minlength=len(counts)) for i in range(p.shape[1])])
+    return sums / counts[:, None], inverse
