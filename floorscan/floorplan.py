@@ -184,14 +184,19 @@ def _within_distance(seg: np.ndarray, i: np.ndarray, j: np.ndarray, distance: fl
     return i[keep], j[keep]
 
 
-def _point_segment_distance(p: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Distance from points ``(P, 2)`` to the matching segments ``(P, 4)``, metres."""
-    d = s[:, 2:] - s[:, :2]
-    l2 = np.einsum("ij,ij->i", d, d)
+def point_segment_dist2(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> np.ndarray:
+    """Squared distance (square metres) from points ``(px, py)`` (P,) to the matching
+    rows of segments ``seg`` (P, 4) ``x0, y0, x1, y1`` (a zero-length segment is its
+    point). Used here and by :mod:`floorscan.metrics`."""
+    ax, ay, bx, by = seg[:, 0], seg[:, 1], seg[:, 2], seg[:, 3]
+    dx, dy = bx - ax, by - ay
+    l2 = dx * dx + dy * dy
     with np.errstate(invalid="ignore", divide="ignore"):
-        t = np.einsum("ij,ij->i", p - s[:, :2], d) / l2
+        t = ((px - ax) * dx + (py - ay) * dy) / l2
     t = np.where(l2 > 0, np.clip(t, 0.0, 1.0), 0.0)
-    return np.hypot(*(s[:, :2] + t[:, None] * d - p).T)
+    ex = ax + t * dx - px
+    ey = ay + t * dy - py
+    return ex * ex + ey * ey
 
 
 def _segment_distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -202,11 +207,11 @@ def _segment_distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
     a0, a1, b0, b1 = a[:, :2], a[:, 2:], b[:, :2], b[:, 2:]
     cross = (orient(a0, a1, b0) * orient(a0, a1, b1) < 0) & (orient(b0, b1, a0) * orient(b0, b1, a1) < 0)
-    d = np.minimum.reduce([
-        _point_segment_distance(a0, b), _point_segment_distance(a1, b),
-        _point_segment_distance(b0, a), _point_segment_distance(b1, a),
+    d2 = np.minimum.reduce([
+        point_segment_dist2(a0[:, 0], a0[:, 1], b), point_segment_dist2(a1[:, 0], a1[:, 1], b),
+        point_segment_dist2(b0[:, 0], b0[:, 1], a), point_segment_dist2(b1[:, 0], b1[:, 1], a),
     ])  # fmt: skip
-    return np.where(cross, 0.0, d)
+    return np.where(cross, 0.0, np.sqrt(d2))
 
 
 def _line_geometry(seg: np.ndarray, i: np.ndarray, j: np.ndarray):
@@ -323,8 +328,7 @@ def merge_segments(
     for _ in range(max(1, params.max_passes)):
         reach = max(params.merge_gap_m, params.merge_distance_m)
         i, j = _candidate_pairs(cur, reach, np.radians(params.merge_angle_deg), exact=False)
-        if len(i):
-            ang = _angle_diff(_axial_angle(cur[i]), _axial_angle(cur[j]))
+        if len(i):  # within merge_angle_deg already (_candidate_pairs)
             a, b, d, n, length = _line_geometry(cur, i, j)
             dist = np.maximum(
                 np.abs(np.einsum("ij,ij->i", cur[b, :2] - cur[a, :2], n)),
@@ -334,11 +338,7 @@ def merge_segments(
             tb0 = np.einsum("ij,ij->i", cur[b, :2] - cur[a, :2], d)
             tb1 = np.einsum("ij,ij->i", cur[b, 2:] - cur[a, :2], d)
             gap = np.maximum(np.minimum(tb0, tb1) - ta[1], ta[0] - np.maximum(tb0, tb1))
-            ok = (
-                (ang <= np.radians(params.merge_angle_deg))
-                & (dist <= params.merge_distance_m)
-                & (gap <= params.merge_gap_m)
-            )
+            ok = (dist <= params.merge_distance_m) & (gap <= params.merge_gap_m)
             # Overlapping along the line (gap <= 0), a point of the shorter projects
             # onto the longer and lies within dist of it: within reach for sure.
             sure = ok & (gap <= 0) & (dist < reach * (1 - 1e-9))
@@ -401,8 +401,7 @@ def pair_faces(
     wall_of_face = np.full(nf, -1, dtype=np.int64)
     axes, thick = [], []
     i, j = _candidate_pairs(faces, params.pair_max_m, np.radians(params.pair_angle_deg))
-    if len(i):
-        ang = _angle_diff(_axial_angle(faces[i]), _axial_angle(faces[j]))
+    if len(i):  # within pair_angle_deg already (_candidate_pairs)
         a, b, d, n, length = _line_geometry(faces, i, j)
         midb = 0.5 * (faces[b, :2] + faces[b, 2:])
         dist = np.abs(np.einsum("ij,ij->i", midb - faces[a, :2], n))
@@ -410,8 +409,7 @@ def pair_faces(
         tb1 = np.einsum("ij,ij->i", faces[b, 2:] - faces[a, :2], d)
         overlap = np.minimum(length[a], np.maximum(tb0, tb1)) - np.maximum(0.0, np.minimum(tb0, tb1))
         ok = (
-            (ang <= np.radians(params.pair_angle_deg))
-            & (dist >= params.pair_min_m)
+            (dist >= params.pair_min_m)
             & (dist <= params.pair_max_m)
             & (overlap >= params.pair_min_overlap * np.minimum(length[a], length[b]))
         )

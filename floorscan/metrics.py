@@ -67,6 +67,8 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
+from floorscan.floorplan import point_segment_dist2
+
 #: Segments shorter than this (metres) have no length and are ignored.
 MIN_SEGMENT_M = 1e-9
 #: Largest grid a bitmap metric may allocate (cells), a guard against a bad cell size.
@@ -263,24 +265,11 @@ def rasterize_segments(segments, grid: Grid, width_m: float = 0.10) -> np.ndarra
         iy = lo_y[rep] + local // w[rep]
         cx = grid.x0 + (ix + 0.5) * c
         cy = grid.y0 + (iy + 0.5) * c
-        d2 = _point_segment_dist2(cx, cy, seg[rep])
+        d2 = point_segment_dist2(cx, cy, seg[rep])
         hit = d2 <= half * half * (1 + 1e-12)
         flat[iy[hit] * grid.nx + ix[hit]] = True
         i = j
     return out
-
-
-def _point_segment_dist2(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> np.ndarray:
-    """Squared distance from points ``(px, py)`` to the matching rows of ``seg``."""
-    ax, ay, bx, by = seg[:, 0], seg[:, 1], seg[:, 2], seg[:, 3]
-    dx, dy = bx - ax, by - ay
-    l2 = dx * dx + dy * dy
-    with np.errstate(invalid="ignore", divide="ignore"):
-        t = ((px - ax) * dx + (py - ay) * dy) / l2
-    t = np.where(l2 > 0, np.clip(t, 0.0, 1.0), 0.0)
-    ex = ax + t * dx - px
-    ey = ay + t * dy - py
-    return ex * ex + ey * ey
 
 
 def error_map(inferred: np.ndarray, ground_truth: np.ndarray) -> np.ndarray:
@@ -511,6 +500,9 @@ def sample_segments(segments, step_m: float = 0.01) -> tuple[np.ndarray, np.ndar
 #: Spacing (metres) of the points along segments whose KD-tree gives each query point an
 #: upper bound of its distance to the nearest segment (:func:`nearest_distances`).
 BOUND_STEP_M = 0.1
+#: Radius of the first, short-range nearest-segment query (metres): most points are
+#: this near a wall, the others are queried again without a limit.
+NEAR_QUERY_M = 0.25
 #: Query points per chunk of :func:`nearest_distances` (bounds its memory: the pairs of
 #: a chunk are about this times the number of overlapping duplicates of a wall).
 NEAREST_CHUNK = 4096
@@ -570,13 +562,13 @@ class _SegmentIndex:
                 continue
             order = np.argsort(pi, kind="stable")
             pi, si = pi[order], si[order]
-            d = np.sqrt(_point_segment_dist2(pts[cid[pi], 0], pts[cid[pi], 1], self.seg[si]))
+            d = np.sqrt(point_segment_dist2(pts[cid[pi], 0], pts[cid[pi], 1], self.seg[si]))
             first = np.flatnonzero(np.r_[True, pi[1:] != pi[:-1]])
             out[start + pi[first]] = np.minimum.reduceat(d, first)
         return out
 
 
-def _nearest_below(pts, index: _SegmentIndex, bound: np.ndarray, u=None, geoms=None) -> np.ndarray:
+def _nearest_below(pts, index: _SegmentIndex, bound: np.ndarray, geoms=None) -> np.ndarray:
     """``min(bound, exact distance from each point to the nearest segment of index)``.
 
     Points whose lower bound ``u - BOUND_STEP_M / 2`` exceeds ``bound`` keep
@@ -586,13 +578,12 @@ def _nearest_below(pts, index: _SegmentIndex, bound: np.ndarray, u=None, geoms=N
     out = np.array(bound, dtype=np.float64, copy=True)
     if len(pts) == 0 or len(index.seg) == 0:
         return out
-    if u is None:
-        # Most points are near a wall: a short-range query first, the rest in full.
-        near = 0.25 + 0.5 * BOUND_STEP_M
-        u = index.upper(pts, near)
-        far = np.flatnonzero(np.isinf(u) & (out > near - 0.5 * BOUND_STEP_M))
-        if len(far):
-            u[far] = index.upper(pts[far])
+    # Most points are near a wall: a short-range query first, the rest in full.
+    near = NEAR_QUERY_M + 0.5 * BOUND_STEP_M
+    u = index.upper(pts, near)
+    far = np.flatnonzero(np.isinf(u) & (out > near - 0.5 * BOUND_STEP_M))
+    if len(far):
+        u[far] = index.upper(pts[far])
     todo = np.flatnonzero(u - 0.5 * BOUND_STEP_M <= out * (1 + 1e-9) + 1e-9)
     if len(todo):
         d = index.exact(pts, todo, np.minimum(u[todo], out[todo]), geoms)
@@ -600,7 +591,7 @@ def _nearest_below(pts, index: _SegmentIndex, bound: np.ndarray, u=None, geoms=N
     return out
 
 
-def _within(pts, index: _SegmentIndex, taus, hit: np.ndarray, u=None, geoms=None) -> np.ndarray:
+def _within(pts, index: _SegmentIndex, taus, hit: np.ndarray, geoms=None) -> np.ndarray:
     """Whether each point is within each tau of a segment of ``index``, or already was.
 
     ``hit`` is a ``(T, S)`` bool array (one row per tau), returned updated (a copy):
@@ -611,7 +602,7 @@ def _within(pts, index: _SegmentIndex, taus, hit: np.ndarray, u=None, geoms=None
     hit = np.array(hit, dtype=bool, copy=True)
     if len(pts) == 0 or len(index.seg) == 0:
         return hit
-    u = index.upper(pts, max(taus) + BOUND_STEP_M) if u is None else u
+    u = index.upper(pts, max(taus) + BOUND_STEP_M)
     for t, tau in enumerate(taus):
         row = hit[t]
         row |= u <= tau * (1 - 1e-9)
@@ -924,6 +915,15 @@ def read_wall_faces(path, kind: str = "face") -> np.ndarray:
     floorscan.io.InputError
         When the file is not a FeatureCollection or has no feature of ``kind``.
     """
+    from floorscan.io import InputError
+
+    seg = _wall_faces(_feature_collection(path), kind)
+    if not len(seg):
+        raise InputError(f"{path}: no LineString feature with property kind={kind!r}")
+    return seg
+
+
+def _feature_collection(path) -> dict:
     import json
 
     from floorscan.io import InputError
@@ -932,6 +932,11 @@ def read_wall_faces(path, kind: str = "face") -> np.ndarray:
         doc = json.load(fh)
     if doc.get("type") != "FeatureCollection":
         raise InputError(f"{path}: expected a GeoJSON FeatureCollection, got {doc.get('type')!r}")
+    return doc
+
+
+def _wall_faces(doc: dict, kind: str) -> np.ndarray:
+    """The straight pieces of the (Multi)LineString features of ``kind``, ``(M, 4)``."""
     rows: list[np.ndarray] = []
     for feat in doc.get("features", []):
         if (feat.get("properties") or {}).get("kind") != kind:
@@ -947,9 +952,15 @@ def read_wall_faces(path, kind: str = "face") -> np.ndarray:
             xy = np.asarray(line, dtype=np.float64)[:, :2]
             if len(xy) >= 2:
                 rows.append(np.column_stack([xy[:-1], xy[1:]]))
-    if not rows:
-        raise InputError(f"{path}: no LineString feature with property kind={kind!r}")
-    return as_segments(np.vstack(rows))
+    return as_segments(np.vstack(rows)) if rows else np.zeros((0, 4))
+
+
+def _wall_count(doc: dict) -> int:
+    props = [feat.get("properties") or {} for feat in doc.get("features", [])]
+    ids = {p["wall_id"] for p in props if "wall_id" in p}
+    if ids:
+        return len(ids)
+    return sum(p.get("kind", "wall") in ("axis", "wall") for p in props)
 
 
 def floorplan_wall_count(path) -> int:
@@ -960,28 +971,20 @@ def floorplan_wall_count(path) -> int:
     ``wall_id``; without that property, the features of kind ``axis`` or ``wall`` (or
     without a kind).
     """
-    import json
-
-    with open(path, encoding="utf-8") as fh:
-        doc = json.load(fh)
-    props = [feat.get("properties") or {} for feat in doc.get("features", [])]
-    ids = {p["wall_id"] for p in props if "wall_id" in p}
-    if ids:
-        return len(ids)
-    return sum(p.get("kind", "wall") in ("axis", "wall") for p in props)
+    return _wall_count(_feature_collection(path))
 
 
 def floorplan_faces(path) -> np.ndarray:
     """The merged faces (``kind`` "face") of a floor plan ``.geojson``, ``(F, 4)``
     metres; empty when the plan has none (a plan without walls is valid)."""
-    from floorscan.io import InputError
+    return _wall_faces(_feature_collection(path), "face")
 
-    try:
-        return read_wall_faces(path, kind="face")
-    except InputError as exc:
-        if "no LineString feature" in str(exc):
-            return np.zeros((0, 4))
-        raise
+
+def read_floorplan(path) -> tuple[np.ndarray, int]:
+    """:func:`floorplan_faces` and :func:`floorplan_wall_count` of a floor plan
+    ``.geojson``, from one read of the file."""
+    doc = _feature_collection(path)
+    return _wall_faces(doc, "face"), _wall_count(doc)
 
 
 def k_scans(k_label: str, n_kept: int) -> int:
@@ -999,6 +1002,7 @@ def score_dataset(
     dataset: str = "",
     log=None,
     recall_references: dict[str, np.ndarray] | None = None,
+    workers: int = 1,
 ):
     """Score every ordering x extractor x k of a dataset: one row per run.
 
@@ -1036,6 +1040,12 @@ def score_dataset(
         never visible from the LIDAR cannot be recovered). Precision and the bitmap
         metrics stay against ``references``, and ``recall_all_<tau>`` gives recall
         against ``references`` too.
+    workers : int
+        Processes (:func:`floorscan.parallel.map_in_processes`; the score rule's
+        ``threads``) over which the orderings x extractors are split. Each ordering and
+        extractor is scored in one process, so the table does not depend on it
+        (tested); the walls are then best given as paths (runs are pickled to the
+        workers). The per-run lines are logged when all are scored.
 
     Returns
     -------
@@ -1048,12 +1058,39 @@ def score_dataset(
         When ``reference_kind`` is unknown, a run's extractor has no reference, or the
         references are all empty (no grid can be built).
     """
-    import time
-
     import pandas as pd
 
     if reference_kind not in (GROUND_TRUTH, REFERENCE):
         raise ValueError(f"reference_kind must be {GROUND_TRUTH!r} or {REFERENCE!r}")
+    groups: dict[tuple, list[dict]] = {}
+    for run in runs:
+        groups.setdefault((run["ordering"], run["extractor"]), []).append(run)
+    keys = list(groups)
+    n = max(1, min(int(workers), len(keys)))
+    args = (references, reference_kind, cfg, dataset, recall_references)
+    if n == 1:
+        rows = _score_rows(runs, *args)
+    else:
+        from floorscan.parallel import map_in_processes
+
+        shares = [[r for key in keys[w::n] for r in groups[key]] for w in range(n)]
+        rows = [row for part in map_in_processes(_score_rows, [(share, *args) for share in shares]) for row in part]
+    df = pd.DataFrame(rows)
+    if not df.empty:
+        df = df.sort_values(["ordering", "extractor", "n_scans", "k"], kind="stable")
+    df = df.reset_index(drop=True)
+    if log is not None:
+        tau = tau_label(cfg["taus_m"][0])
+        for r in rows:
+            log.info("%s %s k=%s: %d segments, F1@%s %.3f, wall CM %.3f", r["ordering"], r["extractor"], r["k"],
+                     r["n_segments"], tau, r[f"f1_{tau}"], r["wall_correct_match"])
+    return df
+
+
+def _score_rows(runs, references, reference_kind, cfg, dataset, recall_references) -> list[dict]:
+    """The rows of :func:`score_dataset` of ``runs``, in run order (one process)."""
+    import time
+
     refs = {e: as_segments(s) for e, s in references.items()}
     nonempty = [s for s in refs.values() if len(s)]
     if not nonempty:
@@ -1102,7 +1139,7 @@ def score_dataset(
         m = growing[key].score(walls)
         plan_path = run.get("floorplan")
         if plan_path is not None:
-            plan, nfp = floorplan_faces(plan_path), floorplan_wall_count(plan_path)
+            plan, nfp = read_floorplan(plan_path)
         else:
             plan, nfp = run.get("floorplan_faces"), run.get("n_floorplan_walls")
         if plan is not None:
@@ -1129,17 +1166,7 @@ def score_dataset(
             "score_time_s": time.perf_counter() - t0,
         }
         rows.append(row)
-        if log is not None:
-            f1 = m.get(f"f1_{tau_label(cfg['taus_m'][0])}")
-            log.info(
-                "%s %s k=%s: %d segments, F1@%s %.3f, wall CM %.3f",
-                run["ordering"], ext, run["k"], len(walls), tau_label(cfg["taus_m"][0]),
-                f1, m["wall_correct_match"],
-            )
-    df = pd.DataFrame(rows)
-    if not df.empty:
-        df = df.sort_values(["ordering", "extractor", "n_scans", "k"], kind="stable")
-    return df.reset_index(drop=True)
+    return rows
 
 
 def summarize(metrics, tau: float = 0.05, levels=(0.95, 0.99)):
@@ -1272,36 +1299,3 @@ def load_references(kind: str, extractors, ground_truth=None, reference_paths=()
     from floorscan.io import read_table
 
     return {e: as_segments(read_table(p)) for e, p in zip(extractors, reference_paths)}
-
-
-def score_dataset_parallel(runs: list[dict], references, reference_kind, cfg, dataset="", log=None,
-                           recall_references=None, workers: int = 1):
-    """:func:`score_dataset` with the orderings x extractors split over ``workers``
-    processes (:func:`floorscan.parallel.map_in_processes`; the score rule's
-    ``threads``): each ordering and extractor is scored incrementally over its k in one
-    process, independently of the others, so the table is the same as
-    :func:`score_dataset`'s (tested). ``runs`` must give the walls as paths (or small
-    tables: they are pickled to the workers). The per-run lines are logged here,
-    after the workers finish.
-    """
-    import pandas as pd
-
-    from floorscan.parallel import map_in_processes
-
-    groups: dict[tuple, list[dict]] = {}
-    for run in runs:
-        groups.setdefault((run["ordering"], run["extractor"]), []).append(run)
-    keys = list(groups)
-    n = max(1, min(int(workers), len(keys)))
-    if n == 1:
-        return score_dataset(runs, references, reference_kind, cfg, dataset, log, recall_references)
-    shares = [[r for key in keys[w::n] for r in groups[key]] for w in range(n)]
-    calls = [(share, references, reference_kind, cfg, dataset, None, recall_references) for share in shares]
-    df = pd.concat(map_in_processes(score_dataset, calls), ignore_index=True)
-    df = df.sort_values(["ordering", "extractor", "n_scans", "k"], kind="stable").reset_index(drop=True)
-    if log is not None:
-        tau = tau_label(cfg["taus_m"][0])
-        for r in df.to_dict("records"):
-            log.info("%s %s k=%s: %d segments, F1@%s %.3f, wall CM %.3f", r["ordering"], r["extractor"], r["k"],
-                     r["n_segments"], tau, r[f"f1_{tau}"], r["wall_correct_match"])
-    return df

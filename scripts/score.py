@@ -29,7 +29,7 @@ with stage_log(snakemake) as log:  # noqa: F821
         for (o, e, k), wp, fp in zip(smk.params.runs, smk.input.walls, smk.input.floorplans)
     ]
     # the orderings x extractors in the rule's threads (processes); same table
-    table = metrics.score_dataset_parallel(
+    table = metrics.score_dataset(
         runs, references, kind, cfg, smk.wildcards.dataset, log, recall_references=recall_refs,
         workers=smk.threads,
     )

@@ -321,7 +321,7 @@ def test_score_dataset_in_worker_processes_gives_the_same_table(tmp_path):
     cfg = {"cell_m": 0.05, "wall_width_m": 0.1, "margin_m": 1.0, "taus_m": [0.05, 0.025],
            "sample_step_m": 0.01}
     one = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg, dataset="toy")
-    two = M.score_dataset_parallel(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg, dataset="toy", workers=2)
+    two = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg, dataset="toy", workers=2)
     assert len(two) == 6 and list(two["ordering"]) == ["cluster_hull"] * 2 + ["random"] * 2 + ["sequential"] * 2
     assert two.loc[two["ordering"] == "sequential", "recall_5cm"].tolist() == pytest.approx([5.05 / 16, 1.0])
     pd.testing.assert_frame_equal(one.drop(columns="score_time_s"), two.drop(columns="score_time_s"))
@@ -432,7 +432,7 @@ def test_nearest_distances_equal_brute_force_on_stacked_duplicates():
     rng = np.random.default_rng(4)
     pts = np.vstack([rng.uniform([-30, -30], [40, 36], (300, 2)), rng.uniform([0, -0.1], [10, 0.1], (300, 2))])
     brute = np.sqrt(
-        M._point_segment_dist2(np.repeat(pts[:, 0], len(seg)), np.repeat(pts[:, 1], len(seg)), np.tile(seg, (len(pts), 1)))
+        M.point_segment_dist2(np.repeat(pts[:, 0], len(seg)), np.repeat(pts[:, 1], len(seg)), np.tile(seg, (len(pts), 1)))
     ).reshape(len(pts), len(seg)).min(axis=1)
     np.testing.assert_allclose(M.nearest_distances(pts, seg), brute, rtol=1e-12, atol=1e-12)
     assert np.isinf(M.nearest_distances(pts[:3], np.zeros((0, 4)))).all()
