@@ -311,7 +311,8 @@ def subsample_points(points, max_points: int, seed: int, z_band=None, batch_rows
     with z inside ``z_band`` when the points are 3D (any z not 0).
 
     ``points`` is a frame (``x, y, z``) or the path of a Parquet points table, which is
-    read twice in batches of ``batch_rows`` (z to count, then x, y of the drawn rows):
+    read in batches of ``batch_rows`` (with ``z_band``, first z to count, then x, y of
+    the drawn rows):
     the same points as from the whole frame, in memory one batch at a time.
     """
     if isinstance(points, (str, Path)):
@@ -332,14 +333,16 @@ def _subsample_file(path, max_points: int, seed: int, z_band, batch_rows: int) -
     missing = [c for c in ("x", "y", "z") if c not in pf.schema_arrow.names]
     if missing:
         raise KeyError(f"{path}: columns {missing} missing; expected x, y, z")
-
-    def z_batches():
+    total, three_d = pf.metadata.num_rows, False
+    if z_band is not None:  # one pass over z: is the scan 3D, and how many are in the band
+        n_band = 0
         for b in pf.iter_batches(batch_size=batch_rows, columns=["z"]):
-            yield b.column(0).to_numpy(zero_copy_only=False).astype(np.float64)
-
-    three_d = z_band is not None and any(np.any(z != 0) for z in z_batches())
+            z = b.column(0).to_numpy(zero_copy_only=False).astype(np.float64)
+            three_d = three_d or bool(np.any(z != 0))
+            n_band += int(np.count_nonzero((z >= z_band[0]) & (z <= z_band[1])))
+        if three_d:
+            total = n_band
     band = (lambda z: (z >= z_band[0]) & (z <= z_band[1])) if three_d else (lambda z: np.ones(len(z), bool))
-    total = sum(int(np.count_nonzero(band(z))) for z in z_batches())
     chosen = None
     if total > max_points:
         chosen = np.sort(np.random.default_rng(seed).choice(total, max_points, replace=False))

@@ -378,20 +378,15 @@ def scan_hulls(
                 crows[0].append(np.array([sid]))
                 crows[1].append(np.array([CONVEX_CLUSTER]))
     missing = sorted(wanted - seen) if wanted is not None else []
-    out = []
-    for b, (rs, rc) in zip(builders, rows):
-        geoms, areas = b.finish()
-        rs = rs + [np.array([s]) for s in missing]
-        rc = rc + [np.array([0]) for _ in missing]
-        out.append(_frame(rs, rc, np.r_[geoms, np.full(len(missing), shapely.Polygon(), dtype=object)],
-                          np.r_[areas, np.zeros(len(missing))]))
-    conv = None
-    if convex:
-        geoms, areas = cbuilder.finish()
-        conv = _frame(crows[0] + [np.array([s]) for s in missing],
-                      crows[1] + [np.array([CONVEX_CLUSTER]) for _ in missing],
+
+    def table(builder, rs, rc, cluster_id):  # a scan without points gets one empty hull
+        geoms, areas = builder.finish()
+        return _frame(rs + [np.array([s]) for s in missing], rc + [np.array([cluster_id]) for _ in missing],
                       np.r_[geoms, np.full(len(missing), shapely.Polygon(), dtype=object)],
                       np.r_[areas, np.zeros(len(missing))])
+
+    out = [table(b, rs, rc, 0) for b, (rs, rc) in zip(builders, rows)]
+    conv = table(cbuilder, crows[0], crows[1], CONVEX_CLUSTER) if convex else None
     counts = {"n_scans": len(seen) if wanted is None else len(wanted), "n_points": int(n_points), "n_points_ignored": int(n_ignored),
               "n_no_points": int(len(missing))}
     return out, conv, counts
@@ -558,7 +553,6 @@ def compute_hulls(
     scans = split_by_scan(registered, ("x", "y")).items() if isinstance(registered, pd.DataFrame) else registered
     (cluster,), convex, counts = scan_hulls(scans, [params], ids, convex=True)
     per_scan = cluster.groupby("scan_id")["area_m2"].sum()
-    counts["n_scans"] = int(len(ids))
     counts["n_zero_area"] = int((per_scan <= 0).sum())
     counts["n_clusters_zero_area"] = int((cluster["area_m2"] <= 0).sum())
     return cluster, convex, counts

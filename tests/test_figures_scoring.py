@@ -162,3 +162,10 @@ def test_subsample_points_from_file_equals_the_frame(tmp_path):
         assert np.array_equal(a, b), (max_points, band)
     assert len(F.subsample_points(str(path), 10**6, seed=0, z_band=(0.5, 2.0))) == int(
         ((pts["z"] >= 0.5) & (pts["z"] <= 2.0)).sum())
+    # a 2D table (all z = 0): the band does not apply, every point can be drawn
+    flat = pts.assign(z=np.float32(0))
+    write_table(flat, path)
+    for max_points in (500, 10**6):
+        a = F.subsample_points(flat, max_points, seed=4, z_band=(0.5, 2.0))
+        b = F.subsample_points(str(path), max_points, seed=4, z_band=(0.5, 2.0), batch_rows=999)
+        assert len(b) == min(max_points, 6000) and np.array_equal(a, b)

@@ -274,6 +274,14 @@ def test_coverage_vs_clusters_streamed_and_reusing_the_stage_hulls(synthetic, tm
     for k in ks:
         assert from_frame[k].equals(plain[k]) and streamed[k].equals(plain[k]), k
     assert reused[1].equals(plain[1]) and reused[10].equals(plain[10])
+    # the k = 1 curve against hulls made here without floorscan.hulls: GEOS's convex hull
+    # of each scan's points
+    import shapely
+
+    xy = {s: g[["x", "y"]].to_numpy() for s, g in registered.groupby("scan_id")}
+    direct = fs.greedy_coverage(sub, np.array([shapely.convex_hull(shapely.multipoints(xy[s])) for s in sub]))
+    assert plain[1]["scan_id"].tolist() == direct["scan_id"].tolist()
+    np.testing.assert_allclose(plain[1]["covered_area_m2"], direct["covered_area_m2"], rtol=1e-9)
     # fewer clusters cover more (a coarser hull spans the gaps), k=1 is the convex hull
     final = {k: plain[k]["covered_area_m2"].iloc[-1] for k in ks}
     assert final[1] > final[3] > final[10] > 0
