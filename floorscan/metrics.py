@@ -743,15 +743,8 @@ def _tolerance_from(len_i: float, len_g: float, n_pts: int, d: np.ndarray, cover
         "n_gt_samples": float(n_pts),
     }
     for tau in taus:
-        lab = tau_label(tau)
-        if has_i:
-            p = float(covered[tau] / len_i) if has_g else 0.0
-        else:
-            p = math.nan
         r = float(np.mean(d <= tau)) if has_g and n_pts else math.nan
-        out[f"precision_{lab}"] = p
-        out[f"recall_{lab}"] = r
-        out[f"f1_{lab}"] = _f1(p, r, has_i, has_g)
+        _set_prf(out, tau, covered[tau], len_i, r, has_i, has_g)
     if has_i and has_g and n_pts:
         out["median_distance_m"] = float(np.median(d))
         out["mean_distance_m"] = float(np.mean(d))
@@ -876,18 +869,23 @@ def _recall_precision(inferred, gt, taus, samples, geoms) -> dict[str, float]:
     hit = np.zeros((len(taus), len(samples)), dtype=bool)
     if has_i:
         hit = _within(samples, _SegmentIndex(inf), taus, hit, geoms=geoms)
-    out = {}
+    out: dict[str, float] = {}
     for t, tau in enumerate(taus):
-        lab = tau_label(tau)
-        if has_i:
-            p = float(length_within(inf, gt, tau).sum() / len_i) if has_g else 0.0
-        else:
-            p = math.nan
+        covered = float(length_within(inf, gt, tau).sum()) if has_i and has_g else 0.0
         r = float(np.mean(hit[t])) if has_g and len(samples) else math.nan
-        out[f"precision_{lab}"] = p
-        out[f"recall_{lab}"] = r
-        out[f"f1_{lab}"] = _f1(p, r, has_i, has_g)
+        _set_prf(out, tau, covered, len_i, r, has_i, has_g)
     return out
+
+
+def _set_prf(out: dict, tau: float, covered_m: float, len_i: float, recall: float, has_i: bool, has_g: bool) -> None:
+    """Set ``precision_<tau>`` (inferred length within tau of the ground truth over the
+    inferred length; NaN without inferred walls, 0 without ground truth), ``recall_<tau>``
+    and ``f1_<tau>`` in ``out``."""
+    lab = tau_label(tau)
+    p = (float(covered_m / len_i) if has_g else 0.0) if has_i else math.nan
+    out[f"precision_{lab}"] = p
+    out[f"recall_{lab}"] = recall
+    out[f"f1_{lab}"] = _f1(p, recall, has_i, has_g)
 
 
 # ----------------------------------------------------------------- dataset scoring
