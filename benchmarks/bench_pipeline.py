@@ -104,6 +104,8 @@ class RssPoller:
         self.interval_s = interval_s
         self.peak: dict[str, float] = {}
         self._cpu: dict[int, tuple[str, float]] = {}
+        #: pid -> [script, first seen, last seen] (s since the poller started)
+        self.spans: dict[int, list] = {}
         self.total_peak = 0.0
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True)
@@ -126,7 +128,9 @@ class RssPoller:
 
     def _run(self):
         ps = self._psutil
+        t0 = time.perf_counter()
         while not self._stop.is_set():
+            now = time.perf_counter() - t0
             try:
                 procs = [self.root, *self.root.children(recursive=True)]
             except ps.Error:
@@ -144,6 +148,7 @@ class RssPoller:
                 if m:
                     self.peak[m.group(1)] = max(self.peak.get(m.group(1), 0.0), rss)
                     self._cpu[p.pid] = (m.group(1), t.user + t.system)
+                    self.spans.setdefault(p.pid, [m.group(1), now, now])[2] = now
             self.total_peak = max(self.total_peak, total)
             self._stop.wait(self.interval_s)
 
@@ -194,9 +199,13 @@ def stage_of(name: str) -> str:
     return max(hits, key=len) if hits else name
 
 
-def stage_table(bench_dir: Path, polled: dict[str, float], cpu: dict[str, float] | None = None) -> pd.DataFrame:
+def stage_table(
+    bench_dir: Path, polled: dict[str, float], cpu: dict[str, float] | None = None, spans: dict | None = None
+) -> pd.DataFrame:
     """A row per stage from the benchmark TSVs: jobs, s_total, s_max, rss_mb (TSV),
-    the polled peak RSS of the stage's jobs (MB) and their polled CPU seconds."""
+    the polled peak RSS of the stage's jobs (MB), their polled CPU seconds, and when
+    the stage's first job was first seen and its last job last seen (``start``,
+    ``end``: s since Snakemake started; from ``RssPoller.spans``)."""
     rows = []
     for p in sorted(bench_dir.rglob("*.tsv")):
         b = read_benchmark(p)
@@ -215,6 +224,9 @@ def stage_table(bench_dir: Path, polled: dict[str, float], cpu: dict[str, float]
     for k, v in polled.items():  # scripts of no stage above (e.g. the shard plans)
         if stage_of(k) not in t.index:
             t.loc[stage_of(k)] = [0, np.nan, np.nan, np.nan, v, cpu.get(k, np.nan)]
+    spans = list((spans or {}).values())
+    t["start"] = [min([a for n, a, _ in spans if stage_of(n) == st], default=np.nan) for st in t.index]
+    t["end"] = [max([b for n, _, b in spans if stage_of(n) == st], default=np.nan) for st in t.index]
     order = {st: i for i, st in enumerate(STAGES)}
     return t.iloc[sorted(range(len(t)), key=lambda i: (order.get(t.index[i], len(STAGES)), t.index[i]))]
 
@@ -252,7 +264,7 @@ def run_dataset(repo: Path, dataset: str, cores: int) -> dict:
         "kept": kept, "largest_registered": largest_reg, "registered_points": reg_points,
         "bag_mb": bag.stat().st_size / 2**20 if bag.exists() else np.nan,
         "wall_s": wall, "rtf": duration / wall, "simulate_s": t_sim,
-        "stages": stage_table(res / "benchmarks", poller.peak, poller.cpu), "peak_all_jobs_mb": poller.total_peak,
+        "stages": stage_table(res / "benchmarks", poller.peak, poller.cpu, poller.spans), "peak_all_jobs_mb": poller.total_peak,
         "load": (load_before, load_after),
     }  # fmt: skip
 
@@ -272,11 +284,14 @@ def report(r: dict, cores: int) -> None:
           f"{r['load'][0]:.1f} before, {r['load'][1]:.1f} after: other processes on the machine slow "
           "every job, the CPU seconds do not depend on them")
     print(f"peak RSS of all running jobs together: {r['peak_all_jobs_mb']:.0f} MB")
-    print(f"{'stage':<18}{'jobs':>5}{'s total':>10}{'s max':>9}{'CPU s':>8}{'RSS MB':>9}{'polled':>9}")
+    print(f"{'stage':<18}{'jobs':>5}{'s total':>10}{'s max':>9}{'CPU s':>8}{'RSS MB':>9}{'polled':>9}"
+          f"{'from s':>8}{'to s':>7}")
     for st, row in t.iterrows():
         print(f"{st:<18}{int(row['jobs']):>5d}{row['s_total']:>10.1f}{row['s_max']:>9.1f}{row['cpu_s']:>8.1f}"
-              f"{row['rss_mb']:>9.0f}{row['rss_polled_mb']:>9.0f}")
+              f"{row['rss_mb']:>9.0f}{row['rss_polled_mb']:>9.0f}{row['start']:>8.1f}{row['end']:>7.1f}")
     print(f"{'sum of jobs':<18}{int(t['jobs'].sum()):>5d}{t['s_total'].sum():>10.1f}{'':>9}{cpu:>8.1f}")
+    print("from s / to s: when the stage's first job started and its last job ended, seconds after Snakemake "
+          "started (polled every 0.2 s)")
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -76,6 +76,11 @@ class GraphParams:
         Per distance.
     voxel_size_m : float
         Voxel downsampling of the scans before the edge ICP, metres (0: none).
+    vertical_extent_m : float
+        A 3D scan keeps the 2D cells whose points span at least this height, metres
+        (floor and ceiling drop out; :func:`floorscan.registration.graph_cloud`).
+    max_height_gap_m : float
+        ... counting heights without a gap wider than this between them, metres.
     inlier_m : float
         A source point is an inlier when its nearest target point is this close, metres.
     min_edge_fitness : float
@@ -99,6 +104,8 @@ class GraphParams:
     icp_distances_m: tuple[float, ...] = (0.3, 0.1)
     icp_max_iterations: int = 20
     voxel_size_m: float = 0.05
+    vertical_extent_m: float = 0.2
+    max_height_gap_m: float = 0.5
     inlier_m: float = 0.05
     min_edge_fitness: float = 0.6
     edge_sigma_m: float = 0.005

@@ -390,9 +390,20 @@ def test_scan_clouds_drop_floor_and_ceiling_from_3d_icp():
     np.testing.assert_array_equal(c2.fit_source, flat)
     # the pose graph gets the wall projected to the xy plane on a 5 cm 2D grid: one
     # point per 5 cm of wall (120 columns of 6 m; the grid cuts one column in two
-    # halves at most), none of the floor
-    g3 = graph_cloud(np.concatenate([floor, wall]), cfg)
-    assert 115 <= len(g3) <= 125 and np.allclose(g3[:, 1], 3.0) and np.all(g3[:, 2] == 0.0)
+    # halves at most), none of the floor or the ceiling (each cell of them holds
+    # points of one height, with 1 cm of noise), a 0.3 m box side (0.2 m extent) kept
+    rng = np.random.default_rng(0)
+    ceiling = floor + [0.0, 0.0, 2.4]
+    box = np.column_stack([np.full(7, -2.0), np.full(7, 0.0), np.linspace(-0.4, -0.1, 7)])
+    noisy = np.concatenate([floor, ceiling]) + rng.normal(0.0, 0.01, (2 * len(floor), 3)) * [0, 0, 1]
+    g3 = graph_cloud(np.concatenate([noisy, wall, box]), cfg)
+    on_wall = np.isclose(g3[:, 1], 3.0)
+    assert 115 <= on_wall.sum() <= 125 and np.all(g3[:, 2] == 0.0)
+    np.testing.assert_allclose(g3[~on_wall], [[-2.0, 0.0, 0.0]], atol=0.05)  # the box side (its cell mean), only
+    assert len(graph_cloud(np.concatenate([noisy, wall]), RegistrationConfig(graph={"vertical_extent_m": 2.5}))) == 0
+    # no gap limit: floor and ceiling (2.4 m apart) make every cell a wall
+    loose = graph_cloud(np.concatenate([noisy, wall]), RegistrationConfig(graph={"max_height_gap_m": 3.0}))
+    assert len(loose) > 14000
     np.testing.assert_array_equal(graph_cloud(flat, cfg), flat)
 
 
