@@ -1,0 +1,45 @@
+"""floorscan.workflow.stage_log: the stage's log file, failures, and the profile option."""
+
+import pstats
+from types import SimpleNamespace
+
+import pytest
+
+from floorscan.workflow import stage_log
+
+
+def _work(n):
+    return sum(i * i for i in range(n))
+
+
+def _smk(tmp_path):
+    return SimpleNamespace(rule="hulls_shard", log=[str(tmp_path / "stage.log")],
+                           wildcards={"dataset": "demo", "shard": "scans_0-9"})
+
+
+def test_stage_log_writes_start_done_and_cpu(tmp_path, monkeypatch):
+    monkeypatch.delenv("FLOORSCAN_PROFILE", raising=False)
+    with stage_log(_smk(tmp_path)) as log:
+        log.info("working")
+    text = (tmp_path / "stage.log").read_text()
+    assert "start hulls_shard {'dataset': 'demo', 'shard': 'scans_0-9'}" in text
+    assert "s CPU before the stage" in text and "working" in text
+    assert "done hulls_shard in" in text and " s CPU)" in text
+    assert not list(tmp_path.glob("*.prof"))
+
+
+def test_stage_log_profiles_the_stage_into_the_given_directory(tmp_path, monkeypatch):
+    monkeypatch.setenv("FLOORSCAN_PROFILE", str(tmp_path / "prof"))
+    with stage_log(_smk(tmp_path)):
+        _work(10_000)
+    stats = pstats.Stats(str(tmp_path / "prof" / "hulls_shard_demo_scans_0-9.prof"))
+    assert any(fn[2] == "_work" for fn in stats.stats)
+
+
+def test_stage_log_logs_and_reraises_a_failure(tmp_path, monkeypatch):
+    monkeypatch.setenv("FLOORSCAN_PROFILE", str(tmp_path / "prof"))
+    with pytest.raises(ValueError, match="bad scan"):
+        with stage_log(_smk(tmp_path)):
+            raise ValueError("bad scan")
+    assert "stage hulls_shard failed" in (tmp_path / "stage.log").read_text()
+    assert (tmp_path / "prof" / "hulls_shard_demo_scans_0-9.prof").exists()
