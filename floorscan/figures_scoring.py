@@ -482,31 +482,28 @@ def plot_wall_extraction(status: dict, out, title: str = "") -> None:
 # ----------------------------------------------------------------- all figures
 
 
-def make_score_figures(
+def make_walls_figures(
     *,
     dataset: str,
-    metrics: pd.DataFrame,
     reference: dict,
     reference_kind: str,
     walls: dict,
     floorplans: dict,
     points,
     scan_status: dict,
-    bench_dir,
     outputs: dict,
     cfg: dict,
     log=None,
-) -> pd.DataFrame:
-    """Write every scoring figure of a dataset; return the stage-time table.
+) -> None:
+    """Write the figures of a dataset's walls and floor plans (thesis Figs. 5.1, 5.5,
+    5.10 - 5.12); they need no metrics, so they are drawn while the runs are scored.
 
     Parameters
     ----------
     dataset : str
         Dataset name, for titles.
-    metrics : pandas.DataFrame
-        ``metrics.parquet``.
     reference : dict
-        ``{extractor: (M, 4) segments}`` the walls were scored against.
+        ``{extractor: (M, 4) segments}`` the walls are scored against.
     reference_kind : str
         ``"ground_truth"`` or ``"reference"``.
     walls : dict
@@ -520,23 +517,17 @@ def make_score_figures(
         (read in batches); subsampled here (:func:`subsample_points`).
     scan_status : dict
         ``{extractor: DataFrame}`` wall extraction status per scan.
-    bench_dir : path
-        ``results/{dataset}/benchmarks``.
     outputs : dict
-        Paths: ``metrics_vs_k``, ``floorplan``, ``bitmap_overlay``,
-        ``walls_over_points_k``, ``walls_over_points_all``, ``stage_times_png``,
-        ``stage_times_tsv``, ``wall_extraction``.
+        Paths: ``floorplan``, ``bitmap_overlay``, ``walls_over_points_k``,
+        ``walls_over_points_all``, ``wall_extraction``.
     cfg : dict
         The ``score`` config section.
     """
     k = str(cfg["figure_k"])
-    tau = cfg["summary_tau_m"]
     ext_fig = cfg["figure_extractor"]
     ordering_fig = cfg["figure_ordering"]
     ref_name = reference_name(reference_kind)
     extractors = sorted(scan_status) or sorted(reference)
-
-    plot_metrics_vs_k(metrics, outputs["metrics_vs_k"], tau)
 
     ref_fig = reference.get(ext_fig, next(iter(reference.values())))
     panels = [
@@ -568,13 +559,35 @@ def make_score_figures(
         plot_walls_over_points(xy, panels, outputs[key],
                                f"{dataset}: walls from {label} over the registered points")
 
+    plot_wall_extraction(scan_status, outputs["wall_extraction"],
+                         f"{dataset}: wall extraction per scan, ransac against cluster_ransac")
+    if log is not None:
+        log.info("walls figures written for %s", dataset)
+
+
+def make_score_figures(*, dataset: str, metrics: pd.DataFrame, bench_dir, outputs: dict, cfg: dict, log=None) -> pd.DataFrame:
+    """Write the metrics figure (thesis Fig. 5.4) and the time per stage (Table 5.1)
+    of a dataset; return the stage-time table.
+
+    Parameters
+    ----------
+    dataset : str
+        Dataset name, for titles.
+    metrics : pandas.DataFrame
+        ``metrics.parquet``.
+    bench_dir : path
+        ``results/{dataset}/benchmarks``: every job's benchmark file there is counted
+        (the rule runs last, after the other figures).
+    outputs : dict
+        Paths: ``metrics_vs_k``, ``stage_times_png``, ``stage_times_tsv``.
+    cfg : dict
+        The ``score`` config section.
+    """
+    plot_metrics_vs_k(metrics, outputs["metrics_vs_k"], cfg["summary_tau_m"])
     table = stage_times(bench_dir)
     with atomic_path(outputs["stage_times_tsv"]) as tmp:
         table.to_csv(tmp, sep="\t", index=False, float_format="%.3f")
     plot_stage_times(table, outputs["stage_times_png"], f"{dataset}: time and memory per stage")
-
-    plot_wall_extraction(scan_status, outputs["wall_extraction"],
-                         f"{dataset}: wall extraction per scan, ransac against cluster_ransac")
     if log is not None:
-        log.info("figures written for %s (%d stages timed)", dataset, len(table))
+        log.info("score figures written for %s (%d stages timed)", dataset, len(table))
     return table

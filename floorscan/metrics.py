@@ -1073,16 +1073,33 @@ def score_dataset(
 
         shares = [[r for key in keys[w::n] for r in groups[key]] for w in range(n)]
         rows = [row for part in map_in_processes(_score_rows, [(share, *args) for share in shares]) for row in part]
-    df = pd.DataFrame(rows)
-    if not df.empty:
-        df = df.sort_values(["ordering", "extractor", "n_scans", "k"], kind="stable")
-    df = df.reset_index(drop=True)
+    df = sort_scores(pd.DataFrame(rows))
     if log is not None:
         tau = tau_label(cfg["taus_m"][0])
         for r in rows:
             log.info("%s %s k=%s: %d segments, F1@%s %.3f, wall CM %.3f", r["ordering"], r["extractor"], r["k"],
                      r["n_segments"], tau, r[f"f1_{tau}"], r["wall_correct_match"])
     return df
+
+
+def sort_scores(table):
+    """Metrics rows in the order of :func:`score_dataset`: by ordering, extractor,
+    number of scans and k label (a new frame, index 0..n-1). Concatenated tables of
+    parts of a dataset's runs (the ``score_runs`` jobs, one per extractor) sorted so
+    equal the table of one :func:`score_dataset` call over all runs.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        Rows of :func:`score_dataset` (empty allowed).
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
+    if not table.empty:
+        table = table.sort_values(["ordering", "extractor", "n_scans", "k"], kind="stable")
+    return table.reset_index(drop=True)
 
 
 def _score_rows(runs, references, reference_kind, cfg, dataset, recall_references) -> list[dict]:

@@ -1,5 +1,7 @@
-"""Stage `score`: metrics of every ordering x extractor x k (thesis section 5.1 and
-ISPRS-style tolerance metrics) and the scan-reduction summary."""
+"""Stage `score`: the metrics of every ordering x extractor x k (the extractors' tables
+of scripts/score_runs.py, in one table) and the scan-reduction summary."""
+
+import pandas as pd
 
 from floorscan import metrics
 from floorscan.io import atomic_path, read_table, write_table
@@ -8,33 +10,10 @@ from floorscan.workflow import stage_log
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
     cfg = smk.params.cfg
-    kind = smk.params.reference_kind
-    extractors = list(smk.params.extractors)
-    references = metrics.load_references(
-        kind, extractors, smk.input.get("ground_truth"), smk.input.get("reference", [])
-    )
-    recall_refs = metrics.load_recall_references(
-        kind, extractors, smk.input.get("ground_truth"), cfg["recall_reference"]
-    )
-    log.info("scoring against the %s: %s", smk.params.reference_label,
-             {e: len(s) for e, s in references.items()})
-    if recall_refs is not None:
-        log.info("recall against the %s features: %s segments", cfg["recall_reference"],
-                 {e: len(s) for e, s in recall_refs.items()})
-    n_kept = {o: len(read_table(p, columns=["scan_id"]))
-              for o, p in zip(smk.params.orderings, smk.input.orderings)}
-    # Paths, not tables: score_dataset reads one run's walls and floor plan at a time.
-    runs = [
-        {"ordering": o, "extractor": e, "k": k, "walls": wp, "n_kept": n_kept[o], "floorplan": fp}
-        for (o, e, k), wp, fp in zip(smk.params.runs, smk.input.walls, smk.input.floorplans)
-    ]
-    # the orderings x extractors in the rule's threads (processes); same table
-    table = metrics.score_dataset(
-        runs, references, kind, cfg, smk.wildcards.dataset, log, recall_references=recall_refs,
-        workers=smk.threads,
-    )
+    table = metrics.sort_scores(pd.concat([read_table(p) for p in smk.input.runs], ignore_index=True))
     summary = metrics.summarize(table, cfg["summary_tau_m"], cfg["summary_levels"])
-    meta = {"dataset": smk.wildcards.dataset, "reference_kind": kind,
+    log.info("%d runs scored; summary:\n%s", len(table), summary.to_string(index=False))
+    meta = {"dataset": smk.wildcards.dataset, "reference_kind": smk.params.reference_kind,
             "reference": smk.params.reference_label}
     write_table(table, smk.output.metrics, metadata=meta)
     write_table(summary, smk.output.summary, metadata=meta)

@@ -1,31 +1,15 @@
-"""Stage `score_figures`: the thesis Chapter 5 figures of a dataset (Figs. 5.1, 5.4,
-5.5, 5.10-5.12, Table 5.1)."""
+"""Stage `score`, the last figures of a dataset: metrics against k (thesis Fig. 5.4)
+and the time and memory of every stage (Table 5.1)."""
 
-from floorscan import figures_scoring, metrics
+from floorscan import figures_scoring
 from floorscan.io import read_table
 from floorscan.workflow import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
-    kind = smk.params.reference_kind
-    extractors = list(smk.params.extractors)
-    reference = metrics.load_references(
-        kind, extractors, smk.input.get("ground_truth"), smk.input.get("reference", [])
-    )
-    walls = {tuple(r): read_table(p) for r, p in zip(smk.params.walls_runs, smk.input.walls)}
-    floorplans = {
-        tuple(r): figures_scoring.read_geojson_geometries(p)
-        for r, p in zip(smk.params.floorplan_runs, smk.input.floorplans)
-    }
     figures_scoring.make_score_figures(
         dataset=smk.wildcards.dataset,
         metrics=read_table(smk.input.metrics),
-        reference=reference,
-        reference_kind=kind,
-        walls=walls,
-        floorplans=floorplans,
-        points=str(smk.input.registered),  # read in batches, not held whole
-        scan_status={e: read_table(p) for e, p in zip(extractors, smk.input.scan_status)},
         bench_dir=smk.params.bench_dir,
         outputs=dict(smk.output.items()),
         cfg=smk.params.cfg,

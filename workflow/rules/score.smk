@@ -83,9 +83,14 @@ def score_check(wildcards):
     return cfg
 
 
-def score_inputs(wildcards):
+def score_extractor_runs(wildcards):
+    """[ordering, extractor, k label] of the wall files of one extractor, in input order."""
+    return [r for r in score_runs(wildcards) if r[1] == wildcards.extractor]
+
+
+def score_runs_inputs(wildcards):
     ds = wildcards.dataset
-    runs = score_runs(wildcards)
+    runs = score_extractor_runs(wildcards)
     return {
         "walls": [f"results/{ds}/walls/{o}/{e}/k{k}.parquet" for o, e, k in runs],
         "floorplans": [f"results/{ds}/floorplan/{o}_{e}_k{k}.geojson" for o, e, k in runs],
@@ -113,28 +118,41 @@ def score_figure_floorplans(wildcards):
     return [[o, cfg["figure_extractor"]] for o in cfg["figure_orderings"]]
 
 
-def score_figure_inputs(wildcards):
-    ds = wildcards.dataset
-    k = str(stage_config("score")(wildcards)["figure_k"])
-    return {
-        "metrics": f"results/{ds}/metrics.parquet",
-        "walls": [f"results/{ds}/walls/{o}/{e}/k{kk}.parquet" for o, e, kk in score_figure_runs(wildcards)],
-        "floorplans": [
-            f"results/{ds}/floorplan/{o}_{e}_k{k}.geojson" for o, e in score_figure_floorplans(wildcards)
-        ],
-        "registered": f"results/{ds}/registered.parquet",
-        "scan_status": [f"results/{ds}/walls/{e}/scan_status.parquet" for e in score_extractors(wildcards)],
-        **_score_reference_inputs(wildcards),
-    }
-
-
 def score_bench_dir(wildcards):
     return f"results/{wildcards.dataset}/benchmarks"
 
 
+# One job per extractor scores its orderings x k as soon as its floor plans exist, while
+# the other extractor's plans are still being made; `score` merges the tables (the same
+# table as one job over all runs, tested) and writes the summary.
+rule score_runs:
+    input:
+        unpack(score_runs_inputs),
+    output:
+        metrics="results/{dataset}/score/{extractor}.parquet",
+    wildcard_constraints:
+        extractor=WALLS_CONSTRAINTS["extractor"],
+    params:
+        cfg=score_check,
+        runs=score_extractor_runs,
+        orderings=score_orderings,
+        extractors=score_extractors,
+        reference_kind=score_reference_kind,
+        reference_label=score_reference_label,
+    # orderings scored in this many processes (capped at --cores); same table
+    threads: 1
+    log:
+        "results/{dataset}/logs/score_runs_{extractor}.log",
+    benchmark:
+        "results/{dataset}/benchmarks/score_runs_{extractor}.tsv"
+    script:
+        "../../scripts/score_runs.py"
+
+
 rule score:
     input:
-        unpack(score_inputs),
+        runs=lambda wc: expand("results/{dataset}/score/{extractor}.parquet", dataset=wc.dataset,
+                               extractor=score_extractors(wc)),
     output:
         metrics="results/{dataset}/metrics.parquet",
         summary="results/{dataset}/summary.parquet",
@@ -147,13 +165,8 @@ rule score:
         ),
     params:
         cfg=score_check,
-        runs=score_runs,
-        orderings=score_orderings,
-        extractors=score_extractors,
         reference_kind=score_reference_kind,
         reference_label=score_reference_label,
-    # orderings x extractors scored in this many processes (capped at --cores); same table
-    threads: 2
     log:
         log_path("score"),
     benchmark:
@@ -162,17 +175,25 @@ rule score:
         "../../scripts/score.py"
 
 
-rule score_figures:
+def score_walls_figure_inputs(wildcards):
+    ds = wildcards.dataset
+    k = str(stage_config("score")(wildcards)["figure_k"])
+    return {
+        "walls": [f"results/{ds}/walls/{o}/{e}/k{kk}.parquet" for o, e, kk in score_figure_runs(wildcards)],
+        "floorplans": [
+            f"results/{ds}/floorplan/{o}_{e}_k{k}.geojson" for o, e in score_figure_floorplans(wildcards)
+        ],
+        "registered": f"results/{ds}/registered.parquet",
+        "scan_status": [f"results/{ds}/walls/{e}/scan_status.parquet" for e in score_extractors(wildcards)],
+        **_score_reference_inputs(wildcards),
+    }
+
+
+# The figures of walls and floor plans need no metrics: drawn while the runs are scored.
+rule score_walls_figures:
     input:
-        unpack(score_figure_inputs),
+        unpack(score_walls_figure_inputs),
     output:
-        metrics_vs_k=report(
-            "results/{dataset}/figures/metrics_vs_k.png",
-            caption="../report/metrics_vs_k.rst",
-            category="Scoring",
-            subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Fig. 5.4 metrics against k"},
-        ),
         floorplan=report(
             f"results/{{dataset}}/figures/floorplan_k{SCORE_FIGURE_K}.png",
             caption="../report/floorplan.rst",
@@ -201,6 +222,42 @@ rule score_figures:
             subcategory="{dataset}",
             labels={"dataset": "{dataset}", "figure": "Fig. 5.12 walls over points, all scans"},
         ),
+        wall_extraction=report(
+            "results/{dataset}/figures/wall_extraction.png",
+            caption="../report/wall_extraction.rst",
+            category="Timing",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "Fig. 5.10 wall extraction per scan"},
+        ),
+    params:
+        cfg=score_check,
+        walls_runs=score_figure_runs,
+        floorplan_runs=score_figure_floorplans,
+        extractors=score_extractors,
+        reference_kind=score_reference_kind,
+    log:
+        "results/{dataset}/logs/score_walls_figures.log",
+    benchmark:
+        "results/{dataset}/benchmarks/score_walls_figures.tsv"
+    script:
+        "../../scripts/walls_figures.py"
+
+
+# Last: the time per stage counts every other job's benchmark file, so the other
+# figure jobs are inputs too.
+rule score_figures:
+    input:
+        metrics="results/{dataset}/metrics.parquet",
+        walls_figures=f"results/{{dataset}}/figures/floorplan_k{SCORE_FIGURE_K}.png",
+        selection_figures="results/{dataset}/figures/coverage_vs_scans.png",
+    output:
+        metrics_vs_k=report(
+            "results/{dataset}/figures/metrics_vs_k.png",
+            caption="../report/metrics_vs_k.rst",
+            category="Scoring",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "Fig. 5.4 metrics against k"},
+        ),
         stage_times_png=report(
             "results/{dataset}/figures/stage_times.png",
             caption="../report/stage_times.rst",
@@ -215,20 +272,8 @@ rule score_figures:
             subcategory="{dataset}",
             labels={"dataset": "{dataset}", "figure": "Table 5.1 time per stage (table)"},
         ),
-        wall_extraction=report(
-            "results/{dataset}/figures/wall_extraction.png",
-            caption="../report/wall_extraction.rst",
-            category="Timing",
-            subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Fig. 5.10 wall extraction per scan"},
-        ),
     params:
         cfg=score_check,
-        walls_runs=score_figure_runs,
-        floorplan_runs=score_figure_floorplans,
-        extractors=score_extractors,
-        reference_kind=score_reference_kind,
-        reference_label=score_reference_label,
         bench_dir=score_bench_dir,
     log:
         "results/{dataset}/logs/score_figures.log",

@@ -1,0 +1,39 @@
+"""Stage `score`, one extractor: metrics of its walls for every ordering x k (thesis
+section 5.1 and ISPRS-style tolerance metrics). scripts/score.py merges the
+extractors and writes the scan-reduction summary."""
+
+from floorscan import metrics
+from floorscan.io import read_table, write_table
+from floorscan.workflow import stage_log
+
+with stage_log(snakemake) as log:  # noqa: F821
+    smk = snakemake  # noqa: F821
+    cfg = smk.params.cfg
+    kind = smk.params.reference_kind
+    # every extractor's reference: the bitmap grid spans all of them, as in one job
+    extractors = list(smk.params.extractors)
+    references = metrics.load_references(
+        kind, extractors, smk.input.get("ground_truth"), smk.input.get("reference", [])
+    )
+    recall_refs = metrics.load_recall_references(
+        kind, extractors, smk.input.get("ground_truth"), cfg["recall_reference"]
+    )
+    log.info("scoring %s against the %s: %s", smk.wildcards.extractor, smk.params.reference_label,
+             {e: len(s) for e, s in references.items()})
+    if recall_refs is not None:
+        log.info("recall against the %s features: %s segments", cfg["recall_reference"],
+                 {e: len(s) for e, s in recall_refs.items()})
+    n_kept = {o: len(read_table(p, columns=["scan_id"]))
+              for o, p in zip(smk.params.orderings, smk.input.orderings)}
+    # Paths, not tables: score_dataset reads one run's walls and floor plan at a time.
+    runs = [
+        {"ordering": o, "extractor": e, "k": k, "walls": wp, "n_kept": n_kept[o], "floorplan": fp}
+        for (o, e, k), wp, fp in zip(smk.params.runs, smk.input.walls, smk.input.floorplans)
+    ]
+    table = metrics.score_dataset(
+        runs, references, kind, cfg, smk.wildcards.dataset, log, recall_references=recall_refs,
+        workers=smk.threads,
+    )
+    meta = {"dataset": smk.wildcards.dataset, "reference_kind": kind,
+            "reference": smk.params.reference_label, "extractor": smk.wildcards.extractor}
+    write_table(table, smk.output.metrics, metadata=meta)

@@ -1,0 +1,32 @@
+"""Stage `score`, the figures of the walls and floor plans of a dataset (thesis Figs.
+5.1, 5.5, 5.10 - 5.12): they need no metrics, so they are drawn while the runs are
+scored."""
+
+from floorscan import figures_scoring, metrics
+from floorscan.io import read_table
+from floorscan.workflow import stage_log
+
+with stage_log(snakemake) as log:  # noqa: F821
+    smk = snakemake  # noqa: F821
+    kind = smk.params.reference_kind
+    extractors = list(smk.params.extractors)
+    reference = metrics.load_references(
+        kind, extractors, smk.input.get("ground_truth"), smk.input.get("reference", [])
+    )
+    walls = {tuple(r): read_table(p) for r, p in zip(smk.params.walls_runs, smk.input.walls)}
+    floorplans = {
+        tuple(r): figures_scoring.read_geojson_geometries(p)
+        for r, p in zip(smk.params.floorplan_runs, smk.input.floorplans)
+    }
+    figures_scoring.make_walls_figures(
+        dataset=smk.wildcards.dataset,
+        reference=reference,
+        reference_kind=kind,
+        walls=walls,
+        floorplans=floorplans,
+        points=str(smk.input.registered),  # read in batches, not held whole
+        scan_status={e: read_table(p) for e, p in zip(extractors, smk.input.scan_status)},
+        outputs=dict(smk.output.items()),
+        cfg=smk.params.cfg,
+        log=log,
+    )
