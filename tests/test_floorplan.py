@@ -224,3 +224,115 @@ def test_union_find_numbers_components_by_smallest_node():
     chain = np.arange(999)
     assert (_union_find(1000, chain[::-1], chain[::-1] + 1) == 0).all()
     assert _union_find(3, np.empty(0, int), np.empty(0, int)).tolist() == [0, 1, 2]
+
+
+def test_ifc_walls_sharing_geometry_read_back_their_own_axis_height_thickness(tmp_path):
+    """Walls of one thickness share the body's profile placement (one entity), and
+    every wall still reads back its own axis, height, thickness and name."""
+    import ifcopenshell
+    import ifcopenshell.util.element as ue
+    import ifcopenshell.util.placement as up
+    import ifcopenshell.validate
+
+    from floorscan.floorplan import FloorPlan, write_ifc
+
+    walls = pd.DataFrame({
+        "wall_id": [0, 1, 2], "x0": [0.0, 5.0, 0.0], "y0": [0.0, 0.0, 3.0], "x1": [5.0, 5.0, 3.0],
+        "y1": [0.0, 4.0, 7.0], "length_m": [5.0, 4.0, 5.0], "thickness_m": [0.1, 0.1, 0.25],
+        "height_m": [2.5, 2.5, 3.0], "paired": [False, False, True], "n_faces": [1, 1, 2],
+        "n_segments": [3, 4, 5], "n_inliers": [50, 60, 70],
+    })  # fmt: skip
+    write_ifc(FloorPlan(walls=walls, faces=pd.DataFrame()), tmp_path / "w.ifc", name="shared")
+    model = ifcopenshell.open(str(tmp_path / "w.ifc"))
+    log = ifcopenshell.validate.json_logger()
+    ifcopenshell.validate.validate(model, log, express_rules=False)
+    assert log.statements == []
+    ws = model.by_type("IfcWall")
+    assert [w.Name for w in ws] == ["Wall 0", "Wall 1", "Wall 2"]
+    solids = [w.Representation.Representations[0].Items[0] for w in ws]
+    assert solids[0].Position == solids[1].Position and solids[0].Position.id() == solids[1].Position.id()
+    assert solids[2].Position.id() != solids[0].Position.id()
+    # the model context's world coordinate system, 2 profile placements, 3 wall placements
+    assert len(model.by_type("IfcAxis2Placement3D")) == 1 + 2 + 3
+    for w, solid, want in zip(ws, solids, walls.itertuples(index=False)):
+        m = up.get_local_placement(w.ObjectPlacement)
+        length = np.hypot(want.x1 - want.x0, want.y1 - want.y0)
+        np.testing.assert_allclose(m[:3, 3], [want.x0, want.y0, 0.0], atol=1e-12)
+        along = [(want.x1 - want.x0) / length, (want.y1 - want.y0) / length, 0.0]
+        np.testing.assert_allclose(m[:3, 0], along, atol=1e-12)
+        assert solid.Depth == want.height_m
+        assert solid.Position.Location.Coordinates == pytest.approx((0.0, -want.thickness_m / 2, 0.0))
+        assert solid.SweptArea.OuterCurve.Points.CoordList[2] == pytest.approx((length, want.thickness_m))
+        axis = w.Representation.Representations[1].Items[0].Points.CoordList
+        np.testing.assert_allclose(axis, [[0.0, 0.0], [length, 0.0]], atol=1e-12)
+        q = ue.get_psets(w)["Qto_WallBaseQuantities"]
+        assert (q["Length"], q["Width"], q["Height"]) == pytest.approx((length, want.thickness_m, want.height_m))
+
+
+def test_geojson_is_one_feature_per_line_and_equals_floorplan_geojson(tmp_path):
+    from floorscan.floorplan import floorplan_geojson, write_geojson
+
+    segs = scans_segments(BOX + THICK, [(2, 1.2), (2, -1.0), (1, 1.5), (3, -1.5)], "ransac")
+    plan = build_floorplan(segs, FloorplanParams())
+    write_geojson(plan, tmp_path / "p.geojson")
+    text = (tmp_path / "p.geojson").read_text()
+    lines = text.splitlines()
+    n = len(plan.walls) * 2 + len(plan.faces)
+    assert len(lines) == n + 2 and lines[0] == '{"type": "FeatureCollection", "features": [' and lines[-1] == "]}"
+    assert json.loads(text) == floorplan_geojson(plan)
+    first = json.loads(lines[1].rstrip(","))
+    assert first["properties"]["kind"] == "axis" and len(first["geometry"]["coordinates"]) == 2
+    x0, y0, x1, y1 = plan.walls.loc[0, ["x0", "y0", "x1", "y1"]].to_numpy(float).tolist()
+    assert first["geometry"]["coordinates"] == [[round(x0, 5), round(y0, 5)], [round(x1, 5), round(y1, 5)]]
+    assert abs(first["geometry"]["coordinates"][0][0] - x0) <= 5e-6
+
+
+def test_candidate_pairs_by_direction_bins_equal_dwithin_and_angle():
+    """Binned by direction (with the wrap at 0 / 180 degrees), the candidates are
+    exactly the dwithin pairs within the angle."""
+    import shapely
+
+    from floorscan.floorplan import _angle_diff, _axial_angle, _candidate_pairs
+
+    rng = np.random.default_rng(11)
+    p0 = rng.uniform(0, 5, (400, 2))
+    ang = rng.choice([0.0, np.pi / 2, np.pi - 0.01, rng.uniform(0, np.pi)], 400) + rng.normal(0, 0.03, 400)
+    seg = np.hstack([p0, p0 + rng.uniform(0.1, 2.0, (400, 1)) * np.c_[np.cos(ang), np.sin(ang)]])
+    lines = shapely.linestrings(seg.reshape(-1, 2, 2))
+    for dist, max_deg in ((0.3, 3.0), (0.05, 1.0), (0.3, 20.0), (0.3, 80.0)):
+        i, j = shapely.STRtree(lines).query(lines, predicate="dwithin", distance=dist)
+        a = _axial_angle(seg)
+        keep = (i < j) & (_angle_diff(a[i], a[j]) <= np.radians(max_deg))
+        want = sorted(zip(i[keep].tolist(), j[keep].tolist()))
+        got = list(zip(*(x.tolist() for x in _candidate_pairs(seg, dist, np.radians(max_deg)))))
+        assert got == want and len(want) > 20
+    across = [(p, q) for p, q in want if abs(a[p] - a[q]) > np.pi / 2]  # one near 0, one near 180 degrees
+    assert across
+
+
+def test_merge_skips_connected_pairs_without_changing_faces(monkeypatch):
+    """Testing the candidates a few at a time and skipping pairs already connected
+    gives the faces that testing all of them gives."""
+    import floorscan.floorplan as fp
+
+    rng = np.random.default_rng(5)
+    walls = np.array([[0, 0, 6, 0], [0, 0.2, 6, 0.2], [6.5, -1, 6.5, 4], [0, 3, 3, 3.02]], dtype=float)
+    segs, w = [], []
+    for wall in walls:  # 60 scans see each wall: noisy, partial, stacked segments
+        t = np.sort(rng.uniform(0, 1, (60, 2)), axis=1)
+        t[:, 1] = np.maximum(t[:, 1], t[:, 0] + 0.3)
+        a, b = wall[:2], wall[2:]
+        ends = np.hstack([a + t[:, :1] * (b - a), a + np.minimum(t[:, 1:], 1) * (b - a)])
+        segs.append(ends + rng.normal(0, 0.004, (60, 4)))
+        w.append(rng.integers(20, 200, 60))
+    seg, w = np.vstack(segs), np.concatenate(w).astype(float)
+    monkeypatch.setattr(fp, "_MERGE_CHUNK", 1 << 30)
+    faces_all, w_all, labels_all = fp.merge_segments(seg, w)
+    monkeypatch.setattr(fp, "_MERGE_CHUNK", 7)
+    faces, fw, labels = fp.merge_segments(seg, w)
+    assert len(faces) == 4
+    np.testing.assert_array_equal(faces, faces_all)
+    np.testing.assert_array_equal(fw, w_all)
+    np.testing.assert_array_equal(labels, labels_all)
+    np.testing.assert_allclose(np.sort(fw), np.sort([x.sum() for x in np.split(w, 4)]))
+    np.testing.assert_allclose(faces[labels[0]][[1, 3]], [0, 0], atol=0.01)
