@@ -4,7 +4,7 @@
 #               scan, the extractor parameters and the seed, never on ordering or k),
 #               in shards of scans (scan_walls_plan, scan_walls_shard) merged in scan order
 #   walls:      the wall segments of the first k scans of an ordering (a filter)
-#   floorplan:  merged walls of one (ordering, extractor, k) as GeoJSON, SVG, DXF, IFC
+#   floorplan:  merged walls of each (ordering, k) of an extractor as GeoJSON, SVG, DXF, IFC
 import json
 import re
 from pathlib import Path
@@ -130,14 +130,6 @@ rule scan_walls:
         "../../scripts/scan_walls_merge.py"
 
 
-def walls_tables(ordering="{ordering}", extractor="{extractor}"):
-    """The k-walls tables of every configured k (patterns keep the other wildcards)."""
-    return expand(
-        "results/{{dataset}}/walls/{ordering}/{extractor}/k{k}.parquet",
-        ordering=ordering, extractor=extractor, k=walls_k_names(),
-    )
-
-
 def walls_run_params(wildcards):
     """What the `walls` job writes: orderings, extractors and k labels."""
     w = config["walls"]
@@ -165,24 +157,28 @@ rule walls:
         "../../scripts/walls.py"
 
 
-# One job per (ordering, extractor): every k of it, in the four formats.
+# One job per extractor: every ordering and k of it, in the four formats (a job costs
+# ~1 s of start-up and imports; 2 jobs on 2 cores, and each extractor's score_runs
+# starts as soon as its job ends).
 rule floorplan:
     input:
-        walls_tables(),
+        lambda wc: [
+            f"results/{wc.dataset}/walls/{o}/{wc.extractor}/k{k}.parquet"
+            for o in config["walls"]["orderings"] for k in walls_k_names()
+        ],
     output:
         expand(
-            "results/{{dataset}}/floorplan/{{ordering}}_{{extractor}}_k{k}.{fmt}",
-            k=walls_k_names(), fmt=FLOORPLAN_FORMATS,
+            "results/{{dataset}}/floorplan/{ordering}_{{extractor}}_k{k}.{fmt}",
+            ordering=config["walls"]["orderings"], k=walls_k_names(), fmt=FLOORPLAN_FORMATS,
         ),
     wildcard_constraints:
-        ordering=WALLS_CONSTRAINTS["ordering"],
         extractor=WALLS_CONSTRAINTS["extractor"],
     params:
         cfg=stage_config("floorplan"),
-        k=walls_k_names(),
+        runs=lambda wc: [[o, k] for o in config["walls"]["orderings"] for k in walls_k_names()],
     log:
-        "results/{dataset}/logs/floorplan_{ordering}_{extractor}.log",
+        "results/{dataset}/logs/floorplan_{extractor}.log",
     benchmark:
-        "results/{dataset}/benchmarks/floorplan_{ordering}_{extractor}.tsv"
+        "results/{dataset}/benchmarks/floorplan_{extractor}.tsv"
     script:
         "../../scripts/floorplan.py"
