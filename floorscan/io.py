@@ -207,15 +207,39 @@ class ScanRowGroups:
     (the ingest and register stages; :func:`iter_scans` reads them back batch by batch).
 
     ``add(scan_id, points)`` buffers one scan ((n, 3) metres, cast to the writer's
-    float32 columns); ``flush()`` writes what is buffered (call it once at the end).
+    float32 columns); ``flush()`` writes what is buffered and waits until it is written
+    (call it once at the end). Use it as a context manager around the writing, so that a
+    failure waits for the row group being written before the writer closes.
+
+    A full row group is encoded and compressed in a background thread while the caller
+    produces the next one (Arrow releases the GIL while it writes): in the ingest stage
+    reading the bag and writing ``scans.parquet`` overlap. One row group at a time is in
+    the thread, in order, so the file is the same as written in line, and memory holds
+    two row groups at most.
     """
 
     def __init__(self, writer: pq.ParquetWriter, rows: int = 1 << 20):
+        from concurrent.futures import ThreadPoolExecutor
+
         self.writer = writer
         self.rows = rows
         self.ids: list[np.ndarray] = []
         self.pts: list[np.ndarray] = []
         self.n = 0
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="ScanRowGroups")
+        self._pending = None
+
+    def __enter__(self) -> "ScanRowGroups":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        try:
+            if exc[0] is None:
+                self.flush()
+            else:  # let the row group in the thread finish; its error, if any, is secondary
+                self._wait(raise_error=False)
+        finally:
+            self._pool.shutdown(wait=True)
 
     def add(self, scan_id: int, points: np.ndarray) -> None:
         pts = np.asarray(points, dtype=np.float32).reshape(-1, 3)
@@ -223,9 +247,20 @@ class ScanRowGroups:
         self.pts.append(pts)
         self.n += len(pts)
         if self.n >= self.rows:
-            self.flush()
+            self._submit()
 
     def flush(self) -> None:
+        self._submit()
+        self._wait()
+
+    def _wait(self, raise_error: bool = True) -> None:
+        pending, self._pending = self._pending, None
+        if pending is not None:
+            err = pending.exception()
+            if err is not None and raise_error:
+                raise err
+
+    def _submit(self) -> None:
         if not self.n:
             return
         p = np.concatenate(self.pts)
@@ -233,8 +268,9 @@ class ScanRowGroups:
             {"scan_id": np.concatenate(self.ids), "x": p[:, 0], "y": p[:, 1], "z": p[:, 2]},
             schema=self.writer.schema,
         )
-        self.writer.write_table(table, row_group_size=len(p))
         self.ids, self.pts, self.n = [], [], 0
+        self._wait()  # the previous row group is written first
+        self._pending = self._pool.submit(self.writer.write_table, table, row_group_size=len(p))
 
 
 def iter_scans(

@@ -1581,15 +1581,14 @@ def register_recording(
         schema = schema.with_metadata({str(k): str(v) for k, v in metadata.items()})
     with atomic_path(registered_path) as tmp:
         with pq.ParquetWriter(tmp, schema, **parquet_options(schema)) as writer:
-            out = ScanRowGroups(writer)
-            for sid, pts in iter_scans(scans_path):
-                pose = pose_of.get(int(sid))
-                if pose is None:
-                    continue
-                q = transform_points(pts, *pose)
-                density.add(q[:, :2])
-                out.add(sid, q)
-            out.flush()
+            with ScanRowGroups(writer) as out:  # row groups written in a thread
+                for sid, pts in iter_scans(scans_path):
+                    pose = pose_of.get(int(sid))
+                    if pose is None:
+                        continue
+                    q = transform_points(pts, *pose)
+                    density.add(q[:, :2])
+                    out.add(sid, q)
     return RegistrationResult(registered=None, table=table, summary=summary, density=density)
 
 

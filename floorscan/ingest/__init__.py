@@ -134,21 +134,20 @@ def write_recording(
     meta = {k.encode(): str(v).encode() for k, v in (metadata or {}).items()}
     with atomic_path(scans_path) as tmp:
         with pq.ParquetWriter(tmp, SCANS.with_metadata(meta), **parquet_options(SCANS)) as writer:
-            batch = ScanRowGroups(writer)
-            last_t = None
-            for scan_id, scan in enumerate(recording.scans):
-                if last_t is not None and scan.t_ns < last_t:
-                    raise InputError(
-                        f"{recording.source}: scan timestamps go backwards at scan {scan_id} "
-                        f"({scan.t_ns} ns after {last_t} ns); expected non-decreasing stamps"
-                    )
-                last_t = scan.t_ns
-                pts = np.asarray(scan.points, dtype=np.float32).reshape(-1, 3)
-                n = len(pts)
-                rows.append((scan_id, int(scan.t_ns), n, int(scan.n_dropped), scan.frame))
-                if n:
-                    batch.add(scan_id, pts)
-            batch.flush()
+            with ScanRowGroups(writer) as batch:  # row groups written in a thread
+                last_t = None
+                for scan_id, scan in enumerate(recording.scans):
+                    if last_t is not None and scan.t_ns < last_t:
+                        raise InputError(
+                            f"{recording.source}: scan timestamps go backwards at scan {scan_id} "
+                            f"({scan.t_ns} ns after {last_t} ns); expected non-decreasing stamps"
+                        )
+                    last_t = scan.t_ns
+                    pts = np.asarray(scan.points, dtype=np.float32).reshape(-1, 3)
+                    n = len(pts)
+                    rows.append((scan_id, int(scan.t_ns), n, int(scan.n_dropped), scan.frame))
+                    if n:
+                        batch.add(scan_id, pts)
         if not rows:
             raise InputError(f"{recording.source}: no scans found")
         index = pd.DataFrame(rows, columns=["scan_id", "t_ns", "n_points", "n_dropped", "frame"])
