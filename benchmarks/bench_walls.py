@@ -18,6 +18,12 @@ lines as ``ransac``) until fewer than ``min_points`` remain. It finds planes, no
 segments (no gap splitting), so its count is of lines, not wall segments.
 
 Run: ``.venv/bin/python -m benchmarks.bench_walls [--max-scans N] [datasets ...]``.
+
+Shard mode (issue 8: the cost of one ``scan_walls`` job): ``--shard PATH START STOP``
+times :func:`floorscan.walls.extract_walls` on the scans START..STOP of a points
+table (e.g. hallways3d's ``registered.parquet``, scans 0..1694), per extractor with
+the default config: CPU seconds (``time.process_time``) and wall seconds, ms per
+scan, ``--repeats`` times (the scans are read once, before timing).
 """
 from __future__ import annotations
 
@@ -32,8 +38,8 @@ import pandas as pd
 import yaml
 
 from floorscan.floorplan import build_floorplan
-from floorscan.io import read_table, split_by_scan
-from floorscan.walls import extract_scan, params_from_config, scan_points_2d
+from floorscan.io import iter_scans, read_table, split_by_scan
+from floorscan.walls import EXTRACTORS, extract_scan, extract_walls, params_from_config, scan_points_2d
 
 REPO = Path(__file__).resolve().parents[1]
 DATASETS = ["intel", "aces", "freiburg101", "orebro", "trace0", "mac_ros2"]
@@ -83,11 +89,36 @@ def stats(times: list[float]) -> str:
     return f"{t.mean():7.1f} {np.median(t):7.1f} {np.percentile(t, 95):7.1f}"
 
 
+def time_shard(path: str, start: int, stop: int, repeats: int) -> None:
+    """CPU and wall ms per scan of extract_walls on one scan range, per extractor."""
+    scans = list(iter_scans(path, ("x", "y", "z"), scan_range=(start, stop)))
+    n = max(len(scans), 1)
+    import scipy.spatial  # noqa: F401  (imported by a job before its first scan)
+
+    print(f"{path}: scans {start}..{stop}: {len(scans)} scans, {np.mean([len(p) for _, p in scans]):.0f} points/scan")
+    for extractor in EXTRACTORS:
+        cpu, wall = [], []
+        for _ in range(repeats):
+            t0, c0 = time.perf_counter(), time.process_time()
+            walls, _ = extract_walls(iter(scans), extractor, {})
+            cpu.append(time.process_time() - c0)
+            wall.append(time.perf_counter() - t0)
+        print(
+            f"  {extractor:15s} CPU ms/scan {' '.join(f'{1e3 * c / n:6.2f}' for c in cpu)}   "
+            f"wall ms/scan {' '.join(f'{1e3 * w / n:6.2f}' for w in wall)}   ({len(walls)} wall segments)"
+        )
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("datasets", nargs="*", default=DATASETS)
     ap.add_argument("--max-scans", type=int, default=150, help="evenly spaced subset per dataset (0 = all)")
+    ap.add_argument("--shard", nargs=3, metavar=("PATH", "START", "STOP"), help="time extract_walls on one scan range")
+    ap.add_argument("--repeats", type=int, default=3, help="shard mode: timed runs per extractor")
     args = ap.parse_args(argv if argv is not None else [])
+    if args.shard:
+        time_shard(args.shard[0], int(args.shard[1]), int(args.shard[2]), args.repeats)
+        return
     cfg = schema_defaults(REPO / "workflow/schemas/walls.schema.yaml")
     scan_p, rp, cp = params_from_config(cfg)
     from floorscan.walls import cluster_ransac  # noqa: F401  (warm imports)

@@ -35,12 +35,20 @@ scan of hallways and hallways3d against the plain forms, and in the tests):
   Open3D (2.5 s, as Open3D imports scikit-learn); scikit-learn is imported only
   for ``meanshift: sklearn`` or an estimated bandwidth;
 - no pandas frame per scan: segments stay tuples until one frame per job, and
-  :func:`extract_walls` takes scans streamed from the file (memory: one scan).
+  :func:`extract_walls` takes scans streamed from the file (memory: one scan);
+- fewer passes and fewer small numpy calls per scan (issue 8, second round; same
+  floats, checked table for table on hallways3d shard 0, trace0, intel and demo, and
+  in the tests): the RANSAC distances and the MeanShift squared distances as one
+  BLAS product each (offsets and norms as extra terms of the product), counts as
+  byte sums, MeanShift iterating only its moving seeds, bin seeding without the
+  inverse, no re-sort of points already in order (:func:`_segments_on_line`) and
+  fast paths for a wall without gaps.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import time
 import warnings
 from dataclasses import dataclass
@@ -299,11 +307,15 @@ def fit_line(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     direction : (2,) float64 ndarray
         Unit direction of the line; the normal is ``(-direction[1], direction[0])``.
     """
-    c = points.mean(axis=0)
+    c = np.add.reduce(points, axis=0) / len(points)  # points.mean(axis=0), fewer calls
     d = points - c
-    sxx, syy, sxy = (d[:, 0] ** 2).sum(), (d[:, 1] ** 2).sum(), (d[:, 0] * d[:, 1]).sum()
+    dx, dy = d[:, 0], d[:, 1]
+    sxx, syy, sxy = np.add.reduce(dx * dx), np.add.reduce(dy * dy), np.add.reduce(dx * dy)
     phi = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)  # angle of the major axis
     return c, np.array([np.cos(phi), np.sin(phi)])
+
+
+_PERP = np.array([-1.0, 1.0])  # (dy, dx) * _PERP = (-dy, dx), a normal of (dx, dy)
 
 
 def _best_line(points: np.ndarray, rng: np.random.Generator, params: RansacParams):
@@ -315,29 +327,34 @@ def _best_line(points: np.ndarray, rng: np.random.Generator, params: RansacParam
         return None
     i = rng.integers(0, n, size=params.iterations)
     j = rng.integers(0, n - 1, size=params.iterations)
-    j = j + (j >= i)  # j != i
-    d = points[j] - points[i]
+    j += j >= i  # j != i
+    start = points[i]
+    d = points[j] - start
     length = np.hypot(d[:, 0], d[:, 1])
     ok = length > 1e-9
-    if not ok.any():
-        return None
-    normals = np.stack([-d[ok, 1], d[ok, 0]], axis=1) / length[ok, None]
-    offsets = np.einsum("ij,ij->i", normals, points[i[ok]])
+    if not ok.all():
+        if not ok.any():
+            return None
+        d, length, start = d[ok], length[ok], start[ok]
+    normals = d[:, ::-1] * _PERP  # (-dy, dx), exact
+    normals /= length[:, None]
+    offsets = np.einsum("ij,ij->i", normals, start)
     best = int(np.argmax(_inlier_counts(points, normals, offsets, params.threshold_m)))
     normal, offset = normals[best], offsets[best]
     mask = np.abs(points @ normal - offset) < params.threshold_m
+    n_mask = np.count_nonzero(mask)
     c, direction = None, np.array([normal[1], -normal[0]])
     for _ in range(params.refine_iterations):
-        if np.count_nonzero(mask) < 2:
+        if n_mask < 2:
             break
         c, direction = fit_line(points[mask])
         normal = np.array([-direction[1], direction[0]])
         new = np.abs((points - c) @ normal) < params.threshold_m
         n_new = np.count_nonzero(new)
-        if n_new < 2 or np.array_equal(new, mask):
+        if n_new < 2 or (n_new == n_mask and (new == mask).all()):
             mask = new if n_new >= 2 else mask
             break
-        mask = new
+        mask, n_mask = new, n_new
     if c is None:  # no refit: the line through the inliers' mean
         c = points[mask].mean(axis=0)
     return mask, c, direction
@@ -348,25 +365,41 @@ def _inlier_counts(points: np.ndarray, normals: np.ndarray, offsets: np.ndarray,
 
     Hypotheses in blocks of about 64k distances (at least 4; the block stays in the CPU cache;
     16 MB blocks were 3x slower), laid out (hypothesis, point) so the count runs
-    along contiguous memory, with in-place arithmetic. The distances are the same
-    BLAS products as ``points @ normals.T`` (checked bit for bit), so the counts are.
+    along contiguous memory, into reused buffers. The signed distance is one BLAS
+    product of ``(nx, ny, -offset)`` with ``(x, y, 1)``: the kernel accumulates along
+    the 3 terms in order with fused multiply-adds, so it rounds as ``points @ normals.T``
+    then ``- offsets`` (checked bit for bit on every RANSAC run of hallways3d,
+    trace0, intel and demo, and in the tests); it saves a pass over the block
+    (issue 8). The count sums the bytes of the boolean block (exact; 3x faster than
+    ``count_nonzero(axis=1)``).
     """
-    pt = np.ascontiguousarray(points.T)
+    n = len(points)
+    pt = np.empty((3, n))
+    pt[:2] = points.T
+    pt[2] = 1.0
+    hyp = np.empty((len(normals), 3))
+    hyp[:, :2] = normals
+    np.negative(offsets, out=hyp[:, 2])
     counts = np.empty(len(normals), dtype=np.int64)
-    block = max(4, 65536 // max(len(points), 1))
+    block = max(4, 65536 // max(n, 1))
+    dist = np.empty((min(block, len(normals)), n))
+    inlier = np.empty(dist.shape, dtype=bool)
+    count_type = np.uint16 if n < 2**16 else np.int64
     for s in range(0, len(normals), block):
-        dist = normals[s : s + block] @ pt
-        dist -= offsets[s : s + block, None]
-        np.abs(dist, out=dist)
-        counts[s : s + block] = np.count_nonzero(dist < threshold, axis=1)
+        e = min(s + block, len(normals))
+        d, m = dist[: e - s], inlier[: e - s]
+        np.matmul(hyp[s:e], pt, out=d)
+        np.abs(d, out=d)
+        np.less(d, threshold, out=m)
+        counts[s:e] = m.view(np.uint8).sum(axis=1, dtype=count_type)
     return counts
 
 
 def _uncovered_length(t: np.ndarray, min_gap: float) -> float:
     """Summed length of the jumps between sorted positions ``t`` (metres): gaps wider
     than ``min_gap`` and 3 times both neighbouring gaps (see ``RansacParams``)."""
-    g = np.diff(t)
-    if len(g) == 0:
+    g = t[1:] - t[:-1]  # numpy.diff
+    if len(g) == 0 or not (g > min_gap).any():  # no jump: the usual case
         return 0.0
     near = np.zeros(len(g))  # the larger neighbouring gap (0 beyond the ends)
     near[1:] = g[:-1]
@@ -384,29 +417,34 @@ def _segments_on_line(points: np.ndarray, direction: np.ndarray, params: RansacP
     its length. Returns tuples (x0, y0, x1, y1, n_inliers, rmse_m).
     """
     t = points @ direction
-    order = np.argsort(t, kind="stable")
-    ts = t[order]
-    bounds = _piece_bounds(ts, params.max_gap_m)
+    gaps = t[1:] - t[:-1]
+    if (gaps >= 0).all():  # in order already (from _claimed_segments): the stable sort is the identity
+        order, ts = None, t
+    else:
+        order = np.argsort(t, kind="stable")
+        ts, gaps = t[order], None
+    bounds = _piece_bounds(ts, params.max_gap_m, gaps)
     out = []
     for a, b in zip(bounds[:-1], bounds[1:]):
         if b - a < max(params.min_inliers, 2):
             continue
-        piece = order[a:b]
-        p = points[piece]
+        p = points[a:b] if order is None else points[order[a:b]]
         c, d = fit_line(p)
         if d @ direction < 0:
             d = -d
-        u = (p - c) @ d
-        lo, hi = float(u.min()), float(u.max())
+        pc = p - c
+        u = pc @ d
+        lo, hi = float(np.minimum.reduce(u)), float(np.maximum.reduce(u))
         if hi - lo < params.min_length_m:
             continue
         if params.min_coverage > 0:
             uncovered = _uncovered_length(np.sort(u), params.coverage_gap_m)
             if 1.0 - uncovered / (hi - lo) < params.min_coverage:
                 continue
-        resid = (p - c) @ np.array([-d[1], d[0]])
+        resid = pc @ np.array([-d[1], d[0]])
         a, b = c + lo * d, c + hi * d
-        out.append((a[0], a[1], b[0], b[1], len(piece), float(np.sqrt(np.mean(resid**2)))))
+        rmse = math.sqrt(np.add.reduce(resid * resid) / len(resid))  # sqrt(mean(resid**2))
+        out.append((a[0], a[1], b[0], b[1], len(p), rmse))
     return out
 
 
@@ -544,17 +582,19 @@ def neighbourhood_covariances(
     k = int(min(max_nn, n))
     # slightly wider bound, then the exact rule on squared distances
     _, idx = cKDTree(pts).query(pts, k=k, distance_upper_bound=radius_m * (1 + 1e-9))
-    idx = np.asarray(idx).reshape(n, k)
-    ok = idx < n
-    idx = np.where(ok, idx, 0)
-    x, y = pts[idx, 0], pts[idx, 1]
-    dx, dy = x - pts[:, 0:1], y - pts[:, 1:2]
-    ok &= dx * dx + dy * dy < radius_m * radius_m
     # (k, N) layout: a sum over axis 0 adds neighbour after neighbour for every point,
     # in order, as Open3D does (no pairwise summation: that is for the inner axis);
     # "+ 0.0" as Open3D's sums start from +0.0 (only the sign of a zero sum differs)
-    x, y = np.where(ok, x, 0.0).T.copy(), np.where(ok, y, 0.0).T.copy()
-    cnt = ok.sum(axis=1)
+    idx = np.ascontiguousarray(np.asarray(idx).reshape(n, k).T)
+    ok = idx < n
+    idx[~ok] = 0
+    px, py = pts[:, 0].copy(), pts[:, 1].copy()
+    x, y = px[idx], py[idx]
+    dx, dy = x - px, y - py
+    ok &= dx * dx + dy * dy < radius_m * radius_m
+    out = ~ok
+    x[out], y[out] = 0.0, 0.0
+    cnt = ok.view(np.uint8).sum(axis=0, dtype=np.int64)
     sx, sy = x.sum(axis=0) + 0.0, y.sum(axis=0) + 0.0
     sxx, sxy, syy = (x * x).sum(axis=0) + 0.0, (x * y).sum(axis=0) + 0.0, (y * y).sum(axis=0) + 0.0
     m = np.maximum(cnt, 1).astype(np.float64)
@@ -599,40 +639,55 @@ def mean_shift(x: np.ndarray, bandwidth: float, min_bin_freq: int = 1, max_iter:
     if len(x) == 0:
         return np.empty(0, dtype=np.int64)
     cells = np.round(x / bandwidth)
-    _, counts, first = cell_groups(cells, first=True)
-    cells = cells[first]
-    seeds = cells[counts >= min_bin_freq] * bandwidth
-    if len(seeds) == len(x):
-        seeds = x.copy()
-    if len(seeds) == 0:
+    counts, first = _bin_counts(cells)
+    means = cells[first[counts >= min_bin_freq]] * bandwidth  # the seeds
+    if len(means) == len(x):
+        means = x.copy()
+    if len(means) == 0:
         return np.full(len(x), -1, dtype=np.int64)
     r2, stop = bandwidth**2, 1e-3 * bandwidth
-    means = seeds.astype(np.float64)
     within = np.zeros(len(means), dtype=np.int64)
-    active = np.ones(len(means), dtype=bool)
-    xx = (x**2).sum(axis=1)
+    dim = x.shape[1]
+    # Squared distances of seeds m to points x, (m**2).sum(1)[:, None] - 2.0 * m @ x.T
+    # + (x**2).sum(1)[None, :], as one BLAS product of rows (-2 m, (m**2).sum(), 1) with
+    # columns (x, 1, (x**2).sum()): the kernel accumulates the terms in this order with
+    # fused multiply-adds, so it rounds as the three steps (scaling by -2 is exact;
+    # checked bit for bit on every MeanShift of the wall benchmarks, and in the tests).
+    xa = np.empty((dim + 2, len(x)))
+    xa[:dim] = x.T
+    xa[dim] = 1.0
+    xa[dim + 1] = (x**2).sum(axis=1)
+    act = np.arange(len(means))  # the seeds still moving, in seed order
+    m = means.copy()  # their means
     for _ in range(max_iter):
-        idx = np.flatnonzero(active)
-        if len(idx) == 0:
+        if len(act) == 0:
             break
-        m = means[idx]
-        # (m**2).sum(1)[:, None] - 2.0 * m @ x.T + xx[None, :], in place (the same
-        # floats: scaling by 2 is exact, so (2 m) @ x.T = 2 (m @ x.T))
-        d2 = m @ x.T
-        d2 *= 2.0
-        np.subtract((m**2).sum(axis=1)[:, None], d2, out=d2)
-        d2 += xx[None, :]
-        w = d2 <= r2
+        ma = np.empty((len(m), dim + 2))
+        np.multiply(m, -2.0, out=ma[:, :dim])
+        ma[:, dim] = (m**2).sum(axis=1)
+        ma[:, dim + 1] = 1.0
+        # the flat kernel's weights (d2 <= r2) written as 1.0 / 0.0, and their counts
+        # (sums of ones: exact integers, as w.sum(axis=1))
+        w = np.less_equal(ma @ xa, r2, out=np.empty((len(m), len(x))))
         cnt = w.sum(axis=1)
-        within[idx] = cnt
+        within[act] = cnt
         moved = cnt > 0
-        new = (w[moved].astype(np.float64) @ x) / cnt[moved, None]
-        shift = np.sqrt(((new - m[moved]) ** 2).sum(axis=1))
-        means[idx[moved]] = new
-        done = np.zeros(len(idx), dtype=bool)
-        done[~moved] = True
-        done[np.flatnonzero(moved)[shift <= stop]] = True
-        active[idx[done]] = False
+        if moved.all():  # the usual case: no boolean indexing
+            new = (w @ x) / cnt[:, None]
+            shift = np.sqrt(((new - m) ** 2).sum(axis=1))
+            means[act] = new
+            going = shift > stop
+            if going.all():
+                m = new
+                continue
+        else:
+            new = (w[moved] @ x) / cnt[moved, None]
+            shift = np.sqrt(((new - m[moved]) ** 2).sum(axis=1))
+            means[act[moved]] = new
+            going = np.zeros(len(act), dtype=bool)
+            going[np.flatnonzero(moved)[shift > stop]] = True
+        act = act[going]
+        m = means[act]
     keep = within > 0
     if not keep.any():
         return np.full(len(x), -1, dtype=np.int64)
@@ -640,15 +695,34 @@ def mean_shift(x: np.ndarray, bandwidth: float, min_bin_freq: int = 1, max_iter:
     # Decreasing (points within, centre) as sklearn sorts its (centre, count) items.
     order = np.lexsort(tuple(centers[:, k] for k in range(centers.shape[1] - 1, -1, -1)) + (n_in,))[::-1]
     centers = centers[order]
+    # row i: ((centers - centers[i]) ** 2).sum(axis=1) <= r2, for all i at once when few
+    near = ((centers[:, None, :] - centers[None, :, :]) ** 2).sum(axis=2) <= r2 if len(centers) <= 256 else None
     unique = np.ones(len(centers), dtype=bool)
     for i in range(len(centers)):
         if unique[i]:
-            near = ((centers - centers[i]) ** 2).sum(axis=1) <= r2
-            unique[near] = False
+            unique[((centers - centers[i]) ** 2).sum(axis=1) <= r2 if near is None else near[i]] = False
             unique[i] = True
     centers = centers[unique]
-    d2 = ((x[:, None, :] - centers[None, :, :]) ** 2).sum(axis=2)
+    if dim == 1:  # the same squares without a sum over one term
+        d2 = (x - centers[:, 0]) ** 2
+    else:
+        d2 = ((x[:, None, :] - centers[None, :, :]) ** 2).sum(axis=2)
     return np.argmin(d2, axis=1).astype(np.int64)
+
+
+def _bin_counts(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Points per occupied grid cell and the first point of each, cells in
+    lexicographic order: :func:`floorscan.grid.cell_groups` without the inverse
+    (not needed by the bin seeding; one pass fewer)."""
+    c = cells.astype(np.int64)
+    lo = c.min(axis=0)
+    span = c.max(axis=0) - lo + 1
+    if float(np.prod(span.astype(np.float64))) >= 2.0**62:
+        _, counts, first = cell_groups(cells, first=True)
+        return counts, first
+    key = c[:, 0] - lo[0] if c.shape[1] == 1 else np.ravel_multi_index(tuple((c - lo).T), tuple(int(v) for v in span))
+    _, first, counts = np.unique(key, return_index=True, return_counts=True)
+    return counts, first
 
 
 def _mean_shift(
@@ -736,7 +810,8 @@ def wall_signature(points: np.ndarray, normals: np.ndarray, angle_labels: np.nda
             continue
         phi = 0.5 * np.arctan2(np.sin(t).mean(), np.cos(t).mean())
         cluster_normals[lab] = (np.cos(phi), np.sin(phi))
-        rho[m] = (points[m] - points[m].mean(axis=0)) @ cluster_normals[lab]
+        pm = points[m]
+        rho[m] = (pm - pm.mean(axis=0)) @ cluster_normals[lab]
     return rho, cluster_normals
 
 
@@ -797,7 +872,7 @@ def _cluster_ransac_rows(points: np.ndarray, params: RansacParams, cluster: Clus
         )
     rho, _ = wall_signature(pts, normals, labels)
     rows: list[tuple] = []
-    for lab in np.unique(labels[labels >= 0]):
+    for lab in np.flatnonzero(np.bincount(labels[labels >= 0])):  # numpy.unique
         members = np.flatnonzero(labels == lab)
         if len(members) < cluster.min_cluster_points:
             continue
@@ -805,7 +880,7 @@ def _cluster_ransac_rows(points: np.ndarray, params: RansacParams, cluster: Clus
             rho[members, None], cluster.offset_bandwidth_m, cluster.bin_seeding,
             max(1, cluster.min_cluster_points // 3), cluster.meanshift,
         )
-        for s in np.unique(sub[sub >= 0]):
+        for s in np.flatnonzero(np.bincount(sub[sub >= 0])):
             idx = members[sub == s]
             if len(idx) < cluster.min_cluster_points:
                 continue
@@ -856,10 +931,14 @@ def _claimed_segments(pts, c, direction, claimed, params) -> list[tuple]:
     return rows
 
 
-def _piece_bounds(ts: np.ndarray, max_gap: float) -> list[int]:
+def _piece_bounds(ts: np.ndarray, max_gap: float, gaps: np.ndarray | None = None) -> list[int]:
     """Start of each piece of sorted positions ``ts`` split at gaps wider than
-    ``max_gap``, and the end: pieces are ``ts[b[i]:b[i+1]]`` (as ``numpy.split``)."""
-    return [0, *(np.flatnonzero(np.diff(ts) > max_gap) + 1).tolist(), len(ts)]
+    ``max_gap``, and the end: pieces are ``ts[b[i]:b[i+1]]`` (as ``numpy.split``).
+    ``gaps`` is ``numpy.diff(ts)`` when the caller has it."""
+    wide = (ts[1:] - ts[:-1] if gaps is None else gaps) > max_gap  # numpy.diff
+    if not wide.any():  # one piece: the usual case
+        return [0, len(ts)]
+    return [0, *(np.flatnonzero(wide) + 1).tolist(), len(ts)]
 
 
 # --------------------------------------------------------------------------------------

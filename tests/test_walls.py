@@ -369,3 +369,82 @@ def test_a_wall_seen_at_a_grazing_angle_is_covered():
     df = ransac(pts, RansacParams(min_inliers=5, max_gap_m=1.0), seed=0)
     assert len(df) == 1
     assert df["x1"].max() - df["x0"].min() > 5.0
+
+
+def _plain_mean_shift(x, bandwidth, min_bin_freq):
+    """mean_shift in its plain form (before issue 8's shortcuts): the reference."""
+    from floorscan.grid import cell_groups
+
+    cells = np.round(x / bandwidth)
+    _, counts, first = cell_groups(cells, first=True)
+    seeds = cells[first][counts >= min_bin_freq] * bandwidth
+    seeds = x.copy() if len(seeds) == len(x) else seeds
+    if len(seeds) == 0:
+        return np.full(len(x), -1)
+    r2, means = bandwidth**2, seeds.copy()
+    within, active = np.zeros(len(means), dtype=np.int64), np.ones(len(means), dtype=bool)
+    for _ in range(300):
+        idx = np.flatnonzero(active)
+        if len(idx) == 0:
+            break
+        m = means[idx]
+        d2 = (m**2).sum(axis=1)[:, None] - 2.0 * (m @ x.T) + (x**2).sum(axis=1)[None, :]
+        w = d2 <= r2
+        cnt = w.sum(axis=1)
+        within[idx] = cnt
+        moved = cnt > 0
+        new = (w[moved].astype(np.float64) @ x) / cnt[moved, None]
+        shift = np.sqrt(((new - m[moved]) ** 2).sum(axis=1))
+        means[idx[moved]] = new
+        done = ~moved
+        done[np.flatnonzero(moved)[shift <= 1e-3 * bandwidth]] = True
+        active[idx[done]] = False
+    keep = within > 0
+    centers, n_in = means[keep], within[keep]
+    order = np.lexsort(tuple(centers[:, k] for k in range(centers.shape[1] - 1, -1, -1)) + (n_in,))[::-1]
+    centers = centers[order]
+    unique = np.ones(len(centers), dtype=bool)
+    for i in range(len(centers)):
+        if unique[i]:
+            unique[((centers - centers[i]) ** 2).sum(axis=1) <= r2] = False
+            unique[i] = True
+    centers = centers[unique]
+    return np.argmin(((x[:, None, :] - centers[None, :, :]) ** 2).sum(axis=2), axis=1)
+
+
+def test_issue8_shortcuts_equal_the_plain_forms_bit_for_bit():
+    """mean_shift (one BLAS product for the squared distances, only the moving seeds),
+    the bin counts, the inlier counts beyond 2**16 points and _segments_on_line on
+    points already in order give exactly what the plain forms give."""
+    from floorscan.grid import cell_groups
+    from floorscan.walls import _bin_counts, _inlier_counts, _segments_on_line
+
+    rng = np.random.default_rng(11)
+    one = np.r_[rng.normal(0, 0.01, 120), rng.normal(0.2, 0.01, 80), rng.normal(1.0, 0.02, 40), rng.uniform(-1, 2, 20)]
+    ang = rng.normal(0, 0.02, 300) + np.repeat([0.3, 1.9, 2.5], 100)
+    two = 0.5 * np.c_[np.cos(2 * ang), np.sin(2 * ang)]
+    sparse = (np.arange(300) * 0.2 + rng.uniform(-0.01, 0.01, 300))[rng.permutation(300), None]  # 300 seeds and modes
+    for x, bw, mbf in ((one[:, None], 0.05, 5), (two, 0.1, 5), (two, 0.03, 1), (sparse, 0.05, 1)):
+        labels = mean_shift(x, bw, min_bin_freq=mbf)
+        np.testing.assert_array_equal(labels, _plain_mean_shift(x, bw, mbf))
+        _, counts, first = cell_groups(np.round(x / bw), first=True)
+        for a, b in zip(_bin_counts(np.round(x / bw)), (counts, first)):
+            np.testing.assert_array_equal(a, b)
+    assert len(np.unique(mean_shift(sparse, 0.05, 1))) == 300  # > 256 modes: the pairwise loop, not the matrix
+    assert len(np.unique(mean_shift(one[:, None], 0.05, 5)[:240])) == 3
+
+    big = rng.uniform(-3, 5, (70000, 2))  # counts past the 16-bit sum
+    normals = np.array([[0.0, 1.0], [1.0, 0.0], [0.6, 0.8], [-0.8, 0.6]])
+    offsets = np.array([1.0, -2.5, 0.3, 4.0])
+    expected = (np.abs(big @ normals.T - offsets) < 0.03).sum(axis=0)
+    np.testing.assert_array_equal(_inlier_counts(big, normals, offsets, 0.03), expected)
+    assert expected.min() > 100
+
+    t = np.r_[np.linspace(0, 2, 80), np.linspace(2.8, 4, 50)]  # a wall with a 0.8 m door
+    wall = np.c_[t, 1.0 + 0.005 * rng.normal(size=len(t))]
+    direction = np.array([1.0, 0.0])
+    shuffled = wall[rng.permutation(len(wall))]
+    got = _segments_on_line(wall, direction, RansacParams())
+    assert got == _segments_on_line(shuffled, direction, RansacParams())  # sorted by the same stable sort
+    assert len(got) == 2 and [r[4] for r in got] == [80, 50]
+    np.testing.assert_allclose([got[0][0], got[0][2], got[1][0], got[1][2]], [0, 2, 2.8, 4], atol=0.02)
