@@ -6,11 +6,13 @@ stdin and writes its pickled result on stdout. Not ``fork``: Open3D's and
 scikit-learn's OpenMP runtimes are not safe across fork. Not ``multiprocessing``'s
 ``spawn`` either: it re-runs the parent's main script in every worker, and a Snakemake
 stage script has no ``if __name__ == "__main__"`` guard. A worker costs ~1 s to start
-(interpreter and imports), so callers give each at least a second of work.
+(interpreter and imports), so callers give each at least a second of work, or start
+it ahead with :func:`prestart`.
 """
 
 from __future__ import annotations
 
+import atexit
 import importlib
 import pickle
 import subprocess
@@ -20,8 +22,54 @@ from typing import Any, Callable, Sequence
 
 _WORKER = "from floorscan.parallel import _worker; _worker()"
 
+#: Workers started ahead by :func:`prestart`, waiting for their call on stdin.
+_READY: list[tuple[subprocess.Popen, Any]] = []
 
-def map_in_processes(fn: Callable, calls: Sequence[tuple]) -> list[Any]:
+
+def prestart(n: int, preload: Sequence[str] = ()) -> int:
+    """Start ``n`` workers now, importing ``preload`` modules, for the next
+    :func:`map_in_processes` call, so their start-up (~1-3 s with Open3D) overlaps
+    the caller's work instead of delaying the results.
+
+    Workers not used by the time the interpreter exits are stopped. Returns the
+    number of workers waiting.
+
+    Parameters
+    ----------
+    n : int
+        Workers to start (none when ``n <= 0``).
+    preload : sequence of str
+        Module names each worker imports before it waits for its call.
+    """
+    for _ in range(max(0, int(n))):
+        _READY.append(_spawn(preload))
+    return len(_READY)
+
+
+def ready() -> int:
+    """Workers started by :func:`prestart` and not used yet."""
+    return len(_READY)
+
+
+def _spawn(preload: Sequence[str] = ()) -> tuple[subprocess.Popen, Any]:
+    err = tempfile.TemporaryFile()  # a file, not a pipe: it never fills up
+    code = "".join(f"import {m}; " for m in preload) + _WORKER
+    proc = subprocess.Popen(
+        [sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=err,
+    )
+    return proc, err
+
+
+@atexit.register
+def _stop_ready() -> None:
+    while _READY:
+        proc, err = _READY.pop()
+        proc.kill()
+        proc.wait()
+        err.close()
+
+
+def map_in_processes(fn: Callable, calls: Sequence[tuple], local_first: bool = True) -> list[Any]:
     """``[fn(*args) for args in calls]``, the first call here and the others each in a
     worker process, all at once.
 
@@ -32,6 +80,10 @@ def map_in_processes(fn: Callable, calls: Sequence[tuple]) -> list[Any]:
         arguments and result must pickle.
     calls : sequence of tuple
         Positional arguments of each call.
+    local_first : bool
+        Run the first call in this process (default). False: every call in a worker,
+        e.g. when workers started ahead (:func:`prestart`) have imported what the
+        calls need and this process has not.
 
     Returns
     -------
@@ -44,19 +96,21 @@ def map_in_processes(fn: Callable, calls: Sequence[tuple]) -> list[Any]:
         A worker failed (its exit status and the last lines of its stderr).
     """
     calls = list(calls)
-    if len(calls) <= 1:
+    if len(calls) == 0 or (len(calls) == 1 and local_first):
         return [fn(*args) for args in calls]
+    remote = calls[1:] if local_first else calls
     procs, errs = [], []
     try:
-        for args in calls[1:]:
-            errs.append(tempfile.TemporaryFile())  # a file, not a pipe: it never fills up
-            proc = subprocess.Popen(
-                [sys.executable, "-c", _WORKER], stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=errs[-1],
-            )
-            proc.stdin.write(pickle.dumps((fn.__module__, fn.__qualname__, args)))
-            proc.stdin.close()
+        for args in remote:
+            proc, err = _READY.pop(0) if _READY else _spawn()
             procs.append(proc)
-        results = [fn(*calls[0])]
+            errs.append(err)
+            try:
+                proc.stdin.write(pickle.dumps((fn.__module__, fn.__qualname__, args)))
+                proc.stdin.close()
+            except BrokenPipeError:  # it died starting (e.g. a preload failed): reported below
+                pass
+        results = [fn(*calls[0])] if local_first else []
         for proc, err in zip(procs, errs):
             out = proc.stdout.read()
             if proc.wait() != 0:

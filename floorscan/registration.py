@@ -1511,6 +1511,14 @@ def register_recording(
     from floorscan.io import REGISTERED, ScanRowGroups, atomic_path, iter_scans, parquet_options
 
     cfg = _config(config)
+    if cfg.reference == "graph" or (cfg.mode == "odometry" and cfg.loop_closure):
+        from floorscan.parallel import prestart
+        from floorscan.posegraph import GraphParams
+
+        # the edge ICP's worker processes import Open3D while the scans are read, on
+        # the core this reading leaves idle (with one worker the ICP runs here)
+        workers = GraphParams.from_mapping(cfg.graph).workers
+        prestart(workers if workers > 1 else 0, preload=("open3d", "floorscan.posegraph"))
     index = _prepare_index(scan_index)
     aligned = _aligned_poses(index, poses, cfg)
     sids = index["scan_id"].to_numpy()
