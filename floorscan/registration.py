@@ -122,6 +122,7 @@ import math
 import os
 from collections import Counter, deque
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Mapping, NamedTuple
 
 import numpy as np
@@ -1468,15 +1469,17 @@ def register_recording(
     """:func:`register_scans` on a points file, streamed: memory follows the largest scan.
 
     Issue 8 ("Speed and scale"): the whole ``scans.parquet`` of a 3D recording is 73 M
-    points (hallways3d; 6.4 GB RSS when loaded as a table). Here it is read twice in
-    record batches (:func:`floorscan.io.iter_scans`): first, each scan is screened as it
+    points (hallways3d; 6.4 GB RSS when loaded as a table). Here it is read once in
+    record batches (:func:`floorscan.io.iter_scans`): each scan is screened as it
     arrives (every check of :func:`screen_scans` depends on the scan and the ones before
     it only) and the sampled ones keep only the small clouds registration needs
-    (:func:`graph_cloud` for ``reference: graph``, ~1k points of a 14k-point 3D scan);
-    after registration, each kept scan's full points are transformed into the map frame
-    and written to ``registered_path`` (a Parquet writer on :func:`floorscan.io.atomic_path`,
-    a row group per ~1 M points) and counted into a density raster for the figure.
-    Same output as :func:`register_scans` (tested), given the same input.
+    (:func:`graph_cloud` for ``reference: graph``, ~1k points of a 14k-point 3D scan),
+    their points going to a temporary Parquet file beside ``registered_path`` (the kept
+    scans are sampled ones: 1 in ``every_n``). After registration that file is read
+    back and each kept scan's points are transformed into the map frame and written to
+    ``registered_path`` (a Parquet writer on :func:`floorscan.io.atomic_path`, a row group
+    per ~1 M points) and counted into a density raster for the figure. Same output as
+    :func:`register_scans` (tested), given the same input.
 
     Parameters
     ----------
@@ -1507,8 +1510,7 @@ def register_recording(
     """
     import pyarrow.parquet as pq
 
-    from floorscan.figures_registration import DensityRaster
-    from floorscan.io import REGISTERED, ScanRowGroups, atomic_path, iter_scans, parquet_options
+    from floorscan.io import SCANS, ScanRowGroups, iter_scans, parquet_options
 
     cfg = _config(config)
     if cfg.reference == "graph" or (cfg.mode == "odometry" and cfg.loop_closure):
@@ -1526,7 +1528,6 @@ def register_recording(
     screen = _Screener(index, aligned, cfg)
     store = _ScanStore(cfg)
     radius = np.zeros(n)
-    odometry = cfg.mode == "odometry"
 
     def walk():
         """(index position, points) in index order; the file's scans are ascending."""
@@ -1542,18 +1543,37 @@ def register_recording(
                 yield k, None
                 k += 1
             if k < n and sids[k] == sid:
+                if not np.isfinite(pts).all():
+                    raise InputError(
+                        f"{scans_path}: scan {sid} has non-finite x, y or z; expected finite metres"
+                    )
                 yield k, pts
                 k += 1
         while k < n:
             yield k, None
             k += 1
 
+    # The sampled scans' points (the kept scans are among them) are copied to a
+    # temporary file as they pass, so the second pass reads them, not the whole
+    # recording again (1 in every_n scans; hallways3d 14.5 of 72 M points).
+    sampled_path = Path(registered_path).with_name(f".{Path(registered_path).name}.sampled.parquet")
+    try:
+        with pq.ParquetWriter(sampled_path, SCANS, **parquet_options(SCANS)) as sampled_writer:
+            with ScanRowGroups(sampled_writer) as sampled_out:
+                _first_pass(walk(), sids, screen, store, radius, cfg, sampled_out)
+        table, summary = _register_screened(index, aligned, screen.reasons, store, cfg)
+        store = None
+        return _second_pass(table, summary, radius, sids, sampled_path, registered_path, metadata, cell_m)
+    finally:
+        sampled_path.unlink(missing_ok=True)
+
+
+def _first_pass(scans, sids, screen, store, radius, cfg, sampled_out) -> None:
+    """Screen the scans as they stream by; keep the sampled ones' registration clouds
+    (``store``), largest range (``radius``, filled in) and points (``sampled_out``)."""
+    odometry = cfg.mode == "odometry"
     n_usable = 0  # the every-n-th usable scan is sampled (as _register_screened)
-    for k, pts in walk():
-        if pts is not None and not np.isfinite(pts).all():
-            raise InputError(
-                f"{scans_path}: scan {int(sids[k])} has non-finite x, y or z; expected finite metres"
-            )
+    for k, pts in scans:
         if screen.step(k, pts) != "":
             continue
         is_sampled = n_usable % cfg.every_n == 0
@@ -1570,9 +1590,15 @@ def register_recording(
             store.add(int(sids[k]), pts, needs)
         if is_sampled:
             radius[k] = float(np.max(np.hypot(pts[:, 0], pts[:, 1])))
+            sampled_out.add(int(sids[k]), pts)
 
-    table, summary = _register_screened(index, aligned, screen.reasons, store, cfg)
-    store = None
+
+def _second_pass(table, summary, radius, sids, sampled_path, registered_path, metadata, cell_m) -> "RegistrationResult":
+    """The kept scans into the map frame: ``registered_path`` and the density raster."""
+    import pyarrow.parquet as pq
+
+    from floorscan.figures_registration import DensityRaster
+    from floorscan.io import REGISTERED, ScanRowGroups, atomic_path, iter_scans, parquet_options
 
     kept = table["kept"].to_numpy(bool)
     final = table[["x_m", "y_m", "z_m", "yaw_rad"]].to_numpy(np.float64)
@@ -1590,7 +1616,7 @@ def register_recording(
     with atomic_path(registered_path) as tmp:
         with pq.ParquetWriter(tmp, schema, **parquet_options(schema)) as writer:
             with ScanRowGroups(writer) as out:  # row groups written in a thread
-                for sid, pts in iter_scans(scans_path):
+                for sid, pts in iter_scans(sampled_path):
                     pose = pose_of.get(int(sid))
                     if pose is None:
                         continue
