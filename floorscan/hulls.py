@@ -34,15 +34,26 @@ The scan's coverage is the union of its cluster hulls (:func:`scan_coverage`).
 
 Speed (issue 8). Exact shortcuts, giving the same hulls bit for bit:
 
-- the distinct points of the KMeans sample are counted with one ``lexsort``
-  instead of ``numpy.unique(axis=0)``;
+- the distinct points of the KMeans sample are counted with one sort of complex
+  numbers instead of ``numpy.unique(axis=0)``;
 - the points of a cluster go to GEOS as one LineString (one coordinate sequence)
   instead of a MultiPoint of point geometries: the convex hull of the same
   coordinates without a geometry object per point (GEOS's convex hull then costs
   ~0.1 us a point; creating the point objects cost ~1 us a point). A pre-filter
   of the points inside the octagon of extreme points (Akl-Toussaint) was measured
   slower than GEOS's own;
-- KMeans distances as ``dx*dx + dy*dy`` without an (N, k, 2) temporary.
+- KMeans distances as ``dx*dx + dy*dy`` without an (N, k, 2) temporary;
+- the convex hull of a scan is that of its cluster hulls' vertices and of its
+  points in no cluster hull (outliers): ~20 points a cluster instead of every point
+  through GEOS a second time (a vertex of the scan's hull is a vertex of its
+  cluster's hull, and GEOS gives the same ring for any point set with the same
+  hull: its vertices without collinear points, from the lowest point);
+- scikit-learn is imported before limiting its OpenMP/BLAS threads to one
+  (threadpoolctl limits only loaded libraries: imported later, KMeans ran two
+  OpenMP threads whose spinning cost +30 % CPU, several times more on a busy
+  machine), and its per-call input and parameter validation is switched off
+  (``sklearn.config_context``): the inputs are checked here. The same KMeans, the
+  same labels.
 
 :func:`scan_hulls` runs the stage scan by scan over any iterable of scans (e.g.
 :func:`floorscan.io.iter_scans` streaming ``registered.parquet``), so memory follows
@@ -51,6 +62,8 @@ the largest scan, not the recording.
 
 from __future__ import annotations
 
+import contextlib
+import numbers
 from dataclasses import asdict, dataclass, fields
 from typing import Iterable, Iterator, Mapping, Sequence
 
@@ -115,6 +128,11 @@ class HullParams:
     seed: int = 0
 
     def __post_init__(self) -> None:
+        # scikit-learn's parameter validation is off in the loop (_kmeans_config)
+        for name in ("k_clusters", "sample_size", "n_init", "max_iter", "seed"):
+            value = getattr(self, name)
+            if not isinstance(value, numbers.Integral) or isinstance(value, bool):
+                raise ValueError(f"hulls.{name} must be an integer, got {value!r}")
         if self.k_clusters < 1:
             raise ValueError(f"hulls.k_clusters must be >= 1, got {self.k_clusters}")
         if self.sample_size < 1:
@@ -148,9 +166,13 @@ def _n_distinct(xy: np.ndarray) -> int:
     """Number of distinct rows of an (N, 2) array (``len(np.unique(xy, axis=0))``)."""
     if len(xy) < 2:
         return len(xy)
-    o = np.lexsort((xy[:, 1], xy[:, 0]))
-    s = xy[o]
-    return 1 + int(np.count_nonzero((s[1:, 0] != s[:-1, 0]) | (s[1:, 1] != s[:-1, 1])))
+    # as complex numbers (exact copies of x, y; -0.0 == 0.0 as floats), one sort
+    # orders the rows as lexsort does, 4x faster
+    c = np.empty(len(xy), dtype=np.complex128)
+    c.real = xy[:, 0]
+    c.imag = xy[:, 1]
+    c.sort()
+    return 1 + int(np.count_nonzero(c[1:] != c[:-1]))
 
 
 def cluster_labels(points_xy: np.ndarray, params: HullParams = HullParams(), scan_id: int = 0) -> np.ndarray:
@@ -238,55 +260,117 @@ def _nearest_centre(xy: np.ndarray, centres: np.ndarray) -> tuple[np.ndarray, np
 class _HullBuilder:
     """Collects the points of groups (scan clusters) and makes their convex
     hulls with GEOS in batches: one LineString per group (the group's points as one
-    coordinate sequence; its convex hull is that of the points)."""
+    coordinate sequence; its convex hull is that of the points).
 
-    def __init__(self, batch_points: int = 1 << 20):
+    With ``convex=True`` it also makes the convex hull of every scan added, from the
+    vertices of the scan's group hulls and the points in no group hull (outliers,
+    groups of one point): a vertex of the scan's hull is a vertex of the hull of the
+    group holding it, so these few points have the same hull as the whole scan
+    (GEOS keeps the hull's vertices, without collinear points, and starts the ring
+    at the lowest point: the same polygon bit for bit).
+    """
+
+    def __init__(self, batch_points: int = 1 << 20, convex: bool = False):
         self.batch_points = batch_points
+        self.convex = convex
         self._xy: list[np.ndarray] = []
         self._n: list[np.ndarray] = []
+        self._out: list[np.ndarray] = []
         self._pending = 0
         self.geoms: list[np.ndarray] = []
+        self.convex_geoms: list[np.ndarray] = []
 
     def add(self, xy: np.ndarray, labels: np.ndarray, k: int) -> None:
         """Add the ``k`` groups of one scan: points ``xy`` with ``labels`` in 0..k-1,
-        or -1 (ignored)."""
+        or -1 (ignored, but inside the scan's convex hull)."""
         ok = labels >= 0
-        lab = labels[ok]
+        if ok.all():
+            keep = None
+            lab = labels
+        else:
+            keep = np.flatnonzero(ok)
+            lab = labels[keep]
         # stable sort of small ints: radix sort for int16 (timsort for int64)
         order = np.argsort(lab.astype(np.int16) if k < 2**15 else lab, kind="stable")
-        pts = xy[np.flatnonzero(ok)[order]]
+        pts = xy[order if keep is None else keep[order]]
         counts = np.bincount(lab, minlength=k)
         self._xy.append(pts)
         self._n.append(counts)
+        if self.convex:
+            self._out.append(np.zeros((0, 2)) if keep is None else xy[~ok, :2])
         self._pending += len(pts)
         if self._pending >= self.batch_points:
             self._flush()
+
+    @staticmethod
+    def _hulls(xy: np.ndarray, counts: np.ndarray) -> np.ndarray:
+        """Convex hull of each run of ``counts`` rows of ``xy`` (GEOS geometry: Polygon,
+        or LineString/Point when degenerate); an empty Polygon for a run of < 2 rows."""
+        geoms = np.full(len(counts), shapely.Polygon(), dtype=object)
+        line = counts >= 2  # fewer than 2 points: no LineString, and no area anyway
+        n_line = int(line.sum())
+        if n_line == len(counts):
+            geoms[:] = shapely.convex_hull(shapely.linestrings(xy, indices=np.repeat(np.arange(n_line), counts)))
+        elif n_line:
+            # points of the groups with a line, and the line's number among them
+            sel = np.repeat(line, counts)
+            idx = np.repeat(np.arange(n_line), counts[line])
+            geoms[line] = shapely.convex_hull(shapely.linestrings(xy[sel], indices=idx))
+        return geoms
 
     def _flush(self) -> None:
         if not self._n:
             return
         counts = np.concatenate(self._n)
-        geoms = np.full(len(counts), shapely.Polygon(), dtype=object)
-        line = counts >= 2  # fewer than 2 points: no LineString, and no area anyway
-        if line.any():
-            xy = np.concatenate(self._xy)
-            # points of the groups with a line, and the line's number among them
-            sel = np.repeat(line, counts)
-            idx = np.repeat(np.arange(int(line.sum())), counts[line])
-            geoms[line] = shapely.convex_hull(shapely.linestrings(xy[sel], indices=idx))
+        xy = np.concatenate(self._xy) if len(self._xy) > 1 else self._xy[0]
+        geoms = self._hulls(xy, counts)
         self.geoms.append(geoms)
-        self._xy, self._n, self._pending = [], [], 0
+        if self.convex:
+            k = np.array([len(n) for n in self._n])
+            scan = np.repeat(np.arange(len(k)), k)  # the scan (in this batch) of each group
+            line = counts >= 2
+            hull_xy, hull_i = shapely.get_coordinates(geoms[line], return_index=True)
+            single = counts == 1
+            n_out = np.array([len(o) for o in self._out])
+            pts = np.concatenate([hull_xy, xy[np.repeat(single, counts)], *self._out])
+            sid = np.concatenate([scan[line][hull_i], scan[single], np.repeat(np.arange(len(k)), n_out)])
+            order = np.argsort(sid, kind="stable")
+            self.convex_geoms.append(self._hulls(pts[order], np.bincount(sid, minlength=len(k))))
+        self._xy, self._n, self._out, self._pending = [], [], [], 0
+
+    @staticmethod
+    def _polygons(parts: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        geoms = np.concatenate(parts) if parts else np.zeros(0, dtype=object)
+        areas = shapely.area(geoms) if len(geoms) else np.zeros(0)
+        poly = (shapely.get_type_id(geoms) == 3) & (areas > 0) if len(geoms) else np.zeros(0, bool)
+        geoms = np.where(poly, geoms, shapely.Polygon())
+        return geoms, np.where(poly, areas, 0.0).astype(np.float64)
 
     def finish(self) -> tuple[np.ndarray, np.ndarray]:
         """(geometries, areas) of every group added, in order; a hull without area
         (fewer than 3 points, collinear) is an empty Polygon with area 0."""
         self._flush()
-        geoms = np.concatenate(self.geoms) if self.geoms else np.zeros(0, dtype=object)
+        out = self._polygons(self.geoms)
         self.geoms = []
-        areas = shapely.area(geoms) if len(geoms) else np.zeros(0)
-        poly = (shapely.get_type_id(geoms) == 3) & (areas > 0) if len(geoms) else np.zeros(0, bool)
-        geoms = np.where(poly, geoms, shapely.Polygon())
-        return geoms, np.where(poly, areas, 0.0).astype(np.float64)
+        return out
+
+    def finish_convex(self) -> tuple[np.ndarray, np.ndarray]:
+        """As :meth:`finish`, for the convex hull of every scan added (``convex=True``)."""
+        self._flush()
+        out = self._polygons(self.convex_geoms)
+        self.convex_geoms = []
+        return out
+
+
+def _kmeans_config(clustering: bool):
+    """scikit-learn's configuration for many small KMeans fits: no input finiteness
+    check (:func:`cluster_labels` checks the scan) and no parameter validation
+    (:class:`HullParams` checks them), which are per-call overhead, not results."""
+    if not clustering:
+        return contextlib.nullcontext()
+    import sklearn
+
+    return sklearn.config_context(assume_finite=True, skip_parameter_validation=True)
 
 
 def _frame(scan_rows: list, cluster_rows: list, geoms: np.ndarray, areas: np.ndarray) -> pd.DataFrame:
@@ -343,17 +427,24 @@ def scan_hulls(
     """
     params = list(params)
     wanted = None if scan_ids is None else set(int(s) for s in np.asarray(list(scan_ids), dtype=np.int64))
-    builders = [_HullBuilder(batch_points) for _ in params]
+    # the convex hulls come from the first cluster hulls' vertices (see _HullBuilder)
+    builders = [_HullBuilder(batch_points, convex=convex and i == 0) for i in range(len(params))]
     rows = [([], []) for _ in params]
-    cbuilder = _HullBuilder(batch_points)
+    cbuilder = _HullBuilder(batch_points) if convex and not params else None
     crows: tuple[list, list] = ([], [])
     seen: set[int] = set()
     n_points = n_ignored = 0
     # one KMeans per scan on <= sample_size points: threads only add overhead and
-    # oversubscribe a shared machine, so run BLAS/OpenMP single-threaded
+    # oversubscribe a shared machine, so run BLAS/OpenMP single-threaded.
+    # threadpoolctl limits only the libraries already loaded: load scikit-learn's
+    # OpenMP and BLAS first (imported at the first scan instead, KMeans ran on every
+    # core, its idle threads spinning: +30 % CPU, and up to 5x on a busy machine)
     from threadpoolctl import threadpool_limits
 
-    with threadpool_limits(limits=1):
+    if params:
+        from sklearn.cluster import KMeans  # noqa: F401
+
+    with threadpool_limits(limits=1), _kmeans_config(bool(params)):
         for sid, pts in scans:
             sid = int(sid)
             if sid in seen:
@@ -374,19 +465,22 @@ def scan_hulls(
                 rs.append(np.full(k, sid))
                 rc.append(np.arange(k))
             if convex:
-                cbuilder.add(xy, np.zeros(len(xy), dtype=np.int64), 1)
+                if cbuilder is not None:
+                    cbuilder.add(xy, np.zeros(len(xy), dtype=np.int64), 1)
                 crows[0].append(np.array([sid]))
                 crows[1].append(np.array([CONVEX_CLUSTER]))
     missing = sorted(wanted - seen) if wanted is not None else []
 
-    def table(builder, rs, rc, cluster_id):  # a scan without points gets one empty hull
-        geoms, areas = builder.finish()
+    def table(finish, rs, rc, cluster_id):  # a scan without points gets one empty hull
+        geoms, areas = finish()
         return _frame(rs + [np.array([s]) for s in missing], rc + [np.array([cluster_id]) for _ in missing],
                       np.r_[geoms, np.full(len(missing), shapely.Polygon(), dtype=object)],
                       np.r_[areas, np.zeros(len(missing))])
 
-    out = [table(b, rs, rc, 0) for b, (rs, rc) in zip(builders, rows)]
-    conv = table(cbuilder, crows[0], crows[1], CONVEX_CLUSTER) if convex else None
+    out = [table(b.finish, rs, rc, 0) for b, (rs, rc) in zip(builders, rows)]
+    conv = None
+    if convex:
+        conv = table(builders[0].finish_convex if params else cbuilder.finish, crows[0], crows[1], CONVEX_CLUSTER)
     counts = {"n_scans": len(seen) if wanted is None else len(wanted), "n_points": int(n_points), "n_points_ignored": int(n_ignored),
               "n_no_points": int(len(missing))}
     return out, conv, counts

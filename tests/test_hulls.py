@@ -268,3 +268,67 @@ def test_nearest_centre_is_argmin_of_the_squared_distances_ties_to_the_first():
     np.testing.assert_array_equal(labels, d2.argmin(axis=1))
     np.testing.assert_array_equal(best, d2.min(axis=1))
     assert (labels[:10] == 3).all() and best[0] == 4.0
+
+
+def test_convex_hull_from_cluster_hull_vertices_equals_the_direct_hull():
+    """The convex hull of a scan is made from its cluster hulls' vertices, outliers
+    and one-point clusters: the same WKB as the hull of every point, also with
+    collinear points on the hull's edges, duplicates, and scans cut across batches."""
+    rng = np.random.default_rng(4)
+    g = np.arange(0, 2.0001, 0.25)
+    grid = np.array([[x, y] for x in g for y in g])  # collinear points on every edge
+    pts = {
+        0: l_shape(0.1),
+        1: np.vstack([grid, grid, [[9.0, 1.0]]]),  # duplicates and one far outlier
+        2: np.vstack([rng.uniform(0, 1, (300, 2)), [[5.0, 5.0], [5.0, 5.0]]]),  # a 2-point cluster
+        3: np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [1.0, 1.0]]),  # bottom edge: 3 collinear
+        4: np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]),  # collinear: a LineString hull, no area
+        5: np.array([[3.0, 3.0]]),
+        6: _scans_3d(1, seed=9)[0],
+    }
+    reg = frame(pts)
+    direct = fh.convex_hulls(reg)  # no clustering: the hull of every point
+    for k, factor, batch in ((10, 1.0, 1 << 20), (4, 0.3, 500), (3, 1e-6, 50)):  # 1e-6: all points outliers
+        p = fh.HullParams(k_clusters=k, radius_factor=factor, seed=1)
+        scans = [(s, reg.loc[reg["scan_id"] == s, ["x", "y"]].to_numpy(np.float64)) for s in pts]
+        (cl,), conv, _ = fh.scan_hulls(scans, [p], batch_points=batch)
+        assert fh.to_table(conv).equals(fh.to_table(direct)), (k, factor, batch)
+        if factor == 1e-6:
+            assert (cl["area_m2"] == 0).all()
+    areas = direct["area_m2"].to_numpy()
+    assert areas[1] == pytest.approx(4.0 + 0.5 * 2.0 * 7.0)  # the square and a triangle to (9, 1)
+    assert 4.5 < areas[2] < 5.0  # the unit square and two triangles of 2 m^2 to (5, 5)
+    assert areas[3:6].tolist() == [1.0, 0.0, 0.0]
+    wkb = shapely.to_wkb(direct["geometry"].iloc[3])
+    assert shapely.from_wkb(wkb).exterior.coords[:] == [(0.0, 0.0), (1.0, 1.0), (2.0, 0.0), (0.0, 0.0)]
+
+
+def test_scan_hulls_runs_kmeans_single_threaded_in_a_fresh_interpreter():
+    """threadpoolctl limits only loaded libraries: scikit-learn (its OpenMP) must be
+    loaded before the limit, also when nothing imported it yet."""
+    import subprocess
+    import sys
+
+    code = (
+        "import numpy as np, threadpoolctl\n"
+        "from floorscan import hulls as fh\n"
+        "seen = []\n"
+        "def scans():\n"
+        "    rng = np.random.default_rng(0)\n"
+        "    for s in range(2):\n"
+        "        yield s, rng.uniform(0, 5, (400, 2))\n"
+        "        seen.extend((i['user_api'], i['num_threads']) for i in threadpoolctl.threadpool_info())\n"
+        "fh.scan_hulls(scans(), [fh.HullParams(k_clusters=3)])\n"
+        "print(sorted(set(seen)))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, check=True)
+    seen = eval(out.stdout.strip())
+    assert ("openmp", 1) in seen and all(n == 1 for _, n in seen), seen
+
+
+def test_hull_params_must_be_integers():
+    with pytest.raises(ValueError, match="hulls.k_clusters must be an integer"):
+        fh.HullParams(k_clusters=2.5)
+    with pytest.raises(ValueError, match="hulls.n_init must be an integer"):
+        fh.HullParams(n_init=True)
+    assert fh.HullParams(k_clusters=np.int64(4)).k_clusters == 4
