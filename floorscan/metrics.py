@@ -190,8 +190,9 @@ def grid_for(segments, cell_m: float = 0.05, margin_m: float = 1.0) -> Grid:
     return Grid(float(x0), float(y0), float(cell_m), nx, ny)
 
 
-def _split_long(seg: np.ndarray, max_len: float) -> np.ndarray:
-    """Cut segments into collinear pieces no longer than ``max_len`` (same union)."""
+def _split_long(seg: np.ndarray, max_len: float, return_owner: bool = False):
+    """Cut segments into collinear pieces no longer than ``max_len`` (same union); with
+    ``return_owner``, also the row of ``seg`` each piece comes from."""
     lengths = segment_lengths(seg)
     n = np.maximum(1, np.ceil(lengths / max_len).astype(np.int64))
     idx = np.repeat(np.arange(len(seg)), n)
@@ -200,7 +201,8 @@ def _split_long(seg: np.ndarray, max_len: float) -> np.ndarray:
     t1 = (start + 1) / n[idx]
     p = seg[idx, :2]
     d = seg[idx, 2:] - seg[idx, :2]
-    return np.column_stack([p + t0[:, None] * d, p + t1[:, None] * d])
+    pieces = np.column_stack([p + t0[:, None] * d, p + t1[:, None] * d])
+    return (pieces, idx) if return_owner else pieces
 
 
 def rasterize_segments(segments, grid: Grid, width_m: float = 0.10) -> np.ndarray:
@@ -231,10 +233,18 @@ def rasterize_segments(segments, grid: Grid, width_m: float = 0.10) -> np.ndarra
         raise ValueError(f"width_m must be > 0; got {width_m}")
     out = np.zeros(grid.shape, dtype=bool)
     seg = as_segments(segments)
-    if len(seg) == 0:
-        return out
+    if len(seg):
+        out.reshape(-1)[_raster_cells(seg, grid, width_m)[1]] = True
+    return out
+
+
+def _raster_cells(seg: np.ndarray, grid: Grid, width_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """The wall cells of :func:`rasterize_segments` per segment: ``(owner, flat)``, the
+    row of the finite ``(M, 4)`` ``seg`` and the flat index (``iy * nx + ix``) of each
+    hit, grouped by piece (a cell may repeat). Whether a cell is a segment's depends on
+    that segment only, so the cells of a union of segment sets are the union of theirs."""
     half = width_m / 2.0
-    seg = _split_long(seg, 0.5)
+    seg, owner = _split_long(seg, 0.5, return_owner=True)
     c = grid.cell_m
     # Cell index ranges of each piece's buffered bounds (cells whose centre may be in).
     lo_x = np.floor((np.minimum(seg[:, 0], seg[:, 2]) - half - grid.x0) / c - 0.5)
@@ -253,7 +263,7 @@ def rasterize_segments(segments, grid: Grid, width_m: float = 0.10) -> np.ndarra
     chunk = RASTER_CHUNK
     starts = np.r_[0, np.cumsum(counts)]
     i = 0
-    flat = out.reshape(-1)
+    owners, flats = [], []
     while i < len(seg):
         j = int(np.searchsorted(starts, starts[i] + chunk, side="right")) - 1
         j = max(j, i + 1)
@@ -267,9 +277,12 @@ def rasterize_segments(segments, grid: Grid, width_m: float = 0.10) -> np.ndarra
         cy = grid.y0 + (iy + 0.5) * c
         d2 = point_segment_dist2(cx, cy, seg[rep])
         hit = d2 <= half * half * (1 + 1e-12)
-        flat[iy[hit] * grid.nx + ix[hit]] = True
+        owners.append(owner[rep[hit]])
+        flats.append(iy[hit] * grid.nx + ix[hit])
         i = j
-    return out
+    if not owners:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return np.concatenate(owners), np.concatenate(flats)
 
 
 def error_map(inferred: np.ndarray, ground_truth: np.ndarray) -> np.ndarray:
@@ -517,28 +530,76 @@ def _densify(seg: np.ndarray, step: float) -> np.ndarray:
     return seg[idx, :2] + t[:, None] * (seg[idx, 2:] - seg[idx, :2])
 
 
+#: Longest piece (metres) of the segments in the STRtrees of :class:`_SegmentIndex`:
+#: short pieces have tight bounding boxes (a long, slightly tilted wall's box is wide).
+TREE_PIECE_M = 0.25
+#: Reaches (metres) of the STRtrees of :class:`_SegmentIndex` over the pieces' boxes
+#: grown by the reach: a point whose search radius is at most a reach finds its
+#: candidates by a point query (no box to make per point). Wider radii use the
+#: segments' own boxes and a box per point.
+REACHES_M = (0.02, 0.1)
+
+
+def _box_diagonals(xmin, ymin, xmax, ymax) -> np.ndarray:
+    """Linestrings from ``(xmin, ymin)`` to ``(xmax, ymax)``: their envelopes are the
+    boxes, all an STRtree query without predicate looks at (cheaper to make than
+    ``shapely.box`` polygons)."""
+    return shapely.linestrings(np.stack([xmin, ymin, xmax, ymax], axis=-1).reshape(-1, 2, 2))
+
+
+#: Largest bound (metres) up to which :func:`_nearest_below` measures a point against
+#: the segments within its bound directly, without the KD-tree's upper bound.
+DIRECT_M = 1.0
+
+
 class _SegmentIndex:
-    """Search structures over a fixed set of ``(M, 4)`` segments: a KD-tree (scipy
-    ``cKDTree``) over points at most :data:`BOUND_STEP_M` apart along them, both ends
-    included, and a Shapely STRtree of the segments (built when first needed).
+    """Search structures over a fixed set of ``(M, 4)`` segments, each built when first
+    needed: a KD-tree (scipy ``cKDTree``) over points at most :data:`BOUND_STEP_M`
+    apart along them, both ends included; Shapely STRtrees over the boxes of their
+    pieces no longer than :data:`TREE_PIECE_M` grown by each of :data:`REACHES_M`;
+    and an STRtree of the segments.
 
     For a query point at distance ``d`` from the nearest segment, the distance ``u``
-    to the nearest tree point bounds it: ``u - BOUND_STEP_M / 2 <= d <= u`` (every
+    to the nearest KD-tree point bounds it: ``u - BOUND_STEP_M / 2 <= d <= u`` (every
     point of a segment is within half a step of a tree point).
     """
 
     def __init__(self, seg: np.ndarray):
-        from scipy.spatial import cKDTree
-
         self.seg = seg
-        self.kd = cKDTree(_densify(seg, BOUND_STEP_M)) if len(seg) else None
+        self._kd = None
         self._tree = None
+        self._pieces = None
+        self._reach_trees: dict[float, object] = {}
+
+    @property
+    def kd(self):
+        if self._kd is None and len(self.seg):
+            from scipy.spatial import cKDTree
+
+            self._kd = cKDTree(_densify(self.seg, BOUND_STEP_M))
+        return self._kd
 
     @property
     def tree(self):
+        """STRtree of the segments (queried with boxes, without predicate)."""
         if self._tree is None:
             self._tree = shapely.STRtree(shapely.linestrings(self.seg.reshape(-1, 2, 2)))
         return self._tree
+
+    def reach_tree(self, reach: float):
+        """STRtree of the pieces' boxes grown by ``reach`` (and a relative 1e-6): a
+        point within ``reach`` of a segment lies in the grown box of one of its pieces.
+        ``self._owner``: the segment of each piece."""
+        if reach not in self._reach_trees:
+            if self._pieces is None:
+                self._pieces, self._owner = _split_long(self.seg, TREE_PIECE_M, return_owner=True)
+            pc = self._pieces
+            g = reach * (1 + 1e-6) + 1e-9
+            self._reach_trees[reach] = shapely.STRtree(_box_diagonals(
+                np.minimum(pc[:, 0], pc[:, 2]) - g, np.minimum(pc[:, 1], pc[:, 3]) - g,
+                np.maximum(pc[:, 0], pc[:, 2]) + g, np.maximum(pc[:, 1], pc[:, 3]) + g,
+            ))  # fmt: skip
+        return self._reach_trees[reach]
 
     def upper(self, pts: np.ndarray, limit: float = np.inf) -> np.ndarray:
         """The upper bound ``u`` of each point's distance, metres; ``inf`` without
@@ -549,44 +610,85 @@ class _SegmentIndex:
 
     def exact(self, pts, ids, radius, geoms=None):
         """Exact distance (numpy) from ``pts[ids]`` to the nearest segment within
-        ``radius`` (per point), ``inf`` where none is; in chunks of
-        :data:`NEAREST_CHUNK` points (``geoms``: ``shapely.points(pts)``, if made)."""
+        ``radius`` (per point, with a relative margin of 1e-9 and 1e-9 m), ``inf``
+        where none is; in chunks of :data:`NEAREST_CHUNK` points (``geoms``:
+        ``shapely.points(pts)``, if made).
+
+        The candidates are found by STRtree queries without predicate (boxes only): a
+        point whose radius is at most a reach of :data:`REACHES_M` in the grown boxes
+        of the pieces (:meth:`reach_tree`), the others by their square of half-side
+        the radius in the segments' boxes. The candidates' distances are measured in
+        numpy (:func:`floorscan.floorplan.point_segment_dist2`, to the whole segment)
+        and those beyond the radius dropped: the same minimum as measuring every
+        segment within the radius.
+        """
+        radius = np.asarray(radius, dtype=np.float64)
         out = np.full(len(ids), np.inf)
-        for start in range(0, len(ids), NEAREST_CHUNK):
-            sl = slice(start, start + NEAREST_CHUNK)
-            cid = ids[sl]
-            g = shapely.points(pts[cid]) if geoms is None else geoms[cid]
-            r = np.asarray(radius[sl], dtype=np.float64)
-            pi, si = self.tree.query(g, predicate="dwithin", distance=r * (1 + 1e-9) + 1e-9)
-            if len(pi) == 0:
-                continue
-            order = np.argsort(pi, kind="stable")
-            pi, si = pi[order], si[order]
-            d = np.sqrt(point_segment_dist2(pts[cid[pi], 0], pts[cid[pi], 1], self.seg[si]))
-            first = np.flatnonzero(np.r_[True, pi[1:] != pi[:-1]])
-            out[start + pi[first]] = np.minimum.reduceat(d, first)
+        if len(ids) == 0 or len(self.seg) == 0:
+            return out
+        group = np.searchsorted(np.asarray(REACHES_M), radius, side="left")
+        for level in range(len(REACHES_M) + 1):
+            sel = np.flatnonzero(group == level)
+            for start in range(0, len(sel), NEAREST_CHUNK):
+                at = sel[start:start + NEAREST_CHUNK]
+                p = pts[ids[at]]
+                r = radius[at] * (1 + 1e-9) + 1e-9
+                if level < len(REACHES_M):
+                    g = shapely.points(p) if geoms is None else geoms[ids[at]]
+                    pi, qi = self.reach_tree(REACHES_M[level]).query(g)
+                else:
+                    pi, qi = self.tree.query(_box_diagonals(p[:, 0] - r, p[:, 1] - r, p[:, 0] + r, p[:, 1] + r))
+                if len(pi) == 0:
+                    continue
+                order = np.argsort(pi, kind="stable")
+                pi, si = pi[order], qi[order]
+                if level < len(REACHES_M):
+                    si = self._owner[si]
+                d = np.sqrt(point_segment_dist2(p[pi, 0], p[pi, 1], self.seg[si]))
+                d[d > r[pi]] = np.inf
+                first = np.flatnonzero(np.r_[True, pi[1:] != pi[:-1]])
+                out[at[pi[first]]] = np.minimum.reduceat(d, first)
         return out
 
 
 def _nearest_below(pts, index: _SegmentIndex, bound: np.ndarray, geoms=None) -> np.ndarray:
     """``min(bound, exact distance from each point to the nearest segment of index)``.
 
-    Points whose lower bound ``u - BOUND_STEP_M / 2`` exceeds ``bound`` keep
-    ``bound``; the others are measured against the segments within ``min(u, bound)``
-    only (the nearest wall's stack of duplicates, not every segment nearby).
+    Points farther than ``bound`` from the segments' bounding box keep ``bound``.
+    Points with ``bound`` at most :data:`DIRECT_M` are measured against the segments
+    within ``bound``. For the others (measured with the KD-tree), points whose lower bound
+    ``u - BOUND_STEP_M / 2`` exceeds ``bound`` keep ``bound``; the rest are measured
+    against the segments within ``min(u, bound)`` only (the nearest wall's stack of
+    duplicates, not every segment nearby). ``geoms``: ``shapely.points(pts)``, if made.
     """
     out = np.array(bound, dtype=np.float64, copy=True)
     if len(pts) == 0 or len(index.seg) == 0:
         return out
+    # The distance to the segments' bounding box is a lower bound: points farther from
+    # it than their bound keep it.
+    seg = index.seg
+    gx = np.maximum(np.maximum(np.minimum(seg[:, 0], seg[:, 2]).min() - pts[:, 0], 0.0),
+                    pts[:, 0] - np.maximum(seg[:, 0], seg[:, 2]).max())
+    gy = np.maximum(np.maximum(np.minimum(seg[:, 1], seg[:, 3]).min() - pts[:, 1], 0.0),
+                    pts[:, 1] - np.maximum(seg[:, 1], seg[:, 3]).max())
+    open_ = np.hypot(gx, gy) <= out * (1 + 1e-9) + 1e-9
+    close = open_ & (out <= DIRECT_M)
+    ids = np.flatnonzero(close)
+    if len(ids):
+        out[ids] = np.minimum(out[ids], index.exact(pts, ids, out[ids], geoms))
+    rest = np.flatnonzero(open_ & ~close)
+    if len(rest) == 0:
+        return out
     # Most points are near a wall: a short-range query first, the rest in full.
     near = NEAR_QUERY_M + 0.5 * BOUND_STEP_M
-    u = index.upper(pts, near)
-    far = np.flatnonzero(np.isinf(u) & (out > near - 0.5 * BOUND_STEP_M))
+    u = index.upper(pts[rest], near)
+    far = np.flatnonzero(np.isinf(u) & (out[rest] > near - 0.5 * BOUND_STEP_M))
     if len(far):
-        u[far] = index.upper(pts[far])
-    todo = np.flatnonzero(u - 0.5 * BOUND_STEP_M <= out * (1 + 1e-9) + 1e-9)
+        u[far] = index.upper(pts[rest[far]])
+    keep = u - 0.5 * BOUND_STEP_M <= out[rest] * (1 + 1e-9) + 1e-9
+    todo, u = rest[keep], u[keep]
     if len(todo):
-        d = index.exact(pts, todo, np.minimum(u[todo], out[todo]), geoms)
+        d = index.exact(pts, todo, np.minimum(u, out[todo]), geoms)
         out[todo] = np.minimum(out[todo], d)
     return out
 
@@ -595,20 +697,18 @@ def _within(pts, index: _SegmentIndex, taus, hit: np.ndarray, geoms=None) -> np.
     """Whether each point is within each tau of a segment of ``index``, or already was.
 
     ``hit`` is a ``(T, S)`` bool array (one row per tau), returned updated (a copy):
-    the same as ``hit | (nearest_distances(pts, segments) <= tau)``, but points whose
-    bounds decide it (``u <= tau``, or ``u - BOUND_STEP_M / 2 > tau``) are not
-    measured.
+    the same as ``hit | (nearest_distances(pts, segments) <= tau)``; the points hit
+    at every tau are not measured, the others against the segments within the largest
+    tau only (``geoms``: ``shapely.points(pts)``, if made).
     """
     hit = np.array(hit, dtype=bool, copy=True)
-    if len(pts) == 0 or len(index.seg) == 0:
+    if len(pts) == 0 or len(index.seg) == 0 or len(taus) == 0:
         return hit
-    u = index.upper(pts, max(taus) + BOUND_STEP_M)
-    for t, tau in enumerate(taus):
-        row = hit[t]
-        row |= u <= tau * (1 - 1e-9)
-        maybe = np.flatnonzero(~row & (u - 0.5 * BOUND_STEP_M <= tau * (1 + 1e-9) + 1e-9))
-        if len(maybe):
-            row[maybe] = index.exact(pts, maybe, np.full(len(maybe), float(tau)), geoms) <= tau
+    ids = np.flatnonzero(~hit.all(axis=0))
+    if len(ids):
+        d = index.exact(pts, ids, np.full(len(ids), float(max(taus))), geoms)
+        for t, tau in enumerate(taus):
+            hit[t, ids] |= d <= tau
     return hit
 
 
@@ -616,9 +716,10 @@ def nearest_distances(points: np.ndarray, segments) -> np.ndarray:
     """Exact distance in metres from each ``(S, 2)`` point to the nearest segment.
 
     Each point gets an upper bound ``u`` of its distance from a KD-tree over points
-    along the segments; the segments within ``u`` (a Shapely STRtree ``dwithin``
-    query: the nearest wall's overlapping duplicates, not every segment nearby) are
-    then measured exactly in numpy, in chunks of points (:class:`_SegmentIndex`).
+    along the segments; the segments within ``u`` (candidates from Shapely STRtree
+    box queries, :meth:`_SegmentIndex.exact`: the nearest wall's overlapping
+    duplicates, not every segment nearby) are then measured exactly in numpy, in
+    chunks of points.
     Walls from many scans overlap a hundredfold, and querying a fixed search square
     per point, or ``STRtree.query_nearest``, spends its time on them.
 
@@ -784,6 +885,81 @@ def _row_keys(seg: np.ndarray) -> list[bytes]:
     return np.ascontiguousarray(seg, dtype=np.float64).view(np.dtype((np.void, 32))).ravel().tolist()
 
 
+#: Reach (metres) of the wall-to-sample pairs that give the samples' nearest distances
+#: (:class:`_SamplePairs`); samples farther from every wall are measured by
+#: :func:`_nearest_below`.
+PAIR_REACH_M = 0.1
+#: Longest piece (metres) of the walls whose grown boxes find their samples in
+#: :class:`_SamplePairs`.
+PAIR_PIECE_M = 0.5
+
+
+class _SamplePairs:
+    """The ground-truth samples within ``reach`` of each wall, for walls met again and
+    again: the runs of every ordering of one extractor are subsets of the same walls.
+
+    A fixed ``(S, 2)`` sample set, an STRtree of its points and a cache ``{row key of
+    a wall: (sample indices, distances)}``: every sample whose exact distance
+    (numpy, :func:`floorscan.floorplan.point_segment_dist2`) to the wall is at most
+    ``reach``. Candidates are the samples in the boxes of the wall's pieces (no longer
+    than :data:`PAIR_PIECE_M`) grown by ``reach``; a sample within ``reach`` of a wall
+    is within ``reach`` of one of its pieces, hence in that piece's grown box.
+    """
+
+    def __init__(self, samples: np.ndarray, reach: float):
+        self.samples = samples
+        self.reach = float(reach)
+        self.geoms = shapely.points(samples)
+        self._tree = None
+        self.cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+
+    def of(self, walls: np.ndarray, keys: list[bytes]) -> tuple[np.ndarray, np.ndarray]:
+        """``(sample indices, distances)`` of the pairs of the finite ``(M, 4)``
+        ``walls`` (row keys ``keys``), concatenated; a sample may repeat."""
+        cache = self.cache
+        todo = [i for i, k in enumerate(keys) if k not in cache]
+        if todo:
+            self._measure(walls[todo], [keys[i] for i in todo])
+        if not keys:
+            return np.zeros(0, np.int64), np.zeros(0)
+        parts = [cache[k] for k in keys]
+        return np.concatenate([q[0] for q in parts]), np.concatenate([q[1] for q in parts])
+
+    def _measure(self, seg: np.ndarray, keys: list[bytes]) -> None:
+        if self._tree is None:
+            self._tree = shapely.STRtree(self.geoms)
+        pc, owner = _split_long(seg, PAIR_PIECE_M, return_owner=True)
+        g = self.reach * (1 + 1e-6) + 1e-9
+        boxes = _box_diagonals(
+            np.minimum(pc[:, 0], pc[:, 2]) - g, np.minimum(pc[:, 1], pc[:, 3]) - g,
+            np.maximum(pc[:, 0], pc[:, 2]) + g, np.maximum(pc[:, 1], pc[:, 3]) + g,
+        )  # fmt: skip
+        qi, si = self._tree.query(boxes)
+        if len(qi) > 1 and not (qi[1:] >= qi[:-1]).all():
+            order = np.argsort(qi, kind="stable")
+            qi, si = qi[order], si[order]
+        # One pair per (wall, sample): the piece holding the sample's closest point of
+        # the wall (the sample is in that piece's box when within reach of the wall).
+        n = np.bincount(owner, minlength=len(seg))
+        first = np.cumsum(n) - n
+        wi = owner[qi]
+        sw, p = seg[wi], self.samples[si]
+        dx, dy = sw[:, 2] - sw[:, 0], sw[:, 3] - sw[:, 1]
+        l2 = dx * dx + dy * dy
+        with np.errstate(invalid="ignore", divide="ignore"):
+            t = ((p[:, 0] - sw[:, 0]) * dx + (p[:, 1] - sw[:, 1]) * dy) / l2
+        t = np.where(l2 > 0, np.clip(t, 0.0, 1.0), 0.0)
+        piece = np.minimum(np.floor(t * n[wi]).astype(np.int64), n[wi] - 1)
+        keep = piece == qi - first[wi]
+        wi, si, sw, p = wi[keep], si[keep], sw[keep], p[keep]
+        d = np.sqrt(point_segment_dist2(p[:, 0], p[:, 1], sw))
+        ok = d <= self.reach
+        wi, si, d = wi[ok], si[ok].astype(np.int32), d[ok]
+        bounds = np.searchsorted(wi, np.arange(len(seg) + 1))
+        for j, k in enumerate(keys):
+            self.cache[k] = (si[bounds[j]:bounds[j + 1]], d[bounds[j]:bounds[j + 1]])
+
+
 class _GrowingWalls:
     """Metrics of a growing wall set: the walls of the first k scans of one ordering
     and extractor, for increasing k.
@@ -796,27 +972,57 @@ class _GrowingWalls:
     sums in the same order up to the last bits). A set that is not a superset of the
     previous one is scored from scratch.
 
+    The samples within :data:`PAIR_REACH_M` of a new wall take their distance from
+    the wall's :class:`_SamplePairs` (the nearest wall of a sample within the reach
+    of a wall is within it too); the samples no wall has come within reach of yet
+    are measured by :func:`_nearest_below`. ``recall_all_<tau>`` takes the pairs
+    within the largest tau of ``all_pairs``. The pairs and ``raster_cache``
+    (``{row key: flat wall cells}``, see :func:`_raster_cells`) may be shared by the
+    growing sets of one extractor (same samples, grid and wall width), so that a wall
+    is measured and rasterized once for all orderings.
+
     ``samples`` (recall, distances) and ``all_samples`` (``recall_all_<tau>``, or
-    None) are ground-truth samples (:func:`gt_samples`), ``geoms`` and ``all_geoms``
-    their ``shapely.points``.
+    None) are ground-truth samples (:func:`gt_samples`).
     """
 
-    def __init__(self, gt, gt_bitmap, grid, wall_width_m, taus, samples, geoms,
-                 all_samples=None, all_geoms=None):  # fmt: skip
+    def __init__(self, gt, gt_bitmap, grid, wall_width_m, taus, samples,
+                 all_samples=None, pairs=None, all_pairs=None,
+                 raster_cache=None):  # fmt: skip
         self.gt, self.grid, self.width, self.taus = gt, grid, wall_width_m, list(taus)
         self.gt_bitmap = gt_bitmap
         self.len_g = float(segment_lengths(gt).sum())
-        self.samples, self.geoms = samples, geoms
-        self.all_samples, self.all_geoms = all_samples, all_geoms
+        self.samples = samples
+        self.all_samples = all_samples
+        self.pairs = _SamplePairs(samples, PAIR_REACH_M) if pairs is None else pairs
+        if all_samples is not None and all_pairs is None:
+            all_pairs = _SamplePairs(all_samples, max(self.taus))
+        self.all_pairs = all_pairs
+        self.raster_cache = {} if raster_cache is None else raster_cache
         self.keys: set[bytes] | None = None
         self.covered: dict[float, dict[bytes, float]] = {tau: {} for tau in self.taus}
 
     def _reset(self):
         self.keys = set()
+        self.d_near = np.full(len(self.samples), np.inf)
+        self.d_far = np.full(len(self.samples), np.inf)
         self.d = np.full(len(self.samples), np.inf)
         if self.all_samples is not None:
             self.hit_all = np.zeros((len(self.taus), len(self.all_samples)), dtype=bool)
         self.bitmap = np.zeros(self.grid.shape, dtype=bool)
+
+    def _wall_cells(self, add: np.ndarray, add_keys: list[bytes]) -> np.ndarray:
+        """Flat bitmap cells of the walls ``add`` (rows keyed ``add_keys``), from the
+        raster cache, rasterizing the walls it lacks."""
+        cache = self.raster_cache
+        todo = [i for i, k in enumerate(add_keys) if k not in cache]
+        if todo:
+            owner, flat = _raster_cells(add[todo], self.grid, self.width)
+            order = np.argsort(owner, kind="stable")
+            bounds = np.searchsorted(owner[order], np.arange(len(todo) + 1))
+            flat = flat[order].astype(np.int32 if self.grid.nx * self.grid.ny < 2**31 else np.int64)
+            for j, i in enumerate(todo):
+                cache[add_keys[i]] = flat[bounds[j]:bounds[j + 1]]
+        return np.concatenate([cache[k] for k in add_keys])
 
     def score(self, walls: np.ndarray) -> dict[str, float]:
         """:func:`score_walls` of ``(M, 4)`` finite ``walls`` (and ``recall_all_<tau>``
@@ -828,12 +1034,20 @@ class _GrowingWalls:
         new = np.fromiter((k not in self.keys for k in keys), dtype=bool, count=len(keys))
         add = walls[new]
         if len(add):
-            index = _SegmentIndex(add)
-            self.d = _nearest_below(self.samples, index, self.d, geoms=self.geoms)
-            if self.all_samples is not None:
-                self.hit_all = _within(self.all_samples, index, self.taus, self.hit_all, geoms=self.all_geoms)
-            self.bitmap |= rasterize_segments(add, self.grid, self.width)
             add_keys = [k for k, n in zip(keys, new) if n]
+            si, d = self.pairs.of(add, add_keys)
+            np.minimum.at(self.d_near, si, d)
+            far = np.flatnonzero(np.isinf(self.d_near))
+            if len(far):
+                self.d_far[far] = _nearest_below(
+                    self.samples[far], _SegmentIndex(add), self.d_far[far], self.pairs.geoms[far]
+                )
+            self.d = np.where(np.isinf(self.d_near), self.d_far, self.d_near)
+            if self.all_samples is not None:
+                si, d = self.all_pairs.of(add, add_keys)
+                for t, tau in enumerate(self.taus):
+                    self.hit_all[t, si[d <= tau]] = True
+            self.bitmap.reshape(-1)[self._wall_cells(add, add_keys)] = True
             for tau in self.taus:
                 cache = self.covered[tau]
                 todo = [i for i, k in enumerate(add_keys) if k not in cache]
@@ -859,7 +1073,7 @@ class _GrowingWalls:
         return out
 
 
-def _recall_precision(inferred, gt, taus, samples, geoms) -> dict[str, float]:
+def _recall_precision(inferred, gt, taus, samples, geoms=None, pairs=None) -> dict[str, float]:
     """``precision_<tau>``, ``recall_<tau>`` and ``f1_<tau>`` of :func:`tolerance_metrics`
     (same values), without the distances of the samples that tau does not need."""
     inf = as_segments(inferred)
@@ -868,7 +1082,14 @@ def _recall_precision(inferred, gt, taus, samples, geoms) -> dict[str, float]:
     has_i, has_g = len_i > MIN_SEGMENT_M, len_g > MIN_SEGMENT_M
     hit = np.zeros((len(taus), len(samples)), dtype=bool)
     if has_i:
-        hit = _within(samples, _SegmentIndex(inf), taus, hit, geoms=geoms)
+        if pairs is not None and pairs.samples is samples and max(taus) <= pairs.reach:
+            # The samples near each face (:class:`_SamplePairs`; faces of plans of
+            # several k recur): the same test as _within.
+            si, d = pairs.of(inf, _row_keys(inf))
+            for t, tau in enumerate(taus):
+                hit[t, si[d <= tau]] = True
+        else:
+            hit = _within(samples, _SegmentIndex(inf), taus, hit, geoms)
     out: dict[str, float] = {}
     for t, tau in enumerate(taus):
         covered = float(length_within(inf, gt, tau).sum()) if has_i and has_g else 0.0
@@ -1115,9 +1336,10 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
     ref_bitmaps: dict[str, np.ndarray] = {}
     ref_samples: dict[str, np.ndarray] = {}
     all_samples: dict[str, np.ndarray] = {}
-    ref_geoms: dict[str, np.ndarray] = {}
-    all_geoms: dict[str, np.ndarray] = {}
     growing: dict[tuple[str, str], _GrowingWalls] = {}
+    sample_pairs: dict[str, _SamplePairs] = {}
+    all_pairs: dict[str, _SamplePairs | None] = {}
+    raster_caches: dict[str, dict] = {}
     rows = []
     for run in runs:
         ext = run["extractor"]
@@ -1132,10 +1354,12 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
                 all_samples[ext] if recall_references is None
                 else gt_samples(as_segments(recall_references[ext]), cfg["sample_step_m"])
             )
-            ref_geoms[ext] = shapely.points(ref_samples[ext])
-            all_geoms[ext] = (
-                ref_geoms[ext] if recall_references is None else shapely.points(all_samples[ext])
+            # Shared by the orderings of an extractor: its samples' pairs and wall cells.
+            sample_pairs[ext] = _SamplePairs(ref_samples[ext], PAIR_REACH_M)
+            all_pairs[ext] = (
+                None if recall_references is None else _SamplePairs(all_samples[ext], max(cfg["taus_m"]))
             )
+            raster_caches[ext] = {}
         t0 = time.perf_counter()
         walls = run["walls"]
         if isinstance(walls, (str, os.PathLike)):
@@ -1148,8 +1372,9 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
             # One state per ordering and extractor: its k grow in the order of runs.
             growing[key] = _GrowingWalls(
                 refs[ext], ref_bitmaps[ext], grid, cfg["wall_width_m"], cfg["taus_m"],
-                ref_samples[ext], ref_geoms[ext],
-                *((None, None) if recall_references is None else (all_samples[ext], all_geoms[ext])),
+                ref_samples[ext],
+                None if recall_references is None else all_samples[ext],
+                pairs=sample_pairs[ext], all_pairs=all_pairs[ext], raster_cache=raster_caches[ext],
             )  # fmt: skip
         m = growing[key].score(walls)
         plan_path = run.get("floorplan")
@@ -1158,7 +1383,7 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
         else:
             plan, nfp = run.get("floorplan_faces"), run.get("n_floorplan_walls")
         if plan is not None:
-            pm = _recall_precision(plan, refs[ext], cfg["taus_m"], ref_samples[ext], ref_geoms[ext])
+            pm = _recall_precision(plan, refs[ext], cfg["taus_m"], ref_samples[ext], pairs=sample_pairs[ext])
             for tau in cfg["taus_m"]:
                 for what in ("precision", "recall", "f1"):
                     m[f"plan_{what}_{tau_label(tau)}"] = pm[f"{what}_{tau_label(tau)}"]

@@ -465,3 +465,92 @@ def test_growing_runs_score_as_from_scratch(tmp_path):
         d_all = M.nearest_distances(M.gt_samples(gt), seg[:n])
         assert row["recall_all_5cm"] == pytest.approx(np.mean(d_all <= 0.05), rel=1e-12)
     assert df["recall_5cm"].iloc[-1] > 0.9 and df["precision_5cm"].iloc[-1] < 1.0
+
+
+def _brute_d(pts, seg):
+    """(S, M) exact distances, the way the metrics measure them (numpy)."""
+    return np.sqrt(
+        M.point_segment_dist2(np.repeat(pts[:, 0], len(seg)), np.repeat(pts[:, 1], len(seg)), np.tile(seg, (len(pts), 1)))
+    ).reshape(len(pts), len(seg))
+
+
+def test_sample_pairs_are_every_wall_sample_pair_within_reach():
+    """The pairs a wall set gets from _SamplePairs (measured in batches, cached by row)
+    are exactly the (wall, sample) pairs within the reach, with the same distances."""
+    seg = np.vstack([_stacked_walls(25, seed=7), [[2.0, 2.0, 2.0, 2.0], [5.0, 1.0, 5.3, 1.7]]])
+    samples = M.gt_samples(np.array([[0, 0, 10, 0], [10, 0, 10, 6], [3, 1, 7, 3]], float), 0.02)
+    pairs = M._SamplePairs(samples, 0.1)
+    keys = M._row_keys(seg)
+    pairs.of(seg[5:40], keys[5:40])  # an earlier batch, cached
+    brute = _brute_d(samples, seg)
+    for i in (0, 7, 39, len(seg) - 2, len(seg) - 1):
+        si, d = pairs.of(seg[i:i + 1], keys[i:i + 1])
+        want = np.flatnonzero(brute[:, i] <= 0.1)
+        order = np.argsort(si)
+        assert si[order].tolist() == want.tolist()
+        assert np.array_equal(d[order], brute[want, i])
+    si, d = pairs.of(seg, keys)
+    assert len(si) == int((brute <= 0.1).sum()) > 1000
+
+
+def test_segment_index_exact_and_nearest_below_match_brute_force():
+    """Every radius level of _SegmentIndex.exact (reach trees, segment boxes) and the
+    direct, box-bounded and KD-tree paths of _nearest_below give the brute-force
+    minimum bit for bit."""
+    seg = _stacked_walls(30, seed=11)
+    rng = np.random.default_rng(12)
+    pts = np.vstack([rng.uniform([-3, -3], [13, 9], (400, 2)), rng.uniform([0, -0.05], [10, 0.05], (400, 2))])
+    brute = _brute_d(pts, seg)
+    index = M._SegmentIndex(seg)
+    radius = rng.choice([0.005, 0.02, 0.05, 0.1, 0.4, 3.0], len(pts))
+    ids = np.arange(len(pts))
+    got = index.exact(pts, ids, radius)
+    want = np.where(brute <= radius[:, None] * (1 + 1e-9) + 1e-9, brute, np.inf).min(axis=1)
+    assert np.array_equal(got, want)
+    bound = rng.choice([np.inf, 0.01, 0.08, 0.6, 2.0, 50.0], len(pts))
+    got = M._nearest_below(pts, M._SegmentIndex(seg[:20]), bound)
+    assert np.array_equal(got, np.minimum(bound, brute[:, :20].min(axis=1)))
+
+
+def test_wall_cells_of_batches_union_to_the_bitmap():
+    """Rasterizing walls one by one (the cache shared by the orderings) gives the
+    bitmap of rasterizing them all at once."""
+    seg = _stacked_walls(15, seed=13)
+    grid = M.grid_for([[0, 0, 10, 6]], 0.05, 0.5)
+    whole = M.rasterize_segments(seg, grid, 0.1)
+    parts = np.zeros(grid.shape, bool)
+    for i in range(len(seg)):
+        owner, flat = M._raster_cells(seg[i:i + 1], grid, 0.1)
+        assert (owner == 0).all()
+        parts.reshape(-1)[flat] = True
+    assert np.array_equal(parts, whole) and whole.sum() > 1000
+
+
+def test_orderings_sharing_caches_score_as_from_scratch(tmp_path):
+    """Two orderings of the same walls share the pairs and raster caches of their
+    extractor; every number equals scoring each wall set on its own."""
+    gt = np.array([[0, 0, 10, 0], [10, 0, 10, 6], [10, 6, 0, 6], [0, 6, 0, 0], [4, 0, 4, 6]], dtype=float)
+    seg = _stacked_walls(20, seed=17)
+    cfg = {"cell_m": 0.05, "wall_width_m": 0.1, "margin_m": 1.0, "taus_m": [0.02, 0.05], "sample_step_m": 0.01}
+    rev = seg[::-1].copy()
+    cols = ["x0", "y0", "x1", "y1"]
+    runs = [{"ordering": o, "extractor": "ransac", "k": str(n), "walls": pd.DataFrame(w[:n], columns=cols),
+             "n_kept": 20, "n_floorplan_walls": 2, "floorplan_faces": w[n // 2:n]}
+            for o, w in (("a", seg), ("b", rev)) for n in (4, 15, len(seg))]
+    df = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg, recall_references={"ransac": gt[:4]})
+    grid = M.grid_for(gt, 0.05, 1.0)
+    samples = M.gt_samples(gt[:4])
+    for (_, row), run in zip(df.iterrows(), runs):
+        w = run["walls"].to_numpy()
+        want = M.score_walls(w, gt, grid, 0.1, cfg["taus_m"], 0.01, samples=samples)
+        for key in ("n_both_cells", "n_inferred_cells", "median_distance_m", "mean_distance_m", "recall_2cm",
+                    "recall_5cm"):
+            assert row[key] == want[key], key
+        for key in ("precision_2cm", "f1_5cm"):
+            assert row[key] == pytest.approx(want[key], rel=1e-12), key
+        d_all = M.nearest_distances(M.gt_samples(gt), w)
+        assert row["recall_all_2cm"] == np.mean(d_all <= 0.02)
+        plan = M.tolerance_metrics(run["floorplan_faces"], gt, cfg["taus_m"], samples=samples)
+        assert row["plan_recall_2cm"] == plan["recall_2cm"] and row["plan_recall_5cm"] == plan["recall_5cm"]
+        assert row["plan_f1_5cm"] == pytest.approx(plan["f1_5cm"], rel=1e-12)
+    assert df["recall_5cm"].iloc[-1] > 0.9 and 0 < df["plan_recall_5cm"].iloc[0] < df["plan_recall_5cm"].iloc[-1]
