@@ -240,7 +240,7 @@ rule score_walls_figures:
     benchmark:
         "results/{dataset}/benchmarks/score_walls_figures.tsv"
     script:
-        "../../scripts/walls_figures.py"
+        "../../scripts/score_walls_figures.py"
 
 
 # Last: the time per stage counts every other job's benchmark file, so the other
