@@ -257,3 +257,20 @@ def test_real_recordings(name, tmp_path):
     assert index["n_points"].sum() == len(scans)
     assert scans["scan_id"].nunique() == (index["n_points"] > 0).sum()
     assert np.isfinite(scans[["x", "y", "z"]].to_numpy()).all()
+
+
+def test_filter_points_float32_input_keeps_the_same_points_as_float64():
+    from floorscan.ingest import filter_points
+
+    rng = np.random.default_rng(3)
+    p = rng.uniform(-10, 10, (2000, 3)).astype(np.float32)
+    p[::97, 1] = np.nan
+    p[::89, 2] = np.inf
+    for rmin, rmax in ((None, None), (0.5, 12.0)):
+        a, na = filter_points(p, rmin, rmax)
+        b, nb = filter_points(p.astype(np.float64), rmin, rmax)
+        assert a.dtype == np.float32 and na == nb and na > 0
+        np.testing.assert_array_equal(a, b)
+    clean = p[np.isfinite(p).all(axis=1)]
+    out, n = filter_points(clean)
+    assert n == 0 and out is not clean and np.array_equal(out, clean)

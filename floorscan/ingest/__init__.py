@@ -210,16 +210,22 @@ def filter_points(
     points : (M, 3) float32 ndarray
     n_dropped : int
     """
-    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    p = np.asarray(points)
+    if p.dtype != np.float32:  # float32 input (PointCloud2) is checked as it is: no copy
+        p = p.astype(np.float64)
+    p = p.reshape(-1, 3)
     ok = np.isfinite(p[:, 0]) & np.isfinite(p[:, 1]) & np.isfinite(p[:, 2])  # 10x all(axis=1)
     if range_min is not None or range_max is not None:
+        q = p.astype(np.float64)  # distances in float64, whatever the input
         with np.errstate(invalid="ignore"):
-            d = np.sqrt(p[:, 0] ** 2 + p[:, 1] ** 2 + p[:, 2] ** 2)
+            d = np.sqrt(q[:, 0] ** 2 + q[:, 1] ** 2 + q[:, 2] ** 2)
         if range_min is not None:
             ok &= d >= range_min
         if range_max is not None:
             ok &= d <= range_max
-    return p[ok].astype(np.float32), int(len(p) - ok.sum())
+    n_ok = int(np.count_nonzero(ok))
+    kept = p.astype(np.float32) if n_ok == len(p) else p[ok].astype(np.float32)
+    return kept, len(p) - n_ok
 
 
 def yaw_from_quaternion(qx, qy, qz, qw):
