@@ -187,7 +187,7 @@ def snakemake(repo: Path, dataset: str, cores: int, targets: list[str], poll: bo
 #: Stages of the table: a benchmark file or script is counted under the longest of
 #: these that its name starts with (``hulls_shard_scans_0-99`` -> ``hulls``).
 STAGES = (
-    "simulate", "ingest", "poses", "register", "hulls", "select", "selection_figures",
+    "simulate", "ingest", "poses", "register", "register_figure", "hulls", "select", "selection_figures",
     "scan_walls", "walls", "floorplan", "score_runs", "score", "score_walls_figures", "score_figures",
 )  # fmt: skip
 

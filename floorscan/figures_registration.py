@@ -78,6 +78,44 @@ class DensityRaster:
         return r
 
 
+def density_of_file(path: str | os.PathLike, cell_m: float = 0.05) -> DensityRaster:
+    """The :class:`DensityRaster` of a points table (``registered.parquet``: ``scan_id,
+    x, y, z``, map frame, metres), streamed scan by scan (memory: one row group and
+    the raster). The extent is the points' own, from the file's column statistics
+    (a first pass over x, y when a row group has none).
+
+    Raises
+    ------
+    floorscan.io.InputError
+        When ``x`` or ``y`` is missing (naming the file).
+    """
+    import pyarrow.parquet as pq
+
+    from floorscan.io import iter_scans
+
+    md = pq.ParquetFile(path).metadata
+    names = [md.schema.column(i).name for i in range(md.num_columns)]
+    lo, hi = np.full(2, np.inf), np.full(2, -np.inf)
+    stats_ok = all(c in names for c in ("x", "y"))
+    for g in range(md.num_row_groups) if stats_ok else ():
+        for a, c in enumerate(("x", "y")):
+            st = md.row_group(g).column(names.index(c)).statistics
+            if st is None or not st.has_min_max:
+                stats_ok = False
+                break
+            lo[a], hi[a] = min(lo[a], float(st.min)), max(hi[a], float(st.max))
+    if not stats_ok:
+        for _, xy in iter_scans(path, ("x", "y")):  # also raises on missing columns
+            if len(xy):
+                lo, hi = np.minimum(lo, xy.min(axis=0)), np.maximum(hi, xy.max(axis=0))
+    if not np.isfinite(lo).all():
+        lo = hi = np.zeros(2)
+    raster = DensityRaster(lo, hi, cell_m)
+    for _, xy in iter_scans(path, ("x", "y")):
+        raster.add(xy)
+    return raster
+
+
 def plot_registered_map(
     registered: "pd.DataFrame | DensityRaster",
     registration: pd.DataFrame,

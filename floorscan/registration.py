@@ -1464,7 +1464,7 @@ def register_recording(
     config: RegistrationConfig | Mapping[str, Any] | None,
     registered_path: str | os.PathLike,
     metadata: Mapping[str, str] | None = None,
-    cell_m: float = 0.05,
+    cell_m: float | None = 0.05,
 ) -> RegistrationResult:
     """:func:`register_scans` on a points file, streamed: memory follows the largest scan.
 
@@ -1492,13 +1492,15 @@ def register_recording(
         Output ``registered.parquet`` (schema :data:`floorscan.io.REGISTERED`).
     metadata : mapping, optional
         Key/value strings stored in the output's schema metadata.
-    cell_m : float
-        Cell of the density raster, metres.
+    cell_m : float or None
+        Cell of the density raster, metres; None: no raster (the workflow draws the
+        figure in its own job, :func:`floorscan.figures_registration.density_of_file`).
 
     Returns
     -------
     RegistrationResult
-        ``registered`` is None; ``density`` holds the raster of the registered points.
+        ``registered`` is None; ``density`` holds the raster of the registered points
+        (None without ``cell_m``).
 
     Raises
     ------
@@ -1609,7 +1611,7 @@ def _second_pass(table, summary, radius, sids, sampled_path, registered_path, me
         hi = (final[kept, :2] + r[:, None]).max(axis=0)
     else:
         lo = hi = np.zeros(2)
-    density = DensityRaster(lo, hi, cell_m)
+    density = DensityRaster(lo, hi, cell_m) if cell_m is not None else None
     schema = REGISTERED
     if metadata:
         schema = schema.with_metadata({str(k): str(v) for k, v in metadata.items()})
@@ -1621,7 +1623,8 @@ def _second_pass(table, summary, radius, sids, sampled_path, registered_path, me
                     if pose is None:
                         continue
                     q = transform_points(pts, *pose)
-                    density.add(q[:, :2])
+                    if density is not None:
+                        density.add(q[:, :2])
                     out.add(sid, q)
     return RegistrationResult(registered=None, table=table, summary=summary, density=density)
 

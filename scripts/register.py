@@ -1,5 +1,4 @@
 """Stage register: scans in the map frame, refined by ICP (thesis Algorithm 3 steps 2-6)."""
-from floorscan.figures_registration import plot_registered_map
 from floorscan.io import read_table, write_table
 from floorscan.registration import REGISTRATION, register_recording
 from floorscan.workflow import stage_log
@@ -13,10 +12,9 @@ with stage_log(snakemake) as log:
     # streamed: the points are read scan by scan and written as they are registered
     result = register_recording(
         snakemake.input.scans, read_table(snakemake.input.index), poses, cfg,
-        snakemake.output.registered, metadata=meta,
+        snakemake.output.registered, metadata=meta, cell_m=None,  # figure: rule register_figure
     )
     write_table(result.table, snakemake.output.registration, schema=REGISTRATION, metadata=meta)
-    plot_registered_map(result.density, result.table, snakemake.output.figure, title=snakemake.wildcards.dataset)
     s = result.summary
     log.info(
         "kept %d of %d scans (%d sampled); dropped by reason %s; fraction of the checked scans each "

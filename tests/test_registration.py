@@ -429,6 +429,15 @@ def test_streamed_registration_matches_the_in_memory_one(tmp_path, z_beams):
     pd.testing.assert_frame_equal(reg, a.registered)
     assert b.table.loc[4, "reason"] == "too_few_points"
     assert b.density.grid()[2].sum() == len(reg) and b.registered is None
+    # the figure job's raster, streamed from the file, counts the same points per cell
+    from floorscan.figures_registration import density_of_file
+
+    f = density_of_file(tmp_path / "reg.parquet", b.density.cell_m)
+    assert f.grid()[2].sum() == len(reg)
+    xy = reg[["x", "y"]].to_numpy(np.float64)
+    np.testing.assert_allclose(f.lo, xy.min(axis=0), atol=1e-6)
+    c = register_recording(tmp_path / "scans.parquet", index, poses, cfg, tmp_path / "reg2.parquet", cell_m=None)
+    assert c.density is None and read_table(tmp_path / "reg2.parquet").equals(reg)
 
 
 def test_bad_input_errors():

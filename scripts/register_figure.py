@@ -1,0 +1,11 @@
+"""Stage register, its figure: the registered map by point density and the scan
+locations (thesis Fig. 5.9), in its own job so the per-scan stages need not wait for it."""
+from floorscan.figures_registration import density_of_file, plot_registered_map
+from floorscan.io import read_table
+from floorscan.workflow import stage_log
+
+with stage_log(snakemake) as log:
+    density = density_of_file(snakemake.input.registered)  # streamed scan by scan
+    plot_registered_map(density, read_table(snakemake.input.registration), snakemake.output.figure,
+                        title=snakemake.wildcards.dataset)
+    log.info("registered map: %d x %d cells of %.2f m", density.nx, density.ny, density.cell_m)
