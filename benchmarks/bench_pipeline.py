@@ -94,7 +94,9 @@ def prepare_copy(workdir: Path) -> Path:
 
 class RssPoller:
     """Peak RSS (MB) and CPU time (s) of the Snakemake script jobs under a process, by
-    script name (CPU time as last seen, up to ``interval_s`` short of a job's end)."""
+    script name (CPU time as last seen, up to ``interval_s`` short of a job's end). A
+    job's worker processes (edge ICP, scoring) count toward its script: CPU summed,
+    the peak RSS of the largest process."""
 
     def __init__(self, pid: int, interval_s: float = 0.2):
         import psutil
@@ -104,6 +106,7 @@ class RssPoller:
         self.interval_s = interval_s
         self.peak: dict[str, float] = {}
         self._cpu: dict[int, tuple[str, float]] = {}
+        self._job: dict[int, str] = {}  # pid -> script of the job it belongs to
         #: pid -> [script, first seen, last seen] (s since the poller started)
         self.spans: dict[int, list] = {}
         self.total_peak = 0.0
@@ -141,14 +144,18 @@ class RssPoller:
                     rss = p.memory_info().rss / 2**20
                     cmd = " ".join(p.cmdline())
                     t = p.cpu_times()
+                    ppid = p.ppid()
                 except (ps.Error, OSError):
                     continue
                 total += rss
                 m = _SCRIPT.search(cmd)
-                if m:
-                    self.peak[m.group(1)] = max(self.peak.get(m.group(1), 0.0), rss)
-                    self._cpu[p.pid] = (m.group(1), t.user + t.system)
-                    self.spans.setdefault(p.pid, [m.group(1), now, now])[2] = now
+                name = m.group(1) if m else self._job.get(ppid)  # a job's worker process
+                if name:
+                    self._job[p.pid] = name
+                    self.peak[name] = max(self.peak.get(name, 0.0), rss)
+                    self._cpu[p.pid] = (name, t.user + t.system)
+                    if m:
+                        self.spans.setdefault(p.pid, [name, now, now])[2] = now
             self.total_peak = max(self.total_peak, total)
             self._stop.wait(self.interval_s)
 
