@@ -33,10 +33,8 @@ def cell_groups(cells: np.ndarray, first: bool = False):
         Only with ``first``: the first row of each group.
     """
     c = np.asarray(cells, dtype=np.int64)
-    lo = c.min(axis=0)
-    span = c.max(axis=0) - lo + 1
-    if float(np.prod(span.astype(np.float64))) < 2.0**62:
-        key = np.ravel_multi_index(tuple((c - lo).T), tuple(int(v) for v in span))
+    key = cell_keys(c)
+    if key is not None:
         out = np.unique(key, return_index=first, return_inverse=True, return_counts=True)
     else:  # an extent beyond the int64 key: sort the rows themselves
         out = np.unique(c, axis=0, return_index=first, return_inverse=True, return_counts=True)
@@ -45,6 +43,27 @@ def cell_groups(cells: np.ndarray, first: bool = False):
         return inverse.ravel(), counts, first_rows
     _, inverse, counts = out
     return inverse.ravel(), counts
+
+
+def cell_keys(cells: np.ndarray) -> np.ndarray | None:
+    """One int64 key per row of integer grid cells, ordered as the rows are
+    lexicographically (``numpy.ravel_multi_index`` of the offsets from the minimum).
+
+    Parameters
+    ----------
+    cells : (N, d) int ndarray
+        N >= 1.
+
+    Returns
+    -------
+    (N,) int64 ndarray, or None when the cells' extent has more than 2**62 cells.
+    """
+    c = np.asarray(cells, dtype=np.int64)
+    lo = c.min(axis=0)
+    span = c.max(axis=0) - lo + 1
+    if float(np.prod(span.astype(np.float64))) >= 2.0**62:
+        return None
+    return np.ravel_multi_index(tuple((c - lo).T), tuple(int(v) for v in span))
 
 
 def cell_means(points: np.ndarray, cell_m: float) -> tuple[np.ndarray, np.ndarray]:

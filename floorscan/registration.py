@@ -130,7 +130,7 @@ import pandas as pd
 import pyarrow as pa
 from scipy.spatial import cKDTree
 
-from floorscan.grid import cell_groups, cell_means
+from floorscan.grid import cell_groups, cell_keys, cell_means
 from floorscan.io import InputError
 
 log = logging.getLogger(__name__)
@@ -567,10 +567,22 @@ def graph_cloud(points: np.ndarray, cfg: RegistrationConfig) -> np.ndarray:
 
     params = GraphParams.from_mapping(cfg.graph)
     cell = params.voxel_size_m if params.voxel_size_m > 0 else 0.05
-    inverse, counts = cell_groups(np.floor(p[:, :2] / cell).astype(np.int64))
+    xy_cells = np.floor(p[:, :2] / cell).astype(np.int64)
+    key = cell_keys(xy_cells)
+    if key is None:  # an extent beyond the int64 key
+        inverse, counts = cell_groups(xy_cells)
+        order = np.lexsort((p[:, 2], inverse))  # by cell, then height
+        z, cells = p[order, 2], inverse[order]
+    else:  # one sort: by cell key, then height (the same order and cell numbers)
+        order = np.lexsort((p[:, 2], key))
+        z, ks = p[order, 2], key[order]
+        new_cell = np.ones(len(ks), dtype=bool)
+        new_cell[1:] = ks[1:] != ks[:-1]
+        cells = np.cumsum(new_cell) - 1
+        inverse = np.empty(len(p), dtype=np.intp)
+        inverse[order] = cells
+        counts = np.diff(np.append(np.flatnonzero(new_cell), len(ks)))
     g = len(counts)
-    order = np.lexsort((p[:, 2], inverse))  # by cell, then height
-    z, cells = p[order, 2], inverse[order]
     # runs: the heights of a cell without a gap wider than max_height_gap_m
     start = np.ones(len(z), dtype=bool)
     start[1:] = (cells[1:] != cells[:-1]) | (np.diff(z) > params.max_height_gap_m)

@@ -722,3 +722,23 @@ def test_odometry_mode_on_real_recordings(name, tmp_path):
     assert np.median(err) < max_median
     assert err[-1] < max_final
 
+
+
+def test_graph_cloud_one_sort_equals_the_grouped_path(monkeypatch):
+    """graph_cloud sorts once by (cell key, height); the same cloud as grouping the
+    cells first (its path for extents beyond the int64 key), bit for bit."""
+    import floorscan.registration as R
+    from floorscan.grid import cell_keys
+
+    rng = np.random.default_rng(5)
+    wall = np.column_stack([rng.uniform(-3, 3, 3000), np.full(3000, 2.0) + rng.normal(0, 0.01, 3000),
+                            rng.uniform(-0.4, 2.0, 3000)])
+    floor = np.column_stack([rng.uniform(-3, 3, (3000, 2)), rng.normal(-0.4, 0.01, 3000)])
+    pts = np.concatenate([wall, floor])
+    cfg = RegistrationConfig()
+    fast = R.graph_cloud(pts, cfg)
+    monkeypatch.setattr(R, "cell_keys", lambda cells: None)
+    np.testing.assert_array_equal(fast, R.graph_cloud(pts, cfg))
+    assert 100 < len(fast) <= 240 and np.all(np.abs(fast[:, 1] - 2.0) < 0.05)  # the wall: 120 cells a row, no floor
+    c = rng.integers(-50, 50, (500, 2))
+    np.testing.assert_array_equal(np.argsort(cell_keys(c), kind="stable"), np.lexsort(c.T[::-1]))
