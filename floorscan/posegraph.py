@@ -256,7 +256,9 @@ def scan_pair_edges(
     pairs = [(i, j, kind) for i, j, kind in candidate_pairs(poses, t_s, params)
              if len(pts[i]) >= 3 and len(pts[j]) >= 3]
     chunks = _chunks(pairs, max(1, int(params.workers)))
-    if len(chunks) <= 1:
+    from floorscan.parallel import ready
+
+    if len(chunks) <= 1 and not ready():  # else a prestarted worker has Open3D loaded
         rows = _pair_rows(pts, poses, pairs, params, icp_kinds)
     else:
         rows = _parallel_pair_rows(pts, poses, chunks, params, icp_kinds)

@@ -1532,9 +1532,12 @@ def register_recording(
         from floorscan.posegraph import GraphParams
 
         # the edge ICP's worker processes import Open3D while the scans are read, on
-        # the core this reading leaves idle (with one worker the ICP runs here)
+        # the core this reading leaves idle (with one worker the ICP runs here); as
+        # many as the edges will need (posegraph._chunks: >= 200 pairs a worker; at
+        # most ~3 pairs a sampled scan are counted here, so small recordings get one)
         workers = GraphParams.from_mapping(cfg.graph).workers
-        prestart(workers if workers > 1 else 0, preload=("open3d", "floorscan.posegraph"))
+        pairs = 3 * len(scan_index) // max(1, cfg.every_n)
+        prestart(min(workers, max(1, pairs // 200)) if workers > 1 else 0, preload=("open3d", "floorscan.posegraph"))
     index = _prepare_index(scan_index)
     aligned = _aligned_poses(index, poses, cfg)
     sids = index["scan_id"].to_numpy()
