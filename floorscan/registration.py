@@ -320,15 +320,11 @@ class RegistrationResult:
         One row per scan of the scan index, columns of :data:`REGISTRATION`.
     summary : dict
         Counts per reason, drop fractions per threshold, median corrections.
-    density : floorscan.figures_registration.DensityRaster or None
-        Points per cell of the registered map (:func:`register_recording`, which
-        writes the points to disk instead of returning them; ``registered`` is then None).
     """
 
     registered: pd.DataFrame | None
     table: pd.DataFrame
     summary: dict
-    density: Any = None
 
 
 # --------------------------------------------------------------------------- geometry
@@ -569,19 +565,17 @@ def graph_cloud(points: np.ndarray, cfg: RegistrationConfig) -> np.ndarray:
     cell = params.voxel_size_m if params.voxel_size_m > 0 else 0.05
     xy_cells = np.floor(p[:, :2] / cell).astype(np.int64)
     key = cell_keys(xy_cells)
-    if key is None:  # an extent beyond the int64 key
-        inverse, counts = cell_groups(xy_cells)
-        order = np.lexsort((p[:, 2], inverse))  # by cell, then height
-        z, cells = p[order, 2], inverse[order]
-    else:  # one sort: by cell key, then height (the same order and cell numbers)
-        order = np.lexsort((p[:, 2], key))
-        z, ks = p[order, 2], key[order]
-        new_cell = np.ones(len(ks), dtype=bool)
-        new_cell[1:] = ks[1:] != ks[:-1]
-        cells = np.cumsum(new_cell) - 1
-        inverse = np.empty(len(p), dtype=np.intp)
-        inverse[order] = cells
-        counts = np.diff(np.append(np.flatnonzero(new_cell), len(ks)))
+    if key is None:  # an extent beyond the int64 key: the cells' ranks instead
+        key = cell_groups(xy_cells)[0]
+    # one sort: by cell, then height; cells numbered in lexicographic order
+    order = np.lexsort((p[:, 2], key))
+    z, ks = p[order, 2], key[order]
+    new_cell = np.ones(len(ks), dtype=bool)
+    new_cell[1:] = ks[1:] != ks[:-1]
+    cells = np.cumsum(new_cell) - 1
+    inverse = np.empty(len(p), dtype=np.intp)
+    inverse[order] = cells
+    counts = np.diff(np.append(np.flatnonzero(new_cell), len(ks)))
     g = len(counts)
     # runs: the heights of a cell without a gap wider than max_height_gap_m
     start = np.ones(len(z), dtype=bool)
@@ -1476,7 +1470,6 @@ def register_recording(
     config: RegistrationConfig | Mapping[str, Any] | None,
     registered_path: str | os.PathLike,
     metadata: Mapping[str, str] | None = None,
-    cell_m: float | None = 0.05,
 ) -> RegistrationResult:
     """:func:`register_scans` on a points file, streamed: memory follows the largest scan.
 
@@ -1490,8 +1483,9 @@ def register_recording(
     scans are sampled ones: 1 in ``every_n``). After registration that file is read
     back and each kept scan's points are transformed into the map frame and written to
     ``registered_path`` (a Parquet writer on :func:`floorscan.io.atomic_path`, a row group
-    per ~1 M points) and counted into a density raster for the figure. Same output as
-    :func:`register_scans` (tested), given the same input.
+    per ~1 M points). Same output as :func:`register_scans` (tested), given the same
+    input. The figure of the registered map is drawn from that file
+    (:func:`floorscan.figures_registration.density_of_file`, rule ``register_figure``).
 
     Parameters
     ----------
@@ -1504,15 +1498,11 @@ def register_recording(
         Output ``registered.parquet`` (schema :data:`floorscan.io.REGISTERED`).
     metadata : mapping, optional
         Key/value strings stored in the output's schema metadata.
-    cell_m : float or None
-        Cell of the density raster, metres; None: no raster (the workflow draws the
-        figure in its own job, :func:`floorscan.figures_registration.density_of_file`).
 
     Returns
     -------
     RegistrationResult
-        ``registered`` is None; ``density`` holds the raster of the registered points
-        (None without ``cell_m``).
+        ``registered`` is None: the points are in ``registered_path``.
 
     Raises
     ------
@@ -1544,7 +1534,6 @@ def register_recording(
     n = len(sids)
     screen = _Screener(index, aligned, cfg)
     store = _ScanStore(cfg)
-    radius = np.zeros(n)
 
     def walk():
         """(index position, points) in index order; the file's scans are ascending."""
@@ -1577,17 +1566,18 @@ def register_recording(
     try:
         with pq.ParquetWriter(sampled_path, SCANS, **parquet_options(SCANS)) as sampled_writer:
             with ScanRowGroups(sampled_writer) as sampled_out:
-                _first_pass(walk(), sids, screen, store, radius, cfg, sampled_out)
+                _first_pass(walk(), sids, screen, store, cfg, sampled_out)
         table, summary = _register_screened(index, aligned, screen.reasons, store, cfg)
         store = None
-        return _second_pass(table, summary, radius, sids, sampled_path, registered_path, metadata, cell_m)
+        _second_pass(table, sids, sampled_path, registered_path, metadata)
     finally:
         sampled_path.unlink(missing_ok=True)
+    return RegistrationResult(registered=None, table=table, summary=summary)
 
 
-def _first_pass(scans, sids, screen, store, radius, cfg, sampled_out) -> None:
+def _first_pass(scans, sids, screen, store, cfg, sampled_out) -> None:
     """Screen the scans as they stream by; keep the sampled ones' registration clouds
-    (``store``), largest range (``radius``, filled in) and points (``sampled_out``)."""
+    (``store``) and points (``sampled_out``)."""
     odometry = cfg.mode == "odometry"
     n_usable = 0  # the every-n-th usable scan is sampled (as _register_screened)
     for k, pts in scans:
@@ -1606,27 +1596,18 @@ def _first_pass(scans, sids, screen, store, radius, cfg, sampled_out) -> None:
         if needs:
             store.add(int(sids[k]), pts, needs)
         if is_sampled:
-            radius[k] = float(np.max(np.hypot(pts[:, 0], pts[:, 1])))
             sampled_out.add(int(sids[k]), pts)
 
 
-def _second_pass(table, summary, radius, sids, sampled_path, registered_path, metadata, cell_m) -> "RegistrationResult":
-    """The kept scans into the map frame: ``registered_path`` and the density raster."""
+def _second_pass(table, sids, sampled_path, registered_path, metadata) -> None:
+    """The kept scans, read back from ``sampled_path``, into the map frame: ``registered_path``."""
     import pyarrow.parquet as pq
 
-    from floorscan.figures_registration import DensityRaster
     from floorscan.io import REGISTERED, ScanRowGroups, atomic_path, iter_scans, parquet_options
 
     kept = table["kept"].to_numpy(bool)
     final = table[["x_m", "y_m", "z_m", "yaw_rad"]].to_numpy(np.float64)
     pose_of = {int(s): final[k] for k, s in enumerate(sids) if kept[k]}
-    r = radius[kept]
-    if kept.any():
-        lo = (final[kept, :2] - r[:, None]).min(axis=0)
-        hi = (final[kept, :2] + r[:, None]).max(axis=0)
-    else:
-        lo = hi = np.zeros(2)
-    density = DensityRaster(lo, hi, cell_m) if cell_m is not None else None
     schema = REGISTERED
     if metadata:
         schema = schema.with_metadata({str(k): str(v) for k, v in metadata.items()})
@@ -1635,13 +1616,8 @@ def _second_pass(table, summary, radius, sids, sampled_path, registered_path, me
             with ScanRowGroups(writer) as out:  # row groups written in a thread
                 for sid, pts in iter_scans(sampled_path):
                     pose = pose_of.get(int(sid))
-                    if pose is None:
-                        continue
-                    q = transform_points(pts, *pose)
-                    if density is not None:
-                        density.add(q[:, :2])
-                    out.add(sid, q)
-    return RegistrationResult(registered=None, table=table, summary=summary, density=density)
+                    if pose is not None:
+                        out.add(sid, transform_points(pts, *pose))
 
 
 def summarize(table: pd.DataFrame, cfg: RegistrationConfig | None = None) -> dict:

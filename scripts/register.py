@@ -12,7 +12,7 @@ with stage_log(snakemake) as log:
     # streamed: the points are read scan by scan and written as they are registered
     result = register_recording(
         snakemake.input.scans, read_table(snakemake.input.index), poses, cfg,
-        snakemake.output.registered, metadata=meta, cell_m=None,  # figure: rule register_figure
+        snakemake.output.registered, metadata=meta,  # its figure: rule register_figure
     )
     write_table(result.table, snakemake.output.registration, schema=REGISTRATION, metadata=meta)
     s = result.summary
