@@ -69,7 +69,7 @@ def _stop_ready() -> None:
         err.close()
 
 
-def map_in_processes(fn: Callable, calls: Sequence[tuple], local_first: bool = True) -> list[Any]:
+def map_in_processes(fn: Callable, calls: Sequence[tuple], local_first: bool | None = None) -> list[Any]:
     """``[fn(*args) for args in calls]``, the first call here and the others each in a
     worker process, all at once.
 
@@ -80,10 +80,11 @@ def map_in_processes(fn: Callable, calls: Sequence[tuple], local_first: bool = T
         arguments and result must pickle.
     calls : sequence of tuple
         Positional arguments of each call.
-    local_first : bool
-        Run the first call in this process (default). False: every call in a worker,
-        e.g. when workers started ahead (:func:`prestart`) have imported what the
-        calls need and this process has not.
+    local_first : bool, optional
+        Run the first call in this process (True) or every call in a worker (False).
+        Default: in workers when workers started ahead (:func:`prestart`) wait for
+        all the calls (they have imported what the calls need; this process may
+        not have), else the first call here.
 
     Returns
     -------
@@ -96,6 +97,8 @@ def map_in_processes(fn: Callable, calls: Sequence[tuple], local_first: bool = T
         A worker failed (its exit status and the last lines of its stderr).
     """
     calls = list(calls)
+    if local_first is None:
+        local_first = len(_READY) < len(calls)
     if len(calls) == 0 or (len(calls) == 1 and local_first):
         return [fn(*args) for args in calls]
     remote = calls[1:] if local_first else calls

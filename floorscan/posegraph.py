@@ -255,13 +255,7 @@ def scan_pair_edges(
         pts.append(voxel_downsample(p, params.voxel_size_m))
     pairs = [(i, j, kind) for i, j, kind in candidate_pairs(poses, t_s, params)
              if len(pts[i]) >= 3 and len(pts[j]) >= 3]
-    chunks = _chunks(pairs, max(1, int(params.workers)))
-    from floorscan.parallel import ready
-
-    if len(chunks) <= 1 and not ready():  # else a prestarted worker has Open3D loaded
-        rows = _pair_rows(pts, poses, pairs, params, icp_kinds)
-    else:
-        rows = _parallel_pair_rows(pts, poses, chunks, params, icp_kinds)
+    rows = _parallel_pair_rows(pts, poses, _chunks(pairs, max(1, int(params.workers))), params, icp_kinds)
     return pd.DataFrame(rows, columns=EDGE_COLUMNS).astype(
         {"i": np.int64, "j": np.int64, "kind": str, "dx_m": float, "dy_m": float,
          "dyaw_rad": float, "fitness_prior": float, "fitness": float, "inlier_rmse_m": float}
@@ -280,20 +274,18 @@ def _chunks(pairs: list, n: int) -> list[list]:
 
 
 def _parallel_pair_rows(pts, poses, chunks, params, icp_kinds) -> list[tuple]:
-    """:func:`_pair_rows` of each chunk in worker processes
-    (:func:`floorscan.parallel.map_in_processes`), each fed only the clouds of its
-    pairs; rows in pair order. The first chunk runs here unless workers were started
-    ahead for all of them (:func:`floorscan.parallel.prestart`, as the register stage
-    does while it reads the scans): then this process never imports Open3D (1.5 - 3 s
-    of CPU on the stage's critical path)."""
-    from floorscan import parallel
+    """:func:`_pair_rows` of each chunk (:func:`floorscan.parallel.map_in_processes`:
+    the first here and the others in worker processes, or all in workers started ahead
+    by :func:`floorscan.parallel.prestart`, as the register stage does while it reads
+    the scans: this process then never imports Open3D, 1.5 - 3 s of CPU on the stage's
+    critical path), each fed only the clouds of its pairs; rows in pair order."""
+    from floorscan.parallel import map_in_processes
 
     calls = []
     for chunk in chunks:
         need = sorted({k for i, j, _ in chunk for k in (i, j)})
         calls.append(({k: pts[k] for k in need}, poses, chunk, params, icp_kinds))
-    local_first = parallel.ready() < len(calls)
-    return [row for rows in parallel.map_in_processes(_pair_rows, calls, local_first) for row in rows]
+    return [row for rows in map_in_processes(_pair_rows, calls) for row in rows]
 
 
 def _pair_rows(pts, poses: np.ndarray, pairs, params: GraphParams, icp_kinds) -> list[tuple]:
