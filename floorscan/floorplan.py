@@ -155,7 +155,7 @@ def _candidate_pairs(
     pair within it lies in one bin or two neighbours) and each two neighbouring
     bins are queried on their own: the box pairs of crossing walls (two thirds of
     them on hallways3d) are not made at all. With ``exact`` False the distance
-    test is left to the caller (:func:`_within_distance`, :func:`_merging_pairs`),
+    test is left to the caller (:func:`_within_distance`, :func:`_merge_groups`),
     who may run its own cheaper tests first; the pairs are then in no particular
     order.
     """
@@ -317,15 +317,14 @@ def fit_segments(seg: np.ndarray, weights: np.ndarray) -> np.ndarray:
     return np.array([a[0], a[1], b[0], b[1]])
 
 
-#: Candidate pairs tested at once by :func:`_merging_pairs`.
+#: Candidate pairs tested at once by :func:`_merge_groups`.
 _MERGE_CHUNK = 1 << 15
 
 
-def _merging_pairs(
-    cur: np.ndarray, i: np.ndarray, j: np.ndarray, params: FloorplanParams
-) -> tuple[np.ndarray, np.ndarray]:
-    """Of the candidate pairs (i, j), enough of those passing the merge test of
-    :func:`merge_segments` to connect the same groups as all of them would.
+def _merge_groups(cur: np.ndarray, i: np.ndarray, j: np.ndarray, params: FloorplanParams) -> np.ndarray | None:
+    """The faces of :func:`merge_segments`: the connected groups of the candidate
+    pairs (i, j) that pass its merge test, as a group per segment (numbered 0..G-1 by
+    their smallest segment, as :func:`_union_find`), or None when no pair passes.
 
     The candidates (within the merge angle already) are tested a chunk at a time,
     and a pair whose two segments are already connected by the pairs passed so far
@@ -333,11 +332,11 @@ def _merging_pairs(
     is a stack of hundreds of segments whose pairs nearly all pass; after the first
     chunk most of them are connected (on hallways3d, all scans: 65 % of the 730k
     candidates are skipped). The groups, and so the merged faces, are those of all
-    the passing pairs (:func:`_union_find` numbers them by their smallest segment).
+    the passing pairs.
     """
     reach = max(params.merge_gap_m, params.merge_distance_m)
     label = np.arange(len(cur))  # a component label per segment, of the pairs passed so far
-    out_i, out_j = [], []
+    merged = False
     for start in range(0, len(i), _MERGE_CHUNK):
         ci, cj = i[start : start + _MERGE_CHUNK], j[start : start + _MERGE_CHUNK]
         apart = label[ci] != label[cj]
@@ -360,12 +359,9 @@ def _merging_pairs(
         wi, wj = _within_distance(cur, ci[ok & ~sure], cj[ok & ~sure], reach)
         pi, pj = np.r_[ci[sure], wi], np.r_[cj[sure], wj]
         if len(pi):
-            out_i.append(pi)
-            out_j.append(pj)
+            merged = True
             label = _union_find(len(cur), label[pi], label[pj])[label]
-    if not out_i:
-        return np.empty(0, np.int64), np.empty(0, np.int64)
-    return np.concatenate(out_i), np.concatenate(out_j)
+    return label if merged else None
 
 
 def merge_segments(
@@ -407,10 +403,9 @@ def merge_segments(
     for _ in range(max(1, params.max_passes)):
         reach = max(params.merge_gap_m, params.merge_distance_m)
         i, j = _candidate_pairs(cur, reach, np.radians(params.merge_angle_deg), exact=False)
-        i, j = _merging_pairs(cur, i, j, params)
-        if len(i) == 0:
+        group = _merge_groups(cur, i, j, params)
+        if group is None:
             break
-        group = _union_find(len(cur), i, j)
         # Members of each group in input order (stable sort), one slice per group.
         order = np.argsort(group, kind="stable")
         bounds = np.r_[0, np.cumsum(np.bincount(group))]
