@@ -241,7 +241,8 @@ def rasterize_segments(segments, grid: Grid, width_m: float = 0.10) -> np.ndarra
 def _raster_cells(seg: np.ndarray, grid: Grid, width_m: float) -> tuple[np.ndarray, np.ndarray]:
     """The wall cells of :func:`rasterize_segments` per segment: ``(owner, flat)``, the
     row of the finite ``(M, 4)`` ``seg`` and the flat index (``iy * nx + ix``) of each
-    hit, grouped by piece (a cell may repeat). Whether a cell is a segment's depends on
+    hit, grouped by piece, pieces in row order (``owner`` ascending; a cell may
+    repeat). Whether a cell is a segment's depends on
     that segment only, so the cells of a union of segment sets are the union of theirs."""
     half = width_m / 2.0
     seg, owner = _split_long(seg, 0.5, return_owner=True)
@@ -693,20 +694,20 @@ def _nearest_below(pts, index: _SegmentIndex, bound: np.ndarray, geoms=None) -> 
     return out
 
 
-def _within(pts, index: _SegmentIndex, taus, hit: np.ndarray, geoms=None) -> np.ndarray:
+def _within(pts, index: _SegmentIndex, taus, hit: np.ndarray) -> np.ndarray:
     """Whether each point is within each tau of a segment of ``index``, or already was.
 
     ``hit`` is a ``(T, S)`` bool array (one row per tau), returned updated (a copy):
     the same as ``hit | (nearest_distances(pts, segments) <= tau)``; the points hit
     at every tau are not measured, the others against the segments within the largest
-    tau only (``geoms``: ``shapely.points(pts)``, if made).
+    tau only.
     """
     hit = np.array(hit, dtype=bool, copy=True)
     if len(pts) == 0 or len(index.seg) == 0 or len(taus) == 0:
         return hit
     ids = np.flatnonzero(~hit.all(axis=0))
     if len(ids):
-        d = index.exact(pts, ids, np.full(len(ids), float(max(taus))), geoms)
+        d = index.exact(pts, ids, np.full(len(ids), float(max(taus))))
         for t, tau in enumerate(taus):
             hit[t, ids] |= d <= tau
     return hit
@@ -985,19 +986,16 @@ class _GrowingWalls:
     None) are ground-truth samples (:func:`gt_samples`).
     """
 
-    def __init__(self, gt, gt_bitmap, grid, wall_width_m, taus, samples,
-                 all_samples=None, pairs=None, all_pairs=None,
-                 raster_cache=None):  # fmt: skip
+    def __init__(self, gt, gt_bitmap, grid, wall_width_m, taus, samples, all_samples,
+                 pairs, all_pairs, raster_cache):  # fmt: skip
         self.gt, self.grid, self.width, self.taus = gt, grid, wall_width_m, list(taus)
         self.gt_bitmap = gt_bitmap
         self.len_g = float(segment_lengths(gt).sum())
         self.samples = samples
         self.all_samples = all_samples
-        self.pairs = _SamplePairs(samples, PAIR_REACH_M) if pairs is None else pairs
-        if all_samples is not None and all_pairs is None:
-            all_pairs = _SamplePairs(all_samples, max(self.taus))
+        self.pairs = pairs
         self.all_pairs = all_pairs
-        self.raster_cache = {} if raster_cache is None else raster_cache
+        self.raster_cache = raster_cache
         self.keys: set[bytes] | None = None
         self.covered: dict[float, dict[bytes, float]] = {tau: {} for tau in self.taus}
 
@@ -1016,10 +1014,9 @@ class _GrowingWalls:
         cache = self.raster_cache
         todo = [i for i, k in enumerate(add_keys) if k not in cache]
         if todo:
-            owner, flat = _raster_cells(add[todo], self.grid, self.width)
-            order = np.argsort(owner, kind="stable")
-            bounds = np.searchsorted(owner[order], np.arange(len(todo) + 1))
-            flat = flat[order].astype(np.int32 if self.grid.nx * self.grid.ny < 2**31 else np.int64)
+            owner, flat = _raster_cells(add[todo], self.grid, self.width)  # owner ascending
+            bounds = np.searchsorted(owner, np.arange(len(todo) + 1))
+            flat = flat.astype(np.int32 if self.grid.nx * self.grid.ny < 2**31 else np.int64)
             for j, i in enumerate(todo):
                 cache[add_keys[i]] = flat[bounds[j]:bounds[j + 1]]
         return np.concatenate([cache[k] for k in add_keys])
@@ -1073,7 +1070,7 @@ class _GrowingWalls:
         return out
 
 
-def _recall_precision(inferred, gt, taus, samples, geoms=None, pairs=None) -> dict[str, float]:
+def _recall_precision(inferred, gt, taus, samples, pairs=None) -> dict[str, float]:
     """``precision_<tau>``, ``recall_<tau>`` and ``f1_<tau>`` of :func:`tolerance_metrics`
     (same values), without the distances of the samples that tau does not need."""
     inf = as_segments(inferred)
@@ -1089,7 +1086,7 @@ def _recall_precision(inferred, gt, taus, samples, geoms=None, pairs=None) -> di
             for t, tau in enumerate(taus):
                 hit[t, si[d <= tau]] = True
         else:
-            hit = _within(samples, _SegmentIndex(inf), taus, hit, geoms)
+            hit = _within(samples, _SegmentIndex(inf), taus, hit)
     out: dict[str, float] = {}
     for t, tau in enumerate(taus):
         covered = float(length_within(inf, gt, tau).sum()) if has_i and has_g else 0.0
