@@ -11,7 +11,7 @@ reduced to 2D wall points (:func:`scan_points_2d`) and then fitted with lines:
   clustering of the projection, and a single RANSAC per cluster.
 
 Both turn a fitted line into wall segments with the same rules
-(:func:`_segments_on_line`): the ends are the extent of the inliers along the line,
+(:func:`_claimed_segments`): the ends are the extent of the inliers along the line,
 a line is split where its inliers leave a gap wider than ``max_gap_m`` (a wall with
 a door is two segments), and segments with fewer than ``min_inliers`` points or
 shorter than ``min_length_m`` are dropped.
@@ -41,8 +41,8 @@ scan of hallways and hallways3d against the plain forms, and in the tests):
   in the tests): the RANSAC distances and the MeanShift squared distances as one
   BLAS product each (offsets and norms as extra terms of the product), counts as
   byte sums, MeanShift iterating only its moving seeds, bin seeding without the
-  inverse, no re-sort of points already in order (:func:`_segments_on_line`) and
-  fast paths for a wall without gaps.
+  inverse, each line's points sorted and split at its gaps once
+  (:func:`_claimed_segments`) and fast paths for a wall without gaps.
 """
 
 from __future__ import annotations
@@ -408,44 +408,33 @@ def _uncovered_length(t: np.ndarray, min_gap: float) -> float:
     return float(g[jump].sum())
 
 
-def _segments_on_line(points: np.ndarray, direction: np.ndarray, params: RansacParams) -> list[tuple]:
-    """Split the inliers of a line at gaps wider than ``max_gap_m`` and fit each piece.
+def _piece_segment(points: np.ndarray, direction: np.ndarray, params: RansacParams) -> tuple | None:
+    """The wall segment of one piece of a line's inliers (no gap wider than
+    ``max_gap_m``, :func:`_claimed_segments`), or None.
 
-    Each piece with at least ``min_inliers`` points is refit by total least squares;
+    A piece with at least ``min_inliers`` points is refit by total least squares;
     its ends are the extent of its points along the refit line; it is kept when at
     least ``min_length_m`` long and covered by its inliers over ``min_coverage`` of
-    its length. Returns tuples (x0, y0, x1, y1, n_inliers, rmse_m).
+    its length. Returns (x0, y0, x1, y1, n_inliers, rmse_m).
     """
-    t = points @ direction
-    gaps = t[1:] - t[:-1]
-    if (gaps >= 0).all():  # in order already (from _claimed_segments): the stable sort is the identity
-        order, ts = None, t
-    else:
-        order = np.argsort(t, kind="stable")
-        ts, gaps = t[order], None
-    bounds = _piece_bounds(ts, params.max_gap_m, gaps)
-    out = []
-    for a, b in zip(bounds[:-1], bounds[1:]):
-        if b - a < max(params.min_inliers, 2):
-            continue
-        p = points[a:b] if order is None else points[order[a:b]]
-        c, d = fit_line(p)
-        if d @ direction < 0:
-            d = -d
-        pc = p - c
-        u = pc @ d
-        lo, hi = float(np.minimum.reduce(u)), float(np.maximum.reduce(u))
-        if hi - lo < params.min_length_m:
-            continue
-        if params.min_coverage > 0:
-            uncovered = _uncovered_length(np.sort(u), params.coverage_gap_m)
-            if 1.0 - uncovered / (hi - lo) < params.min_coverage:
-                continue
-        resid = pc @ np.array([-d[1], d[0]])
-        a, b = c + lo * d, c + hi * d
-        rmse = math.sqrt(np.add.reduce(resid * resid) / len(resid))  # sqrt(mean(resid**2))
-        out.append((a[0], a[1], b[0], b[1], len(p), rmse))
-    return out
+    if len(points) < max(params.min_inliers, 2):
+        return None
+    c, d = fit_line(points)
+    if d @ direction < 0:
+        d = -d
+    pc = points - c
+    u = pc @ d
+    lo, hi = float(np.minimum.reduce(u)), float(np.maximum.reduce(u))
+    if hi - lo < params.min_length_m:
+        return None
+    if params.min_coverage > 0:
+        uncovered = _uncovered_length(np.sort(u), params.coverage_gap_m)
+        if 1.0 - uncovered / (hi - lo) < params.min_coverage:
+            return None
+    resid = pc @ np.array([-d[1], d[0]])
+    a, b = c + lo * d, c + hi * d
+    rmse = math.sqrt(np.add.reduce(resid * resid) / len(resid))  # sqrt(mean(resid**2))
+    return (a[0], a[1], b[0], b[1], len(points), rmse)
 
 
 def _frame(rows: list[tuple]) -> pd.DataFrame:
@@ -458,7 +447,7 @@ def ransac(points: np.ndarray, params: RansacParams = RansacParams(), seed=0) ->
 
     Repeat: the best of ``iterations`` lines through two random points (most points
     closer than ``threshold_m``), refit by total least squares on its inliers
-    (``refine_iterations`` times), split into segments (:func:`_segments_on_line`),
+    (``refine_iterations`` times), split into segments (:func:`_claimed_segments`),
     remove its inliers. The segment ends come from all points of the scan near the
     line (:func:`_claimed_segments`), so a corner point claimed by the first of two
     walls still ends the second one. Stop when fewer than ``min_points`` points
@@ -639,7 +628,7 @@ def mean_shift(x: np.ndarray, bandwidth: float, min_bin_freq: int = 1, max_iter:
     if len(x) == 0:
         return np.empty(0, dtype=np.int64)
     cells = np.round(x / bandwidth)
-    counts, first = _bin_counts(cells)
+    counts, first = cell_groups(cells, first=True, inverse=False)
     means = cells[first[counts >= min_bin_freq]] * bandwidth  # the seeds
     if len(means) == len(x):
         means = x.copy()
@@ -708,21 +697,6 @@ def mean_shift(x: np.ndarray, bandwidth: float, min_bin_freq: int = 1, max_iter:
     else:
         d2 = ((x[:, None, :] - centers[None, :, :]) ** 2).sum(axis=2)
     return np.argmin(d2, axis=1).astype(np.int64)
-
-
-def _bin_counts(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Points per occupied grid cell and the first point of each, cells in
-    lexicographic order: :func:`floorscan.grid.cell_groups` without the inverse
-    (not needed by the bin seeding; one pass fewer)."""
-    c = cells.astype(np.int64)
-    lo = c.min(axis=0)
-    span = c.max(axis=0) - lo + 1
-    if float(np.prod(span.astype(np.float64))) >= 2.0**62:
-        _, counts, first = cell_groups(cells, first=True)
-        return counts, first
-    key = c[:, 0] - lo[0] if c.shape[1] == 1 else np.ravel_multi_index(tuple((c - lo).T), tuple(int(v) for v in span))
-    _, first, counts = np.unique(key, return_index=True, return_counts=True)
-    return counts, first
 
 
 def _mean_shift(
@@ -927,15 +901,16 @@ def _claimed_segments(pts, c, direction, claimed, params) -> list[tuple]:
     for a, b in zip(bounds[:-1], bounds[1:]):
         piece = cand[a:b]
         if b - a >= params.min_inliers and np.count_nonzero(claimed[piece]) >= params.min_inliers:
-            rows += _segments_on_line(pts[piece], direction, params)
+            row = _piece_segment(pts[piece], direction, params)
+            if row is not None:
+                rows.append(row)
     return rows
 
 
-def _piece_bounds(ts: np.ndarray, max_gap: float, gaps: np.ndarray | None = None) -> list[int]:
+def _piece_bounds(ts: np.ndarray, max_gap: float) -> list[int]:
     """Start of each piece of sorted positions ``ts`` split at gaps wider than
-    ``max_gap``, and the end: pieces are ``ts[b[i]:b[i+1]]`` (as ``numpy.split``).
-    ``gaps`` is ``numpy.diff(ts)`` when the caller has it."""
-    wide = (ts[1:] - ts[:-1] if gaps is None else gaps) > max_gap  # numpy.diff
+    ``max_gap``, and the end: pieces are ``ts[b[i]:b[i+1]]`` (as ``numpy.split``)."""
+    wide = (ts[1:] - ts[:-1]) > max_gap  # numpy.diff
     if not wide.any():  # one piece: the usual case
         return [0, len(ts)]
     return [0, *(np.flatnonzero(wide) + 1).tolist(), len(ts)]

@@ -414,10 +414,10 @@ def _plain_mean_shift(x, bandwidth, min_bin_freq):
 
 def test_issue8_shortcuts_equal_the_plain_forms_bit_for_bit():
     """mean_shift (one BLAS product for the squared distances, only the moving seeds),
-    the bin counts, the inlier counts beyond 2**16 points and _segments_on_line on
-    points already in order give exactly what the plain forms give."""
+    the bin counts and the inlier counts beyond 2**16 points give exactly what the
+    plain forms give; a line's segments do not depend on the order of its points."""
     from floorscan.grid import cell_groups
-    from floorscan.walls import _bin_counts, _inlier_counts, _segments_on_line
+    from floorscan.walls import _claimed_segments, _inlier_counts
 
     rng = np.random.default_rng(11)
     one = np.r_[rng.normal(0, 0.01, 120), rng.normal(0.2, 0.01, 80), rng.normal(1.0, 0.02, 40), rng.uniform(-1, 2, 20)]
@@ -428,7 +428,7 @@ def test_issue8_shortcuts_equal_the_plain_forms_bit_for_bit():
         labels = mean_shift(x, bw, min_bin_freq=mbf)
         np.testing.assert_array_equal(labels, _plain_mean_shift(x, bw, mbf))
         _, counts, first = cell_groups(np.round(x / bw), first=True)
-        for a, b in zip(_bin_counts(np.round(x / bw)), (counts, first)):
+        for a, b in zip(cell_groups(np.round(x / bw), first=True, inverse=False), (counts, first)):
             np.testing.assert_array_equal(a, b)
     assert len(np.unique(mean_shift(sparse, 0.05, 1))) == 300  # > 256 modes: the pairwise loop, not the matrix
     assert len(np.unique(mean_shift(one[:, None], 0.05, 5)[:240])) == 3
@@ -444,7 +444,8 @@ def test_issue8_shortcuts_equal_the_plain_forms_bit_for_bit():
     wall = np.c_[t, 1.0 + 0.005 * rng.normal(size=len(t))]
     direction = np.array([1.0, 0.0])
     shuffled = wall[rng.permutation(len(wall))]
-    got = _segments_on_line(wall, direction, RansacParams())
-    assert got == _segments_on_line(shuffled, direction, RansacParams())  # sorted by the same stable sort
+    claimed = np.ones(len(wall), dtype=bool)
+    got = _claimed_segments(wall, np.array([2.0, 1.0]), direction, claimed, RansacParams())
+    assert got == _claimed_segments(shuffled, np.array([2.0, 1.0]), direction, claimed, RansacParams())
     assert len(got) == 2 and [r[4] for r in got] == [80, 50]
     np.testing.assert_allclose([got[0][0], got[0][2], got[1][0], got[1][2]], [0, 2, 2.8, 4], atol=0.02)
