@@ -541,6 +541,17 @@ TREE_PIECE_M = 0.25
 REACHES_M = (0.02, 0.1)
 
 
+def _grown_boxes(pieces: np.ndarray, reach: float) -> np.ndarray:
+    """The boxes of ``(P, 4)`` segment pieces grown by ``reach`` (and a relative 1e-6
+    and 1e-9 m), as :func:`_box_diagonals`: a point within ``reach`` of a piece is in
+    its box."""
+    g = reach * (1 + 1e-6) + 1e-9
+    return _box_diagonals(
+        np.minimum(pieces[:, 0], pieces[:, 2]) - g, np.minimum(pieces[:, 1], pieces[:, 3]) - g,
+        np.maximum(pieces[:, 0], pieces[:, 2]) + g, np.maximum(pieces[:, 1], pieces[:, 3]) + g,
+    )
+
+
 def _box_diagonals(xmin, ymin, xmax, ymax) -> np.ndarray:
     """Linestrings from ``(xmin, ymin)`` to ``(xmax, ymax)``: their envelopes are the
     boxes, all an STRtree query without predicate looks at (cheaper to make than
@@ -594,12 +605,7 @@ class _SegmentIndex:
         if reach not in self._reach_trees:
             if self._pieces is None:
                 self._pieces, self._owner = _split_long(self.seg, TREE_PIECE_M, return_owner=True)
-            pc = self._pieces
-            g = reach * (1 + 1e-6) + 1e-9
-            self._reach_trees[reach] = shapely.STRtree(_box_diagonals(
-                np.minimum(pc[:, 0], pc[:, 2]) - g, np.minimum(pc[:, 1], pc[:, 3]) - g,
-                np.maximum(pc[:, 0], pc[:, 2]) + g, np.maximum(pc[:, 1], pc[:, 3]) + g,
-            ))  # fmt: skip
+            self._reach_trees[reach] = shapely.STRtree(_grown_boxes(self._pieces, reach))
         return self._reach_trees[reach]
 
     def upper(self, pts: np.ndarray, limit: float = np.inf) -> np.ndarray:
@@ -930,12 +936,7 @@ class _SamplePairs:
         if self._tree is None:
             self._tree = shapely.STRtree(self.geoms)
         pc, owner = _split_long(seg, PAIR_PIECE_M, return_owner=True)
-        g = self.reach * (1 + 1e-6) + 1e-9
-        boxes = _box_diagonals(
-            np.minimum(pc[:, 0], pc[:, 2]) - g, np.minimum(pc[:, 1], pc[:, 3]) - g,
-            np.maximum(pc[:, 0], pc[:, 2]) + g, np.maximum(pc[:, 1], pc[:, 3]) + g,
-        )  # fmt: skip
-        qi, si = self._tree.query(boxes)
+        qi, si = self._tree.query(_grown_boxes(pc, self.reach))
         if len(qi) > 1 and not (qi[1:] >= qi[:-1]).all():
             order = np.argsort(qi, kind="stable")
             qi, si = qi[order], si[order]
