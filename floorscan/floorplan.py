@@ -15,9 +15,11 @@ Coordinates are metres in the map frame of the recording (a local frame, no CRS)
 
 from __future__ import annotations
 
+import hashlib
 import json
 import logging
 import os
+import shutil
 import uuid
 from dataclasses import dataclass
 from typing import Any, Mapping
@@ -519,7 +521,10 @@ def build_floorplan(segments: pd.DataFrame, params: FloorplanParams = FloorplanP
     segments : pandas.DataFrame
         ``x0, y0, x1, y1`` (metres) and optionally ``n_inliers`` (merge weights;
         else the segment lengths are the weights), e.g. a
-        ``walls/{ordering}/{extractor}/k{k}.parquet`` table.
+        ``walls/{ordering}/{extractor}/k{k}.parquet`` table. With a ``scan_id``
+        column the segments are taken in scan order (a stable sort), so the plan
+        depends on which scans gave them, not on the order an ordering ranked
+        the scans (every ordering's ``k = all`` gives the same plan).
     params : FloorplanParams
 
     Returns
@@ -534,6 +539,7 @@ def build_floorplan(segments: pd.DataFrame, params: FloorplanParams = FloorplanP
     missing = [c for c in ("x0", "y0", "x1", "y1") if c not in segments.columns]
     if missing:
         raise KeyError(f"wall segments lack columns {missing}; expected x0, y0, x1, y1")
+    segments = _in_scan_order(segments)
     seg = segments[["x0", "y0", "x1", "y1"]].to_numpy(dtype=np.float64)
     finite = np.isfinite(seg).all(axis=1)
     if not finite.all():
@@ -728,28 +734,8 @@ def write_dxf(plan: FloorPlan, path: str | os.PathLike) -> None:
         doc.saveas(tmp)
 
 
-def write_ifc(plan: FloorPlan, path: str | os.PathLike, name: str = "floorscan") -> None:
-    """Write the floor plan as IFC4 (IfcOpenShell API), units metres.
-
-    IfcProject > IfcSite > IfcBuilding > IfcBuildingStorey (elevation 0) containing an
-    ``IfcWall`` per wall: a body (SweptSolid, as ``geometry.add_wall_representation``
-    makes it: the rectangle length x thickness centred on the axis, extruded by
-    ``height_m``), an axis representation (Plan/Axis, Curve2D), its placement at the
-    axis start along the axis direction, and the quantities
-    ``Qto_WallBaseQuantities`` Length, Width, Height. The project, units, contexts and
-    spatial structure come from ``ifcopenshell.api``; the walls' entities (those the
-    API would make) from ``file.create_entity``, because the per-wall API calls,
-    milliseconds each, were the stage's bottleneck (663 walls of hallways3d: 0.6 -
-    0.7 s CPU per file; STEP lines written by hand took 0.19 s, but the library's
-    writer is the one to keep). The units keep a fixed order (``assign_unit`` keeps
-    them in a set, whose order changed from run to run).
-    GlobalIds derive from ``name`` and the creation order (same plan, same ids).
-
-    Raises
-    ------
-    ImportError
-        When ifcopenshell is not installed (``pip install ifcopenshell``).
-    """
+def _ifc_model(plan: FloorPlan):
+    """The IFC model of ``plan`` (see :func:`write_ifc`), GlobalIds not yet set (:func:`_name_ifc`)."""
     try:
         import ifcopenshell.api.aggregate
         import ifcopenshell.api.context
@@ -765,7 +751,7 @@ def write_ifc(plan: FloorPlan, path: str | os.PathLike, name: str = "floorscan")
         return getattr(getattr(ifcopenshell.api, module), func)(*args, **kwargs)
 
     model = ifcopenshell.api.project.create_file(version="IFC4")
-    project = api("root.create_entity", model, ifc_class="IfcProject", name=name)
+    project = api("root.create_entity", model, ifc_class="IfcProject")
     length_u = api("unit.add_si_unit", model, unit_type="LENGTHUNIT")
     area_u = api("unit.add_si_unit", model, unit_type="AREAUNIT")
     volume_u = api("unit.add_si_unit", model, unit_type="VOLUMEUNIT")
@@ -790,17 +776,11 @@ def write_ifc(plan: FloorPlan, path: str | os.PathLike, name: str = "floorscan")
     api("aggregate.assign_object", model, relating_object=building, products=[storey])
     storey.Elevation = 0.0
     # Stable GlobalIds (from the project name and creation order), so a rerun gives
-    # the same ids and BIM tools see the same walls, not new ones.
-    ns = uuid.uuid5(uuid.NAMESPACE_URL, f"floorscan:{name}")
-    n_root = 0
-
+    # the same ids and BIM tools see the same walls, not new ones. Placeholders here,
+    # set by _name_ifc in creation order.
     def guid() -> str:
-        nonlocal n_root
-        n_root += 1
-        return ifcopenshell.guid.compress(uuid.uuid5(ns, str(n_root - 1)).hex)
+        return "0" * 22
 
-    for entity in model.by_type("IfcRoot"):
-        entity.GlobalId = guid()
     # The walls' entities (those ifcopenshell.api's add_wall_representation,
     # add_axis_representation, edit_object_placement, add_qto and assign_container
     # make) come from create_entity: the API costs milliseconds per call, which made
@@ -860,14 +840,152 @@ def write_ifc(plan: FloorPlan, path: str | os.PathLike, name: str = "floorscan")
         walls.append(wall)
     if walls:
         ent("IfcRelContainedInSpatialStructure", guid(), None, None, None, walls, storey)
+    return model
+
+
+def write_ifc(plan: FloorPlan, path: str | os.PathLike, name: str = "floorscan") -> None:
+    """Write the floor plan as IFC4 (IfcOpenShell API), units metres.
+
+    IfcProject > IfcSite > IfcBuilding > IfcBuildingStorey (elevation 0) containing an
+    ``IfcWall`` per wall: a body (SweptSolid, as ``geometry.add_wall_representation``
+    makes it: the rectangle length x thickness centred on the axis, extruded by
+    ``height_m``), an axis representation (Plan/Axis, Curve2D), its placement at the
+    axis start along the axis direction, and the quantities
+    ``Qto_WallBaseQuantities`` Length, Width, Height. The project, units, contexts and
+    spatial structure come from ``ifcopenshell.api``; the walls' entities (those the
+    API would make) from ``file.create_entity``, because the per-wall API calls,
+    milliseconds each, were the stage's bottleneck (663 walls of hallways3d: 0.6 -
+    0.7 s CPU per file; STEP lines written by hand took 0.19 s, but the library's
+    writer is the one to keep). The units keep a fixed order (``assign_unit`` keeps
+    them in a set, whose order changed from run to run).
+    GlobalIds derive from ``name`` and the creation order (same plan, same ids).
+
+    Raises
+    ------
+    ImportError
+        When ifcopenshell is not installed (``pip install ifcopenshell``).
+    """
+    model = _ifc_model(plan)
+    _name_ifc(model, name)
     with atomic_path(path) as tmp:
         model.write(str(tmp))
+
+
+def _name_ifc(model, name: str) -> None:
+    """Name the IFC project ``name`` and derive every GlobalId from it and the
+    creation order (``uuid5``): the same plan and name give the same ids, and
+    renaming a model gives the ids a fresh model of that name would have."""
+    import ifcopenshell.guid
+
+    ns = uuid.uuid5(uuid.NAMESPACE_URL, f"floorscan:{name}")
+    model.by_type("IfcProject")[0].Name = name
+    compress = ifcopenshell.guid.compress
+    for n, entity in enumerate(sorted(model.by_type("IfcRoot"), key=lambda e: e.id())):
+        entity.GlobalId = compress(uuid.uuid5(ns, str(n)).hex)
+
+
+FLOORPLAN_FORMATS = ("geojson", "svg", "dxf", "ifc")
+
+
+class FloorplanWriter:
+    """Builds and writes floor plans (stage ``floorplan``); a plan of the same segments
+    as one it wrote before is copied, not built and exported again.
+
+    A sweep writes one plan per ordering and k, and every ordering's ``k = all`` (and
+    any k past the number of scans) holds the same scans: :func:`build_floorplan`
+    takes segments in scan order, so those plans are the same plan. The copy's GeoJSON
+    and DXF are the first file's bytes (neither names the plan; the DXF keeps the
+    first file's creation time), its SVG title and IFC project name and GlobalIds are
+    its own, as a fresh export would make them. On hallways3d this skips 4 of the 5
+    largest plans per extractor.
+
+    Parameters
+    ----------
+    cfg : mapping
+        The ``floorplan`` config section.
+
+    Raises
+    ------
+    KeyError
+        For an unknown config key (on construction) or output format (:meth:`write`).
+    """
+
+    def __init__(self, cfg: Mapping[str, Any] | None):
+        self.params = params_from_config(cfg)
+        self._written: dict[bytes, tuple[FloorPlan, dict[str, str], Any]] = {}
+
+    def write(self, segments: pd.DataFrame, outputs: Mapping[str, str | os.PathLike], name: str = "") -> tuple[FloorPlan, bool]:
+        """Build the floor plan of ``segments`` and write it to ``outputs``.
+
+        Parameters
+        ----------
+        segments : pandas.DataFrame
+            Wall segments (``walls/{ordering}/{extractor}/k{k}.parquet``).
+        outputs : mapping
+            Paths by format: any of :data:`FLOORPLAN_FORMATS`.
+        name : str
+            Title of the SVG and name of the IFC project.
+
+        Returns
+        -------
+        plan : FloorPlan
+        copied : bool
+            Whether the plan equals one written before (same segments), and so was copied.
+
+        Raises
+        ------
+        KeyError
+            For an unknown output format, or a missing coordinate column.
+        """
+        unknown = sorted(set(outputs) - set(FLOORPLAN_FORMATS))
+        if unknown:
+            raise KeyError(f"unknown floor plan formats {unknown}; expected {list(FLOORPLAN_FORMATS)}")
+        key = _segments_key(segments)
+        done = self._written.get(key)
+        name = name or "floorscan"
+        if done is None:
+            plan = build_floorplan(segments, self.params)
+            model = None
+        else:
+            plan, first, model = done
+        for fmt, path in outputs.items():
+            if fmt == "svg":
+                write_svg(plan, path, title=name)
+            elif fmt == "ifc":
+                model = _ifc_model(plan) if model is None else model
+                _name_ifc(model, name)
+                with atomic_path(path) as tmp:
+                    model.write(str(tmp))
+            elif done is not None and fmt in first:
+                with atomic_path(path) as tmp:
+                    shutil.copyfile(first[fmt], tmp)
+            else:
+                {"geojson": write_geojson, "dxf": write_dxf}[fmt](plan, path)
+        if done is None:
+            self._written[key] = (plan, {f: str(p) for f, p in outputs.items()}, model)
+        return plan, done is not None
+
+
+def _segments_key(segments: pd.DataFrame) -> bytes:
+    """Digest of the segments in scan order (what :func:`build_floorplan` reads)."""
+    seg = _in_scan_order(segments)
+    h = hashlib.sha256()
+    for c in seg.columns:
+        h.update(c.encode() + b"\0" + np.ascontiguousarray(seg[c].to_numpy()).tobytes())
+    return h.digest()
+
+
+def _in_scan_order(segments: pd.DataFrame) -> pd.DataFrame:
+    """``segments`` stably sorted by ``scan_id`` (unchanged without that column)."""
+    if "scan_id" not in segments.columns or segments["scan_id"].is_monotonic_increasing:
+        return segments
+    return segments.iloc[np.argsort(segments["scan_id"].to_numpy(), kind="stable")]
 
 
 def write_floorplan(
     segments: pd.DataFrame, cfg: Mapping[str, Any] | None, outputs: Mapping[str, str | os.PathLike], name: str = ""
 ) -> FloorPlan:
-    """Build the floor plan of ``segments`` and write it (stage ``floorplan``).
+    """Build the floor plan of ``segments`` and write it (one :meth:`FloorplanWriter.write`).
 
     Parameters
     ----------
@@ -876,7 +994,7 @@ def write_floorplan(
     cfg : mapping
         The ``floorplan`` config section.
     outputs : mapping
-        Paths by format: any of ``geojson``, ``svg``, ``dxf``, ``ifc``.
+        Paths by format: any of :data:`FLOORPLAN_FORMATS`.
     name : str
         Title of the SVG and name of the IFC project.
 
@@ -889,16 +1007,4 @@ def write_floorplan(
     KeyError
         For an unknown output format or config key.
     """
-    writers = {"geojson": write_geojson, "svg": write_svg, "dxf": write_dxf, "ifc": write_ifc}
-    unknown = sorted(set(outputs) - set(writers))
-    if unknown:
-        raise KeyError(f"unknown floor plan formats {unknown}; expected {sorted(writers)}")
-    plan = build_floorplan(segments, params_from_config(cfg))
-    for fmt, path in outputs.items():
-        if fmt == "svg":
-            write_svg(plan, path, title=name)
-        elif fmt == "ifc":
-            write_ifc(plan, path, name=name or "floorscan")
-        else:
-            writers[fmt](plan, path)
-    return plan
+    return FloorplanWriter(cfg).write(segments, outputs, name)[0]

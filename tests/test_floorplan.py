@@ -337,3 +337,34 @@ def test_merge_skips_connected_pairs_without_changing_faces(monkeypatch):
     np.testing.assert_array_equal(labels, labels_all)
     np.testing.assert_allclose(np.sort(fw), np.sort([x.sum() for x in np.split(w, 4)]))
     np.testing.assert_allclose(faces[labels[0]][[1, 3]], [0, 0], atol=0.01)
+
+
+def test_plan_depends_on_the_scans_not_their_ranking_and_a_repeat_is_copied(tmp_path):
+    """Every ordering's k = all holds the same scans in another order: the same plan.
+    The writer copies it (GeoJSON, DXF bytes) and names it (SVG title, IFC project and
+    GlobalIds, exactly as a fresh export of that name)."""
+    from floorscan.floorplan import FLOORPLAN_FORMATS, FloorplanWriter, write_ifc
+
+    segs = scans_segments(BOX + THICK, [(2, 1.2), (2, -1.0), (1, 1.5), (3, -1.5)], "ransac")
+    reranked = pd.concat([segs[segs.scan_id == s] for s in (2, 0, 3, 1)], ignore_index=True)
+    assert not reranked["scan_id"].is_monotonic_increasing
+    a, b = build_floorplan(segs), build_floorplan(reranked)
+    pd.testing.assert_frame_equal(a.walls, b.walls)
+    pd.testing.assert_frame_equal(a.faces, b.faces)
+
+    writer = FloorplanWriter({})
+    out = {run: {f: tmp_path / f"{run}.{f}" for f in FLOORPLAN_FORMATS} for run in ("first", "again", "fewer")}
+    assert writer.write(segs, out["first"], name="first")[1] is False
+    plan, copied = writer.write(reranked, out["again"], name="again")
+    assert copied is True
+    pd.testing.assert_frame_equal(plan.walls, a.walls)
+    for f in ("geojson", "dxf"):
+        assert out["again"][f].read_bytes() == out["first"][f].read_bytes()
+    assert "<title>again</title>" in out["again"]["svg"].read_text()
+    write_ifc(a, tmp_path / "fresh.ifc", name="again")
+    fresh = [line for line in (tmp_path / "fresh.ifc").read_text().splitlines() if not line.startswith("FILE_NAME")]
+    again = [line for line in out["again"]["ifc"].read_text().splitlines() if not line.startswith("FILE_NAME")]
+    assert again == fresh and "IFCPROJECT(" in "".join(again) and "'again'" in "".join(again)
+    # another scan set is built anew
+    assert writer.write(segs[segs.scan_id != 3], out["fewer"], name="fewer")[1] is False
+    assert out["fewer"]["geojson"].read_bytes() != out["first"]["geojson"].read_bytes()
