@@ -132,12 +132,137 @@ def map_in_processes(fn: Callable, calls: Sequence[tuple], local_first: bool | N
     return results
 
 
+class CallStream:
+    """Calls sent to worker processes as the caller produces them, each worker taking
+    many calls in turn (:func:`map_in_processes` needs every call at once).
+
+    :meth:`submit` returns at once: a thread per worker writes the calls to it and
+    another reads its results, so the caller keeps working while the workers run
+    (the register stage reads and screens scans while the pose graph's edges are
+    aligned). Workers started ahead by :func:`prestart` are used first. A worker
+    keeps its module state between calls (a cache of inputs sent before, say).
+
+    Parameters
+    ----------
+    n : int
+        Worker processes (at least 1).
+
+    Raises
+    ------
+    RuntimeError
+        From :meth:`results`: a worker failed (its exit status and the last lines
+        of its stderr).
+    """
+
+    def __init__(self, n: int):
+        import queue
+        import threading
+
+        self._n = max(1, int(n))
+        self._procs: list[tuple[subprocess.Popen, Any]] = []
+        self._outbox: list[Any] = []
+        self._threads: list[threading.Thread] = []
+        self._results: dict[int, Any] = {}
+        self._submitted = 0
+        self.pending = [0] * self._n  # calls sent to each worker and not yet answered
+        self._lock = threading.Lock()
+        for w in range(self._n):
+            proc, err = _READY.pop(0) if _READY else _spawn()
+            self._procs.append((proc, err))
+            box: queue.Queue = queue.Queue()
+            self._outbox.append(box)
+            order: queue.Queue = queue.Queue()  # call numbers, in the order this worker answers
+            self._threads.append(threading.Thread(target=self._send, args=(proc, box, order), daemon=True))
+            self._threads.append(threading.Thread(target=self._receive, args=(w, proc, order), daemon=True))
+        for t in self._threads:
+            t.start()
+
+    def submit(self, worker: int, fn: Callable, args: tuple) -> int:
+        """Queue ``fn(*args)`` for worker ``worker`` (0 .. n - 1); returns the call number.
+        ``fn`` is module-level; arguments and result must pickle."""
+        number = self._submitted
+        self._submitted += 1
+        with self._lock:
+            self.pending[worker] += 1
+        self._outbox[worker].put((number, pickle.dumps((fn.__module__, fn.__qualname__, args))))
+        return number
+
+    def least_busy(self) -> int:
+        """The worker with the fewest unanswered calls."""
+        with self._lock:
+            return min(range(self._n), key=lambda w: self.pending[w])
+
+    def _send(self, proc, box, order) -> None:
+        while True:
+            item = box.get()
+            if item is None:
+                break
+            number, data = item
+            order.put(number)
+            try:
+                proc.stdin.write(data)
+                proc.stdin.flush()
+            except (BrokenPipeError, ValueError):  # it died: reported by results()
+                break
+        try:
+            proc.stdin.close()
+        except (BrokenPipeError, ValueError):
+            pass
+        order.put(None)
+
+    def _receive(self, w: int, proc, order) -> None:
+        while True:
+            number = order.get()
+            if number is None:
+                return
+            try:
+                result = pickle.load(proc.stdout)
+            except Exception:  # EOF or garbage: the worker failed; results() reports it
+                return
+            self._results[number] = result
+            with self._lock:
+                self.pending[w] -= 1
+
+    def results(self) -> list[Any]:
+        """Wait for every call; their results in submission order. Ends the workers."""
+        try:
+            for box in self._outbox:
+                box.put(None)
+            for t in self._threads:
+                t.join()
+            for (proc, err), box in zip(self._procs, self._outbox):
+                if proc.wait() != 0:
+                    err.seek(0)
+                    tail = "\n".join(err.read().decode(errors="replace").strip().splitlines()[-5:])
+                    raise RuntimeError(f"a CallStream worker process exited with {proc.returncode}:\n{tail}")
+            missing = self._submitted - len(self._results)
+            if missing:
+                raise RuntimeError(f"{missing} of {self._submitted} calls got no result from the worker processes")
+            return [self._results[k] for k in range(self._submitted)]
+        finally:
+            self.close()
+
+    def close(self) -> None:
+        """Stop the workers (results not collected are lost)."""
+        for proc, err in self._procs:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+            err.close()
+        self._procs = []
+
+
 def _worker() -> None:
-    """Worker entry point: one pickled ``(module, name, args)`` call on stdin, its
-    pickled result on stdout."""
-    module, name, args = pickle.load(sys.stdin.buffer)
-    fn = importlib.import_module(module)
-    for part in name.split("."):
-        fn = getattr(fn, part)
-    sys.stdout.buffer.write(pickle.dumps(fn(*args)))
-    sys.stdout.buffer.flush()
+    """Worker entry point: pickled ``(module, name, args)`` calls on stdin, one after
+    the other until it closes, each call's pickled result on stdout."""
+    stdin, stdout = sys.stdin.buffer, sys.stdout.buffer
+    while True:
+        try:
+            module, name, args = pickle.load(stdin)
+        except EOFError:
+            return
+        fn = importlib.import_module(module)
+        for part in name.split("."):
+            fn = getattr(fn, part)
+        stdout.write(pickle.dumps(fn(*args)))
+        stdout.flush()

@@ -38,7 +38,7 @@ import functools
 import logging
 import math
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -209,6 +209,8 @@ def scan_pair_edges(
     t_s: np.ndarray,
     params: GraphParams = GraphParams(),
     icp_kinds: tuple[str, ...] = ("sequential", "loop"),
+    known: "Mapping[tuple[int, int], tuple] | None" = None,
+    scan_ids: Sequence[int] | None = None,
 ) -> pd.DataFrame:
     """Relative-pose constraints between overlapping scans by planar ICP.
 
@@ -236,6 +238,12 @@ def scan_pair_edges(
         Pair kinds aligned by ICP; the others keep the relative pose of ``poses``
         with fitness 1 (odometry mode: the odometry chain is the sequential edges, ICP
         only closes the loops).
+    known : mapping, optional
+        Rows aligned ahead (:meth:`EdgeStream.finish`), by the pair's scan ids; a
+        pair found there with the same kind takes that row (the same clouds, poses
+        and parameters give the same row), the others are aligned here.
+    scan_ids : sequence of int, optional
+        The scan id of each cloud (needed with ``known``).
 
     Returns
     -------
@@ -248,18 +256,128 @@ def scan_pair_edges(
         uses the pairs with ``fitness >= min_edge_fitness``.
     """
     poses = np.asarray(poses, dtype=np.float64)
-    pts = []
-    for c in clouds:  # the xy projection (z = 0): Open3D's 6-DoF ICP then stays planar
-        p = np.array(c, dtype=np.float64).reshape(-1, 3)
-        p[:, 2] = 0.0
-        pts.append(voxel_downsample(p, params.voxel_size_m))
+    pts = [_plane_cloud(c, params.voxel_size_m) for c in clouds]
     pairs = [(i, j, kind) for i, j, kind in candidate_pairs(poses, t_s, params)
              if len(pts[i]) >= 3 and len(pts[j]) >= 3]
-    rows = _parallel_pair_rows(pts, poses, _chunks(pairs, max(1, int(params.workers))), params, icp_kinds)
+    done: dict[int, tuple] = {}  # pair number -> row, from the rows aligned ahead
+    if known:
+        if scan_ids is None or len(scan_ids) != len(pts):
+            raise ValueError("known edges need the scan_ids of the clouds")
+        ids = [int(s) for s in scan_ids]
+        for n, (i, j, kind) in enumerate(pairs):
+            row = known.get((ids[i], ids[j]))
+            if row is not None and row[2] == kind:
+                done[n] = (i, j, *row[2:])
+    todo = [pair for n, pair in enumerate(pairs) if n not in done]
+    computed = iter(_parallel_pair_rows(pts, poses, _chunks(todo, max(1, int(params.workers))), params, icp_kinds))
+    rows = [done[n] if n in done else next(computed) for n in range(len(pairs))]
+    if known is not None:
+        log.info("edges: %d of %d pairs aligned while the scans were read", len(done), len(pairs))
     return pd.DataFrame(rows, columns=EDGE_COLUMNS).astype(
         {"i": np.int64, "j": np.int64, "kind": str, "dx_m": float, "dy_m": float,
          "dyaw_rad": float, "fitness_prior": float, "fitness": float, "inlier_rmse_m": float}
     )
+
+
+def _plane_cloud(cloud: np.ndarray, voxel_size_m: float) -> np.ndarray:
+    """A cloud as ICP aligns it: projected to xy (z = 0: Open3D's 6-DoF ICP then stays
+    planar), voxel-downsampled; (M, 3) float64."""
+    p = np.array(cloud, dtype=np.float64).reshape(-1, 3)
+    p[:, 2] = 0.0
+    return voxel_downsample(p, voxel_size_m)
+
+
+class EdgeStream:
+    """The ICP of :func:`scan_pair_edges`, run in worker processes while the clouds
+    arrive, for the scans expected to be sampled (issue 8: the register stage reads
+    and screens a 3D recording for seconds, and the edges took as long again after).
+
+    The pairs are :func:`candidate_pairs` of the expected scans and their initial
+    poses; each is sent (in batches of :data:`STREAM_BATCH`) to the least busy worker
+    as soon as both its clouds are here, a worker keeping the clouds it was sent.
+    :func:`scan_pair_edges` then takes the rows of its pairs from :meth:`finish`
+    and aligns only pairs that were not expected (a scan dropped after all), so the
+    edges are the same as without the stream (tested).
+
+    Parameters
+    ----------
+    scan_ids : (N,) int array-like
+        The scans expected, in time order.
+    poses : (N, 4) float ndarray
+        Their initial poses ``x, y, z, yaw`` (metres, radians).
+    t_s : (N,) float ndarray
+        Their times, seconds.
+    params : GraphParams
+    icp_kinds : tuple of str
+        As :func:`scan_pair_edges`.
+    workers : int
+        Worker processes (:class:`floorscan.parallel.CallStream`; ones started ahead
+        by :func:`floorscan.parallel.prestart` first).
+    """
+
+    def __init__(self, scan_ids, poses, t_s, params: GraphParams, icp_kinds: tuple[str, ...], workers: int):
+        from floorscan.parallel import CallStream
+
+        ids = [int(s) for s in scan_ids]
+        poses = np.asarray(poses, dtype=np.float64)
+        self.params, self.icp_kinds = params, icp_kinds
+        self.poses = {sid: poses[k] for k, sid in enumerate(ids)}
+        self.by_later: dict[int, list[tuple[int, int, str]]] = {}
+        for i, j, kind in candidate_pairs(poses, t_s, params):
+            self.by_later.setdefault(ids[j], []).append((ids[i], ids[j], kind))
+        self.pts: dict[int, np.ndarray] = {}
+        self.stream = CallStream(workers)
+        self.sent = [set() for _ in range(max(1, int(workers)))]
+        self.ready: list[tuple[int, int, str]] = []
+
+    def add(self, scan_id: int, cloud: np.ndarray) -> None:
+        """Scan ``scan_id``'s cloud (as for :func:`scan_pair_edges`) is here: send the
+        pairs it completes (with an earlier scan) once a batch is full."""
+        sid = int(scan_id)
+        self.pts[sid] = p = _plane_cloud(cloud, self.params.voxel_size_m)
+        if len(p) < 3:
+            return
+        for pair in self.by_later.get(sid, ()):
+            other = self.pts.get(pair[0])
+            if other is not None and len(other) >= 3:
+                self.ready.append(pair)
+        if len(self.ready) >= STREAM_BATCH:
+            self._send()
+
+    def _send(self) -> None:
+        if not self.ready:
+            return
+        w = self.stream.least_busy()
+        scans = {k for i, j, _ in self.ready for k in (i, j)}
+        new = {k: self.pts[k] for k in sorted(scans - self.sent[w])}
+        self.sent[w] |= new.keys()
+        poses = {k: self.poses[k] for k in sorted(scans)}
+        self.stream.submit(w, _stream_pair_rows, (new, poses, self.ready, self.params, self.icp_kinds))
+        self.ready = []
+
+    def finish(self) -> dict[tuple[int, int], tuple]:
+        """Send the last batch and wait: the :data:`EDGE_COLUMNS` rows (``i, j`` are
+        scan ids) by ``(i, j)``."""
+        self._send()
+        return {(r[0], r[1]): r for rows in self.stream.results() for r in rows}
+
+    def close(self) -> None:
+        """Stop the workers (after an error elsewhere)."""
+        self.stream.close()
+
+
+#: Pairs per call of :class:`EdgeStream` (~0.3 s of ICP).
+STREAM_BATCH = 100
+
+#: The clouds an :class:`EdgeStream` worker process was sent, by scan id.
+_STREAM_CLOUDS: dict[int, np.ndarray] = {}
+
+
+def _stream_pair_rows(new_clouds, poses, pairs, params, icp_kinds) -> list[tuple]:
+    """:func:`_pair_rows` in an :class:`EdgeStream` worker: ``new_clouds`` join the
+    clouds sent before; ``i, j`` and the keys of ``poses`` are scan ids."""
+    _STREAM_CLOUDS.update(new_clouds)
+    return _pair_rows(_STREAM_CLOUDS, poses, pairs, params, icp_kinds)
 
 
 _MIN_PAIRS_PER_WORKER = 200
@@ -290,7 +408,8 @@ def _parallel_pair_rows(pts, poses, chunks, params, icp_kinds) -> list[tuple]:
 
 def _pair_rows(pts, poses: np.ndarray, pairs, params: GraphParams, icp_kinds) -> list[tuple]:
     """The :data:`EDGE_COLUMNS` rows of ``pairs`` (see :func:`scan_pair_edges`);
-    ``pts[k]`` is scan k's projected, downsampled cloud (a list or a dict)."""
+    ``pts[k]`` is scan k's projected, downsampled cloud and ``poses[k]`` its initial
+    pose (lists, arrays or dicts by scan id)."""
     import open3d as o3d
 
     reg = o3d.pipelines.registration
@@ -587,6 +706,8 @@ def refine_poses(
     priors: np.ndarray | None,
     params: GraphParams = GraphParams(),
     icp_kinds: tuple[str, ...] = ("sequential", "loop"),
+    known: "Mapping[tuple[int, int], tuple] | None" = None,
+    scan_ids: Sequence[int] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
     """Pose-graph registration of a sequence of scans: edges, then optimisation.
 
@@ -602,7 +723,7 @@ def refine_poses(
     priors : (N, 4) float ndarray or None
         The localizer's poses (None in odometry mode: the first scan is held).
     params : GraphParams
-    icp_kinds : tuple of str
+    icp_kinds, known, scan_ids
         See :func:`scan_pair_edges`.
 
     Returns
@@ -621,7 +742,7 @@ def refine_poses(
     """
     initial = np.asarray(initial, dtype=np.float64)
     n = len(initial)
-    edges = scan_pair_edges(clouds, initial, t_s, params, icp_kinds)
+    edges = scan_pair_edges(clouds, initial, t_s, params, icp_kinds, known, scan_ids)
     poses, info = optimize_pose_graph(initial, edges, priors, params)
     info["n_pairs"] = int(len(edges))
     both = np.r_[edges["i"].to_numpy(), edges["j"].to_numpy()]

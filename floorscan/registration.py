@@ -784,25 +784,26 @@ class _Screener:
                 r = str(poses["reason"].iloc[i]) or "invalid"
                 self.reasons[i] = f"no_pose:{r}"
             self.px, self.py, self.pyaw = (poses[c].to_numpy(np.float64) for c in ("x", "y", "yaw"))
-        self.prev_digest = None
+        self.prev = None  # the previous scan's points (duplicate check)
         self.last = None  # last plausible pose (pose-jump check)
 
-    def step(self, i: int, pts: np.ndarray | None) -> str:
+    def step(self, i: int, pts: np.ndarray | None, points_unseen: bool = False) -> str:
         """Screen scan ``i`` (index position) with its points (None: no points);
-        returns its reason (``""``: usable)."""
+        returns its reason (``""``: usable). ``points_unseen``: the points are not
+        known yet and taken to pass (the scans expected to be usable, from the
+        index and poses alone)."""
         cfg, reasons, t = self.cfg, self.reasons, self.t
         size = 0 if pts is None else len(pts)
-        digest = None
-        if size:
-            digest = (size, hash(np.ascontiguousarray(pts, dtype=np.float64).tobytes()))
         if reasons[i] == "":
             if i > 0 and t[i] == t[i - 1]:
                 reasons[i] = "duplicate"
+            elif points_unseen:
+                pass
             elif size < max(cfg.min_points, 1):
                 reasons[i] = "too_few_points"
-            elif digest is not None and digest == self.prev_digest:
-                reasons[i] = "duplicate"
-        self.prev_digest = digest
+            elif self.prev is not None and np.array_equal(pts, self.prev):
+                reasons[i] = "duplicate"  # the same returns as the scan before
+        self.prev = pts if size else None
         if self.poses is None or reasons[i].startswith("no_pose") or reasons[i] == "duplicate":
             return reasons[i]
         # pose jump: against the last plausible pose (a single outlier drops one scan; after
@@ -1401,10 +1402,11 @@ def _aligned_poses(index: pd.DataFrame, poses: pd.DataFrame | None, cfg: Registr
     return _align_poses(index, poses)
 
 
-def _register_screened(index, aligned, reasons, clouds: "_ScanStore", cfg) -> tuple[pd.DataFrame, dict]:
+def _register_screened(index, aligned, reasons, clouds: "_ScanStore", cfg, known_edges=None) -> tuple[pd.DataFrame, dict]:
     """Algorithm 3 steps 2-6 after the per-scan checks: sampling, then the registration
-    of the configured mode. Returns the :data:`REGISTRATION` table and the summary;
-    raises :class:`RegistrationError` when nothing could be registered."""
+    of the configured mode (``known_edges``: pose-graph edges aligned ahead). Returns
+    the :data:`REGISTRATION` table and the summary; raises :class:`RegistrationError`
+    when nothing could be registered."""
     n = len(index)
     odometry = cfg.mode == "odometry"
     usable = np.flatnonzero(reasons == "")
@@ -1430,7 +1432,7 @@ def _register_screened(index, aligned, reasons, clouds: "_ScanStore", cfg) -> tu
         if cfg.loop_closure:
             _register_graph(np.flatnonzero(kept), clouds, sids, t, cfg, out, priors=False)
     elif cfg.reference == "graph":
-        n_anchor = _register_graph(sampled, clouds, sids, t, cfg, out, priors=True)
+        n_anchor = _register_graph(sampled, clouds, sids, t, cfg, out, priors=True, known=known_edges)
     elif cfg.reference == "previous":
         n_anchor = _register_sequential(sampled, clouds, sids, t, cfg, out)
     else:
@@ -1517,6 +1519,7 @@ def register_recording(
     from floorscan.io import SCANS, ScanRowGroups, iter_scans, parquet_options
 
     cfg = _config(config)
+    n_workers = 0
     if cfg.reference == "graph" or (cfg.mode == "odometry" and cfg.loop_closure):
         from floorscan.parallel import prestart
         from floorscan.posegraph import GraphParams
@@ -1527,13 +1530,29 @@ def register_recording(
         # most ~3 pairs a sampled scan are counted here, so small recordings get one)
         workers = GraphParams.from_mapping(cfg.graph).workers
         pairs = 3 * len(scan_index) // max(1, cfg.every_n)
-        prestart(min(workers, max(1, pairs // 200)) if workers > 1 else 0, preload=("open3d", "floorscan.posegraph"))
+        n_workers = min(workers, max(1, pairs // 200)) if workers > 1 else 0
+        prestart(n_workers, preload=("open3d", "floorscan.posegraph"))
     index = _prepare_index(scan_index)
     aligned = _aligned_poses(index, poses, cfg)
     sids = index["scan_id"].to_numpy()
     n = len(sids)
     screen = _Screener(index, aligned, cfg)
     store = _ScanStore(cfg)
+    edges = None
+    if cfg.mode == "pose" and cfg.reference == "graph" and n_workers and aligned is not None:
+        # the pose graph's edges are aligned in the workers while the scans are read
+        # (posegraph.EdgeStream), for the scans that the index and poses say will be
+        # sampled; a scan the points drop after all only costs its pairs again
+        from floorscan.posegraph import EdgeStream
+
+        expected = _expected_sampled(index, aligned, cfg)
+        if len(expected):
+            t = index["t_ns"].to_numpy(np.int64)[expected]
+            init = aligned.iloc[expected][["x", "y", "z", "yaw"]].to_numpy(np.float64)
+            edges = EdgeStream(
+                sids[expected], init, (t - t[0]) * 1e-9, GraphParams.from_mapping(cfg.graph),
+                ("sequential", "loop"), n_workers,
+            )  # fmt: skip
 
     def walk():
         """(index position, points) in index order; the file's scans are ascending."""
@@ -1566,18 +1585,31 @@ def register_recording(
     try:
         with pq.ParquetWriter(sampled_path, SCANS, **parquet_options(SCANS)) as sampled_writer:
             with ScanRowGroups(sampled_writer) as sampled_out:
-                _first_pass(walk(), sids, screen, store, cfg, sampled_out)
-        table, summary = _register_screened(index, aligned, screen.reasons, store, cfg)
+                _first_pass(walk(), sids, screen, store, cfg, sampled_out, edges)
+        known = edges.finish() if edges is not None else None
+        table, summary = _register_screened(index, aligned, screen.reasons, store, cfg, known)
         store = None
         _second_pass(table, sids, sampled_path, registered_path, metadata)
     finally:
+        if edges is not None:
+            edges.close()
         sampled_path.unlink(missing_ok=True)
     return RegistrationResult(registered=None, table=table, summary=summary)
 
 
-def _first_pass(scans, sids, screen, store, cfg, sampled_out) -> None:
+def _expected_sampled(index: pd.DataFrame, aligned: pd.DataFrame, cfg) -> np.ndarray:
+    """Index positions of the scans that will be sampled if every scan's points pass
+    the screening (the checks of the index and poses only: as _register_screened samples)."""
+    screen = _Screener(index, aligned, cfg)
+    for i in range(len(index)):
+        screen.step(i, None, points_unseen=True)
+    return np.flatnonzero(screen.reasons == "")[:: cfg.every_n]
+
+
+def _first_pass(scans, sids, screen, store, cfg, sampled_out, edges=None) -> None:
     """Screen the scans as they stream by; keep the sampled ones' registration clouds
-    (``store``) and points (``sampled_out``)."""
+    (``store``) and points (``sampled_out``); hand the graph clouds to ``edges``
+    (a :class:`floorscan.posegraph.EdgeStream`)."""
     odometry = cfg.mode == "odometry"
     n_usable = 0  # the every-n-th usable scan is sampled (as _register_screened)
     for k, pts in scans:
@@ -1595,6 +1627,8 @@ def _first_pass(scans, sids, screen, store, cfg, sampled_out) -> None:
             needs = ()
         if needs:
             store.add(int(sids[k]), pts, needs)
+            if edges is not None and "graph" in needs:
+                edges.add(int(sids[k]), store.graph(int(sids[k])))
         if is_sampled:
             sampled_out.add(int(sids[k]), pts)
 
@@ -1693,7 +1727,7 @@ def _raise_if_nothing_registered(table: pd.DataFrame, cfg: RegistrationConfig, s
 # --------------------------------------------------------------------------- pose graph
 
 
-def _register_graph(scans, clouds, sids, t, cfg, out, priors: bool) -> int:
+def _register_graph(scans, clouds, sids, t, cfg, out, priors: bool, known=None) -> int:
     """Pose-graph registration (``reference: graph``, :mod:`floorscan.posegraph`).
 
     ``scans`` (indices into the scan index, time order) start at ``final`` (the
@@ -1722,7 +1756,7 @@ def _register_graph(scans, clouds, sids, t, cfg, out, priors: bool) -> int:
     cl = [clouds.graph(int(sids[i])) for i in scans]
     kinds = ("sequential", "loop") if priors else ("loop",)
     poses, fp, fi, rm, info = posegraph.refine_poses(
-        cl, init, t_s, init if priors else None, params, icp_kinds=kinds
+        cl, init, t_s, init if priors else None, params, icp_kinds=kinds, known=known, scan_ids=sids[scans]
     )
     final[scans] = poses
     log.info("pose graph: %d scans, %s", n, info)

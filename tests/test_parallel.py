@@ -46,3 +46,34 @@ def test_without_local_first_every_call_runs_in_a_worker():
     assert [r[0] for r in out] == [2, 4]
     assert os.getpid() not in {r[1] for r in out} and out[0][1] != out[1][1]
     assert parallel.map_in_processes(_whoami, [], local_first=False) == []
+
+
+_SEEN: list = []
+
+
+def _remember(x):
+    """Keeps what it was given before (a worker keeps its module state between calls)."""
+    if x == "fail":
+        raise ValueError("asked to fail")
+    _SEEN.append(x)
+    return list(_SEEN), os.getpid()
+
+
+def test_call_stream_workers_take_many_calls_and_keep_their_state():
+    stream = parallel.CallStream(2)
+    for k in range(6):
+        stream.submit(k % 2, _remember, (k,))
+    out = stream.results()
+    assert [seen for seen, _ in out] == [[0], [1], [0, 2], [1, 3], [0, 2, 4], [1, 3, 5]]
+    pids = [pid for _, pid in out]
+    assert len(set(pids)) == 2 and os.getpid() not in pids and pids[0::2] == [pids[0]] * 3
+    assert stream.pending == [0, 0]
+
+
+def test_call_stream_reports_a_failed_call():
+    stream = parallel.CallStream(1)
+    stream.submit(0, _remember, (1,))
+    stream.submit(0, _remember, ("fail",))
+    stream.submit(0, _remember, (2,))
+    with pytest.raises(RuntimeError, match="asked to fail"):
+        stream.results()
