@@ -1237,7 +1237,9 @@ def score_dataset(
         per-scan segments); or ``floorplan``, the path of the plan's ``.geojson``, from
         which both are read when the run is scored. Runs of one ordering and extractor
         in increasing k (each wall set containing the previous one) are scored
-        incrementally, from the new walls only, with the same result.
+        incrementally, from the new walls only, with the same result. The last run of
+        an ordering whose walls (as a set) and plan faces equal an earlier run's of
+        its extractor (every ordering's ``k = all``) takes that run's metrics.
     references : dict
         ``{extractor: (M, 4) segments}``: what each extractor's walls are scored
         against. On synthetic datasets every extractor maps to the same ground truth
@@ -1338,8 +1340,13 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
     sample_pairs: dict[str, _SamplePairs] = {}
     all_pairs: dict[str, _SamplePairs | None] = {}
     raster_caches: dict[str, dict] = {}
+    # A run with the same walls and floor plan as an earlier one of its extractor (every
+    # ordering's k = all: the same scans) has its metrics; when no larger k of its
+    # ordering follows, they are taken, not computed again from its growing state.
+    last_of_group = {(r["ordering"], r["extractor"]): n for n, r in enumerate(runs)}
+    scored: dict[tuple, dict] = {}
     rows = []
-    for run in runs:
+    for n_run, run in enumerate(runs):
         ext = run["extractor"]
         if ext not in refs:
             raise ValueError(f"no {reference_kind} walls for extractor {ext!r}")
@@ -1365,7 +1372,17 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
 
             walls = read_table(walls, columns=["x0", "y0", "x1", "y1"])
         walls = as_segments(walls)
+        plan_path = run.get("floorplan")
+        if plan_path is not None:
+            plan, nfp = read_floorplan(plan_path)
+        else:
+            plan, nfp = run.get("floorplan_faces"), run.get("n_floorplan_walls")
+        same = (ext, _set_digest(walls), None if plan is None else _set_digest(as_segments(plan)))
         key = (run["ordering"], ext)
+        m = scored.get(same) if last_of_group[key] == n_run else None
+        if m is not None:
+            rows.append(_score_row(run, dataset, reference_kind, walls, nfp, grid, cfg, dict(m), t0))
+            continue
         if key not in growing:
             # One state per ordering and extractor: its k grow in the order of runs.
             growing[key] = _GrowingWalls(
@@ -1375,36 +1392,46 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
                 pairs=sample_pairs[ext], all_pairs=all_pairs[ext], raster_cache=raster_caches[ext],
             )  # fmt: skip
         m = growing[key].score(walls)
-        plan_path = run.get("floorplan")
-        if plan_path is not None:
-            plan, nfp = read_floorplan(plan_path)
-        else:
-            plan, nfp = run.get("floorplan_faces"), run.get("n_floorplan_walls")
         if plan is not None:
             pm = _recall_precision(plan, refs[ext], cfg["taus_m"], ref_samples[ext], pairs=sample_pairs[ext])
             for tau in cfg["taus_m"]:
                 for what in ("precision", "recall", "f1"):
                     m[f"plan_{what}_{tau_label(tau)}"] = pm[f"{what}_{tau_label(tau)}"]
-        n_kept = int(run["n_kept"])
-        n_scans = k_scans(run["k"], n_kept)
-        row = {
-            "dataset": dataset,
-            "reference_kind": reference_kind,
-            "ordering": run["ordering"],
-            "extractor": ext,
-            "k": str(run["k"]),
-            "n_scans": n_scans,
-            "n_scans_kept": n_kept,
-            "scan_fraction": n_scans / n_kept if n_kept else math.nan,
-            "n_segments": int(len(walls)),
-            "n_floorplan_walls": -1 if nfp is None else int(nfp),
-            "cell_m": float(grid.cell_m),
-            "wall_width_m": float(cfg["wall_width_m"]),
-            **m,
-            "score_time_s": time.perf_counter() - t0,
-        }
-        rows.append(row)
+        scored.setdefault(same, dict(m))
+        rows.append(_score_row(run, dataset, reference_kind, walls, nfp, grid, cfg, m, t0))
     return rows
+
+
+def _score_row(run, dataset, reference_kind, walls, nfp, grid, cfg, m: dict, t0: float) -> dict:
+    import time
+
+    n_kept = int(run["n_kept"])
+    n_scans = k_scans(run["k"], n_kept)
+    return {
+        "dataset": dataset,
+        "reference_kind": reference_kind,
+        "ordering": run["ordering"],
+        "extractor": run["extractor"],
+        "k": str(run["k"]),
+        "n_scans": n_scans,
+        "n_scans_kept": n_kept,
+        "scan_fraction": n_scans / n_kept if n_kept else math.nan,
+        "n_segments": int(len(walls)),
+        "n_floorplan_walls": -1 if nfp is None else int(nfp),
+        "cell_m": float(grid.cell_m),
+        "wall_width_m": float(cfg["wall_width_m"]),
+        **m,
+        "score_time_s": time.perf_counter() - t0,
+    }
+
+
+def _set_digest(segments: np.ndarray) -> bytes:
+    """Digest of a set of segments (rows in any order)."""
+    import hashlib
+
+    seg = np.ascontiguousarray(segments, dtype=np.float64).reshape(-1, 4)
+    seg = seg[np.lexsort(seg.T[::-1])] if len(seg) else seg
+    return hashlib.sha256(seg.tobytes()).digest()
 
 
 def summarize(metrics, tau: float = 0.05, levels=(0.95, 0.99)):

@@ -554,3 +554,29 @@ def test_orderings_sharing_caches_score_as_from_scratch(tmp_path):
         assert row["plan_recall_2cm"] == plan["recall_2cm"] and row["plan_recall_5cm"] == plan["recall_5cm"]
         assert row["plan_f1_5cm"] == pytest.approx(plan["f1_5cm"], rel=1e-12)
     assert df["recall_5cm"].iloc[-1] > 0.9 and 0 < df["plan_recall_5cm"].iloc[0] < df["plan_recall_5cm"].iloc[-1]
+
+
+def test_a_last_run_with_the_walls_and_plan_of_an_earlier_one_takes_its_metrics(tmp_path):
+    """Every ordering's k = all holds the same walls (in another order) and plan: the
+    later orderings take the first one's metrics (identical rows) instead of growing
+    their own state to it, and those equal scoring the wall set on its own."""
+    gt = np.array([[0, 0, 10, 0], [10, 0, 10, 6], [10, 6, 0, 6], [0, 6, 0, 0], [4, 0, 4, 6]], dtype=float)
+    seg = _stacked_walls(20, seed=5)
+    cfg = {"cell_m": 0.05, "wall_width_m": 0.1, "margin_m": 1.0, "taus_m": [0.02, 0.05], "sample_step_m": 0.01}
+    cols = ["x0", "y0", "x1", "y1"]
+    order = np.random.default_rng(1).permutation(len(seg))
+    runs = [{"ordering": o, "extractor": "ransac", "k": k, "walls": pd.DataFrame(w[:n], columns=cols),
+             "n_kept": 20, "n_floorplan_walls": 3, "floorplan_faces": seg[:6] if k == "all" else w[:2]}
+            for o, w in (("a", seg), ("b", seg[order])) for k, n in (("5", 5), ("all", len(seg)))]
+    df = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg)
+    metric_cols = [c for c in df.columns if c not in ("ordering", "score_time_s")]
+    a_all, b_all = (df[(df.ordering == o) & (df.k == "all")][metric_cols].reset_index(drop=True) for o in "ab")
+    pd.testing.assert_frame_equal(a_all, b_all, check_exact=True)
+    want = M.score_walls(seg, gt, M.grid_for(gt, 0.05, 1.0), 0.1, cfg["taus_m"], 0.01)
+    assert b_all.loc[0, "f1_5cm"] == pytest.approx(want["f1_5cm"], rel=1e-12) and want["f1_5cm"] > 0.5
+    # a different plan for the same walls is scored, not taken
+    runs[3] = {**runs[3], "floorplan_faces": seg[6:9]}
+    df2 = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg)
+    b2 = df2[(df2.ordering == "b") & (df2.k == "all")].iloc[0]
+    plan = M.tolerance_metrics(seg[6:9], gt, cfg["taus_m"], samples=M.gt_samples(gt))
+    assert b2["plan_recall_5cm"] == plan["recall_5cm"] != a_all.loc[0, "plan_recall_5cm"]
