@@ -10,6 +10,15 @@ DATASETS = config["datasets"]
 # with a {dataset} placeholder (see all_outputs).
 FINAL_OUTPUTS = []
 
+# Scheduling (issue 8): of the jobs ready at once, Snakemake starts those of higher
+# priority first. On few cores the hulls go first, so select and the figures of the
+# registration and selection run beside the walls shards (not alone, and not at the
+# end, where the floor plans and scores of both extractors keep every core busy); then
+# the chain to the floor plans and scores; the last figures wait for those anyway.
+PRIORITY_HULLS = 20
+PRIORITY_WALLS = 10
+PRIORITY_FIGURES = 0
+
 
 wildcard_constraints:
     dataset="|".join(sorted(DATASETS)) or "NO_DATASET",

@@ -77,6 +77,7 @@ def scan_walls_shards(wildcards):
 # plan for every extractor). Plan and merge take well under a second, so on a cluster
 # they run on the submitting host (localrule).
 checkpoint scan_walls_plan:
+    priority: PRIORITY_WALLS
     localrule: True
     input:
         registered="results/{dataset}/registered.parquet",
@@ -95,6 +96,7 @@ checkpoint scan_walls_plan:
 
 
 rule scan_walls_shard:
+    priority: PRIORITY_WALLS
     input:
         points="results/{dataset}/registered.parquet",
     output:
@@ -114,6 +116,7 @@ rule scan_walls_shard:
 
 
 rule scan_walls:
+    priority: PRIORITY_WALLS
     localrule: True
     input:
         unpack(scan_walls_shards),
@@ -139,6 +142,7 @@ def walls_run_params(wildcards):
 # One job per dataset: taking the first k scans of an ordering is a cheap filter, so
 # the 70 tables of the default config come from one process (a job costs ~1 s to start).
 rule walls:
+    priority: PRIORITY_WALLS
     input:
         walls=expand("results/{{dataset}}/walls/{extractor}/per_scan.parquet", extractor=config["walls"]["extractors"]),
         orderings=expand("results/{{dataset}}/orderings/{ordering}.parquet", ordering=config["walls"]["orderings"]),
@@ -161,6 +165,7 @@ rule walls:
 # ~1 s of start-up and imports; 2 jobs on 2 cores, and each extractor's score_runs
 # starts as soon as its job ends).
 rule floorplan:
+    priority: PRIORITY_WALLS
     input:
         lambda wc: [
             f"results/{wc.dataset}/walls/{o}/{wc.extractor}/k{k}.parquet"
