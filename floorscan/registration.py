@@ -537,7 +537,7 @@ def graph_cloud(points: np.ndarray, cfg: RegistrationConfig) -> np.ndarray:
     - raw 3D points: 1.75 cm, 0.12 deg, 569 s CPU, 6.4 GB RSS;
     - projected after dropping the horizontal surfaces by their Open3D normals on a
       0.2 m voxel grid (the previous version): 1.86 cm, 0.18 deg, ~11 ms per scan;
-    - projected with the height-extent test: 1.57 cm, 0.12 deg, ~4 ms per scan, ~570
+    - projected with the height-extent test: 1.57 cm, 0.12 deg, ~1.7 ms per scan, ~570
       cells of ~1k before (without the gap limit 1.55 cm, 0.16 deg, within 0.01 cm for
       a 0.1, 0.2 or 0.3 m extent);
     - the localizer: 6.92 cm, 1.15 deg.
@@ -567,8 +567,7 @@ def graph_cloud(points: np.ndarray, cfg: RegistrationConfig) -> np.ndarray:
     key = cell_keys(xy_cells)
     if key is None:  # an extent beyond the int64 key: the cells' ranks instead
         key = cell_groups(xy_cells)[0]
-    # one sort: by cell, then height; cells numbered in lexicographic order
-    order = np.lexsort((p[:, 2], key))
+    order = _cell_height_order(key, p[:, 2])
     z, ks = p[order, 2], key[order]
     new_cell = np.ones(len(ks), dtype=bool)
     new_cell[1:] = ks[1:] != ks[:-1]
@@ -591,6 +590,22 @@ def graph_cloud(points: np.ndarray, cfg: RegistrationConfig) -> np.ndarray:
         return q
     xy = np.column_stack([np.bincount(inverse, weights=p[:, i], minlength=g) for i in (0, 1)]) / counts[:, None]
     return np.column_stack([xy[vertical], np.zeros(int(vertical.sum()))])
+
+
+def _cell_height_order(key: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """The order of the points by cell key, then height: ``numpy.lexsort((z, key))``
+    up to the order of equal heights in a cell. Heights that are float32 values (as
+    ``scans.parquet`` stores them) and keys below 2**31 make one int64 key, the cell
+    above the float32 bits mapped to an order-preserving unsigned integer, sorted in
+    one argsort: 0.2 instead of 2.1 ms for a 14k-point scan (the lexsort was most of
+    :func:`graph_cloud`'s time)."""
+    z32 = z.astype(np.float32)
+    if len(key) == 0 or int(key.max()) >= 2**31 or not np.array_equal(z32, z):
+        return np.lexsort((z, key))
+    bits = z32.view(np.uint32).astype(np.int64)
+    # IEEE order: negative floats reversed below the positive ones
+    ordered = np.where(bits >= 2**31, 2**32 - 1 - bits, bits + 2**31)
+    return np.argsort((key.astype(np.int64) << 32) | ordered)
 
 
 def fitness_against(

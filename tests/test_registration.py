@@ -771,3 +771,22 @@ def test_graph_cloud_one_sort_equals_the_grouped_path(monkeypatch):
     assert 100 < len(fast) <= 240 and np.all(np.abs(fast[:, 1] - 2.0) < 0.05)  # the wall: 120 cells a row, no floor
     c = rng.integers(-50, 50, (500, 2))
     np.testing.assert_array_equal(np.argsort(cell_keys(c), kind="stable"), np.lexsort(c.T[::-1]))
+
+
+def test_cell_height_order_is_lexsort_by_cell_then_height():
+    """The one-key sort of graph_cloud orders as numpy.lexsort((z, key)) (equal
+    heights in a cell may swap): float32 heights of both signs, -0.0 and ties; keys
+    past 2**31 or float64 heights take the lexsort itself."""
+    from floorscan.registration import _cell_height_order
+
+    rng = np.random.default_rng(3)
+    for n in (1, 2, 50, 3000):
+        key = rng.integers(0, 40, n)
+        z = rng.normal(0.0, 2.0, n).astype(np.float32).astype(np.float64)
+        z[rng.random(n) < 0.1], z[rng.random(n) < 0.05], z[rng.random(n) < 0.1] = 0.0, -0.0, 1.5
+        want = np.lexsort((z, key))
+        got = _cell_height_order(key, z)
+        assert np.array_equal(key[got], key[want]) and np.array_equal(z[got], z[want])
+    key = np.array([2**31, 5, 5])
+    z64 = np.array([0.1, 0.3, 0.2])  # not float32 values
+    assert _cell_height_order(key, z64).tolist() == [2, 1, 0]
