@@ -110,6 +110,8 @@ class RssPoller:
         #: pid -> [script, first seen, last seen] (s since the poller started)
         self.spans: dict[int, list] = {}
         self.total_peak = 0.0
+        #: CPU seconds of the Snakemake process itself (DAG, scheduling, file checks)
+        self.snakemake_cpu = 0.0
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True)
 
@@ -139,6 +141,11 @@ class RssPoller:
             except ps.Error:
                 break
             total = 0.0
+            try:
+                t = self.root.cpu_times()
+                self.snakemake_cpu = t.user + t.system
+            except (ps.Error, OSError):
+                pass
             for p in procs:
                 try:
                     rss = p.memory_info().rss / 2**20
@@ -272,6 +279,7 @@ def run_dataset(repo: Path, dataset: str, cores: int) -> dict:
         "bag_mb": bag.stat().st_size / 2**20 if bag.exists() else np.nan,
         "wall_s": wall, "rtf": duration / wall, "simulate_s": t_sim,
         "stages": stage_table(res / "benchmarks", poller.peak, poller.cpu, poller.spans), "peak_all_jobs_mb": poller.total_peak,
+        "snakemake_cpu_s": poller.snakemake_cpu,
         "load": (load_before, load_after),
     }  # fmt: skip
 
@@ -290,6 +298,7 @@ def report(r: dict, cores: int) -> None:
     print(f"CPU time of all jobs {cpu:.0f} s (wall x cores = {r['wall_s'] * cores:.0f} s); load average "
           f"{r['load'][0]:.1f} before, {r['load'][1]:.1f} after: other processes on the machine slow "
           "every job, the CPU seconds do not depend on them")
+    print(f"CPU time of the Snakemake process itself (DAG, scheduling, checks): {r['snakemake_cpu_s']:.1f} s")
     print(f"peak RSS of all running jobs together: {r['peak_all_jobs_mb']:.0f} MB")
     print(f"{'stage':<18}{'jobs':>5}{'s total':>10}{'s max':>9}{'CPU s':>8}{'RSS MB':>9}{'polled':>9}"
           f"{'from s':>8}{'to s':>7}")
