@@ -368,3 +368,93 @@ def test_plan_depends_on_the_scans_not_their_ranking_and_a_repeat_is_copied(tmp_
     # another scan set is built anew
     assert writer.write(segs[segs.scan_id != 3], out["fewer"], name="fewer")[1] is False
     assert out["fewer"]["geojson"].read_bytes() != out["first"]["geojson"].read_bytes()
+
+
+def test_ifc_guids_equal_ifcopenshell_compress_of_uuid5():
+    """The batched GlobalIds are ifcopenshell.guid.compress(uuid5(ns, str(i)).hex)."""
+    import uuid
+
+    import ifcopenshell.guid
+
+    from floorscan.floorplan import _ifc_guids
+
+    for name in ("floorscan", "x cluster_hull ransac k10", "Grundriß & <plan>"):
+        ns = uuid.uuid5(uuid.NAMESPACE_URL, f"floorscan:{name}")
+        want = [ifcopenshell.guid.compress(uuid.uuid5(ns, str(i)).hex) for i in range(300)]
+        got = _ifc_guids(name, 300)
+        assert got == want and len(set(got)) == 300 and all(len(g) == 22 for g in got)
+    assert _ifc_guids("a", 0) == [] and _ifc_guids("a", 5) != _ifc_guids("b", 5)
+
+
+def test_ifc_project_head_equals_what_ifcopenshell_api_makes(tmp_path):
+    """The project, units, contexts and spatial structure, made with create_entity, are
+    the entities ifcopenshell.api makes (same types, order and values but GlobalIds)."""
+    import ifcopenshell.api.aggregate
+    import ifcopenshell.api.context
+    import ifcopenshell.api.project
+    import ifcopenshell.api.root
+    import ifcopenshell.api.unit
+
+    from floorscan.floorplan import FloorPlan, _ifc_model
+
+    api = ifcopenshell.api
+    ref = api.project.create_file(version="IFC4")
+    project = api.root.create_entity(ref, ifc_class="IfcProject", name="p")
+    units = [api.unit.add_si_unit(ref, unit_type=u) for u in ("LENGTHUNIT", "AREAUNIT", "VOLUMEUNIT")]
+    api.unit.assign_unit(ref, units=units)
+    ref.by_type("IfcUnitAssignment")[0].Units = tuple(units)
+    model3d = api.context.add_context(ref, context_type="Model")
+    api.context.add_context(ref, context_type="Model", context_identifier="Body", target_view="MODEL_VIEW",
+                            parent=model3d)  # fmt: skip
+    plan_ctx = api.context.add_context(ref, context_type="Plan")
+    api.context.add_context(ref, context_type="Plan", context_identifier="Axis", target_view="GRAPH_VIEW",
+                            parent=plan_ctx)  # fmt: skip
+    site = api.root.create_entity(ref, ifc_class="IfcSite", name="Site")
+    building = api.root.create_entity(ref, ifc_class="IfcBuilding", name="Building")
+    storey = api.root.create_entity(ref, ifc_class="IfcBuildingStorey", name="Storey 0")
+    for whole, part in ((project, site), (site, building), (building, storey)):
+        api.aggregate.assign_object(ref, relating_object=whole, products=[part])
+    storey.Elevation = 0.0
+
+    empty = FloorPlan(walls=pd.DataFrame(columns=["wall_id", "x0", "y0", "x1", "y1", "thickness_m", "height_m"]),
+                      faces=pd.DataFrame())  # fmt: skip
+    model = _ifc_model(empty, "p")
+
+    def lines(m):  # STEP lines of the entities in id order, GlobalIds blanked
+        ents = sorted(m, key=lambda e: e.id())
+        return [e.to_string().replace(e.GlobalId, "G") if e.is_a("IfcRoot") else e.to_string() for e in ents]
+
+    ours, want = lines(model), lines(ref)
+    assert len(want) == 22 and ours[:22] == want
+    assert "IFCPROJECT('G',$,'p',$,$,$,$,(#10,#15),#5)" in want[0]
+    # ours also holds the walls' shared +Z and +X directions
+    assert ours[22:] == ["#23=IFCDIRECTION((0.,0.,1.))", "#24=IFCDIRECTION((1.,0.,0.))"]
+    for field in ("name", "preprocessor_version", "originating_system", "authorization"):
+        assert getattr(model.header.file_name, field) == getattr(ref.header.file_name, field)
+    assert model.header.file_description.description == ref.header.file_description.description
+
+
+def test_footprint_geojson_equals_shapely_to_geojson_rounded():
+    """Footprint coordinates from the rings equal shapely.to_geojson's, read and rounded."""
+    import shapely
+
+    from floorscan.floorplan import FloorPlan, _round_coords, floorplan_geojson
+
+    rng = np.random.default_rng(3)
+    n = 200
+    p0 = rng.uniform(-30, 30, (n, 2))
+    p1 = p0 + rng.normal(0, 3, (n, 2))
+    p1[0] = p0[0]  # a zero-length wall: an empty footprint, no footprint feature
+    walls = pd.DataFrame({
+        "wall_id": np.arange(n, dtype=np.int32), "x0": p0[:, 0], "y0": p0[:, 1], "x1": p1[:, 0], "y1": p1[:, 1],
+        "length_m": np.hypot(*(p1 - p0).T), "thickness_m": rng.uniform(0.05, 0.4, n), "height_m": 2.5,
+        "paired": True, "n_faces": 2, "n_segments": 3, "n_inliers": 10,
+    })  # fmt: skip
+    faces = pd.DataFrame(columns=["face_id", "wall_id", "x0", "y0", "x1", "y1", "n_segments", "n_inliers"])
+    plan = FloorPlan(walls=walls, faces=faces)
+    feats = [f for f in floorplan_geojson(plan)["features"] if f["properties"]["kind"] == "footprint"]
+    polys = plan.footprints()
+    assert polys[0].is_empty and [f["properties"]["wall_id"] for f in feats] == list(range(1, n))
+    for f, poly in zip(feats, polys[1:]):
+        assert f["geometry"] == _round_coords(json.loads(shapely.to_geojson(poly)))
+        assert len(f["geometry"]["coordinates"][0]) == 5
