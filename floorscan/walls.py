@@ -42,7 +42,14 @@ scan of hallways and hallways3d against the plain forms, and in the tests):
   BLAS product each (offsets and norms as extra terms of the product), counts as
   byte sums, MeanShift iterating only its moving seeds, bin seeding without the
   inverse, each line's points sorted and split at its gaps once
-  (:func:`_claimed_segments`) and fast paths for a wall without gaps.
+  (:func:`_claimed_segments`) and fast paths for a wall without gaps;
+- third round (same floats: walls and scan status tables equal on hallways3d scans
+  0..1694 and 3390..5080, hallways, trace0, intel, aces, freiburg101, orebro,
+  mac_ros2 and demo, both extractors; and in the tests): MeanShift's 1D bin seeds by
+  a sort, its sums of two squares term by term instead of reductions over a short
+  axis (:func:`_row_squares`, :func:`_pair_squares`), :func:`fit_line`'s three sums
+  in one reduction, the covariances' non-neighbours zeroed by a product, and
+  ``integers(n)`` for ``integers(0, n)``.
 """
 
 from __future__ import annotations
@@ -308,9 +315,13 @@ def fit_line(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         Unit direction of the line; the normal is ``(-direction[1], direction[0])``.
     """
     c = np.add.reduce(points, axis=0) / len(points)  # points.mean(axis=0), fewer calls
-    d = points - c
-    dx, dy = d[:, 0], d[:, 1]
-    sxx, syy, sxy = np.add.reduce(dx * dx), np.add.reduce(dy * dy), np.add.reduce(dx * dy)
+    d = (points - c).T  # rows dx, dy
+    prod = np.empty((3, len(points)))  # rows dx * dx, dy * dy, dx * dy
+    np.multiply(d, d, out=prod[:2])
+    np.multiply(d[0], d[1], out=prod[2])
+    # one reduction along the rows: each row is summed as np.add.reduce sums it alone
+    # (checked for every length up to 20000 and for sampled lengths up to 10**6)
+    sxx, syy, sxy = np.add.reduce(prod, axis=1)
     phi = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)  # angle of the major axis
     return c, np.array([np.cos(phi), np.sin(phi)])
 
@@ -325,8 +336,9 @@ def _best_line(points: np.ndarray, rng: np.random.Generator, params: RansacParam
     n = len(points)
     if n < 2:
         return None
-    i = rng.integers(0, n, size=params.iterations)
-    j = rng.integers(0, n - 1, size=params.iterations)
+    # integers(n) is integers(0, n) (the same draws), without the checks of low
+    i = rng.integers(n, size=params.iterations)
+    j = rng.integers(n - 1, size=params.iterations)
     j += j >= i  # j != i
     start = points[i]
     d = points[j] - start
@@ -579,13 +591,20 @@ def neighbourhood_covariances(
     idx[~ok] = 0
     px, py = pts[:, 0].copy(), pts[:, 1].copy()
     x, y = px[idx], py[idx]
-    dx, dy = x - px, y - py
-    ok &= dx * dx + dy * dy < radius_m * radius_m
-    out = ~ok
-    x[out], y[out] = 0.0, 0.0
+    d2, dy = x - px, y - py  # dx * dx + dy * dy in place
+    d2 *= d2
+    dy *= dy
+    d2 += dy
+    ok &= d2 < radius_m * radius_m
     cnt = ok.view(np.uint8).sum(axis=0, dtype=np.int64)
-    sx, sy = x.sum(axis=0) + 0.0, y.sum(axis=0) + 0.0
-    sxx, sxy, syy = (x * x).sum(axis=0) + 0.0, (x * y).sum(axis=0) + 0.0, (y * y).sum(axis=0) + 0.0
+    # the points that are no neighbours become zeros (-0.0 for a negative coordinate:
+    # no matter, a non-zero sum is unchanged by it and the "+ 0.0" makes a zero sum +0.0)
+    x *= ok
+    y *= ok
+    sx, sy, sxy = x.sum(axis=0) + 0.0, y.sum(axis=0) + 0.0, (x * y).sum(axis=0) + 0.0
+    x *= x
+    y *= y
+    sxx, syy = x.sum(axis=0) + 0.0, y.sum(axis=0) + 0.0
     m = np.maximum(cnt, 1).astype(np.float64)
     sx, sy, sxx, sxy, syy = sx / m, sy / m, sxx / m, sxy / m, syy / m
     cxx, cyy, cxy = sxx - sx * sx, syy - sy * sy, sxy - sx * sy
@@ -627,25 +646,23 @@ def mean_shift(x: np.ndarray, bandwidth: float, min_bin_freq: int = 1, max_iter:
         x = x[:, None]
     if len(x) == 0:
         return np.empty(0, dtype=np.int64)
-    cells = np.round(x / bandwidth)
-    counts, first = cell_groups(cells, first=True, inverse=False)
-    means = cells[first[counts >= min_bin_freq]] * bandwidth  # the seeds
+    means = _bin_seeds(x, bandwidth, min_bin_freq)
     if len(means) == len(x):
         means = x.copy()
     if len(means) == 0:
         return np.full(len(x), -1, dtype=np.int64)
     r2, stop = bandwidth**2, 1e-3 * bandwidth
     within = np.zeros(len(means), dtype=np.int64)
-    dim = x.shape[1]
+    n, dim = x.shape
     # Squared distances of seeds m to points x, (m**2).sum(1)[:, None] - 2.0 * m @ x.T
     # + (x**2).sum(1)[None, :], as one BLAS product of rows (-2 m, (m**2).sum(), 1) with
     # columns (x, 1, (x**2).sum()): the kernel accumulates the terms in this order with
     # fused multiply-adds, so it rounds as the three steps (scaling by -2 is exact;
     # checked bit for bit on every MeanShift of the wall benchmarks, and in the tests).
-    xa = np.empty((dim + 2, len(x)))
+    xa = np.empty((dim + 2, n))
     xa[:dim] = x.T
     xa[dim] = 1.0
-    xa[dim + 1] = (x**2).sum(axis=1)
+    xa[dim + 1] = _row_squares(x)
     act = np.arange(len(means))  # the seeds still moving, in seed order
     m = means.copy()  # their means
     for _ in range(max_iter):
@@ -653,17 +670,17 @@ def mean_shift(x: np.ndarray, bandwidth: float, min_bin_freq: int = 1, max_iter:
             break
         ma = np.empty((len(m), dim + 2))
         np.multiply(m, -2.0, out=ma[:, :dim])
-        ma[:, dim] = (m**2).sum(axis=1)
+        ma[:, dim] = _row_squares(m)
         ma[:, dim + 1] = 1.0
         # the flat kernel's weights (d2 <= r2) written as 1.0 / 0.0, and their counts
         # (sums of ones: exact integers, as w.sum(axis=1))
-        w = np.less_equal(ma @ xa, r2, out=np.empty((len(m), len(x))))
+        w = np.less_equal(ma @ xa, r2, out=np.empty((len(m), n)))
         cnt = w.sum(axis=1)
         within[act] = cnt
         moved = cnt > 0
         if moved.all():  # the usual case: no boolean indexing
             new = (w @ x) / cnt[:, None]
-            shift = np.sqrt(((new - m) ** 2).sum(axis=1))
+            shift = np.sqrt(_row_squares(new - m))
             means[act] = new
             going = shift > stop
             if going.all():
@@ -671,7 +688,7 @@ def mean_shift(x: np.ndarray, bandwidth: float, min_bin_freq: int = 1, max_iter:
                 continue
         else:
             new = (w[moved] @ x) / cnt[moved, None]
-            shift = np.sqrt(((new - m[moved]) ** 2).sum(axis=1))
+            shift = np.sqrt(_row_squares(new - m[moved]))
             means[act[moved]] = new
             going = np.zeros(len(act), dtype=bool)
             going[np.flatnonzero(moved)[shift > stop]] = True
@@ -684,19 +701,63 @@ def mean_shift(x: np.ndarray, bandwidth: float, min_bin_freq: int = 1, max_iter:
     # Decreasing (points within, centre) as sklearn sorts its (centre, count) items.
     order = np.lexsort(tuple(centers[:, k] for k in range(centers.shape[1] - 1, -1, -1)) + (n_in,))[::-1]
     centers = centers[order]
+    nc = len(centers)
     # row i: ((centers - centers[i]) ** 2).sum(axis=1) <= r2, for all i at once when few
-    near = ((centers[:, None, :] - centers[None, :, :]) ** 2).sum(axis=2) <= r2 if len(centers) <= 256 else None
-    unique = np.ones(len(centers), dtype=bool)
-    for i in range(len(centers)):
+    near = _pair_squares(centers, centers) <= r2 if nc <= 256 else None
+    unique = np.ones(nc, dtype=bool)
+    for i in range(nc):
         if unique[i]:
-            unique[((centers - centers[i]) ** 2).sum(axis=1) <= r2 if near is None else near[i]] = False
+            unique[_row_squares(centers - centers[i]) <= r2 if near is None else near[i]] = False
             unique[i] = True
     centers = centers[unique]
-    if dim == 1:  # the same squares without a sum over one term
-        d2 = (x - centers[:, 0]) ** 2
-    else:
-        d2 = ((x[:, None, :] - centers[None, :, :]) ** 2).sum(axis=2)
-    return np.argmin(d2, axis=1).astype(np.int64)
+    if len(centers) == 1:  # every point is nearest to it
+        return np.zeros(n, dtype=np.int64)
+    return np.argmin(_pair_squares(x, centers), axis=1).astype(np.int64)
+
+
+def _bin_seeds(x: np.ndarray, bandwidth: float, min_bin_freq: int) -> np.ndarray:
+    """MeanShift's bin seeds of (N, d) ``x``: the grid cells ``round(x / bandwidth)``
+    holding at least ``min_bin_freq`` points, times ``bandwidth``, in lexicographic
+    order of the cells, (S, d). In 1D (the offsets: most calls) by a sort and a
+    comparison of neighbours instead of :func:`floorscan.grid.cell_groups` (same
+    cells, fewer calls)."""
+    cells = np.round(x / bandwidth)
+    if x.shape[1] == 1:
+        c = np.sort(cells[:, 0])
+        new = np.empty(len(c), dtype=bool)
+        new[0] = True
+        np.not_equal(c[1:], c[:-1], out=new[1:])
+        start = np.flatnonzero(new)
+        counts = np.empty(len(start), dtype=np.intp)  # numpy.diff(start, append=len(c))
+        np.subtract(start[1:], start[:-1], out=counts[:-1])
+        counts[-1] = len(c) - start[-1]
+        return c[start[counts >= min_bin_freq], None] * bandwidth
+    counts, first = cell_groups(cells, first=True, inverse=False)
+    return cells[first[counts >= min_bin_freq]] * bandwidth
+
+
+def _row_squares(a: np.ndarray) -> np.ndarray:
+    """``(a**2).sum(axis=1)`` of (N, d) ``a``, for d <= 2 without the reduction (slow on
+    a short axis): a sum of one or two terms is the same float whatever the order."""
+    if a.shape[1] == 1:
+        return a[:, 0] * a[:, 0]
+    if a.shape[1] == 2:
+        return a[:, 0] * a[:, 0] + a[:, 1] * a[:, 1]
+    return (a**2).sum(axis=1)
+
+
+def _pair_squares(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Squared distances (N, M) of the rows of (N, d) ``a`` to those of (M, d) ``b``,
+    ``((a[:, None, :] - b[None, :, :]) ** 2).sum(axis=2)``; for d <= 2 term by term (the
+    same floats, without the 3D temporary and the reduction over a short axis)."""
+    if a.shape[1] > 2:
+        return ((a[:, None, :] - b[None, :, :]) ** 2).sum(axis=2)
+    d = a[:, 0, None] - b[:, 0]
+    out = d * d
+    if a.shape[1] == 2:
+        d = a[:, 1, None] - b[:, 1]
+        out += d * d
+    return out
 
 
 def _mean_shift(
@@ -782,10 +843,11 @@ def wall_signature(points: np.ndarray, normals: np.ndarray, angle_labels: np.nda
         t = t[np.isfinite(t)]
         if len(t) == 0:
             continue
-        phi = 0.5 * np.arctan2(np.sin(t).mean(), np.cos(t).mean())
+        # means as np.add.reduce / count: what ndarray.mean computes, fewer calls
+        phi = 0.5 * np.arctan2(np.add.reduce(np.sin(t)) / len(t), np.add.reduce(np.cos(t)) / len(t))
         cluster_normals[lab] = (np.cos(phi), np.sin(phi))
         pm = points[m]
-        rho[m] = (pm - pm.mean(axis=0)) @ cluster_normals[lab]
+        rho[m] = (pm - np.add.reduce(pm, axis=0) / len(pm)) @ cluster_normals[lab]
     return rho, cluster_normals
 
 

@@ -449,3 +449,79 @@ def test_issue8_shortcuts_equal_the_plain_forms_bit_for_bit():
     assert got == _claimed_segments(shuffled, np.array([2.0, 1.0]), direction, claimed, RansacParams())
     assert len(got) == 2 and [r[4] for r in got] == [80, 50]
     np.testing.assert_allclose([got[0][0], got[0][2], got[1][0], got[1][2]], [0, 2, 2.8, 4], atol=0.02)
+
+
+def _plain_fit_line(points):
+    """fit_line as written before issue 8's third round (three separate sums)."""
+    c = points.mean(axis=0)
+    d = points - c
+    dx, dy = d[:, 0], d[:, 1]
+    phi = 0.5 * np.arctan2(2.0 * (dx * dy).sum(), (dx * dx).sum() - (dy * dy).sum())
+    return c, np.array([np.cos(phi), np.sin(phi)])
+
+
+def _plain_covariances(pts, radius_m, max_nn):
+    """neighbourhood_covariances as written before issue 8's third round (masked zeros)."""
+    from scipy.spatial import cKDTree
+
+    n, k = len(pts), min(max_nn, len(pts))
+    _, idx = cKDTree(pts).query(pts, k=k, distance_upper_bound=radius_m * (1 + 1e-9))
+    idx = np.ascontiguousarray(np.asarray(idx).reshape(n, k).T)
+    ok = idx < n
+    idx[~ok] = 0
+    x, y = pts[idx, 0], pts[idx, 1]
+    dx, dy = x - pts[:, 0], y - pts[:, 1]
+    ok &= dx * dx + dy * dy < radius_m * radius_m
+    x[~ok], y[~ok] = 0.0, 0.0
+    cnt = ok.sum(axis=0)
+    m = np.maximum(cnt, 1).astype(np.float64)
+    sx, sy = (x.sum(axis=0) + 0.0) / m, (y.sum(axis=0) + 0.0) / m
+    sxx, sxy, syy = ((x * x).sum(axis=0) + 0.0) / m, ((x * y).sum(axis=0) + 0.0) / m, ((y * y).sum(axis=0) + 0.0) / m
+    cxx, cyy, cxy = sxx - sx * sx, syy - sy * sy, sxy - sx * sy
+    few = cnt < 3
+    cxx[few], cyy[few], cxy[few] = 1.0, 1.0, 0.0
+    return cxx, cyy, cxy
+
+
+def test_issue8_third_round_shortcuts_equal_the_plain_forms_bit_for_bit():
+    """fit_line's sums in one reduction, the covariances' zeros by a product, MeanShift's
+    1D bin seeds by a sort, the squared distances term by term, the cell keys without
+    ravel_multi_index and ``integers(n)`` for ``integers(0, n)`` give the same numbers."""
+    from floorscan.grid import cell_groups, cell_keys
+    from floorscan.walls import _bin_seeds, _pair_squares, _row_squares, fit_line, neighbourhood_covariances
+
+    rng = np.random.default_rng(12)
+    for n in (*range(2, 40), 129, 1000, 9000):
+        pts = rng.normal(size=(n, 2)) * [3.0, 0.01] + rng.uniform(-20, 20, 2)
+        for a, b in zip(fit_line(pts), _plain_fit_line(pts)):
+            np.testing.assert_array_equal(a, b)
+
+    # negative coordinates (zeros of both signs), an isolated point, max_nn beyond the points
+    t = rng.uniform(-3, 0, 300)
+    pts = np.r_[np.c_[t, 0.01 * rng.normal(size=300)], rng.uniform(-2, 2, (80, 2)), [[-9.0, 0.0]]]
+    for radius, max_nn in ((0.25, 20), (0.1, 3), (0.5, 1000)):
+        for a, b in zip(neighbourhood_covariances(pts, radius, max_nn), _plain_covariances(pts, radius, max_nn)):
+            np.testing.assert_array_equal(a, b)
+            assert (np.signbit(a) == np.signbit(b)).all()
+
+    for x, bw, mbf in ((rng.normal(0, 0.1, (500, 1)), 0.05, 5), (np.r_[-0.01, -0.02, 0.01, 3.0][:, None], 0.05, 1),
+                       (np.zeros((4, 1)), 0.1, 5), (rng.normal(0, 1, (300, 2)), 0.3, 2)):
+        cells = np.round(x / bw)
+        _, counts, first = cell_groups(cells, first=True)
+        expected = cells[first[counts >= mbf]] * bw
+        np.testing.assert_array_equal(_bin_seeds(x, bw, mbf), expected)
+    assert _bin_seeds(np.zeros((4, 1)), 0.1, 5).shape == (0, 1)
+
+    for d in (1, 2, 3):
+        a, b = rng.normal(size=(50, d)), rng.normal(size=(7, d))
+        np.testing.assert_array_equal(_row_squares(a), (a**2).sum(axis=1))
+        np.testing.assert_array_equal(_pair_squares(a, b), ((a[:, None, :] - b[None, :, :]) ** 2).sum(axis=2))
+        cells = np.floor(rng.uniform(-1e4, 1e4, (500, d))).astype(np.int64)
+        lo, span = cells.min(axis=0), cells.max(axis=0) - cells.min(axis=0) + 1
+        np.testing.assert_array_equal(cell_keys(cells), np.ravel_multi_index(tuple((cells - lo).T), tuple(span)))
+    assert cell_keys(np.array([[0, 0, 0], [2**21, 2**21, 2**21]])) is None  # beyond 2**62 cells
+
+    for n in (2, 3, 129, 2000):
+        r1, r2 = np.random.default_rng((0, n)), np.random.default_rng((0, n))
+        np.testing.assert_array_equal(r1.integers(0, n, size=200), r2.integers(n, size=200))
+        np.testing.assert_array_equal(r1.integers(0, n - 1, size=200), r2.integers(n - 1, size=200))
