@@ -2,7 +2,7 @@
 and time and peak memory of every stage (issue 8; thesis Table 5.1).
 
 Run: ``.venv/bin/python -m benchmarks pipeline [--datasets hallways hallways3d
-hallways3d_6000] [--cores 2] [--workdir DIR] [--keep]``
+hallways3d_6000] [--cores 2] [--workdir DIR] [--keep] [--snakemake-args '...']``
 
 For each dataset the workflow runs in a copy of the repository (so ``results/`` of
 the checkout is never touched; ``PYTHONPATH`` points at the copy): first the
@@ -34,6 +34,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import shlex
 import shutil
 import subprocess
 import sys
@@ -167,7 +168,7 @@ class RssPoller:
             self._stop.wait(self.interval_s)
 
 
-def snakemake(repo: Path, dataset: str, cores: int, targets: list[str], poll: bool = False):
+def snakemake(repo: Path, dataset: str, cores: int, targets: list[str], poll: bool = False, extra: tuple = ()):
     """Run Snakemake in ``repo`` for ``dataset``; returns (seconds, RssPoller or None).
 
     With ``poll`` (the timed run) only modification times trigger reruns, so a kept
@@ -176,7 +177,7 @@ def snakemake(repo: Path, dataset: str, cores: int, targets: list[str], poll: bo
     cmd = [
         str(repo / ".venv" / "bin" / "snakemake"), "--cores", str(cores),
         "--configfile", "config/config.yaml", "config/bench_pipeline.yaml",
-        "--config", f"target=[{dataset}]", "--quiet", "all",
+        "--config", f"target=[{dataset}]", "--quiet", *extra, "all",
         *(["--rerun-triggers", "mtime"] if poll else []),
         *([] if not targets else ["--", *targets]),
     ]  # fmt: skip
@@ -253,7 +254,7 @@ def largest_scan(path: Path) -> tuple[int, int, int]:
     return len(counts), int(counts.max(initial=0)), len(ids)
 
 
-def run_dataset(repo: Path, dataset: str, cores: int) -> dict:
+def run_dataset(repo: Path, dataset: str, cores: int, extra: tuple = ()) -> dict:
     res = repo / "results" / dataset
     if res.exists():  # keep the simulated recording only
         for item in res.iterdir():
@@ -266,7 +267,7 @@ def run_dataset(repo: Path, dataset: str, cores: int) -> dict:
         t_sim, _ = snakemake(repo, dataset, cores, [f"results/{dataset}/sim/recording.bag"])
         (res / "benchmarks" / "simulate.tsv").unlink(missing_ok=True)
     load_before = os.getloadavg()[0]
-    wall, poller = snakemake(repo, dataset, cores, [], poll=True)
+    wall, poller = snakemake(repo, dataset, cores, [], poll=True, extra=extra)
     load_after = os.getloadavg()[0]
     index = pq.read_table(res / "scan_index.parquet", columns=["t_ns", "n_points"]).to_pandas()
     duration = (index["t_ns"].max() - index["t_ns"].min()) / 1e9
@@ -316,14 +317,16 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--cores", type=int, default=2)
     ap.add_argument("--workdir", type=Path, help="keep the copy here and reuse its simulated recordings")
     ap.add_argument("--keep", action="store_true", help="do not delete the temporary copy")
+    ap.add_argument("--snakemake-args", default="", help="more Snakemake options for the timed run, e.g. '--scheduler greedy'")
     args = ap.parse_args(argv)
+    extra = tuple(shlex.split(args.snakemake_args))
     workdir = args.workdir or Path(tempfile.mkdtemp(prefix="floorscan-bench-pipeline-"))
     repo = prepare_copy(workdir)
     print(f"bench_pipeline: workflow copy {repo}, --cores {args.cores}, datasets {args.datasets}")
     try:
         results = []
         for ds in args.datasets:
-            r = run_dataset(repo, ds, args.cores)
+            r = run_dataset(repo, ds, args.cores, extra)
             report(r, args.cores)
             results.append(r)
         print("\n### summary")
