@@ -1085,26 +1085,8 @@ def _in_scan_order(segments: pd.DataFrame) -> pd.DataFrame:
 def write_floorplan(
     segments: pd.DataFrame, cfg: Mapping[str, Any] | None, outputs: Mapping[str, str | os.PathLike], name: str = ""
 ) -> FloorPlan:
-    """Build the floor plan of ``segments`` and write it (one :meth:`FloorplanWriter.write`).
-
-    Parameters
-    ----------
-    segments : pandas.DataFrame
-        Wall segments (``walls/{ordering}/{extractor}/k{k}.parquet``).
-    cfg : mapping
-        The ``floorplan`` config section.
-    outputs : mapping
-        Paths by format: any of :data:`FLOORPLAN_FORMATS`.
-    name : str
-        Title of the SVG and name of the IFC project.
-
-    Returns
-    -------
-    FloorPlan
-
-    Raises
-    ------
-    KeyError
-        For an unknown output format or config key.
-    """
+    """Build the floor plan of ``segments`` and write it: ``FloorplanWriter(cfg).write(
+    segments, outputs, name)`` (see there; ``cfg`` is the ``floorplan`` config section),
+    returning the :class:`FloorPlan`. Raises ``KeyError`` for an unknown output format
+    or config key."""
     return FloorplanWriter(cfg).write(segments, outputs, name)[0]
