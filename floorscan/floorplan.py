@@ -794,56 +794,43 @@ def _write_dxf(plan: FloorPlan, path: str | os.PathLike, polys) -> None:
 
 def _ifc_model(plan: FloorPlan, name: str):
     """The IFC model of ``plan`` (see :func:`write_ifc`) for a project named ``name``,
-    its GlobalIds set as :func:`_name_ifc` sets them (computed here in one batch and
-    given to each entity as it is made, not set again afterwards)."""
+    its GlobalIds given as each entity is made, as :func:`_name_ifc` sets them."""
     try:
-        import ifcopenshell
+        import ifcopenshell.api.aggregate
+        import ifcopenshell.api.context
+        import ifcopenshell.api.project
+        import ifcopenshell.api.root
+        import ifcopenshell.api.unit
     except ImportError as e:  # pragma: no cover
         raise ImportError("writing IFC needs ifcopenshell: pip install ifcopenshell") from e
-    import datetime
 
-    # The header and the entities ifcopenshell.api's project.create_file,
-    # root.create_entity, unit.add_si_unit/assign_unit, context.add_context and
-    # aggregate.assign_object make for the project, its units (in a fixed order:
-    # assign_unit kept them in a set, whose order changed from run to run), its Model
-    # and Plan contexts with their Body and Axis subcontexts, and the site, building
-    # and storey: the same entities, in the same order, made with create_entity
-    # (importing ifcopenshell.api.project cost 0.04 s CPU a job, its calls 1.5 ms a model).
-    model = ifcopenshell.file(schema="IFC4")
-    file_name = model.header.file_name
-    file_name.name = "/dev/null"
-    file_name.time_stamp = datetime.datetime.now().astimezone().replace(microsecond=0).isoformat()
-    file_name.preprocessor_version = file_name.originating_system = f"IfcOpenShell {ifcopenshell.version}"
-    file_name.authorization = "Nobody"
-    model.header.file_description.description = ("ViewDefinition[DesignTransferView]",)
-    # Stable GlobalIds (from the project name and creation order, as _name_ifc), so a
-    # rerun gives the same ids and BIM tools see the same walls, not new ones: one per
-    # IfcRoot in creation order (7 here, 3 a wall, 1 for the storey's containment).
-    guid = iter(_ifc_guids(name, 7 + 3 * len(plan.walls) + 1)).__next__
-    ent = model.create_entity
-    project = ent("IfcProject", GlobalId=guid(), Name=name)
-    si_units = tuple(
-        ent("IfcSIUnit", UnitType=unit, Name=si)
-        for unit, si in (("LENGTHUNIT", "METRE"), ("AREAUNIT", "SQUARE_METRE"), ("VOLUMEUNIT", "CUBIC_METRE"))
+    api = ifcopenshell.api
+    model = api.project.create_file(version="IFC4")
+    project = api.root.create_entity(model, ifc_class="IfcProject", name=name)
+    units = [api.unit.add_si_unit(model, unit_type=u) for u in ("LENGTHUNIT", "AREAUNIT", "VOLUMEUNIT")]
+    api.unit.assign_unit(model, units=units)
+    # assign_unit keeps the units in a set: their order changed from run to run
+    model.by_type("IfcUnitAssignment")[0].Units = tuple(units)
+    model3d = api.context.add_context(model, context_type="Model")
+    body = api.context.add_context(
+        model, context_type="Model", context_identifier="Body", target_view="MODEL_VIEW", parent=model3d
     )
-    project.UnitsInContext = ent("IfcUnitAssignment", si_units)
-    origin3 = ent("IfcAxis2Placement3D", ent("IfcCartesianPoint", (0.0, 0.0, 0.0)),
-                  ent("IfcDirection", (0.0, 0.0, 1.0)), ent("IfcDirection", (1.0, 0.0, 0.0)))  # fmt: skip
-    model3d = ent("IfcGeometricRepresentationContext", ContextType="Model", CoordinateSpaceDimension=3,
-                  Precision=1.0e-5, WorldCoordinateSystem=origin3)  # fmt: skip
-    body = ent("IfcGeometricRepresentationSubContext", ContextIdentifier="Body", ContextType="Model",
-               ParentContext=model3d, TargetView="MODEL_VIEW")  # fmt: skip
-    origin2 = ent("IfcAxis2Placement2D", ent("IfcCartesianPoint", (0.0, 0.0)), ent("IfcDirection", (1.0, 0.0)))
-    plan_ctx = ent("IfcGeometricRepresentationContext", ContextType="Plan", CoordinateSpaceDimension=2,
-                   Precision=1.0e-5, WorldCoordinateSystem=origin2)  # fmt: skip
-    axis_ctx = ent("IfcGeometricRepresentationSubContext", ContextIdentifier="Axis", ContextType="Plan",
-                   ParentContext=plan_ctx, TargetView="GRAPH_VIEW")  # fmt: skip
-    project.RepresentationContexts = (model3d, plan_ctx)
-    site = ent("IfcSite", GlobalId=guid(), Name="Site")
-    building = ent("IfcBuilding", GlobalId=guid(), Name="Building")
-    storey = ent("IfcBuildingStorey", GlobalId=guid(), Name="Storey 0", Elevation=0.0)
+    plan_ctx = api.context.add_context(model, context_type="Plan")
+    axis_ctx = api.context.add_context(
+        model, context_type="Plan", context_identifier="Axis", target_view="GRAPH_VIEW", parent=plan_ctx
+    )
+    site = api.root.create_entity(model, ifc_class="IfcSite", name="Site")
+    building = api.root.create_entity(model, ifc_class="IfcBuilding", name="Building")
+    storey = api.root.create_entity(model, ifc_class="IfcBuildingStorey", name="Storey 0")
     for whole, part in ((project, site), (site, building), (building, storey)):
-        ent("IfcRelAggregates", GlobalId=guid(), RelatingObject=whole, RelatedObjects=(part,))
+        api.aggregate.assign_object(model, relating_object=whole, products=[part])
+    storey.Elevation = 0.0
+    # Stable GlobalIds (from the project name and creation order), so a rerun gives
+    # the same ids and BIM tools see the same walls, not new ones.
+    guid = _ifc_guids(name)
+    for entity in sorted(model.by_type("IfcRoot"), key=lambda e: e.id()):
+        entity.GlobalId = guid()
+    ent = model.create_entity
 
     # The walls' entities (those ifcopenshell.api's add_wall_representation,
     # add_axis_representation, edit_object_placement, add_qto and assign_container
@@ -916,10 +903,9 @@ def write_ifc(plan: FloorPlan, path: str | os.PathLike, name: str = "floorscan")
     makes it: the rectangle length x thickness centred on the axis, extruded by
     ``height_m``), an axis representation (Plan/Axis, Curve2D), its placement at the
     axis start along the axis direction, and the quantities
-    ``Qto_WallBaseQuantities`` Length, Width, Height. Every entity is made with
-    ``file.create_entity``: the project, units, contexts and spatial structure are
-    those ``ifcopenshell.api`` makes (header included; a test compares them), and the
-    walls' entities those its per-wall calls would make, because those calls,
+    ``Qto_WallBaseQuantities`` Length, Width, Height. The project, units, contexts and
+    spatial structure come from ``ifcopenshell.api``; the walls' entities (those its
+    per-wall calls would make) from ``file.create_entity``, because those calls,
     milliseconds each, were the stage's bottleneck (663 walls of hallways3d: 0.6 -
     0.7 s CPU per file; STEP lines written by hand took 0.19 s, but the library's
     writer is the one to keep). The units keep a fixed order (``assign_unit`` keeps
@@ -938,44 +924,25 @@ def write_ifc(plan: FloorPlan, path: str | os.PathLike, name: str = "floorscan")
 
 def _name_ifc(model, name: str) -> None:
     """Name the IFC project ``name`` and derive every GlobalId from it and the
-    creation order (``uuid5``): the same plan and name give the same ids, and
-    renaming a model gives the ids a fresh model of that name would have."""
+    creation order: the same plan and name give the same ids, and renaming a model
+    gives the ids a fresh model of that name would have."""
     model.by_type("IfcProject")[0].Name = name
-    roots = sorted(model.by_type("IfcRoot"), key=lambda e: e.id())
-    for entity, gid in zip(roots, _ifc_guids(name, len(roots))):
-        entity.GlobalId = gid
+    guid = _ifc_guids(name)
+    for entity in sorted(model.by_type("IfcRoot"), key=lambda e: e.id()):
+        entity.GlobalId = guid()
 
 
-#: Standard base64 digits to the IFC GlobalId digits (``ifcopenshell.guid``).
-_STD_TO_IFC_B64 = str.maketrans(
-    "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/",
-    "0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_$",
-)
+def _ifc_guids(name: str):
+    """A function giving the GlobalIds of the model named ``name`` in creation order:
+    ``ifcopenshell.guid.compress(uuid5(ns, str(i)).hex)`` for i = 0, 1, ..., ``ns``
+    the ``uuid5`` of ``floorscan:{name}`` (URL namespace)."""
+    import itertools
 
+    import ifcopenshell.guid
 
-def _ifc_guids(name: str, n: int) -> list[str]:
-    """The GlobalIds of the first ``n`` IfcRoot entities of the model named ``name``:
-    ``ifcopenshell.guid.compress(uuid.uuid5(ns, str(i)).hex)`` for i = 0..n-1, ``ns``
-    the uuid5 of ``floorscan:{name}`` (URL namespace).
-
-    Computed in one batch: ``uuid5`` is the SHA-1 of namespace and name cut to 16
-    bytes with the version (5) and variant (RFC 4122) bits set, and ``compress`` the
-    base64 of the 16 bytes after two zero bytes (24 digits, the first two dropped)
-    in the IFC digit order; 18 bytes are whole base64 groups, so the ids are slices
-    of one ``b64encode`` of all of them. ~1 us an id instead of ~6 us.
-    """
-    import base64
-
-    ns = uuid.uuid5(uuid.NAMESPACE_URL, f"floorscan:{name}").bytes
-    sha1 = hashlib.sha1
-    raw = bytearray()
-    for i in range(n):
-        d = bytearray(sha1(ns + str(i).encode()).digest()[:16])
-        d[6] = (d[6] & 0x0F) | 0x50
-        d[8] = (d[8] & 0x3F) | 0x80
-        raw += b"\0\0" + d
-    text = base64.b64encode(bytes(raw)).decode().translate(_STD_TO_IFC_B64)
-    return [text[k + 2 : k + 24] for k in range(0, 24 * n, 24)]
+    ns = uuid.uuid5(uuid.NAMESPACE_URL, f"floorscan:{name}")
+    count = itertools.count()
+    return lambda: ifcopenshell.guid.compress(uuid.uuid5(ns, str(next(count))).hex)
 
 
 FLOORPLAN_FORMATS = ("geojson", "svg", "dxf", "ifc")
@@ -1034,6 +1001,7 @@ class FloorplanWriter:
         unknown = sorted(set(outputs) - set(FLOORPLAN_FORMATS))
         if unknown:
             raise KeyError(f"unknown floor plan formats {unknown}; expected {list(FLOORPLAN_FORMATS)}")
+        segments = _in_scan_order(segments)  # as build_floorplan takes them (sorted once)
         key = _segments_key(segments)
         done = self._written.get(key)
         name = name or "floorscan"
@@ -1067,11 +1035,10 @@ class FloorplanWriter:
 
 
 def _segments_key(segments: pd.DataFrame) -> bytes:
-    """Digest of the segments in scan order (what :func:`build_floorplan` reads)."""
-    seg = _in_scan_order(segments)
+    """Digest of the segments (in scan order: what :func:`build_floorplan` reads)."""
     h = hashlib.sha256()
-    for c in seg.columns:
-        h.update(c.encode() + b"\0" + np.ascontiguousarray(seg[c].to_numpy()).tobytes())
+    for c in segments.columns:
+        h.update(c.encode() + b"\0" + np.ascontiguousarray(segments[c].to_numpy()).tobytes())
     return h.digest()
 
 
