@@ -102,34 +102,14 @@ def map_in_processes(fn: Callable, calls: Sequence[tuple], local_first: bool | N
     if len(calls) == 0 or (len(calls) == 1 and local_first):
         return [fn(*args) for args in calls]
     remote = calls[1:] if local_first else calls
-    procs, errs = [], []
+    stream = CallStream(len(remote))  # a worker per call, started ahead ones first
     try:
-        for args in remote:
-            proc, err = _READY.pop(0) if _READY else _spawn()
-            procs.append(proc)
-            errs.append(err)
-            try:
-                proc.stdin.write(pickle.dumps((fn.__module__, fn.__qualname__, args)))
-                proc.stdin.close()
-            except BrokenPipeError:  # it died starting (e.g. a preload failed): reported below
-                pass
+        for w, args in enumerate(remote):
+            stream.submit(w, fn, args)
         results = [fn(*calls[0])] if local_first else []
-        for proc, err in zip(procs, errs):
-            out = proc.stdout.read()
-            if proc.wait() != 0:
-                err.seek(0)
-                tail = "\n".join(err.read().decode(errors="replace").strip().splitlines()[-5:])
-                raise RuntimeError(f"{fn.__module__}.{fn.__qualname__} in a worker process exited with "
-                                   f"{proc.returncode}:\n{tail}")
-            results.append(pickle.loads(out))
+        return results + stream.results()
     finally:
-        for proc in procs:
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait()
-        for err in errs:
-            err.close()
-    return results
+        stream.close()
 
 
 class CallStream:
@@ -164,6 +144,7 @@ class CallStream:
         self._threads: list[threading.Thread] = []
         self._results: dict[int, Any] = {}
         self._submitted = 0
+        self._what = "a call"  # the function last submitted, for error messages
         self.pending = [0] * self._n  # calls sent to each worker and not yet answered
         self._lock = threading.Lock()
         for w in range(self._n):
@@ -182,6 +163,7 @@ class CallStream:
         ``fn`` is module-level; arguments and result must pickle."""
         number = self._submitted
         self._submitted += 1
+        self._what = f"{fn.__module__}.{fn.__qualname__}"
         with self._lock:
             self.pending[worker] += 1
         self._outbox[worker].put((number, pickle.dumps((fn.__module__, fn.__qualname__, args))))
@@ -234,7 +216,7 @@ class CallStream:
                 if proc.wait() != 0:
                     err.seek(0)
                     tail = "\n".join(err.read().decode(errors="replace").strip().splitlines()[-5:])
-                    raise RuntimeError(f"a CallStream worker process exited with {proc.returncode}:\n{tail}")
+                    raise RuntimeError(f"{self._what} in a worker process exited with {proc.returncode}:\n{tail}")
             missing = self._submitted - len(self._results)
             if missing:
                 raise RuntimeError(f"{missing} of {self._submitted} calls got no result from the worker processes")
