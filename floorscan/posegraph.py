@@ -38,7 +38,7 @@ import functools
 import logging
 import math
 from dataclasses import dataclass
-from typing import Mapping, Sequence
+from typing import Sequence
 
 import numpy as np
 import pandas as pd
@@ -209,7 +209,7 @@ def scan_pair_edges(
     t_s: np.ndarray,
     params: GraphParams = GraphParams(),
     icp_kinds: tuple[str, ...] = ("sequential", "loop"),
-    known: "Mapping[tuple[int, int], tuple] | None" = None,
+    ahead: "EdgeStream | None" = None,
     scan_ids: Sequence[int] | None = None,
 ) -> pd.DataFrame:
     """Relative-pose constraints between overlapping scans by planar ICP.
@@ -238,12 +238,13 @@ def scan_pair_edges(
         Pair kinds aligned by ICP; the others keep the relative pose of ``poses``
         with fitness 1 (odometry mode: the odometry chain is the sequential edges, ICP
         only closes the loops).
-    known : mapping, optional
-        Rows aligned ahead (:meth:`EdgeStream.finish`), by the pair's scan ids; a
-        pair found there with the same kind takes that row (the same clouds, poses
-        and parameters give the same row), the others are aligned here.
+    ahead : EdgeStream, optional
+        Pairs aligned ahead (after :meth:`EdgeStream.finish`): a pair found in its
+        ``rows`` (by scan ids) with the same kind takes that row (the same clouds,
+        poses and parameters give the same row), the others are aligned here; its
+        projected clouds (``pts``) are used, not made again.
     scan_ids : sequence of int, optional
-        The scan id of each cloud (needed with ``known``).
+        The scan id of each cloud (needed with ``ahead``).
 
     Returns
     -------
@@ -256,22 +257,25 @@ def scan_pair_edges(
         uses the pairs with ``fitness >= min_edge_fitness``.
     """
     poses = np.asarray(poses, dtype=np.float64)
-    pts = [_plane_cloud(c, params.voxel_size_m) for c in clouds]
+    if ahead is not None and (scan_ids is None or len(scan_ids) != len(clouds)):
+        raise ValueError("edges aligned ahead need the scan_ids of the clouds")
+    ids = [int(s) for s in scan_ids] if ahead is not None else None
+    pts = [
+        ahead.pts[ids[k]] if ahead is not None and ids[k] in ahead.pts else _plane_cloud(c, params.voxel_size_m)
+        for k, c in enumerate(clouds)
+    ]
     pairs = [(i, j, kind) for i, j, kind in candidate_pairs(poses, t_s, params)
              if len(pts[i]) >= 3 and len(pts[j]) >= 3]
     done: dict[int, tuple] = {}  # pair number -> row, from the rows aligned ahead
-    if known:
-        if scan_ids is None or len(scan_ids) != len(pts):
-            raise ValueError("known edges need the scan_ids of the clouds")
-        ids = [int(s) for s in scan_ids]
+    if ahead is not None:
         for n, (i, j, kind) in enumerate(pairs):
-            row = known.get((ids[i], ids[j]))
+            row = ahead.rows.get((ids[i], ids[j]))
             if row is not None and row[2] == kind:
                 done[n] = (i, j, *row[2:])
     todo = [pair for n, pair in enumerate(pairs) if n not in done]
     computed = iter(_parallel_pair_rows(pts, poses, _chunks(todo, max(1, int(params.workers))), params, icp_kinds))
     rows = [done[n] if n in done else next(computed) for n in range(len(pairs))]
-    if known is not None:
+    if ahead is not None:
         log.info("edges: %d of %d pairs aligned while the scans were read", len(done), len(pairs))
     return pd.DataFrame(rows, columns=EDGE_COLUMNS).astype(
         {"i": np.int64, "j": np.int64, "kind": str, "dx_m": float, "dy_m": float,
@@ -295,8 +299,9 @@ class EdgeStream:
     The pairs are :func:`candidate_pairs` of the expected scans and their initial
     poses; each is sent (in batches of :data:`STREAM_BATCH`) to the least busy worker
     as soon as both its clouds are here, a worker keeping the clouds it was sent.
-    :func:`scan_pair_edges` then takes the rows of its pairs from :meth:`finish`
-    and aligns only pairs that were not expected (a scan dropped after all), so the
+    :func:`scan_pair_edges` then takes the rows of its pairs and the projected
+    clouds (``rows``, ``pts``) after :meth:`finish` and aligns only pairs that were
+    not expected (a scan dropped after all), so the
     edges are the same as without the stream (tested).
 
     Parameters
@@ -329,6 +334,8 @@ class EdgeStream:
         self.stream = CallStream(workers)
         self.sent = [set() for _ in range(max(1, int(workers)))]
         self.ready: list[tuple[int, int, str]] = []
+        #: After :meth:`finish`: the :data:`EDGE_COLUMNS` rows by ``(i, j)`` (scan ids).
+        self.rows: dict[tuple[int, int], tuple] = {}
 
     def add(self, scan_id: int, cloud: np.ndarray) -> None:
         """Scan ``scan_id``'s cloud (as for :func:`scan_pair_edges`) is here: send the
@@ -355,11 +362,11 @@ class EdgeStream:
         self.stream.submit(w, _stream_pair_rows, (new, poses, self.ready, self.params, self.icp_kinds))
         self.ready = []
 
-    def finish(self) -> dict[tuple[int, int], tuple]:
-        """Send the last batch and wait: the :data:`EDGE_COLUMNS` rows (``i, j`` are
-        scan ids) by ``(i, j)``."""
+    def finish(self) -> "EdgeStream":
+        """Send the last batch and wait for :attr:`rows` (``i, j`` are scan ids); returns self."""
         self._send()
-        return {(r[0], r[1]): r for rows in self.stream.results() for r in rows}
+        self.rows = {(r[0], r[1]): r for rows in self.stream.results() for r in rows}
+        return self
 
     def close(self) -> None:
         """Stop the workers (after an error elsewhere)."""
@@ -706,7 +713,7 @@ def refine_poses(
     priors: np.ndarray | None,
     params: GraphParams = GraphParams(),
     icp_kinds: tuple[str, ...] = ("sequential", "loop"),
-    known: "Mapping[tuple[int, int], tuple] | None" = None,
+    ahead: "EdgeStream | None" = None,
     scan_ids: Sequence[int] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
     """Pose-graph registration of a sequence of scans: edges, then optimisation.
@@ -723,7 +730,7 @@ def refine_poses(
     priors : (N, 4) float ndarray or None
         The localizer's poses (None in odometry mode: the first scan is held).
     params : GraphParams
-    icp_kinds, known, scan_ids
+    icp_kinds, ahead, scan_ids
         See :func:`scan_pair_edges`.
 
     Returns
@@ -742,7 +749,7 @@ def refine_poses(
     """
     initial = np.asarray(initial, dtype=np.float64)
     n = len(initial)
-    edges = scan_pair_edges(clouds, initial, t_s, params, icp_kinds, known, scan_ids)
+    edges = scan_pair_edges(clouds, initial, t_s, params, icp_kinds, ahead, scan_ids)
     poses, info = optimize_pose_graph(initial, edges, priors, params)
     info["n_pairs"] = int(len(edges))
     both = np.r_[edges["i"].to_numpy(), edges["j"].to_numpy()]

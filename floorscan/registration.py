@@ -1417,9 +1417,10 @@ def _aligned_poses(index: pd.DataFrame, poses: pd.DataFrame | None, cfg: Registr
     return _align_poses(index, poses)
 
 
-def _register_screened(index, aligned, reasons, clouds: "_ScanStore", cfg, known_edges=None) -> tuple[pd.DataFrame, dict]:
+def _register_screened(index, aligned, reasons, clouds: "_ScanStore", cfg, ahead=None) -> tuple[pd.DataFrame, dict]:
     """Algorithm 3 steps 2-6 after the per-scan checks: sampling, then the registration
-    of the configured mode (``known_edges``: pose-graph edges aligned ahead). Returns
+    of the configured mode (``ahead``: pose-graph edges aligned ahead, a finished
+    :class:`floorscan.posegraph.EdgeStream`). Returns
     the :data:`REGISTRATION` table and the summary; raises :class:`RegistrationError`
     when nothing could be registered."""
     n = len(index)
@@ -1447,7 +1448,7 @@ def _register_screened(index, aligned, reasons, clouds: "_ScanStore", cfg, known
         if cfg.loop_closure:
             _register_graph(np.flatnonzero(kept), clouds, sids, t, cfg, out, priors=False)
     elif cfg.reference == "graph":
-        n_anchor = _register_graph(sampled, clouds, sids, t, cfg, out, priors=True, known=known_edges)
+        n_anchor = _register_graph(sampled, clouds, sids, t, cfg, out, priors=True, ahead=ahead)
     elif cfg.reference == "previous":
         n_anchor = _register_sequential(sampled, clouds, sids, t, cfg, out)
     else:
@@ -1601,8 +1602,8 @@ def register_recording(
         with pq.ParquetWriter(sampled_path, SCANS, **parquet_options(SCANS)) as sampled_writer:
             with ScanRowGroups(sampled_writer) as sampled_out:
                 _first_pass(walk(), sids, screen, store, cfg, sampled_out, edges)
-        known = edges.finish() if edges is not None else None
-        table, summary = _register_screened(index, aligned, screen.reasons, store, cfg, known)
+        ahead = edges.finish() if edges is not None else None
+        table, summary = _register_screened(index, aligned, screen.reasons, store, cfg, ahead)
         store = None
         _second_pass(table, sids, sampled_path, registered_path, metadata)
     finally:
@@ -1742,7 +1743,7 @@ def _raise_if_nothing_registered(table: pd.DataFrame, cfg: RegistrationConfig, s
 # --------------------------------------------------------------------------- pose graph
 
 
-def _register_graph(scans, clouds, sids, t, cfg, out, priors: bool, known=None) -> int:
+def _register_graph(scans, clouds, sids, t, cfg, out, priors: bool, ahead=None) -> int:
     """Pose-graph registration (``reference: graph``, :mod:`floorscan.posegraph`).
 
     ``scans`` (indices into the scan index, time order) start at ``final`` (the
@@ -1771,7 +1772,7 @@ def _register_graph(scans, clouds, sids, t, cfg, out, priors: bool, known=None) 
     cl = [clouds.graph(int(sids[i])) for i in scans]
     kinds = ("sequential", "loop") if priors else ("loop",)
     poses, fp, fi, rm, info = posegraph.refine_poses(
-        cl, init, t_s, init if priors else None, params, icp_kinds=kinds, known=known, scan_ids=sids[scans]
+        cl, init, t_s, init if priors else None, params, icp_kinds=kinds, ahead=ahead, scan_ids=sids[scans]
     )
     final[scans] = poses
     log.info("pose graph: %d scans, %s", n, info)
