@@ -225,7 +225,7 @@ class RayCaster:
     """
 
     def __init__(self, vertices: np.ndarray, triangles: np.ndarray) -> None:
-        import open3d as o3d
+        from floorscan.o3d import o3d
 
         self._o3d = o3d
         self.scene = o3d.t.geometry.RaycastingScene()

@@ -139,7 +139,7 @@ def _one_openmp_thread():
 
 @functools.lru_cache(maxsize=1)
 def _openmp_controller():
-    import open3d  # noqa: F401  (its OpenMP runtime must be loaded before the scan)
+    from floorscan.o3d import o3d  # noqa: F401  (its OpenMP runtime must be loaded before the scan)
     from threadpoolctl import ThreadpoolController
 
     return ThreadpoolController()
@@ -417,7 +417,7 @@ def _pair_rows(pts, poses: np.ndarray, pairs, params: GraphParams, icp_kinds) ->
     """The :data:`EDGE_COLUMNS` rows of ``pairs`` (see :func:`scan_pair_edges`);
     ``pts[k]`` is scan k's projected, downsampled cloud and ``poses[k]`` its initial
     pose (lists, arrays or dicts by scan id)."""
-    import open3d as o3d
+    from floorscan.o3d import o3d
 
     reg = o3d.pipelines.registration
     trees: dict[int, cKDTree] = {}
@@ -657,7 +657,7 @@ def _optimize_open3d(poses: np.ndarray, edges: pd.DataFrame, priors, params: Gra
     Gauss-Newton converges in a few iterations from the
     localizer's poses; its Levenberg-Marquardt needed ~50 (9.3 s CPU on hallways) to the
     same poses. Returns the poses and the number of loop edges pruned."""
-    import open3d as o3d
+    from floorscan.o3d import o3d
 
     reg = o3d.pipelines.registration
     n = len(poses)

@@ -432,7 +432,7 @@ def normals_3d(points: np.ndarray, k: int) -> np.ndarray:
     -------
     (N, 3) float64 ndarray
     """
-    import open3d as o3d
+    from floorscan.o3d import o3d
 
     from floorscan.posegraph import _one_openmp_thread
 
@@ -1547,7 +1547,7 @@ def register_recording(
         workers = GraphParams.from_mapping(cfg.graph).workers
         pairs = 3 * len(scan_index) // max(1, cfg.every_n)
         n_workers = min(workers, max(1, pairs // 200)) if workers > 1 else 0
-        prestart(n_workers, preload=("open3d", "floorscan.posegraph"))
+        prestart(n_workers, preload=("floorscan.o3d", "floorscan.posegraph"))
     index = _prepare_index(scan_index)
     aligned = _aligned_poses(index, poses, cfg)
     sids = index["scan_id"].to_numpy()

@@ -44,7 +44,7 @@ def read_pcd_xyz(path: str | Path) -> np.ndarray:
         Missing, unreadable or truncated file (the point count read differs from the
         header's ``POINTS``), or no x/y/z fields.
     """
-    import open3d as o3d
+    from floorscan.o3d import o3d
 
     path = Path(path)
     header = _pcd_header(path)
