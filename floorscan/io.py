@@ -263,14 +263,16 @@ class ScanRowGroups:
     def _submit(self) -> None:
         if not self.n:
             return
-        p = np.concatenate(self.pts)
+        # (3, n) with each coordinate contiguous: Arrow takes the rows without a copy
+        # (columns of an (n, 3) array are strided and were copied once more)
+        p = np.concatenate([a.T for a in self.pts], axis=1)
         table = pa.table(
-            {"scan_id": np.concatenate(self.ids), "x": p[:, 0], "y": p[:, 1], "z": p[:, 2]},
+            {"scan_id": np.concatenate(self.ids), "x": p[0], "y": p[1], "z": p[2]},
             schema=self.writer.schema,
         )
         self.ids, self.pts, self.n = [], [], 0
         self._wait()  # the previous row group is written first
-        self._pending = self._pool.submit(self.writer.write_table, table, row_group_size=len(p))
+        self._pending = self._pool.submit(self.writer.write_table, table, row_group_size=p.shape[1])
 
 
 def iter_scans(

@@ -274,3 +274,33 @@ def test_filter_points_float32_input_keeps_the_same_points_as_float64():
     clean = p[np.isfinite(p).all(axis=1)]
     out, n = filter_points(clean)
     assert n == 0 and out is not clean and np.array_equal(out, clean)
+
+
+def _pc2(points, fmt, point_step, offsets=(0, 4, 8), bigendian=False):
+    """A stand-in PointCloud2 message (the attributes pointcloud2_xyz reads)."""
+    from types import SimpleNamespace
+
+    datatype = {"f4": 7, "f8": 8}[fmt]
+    order = ">" if bigendian else "<"
+    dt = np.dtype({"names": list("xyz"), "formats": [order + fmt] * 3, "offsets": list(offsets), "itemsize": point_step})
+    rec = np.zeros(len(points), dtype=dt)
+    for i, n in enumerate("xyz"):
+        rec[n] = points[:, i]
+    fields = [SimpleNamespace(name=n, datatype=datatype, offset=o) for n, o in zip("xyz", offsets)]
+    return SimpleNamespace(fields=fields, is_bigendian=bigendian, point_step=point_step, width=len(points), height=1,
+                           row_step=point_step * len(points), data=np.frombuffer(rec.tobytes(), np.uint8))
+
+
+def test_pointcloud2_xyz_keeps_float32_fields_and_widens_the_others():
+    from floorscan.ingest.rosbag import pointcloud2_xyz
+
+    pts = np.array([[1.5, -2.25, 0.125], [3.1, 4.2, np.nan], [0.1, 0.2, 0.3]])
+    little = pointcloud2_xyz(_pc2(pts, "f4", 16))  # x y z + 4 bytes of intensity
+    assert little.dtype == np.float32 and little.shape == (3, 3)
+    np.testing.assert_array_equal(little, pts.astype(np.float32))  # NaN kept for the caller to count
+    big = pointcloud2_xyz(_pc2(pts, "f4", 12, bigendian=True))
+    assert big.dtype == np.float64
+    np.testing.assert_array_equal(big, pts.astype(np.float32).astype(np.float64))
+    double = pointcloud2_xyz(_pc2(pts, "f8", 32, offsets=(0, 8, 16)))
+    assert double.dtype == np.float64
+    np.testing.assert_array_equal(double, pts)

@@ -208,6 +208,7 @@ def filter_points(
     Returns
     -------
     points : (M, 3) float32 ndarray
+        ``points`` itself when it is float32 and every point is kept (no copy).
     n_dropped : int
     """
     p = np.asarray(points)
@@ -224,7 +225,7 @@ def filter_points(
         if range_max is not None:
             ok &= d <= range_max
     n_ok = int(np.count_nonzero(ok))
-    kept = p.astype(np.float32) if n_ok == len(p) else p[ok].astype(np.float32)
+    kept = p.astype(np.float32, copy=False) if n_ok == len(p) else p[ok].astype(np.float32, copy=False)
     return kept, len(p) - n_ok
 
 

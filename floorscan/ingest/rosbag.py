@@ -158,11 +158,13 @@ _PC2_DTYPES = {1: "i1", 2: "u1", 3: "i2", 4: "u2", 5: "i4", 6: "u4", 7: "f4", 8:
 
 
 def pointcloud2_xyz(msg, path: Path | str = "", topic: str = "") -> np.ndarray:
-    """The ``x, y, z`` fields of a ``sensor_msgs/PointCloud2`` as an (N, 3) float64 array.
+    """The ``x, y, z`` fields of a ``sensor_msgs/PointCloud2`` as an (N, 3) array.
 
-    Handles any point step, field offsets, endianness and organised clouds
-    (height > 1). Non-finite points are returned as they are (the caller drops and
-    counts them).
+    float32 when the three fields are little-endian float32 (the usual LIDAR driver
+    layout: the values as they are, without a float64 copy that the float32 scan table
+    would round back), else float64. Handles any point step, field offsets, endianness
+    and organised clouds (height > 1). Non-finite points are returned as they are (the
+    caller drops and counts them).
 
     Raises
     ------
@@ -193,8 +195,12 @@ def pointcloud2_xyz(msg, path: Path | str = "", topic: str = "") -> np.ndarray:
         data = np.ascontiguousarray(rows).reshape(-1)
     if data.size < n_points * msg.point_step:
         raise InputError(f"{path}: PointCloud2 on {topic!r} has {data.size} bytes for {n_points} points")
-    arr = np.frombuffer(data[: n_points * int(msg.point_step)].tobytes(), dtype=dt, count=n_points)
-    return np.stack([arr["x"], arr["y"], arr["z"]], axis=1).astype(np.float64)
+    arr = np.frombuffer(data, dtype=dt, count=n_points)  # a view: count bounds it
+    out_dtype = np.float32 if all(f == "<f4" for f in formats) else np.float64
+    out = np.empty((n_points, 3), dtype=out_dtype)
+    for i, n in enumerate("xyz"):
+        out[:, i] = arr[n]
+    return out
 
 
 def _pose_topic_stream(reader, path: Path, pose_cfg: Mapping[str, Any], scan_frame: str):
