@@ -1573,7 +1573,9 @@ def register_recording(
     def walk():
         """(index position, points) in index order; the file's scans are ascending."""
         k, last = 0, None
-        for sid, pts in iter_scans(scans_path):
+        # float32 as stored: most scans are only screened; _first_pass widens the
+        # scans it keeps to float64
+        for sid, pts in iter_scans(scans_path, dtype=np.float32):
             if last is not None and sid <= last:
                 raise InputError(
                     f"{scans_path}: scan {sid} follows scan {last}; expected the scans in "
@@ -1642,7 +1644,7 @@ def _first_pass(scans, sids, screen, store, cfg, sampled_out, edges=None) -> Non
         else:
             needs = ()
         if needs:
-            store.add(int(sids[k]), pts, needs)
+            store.add(int(sids[k]), pts.astype(np.float64), needs)
             if edges is not None and "graph" in needs:
                 edges.add(int(sids[k]), store.graph(int(sids[k])))
         if is_sampled:
