@@ -154,9 +154,10 @@ def _candidate_pairs(
     ``STRtree.query(predicate="dwithin")``, without a GEOS distance per pair: walls
     seen by many scans stack a hundred segments deep. With ``max_angle``, the
     segments are first binned by direction (bins at least ``max_angle`` wide, so a
-    pair within it lies in one bin or two neighbours) and each two neighbouring
-    bins are queried on their own: the box pairs of crossing walls (two thirds of
-    them on hallways3d) are not made at all. With ``exact`` False the distance
+    pair within it lies in one bin or two neighbours) and only the pairs within a
+    bin or two neighbouring bins are queried (:func:`_binned_box_pairs`, one
+    query): the box pairs of crossing walls (two thirds of them on hallways3d) are
+    not made at all. With ``exact`` False the distance
     test is left to the caller (:func:`_within_distance`, :func:`_merge_groups`),
     who may run its own cheaper tests first; the pairs are then in no particular
     order.
@@ -167,35 +168,17 @@ def _candidate_pairs(
         return np.empty(0, np.int64), np.empty(0, np.int64)
     lo = np.minimum(seg[:, :2], seg[:, 2:]) - distance
     hi = np.maximum(seg[:, :2], seg[:, 2:]) + distance
-    lines = shapely.linestrings(np.stack([seg[:, :2], seg[:, 2:]], axis=1))
-    boxes = shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1])
     ang = _axial_angle(seg) if max_angle is not None else None
     # Direction bins, 1 % wider than max_angle against rounding; fewer than 3 bins: one query.
     n_bins = 1 if max_angle is None else int(min(64, np.floor(np.pi / (1.01 * max(max_angle, 1e-9)))))
     if n_bins < 3:
-        windows = [(0, np.arange(len(seg)))]
-        n_bins, in_bin = 1, None
-    else:
-        in_bin = np.clip((np.nan_to_num(ang) * (n_bins / np.pi)).astype(np.int64), 0, n_bins - 1)
-        by_bin = np.argsort(in_bin, kind="stable")
-        bounds = np.r_[0, np.cumsum(np.bincount(in_bin, minlength=n_bins))]
-        windows = []
-        for k in range(n_bins):
-            nxt = (k + 1) % n_bins
-            if bounds[k + 1] - bounds[k] + bounds[nxt + 1] - bounds[nxt] >= 2:
-                windows.append((k, np.r_[by_bin[bounds[k] : bounds[k + 1]], by_bin[bounds[nxt] : bounds[nxt + 1]]]))
-    out_i, out_j = [], []
-    for k, idx in windows:
-        li, lj = shapely.STRtree(lines[idx]).query(boxes[idx])
-        i, j = idx[li], idx[lj]
+        lines = shapely.linestrings(np.stack([seg[:, :2], seg[:, 2:]], axis=1))
+        boxes = shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1])
+        i, j = shapely.STRtree(lines).query(boxes)
         keep = i < j
-        if n_bins > 1:  # pairs with both in the next bin are the next window's
-            nxt = (k + 1) % n_bins
-            keep &= (in_bin[i] != nxt) | (in_bin[j] != nxt)
-        out_i.append(i[keep])
-        out_j.append(j[keep])
-    i = np.concatenate(out_i) if out_i else np.empty(0, np.int64)
-    j = np.concatenate(out_j) if out_j else np.empty(0, np.int64)
+        i, j = i[keep], j[keep]
+    else:
+        i, j = _binned_box_pairs(seg, lo, hi, ang, n_bins)
     if max_angle is not None and len(i):
         keep = _angle_diff(ang[i], ang[j]) <= max_angle
         i, j = i[keep], j[keep]
@@ -204,6 +187,47 @@ def _candidate_pairs(
     i, j = _within_distance(seg, i, j, distance)
     order = np.lexsort((j, i))
     return i[order], j[order]
+
+
+def _binned_box_pairs(seg: np.ndarray, lo: np.ndarray, hi: np.ndarray, ang: np.ndarray, n_bins: int):
+    """Pairs (i < j, in no particular order) of segments in one direction bin or two
+    neighbouring ones (``n_bins`` >= 3 bins over [0, pi) of ``ang``) whose boxes
+    (``lo``, ``hi``: each segment's box grown by the search distance) meet its
+    neighbour's bounding box, from one STRtree query.
+
+    Each bin gets its own stretch of the x axis (bins a box width plus a margin apart),
+    the tree holds every segment in its bin's stretch, and every box is queried twice:
+    in its own bin's stretch (pairs within the bin) and in the next bin's (pairs
+    with the next bin; bin ``n_bins - 1``'s next is bin 0). The query boxes grow by a
+    relative 1e-9 more than the distance, so the shift by whole stretches cannot lose
+    a pair to rounding: the pairs are the grown-box pairs of one bin or two
+    neighbouring ones, and a few more at most at the distance's edge (the callers
+    test the distance; before, a tree and a query per bin pair, 59 of each for the
+    merge's 3 degrees, cost more than the queries).
+    """
+    import shapely
+
+    n = len(seg)
+    in_bin = np.clip((np.nan_to_num(ang) * (n_bins / np.pi)).astype(np.int64), 0, n_bins - 1)
+    finite = np.isfinite(lo).all(axis=1) & np.isfinite(hi).all(axis=1)  # others meet nothing, as in a tree
+    if not finite.any():
+        return np.empty(0, np.int64), np.empty(0, np.int64)
+    x_min, x_max = float(lo[finite, 0].min()), float(hi[finite, 0].max())
+    y_abs = float(max(np.abs(lo[finite, 1]).max(), np.abs(hi[finite, 1]).max()))
+    stretch = (x_max - x_min) * 1.5 + 1.0
+    eps = 1e-9 * (n_bins + 1) * (stretch + abs(x_min) + abs(x_max) + y_abs)
+    shift = in_bin * stretch - x_min
+    xy = seg.reshape(n, 2, 2).copy()
+    xy[:, :, 0] += shift[:, None]
+    tree = shapely.STRtree(shapely.linestrings(xy))
+    slot = np.r_[in_bin, (in_bin + 1) % n_bins] * stretch - x_min
+    qlo, qhi = np.tile(lo, (2, 1)) - eps, np.tile(hi, (2, 1)) + eps
+    qi, j = tree.query(shapely.box(qlo[:, 0] + slot, qlo[:, 1], qhi[:, 0] + slot, qhi[:, 1]))
+    i = qi % n
+    same = qi < n
+    keep = ~same | (i < j)  # a pair in one bin is found from both of its boxes
+    i, j = i[keep], j[keep]
+    return np.minimum(i, j), np.maximum(i, j)
 
 
 def _within_distance(seg: np.ndarray, i: np.ndarray, j: np.ndarray, distance: float):
@@ -630,7 +654,7 @@ def floorplan_geojson(plan: FloorPlan) -> dict:
     return _floorplan_geojson(plan, plan.footprints())
 
 
-def _floorplan_geojson(plan: FloorPlan, polys) -> dict:
+def _floorplan_geojson(plan: FloorPlan, polys, rings: list | None = None) -> dict:
     """:func:`floorplan_geojson` given the plan's footprints (:meth:`FloorPlan.footprints`).
 
     A footprint's coordinates are its exterior ring's (:func:`_exterior_rings`),
@@ -641,15 +665,18 @@ def _floorplan_geojson(plan: FloorPlan, polys) -> dict:
     """
     import shapely
 
-    def col(df, c):
-        return df[c].tolist()
+    floats = ("x0", "y0", "x1", "y1", "thickness_m", "height_m", "length_m")
+
+    def col(df, c):  # floats as float64 (not DataFrame.astype: 3 ms a call)
+        return df[c].to_numpy(dtype=np.float64).tolist() if c in floats else df[c].tolist()
 
     def line(x0, y0, x1, y1):
         return {"type": "LineString", "coordinates": [[round(x0, 5), round(y0, 5)], [round(x1, 5), round(y1, 5)]]}
 
     feats = []
-    w = plan.walls.astype({c: np.float64 for c in ("x0", "y0", "x1", "y1", "thickness_m", "height_m", "length_m")})
-    rings = _exterior_rings(polys)
+    w = plan.walls
+    if rings is None:
+        rings = _exterior_rings(polys)
     plain = (
         (shapely.get_type_id(polys) == 3) & (shapely.get_num_interior_rings(polys) == 0)
         if len(polys) else np.zeros(0, bool)
@@ -670,7 +697,7 @@ def _floorplan_geojson(plan: FloorPlan, polys) -> dict:
             else:
                 geom = _round_coords(json.loads(shapely.to_geojson(poly)))
             feats.append(_feature("footprint", geom, {"wall_id": int(wall_id), "thickness_m": thick}))
-    f = plan.faces.astype({c: np.float64 for c in ("x0", "y0", "x1", "y1")})
+    f = plan.faces
     for face_id, wall_id, x0, y0, x1, y1, n_seg, n_inl in zip(
         col(f, "face_id"), col(f, "wall_id"), col(f, "x0"), col(f, "y0"), col(f, "x1"), col(f, "y1"),
         col(f, "n_segments"), col(f, "n_inliers"),
@@ -701,8 +728,8 @@ def write_geojson(plan: FloorPlan, path: str | os.PathLike) -> None:
     _write_geojson(plan, path, plan.footprints())
 
 
-def _write_geojson(plan: FloorPlan, path: str | os.PathLike, polys) -> None:
-    doc = _floorplan_geojson(plan, polys)
+def _write_geojson(plan: FloorPlan, path: str | os.PathLike, polys, rings: list | None = None) -> None:
+    doc = _floorplan_geojson(plan, polys, rings)
     feats = ",\n".join(map(json.dumps, doc["features"]))
     text = f'{{"type": "FeatureCollection", "features": [\n{feats}\n]}}\n' if feats else json.dumps(doc) + "\n"
     with atomic_path(path) as tmp:
@@ -718,7 +745,9 @@ def write_svg(plan: FloorPlan, path: str | os.PathLike, px_per_m: float = 40.0, 
     _write_svg(plan, path, plan.footprints(), px_per_m, title)
 
 
-def _write_svg(plan: FloorPlan, path: str | os.PathLike, polys, px_per_m: float = 40.0, title: str = "") -> None:
+def _write_svg(
+    plan: FloorPlan, path: str | os.PathLike, polys, px_per_m: float = 40.0, title: str = "", rings: list | None = None
+) -> None:
     if len(plan.walls):
         xs = plan.walls[["x0", "x1"]].to_numpy()
         ys = plan.walls[["y0", "y1"]].to_numpy()
@@ -735,7 +764,7 @@ def _write_svg(plan: FloorPlan, path: str | os.PathLike, polys, px_per_m: float 
         '<g transform="scale(1,-1)">',
         '<g id="walls" fill="#9a9a9a" stroke="#333" stroke-width="0.01">',
     ]
-    for ring in _exterior_rings(polys):
+    for ring in _exterior_rings(polys) if rings is None else rings:
         if ring is None:
             continue
         pts = " ".join(f"{x:.4f},{y:.4f}" for x, y in ring[:-1])
@@ -768,7 +797,7 @@ def write_dxf(plan: FloorPlan, path: str | os.PathLike) -> None:
     _write_dxf(plan, path, plan.footprints())
 
 
-def _write_dxf(plan: FloorPlan, path: str | os.PathLike, polys) -> None:
+def _write_dxf(plan: FloorPlan, path: str | os.PathLike, polys, rings: list | None = None) -> None:
     """:func:`write_dxf` given the plan's footprints (:meth:`FloorPlan.footprints`)."""
     import ezdxf
     from ezdxf import units
@@ -781,7 +810,8 @@ def _write_dxf(plan: FloorPlan, path: str | os.PathLike, polys) -> None:
     msp = doc.modelspace()
     w, f = plan.walls, plan.faces
     for x0, y0, x1, y1, ring in zip(
-        w["x0"].tolist(), w["y0"].tolist(), w["x1"].tolist(), w["y1"].tolist(), _exterior_rings(polys)
+        w["x0"].tolist(), w["y0"].tolist(), w["x1"].tolist(), w["y1"].tolist(),
+        _exterior_rings(polys) if rings is None else rings,
     ):
         msp.add_line((x0, y0), (x1, y1), dxfattribs={"layer": "WALL_AXIS"})
         if ring is not None:
@@ -826,19 +856,22 @@ def _ifc_model(plan: FloorPlan, name: str):
         api.aggregate.assign_object(model, relating_object=whole, products=[part])
     storey.Elevation = 0.0
     # Stable GlobalIds (from the project name and creation order), so a rerun gives
-    # the same ids and BIM tools see the same walls, not new ones.
-    guid = _ifc_guids(name)
-    for entity in sorted(model.by_type("IfcRoot"), key=lambda e: e.id()):
+    # the same ids and BIM tools see the same walls, not new ones: the spatial
+    # structure's in creation order, then 3 a wall, then the container's.
+    roots = sorted(model.by_type("IfcRoot"), key=lambda e: e.id())
+    guids = iter(_ifc_guid_list(name, len(roots) + 3 * len(plan.walls) + 1))
+    guid = guids.__next__
+    for entity in roots:
         entity.GlobalId = guid()
-    ent = model.create_entity
+    ent = _entity_maker(model)
 
     # The walls' entities (those ifcopenshell.api's add_wall_representation,
     # add_axis_representation, edit_object_placement, add_qto and assign_container
-    # make) come from create_entity: the API costs milliseconds per call, which made
-    # IFC the slowest export of thousands of walls. create_entity costs ~5 us an
-    # entity and sets each given attribute with one Python-level call (~3.5 us; both
-    # measured on ifcopenshell 0.9, 20 entities and 45 attributes a wall, about all
-    # of this function's time), so unset (None) attributes are
+    # make) come from create_entity (as :func:`_entity_maker` makes them): the API
+    # costs milliseconds per call, which made IFC the slowest export of thousands of
+    # walls. An entity costs ~2 us and each given attribute ~1 us (ifcopenshell
+    # 0.9, 20 entities and 45 attributes a wall, most of this function's time), so
+    # unset (None) attributes are
     # not passed (keywords instead), and the geometric entities that many walls have
     # alike are made once: the +Z and +X directions, and per thickness the corner
     # point of the body profile and its placement (most walls have the default
@@ -905,7 +938,7 @@ def write_ifc(plan: FloorPlan, path: str | os.PathLike, name: str = "floorscan")
     axis start along the axis direction, and the quantities
     ``Qto_WallBaseQuantities`` Length, Width, Height. The project, units, contexts and
     spatial structure come from ``ifcopenshell.api``; the walls' entities (those its
-    per-wall calls would make) from ``file.create_entity``, because those calls,
+    per-wall calls would make) as ``file.create_entity`` makes them, because those calls,
     milliseconds each, were the stage's bottleneck (663 walls of hallways3d: 0.6 -
     0.7 s CPU per file; STEP lines written by hand took 0.19 s, but the library's
     writer is the one to keep). The units keep a fixed order (``assign_unit`` keeps
@@ -917,9 +950,54 @@ def write_ifc(plan: FloorPlan, path: str | os.PathLike, name: str = "floorscan")
     ImportError
         When ifcopenshell is not installed (``pip install ifcopenshell``).
     """
-    model = _ifc_model(plan, name)
+    _save_ifc(_ifc_model(plan, name), path)
+
+
+def _save_ifc(model, path: str | os.PathLike) -> None:
+    """Write ``model`` to ``path`` atomically as IFC-SPF text: ``model.to_string()``
+    (the text ``model.write`` writes) in one write, which took three quarters of
+    ``model.write``'s time (17 against 23 ms for 205 walls, ifcopenshell 0.9)."""
+    text = model.to_string()
     with atomic_path(path) as tmp:
-        model.write(str(tmp))
+        tmp.write_bytes(text.encode("utf-8"))
+
+
+def _entity_maker(model):
+    """``model.create_entity`` (same arguments, same entity), at a third of its cost.
+
+    ``file.create_entity`` sets each given attribute through
+    ``entity_instance.__setitem__``, which makes a Python ``file`` object per call
+    (``entity_instance.file``) to ask it for an open undo transaction: with 20
+    entities and 45 attributes a wall that was half of :func:`_ifc_model`'s time. With
+    no transaction open (none is: this module begins none), the entity is made by
+    ``file.create`` and its attributes set by ``entity_instance.set_attribute_value_py``,
+    the two calls ``create_entity`` and ``__setitem__`` end in; keyword names map to
+    attribute indices once per class. With a transaction open, or an ifcopenshell
+    without those calls, this is ``model.create_entity`` itself.
+    """
+    import ifcopenshell
+
+    create = getattr(model, "create", None)
+    setter = getattr(ifcopenshell.entity_instance, "set_attribute_value_py", None)
+    if create is None or setter is None or getattr(model, "transaction", None) is not None:
+        return model.create_entity
+    index: dict[tuple[str, str], int] = {}
+
+    def ent(cls: str, *args, **kwargs):
+        e = create(cls, -1)
+        for i, v in enumerate(args):
+            setter(e, i, v)
+        for k, v in kwargs.items():
+            i = index.get((cls, k))
+            if i is None:
+                i = e.get_argument_index(k)
+                if i >= len(e):
+                    raise ValueError(f"entity instance of type {cls!r} has no attribute {k!r}")
+                index[(cls, k)] = i
+            setter(e, i, v)
+        return e
+
+    return ent
 
 
 def _name_ifc(model, name: str) -> None:
@@ -927,22 +1005,21 @@ def _name_ifc(model, name: str) -> None:
     creation order: the same plan and name give the same ids, and renaming a model
     gives the ids a fresh model of that name would have."""
     model.by_type("IfcProject")[0].Name = name
-    guid = _ifc_guids(name)
-    for entity in sorted(model.by_type("IfcRoot"), key=lambda e: e.id()):
-        entity.GlobalId = guid()
+    roots = sorted(model.by_type("IfcRoot"), key=lambda e: e.id())
+    for entity, guid in zip(roots, _ifc_guid_list(name, len(roots))):
+        entity.GlobalId = guid
 
 
-def _ifc_guids(name: str):
-    """A function giving the GlobalIds of the model named ``name`` in creation order:
-    ``ifcopenshell.guid.compress(uuid5(ns, str(i)).hex)`` for i = 0, 1, ..., ``ns``
-    the ``uuid5`` of ``floorscan:{name}`` (URL namespace)."""
-    import itertools
-
+def _ifc_guid_list(name: str, n: int) -> list[str]:
+    """The first ``n`` GlobalIds of the model named ``name``, in creation order:
+    ``ifcopenshell.guid.compress(uuid5(ns, str(i)).hex)`` for i = 0 .. n-1, ``ns`` the
+    ``uuid5`` of ``floorscan:{name}`` (URL namespace): the same plan and name give the
+    same ids."""
     import ifcopenshell.guid
 
     ns = uuid.uuid5(uuid.NAMESPACE_URL, f"floorscan:{name}")
-    count = itertools.count()
-    return lambda: ifcopenshell.guid.compress(uuid.uuid5(ns, str(next(count))).hex)
+    compress = ifcopenshell.guid.compress
+    return [compress(uuid.uuid5(ns, str(i)).hex) for i in range(n)]
 
 
 FLOORPLAN_FORMATS = ("geojson", "svg", "dxf", "ifc")
@@ -1010,25 +1087,25 @@ class FloorplanWriter:
             model = None
         else:
             plan, first, model = done
-        polys = None  # the footprints, made once for the SVG, GeoJSON and DXF
+        polys = rings = None  # the footprints and their rings, made once for the SVG, GeoJSON and DXF
         for fmt, path in outputs.items():
             copy = fmt in ("geojson", "dxf") and done is not None and fmt in first
             if fmt != "ifc" and not copy and polys is None:
                 polys = plan.footprints()
+                rings = _exterior_rings(polys)
             if fmt == "svg":
-                _write_svg(plan, path, polys, title=name)
+                _write_svg(plan, path, polys, title=name, rings=rings)
             elif fmt == "ifc":
                 if model is None:
                     model = _ifc_model(plan, name)
                 else:
                     _name_ifc(model, name)
-                with atomic_path(path) as tmp:
-                    model.write(str(tmp))
+                _save_ifc(model, path)
             elif copy:
                 with atomic_path(path) as tmp:
                     shutil.copyfile(first[fmt], tmp)
             else:
-                {"geojson": _write_geojson, "dxf": _write_dxf}[fmt](plan, path, polys)
+                {"geojson": _write_geojson, "dxf": _write_dxf}[fmt](plan, path, polys, rings)
         if done is None:
             self._written[key] = (plan, {f: str(p) for f, p in outputs.items()}, model)
         return plan, done is not None

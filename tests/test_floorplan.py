@@ -394,3 +394,71 @@ def test_footprint_geojson_equals_shapely_to_geojson_rounded():
     for f, poly in zip(feats, polys[1:]):
         assert f["geometry"] == _round_coords(json.loads(shapely.to_geojson(poly)))
         assert len(f["geometry"]["coordinates"][0]) == 5
+
+
+def test_ifc_guid_list_equals_uuid5_compressed_by_ifcopenshell():
+    """The batched GlobalIds are ifcopenshell.guid.compress(uuid5(ns, str(i)).hex)."""
+    import uuid
+
+    import ifcopenshell.guid
+
+    from floorscan.floorplan import _ifc_guid_list
+
+    for name in ("hallways3d random ransac k5", "O'Brien's plan", "é"):
+        ns = uuid.uuid5(uuid.NAMESPACE_URL, f"floorscan:{name}")
+        ids = _ifc_guid_list(name, 1200)
+        assert ids == [ifcopenshell.guid.compress(uuid.uuid5(ns, str(i)).hex) for i in range(1200)]
+        assert len(set(ids)) == 1200 and all(len(g) == 22 for g in ids)
+    assert _ifc_guid_list("x", 0) == []
+
+
+def test_ifc_entity_maker_makes_what_create_entity_makes():
+    """Positional and keyword attributes (entities, lists of points, None) set as
+    file.create_entity sets them; an unknown keyword is an error."""
+    import ifcopenshell
+
+    from floorscan.floorplan import _entity_maker
+
+    def build(model, ent):
+        z = ent("IfcDirection", (0.0, 0.0, 1.0))
+        pts = ent("IfcCartesianPointList2D", ((0.0, 0.0), (0.0, 0.25), (3.5, 0.25), (3.5, 0.0), (0.0, 0.0)))
+        curve = ent("IfcIndexedPolyCurve", Points=pts, SelfIntersect=False)
+        place = ent("IfcAxis2Placement3D", ent("IfcCartesianPoint", (1.0, -0.125, 0.0)), z, None)
+        ent("IfcQuantityLength", Name="Width", LengthValue=0.25)
+        ent("IfcExtrudedAreaSolid", ent("IfcArbitraryClosedProfileDef", "AREA", OuterCurve=curve), place, z, 2.5)
+        return model.to_string().split("DATA;")[1]
+
+    ref, fast = ifcopenshell.file(schema="IFC4"), ifcopenshell.file(schema="IFC4")
+    text = build(fast, _entity_maker(fast))
+    assert text == build(ref, ref.create_entity)
+    assert "#8=IFCEXTRUDEDAREASOLID(#7,#5,#1,2.5);" in text and "#3=IFCINDEXEDPOLYCURVE(#2,$,.F.);" in text
+    with pytest.raises(ValueError, match="Width"):
+        _entity_maker(fast)("IfcQuantityLength", Width=1.0)
+
+
+def test_candidate_pairs_by_direction_bins_far_from_the_origin():
+    """The one-query binned search (each bin its own stretch of x) finds exactly the
+    dwithin pairs within the angle also at UTM-sized coordinates, with pairs exactly
+    at the distance and across the 0/180 degree wrap."""
+    import shapely
+
+    from floorscan.floorplan import _angle_diff, _axial_angle, _candidate_pairs
+
+    rng = np.random.default_rng(12)
+    p0 = rng.uniform(0, 40, (500, 2))
+    ang = rng.choice([0.0, np.pi / 2, np.pi - 0.005, 0.005], 500) + rng.normal(0, 0.01, 500)
+    seg = np.hstack([p0, p0 + rng.uniform(0.5, 3.0, (500, 1)) * np.c_[np.cos(ang), np.sin(ang)]])
+    seg[:30] = seg[30:60] + [0.0, 0.25, 0.0, 0.25]  # exactly 0.25 m from a neighbour (same x)
+    seg += [500_000.0, 4_000_000.0, 500_000.0, 4_000_000.0]
+    lines = shapely.linestrings(seg.reshape(-1, 2, 2))
+    a = _axial_angle(seg)
+    for exact in (True, False):
+        i, j = shapely.STRtree(lines).query(lines, predicate="dwithin", distance=0.25)
+        keep = (i < j) & (_angle_diff(a[i], a[j]) <= np.radians(3.0))
+        want = set(zip(i[keep].tolist(), j[keep].tolist()))
+        got_i, got_j = _candidate_pairs(seg, 0.25, np.radians(3.0), exact=exact)
+        got = set(zip(got_i.tolist(), got_j.tolist()))
+        assert (got == want) if exact else (got >= want), exact
+        assert (got_i < got_j).all() and len(got) == len(got_i)
+    assert {(p, p + 30) for p in range(30)} <= want
+    assert any(abs(a[p] - a[q]) > np.pi / 2 for p, q in want)
