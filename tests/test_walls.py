@@ -525,3 +525,83 @@ def test_issue8_third_round_shortcuts_equal_the_plain_forms_bit_for_bit():
         r1, r2 = np.random.default_rng((0, n)), np.random.default_rng((0, n))
         np.testing.assert_array_equal(r1.integers(0, n, size=200), r2.integers(n, size=200))
         np.testing.assert_array_equal(r1.integers(0, n - 1, size=200), r2.integers(n - 1, size=200))
+
+
+def _plain_best_line(points, rng, params):
+    """_best_line as written before issue 8's fourth round (row gathers, einsum offsets)."""
+    from floorscan.walls import _inlier_counts, fit_line
+
+    n = len(points)
+    i = rng.integers(n, size=params.iterations)
+    j = rng.integers(n - 1, size=params.iterations)
+    j += j >= i
+    start = points[i]
+    d = points[j] - start
+    length = np.hypot(d[:, 0], d[:, 1])
+    ok = length > 1e-9
+    if not ok.any():
+        return None
+    d, length, start = d[ok], length[ok], start[ok]
+    normals = d[:, ::-1] * np.array([-1.0, 1.0])
+    normals /= length[:, None]
+    offsets = np.einsum("ij,ij->i", normals, start)
+    best = int(np.argmax(_inlier_counts(points, normals, offsets, params.threshold_m)))
+    normal, offset = normals[best], offsets[best]
+    mask = np.abs(points @ normal - offset) < params.threshold_m
+    n_mask = np.count_nonzero(mask)
+    c, direction = None, np.array([normal[1], -normal[0]])
+    for _ in range(params.refine_iterations):
+        if n_mask < 2:
+            break
+        c, direction = fit_line(points[mask])
+        normal = np.array([-direction[1], direction[0]])
+        new = np.abs((points - c) @ normal) < params.threshold_m
+        n_new = np.count_nonzero(new)
+        if n_new < 2 or (n_new == n_mask and (new == mask).all()):
+            mask = new if n_new >= 2 else mask
+            break
+        mask, n_mask = new, n_new
+    if c is None:
+        c = points[mask].mean(axis=0)
+    return mask, c, direction
+
+
+def test_issue8_fourth_round_shortcuts_equal_the_plain_forms_bit_for_bit():
+    """The RANSAC hypotheses built on coordinate columns (offsets as a sum of two
+    products instead of einsum) and the 3D grid thinning on contiguous columns give
+    the same lines and points as the plain forms; the same seed, the same line."""
+    from floorscan.grid import cell_means
+    from floorscan.walls import _best_line
+
+    rng = np.random.default_rng(13)
+    nrm = rng.normal(size=(100000, 2))
+    nrm /= np.hypot(nrm[:, 0], nrm[:, 1])[:, None]
+    start = rng.uniform(-60, 60, (100000, 2))
+    np.testing.assert_array_equal(nrm[:, 0] * start[:, 0] + nrm[:, 1] * start[:, 1], np.einsum("ij,ij->i", nrm, start))
+
+    room = np.vstack([raycast(ROOM, o, seed=s) for s, o in enumerate([(1, 1), (3, 5)])]) + [-31.7, 12.4]
+    dup = np.r_[room[:5], room[:5]]  # only duplicate pairs: no hypothesis
+    for params in (RansacParams(), RansacParams(iterations=7, refine_iterations=0), RansacParams(refine_iterations=5)):
+        for pts in (room, room[:40], room[::-1][:333], np.r_[room[:3], room[:3], room[:2]], dup):
+            for seed in range(3):
+                got = _best_line(pts, np.random.default_rng(seed), params)
+                want = _plain_best_line(pts, np.random.default_rng(seed), params)
+                if want is None:
+                    assert got is None
+                    continue
+                for a, b in zip(got, want):
+                    np.testing.assert_array_equal(a, b)
+    assert _best_line(dup[:1], np.random.default_rng(0), RansacParams()) is None
+    mask, c, direction = _best_line(room, np.random.default_rng(0), RansacParams())
+    assert mask.sum() > 150 and abs(abs(direction[0]) * abs(direction[1])) < 1e-2  # a wall of the room
+
+    # 3D scan in the map frame (negative coordinates): band cut and one mean per 2 cm cell
+    n = 20000
+    xyz = np.c_[rng.uniform(-45.3, -38.1, n), rng.uniform(7.2, 13.9, n), rng.uniform(-0.2, 2.8, n)]
+    for scan in (ScanParams(), ScanParams(grid_m=0.05), ScanParams(grid_m=0.0), ScanParams(min_height_m=1.0, max_height_m=1.2)):
+        band = xyz[(xyz[:, 2] >= scan.min_height_m) & (xyz[:, 2] <= scan.max_height_m), :2]
+        want = cell_means(band, scan.grid_m)[0] if scan.grid_m > 0 else band
+        got, reason = scan_points_2d(xyz, scan)
+        assert reason == "" and got.shape == want.shape and len(got) > 100
+        np.testing.assert_array_equal(got, want)
+    assert scan_points_2d(xyz, ScanParams(min_height_m=5.0, max_height_m=6.0))[1] == "no_points_in_height_band"
