@@ -28,3 +28,15 @@ rule all:
     default_target: True
     input:
         all_outputs(),
+
+
+# Snakemake 9.27 re-checks its job rate limit (--max-jobs-per-timespan, 100/1s) with a
+# threading.Timer of one second after every scheduling round
+# (JobScheduler._schedule_reevalutation); the timers are not daemons, so the last ones
+# kept a finished run alive for up to a second. Nothing is scheduled after success.
+onsuccess:
+    import threading
+
+    for _timer in threading.enumerate():
+        if isinstance(_timer, threading.Timer):
+            _timer.cancel()
