@@ -450,15 +450,24 @@ def length_within(segments, others, tau: float) -> np.ndarray:
     """
     if tau < 0:
         raise ValueError(f"tau must be >= 0; got {tau}")
-    seg = as_segments(segments)
-    oth = as_segments(others)
+    return _lengths_within(as_segments(segments), as_segments(others), [tau])[0]
+
+
+def _lengths_within(seg: np.ndarray, oth: np.ndarray, taus) -> list[np.ndarray]:
+    """:func:`length_within` of finite ``seg`` and ``oth`` for each tau of ``taus``
+    (>= 0), sharing the geometries and the STRtree between the taus."""
     lengths = segment_lengths(seg)
-    covered = np.zeros(len(seg))
     if len(seg) == 0 or len(oth) == 0:
-        return covered
+        return [np.zeros(len(seg)) for _ in taus]
     geoms_o = shapely.linestrings(oth.reshape(-1, 2, 2))
     geoms_s = shapely.linestrings(seg.reshape(-1, 2, 2))
     tree = shapely.STRtree(geoms_o)
+    return [_length_within_tau(seg, oth, lengths, tree, geoms_s, tau) for tau in taus]
+
+
+def _length_within_tau(seg, oth, lengths, tree, geoms_s, tau: float) -> np.ndarray:
+    """:func:`length_within` at one tau, from ``oth``'s STRtree and ``seg``'s lines."""
+    covered = np.zeros(len(seg))
     si, oi = tree.query(geoms_s, predicate="dwithin", distance=tau * (1 + 1e-9) + 1e-12)
     keep = lengths[si] > MIN_SEGMENT_M
     si, oi = si[keep], oi[keep]
@@ -647,8 +656,10 @@ class _SegmentIndex:
                     pi, qi = self.tree.query(_box_diagonals(p[:, 0] - r, p[:, 1] - r, p[:, 0] + r, p[:, 1] + r))
                 if len(pi) == 0:
                     continue
-                order = np.argsort(pi, kind="stable")
-                pi, si = pi[order], qi[order]
+                if len(pi) > 1 and not (pi[1:] >= pi[:-1]).all():
+                    order = np.argsort(pi, kind="stable")
+                    pi, qi = pi[order], qi[order]
+                si = qi
                 if level < len(REACHES_M):
                     si = self._owner[si]
                 d = np.sqrt(point_segment_dist2(p[pi, 0], p[pi, 1], self.seg[si]))
@@ -898,7 +909,7 @@ def _row_keys(seg: np.ndarray) -> list[bytes]:
 PAIR_REACH_M = 0.1
 #: Longest piece (metres) of the walls whose grown boxes find their samples in
 #: :class:`_SamplePairs`.
-PAIR_PIECE_M = 0.5
+PAIR_PIECE_M = 2.0
 
 
 class _SamplePairs:
@@ -917,6 +928,7 @@ class _SamplePairs:
         self.samples = samples
         self.reach = float(reach)
         self.geoms = shapely.points(samples)
+        self._x, self._y = samples[:, 0].copy(), samples[:, 1].copy()
         self._tree = None
         self.cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
 
@@ -942,21 +954,24 @@ class _SamplePairs:
             qi, si = qi[order], si[order]
         # One pair per (wall, sample): the piece holding the sample's closest point of
         # the wall (the sample is in that piece's box when within reach of the wall).
+        # The projection and distance are point_segment_dist2's, from per-wall terms
+        # looked up per piece: every candidate is measured (most are kept).
         n = np.bincount(owner, minlength=len(seg))
-        first = np.cumsum(n) - n
-        wi = owner[qi]
-        sw, p = seg[wi], self.samples[si]
-        dx, dy = sw[:, 2] - sw[:, 0], sw[:, 3] - sw[:, 1]
+        rank = np.arange(len(pc)) - (np.cumsum(n) - n)[owner]  # of the piece in its wall
+        ax, ay = seg[:, 0], seg[:, 1]
+        dx, dy = seg[:, 2] - ax, seg[:, 3] - ay
         l2 = dx * dx + dy * dy
+        axq, ayq, dxq, dyq, l2q, nq = (v[owner][qi] for v in (ax, ay, dx, dy, l2, n))
+        px, py = self._x[si], self._y[si]
         with np.errstate(invalid="ignore", divide="ignore"):
-            t = ((p[:, 0] - sw[:, 0]) * dx + (p[:, 1] - sw[:, 1]) * dy) / l2
-        t = np.where(l2 > 0, np.clip(t, 0.0, 1.0), 0.0)
-        piece = np.minimum(np.floor(t * n[wi]).astype(np.int64), n[wi] - 1)
-        keep = piece == qi - first[wi]
-        wi, si, sw, p = wi[keep], si[keep], sw[keep], p[keep]
-        d = np.sqrt(point_segment_dist2(p[:, 0], p[:, 1], sw))
-        ok = d <= self.reach
-        wi, si, d = wi[ok], si[ok].astype(np.int32), d[ok]
+            t = ((px - axq) * dxq + (py - ayq) * dyq) / l2q
+        t = np.where(l2q > 0, np.clip(t, 0.0, 1.0), 0.0)
+        ex = axq + t * dxq - px
+        ey = ayq + t * dyq - py
+        d = np.sqrt(ex * ex + ey * ey)
+        piece = np.minimum(np.floor(t * nq).astype(np.int64), nq - 1)
+        keep = np.flatnonzero((piece == rank[qi]) & (d <= self.reach))
+        wi, si, d = owner[qi[keep]], si[keep].astype(np.int32), d[keep]
         bounds = np.searchsorted(wi, np.arange(len(seg) + 1))
         for j, k in enumerate(keys):
             self.cache[k] = (si[bounds[j]:bounds[j + 1]], d[bounds[j]:bounds[j + 1]])
@@ -1046,12 +1061,14 @@ class _GrowingWalls:
                 for t, tau in enumerate(self.taus):
                     self.hit_all[t, si[d <= tau]] = True
             self.bitmap.reshape(-1)[self._wall_cells(add, add_keys)] = True
-            for tau in self.taus:
-                cache = self.covered[tau]
-                todo = [i for i, k in enumerate(add_keys) if k not in cache]
-                if todo:
-                    cov = length_within(add[todo], self.gt, tau)
-                    cache.update(zip((add_keys[i] for i in todo), cov.tolist()))
+            # Measured once per wall for every tau (the caches of the taus hold the
+            # same walls), in the same batches as tau by tau: a wall's covered length
+            # depends, in its last bits, on its row in the batch (the sweep's offset).
+            todo = [i for i, k in enumerate(add_keys) if any(k not in self.covered[tau] for tau in self.taus)]
+            if todo:
+                covs = _lengths_within(add[todo], self.gt, self.taus)
+                for tau, cov in zip(self.taus, covs):
+                    self.covered[tau].update(zip((add_keys[i] for i in todo), cov.tolist()))
         self.keys = cur
         out = bitmap_metrics(self.bitmap, self.gt_bitmap)
         len_i = float(segment_lengths(walls).sum())
@@ -1089,8 +1106,9 @@ def _recall_precision(inferred, gt, taus, samples, pairs=None) -> dict[str, floa
         else:
             hit = _within(samples, _SegmentIndex(inf), taus, hit)
     out: dict[str, float] = {}
+    covs = _lengths_within(inf, as_segments(gt), taus) if has_i and has_g else None
     for t, tau in enumerate(taus):
-        covered = float(length_within(inf, gt, tau).sum()) if has_i and has_g else 0.0
+        covered = float(covs[t].sum()) if has_i and has_g else 0.0
         r = float(np.mean(hit[t])) if has_g and len(samples) else math.nan
         _set_prf(out, tau, covered, len_i, r, has_i, has_g)
     return out
@@ -1154,22 +1172,27 @@ def _feature_collection(path) -> dict:
 
 def _wall_faces(doc: dict, kind: str) -> np.ndarray:
     """The straight pieces of the (Multi)LineString features of ``kind``, ``(M, 4)``."""
-    rows: list[np.ndarray] = []
+    lines: list = []
     for feat in doc.get("features", []):
         if (feat.get("properties") or {}).get("kind") != kind:
             continue
         geom = feat.get("geometry") or {}
         if geom.get("type") == "LineString":
-            lines = [geom["coordinates"]]
+            lines.append(geom["coordinates"])
         elif geom.get("type") == "MultiLineString":
-            lines = geom["coordinates"]
-        else:
-            continue
-        for line in lines:
-            xy = np.asarray(line, dtype=np.float64)[:, :2]
-            if len(xy) >= 2:
-                rows.append(np.column_stack([xy[:-1], xy[1:]]))
-    return as_segments(np.vstack(rows)) if rows else np.zeros((0, 4))
+            lines.extend(geom["coordinates"])
+    # All vertices at once (x, y of each; a z is dropped), then the pieces between
+    # consecutive vertices of a line.
+    lines = [line for line in lines if len(line) >= 2]
+    if not lines:
+        return np.zeros((0, 4))
+    xy = np.array([p[:2] for line in lines for p in line], dtype=np.float64).reshape(-1, 2)
+    n = np.fromiter((len(line) for line in lines), dtype=np.int64, count=len(lines))
+    end = np.cumsum(n)
+    start = np.ones(len(xy), dtype=bool)
+    start[end - 1] = False  # a line's last vertex starts no piece
+    i = np.flatnonzero(start)
+    return as_segments(np.column_stack([xy[i], xy[i + 1]]))
 
 
 def _wall_count(doc: dict) -> int:

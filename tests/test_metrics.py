@@ -256,6 +256,22 @@ def test_read_wall_faces_keeps_faces_only(tmp_path):
         M.read_wall_faces(_geojson(tmp_path), kind="door")
 
 
+def test_wall_faces_splits_lines_and_multilines_into_pieces():
+    """Every line's consecutive vertices give a piece (z dropped), lines of one vertex
+    and other geometry types give none, in feature and line order."""
+    line = lambda c: {"type": "LineString", "coordinates": c}  # noqa: E731
+    doc = {"type": "FeatureCollection", "features": [
+        {"properties": {"kind": "face"}, "geometry": {"type": "MultiLineString", "coordinates": [
+            [[0, 0, 1.5], [1, 0, 1.5], [1, 2, 1.5]], [[5, 5]], [[2, 2], [3, 3]]]}},
+        {"properties": {"kind": "axis"}, "geometry": line([[7, 7], [8, 8]])},
+        {"properties": {"kind": "face"}, "geometry": {"type": "Point", "coordinates": [9, 9]}},
+        {"properties": {"kind": "face"}, "geometry": line([[9, 9], [8, 8.5], [7, 7]])},
+    ]}  # fmt: skip
+    seg = M._wall_faces(doc, "face")
+    assert seg.tolist() == [[0, 0, 1, 0], [1, 0, 1, 2], [2, 2, 3, 3], [9, 9, 8, 8.5], [8, 8.5, 7, 7]]
+    assert M._wall_faces(doc, "footprint").shape == (0, 4)
+
+
 def test_floorplan_wall_count(tmp_path):
     def feat(kind, wid, geom):
         return {"type": "Feature", "properties": {"kind": kind, "wall_id": wid}, "geometry": geom}
