@@ -23,6 +23,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
+import pyarrow as pa  # noqa: E402
+import pyarrow.parquet as pq  # noqa: E402
 
 from floorscan.hulls import HullParams, kept_scan_ids, scan_coverage, scan_hulls  # noqa: E402
 from floorscan.io import split_by_scan  # noqa: E402
@@ -146,6 +148,12 @@ def coverage_vs_clusters(
     -------
     dict k -> ordering frame (``rank, scan_id, covered_area_m2, gain_m2``).
     """
+    return _coverage_curves(registered, scan_ids, k_values, hull_params, raster_m, hulls, convex)[0]
+
+
+def _coverage_curves(registered, scan_ids, k_values, hull_params, raster_m, hulls, convex):
+    """:func:`coverage_vs_clusters` and, per k, the scans' coverage (ids, geometries)
+    that the curves ordered (Fig. 5.8 times the greedy on those of the stage's k)."""
     ids = np.asarray(scan_ids, dtype=np.int64)
     known = {}
     if hulls is not None:
@@ -157,17 +165,22 @@ def coverage_vs_clusters(
         if isinstance(registered, pd.DataFrame):
             scans = split_by_scan(registered[np.isin(registered["scan_id"].to_numpy(), ids)], ("x", "y")).items()
         elif isinstance(registered, (str, os.PathLike)):
-            scans = iter_scans(registered, ("x", "y"))
+            # float32 as stored (the registered.parquet contract): the scans not drawn
+            # are skipped without a float64 copy, scan_hulls widens the drawn ones exactly
+            schema = pq.read_schema(registered)
+            f32 = all(schema.field(c).type == pa.float32() for c in ("x", "y") if c in schema.names)
+            scans = iter_scans(registered, ("x", "y"), dtype=np.float32 if f32 else np.float64)
         else:
             scans = registered
         params = [HullParams(**{**hull_params.as_dict(), "k_clusters": k}) for k in todo]
         made, _, _ = scan_hulls(scans, params, scan_ids=ids, convex=False)
         known.update(zip(todo, made))
-    out = {}
+    out, coverage = {}, {}
     for k in k_values:
-        sid, geoms = scan_coverage(known[int(k)], ids)
-        out[int(k)] = greedy_coverage(sid, geoms, raster_m)
-    return out
+        if int(k) not in coverage:
+            coverage[int(k)] = scan_coverage(known[int(k)], ids)
+        out[int(k)] = greedy_coverage(*coverage[int(k)], raster_m)
+    return out, coverage
 
 
 def plot_coverage_vs_clusters(curves: Mapping[int, pd.DataFrame], path: str | os.PathLike, title: str = "") -> None:
@@ -260,12 +273,12 @@ def selection_figures(
     """
     plot_coverage_vs_scans(orderings, out_coverage, title)
     ids = _spaced(kept_scan_ids(registration), params.figure_max_scans)
-    curves = coverage_vs_clusters(
-        registered, ids, params.figure_k_clusters, hull_params, select_params.raster_m, hulls=hulls,
-        convex=convex_hulls,
+    curves, coverage = _coverage_curves(
+        registered, ids, params.figure_k_clusters, hull_params, select_params.raster_m, hulls, convex_hulls
     )
     plot_coverage_vs_clusters(curves, out_clusters, title)
-    sid, geoms = scan_coverage(hulls, ids)
+    # the coverage of the stage's hulls: the same unions as scan_coverage(hulls, ids)
+    sid, geoms = coverage.get(int(hull_params.k_clusters)) or scan_coverage(hulls, ids)
     sizes = sorted({int(s) for s in np.unique(np.geomspace(10, max(len(ids), 10), 8).round())} | {len(ids)})
     sizes = [s for s in sizes if 0 < s <= len(ids)]
     timing = selection_timing(sid, geoms, sizes, params.figure_reference_max_scans, select_params.raster_m)

@@ -43,6 +43,12 @@ the raster greedy picks the same scans (tests).
 remaining candidate's gain against the current union. :func:`greedy_coverage` is the
 production greedy, lazy evaluation (Minoux 1978): coverage is monotone submodular, so
 a gain computed in an earlier round is an upper bound of the current one.
+
+Speed (issue 8), exact: a covered cell stays covered, so both greedies drop the cells
+found covered from what they gather next time (the reference from the remaining
+candidates' cells laid end to end, the lazy greedy per scan once half of a scan's
+cells are covered); the rasteriser orders a row's crossings by a stable sort of
+(scan, row) and a swap per pair instead of a three-key ``lexsort``.
 """
 
 from __future__ import annotations
@@ -221,7 +227,7 @@ class RasterCoverage:
         p0, p1 = e0[edge], e1[edge]
         x = p0[:, 0] + (yc - p0[:, 1]) * (p1[:, 0] - p0[:, 0]) / (p1[:, 1] - p0[:, 1])
         own = e_owner[edge]
-        order = np.lexsort((x, row, own))
+        order = _order_crossings(own * (int(row.max()) + 1) + row, x)
         x, row, own = x[order], row[order], own[order]
         # crossings pair up (even-odd) within each (owner, row)
         xa, xb, row, own = x[0::2], x[1::2], row[0::2], own[0::2]
@@ -229,7 +235,11 @@ class RasterCoverage:
         i_hi = np.ceil((xb - self.x0) / r - 0.5).astype(np.int64)
         width = np.maximum(i_hi - i_lo, 0)
         first = np.cumsum(width) - width  # position of each interval's first cell
-        cells = (np.arange(width.sum(), dtype=np.int64) + np.repeat(row * self.nx + i_lo - first, width)).astype(np.int32)
+        # int32 throughout: the cell numbers are < 2**31 (checked) and the wrapping
+        # intermediate sums are exact modulo 2**32
+        base = (row * self.nx + i_lo - first).astype(np.int32)
+        cells = np.arange(int(width.sum()), dtype=np.int32)
+        cells += np.repeat(base, width)
         counts = np.bincount(own, weights=width, minlength=n).astype(np.int64)
         return cells, counts
 
@@ -254,6 +264,12 @@ class RasterCoverage:
         out[nz] = np.add.reduceat(new, offs[nz], dtype=np.int64)
         return out
 
+    def gain(self, j: int) -> int:
+        """Cells scan ``j`` would add to the current union (``gains([j])[0]``, without
+        the array bookkeeping: the lazy greedy evaluates one scan at a time)."""
+        a, b = self.start[j], self.stop[j]
+        return int(b - a) - int(np.count_nonzero(self.covered[self.cells[a:b]]))
+
     def add(self, j: int) -> None:
         """Add scan ``j``'s cells to the union."""
         self.covered[self.cells_of(j)] = True
@@ -261,6 +277,27 @@ class RasterCoverage:
     def reset(self) -> None:
         """Empty the union (the scans' cells are kept), to order the same scans again."""
         self.covered[:] = False
+
+
+def _order_crossings(key: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """A permutation sorting the crossings by (``key``, ``x``), as
+    ``np.lexsort((x, key))`` (up to the order of equal pairs): a stable sort by
+    ``key`` (the crossings come nearly sorted: edge after edge of each scan), then
+    ``x`` in order within each run of equal keys, by a swap for the runs of two
+    crossings (a row through a convex hull) and ``lexsort`` for the longer ones."""
+    order = np.argsort(key, kind="stable")
+    ks, xs = key[order], x[order]
+    starts = np.flatnonzero(np.r_[True, ks[1:] != ks[:-1]]) if len(ks) else np.zeros(0, np.int64)
+    size = np.diff(np.r_[starts, len(ks)])
+    two = starts[size == 2]
+    swap = two[xs[two] > xs[two + 1]]
+    order[swap], order[swap + 1] = order[swap + 1], order[swap].copy()
+    long = size > 2
+    if long.any():
+        sub = np.repeat(starts[long], size[long]) + (np.arange(int(size[long].sum())) -
+                                                       np.repeat(np.cumsum(size[long]) - size[long], size[long]))
+        order[sub] = order[sub][np.lexsort((xs[sub], ks[sub]))]
+    return order
 
 
 def _result(scan_ids: np.ndarray, order: Sequence[int], gain_cells: Sequence[int], cell_m2: float) -> pd.DataFrame:
@@ -295,6 +332,22 @@ def _zero_tail(ids: np.ndarray, cov: RasterCoverage) -> list[int]:
     return zero[np.argsort(ids[zero], kind="stable")].tolist()
 
 
+def _cells_of_scans(cov: RasterCoverage, scans: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The cells of ``scans`` laid end to end and the position in ``scans`` of the
+    scan of each cell."""
+    counts = cov.counts[scans]
+    offs = np.cumsum(counts) - counts
+    idx = np.repeat(cov.start[scans] - offs, counts) + np.arange(int(counts.sum()))
+    return cov.cells[idx], np.repeat(np.arange(len(scans)), counts)
+
+
+def _segments(seg: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Start of each run of equal values of the non-decreasing ``seg``, its value
+    and its length."""
+    starts = np.flatnonzero(np.r_[True, seg[1:] != seg[:-1]]) if len(seg) else np.zeros(0, np.int64)
+    return starts, seg[starts], np.diff(np.r_[starts, len(seg)])
+
+
 def greedy_reference(scan_ids: Sequence[int], geometries: Sequence, raster_m: float = 0.05) -> pd.DataFrame:
     """Plain greedy maximum coverage (thesis Algorithm 1): the reference.
 
@@ -322,14 +375,36 @@ def greedy_reference(scan_ids: Sequence[int], geometries: Sequence, raster_m: fl
     remaining = np.flatnonzero(cov.counts > 0)
     remaining = remaining[np.argsort(ids[remaining], kind="stable")]  # ascending id
     order, gains = [], []
-    while len(remaining):
-        g = cov.gains(remaining)
+    # every round recomputes every remaining candidate's gain against the union: one
+    # gather over the candidates' cells laid end to end. A covered cell stays covered,
+    # so the cells already covered and the chosen candidates are dropped from that
+    # array whenever they are half of it (instead of indexing the remaining cells
+    # anew every round); a dropped cell adds 0 to every gain, so the gains are exact.
+    cand = remaining
+    cells, seg = _cells_of_scans(cov, cand)
+    starts, owners, lens = _segments(seg)
+    alive = np.ones(len(cand), dtype=bool)
+    n_alive = len(cand)
+    while n_alive:
+        g = np.zeros(len(cand), dtype=np.int64)
+        if len(cells):
+            g[owners] = lens - np.add.reduceat(cov.covered[cells], starts, dtype=np.int64)
+        g[~alive] = -1
         i = int(np.argmax(g))  # first maximum = lowest scan_id (ascending order)
-        j = int(remaining[i])
+        j = int(cand[i])
         order.append(j)
         gains.append(int(g[i]))
         cov.add(j)
-        remaining = np.delete(remaining, i)
+        alive[i] = False
+        n_alive -= 1
+        # cells to keep: at most the alive candidates' gains this round
+        if n_alive and 2 * int(g[alive].sum()) <= len(cells):
+            keep = alive[seg]
+            keep &= ~cov.covered[cells]
+            renum = np.cumsum(alive) - 1
+            cells, seg, cand = cells[keep], renum[seg[keep]], cand[alive]
+            starts, owners, lens = _segments(seg)
+            alive = np.ones(len(cand), dtype=bool)
     zero = _zero_tail(ids, cov)
     return _result(ids, order + zero, gains + [0] * len(zero), raster_m**2)
 
@@ -366,6 +441,7 @@ def greedy_coverage(
     heap = [(-int(cov.counts[j]), int(ids[j]), int(j), 0) for j in active]  # round-0 gains are exact
     heapq.heapify(heap)
     order, gains = [], []
+    live: dict[int, np.ndarray] = {}
     evaluations, rnd = len(active), 0
     while heap:
         neg, sid, j, stamp = heap[0]
@@ -376,7 +452,14 @@ def greedy_coverage(
             cov.add(j)
             rnd += 1
             continue
-        g = int(cov.gains([j])[0])
+        # the scan's cells not covered at its last evaluation (covered ones stay so)
+        cells = live.get(j)
+        if cells is None:
+            cells = cov.cells_of(j)
+        hit = cov.covered[cells]
+        g = len(cells) - int(np.count_nonzero(hit))
+        if 2 * g <= len(cells):
+            live[j] = cells[~hit]
         evaluations += 1
         heapq.heapreplace(heap, (-g, sid, j, rnd))
     zero = _zero_tail(ids, cov)
@@ -479,9 +562,9 @@ def coverage_along(
         raise ValueError("order must be a permutation of scan_ids")
     positions = srt[pos]
     gains = []
-    for j in positions:
-        gains.append(int(cov.gains([j])[0]))
-        cov.add(int(j))
+    for j in positions.tolist():
+        gains.append(cov.gain(j))
+        cov.add(j)
     return _result(ids, positions, gains, raster_m**2)
 
 

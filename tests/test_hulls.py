@@ -334,3 +334,27 @@ def test_hull_params_must_be_integers():
     with pytest.raises(ValueError, match="hulls.n_init must be an integer"):
         fh.HullParams(n_init=True)
     assert fh.HullParams(k_clusters=np.int64(4)).k_clusters == 4
+
+
+def test_several_parameter_sets_in_one_pass_equal_separate_runs():
+    """scan_hulls shares the KMeans sample between parameter sets with the same seed
+    and sample size (Fig. 5.7): every table equals a run with that set alone, and the
+    cluster hulls of k = 1 are the convex hulls (WKB bytes)."""
+    pts = {0: l_shape(0.1), 1: _scans_3d(1, seed=5)[0], 2: np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]),
+           3: np.array([[1.0, 1.0]] * 4)}
+    reg = frame(pts)
+    sets = [fh.HullParams(k_clusters=k, seed=s, sample_size=n) for k, s, n in
+            ((1, 0, 1000), (2, 0, 1000), (7, 0, 1000), (7, 4, 1000), (7, 0, 300))]
+    scans = fh.split_by_scan(reg, ("x", "y")).items()
+    together, conv, counts = fh.scan_hulls(scans, sets, convex=True)
+    assert counts["n_scans"] == 4 and counts["n_points"] == len(reg)
+    for p, got in zip(sets, together):
+        alone = fh.cluster_hulls(reg, p)
+        assert got[["scan_id", "cluster"]].equals(alone[["scan_id", "cluster"]])
+        assert shapely.to_wkb(got["geometry"].to_numpy()).tolist() == shapely.to_wkb(alone["geometry"].to_numpy()).tolist()
+        np.testing.assert_array_equal(got["area_m2"], alone["area_m2"])
+    # other seeds / sample sizes give other clusters of the 3D scan
+    wkb = [shapely.to_wkb(t.loc[t["scan_id"] == 1, "geometry"].to_numpy()).tolist() for t in together[2:]]
+    assert wkb[0] != wkb[1] and wkb[0] != wkb[2]
+    assert shapely.to_wkb(together[0]["geometry"].to_numpy()).tolist() == shapely.to_wkb(conv["geometry"].to_numpy()).tolist()
+    assert together[0]["area_m2"].iloc[0] == pytest.approx(11.5, abs=1e-4)  # the L's convex hull

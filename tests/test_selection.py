@@ -298,3 +298,86 @@ def test_one_raster_reused_for_every_ordering(synthetic):
     assert b["covered_area_m2"].iloc[-1] == pytest.approx(a["covered_area_m2"].iloc[-1], abs=1e-9)
     with pytest.raises(ValueError, match="raster"):
         fs.greedy_coverage(ids, geoms, 0.1, raster=raster)
+
+
+def _set_greedy(cells: list[set]) -> tuple[list[int], list[int]]:
+    """Algorithm 1 on Python sets of cells: max gain, ties to the lowest index."""
+    union, left, order, gains = set(), [i for i in range(len(cells)) if cells[i]], [], []
+    while left:
+        g = [len(cells[i] - union) for i in left]
+        i = left[int(np.argmax(g))]
+        order.append(i)
+        gains.append(max(g))
+        union |= cells[i]
+        left.remove(i)
+    return order, gains
+
+
+def test_greedies_equal_set_arithmetic_on_overlapping_boxes():
+    """Heavily overlapping boxes (most cells covered after a few picks, so the
+    reference drops covered cells and chosen scans many times, and the lazy greedy
+    keeps only uncovered cells): both orderings and gains equal plain set arithmetic
+    on the same cells, and RasterCoverage.gain equals gains."""
+    rng = np.random.default_rng(4)
+    lo = rng.uniform(0, 3, (70, 2))
+    geoms = np.array([box(x, y, x + w, y + h) for (x, y), w, h in
+                      zip(lo, rng.uniform(0.2, 2.5, 70), rng.uniform(0.2, 2.5, 70))] + [shapely.Polygon()], dtype=object)
+    ids = np.arange(len(geoms))[::-1] * 3  # ids descending: ties go by id, not position
+    cov = fs.RasterCoverage(geoms, 0.1)
+    cells = [set(cov.cells_of(j).tolist()) for j in range(len(geoms))]
+    pos = np.argsort(ids)  # positions in ascending id, so index ties = id ties
+    order, gains = _set_greedy([cells[j] for j in pos])
+    want_ids = ids[pos[order]].tolist() + [ids[-1]]
+    for fn in (fs.greedy_reference, fs.greedy_coverage):
+        o = fn(ids, geoms, 0.1)
+        assert o["scan_id"].tolist() == want_ids
+        np.testing.assert_allclose(o["gain_m2"], np.r_[gains, 0] * 0.01, rtol=0, atol=1e-12)
+    assert sum(gains) == len(set().union(*cells))
+    for j in (0, 5, 40):
+        cov.add(j)
+    assert [cov.gain(j) for j in range(len(geoms))] == cov.gains(np.arange(len(geoms))).tolist()
+    assert cov.gain(0) == 0 and cov.gain(len(geoms) - 1) == 0
+
+
+
+def test_crossings_ordered_as_lexsort():
+    rng = np.random.default_rng(7)
+    key = np.sort(rng.integers(0, 400, 3000))  # runs of 1 to ~20 equal keys
+    key[::7] = rng.integers(0, 400, len(key[::7]))  # not quite sorted
+    x = rng.integers(0, 5, len(key)).astype(float)  # ties in x too
+    want = np.lexsort((x, key))
+    got = fs._order_crossings(key, x)
+    assert sorted(got.tolist()) == list(range(len(key)))
+    np.testing.assert_array_equal(key[got], key[want])
+    np.testing.assert_array_equal(x[got], x[want])
+    pairs = np.array([3, 3, 1, 1, 2, 2]), np.array([0.5, 0.2, 0.1, 0.9, 4.0, 4.0])
+    assert fs._order_crossings(*pairs).tolist() == [2, 3, 4, 5, 1, 0]  # the pair of key 3 swapped
+
+
+
+def test_coverage_vs_clusters_streams_float64_tables_unrounded(synthetic, tmp_path, monkeypatch):
+    """registered.parquet is float32 (read as stored, widened exactly); a table stored
+    in float64 is read as float64, not rounded to float32."""
+    import floorscan.figures_selection as fsel
+    from floorscan.io import write_table
+
+    registered, _, _, _, ids, _ = synthetic
+    sub = ids[::4]
+    wide = registered.astype({"x": np.float64, "y": np.float64})
+    wide["x"] += 1e-9  # not representable in float32
+    seen = {}
+
+    def spy(scans, *a, **k):
+        scans = [(s, p) for s, p in scans]
+        seen.update(scans)
+        return fh.scan_hulls(scans, *a, **k)
+
+    monkeypatch.setattr(fsel, "scan_hulls", spy)
+    for name, df in (("f32", registered), ("f64", wide)):
+        seen.clear()
+        write_table(df, tmp_path / f"{name}.parquet")
+        fsel.coverage_vs_clusters(str(tmp_path / f"{name}.parquet"), sub, (3,), fh.HullParams())
+        s = int(sub[1])
+        want = df.loc[df["scan_id"] == s, ["x", "y"]].to_numpy()
+        assert seen[s].dtype == want.dtype and np.array_equal(seen[s], want), name
+        assert len(seen) == len(np.unique(df["scan_id"]))  # every scan streamed, unasked ones skipped by scan_hulls
