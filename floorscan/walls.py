@@ -396,7 +396,13 @@ def _best_line(points: np.ndarray, rng: np.random.Generator, params: RansacParam
     np.multiply(hyp[1], sy, out=sy)
     np.add(sx, sy, out=hyp[2])  # the offsets
     best = int(np.argmax(_hypothesis_counts(pt, hyp.T, params.threshold_m, negate=True)))
-    normal, offset = hyp[:2, best].copy(), hyp[2, best]
+    return _refine_line(points, hyp[:2, best].copy(), hyp[2, best], params)
+
+
+def _refine_line(points: np.ndarray, normal: np.ndarray, offset: float, params: RansacParams):
+    """The inliers of the line ``points @ normal == offset`` refitted (least squares)
+    to their own inliers up to ``params.refine_iterations`` times, until they no longer
+    change: ``(mask, centre, direction)`` as :func:`_best_line` returns them."""
     mask = np.abs(points @ normal - offset) < params.threshold_m
     n_mask = np.count_nonzero(mask)
     c, direction = None, np.array([normal[1], -normal[0]])

@@ -529,7 +529,7 @@ def test_issue8_third_round_shortcuts_equal_the_plain_forms_bit_for_bit():
 
 def _plain_best_line(points, rng, params):
     """_best_line as written before issue 8's fourth round (row gathers, einsum offsets)."""
-    from floorscan.walls import _inlier_counts, fit_line
+    from floorscan.walls import _inlier_counts, _refine_line
 
     n = len(points)
     i = rng.integers(n, size=params.iterations)
@@ -546,24 +546,7 @@ def _plain_best_line(points, rng, params):
     normals /= length[:, None]
     offsets = np.einsum("ij,ij->i", normals, start)
     best = int(np.argmax(_inlier_counts(points, normals, offsets, params.threshold_m)))
-    normal, offset = normals[best], offsets[best]
-    mask = np.abs(points @ normal - offset) < params.threshold_m
-    n_mask = np.count_nonzero(mask)
-    c, direction = None, np.array([normal[1], -normal[0]])
-    for _ in range(params.refine_iterations):
-        if n_mask < 2:
-            break
-        c, direction = fit_line(points[mask])
-        normal = np.array([-direction[1], direction[0]])
-        new = np.abs((points - c) @ normal) < params.threshold_m
-        n_new = np.count_nonzero(new)
-        if n_new < 2 or (n_new == n_mask and (new == mask).all()):
-            mask = new if n_new >= 2 else mask
-            break
-        mask, n_mask = new, n_new
-    if c is None:
-        c = points[mask].mean(axis=0)
-    return mask, c, direction
+    return _refine_line(points, normals[best], offsets[best], params)  # the refit is shared
 
 
 def test_issue8_fourth_round_shortcuts_equal_the_plain_forms_bit_for_bit():
