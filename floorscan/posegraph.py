@@ -186,23 +186,23 @@ def candidate_pairs(
         for j in range(i + 1, min(n, i + 1 + params.sequential_neighbours)):
             pairs[(i, j)] = "sequential"
     if n > 1 and params.loop_max_per_scan > 0:
-        tree = cKDTree(np.asarray(poses, dtype=np.float64)[:, :2])
-        for i, j in sorted(tree.query_pairs(params.loop_radius_m)):
-            if abs(t_s[j] - t_s[i]) < params.loop_min_separation_s or (i, j) in pairs:
-                continue
-            pairs.setdefault((i, j), "loop_candidate")
+        xy = np.asarray(poses)[:, :2]
+        cand = cKDTree(np.asarray(xy, dtype=np.float64)).query_pairs(params.loop_radius_m, output_type="ndarray")
+        i, j = cand[:, 0].astype(np.int64), cand[:, 1].astype(np.int64)  # i < j
+        t = np.asarray(t_s)
+        # revisits only: not within loop_min_separation_s, not a sequential pair
+        ok = ~(np.abs(t[j] - t[i]) < params.loop_min_separation_s) & (j - i > params.sequential_neighbours)
+        i, j = i[ok], j[ok]
+        d = xy[i] - xy[j]
+        order = np.lexsort((j, i, np.hypot(d[:, 0], d[:, 1])))  # nearest first, ties by (i, j)
         # keep the nearest loop_max_per_scan candidates of each scan
-        loops = [(i, j) for (i, j), k in pairs.items() if k == "loop_candidate"]
-        dist = {p: float(np.hypot(*(poses[p[0], :2] - poses[p[1], :2]))) for p in loops}
-        count = np.zeros(n, dtype=np.int64)
-        for p in sorted(loops, key=lambda p: (dist[p], p)):
-            i, j = p
-            if count[i] < params.loop_max_per_scan and count[j] < params.loop_max_per_scan:
-                pairs[p] = "loop"
-                count[i] += 1
-                count[j] += 1
-            else:
-                del pairs[p]
+        count = [0] * n
+        cap = params.loop_max_per_scan
+        for a, b in zip(i[order].tolist(), j[order].tolist()):
+            if count[a] < cap and count[b] < cap:
+                pairs[(a, b)] = "loop"
+                count[a] += 1
+                count[b] += 1
     return [(i, j, k) for (i, j), k in sorted(pairs.items())]
 
 

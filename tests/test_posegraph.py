@@ -241,3 +241,24 @@ def test_unknown_solver():
         G.optimize_pose_graph(np.zeros((2, 4)), pd.DataFrame(columns=G.EDGE_COLUMNS), params=G.GraphParams(solver="dense"))
     assert G.GraphParams.from_mapping({"solver": "open3d"}).solver == "open3d"
     assert dataclasses.replace(G.GraphParams(), solver="sparse") == G.GraphParams()
+
+
+def test_candidate_pairs_out_and_back():
+    """A rover driving 9 m out and back along a line (1 m, 1 s between scans): each
+    scan pairs with its successor, and with the scan at its place on the way back
+    once the two are 3 s apart; the nearest loop per scan is kept."""
+    from floorscan.posegraph import GraphParams, candidate_pairs
+
+    x = np.r_[np.arange(10.0), np.arange(9.0, -1.0, -1.0)]
+    poses = np.c_[x, np.zeros(20), np.zeros(20), np.zeros(20)]
+    t = np.arange(20.0)
+    params = GraphParams(sequential_neighbours=1, loop_radius_m=0.5, loop_min_separation_s=3.0, loop_max_per_scan=1)
+    pairs = candidate_pairs(poses, t, params)
+    assert [p for p in pairs if p[2] == "sequential"] == [(i, i + 1, "sequential") for i in range(19)]
+    assert [p for p in pairs if p[2] == "loop"] == [(k, 19 - k, "loop") for k in range(9)]
+    # within 1.5 m the neighbours 1 m away compete; the nearest (0 m) wins with one loop per scan
+    wide = candidate_pairs(poses, t, GraphParams(**{**params.__dict__, "loop_radius_m": 1.5}))
+    assert [p for p in wide if p[2] == "loop"] == [(k, 19 - k, "loop") for k in range(9)]
+    two = candidate_pairs(poses, t, GraphParams(**{**params.__dict__, "loop_radius_m": 1.5, "loop_max_per_scan": 2}))
+    loops = [(i, j) for i, j, kind in two if kind == "loop"]
+    assert all(j - i > 1 for i, j in loops) and len(loops) == 17  # 9 at 0 m, then 8 at 1 m
