@@ -95,6 +95,20 @@ def cell_means(points: np.ndarray, cell_m: float) -> tuple[np.ndarray, np.ndarra
         Each point's cell (row of ``means``).
     """
     p = np.asarray(points, dtype=np.float64)
-    inverse, counts = cell_groups(np.floor(p / cell_m).astype(np.int64))
-    sums = np.column_stack([np.bincount(inverse, weights=p[:, i], minlength=len(counts)) for i in range(p.shape[1])])
-    return sums / counts[:, None], inverse
+    # column by column (contiguous copies): the divisions, floors, keys and bincount
+    # sums are those of the (N, d) forms, ~1.5x faster on the walls' 3D band cut
+    cols = [np.ascontiguousarray(p[:, i]) for i in range(p.shape[1])]
+    cells = np.empty((len(cols), len(p)), dtype=np.int64)
+    for i, c in enumerate(cols):
+        cells[i] = np.floor(c / cell_m)
+    key = cell_keys(cells.T)
+    if key is None:
+        inverse, counts = cell_groups(cells.T)
+    else:
+        _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
+        inverse = inverse.ravel()
+    means = np.empty((len(counts), len(cols)))
+    for i, c in enumerate(cols):
+        means[:, i] = np.bincount(inverse, weights=c, minlength=len(counts))
+    means /= counts[:, None]
+    return means, inverse

@@ -58,7 +58,7 @@ scan of hallways and hallways3d against the plain forms, and in the tests):
   same distance, as on a lattice, where the order of the tied ones may differ), the
   RANSAC hypotheses built on coordinate columns straight into the rows of the
   distance product (:func:`_hypothesis_counts`), the 3D band cut and grid thinning
-  on contiguous columns (:func:`_cell_means_xy`), MeanShift's kernel weights in
+  on contiguous columns (:func:`floorscan.grid.cell_means`), MeanShift's kernel weights in
   place, and fewer temporaries in :func:`neighbourhood_covariances`.
 """
 
@@ -299,31 +299,8 @@ def scan_points_2d(xyz: np.ndarray, params: ScanParams = ScanParams()) -> tuple[
     if len(band) == 0:
         return empty, "no_points_in_height_band"
     if params.grid_m > 0:
-        # one mean point per occupied cell (cell_means, on contiguous columns)
-        return _cell_means_xy(xyz[band, 0], xyz[band, 1], params.grid_m), ""
+        return cell_means(xyz[band, :2], params.grid_m)[0], ""  # one mean point per occupied cell
     return xyz[band, :2], ""
-
-
-def _cell_means_xy(px: np.ndarray, py: np.ndarray, cell_m: float) -> np.ndarray:
-    """``cell_means(column_stack([px, py]), cell_m)[0]``: the same cells, order and
-    floats (the same divisions, keys, ``unique`` and ``bincount`` sums in point order),
-    from contiguous columns without the (N, 2) copies (issue 8)."""
-    cx = np.floor(px / cell_m).astype(np.int64)
-    cy = np.floor(py / cell_m).astype(np.int64)
-    lox, loy = int(cx.min()), int(cy.min())
-    spanx, spany = int(cx.max()) - lox + 1, int(cy.max()) - loy + 1
-    if float(spanx) * float(spany) >= 2.0**62:  # beyond the int64 key: the general form
-        return cell_means(np.column_stack([px, py]), cell_m)[0]
-    cx -= lox  # cell_keys: numpy.ravel_multi_index of the offsets from the minimum
-    cx *= spany
-    cy -= loy
-    cx += cy
-    _, inverse, counts = np.unique(cx, return_inverse=True, return_counts=True)
-    out = np.empty((len(counts), 2))
-    out[:, 0] = np.bincount(inverse, weights=px, minlength=len(counts))
-    out[:, 1] = np.bincount(inverse, weights=py, minlength=len(counts))
-    out /= counts[:, None]
-    return out
 
 
 # --------------------------------------------------------------------------------------
