@@ -287,8 +287,7 @@ def _order_crossings(key: np.ndarray, x: np.ndarray) -> np.ndarray:
     crossings (a row through a convex hull) and ``lexsort`` for the longer ones."""
     order = np.argsort(key, kind="stable")
     ks, xs = key[order], x[order]
-    starts = np.flatnonzero(np.r_[True, ks[1:] != ks[:-1]]) if len(ks) else np.zeros(0, np.int64)
-    size = np.diff(np.r_[starts, len(ks)])
+    starts, _, size = _segments(ks)
     two = starts[size == 2]
     swap = two[xs[two] > xs[two + 1]]
     order[swap], order[swap + 1] = order[swap + 1], order[swap].copy()
