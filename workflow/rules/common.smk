@@ -11,13 +11,48 @@ DATASETS = config["datasets"]
 FINAL_OUTPUTS = []
 
 # Scheduling (issue 8): of the jobs ready at once, Snakemake starts those of higher
-# priority first. On few cores the hulls go first, so select and the figures of the
-# registration and selection run beside the walls shards (not alone, and not at the
-# end, where the floor plans and scores of both extractors keep every core busy); then
-# the chain to the floor plans and scores; the last figures wait for those anyway.
-PRIORITY_HULLS = 20
-PRIORITY_WALLS = 10
-PRIORITY_FIGURES = 0
+# priority first (the greedy scheduler of workflow/profiles/default; ties go to larger
+# inputs). On few cores that order decides when the last job ends, so each rule's
+# priority is its "upward rank", the standard list-scheduling heuristic: the seconds of
+# the longest chain of jobs from its start to the end of the workflow, measured on
+# hallways3d (2 cores, one job's start-up ~0.6 s included):
+#
+#   scan_walls_plan 0.8 -> cluster_ransac shard 13 -> merge 0.6 -> walls 0.8
+#     -> floorplan 11 -> score_runs 4.6 -> score 1 -> score_figures 3        = 35
+#   hulls_plan 0.8 -> hulls_shard 8 -> hulls 0.6 -> select 2.6 -> walls ...  = 33
+#   ransac shard 7.5 -> merge 0.6 -> walls 0.8 -> floorplan ...              = 29
+#   selection_figures 10.5 -> score_figures 3                                 = 14
+#
+# (walls need the orderings of select, so the hulls chain is as urgent as the walls
+# shards). Two details matter most: the cluster_ransac shards (about twice ransac's
+# time a scan) go before ransac's, and the figures, which nothing but score_figures
+# waits for, fill the cores between the chains instead of delaying them (with the
+# hulls chain first, as before, the cluster_ransac shard started 12 s after
+# registration and hallways3d ended 9 s later than this order). Ingest, poses and
+# register run alone (0).
+PRIORITY = {
+    "scan_walls_plan": 35,
+    "scan_walls_shard": {"cluster_ransac": 34, "ransac": 29},
+    "hulls_plan": 33,
+    "hulls_shard": 32,
+    "hulls": 25,
+    "select": 24,
+    "scan_walls": 22,
+    "walls": 21,
+    "floorplan": 20,
+    "selection_figures": 14,
+    "score_runs": 9,
+    "score_walls_figures": 8,
+    "register_figure": 6,
+    "score": 4,
+    "score_figures": 3,
+}
+
+
+def shard_priority(wildcards):
+    """Priority of a walls shard job: by its extractor (PRIORITY; unknown: ransac's)."""
+    by_extractor = PRIORITY["scan_walls_shard"]
+    return by_extractor.get(wildcards.extractor, by_extractor["ransac"])
 
 
 wildcard_constraints:

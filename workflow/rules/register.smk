@@ -34,7 +34,7 @@ rule register:
 
 # The figure in its own job: the per-scan stages start without waiting for it.
 rule register_figure:
-    priority: PRIORITY_HULLS
+    priority: PRIORITY["register_figure"]
     input:
         registered="results/{dataset}/registered.parquet",
         registration="results/{dataset}/registration.parquet",

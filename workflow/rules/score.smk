@@ -126,7 +126,7 @@ def score_bench_dir(wildcards):
 # the other extractor's plans are still being made; `score` merges the tables (the same
 # table as one job over all runs, tested) and writes the summary.
 rule score_runs:
-    priority: PRIORITY_WALLS
+    priority: PRIORITY["score_runs"]
     input:
         unpack(score_runs_inputs),
     output:
@@ -151,7 +151,7 @@ rule score_runs:
 
 
 rule score:
-    priority: PRIORITY_WALLS
+    priority: PRIORITY["score"]
     input:
         runs=lambda wc: expand("results/{dataset}/score/{extractor}.parquet", dataset=wc.dataset,
                                extractor=score_extractors(wc)),
@@ -193,7 +193,7 @@ def score_walls_figure_inputs(wildcards):
 
 # The figures of walls and floor plans need no metrics: drawn while the runs are scored.
 rule score_walls_figures:
-    priority: PRIORITY_FIGURES
+    priority: PRIORITY["score_walls_figures"]
     input:
         unpack(score_walls_figure_inputs),
     output:
@@ -249,7 +249,7 @@ rule score_walls_figures:
 # Last: the time per stage counts every other job's benchmark file, so the other
 # figure jobs are inputs too.
 rule score_figures:
-    priority: PRIORITY_FIGURES
+    priority: PRIORITY["score_figures"]
     input:
         metrics="results/{dataset}/metrics.parquet",
         walls_figures=f"results/{{dataset}}/figures/floorplan_k{SCORE_FIGURE_K}.png",

@@ -40,7 +40,7 @@ def hulls_shards(wildcards):
 # shards is known only after registration: a checkpoint writes the plan. Plan and merge
 # take well under a second, so on a cluster they run on the submitting host (localrule).
 checkpoint hulls_plan:
-    priority: PRIORITY_HULLS
+    priority: PRIORITY["hulls_plan"]
     localrule: True
     input:
         registered="results/{dataset}/registered.parquet",
@@ -59,7 +59,7 @@ checkpoint hulls_plan:
 
 
 rule hulls_shard:
-    priority: PRIORITY_HULLS
+    priority: PRIORITY["hulls_shard"]
     input:
         registered="results/{dataset}/registered.parquet",
         registration="results/{dataset}/registration.parquet",
@@ -79,7 +79,7 @@ rule hulls_shard:
 
 
 rule hulls:
-    priority: PRIORITY_HULLS
+    priority: PRIORITY["hulls"]
     localrule: True
     input:
         unpack(hulls_shards),
@@ -95,7 +95,7 @@ rule hulls:
 
 
 rule select:
-    priority: PRIORITY_HULLS
+    priority: PRIORITY["select"]
     input:
         hulls="results/{dataset}/hulls.parquet",
         convex="results/{dataset}/convex_hulls.parquet",
@@ -116,7 +116,7 @@ rule select:
 
 
 rule selection_figures:
-    priority: PRIORITY_HULLS
+    priority: PRIORITY["selection_figures"]
     input:
         registered="results/{dataset}/registered.parquet",
         registration="results/{dataset}/registration.parquet",

@@ -77,7 +77,7 @@ def scan_walls_shards(wildcards):
 # plan for every extractor). Plan and merge take well under a second, so on a cluster
 # they run on the submitting host (localrule).
 checkpoint scan_walls_plan:
-    priority: PRIORITY_WALLS
+    priority: PRIORITY["scan_walls_plan"]
     localrule: True
     input:
         registered="results/{dataset}/registered.parquet",
@@ -96,7 +96,7 @@ checkpoint scan_walls_plan:
 
 
 rule scan_walls_shard:
-    priority: PRIORITY_WALLS
+    priority: shard_priority
     input:
         points="results/{dataset}/registered.parquet",
     output:
@@ -116,7 +116,7 @@ rule scan_walls_shard:
 
 
 rule scan_walls:
-    priority: PRIORITY_WALLS
+    priority: PRIORITY["scan_walls"]
     localrule: True
     input:
         unpack(scan_walls_shards),
@@ -145,7 +145,7 @@ def walls_run_params(wildcards):
 # still being extracted (hallways3d: ransac's shards end seconds before
 # cluster_ransac's).
 rule walls:
-    priority: PRIORITY_WALLS
+    priority: PRIORITY["walls"]
     input:
         walls="results/{dataset}/walls/{extractor}/per_scan.parquet",
         orderings=expand("results/{{dataset}}/orderings/{ordering}.parquet", ordering=config["walls"]["orderings"]),
@@ -170,7 +170,7 @@ rule walls:
 # ~1 s of start-up and imports; 2 jobs on 2 cores, and each extractor's score_runs
 # starts as soon as its job ends).
 rule floorplan:
-    priority: PRIORITY_WALLS
+    priority: PRIORITY["floorplan"]
     input:
         lambda wc: [
             f"results/{wc.dataset}/walls/{o}/{wc.extractor}/k{k}.parquet"
