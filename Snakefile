@@ -1,7 +1,9 @@
 # floorscan: scan selection and wall extraction for indoor floor plans.
 # Run: snakemake --cores 2            (default target: the datasets in config `target`)
 #      snakemake --cores 2 --config target='[intel]'
-from snakemake.utils import min_version, validate
+from snakemake.utils import min_version
+
+from floorscan.config import validate_config
 
 min_version("9.14.8")
 
@@ -12,7 +14,7 @@ configfile: "config/config.yaml"
 report: "workflow/report/workflow.rst"
 
 
-validate(config, "workflow/schemas/config.schema.yaml")
+validate_config(config, workflow.basedir + "/workflow/schemas/config.schema.yaml")
 
 
 include: "workflow/rules/common.smk"

@@ -35,3 +35,36 @@ def test_default_config_dry_run_plans_every_stage():
     res = dry_run()
     assert res.returncode == 0, res.stderr[-2000:]
     assert "ingest" in res.stdout and "poses" in res.stdout
+
+
+SCHEMAS = sorted((REPO / "workflow" / "schemas").glob("*.schema.yaml"))
+
+
+@pytest.mark.parametrize("schema", SCHEMAS, ids=lambda p: p.name.split(".")[0])
+def test_validate_config_fills_the_defaults_snakemake_validate_fills(schema):
+    import copy
+
+    import yaml
+    from snakemake.utils import validate
+
+    from floorscan.config import validate_config
+
+    cfg = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
+    stage = schema.name.split(".")[0]
+    data = cfg if stage == "config" else (cfg.get(stage) or {})
+    ours, theirs = copy.deepcopy(data), copy.deepcopy(data)
+    validate_config(ours, schema, stage)
+    validate(theirs, str(schema))
+    assert ours == theirs
+    props = yaml.safe_load(schema.read_text()).get("properties", {})
+    assert all(name in ours for name, prop in props.items() if "default" in prop)  # defaults filled
+
+
+def test_validate_config_names_the_field_and_copies_defaults():
+    from floorscan.config import ConfigError, validate_config
+
+    schema = REPO / "workflow" / "schemas" / "walls.schema.yaml"
+    with pytest.raises(ConfigError, match=r"datasets\.x\.params\.walls\.k\.0: .*schema .*walls\.schema\.yaml"):
+        validate_config({"k": ["many"]}, schema, "datasets.x.params.walls")
+    a, b = validate_config({}, schema, "walls"), validate_config({}, schema, "walls")
+    assert a == b and a["k"] == b["k"] and a["k"] is not b["k"]  # no shared mutable default
