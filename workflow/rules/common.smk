@@ -15,26 +15,26 @@ FINAL_OUTPUTS = []
 # inputs). On few cores that order decides when the last job ends, so each rule's
 # priority is its "upward rank", the standard list-scheduling heuristic: the seconds of
 # the longest chain of jobs from its start to the end of the workflow, measured on
-# hallways3d (2 cores, one job's start-up ~0.6 s included):
+# hallways3d (2 cores, a job's start-up of ~0.6 s included), e.g.
 #
-#   scan_walls_plan 0.8 -> cluster_ransac shard 13 -> merge 0.6 -> walls 0.8
-#     -> floorplan 11 -> score_runs 4.6 -> score 1 -> score_figures 3        = 35
-#   hulls_plan 0.8 -> hulls_shard 8 -> hulls 0.6 -> select 2.6 -> walls ...  = 33
-#   ransac shard 7.5 -> merge 0.6 -> walls 0.8 -> floorplan ...              = 29
+#   scan_walls_plan 0.8 -> cluster_ransac shard 13 -> merge 0.6 -> walls 1
+#     -> floorplan 11.5 -> score_runs 5 -> score 0.8 -> score_figures 3      = 36
+#   hulls_plan 0.8 -> hulls_shard 8.7 -> hulls 0.6 -> select 2.8 -> walls ... = 34
+#   ransac shard 7.5 -> merge ...                                             = 29
 #   selection_figures 10.5 -> score_figures 3                                 = 14
+#   register_figure 2.7 (nothing waits for it)                                = 3
 #
-# (walls need the orderings of select, so the hulls chain is as urgent as the walls
-# shards). Two details matter most: the cluster_ransac shards (about twice ransac's
-# time a scan) go before ransac's, and the figures, which nothing but score_figures
-# waits for, fill the cores between the chains instead of delaying them (with the
-# hulls chain first, as before, the cluster_ransac shard started 12 s after
-# registration and hallways3d ended 9 s later than this order). Ingest, poses and
-# register run alone (0).
+# Walls need the orderings of select, so the hulls chain is as urgent as the walls
+# shards; the cluster_ransac shards (about twice ransac's time a scan) go before
+# ransac's; the figures fill the cores between the chains instead of delaying them.
+# With the hulls chain first and the figures next (the order before), the
+# cluster_ransac shard started 12 s after registration and the chain of floor plans
+# and scores behind it ended the run. Ingest, poses and register run alone (0).
 PRIORITY = {
-    "scan_walls_plan": 35,
-    "scan_walls_shard": {"cluster_ransac": 34, "ransac": 29},
-    "hulls_plan": 33,
-    "hulls_shard": 32,
+    "scan_walls_plan": 36,
+    "scan_walls_shard": {"cluster_ransac": 35, "ransac": 29},
+    "hulls_plan": 34,
+    "hulls_shard": 33,
     "hulls": 25,
     "select": 24,
     "scan_walls": 22,
@@ -43,9 +43,9 @@ PRIORITY = {
     "selection_figures": 14,
     "score_runs": 9,
     "score_walls_figures": 8,
-    "register_figure": 6,
     "score": 4,
     "score_figures": 3,
+    "register_figure": 3,
 }
 
 
