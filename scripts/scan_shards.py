@@ -1,12 +1,14 @@
 """Checkpoint of a per-scan stage (hulls, scan_walls): its shards by scan range."""
-from floorscan.io import read_table, write_json
+import pyarrow.parquet as pq
+
+from floorscan.io import write_json
 from floorscan.shards import plan_shards
 from floorscan.workflow import stage_log
 
 with stage_log(snakemake) as log:
     plan = plan_shards(
-        read_table(snakemake.input.registration),
-        read_table(snakemake.input.registered, columns=["scan_id"])["scan_id"].to_numpy(),
+        pq.read_table(snakemake.input.registration),
+        pq.read_table(snakemake.input.registered, columns=["scan_id"])["scan_id"].to_numpy(),
         snakemake.params.shard_scans,
         path=snakemake.input.registration,
     )

@@ -102,12 +102,16 @@ def test_plan_covers_registration_and_points():
     assert [(s["start"], s["stop"], s["n_kept"]) for s in plan["shards"]] == [(0, 8, 2), (9, 24, 2), (25, 33, 1)]
     assert (plan["first"], plan["last"], plan["n_kept"], plan["shard_scans"]) == (0, 33, 5, 2)
     assert plan["shards"][1]["label"] == "scans_000009-000024"
+    # the checkpoint passes the file as a pyarrow Table (no pandas in that job): same plan
+    assert plan_shards(pa.Table.from_pandas(reg), np.array([4, 5, 9, 17, 25, 33]), 2) == plan
 
 
 def test_plan_without_kept_scans_is_a_clear_error():
     reg = registration_table(12, set()).assign(reason="pose_gap")
     with pytest.raises(InputError, match=r"reg\.parquet: no kept scan \(of 12\).*'pose_gap': 12"):
         plan_shards(reg, [], 10, path="reg.parquet")
+    with pytest.raises(InputError, match=r"no kept scan \(of 12\).*'pose_gap': 12"):
+        plan_shards(pa.Table.from_pandas(reg), [], 10, path="reg.parquet")
     with pytest.raises(InputError, match="columns \\['kept'\\] missing"):
         plan_shards(pd.DataFrame({"scan_id": [0, 1]}), [], 10, path="reg.parquet")
 
