@@ -179,7 +179,8 @@ def unsharded(registered, registration, out: Path, extractor: str):
 
 
 def sharded(registered, registration, out: Path, shard_scans: int, extractor: str):
-    """The workflow's jobs: plan (checkpoint), one job per shard, merge; real scripts."""
+    """The workflow's jobs: plan (checkpoint), one job per shard, merge (hulls; walls, with
+    its k tables); real scripts."""
     res = {"registered": str(registered), "registration": str(registration)}
     plans, merge_logs = {}, {}
     for stage in ("hulls", "scan_walls"):
@@ -201,11 +202,17 @@ def sharded(registered, registration, out: Path, shard_scans: int, extractor: st
          "convex": [shard("hulls", lb, "convex_hulls") for lb in labels]},
         {"hulls": str(out / "hulls.parquet"), "convex": str(out / "convex_hulls.parquet")},
         wildcards={"dataset": "t"})
+    # rule walls merges the wall shards and filters the first k scans of each ordering
+    kept = pq.read_table(registration).to_pandas().query("kept")["scan_id"].to_numpy()
+    ordering = out / "orderings" / "sequential.parquet"
+    write_table(pd.DataFrame({"rank": np.arange(len(kept)), "scan_id": kept}), ordering)
+    tables = [str(out / "walls" / "sequential" / extractor / f"k{k}.parquet") for k in ("5", "all")]
     merge_logs["scan_walls"] = run_script(
-        "scan_walls_merge.py", out, "scan_walls",
-        {"plan": str(plans["scan_walls"]), "walls": [shard("scan_walls", lb, "per_scan") for lb in labels],
-         "status": [shard("scan_walls", lb, "scan_status") for lb in labels]},
-        {"walls": str(out / "per_scan.parquet"), "status": str(out / "scan_status.parquet")},
+        "walls.py", out, "walls",
+        {"plan": str(plans["scan_walls"]), "shard_walls": [shard("scan_walls", lb, "per_scan") for lb in labels],
+         "shard_status": [shard("scan_walls", lb, "scan_status") for lb in labels], "orderings": [str(ordering)]},
+        {"walls": str(out / "per_scan.parquet"), "status": str(out / "scan_status.parquet"), "tables": tables},
+        params={"run": {"orderings": ["sequential"], "k": ["5", "all"]}},
         wildcards={"dataset": "t", "extractor": extractor})
     return labels, merge_logs
 
@@ -270,6 +277,16 @@ def test_sharded_scripts_write_the_unsharded_files(tmp_path, shard_scans):
     assert "'too_few_points': 1" in logs["scan_walls"]
     walls = pq.read_table(tmp_path / "many" / "per_scan.parquet").to_pandas()
     assert len(walls) > 4 * 35 and walls.groupby("scan_id").size().index.is_monotonic_increasing
+    # the same job's k tables: all kept scans in the sequential ordering are the walls
+    # of the kept scans (dropped scan 30's points, in the points table, have walls too)
+    k_dir = tmp_path / "many" / "walls" / "sequential" / "ransac"
+    kall = pq.read_table(k_dir / "kall.parquet").to_pandas()
+    assert (walls["scan_id"] == 30).sum() > 0
+    assert kall.equals(walls[walls["scan_id"] != 30].reset_index(drop=True))
+    first5 = sorted(status.index)[:5]
+    assert pq.read_table(k_dir / "k5.parquet").to_pandas()["scan_id"].unique().tolist() == [
+        s for s in first5 if (walls["scan_id"] == s).any()
+    ]
 
 
 @needs_shared

@@ -17,10 +17,10 @@ FINAL_OUTPUTS = []
 # the longest chain of jobs from its start to the end of the workflow, measured on
 # hallways3d (2 cores, a job's start-up of ~0.6 s included), e.g.
 #
-#   scan_walls_plan 0.8 -> cluster_ransac shard 13 -> merge 0.6 -> walls 1
-#     -> floorplan 11.5 -> score_runs 5 -> score 0.8 -> score_figures 3      = 36
+#   scan_walls_plan 0.8 -> cluster_ransac shard 13 -> walls 1.2
+#     -> floorplan 11.5 -> score_runs 5 -> score 0.8 -> score_figures 3      = 35
 #   hulls_plan 0.8 -> hulls_shard 8.7 -> hulls 0.6 -> select 2.8 -> walls ... = 34
-#   ransac shard 7.5 -> merge ...                                             = 29
+#   ransac shard 7.5 -> walls ...                                             = 29
 #   selection_figures 10.5 -> score_figures 3                                 = 14
 #   register_figure 2.7 (nothing waits for it)                                = 3
 #
@@ -37,7 +37,6 @@ PRIORITY = {
     "hulls_shard": 33,
     "hulls": 25,
     "select": 24,
-    "scan_walls": 22,
     "walls": 21,
     "floorplan": 20,
     "selection_figures": 14,

@@ -1,9 +1,10 @@
 # Wall extraction and merged floor plans (issue 6; thesis sections 3.4, 5.3, Algorithm 4).
 #
-#   scan_walls: every kept scan once per extractor (walls of a scan depend only on the
-#               scan, the extractor parameters and the seed, never on ordering or k),
-#               in shards of scans (scan_walls_plan, scan_walls_shard) merged in scan order
-#   walls:      the wall segments of the first k scans of an ordering (a filter)
+#   scan_walls_shard: every kept scan once per extractor (walls of a scan depend only
+#               on the scan, the extractor parameters and the seed, never on ordering
+#               or k), in shards of scans (plan: checkpoint scan_walls_plan)
+#   walls:      the shards merged in scan order (the per-scan tables), and the wall
+#               segments of the first k scans of each ordering (a filter)
 #   floorplan:  merged walls of each (ordering, k) of an extractor as GeoJSON, SVG, DXF, IFC
 import json
 import re
@@ -59,7 +60,7 @@ def walls_shard_scans(wildcards):
 
 
 def scan_walls_shards(wildcards):
-    """Inputs of the merge: the plan and the extractor's shard files it lists."""
+    """The shard plan and the extractor's shard files it lists (after the checkpoint)."""
     plan = checkpoints.scan_walls_plan.get(dataset=wildcards.dataset).output.plan
     labels = [s["label"] for s in json.loads(Path(plan).read_text())["shards"]]
     shard = "results/{dataset}/shards/walls/{extractor}/{shard}/{name}.parquet"
@@ -67,12 +68,18 @@ def scan_walls_shards(wildcards):
         name: [shard.format(dataset=wildcards.dataset, extractor=wildcards.extractor, shard=s, name=name) for s in labels]
         for name in ("per_scan", "scan_status")
     }
-    return {"plan": plan, "walls": files["per_scan"], "status": files["scan_status"]}
+    return {"plan": plan, "shard_walls": files["per_scan"], "shard_status": files["scan_status"]}
+
+
+def walls_inputs(wildcards):
+    """Inputs of `walls`: the shards (scan_walls_shards) and the orderings."""
+    orderings = [f"results/{wildcards.dataset}/orderings/{o}.parquet" for o in config["walls"]["orderings"]]
+    return {**scan_walls_shards(wildcards), "orderings": orderings}
 
 
 # Sharding (issue 8): the walls of a scan depend only on the scan and (seed, scan_id), so
 # the scans are split by scan range into shards of <= walls.shard_scans kept scans, one
-# job each, concatenated in scan order by `scan_walls` into the unsharded tables. The
+# job each, concatenated in scan order by `walls` into the unsharded tables. The
 # number of shards is known only after registration: a checkpoint writes the plan (one
 # plan for every extractor). Plan and merge take well under a second, so on a cluster
 # they run on the submitting host (localrule).
@@ -115,42 +122,26 @@ rule scan_walls_shard:
         "../../scripts/scan_walls.py"
 
 
-rule scan_walls:
-    priority: PRIORITY["scan_walls"]
-    localrule: True
-    input:
-        unpack(scan_walls_shards),
-    output:
-        walls="results/{dataset}/walls/{extractor}/per_scan.parquet",
-        status="results/{dataset}/walls/{extractor}/scan_status.parquet",
-    wildcard_constraints:
-        extractor=WALLS_CONSTRAINTS["extractor"],
-    log:
-        "results/{dataset}/logs/scan_walls_{extractor}.log",
-    benchmark:
-        "results/{dataset}/benchmarks/scan_walls_{extractor}.tsv"
-    script:
-        "../../scripts/scan_walls_merge.py"
-
-
 def walls_run_params(wildcards):
     """What the `walls` job of an extractor writes: orderings and k labels."""
     return {"orderings": list(config["walls"]["orderings"]), "k": walls_k_names()}
 
 
-# One job per dataset and extractor: taking the first k scans of an ordering is a cheap
-# filter, so the 35 tables of an extractor (default config) come from one process (a
-# job costs ~0.5-1 s to start). Per extractor, not per dataset, so that the faster
-# extractor's walls, floor plans and scores run while the other's per-scan walls are
-# still being extracted (hallways3d: ransac's shards end seconds before
-# cluster_ransac's).
+# One job per dataset and extractor: the shards concatenated into the extractor's
+# per-scan tables, then the first k scans of each ordering, a cheap filter, so the 50
+# tables of an extractor (default config) come from one process. Per extractor, not
+# per dataset, so that the faster extractor's walls, floor plans and scores run while
+# the other's shards are still being extracted (hallways3d: ransac's shards end
+# seconds before cluster_ransac's). The concatenation was a job of its own (rule
+# scan_walls): a job costs ~0.6 s to start, on the critical path of the run.
 rule walls:
     priority: PRIORITY["walls"]
     input:
-        walls="results/{dataset}/walls/{extractor}/per_scan.parquet",
-        orderings=expand("results/{{dataset}}/orderings/{ordering}.parquet", ordering=config["walls"]["orderings"]),
+        unpack(walls_inputs),
     output:
-        expand(
+        walls="results/{dataset}/walls/{extractor}/per_scan.parquet",
+        status="results/{dataset}/walls/{extractor}/scan_status.parquet",
+        tables=expand(
             "results/{{dataset}}/walls/{ordering}/{{extractor}}/k{k}.parquet",
             ordering=config["walls"]["orderings"], k=walls_k_names(),
         ),
