@@ -209,7 +209,7 @@ STAGES = (
 
 def stage_of(name: str) -> str:
     """Stage of a benchmark file name (``floorplan_random_ransac`` -> ``floorplan``) or a
-    script name (``hulls_merge`` -> ``hulls``); the name itself when none matches."""
+    script name (``hulls_shard`` -> ``hulls``); the name itself when none matches."""
     hits = [st for st in STAGES if name == st or name.startswith(st + "_")]
     return max(hits, key=len) if hits else name
 

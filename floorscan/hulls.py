@@ -80,8 +80,8 @@ import shapely
 from floorscan.io import split_by_scan
 
 # scikit-learn (KMeans) and threadpoolctl are imported where used: importing
-# scikit-learn costs ~1.4 s, which the stages that only read hulls (select, the
-# hulls merge) need not pay (issue 8).
+# scikit-learn costs ~1.4 s, which the stages that only merge or read hulls (select)
+# need not pay (issue 8).
 
 #: ``hulls.parquet`` and ``convex_hulls.parquet``: a row per (scan, cluster); the
 #: geometry is WKB (little endian, 2D) of a Polygon, empty when the hull has no area.

@@ -3,9 +3,9 @@
 The per-scan stages of the demo run twice from the same registered scans: once with
 the local executor, one job per stage, and once in shards through the cluster-generic
 executor (``workflow/profiles/local-cluster``: ``submit.sh`` starts every shard job as
-a separate background process running its own Snakemake; the cheap plan jobs and the
-hulls merge are local rules of the submitting process). The outputs must be the same
-bytes.
+a separate background process running its own Snakemake, as are select and walls,
+which merge the shards; the cheap plan jobs are local rules of the submitting
+process). The outputs must be the same bytes.
 """
 
 import hashlib
@@ -77,6 +77,6 @@ def test_every_shard_was_a_separate_submitted_process(runs):
         assert len(outs) == 2, stage
         assert [p.name for p in (local / "shards" / folder).iterdir() if p.is_dir()] == ["scans_000000-000320"]
     pids = re.findall(r"Submitted job \d+ with external jobid '(\d+)'", log)
-    # the 4 shard jobs, and select and walls (per_scan.parquet is written by walls,
-    # which needs the orderings); the plans and the hulls merge are local rules
+    # the 4 shard jobs, and select and walls, which merge them (per_scan.parquet is
+    # written by walls, which needs the orderings); the plans are local rules
     assert len(pids) == 6 and len(set(pids)) == 6

@@ -22,6 +22,7 @@ import pytest
 from conftest import REPO, SHARED_DATA, needs_shared
 from floorscan.hulls import HullParams, compute_hulls, to_table
 from floorscan.io import InputError, REGISTERED, write_table
+from floorscan.selection import ORDERINGS
 from floorscan.shards import (
     concat_shards,
     parse_shard_label,
@@ -93,7 +94,12 @@ def test_labels_round_trip_and_reject_garbage():
 
 
 def registration_table(n_scans: int, kept: set) -> pd.DataFrame:
-    return pd.DataFrame({"scan_id": np.arange(n_scans, dtype=np.int32), "kept": [i in kept for i in range(n_scans)]})
+    """A registration table: the rover drives along x at 0.5 m/s, a scan every 0.2 s."""
+    ids = np.arange(n_scans, dtype=np.int32)
+    return pd.DataFrame({
+        "scan_id": ids, "t_ns": ids.astype(np.int64) * 200_000_000, "kept": [i in kept for i in range(n_scans)],
+        "x_m": 0.1 * ids, "y_m": np.zeros(n_scans), "yaw_rad": np.zeros(n_scans),
+    })  # fmt: skip
 
 
 def test_plan_covers_registration_and_points():
@@ -196,16 +202,17 @@ def sharded(registered, registration, out: Path, shard_scans: int, extractor: st
         run_script("scan_walls.py", out, "scan_walls_shard", {"points": str(registered)},
                    {"walls": shard("scan_walls", lb, "per_scan"), "status": shard("scan_walls", lb, "scan_status")},
                    {"cfg": WALLS_CFG}, {"dataset": "t", "extractor": extractor, "shard": lb})
+    # rule select merges the hull shards and orders the scans
+    orderings = [str(out / "orderings" / f"{o}.parquet") for o in ORDERINGS]
     merge_logs["hulls"] = run_script(
-        "hulls_merge.py", out, "hulls",
-        {"plan": str(plans["hulls"]), "hulls": [shard("hulls", lb, "hulls") for lb in labels],
-         "convex": [shard("hulls", lb, "convex_hulls") for lb in labels]},
-        {"hulls": str(out / "hulls.parquet"), "convex": str(out / "convex_hulls.parquet")},
-        wildcards={"dataset": "t"})
+        "select.py", out, "select",
+        {"plan": str(plans["hulls"]), "shard_hulls": [shard("hulls", lb, "hulls") for lb in labels],
+         "shard_convex": [shard("hulls", lb, "convex_hulls") for lb in labels], "registration": str(registration)},
+        {"hulls": str(out / "hulls.parquet"), "convex": str(out / "convex_hulls.parquet"),
+         "orderings": orderings, "summary": str(out / "orderings" / "summary.parquet")},
+        params={"cfg": {}}, wildcards={"dataset": "t"})
     # rule walls merges the wall shards and filters the first k scans of each ordering
-    kept = pq.read_table(registration).to_pandas().query("kept")["scan_id"].to_numpy()
-    ordering = out / "orderings" / "sequential.parquet"
-    write_table(pd.DataFrame({"rank": np.arange(len(kept)), "scan_id": kept}), ordering)
+    ordering = out / "orderings" / "sequential.parquet"  # select's: the kept scans in id order
     tables = [str(out / "walls" / "sequential" / extractor / f"k{k}.parquet") for k in ("5", "all")]
     merge_logs["scan_walls"] = run_script(
         "walls.py", out, "walls",

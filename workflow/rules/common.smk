@@ -19,7 +19,7 @@ FINAL_OUTPUTS = []
 #
 #   scan_walls_plan 0.8 -> cluster_ransac shard 13 -> walls 1.2
 #     -> floorplan 11.5 -> score_runs 5 -> score 0.8 -> score_figures 3      = 35
-#   hulls_plan 0.8 -> hulls_shard 8.7 -> hulls 0.6 -> select 2.8 -> walls ... = 34
+#   hulls_plan 0.8 -> hulls_shard 8.7 -> select 3.2 -> walls ...              = 34
 #   ransac shard 7.5 -> walls ...                                             = 29
 #   selection_figures 10.5 -> score_figures 3                                 = 14
 #   register_figure 2.7 (nothing waits for it)                                = 3
@@ -35,7 +35,6 @@ PRIORITY = {
     "scan_walls_shard": {"cluster_ransac": 35, "ransac": 29},
     "hulls_plan": 34,
     "hulls_shard": 33,
-    "hulls": 25,
     "select": 24,
     "walls": 21,
     "floorplan": 20,

@@ -23,22 +23,24 @@ def hulls_shard_scans(wildcards):
 
 
 def hulls_shards(wildcards):
-    """Inputs of the merge: the plan and the shard files it lists (after the checkpoint)."""
+    """Inputs of `select`: the hulls plan and the shard files it lists (after the
+    checkpoint), and the registration table."""
     plan = checkpoints.hulls_plan.get(dataset=wildcards.dataset).output.plan
     labels = [s["label"] for s in json.loads(Path(plan).read_text())["shards"]]
     shard = "results/{dataset}/shards/hulls/{shard}/{name}.parquet"
     return {
         "plan": plan,
-        "hulls": [shard.format(dataset=wildcards.dataset, shard=s, name="hulls") for s in labels],
-        "convex": [shard.format(dataset=wildcards.dataset, shard=s, name="convex_hulls") for s in labels],
+        "shard_hulls": [shard.format(dataset=wildcards.dataset, shard=s, name="hulls") for s in labels],
+        "shard_convex": [shard.format(dataset=wildcards.dataset, shard=s, name="convex_hulls") for s in labels],
+        "registration": f"results/{wildcards.dataset}/registration.parquet",
     }
 
 
 # Sharding (issue 8): the hulls of a scan depend only on the scan and (seed, scan_id), so
 # the kept scans are split by scan range into shards of <= hulls.shard_scans scans, one
-# job each, concatenated in scan order by `hulls` into the unsharded tables. The number of
-# shards is known only after registration: a checkpoint writes the plan. Plan and merge
-# take well under a second, so on a cluster they run on the submitting host (localrule).
+# job each, concatenated in scan order by `select` into the unsharded tables. The number
+# of shards is known only after registration: a checkpoint writes the plan. The plan
+# takes well under a second, so on a cluster it runs on the submitting host (localrule).
 checkpoint hulls_plan:
     priority: PRIORITY["hulls_plan"]
     localrule: True
@@ -78,29 +80,15 @@ rule hulls_shard:
         "../../scripts/hulls.py"
 
 
-rule hulls:
-    priority: PRIORITY["hulls"]
-    localrule: True
+# One job merges the hull shards (hulls.parquet, convex_hulls.parquet) and orders the
+# scans: the merge was a job of its own (rule hulls), and a job costs ~0.6 s to start.
+rule select:
+    priority: PRIORITY["select"]
     input:
         unpack(hulls_shards),
     output:
         hulls="results/{dataset}/hulls.parquet",
         convex="results/{dataset}/convex_hulls.parquet",
-    log:
-        log_path("hulls"),
-    benchmark:
-        benchmark_path("hulls")
-    script:
-        "../../scripts/hulls_merge.py"
-
-
-rule select:
-    priority: PRIORITY["select"]
-    input:
-        hulls="results/{dataset}/hulls.parquet",
-        convex="results/{dataset}/convex_hulls.parquet",
-        registration="results/{dataset}/registration.parquet",
-    output:
         orderings=expand(
             "results/{{dataset}}/orderings/{ordering}.parquet", ordering=SELECT_ORDERINGS
         ),
