@@ -20,6 +20,10 @@ FINAL_OUTPUTS = []
 #   scan_walls_plan 0.8 -> cluster_ransac shard 13 -> walls 1.2
 #     -> floorplan 11.5 -> score_runs 5 -> score 0.8 -> score_figures 3      = 35
 #   hulls_plan 0.8 -> hulls_shard 8.7 -> select 3.2 -> walls ...              = 34
+#
+# select is raised above its rank (24) to 31, over the ransac shards: both walls jobs
+# wait for its orderings, and when ransac's shard went first the cluster_ransac walls
+# waited 2.5 s for select after their shard ended.
 #   ransac shard 7.5 -> walls ...                                             = 29
 #   selection_figures 10.5 -> score_figures 3                                 = 14
 #   register_figure 2.7 (nothing waits for it)                                = 3
@@ -35,7 +39,7 @@ PRIORITY = {
     "scan_walls_shard": {"cluster_ransac": 35, "ransac": 29},
     "hulls_plan": 34,
     "hulls_shard": 33,
-    "select": 24,
+    "select": 31,
     "walls": 21,
     "floorplan": 20,
     "selection_figures": 14,
