@@ -15,15 +15,11 @@ FINAL_OUTPUTS = []
 # inputs). On few cores that order decides when the last job ends, so each rule's
 # priority is its "upward rank", the standard list-scheduling heuristic: the seconds of
 # the longest chain of jobs from its start to the end of the workflow, measured on
-# hallways3d (2 cores, a job's start-up of ~0.6 s included), e.g.
+# hallways3d (2 cores, a job's start-up of ~0.6 s included):
 #
 #   scan_walls_plan 0.8 -> cluster_ransac shard 13 -> walls 1.2
 #     -> floorplan 11.5 -> score_runs 5 -> score 0.8 -> score_figures 3      = 35
 #   hulls_plan 0.8 -> hulls_shard 8.7 -> select 3.2 -> walls ...              = 34
-#
-# select is raised above its rank (24) to 31, over the ransac shards: both walls jobs
-# wait for its orderings, and when ransac's shard went first the cluster_ransac walls
-# waited 2.5 s for select after their shard ended.
 #   ransac shard 7.5 -> walls ...                                             = 29
 #   selection_figures 10.5 -> score_figures 3                                 = 14
 #   register_figure 2.7 (nothing waits for it)                                = 3
@@ -31,9 +27,12 @@ FINAL_OUTPUTS = []
 # Walls need the orderings of select, so the hulls chain is as urgent as the walls
 # shards; the cluster_ransac shards (about twice ransac's time a scan) go before
 # ransac's; the figures fill the cores between the chains instead of delaying them.
-# With the hulls chain first and the figures next (the order before), the
-# cluster_ransac shard started 12 s after registration and the chain of floor plans
-# and scores behind it ended the run. Ingest, poses and register run alone (0).
+# select is raised above its rank (24) to 31, over the ransac shards: both walls jobs
+# wait for its orderings, and when ransac's shard went first the cluster_ransac walls
+# waited 2.5 s for select after their shard ended. With the hulls chain first and the
+# figures next (the order before), the cluster_ransac shard started 12 s after
+# registration and the chain of floor plans and scores behind it ended the run.
+# Ingest, poses and register run alone (0).
 PRIORITY = {
     "scan_walls_plan": 36,
     "scan_walls_shard": {"cluster_ransac": 35, "ransac": 29},
