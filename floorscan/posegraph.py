@@ -85,7 +85,7 @@ class GraphParams:
         ``voxel_size_m``: the clouds themselves); the last stage and the fitness use
         the full clouds. Coarse-to-fine multi-scale ICP, as Open3D's multi-scale ICP
         (its tutorial halves the voxel with the distance). 0.1 against 0 (issue 8):
-        the edge ICP 16.0 -> 13.2 CPU-s on hallways3d, 12.3 -> 10.2 on hallways;
+        1500 edges of hallways3d in 3.2 against 4.0 CPU-s (one process, interleaved);
         RMS error against the simulator's truth hallways3d 1.55 -> 1.47 cm (0.119 ->
         0.133 deg), hallways 1.78 -> 1.84 cm (0.198 -> 0.187 deg); 0.15 saved 2 CPU-s
         more for 1.58 cm, 0.141 deg on hallways3d. On the real mac_ros2 recording the

@@ -262,3 +262,23 @@ def test_candidate_pairs_out_and_back():
     two = candidate_pairs(poses, t, GraphParams(**{**params.__dict__, "loop_radius_m": 1.5, "loop_max_per_scan": 2}))
     loops = [(i, j) for i, j, kind in two if kind == "loop"]
     assert all(j - i > 1 for i, j in loops) and len(loops) == 17  # 9 at 0 m, then 8 at 1 m
+
+
+def test_coarse_icp_stage_keeps_edges_accurate(recording):
+    """coarse_voxel_size_m: the first ICP stage on 0.1 m clouds; 0, or a size not above
+    voxel_size_m, is plain two-stage ICP on the full clouds (the same edges)."""
+    truth, clouds, t, priors = recording
+    n = 14
+    off = G.scan_pair_edges(clouds[:n], priors[:n], t[:n], G.GraphParams(coarse_voxel_size_m=0.0))
+    same = G.scan_pair_edges(clouds[:n], priors[:n], t[:n], G.GraphParams(coarse_voxel_size_m=0.05))
+    pd.testing.assert_frame_equal(off, same)
+    on = G.scan_pair_edges(clouds[:n], priors[:n], t[:n], G.GraphParams(coarse_voxel_size_m=0.1))
+    assert len(on) == len(off) and (on["fitness"] >= 0.6).sum() == (off["fitness"] >= 0.6).sum()
+    for e in (off, on):
+        err = [
+            math.hypot(r.dx_m - dx, r.dy_m - dy)
+            for r in e.itertuples()
+            for dx, dy, _ in [G.se2_between(truth[r.i], truth[r.j])]
+        ]
+        assert np.median(err) < 0.004  # the priors are 5 cm off
+    assert not np.array_equal(on[["dx_m", "dy_m"]].to_numpy(), off[["dx_m", "dy_m"]].to_numpy())
