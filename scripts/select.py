@@ -18,13 +18,14 @@ with stage_log(snakemake) as log:
     convex, _ = read_shards(snakemake.input.shard_convex, plan, "convex hull shards")
     log.info("hulls: %s from %d shards", counts, len(plan["shards"]))
     meta = {"stage": "hulls", "dataset": snakemake.wildcards.dataset, "units": "metres, m2"}
-    write_table(cluster, snakemake.output.hulls, schema=HULLS, metadata=meta)
-    write_table(convex, snakemake.output.convex, schema=HULLS, metadata=meta)
+    cluster, convex = cluster.cast(HULLS), convex.cast(HULLS)  # the frames the files read back as
+    write_table(cluster, snakemake.output.hulls, metadata=meta)
+    write_table(convex, snakemake.output.convex, metadata=meta)
 
     params = SelectParams.from_config(snakemake.params.cfg)
     orderings, summary = select_stage(
-        read_table(snakemake.output.hulls),  # as a separate select job read them
-        read_table(snakemake.output.convex),
+        cluster.to_pandas(),
+        convex.to_pandas(),
         read_table(snakemake.input.registration),
         params,
     )
