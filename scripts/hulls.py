@@ -1,6 +1,6 @@
 """Stage `hulls`, one shard: cluster hulls and convex hulls of the kept scans of a scan
 range (thesis Algorithm 2), streamed scan by scan (memory holds one scan, issue 8).
-scripts/hulls_merge.py concatenates the shards."""
+scripts/select.py concatenates the shards."""
 import json
 
 from floorscan.hulls import HullParams, compute_hulls, to_table

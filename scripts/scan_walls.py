@@ -1,6 +1,6 @@
 """Stage scan_walls, one shard: wall segments of the scans of a scan range with one
 extractor, streamed scan by scan (memory holds one scan, issue 8).
-scripts/scan_walls_merge.py concatenates the shards."""
+scripts/walls.py concatenates the shards."""
 from floorscan.io import iter_scans, write_table
 from floorscan.shards import parse_shard_label
 from floorscan.walls import SCAN_STATUS, WALLS, extract_walls
