@@ -87,8 +87,8 @@ class GraphParams:
         (its tutorial halves the voxel with the distance). 0.1 against 0 (issue 8):
         1500 edges of hallways3d in 3.2 against 4.0 CPU-s (one process, interleaved);
         RMS error against the simulator's truth hallways3d 1.55 -> 1.47 cm (0.119 ->
-        0.133 deg), hallways 1.78 -> 1.84 cm (0.198 -> 0.187 deg); 0.15 saved 2 CPU-s
-        more for 1.58 cm, 0.141 deg on hallways3d. On the real mac_ros2 recording the
+        0.133 deg), hallways 1.78 -> 1.84 cm (0.198 -> 0.187 deg); 0.15 gave 1.58 cm,
+        0.141 deg on hallways3d. On the real mac_ros2 recording the
         edges moved by 0 cm (median; 0.3 cm p95, 2 cm at most) and one of 283 pairs
         fell under ``min_edge_fitness`` (0.59 after the coarse stage, just above
         0.6 without), leaving one of 72 scans without an edge (on its prior).
@@ -442,7 +442,9 @@ def _pair_rows(pts, poses: np.ndarray, pairs, params: GraphParams, icp_kinds) ->
 
     coarse_clouds: dict[int, object] = {}
     coarse_voxel = float(params.coarse_voxel_size_m)
-    last_stage = len(params.icp_distances_m) - 1
+    # the stages before the last run on coarser clouds when the size is above the
+    # clouds' own voxel (voxel_size_m >= 0, so a size of 0 never is)
+    coarse_stages = len(params.icp_distances_m) - 1 if coarse_voxel > params.voxel_size_m else 0
 
     def cloud(k: int):
         if k not in o3d_clouds:
@@ -451,7 +453,7 @@ def _pair_rows(pts, poses: np.ndarray, pairs, params: GraphParams, icp_kinds) ->
 
     def stage_cloud(k: int, stage: int):
         """Scan k's cloud for ICP stage ``stage``: coarser for all but the last."""
-        if stage == last_stage or coarse_voxel <= 0 or coarse_voxel <= params.voxel_size_m:
+        if stage >= coarse_stages:
             return cloud(k)
         if k not in coarse_clouds:
             coarse_clouds[k] = cloud(k).voxel_down_sample(coarse_voxel)

@@ -148,9 +148,9 @@ def plan_shards(
     kept = np.unique(ids[np.asarray(registration["kept"], dtype=bool)])
     if len(kept) == 0:
         reasons = {}
-        if "reason" in names:
-            values, counts = np.unique(np.asarray(registration["reason"], dtype=object).astype(str), return_counts=True)
-            reasons = {str(v): int(c) for v, c in sorted(zip(values, counts), key=lambda vc: (-vc[1], vc[0]))}
+        if "reason" in names:  # an error path: pandas may be imported here
+            reason = registration["reason"]
+            reasons = (reason.to_pandas() if isinstance(reason, pa.ChunkedArray) else reason).value_counts().to_dict()
         raise InputError(
             f"{path}: no kept scan (of {len(ids)}), so no hulls or walls to compute; "
             f"registration drop reasons: {reasons or 'none recorded'}"

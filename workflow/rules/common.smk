@@ -79,13 +79,14 @@ def all_outputs():
 SCHEMA_DIR = Path(workflow.basedir) / "workflow" / "schemas"
 
 
-def stage_schema_check(stage, schema_file):
-    """Validate the `stage` section of the config against its schema (filling defaults),
-    and each dataset's `params: {stage: ...}` overrides merged over it.
+def stage_schema_check(stage):
+    """Validate the `stage` section of the config against its schema,
+    workflow/schemas/<stage>.schema.yaml (filling defaults), and each dataset's
+    `params: {stage: ...}` overrides merged over it.
 
     floorscan.config.validate_config: snakemake.utils.validate's checks and defaults,
     each schema parsed once (16 validations took Snakemake ~0.5 s at every start)."""
-    schema = SCHEMA_DIR / Path(schema_file).name
+    schema = SCHEMA_DIR / f"{stage}.schema.yaml"
     config.setdefault(stage, {})
     validate_config(config[stage], schema, stage)
     for name, ds in DATASETS.items():

@@ -1,6 +1,6 @@
 # Stages 1-2: read the recording (ingest) and interpolate a pose per scan (poses).
-stage_schema_check("ingest", "../schemas/ingest.schema.yaml")
-stage_schema_check("poses", "../schemas/poses.schema.yaml")
+stage_schema_check("ingest")
+stage_schema_check("poses")
 
 
 def recording_input(wildcards):

@@ -1,6 +1,6 @@
 # Registration (issue 4; thesis sections 3.2.2, 3.5, Algorithm 3 steps 2-6): every kept
 # scan in the map frame, from the localizer's pose refined by planar ICP.
-stage_schema_check("register", "../schemas/register.schema.yaml")
+stage_schema_check("register")
 
 
 def register_inputs(wildcards):

@@ -4,7 +4,7 @@
 # Chapter 5 figures for the report.
 
 
-stage_schema_check("score", "../schemas/score.schema.yaml")
+stage_schema_check("score")
 
 # The figure k is in the figure file names (floorplan_k15.png), so it is global: a
 # per-dataset override of score.figure_k is refused by score_check.

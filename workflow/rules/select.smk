@@ -2,8 +2,8 @@
 import json
 from pathlib import Path
 
-stage_schema_check("hulls", "../schemas/hulls.schema.yaml")
-stage_schema_check("select", "../schemas/select.schema.yaml")
+stage_schema_check("hulls")
+stage_schema_check("select")
 
 # Shard labels of floorscan.shards.shard_label: scans_<first scan id>-<last scan id>.
 SHARD_LABEL = r"scans_\d+-\d+"

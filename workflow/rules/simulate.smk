@@ -3,7 +3,7 @@
 # through ingest like a real one (sim/recording.bag, or sim/pcd for `recording: pcd`).
 import re
 
-stage_schema_check("simulate", "../schemas/simulate.schema.yaml")
+stage_schema_check("simulate")
 
 SYNTHETIC_DATASETS = sorted(d for d in DATASETS if is_synthetic(d))
 

@@ -10,8 +10,8 @@ import json
 import re
 from pathlib import Path
 
-stage_schema_check("walls", "../schemas/walls.schema.yaml")
-stage_schema_check("floorplan", "../schemas/floorplan.schema.yaml")
+stage_schema_check("walls")
+stage_schema_check("floorplan")
 
 WALLS_EXTRACT_KEYS = ("seed", "height_band_m", "planar_tolerance_m", "grid_m", "ransac", "cluster_ransac")
 FLOORPLAN_FORMATS = ("geojson", "svg", "dxf", "ifc")
