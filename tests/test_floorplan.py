@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+import shapely
 import yaml
 
 from floorscan.floorplan import (
@@ -119,8 +120,26 @@ def test_exports_reopen_with_ifcopenshell_and_ezdxf(tmp_path):
     again = ifcopenshell.open(str(tmp_path / "again.ifc"))
     assert [w.GlobalId for w in again.by_type("IfcWall")] == [w.GlobalId for w in walls]  # stable ids
 
+    # DXF R12 (default): every entity on its layer with the layer's colour, the
+    # coordinates to the micrometre; R2010: the layer table and units (metres)
     doc = ezdxf.readfile(out["dxf"])
     msp = doc.modelspace()
+    assert doc.dxfversion == "AC1009"
+    axes = msp.query('LINE[layer=="WALL_AXIS"]')
+    assert len(axes) == n and {e.dxf.color for e in axes} == {1}
+    got = sorted((e.dxf.start.x, e.dxf.start.y, e.dxf.end.x, e.dxf.end.y) for e in axes)
+    np.testing.assert_allclose(got, sorted(plan.walls[["x0", "y0", "x1", "y1"]].itertuples(index=False)), atol=1e-6)
+    outlines = msp.query('POLYLINE[layer=="WALL_OUTLINE"]')
+    assert len(outlines) == n and all(p.is_closed for p in outlines)
+    rings = sorted(round(shapely.Polygon([(v.dxf.location.x, v.dxf.location.y) for v in p.vertices]).area, 5) for p in outlines)
+    assert rings == sorted(round(a, 5) for a in shapely.area(plan.footprints()))
+    assert len(msp.query('LINE[layer=="WALL_FACE"]')) == len(plan.faces)
+    write_floorplan(segs, {"wall_height_m": 2.7, "dxf_version": "R2010"}, {"dxf": tmp_path / "r2010.dxf"})
+    doc = ezdxf.readfile(tmp_path / "r2010.dxf")
+    msp = doc.modelspace()
+    assert doc.dxfversion == "AC1024" and doc.units == 6  # metres
+    assert {layer.dxf.name: layer.dxf.color for layer in doc.layers if layer.dxf.name.startswith("WALL")} == {
+        "WALL_AXIS": 1, "WALL_OUTLINE": 7, "WALL_FACE": 3}  # fmt: skip
     assert len(msp.query('LINE[layer=="WALL_AXIS"]')) == n
     outlines = msp.query('LWPOLYLINE[layer=="WALL_OUTLINE"]')
     assert len(outlines) == n and all(p.closed for p in outlines)
@@ -157,6 +176,8 @@ def test_bad_config_and_columns_are_named():
         build_floorplan(pd.DataFrame({"a": [1]}))
     with pytest.raises(ValueError, match="pair_min_m"):
         FloorplanParams(pair_min_m=0.5, pair_max_m=0.4)
+    with pytest.raises(ValueError, match="dxf_version"):
+        FloorplanParams(dxf_version="R14")
 
 
 def test_schema_defaults_agree_with_floorplan_params():
