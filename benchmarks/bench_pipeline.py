@@ -21,6 +21,11 @@ dataset:
   its figure can miss the peak of a long job), and the CPU seconds of its jobs
   (polled; unlike wall time they do not grow when other processes share the cores).
 
+Around every timed run a speed probe (:func:`speed_probe`: the same fixed
+single-threaded NumPy and Python work) is timed, so runs made when the machine was
+faster or slower can be told apart (a shared VM's speed drifts: up to 1.6x within an
+hour on the project's).
+
 ``hallways3d_6000`` is not in ``config/config.yaml``: the benchmark adds it with a
 ``--configfile`` overlay (:data:`EXTRA_DATASETS`): the hallways floor, 3D scanner,
 the rover at 0.248 m/s instead of 0.3, so ~6000 scans over ~600 s.
@@ -254,6 +259,24 @@ def largest_scan(path: Path) -> tuple[int, int, int]:
     return len(counts), int(counts.max(initial=0)), len(ids)
 
 
+def speed_probe(repeats: int = 3) -> float:
+    """CPU milliseconds of a fixed single-threaded workload (the least of ``repeats``):
+    sorting 10**6 random floats and a Python loop of 3 * 10**5 steps, the two kinds of
+    work the stages do. Lower is faster; the same machine at the same speed gives
+    the same figure within a few percent."""
+    rng = np.random.default_rng(0)
+    x = rng.random(1_000_000)
+    best = np.inf
+    for _ in range(repeats):
+        t = time.process_time()
+        np.sort(x)
+        acc = 0
+        for i in range(300_000):
+            acc += i * i % 7
+        best = min(best, time.process_time() - t)
+    return best * 1e3
+
+
 def run_dataset(repo: Path, dataset: str, cores: int, extra: tuple = ()) -> dict:
     res = repo / "results" / dataset
     if res.exists():  # keep the simulated recording only
@@ -266,9 +289,9 @@ def run_dataset(repo: Path, dataset: str, cores: int, extra: tuple = ()) -> dict
     if synthetic:
         t_sim, _ = snakemake(repo, dataset, cores, [f"results/{dataset}/sim/recording.bag"])
         (res / "benchmarks" / "simulate.tsv").unlink(missing_ok=True)
-    load_before = os.getloadavg()[0]
+    load_before, probe_before = os.getloadavg()[0], speed_probe()
     wall, poller = snakemake(repo, dataset, cores, [], poll=True, extra=extra)
-    load_after = os.getloadavg()[0]
+    load_after, probe_after = os.getloadavg()[0], speed_probe()
     index = pq.read_table(res / "scan_index.parquet", columns=["t_ns", "n_points"]).to_pandas()
     duration = (index["t_ns"].max() - index["t_ns"].min()) / 1e9
     bag = res / "sim" / "recording.bag"
@@ -281,7 +304,7 @@ def run_dataset(repo: Path, dataset: str, cores: int, extra: tuple = ()) -> dict
         "wall_s": wall, "rtf": duration / wall, "simulate_s": t_sim,
         "stages": stage_table(res / "benchmarks", poller.peak, poller.cpu, poller.spans), "peak_all_jobs_mb": poller.total_peak,
         "snakemake_cpu_s": poller.snakemake_cpu,
-        "load": (load_before, load_after),
+        "load": (load_before, load_after), "probe_ms": (probe_before, probe_after),
     }  # fmt: skip
 
 
@@ -299,6 +322,8 @@ def report(r: dict, cores: int) -> None:
     print(f"CPU time of all jobs {cpu:.0f} s (wall x cores = {r['wall_s'] * cores:.0f} s); load average "
           f"{r['load'][0]:.1f} before, {r['load'][1]:.1f} after: other processes on the machine slow "
           "every job, the CPU seconds do not depend on them")
+    print(f"speed probe (fixed single-threaded work, lower is faster): {r['probe_ms'][0]:.0f} ms before, "
+          f"{r['probe_ms'][1]:.0f} ms after")
     print(f"CPU time of the Snakemake process itself (DAG, scheduling, checks): {r['snakemake_cpu_s']:.1f} s")
     print(f"peak RSS of all running jobs together: {r['peak_all_jobs_mb']:.0f} MB")
     print(f"{'stage':<18}{'jobs':>5}{'s total':>10}{'s max':>9}{'CPU s':>8}{'RSS MB':>9}{'polled':>9}"
@@ -331,14 +356,15 @@ def main(argv: list[str] | None = None) -> None:
             results.append(r)
         print("\n### summary")
         print(f"{'dataset':<18}{'duration s':>11}{'scans':>7}{'largest':>9}{'wall s':>9}{'RTF':>7}"
-              f"{'CPU s':>8}{'RTF/CPU':>9}{'max job RSS MB':>16}")
+              f"{'CPU s':>8}{'RTF/CPU':>9}{'max job RSS MB':>16}{'probe ms':>10}")
         for r in results:
             cpu = r["stages"]["cpu_s"].sum()
             print(f"{r['dataset']:<18}{r['duration_s']:>11.1f}{r['scans']:>7d}{r['largest_scan']:>9d}"
                   f"{r['wall_s']:>9.1f}{r['rtf']:>7.2f}{cpu:>8.0f}{r['duration_s'] / cpu:>9.2f}"
-                  f"{r['stages']['rss_polled_mb'].max():>16.0f}")
+                  f"{r['stages']['rss_polled_mb'].max():>16.0f}{max(r['probe_ms']):>10.0f}")
         print("RTF = recording duration / end-to-end wall time; RTF/CPU = duration / CPU seconds of all jobs "
-              f"(the wall time on an idle machine is at least CPU s / {args.cores})")
+              f"(the wall time on an idle machine is at least CPU s / {args.cores}); probe ms: the slower "
+              "of the speed probes around the run (lower is faster)")
     finally:
         if args.workdir is None and not args.keep:
             shutil.rmtree(workdir, ignore_errors=True)
