@@ -22,9 +22,11 @@ dataset:
   (polled; unlike wall time they do not grow when other processes share the cores).
 
 Around every timed run a speed probe (:func:`speed_probe`: the same fixed
-single-threaded NumPy and Python work) is timed, so runs made when the machine was
-faster or slower can be told apart (a shared VM's speed drifts: up to 1.6x within an
-hour on the project's).
+single-threaded NumPy and Python work) is timed: a hint of the machine's speed at the
+run's start and end (a shared VM's speed drifts: up to 1.6x within an hour on the
+project's). Only a hint: it cannot see the drift during a run (measured 30-46 ms around
+hallways3d runs of 52-74 s; the fastest run had the fastest probe, but one at 34 ms
+took 74 s).
 
 ``hallways3d_6000`` is not in ``config/config.yaml``: the benchmark adds it with a
 ``--configfile`` overlay (:data:`EXTRA_DATASETS`): the hallways floor, 3D scanner,
