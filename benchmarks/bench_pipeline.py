@@ -19,7 +19,8 @@ dataset:
   job both from those files and from polling every job's process here every 0.2 s
   (Snakemake samples every 0.5 s for the first 15 s of a job, then every 30 s, so
   its figure can miss the peak of a long job), and the CPU seconds of its jobs
-  (polled; unlike wall time they do not grow when other processes share the cores).
+  (polled; they do not count other processes' time, but they too grow when the VM
+  is slow: 88 to 122 CPU-s for the same hallways3d run).
 
 Around every timed run a speed probe (:func:`speed_probe`: the same fixed
 single-threaded NumPy and Python work) is timed: a hint of the machine's speed at the
@@ -323,7 +324,7 @@ def report(r: dict, cores: int) -> None:
     cpu = t["cpu_s"].sum()
     print(f"CPU time of all jobs {cpu:.0f} s (wall x cores = {r['wall_s'] * cores:.0f} s); load average "
           f"{r['load'][0]:.1f} before, {r['load'][1]:.1f} after: other processes on the machine slow "
-          "every job, the CPU seconds do not depend on them")
+          "every job; the CPU seconds leave their time out, but grow too when the VM is slow")
     print(f"speed probe (fixed single-threaded work, lower is faster): {r['probe_ms'][0]:.0f} ms before, "
           f"{r['probe_ms'][1]:.0f} ms after")
     print(f"CPU time of the Snakemake process itself (DAG, scheduling, checks): {r['snakemake_cpu_s']:.1f} s")
