@@ -8,14 +8,18 @@ ranges (shards) in separate jobs, in parallel on local cores or cluster nodes, a
 the shard tables concatenated in scan order equal the table of one unsharded job.
 
 The number of shards depends on the number of kept scans, which is known only after
-registration, so the workflow computes a shard plan in a Snakemake checkpoint
-(:func:`plan_shards`): the scan id axis ``[first, last]`` is cut into contiguous,
+registration, so the workflow's ``register`` rule is a Snakemake checkpoint: when it
+ends, the Snakemake process reads the shard plan from its files
+(:func:`plan_from_files`, a few milliseconds) and names the shard jobs. The plan
+(:func:`plan_shards`) cuts the scan id axis ``[first, last]`` into contiguous,
 inclusive ranges holding at most ``shard_scans`` kept scans each, as evenly as
 possible. The ranges cover every scan id (kept or not) exactly once, so each point
 of ``registered.parquet`` falls in exactly one shard. A shard's range is in its file
 name (:func:`shard_label`), so a shard job needs only its inputs and its wildcards.
 
-Why a checkpoint on kept scans rather than fixed ranges of scan ids: the kept scans
+The plan was a checkpoint job of its own per stage (issue 8): two jobs and a DAG
+update between registration and the shards, 1.1-1.5 s on the critical path of
+hallways3d. Why shards of kept scans rather than fixed ranges of scan ids: the kept scans
 are spread unevenly over the recording (hallways keeps 1017 of 5081 scans), so fixed
 id ranges would give unequal jobs, and a fixed number of shards would split small
 recordings into jobs that cost more to start than to run.
@@ -112,17 +116,17 @@ def plan_shards(
     shard_scans: int = 0,
     path: str = "registration.parquet",
 ) -> dict:
-    """The shard plan of a per-scan stage (the workflow's checkpoint output).
+    """The shard plan of a per-scan stage: its shards' scan ranges and labels.
 
     Parameters
     ----------
     registration : pandas.DataFrame or pyarrow.Table
         ``registration.parquet``: a row per scan with ``scan_id`` and ``kept`` (and
-        ``reason``, quoted when no scan is kept). The checkpoint reads it with pyarrow
-        only: a job without pandas starts ~0.3 s sooner, on the path to the shards.
+        ``reason``, quoted when no scan is kept).
     point_scan_ids : (P,) int array_like
-        ``scan_id`` of the points of ``registered.parquet``: the ranges also cover
-        these, so no point falls outside every shard.
+        ``scan_id`` of the points of ``registered.parquet`` (or just their smallest
+        and largest): the ranges also cover these, so no point falls outside every
+        shard.
     shard_scans : int
         Kept scans per shard at most; 0 = one shard.
     path : str
@@ -164,6 +168,58 @@ def plan_shards(
         n = int(((kept >= start) & (kept <= stop)).sum())
         shards.append({"label": shard_label(start, stop), "start": start, "stop": stop, "n_kept": n})
     return {"shard_scans": int(shard_scans), "n_kept": int(len(kept)), "first": first, "last": last, "shards": shards}
+
+
+def scan_id_bounds(path: str | os.PathLike) -> tuple[int, int] | None:
+    """Smallest and largest ``scan_id`` of a Parquet table, from its row groups'
+    statistics (the column itself is read only when a row group has none).
+
+    Returns None for a table without rows. Raises ``InputError`` naming ``path`` when
+    it has no ``scan_id`` column.
+    """
+    pf = pq.ParquetFile(path)
+    names = pf.schema_arrow.names
+    if "scan_id" not in names:
+        raise InputError(f"{path}: no scan_id column; expected {names} to have one")
+    col = names.index("scan_id")
+    lo = hi = None
+    for g in range(pf.metadata.num_row_groups):
+        group = pf.metadata.row_group(g)
+        if group.num_rows == 0:
+            continue
+        stats = group.column(col).statistics
+        if stats is None or not stats.has_min_max:
+            ids = pf.read(columns=["scan_id"])["scan_id"].to_numpy()
+            return (int(ids.min()), int(ids.max())) if len(ids) else None
+        lo = int(stats.min) if lo is None else min(lo, int(stats.min))
+        hi = int(stats.max) if hi is None else max(hi, int(stats.max))
+    return None if lo is None else (lo, hi)
+
+
+def plan_from_files(
+    registration: str | os.PathLike, registered: str | os.PathLike, shard_scans: int
+) -> dict:
+    """:func:`plan_shards` of the register stage's files, reading only what it needs.
+
+    The workflow calls this in the Snakemake process once ``register`` (a checkpoint)
+    has ended, to name the shard jobs, and the merging jobs call it again to check
+    their shards: the columns ``scan_id`` and ``kept`` of ``registration`` (a row per
+    recorded scan) and the ``scan_id`` bounds of ``registered`` (row-group
+    statistics, :func:`scan_id_bounds`), with pyarrow only.
+
+    Raises
+    ------
+    InputError
+        As :func:`plan_shards`, naming the file.
+    """
+    # ParquetFile.read: pq.read_table imports pyarrow.dataset (0.3 s of CPU)
+    pf = pq.ParquetFile(registration)
+    cols = [c for c in ("scan_id", "kept") if c in pf.schema_arrow.names]
+    table = pf.read(columns=cols) if len(cols) == 2 else pf.read()
+    if len(cols) == 2 and not np.asarray(table["kept"], dtype=bool).any():
+        table = pf.read()  # with the drop reasons, for the error message
+    bounds = scan_id_bounds(registered)
+    return plan_shards(table, np.array(bounds or (), dtype=np.int64), shard_scans, path=str(registration))
 
 
 def read_scan_range(

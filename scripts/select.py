@@ -2,18 +2,17 @@
 convex_hulls.parquet, exactly the tables of one unsharded job), then the five scan
 orderings and their coverage summary (thesis Algorithm 1). One job, not a merge job
 and a select job: a job costs ~0.6 s to start, on the path to the walls' k tables."""
-import json
 from pathlib import Path
 
 from floorscan.hulls import HULLS
 from floorscan.io import read_table, write_table
 from floorscan.selection import ORDERING, SUMMARY, SelectParams, select_stage
-from floorscan.shards import read_shards
+from floorscan.shards import plan_from_files, read_shards
 from floorscan.workflow import stage_log
 
 with stage_log(snakemake) as log:
-    with open(snakemake.input.plan) as f:
-        plan = json.load(f)
+    # the plan the workflow named the shards by, from the register stage's files
+    plan = plan_from_files(snakemake.input.registration, snakemake.input.registered, snakemake.params.shard_scans)
     cluster, counts = read_shards(snakemake.input.shard_hulls, plan, "hulls shards")
     convex, _ = read_shards(snakemake.input.shard_convex, plan, "convex hull shards")
     log.info("hulls: %s from %d shards", counts, len(plan["shards"]))

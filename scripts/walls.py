@@ -2,19 +2,18 @@
 scan_walls_shard concatenated in scan order: exactly the tables of one unsharded job)
 and of the first k scans of each ordering. One job, not a merge job and a walls job:
 a job costs ~0.6 s to start, on the path from the last shard to the floor plans."""
-import json
 from pathlib import Path
 
 from floorscan.io import read_table, write_table
-from floorscan.shards import read_shards
+from floorscan.shards import plan_from_files, read_shards
 from floorscan.walls import SCAN_STATUS, WALLS, first_k_walls
 from floorscan.workflow import stage_log
 
 with stage_log(snakemake) as log:
     run = snakemake.params.run
     dataset, extractor = snakemake.wildcards.dataset, snakemake.wildcards.extractor
-    with open(snakemake.input.plan) as f:
-        plan = json.load(f)
+    # the plan the workflow named the shards by, from the register stage's files
+    plan = plan_from_files(snakemake.input.registration, snakemake.input.registered, snakemake.params.shard_scans)
     walls, _ = read_shards(snakemake.input.shard_walls, plan, f"{extractor} wall shards")
     status, _ = read_shards(snakemake.input.shard_status, plan, f"{extractor} scan status shards")
     status = status.to_pandas()

@@ -8,7 +8,6 @@ the unsharded stage writes (``time_s``, the per-scan wall-clock time, aside).
 
 import hashlib
 import itertools
-import json
 import math
 import runpy
 from pathlib import Path
@@ -26,9 +25,11 @@ from floorscan.selection import ORDERINGS
 from floorscan.shards import (
     concat_shards,
     parse_shard_label,
+    plan_from_files,
     plan_shards,
     read_scan_range,
     read_shards,
+    scan_id_bounds,
     shard_label,
     shard_ranges,
 )
@@ -108,7 +109,7 @@ def test_plan_covers_registration_and_points():
     assert [(s["start"], s["stop"], s["n_kept"]) for s in plan["shards"]] == [(0, 8, 2), (9, 24, 2), (25, 33, 1)]
     assert (plan["first"], plan["last"], plan["n_kept"], plan["shard_scans"]) == (0, 33, 5, 2)
     assert plan["shards"][1]["label"] == "scans_000009-000024"
-    # the checkpoint passes the file as a pyarrow Table (no pandas in that job): same plan
+    # plan_from_files passes the file as a pyarrow Table: same plan
     assert plan_shards(pa.Table.from_pandas(reg), np.array([4, 5, 9, 17, 25, 33]), 2) == plan
 
 
@@ -120,6 +121,35 @@ def test_plan_without_kept_scans_is_a_clear_error():
         plan_shards(pa.Table.from_pandas(reg), [], 10, path="reg.parquet")
     with pytest.raises(InputError, match="columns \\['kept'\\] missing"):
         plan_shards(pd.DataFrame({"scan_id": [0, 1]}), [], 10, path="reg.parquet")
+
+
+def test_plan_from_files_reads_bounds_from_statistics(tmp_path):
+    reg = registration_table(30, {4, 5, 9, 17, 25})
+    write_table(reg, tmp_path / "registration.parquet")
+    ids = np.repeat(np.array([4, 5, 9, 17, 25, 33], np.int32), 3)  # a point of scan 33
+    pts = pd.DataFrame({"scan_id": ids, "x": np.zeros(len(ids), np.float32)})
+    # three row groups: the bounds come from their statistics (min 4, max 33)
+    pq.write_table(pa.Table.from_pandas(pts, preserve_index=False), tmp_path / "registered.parquet", row_group_size=7)
+    assert pq.ParquetFile(tmp_path / "registered.parquet").metadata.num_row_groups == 3
+    assert scan_id_bounds(tmp_path / "registered.parquet") == (4, 33)
+    plan = plan_from_files(tmp_path / "registration.parquet", tmp_path / "registered.parquet", 2)
+    assert plan == plan_shards(reg, ids, 2)
+    assert [s["label"] for s in plan["shards"]] == ["scans_000000-000008", "scans_000009-000024", "scans_000025-000033"]
+    # without statistics the column is read: the same bounds
+    pq.write_table(pa.Table.from_pandas(pts, preserve_index=False), tmp_path / "nostats.parquet",
+                   row_group_size=7, write_statistics=False)
+    assert scan_id_bounds(tmp_path / "nostats.parquet") == (4, 33)
+    # no points: the registration alone (0..29)
+    pq.write_table(pa.Table.from_pandas(pts.iloc[:0], preserve_index=False), tmp_path / "empty.parquet")
+    assert scan_id_bounds(tmp_path / "empty.parquet") is None
+    assert plan_from_files(tmp_path / "registration.parquet", tmp_path / "empty.parquet", 0)["last"] == 29
+    with pytest.raises(InputError, match=r"x\.parquet: no scan_id column"):
+        pq.write_table(pa.table({"x": [1.0]}), tmp_path / "x.parquet")
+        scan_id_bounds(tmp_path / "x.parquet")
+    # nothing kept: the error names the file and the drop reasons (read for the message)
+    write_table(registration_table(12, set()).assign(reason="pose_gap"), tmp_path / "none.parquet")
+    with pytest.raises(InputError, match=r"none\.parquet: no kept scan \(of 12\).*'pose_gap': 12"):
+        plan_from_files(tmp_path / "none.parquet", tmp_path / "registered.parquet", 2)
 
 
 def test_read_scan_range_keeps_file_order(tmp_path):
@@ -185,15 +215,12 @@ def unsharded(registered, registration, out: Path, extractor: str):
 
 
 def sharded(registered, registration, out: Path, shard_scans: int, extractor: str):
-    """The workflow's jobs: plan (checkpoint), one job per shard, merge (hulls; walls, with
-    its k tables); real scripts."""
+    """The workflow's jobs: the plan (what the Snakefile computes once the register
+    checkpoint has ended), one job per shard, merge (hulls; walls, with its k tables);
+    real scripts."""
     res = {"registered": str(registered), "registration": str(registration)}
-    plans, merge_logs = {}, {}
-    for stage in ("hulls", "scan_walls"):
-        plans[stage] = out / "shards" / stage / "plan.json"
-        run_script("scan_shards.py", out, f"{stage}_plan", res, {"plan": str(plans[stage])},
-                   {"stage": stage, "shard_scans": shard_scans}, {"dataset": "t"})
-    labels = [s["label"] for s in json.loads(plans["hulls"].read_text())["shards"]]
+    merge_logs = {}
+    labels = [s["label"] for s in plan_from_files(registration, registered, shard_scans)["shards"]]
     shard = lambda stage, lb, name: str(out / "shards" / stage / lb / f"{name}.parquet")  # noqa: E731
     for lb in labels:
         run_script("hulls.py", out, "hulls_shard", res,
@@ -206,20 +233,21 @@ def sharded(registered, registration, out: Path, shard_scans: int, extractor: st
     orderings = [str(out / "orderings" / f"{o}.parquet") for o in ORDERINGS]
     merge_logs["hulls"] = run_script(
         "select.py", out, "select",
-        {"plan": str(plans["hulls"]), "shard_hulls": [shard("hulls", lb, "hulls") for lb in labels],
-         "shard_convex": [shard("hulls", lb, "convex_hulls") for lb in labels], "registration": str(registration)},
+        {"shard_hulls": [shard("hulls", lb, "hulls") for lb in labels],
+         "shard_convex": [shard("hulls", lb, "convex_hulls") for lb in labels], **res},
         {"hulls": str(out / "hulls.parquet"), "convex": str(out / "convex_hulls.parquet"),
          "orderings": orderings, "summary": str(out / "orderings" / "summary.parquet")},
-        params={"cfg": {}}, wildcards={"dataset": "t"})
+        params={"cfg": {}, "shard_scans": shard_scans}, wildcards={"dataset": "t"})
     # rule walls merges the wall shards and filters the first k scans of each ordering
     ordering = out / "orderings" / "sequential.parquet"  # select's: the kept scans in id order
     tables = [str(out / "walls" / "sequential" / extractor / f"k{k}.parquet") for k in ("5", "all")]
     merge_logs["scan_walls"] = run_script(
         "walls.py", out, "walls",
-        {"plan": str(plans["scan_walls"]), "shard_walls": [shard("scan_walls", lb, "per_scan") for lb in labels],
-         "shard_status": [shard("scan_walls", lb, "scan_status") for lb in labels], "orderings": [str(ordering)]},
+        {"shard_walls": [shard("scan_walls", lb, "per_scan") for lb in labels],
+         "shard_status": [shard("scan_walls", lb, "scan_status") for lb in labels], "orderings": [str(ordering)],
+         **res},
         {"walls": str(out / "per_scan.parquet"), "status": str(out / "scan_status.parquet"), "tables": tables},
-        params={"run": {"orderings": ["sequential"], "k": ["5", "all"]}},
+        params={"run": {"orderings": ["sequential"], "k": ["5", "all"]}, "shard_scans": shard_scans},
         wildcards={"dataset": "t", "extractor": extractor})
     return labels, merge_logs
 

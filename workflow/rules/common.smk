@@ -17,9 +17,9 @@ FINAL_OUTPUTS = []
 # the longest chain of jobs from its start to the end of the workflow, measured on
 # hallways3d (2 cores, a job's start-up of ~0.6 s included):
 #
-#   scan_walls_plan 0.8 -> cluster_ransac shard 13 -> walls 1.2
-#     -> floorplan 11.5 -> score_runs 5 -> score 0.8 -> score_figures 3      = 35
-#   hulls_plan 0.8 -> hulls_shard 8.7 -> select 3.2 -> walls ...              = 34
+#   cluster_ransac shard 13 -> walls 1.2 -> floorplan 11.5
+#     -> score_runs 5 -> score 0.8 -> score_figures 3                        = 34
+#   hulls_shard 8.7 -> select 3.2 -> walls ...                                = 33
 #   ransac shard 7.5 -> walls ...                                             = 29
 #   selection_figures 10.5 -> score_figures 3                                 = 14
 #   register_figure 2.7 (nothing waits for it)                                = 3
@@ -34,9 +34,7 @@ FINAL_OUTPUTS = []
 # registration and the chain of floor plans and scores behind it ended the run.
 # Ingest, poses and register run alone (0).
 PRIORITY = {
-    "scan_walls_plan": 36,
     "scan_walls_shard": {"cluster_ransac": 35, "ransac": 29},
-    "hulls_plan": 34,
     "hulls_shard": 33,
     "select": 31,
     "walls": 21,
@@ -134,3 +132,32 @@ def log_path(stage):
 
 def benchmark_path(stage):
     return f"results/{{dataset}}/benchmarks/{stage}.tsv"
+
+
+# Shard plans (issue 8; floorscan.shards): `register` is a checkpoint, and once it has
+# ended the shard jobs of a per-scan stage are named from its files. Input functions
+# run several times per job; the plan is read once per file version and shard size.
+_SHARD_PLANS = {}
+
+
+def shard_plan(wildcards, stage):
+    """The shard plan (floorscan.shards.plan_shards) of per-scan stage `stage` (`hulls`
+    or `walls`, whose config holds shard_scans) from the register checkpoint's files.
+    Before `register` has run this raises Snakemake's IncompleteCheckpointException,
+    which defers the jobs that depend on it until then."""
+    out = checkpoints.register.get(dataset=wildcards.dataset).output
+    shard_scans = int(stage_config(stage)(wildcards)["shard_scans"])
+    key = (
+        str(out.registration), Path(out.registration).stat().st_mtime_ns,
+        str(out.registered), Path(out.registered).stat().st_mtime_ns, shard_scans,
+    )
+    if key not in _SHARD_PLANS:
+        from floorscan.shards import plan_from_files
+
+        _SHARD_PLANS[key] = plan_from_files(out.registration, out.registered, shard_scans)
+    return _SHARD_PLANS[key]
+
+
+def shard_labels(wildcards, stage):
+    """The shard labels (scans_<first>-<last>) of `stage`'s plan, in scan order."""
+    return [s["label"] for s in shard_plan(wildcards, stage)["shards"]]

@@ -14,7 +14,10 @@ def register_inputs(wildcards):
     return inputs
 
 
-rule register:
+# A checkpoint (issue 8): the number of hulls and walls shards follows from its
+# outputs (the kept scans), so Snakemake names those jobs when it has ended
+# (shard_plan in common.smk).
+checkpoint register:
     input:
         unpack(register_inputs),
     output:

@@ -23,43 +23,22 @@ def hulls_shard_scans(wildcards):
 
 
 def hulls_shards(wildcards):
-    """Inputs of `select`: the hulls plan and the shard files it lists (after the
-    checkpoint), and the registration table."""
-    plan = checkpoints.hulls_plan.get(dataset=wildcards.dataset).output.plan
-    labels = [s["label"] for s in json.loads(Path(plan).read_text())["shards"]]
+    """Inputs of `select`: the hull shard files of the plan (known once the register
+    checkpoint has ended), and the register stage's files the plan comes from."""
     shard = "results/{dataset}/shards/hulls/{shard}/{name}.parquet"
+    labels = shard_labels(wildcards, "hulls")
     return {
-        "plan": plan,
         "shard_hulls": [shard.format(dataset=wildcards.dataset, shard=s, name="hulls") for s in labels],
         "shard_convex": [shard.format(dataset=wildcards.dataset, shard=s, name="convex_hulls") for s in labels],
+        "registered": f"results/{wildcards.dataset}/registered.parquet",
         "registration": f"results/{wildcards.dataset}/registration.parquet",
     }
 
 
 # Sharding (issue 8): the hulls of a scan depend only on the scan and (seed, scan_id), so
 # the kept scans are split by scan range into shards of <= hulls.shard_scans scans, one
-# job each, concatenated in scan order by `select` into the unsharded tables. The number
-# of shards is known only after registration: a checkpoint writes the plan. The plan
-# takes well under a second, so on a cluster it runs on the submitting host (localrule).
-checkpoint hulls_plan:
-    priority: PRIORITY["hulls_plan"]
-    localrule: True
-    input:
-        registered="results/{dataset}/registered.parquet",
-        registration="results/{dataset}/registration.parquet",
-    output:
-        plan="results/{dataset}/shards/hulls/plan.json",
-    params:
-        stage="hulls",
-        shard_scans=hulls_shard_scans,
-    log:
-        log_path("hulls_plan"),
-    benchmark:
-        benchmark_path("hulls_plan")
-    script:
-        "../../scripts/scan_shards.py"
-
-
+# job each, concatenated in scan order by `select` into the unsharded tables. The
+# shards are known once the register checkpoint has ended (shard_plan, common.smk).
 rule hulls_shard:
     priority: PRIORITY["hulls_shard"]
     input:
@@ -95,6 +74,7 @@ rule select:
         summary="results/{dataset}/orderings/summary.parquet",
     params:
         cfg=stage_config("select"),
+        shard_scans=hulls_shard_scans,
     log:
         log_path("select"),
     benchmark:

@@ -2,7 +2,7 @@
 #
 #   scan_walls_shard: every kept scan once per extractor (walls of a scan depend only
 #               on the scan, the extractor parameters and the seed, never on ordering
-#               or k), in shards of scans (plan: checkpoint scan_walls_plan)
+#               or k), in shards of scans (named once the register checkpoint ends)
 #   walls:      the shards merged in scan order (the per-scan tables), and the wall
 #               segments of the first k scans of each ordering (a filter)
 #   floorplan:  merged walls of each (ordering, k) of an extractor as GeoJSON, SVG, DXF, IFC
@@ -60,15 +60,20 @@ def walls_shard_scans(wildcards):
 
 
 def scan_walls_shards(wildcards):
-    """The shard plan and the extractor's shard files it lists (after the checkpoint)."""
-    plan = checkpoints.scan_walls_plan.get(dataset=wildcards.dataset).output.plan
-    labels = [s["label"] for s in json.loads(Path(plan).read_text())["shards"]]
+    """The extractor's shard files of the plan (known once the register checkpoint has
+    ended), and the register stage's files the plan comes from."""
     shard = "results/{dataset}/shards/walls/{extractor}/{shard}/{name}.parquet"
+    labels = shard_labels(wildcards, "walls")
     files = {
         name: [shard.format(dataset=wildcards.dataset, extractor=wildcards.extractor, shard=s, name=name) for s in labels]
         for name in ("per_scan", "scan_status")
     }
-    return {"plan": plan, "shard_walls": files["per_scan"], "shard_status": files["scan_status"]}
+    return {
+        "shard_walls": files["per_scan"],
+        "shard_status": files["scan_status"],
+        "registered": f"results/{wildcards.dataset}/registered.parquet",
+        "registration": f"results/{wildcards.dataset}/registration.parquet",
+    }
 
 
 def walls_inputs(wildcards):
@@ -80,28 +85,7 @@ def walls_inputs(wildcards):
 # Sharding (issue 8): the walls of a scan depend only on the scan and (seed, scan_id), so
 # the scans are split by scan range into shards of <= walls.shard_scans kept scans, one
 # job each, concatenated in scan order by `walls` into the unsharded tables. The
-# number of shards is known only after registration: a checkpoint writes the plan (one
-# plan for every extractor). Plan and merge take well under a second, so on a cluster
-# they run on the submitting host (localrule).
-checkpoint scan_walls_plan:
-    priority: PRIORITY["scan_walls_plan"]
-    localrule: True
-    input:
-        registered="results/{dataset}/registered.parquet",
-        registration="results/{dataset}/registration.parquet",
-    output:
-        plan="results/{dataset}/shards/walls/plan.json",
-    params:
-        stage="scan_walls",
-        shard_scans=walls_shard_scans,
-    log:
-        log_path("scan_walls_plan"),
-    benchmark:
-        benchmark_path("scan_walls_plan")
-    script:
-        "../../scripts/scan_shards.py"
-
-
+# shards are known once the register checkpoint has ended (shard_plan, common.smk).
 rule scan_walls_shard:
     priority: shard_priority
     input:
@@ -149,6 +133,7 @@ rule walls:
         extractor=WALLS_CONSTRAINTS["extractor"],
     params:
         run=walls_run_params,
+        shard_scans=walls_shard_scans,
     log:
         "results/{dataset}/logs/walls_{extractor}.log",
     benchmark:
