@@ -259,9 +259,42 @@ def test_candidate_pairs_out_and_back():
     # within 1.5 m the neighbours 1 m away compete; the nearest (0 m) wins with one loop per scan
     wide = candidate_pairs(poses, t, GraphParams(**{**params.__dict__, "loop_radius_m": 1.5}))
     assert [p for p in wide if p[2] == "loop"] == [(k, 19 - k, "loop") for k in range(9)]
-    two = candidate_pairs(poses, t, GraphParams(**{**params.__dict__, "loop_radius_m": 1.5, "loop_max_per_scan": 2}))
+    # two loops a scan, however close the partners: 9 at 0 m, then 8 at 1 m on the same pass
+    two = candidate_pairs(poses, t, GraphParams(**{**params.__dict__, "loop_radius_m": 1.5, "loop_max_per_scan": 2,
+                                                   "loop_partner_separation_m": 0.0}))
     loops = [(i, j) for i, j, kind in two if kind == "loop"]
-    assert all(j - i > 1 for i, j in loops) and len(loops) == 17  # 9 at 0 m, then 8 at 1 m
+    assert all(j - i > 1 for i, j in loops) and len(loops) == 17
+    # partners 6 m apart along the path: the second (1 m from the first) is left out
+    apart = candidate_pairs(poses, t, GraphParams(**{**params.__dict__, "loop_radius_m": 1.5, "loop_max_per_scan": 2}))
+    assert [p for p in apart if p[2] == "loop"] == [(k, 19 - k, "loop") for k in range(9)]
+
+
+def test_loop_partners_come_from_different_passes():
+    """Three passes along x (1 m, 1 s between scans) at y = 0, 0.1 and 1.2 m. The two
+    nearest candidates of a first-pass scan both lie on the second pass (0.1 and
+    1.005 m away), so with the nearest two the third pass gets no loop at all; with
+    partners 6 m apart along the path each scan is tied to both other passes."""
+    x = np.tile(np.arange(30.0), 3)
+    y = np.repeat([0.0, 0.1, 1.2], 30)
+    poses, t = np.c_[x, y], np.arange(90.0)
+
+    def partners(sep):
+        p = G.GraphParams(sequential_neighbours=1, loop_radius_m=1.5, loop_min_separation_s=3.0,
+                          loop_max_per_scan=2, loop_partner_separation_m=sep)
+        out = {a: [] for a in range(90)}
+        for i, j, kind in G.candidate_pairs(poses, t, p):
+            if kind == "loop":
+                out[i].append(j)
+                out[j].append(i)
+        return out
+
+    nearest = partners(0.0)
+    assert sorted(nearest[10]) == [40, 41] and sorted(nearest[40]) == [10, 11]
+    assert not any(nearest[a] for a in range(60, 90))
+    apart = partners(6.0)
+    assert all(sorted(apart[k]) == [k + 30, k + 60] for k in range(30))  # first pass: one partner on each other
+    assert all(sorted(apart[k + 60]) == [k, k + 30] for k in range(30))
+    assert sum(len(v) for v in apart.values()) == 2 * 90
 
 
 def test_coarse_icp_stage_keeps_edges_accurate(recording):
