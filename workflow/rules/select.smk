@@ -1,7 +1,4 @@
 # Coverage hulls and scan orderings (issue 5; thesis section 3.3, Algorithms 1 and 2).
-import json
-from pathlib import Path
-
 stage_schema_check("hulls")
 stage_schema_check("select")
 

@@ -6,9 +6,7 @@
 #   walls:      the shards merged in scan order (the per-scan tables), and the wall
 #               segments of the first k scans of each ordering (a filter)
 #   floorplan:  merged walls of each (ordering, k) of an extractor as GeoJSON, SVG, DXF, IFC
-import json
 import re
-from pathlib import Path
 
 stage_schema_check("walls")
 stage_schema_check("floorplan")
