@@ -80,7 +80,7 @@ class GraphParams:
         closure from distinct passes is what ties the passes together; neighbouring
         scans of one pass add ICP time and little information. 6 with 2 loops a scan
         against 0 with 4 (issue 8; RMS error against the simulator's truth; 3 runs of
-        registration interleaved): hallways3d 2983 instead of 3992 pairs, 1.50 against
+        registration interleaved): hallways3d 2893 instead of 3999 pairs, 1.50 against
         1.47 cm, 0.135 against 0.133 deg, edge-ICP CPU 10.8-12.8 against 13.3-15.6 s,
         wall 9.2-11.4 against 10.5-12.3 s; hallways (2D) 1.79 against 1.84 cm, 0.160
         against 0.187 deg; hallways3d_6000 1.53 against 1.40 cm, 0.159 against 0.197

@@ -143,8 +143,8 @@ def test_plan_from_files_reads_bounds_from_statistics(tmp_path):
     pq.write_table(pa.Table.from_pandas(pts.iloc[:0], preserve_index=False), tmp_path / "empty.parquet")
     assert scan_id_bounds(tmp_path / "empty.parquet") is None
     assert plan_from_files(tmp_path / "registration.parquet", tmp_path / "empty.parquet", 0)["last"] == 29
+    pq.write_table(pa.table({"x": [1.0]}), tmp_path / "x.parquet")
     with pytest.raises(InputError, match=r"x\.parquet: no scan_id column"):
-        pq.write_table(pa.table({"x": [1.0]}), tmp_path / "x.parquet")
         scan_id_bounds(tmp_path / "x.parquet")
     # nothing kept: the error names the file and the drop reasons (read for the message)
     write_table(registration_table(12, set()).assign(reason="pose_gap"), tmp_path / "none.parquet")
