@@ -155,7 +155,7 @@ def plan_shards(
     kept = np.unique(ids[np.asarray(registration["kept"], dtype=bool)])
     if len(kept) == 0:
         reasons = {}
-        if "reason" in names:  # an error path: pandas may be imported here
+        if "reason" in names:  # the drop reasons, counted with pandas
             reason = registration["reason"]
             reasons = (reason.to_pandas() if isinstance(reason, pa.ChunkedArray) else reason).value_counts().to_dict()
         raise InputError(
