@@ -14,7 +14,10 @@ Prints
   registration.parquet, hulls.parquet, convex_hulls.parquet, orderings/), the CPU
   seconds (``time.process_time``, imports excluded) of the hulls stage's work on the
   first 509 kept scans, of the select stage and of the three selection figures
-  (issue 8: these stages' CPU counts toward the 10x real-time target).
+  (issue 8: these stages' CPU counts toward the 10x real-time target);
+- KMeans of 200 3D scan samples by :func:`floorscan.hulls.kmeans` and by
+  scikit-learn's ``KMeans`` in the same run: ms per fit, ratio, whether the centres
+  are identical (they must be), and what importing scikit-learn costs a job.
 
 The synthetic scans are ray cast in numpy against a Shapely floor plan (corridor
 ring with rooms off it), a rover path along the corridors; no timed assertions.
@@ -156,6 +159,39 @@ def _hull_bench(n_scans: int, three_d: bool) -> None:
           f"cluster hulls {t_cluster / n_scans * 1e3:.2f} ms/scan, convex hull {t_convex / n_scans * 1e3:.3f} ms/scan")
 
 
+def _kmeans_bench(n_scans: int) -> None:
+    """floorscan's KMeans (:func:`floorscan.hulls.kmeans`) against scikit-learn's on
+    the hulls stage's samples of 3D scans, side by side (issue 8)."""
+    import subprocess
+
+    from sklearn.cluster import KMeans
+    from threadpoolctl import threadpool_limits
+
+    reg, _ = simulate_scans(n_scans, seed=3, three_d=True)
+    p = fh.HullParams()
+    fits = []
+    for sid, xy in fh.split_by_scan(reg, ("x", "y")).items():
+        sample, distinct, state = fh._kmeans_sample(xy, p, sid)
+        if state is not None:
+            fits.append((sample, min(p.k_clusters, distinct), state))
+    code = "import time; t = time.process_time(); import sklearn.cluster; print(time.process_time() - t)"
+    t_import = float(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout)
+    # as the stage runs scikit-learn (hulls.kmeans: sklearn): one thread, no per-call checks
+    with threadpool_limits(limits=1), fh._kmeans_config(True):
+        t0 = time.process_time()
+        ref = [KMeans(n_clusters=k, n_init=p.n_init, max_iter=p.max_iter, random_state=st, algorithm="lloyd")
+               .fit(s).cluster_centers_ for s, k, st in fits]
+        t_sk = time.process_time() - t0
+        t0 = time.process_time()
+        ours = [fh.kmeans(s, k, n_init=p.n_init, max_iter=p.max_iter, random_state=st)[0] for s, k, st in fits]
+        t_ours = time.process_time() - t0
+    same = all(np.array_equal(a, b) for a, b in zip(ours, ref))
+    n = len(fits)
+    print(f"KMeans of {n} 3D scan samples ({p.sample_size} points, k {p.k_clusters}): floorscan "
+          f"{t_ours / n * 1e3:.2f} ms/fit, scikit-learn {t_sk / n * 1e3:.2f} ms/fit (CPU): ratio "
+          f"{t_sk / t_ours:.1f}x; identical centres {same}; importing sklearn.cluster {t_import:.2f} CPU-s a job")
+
+
 def _coverage(n_scans: int, seed: int):
     reg, regi = simulate_scans(n_scans, seed=seed)
     hulls, t = _timed(fh.cluster_hulls, reg, fh.HullParams())
@@ -174,8 +210,6 @@ def _hallways3d_cpu(root: Path) -> None:
     registration = read_table(root / "registration.parquet")
     kept = fh.kept_scan_ids(registration)
     last = int(kept[len(kept) // 2 - 1])  # the first of two shards
-    from sklearn.cluster import KMeans  # noqa: F401  (import not counted)
-
     t0 = time.process_time()
     _, _, counts = fh.compute_hulls(iter_scans(root / "registered.parquet", ("x", "y"), scan_range=(0, last)),
                                     registration[registration["scan_id"] <= last], fh.HullParams())
@@ -210,6 +244,7 @@ def main(argv: list[str] | None = None) -> None:
 
     _hull_bench(50 if args.quick else 200, three_d=False)
     _hull_bench(5 if args.quick else 20, three_d=True)
+    _kmeans_bench(20 if args.quick else 200)
 
     ids, geoms, _ = _coverage(n_ref, seed=4)
     stats: dict = {}

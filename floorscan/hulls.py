@@ -7,7 +7,8 @@ union of one convex hull per cluster (Fig. 3.2b).
 
 Per scan, on the map-frame floor coordinates (x, y) only:
 
-1. KMeans (scikit-learn, Lloyd, ``n_init`` fixed) with ``k_clusters`` centres on a
+1. KMeans (Lloyd with k-means++ seeding, ``n_init`` fixed; :func:`kmeans`, which
+   gives scikit-learn's centres bit for bit) with ``k_clusters`` centres on a
    seeded random subsample of at most ``sample_size`` points ("KMeans cannot be
    performed on all the points in a reasonable time. A small subset of those points is
    used for the clustering", section 3.3.2). The seed of scan ``s`` is derived from
@@ -48,12 +49,16 @@ Speed (issue 8). Exact shortcuts, giving the same hulls bit for bit:
   through GEOS a second time (a vertex of the scan's hull is a vertex of its
   cluster's hull, and GEOS gives the same ring for any point set with the same
   hull: its vertices without collinear points, from the lowest point);
-- scikit-learn is imported before limiting its OpenMP/BLAS threads to one
+- KMeans is :func:`kmeans`, scikit-learn's algorithm in NumPy with the same
+  floating-point operations: the same centres bit for bit (tested; all 1017 x 3
+  fits of hallways3d's hulls and Fig. 5.7 compared equal), without importing
+  scikit-learn (~1.8 s a job) or its per-fit checks: hallways3d's hulls stage took
+  4.6-5.5 CPU-s against 7.3-8.7 with scikit-learn. With ``kmeans: sklearn``,
+  scikit-learn is imported before limiting its OpenMP/BLAS threads to one
   (threadpoolctl limits only loaded libraries: imported later, KMeans ran two
   OpenMP threads whose spinning cost +30 % CPU, several times more on a busy
   machine), and its per-call input and parameter validation is switched off
-  (``sklearn.config_context``): the inputs are checked here. The same KMeans, the
-  same labels;
+  (``sklearn.config_context``): the inputs are checked here;
 - several parameter sets in one pass (Fig. 5.7's cluster counts) share each scan's
   KMeans sample, distinct-point count and ``random_state`` when their ``seed`` and
   ``sample_size`` agree (they depend on nothing else);
@@ -79,9 +84,9 @@ import shapely
 
 from floorscan.io import split_by_scan
 
-# scikit-learn (KMeans) and threadpoolctl are imported where used: importing
-# scikit-learn costs ~1.4 s, which the stages that only merge or read hulls (select)
-# need not pay (issue 8).
+# scikit-learn (KMeans, hulls.kmeans: sklearn) and threadpoolctl are imported where
+# used: importing scikit-learn costs ~1.8 s, which the stages that only merge or read
+# hulls (select) need not pay (issue 8).
 
 #: ``hulls.parquet`` and ``convex_hulls.parquet``: a row per (scan, cluster); the
 #: geometry is WKB (little endian, 2D) of a Polygon, empty when the hull has no area.
@@ -98,6 +103,7 @@ HULLS = pa.schema(
 CONVEX_CLUSTER = -1
 
 RADIUS_RULES = ("nearest_centre", "global_min")
+KMEANS_BACKENDS = ("numpy", "sklearn")
 
 
 @dataclass(frozen=True)
@@ -122,6 +128,9 @@ class HullParams:
         KMeans Lloyd iterations at most.
     seed : int
         Base seed of the subsample and KMeans.
+    kmeans : {"numpy", "sklearn"}
+        KMeans implementation: :func:`kmeans` (default) or scikit-learn's
+        ``KMeans``, the reference it reproduces bit for bit.
     """
 
     k_clusters: int = 10
@@ -131,6 +140,7 @@ class HullParams:
     n_init: int = 1
     max_iter: int = 100
     seed: int = 0
+    kmeans: str = "numpy"
 
     def __post_init__(self) -> None:
         # scikit-learn's parameter validation is off in the loop (_kmeans_config)
@@ -148,6 +158,8 @@ class HullParams:
             raise ValueError(f"hulls.radius_rule must be one of {RADIUS_RULES}, got {self.radius_rule!r}")
         if self.n_init < 1 or self.max_iter < 1:
             raise ValueError("hulls.n_init and hulls.max_iter must be >= 1")
+        if self.kmeans not in KMEANS_BACKENDS:
+            raise ValueError(f"hulls.kmeans must be one of {KMEANS_BACKENDS}, got {self.kmeans!r}")
 
     @classmethod
     def from_config(cls, cfg: Mapping | None) -> "HullParams":
@@ -234,16 +246,18 @@ def _labels(xy: np.ndarray, params: HullParams, drawn: tuple[np.ndarray, int, in
     k = min(params.k_clusters, distinct)
     if k <= 1:
         return np.zeros(n, dtype=np.int64)
-    from sklearn.cluster import KMeans
+    if params.kmeans == "numpy":
+        centres, _ = kmeans(sample, k, n_init=params.n_init, max_iter=params.max_iter, random_state=state)
+    else:
+        from sklearn.cluster import KMeans
 
-    km = KMeans(
-        n_clusters=k,
-        n_init=params.n_init,
-        max_iter=params.max_iter,
-        random_state=state,
-        algorithm="lloyd",
-    ).fit(sample)
-    centres = km.cluster_centers_
+        centres = KMeans(
+            n_clusters=k,
+            n_init=params.n_init,
+            max_iter=params.max_iter,
+            random_state=state,
+            algorithm="lloyd",
+        ).fit(sample).cluster_centers_
     labels, d2min = _nearest_centre(xy, centres)
     cc = np.sqrt(((centres[:, None, :] - centres[None, :, :]) ** 2).sum(axis=2))
     np.fill_diagonal(cc, np.inf)
@@ -252,6 +266,190 @@ def _labels(xy: np.ndarray, params: HullParams, drawn: tuple[np.ndarray, int, in
     keep = d2min <= radius[labels] ** 2
     labels[~keep] = -1
     return labels
+
+
+def kmeans(
+    points: np.ndarray,
+    k: int,
+    n_init: int = 1,
+    max_iter: int = 300,
+    random_state: int = 0,
+    tol: float = 1e-4,
+    init: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """KMeans (k-means++ seeding, Lloyd iterations): the centres of
+    :class:`sklearn.cluster.KMeans` bit for bit, without importing scikit-learn.
+
+    The algorithm of scikit-learn 1.9's ``KMeans(n_clusters=k, n_init=n_init,
+    max_iter=max_iter, tol=tol, random_state=random_state, algorithm="lloyd")`` run
+    on one thread, step for step and with the same floating-point operations: the
+    data centred on its mean; greedy k-means++ (Arthur and Vassilvitskii 2007) with
+    ``2 + int(log k)`` local trials drawn from ``numpy.random.RandomState(
+    random_state)``; Lloyd steps that stop when no label changes or when the
+    squared centre shifts sum to at most ``tol`` times the mean variance of the
+    coordinates; an empty cluster moves to the point farthest from its centre;
+    of ``n_init`` runs the lowest inertia wins. A stage makes ~1000 fits on ~1000
+    points each (thesis Algorithm 2, one fit per scan): importing scikit-learn costs
+    ~1.7 CPU-s a job, and its fits ~1.6x the CPU time of these (``python -m
+    benchmarks selection``). Tests check the same centres and labels, bit for bit,
+    against scikit-learn on one thread (``hulls.kmeans: sklearn`` runs it instead).
+
+    Parameters
+    ----------
+    points : (N, d) float ndarray
+        Points to cluster, metres. Not modified.
+    k : int
+        Clusters, ``1 <= k <= N``.
+    n_init : int
+        Runs from different seedings; the one with the lowest inertia is returned.
+    max_iter : int
+        Lloyd steps at most per run.
+    random_state : int
+        Seed of the ``numpy.random.RandomState`` of the seeding.
+    tol : float
+        Relative tolerance on the centre shift (scikit-learn's ``tol``).
+    init : (k, d) float ndarray, optional
+        Initial centres instead of k-means++ (then ``n_init`` must be 1).
+
+    Returns
+    -------
+    centres : (k, d) float64 ndarray
+        Metres.
+    labels : (N,) int64 ndarray
+        Nearest centre of each point, ``0 .. k-1``.
+
+    Raises
+    ------
+    ValueError
+        When ``points`` is not (N, d) with ``1 <= k <= N``, or ``init`` is not (k, d).
+    """
+    x = np.array(points, dtype=np.float64, order="C")  # a copy: centred in place
+    if x.ndim != 2 or not 1 <= int(k) <= len(x):
+        raise ValueError(f"kmeans: points must be (N, d) with 1 <= k <= N, got shape {x.shape} and k={k}")
+    k = int(k)
+    tol_abs = np.mean(np.var(x, axis=0)) * tol  # scikit-learn: before centring
+    mean = x.mean(axis=0)
+    x -= mean  # "for more accurate distance computations" (scikit-learn)
+    if init is not None:
+        init = np.array(init, dtype=np.float64, order="C")
+        if init.shape != (k, x.shape[1]) or n_init != 1:
+            raise ValueError(f"kmeans: init must be ({k}, {x.shape[1]}) with n_init 1, got {init.shape}, {n_init}")
+        init -= mean
+    rng = np.random.RandomState(random_state)
+    x_sq = np.einsum("ij,ij->i", x, x)
+    cols = [np.ascontiguousarray(x[:, f]) for f in range(x.shape[1])]
+    best = None
+    for _ in range(int(n_init)):
+        start = _kmeans_plusplus(x, x_sq, k, rng) if init is None else init
+        centres, labels = _lloyd(x, cols, start, int(max_iter), tol_abs)
+        d = x - centres[labels]
+        d *= d
+        # scikit-learn's inertia: point after point, as the cumulative sum
+        inertia = np.cumsum(d.sum(axis=1))[-1]
+        if best is None or (inertia < best[0] and not _same_clustering(labels, best[2], k)):
+            best = (inertia, centres, labels)
+    return best[1] + mean, best[2].astype(np.int64)
+
+
+def _kmeans_plusplus(x: np.ndarray, x_sq: np.ndarray, k: int, rng: np.random.RandomState) -> np.ndarray:
+    """scikit-learn's ``_kmeans_plusplus`` (unit weights): the same draws, the same
+    distance expressions (``-2 c.x + |c|^2 + |x|^2``, clipped at 0)."""
+    n = len(x)
+    w = np.ones(n)
+    trials = 2 + int(np.log(k))
+    centres = np.empty((k, x.shape[1]))
+    centres[0] = x[rng.choice(n, p=w / w.sum())]
+    c0 = centres[0, np.newaxis]
+    closest = -2 * (c0 @ x.T)
+    closest += np.einsum("ij,ij->i", c0, c0)[:, None]
+    closest += x_sq[None, :]
+    np.maximum(closest, 0, out=closest)
+    potential = closest @ w
+    for c in range(1, k):
+        draws = rng.uniform(size=trials) * potential
+        candidates = np.searchsorted(np.cumsum(w * closest), draws)
+        np.minimum(candidates, closest.size - 1, out=candidates)
+        xc = x[candidates]
+        d = -2 * (xc @ x.T)
+        d += np.einsum("ij,ij->i", xc, xc)[:, None]
+        d += x_sq[None, :]
+        np.maximum(d, 0, out=d)
+        np.minimum(closest, d, out=d)
+        potentials = d @ w.reshape(-1, 1)
+        pick = np.argmin(potentials)
+        potential, closest = potentials[pick], d[pick]
+        centres[c] = x[candidates[pick]]
+    return centres
+
+
+def _lloyd(x: np.ndarray, cols: list, centres: np.ndarray, max_iter: int, tol_abs: float):
+    """scikit-learn's ``_kmeans_single_lloyd`` on one thread: (centres, labels)."""
+    k = len(centres)
+    labels_old = None
+    converged = False  # strictly: no label changed
+    for _ in range(max_iter):
+        labels = _assign(x, centres)
+        # sums point after point in order, as scikit-learn's loop (bincount adds in order)
+        counts = np.bincount(labels, minlength=k).astype(np.float64)
+        new = np.empty_like(centres)
+        for f, col in enumerate(cols):
+            new[:, f] = np.bincount(labels, weights=col, minlength=k)
+        if not counts.all():
+            _relocate_empty(x, centres, new, counts, labels)
+        if counts.all():
+            new *= (1.0 / counts)[:, None]
+        else:  # scikit-learn's _average_centers, cluster by cluster
+            largest = int(np.argmax(counts))
+            for j in range(k):
+                if counts[j] > 0:
+                    new[j] *= 1.0 / counts[j]
+                else:
+                    new[j] = new[largest]
+        shift = new - centres
+        shift *= shift
+        shift = np.sqrt(shift.sum(axis=1))
+        centres = new
+        if labels_old is not None and np.array_equal(labels, labels_old):
+            converged = True
+            break
+        if (shift**2).sum() <= tol_abs:
+            break
+        labels_old = labels
+    if not converged:
+        labels = _assign(x, centres)
+    return centres, labels
+
+
+def _assign(x: np.ndarray, centres: np.ndarray) -> np.ndarray:
+    """Nearest centre by ``|c|^2 - 2 c.x`` (scikit-learn's BLAS expression; the
+    factor -2 is exact, so scaling the centres first gives the same floats)."""
+    d = x @ (-2.0 * centres).T
+    d += np.einsum("ij,ij->i", centres, centres)
+    return d.argmin(axis=1)
+
+
+def _relocate_empty(x, centres, new, counts, labels) -> None:
+    """scikit-learn's ``_relocate_empty_clusters_dense``: each empty cluster takes
+    the point farthest from its centre (in place on ``new`` and ``counts``)."""
+    empty = np.flatnonzero(counts == 0)
+    dist = ((x - centres[labels]) ** 2).sum(axis=1)
+    far = np.argpartition(dist, -len(empty))[: -len(empty) - 1 : -1]
+    if np.max(dist) == 0:  # fewer distinct points than clusters
+        return
+    for e, i in zip(empty, far):
+        old = labels[i]
+        new[old] -= x[i]
+        new[e] = x[i]
+        counts[e] = 1.0
+        counts[old] -= 1.0
+
+
+def _same_clustering(a: np.ndarray, b: np.ndarray, k: int) -> bool:
+    """Whether labels ``a`` and ``b`` are the same partition up to a renaming."""
+    first = np.full(k, -1, dtype=np.int64)
+    idx = np.unique(a, return_index=True)
+    first[idx[0]] = b[idx[1]]
+    return bool(np.array_equal(first[a], b))
 
 
 def _nearest_centre(xy: np.ndarray, centres: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -462,14 +660,16 @@ def scan_hulls(
     # one KMeans per scan on <= sample_size points: threads only add overhead and
     # oversubscribe a shared machine, so run BLAS/OpenMP single-threaded.
     # threadpoolctl limits only the libraries already loaded: load scikit-learn's
-    # OpenMP and BLAS first (imported at the first scan instead, KMeans ran on every
-    # core, its idle threads spinning: +30 % CPU, and up to 5x on a busy machine)
+    # OpenMP and BLAS first when it is used (imported at the first scan instead, its
+    # KMeans ran on every core, its idle threads spinning: +30 % CPU, and up to 5x on
+    # a busy machine)
     from threadpoolctl import threadpool_limits
 
-    if params:
+    use_sklearn = any(p.kmeans == "sklearn" for p in params)
+    if use_sklearn:
         from sklearn.cluster import KMeans  # noqa: F401
 
-    with threadpool_limits(limits=1), _kmeans_config(bool(params)):
+    with threadpool_limits(limits=1), _kmeans_config(use_sklearn):
         for sid, pts in scans:
             sid = int(sid)
             if sid in seen:

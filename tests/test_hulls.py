@@ -306,8 +306,9 @@ def test_convex_hull_from_cluster_hull_vertices_equals_the_direct_hull():
 @pytest.mark.skipif((__import__("os").cpu_count() or 1) < 2,
                     reason="one CPU: OpenMP runs one thread anyway, the limit cannot be seen")
 def test_scan_hulls_runs_kmeans_single_threaded_in_a_fresh_interpreter():
-    """threadpoolctl limits only loaded libraries: scikit-learn (its OpenMP) must be
-    loaded before the limit, also when nothing imported it yet."""
+    """With ``kmeans: sklearn``: threadpoolctl limits only loaded libraries, so
+    scikit-learn (its OpenMP) must be loaded before the limit, also when nothing
+    imported it yet."""
     import subprocess
     import sys
 
@@ -320,12 +321,123 @@ def test_scan_hulls_runs_kmeans_single_threaded_in_a_fresh_interpreter():
         "    for s in range(2):\n"
         "        yield s, rng.uniform(0, 5, (400, 2))\n"
         "        seen.extend((i['user_api'], i['num_threads']) for i in threadpoolctl.threadpool_info())\n"
-        "fh.scan_hulls(scans(), [fh.HullParams(k_clusters=3)])\n"
+        "fh.scan_hulls(scans(), [fh.HullParams(k_clusters=3, kmeans='sklearn')])\n"
         "print(sorted(set(seen)))\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, check=True)
     seen = eval(out.stdout.strip())
     assert ("openmp", 1) in seen and all(n == 1 for _, n in seen), seen
+
+
+def test_default_hulls_do_not_import_sklearn():
+    """The default KMeans is floorscan's: a hulls job does not pay scikit-learn's imports."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, numpy as np\n"
+        "from floorscan import hulls as fh\n"
+        "rng = np.random.default_rng(0)\n"
+        "out, _, _ = fh.scan_hulls([(0, rng.uniform(0, 5, (400, 2)))], [fh.HullParams(k_clusters=3)])\n"
+        "print(len(out[0]), 'sklearn' in sys.modules, 'scipy' in sys.modules)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, check=True)
+    assert out.stdout.split() == ["3", "False", "False"]
+
+
+def _kmeans_cases():
+    """Scan-like samples: noisy wall segments of a room, a floor patch, duplicates."""
+    rng = np.random.default_rng(11)
+    for case in range(24):
+        n_walls = int(rng.integers(2, 7))
+        parts = []
+        for _ in range(n_walls):
+            a, b = rng.uniform(-6, 6, 2), rng.uniform(-6, 6, 2)
+            t = rng.uniform(0, 1, int(rng.integers(50, 300)))
+            parts.append(a + t[:, None] * (b - a) + rng.normal(0, 0.01, (len(t), 2)))
+        x = np.vstack(parts + [rng.uniform(-1, 1, (int(rng.integers(0, 200)), 2))])
+        if case % 4 == 3:  # repeated returns
+            x = np.vstack([x, x[: len(x) // 3]])
+        yield case, x + rng.uniform(-50, 50, 2)
+
+
+@pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")
+def test_kmeans_gives_the_centres_of_sklearn_bit_for_bit():
+    """scikit-learn on one thread, as the hulls stage runs it (on more threads its
+    sums are split between threads and can differ in the last bit)."""
+    from sklearn.cluster import KMeans
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1):
+        _compare_kmeans(KMeans)
+
+
+def _compare_kmeans(KMeans):
+    n_fits = 0
+    for case, x in _kmeans_cases():
+        for k, n_init in ((2, 1), (10, 1), (20, 1), (10, 3)):
+            state = 1000 * case + k
+            ref = KMeans(n_clusters=k, n_init=n_init, max_iter=100, random_state=state, algorithm="lloyd").fit(x)
+            centres, labels = fh.kmeans(x, k, n_init=n_init, max_iter=100, random_state=state)
+            np.testing.assert_array_equal(centres, ref.cluster_centers_, err_msg=f"case {case} k {k}")
+            np.testing.assert_array_equal(labels, ref.labels_, err_msg=f"case {case} k {k}")
+            assert labels.dtype == np.int64 and centres.shape == (k, 2)
+            n_fits += 1
+    assert n_fits == 96
+    # a few Lloyd steps at most: the tolerance and max_iter stops, not only convergence
+    x = next(_kmeans_cases())[1]
+    for max_iter in (1, 2, 3):
+        ref = KMeans(n_clusters=10, n_init=1, max_iter=max_iter, random_state=5, algorithm="lloyd").fit(x)
+        np.testing.assert_array_equal(fh.kmeans(x, 10, max_iter=max_iter, random_state=5)[0], ref.cluster_centers_)
+    ref = KMeans(n_clusters=10, n_init=1, tol=0.5, random_state=5, algorithm="lloyd").fit(x)
+    np.testing.assert_array_equal(fh.kmeans(x, 10, tol=0.5, random_state=5)[0], ref.cluster_centers_)
+
+
+@pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")
+def test_kmeans_empty_clusters_as_sklearn():
+    """An empty cluster takes the point farthest from its centre; with every point on
+    its centre (fewer distinct points than clusters) it copies the largest cluster's
+    centre, as scikit-learn does (before that centre is averaged, when it comes later)."""
+    from sklearn.cluster import KMeans
+    from threadpoolctl import threadpool_limits
+
+    rng = np.random.default_rng(3)
+    x = np.vstack([rng.normal([0, 0], 0.1, (40, 2)), rng.normal([3, 0], 0.1, (40, 2)), [[9.0, 9.0]]])
+    inits = [np.array([[0.0, 0.0], [3.0, 0.0], [50.0, 50.0]]),  # the far centre gets no point
+             np.array([[50.0, 50.0], [-50.0, 0.0], [0.0, 0.0], [3.0, 0.0]])]
+    dup = np.array([[2.0, 0.0]] * 5 + [[1.0, 0.0]] * 5)
+    cases = [(x, inits[0]), (x, inits[1]), (dup, np.array([[5.0, 5.0], [2.0, 0.0], [1.0, 0.0]]))]
+    for data, init in cases:
+        with threadpool_limits(limits=1):
+            ref = KMeans(n_clusters=len(init), init=init, n_init=1, random_state=0, algorithm="lloyd").fit(data)
+        centres, labels = fh.kmeans(data, len(init), init=init)
+        np.testing.assert_array_equal(centres, ref.cluster_centers_)
+        np.testing.assert_array_equal(labels, ref.labels_)
+    # the relocated cluster holds the outlier at (9, 9); the duplicates' empty cluster
+    # copies the unaveraged sum of the next cluster: 5 x 0.5 m about the mean x = 1.5 m
+    assert [9.0, 9.0] in fh.kmeans(x, 3, init=inits[0])[0].tolist()
+    assert fh.kmeans(dup, 3, init=cases[2][1])[0].tolist() == [[4.0, 0.0], [2.0, 0.0], [1.0, 0.0]]
+
+
+def test_kmeans_bad_input():
+    x = np.zeros((3, 2))
+    with pytest.raises(ValueError, match=r"1 <= k <= N, got shape \(3, 2\) and k=4"):
+        fh.kmeans(x, 4)
+    with pytest.raises(ValueError, match="1 <= k <= N"):
+        fh.kmeans(np.zeros(3), 1)
+    with pytest.raises(ValueError, match=r"init must be \(2, 2\) with n_init 1"):
+        fh.kmeans(x, 2, init=np.zeros((3, 2)))
+    with pytest.raises(ValueError, match="hulls.kmeans must be one of"):
+        fh.HullParams(kmeans="scipy")
+
+
+def test_hulls_with_sklearn_kmeans_are_the_same():
+    reg = frame({0: l_shape(0.1), 1: _scans_3d(1, seed=5)[0], 2: np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]])})
+    ours = fh.cluster_hulls(reg, fh.HullParams(k_clusters=7, seed=2))
+    ref = fh.cluster_hulls(reg, fh.HullParams(k_clusters=7, seed=2, kmeans="sklearn"))
+    assert ours[["scan_id", "cluster", "area_m2"]].equals(ref[["scan_id", "cluster", "area_m2"]])
+    assert shapely.to_wkb(ours["geometry"].to_numpy()).tolist() == shapely.to_wkb(ref["geometry"].to_numpy()).tolist()
+    assert ours["scan_id"].tolist() == [0] * 7 + [1] * 7 + [2] * 3  # k = min(7, distinct points)
 
 
 def test_hull_params_must_be_integers():
