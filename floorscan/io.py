@@ -143,7 +143,7 @@ def write_table(
         pq.write_table(table, tmp, **parquet_options(table.schema))
 
 
-def parquet_options(schema: pa.Schema) -> dict:
+def parquet_options(schema: pa.Schema, statistics: list[str] | None = None) -> dict:
     """Keyword arguments for ``pyarrow.parquet.write_table`` / ``ParquetWriter``: LZ4
     (pyarrow's ``"lz4"`` is the interoperable LZ4_RAW codec of the Parquet format);
     floating-point columns BYTE_STREAM_SPLIT-encoded without a dictionary (coordinates
@@ -154,13 +154,22 @@ def parquet_options(schema: pa.Schema) -> dict:
     is as small (146 against 145 MB; the byte-split floats compress alike) and it takes
     0.57 against 1.07 CPU-s to write and 0.31 against 0.44 CPU-s to read (the ingest
     stage writes 72 M points, the register stage reads them).
+
+    ``statistics`` names the columns whose row-group min/max are written (default:
+    all). The points tables keep them for ``scan_id`` (row groups of a scan range,
+    :func:`iter_scans`) and, where a reader uses them, ``x`` and ``y``: min/max of
+    the float columns took 40 % of writing a points table (0.20 of 0.53 CPU-s for
+    12.6 M points of hallways3d).
     """
     floats = [f.name for f in schema if pa.types.is_floating(f.type)]
-    return {
+    options = {
         "compression": "lz4",
         "use_dictionary": [f.name for f in schema if f.name not in floats],
         "column_encoding": {name: "BYTE_STREAM_SPLIT" for name in floats},
     }
+    if statistics is not None:
+        options["write_statistics"] = list(statistics)
+    return options
 
 
 def read_table(path: str | os.PathLike, columns: list[str] | None = None) -> pd.DataFrame:

@@ -1601,7 +1601,7 @@ def register_recording(
     # recording again (1 in every_n scans; hallways3d 14.5 of 72 M points).
     sampled_path = Path(registered_path).with_name(f".{Path(registered_path).name}.sampled.parquet")
     try:
-        with pq.ParquetWriter(sampled_path, SCANS, **parquet_options(SCANS)) as sampled_writer:
+        with pq.ParquetWriter(sampled_path, SCANS, **parquet_options(SCANS, ["scan_id"])) as sampled_writer:
             with ScanRowGroups(sampled_writer) as sampled_out:
                 _first_pass(walk(), sids, screen, store, cfg, sampled_out, edges)
         ahead = edges.finish() if edges is not None else None
@@ -1664,7 +1664,8 @@ def _second_pass(table, sids, sampled_path, registered_path, metadata) -> None:
     if metadata:
         schema = schema.with_metadata({str(k): str(v) for k, v in metadata.items()})
     with atomic_path(registered_path) as tmp:
-        with pq.ParquetWriter(tmp, schema, **parquet_options(schema)) as writer:
+        # x, y statistics: the register figure's raster extent (density_of_file)
+        with pq.ParquetWriter(tmp, schema, **parquet_options(schema, ["scan_id", "x", "y"])) as writer:
             with ScanRowGroups(writer) as out:  # row groups written in a thread
                 for sid, pts in iter_scans(sampled_path):
                     pose = pose_of.get(int(sid))

@@ -437,6 +437,11 @@ def test_streamed_registration_matches_the_in_memory_one(tmp_path, z_beams):
 
     f = density_of_file(tmp_path / "reg.parquet", 0.05)
     assert f.grid()[2].sum() == len(reg)
+    # its extent comes from the x, y statistics, the only float ones written
+    import pyarrow.parquet as pq
+
+    group = pq.ParquetFile(tmp_path / "reg.parquet").metadata.row_group(0)
+    assert [group.column(i).is_stats_set for i in range(4)] == [True, True, True, False]  # scan_id x y z
     xy = reg[["x", "y"]].to_numpy(np.float64)
     np.testing.assert_allclose(f.lo, xy.min(axis=0), atol=1e-6)
 

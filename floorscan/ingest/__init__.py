@@ -133,7 +133,7 @@ def write_recording(
     rows: list[tuple[int, int, int, int, str]] = []
     meta = {k.encode(): str(v).encode() for k, v in (metadata or {}).items()}
     with atomic_path(scans_path) as tmp:
-        with pq.ParquetWriter(tmp, SCANS.with_metadata(meta), **parquet_options(SCANS)) as writer:
+        with pq.ParquetWriter(tmp, SCANS.with_metadata(meta), **parquet_options(SCANS, ["scan_id"])) as writer:
             with ScanRowGroups(writer) as batch:  # row groups written in a thread
                 last_t = None
                 for scan_id, scan in enumerate(recording.scans):
