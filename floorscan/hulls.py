@@ -50,10 +50,10 @@ Speed (issue 8). Exact shortcuts, giving the same hulls bit for bit:
   cluster's hull, and GEOS gives the same ring for any point set with the same
   hull: its vertices without collinear points, from the lowest point);
 - KMeans is :func:`kmeans`, scikit-learn's algorithm in NumPy with the same
-  floating-point operations: the same centres bit for bit (tested; all 1017 x 3
-  fits of hallways3d's hulls and Fig. 5.7 compared equal), without importing
-  scikit-learn (~1.8 s a job) or its per-fit checks: hallways3d's hulls stage took
-  4.6-5.5 CPU-s against 7.3-8.7 with scikit-learn. With ``kmeans: sklearn``,
+  floating-point operations: the same centres bit for bit (tested; on the samples
+  of all 1017 kept scans of hallways3d at k = 2, 10 and 20 too), without importing
+  scikit-learn (~1.7 CPU-s a job) or its per-fit checks: hallways3d's hulls stage
+  took 4.6-5.5 CPU-s against 7.3-8.7 with scikit-learn, the same hulls. With ``kmeans: sklearn``,
   scikit-learn is imported before limiting its OpenMP/BLAS threads to one
   (threadpoolctl limits only loaded libraries: imported later, KMeans ran two
   OpenMP threads whose spinning cost +30 % CPU, several times more on a busy
@@ -85,7 +85,7 @@ import shapely
 from floorscan.io import split_by_scan
 
 # scikit-learn (KMeans, hulls.kmeans: sklearn) and threadpoolctl are imported where
-# used: importing scikit-learn costs ~1.8 s, which the stages that only merge or read
+# used: importing scikit-learn costs ~1.7 CPU-s, which the stages that only merge or read
 # hulls (select) need not pay (issue 8).
 
 #: ``hulls.parquet`` and ``convex_hulls.parquet``: a row per (scan, cluster); the
@@ -292,7 +292,8 @@ def kmeans(
     points each (thesis Algorithm 2, one fit per scan): importing scikit-learn costs
     ~1.7 CPU-s a job, and its fits ~1.6x the CPU time of these (``python -m
     benchmarks selection``). Tests check the same centres and labels, bit for bit,
-    against scikit-learn on one thread (``hulls.kmeans: sklearn`` runs it instead).
+    against scikit-learn on one thread, in 2D (``hulls.kmeans: sklearn`` runs
+    scikit-learn instead).
 
     Parameters
     ----------
