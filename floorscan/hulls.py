@@ -52,7 +52,7 @@ Speed (issue 8). Exact shortcuts, giving the same hulls bit for bit:
 - KMeans is :func:`kmeans`, scikit-learn's algorithm in NumPy with the same
   floating-point operations: the same centres bit for bit (tested; on the samples
   of all 1017 kept scans of hallways3d at k = 2, 10 and 20 too), without importing
-  scikit-learn (~1.7 CPU-s a job) or its per-fit checks: hallways3d's hulls stage
+  scikit-learn (1.4-1.7 CPU-s a job) or its per-fit checks: hallways3d's hulls stage
   took 4.6-5.5 CPU-s against 7.3-8.7 with scikit-learn, the same hulls. With ``kmeans: sklearn``,
   scikit-learn is imported before limiting its OpenMP/BLAS threads to one
   (threadpoolctl limits only loaded libraries: imported later, KMeans ran two
@@ -85,8 +85,8 @@ import shapely
 from floorscan.io import split_by_scan
 
 # scikit-learn (KMeans, hulls.kmeans: sklearn) and threadpoolctl are imported where
-# used: importing scikit-learn costs ~1.7 CPU-s, which the stages that only merge or read
-# hulls (select) need not pay (issue 8).
+# used: importing scikit-learn costs 1.4-1.7 CPU-s, which the stages that only merge
+# or read hulls (select) need not pay (issue 8).
 
 #: ``hulls.parquet`` and ``convex_hulls.parquet``: a row per (scan, cluster); the
 #: geometry is WKB (little endian, 2D) of a Polygon, empty when the hull has no area.
@@ -290,7 +290,7 @@ def kmeans(
     coordinates; an empty cluster moves to the point farthest from its centre;
     of ``n_init`` runs the lowest inertia wins. A stage makes ~1000 fits on ~1000
     points each (thesis Algorithm 2, one fit per scan): importing scikit-learn costs
-    ~1.7 CPU-s a job, and its fits ~1.6x the CPU time of these (``python -m
+    1.4-1.7 CPU-s a job, and its fits 1.3-1.6x the CPU time of these (``python -m
     benchmarks selection``). Tests check the same centres and labels, bit for bit,
     against scikit-learn on one thread, in 2D (``hulls.kmeans: sklearn`` runs
     scikit-learn instead).
