@@ -52,12 +52,12 @@ Speed (issue 8). Exact shortcuts, giving the same hulls bit for bit:
 - KMeans is :func:`kmeans`, scikit-learn's algorithm in NumPy with the same
   floating-point operations: the same centres bit for bit (tested; on the samples
   of all 1017 kept scans of hallways3d at k = 2, 10 and 20 too), without importing
-  scikit-learn (1.4-1.7 CPU-s a job) or its per-fit checks: hallways3d's hulls stage
-  took 4.6-5.5 CPU-s against 7.3-8.7 with scikit-learn, the same hulls. With ``kmeans: sklearn``,
-  scikit-learn is imported before limiting its OpenMP/BLAS threads to one
-  (threadpoolctl limits only loaded libraries: imported later, KMeans ran two
-  OpenMP threads whose spinning cost +30 % CPU, several times more on a busy
-  machine), and its per-call input and parameter validation is switched off
+  scikit-learn (1.4-1.7 CPU-s a job) or its per-fit checks: hallways3d's hulls
+  stage took 4.6-5.5 CPU-s against 7.3-8.7 with scikit-learn, the same hulls. With
+  ``kmeans: sklearn``, scikit-learn is imported before limiting its OpenMP/BLAS
+  threads to one (threadpoolctl limits only loaded libraries: imported later,
+  KMeans ran two OpenMP threads whose spinning cost +30 % CPU, several times more
+  on a busy machine), and its per-call input and parameter validation is switched off
   (``sklearn.config_context``): the inputs are checked here;
 - several parameter sets in one pass (Fig. 5.7's cluster counts) share each scan's
   KMeans sample, distinct-point count and ``random_state`` when their ``seed`` and
@@ -343,6 +343,9 @@ def kmeans(
     for _ in range(int(n_init)):
         start = _kmeans_plusplus(x, x_sq, k, rng) if init is None else init
         centres, labels = _lloyd(x, cols, start, int(max_iter), tol_abs)
+        if n_init == 1:  # nothing to compare (the stage's default: one fit per scan)
+            best = (None, centres, labels)
+            break
         d = x - centres[labels]
         d *= d
         # scikit-learn's inertia: point after point, as the cumulative sum
