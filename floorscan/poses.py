@@ -5,6 +5,10 @@ the scans. Each scan's pose is interpolated between the two poses around its sta
 linearly in position and along the shorter arc in yaw. Nothing is extrapolated: a scan
 before the first or after the last pose, or between two poses further apart than
 ``max_gap_s``, gets no pose and is dropped with its reason.
+
+A recording without a map pose source (ingest's pose kind ``none``: wheel odometry only)
+has an empty pose stream; then no scan has a pose (reason ``no_pose_source``) and the
+register stage places the scans by LIDAR odometry.
 """
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ from floorscan.io import InputError
 BEFORE = "before_pose_stream"
 AFTER = "after_pose_stream"
 GAP = "pose_gap"
+NO_POSE_SOURCE = "no_pose_source"
 
 
 def wrap_angle(a):
@@ -34,7 +39,8 @@ def interpolate_poses(
     ----------
     stream : DataFrame
         Columns ``t_ns`` (int64, strictly increasing), ``x``, ``y``, ``z`` (metres) and
-        ``yaw`` (radians), in the map frame.
+        ``yaw`` (radians), in the map frame. Empty: the recording has no map pose
+        source, and every query gets reason ``no_pose_source``.
     t_ns : (S,) int64 ndarray
         Query times (scan stamps), nanoseconds.
     max_gap_s : float
@@ -47,18 +53,23 @@ def interpolate_poses(
     DataFrame
         S rows: ``t_ns``, ``x``, ``y``, ``z``, ``yaw`` (wrapped to [-pi, pi); NaN when
         there is no pose), ``valid`` (bool), ``reason`` ("" or one of
-        ``before_pose_stream``, ``after_pose_stream``, ``pose_gap``). A query equal to a
-        stream stamp gets that pose exactly.
+        ``before_pose_stream``, ``after_pose_stream``, ``pose_gap``,
+        ``no_pose_source``). A query equal to a stream stamp gets that pose exactly.
 
     Raises
     ------
     InputError
-        Empty stream, unsorted or duplicate stream stamps, or no query time within
-        the stream's span (the stream does not overlap the scans).
+        Unsorted or duplicate stream stamps, or no query time within the stream's span
+        (the stream does not overlap the scans).
     """
     ts = stream["t_ns"].to_numpy(dtype=np.int64)
+    q = np.asarray(t_ns, dtype=np.int64)
     if ts.size == 0:
-        raise InputError(f"{source}: the pose stream is empty")
+        nan = np.full(q.size, np.nan)
+        return pd.DataFrame(
+            {"t_ns": q, "x": nan, "y": nan.copy(), "z": nan.copy(), "yaw": nan.copy(),
+             "valid": np.zeros(q.size, dtype=bool), "reason": np.full(q.size, NO_POSE_SOURCE, dtype=object).astype(str)}
+        )
     d = np.diff(ts)
     if np.any(d <= 0):
         i = int(np.flatnonzero(d <= 0)[0]) + 1
@@ -66,7 +77,6 @@ def interpolate_poses(
         raise InputError(
             f"{source}: {kind} t_ns at row {i} ({ts[i]} after {ts[i - 1]}); expected strictly increasing stamps"
         )
-    q = np.asarray(t_ns, dtype=np.int64)
     n = q.size
     out = {k: np.full(n, np.nan) for k in ("x", "y", "z", "yaw")}
     reason = np.full(n, "", dtype=object)

@@ -1,10 +1,16 @@
-"""Stage ingest: read a recording into scans.parquet, scan_index.parquet, pose_stream.parquet."""
-from floorscan.ingest import open_recording, write_recording
+"""Stage ingest: read a recording into scans.parquet, scan_index.parquet, pose_stream.parquet.
+
+What ingest detected (format, scan topic, pose source and kind, stamps, a CARMEN log's
+max range) is logged and stored in the schema metadata of the index and pose stream."""
+from floorscan.ingest import detected_line, open_recording, write_recording
 from floorscan.workflow import stage_log
 
 with stage_log(snakemake) as log:
     ds = snakemake.params.dataset
     rec = open_recording(ds, snakemake.params.cfg, max_gap_s=snakemake.params.max_gap_s)
+    log.info("detected: %s", detected_line(rec.detected))
+    for note in rec.notes:
+        log.info("%s", note)
     index = write_recording(
         rec,
         snakemake.output.scans,
@@ -13,9 +19,8 @@ with stage_log(snakemake) as log:
         sensor_height_m=ds.get("sensor_height_m", 0.0),
         metadata={"dataset": ds["name"], "source": rec.source},
     )
-    for note in rec.notes:
-        log.info("%s", note)
     log.info(
-        "%d scans, %d points, %d returns dropped as invalid (NaN, inf or out of range)",
+        "%d scans, %d points, %d returns dropped as invalid (NaN, inf, below the minimum range, "
+        "at or beyond the maximum range)",
         len(index), index["n_points"].sum(), index["n_dropped"].sum(),
     )

@@ -194,3 +194,115 @@ def flaser_line(ranges, pose, t_s) -> str:
     r = " ".join(f"{v:.3f}" for v in ranges)
     x, y, th = pose
     return f"FLASER {len(ranges)} {r} {x} {y} {th} {x} {y} {th} {t_s} pippo {t_s}"
+
+
+def write_detection_bag(
+    path: Path,
+    scan_topics: tuple[str, ...] = ("/scan",),
+    pose_topics: tuple[str, ...] = (),
+    tf_links: tuple[tuple[str, str], ...] = (("odom", "base_link"),),
+    odom_topics: tuple[str, ...] = ("/odom",),
+    frame_prefix: str = "",
+    ranges=None,
+    n_scans: int = 10,
+    ros2: bool = False,
+) -> Path:
+    """Write a bag for detecting the scan topic and pose source.
+
+    Parameters
+    ----------
+    scan_topics : tuple of str
+        Topics carrying the LaserScan of each scan (frame ``laser``, 181 beams,
+        range 0.05-30 m); topics ending in ``_cloud`` carry a PointCloud2 instead.
+    pose_topics : tuple of str
+        PoseWithCovarianceStamped topics (frame ``map``) with the base pose at 10 Hz.
+    tf_links : tuple of (str, str)
+        Moving /tf links at 10 Hz: ``("map", "odom")`` is the identity, any other link
+        carries the base pose. A static ``base_link -> laser`` mount is on /tf_static.
+    odom_topics : tuple of str
+        nav_msgs/Odometry topics (frame ``odom``) with the base pose.
+    frame_prefix : str
+        Put before every TF and header frame name (``"/"`` as old ROS1 bags do).
+    ranges : callable, optional
+        ``ranges(i)`` -> (181,) float32 ranges of scan ``i``; default :func:`scan_ranges`.
+    """
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS2_HUMBLE if ros2 else Stores.ROS1_NOETIC)
+    if "tf2_msgs/msg/TFMessage" not in ts.types:
+        from rosbags.typesys import get_types_from_msg
+
+        ts.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", "tf2_msgs/msg/TFMessage"))
+    T = ts.types
+    ser = ts.serialize_cdr if ros2 else ts.serialize_ros1
+    if ros2:
+        from rosbags.rosbag2 import Writer
+
+        writer = Writer(path, version=9)
+    else:
+        from rosbags.rosbag1 import Writer
+
+        writer = Writer(path)
+    ranges = ranges or scan_ranges
+
+    def f(name):
+        return frame_prefix + name
+
+    Pose, Point, Q = T["geometry_msgs/msg/Pose"], T["geometry_msgs/msg/Point"], T["geometry_msgs/msg/Quaternion"]
+    Vec, cov = T["geometry_msgs/msg/Vector3"], np.zeros(36)
+
+    def transform(parent, child, t, x, y, yaw, z=0.0):
+        return T["geometry_msgs/msg/TransformStamped"](
+            header=_header(ts, t, f(parent), not ros2), child_frame_id=f(child),
+            transform=T["geometry_msgs/msg/Transform"](
+                translation=Vec(x=float(x), y=float(y), z=float(z)), rotation=Q(*_quat(float(yaw)))))
+
+    msgs = [(T0_NS - 1, "/tf_static", T["tf2_msgs/msg/TFMessage"](
+        transforms=[transform("base_link", "laser", T0_NS, MOUNT_X, 0.0, 0.0, MOUNT_Z)]))]
+    for i in range(n_scans):
+        t = T0_NS + int(i * 0.1e9)
+        r = np.asarray(ranges(i), dtype=np.float32)
+        for topic in scan_topics:
+            if topic.endswith("_cloud"):
+                ang = -math.pi / 2 + np.arange(r.size) * math.pi / (r.size - 1)
+                xyz = np.stack([r * np.cos(ang), r * np.sin(ang), np.zeros(r.size, np.float32)], 1).astype("<f4")
+                fields = [T["sensor_msgs/msg/PointField"](name=n, offset=4 * k, datatype=7, count=1)
+                          for k, n in enumerate("xyz")]
+                msg = T["sensor_msgs/msg/PointCloud2"](
+                    header=_header(ts, t, f("laser"), not ros2), height=1, width=r.size, fields=fields,
+                    is_bigendian=False, point_step=12, row_step=12 * r.size,
+                    data=np.frombuffer(xyz.tobytes(), np.uint8), is_dense=False)
+            else:
+                msg = T["sensor_msgs/msg/LaserScan"](
+                    header=_header(ts, t, f("laser"), not ros2), angle_min=-math.pi / 2, angle_max=math.pi / 2,
+                    angle_increment=math.pi / (r.size - 1), time_increment=0.0, scan_time=0.1,
+                    range_min=0.05, range_max=30.0, ranges=r, intensities=np.zeros(0, np.float32))
+            msgs.append((t, topic, msg))
+    for k in range(n_scans + 2):
+        t = T0_NS + int((k * 0.1 - 0.05) * 1e9)
+        x, y, yaw = base_pose((t - T0_NS) / 1e9)
+        pose = Pose(position=Point(x=float(x), y=float(y), z=0.0), orientation=Q(*_quat(float(yaw))))
+        for topic in pose_topics:
+            msgs.append((t, topic, T["geometry_msgs/msg/PoseWithCovarianceStamped"](
+                header=_header(ts, t, f("map"), not ros2),
+                pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=cov))))
+        for topic in odom_topics:
+            msgs.append((t, topic, T["nav_msgs/msg/Odometry"](
+                header=_header(ts, t, f("odom"), not ros2), child_frame_id=f("base_link"),
+                pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=cov),
+                twist=T["geometry_msgs/msg/TwistWithCovariance"](
+                    twist=T["geometry_msgs/msg/Twist"](
+                        linear=Vec(x=0.0, y=0.0, z=0.0), angular=Vec(x=0.0, y=0.0, z=0.0)),
+                    covariance=cov))))
+        if tf_links:
+            msgs.append((t, "/tf", T["tf2_msgs/msg/TFMessage"](transforms=[
+                transform(p, c, t, 0.0, 0.0, 0.0) if (p, c) == ("map", "odom") else transform(p, c, t, x, y, yaw)
+                for p, c in tf_links])))
+    msgs.sort(key=lambda m: m[0])
+    with writer:
+        conns = {}
+        for t, topic, msg in msgs:
+            if topic not in conns:
+                conns[topic] = writer.add_connection(topic, msg.__msgtype__, typestore=ts)
+            writer.write(conns[topic], t, ser(msg, msg.__msgtype__))
+    return path

@@ -304,3 +304,372 @@ def test_pointcloud2_xyz_keeps_float32_fields_and_widens_the_others():
     double = pointcloud2_xyz(_pc2(pts, "f8", 32, offsets=(0, 8, 16)))
     assert double.dtype == np.float64
     np.testing.assert_array_equal(double, pts)
+
+
+# --- issue 20: one range rule for every reader ----------------------------------------
+
+
+def test_laser_scan_returns_at_range_max_are_no_return():
+    from floorscan.ingest import laser_scan_points
+
+    r = np.array([0.04, 0.05, 1.0, 29.999, 30.0, 30.5, np.nan, np.inf])
+    pts, dropped = laser_scan_points(r, 0.0, 0.0, 0.05, 30.0)  # all beams along +x
+    # kept: 0.05 (range_min is valid), 1.0 and 29.999; dropped: below min, at max, beyond, NaN, inf
+    np.testing.assert_allclose(pts[:, 0], [0.05, 1.0, 29.999], rtol=1e-6)
+    assert dropped == 5
+
+
+def test_filter_points_upper_bound_is_strict_too():
+    from floorscan.ingest import filter_points
+
+    p = np.array([[3.0, 4.0, 0.0], [0.6, 0.8, 0.0], [0.0, 0.0, 4.999], [6.0, 8.0, 0.0], [0.1, 0.0, 0.0]])
+    kept, dropped = filter_points(p, 0.5, 5.0)  # distances 5, 1, 4.999, 10, 0.1
+    np.testing.assert_allclose(kept, p[[1, 2]])
+    assert dropped == 3
+
+
+def test_bag_returns_at_range_max_dropped_and_counted(tmp_path):
+    from conftest import write_detection_bag
+
+    def ranges(i):
+        r = scan_ranges(i)
+        r[10:30] = 30.0  # exactly range_max: 20 "no return" beams
+        return r
+
+    bag = write_detection_bag(tmp_path / "max.bag", pose_topics=("/amcl_pose",), ranges=ranges, n_scans=4)
+    index, *_ = ingest({"path": str(bag)}, tmp_path)
+    # NaN, inf, 0.01 m (< range_min), 40 m (> range_max) and the 20 beams at range_max
+    assert index["n_dropped"].tolist() == [24] * 4
+    assert index["n_points"].tolist() == [N_BEAMS - 24] * 4
+
+
+# --- CARMEN: no-return range detected --------------------------------------------------
+
+
+def _carmen_scans(n_scans, far, n_far_per_scan, t0=10.0):
+    """FLASER lines of 180 beams at 2 m with ``n_far_per_scan`` beams at ``far`` m."""
+    lines = []
+    for i in range(n_scans):
+        r = [2.0] * 180
+        for k in range(n_far_per_scan):
+            r[k] = far
+        lines.append(flaser_line(r, (0.1 * i, 0.0, 0.0), t0 + 0.2 * i))
+    return lines
+
+
+def test_no_return_range_rules():
+    from floorscan.ingest.carmen import no_return_range
+
+    # 50 readings at 32.767 m among 20 000 (0.25 %), codes a few mm below, a real wall at 32.6 m
+    r = np.r_[np.full(19_930, 2.0), np.full(50, 32.767), np.full(15, 32.763), [32.6] * 5]
+    nr = no_return_range([r])
+    assert (nr.how, nr.value_m, nr.count) == ("detected", 32.767, 50)
+    assert nr.fraction == pytest.approx(50 / 20_000)
+    assert nr.max_range_m == pytest.approx(32.667)
+    assert nr.n_dropped == 65  # 32.767 and 32.763; 32.6 m is kept
+    # the farthest wall read 3 times in 20 000: not a no-return value; the SICK limit 80 m
+    far = no_return_range([np.r_[np.full(19_997, 2.0), [45.0] * 3]])
+    assert (far.how, far.max_range_m, far.count, far.n_dropped) == ("fallback", 80.0, 3, 0)
+    # frequent enough as a fraction but under 10 readings
+    few = no_return_range([np.r_[np.full(100, 2.0), [81.91] * 9]])
+    assert few.how == "fallback" and few.n_dropped == 9
+    # a number given by the user wins
+    given = no_return_range([r], max_range_m=32.0)
+    assert (given.how, given.max_range_m, given.n_dropped) == ("configured", 32.0, 70)
+
+
+def test_carmen_max_range_detected_and_stored(tmp_path):
+    # 10 scans x 180 beams, 12 of each scan at 32.767 m (6.7 %)
+    log = write_carmen(tmp_path / "d.log", _carmen_scans(10, 32.767, 12))
+    index, *_ = ingest({"path": str(log)}, tmp_path)  # format detected too
+    assert index["n_dropped"].tolist() == [12] * 10
+    meta = _meta(tmp_path / "scan_index.parquet")
+    assert meta["max_range_m"] == "32.667" and meta["format"] == "carmen" and meta["scan_topic"] == "FLASER"
+    out = tmp_path / "given"
+    out.mkdir()
+    index2, *_ = ingest({"path": str(log)}, out, {"carmen_max_range_m": 40.0})
+    assert index2["n_dropped"].tolist() == [0] * 10
+    assert _meta(out / "scan_index.parquet")["max_range_m"] == "40"
+
+
+def _meta(path):
+    import pyarrow.parquet as pq
+
+    return {k.decode(): v.decode() for k, v in (pq.read_schema(path).metadata or {}).items()}
+
+
+# --- CARMEN: stamps classified ---------------------------------------------------------
+
+
+def _stamped_log(path, stamps):
+    return write_carmen(path, [flaser_line([1.0] * 180, (float(i), 0.0, 0.0), t) for i, t in enumerate(stamps)])
+
+
+def test_carmen_spread_stamps_keep_line_order(tmp_path, caplog):
+    # 7 lines, 3 repeat the stamp before them (at most half): spread
+    log = _stamped_log(tmp_path / "s.log", [10.0, 10.0, 10.2, 10.3, 10.3, 10.3, 10.6])
+    rec = open_recording({"path": str(log)}, {}, 0.5)
+    assert rec.detected["stamps"] == "spread"
+    assert any("3 of 7 laser lines repeat" in n and "2 runs, the longest 3 lines" in n for n in rec.notes)
+    index, stream, _, poses = ingest({"path": str(log)}, tmp_path)
+    assert index["t_ns"].tolist() == [10_000_000_000, 10_100_000_000, 10_200_000_000, 10_300_000_000,
+                                      10_400_000_000, 10_500_000_000, 10_600_000_000]
+    assert poses["x"].tolist() == [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0]  # line order, each its own pose
+    assert _meta(tmp_path / "scan_index.parquet")["stamps"] == "spread"
+
+
+def test_carmen_last_run_spread_over_the_median_step(tmp_path):
+    log = _stamped_log(tmp_path / "l.log", [1.0, 1.5, 2.0, 2.5, 2.5])
+    index, *_ = ingest({"path": str(log)}, tmp_path)
+    assert index["t_ns"].tolist() == [1_000_000_000, 1_500_000_000, 2_000_000_000, 2_500_000_000, 2_750_000_000]
+
+
+def test_carmen_mostly_repeated_stamps_are_made_up(tmp_path):
+    # 3 of 5 lines repeat an earlier stamp (more than half): index x period from the first stamp
+    log = _stamped_log(tmp_path / "m.log", [5.0, 5.0, 5.0, 5.0, 5.1])
+    rec = open_recording({"path": str(log)}, {"missing_time_period_s": 0.2}, 0.5)
+    assert rec.detected["stamps"] == "made_up"
+    assert any("3 of 5 laser lines repeat an earlier timestamp" in n for n in rec.notes)
+    index, *_ = ingest({"path": str(log)}, tmp_path, {"missing_time_period_s": 0.2})
+    assert index["t_ns"].tolist() == [5_000_000_000, 5_200_000_000, 5_400_000_000, 5_600_000_000, 5_800_000_000]
+    assert _meta(tmp_path / "pose_stream.parquet")["stamps"] == "made_up"
+
+
+def test_carmen_all_zero_stamps_made_up_and_mixed_zero_rejected(tmp_path):
+    log = _stamped_log(tmp_path / "z.log", [0, 0, 0])
+    assert open_recording({"path": str(log)}, {}, 0.5).detected["stamps"] == "made_up"
+    mixed = _stamped_log(tmp_path / "x.log", [1.0, 0, 1.2])
+    ingest_fails({"path": str(mixed)}, tmp_path, r"x.log: laser lines with timestamp 0 among stamped ones \(lines \[2\]\)")
+
+
+def test_carmen_lines_out_of_order_are_recorded_stamps(tmp_path):
+    log = _stamped_log(tmp_path / "o.log", [1.0, 1.5, 1.2])
+    rec = open_recording({"path": str(log)}, {}, 0.5)
+    assert rec.detected["stamps"] == "recorded"
+    assert any("1 laser lines earlier than the line before them" in n for n in rec.notes)
+
+
+# --- format detection ------------------------------------------------------------------
+
+
+def test_detect_format_of_each_kind(ros1_bag, ros2_bag, tmp_path):
+    from floorscan.ingest.detect import bag_path, detect_format
+
+    assert detect_format(ros1_bag) == "rosbag"
+    assert detect_format(ros2_bag) == "rosbag"  # folder with metadata.yaml and a .db3
+    db3 = next(ros2_bag.glob("*.db3"))
+    assert detect_format(db3) == "rosbag" and bag_path(db3) == ros2_bag
+    magic = tmp_path / "recording"  # no suffix: the ROS1 magic says it
+    shutil.copy(ros1_bag, magic)
+    assert detect_format(magic) == "rosbag"
+    lines = ["PARAM robot_frontlaser_offset 0.0 nohost 0"] * 50 + [flaser_line([1.0] * 180, (0, 0, 0), 1.0)]
+    for name in ("a.log", "a.log.gz", "a.clf", "a.gz"):
+        assert detect_format(write_carmen(tmp_path / name, lines)) == "carmen", name
+    pcd = tmp_path / "pcd"
+    pcd.mkdir()
+    (pcd / "0000.pcd").write_text("")
+    assert detect_format(pcd) == "pcd"
+
+
+def test_detect_format_errors_name_the_path_and_what_is_expected(tmp_path):
+    from floorscan.ingest.detect import detect_format
+
+    expected = r"expected a ROS1 \.bag file, a ROS2 bag folder .* a CARMEN log .* a folder of \.pcd files"
+    (tmp_path / "notes.txt").write_text("hello\n")
+    with pytest.raises(InputError, match=rf"notes.txt: unknown recording format \(suffix '.txt'\); {expected}"):
+        detect_format(tmp_path / "notes.txt")
+    write_carmen(tmp_path / "server.log", ["GET /index.html 200"] * 10)
+    with pytest.raises(InputError, match=rf"server.log: no FLASER or ROBOTLASER1 line in its first .*; {expected}"):
+        detect_format(tmp_path / "server.log")
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    (empty / "readme.md").write_text("")
+    with pytest.raises(InputError, match=rf"empty: a folder with neither a ROS2 bag nor \.pcd files \(it holds: readme.md\); {expected}"):
+        detect_format(empty)
+    # through open_recording: nothing written
+    ingest_fails({"path": str(tmp_path / "notes.txt")}, tmp_path, "unknown recording format")
+
+
+def test_explicit_format_wins_over_the_path(tmp_path):
+    # a CARMEN log under a bag's name
+    log = write_carmen(tmp_path / "looks_like.bag", [flaser_line([1.0] * 180, (i, 0, 0), 1.0 + i) for i in range(3)])
+    index, *_ = ingest({"format": "carmen", "path": str(log)}, tmp_path)
+    assert len(index) == 3
+    assert _meta(tmp_path / "scan_index.parquet")["format"] == "carmen"
+
+
+# --- bags: scan topic and pose source detected -----------------------------------------
+
+
+def test_scan_topic_detected_and_several_refused(tmp_path):
+    from conftest import write_detection_bag
+
+    one = write_detection_bag(tmp_path / "one.bag", scan_topics=("/front_cloud",), pose_topics=("/amcl_pose",), n_scans=3)
+    rec = open_recording({"path": str(one)}, {}, 0.5)
+    assert rec.detected["scan_topic"] == "/front_cloud"
+    two = write_detection_bag(tmp_path / "two.bag", scan_topics=("/front", "/rear"), n_scans=3)
+    ingest_fails(
+        {"path": str(two)}, tmp_path,
+        r"two.bag: several scan topics: /front \(sensor_msgs/msg/LaserScan, 3 messages\), "
+        r"/rear \(sensor_msgs/msg/LaserScan, 3 messages\); set the dataset's 'scan_topic'",
+    )
+    none = write_detection_bag(tmp_path / "none.bag", scan_topics=(), n_scans=3)
+    ingest_fails({"path": str(none)}, tmp_path, r"none.bag: no topic with sensor_msgs/LaserScan .*topics in the bag: /odom \(nav_msgs/msg/Odometry, 5 messages\)")
+    # a scan topic set in the dataset picks one of several
+    rec2 = open_recording({"path": str(two), "scan_topic": "/rear"}, {}, 0.5)
+    assert rec2.detected["scan_topic"] == "/rear"
+
+
+def test_pose_source_amcl_topic_detected(ros1_bag, tmp_path):
+    index, stream, _, poses = ingest({"path": str(ros1_bag)}, tmp_path)
+    meta = _meta(tmp_path / "scan_index.parquet")
+    assert {k: meta[k] for k in ("format", "scan_topic", "pose_source", "pose_kind", "stamps")} == {
+        "format": "rosbag", "scan_topic": "/scan", "pose_source": "topic /amcl_pose (PoseWithCovarianceStamped)",
+        "pose_kind": "map", "stamps": "recorded",
+    }
+    assert _meta(tmp_path / "pose_stream.parquet")["pose_source"] == meta["pose_source"]
+    assert_poses_match_truth(index, poses, 20)
+
+
+def test_several_pose_topics(tmp_path):
+    from conftest import write_detection_bag
+
+    with_amcl = write_detection_bag(tmp_path / "a.bag", pose_topics=("/amcl_pose", "/slam_pose"), n_scans=3)
+    assert open_recording({"path": str(with_amcl)}, {}, 0.5).detected["pose_source"].startswith("topic /amcl_pose")
+    without = write_detection_bag(tmp_path / "b.bag", pose_topics=("/pose_a", "/pose_b"), n_scans=3)
+    ingest_fails({"path": str(without)}, tmp_path, r"b.bag: several pose topics: /pose_a .*/pose_b .*set the dataset's 'pose'")
+
+
+def test_pose_source_tf_map_detected(tmp_path):
+    from conftest import write_detection_bag
+
+    bag = write_detection_bag(tmp_path / "tf.bag", tf_links=(("map", "odom"), ("odom", "base_link")), odom_topics=())
+    index, stream, _, poses = ingest({"path": str(bag)}, tmp_path)
+    meta = _meta(tmp_path / "scan_index.parquet")
+    assert (meta["pose_source"], meta["pose_kind"]) == ("TF map -> odom -> base_link -> laser", "map")
+    assert_poses_match_truth(index, poses, 10)
+
+
+@pytest.mark.parametrize("prefix", ["", "/"], ids=["frames", "slashed_frames"])
+def test_odometry_only_bag_has_no_map_pose(tmp_path, prefix):
+    from conftest import write_detection_bag
+
+    bag = write_detection_bag(tmp_path / "odom.bag", frame_prefix=prefix)  # /odom and TF odom -> base_link
+    index, stream, _, poses = ingest({"path": str(bag)}, tmp_path)
+    assert len(index) == 10 and stream.empty
+    meta = _meta(tmp_path / "scan_index.parquet")
+    assert meta["pose_kind"] == "none"
+    assert meta["pose_source"] == "none: wheel odometry only (TF odom -> base_link -> laser; Odometry on /odom); LIDAR odometry"
+    assert _meta(tmp_path / "pose_stream.parquet")["pose_kind"] == "none"
+    assert not poses["valid"].any() and set(poses["reason"]) == {"no_pose_source"}
+
+
+def test_odometry_given_as_pose_is_used_as_the_map_pose(tmp_path):
+    from conftest import write_detection_bag
+
+    bag = write_detection_bag(tmp_path / "odom.bag")
+    for pose in ({"source": "topic", "topic": "/odom"}, {"source": "tf", "fixed_frame": "odom"}):
+        out = tmp_path / pose["source"]
+        out.mkdir()
+        index, _, _, poses = ingest({"path": str(bag), "pose": pose}, out)
+        meta = _meta(out / "scan_index.parquet")
+        assert meta["pose_kind"] == "map" and meta["pose_source"].endswith("(set in the dataset)")
+        assert_poses_match_truth(index, poses, 10)
+
+
+def test_empty_pose_stream_is_an_error_for_a_map_pose_source(tmp_path):
+    from floorscan.ingest import Recording, Scan, pose_stream_frame
+
+    def scans():
+        yield Scan(0, "laser", np.zeros((1, 3), np.float32), 0)
+
+    empty = pose_stream_frame([], [], [], [], [])
+    out = tmp_path / "out"
+    out.mkdir()
+    rec = Recording(scans(), empty, "rec", detected={"pose_kind": "map", "pose_source": "topic /amcl_pose"})
+    with pytest.raises(InputError, match=r"rec: no poses found for the pose source \(topic /amcl_pose\)"):
+        write_recording(rec, out / "s.parquet", out / "i.parquet", out / "p.parquet")
+    assert list(out.iterdir()) == []
+    rec = Recording(scans(), empty, "rec", detected={"pose_kind": "none", "pose_source": "none"})
+    write_recording(rec, out / "s.parquet", out / "i.parquet", out / "p.parquet")
+    assert read_table(out / "p.parquet").empty
+
+
+# --- real recordings: what is detected -------------------------------------------------
+
+# path: (scan topic, pose source, pose kind)
+REAL_BAGS = {
+    "uob-pioneer/trace0.bag": ("/base_scan", "TF map -> odom -> base_link -> laser", "map"),
+    "uob-pioneer/lgfloor2.bag": (
+        "/base_scan", "none: wheel odometry only (TF odom -> base_link -> laser); LIDAR odometry", "none"),
+    "stage-sim/simpath2.bag": (
+        "/base_scan",
+        "none: wheel odometry only (TF odom -> base_footprint -> base_link -> base_laser_link; "
+        "Odometry on /base_pose_ground_truth, /odom); LIDAR odometry",
+        "none",
+    ),
+    "comprobo-mac/macfirst_floor_take_2": (
+        "/scan", "none: wheel odometry only (TF odom -> base_link -> rplidar_link; Odometry on /odom); LIDAR odometry",
+        "none"),
+}
+
+
+@needs_shared
+@pytest.mark.realdata
+@pytest.mark.parametrize("name", list(REAL_BAGS))
+def test_real_bags_detected(name):
+    topic, source, kind = REAL_BAGS[name]
+    rec = open_recording({"path": str(SHARED_DATA / name)}, {}, 0.5)
+    assert rec.detected == {"format": "rosbag", "scan_topic": topic, "pose_source": source, "pose_kind": kind,
+                            "stamps": "recorded"}
+    assert rec.pose_stream.empty == (kind == "none")
+
+
+@needs_shared
+@pytest.mark.realdata
+@pytest.mark.parametrize(
+    "name, stamps, max_range_m",
+    [("belgioioso", "made_up", "81.81"), ("orebro", "made_up", "32.667"), ("intel", "recorded", "81.73"),
+     ("aces", "recorded", "49.9"), ("freiburg-101", "recorded", "81.81")],
+)
+def test_real_carmen_logs_detected(name, stamps, max_range_m):
+    rec = open_recording({"path": str(SHARED_DATA / "radish" / f"{name}-corrected.log.gz")}, {}, 0.5)
+    assert rec.detected == {"format": "carmen", "scan_topic": "FLASER",
+                            "pose_source": "embedded (corrected pose on each FLASER line)", "pose_kind": "map",
+                            "stamps": stamps, "max_range_m": max_range_m}
+
+
+@needs_shared
+@pytest.mark.realdata
+def test_real_orebro_no_return_readings_all_dropped():
+    rec = open_recording({"path": str(SHARED_DATA / "radish" / "orebro-corrected.log.gz")}, {}, 0.5)
+    # 463 readings at 32.767 m and 505 at 32.759-32.765 m (its no-return codes)
+    assert any("largest reading 32.767 m carries 463" in n and "968 readings dropped" in n for n in rec.notes)
+    assert sum(s.n_dropped for s in rec.scans) == 968
+
+
+@needs_shared
+@pytest.mark.realdata
+def test_real_simpath2_returns_at_range_max_dropped():
+    rec = open_recording({"path": str(SHARED_DATA / "stage-sim" / "simpath2.bag")}, {}, 0.5)
+    kept = dropped = 0
+    for s in rec.scans:
+        kept, dropped = kept + len(s.points), dropped + s.n_dropped
+    # 634 scans x 500 beams; 56 454 at range_max (5.6 m), 17.8 %: none were dropped before
+    assert (kept + dropped, dropped) == (317_000, 56_454)
+
+
+def test_pcd_folder_detected_with_made_up_stamps(tmp_path):
+    folder = tmp_path / "pcd"
+    folder.mkdir()
+    header = "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n"
+    for i in range(3):
+        (folder / f"{i}.pcd").write_text(header + f"{i + 1.0} 0 0\n{i + 1.0} 1 0\n")
+    (folder / "locations.csv").write_text("file,x,y,z\n" + "".join(f"{i}.pcd,{i}.0,0.0,0.0\n" for i in range(3)))
+    index, *_ = ingest({"path": str(folder)}, tmp_path, {"missing_time_period_s": 0.5})
+    assert index["t_ns"].tolist() == [0, 500_000_000, 1_000_000_000]
+    meta = _meta(tmp_path / "scan_index.parquet")
+    assert {k: meta[k] for k in ("format", "scan_topic", "pose_source", "pose_kind", "stamps")} == {
+        "format": "pcd", "scan_topic": "pcd files", "pose_source": "embedded (scan locations in locations.csv)",
+        "pose_kind": "map", "stamps": "made_up",
+    }

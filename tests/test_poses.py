@@ -77,3 +77,14 @@ def test_scan_poses_carries_scan_ids():
     assert out["scan_id"].tolist() == [7, 8]
     assert out["x"].tolist() == [0.0, 0.5]
     assert out["valid"].all()
+
+
+def test_empty_stream_means_no_pose_source():
+    """Pose kind none (wheel odometry only): every scan without a pose, no error."""
+    s = stream([], [], [], [])
+    index = pd.DataFrame({"scan_id": np.array([0, 1, 2], np.int32), "t_ns": np.array([0, 100, 200])})
+    out = scan_poses(index, s, 0.5, "pose_stream.parquet")
+    assert out["scan_id"].tolist() == [0, 1, 2]
+    assert out["valid"].tolist() == [False] * 3
+    assert out["reason"].tolist() == ["no_pose_source"] * 3
+    assert out[["x", "y", "z", "yaw"]].isna().all().all()

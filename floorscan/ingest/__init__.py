@@ -10,6 +10,16 @@ Three formats are read, each by its own module:
 - ``pcd`` (:mod:`floorscan.ingest.pcd`): a folder of ``.pcd`` scans in the map frame plus
   a CSV of scan locations (the thesis's synthetic layout, section 4.1).
 
+A dataset may name only its ``path``: the format is then detected from it
+(:func:`floorscan.ingest.detect.detect_format`), a bag's scan topic and pose source from
+its topics and TF tree, a CARMEN log's no-return range and the kind of its stamps from
+its readings. What was found travels with the data as :attr:`Recording.detected`, stored
+in the schema metadata of ``scan_index.parquet`` and ``pose_stream.parquet``.
+
+Every reader keeps the same returns (:func:`laser_scan_points`, :func:`filter_points`):
+finite, at or beyond the minimum range and strictly short of the maximum range; a return
+at the maximum is the scanner's "no return" and would draw an arc of fake wall.
+
 Every reader yields :class:`Scan` records in recording order plus a pose stream; the
 writer :func:`write_recording` streams the points to ``scans.parquet`` one batch at a
 time, so memory grows with the largest scan, not with the recording.
@@ -53,29 +63,57 @@ class Scan:
     n_dropped: int
 
 
+#: Keys of :attr:`Recording.detected`, in the order they are logged.
+DETECTED_KEYS = ("format", "scan_topic", "pose_source", "stamps", "pose_kind", "max_range_m")
+#: Pose kinds: ``map`` poses (a localizer, the TF chain from ``map``, a log's corrected
+#: poses, a PCD folder's locations, or a pose source set in the dataset), or ``none``.
+POSE_KINDS = ("map", "none")
+#: Stamp classes: ``recorded`` (strictly increasing, after sorting the few lines out of
+#: order), ``spread`` (some repeated stamps spread in line order), ``made_up`` (all zero
+#: or mostly repeated: index x period).
+STAMP_CLASSES = ("recorded", "spread", "made_up")
+
+
 @dataclasses.dataclass
 class Recording:
     """A recording opened for ingest: a scan iterator and its pose stream.
 
     ``scans`` is consumed once. ``pose_stream`` is filled by the time ``scans`` is
     exhausted (a bag reader may read poses first); it has the columns of
-    :data:`floorscan.io.POSE_STREAM`.
+    :data:`floorscan.io.POSE_STREAM`, and is empty when ``detected["pose_kind"]`` is
+    ``"none"`` (no map pose source: the register stage runs LIDAR odometry).
+
+    Attributes
+    ----------
+    detected : dict of str to str
+        What the reader found or was told (keys of :data:`DETECTED_KEYS`): ``format``
+        (rosbag, carmen, pcd), ``scan_topic`` (a bag's topic, a CARMEN log's laser line
+        type, ``pcd files``), ``pose_source`` (a readable phrase), ``pose_kind``
+        (:data:`POSE_KINDS`), ``stamps`` (:data:`STAMP_CLASSES`) and, for CARMEN,
+        ``max_range_m`` (returns at or beyond it were dropped, metres).
+    notes : list of str
+        What the reader noticed and did about it, one line each, for the stage log.
     """
 
     scans: Iterator[Scan]
     pose_stream: pd.DataFrame | None = None
     source: str = ""
     notes: list[str] = dataclasses.field(default_factory=list)
+    detected: dict[str, str] = dataclasses.field(default_factory=dict)
 
 
 def open_recording(dataset: Mapping[str, Any], cfg: Mapping[str, Any], max_gap_s: float) -> Recording:
     """Open the recording a dataset entry names.
 
+    The format is the dataset's ``format`` when given, else detected from ``path``
+    (:func:`floorscan.ingest.detect.detect_format`); ``Recording.detected["format"]``
+    holds it either way.
+
     Parameters
     ----------
     dataset : mapping
-        The dataset's config entry: ``format`` (rosbag, carmen, pcd), ``path`` and the
-        format's options (see ``workflow/schemas/config.schema.yaml``).
+        The dataset's config entry: ``path``, optional ``format`` (rosbag, carmen, pcd)
+        and the format's options (see ``workflow/schemas/config.schema.yaml``).
     cfg : mapping
         The ``ingest`` config section.
     max_gap_s : float
@@ -85,25 +123,41 @@ def open_recording(dataset: Mapping[str, Any], cfg: Mapping[str, Any], max_gap_s
     Raises
     ------
     InputError
-        The path is missing, or the format cannot be read (message names the file).
+        The path is missing, its format cannot be detected (without ``format``), or the
+        recording cannot be read (message names the file).
     """
-    fmt = dataset["format"]
+    fmt = dataset.get("format")
     path = Path(dataset["path"])
     if not path.exists():
-        raise InputError(f"{path}: recording not found (dataset format {fmt!r})")
+        raise InputError(f"{path}: recording not found (dataset format {fmt or 'to be detected'!r})")
+    how = "set in the dataset"
+    if fmt is None:
+        from floorscan.ingest.detect import detect_format
+
+        fmt, how = detect_format(path), "detected from the path"
     if fmt == "rosbag":
         from floorscan.ingest.rosbag import open_bag
 
-        return open_bag(path, dataset, max_gap_s=max_gap_s)
-    if fmt == "carmen":
+        rec = open_bag(path, dataset, max_gap_s=max_gap_s)
+    elif fmt == "carmen":
         from floorscan.ingest.carmen import open_carmen
 
-        return open_carmen(path, dataset, cfg)
-    if fmt == "pcd":
+        rec = open_carmen(path, dataset, cfg)
+    elif fmt == "pcd":
         from floorscan.ingest.pcd import open_pcd_folder
 
-        return open_pcd_folder(path, dataset, cfg)
-    raise InputError(f"{path}: unsupported dataset format {fmt!r}; expected rosbag, carmen or pcd")
+        rec = open_pcd_folder(path, dataset, cfg)
+    else:
+        raise InputError(f"{path}: unsupported dataset format {fmt!r}; expected rosbag, carmen or pcd")
+    rec.detected = {"format": fmt, **{k: v for k, v in rec.detected.items() if k != "format"}}
+    rec.notes.insert(0, f"format {fmt} ({how})")
+    return rec
+
+
+def detected_line(detected: Mapping[str, str]) -> str:
+    """One log line of what ingest detected: ``format=..., scan_topic=..., ...``."""
+    keys = [k for k in DETECTED_KEYS if k in detected] + sorted(k for k in detected if k not in DETECTED_KEYS)
+    return ", ".join(f"{k}={detected[k]}" for k in keys)
 
 
 def write_recording(
@@ -118,7 +172,9 @@ def write_recording(
 
     Scans get ``scan_id`` 0..N-1 in recording order. ``sensor_height_m`` is added to
     the pose stream's z. All three files are written atomically: on any error none
-    of them is left behind.
+    of them is left behind. ``recording.detected`` (string values) and ``metadata`` are
+    stored in the schema metadata of the scan index and the pose stream; the register
+    stage reads ``pose_kind`` and ``stamps`` from the scan index's.
 
     Returns
     -------
@@ -128,9 +184,11 @@ def write_recording(
     Raises
     ------
     InputError
-        No scans, or scan timestamps going backwards.
+        No scans, scan timestamps going backwards, or no poses while the pose kind is
+        not ``none`` (a map pose source was found or set but has no poses).
     """
     rows: list[tuple[int, int, int, int, str]] = []
+    table_meta = {**{k: str(v) for k, v in recording.detected.items()}, **(metadata or {})}
     meta = {k.encode(): str(v).encode() for k, v in (metadata or {}).items()}
     with atomic_path(scans_path) as tmp:
         with pq.ParquetWriter(tmp, SCANS.with_metadata(meta), **parquet_options(SCANS, ["scan_id"])) as writer:
@@ -153,11 +211,14 @@ def write_recording(
         index = pd.DataFrame(rows, columns=["scan_id", "t_ns", "n_points", "n_dropped", "frame"])
         stream = recording.pose_stream
         if stream is None or stream.empty:
-            raise InputError(f"{recording.source}: no poses found for the pose source")
+            if recording.detected.get("pose_kind") != "none":
+                what = recording.detected.get("pose_source", "the pose source")
+                raise InputError(f"{recording.source}: no poses found for the pose source ({what})")
+            stream = pose_stream_frame([], [], [], [], [])  # no map pose: LIDAR odometry
         stream = stream.copy()
         stream["z"] = stream["z"].astype(np.float64) + float(sensor_height_m)
-        write_table(index, index_path, schema=SCAN_INDEX, metadata=metadata)
-        write_table(stream, pose_stream_path, schema=POSE_STREAM, metadata=metadata)
+        write_table(index, index_path, schema=SCAN_INDEX, metadata=table_meta)
+        write_table(stream, pose_stream_path, schema=POSE_STREAM, metadata=table_meta)
     return index
 
 
@@ -176,19 +237,21 @@ def laser_scan_points(
         Range of each beam, metres; beam i points at ``angle_min + i * angle_increment``
         radians, counter-clockwise from the scanner's +x.
     range_min, range_max : float
-        Valid range interval, metres, inclusive.
+        Valid range interval ``[range_min, range_max)``, metres: a return at
+        ``range_max`` is the scanner's "no return" (the Stage simulator, for one,
+        reports every beam that hits nothing at exactly ``range_max``).
 
     Returns
     -------
     points : (N, 3) float32 ndarray
         Valid returns (z = 0), metres.
     n_dropped : int
-        Beams dropped: NaN, inf, or outside ``[range_min, range_max]``.
+        Beams dropped: NaN, inf, below ``range_min``, at or beyond ``range_max``.
     """
     r = np.asarray(ranges, dtype=np.float64)
     angles = angle_min + angle_increment * np.arange(r.size)
     with np.errstate(invalid="ignore"):
-        ok = np.isfinite(r) & (r >= range_min) & (r <= range_max)
+        ok = np.isfinite(r) & (r >= range_min) & (r < range_max)
     pts = np.zeros((int(ok.sum()), 3), dtype=np.float32)
     pts[:, 0] = r[ok] * np.cos(angles[ok])
     pts[:, 1] = r[ok] * np.sin(angles[ok])
@@ -200,16 +263,22 @@ def filter_points(
 ) -> tuple[np.ndarray, int]:
     """Drop non-finite points and points outside a range interval (distance from origin).
 
+    The same rule as :func:`laser_scan_points`: a point is kept when its distance ``d``
+    satisfies ``range_min <= d < range_max`` (each bound only when given).
+
     Parameters
     ----------
     points : (N, 3) float ndarray
         Points in the scanner frame, metres.
+    range_min, range_max : float, optional
+        Range interval ``[range_min, range_max)``, metres.
 
     Returns
     -------
     points : (M, 3) float32 ndarray
         ``points`` itself when it is float32 and every point is kept (no copy).
     n_dropped : int
+        Points dropped: non-finite or outside the range interval.
     """
     p = np.asarray(points)
     if p.dtype != np.float32:  # float32 input (PointCloud2) is checked as it is: no copy
@@ -223,7 +292,7 @@ def filter_points(
         if range_min is not None:
             ok &= d >= range_min
         if range_max is not None:
-            ok &= d <= range_max
+            ok &= d < range_max
     n_ok = int(np.count_nonzero(ok))
     kept = p.astype(np.float32, copy=False) if n_ok == len(p) else p[ok].astype(np.float32, copy=False)
     return kept, len(p) - n_ok

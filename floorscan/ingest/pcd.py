@@ -12,7 +12,8 @@ scans are stamped at their row index times ``missing_time_period_s``; without ``
 it is 0. Rows are taken in ``t_ns`` order (file order when there is no ``t_ns``).
 
 Points are moved into the scanner frame with the inverse pose, so a PCD recording flows
-through the same stages as a bag; the pose stream is the locations themselves.
+through the same stages as a bag; the pose stream is the locations themselves (pose kind
+``map``, source ``embedded``; stamps ``recorded`` with ``t_ns``, else ``made_up``).
 """
 
 from __future__ import annotations
@@ -79,6 +80,13 @@ def _pcd_header(path: Path) -> dict[str, list[str]]:
 def read_locations(folder: Path, name: str, period_s: float) -> pd.DataFrame:
     """Read and check the locations CSV of a PCD folder.
 
+    Returns
+    -------
+    DataFrame
+        Columns ``file``, ``t_ns`` (int64, ns), ``x``, ``y``, ``z`` (metres), ``yaw``
+        (radians); ``attrs["stamps"]`` is ``recorded`` (a ``t_ns`` column) or
+        ``made_up`` (row index x ``period_s``).
+
     Raises
     ------
     InputError
@@ -106,6 +114,7 @@ def read_locations(folder: Path, name: str, period_s: float) -> pd.DataFrame:
         df[c] = vals
     if "yaw" not in df.columns:
         df["yaw"] = 0.0
+    df.attrs["stamps"] = "recorded" if "t_ns" in df.columns else "made_up"
     if "t_ns" not in df.columns:
         log.warning("%s: no t_ns column; scans stamped at row index x %s s", path, period_s)
         df["t_ns"] = np.round(np.arange(len(df)) * period_s * 1e9).astype(np.int64)
@@ -122,6 +131,9 @@ def read_locations(folder: Path, name: str, period_s: float) -> pd.DataFrame:
 
 def open_pcd_folder(path: Path, dataset: Mapping[str, Any], cfg: Mapping[str, Any]) -> Recording:
     """Open a folder of map-frame ``.pcd`` scans as a :class:`~floorscan.ingest.Recording`.
+
+    ``Recording.detected``: scan topic ``pcd files``, pose source embedded (the
+    locations CSV), pose kind ``map``, stamps from :func:`read_locations`.
 
     Raises
     ------
@@ -143,4 +155,12 @@ def open_pcd_folder(path: Path, dataset: Mapping[str, Any], cfg: Mapping[str, An
             kept, dropped = filter_points(local, rmin, rmax)
             yield Scan(int(row.t_ns), "scanner", kept, dropped)
 
-    return Recording(scans=_scans(), pose_stream=stream, source=str(path))
+    name = dataset.get("locations", "locations.csv")
+    detected = {
+        "scan_topic": "pcd files",
+        "pose_source": f"embedded (scan locations in {name})",
+        "pose_kind": "map",
+        "stamps": loc.attrs.get("stamps", "recorded"),
+    }
+    notes = [f"{len(loc)} scans listed in {name}; stamps {detected['stamps']}"]
+    return Recording(scans=_scans(), pose_stream=stream, source=str(path), notes=notes, detected=detected)

@@ -12,7 +12,21 @@ when the stamp is zero). Poses come from one of (dataset option ``pose.source``)
   and ``/tf_static`` (several publishers), each link interpolated at the union of the
   moving links' stamps, linearly in translation and by slerp in rotation, as tf2 does.
 
-ROS2 bags that store no message definitions are read with the Humble typestore.
+Detection (issue 20), when the dataset does not name them:
+
+- scan topic (:func:`detect_scan_topic`): the bag's one topic of LaserScan or
+  PointCloud2 messages; with several or none, an ``InputError`` lists the candidates
+  (or the bag's topics) and asks for ``scan_topic``;
+- pose source (:func:`detect_pose_source`), in this order: (a) a
+  PoseWithCovarianceStamped or PoseStamped topic (with several, ``/amcl_pose``); (b) the
+  TF chain from ``map`` to the scan frame; (c) none. Wheel odometry (nav_msgs/Odometry
+  topics, TF chains from ``odom``) drifts and is never taken for the map pose: without
+  (a) or (b) the pose stream is empty, the pose kind ``none``, and the register stage
+  runs LIDAR odometry. A pose source set in the dataset is used as given (pose kind
+  ``map``: the user's choice).
+
+ROS2 bags that store no message definitions are read with the Humble typestore. A
+``.db3`` / ``.mcap`` file is read as its folder's bag.
 """
 
 from __future__ import annotations
@@ -42,6 +56,13 @@ POSE_TYPES = (
     "geometry_msgs/msg/PoseStamped",
     "nav_msgs/msg/Odometry",
 )
+#: Pose topics detection takes for map poses (a localizer's output); odometry is not one.
+MAP_POSE_TYPES = POSE_TYPES[:2]
+ODOMETRY_TYPE = "nav_msgs/msg/Odometry"
+#: The pose topic detection prefers among several (AMCL's output).
+PREFERRED_POSE_TOPIC = "/amcl_pose"
+#: The map frame of a TF chain detection looks for.
+MAP_FRAME = "map"
 TF_TOPICS = ("/tf", "/tf_static")
 #: A scanner tilted more than this (degrees) cannot be treated as planar.
 MAX_TILT_DEG = 10.0
@@ -66,6 +87,59 @@ def _topics(reader) -> dict[str, str]:
     return out
 
 
+def _topic_counts(reader) -> dict[str, tuple[str, int]]:
+    """Topic -> (message type, message count over all its connections)."""
+    out: dict[str, tuple[str, int]] = {}
+    for c in reader.connections:
+        msgtype, n = out.get(c.topic, (c.msgtype, 0))
+        out[c.topic] = (msgtype, n + int(getattr(c, "msgcount", 0) or 0))
+    return out
+
+
+def _short(msgtype: str) -> str:
+    return msgtype.rsplit("/", 1)[-1]
+
+
+def _listing(topics: Mapping[str, tuple[str, int]]) -> str:
+    return ", ".join(f"{t} ({m}, {n} messages)" for t, (m, n) in sorted(topics.items()))
+
+
+def detect_scan_topic(topics: Mapping[str, tuple[str, int]], path: Path | str = "") -> tuple[str, str]:
+    """The bag's one scan topic.
+
+    Parameters
+    ----------
+    topics : mapping of str to (str, int)
+        Topic -> (message type, message count), as rosbags names the types
+        (``sensor_msgs/msg/LaserScan``).
+
+    Returns
+    -------
+    topic : str
+    note : str
+        Why it was chosen, for the stage log.
+
+    Raises
+    ------
+    InputError
+        Several topics with LaserScan or PointCloud2 messages (listed with their type
+        and message count; set the dataset's ``scan_topic``), or none (the bag's topics
+        are listed).
+    """
+    scans = {t: (m, n) for t, (m, n) in topics.items() if m in SCAN_TYPES and n > 0}
+    if len(scans) == 1:
+        (topic, (msgtype, n)), = scans.items()
+        return topic, f"scan topic {topic} (detected: the bag's one {_short(msgtype)} topic, {n} messages)"
+    if scans:
+        raise InputError(
+            f"{path}: several scan topics: {_listing(scans)}; set the dataset's 'scan_topic' to one of them"
+        )
+    raise InputError(
+        f"{path}: no topic with sensor_msgs/LaserScan or sensor_msgs/PointCloud2 messages; "
+        f"topics in the bag: {_listing(topics) or 'none'}"
+    )
+
+
 def _connections(reader, path: Path, topic: str, allowed: tuple[str, ...], what: str):
     topics = _topics(reader)
     if topic not in topics:
@@ -86,42 +160,74 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float = 0.5) -> 
     Parameters
     ----------
     path : Path
-        The bag file (ROS1) or folder (ROS2).
+        The bag file (ROS1), folder (ROS2) or a ROS2 bag's ``.db3`` / ``.mcap`` file.
     dataset : mapping
-        ``scan_topic``, ``pose`` (``source``, ``topic``, ``fixed_frame``, ``base_frame``),
-        optional ``range_min_m`` / ``range_max_m`` (tighten the message's limits).
+        Optional ``scan_topic`` and ``pose`` (``source``, ``topic``, ``fixed_frame``,
+        ``base_frame``), detected when absent (see the module docstring); optional
+        ``range_min_m`` / ``range_max_m`` (tighten the message's limits).
     max_gap_s : float
         TF chains: samples inside a gap longer than this in any moving link are left
         out of the pose stream, so the pose stage sees the gap.
+
+    Returns
+    -------
+    Recording
+        ``detected`` holds ``scan_topic``, ``pose_source``, ``pose_kind`` (``map``, or
+        ``none`` with an empty pose stream) and ``stamps`` (``recorded``: header stamps).
 
     Raises
     ------
     InputError
         Unreadable/corrupt bag, missing topic (the message lists the bag's topics),
         unsupported message type, no path between the TF frames, pose stamps unsorted
-        or duplicated.
+        or duplicated; without ``scan_topic``, several or no scan topics; without
+        ``pose``, several map pose topics and none of them ``/amcl_pose``.
     """
-    scan_topic = dataset["scan_topic"]
-    pose_cfg = dataset["pose"]
+    from floorscan.ingest.detect import bag_path
+
+    path = bag_path(path)
     rmin_cfg = dataset.get("range_min_m")
     rmax_cfg = dataset.get("range_max_m")
+    notes: list[str] = []
     try:
         with _reader(path) as reader:
+            topics = _topic_counts(reader)
+            scan_topic = dataset.get("scan_topic")
+            if scan_topic is None:
+                scan_topic, note = detect_scan_topic(topics, path)
+                notes.append(note)
             scan_conns = _connections(reader, path, scan_topic, SCAN_TYPES, "scans")
             first = next(reader.messages(connections=scan_conns), None)
             if first is None:
                 raise InputError(f"{path}: topic {scan_topic!r} has no messages")
             c0, _, raw0 = first
             scan_frame = reader.deserialize(raw0, c0.msgtype).header.frame_id.lstrip("/")
-            source = pose_cfg["source"]
-            if source == "topic":
-                if "topic" not in pose_cfg:
-                    raise InputError(f"{path}: pose.source 'topic' needs pose.topic (e.g. /amcl_pose)")
-                stream = _pose_topic_stream(reader, path, pose_cfg, scan_frame)
-            elif source == "tf":
-                stream = _tf_stream(reader, path, pose_cfg["fixed_frame"], scan_frame, max_gap_s)
+            tf = _LazyTF(reader, path)
+            pose_cfg = dataset.get("pose")
+            if pose_cfg is None:
+                pose_cfg, phrase, note = detect_pose_source(topics, tf.edges, scan_frame, path)
+                notes.append(note)
             else:
-                raise InputError(f"{path}: pose.source {source!r} is not available for bags; use topic or tf")
+                phrase = None
+            if pose_cfg is None:
+                stream, pose_kind = pose_stream_frame([], [], [], [], []), "none"
+            else:
+                pose_kind = "map"
+                source = pose_cfg["source"]
+                if source == "topic":
+                    if "topic" not in pose_cfg:
+                        raise InputError(f"{path}: pose.source 'topic' needs pose.topic (e.g. /amcl_pose)")
+                    stream = _pose_topic_stream(reader, path, pose_cfg, scan_frame, tf)
+                    described = f"topic {pose_cfg['topic']} ({_short(topics[pose_cfg['topic']][0])})"
+                elif source == "tf":
+                    fixed = pose_cfg.get("fixed_frame", MAP_FRAME)
+                    stream, chain = _tf_stream(tf.edges, path, fixed, scan_frame, max_gap_s)
+                    described = "TF " + " -> ".join([fixed] + [e.child for e in chain])
+                else:
+                    raise InputError(f"{path}: pose.source {source!r} is not available for bags; use topic or tf")
+                if phrase is None:
+                    phrase = f"{described} (set in the dataset)"
+                    notes.append(f"pose source {phrase}: used as the map pose")
     except InputError:
         raise
     except Exception as e:  # rosbags raises several reader/deserialization errors
@@ -151,7 +257,98 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float = 0.5) -> 
                 f"{path}: cannot read scans on {scan_topic!r}, truncated or corrupt bag ({type(e).__name__}: {e})"
             ) from None
 
-    return Recording(scans=_scans(), pose_stream=stream, source=f"{path} {scan_topic}")
+    detected = {"scan_topic": scan_topic, "pose_source": phrase, "pose_kind": pose_kind, "stamps": "recorded"}
+    return Recording(
+        scans=_scans(), pose_stream=stream, source=f"{path} {scan_topic}", notes=notes, detected=detected
+    )
+
+
+class _LazyTF:
+    """The bag's TF links, read once on first use (detection and the pose source share them)."""
+
+    def __init__(self, reader, path: Path):
+        self._reader, self._path, self._edges = reader, path, None
+
+    @property
+    def edges(self) -> dict[tuple[str, str], "_Edge"]:
+        if self._edges is None:
+            self._edges = _read_tf(self._reader, self._path)
+        return self._edges
+
+
+def detect_pose_source(
+    topics: Mapping[str, tuple[str, int]],
+    edges: Mapping[tuple[str, str], "_Edge"],
+    scan_frame: str,
+    path: Path | str = "",
+) -> tuple[dict | None, str, str]:
+    """The map pose source of a bag, or none (see the module docstring for the order).
+
+    Parameters
+    ----------
+    topics : mapping of str to (str, int)
+        Topic -> (message type, message count).
+    edges : mapping
+        The bag's TF links (parent, child) -> link, as :func:`_read_tf` returns them.
+    scan_frame : str
+        Frame of the scans (no leading slash).
+
+    Returns
+    -------
+    pose : dict or None
+        A dataset ``pose`` entry (``{source: topic, topic, base_frame}`` or
+        ``{source: tf, fixed_frame: map}``), or None: no map pose (pose kind ``none``).
+    phrase : str
+        The pose source for people, e.g. ``topic /amcl_pose (PoseWithCovarianceStamped)``,
+        ``TF map -> odom -> base_link -> laser`` or ``none: wheel odometry only (TF odom ->
+        base_link -> laser); LIDAR odometry``.
+    note : str
+        Why, for the stage log.
+
+    Raises
+    ------
+    InputError
+        Several PoseWithCovarianceStamped / PoseStamped topics, none of them
+        ``/amcl_pose`` (they are listed; set the dataset's ``pose``).
+    """
+    poses = {t: (m, n) for t, (m, n) in topics.items() if m in MAP_POSE_TYPES and n > 0}
+    if len(poses) > 1 and PREFERRED_POSE_TOPIC in poses:
+        poses = {PREFERRED_POSE_TOPIC: poses[PREFERRED_POSE_TOPIC]}
+        why = f"{PREFERRED_POSE_TOPIC} among several pose topics"
+    else:
+        why = "the bag's one map pose topic"
+    if len(poses) > 1:
+        raise InputError(
+            f"{path}: several pose topics: {_listing(poses)}; set the dataset's "
+            f"'pose' (e.g. {{source: topic, topic: {sorted(poses)[0]}}})"
+        )
+    if poses:
+        (topic, (msgtype, n)), = poses.items()
+        phrase = f"topic {topic} ({_short(msgtype)})"
+        note = f"pose source {phrase} (detected: {why}, {n} messages)"
+        return {"source": "topic", "topic": topic, "base_frame": "base_link"}, phrase, note
+    chain = _chain_or_none(edges, MAP_FRAME, scan_frame)
+    if chain is not None:
+        phrase = "TF " + " -> ".join([MAP_FRAME] + [e.child for e in chain])
+        note = f"pose source {phrase} (detected: no pose topic, and the TF chain from {MAP_FRAME!r} to the scan frame)"
+        return {"source": "tf", "fixed_frame": MAP_FRAME}, phrase, note
+    wheel = []
+    root_chain = _chain_from_root(edges, scan_frame)
+    if len(root_chain) > 1:
+        wheel.append("TF " + " -> ".join(root_chain))
+    odom = sorted(t for t, (m, n) in topics.items() if m == ODOMETRY_TYPE and n > 0)
+    if odom:
+        wheel.append(f"Odometry on {', '.join(odom)}")
+    if wheel:
+        phrase = f"none: wheel odometry only ({'; '.join(wheel)}); LIDAR odometry"
+    else:
+        phrase = "none: no pose topic and no TF; LIDAR odometry"
+    note = (
+        f"pose source none (detected: no PoseWithCovarianceStamped or PoseStamped topic and no TF chain "
+        f"from {MAP_FRAME!r} to {scan_frame!r}; wheel odometry drifts and is never taken for the map pose): "
+        "the pose stream is empty (pose kind none) and the register stage runs LIDAR odometry"
+    )
+    return None, phrase, note
 
 
 _PC2_DTYPES = {1: "i1", 2: "u1", 3: "i2", 4: "u2", 5: "i4", 6: "u4", 7: "f4", 8: "f8"}
@@ -203,7 +400,7 @@ def pointcloud2_xyz(msg, path: Path | str = "", topic: str = "") -> np.ndarray:
     return out
 
 
-def _pose_topic_stream(reader, path: Path, pose_cfg: Mapping[str, Any], scan_frame: str):
+def _pose_topic_stream(reader, path: Path, pose_cfg: Mapping[str, Any], scan_frame: str, tf: "_LazyTF"):
     topic = pose_cfg["topic"]
     conns = _connections(reader, path, topic, POSE_TYPES, "poses")
     t, xyz, quat = [], [], []
@@ -221,9 +418,8 @@ def _pose_topic_stream(reader, path: Path, pose_cfg: Mapping[str, Any], scan_fra
     rot = Rotation.from_quat(np.asarray(quat, dtype=np.float64))
     trans = np.asarray(xyz, dtype=np.float64)
     # mount of the scanner on the base: a constant transform base_frame -> scan_frame
-    edges = _read_tf(reader, path)
     base = pose_cfg.get("base_frame", "base_link")
-    mount = _static_chain(edges, base, scan_frame)
+    mount = _static_chain(tf.edges, base, scan_frame)
     if mount is not None:
         m_rot, m_t = mount
         trans = trans + rot.apply(m_t)
@@ -337,6 +533,27 @@ def _chain(edges: dict[tuple[str, str], _Edge], fixed: str, frame: str, path: Pa
     return chain[::-1]
 
 
+def _chain_or_none(edges, fixed: str, frame: str) -> list[_Edge] | None:
+    """The chain of links from ``fixed`` to ``frame``, or None when there is none."""
+    if fixed == frame:
+        return None
+    try:
+        return _chain(edges, fixed, frame, Path())
+    except InputError:
+        return None
+
+
+def _chain_from_root(edges, frame: str) -> list[str]:
+    """Frames from the root of ``frame``'s TF tree down to ``frame`` (first parent each)."""
+    parents: dict[str, str] = {}
+    for parent, child in edges:
+        parents.setdefault(child, parent)
+    out = [frame]
+    while out[-1] in parents and parents[out[-1]] not in out:
+        out.append(parents[out[-1]])
+    return out[::-1]
+
+
 def _static_chain(edges, base: str, frame: str):
     if base == frame:
         return Rotation.identity(), np.zeros(3)
@@ -353,8 +570,8 @@ def _static_chain(edges, base: str, frame: str):
     return rot, trans
 
 
-def _tf_stream(reader, path: Path, fixed: str, frame: str, max_gap_s: float):
-    edges = _read_tf(reader, path)
+def _tf_stream(edges, path: Path, fixed: str, frame: str, max_gap_s: float):
+    """Pose stream of the TF chain ``fixed`` -> ``frame`` and the chain's links."""
     if not edges:
         raise InputError(f"{path}: pose.source is 'tf' but the bag has no /tf or /tf_static messages")
     chain = _chain(edges, fixed, frame, path)
@@ -378,4 +595,4 @@ def _tf_stream(reader, path: Path, fixed: str, frame: str, max_gap_s: float):
         r_e, t_e = e.at(t)
         trans = trans + rot.apply(t_e)
         rot = rot * r_e
-    return _planar(t, rot, trans, f"{path}: TF chain {fixed!r} -> {frame!r}")
+    return _planar(t, rot, trans, f"{path}: TF chain {fixed!r} -> {frame!r}"), chain

@@ -123,7 +123,7 @@ def dataset_config(wildcards):
 
 
 def is_synthetic(dataset):
-    return DATASETS[dataset]["format"] == "synthetic"
+    return DATASETS[dataset].get("format") == "synthetic"
 
 
 def log_path(stage):

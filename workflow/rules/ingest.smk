@@ -6,7 +6,7 @@ stage_schema_check("poses")
 def recording_input(wildcards):
     """The recording a dataset reads: its path, or the simulated one for synthetic data."""
     ds = DATASETS[wildcards.dataset]
-    if ds["format"] == "synthetic":
+    if ds.get("format") == "synthetic":
         if ds.get("recording", "bag") == "pcd":
             return f"results/{wildcards.dataset}/sim/pcd"
         return f"results/{wildcards.dataset}/sim/recording.bag"
@@ -16,7 +16,7 @@ def recording_input(wildcards):
 def ingest_dataset(wildcards):
     """The dataset entry as ingest reads it; synthetic datasets read their simulation."""
     ds = dataset_config(wildcards)
-    if ds["format"] == "synthetic":
+    if ds.get("format") == "synthetic":
         if ds.get("recording", "bag") == "pcd":
             ds.update(format="pcd", path=recording_input(wildcards), locations="locations.csv")
         else:

@@ -1,0 +1,126 @@
+"""The format of a recording, from its path (issue 20: a user gives only ``path``).
+
+A dataset without ``format`` is read as what its path is:
+
+- ``rosbag``: a ROS1 ``.bag`` file (or any file starting with the ROS1 bag magic
+  ``#ROSBAG V2.0``); a ROS2 bag folder (``metadata.yaml``, or ``.db3`` / ``.mcap``
+  files in it); a ``.db3`` or ``.mcap`` file, whose folder is the bag;
+- ``carmen``: a ``.log``, ``.log.gz``, ``.clf`` or ``.gz`` file (plain or gzip text)
+  with a ``FLASER`` or ``ROBOTLASER1`` line among its first lines (the CARMEN logger's
+  laser messages, which follow the log's ``PARAM`` lines and some ``ODOM`` ones), so
+  an unrelated ``.log`` is not taken for one;
+- ``pcd``: a folder holding ``.pcd`` files (with the locations CSV read by
+  :mod:`floorscan.ingest.pcd`).
+
+Anything else is an :class:`~floorscan.io.InputError` naming the path and listing what
+is expected. An explicit ``format`` in the dataset always wins over detection.
+"""
+
+from __future__ import annotations
+
+import gzip
+import zlib
+from pathlib import Path
+
+from floorscan.io import InputError
+
+#: File suffixes of a ROS2 bag's storage (sqlite3, MCAP).
+ROS2_STORAGE_SUFFIXES = (".db3", ".mcap")
+#: Suffixes of a CARMEN log (the last suffix; ``.log.gz`` ends in ``.gz``).
+CARMEN_SUFFIXES = (".log", ".clf", ".gz")
+#: CARMEN laser message types that make a file a recording floorscan reads.
+CARMEN_LASER_TYPES = ("FLASER", "ROBOTLASER1")
+#: How far into a CARMEN candidate the laser line is looked for.
+PEEK_LINES = 20_000
+PEEK_BYTES = 8 << 20
+ROS1_MAGIC = b"#ROSBAG V2.0"
+
+EXPECTED = (
+    "expected a ROS1 .bag file, a ROS2 bag folder (metadata.yaml, .db3 or .mcap files) or its "
+    ".db3/.mcap file, a CARMEN log (.log, .log.gz, .clf or .gz text with FLASER or ROBOTLASER1 "
+    "lines), or a folder of .pcd files with their locations CSV; or set the dataset's 'format'"
+)
+
+
+def detect_format(path: str | Path) -> str:
+    """The format of the recording at ``path``: ``'rosbag'``, ``'carmen'`` or ``'pcd'``.
+
+    Parameters
+    ----------
+    path : str or Path
+        A file or folder (see the module docstring for what each format looks like).
+
+    Returns
+    -------
+    str
+        ``'rosbag'``, ``'carmen'`` or ``'pcd'``. For ``'rosbag'`` the bag to open is
+        :func:`bag_path` of ``path``.
+
+    Raises
+    ------
+    InputError
+        ``path`` does not exist, or is none of the formats (the message names the
+        path, what it holds and what is expected); a CARMEN candidate that cannot be
+        read (truncated or corrupt gzip).
+    """
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"{path}: recording not found; {EXPECTED}")
+    if path.is_dir():
+        names = sorted(p.name for p in path.iterdir())
+        if (path / "metadata.yaml").is_file() or any(n.endswith(ROS2_STORAGE_SUFFIXES) for n in names):
+            return "rosbag"
+        if any(n.lower().endswith(".pcd") for n in names):
+            return "pcd"
+        shown = ", ".join(names[:10]) + (f" ... ({len(names)} entries)" if len(names) > 10 else "")
+        raise InputError(
+            f"{path}: a folder with neither a ROS2 bag nor .pcd files (it holds: {shown or 'nothing'}); {EXPECTED}"
+        )
+    suffix = path.suffix.lower()
+    if suffix == ".bag" or suffix in ROS2_STORAGE_SUFFIXES:
+        return "rosbag"
+    with open(path, "rb") as f:
+        head = f.read(len(ROS1_MAGIC))
+    if head == ROS1_MAGIC:
+        return "rosbag"
+    if suffix in CARMEN_SUFFIXES:
+        found = _carmen_laser_line(path)
+        if found:
+            return "carmen"
+        raise InputError(
+            f"{path}: no {' or '.join(CARMEN_LASER_TYPES)} line in its first {PEEK_LINES} lines, "
+            f"so not a CARMEN log floorscan reads; {EXPECTED}"
+        )
+    if suffix == ".pcd":
+        raise InputError(f"{path}: a single .pcd file; give the folder of .pcd scans (with locations.csv) instead")
+    raise InputError(f"{path}: unknown recording format (suffix {suffix or 'none'!r}); {EXPECTED}")
+
+
+def bag_path(path: str | Path) -> Path:
+    """The path rosbags opens for a bag: a ``.db3`` / ``.mcap`` file's folder, else ``path``."""
+    path = Path(path)
+    if path.is_file() and path.suffix.lower() in ROS2_STORAGE_SUFFIXES:
+        return path.parent
+    return path
+
+
+def _carmen_laser_line(path: Path) -> bool:
+    """Whether a FLASER/ROBOTLASER1 line is among the first lines of a (gzip) text file."""
+    with open(path, "rb") as f:
+        gz = f.read(2) == b"\x1f\x8b"
+    try:
+        with (gzip.open(path, "rb") if gz else open(path, "rb")) as f:
+            n_bytes = 0
+            for _ in range(PEEK_LINES):
+                line = f.readline(1 << 16)  # bounded: a binary file may have no newline
+                if not line:
+                    break
+                tok = line.split(maxsplit=1)
+                if tok and tok[0].decode("ascii", errors="replace") in CARMEN_LASER_TYPES:
+                    return True
+                n_bytes += len(line)
+                if n_bytes >= PEEK_BYTES:
+                    break
+    except (EOFError, OSError, zlib.error) as e:
+        raise InputError(f"{path}: cannot read it to detect its format, truncated or corrupt ({e})") from None
+    return False
