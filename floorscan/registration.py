@@ -132,6 +132,7 @@ from scipy.spatial import cKDTree
 
 from floorscan.grid import cell_groups, cell_keys, cell_means
 from floorscan.io import InputError
+from floorscan.register.sampling import EveryN, MotionFilter, median_step_m
 
 log = logging.getLogger(__name__)
 
@@ -184,9 +185,14 @@ class RegistrationConfig:
     See the schema for each key's description, bounds and the reasons for the defaults.
     """
 
-    mode: str = "pose"
+    mode: str = "auto"
     reference: str = "graph"
-    every_n: int = 5
+    every_n: int | None = None
+    keep_distance_m: float | None = None
+    keep_angle_rad: float | None = None
+    keep_range_fraction: float = 0.1
+    min_kept_fraction: float = 0.2
+    min_consistency: float = 0.3
     n_previous: int = 5
     min_points: int = 30
     fitness_max_correspondence_m: float = 0.15
@@ -241,8 +247,19 @@ class RegistrationConfig:
 
     def check(self) -> None:
         """Raise :class:`InputError` naming the key when a value is out of range."""
-        if self.mode not in ("pose", "odometry"):
-            raise InputError(f"config register.mode: expected 'pose' or 'odometry', got {self.mode!r}")
+        if self.mode not in ("auto", "pose", "odometry"):
+            raise InputError(f"config register.mode: expected 'auto', 'pose' or 'odometry', got {self.mode!r}")
+        if self.every_n is not None and int(self.every_n) < 1:
+            raise InputError(f"config register.every_n: expected >= 1 or null, got {self.every_n}")
+        for key in ("keep_distance_m", "keep_angle_rad"):
+            v = getattr(self, key)
+            if v is not None and not (math.isfinite(v) and v >= 0):
+                raise InputError(f"config register.{key}: expected >= 0 or null (chosen from the recording), got {v}")
+        if not 0.0 < self.keep_range_fraction <= 1.0:
+            raise InputError(f"config register.keep_range_fraction: expected 0 < value <= 1, got {self.keep_range_fraction}")
+        for key in ("min_kept_fraction", "min_consistency"):
+            if not 0.0 <= getattr(self, key) <= 1.0:
+                raise InputError(f"config register.{key}: expected 0..1, got {getattr(self, key)}")
         if self.reference not in ("graph", "map", "previous"):
             raise InputError(
                 f"config register.reference: expected 'graph', 'map' or 'previous', got {self.reference!r}"
@@ -274,7 +291,7 @@ class RegistrationConfig:
                 "config register.odometry_icp_method: expected 'point_to_point' or 'point_to_plane', "
                 f"got {self.odometry_icp_method!r}"
             )
-        for key in ("every_n", "n_previous", "n_references", "passes", "icp_max_iterations", "odometry_window"):
+        for key in ("n_previous", "n_references", "passes", "icp_max_iterations", "odometry_window"):
             if int(getattr(self, key)) < 1:
                 raise InputError(f"config register.{key}: expected >= 1, got {getattr(self, key)}")
         if self.normal_neighbours < 3:
@@ -875,6 +892,16 @@ class _ScanStore:
     def icp(self, sid: int) -> np.ndarray:
         return self._get("icp", sid)
 
+    def map_cloud(self, sid: int) -> np.ndarray:
+        """The cloud the map's consistency is measured on: the graph cloud, or else the
+        stored cloud there is (fitness reference, ICP cloud), or the graph cloud of the
+        raw points."""
+        for kind in ("graph", "clouds", "icp"):
+            got = self.stored[kind].get(sid)
+            if got is not None:
+                return got.fit_target if kind == "clouds" else got
+        return self.graph(sid)
+
 
 # --------------------------------------------------------------------------- main loop
 
@@ -1121,18 +1148,24 @@ def predict_constant_velocity(p1, t1: int, p2, t2: int, t3: int) -> tuple[float,
     return _se2_compose(p2, (k * d[0], k * d[1], k * d[2]))
 
 
-def _register_odometry(usable, sampled, clouds, sids, t, cfg, out) -> int:
+def _register_odometry(usable, sampled, clouds, sids, t, cfg, out) -> tuple[int, np.ndarray]:
     """Pose-free registration: LIDAR odometry from the first usable scan (``mode: odometry``).
 
-    Fills the per-scan output arrays ``out`` in place; returns the number of anchors (1,
-    the first scan). See :func:`register_scans` (Notes) for the method.
+    ``sampled``: index positions of the sampled scans (``every_n``), or None to sample
+    with the motion filter on the odometry's own poses as they are estimated. Fills the
+    per-scan output arrays ``out`` in place; returns the number of anchors (1, the first
+    scan) and the sampled positions. See :func:`register_scans` (Notes) for the method.
     """
     kept, reasons, fit_prior, fit_icp, rmse, corr, final = out
     is_sampled = np.zeros(len(sids), dtype=bool)
-    is_sampled[sampled] = True
+    sampler = None
+    if sampled is None:  # the motion filter on the odometry's poses, as they come
+        sampler = MotionFilter(cfg.keep_distance_m, cfg.keep_angle_rad)
+    else:
+        is_sampled[sampled] = True
     seq = usable if cfg.odometry_scans == "all" else sampled
     if len(seq) == 0:
-        return 0
+        return 0, np.zeros(0, dtype=np.int64)
     icp_cfg = dataclasses.replace(cfg, icp_method=cfg.odometry_icp_method)
     local: deque[np.ndarray] = deque(maxlen=cfg.odometry_window)  # keyframes' ICP points, map frame
     target = None  # (points, KD-tree, normals) of the local map, rebuilt after a new keyframe
@@ -1147,7 +1180,14 @@ def _register_odometry(usable, sampled, clouds, sids, t, cfg, out) -> int:
             pose = (0.0, 0.0, 0.0, 0.0)
             reasons[i] = "anchor"
             corr[i] = 0.0
+            if sampler is not None:
+                is_sampled[i] = sampler.step(0.0, 0.0, 0.0)
         else:
+            if i > 0 and reasons[i - 1] == "duplicate":
+                # the scan before repeats its predecessor: the sensor stood still until
+                # then, so the motion model restarts from rest instead of carrying the
+                # last velocity across the stop
+                chain.append((chain[-1][0], int(t[i - 1])))
             if len(chain) == 2:
                 pred = predict_constant_velocity(chain[0][0], chain[0][1], chain[1][0], chain[1][1], int(t[i]))
             else:
@@ -1164,6 +1204,9 @@ def _register_odometry(usable, sampled, clouds, sids, t, cfg, out) -> int:
             fp = fitness_against(transform_points(src, *pred), target[1], cfg.fitness_max_correspondence_m)[0]
             pose, n_corr = _icp_to_map(src, target[0], pred, icp_cfg, tree=target[1], normals=target[2],
                                        distances=stages)
+            if sampler is not None:
+                at = pose if n_corr else pred
+                is_sampled[i] = sampler.step(at[0], at[1], at[3])
             fi, rm = math.nan, math.nan
             if n_corr:
                 fi, rm, _ = fitness_against(transform_points(src, *pose), target[1], cfg.fitness_max_correspondence_m)
@@ -1193,7 +1236,7 @@ def _register_odometry(usable, sampled, clouds, sids, t, cfg, out) -> int:
             local.append(transform_points(src, *pose))
             last_key = pose
             target = None
-    return 1
+    return 1, np.flatnonzero(is_sampled)
 
 
 def _register_map(sampled, clouds, sids, t, cfg, out) -> int:
@@ -1307,6 +1350,7 @@ def register_scans(
     scan_index: pd.DataFrame,
     poses: pd.DataFrame | None = None,
     config: RegistrationConfig | Mapping[str, Any] | None = None,
+    recording: Mapping[str, str] | None = None,
 ) -> RegistrationResult:
     """Register the scans of a recording into the map frame (thesis Algorithm 3, steps 2-6).
 
@@ -1322,11 +1366,15 @@ def register_scans(
         (scan-to-scan ICP from the first usable scan, which defines the map frame).
     config : RegistrationConfig or mapping, optional
         The ``register`` config section; defaults from :class:`RegistrationConfig`.
+    recording : mapping of str to str, optional
+        What ingest found in the recording (``scan_index.parquet``'s schema metadata:
+        ``pose_kind``, ``stamps``), for :func:`resolve_config`.
 
     Returns
     -------
     RegistrationResult
-        Registered points of the kept scans, one table row per scan, a summary.
+        Registered points of the kept scans, one table row per scan, a summary (its
+        ``verdict``: :class:`floorscan.register.consistency.Verdict` as a dict).
 
     Raises
     ------
@@ -1334,8 +1382,10 @@ def register_scans(
         When a table lacks a column, a point is not finite, the poses do not cover the scan
         index, or poses are missing in pose mode.
     RegistrationError
-        When no scan could be registered: the message gives the count per reason and the
-        threshold that dropped most scans.
+        When no scan could be registered (the message gives the count per reason and the
+        threshold that dropped most scans), or the result is poor: fewer than
+        ``min_kept_fraction`` of the sampled scans kept, or a map consistency below
+        ``min_consistency`` (:mod:`floorscan.register.consistency`).
 
     Notes
     -----
@@ -1375,6 +1425,7 @@ def register_scans(
             f"{int(scans['scan_id'].to_numpy()[bad][0])}); expected finite metres"
         )
     clouds = split_by_scan(scans)
+    cfg = resolve_config(cfg, recording, math.nan if cfg.every_n else _range_sample(clouds))
     aligned = _aligned_poses(index, poses, cfg)
     reasons = screen_scans(index, clouds, aligned, cfg)
     table, summary = _register_screened(index, aligned, reasons, _ScanStore(cfg, clouds), cfg)
@@ -1399,6 +1450,114 @@ def _config(config) -> RegistrationConfig:
     cfg = config if isinstance(config, RegistrationConfig) else RegistrationConfig.from_mapping(config)
     cfg.check()
     return cfg
+
+
+def resolve_config(
+    cfg: RegistrationConfig, recording: Mapping[str, str] | None, range_m: float
+) -> RegistrationConfig:
+    """The settings a recording needs, from what ingest found in it (logged with why).
+
+    - ``mode: auto``: ``pose`` when the recording has map poses (``pose_kind`` ``map``:
+      a localizer topic, the TF chain from ``map``, a log's corrected poses), else
+      ``odometry`` (LIDAR odometry: wheel odometry alone is never the map pose);
+    - made-up stamps (``stamps`` ``made_up``: all zero, or mostly repeated) carry no
+      speed, so the pose-jump checks (``max_speed_m_s``, ``max_turn_rate_rad_s``) are off;
+    - without ``every_n``, the motion filter's thresholds not configured are chosen from
+      the scanner's typical range ``range_m`` (:mod:`floorscan.register.sampling`).
+
+    Parameters
+    ----------
+    cfg : RegistrationConfig
+    recording : mapping of str to str, or None
+        The schema metadata of ``scan_index.parquet`` (keys ``pose_kind``, ``stamps``);
+        None or missing keys: map poses, recorded stamps.
+    range_m : float
+        Typical range of the scanner, metres (:func:`floorscan.register.sampling.typical_range_m`).
+
+    Returns
+    -------
+    RegistrationConfig
+        With ``mode`` ``pose`` or ``odometry`` and the sampling thresholds set.
+
+    Raises
+    ------
+    InputError
+        ``mode: pose`` on a recording without map poses, or ``odometry_scans: sampled``
+        without ``every_n``.
+    """
+    from floorscan.register.sampling import choose_thresholds
+
+    rec = dict(recording or {})
+    pose_kind = rec.get("pose_kind", "map")
+    changes: dict[str, Any] = {}
+    if cfg.mode == "auto":
+        changes["mode"] = "pose" if pose_kind == "map" else "odometry"
+        log.info(
+            "register.mode auto -> %s (pose source: %s)", changes["mode"], rec.get("pose_source", "map poses")
+        )
+    elif cfg.mode == "pose" and pose_kind != "map":
+        raise InputError(
+            f"register.mode 'pose' needs map poses, but the recording has none ({rec.get('pose_source', pose_kind)}); "
+            "use register.mode auto or odometry, or name a pose source (dataset 'pose')"
+        )
+    if rec.get("stamps") == "made_up":
+        changes.update(max_speed_m_s=math.inf, max_turn_rate_rad_s=math.inf)
+        log.info("the scan stamps are made up (%s): pose-jump checks on speed and turn rate are off", rec.get("stamps"))
+    if cfg.every_n:
+        log.info("sampling: every %d-th usable scan (register.every_n)", cfg.every_n)
+    else:
+        th = choose_thresholds(range_m, cfg.keep_distance_m, cfg.keep_angle_rad, cfg.keep_range_fraction)
+        changes.update(keep_distance_m=th.distance_m, keep_angle_rad=th.angle_rad)
+        log.info("sampling: motion filter, %s", th.reason)
+        if changes.get("mode", cfg.mode) == "odometry" and cfg.odometry_scans == "sampled":
+            raise InputError("register.odometry_scans 'sampled' needs register.every_n (the motion filter samples the odometry's own poses)")
+    return dataclasses.replace(cfg, **changes)
+
+
+def _range_sample(clouds: Mapping[int, np.ndarray], n: int = 200) -> float:
+    """Typical range of a recording from up to ``n`` of its scans, evenly spread."""
+    from floorscan.register.sampling import typical_range_m
+
+    ids = sorted(clouds)
+    pick = ids[:: max(1, len(ids) // n)]
+    return typical_range_m(clouds[i] for i in pick)
+
+
+def _range_of_file(scans_path, max_points: int = 400_000) -> float:
+    """Typical range of a recording from a points file (``scans.parquet``): up to 8 of
+    its row groups, evenly spread, every k-th point of them."""
+    import pyarrow.parquet as pq
+
+    from floorscan.register.sampling import typical_range_m
+
+    pf = pq.ParquetFile(scans_path)
+    n_groups = pf.metadata.num_row_groups
+    if n_groups == 0:
+        return math.nan
+    groups = sorted(set(np.linspace(0, n_groups - 1, min(8, n_groups)).round().astype(int).tolist()))
+    table = pf.read_row_groups(groups, columns=["x", "y"])
+    step = max(1, table.num_rows // max_points)
+    xy = np.column_stack([table.column(c).to_numpy()[::step] for c in ("x", "y")])
+    return typical_range_m([xy])
+
+
+def _judge(table: pd.DataFrame, clouds: "_ScanStore", cfg: RegistrationConfig, summary: dict):
+    """The verdict on the registration (:func:`floorscan.register.consistency.verdict`)."""
+    from floorscan.register.consistency import map_consistency, path_length_m, verdict
+
+    kept = table["kept"].to_numpy(bool)
+    sids = table["scan_id"].to_numpy()[kept]
+    final = table[["x_m", "y_m", "z_m", "yaw_rad"]].to_numpy(np.float64)[kept]
+    parts = [transform_points(clouds.map_cloud(int(s)), *f) for s, f in zip(sids, final)]
+    cons, n_rev = map_consistency(parts, path_length_m(final[:, 0], final[:, 1]), final[:, :2])
+    failures = {k: v for k, v in summary["drops"].items() if k not in ("not_sampled",)}
+    worst = max(failures, key=lambda k: failures[k]) if failures else ""
+    option = REASON_THRESHOLD.get(worst, "")
+    option = " / ".join(f"register.{o}={getattr(cfg, o)}" if hasattr(cfg, o) else o for o in option.split(" / ") if o)
+    return verdict(
+        summary["n_sampled"], summary["n_kept"], cons, n_rev, cfg.min_kept_fraction, cfg.min_consistency,
+        worst, option,
+    )
 
 
 def _prepare_index(scan_index: pd.DataFrame) -> pd.DataFrame:
@@ -1426,9 +1585,10 @@ def _register_screened(index, aligned, reasons, clouds: "_ScanStore", cfg, ahead
     n = len(index)
     odometry = cfg.mode == "odometry"
     usable = np.flatnonzero(reasons == "")
-    sampled = usable[:: cfg.every_n]
-    not_sampled = np.setdiff1d(usable, sampled)
-    reasons[not_sampled] = "not_sampled"
+    if odometry:  # sampled on the odometry's own poses unless every_n is set
+        sampled = usable[:: cfg.every_n] if cfg.every_n else None
+    else:
+        sampled = _sample(usable, aligned, cfg)
 
     kept = np.zeros(n, dtype=bool)
     fit_prior = np.full(n, np.nan)
@@ -1444,7 +1604,7 @@ def _register_screened(index, aligned, reasons, clouds: "_ScanStore", cfg, ahead
     sids = index["scan_id"].to_numpy()
     out = (kept, reasons, fit_prior, fit_icp, rmse, corr, final)
     if odometry:
-        n_anchor = _register_odometry(usable, sampled, clouds, sids, t, cfg, out)
+        n_anchor, sampled = _register_odometry(usable, sampled, clouds, sids, t, cfg, out)
         if cfg.loop_closure:
             _register_graph(np.flatnonzero(kept), clouds, sids, t, cfg, out, priors=False)
     elif cfg.reference == "graph":
@@ -1453,6 +1613,15 @@ def _register_screened(index, aligned, reasons, clouds: "_ScanStore", cfg, ahead
         n_anchor = _register_sequential(sampled, clouds, sids, t, cfg, out)
     else:
         n_anchor = _register_map(sampled, clouds, sids, t, cfg, out)
+    reasons[np.setdiff1d(usable, sampled)] = "not_sampled"
+    if not cfg.every_n and len(usable) > 1:
+        at = final[usable] if odometry else aligned[["x", "y"]].to_numpy(np.float64)[usable]
+        at = at[np.isfinite(at[:, 0])]
+        log.info(
+            "sampling: %d of %d usable scans (the recording's median step between scans %.3f m; "
+            "keep_distance_m %.3f, keep_angle_rad %.3f)",
+            len(sampled), len(usable), median_step_m(at[:, 0], at[:, 1]), cfg.keep_distance_m, cfg.keep_angle_rad,
+        )
 
     table = pd.DataFrame(
         {
@@ -1474,10 +1643,15 @@ def _register_screened(index, aligned, reasons, clouds: "_ScanStore", cfg, ahead
     )
     summary = summarize(table, cfg)
     _raise_if_nothing_registered(table, cfg, summary)
+    judged = _judge(table, clouds, cfg, summary)
+    summary["verdict"] = judged.as_dict()
     log.info(
         "register (%s): %d scans, %d sampled, %d kept (%d anchors); drops %s",
         cfg.mode, n, len(sampled), int(kept.sum()), n_anchor, summary["drops"],
     )
+    (log.info if judged.ok and not judged.warnings else log.warning)("verdict: %s", judged.line())
+    if not judged.ok:
+        raise RegistrationError(f"register: the result is poor: {judged.line()}")
     return table, summary
 
 
@@ -1488,6 +1662,7 @@ def register_recording(
     config: RegistrationConfig | Mapping[str, Any] | None,
     registered_path: str | os.PathLike,
     metadata: Mapping[str, str] | None = None,
+    recording: Mapping[str, str] | None = None,
 ) -> RegistrationResult:
     """:func:`register_scans` on a points file, streamed: memory follows the largest scan.
 
@@ -1516,6 +1691,8 @@ def register_recording(
         Output ``registered.parquet`` (schema :data:`floorscan.io.REGISTERED`).
     metadata : mapping, optional
         Key/value strings stored in the output's schema metadata.
+    recording : mapping, optional
+        As for :func:`register_scans`.
 
     Returns
     -------
@@ -1535,6 +1712,7 @@ def register_recording(
     from floorscan.io import SCANS, ScanRowGroups, iter_scans, parquet_options
 
     cfg = _config(config)
+    cfg = resolve_config(cfg, recording, math.nan if cfg.every_n else _range_of_file(scans_path))
     n_workers = 0
     if cfg.reference == "graph" or (cfg.mode == "odometry" and cfg.loop_closure):
         from floorscan.parallel import prestart
@@ -1545,7 +1723,7 @@ def register_recording(
         # many as the edges will need (posegraph._chunks: >= 200 pairs a worker; at
         # most ~3 pairs a sampled scan are counted here, so small recordings get one)
         workers = GraphParams.from_mapping(cfg.graph).workers
-        pairs = 3 * len(scan_index) // max(1, cfg.every_n)
+        pairs = 3 * len(scan_index) // max(1, cfg.every_n or 5)
         n_workers = min(workers, max(1, pairs // 200)) if workers > 1 else 0
         prestart(n_workers, preload=("floorscan.o3d", "floorscan.posegraph"))
     index = _prepare_index(scan_index)
@@ -1621,7 +1799,25 @@ def _expected_sampled(index: pd.DataFrame, aligned: pd.DataFrame, cfg) -> np.nda
     screen = _Screener(index, aligned, cfg)
     for i in range(len(index)):
         screen.step(i, None, points_unseen=True)
-    return np.flatnonzero(screen.reasons == "")[:: cfg.every_n]
+    return _sample(np.flatnonzero(screen.reasons == ""), aligned, cfg)
+
+
+def _sampler(cfg: RegistrationConfig):
+    """The sampling rule of Algorithm 3 step 2: ``every_n`` when set, else the motion
+    filter (:mod:`floorscan.register.sampling`; thresholds resolved by
+    :func:`resolve_config`)."""
+    if cfg.every_n:
+        return EveryN(cfg.every_n)
+    if cfg.keep_distance_m is None or cfg.keep_angle_rad is None:
+        raise ValueError("register: the motion filter's thresholds are not resolved (resolve_config)")
+    return MotionFilter(cfg.keep_distance_m, cfg.keep_angle_rad)
+
+
+def _sample(usable: np.ndarray, aligned: pd.DataFrame, cfg: RegistrationConfig) -> np.ndarray:
+    """Index positions of the sampled scans among ``usable`` (pose modes)."""
+    sampler = _sampler(cfg)
+    x, y, yaw = (aligned[c].to_numpy(np.float64) for c in ("x", "y", "yaw"))
+    return np.asarray([i for i in usable if sampler.step(x[i], y[i], yaw[i])], dtype=np.int64)
 
 
 def _first_pass(scans, sids, screen, store, cfg, sampled_out, edges=None) -> None:
@@ -1629,12 +1825,18 @@ def _first_pass(scans, sids, screen, store, cfg, sampled_out, edges=None) -> Non
     (``store``) and points (``sampled_out``); hand the graph clouds to ``edges``
     (a :class:`floorscan.posegraph.EdgeStream`)."""
     odometry = cfg.mode == "odometry"
-    n_usable = 0  # the every-n-th usable scan is sampled (as _register_screened)
+    # sampled as _register_screened samples; odometry without every_n samples on its
+    # own poses later, so every usable scan may be sampled
+    sampler = _sampler(cfg) if not odometry or cfg.every_n else None
     for k, pts in scans:
         if screen.step(k, pts) != "":
             continue
-        is_sampled = n_usable % cfg.every_n == 0
-        n_usable += 1
+        if sampler is None:
+            is_sampled = True
+        elif odometry:
+            is_sampled = sampler.step()
+        else:
+            is_sampled = sampler.step(screen.px[k], screen.py[k], screen.pyaw[k])
         if odometry:
             needs = ("icp",) if cfg.odometry_scans == "all" or is_sampled else ()
             if is_sampled and cfg.loop_closure:

@@ -1,4 +1,8 @@
 """Stage register: scans in the map frame, refined by ICP (thesis Algorithm 3 steps 2-6)."""
+import json
+
+import pyarrow.parquet as pq
+
 from floorscan.io import read_table, write_table
 from floorscan.registration import REGISTRATION, register_recording
 from floorscan.workflow import stage_log
@@ -7,15 +11,22 @@ with stage_log(snakemake) as log:
     # the edge ICP runs in the rule's threads (processes); the edges do not depend on it
     cfg = dict(snakemake.params.cfg)
     cfg["graph"] = {**(cfg.get("graph") or {}), "workers": snakemake.threads}
-    poses = read_table(snakemake.input.poses) if "poses" in snakemake.input.keys() else None
-    meta = {"dataset": snakemake.wildcards.dataset, "units": "metres, radians"}
+    # what ingest found in the recording: pose kind (map poses or none), stamps
+    meta = pq.read_schema(snakemake.input.index).metadata or {}
+    recording = {k.decode(): v.decode() for k, v in meta.items() if not k.startswith(b"ARROW")}
+    poses = read_table(snakemake.input.poses)
+    out_meta = {"dataset": snakemake.wildcards.dataset, "units": "metres, radians"}
     # streamed: the points are read scan by scan and written as they are registered
     result = register_recording(
         snakemake.input.scans, read_table(snakemake.input.index), poses, cfg,
-        snakemake.output.registered, metadata=meta,  # its figure: rule register_figure
+        snakemake.output.registered, metadata=out_meta, recording=recording,  # figure: rule register_figure
     )
-    write_table(result.table, snakemake.output.registration, schema=REGISTRATION, metadata=meta)
     s = result.summary
+    out_meta.update(
+        verdict=json.dumps(s["verdict"]), mode=s["config"]["mode"],
+        recording=json.dumps({k: recording[k] for k in sorted(recording) if k != "pandas"}),
+    )
+    write_table(result.table, snakemake.output.registration, schema=REGISTRATION, metadata=out_meta)
     log.info(
         "kept %d of %d scans (%d sampled); dropped by reason %s; fraction of the checked scans each "
         "fitness threshold drops %s; median correction %.3f m, %.3f rad",

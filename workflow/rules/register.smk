@@ -4,14 +4,12 @@ stage_schema_check("register")
 
 
 def register_inputs(wildcards):
-    """Scans and index; the poses too unless the dataset registers in `odometry` mode."""
-    inputs = {
+    """Scans, index and poses (in odometry mode, auto or set, the poses are not used)."""
+    return {
         "scans": f"results/{wildcards.dataset}/scans.parquet",
         "index": f"results/{wildcards.dataset}/scan_index.parquet",
+        "poses": f"results/{wildcards.dataset}/poses.parquet",
     }
-    if stage_config("register")(wildcards)["mode"] == "pose":
-        inputs["poses"] = f"results/{wildcards.dataset}/poses.parquet"
-    return inputs
 
 
 # A checkpoint (issue 8): the number of hulls and walls shards follows from its

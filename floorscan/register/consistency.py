@@ -1,0 +1,217 @@
+"""Does the registered map agree with itself? The verdict on a registration.
+
+A map registered from drifting poses (wheel odometry taken for the map pose, a
+localizer that lost track) looks locally sharp, since consecutive scans agree, and
+doubles its walls where the rover passes a place again. So the check looks where the
+rover passed twice. Two scans are of different passes when the rover travelled at
+least ``min_separation_m`` between them and at least ``path_ratio`` times the straight
+distance between their poses (it went away and came back: the loop-closure candidate
+test of SLAM front ends; scans along one corridor are of one pass, however far apart).
+For a sample of map points, those with a point of another pass within
+``revisit_radius_m`` are revisited; of them, the fraction with such a point within
+``tau_m`` is the map's *consistency* (the cloud-to-cloud agreement of Cloud
+Compare's C2C distance, restricted to revisits; the same idea as a loop closure's
+inlier fraction in SLAM back ends). A well-registered indoor map measures
+0.5-0.9 at 5 cm (the scanner's noise and the sampling of a wall by another scan),
+a doubled one much less. When too few points are revisited (a one-way corridor) it is
+undefined (NaN) and judges nothing.
+
+:func:`verdict` joins it with the fraction of sampled scans kept.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from floorscan.grid import cell_means
+
+#: Fewer revisited sample points than this: consistency undefined.
+MIN_REVISITED = 300
+#: A result from fewer kept scans than this is flagged in the summary and report.
+FEW_SCANS = 10
+
+
+def map_consistency(
+    clouds: list[np.ndarray],
+    path_m: np.ndarray,
+    positions: np.ndarray,
+    tau_m: float = 0.05,
+    revisit_radius_m: float = 0.3,
+    min_separation_m: float = 3.0,
+    path_ratio: float = 2.0,
+    cell_m: float = 0.05,
+    max_points: int = 50_000,
+    neighbours: int = 48,
+    seed: int = 0,
+) -> tuple[float, int]:
+    """Fraction of revisited map points that another pass confirms within ``tau_m``.
+
+    Parameters
+    ----------
+    clouds : list of (N_i, >=2) float ndarray
+        Each kept scan's points in the map frame (x, y used), metres, in time order.
+    path_m : (K,) float ndarray
+        Distance travelled along the kept poses up to each scan, metres.
+    positions : (K, 2) float ndarray
+        Each scan's position (x, y) in the map frame, metres.
+    tau_m, revisit_radius_m, min_separation_m, cell_m : float
+        See the module docstring; each scan is reduced to one point per ``cell_m`` cell
+        first. Metres.
+    path_ratio : float
+        See the module docstring.
+    max_points : int
+        Sample size (points drawn with ``seed``; the same input gives the same number).
+    neighbours : int
+        Nearest points examined per sample point.
+
+    Returns
+    -------
+    consistency : float
+        In [0, 1]; NaN when fewer than :data:`MIN_REVISITED` sample points are revisited.
+    n_revisited : int
+        Sample points that another pass has within ``revisit_radius_m``.
+    """
+    parts, labels = [], []
+    for i, c in enumerate(clouds):
+        if len(c) == 0:
+            continue
+        xy = cell_means(np.asarray(c, dtype=np.float64)[:, :2], cell_m)[0]
+        parts.append(xy)
+        labels.append(np.full(len(xy), i, dtype=np.int64))
+    if not parts:
+        return math.nan, 0
+    pts = np.concatenate(parts)
+    lab = np.concatenate(labels)
+    s = np.asarray(path_m, dtype=np.float64)[lab]
+    pos = np.asarray(positions, dtype=np.float64)[lab, :2]
+    rng = np.random.default_rng(seed)
+    idx = np.arange(len(pts)) if len(pts) <= max_points else np.sort(rng.choice(len(pts), max_points, replace=False))
+    tree = cKDTree(pts)
+    d, j = tree.query(pts[idx], k=min(neighbours, len(pts)), distance_upper_bound=revisit_radius_m)
+    d, j = d.reshape(len(idx), -1), j.reshape(len(idx), -1)
+    found = np.isfinite(d)
+    j = np.minimum(j, len(pts) - 1)
+    travel = np.abs(s[idx][:, None] - s[j])
+    straight = np.hypot(pos[idx, 0][:, None] - pos[j, 0], pos[idx, 1][:, None] - pos[j, 1])
+    other = found & (travel >= min_separation_m) & (travel >= path_ratio * straight)
+    revisited = other.any(axis=1)
+    n_rev = int(revisited.sum())
+    if n_rev < MIN_REVISITED:
+        return math.nan, n_rev
+    confirmed = (other & (d <= tau_m)).any(axis=1)
+    return float(confirmed[revisited].mean()), n_rev
+
+
+def path_length_m(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Cumulative distance along poses (x, y metres), 0 at the first: (K,) metres."""
+    if len(x) == 0:
+        return np.zeros(0)
+    return np.r_[0.0, np.cumsum(np.hypot(np.diff(x), np.diff(y)))]
+
+
+@dataclass
+class Verdict:
+    """The verdict on a registration.
+
+    Attributes
+    ----------
+    n_sampled, n_kept : int
+        Scans sampled for registration and kept.
+    kept_fraction : float
+        ``n_kept / n_sampled``.
+    consistency : float
+        :func:`map_consistency` (NaN: undefined).
+    n_revisited : int
+    problems : list of str
+        Why the result is poor (each names its numbers and the option); empty when good.
+    warnings : list of str
+        What a reader should know although the stage goes on (few scans, no revisits).
+    """
+
+    n_sampled: int
+    n_kept: int
+    kept_fraction: float
+    consistency: float
+    n_revisited: int
+    problems: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+    def line(self) -> str:
+        """One line for logs, the summary and the report."""
+        head = "GOOD" if self.ok and not self.warnings else ("POOR" if not self.ok else "WARNING")
+        cons = "undefined (no place passed twice)" if math.isnan(self.consistency) else f"{self.consistency:.2f}"
+        text = (
+            f"{head}: kept {self.n_kept} of {self.n_sampled} sampled scans ({100 * self.kept_fraction:.0f} %); "
+            f"map consistency {cons} ({self.n_revisited} revisited points)"
+        )
+        return "; ".join([text, *self.problems, *self.warnings])
+
+    def as_dict(self) -> dict:
+        return {
+            "ok": self.ok,
+            "line": self.line(),
+            "n_sampled": self.n_sampled,
+            "n_kept": self.n_kept,
+            "kept_fraction": self.kept_fraction,
+            "consistency": None if math.isnan(self.consistency) else self.consistency,
+            "n_revisited": self.n_revisited,
+            "problems": list(self.problems),
+            "warnings": list(self.warnings),
+        }
+
+
+def verdict(
+    n_sampled: int,
+    n_kept: int,
+    consistency: float,
+    n_revisited: int,
+    min_kept_fraction: float,
+    min_consistency: float,
+    worst_reason: str = "",
+    worst_option: str = "",
+) -> Verdict:
+    """Judge a registration by its kept fraction and its map consistency.
+
+    Parameters
+    ----------
+    n_sampled, n_kept : int
+    consistency : float
+        NaN: undefined, not judged.
+    n_revisited : int
+    min_kept_fraction, min_consistency : float
+        ``register.min_kept_fraction`` / ``register.min_consistency``.
+    worst_reason, worst_option : str
+        The drop reason behind most lost scans and the option that sets it, for the
+        message.
+
+    Returns
+    -------
+    Verdict
+    """
+    frac = n_kept / n_sampled if n_sampled else 0.0
+    v = Verdict(n_sampled, n_kept, frac, consistency, n_revisited)
+    if frac < min_kept_fraction:
+        why = f"; most were dropped as '{worst_reason}' ({worst_option})" if worst_reason else ""
+        v.problems.append(
+            f"only {100 * frac:.0f} % of the sampled scans were kept, below register.min_kept_fraction "
+            f"{min_kept_fraction}{why}"
+        )
+    if math.isfinite(consistency) and consistency < min_consistency:
+        v.problems.append(
+            f"where the rover passed twice only {100 * consistency:.0f} % of the map's points agree within "
+            f"5 cm, below register.min_consistency {min_consistency}: the poses drift (register.mode: odometry "
+            "registers without them; register.min_consistency 0 accepts the map)"
+        )
+    if n_kept < FEW_SCANS:
+        v.warnings.append(f"only {n_kept} scans kept: scores from so few scans mean little")
+    if math.isnan(consistency):
+        v.warnings.append("no place was passed twice, so the map's consistency could not be checked")
+    return v
