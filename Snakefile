@@ -1,9 +1,10 @@
 # floorscan: scan selection and wall extraction for indoor floor plans.
 # Run: snakemake --cores 2            (default target: the datasets in config `target`)
 #      snakemake --cores 2 --config target='[intel]'
+#      snakemake --cores 2 --config path=/data/run.bag   (a recording of your own)
 from snakemake.utils import min_version
 
-from floorscan.config import validate_config
+from floorscan.config import add_path_dataset, validate_config
 
 min_version("9.14.8")
 
@@ -15,6 +16,8 @@ report: "workflow/report/workflow.rst"
 
 
 validate_config(config, workflow.basedir + "/workflow/schemas/config.schema.yaml")
+# `--config path=/data/run.bag`: that recording, detected, is the dataset to build
+add_path_dataset(config)
 
 
 include: "workflow/rules/common.smk"

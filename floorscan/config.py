@@ -107,3 +107,45 @@ def validate_config(data: dict, schema_path: str | os.PathLike, section: str = "
         field = ".".join([section, *(str(p) for p in e.absolute_path)])
         raise ConfigError(f"{field}: {e.message} (schema {os.fspath(schema_path)})") from None
     return data
+
+
+def add_path_dataset(config: dict) -> str | None:
+    """Make the top-level ``path`` of a config (``--config path=/data/run.bag``) a dataset.
+
+    The dataset is named after the recording (its file or folder name without the
+    recording suffixes, other characters than letters, digits and ``_`` replaced by
+    ``_``), holds only ``path`` (ingest detects the rest) and becomes the only target.
+    A dataset of that name with the same path is reused; with another path the name
+    gets a numeric suffix.
+
+    Parameters
+    ----------
+    config : dict
+        The validated workflow config; changed in place (``datasets``, ``target``).
+
+    Returns
+    -------
+    str or None
+        The dataset name, or None when the config has no ``path``.
+    """
+    import re
+    from pathlib import PurePath
+
+    path = config.get("path")
+    if not path:
+        return None
+    name = PurePath(str(path).rstrip("/")).name
+    for suffix in (".gz", ".log", ".clf", ".bag", ".db3", ".mcap"):
+        if name.lower().endswith(suffix) and len(name) > len(suffix):
+            name = name[: -len(suffix)]
+    name = re.sub(r"[^A-Za-z0-9_]", "_", name) or "recording"
+    if name[0].isdigit():
+        name = f"r_{name}"
+    datasets = config.setdefault("datasets", {})
+    base, n = name, 1
+    while name in datasets and datasets[name].get("path") != str(path):
+        n += 1
+        name = f"{base}_{n}"
+    datasets.setdefault(name, {"description": f"{path} (--config path)", "path": str(path)})
+    config["target"] = [name]
+    return name

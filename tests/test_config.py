@@ -68,3 +68,36 @@ def test_validate_config_names_the_field_and_copies_defaults():
         validate_config({"k": ["many"]}, schema, "datasets.x.params.walls")
     a, b = validate_config({}, schema, "walls"), validate_config({}, schema, "walls")
     assert a == b and a["k"] == b["k"] and a["k"] is not b["k"]  # no shared mutable default
+
+
+def test_a_path_alone_is_a_dataset():
+    """`--config path=...`: the recording becomes a dataset named after the file, with
+    nothing but its path, and the only target; the schema accepts it."""
+    from floorscan.config import add_path_dataset, validate_config
+
+    schema = REPO / "workflow" / "schemas" / "config.schema.yaml"
+    cfg = {"datasets": {"demo": {"format": "synthetic", "building": "demo", "scanner": "2d", "seed": 1}},
+           "path": "/data/my-run.2024.bag"}
+    validate_config(cfg, schema)
+    assert add_path_dataset(cfg) == "my_run_2024"
+    assert cfg["datasets"]["my_run_2024"]["path"] == "/data/my-run.2024.bag"
+    assert cfg["target"] == ["my_run_2024"]
+    validate_config(cfg, schema)  # format, scan topic and pose are detected by ingest
+    # the same path again: the same dataset; another file of the same name: a new one
+    assert add_path_dataset(cfg) == "my_run_2024"
+    cfg["path"] = "/other/my-run.2024.bag"
+    assert add_path_dataset(cfg) == "my_run_2024_2"
+    for path, name in (("/d/intel.log.gz", "intel"), ("/d/ros2_run/", "ros2_run"), ("/d/2024.bag", "r_2024")):
+        assert add_path_dataset({"path": path}) == name
+    assert add_path_dataset({"datasets": {}}) is None
+
+
+def test_a_dataset_needs_a_path_unless_synthetic():
+    from floorscan.config import ConfigError, validate_config
+
+    schema = REPO / "workflow" / "schemas" / "config.schema.yaml"
+    with pytest.raises(ConfigError, match=r"datasets\.x: 'path' is a required property"):
+        validate_config({"datasets": {"x": {"format": "rosbag"}}}, schema)
+    with pytest.raises(ConfigError, match=r"datasets\.x: 'building' is a required property"):
+        validate_config({"datasets": {"x": {"format": "synthetic"}}}, schema)
+    validate_config({"datasets": {"x": {"path": "/d/run.bag"}}}, schema)
