@@ -122,6 +122,7 @@ def plot_registered_map(
     path: str | os.PathLike,
     *,
     title: str = "",
+    subtitle: tuple[str, ...] = (),
     density_radius_m: float = 1.0,
     cell_m: float = 0.05,
 ) -> None:
@@ -143,9 +144,13 @@ def plot_registered_map(
     path : path-like
         Output PNG.
     title : str
+    subtitle : tuple of str
+        Lines under the title (the registration's verdict, what ingest detected).
     density_radius_m, cell_m : float
         Metres.
     """
+    import textwrap
+
     import matplotlib
 
     matplotlib.use("Agg")
@@ -174,7 +179,8 @@ def plot_registered_map(
     ax.set_xlabel("x (m, map frame)")
     ax.set_ylabel("y (m, map frame)")
     n_scans = len(registration)
-    ax.set_title(f"{title}  {len(kept)} of {n_scans} scans kept".strip())
+    lines = [f"{title}  {len(kept)} of {n_scans} scans kept".strip(), *subtitle]
+    ax.set_title("\n".join(textwrap.fill(line, 72) for line in lines), fontsize=9 if subtitle else None)
     fig.tight_layout()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png")

@@ -1520,10 +1520,24 @@ def summarize(metrics, tau: float = 0.05, levels=(0.95, 0.99)):
     return pd.DataFrame(rows)
 
 
-def summary_markdown(summary, tau: float = 0.05, levels=(0.95, 0.99)) -> str:
-    """The summary table as Markdown, headed by what F1 is measured against."""
+def summary_markdown(
+    summary, tau: float = 0.05, levels=(0.95, 0.99), verdict=None, recording=None, mode: str = ""
+) -> str:
+    """The summary table as Markdown, headed by the registration's verdict and what the
+    recording was found to be (``verdict``: :meth:`floorscan.register.consistency.Verdict.as_dict`;
+    ``recording``: ingest's detection, ``format``, ``scan_topic``, ``pose_source``,
+    ``stamps``; ``mode``: the register mode used), then what F1 is measured against.
+    An F1 from fewer than 10 kept scans is marked."""
+    head_lines = []
+    if verdict:
+        head_lines += [f"**Verdict: {verdict['line']}**", ""]
+    found = ", ".join(
+        f"{k} {recording[k]}" for k in ("format", "scan_topic", "pose_source", "stamps") if k in (recording or {})
+    )
+    if found or mode:
+        head_lines += [f"Recording: {found or 'as configured'}; registered in {mode or 'pose'} mode.", ""]
     if summary.empty:
-        return "# Scan reduction summary\n\nNo scored runs.\n"
+        return "# Scan reduction summary\n\n" + "\n".join(head_lines) + "No scored runs.\n"
     ds = summary["dataset"].iloc[0]
     kind = summary["reference_kind"].iloc[0]
     against = (
@@ -1534,6 +1548,7 @@ def summary_markdown(summary, tau: float = 0.05, levels=(0.95, 0.99)) -> str:
     lines = [
         f"# Scan reduction summary: {ds}",
         "",
+        *head_lines,
         f"F1 at tau = {tau_label(tau)} against {against}. For each level, the smallest k "
         "of the configured grid whose F1 reaches that fraction of the all-scan F1, the "
         "scans it uses as a fraction of the scans kept, and the reduction factor.",
@@ -1546,7 +1561,10 @@ def summary_markdown(summary, tau: float = 0.05, levels=(0.95, 0.99)) -> str:
     lines.append("| " + " | ".join(head) + " |")
     lines.append("|" + "---|" * len(head))
     for _, r in summary.iterrows():
-        cells = [r["ordering"], r["extractor"], str(r["n_scans_kept"]), f"{r['f1_all']:.3f}"]
+        f1_all = f"{r['f1_all']:.3f}"
+        if int(r["n_scans_kept"]) < 10:
+            f1_all += f" (warning: from {int(r['n_scans_kept'])} scans)"
+        cells = [r["ordering"], r["extractor"], str(r["n_scans_kept"]), f1_all]
         for level in levels:
             p = f"{round(level * 100, 6):g}"
             k = r[f"k_{p}"] or "-"

@@ -155,6 +155,7 @@ rule score:
     input:
         runs=lambda wc: expand("results/{dataset}/score/{extractor}.parquet", dataset=wc.dataset,
                                extractor=score_extractors(wc)),
+        registration="results/{dataset}/registration.parquet",
     output:
         metrics="results/{dataset}/metrics.parquet",
         summary="results/{dataset}/summary.parquet",
