@@ -1,0 +1,80 @@
+"""Every shared real recording runs on the defaults to a floor plan (issue 20).
+
+The workflow runs once, in a copy of the repository, on the nine recordings of
+``../shared/data`` as ``config/config.yaml`` names them (a path each, nothing else: the
+format, scan topic, pose source and stamps are detected), up to the floor plans of the
+thesis's ordering with the RANSAC extractor. Each test checks what was detected, how
+many scans were sampled and kept, the verdict, the wall length of the all-scan plan,
+and the fraction of it that the plan from the first 50 scans reaches (the measured figures are
+in MEASURED; bounds leave a margin for other machines' floating point).
+"""
+
+from __future__ import annotations
+
+import json
+
+import pyarrow.parquet as pq
+import pytest
+from shapely.geometry import shape
+
+from conftest import SHARED_DATA, needs_shared
+from floorscan.io import read_table
+from test_workflow import copy_workflow, snakemake
+
+pytestmark = [needs_shared, pytest.mark.realdata, pytest.mark.workflow, pytest.mark.slow]
+
+# dataset: (format, scan topic, pose kind, stamps, mode, scans, sampled, kept, plan
+# wall length with all kept scans in m, the fraction of it the first 50 scans reach)
+MEASURED = {
+    "intel": ("carmen", "FLASER", "map", "recorded", "pose", 910, 895, 893, 403.2, 0.38),
+    "aces": ("carmen", "FLASER", "map", "recorded", "pose", 440, 440, 437, 534.2, 0.34),
+    "freiburg101": ("carmen", "FLASER", "map", "recorded", "pose", 292, 290, 288, 196.4, 0.71),
+    "orebro": ("carmen", "FLASER", "map", "made_up", "pose", 237, 237, 233, 319.7, 0.40),
+    "belgioioso": ("carmen", "FLASER", "map", "made_up", "pose", 395, 390, 389, 524.7, 0.61),
+    "trace0": ("rosbag", "/base_scan", "map", "recorded", "pose", 958, 221, 221, 84.8, 0.86),
+    "lgfloor2": ("rosbag", "/base_scan", "none", "recorded", "odometry", 1640, 492, 492, 127.5, 0.75),
+    "mac_ros2": ("rosbag", "/scan", "none", "recorded", "odometry", 357, 61, 61, 50.6, 0.96),
+    "simpath2": ("rosbag", "/base_scan", "none", "recorded", "odometry", 634, 241, 241, 134.6, 0.90),
+}
+
+ORDERING, EXTRACTOR = "cluster_hull", "ransac"
+
+
+@pytest.fixture(scope="module")
+def real_run(tmp_path_factory):
+    root = tmp_path_factory.mktemp("real")
+    wd = copy_workflow(root / "floorscan")
+    targets = [
+        f"results/{d}/floorplan/{ORDERING}_{EXTRACTOR}_k{k}.geojson" for d in MEASURED for k in ("all", "50")
+    ]
+    grid = wd / "walls_grid.yaml"
+    grid.write_text(f"walls:\n  k: [50, all]\n  orderings: [{ORDERING}]\n  extractors: [{EXTRACTOR}]\n")
+    res = snakemake(wd, *targets, "--configfile", str(grid), timeout=1800)
+    assert res.returncode == 0, res.stderr[-4000:]
+    return wd / "results"
+
+
+def _plan_length_m(path) -> float:
+    """Total length of the floor plan's wall centre lines, metres."""
+    data = json.loads(path.read_text())
+    return sum(shape(f["geometry"]).length for f in data["features"] if f["properties"].get("kind") == "axis")
+
+
+@pytest.mark.parametrize("name", list(MEASURED))
+def test_recording_runs_on_defaults_to_a_recognisable_plan(real_run, name):
+    fmt, topic, pose_kind, stamps, mode, n_scans, n_sampled, n_kept, length_all, fraction = MEASURED[name]
+    out = real_run / name
+    meta = {k.decode(): v.decode() for k, v in pq.read_schema(out / "scan_index.parquet").metadata.items()}
+    assert (meta["format"], meta["scan_topic"], meta["pose_kind"], meta["stamps"]) == (fmt, topic, pose_kind, stamps)
+    reg_meta = {k.decode(): v.decode() for k, v in pq.read_schema(out / "registration.parquet").metadata.items()}
+    verdict = json.loads(reg_meta["verdict"])
+    assert reg_meta["mode"] == mode and verdict["ok"], verdict["line"]
+    reg = read_table(out / "registration.parquet")
+    assert len(reg) == n_scans
+    assert abs(verdict["n_sampled"] - n_sampled) <= max(2, 0.02 * n_sampled)
+    assert abs(int(reg["kept"].sum()) - n_kept) <= max(2, 0.02 * n_kept)
+    assert verdict["kept_fraction"] >= 0.9
+    all_m = _plan_length_m(out / "floorplan" / f"{ORDERING}_{EXTRACTOR}_kall.geojson")
+    part_m = _plan_length_m(out / "floorplan" / f"{ORDERING}_{EXTRACTOR}_k50.geojson")
+    assert all_m == pytest.approx(length_all, rel=0.1)
+    assert part_m / all_m >= fraction - 0.1
