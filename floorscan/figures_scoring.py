@@ -8,6 +8,7 @@
   purple (Fig. 5.1);
 - :func:`plot_walls_over_points`: wall segments over the registered points
   (Figs. 5.11, 5.12);
+- :func:`plot_reference_map`: the occupancy-grid reference map of a recording;
 - :func:`stage_times` / :func:`plot_stage_times`: time and memory per stage from the
   Snakemake benchmark files (Table 5.1);
 - :func:`plot_wall_extraction`: time per scan and cumulative walls per scan of each
@@ -280,6 +281,37 @@ def plot_bitmap_overlay(
 
 
 # ------------------------------------------------------------------ Figs. 5.11, 5.12
+
+
+def plot_reference_map(grid, out, title: str = "", faces=None) -> None:
+    """The reference map (:class:`floorscan.score.reference.OccupancyGrid`): free
+    cells white, unknown grey, structure black, occupied cells hit by a single scan
+    red; optionally a floor plan's faces ((F, 4) segments, metres) in blue over it."""
+    rgb = np.full(grid.shape + (3,), 0.80)
+    rgb[grid.free()] = 1.0
+    h, w = grid.shape
+    x0, y0 = grid.origin_xy
+    r = grid.resolution_m
+    counts = grid.counts()
+    fig, ax = plt.subplots(figsize=(8, 8))
+    ax.imshow(rgb, origin="lower", extent=(x0, x0 + w * r, y0, y0 + h * r), interpolation="nearest")
+    # occupied cells as markers of at least a pixel: at a building's scale a 5 cm cell
+    # is a tenth of one, and the image alone would hide them
+    size = max(0.3, (72.0 * 8 * r / max(w * r, h * r)) ** 2)
+    for mask, colour in ((grid.structure(), "black"), (grid.single_scan(), (0.85, 0.1, 0.1))):
+        xy = grid.cell_centres(mask)
+        ax.scatter(xy[:, 0], xy[:, 1], s=size, c=[colour], marker="s", linewidths=0)
+    if faces is not None and len(faces):
+        ax.add_collection(_segments_collection(faces, colors="tab:blue", linewidths=0.8))
+    ax.set_xlabel("x (m, map frame)")
+    ax.set_ylabel("y (m, map frame)")
+    ax.set_title(
+        f"{title}\n{counts['structure']} structure cells (black: occupied, >= {grid.params.min_scans} scans), "
+        f"{counts['single_scan']} single-scan (red)\n{counts['free']} free (white), "
+        f"{counts['unknown']} unknown (grey); {r * 100:.0f} cm cells",
+        fontsize=9,
+    )
+    _save(fig, out)
 
 
 def plot_walls_over_points(points, panels, out, title: str = "") -> None:

@@ -1481,7 +1481,10 @@ def summarize(metrics, tau: float = 0.05, levels=(0.95, 0.99)):
     pandas.DataFrame
         Columns ``dataset, reference_kind, ordering, extractor, n_scans_kept, f1_all``
         and per level L (as a percentage p): ``k_p``, ``n_scans_p``, ``fraction_p``,
-        ``reduction_p`` (``k_p`` empty, the others NaN, when F1_all is NaN or 0).
+        ``reduction_p`` (``k_p`` empty, the others NaN, when F1_all is NaN or 0);
+        with the ``map_*`` columns of the reference map in ``metrics``, also
+        ``map_completeness_all``, ``map_correctness_all``, ``map_f1_all``: the all-scan
+        floor plan against the reference map at ``tau``.
     """
     import pandas as pd
 
@@ -1502,6 +1505,11 @@ def summarize(metrics, tau: float = 0.05, levels=(0.95, 0.99)):
             "n_scans_kept": n_kept,
             "f1_all": f1_all,
         }
+        # the all-scan floor plan against the reference map (occupancy grid), when scored
+        for m in ("completeness", "correctness", "f1"):
+            c = f"map_{m}_{tau_label(tau)}"
+            if c in g.columns:
+                row[f"map_{m}_all"] = float(all_rows[c].iloc[0]) if len(all_rows) else math.nan
         for level in levels:
             p = f"{round(level * 100, 6):g}"
             hit = g[g[col] >= level * f1_all - 1e-12] if f1_all > 0 else g.iloc[0:0]
@@ -1572,6 +1580,21 @@ def summary_markdown(
                 k = f"{k} ({r[f'n_scans_{p}']})" if str(r[f"n_scans_{p}"]) != k else k
             cells += [k, f"{r[f'fraction_{p}']:.3f}", f"{r[f'reduction_{p}']:.1f}x"]
         lines.append("| " + " | ".join(cells) + " |")
+    if "map_f1_all" in summary.columns:
+        lines += [
+            "",
+            f"The floor plan from all kept scans against the reference map (occupancy grid of all kept "
+            f"scans, its structure cells; `reference/map.pgm`), at tau = {tau_label(tau)}: completeness "
+            "(structure within tau of a plan face), correctness (plan face length within tau of structure), F1.",
+            "",
+            "| ordering | extractor | completeness | correctness | F1 |",
+            "|---|---|---|---|---|",
+        ]
+        for _, r in summary.iterrows():
+            lines.append(
+                f"| {r['ordering']} | {r['extractor']} | {r['map_completeness_all']:.3f} | "
+                f"{r['map_correctness_all']:.3f} | {r['map_f1_all']:.3f} |"
+            )
     return "\n".join(lines) + "\n"
 
 

@@ -34,6 +34,16 @@ with stage_log(snakemake) as log:  # noqa: F821
         runs, references, kind, cfg, smk.wildcards.dataset, log, recall_references=recall_refs,
         workers=smk.threads,
     )
+    # the plans against the reference map (occupancy grid of all kept scans)
+    import pyarrow.parquet as pq
+
+    from floorscan.score.against_reference import score_plans
+    from floorscan.score.reference import grid_from_table
+
+    grid_meta = {k.decode(): v.decode() for k, v in pq.read_schema(smk.input.reference_map).metadata.items()}
+    grid = grid_from_table(read_table(smk.input.reference_map), grid_meta)
+    against_map = score_plans(runs, grid, tuple(cfg["taus_m"]), metrics.floorplan_faces)
+    table = table.merge(against_map, on=["ordering", "extractor", "k"], how="left", validate="one_to_one")
     meta = {"dataset": smk.wildcards.dataset, "reference_kind": kind,
             "reference": smk.params.reference_label, "extractor": smk.wildcards.extractor}
     write_table(table, smk.output.metrics, metadata=meta)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pyarrow.parquet as pq
 import pytest
 from shapely.geometry import shape
@@ -37,6 +38,20 @@ MEASURED = {
     "simpath2": ("rosbag", "/base_scan", "none", "recorded", "odometry", 634, 241, 241, 134.6, 0.90),
 }
 
+# dataset: the all-scan plan against the reference map (occupancy grid of all kept
+# scans, issue 21): completeness and correctness at 5 cm, as measured
+MEASURED_MAP = {
+    "intel": (0.737, 0.865),
+    "aces": (0.773, 0.734),
+    "freiburg101": (0.677, 0.783),
+    "orebro": (0.719, 0.743),
+    "belgioioso": (0.882, 0.819),
+    "trace0": (0.796, 0.888),
+    "lgfloor2": (0.735, 0.654),
+    "mac_ros2": (0.571, 0.672),
+    "simpath2": (0.841, 0.950),
+}
+
 ORDERING, EXTRACTOR = "cluster_hull", "ransac"
 
 
@@ -46,7 +61,7 @@ def real_run(tmp_path_factory):
     wd = copy_workflow(root / "floorscan")
     targets = [
         f"results/{d}/floorplan/{ORDERING}_{EXTRACTOR}_k{k}.geojson" for d in MEASURED for k in ("all", "50")
-    ]
+    ] + [f"results/{d}/reference/occupancy.parquet" for d in MEASURED]
     grid = wd / "walls_grid.yaml"
     grid.write_text(f"walls:\n  k: [50, all]\n  orderings: [{ORDERING}]\n  extractors: [{EXTRACTOR}]\n")
     res = snakemake(wd, *targets, "--configfile", str(grid), timeout=1800)
@@ -78,3 +93,37 @@ def test_recording_runs_on_defaults_to_a_recognisable_plan(real_run, name):
     part_m = _plan_length_m(out / "floorplan" / f"{ORDERING}_{EXTRACTOR}_k50.geojson")
     assert all_m == pytest.approx(length_all, rel=0.1)
     assert part_m / all_m >= fraction - 0.1
+
+
+@pytest.mark.parametrize("name", list(MEASURED_MAP))
+def test_the_plan_against_the_reference_map_sees_a_wall_through_free_space(real_run, name):
+    """The all-scan plan against the reference map is not 1 by construction (its
+    correctness is below 1 on every recording), and walls drawn along the rover's own
+    path, through space every scan saw free, lower correctness by their share of the
+    plan's length while completeness stays."""
+    from floorscan.metrics import floorplan_faces
+    from floorscan.score.against_reference import plan_against_reference
+    from floorscan.score.reference import grid_from_table
+
+    out = real_run / name
+    path = out / "reference" / "occupancy.parquet"
+    meta = {k.decode(): v.decode() for k, v in pq.read_schema(path).metadata.items()}
+    grid = grid_from_table(read_table(path), meta)
+    faces = floorplan_faces(out / "floorplan" / f"{ORDERING}_{EXTRACTOR}_kall.geojson")
+    got = plan_against_reference(faces, grid)
+    completeness, correctness = MEASURED_MAP[name]
+    assert got["completeness_5cm"] == pytest.approx(completeness, abs=0.03)
+    assert got["correctness_5cm"] == pytest.approx(correctness, abs=0.03)
+    assert got["correctness_5cm"] < 0.97 and got["correctness_10cm"] < 1.0
+    reg = read_table(out / "registration.parquet")
+    xy = reg.loc[reg["kept"], ["x_m", "y_m"]].to_numpy()
+    steps = np.hstack([xy[:-1], xy[1:]])
+    length = np.hypot(steps[:, 2] - steps[:, 0], steps[:, 3] - steps[:, 1])
+    spurious = steps[(length > 0.2) & (length < 2.0)][:40]
+    added = float(np.hypot(spurious[:, 2] - spurious[:, 0], spurious[:, 3] - spurious[:, 1]).sum())
+    bad = plan_against_reference(np.vstack([faces, spurious]), grid)
+    share = added / bad["plan_length_m"]
+    assert share > 0.02
+    assert bad["correctness_5cm"] < got["correctness_5cm"] * (1 - 0.8 * share)
+    assert bad["free_fraction"] > got["free_fraction"] + 0.4 * share
+    assert bad["completeness_5cm"] >= got["completeness_5cm"]

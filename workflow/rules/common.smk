@@ -40,6 +40,7 @@ PRIORITY = {
     "walls": 21,
     "floorplan": 20,
     "selection_figures": 14,
+    "reference": 10,
     "score_runs": 9,
     "score_walls_figures": 8,
     "score": 4,

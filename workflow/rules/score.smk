@@ -1,7 +1,8 @@
 # Scoring (thesis Chapter 5): metrics of the walls of every ordering x extractor x k
 # against the ground truth (synthetic datasets) or the reference (real recordings: the
-# walls of the same extractor from all kept scans), the scan-reduction summary, and the
-# Chapter 5 figures for the report.
+# walls of the same extractor from all kept scans), and of every floor plan against the
+# reference map (rule reference: the occupancy grid of all kept scans), the
+# scan-reduction summary, and the Chapter 5 figures for the report.
 
 
 stage_schema_check("score")
@@ -95,6 +96,7 @@ def score_runs_inputs(wildcards):
         "walls": [f"results/{ds}/walls/{o}/{e}/k{k}.parquet" for o, e, k in runs],
         "floorplans": [f"results/{ds}/floorplan/{o}_{e}_k{k}.geojson" for o, e, k in runs],
         "orderings": [f"results/{ds}/orderings/{o}.parquet" for o in score_orderings(wildcards)],
+        "reference_map": f"results/{ds}/reference/occupancy.parquet",
         **_score_reference_inputs(wildcards),
     }
 
@@ -120,6 +122,50 @@ def score_figure_floorplans(wildcards):
 
 def score_bench_dir(wildcards):
     return f"results/{wildcards.dataset}/benchmarks"
+
+
+def reference_config(wildcards):
+    """The score.reference section (the occupancy grid's settings)."""
+    return dict(stage_config("score")(wildcards).get("reference") or {})
+
+
+def reference_inputs(wildcards):
+    ds = wildcards.dataset
+    inputs = {
+        "registered": f"results/{ds}/registered.parquet",
+        "registration": f"results/{ds}/registration.parquet",
+    }
+    if is_synthetic(ds):  # the reference itself is scored against the true walls
+        inputs["ground_truth"] = f"results/{ds}/sim/walls.geojson"
+    return inputs
+
+
+# The reference map: the occupancy grid of all kept scans (floorscan.score.reference),
+# what every floor plan is scored against by completeness and correctness (map_*).
+rule reference:
+    priority: PRIORITY["reference"]
+    input:
+        unpack(reference_inputs),
+    output:
+        pgm="results/{dataset}/reference/map.pgm",
+        yaml="results/{dataset}/reference/map.yaml",
+        cells="results/{dataset}/reference/occupancy.parquet",
+        figure=report(
+            "results/{dataset}/figures/reference_map.png",
+            caption="../report/reference_map.rst",
+            category="Scoring",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "reference map (occupancy grid)"},
+        ),
+    params:
+        cfg=reference_config,
+        walls=stage_config("walls"),
+    log:
+        log_path("reference"),
+    benchmark:
+        benchmark_path("reference")
+    script:
+        "../../scripts/reference.py"
 
 
 # One job per extractor scores its orderings x k as soon as its floor plans exist, while

@@ -1,0 +1,208 @@
+"""A floor plan against a reference map, in the ISPRS indoor benchmark's terms.
+
+The ISPRS benchmark on indoor modelling (Khoshelham et al., ISPRS Annals IV-2/W4,
+2017) scores a model against a reference by *completeness* (the fraction of the
+reference that lies within a tolerance tau of the model), *correctness* (the fraction
+of the model that lies within tau of the reference) and their harmonic mean. Here the
+model is the floor plan's wall faces (the lines the scanner sees; ``kind`` "face" of
+the GeoJSON) and the reference is the structure of the occupancy grid
+(:mod:`floorscan.score.reference`): occupied cells hit by at least two scans.
+
+- completeness (recall) at tau: structure cells whose centre is within tau of a face;
+- correctness (precision) at tau: face length (sampled every ``sample_m``) within tau
+  of a structure cell's centre. A wall drawn through free space is far from any
+  structure and lowers it;
+- F1 = 2 P R / (P + R); the median distance of the face samples to the structure;
+- ``free_fraction``: face length over cells the reference map calls free and farther
+  than the largest tau from structure (a wall drawn where scans saw through), the part
+  of the incorrect length that the scans contradict; the rest lies in unknown space.
+
+Cell centres quantise the structure to the grid: a wall surface lies within half a
+cell (2.5 cm at 5 cm cells) of its cells' centres across the wall, so tau below that
+is not meaningful.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from floorscan.score.reference import OccupancyGrid
+
+
+def sample_segments(segments: np.ndarray, sample_m: float) -> np.ndarray:
+    """Points every ``sample_m`` (at most) along each segment, ends included.
+
+    Parameters
+    ----------
+    segments : (F, 4) float ndarray
+        x0, y0, x1, y1 per segment, metres.
+    sample_m : float
+        Largest spacing, metres.
+
+    Returns
+    -------
+    (N, 2) float64 ndarray
+        The samples, each standing for ``length / n`` metres of its segment (equal
+        weights within a segment); see :func:`segment_weights`.
+    """
+    seg = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
+    if len(seg) == 0:
+        return np.empty((0, 2))
+    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    n = np.maximum(np.ceil(length / sample_m).astype(np.int64), 1) + 1
+    which = np.repeat(np.arange(len(seg)), n)
+    t = (np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n - 1, n)
+    a, b = seg[which, :2], seg[which, 2:]
+    return a + (b - a) * t[:, None]
+
+
+def segment_weights(segments: np.ndarray, sample_m: float) -> np.ndarray:
+    """Length in metres each sample of :func:`sample_segments` stands for."""
+    seg = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
+    if len(seg) == 0:
+        return np.empty(0)
+    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    n = np.maximum(np.ceil(length / sample_m).astype(np.int64), 1) + 1
+    return np.repeat(length / n, n)
+
+
+def plan_against_reference(
+    faces: np.ndarray,
+    grid: OccupancyGrid,
+    taus_m: tuple[float, ...] = (0.05, 0.10),
+    sample_m: float = 0.01,
+    structure_tree: cKDTree | None = None,
+) -> dict[str, float]:
+    """Completeness, correctness, F1 and median distance of a plan's faces against
+    the reference map's structure (see the module docstring).
+
+    Parameters
+    ----------
+    faces : (F, 4) float ndarray
+        The plan's wall faces, x0, y0, x1, y1 in the map frame, metres.
+    grid : OccupancyGrid
+        The reference map.
+    taus_m : tuple of float
+        Tolerances, metres; the keys carry them in cm (``completeness_5cm``).
+    sample_m : float
+        Spacing of the face samples, metres.
+    structure_tree : scipy.spatial.cKDTree, optional
+        Of ``grid.cell_centres(grid.structure())``, when already built.
+
+    Returns
+    -------
+    dict of str to float
+        ``completeness_<t>cm``, ``correctness_<t>cm``, ``f1_<t>cm`` per tau,
+        ``median_distance_m``, ``free_fraction``, ``plan_length_m``,
+        ``n_structure_cells``. Completeness is 0 and the others NaN for a plan
+        without faces.
+
+    Raises
+    ------
+    ValueError
+        When the reference map has no structure cell.
+    """
+    structure = grid.cell_centres(grid.structure())
+    if len(structure) == 0:
+        raise ValueError("the reference map has no structure cell (occupied and hit by enough scans)")
+    tree_ref = structure_tree if structure_tree is not None else cKDTree(structure)
+    seg = np.asarray(faces, dtype=np.float64).reshape(-1, 4)
+    out: dict[str, float] = {"n_structure_cells": float(len(structure))}
+    samples = sample_segments(seg, sample_m)
+    weights = segment_weights(seg, sample_m)
+    total = float(weights.sum())
+    out["plan_length_m"] = total
+    if len(samples) == 0 or total <= 0:
+        for tau in taus_m:
+            key = _cm(tau)
+            out[f"completeness_{key}"], out[f"correctness_{key}"], out[f"f1_{key}"] = 0.0, math.nan, math.nan
+        out["median_distance_m"], out["free_fraction"] = math.nan, math.nan
+        return out
+    d_plan, _ = tree_ref.query(samples, k=1, distance_upper_bound=max(taus_m) * 10)
+    d_ref, _ = cKDTree(samples).query(structure, k=1, distance_upper_bound=max(taus_m) + sample_m)
+    for tau in taus_m:
+        key = _cm(tau)
+        correctness = float(weights[d_plan <= tau].sum() / total)
+        # a sample stands for the face within sample_m / 2 of it
+        completeness = float(np.mean(d_ref <= tau + 0.5 * sample_m))
+        f1 = 2 * correctness * completeness / (correctness + completeness) if correctness + completeness > 0 else 0.0
+        out[f"completeness_{key}"], out[f"correctness_{key}"], out[f"f1_{key}"] = completeness, correctness, f1
+    finite = np.isfinite(d_plan)
+    out["median_distance_m"] = float(np.median(np.where(finite, d_plan, np.inf))) if len(d_plan) else math.nan
+    rows, cols, inside = grid.cells_of(samples)
+    on_free = np.zeros(len(samples), dtype=bool)
+    on_free[inside] = grid.free()[rows[inside], cols[inside]]
+    # beside a wall the free cells begin within a cell of its face: only samples beyond
+    # the largest tolerance from structure are a wall drawn through free space
+    on_free &= d_plan > max(taus_m)
+    out["free_fraction"] = float(weights[on_free].sum() / total)
+    return out
+
+
+def _cm(tau_m: float) -> str:
+    return f"{round(tau_m * 100):d}cm"
+
+
+def score_plans(runs: list[dict], grid: OccupancyGrid, taus_m: tuple[float, ...], faces_of) -> "pd.DataFrame":
+    """:func:`plan_against_reference` of every run's floor plan.
+
+    Parameters
+    ----------
+    runs : list of dict
+        ``ordering``, ``extractor``, ``k`` (label) and ``floorplan`` (a GeoJSON path).
+    grid : OccupancyGrid
+    taus_m : tuple of float
+    faces_of : callable
+        Path -> (F, 4) faces of the plan (:func:`floorscan.metrics.floorplan_faces`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``ordering``, ``extractor``, ``k`` and the metrics prefixed ``map_``, a row per run.
+    """
+    import pandas as pd
+
+    structure = grid.cell_centres(grid.structure())
+    if len(structure) == 0:
+        raise ValueError("the reference map has no structure cell (occupied and hit by enough scans)")
+    tree = cKDTree(structure)
+    rows = []
+    for run in runs:
+        m = plan_against_reference(faces_of(run["floorplan"]), grid, tuple(taus_m), structure_tree=tree)
+        rows.append({"ordering": run["ordering"], "extractor": run["extractor"], "k": str(run["k"]),
+                     **{f"map_{key}": value for key, value in m.items()}})
+    return pd.DataFrame(rows)
+
+
+def reference_against_ground_truth(
+    grid: OccupancyGrid, faces: np.ndarray, observed: np.ndarray | None = None, taus_m: tuple[float, ...] = (0.05, 0.10)
+) -> dict[str, float]:
+    """How good the reference map is, on a synthetic recording: its structure against
+    the simulator's true wall faces.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+    faces : (F, 4) float ndarray
+        All true wall faces, metres (``kind`` "face" of ``sim/walls.geojson``).
+    observed : (G, 4) float ndarray, optional
+        The parts of the faces the recording saw (``observed_face``); default ``faces``.
+    taus_m : tuple of float
+
+    Returns
+    -------
+    dict of str to float
+        ``correctness_<t>cm``: structure cells within tau of a true face;
+        ``completeness_<t>cm``: observed face length within tau of structure.
+    """
+    out: dict[str, float] = {}
+    all_faces = plan_against_reference(faces, grid, taus_m)
+    seen = all_faces if observed is None else plan_against_reference(observed, grid, taus_m)
+    for tau in taus_m:
+        key = _cm(tau)
+        out[f"correctness_{key}"] = all_faces[f"completeness_{key}"]
+        out[f"completeness_{key}"] = seen[f"correctness_{key}"]
+    return out
