@@ -9,6 +9,7 @@
 - :func:`plot_walls_over_points`: wall segments over the registered points
   (Figs. 5.11, 5.12);
 - :func:`plot_reference_map`: the occupancy-grid reference map of a recording;
+- :func:`plot_quality_vs_k`: plan F1 against k for every ordering, random's seeds and the oracle;
 - :func:`stage_times` / :func:`plot_stage_times`: time and memory per stage from the
   Snakemake benchmark files (Table 5.1);
 - :func:`plot_wall_extraction`: time per scan and cumulative walls per scan of each
@@ -311,6 +312,40 @@ def plot_reference_map(grid, out, title: str = "", faces=None) -> None:
         f"{counts['unknown']} unknown (grey); {r * 100:.0f} cm cells",
         fontsize=9,
     )
+    _save(fig, out)
+
+
+def plot_quality_vs_k(curves: pd.DataFrame, out, tau: float = 0.05, up_to: float = 0.2, title: str = "") -> None:
+    """F1 of the plan of the first k scans against the reference map, per extractor
+    (:func:`floorscan.score.curves.score_curves`' table with an ``extractor`` column):
+    every ordering, random's mean with a one-sd band over its seeds, the oracle dashed."""
+    col = f"f1_{round(tau * 100):d}cm"
+    extractors = sorted(curves["extractor"].unique())
+    fig, axes = plt.subplots(1, len(extractors), figsize=(6.5 * len(extractors), 5), squeeze=False)
+    for ax, extractor in zip(axes[0], extractors):
+        c = curves[curves["extractor"] == extractor]
+        n_kept = int(c["n_kept"].iloc[0])
+        f1_all = float(c.loc[c["k"] == n_kept, col].iloc[0])
+        ax.axvspan(0, up_to, color="0.92", zorder=0)
+        for ordering, g in c.groupby("ordering", sort=True):
+            n_seeds = g["seed"].nunique()
+            stats = g.groupby("k", sort=True)[col].agg(["mean", "std", "count"])
+            stats = stats[stats["count"] == n_seeds]  # the k every seed was scored at
+            x = stats.index.to_numpy() / n_kept
+            colour = ORDERING_COLOURS.get(ordering, "black")
+            style = "--" if ordering == "oracle" else "-"
+            label = f"{ordering} (mean of {g['seed'].nunique()} seeds)" if g["seed"].nunique() > 1 else ordering
+            ax.plot(x, stats["mean"], style, color=colour, lw=1.4, label=label)
+            if g["seed"].nunique() > 1:
+                ax.fill_between(x, stats["mean"] - stats["std"], stats["mean"] + stats["std"], color=colour, alpha=0.2)
+        ax.axhline(0.95 * f1_all, color="0.3", ls=":", lw=1, label="95 % of the all-scan F1")
+        ax.set_xlim(0, 1)
+        ax.set_ylim(0, 1)
+        ax.set_xlabel(f"k / kept scans ({n_kept} kept)")
+        ax.set_ylabel(f"F1 against the reference map, tau {tau * 100:.0f} cm")
+        ax.set_title(f"{extractor}", fontsize=10)
+        ax.legend(fontsize=8, loc="lower right")
+    fig.suptitle(title or "Floor-plan F1 against the number of scans", fontsize=11)
     _save(fig, out)
 
 

@@ -109,3 +109,35 @@ def test_default_run_selection_walls_and_scores(default_run):
         assert 0.6 < mi.loc[("cluster_hull", ext, "all"), "recall_all_5cm"] < 0.85
     for fmt in ("geojson", "svg", "dxf", "ifc"):
         assert (out / "floorplan" / f"cluster_hull_cluster_ransac_k15.{fmt}").stat().st_size > 500
+
+
+def test_default_run_reference_map_curves_and_summary(default_run):
+    """Issue 21 on the demo: the reference map is written for map_server, every plan
+    is scored against it (correctness below 1), and the summary reads k95 for every
+    ordering and extractor from the curves: random from 10 seeds, the oracle as the
+    bound. Measured: all-scan plan F1 0.932 / 0.935 (cluster_ransac / ransac);
+    cluster_hull k95 7 of 76 kept, oracle 4 / 5, random 9.9 +- 4.2 / 10.0 +- 4.1;
+    AUC cluster_hull 0.824 / 0.829 against random 0.782 / 0.782."""
+    out = default_run / "results" / "demo"
+    assert (out / "reference" / "map.pgm").read_bytes().startswith(b"P5\n")
+    assert "mode: trinary" in (out / "reference" / "map.yaml").read_text()
+    m = read_table(out / "metrics.parquet")
+    assert (m["map_correctness_5cm"] < 1).all() and (m["map_correctness_5cm"] > 0.9).all()
+    s = read_table(out / "summary.parquet").set_index(["extractor", "ordering"])
+    assert set(s.index.get_level_values("ordering")) == {
+        "cluster_hull", "convex_hull", "motion_filter", "oracle", "random", "sequential"}
+    for ext in ("ransac", "cluster_ransac"):
+        assert s.loc[(ext, "random"), "n_seeds"] == 10 and s.loc[(ext, "random"), "k_95_seed_sd"] > 0
+        assert s.loc[(ext, "oracle"), "k95_over_oracle"] == 1.0
+        assert s.loc[(ext, "oracle"), "k_95"] <= s.loc[(ext, "cluster_hull"), "k_95"] <= 10
+        assert s.loc[(ext, "cluster_hull"), "auc"] > s.loc[(ext, "random"), "auc"] + 0.02
+        assert s.loc[(ext, "sequential"), "k_95"] > 40
+        assert 0.9 < s.loc[(ext, "cluster_hull"), "f1_all"] < 0.96
+    curves = read_table(out / "score" / "curves_ransac.parquet")
+    cluster = curves[curves["ordering"] == "cluster_hull"]["k"]
+    assert list(cluster[cluster <= 15]) == list(range(1, 16))  # every k up to 20 % of 76
+    md = (out / "summary.md").read_text()
+    assert md.startswith("# Scan reduction summary: demo") and "**Verdict: GOOD" in md
+    assert "cluster_hull beats random with ransac" in md
+    assert "<table" in (out / "summary.html").read_text()
+    assert (out / "figures" / "quality_vs_k.png").stat().st_size > 20_000

@@ -8,7 +8,8 @@ model is the floor plan's wall faces (the lines the scanner sees; ``kind`` "face
 the GeoJSON) and the reference is the structure of the occupancy grid
 (:mod:`floorscan.score.reference`): occupied cells hit by at least two scans.
 
-- completeness (recall) at tau: structure cells whose centre is within tau of a face;
+- completeness (recall) at tau: structure cells whose centre is within tau of a face
+  (of its samples every ``sample_m``, 2 cm: within :func:`within_bound`, 1 mm more);
 - correctness (precision) at tau: face length (sampled every ``sample_m``) within tau
   of a structure cell's centre. A wall drawn through free space is far from any
   structure and lowers it;
@@ -30,6 +31,42 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from floorscan.score.reference import OccupancyGrid
+
+
+class Structure:
+    """The reference map's structure, prepared once for scoring many plans.
+
+    Attributes
+    ----------
+    grid : OccupancyGrid
+    xy : (S, 2) float64 ndarray
+        Centres of the structure cells, metres.
+    tree : scipy.spatial.cKDTree
+        Of ``xy``.
+    free : (H, W) bool ndarray
+        The grid's free cells.
+
+    Raises
+    ------
+    ValueError
+        When the reference map has no structure cell.
+    """
+
+    def __init__(self, grid: OccupancyGrid):
+        self.grid = grid
+        self.xy = grid.cell_centres(grid.structure())
+        if len(self.xy) == 0:
+            raise ValueError("the reference map has no structure cell (occupied and hit by enough scans)")
+        self.tree = cKDTree(self.xy)
+        self.free = grid.free()
+
+
+def within_bound(tau_m: float, sample_m: float) -> float:
+    """Distance to the nearest sample of a segment sampled every ``sample_m`` below
+    which a point is within ``tau_m`` of the segment, up to ``sample_m**2 / (8 tau)``:
+    ``sqrt(tau**2 + (sample_m / 2)**2)`` (a point at ``tau`` from the segment has a
+    sample within half a spacing along it)."""
+    return math.hypot(tau_m, 0.5 * sample_m)
 
 
 def sample_segments(segments: np.ndarray, sample_m: float) -> np.ndarray:
@@ -71,10 +108,9 @@ def segment_weights(segments: np.ndarray, sample_m: float) -> np.ndarray:
 
 def plan_against_reference(
     faces: np.ndarray,
-    grid: OccupancyGrid,
+    reference: OccupancyGrid | Structure,
     taus_m: tuple[float, ...] = (0.05, 0.10),
-    sample_m: float = 0.01,
-    structure_tree: cKDTree | None = None,
+    sample_m: float = 0.02,
 ) -> dict[str, float]:
     """Completeness, correctness, F1 and median distance of a plan's faces against
     the reference map's structure (see the module docstring).
@@ -83,14 +119,13 @@ def plan_against_reference(
     ----------
     faces : (F, 4) float ndarray
         The plan's wall faces, x0, y0, x1, y1 in the map frame, metres.
-    grid : OccupancyGrid
-        The reference map.
+    reference : OccupancyGrid or Structure
+        The reference map (a :class:`Structure` when scoring many plans).
     taus_m : tuple of float
         Tolerances, metres; the keys carry them in cm (``completeness_5cm``).
     sample_m : float
-        Spacing of the face samples, metres.
-    structure_tree : scipy.spatial.cKDTree, optional
-        Of ``grid.cell_centres(grid.structure())``, when already built.
+        Spacing of the face samples, metres (completeness within
+        :func:`within_bound` of tau).
 
     Returns
     -------
@@ -105,10 +140,8 @@ def plan_against_reference(
     ValueError
         When the reference map has no structure cell.
     """
-    structure = grid.cell_centres(grid.structure())
-    if len(structure) == 0:
-        raise ValueError("the reference map has no structure cell (occupied and hit by enough scans)")
-    tree_ref = structure_tree if structure_tree is not None else cKDTree(structure)
+    ref = reference if isinstance(reference, Structure) else Structure(reference)
+    structure = ref.xy
     seg = np.asarray(faces, dtype=np.float64).reshape(-1, 4)
     out: dict[str, float] = {"n_structure_cells": float(len(structure))}
     samples = sample_segments(seg, sample_m)
@@ -121,20 +154,18 @@ def plan_against_reference(
             out[f"completeness_{key}"], out[f"correctness_{key}"], out[f"f1_{key}"] = 0.0, math.nan, math.nan
         out["median_distance_m"], out["free_fraction"] = math.nan, math.nan
         return out
-    d_plan, _ = tree_ref.query(samples, k=1, distance_upper_bound=max(taus_m) * 10)
-    d_ref, _ = cKDTree(samples).query(structure, k=1, distance_upper_bound=max(taus_m) + sample_m)
+    d_plan, _ = ref.tree.query(samples, k=1, distance_upper_bound=max(taus_m) * 10)
+    d_ref, _ = cKDTree(samples).query(structure, k=1, distance_upper_bound=within_bound(max(taus_m), sample_m))
     for tau in taus_m:
         key = _cm(tau)
         correctness = float(weights[d_plan <= tau].sum() / total)
-        # a sample stands for the face within sample_m / 2 of it
-        completeness = float(np.mean(d_ref <= tau + 0.5 * sample_m))
+        completeness = float(np.mean(d_ref <= within_bound(tau, sample_m)))
         f1 = 2 * correctness * completeness / (correctness + completeness) if correctness + completeness > 0 else 0.0
         out[f"completeness_{key}"], out[f"correctness_{key}"], out[f"f1_{key}"] = completeness, correctness, f1
-    finite = np.isfinite(d_plan)
-    out["median_distance_m"] = float(np.median(np.where(finite, d_plan, np.inf))) if len(d_plan) else math.nan
-    rows, cols, inside = grid.cells_of(samples)
+    out["median_distance_m"] = float(np.median(d_plan))
+    rows, cols, inside = ref.grid.cells_of(samples)
     on_free = np.zeros(len(samples), dtype=bool)
-    on_free[inside] = grid.free()[rows[inside], cols[inside]]
+    on_free[inside] = ref.free[rows[inside], cols[inside]]
     # beside a wall the free cells begin within a cell of its face: only samples beyond
     # the largest tolerance from structure are a wall drawn through free space
     on_free &= d_plan > max(taus_m)
@@ -165,13 +196,10 @@ def score_plans(runs: list[dict], grid: OccupancyGrid, taus_m: tuple[float, ...]
     """
     import pandas as pd
 
-    structure = grid.cell_centres(grid.structure())
-    if len(structure) == 0:
-        raise ValueError("the reference map has no structure cell (occupied and hit by enough scans)")
-    tree = cKDTree(structure)
+    structure = Structure(grid)
     rows = []
     for run in runs:
-        m = plan_against_reference(faces_of(run["floorplan"]), grid, tuple(taus_m), structure_tree=tree)
+        m = plan_against_reference(faces_of(run["floorplan"]), structure, tuple(taus_m))
         rows.append({"ordering": run["ordering"], "extractor": run["extractor"], "k": str(run["k"]),
                      **{f"map_{key}": value for key, value in m.items()}})
     return pd.DataFrame(rows)

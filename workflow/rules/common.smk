@@ -41,6 +41,7 @@ PRIORITY = {
     "floorplan": 20,
     "selection_figures": 14,
     "reference": 10,
+    "score_curves": 9,
     "score_runs": 9,
     "score_walls_figures": 8,
     "score": 4,

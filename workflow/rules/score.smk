@@ -196,15 +196,64 @@ rule score_runs:
         "../../scripts/score_runs.py"
 
 
+def score_curves_inputs(wildcards):
+    ds = wildcards.dataset
+    return {
+        "walls": f"results/{ds}/walls/{wildcards.extractor}/per_scan.parquet",
+        "orderings": [f"results/{ds}/orderings/{o}.parquet" for o in score_orderings(wildcards)],
+        "reference_map": f"results/{ds}/reference/occupancy.parquet",
+    }
+
+
+# Quality against k (floorscan.score.curves): the plan of the first k scans of every
+# ordering, random's seeds and the completeness oracle against the reference map, on a
+# k grid of 2 % of the kept scans; one job per extractor.
+rule score_curves:
+    priority: PRIORITY["score_curves"]
+    input:
+        unpack(score_curves_inputs),
+    output:
+        curves="results/{dataset}/score/curves_{extractor}.parquet",
+        oracle="results/{dataset}/score/oracle_{extractor}.parquet",
+    wildcard_constraints:
+        extractor=WALLS_CONSTRAINTS["extractor"],
+    params:
+        cfg=score_check,
+        orderings=score_orderings,
+        floorplan=stage_config("floorplan"),
+    log:
+        "results/{dataset}/logs/score_curves_{extractor}.log",
+    benchmark:
+        "results/{dataset}/benchmarks/score_curves_{extractor}.tsv"
+    script:
+        "../../scripts/score_curves.py"
+
+
 rule score:
     priority: PRIORITY["score"]
     input:
         runs=lambda wc: expand("results/{dataset}/score/{extractor}.parquet", dataset=wc.dataset,
                                extractor=score_extractors(wc)),
+        curves=lambda wc: expand("results/{dataset}/score/curves_{extractor}.parquet", dataset=wc.dataset,
+                                 extractor=score_extractors(wc)),
         registration="results/{dataset}/registration.parquet",
     output:
         metrics="results/{dataset}/metrics.parquet",
         summary="results/{dataset}/summary.parquet",
+        summary_html=report(
+            "results/{dataset}/summary.html",
+            caption="../report/summary.rst",
+            category="Scoring",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "summary table"},
+        ),
+        quality_vs_k=report(
+            "results/{dataset}/figures/quality_vs_k.png",
+            caption="../report/quality_vs_k.rst",
+            category="Scoring",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "F1 against k, every ordering and the oracle"},
+        ),
         summary_md=report(
             "results/{dataset}/summary.md",
             caption="../report/summary.rst",

@@ -1,0 +1,515 @@
+"""Floor-plan quality against the number of scans, and the bound of any selection.
+
+For an ordering of the kept scans, the floor plan of its first k scans (the walls
+stage's per-scan segments of those scans, merged by :func:`floorscan.floorplan.build_floorplan`
+as the floorplan stage merges them) is scored against the reference map
+(:func:`floorscan.score.against_reference.plan_against_reference`) at every k of a
+grid (:func:`k_grid`: a step of at most 2 % of the kept scans, so that the k reaching a
+level is read to within 2 %). Orderings scored:
+
+- the workflow's orderings (``orderings/<ordering>.parquet``; thesis Algorithm 1 and
+  the baselines);
+- ``random`` as several seeded permutations (``random_seeds``, seeds 0, 1, ...): its
+  mean curve and the spread of the seeds;
+- ``oracle``: a greedy that maximises completeness itself (:func:`oracle_ordering`).
+  It knows the reference, so no user can run it: it is the limit a reference-free
+  ordering is measured against.
+
+:func:`curve_summary` reads, per ordering, the k reaching 95 % and 99 % of the
+all-scan plan's F1, the area under the F1-vs-k curve up to 20 % of the kept scans, and
+the ratio of k95 to the oracle's.
+"""
+
+from __future__ import annotations
+
+import heapq
+import logging
+import math
+from typing import Callable
+
+import numpy as np
+import pandas as pd
+
+from floorscan.score.against_reference import Structure, plan_against_reference, sample_segments, within_bound
+
+#: Ordering name of the completeness-maximising bound.
+ORACLE = "oracle"
+#: Ordering name of the seeded random permutations.
+RANDOM = "random"
+
+
+def k_grid(n_kept: int, step_fraction: float = 0.02) -> list[int]:
+    """The k at which curves are scored: every ``step`` scans, ``step`` =
+    ``max(1, floor(step_fraction * n_kept))``, and ``n_kept`` itself.
+
+    Raises
+    ------
+    ValueError
+        When ``n_kept`` < 1 or ``step_fraction`` is not in (0, 1].
+    """
+    if n_kept < 1:
+        raise ValueError(f"k grid: no kept scan (n_kept {n_kept})")
+    if not 0.0 < step_fraction <= 1.0:
+        raise ValueError(f"score.curve_step_fraction: expected 0 < value <= 1, got {step_fraction}")
+    step = max(1, int(math.floor(step_fraction * n_kept)))
+    return list(range(step, n_kept, step)) + [n_kept]
+
+
+def oracle_ordering(
+    per_scan: pd.DataFrame, scan_ids: list[int], structure: Structure, tau_m: float, sample_m: float = 0.02
+) -> pd.DataFrame:
+    """The greedy ordering that maximises the reference structure its walls reach.
+
+    Each scan covers the structure cells within ``tau_m`` of its own wall segments;
+    the ordering takes at each step the scan that adds the most uncovered cells (lazy
+    greedy, Minoux 1978: a scan's gain only shrinks as others are taken, so a stale
+    gain is an upper bound and a scan whose refreshed gain still tops the heap is the
+    plain greedy's choice; ties go to the smaller scan_id). Scans that add nothing
+    follow in scan_id order.
+
+    Parameters
+    ----------
+    per_scan : pandas.DataFrame
+        Per-scan wall segments: ``scan_id, x0, y0, x1, y1`` (metres, map frame).
+    scan_ids : list of int
+        The kept scans to order.
+    structure : Structure
+    tau_m : float
+        Tolerance, metres.
+    sample_m : float
+        Spacing of the segment samples, metres.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``rank, scan_id, gain_cells, covered_cells``, one row per scan of ``scan_ids``.
+    """
+    cover = scan_cover(per_scan, scan_ids, structure, tau_m, sample_m)
+    return lazy_greedy(cover, scan_ids)
+
+
+def scan_cover(
+    per_scan: pd.DataFrame, scan_ids: list[int], structure: Structure, tau_m: float, sample_m: float = 0.02
+) -> dict[int, np.ndarray]:
+    """Per scan, the indices of the structure cells within ``tau_m`` of its wall
+    segments (sorted int64; empty for a scan without walls)."""
+    cover = {int(s): np.empty(0, dtype=np.int64) for s in scan_ids}
+    if len(per_scan) == 0:
+        return cover
+    seg = per_scan[["x0", "y0", "x1", "y1"]].to_numpy(np.float64)
+    sid = per_scan["scan_id"].to_numpy()
+    order = np.argsort(sid, kind="stable")
+    bounds = np.flatnonzero(np.diff(sid[order])) + 1
+    for rows in np.split(order, bounds):
+        s = int(sid[rows[0]])
+        if s not in cover:
+            continue
+        hits = structure.tree.query_ball_point(sample_segments(seg[rows], sample_m), within_bound(tau_m, sample_m))
+        cells = np.concatenate([np.asarray(h, dtype=np.int64) for h in hits]) if len(hits) else np.empty(0, np.int64)
+        cover[s] = np.unique(cells)
+    return cover
+
+
+def lazy_greedy(cover: dict[int, np.ndarray], scan_ids: list[int]) -> pd.DataFrame:
+    """Greedy maximum coverage of the sets ``cover`` (see :func:`oracle_ordering`)."""
+    n_cells = 1 + max((int(c.max()) for c in cover.values() if len(c)), default=-1)
+    covered = np.zeros(n_cells, dtype=bool)
+    heap = [(-len(cover[int(s)]), int(s)) for s in scan_ids]
+    heapq.heapify(heap)
+    rows, total = [], 0
+    taken: set[int] = set()
+    while heap:
+        neg, s = heapq.heappop(heap)
+        gain = int(np.count_nonzero(~covered[cover[s]]))
+        if heap and (gain < -heap[0][0] or (gain == -heap[0][0] and heap[0][1] < s)):
+            heapq.heappush(heap, (-gain, s))  # stale: refreshed, back in line
+            continue
+        if gain == 0:  # no scan adds anything any more
+            heapq.heappush(heap, (0, s))
+            break
+        covered[cover[s]] = True
+        total += gain
+        taken.add(s)
+        rows.append((len(rows), s, gain, total))
+    for s in sorted(int(x) for x in scan_ids if int(x) not in taken):
+        rows.append((len(rows), s, 0, total))
+    return pd.DataFrame(rows, columns=["rank", "scan_id", "gain_cells", "covered_cells"])
+
+
+def greedy(cover: dict[int, np.ndarray], scan_ids: list[int]) -> pd.DataFrame:
+    """The plain greedy of :func:`lazy_greedy` (every gain recomputed at every step),
+    the reference it is tested against."""
+    n_cells = 1 + max((int(c.max()) for c in cover.values() if len(c)), default=-1)
+    covered = np.zeros(n_cells, dtype=bool)
+    left = sorted(int(s) for s in scan_ids)
+    rows, total = [], 0
+    while left:
+        gains = [int(np.count_nonzero(~covered[cover[s]])) for s in left]
+        best = int(np.argmax(gains))  # first maximum: the smallest scan_id
+        if gains[best] == 0:
+            break
+        s = left.pop(best)
+        covered[cover[s]] = True
+        total += gains[best]
+        rows.append((len(rows), s, gains[best], total))
+    for s in left:
+        rows.append((len(rows), s, 0, total))
+    return pd.DataFrame(rows, columns=["rank", "scan_id", "gain_cells", "covered_cells"])
+
+
+def random_orderings(scan_ids: list[int], seeds: list[int]) -> dict[int, pd.DataFrame]:
+    """Seeded random permutations of the kept scans, ``{seed: (rank, scan_id)}``
+    (``numpy.random.default_rng(seed).permutation`` of the sorted scan ids)."""
+    ids = np.sort(np.asarray(scan_ids, dtype=np.int64))
+    return {
+        int(seed): pd.DataFrame({"rank": np.arange(len(ids)), "scan_id": np.random.default_rng(seed).permutation(ids)})
+        for seed in seeds
+    }
+
+
+def quality_curve(
+    per_scan: pd.DataFrame,
+    ordering: pd.DataFrame,
+    ks: list[int],
+    structure: Structure,
+    build_plan: Callable[[pd.DataFrame], np.ndarray],
+    taus_m: tuple[float, ...] = (0.05, 0.10),
+) -> pd.DataFrame:
+    """The plan of the first k scans of ``ordering`` against the reference, per k.
+
+    Parameters
+    ----------
+    per_scan : pandas.DataFrame
+        Per-scan wall segments (schema :data:`floorscan.walls.WALLS`).
+    ordering : pandas.DataFrame
+        ``rank, scan_id``.
+    ks : list of int
+        Numbers of scans (:func:`k_grid`).
+    structure : Structure
+    build_plan : callable
+        Segments of the first k scans -> the plan's faces ((F, 4), metres).
+    taus_m : tuple of float
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``k`` and the metrics of :func:`plan_against_reference`, a row per k.
+    """
+    from floorscan.walls import first_k_walls
+
+    rows = []
+    for k in ks:
+        segments, _ = first_k_walls(per_scan, ordering, int(k))
+        rows.append({"k": int(k), **plan_against_reference(build_plan(segments), structure, taus_m)})
+    return pd.DataFrame(rows)
+
+
+def adaptive_curve(
+    evaluate: Callable[[int], dict],
+    n_kept: int,
+    step_fraction: float = 0.02,
+    dense_fraction: float = 0.2,
+    coarse_factor: int = 5,
+    targets: tuple[float, ...] = (),
+    tau_key: str = "f1_5cm",
+) -> pd.DataFrame:
+    """A quality-vs-k curve read to within one step where it matters, at a fraction
+    of the plans of the full grid.
+
+    Every k of :func:`k_grid` up to ``dense_fraction`` of the kept scans (where the
+    area under the curve is taken); beyond, every ``coarse_factor``-th k of the grid,
+    in order, until every target is reached, and the kept scans themselves; then, for
+    each target F1 that no dense k reaches,
+    every k of the grid between the last coarse k below it and the first that reaches
+    it. So the first k reaching a target is read to within one step of the grid, as on
+    the full grid, unless the curve reached it before and dropped below it again
+    between two coarse k (F1 is not monotone in k).
+
+    Parameters
+    ----------
+    evaluate : callable
+        k -> the metrics of the plan of the first k scans (a dict with ``tau_key``).
+    n_kept : int
+    step_fraction, dense_fraction : float
+    coarse_factor : int
+    targets : tuple of float
+        F1 values whose first k is wanted (levels times the all-scan F1).
+    tau_key : str
+        The F1 column the targets refer to.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``k`` and the metrics, a row per evaluated k, by k.
+    """
+    grid = k_grid(n_kept, step_fraction)
+    dense = [k for k in grid if k <= dense_fraction * n_kept] or grid[:1]
+    rest = [k for k in grid if k > dense[-1]]
+    coarse = rest[coarse_factor - 1 :: coarse_factor]
+    if rest and (not coarse or coarse[-1] != rest[-1]):
+        coarse.append(rest[-1])
+    rows = {k: evaluate(k) for k in dense}
+
+    def reached_all() -> bool:
+        return all(
+            any(r[tau_key] >= t - 1e-12 for r in rows.values()) for t in targets if np.isfinite(t)
+        )
+
+    for k in coarse[:-1]:  # in order, until every target is reached
+        if reached_all():
+            break
+        rows[k] = evaluate(k)
+    if coarse:
+        rows[coarse[-1]] = evaluate(coarse[-1])  # all kept scans
+    for target in targets:
+        if not np.isfinite(target):
+            continue
+        reached = [k for k in sorted(rows) if rows[k][tau_key] >= target - 1e-12]
+        if not reached or reached[0] in dense:
+            continue
+        below = max(k for k in rows if k < reached[0])
+        for k in grid:
+            if below < k < reached[0] and k not in rows:
+                rows[k] = evaluate(k)
+                if rows[k][tau_key] >= target - 1e-12:
+                    break
+    return pd.DataFrame([{"k": k, **rows[k]} for k in sorted(rows)])
+
+
+def first_k_reaching(k: np.ndarray, f1: np.ndarray, target: float) -> float:
+    """The first k of the curve whose F1 reaches ``target`` (NaN when none does)."""
+    hit = np.flatnonzero(np.asarray(f1) >= target - 1e-12)
+    return float(np.asarray(k)[hit[0]]) if len(hit) else math.nan
+
+
+def area_under_curve(k: np.ndarray, f1: np.ndarray, n_kept: int, up_to: float = 0.2) -> float:
+    """Mean F1 over k from 0 to ``up_to`` of the kept scans (trapezoids on k /
+    n_kept, F1 0 at k 0, the curve linearly interpolated at the end): 1 for a curve at
+    F1 1 from the first scan."""
+    x = np.concatenate([[0.0], np.asarray(k, dtype=np.float64) / n_kept])
+    y = np.concatenate([[0.0], np.nan_to_num(np.asarray(f1, dtype=np.float64))])
+    end = min(up_to, float(x[-1]))
+    keep = x < end
+    xs = np.concatenate([x[keep], [end]])
+    ys = np.concatenate([y[keep], [np.interp(end, x, y)]])
+    return float(np.trapezoid(ys, xs) / up_to)
+
+
+def curve_summary(
+    curves: pd.DataFrame, n_kept: int, n_recorded: int, tau_m: float = 0.05, levels=(0.95, 0.99), up_to: float = 0.2
+) -> pd.DataFrame:
+    """Per ordering and extractor: k reaching each level of the all-scan F1, the area
+    under the curve up to ``up_to`` of the kept scans, and k95 against the oracle's.
+
+    Parameters
+    ----------
+    curves : pandas.DataFrame
+        ``extractor, ordering, seed, k`` and ``f1_<tau>`` (``seed`` -1 for a
+        deterministic ordering). With several seeds (random) each figure is the mean of
+        the seeds' own (each seed's curve read on its own k), with their spread.
+    n_kept, n_recorded : int
+        Kept and recorded scans of the recording.
+    tau_m : float
+    levels : sequence of float
+    up_to : float
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``extractor, ordering, n_seeds, f1_all`` and per level p: ``k_p``,
+        ``fraction_kept_p``, ``fraction_recorded_p``; ``k_p_seed_sd`` (random: the
+        seeds' spread); ``auc``, ``auc_seed_sd``; ``k95_over_oracle``.
+    """
+    col = f"f1_{round(tau_m * 100):d}cm"
+    rows = []
+    for (extractor, ordering), g in curves.groupby(["extractor", "ordering"], sort=True):
+        at_all = g.loc[g["k"] == n_kept, col]
+        f1_all = float(at_all.iloc[0]) if len(at_all) else math.nan
+        seeds = [s.sort_values("k") for _, s in g.groupby("seed", sort=True)]
+        row = {"extractor": extractor, "ordering": ordering, "n_seeds": len(seeds), "f1_all": f1_all}
+        for level in levels:
+            p = f"{round(level * 100):d}"
+            per_seed = [first_k_reaching(s["k"].to_numpy(), s[col].to_numpy(), level * f1_all) for s in seeds]
+            kk = float(np.mean(per_seed))
+            row[f"k_{p}"] = kk
+            row[f"fraction_kept_{p}"] = kk / n_kept
+            row[f"fraction_recorded_{p}"] = kk / n_recorded if n_recorded else math.nan
+            row[f"k_{p}_seed_sd"] = float(np.std(per_seed)) if len(seeds) > 1 else math.nan
+        aucs = [area_under_curve(s["k"].to_numpy(), s[col].to_numpy(), n_kept, up_to) for s in seeds]
+        row["auc"] = float(np.mean(aucs))
+        row["auc_seed_sd"] = float(np.std(aucs)) if len(seeds) > 1 else math.nan
+        rows.append(row)
+    out = pd.DataFrame(rows)
+    if out.empty:
+        return out
+    oracle = out[out["ordering"] == ORACLE].set_index("extractor")["k_95"]
+    out["k95_over_oracle"] = [
+        r["k_95"] / oracle[r["extractor"]] if r["extractor"] in oracle.index and oracle[r["extractor"]] > 0 else math.nan
+        for _, r in out.iterrows()
+    ]
+    return out
+
+
+def beats_random_line(summary: pd.DataFrame, ordering: str, extractor: str) -> str:
+    """One sentence: does ``ordering`` beat random (area under the curve and k95)."""
+    s = summary[summary["extractor"] == extractor].set_index("ordering")
+    if ordering not in s.index or RANDOM not in s.index:
+        return f"{ordering} or {RANDOM} was not scored for {extractor}."
+    a, r = s.loc[ordering], s.loc[RANDOM]
+    d_auc = a["auc"] - r["auc"]
+    verb = "beats" if d_auc > 0 else "does not beat"
+    spread = f" +- {r['auc_seed_sd']:.3f}" if np.isfinite(r["auc_seed_sd"]) else ""
+    k_text = (
+        f"k95 {a['k_95']:.0f} against {r['k_95']:.0f} (random's seeds +- {r['k_95_seed_sd']:.0f})"
+        if np.isfinite(a["k_95"]) and np.isfinite(r["k_95"])
+        else "k95 not reached by one of them"
+    )
+    return (
+        f"{ordering} {verb} random with {extractor}: area under the F1 curve up to 20 % of the kept scans "
+        f"{a['auc']:.3f} against {r['auc']:.3f}{spread} ({d_auc:+.3f}); {k_text}."
+    )
+
+
+def score_curves(
+    per_scan: pd.DataFrame,
+    orderings: dict[str, pd.DataFrame],
+    reference_path,
+    floorplan_cfg: dict | None = None,
+    taus_m: tuple[float, ...] = (0.05, 0.10),
+    oracle_tau_m: float = 0.05,
+    step_fraction: float = 0.02,
+    random_seeds: int = 10,
+    dense_fraction: float = 0.2,
+    levels: tuple[float, ...] = (0.95, 0.99),
+    log=None,
+) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The curves of one extractor (stage ``score_curves``).
+
+    Parameters
+    ----------
+    per_scan : pandas.DataFrame
+        The extractor's per-scan wall segments (``walls/<extractor>/per_scan.parquet``).
+    orderings : dict of str to pandas.DataFrame
+        The workflow's orderings (``rank, scan_id``); ``random`` among them is
+        replaced by ``random_seeds`` seeded permutations.
+    reference_path : path
+        ``reference/occupancy.parquet``.
+    floorplan_cfg : mapping, optional
+        The ``floorplan`` config section (the plan is merged as the floorplan stage does).
+    taus_m : tuple of float
+    oracle_tau_m : float
+        Tolerance of the completeness the oracle maximises.
+    step_fraction : float
+        :func:`k_grid`'s step.
+    random_seeds : int
+    dense_fraction : float
+        Every k of the grid up to this fraction of the kept scans
+        (:func:`adaptive_curve`).
+    levels : tuple of float
+        Fractions of the all-scan F1 whose first k is read to within a step.
+    log : logging.Logger, optional
+
+    Returns
+    -------
+    curves : pandas.DataFrame
+        ``ordering, seed`` (-1 unless random), ``n_kept``, ``k`` and the metrics of
+        :func:`plan_against_reference`, a row per ordering (seed) and k.
+    oracle : pandas.DataFrame
+        The oracle ordering (:func:`oracle_ordering`).
+    """
+    import pyarrow.parquet as pq
+
+    from floorscan.floorplan import build_floorplan, params_from_config
+    from floorscan.io import read_table
+    from floorscan.score.reference import grid_from_table
+
+    meta = {k.decode(): v.decode() for k, v in pq.read_schema(reference_path).metadata.items()}
+    structure = Structure(grid_from_table(read_table(reference_path), meta))
+    fp_params = params_from_config(floorplan_cfg or {})
+    cache: dict[tuple, np.ndarray] = {}
+
+    def build_plan(segments: pd.DataFrame) -> np.ndarray:
+        key = tuple(sorted(set(segments["scan_id"].tolist())))
+        if key not in cache:  # the same scans give the same plan (k = all of every ordering)
+            faces = build_floorplan(segments, fp_params).faces
+            cache[key] = faces[["x0", "y0", "x1", "y1"]].to_numpy(np.float64)
+        return cache[key]
+
+    any_ordering = next(iter(orderings.values()))
+    scan_ids = sorted(int(s) for s in any_ordering["scan_id"])
+    n_kept = len(scan_ids)
+    ks = k_grid(n_kept, step_fraction)
+    tau_key = f"f1_{round(oracle_tau_m * 100):d}cm"
+    all_segments = per_scan[per_scan["scan_id"].isin(scan_ids)]
+    f1_all = plan_against_reference(build_plan(all_segments), structure, taus_m)[tau_key]
+    targets = tuple(level * f1_all for level in levels)
+    oracle = oracle_ordering(per_scan, scan_ids, structure, oracle_tau_m)
+    runs = [(name, -1, o) for name, o in orderings.items() if name != RANDOM]
+    runs += [(RANDOM, seed, o) for seed, o in random_orderings(scan_ids, list(range(random_seeds))).items()]
+    runs.append((ORACLE, -1, oracle))
+    parts = []
+    # build_floorplan logs every plan it merges: hundreds here, so only its warnings
+    plan_log = logging.getLogger("floorscan.floorplan")
+    level = plan_log.level
+    plan_log.setLevel(max(level, logging.WARNING))
+    try:
+        for name, seed, ordering in runs:
+            parts.append(_curve_of(name, seed, ordering, per_scan, n_kept, structure, build_plan, taus_m,
+                                   step_fraction, dense_fraction, targets, tau_key))
+            if log is not None:
+                f1 = parts[-1][f"f1_{round(oracle_tau_m * 100):d}cm"]
+                log.info("%s%s: %d k from %d to %d, F1 %.3f .. %.3f", name, f" seed {seed}" if seed >= 0 else "",
+                         len(f1), ks[0], ks[-1], float(f1.min()), float(f1.max()))
+    finally:
+        plan_log.setLevel(level)
+    return pd.concat(parts, ignore_index=True), oracle
+
+
+def _curve_of(name, seed, ordering, per_scan, n_kept, structure, build_plan, taus_m, step_fraction, dense_fraction,
+              targets, tau_key) -> pd.DataFrame:
+    from floorscan.walls import first_k_walls
+
+    def evaluate(k: int) -> dict:
+        segments, _ = first_k_walls(per_scan, ordering, int(k))
+        return plan_against_reference(build_plan(segments), structure, taus_m)
+
+    c = adaptive_curve(evaluate, n_kept, step_fraction, dense_fraction, targets=targets, tau_key=tau_key)
+    c.insert(0, "ordering", name)
+    c.insert(1, "seed", seed)
+    c.insert(2, "n_kept", n_kept)
+    return c
+
+
+def summary_markdown(summary: pd.DataFrame, tau_m: float, n_kept: int, n_recorded: int, line: str) -> str:
+    """The curve summary (:func:`curve_summary`) as a Markdown table for ``summary.md``,
+    headed by ``line`` (:func:`beats_random_line`)."""
+    head = ["extractor", "ordering", "F1 all", "k95", "k95 / kept", "k95 / recorded", "k99", "k99 / kept",
+            "k99 / recorded", "AUC 20 %", "k95 / oracle's"]
+    lines = [
+        f"Floor plans against the reference map at tau = {tau_m * 100:.0f} cm; {n_kept} kept of {n_recorded} "
+        "recorded scans. k95 / k99: the first k whose plan reaches 95 / 99 % of the all-scan plan's F1; "
+        "AUC 20 %: mean F1 up to 20 % of the kept scans; random: mean of its seeds (+- their spread).",
+        "",
+        line,
+        "",
+        "| " + " | ".join(head) + " |",
+        "|" + "---|" * len(head),
+    ]
+
+    def k_text(r, p):
+        k = r[f"k_{p}"]
+        if not np.isfinite(k):
+            return "-"
+        sd = r[f"k_{p}_seed_sd"]
+        return f"{k:.0f}" + (f" +- {sd:.0f}" if np.isfinite(sd) else "")
+
+    for _, r in summary.iterrows():
+        auc = f"{r['auc']:.3f}" + (f" +- {r['auc_seed_sd']:.3f}" if np.isfinite(r["auc_seed_sd"]) else "")
+        cells = [
+            r["extractor"], r["ordering"], f"{r['f1_all']:.3f}",
+            k_text(r, "95"), f"{r['fraction_kept_95']:.3f}", f"{r['fraction_recorded_95']:.3f}",
+            k_text(r, "99"), f"{r['fraction_kept_99']:.3f}", f"{r['fraction_recorded_99']:.3f}",
+            auc, f"{r['k95_over_oracle']:.2f}",
+        ]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
