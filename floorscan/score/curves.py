@@ -56,7 +56,7 @@ def k_grid(n_kept: int, step_fraction: float = 0.02) -> list[int]:
 
 
 def oracle_ordering(
-    per_scan: pd.DataFrame, scan_ids: list[int], structure: Structure, tau_m: float, sample_m: float = 0.02
+    per_scan: pd.DataFrame, scan_ids: list[int], structure: Structure, tau_m: float, sample_m: float = 0.05
 ) -> pd.DataFrame:
     """The greedy ordering that maximises the reference structure its walls reach.
 
@@ -77,7 +77,9 @@ def oracle_ordering(
     tau_m : float
         Tolerance, metres.
     sample_m : float
-        Spacing of the segment samples, metres.
+        Spacing of the segment samples, metres: a cell within
+        :func:`floorscan.score.against_reference.within_bound` of a sample counts
+        (5 cm: up to 6 mm beyond tau at tau 5 cm; a bound needs no finer cover).
 
     Returns
     -------
@@ -89,7 +91,7 @@ def oracle_ordering(
 
 
 def scan_cover(
-    per_scan: pd.DataFrame, scan_ids: list[int], structure: Structure, tau_m: float, sample_m: float = 0.02
+    per_scan: pd.DataFrame, scan_ids: list[int], structure: Structure, tau_m: float, sample_m: float = 0.05
 ) -> dict[int, np.ndarray]:
     """Per scan, the indices of the structure cells within ``tau_m`` of its wall
     segments (sorted int64; empty for a scan without walls)."""

@@ -210,10 +210,13 @@ def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: Occup
     n_cells = width * height
     hits = np.zeros(n_cells, dtype=np.int32)
     misses = np.zeros(n_cells, dtype=np.int32)
+    last = np.zeros(n_cells, dtype=np.int64)  # scratch of _distinct
+    hit_by = np.full(n_cells, -1, dtype=np.int64)  # the last scan with a return in the cell
     step = params.step_fraction * r
-    for o, p in scans:
+    for i, (o, p) in enumerate(scans):
         end = np.floor((p - origin) / r).astype(np.int64)
-        hit = np.unique(end[:, 1] * width + end[:, 0])
+        hit = _distinct(end[:, 1] * width + end[:, 0], last)
+        hit_by[hit] = i
         # one ray per return cell (rays to the same cell cross the same cells)
         tip = (np.column_stack([hit % width, hit // width]) + 0.5) * r + origin
         d = tip - o
@@ -221,11 +224,10 @@ def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: Occup
         n = np.maximum(np.ceil(length / step).astype(np.int64), 1)
         ray = np.repeat(np.arange(len(n)), n)
         frac = (np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n, n)
-        pts = o + d[ray] * frac[:, None]
-        c = np.floor((pts - origin) / r).astype(np.int64)
-        crossed = np.setdiff1d(np.unique(c[:, 1] * width + c[:, 0]), hit, assume_unique=True)
+        c = np.floor((o + d[ray] * frac[:, None] - origin) / r).astype(np.int64)
+        crossed = _distinct(c[:, 1] * width + c[:, 0], last)
         hits[hit] += 1
-        misses[crossed] += 1
+        misses[crossed[hit_by[crossed] != i]] += 1
     log_odds = hits * logit(params.prob_hit) + misses * logit(params.prob_miss)
     return OccupancyGrid(
         origin_xy=origin,
@@ -235,6 +237,15 @@ def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: Occup
         n_miss_scans=misses.reshape(height, width),
         params=params,
     )
+
+
+def _distinct(cells: np.ndarray, last: np.ndarray) -> np.ndarray:
+    """The distinct values of ``cells`` (cell indices below ``len(last)``), without a
+    sort: every entry writes its position into the scratch array ``last`` at its cell;
+    whichever write stays, exactly one position per distinct cell finds itself there."""
+    pos = np.arange(len(cells))
+    last[cells] = pos
+    return cells[last[cells] == pos]
 
 
 def map_image(grid: OccupancyGrid) -> np.ndarray:
