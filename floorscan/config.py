@@ -109,14 +109,23 @@ def validate_config(data: dict, schema_path: str | os.PathLike, section: str = "
     return data
 
 
+def _same_file(a: str | None, b: str) -> bool:
+    """Whether two paths name the same file or folder (resolved against the working
+    directory, symbolic links followed)."""
+    import os
+
+    return a is not None and os.path.realpath(a) == os.path.realpath(b)
+
+
 def add_path_dataset(config: dict) -> str | None:
     """Make the top-level ``path`` of a config (``--config path=/data/run.bag``) a dataset.
 
     The dataset is named after the recording (its file or folder name without the
     recording suffixes, other characters than letters, digits and ``_`` replaced by
     ``_``), holds only ``path`` (ingest detects the rest) and becomes the only target.
-    A dataset of that name with the same path is reused; with another path the name
-    gets a numeric suffix.
+    A dataset of that name with the same recording (the same path, relative to the
+    working directory or absolute) is reused; with another recording the name gets a
+    numeric suffix.
 
     Parameters
     ----------
@@ -143,7 +152,7 @@ def add_path_dataset(config: dict) -> str | None:
         name = f"r_{name}"
     datasets = config.setdefault("datasets", {})
     base, n = name, 1
-    while name in datasets and datasets[name].get("path") != str(path):
+    while name in datasets and not _same_file(datasets[name].get("path"), str(path)):
         n += 1
         name = f"{base}_{n}"
     datasets.setdefault(name, {"description": f"{path} (--config path)", "path": str(path)})

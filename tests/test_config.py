@@ -92,6 +92,25 @@ def test_a_path_alone_is_a_dataset():
     assert add_path_dataset({"datasets": {}}) is None
 
 
+def test_a_path_to_a_shipped_recording_reuses_its_dataset(tmp_path, monkeypatch):
+    """The shipped config names recordings by relative paths; the same file given by
+    its absolute path (or through a symbolic link) is that dataset, not simpath2_2."""
+    from floorscan.config import add_path_dataset
+
+    (tmp_path / "data").mkdir()
+    bag = tmp_path / "data" / "simpath2.bag"
+    bag.write_bytes(b"")
+    (tmp_path / "link").symlink_to(tmp_path / "data")
+    monkeypatch.chdir(tmp_path)
+    for given in (str(bag), str(tmp_path / "link" / "simpath2.bag"), "./data/simpath2.bag"):
+        cfg = {"datasets": {"simpath2": {"path": "data/simpath2.bag"}}, "path": given}
+        assert add_path_dataset(cfg) == "simpath2" and cfg["target"] == ["simpath2"]
+        assert cfg["datasets"]["simpath2"]["path"] == "data/simpath2.bag"
+    other = tmp_path / "simpath2.bag"
+    other.write_bytes(b"")
+    assert add_path_dataset({"datasets": {"simpath2": {"path": "data/simpath2.bag"}}, "path": str(other)}) == "simpath2_2"
+
+
 def test_a_dataset_needs_a_path_unless_synthetic():
     from floorscan.config import ConfigError, validate_config
 
