@@ -112,8 +112,6 @@ def validate_config(data: dict, schema_path: str | os.PathLike, section: str = "
 def _same_file(a: str | None, b: str) -> bool:
     """Whether two paths name the same file or folder (resolved against the working
     directory, symbolic links followed)."""
-    import os
-
     return a is not None and os.path.realpath(a) == os.path.realpath(b)
 
 

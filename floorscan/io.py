@@ -177,6 +177,17 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None) -> pd.
     return pq.read_table(path, columns=columns).to_pandas()
 
 
+#: Schema metadata keys that pyarrow and pandas write for themselves.
+_LIBRARY_METADATA = (b"pandas", b"ARROW:schema")
+
+
+def read_metadata(path: str | os.PathLike) -> dict[str, str]:
+    """The key/value strings :func:`write_table` stored in a Parquet file's schema
+    metadata (pyarrow's and pandas' own keys left out); the data is not read."""
+    meta = pq.read_schema(path).metadata or {}
+    return {k.decode(): v.decode() for k, v in meta.items() if k not in _LIBRARY_METADATA}
+
+
 def write_json(obj: object, path: str | os.PathLike) -> None:
     """Write JSON atomically, sorted keys, 2-space indent."""
     with atomic_path(path) as tmp:

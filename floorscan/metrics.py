@@ -1528,25 +1528,39 @@ def summarize(metrics, tau: float = 0.05, levels=(0.95, 0.99)):
     return pd.DataFrame(rows)
 
 
+def summary_header(dataset: str, verdict=None, recording=None, mode: str = "") -> list[str]:
+    """The lines that head ``summary.md``: the title, the registration's verdict
+    (``verdict``: :meth:`floorscan.register.consistency.Verdict.as_dict`) and what the
+    recording was found to be (``recording``: ingest's detection; ``mode``: the register
+    mode used; :func:`floorscan.ingest.describe_recording`)."""
+    from floorscan.ingest import describe_recording
+
+    lines = [f"# Scan reduction summary: {dataset}" if dataset else "# Scan reduction summary", ""]
+    if verdict:
+        lines += [f"**Verdict: {verdict['line']}**", ""]
+    if recording or mode:
+        lines += [f"Recording: {describe_recording(recording or {}, mode)}.", ""]
+    return lines
+
+
 def summary_markdown(
     summary, tau: float = 0.05, levels=(0.95, 0.99), verdict=None, recording=None, mode: str = ""
 ) -> str:
-    """The summary table as Markdown, headed by the registration's verdict and what the
-    recording was found to be (``verdict``: :meth:`floorscan.register.consistency.Verdict.as_dict`;
-    ``recording``: ingest's detection, ``format``, ``scan_topic``, ``pose_source``,
-    ``stamps``; ``mode``: the register mode used), then what F1 is measured against.
-    An F1 from fewer than 10 kept scans is marked."""
-    head_lines = []
-    if verdict:
-        head_lines += [f"**Verdict: {verdict['line']}**", ""]
-    found = ", ".join(
-        f"{k} {recording[k]}" for k in ("format", "scan_topic", "pose_source", "stamps") if k in (recording or {})
-    )
-    if found or mode:
-        head_lines += [f"Recording: {found or 'as configured'}; registered in {mode or 'pose'} mode.", ""]
+    """The summary table as Markdown, headed by :func:`summary_header`, then what F1 is
+    measured against. An F1 from fewer than
+    :data:`floorscan.register.consistency.FEW_SCANS` kept scans is marked."""
+    ds = "" if summary.empty else summary["dataset"].iloc[0]
+    head = "\n".join(summary_header(ds, verdict, recording, mode))
     if summary.empty:
-        return "# Scan reduction summary\n\n" + "\n".join(head_lines) + "No scored runs.\n"
-    ds = summary["dataset"].iloc[0]
+        return head + "No scored runs.\n"
+    return head + grid_summary_markdown(summary, tau, levels)
+
+
+def grid_summary_markdown(summary, tau: float = 0.05, levels=(0.95, 0.99)) -> str:
+    """The body of :func:`summary_markdown`: the table of :func:`summarize` (the k of
+    the configured grid) and the all-scan plans against the reference map."""
+    from floorscan.register.consistency import FEW_SCANS
+
     kind = summary["reference_kind"].iloc[0]
     against = (
         "the simulator's ground-truth walls"
@@ -1554,9 +1568,6 @@ def summary_markdown(
         else "the reference: walls of the same extractor from all kept scans (not ground truth)"
     )
     lines = [
-        f"# Scan reduction summary: {ds}",
-        "",
-        *head_lines,
         f"F1 at tau = {tau_label(tau)} against {against}. For each level, the smallest k "
         "of the configured grid whose F1 reaches that fraction of the all-scan F1, the "
         "scans it uses as a fraction of the scans kept, and the reduction factor.",
@@ -1570,7 +1581,7 @@ def summary_markdown(
     lines.append("|" + "---|" * len(head))
     for _, r in summary.iterrows():
         f1_all = f"{r['f1_all']:.3f}"
-        if int(r["n_scans_kept"]) < 10:
+        if int(r["n_scans_kept"]) < FEW_SCANS:
             f1_all += f" (warning: from {int(r['n_scans_kept'])} scans)"
         cells = [r["ordering"], r["extractor"], str(r["n_scans_kept"]), f1_all]
         for level in levels:

@@ -1550,10 +1550,7 @@ def _judge(table: pd.DataFrame, clouds: "_ScanStore", cfg: RegistrationConfig, s
     final = table[["x_m", "y_m", "z_m", "yaw_rad"]].to_numpy(np.float64)[kept]
     parts = [transform_points(clouds.map_cloud(int(s)), *f) for s, f in zip(sids, final)]
     cons, n_rev = map_consistency(parts, path_length_m(final[:, 0], final[:, 1]), final[:, :2])
-    failures = {k: v for k, v in summary["drops"].items() if k not in ("not_sampled",)}
-    worst = max(failures, key=lambda k: failures[k]) if failures else ""
-    option = REASON_THRESHOLD.get(worst, "")
-    option = " / ".join(f"register.{o}={getattr(cfg, o)}" if hasattr(cfg, o) else o for o in option.split(" / ") if o)
+    worst, option = _worst_drop({k: v for k, v in summary["drops"].items() if k != "not_sampled"}, cfg)
     return verdict(
         summary["n_sampled"], summary["n_kept"], cons, n_rev, cfg.min_kept_fraction, cfg.min_consistency,
         worst, option,
@@ -1932,17 +1929,21 @@ def _raise_if_nothing_registered(table: pd.DataFrame, cfg: RegistrationConfig, s
         return
     if not failures:
         raise RegistrationError(f"register: no scans to register ({len(table)} scans in the index)")
-    worst = max(failures, key=lambda k: failures[k])
-    key = REASON_THRESHOLD.get(worst, worst)
-    value = ""
-    for part in key.split(" / "):
-        if hasattr(cfg, part):
-            value += f" register.{part}={getattr(cfg, part)}"
+    worst, option = _worst_drop(failures, cfg)
     raise RegistrationError(
         f"register: no scan could be registered ({n_kept} kept without a reference) of "
-        f"{len(table)}; drops per reason {failures}; most were dropped by '{worst}' "
-        f"(threshold{value if value else ' register.' + key})"
+        f"{len(table)}; drops per reason {failures}; most were dropped by '{worst}' (threshold {option})"
     )
+
+
+def _worst_drop(failures: Mapping[str, int], cfg: RegistrationConfig) -> tuple[str, str]:
+    """The drop reason behind most lost scans and the option(s) that set it with their
+    values (``register.min_prior_fitness=0.15``); ``("", "")`` without drops."""
+    if not failures:
+        return "", ""
+    worst = max(failures, key=lambda k: failures[k])
+    parts = REASON_THRESHOLD.get(worst, worst).split(" / ")
+    return worst, " / ".join(f"register.{p}={getattr(cfg, p)}" if hasattr(cfg, p) else p for p in parts)
 
 
 # --------------------------------------------------------------------------- pose graph

@@ -1,7 +1,5 @@
 """Stage poses: the pose of each scan at its timestamp (thesis Algorithm 3 step 1)."""
-import pyarrow.parquet as pq
-
-from floorscan.io import POSES, read_table, write_table
+from floorscan.io import POSES, read_metadata, read_table, write_table
 from floorscan.poses import scan_poses
 from floorscan.workflow import stage_log
 
@@ -11,8 +9,7 @@ with stage_log(snakemake) as log:
     poses = scan_poses(index, stream, snakemake.params.cfg["max_gap_s"], snakemake.input.pose_stream)
     write_table(poses, snakemake.output.poses, schema=POSES)
     if stream.empty:
-        meta = pq.read_schema(snakemake.input.pose_stream).metadata or {}
-        found = meta.get(b"pose_source", b"none").decode()
+        found = read_metadata(snakemake.input.pose_stream).get("pose_source", "none")
         log.info(
             "no map pose source in the recording (%s): none of the %d scans has a pose (no_pose_source); "
             "the register stage places them by LIDAR odometry", found, len(poses),

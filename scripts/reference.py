@@ -1,6 +1,7 @@
 """Stage reference: the occupancy grid of all kept scans (the reference map), written
 as a ROS map_server map, a cell table and a figure."""
-from floorscan.io import read_table, write_table
+from floorscan.figures_scoring import plot_reference_map
+from floorscan.io import read_table
 from floorscan.score import reference as ref
 from floorscan.workflow import stage_log
 
@@ -13,7 +14,7 @@ with stage_log(snakemake) as log:  # noqa: F821
     log.info("reference map: %d x %d cells of %.2f m; %s", grid.shape[1], grid.shape[0], grid.resolution_m, counts)
     log.info("structure: %d occupied cells hit by >= %d scans; %d occupied cells hit by fewer (not structure)",
              counts["structure"], params.min_scans, counts["single_scan"])
-    meta = {**ref.grid_metadata(grid), **{f"n_{k}_cells": str(v) for k, v in counts.items()}}
+    quality = {}
     if smk.input.get("ground_truth"):  # synthetic: how good the reference is
         from floorscan.metrics import OBSERVED_FACE, read_wall_faces
         from floorscan.score.against_reference import reference_against_ground_truth
@@ -22,9 +23,6 @@ with stage_log(snakemake) as log:  # noqa: F821
                                                  read_wall_faces(smk.input.ground_truth, OBSERVED_FACE))
         log.info("reference map against the simulator's true walls: %s",
                  ", ".join(f"{k} {v:.3f}" for k, v in quality.items()))
-        meta.update({f"against_ground_truth_{k}": repr(v) for k, v in quality.items()})
     ref.write_map_server(grid, smk.output.pgm, smk.output.yaml)
-    write_table(ref.grid_table(grid), smk.output.cells, metadata=meta)
-    from floorscan.figures_scoring import plot_reference_map
-
+    ref.write_grid(grid, smk.output.cells, {f"against_ground_truth_{k}": repr(v) for k, v in quality.items()})
     plot_reference_map(grid, smk.output.figure, title=f"{smk.wildcards.dataset} reference map")

@@ -1,9 +1,7 @@
 """Stage register: scans in the map frame, refined by ICP (thesis Algorithm 3 steps 2-6)."""
 import json
 
-import pyarrow.parquet as pq
-
-from floorscan.io import read_table, write_table
+from floorscan.io import read_metadata, read_table, write_table
 from floorscan.registration import REGISTRATION, register_recording
 from floorscan.workflow import stage_log
 
@@ -12,8 +10,7 @@ with stage_log(snakemake) as log:
     cfg = dict(snakemake.params.cfg)
     cfg["graph"] = {**(cfg.get("graph") or {}), "workers": snakemake.threads}
     # what ingest found in the recording: pose kind (map poses or none), stamps
-    meta = pq.read_schema(snakemake.input.index).metadata or {}
-    recording = {k.decode(): v.decode() for k, v in meta.items() if not k.startswith(b"ARROW")}
+    recording = read_metadata(snakemake.input.index)
     poses = read_table(snakemake.input.poses)
     out_meta = {"dataset": snakemake.wildcards.dataset, "units": "metres, radians"}
     # streamed: the points are read scan by scan and written as they are registered
@@ -22,10 +19,7 @@ with stage_log(snakemake) as log:
         snakemake.output.registered, metadata=out_meta, recording=recording,  # figure: rule register_figure
     )
     s = result.summary
-    out_meta.update(
-        verdict=json.dumps(s["verdict"]), mode=s["config"]["mode"],
-        recording=json.dumps({k: recording[k] for k in sorted(recording) if k != "pandas"}),
-    )
+    out_meta.update(verdict=json.dumps(s["verdict"]), mode=s["config"]["mode"])
     write_table(result.table, snakemake.output.registration, schema=REGISTRATION, metadata=out_meta)
     log.info(
         "kept %d of %d scans (%d sampled); dropped by reason %s; fraction of the checked scans each "

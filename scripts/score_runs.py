@@ -4,6 +4,8 @@ extractors and writes the scan-reduction summary."""
 
 from floorscan import metrics
 from floorscan.io import read_table, write_table
+from floorscan.score.against_reference import score_plans
+from floorscan.score.reference import read_grid
 from floorscan.workflow import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821
@@ -35,14 +37,7 @@ with stage_log(snakemake) as log:  # noqa: F821
         workers=smk.threads,
     )
     # the plans against the reference map (occupancy grid of all kept scans)
-    import pyarrow.parquet as pq
-
-    from floorscan.score.against_reference import score_plans
-    from floorscan.score.reference import grid_from_table
-
-    grid_meta = {k.decode(): v.decode() for k, v in pq.read_schema(smk.input.reference_map).metadata.items()}
-    grid = grid_from_table(read_table(smk.input.reference_map), grid_meta)
-    against_map = score_plans(runs, grid, tuple(cfg["taus_m"]), metrics.floorplan_faces)
+    against_map = score_plans(runs, read_grid(smk.input.reference_map), tuple(cfg["taus_m"]), metrics.floorplan_faces)
     table = table.merge(against_map, on=["ordering", "extractor", "k"], how="left", validate="one_to_one")
     meta = {"dataset": smk.wildcards.dataset, "reference_kind": kind,
             "reference": smk.params.reference_label, "extractor": smk.wildcards.extractor}

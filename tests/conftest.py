@@ -72,6 +72,55 @@ def _quat(yaw):
     return 0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)
 
 
+def _bag_writer(path: Path, ros2: bool):
+    """(typestore, its types, serializer, writer) of a ROS1 bag or ROS2 bag folder."""
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS2_HUMBLE if ros2 else Stores.ROS1_NOETIC)
+    if "tf2_msgs/msg/TFMessage" not in ts.types:  # the Noetic store lacks tf2_msgs
+        from rosbags.typesys import get_types_from_msg
+
+        ts.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", "tf2_msgs/msg/TFMessage"))
+    if ros2:
+        from rosbags.rosbag2 import Writer
+
+        return ts, ts.types, ts.serialize_cdr, Writer(path, version=9)
+    from rosbags.rosbag1 import Writer
+
+    return ts, ts.types, ts.serialize_ros1, Writer(path)
+
+
+def _scan_message(ts, t_ns: int, frame: str, r: np.ndarray, ros2: bool, cloud: bool, z: float = 0.0):
+    """A LaserScan of ranges ``r`` over 180 degrees (range 0.05-30 m), or the same beams
+    as a PointCloud2 of float32 x, y, z (z = ``z``)."""
+    T = ts.types
+    header = _header(ts, t_ns, frame, not ros2)
+    if cloud:
+        ang = -math.pi / 2 + np.arange(r.size) * math.pi / (r.size - 1)
+        xyz = np.stack([r * np.cos(ang), r * np.sin(ang), np.full(r.size, z, np.float32)], 1).astype("<f4")
+        fields = [T["sensor_msgs/msg/PointField"](name=n, offset=4 * k, datatype=7, count=1) for k, n in enumerate("xyz")]
+        return T["sensor_msgs/msg/PointCloud2"](
+            header=header, height=1, width=r.size, fields=fields, is_bigendian=False, point_step=12,
+            row_step=12 * r.size, data=np.frombuffer(xyz.tobytes(), np.uint8), is_dense=False,
+        )
+    return T["sensor_msgs/msg/LaserScan"](
+        header=header, angle_min=-math.pi / 2, angle_max=math.pi / 2, angle_increment=math.pi / (r.size - 1),
+        time_increment=0.0, scan_time=0.1, range_min=0.05, range_max=30.0, ranges=r,
+        intensities=np.zeros(0, np.float32),
+    )
+
+
+def _write_messages(writer, ts, ser, msgs) -> None:
+    """Write (t_ns, topic, message) tuples in time order, a connection per topic."""
+    msgs.sort(key=lambda m: m[0])
+    with writer:
+        conns = {}
+        for t, topic, msg in msgs:
+            if topic not in conns:
+                conns[topic] = writer.add_connection(topic, msg.__msgtype__, typestore=ts)
+            writer.write(conns[topic], t, ser(msg, msg.__msgtype__))
+
+
 def write_bag(
     path: Path,
     ros2: bool = False,
@@ -86,46 +135,11 @@ def write_bag(
     ``pose_shift_s`` moves every pose stamp (to build non-overlapping streams);
     ``amcl_order`` "duplicate" or "unsorted" breaks the /amcl_pose stamps.
     """
-    from rosbags.typesys import Stores, get_typestore
-
-    ts = get_typestore(Stores.ROS2_HUMBLE if ros2 else Stores.ROS1_NOETIC)
-    if "tf2_msgs/msg/TFMessage" not in ts.types:  # the Noetic store lacks tf2_msgs
-        from rosbags.typesys import get_types_from_msg
-
-        ts.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", "tf2_msgs/msg/TFMessage"))
-    T = ts.types
-    ser = ts.serialize_cdr if ros2 else ts.serialize_ros1
-    if ros2:
-        from rosbags.rosbag2 import Writer
-
-        writer = Writer(path, version=9)
-    else:
-        from rosbags.rosbag1 import Writer
-
-        writer = Writer(path)
+    ts, T, ser, writer = _bag_writer(path, ros2)
     msgs = []  # (t_ns, topic, msg)
     for i in range(n_scans):
         t = T0_NS + int(i * 0.1e9)
-        if pointcloud:
-            r = scan_ranges(i)
-            ang = -math.pi / 2 + np.arange(N_BEAMS) * math.pi / (N_BEAMS - 1)
-            xyz = np.stack([r * np.cos(ang), r * np.sin(ang), np.full(N_BEAMS, 0.5, np.float32)], 1).astype("<f4")
-            fields = [
-                T["sensor_msgs/msg/PointField"](name=n, offset=4 * k, datatype=7, count=1)
-                for k, n in enumerate("xyz")
-            ]
-            msg = T["sensor_msgs/msg/PointCloud2"](
-                header=_header(ts, t, "laser", not ros2), height=1, width=N_BEAMS, fields=fields,
-                is_bigendian=False, point_step=12, row_step=12 * N_BEAMS,
-                data=np.frombuffer(xyz.tobytes(), np.uint8), is_dense=False,
-            )
-        else:
-            msg = T["sensor_msgs/msg/LaserScan"](
-                header=_header(ts, t, "laser", not ros2), angle_min=-math.pi / 2, angle_max=math.pi / 2,
-                angle_increment=math.pi / (N_BEAMS - 1), time_increment=0.0, scan_time=0.1,
-                range_min=0.05, range_max=30.0, ranges=scan_ranges(i), intensities=np.zeros(0, np.float32),
-            )
-        msgs.append((t, "/scan", msg))
+        msgs.append((t, "/scan", _scan_message(ts, t, "laser", scan_ranges(i), ros2, pointcloud, z=0.5)))
     n_pose = int(round(DURATION / 0.1)) + 2
     stamps = [T0_NS + int((pose_offset_s - 0.1 + k * 0.1 + pose_shift_s) * 1e9) for k in range(n_pose)]
     header_stamps = list(stamps)  # /amcl_pose header stamps; the bag's own times stay sorted
@@ -160,13 +174,7 @@ def write_bag(
         transform=T["geometry_msgs/msg/Transform"](
             translation=Vec(x=MOUNT_X, y=0.0, z=MOUNT_Z), rotation=Q(0.0, 0.0, 0.0, 1.0)))])
     msgs.append((T0_NS - 1, "/tf_static", static))
-    msgs.sort(key=lambda m: m[0])
-    with writer:
-        conns = {}
-        for t, topic, msg in msgs:
-            if topic not in conns:
-                conns[topic] = writer.add_connection(topic, msg.__msgtype__, typestore=ts)
-            writer.write(conns[topic], t, ser(msg, msg.__msgtype__))
+    _write_messages(writer, ts, ser, msgs)
     return path
 
 
@@ -226,23 +234,7 @@ def write_detection_bag(
     ranges : callable, optional
         ``ranges(i)`` -> (181,) float32 ranges of scan ``i``; default :func:`scan_ranges`.
     """
-    from rosbags.typesys import Stores, get_typestore
-
-    ts = get_typestore(Stores.ROS2_HUMBLE if ros2 else Stores.ROS1_NOETIC)
-    if "tf2_msgs/msg/TFMessage" not in ts.types:
-        from rosbags.typesys import get_types_from_msg
-
-        ts.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", "tf2_msgs/msg/TFMessage"))
-    T = ts.types
-    ser = ts.serialize_cdr if ros2 else ts.serialize_ros1
-    if ros2:
-        from rosbags.rosbag2 import Writer
-
-        writer = Writer(path, version=9)
-    else:
-        from rosbags.rosbag1 import Writer
-
-        writer = Writer(path)
+    ts, T, ser, writer = _bag_writer(path, ros2)
     ranges = ranges or scan_ranges
 
     def f(name):
@@ -263,21 +255,7 @@ def write_detection_bag(
         t = T0_NS + int(i * 0.1e9)
         r = np.asarray(ranges(i), dtype=np.float32)
         for topic in scan_topics:
-            if topic.endswith("_cloud"):
-                ang = -math.pi / 2 + np.arange(r.size) * math.pi / (r.size - 1)
-                xyz = np.stack([r * np.cos(ang), r * np.sin(ang), np.zeros(r.size, np.float32)], 1).astype("<f4")
-                fields = [T["sensor_msgs/msg/PointField"](name=n, offset=4 * k, datatype=7, count=1)
-                          for k, n in enumerate("xyz")]
-                msg = T["sensor_msgs/msg/PointCloud2"](
-                    header=_header(ts, t, f("laser"), not ros2), height=1, width=r.size, fields=fields,
-                    is_bigendian=False, point_step=12, row_step=12 * r.size,
-                    data=np.frombuffer(xyz.tobytes(), np.uint8), is_dense=False)
-            else:
-                msg = T["sensor_msgs/msg/LaserScan"](
-                    header=_header(ts, t, f("laser"), not ros2), angle_min=-math.pi / 2, angle_max=math.pi / 2,
-                    angle_increment=math.pi / (r.size - 1), time_increment=0.0, scan_time=0.1,
-                    range_min=0.05, range_max=30.0, ranges=r, intensities=np.zeros(0, np.float32))
-            msgs.append((t, topic, msg))
+            msgs.append((t, topic, _scan_message(ts, t, f("laser"), r, ros2, topic.endswith("_cloud"))))
     for k in range(n_scans + 2):
         t = T0_NS + int((k * 0.1 - 0.05) * 1e9)
         x, y, yaw = base_pose((t - T0_NS) / 1e9)
@@ -298,11 +276,5 @@ def write_detection_bag(
             msgs.append((t, "/tf", T["tf2_msgs/msg/TFMessage"](transforms=[
                 transform(p, c, t, 0.0, 0.0, 0.0) if (p, c) == ("map", "odom") else transform(p, c, t, x, y, yaw)
                 for p, c in tf_links])))
-    msgs.sort(key=lambda m: m[0])
-    with writer:
-        conns = {}
-        for t, topic, msg in msgs:
-            if topic not in conns:
-                conns[topic] = writer.add_connection(topic, msg.__msgtype__, typestore=ts)
-            writer.write(conns[topic], t, ser(msg, msg.__msgtype__))
+    _write_messages(writer, ts, ser, msgs)
     return path

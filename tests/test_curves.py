@@ -25,6 +25,26 @@ def test_k_grid_steps_two_percent_of_the_kept_scans():
         C.k_grid(10, 0)
 
 
+def _plain_greedy(cover, scan_ids):
+    """Greedy maximum coverage with every gain recomputed at every step: the reference
+    the lazy greedy is tested against."""
+    n_cells = 1 + max((int(c.max()) for c in cover.values() if len(c)), default=-1)
+    covered = np.zeros(n_cells, dtype=bool)
+    left = sorted(int(s) for s in scan_ids)
+    rows, total = [], 0
+    while left:
+        gains = [int(np.count_nonzero(~covered[cover[s]])) for s in left]
+        best = int(np.argmax(gains))  # first maximum: the smallest scan_id
+        if gains[best] == 0:
+            break
+        s = left.pop(best)
+        covered[cover[s]] = True
+        total += gains[best]
+        rows.append((len(rows), s, gains[best], total))
+    rows += [(len(rows) + i, s, 0, total) for i, s in enumerate(left)]
+    return pd.DataFrame(rows, columns=["rank", "scan_id", "gain_cells", "covered_cells"])
+
+
 @pytest.mark.parametrize("seed", range(20))
 def test_lazy_greedy_orders_as_the_plain_greedy(seed):
     """Random set systems with many ties (small universes): identical orderings."""
@@ -32,7 +52,7 @@ def test_lazy_greedy_orders_as_the_plain_greedy(seed):
     ids = sorted(rng.choice(1000, size=int(rng.integers(5, 60)), replace=False).tolist())
     universe = int(rng.integers(10, 200))
     cover = {s: np.unique(rng.integers(0, universe, size=int(rng.integers(0, 25)))) for s in ids}
-    lazy, plain = C.lazy_greedy(cover, ids), C.greedy(cover, ids)
+    lazy, plain = C.lazy_greedy(cover, ids), _plain_greedy(cover, ids)
     pd.testing.assert_frame_equal(lazy, plain)
     assert sorted(lazy["scan_id"]) == ids
     assert lazy["covered_cells"].iloc[-1] == len(np.unique(np.concatenate(list(cover.values()))))
@@ -125,3 +145,11 @@ def test_summary_markdown_gives_a_row_per_ordering_with_the_seeds_spread():
     rows = [r for r in md.splitlines() if r.startswith("| ransac")]
     assert len(rows) == 3 and "LINE" in md and "100 kept of 400 recorded" in md
     assert rows[2].split(" | ")[3] == "35 +- 15" and rows[0].split(" | ")[-1] == "2.00 |"
+
+
+def test_summary_markdown_warns_of_an_f1_from_few_scans():
+    curves = pd.concat([_curves("cluster_hull", -1, [0.5, 0.96, 0.97, 1.0], n_kept=8),
+                        _curves("oracle", -1, [0.96, 0.98, 0.99, 1.0], n_kept=8)], ignore_index=True)
+    curves["k"] = curves["k"].map({10: 1, 20: 2, 50: 4, 100: 8})  # 8 kept scans
+    md = C.summary_markdown(C.curve_summary(curves, n_kept=8, n_recorded=20), 0.05, 8, 20, "LINE")
+    assert md.count("1.000 (warning: from 8 scans)") == 2

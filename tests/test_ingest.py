@@ -393,9 +393,9 @@ def test_carmen_max_range_detected_and_stored(tmp_path):
 
 
 def _meta(path):
-    import pyarrow.parquet as pq
+    from floorscan.io import read_metadata
 
-    return {k.decode(): v.decode() for k, v in (pq.read_schema(path).metadata or {}).items()}
+    return read_metadata(path)
 
 
 # --- CARMEN: stamps classified ---------------------------------------------------------

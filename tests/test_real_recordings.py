@@ -14,12 +14,11 @@ from __future__ import annotations
 import json
 
 import numpy as np
-import pyarrow.parquet as pq
 import pytest
 from shapely.geometry import shape
 
 from conftest import SHARED_DATA, needs_shared
-from floorscan.io import read_table
+from floorscan.io import read_metadata, read_table
 from test_workflow import copy_workflow, snakemake
 
 pytestmark = [needs_shared, pytest.mark.realdata, pytest.mark.workflow, pytest.mark.slow]
@@ -79,9 +78,9 @@ def _plan_length_m(path) -> float:
 def test_recording_runs_on_defaults_to_a_recognisable_plan(real_run, name):
     fmt, topic, pose_kind, stamps, mode, n_scans, n_sampled, n_kept, length_all, fraction = MEASURED[name]
     out = real_run / name
-    meta = {k.decode(): v.decode() for k, v in pq.read_schema(out / "scan_index.parquet").metadata.items()}
+    meta = read_metadata(out / "scan_index.parquet")
     assert (meta["format"], meta["scan_topic"], meta["pose_kind"], meta["stamps"]) == (fmt, topic, pose_kind, stamps)
-    reg_meta = {k.decode(): v.decode() for k, v in pq.read_schema(out / "registration.parquet").metadata.items()}
+    reg_meta = read_metadata(out / "registration.parquet")
     verdict = json.loads(reg_meta["verdict"])
     assert reg_meta["mode"] == mode and verdict["ok"], verdict["line"]
     reg = read_table(out / "registration.parquet")
@@ -103,12 +102,10 @@ def test_the_plan_against_the_reference_map_sees_a_wall_through_free_space(real_
     plan's length while completeness stays."""
     from floorscan.metrics import floorplan_faces
     from floorscan.score.against_reference import plan_against_reference
-    from floorscan.score.reference import grid_from_table
+    from floorscan.score.reference import read_grid
 
     out = real_run / name
-    path = out / "reference" / "occupancy.parquet"
-    meta = {k.decode(): v.decode() for k, v in pq.read_schema(path).metadata.items()}
-    grid = grid_from_table(read_table(path), meta)
+    grid = read_grid(out / "reference" / "occupancy.parquet")
     faces = floorplan_faces(out / "floorplan" / f"{ORDERING}_{EXTRACTOR}_kall.geojson")
     got = plan_against_reference(faces, grid)
     completeness, correctness = MEASURED_MAP[name]

@@ -21,11 +21,10 @@ from floorscan.score.reference import (
     PGM_OCCUPIED,
     PGM_UNKNOWN,
     OccupancyParams,
-    grid_from_table,
-    grid_metadata,
-    grid_table,
     map_image,
     occupancy_grid,
+    read_grid,
+    write_grid,
     write_map_server,
 )
 from test_registration import ROOM, SEGMENTS, ray_cast
@@ -142,8 +141,11 @@ def test_map_server_files_and_the_cell_table_round_trip(tmp_path):
     assert meta["image"] == "map.pgm" and meta["resolution"] == 0.05 and meta["mode"] == "trinary"
     assert meta["origin"][:2] == pytest.approx(grid.origin_xy.tolist()) and meta["origin"][2] == 0.0
     assert (meta["occupied_thresh"], meta["free_thresh"], meta["negate"]) == (0.65, 0.196, 0)
-    back = grid_from_table(grid_table(grid), grid_metadata(grid))
+    write_grid(grid, tmp_path / "occupancy.parquet", {"dataset": "room"})
+    back = read_grid(tmp_path / "occupancy.parquet")
     np.testing.assert_array_equal(back.n_hit_scans, grid.n_hit_scans)
+    np.testing.assert_array_equal(back.n_miss_scans, grid.n_miss_scans)
+    np.testing.assert_array_equal(back.origin_xy, grid.origin_xy)
     np.testing.assert_array_equal(back.structure(), grid.structure())
     assert back.params == grid.params
 

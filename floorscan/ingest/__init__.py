@@ -160,6 +160,18 @@ def detected_line(detected: Mapping[str, str]) -> str:
     return ", ".join(f"{k}={detected[k]}" for k in keys)
 
 
+def describe_recording(detected: Mapping[str, str], mode: str = "") -> str:
+    """What a recording was found to be and how it was registered, for people (the
+    report's figure title, ``summary.md``): ``format rosbag, scan_topic /scan,
+    pose_source ..., stamps recorded; registered in odometry mode``.
+
+    ``detected``: the scan index's schema metadata (:func:`floorscan.io.read_metadata`);
+    ``mode``: the register mode used (``pose`` when not given).
+    """
+    found = ", ".join(f"{k} {detected[k]}" for k in ("format", "scan_topic", "pose_source", "stamps") if k in detected)
+    return f"{found or 'as configured'}; registered in {mode or 'pose'} mode"
+
+
 def write_recording(
     recording: Recording,
     scans_path: str | Path,

@@ -87,15 +87,6 @@ def _topics(reader) -> dict[str, str]:
     return out
 
 
-def _topic_counts(reader) -> dict[str, tuple[str, int]]:
-    """Topic -> (message type, message count over all its connections)."""
-    out: dict[str, tuple[str, int]] = {}
-    for c in reader.connections:
-        msgtype, n = out.get(c.topic, (c.msgtype, 0))
-        out[c.topic] = (msgtype, n + int(getattr(c, "msgcount", 0) or 0))
-    return out
-
-
 def _short(msgtype: str) -> str:
     return msgtype.rsplit("/", 1)[-1]
 
@@ -191,7 +182,7 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float = 0.5) -> 
     notes: list[str] = []
     try:
         with _reader(path) as reader:
-            topics = _topic_counts(reader)
+            topics = {t: (info.msgtype, info.msgcount) for t, info in reader.topics.items()}
             scan_topic = dataset.get("scan_topic")
             if scan_topic is None:
                 scan_topic, note = detect_scan_topic(topics, path)

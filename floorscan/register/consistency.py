@@ -11,10 +11,10 @@ For a sample of map points, those with a point of another pass within
 ``revisit_radius_m`` are revisited; of them, the fraction with such a point within
 ``tau_m`` is the map's *consistency* (the cloud-to-cloud agreement of Cloud
 Compare's C2C distance, restricted to revisits; the same idea as a loop closure's
-inlier fraction in SLAM back ends). A well-registered indoor map measures
-0.5-0.9 at 5 cm (the scanner's noise and the sampling of a wall by another scan),
-a doubled one much less. When too few points are revisited (a one-way corridor) it is
-undefined (NaN) and judges nothing.
+inlier fraction in SLAM back ends). A well-registered map scores high but below 1
+(the scanner's noise and the sampling of a wall by another scan), a doubled one low
+(the figures of the shared recordings are in ``benchmarks/README.md``). When too few
+points are revisited (a one-way corridor) it is undefined (NaN) and judges nothing.
 
 :func:`verdict` joins it with the fraction of sampled scans kept.
 """

@@ -30,6 +30,7 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
+from floorscan.register.consistency import FEW_SCANS
 from floorscan.score.against_reference import Structure, plan_against_reference, sample_segments, within_bound
 
 #: Ordering name of the completeness-maximising bound.
@@ -138,27 +139,6 @@ def lazy_greedy(cover: dict[int, np.ndarray], scan_ids: list[int]) -> pd.DataFra
     return pd.DataFrame(rows, columns=["rank", "scan_id", "gain_cells", "covered_cells"])
 
 
-def greedy(cover: dict[int, np.ndarray], scan_ids: list[int]) -> pd.DataFrame:
-    """The plain greedy of :func:`lazy_greedy` (every gain recomputed at every step),
-    the reference it is tested against."""
-    n_cells = 1 + max((int(c.max()) for c in cover.values() if len(c)), default=-1)
-    covered = np.zeros(n_cells, dtype=bool)
-    left = sorted(int(s) for s in scan_ids)
-    rows, total = [], 0
-    while left:
-        gains = [int(np.count_nonzero(~covered[cover[s]])) for s in left]
-        best = int(np.argmax(gains))  # first maximum: the smallest scan_id
-        if gains[best] == 0:
-            break
-        s = left.pop(best)
-        covered[cover[s]] = True
-        total += gains[best]
-        rows.append((len(rows), s, gains[best], total))
-    for s in left:
-        rows.append((len(rows), s, 0, total))
-    return pd.DataFrame(rows, columns=["rank", "scan_id", "gain_cells", "covered_cells"])
-
-
 def random_orderings(scan_ids: list[int], seeds: list[int]) -> dict[int, pd.DataFrame]:
     """Seeded random permutations of the kept scans, ``{seed: (rank, scan_id)}``
     (``numpy.random.default_rng(seed).permutation`` of the sorted scan ids)."""
@@ -167,43 +147,6 @@ def random_orderings(scan_ids: list[int], seeds: list[int]) -> dict[int, pd.Data
         int(seed): pd.DataFrame({"rank": np.arange(len(ids)), "scan_id": np.random.default_rng(seed).permutation(ids)})
         for seed in seeds
     }
-
-
-def quality_curve(
-    per_scan: pd.DataFrame,
-    ordering: pd.DataFrame,
-    ks: list[int],
-    structure: Structure,
-    build_plan: Callable[[pd.DataFrame], np.ndarray],
-    taus_m: tuple[float, ...] = (0.05, 0.10),
-) -> pd.DataFrame:
-    """The plan of the first k scans of ``ordering`` against the reference, per k.
-
-    Parameters
-    ----------
-    per_scan : pandas.DataFrame
-        Per-scan wall segments (schema :data:`floorscan.walls.WALLS`).
-    ordering : pandas.DataFrame
-        ``rank, scan_id``.
-    ks : list of int
-        Numbers of scans (:func:`k_grid`).
-    structure : Structure
-    build_plan : callable
-        Segments of the first k scans -> the plan's faces ((F, 4), metres).
-    taus_m : tuple of float
-
-    Returns
-    -------
-    pandas.DataFrame
-        ``k`` and the metrics of :func:`plan_against_reference`, a row per k.
-    """
-    from floorscan.walls import first_k_walls
-
-    rows = []
-    for k in ks:
-        segments, _ = first_k_walls(per_scan, ordering, int(k))
-        rows.append({"k": int(k), **plan_against_reference(build_plan(segments), structure, taus_m)})
-    return pd.DataFrame(rows)
 
 
 def adaptive_curve(
@@ -419,31 +362,27 @@ def score_curves(
     oracle : pandas.DataFrame
         The oracle ordering (:func:`oracle_ordering`).
     """
-    import pyarrow.parquet as pq
-
     from floorscan.floorplan import build_floorplan, params_from_config
-    from floorscan.io import read_table
-    from floorscan.score.reference import grid_from_table
+    from floorscan.score.reference import read_grid
 
-    meta = {k.decode(): v.decode() for k, v in pq.read_schema(reference_path).metadata.items()}
-    structure = Structure(grid_from_table(read_table(reference_path), meta))
+    structure = Structure(read_grid(reference_path))
     fp_params = params_from_config(floorplan_cfg or {})
-    cache: dict[tuple, np.ndarray] = {}
+    cache: dict[tuple, dict] = {}
 
-    def build_plan(segments: pd.DataFrame) -> np.ndarray:
+    def score_scans(segments: pd.DataFrame) -> dict:
+        """The plan of these segments against the reference, once per set of scans (the
+        same scans give the same plan: k = all of every ordering)."""
         key = tuple(sorted(set(segments["scan_id"].tolist())))
-        if key not in cache:  # the same scans give the same plan (k = all of every ordering)
-            faces = build_floorplan(segments, fp_params).faces
-            cache[key] = faces[["x0", "y0", "x1", "y1"]].to_numpy(np.float64)
+        if key not in cache:
+            faces = build_floorplan(segments, fp_params).faces[["x0", "y0", "x1", "y1"]].to_numpy(np.float64)
+            cache[key] = plan_against_reference(faces, structure, taus_m)
         return cache[key]
 
     any_ordering = next(iter(orderings.values()))
     scan_ids = sorted(int(s) for s in any_ordering["scan_id"])
     n_kept = len(scan_ids)
-    ks = k_grid(n_kept, step_fraction)
     tau_key = f"f1_{round(oracle_tau_m * 100):d}cm"
-    all_segments = per_scan[per_scan["scan_id"].isin(scan_ids)]
-    f1_all = plan_against_reference(build_plan(all_segments), structure, taus_m)[tau_key]
+    f1_all = score_scans(per_scan[per_scan["scan_id"].isin(scan_ids)])[tau_key]
     targets = tuple(level * f1_all for level in levels)
     oracle = oracle_ordering(per_scan, scan_ids, structure, oracle_tau_m)
     runs = [(name, -1, o) for name, o in orderings.items() if name != RANDOM]
@@ -456,24 +395,23 @@ def score_curves(
     plan_log.setLevel(max(level, logging.WARNING))
     try:
         for name, seed, ordering in runs:
-            parts.append(_curve_of(name, seed, ordering, per_scan, n_kept, structure, build_plan, taus_m,
-                                   step_fraction, dense_fraction, targets, tau_key))
+            parts.append(_curve_of(name, seed, ordering, per_scan, n_kept, score_scans, step_fraction,
+                                   dense_fraction, targets, tau_key))
             if log is not None:
-                f1 = parts[-1][f"f1_{round(oracle_tau_m * 100):d}cm"]
+                c = parts[-1]
                 log.info("%s%s: %d k from %d to %d, F1 %.3f .. %.3f", name, f" seed {seed}" if seed >= 0 else "",
-                         len(f1), ks[0], ks[-1], float(f1.min()), float(f1.max()))
+                         len(c), c["k"].iloc[0], c["k"].iloc[-1], float(c[tau_key].min()), float(c[tau_key].max()))
     finally:
         plan_log.setLevel(level)
     return pd.concat(parts, ignore_index=True), oracle
 
 
-def _curve_of(name, seed, ordering, per_scan, n_kept, structure, build_plan, taus_m, step_fraction, dense_fraction,
-              targets, tau_key) -> pd.DataFrame:
+def _curve_of(name, seed, ordering, per_scan, n_kept, score_scans, step_fraction, dense_fraction, targets,
+              tau_key) -> pd.DataFrame:
     from floorscan.walls import first_k_walls
 
     def evaluate(k: int) -> dict:
-        segments, _ = first_k_walls(per_scan, ordering, int(k))
-        return plan_against_reference(build_plan(segments), structure, taus_m)
+        return score_scans(first_k_walls(per_scan, ordering, int(k))[0])
 
     c = adaptive_curve(evaluate, n_kept, step_fraction, dense_fraction, targets=targets, tau_key=tau_key)
     c.insert(0, "ordering", name)
@@ -507,8 +445,11 @@ def summary_markdown(summary: pd.DataFrame, tau_m: float, n_kept: int, n_recorde
 
     for _, r in summary.iterrows():
         auc = f"{r['auc']:.3f}" + (f" +- {r['auc_seed_sd']:.3f}" if np.isfinite(r["auc_seed_sd"]) else "")
+        f1_all = f"{r['f1_all']:.3f}"
+        if n_kept < FEW_SCANS:
+            f1_all += f" (warning: from {n_kept} scans)"
         cells = [
-            r["extractor"], r["ordering"], f"{r['f1_all']:.3f}",
+            r["extractor"], r["ordering"], f1_all,
             k_text(r, "95"), f"{r['fraction_kept_95']:.3f}", f"{r['fraction_recorded_95']:.3f}",
             k_text(r, "99"), f"{r['fraction_kept_99']:.3f}", f"{r['fraction_recorded_99']:.3f}",
             auc, f"{r['k95_over_oracle']:.2f}",

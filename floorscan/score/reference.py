@@ -30,6 +30,7 @@ Usage::
 
     grid = occupancy_grid(((pose_xy, points_xy) for ...), OccupancyParams())
     write_map_server(grid, "map.pgm", "map.yaml")
+    write_grid(grid, "occupancy.parquet")  # read_grid restores it
     structure_xy = grid.cell_centres(grid.structure())
 """
 
@@ -115,23 +116,26 @@ class OccupancyGrid:
         (map_server's ``origin``).
     resolution_m : float
         Cell size, metres.
-    log_odds : (H, W) float64 ndarray
-        Log-odds of occupancy per cell, row ``i`` at ``y = origin_y + (i + 0.5) r``.
     n_hit_scans, n_miss_scans : (H, W) int32 ndarray
-        Scans with a return in the cell / with a ray through it and no return in it.
+        Scans with a return in the cell / with a ray through it and no return in it;
+        row ``i`` at ``y = origin_y + (i + 0.5) r``.
     params : OccupancyParams
     """
 
     origin_xy: np.ndarray
     resolution_m: float
-    log_odds: np.ndarray
     n_hit_scans: np.ndarray
     n_miss_scans: np.ndarray
     params: OccupancyParams
 
     @property
     def shape(self) -> tuple[int, int]:
-        return self.log_odds.shape
+        return self.n_hit_scans.shape
+
+    @property
+    def log_odds(self) -> np.ndarray:
+        """(H, W) float64 log-odds of occupancy: the sum of the scans' updates."""
+        return self.n_hit_scans * logit(self.params.prob_hit) + self.n_miss_scans * logit(self.params.prob_miss)
 
     def probability(self) -> np.ndarray:
         """(H, W) probability of occupancy."""
@@ -228,11 +232,9 @@ def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: Occup
         crossed = _distinct(c[:, 1] * width + c[:, 0], last)
         hits[hit] += 1
         misses[crossed[hit_by[crossed] != i]] += 1
-    log_odds = hits * logit(params.prob_hit) + misses * logit(params.prob_miss)
     return OccupancyGrid(
         origin_xy=origin,
         resolution_m=r,
-        log_odds=log_odds.reshape(height, width),
         n_hit_scans=hits.reshape(height, width),
         n_miss_scans=misses.reshape(height, width),
         params=params,
@@ -285,15 +287,14 @@ def write_map_server(grid: OccupancyGrid, pgm_path: str | Path, yaml_path: str |
 
 
 def grid_table(grid: OccupancyGrid) -> pd.DataFrame:
-    """The known cells (hit or crossed by a scan) as a table: ``row``, ``col`` (int32),
-    ``log_odds`` (float32), ``n_hit_scans``, ``n_miss_scans`` (int32)."""
+    """The known cells (hit or crossed by a scan) as a table: ``row``, ``col``,
+    ``n_hit_scans``, ``n_miss_scans`` (int32)."""
     known = (grid.n_hit_scans > 0) | (grid.n_miss_scans > 0)
     iy, ix = np.nonzero(known)
     return pd.DataFrame(
         {
             "row": iy.astype(np.int32),
             "col": ix.astype(np.int32),
-            "log_odds": grid.log_odds[known].astype(np.float32),
             "n_hit_scans": grid.n_hit_scans[known].astype(np.int32),
             "n_miss_scans": grid.n_miss_scans[known].astype(np.int32),
         }
@@ -313,9 +314,24 @@ def grid_metadata(grid: OccupancyGrid) -> dict[str, str]:
     }
 
 
+def write_grid(grid: OccupancyGrid, path: str | Path, metadata: dict[str, str] | None = None) -> None:
+    """Write the grid as a cell table (:func:`grid_table`) whose schema metadata
+    (:func:`grid_metadata`, the cell counts per class and ``metadata``) restores it."""
+    from floorscan.io import write_table
+
+    counts = {f"n_{k}_cells": str(v) for k, v in grid.counts().items()}
+    write_table(grid_table(grid), path, metadata={**grid_metadata(grid), **counts, **(metadata or {})})
+
+
+def read_grid(path: str | Path) -> OccupancyGrid:
+    """The grid :func:`write_grid` wrote (``reference/occupancy.parquet``)."""
+    from floorscan.io import read_metadata, read_table
+
+    return grid_from_table(read_table(path), read_metadata(path))
+
+
 def grid_from_table(table: pd.DataFrame, metadata: dict[str, str]) -> OccupancyGrid:
-    """The grid of :func:`grid_table` and :func:`grid_metadata` (exact for the counts;
-    the log-odds recomputed from them)."""
+    """The grid of :func:`grid_table` and :func:`grid_metadata`, exactly."""
     fields = OccupancyParams.__dataclass_fields__
     params = OccupancyParams(**{k: type(fields[k].default)(float(metadata[f"param_{k}"])) for k in fields})
     h, w = int(metadata["height"]), int(metadata["width"])
@@ -327,7 +343,6 @@ def grid_from_table(table: pd.DataFrame, metadata: dict[str, str]) -> OccupancyG
     return OccupancyGrid(
         origin_xy=np.array([float(metadata["origin_x_m"]), float(metadata["origin_y_m"])]),
         resolution_m=float(metadata["resolution_m"]),
-        log_odds=hits * logit(params.prob_hit) + misses * logit(params.prob_miss),
         n_hit_scans=hits,
         n_miss_scans=misses,
         params=params,

@@ -17,18 +17,22 @@ FINAL_OUTPUTS = []
 # the longest chain of jobs from its start to the end of the workflow, measured on
 # hallways3d (2 cores, a job's start-up of ~0.6 s included):
 #
-#   reference 12.5 -> score_curves 20 -> score 1 -> score_figures 3         = 36
-#   cluster_ransac shard 13 -> walls 1.2 -> score_curves ...                  = 38
 #   cluster_ransac shard 13 -> walls 1.2 -> floorplan 11.5
 #     -> score_runs 5 -> score 0.8 -> score_figures 3                        = 34
-#   hulls_shard 8.7 -> select 3.2 -> walls ...                                = 37
-#   ransac shard 7.5 -> walls ...                                             = 33
+#   hulls_shard 8.7 -> select 3.2 -> walls ...                                = 33
+#   ransac shard 7.5 -> walls ...                                             = 29
 #   selection_figures 10.5 -> score_figures 3                                 = 14
 #   register_figure 2.7 (nothing waits for it)                                = 3
 #
-# score_curves (rank 24) needs the walls, the orderings and the reference map, not the
-# floor plans: it runs beside floorplan (21) and score_runs. The reference (36) only
-# needs the registration, and is started with the shards so that it is ready then.
+# The reference map and the curves came later (measured 8 s and ~20 s a job):
+#
+#   reference 8 -> score_curves 20 -> score 1 -> score_figures 3              = 32
+#   walls ... -> score_curves 20 -> score ...                                 = 24 from walls
+#
+# so score_curves (24) runs beside floorplan (20) and score_runs, and the reference
+# (36: it needs only the registration) starts with the shards and is ready by then.
+# Every chain through the walls grew by the curves alike, so the order of the others
+# stands.
 #
 # Walls need the orderings of select, so the hulls chain is as urgent as the walls
 # shards; the cluster_ransac shards (about twice ransac's time a scan) go before

@@ -39,6 +39,7 @@ rule register_figure:
     input:
         registered="results/{dataset}/registered.parquet",
         registration="results/{dataset}/registration.parquet",
+        index="results/{dataset}/scan_index.parquet",  # what ingest detected
     output:
         figure=report(
             "results/{dataset}/figures/registered_map.png",

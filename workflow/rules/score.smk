@@ -237,6 +237,7 @@ rule score:
         curves=lambda wc: expand("results/{dataset}/score/curves_{extractor}.parquet", dataset=wc.dataset,
                                  extractor=score_extractors(wc)),
         registration="results/{dataset}/registration.parquet",
+        index="results/{dataset}/scan_index.parquet",  # what ingest detected
     output:
         metrics="results/{dataset}/metrics.parquet",
         summary="results/{dataset}/summary.parquet",
