@@ -335,22 +335,59 @@ def fit_segments(seg: np.ndarray, weights: np.ndarray) -> np.ndarray:
     (4,) float64 ndarray
         The merged segment, metres.
     """
-    seg = np.asarray(seg, dtype=np.float64)
-    w = np.asarray(weights, dtype=np.float64)
+    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
     if len(seg) == 1:
         return seg[0].copy()
+    return fit_groups(seg, weights, np.zeros(len(seg), dtype=np.int64), 1)[0]
+
+
+def fit_groups(seg: np.ndarray, weights: np.ndarray, group: np.ndarray, n_groups: int) -> np.ndarray:
+    """:func:`fit_segments` of every group at once.
+
+    Parameters
+    ----------
+    seg : (M, 4) float ndarray
+        Segments ``x0, y0, x1, y1``, metres.
+    weights : (M,) float ndarray
+        Positive weights.
+    group : (M,) int ndarray
+        Group of each segment, 0 .. ``n_groups`` - 1; every group has a member.
+    n_groups : int
+
+    Returns
+    -------
+    (n_groups, 4) float64 ndarray
+        The fitted segment of each group, metres (a group of one: its segment's line
+        and extent, up to rounding).
+    """
+    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
+    w = np.asarray(weights, dtype=np.float64).reshape(-1)
+    g = np.asarray(group, dtype=np.int64).reshape(-1)
+
+    def total(values):
+        return np.bincount(g, weights=values, minlength=n_groups)
+
     mid = 0.5 * (seg[:, :2] + seg[:, 2:])
     vec = seg[:, 2:] - seg[:, :2]
     length = np.hypot(vec[:, 0], vec[:, 1])
     d = vec / np.maximum(length, 1e-12)[:, None]
-    m = (w[:, None] * mid).sum(axis=0) / w.sum()
-    r = mid - m
-    cov = np.einsum("i,ij,ik->jk", w, r, r) + np.einsum("i,ij,ik->jk", w * length**2 / 12.0, d, d)
-    phi = 0.5 * np.arctan2(2.0 * cov[0, 1], cov[0, 0] - cov[1, 1])
-    u = np.array([np.cos(phi), np.sin(phi)])
-    t = np.concatenate([(seg[:, :2] - m) @ u, (seg[:, 2:] - m) @ u])
-    a, b = m + t.min() * u, m + t.max() * u
-    return np.array([a[0], a[1], b[0], b[1]])
+    w_sum = total(w)
+    m = np.stack([total(w * mid[:, 0]), total(w * mid[:, 1])], axis=1) / w_sum[:, None]
+    r = mid - m[g]
+    wl = w * length**2 / 12.0
+    cxx = total(w * r[:, 0] * r[:, 0] + wl * d[:, 0] * d[:, 0])
+    cyy = total(w * r[:, 1] * r[:, 1] + wl * d[:, 1] * d[:, 1])
+    cxy = total(w * r[:, 0] * r[:, 1] + wl * d[:, 0] * d[:, 1])
+    phi = 0.5 * np.arctan2(2.0 * cxy, cxx - cyy)
+    u = np.stack([np.cos(phi), np.sin(phi)], axis=1)
+    t0 = np.einsum("ij,ij->i", seg[:, :2] - m[g], u[g])
+    t1 = np.einsum("ij,ij->i", seg[:, 2:] - m[g], u[g])
+    lo = np.full(n_groups, np.inf)
+    hi = np.full(n_groups, -np.inf)
+    np.minimum.at(lo, g, np.minimum(t0, t1))
+    np.maximum.at(hi, g, np.maximum(t0, t1))
+    a, b = m + lo[:, None] * u, m + hi[:, None] * u
+    return np.concatenate([a, b], axis=1)
 
 
 #: Candidate pairs tested at once by :func:`_merge_groups`.
@@ -442,14 +479,16 @@ def merge_segments(
         group = _merge_groups(cur, i, j, params)
         if group is None:
             break
-        # Members of each group in input order (stable sort), one slice per group.
-        order = np.argsort(group, kind="stable")
-        bounds = np.r_[0, np.cumsum(np.bincount(group))]
+        size = np.bincount(group)
         # A group of one keeps its segment (as fit_segments would): only the others are fitted.
-        new = cur[order[bounds[:-1]]]
-        for g in np.flatnonzero(np.diff(bounds) > 1):
-            members = order[bounds[g] : bounds[g + 1]]
-            new[g] = fit_segments(cur[members], cur_w[members])
+        new = np.empty((len(size), 4))
+        new[group] = cur  # the groups of one
+        several = size[group] > 1
+        if several.any():
+            fitted = np.flatnonzero(size > 1)
+            rank = np.full(len(size), -1, dtype=np.int64)
+            rank[fitted] = np.arange(len(fitted))
+            new[fitted] = fit_groups(cur[several], cur_w[several], rank[group[several]], len(fitted))
         new_w = np.bincount(group, weights=cur_w)
         labels = group[labels]
         cur, cur_w = new, new_w
@@ -511,13 +550,17 @@ def pair_faces(
             & (overlap >= params.pair_min_overlap * np.minimum(length[a], length[b]))
         )
         order = np.lexsort((j[ok], i[ok], dist[ok]))
-        for p, q in zip(i[ok][order], j[ok][order]):
+        pairs = []
+        for p, q in zip(i[ok][order].tolist(), j[ok][order].tolist()):
             if wall_of_face[p] >= 0 or wall_of_face[q] >= 0:
                 continue
-            axis, t = _axis_between(faces[p], faces[q])
-            wall_of_face[[p, q]] = len(axes)
-            axes.append(axis)
-            thick.append(t)
+            wall_of_face[p] = wall_of_face[q] = len(pairs)
+            pairs.append((p, q))
+        if pairs:
+            p, q = np.array(pairs, dtype=np.int64).T
+            pair_axes, pair_thick = _axis_between(faces[p], faces[q])
+            axes.extend(pair_axes)
+            thick.extend(pair_thick.tolist())
     for f in range(nf):
         if wall_of_face[f] < 0:
             wall_of_face[f] = len(axes)
@@ -526,25 +569,62 @@ def pair_faces(
     return np.array(axes).reshape(-1, 4), np.array(thick, dtype=np.float64), wall_of_face
 
 
-def _axis_between(f: np.ndarray, g: np.ndarray) -> tuple[np.ndarray, float]:
-    """Centre line between two near-parallel faces and their distance (metres)."""
-    lf, lg = np.hypot(*(f[2:] - f[:2])), np.hypot(*(g[2:] - g[:2]))
-    af, ag = np.arctan2(*(f[2:] - f[:2])[::-1]), np.arctan2(*(g[2:] - g[:2])[::-1])
+def _axis_between(f: np.ndarray, g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Centre lines between pairs of near-parallel faces, (P, 4) metres, and their
+    distances, (P,) metres; ``f`` and ``g`` are (P, 4) faces."""
+    vf, vg = f[:, 2:] - f[:, :2], g[:, 2:] - g[:, :2]
+    lf, lg = np.hypot(vf[:, 0], vf[:, 1]), np.hypot(vg[:, 0], vg[:, 1])
+    af, ag = np.arctan2(vf[:, 1], vf[:, 0]), np.arctan2(vg[:, 1], vg[:, 0])
     # Length-weighted axial mean of the two directions.
     phi = 0.5 * np.arctan2(lf * np.sin(2 * af) + lg * np.sin(2 * ag), lf * np.cos(2 * af) + lg * np.cos(2 * ag))
-    u = np.array([np.cos(phi), np.sin(phi)])
-    n = np.array([-u[1], u[0]])
-    of, og = n @ (0.5 * (f[:2] + f[2:])), n @ (0.5 * (g[:2] + g[2:]))
-    pts = np.array([f[:2], f[2:], g[:2], g[2:]])
-    t = pts @ u
+    u = np.stack([np.cos(phi), np.sin(phi)], axis=1)
+    n = np.stack([-u[:, 1], u[:, 0]], axis=1)
+    of = np.einsum("ij,ij->i", n, 0.5 * (f[:, :2] + f[:, 2:]))
+    og = np.einsum("ij,ij->i", n, 0.5 * (g[:, :2] + g[:, 2:]))
+    t = np.stack([np.einsum("ij,ij->i", e, u) for e in (f[:, :2], f[:, 2:], g[:, :2], g[:, 2:])], axis=1)
     off = 0.5 * (of + og)
-    a, b = off * n + t.min() * u, off * n + t.max() * u
-    return np.array([a[0], a[1], b[0], b[1]]), float(abs(of - og))
+    a = off[:, None] * n + t.min(axis=1)[:, None] * u
+    b = off[:, None] * n + t.max(axis=1)[:, None] * u
+    return np.concatenate([a, b], axis=1), np.abs(of - og)
 
 
 # --------------------------------------------------------------------------------------
 # Floor plan
 # --------------------------------------------------------------------------------------
+
+
+def plan_faces(
+    seg: np.ndarray, weights: np.ndarray | None = None, params: FloorplanParams = FloorplanParams()
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The wall faces of a floor plan: the segments merged (:func:`merge_segments`),
+    faces shorter than ``min_length_m`` dropped (:func:`build_floorplan`'s faces).
+
+    Parameters
+    ----------
+    seg : (M, 4) float ndarray
+        Finite segments ``x0, y0, x1, y1``, metres, in scan order.
+    weights : (M,) float ndarray, optional
+        Merge weights (inlier counts); a weight that is not positive, or no weights,
+        is replaced by the segment's length.
+    params : FloorplanParams
+
+    Returns
+    -------
+    faces : (F, 4) float64 ndarray
+        Metres.
+    face_weights : (F,) float64 ndarray
+    n_segments : (F,) int64 ndarray
+        Segments merged into each face.
+    """
+    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
+    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    w = length if weights is None else np.asarray(weights, dtype=np.float64)
+    w = np.where(w > 0, w, np.maximum(length, 1e-6))
+    faces, face_w, labels = merge_segments(seg, w, params)
+    n_seg = np.bincount(labels, minlength=len(faces))
+    flen = np.hypot(faces[:, 2] - faces[:, 0], faces[:, 3] - faces[:, 1]) if len(faces) else np.empty(0)
+    keep = flen >= params.min_length_m
+    return faces[keep].reshape(-1, 4), face_w[keep], n_seg[keep]
 
 
 def build_floorplan(segments: pd.DataFrame, params: FloorplanParams = FloorplanParams()) -> FloorPlan:
@@ -579,18 +659,9 @@ def build_floorplan(segments: pd.DataFrame, params: FloorplanParams = FloorplanP
     if not finite.all():
         log.warning("dropping %d wall segments with non-finite coordinates", int((~finite).sum()))
     seg = seg[finite]
-    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
-    w = (
-        segments["n_inliers"].to_numpy(dtype=np.float64)[finite]
-        if "n_inliers" in segments.columns
-        else length
-    )
-    w = np.where(w > 0, w, np.maximum(length, 1e-6))
-    faces, face_w, labels = merge_segments(seg, w, params)
-    n_seg = np.bincount(labels, minlength=len(faces))
-    flen = np.hypot(faces[:, 2] - faces[:, 0], faces[:, 3] - faces[:, 1]) if len(faces) else np.empty(0)
-    keep = flen >= params.min_length_m
-    faces, face_w, n_seg, flen = faces[keep], face_w[keep], n_seg[keep], flen[keep]
+    w = segments["n_inliers"].to_numpy(dtype=np.float64)[finite] if "n_inliers" in segments.columns else None
+    faces, face_w, n_seg = plan_faces(seg, w, params)
+    flen = np.hypot(faces[:, 2] - faces[:, 0], faces[:, 3] - faces[:, 1])
     axes, thick, wall_of_face = pair_faces(faces, face_w, params)
     nw = len(axes)
     faces_df = pd.DataFrame(

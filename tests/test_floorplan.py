@@ -13,6 +13,7 @@ import yaml
 from floorscan.floorplan import (
     FloorplanParams,
     build_floorplan,
+    fit_groups,
     fit_segments,
     merge_segments,
     pair_faces,
@@ -41,6 +42,23 @@ def test_fit_segments_weighted_line_and_union_extent():
     np.testing.assert_allclose(fit_segments(two_faces, [3, 1]), [0, 0.005, 2, 0.005], atol=1e-12)
     collinear = np.array([[0.0, 1.0, 2.0, 3.0], [1.0, 2.0, 3.0, 4.0]])  # on y = x + 1
     np.testing.assert_allclose(fit_segments(collinear, [5, 1]), [0, 1, 3, 4], atol=1e-12)
+
+
+def test_fit_groups_fits_each_group_on_its_own():
+    # three groups, interleaved rows: the grouped fit is each group's own fit
+    seg = np.array([
+        [0.0, 0.0, 2.0, 0.0], [5.0, 5.0, 5.0, 7.0], [2.0, 0.02, 0.0, 0.02],
+        [0.0, 1.0, 2.0, 3.0], [5.1, 4.0, 5.1, 8.0], [1.0, 2.0, 3.0, 4.0],
+    ])  # fmt: skip
+    w = np.array([3.0, 1.0, 1.0, 5.0, 2.0, 1.0])
+    group = np.array([0, 1, 0, 2, 1, 2])
+    fitted = fit_groups(seg, w, group, 3)
+    np.testing.assert_allclose(fitted[0], [0, 0.005, 2, 0.005], atol=1e-12)
+    np.testing.assert_allclose(fitted[2], [0, 1, 3, 4], atol=1e-12)
+    # the vertical pair, midpoints at one height: centroid x = (5 * 1 + 5.1 * 2) / 3, extent y 4 .. 8
+    np.testing.assert_allclose(fitted[1], [15.2 / 3, 4.0, 15.2 / 3, 8.0], atol=1e-9)
+    for g in range(3):
+        np.testing.assert_allclose(fitted[g], fit_segments(seg[group == g], w[group == g]), atol=1e-12)
 
 
 def test_merge_keeps_apart_what_is_not_one_face():
