@@ -25,39 +25,6 @@ def test_k_grid_steps_two_percent_of_the_kept_scans():
         C.k_grid(10, 0)
 
 
-def _plain_greedy(cover, scan_ids):
-    """Greedy maximum coverage with every gain recomputed at every step: the reference
-    the lazy greedy is tested against."""
-    n_cells = 1 + max((int(c.max()) for c in cover.values() if len(c)), default=-1)
-    covered = np.zeros(n_cells, dtype=bool)
-    left = sorted(int(s) for s in scan_ids)
-    rows, total = [], 0
-    while left:
-        gains = [int(np.count_nonzero(~covered[cover[s]])) for s in left]
-        best = int(np.argmax(gains))  # first maximum: the smallest scan_id
-        if gains[best] == 0:
-            break
-        s = left.pop(best)
-        covered[cover[s]] = True
-        total += gains[best]
-        rows.append((len(rows), s, gains[best], total))
-    rows += [(len(rows) + i, s, 0, total) for i, s in enumerate(left)]
-    return pd.DataFrame(rows, columns=["rank", "scan_id", "gain_cells", "covered_cells"])
-
-
-@pytest.mark.parametrize("seed", range(20))
-def test_lazy_greedy_orders_as_the_plain_greedy(seed):
-    """Random set systems with many ties (small universes): identical orderings."""
-    rng = np.random.default_rng(seed)
-    ids = sorted(rng.choice(1000, size=int(rng.integers(5, 60)), replace=False).tolist())
-    universe = int(rng.integers(10, 200))
-    cover = {s: np.unique(rng.integers(0, universe, size=int(rng.integers(0, 25)))) for s in ids}
-    lazy, plain = C.lazy_greedy(cover, ids), _plain_greedy(cover, ids)
-    pd.testing.assert_frame_equal(lazy, plain)
-    assert sorted(lazy["scan_id"]) == ids
-    assert lazy["covered_cells"].iloc[-1] == len(np.unique(np.concatenate(list(cover.values()))))
-
-
 def test_oracle_takes_the_scan_whose_walls_reach_most_structure_first():
     """Scan 7 sees four walls, scan 3 one of them, scan 5 the other walls: the oracle
     takes 7, then 5 (new walls), then 3 (nothing new); scan 9 has no walls, last."""
@@ -105,6 +72,28 @@ def test_adaptive_curve_reads_the_first_k_as_the_full_grid_with_fewer_plans():
     assert curve["k"].is_monotonic_increasing and curve["k"].iloc[-1] == n
     assert (curve["k"] <= 100).sum() == 10  # every k of the grid up to 20 %
     assert len(curve) < 0.6 * len(full)
+
+
+def test_adaptive_curve_reads_an_exact_target_to_one_scan_in_the_dense_part():
+    """k95 at 3 % of 500 scans (between grid k 10 and 20): bisected to the first k, in
+    a handful of plans more; a target first reached beyond the dense part is not."""
+    n = 500
+
+    def evaluate(k):
+        return {"f1_5cm": min(1.0, k / 14.3)}  # reaches 0.95 at k 13.6: first k 14
+
+    grid_only = C.adaptive_curve(evaluate, n, targets=(0.95,))
+    curve = C.adaptive_curve(evaluate, n, targets=(0.95,), exact_targets=(0.95,))
+    assert C.first_k_reaching(grid_only["k"].to_numpy(), grid_only["f1_5cm"].to_numpy(), 0.95) == 20
+    assert C.first_k_reaching(curve["k"].to_numpy(), curve["f1_5cm"].to_numpy(), 0.95) == 14
+    assert 1 <= len(curve) - len(grid_only) <= 4  # log2 of the step of 10
+    assert curve["k"].is_monotonic_increasing
+
+    def late(k):
+        return {"f1_5cm": k / n}
+
+    late_curve = C.adaptive_curve(late, n, targets=(0.95,), exact_targets=(0.95,))
+    assert late_curve.equals(C.adaptive_curve(late, n, targets=(0.95,)))
 
 
 def _curves(ordering, seed, f1s, n_kept=100):

@@ -10,12 +10,8 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from floorscan.score.against_reference import (
-    plan_against_reference,
-    reference_against_ground_truth,
-    sample_segments,
-    segment_weights,
-)
+from floorscan.core.geometry import sample_segments, segment_weights
+from floorscan.score.against_reference import plan_against_reference, reference_against_ground_truth
 from floorscan.score.reference import (
     PGM_FREE,
     PGM_OCCUPIED,
