@@ -15,6 +15,10 @@ Prints
   seconds (``time.process_time``, imports excluded) of the hulls stage's work on the
   first 509 kept scans, of the select stage and of the three selection figures
   (issue 8: these stages' CPU counts toward the 10x real-time target);
+- the ``wall_coverage`` and ``surface_coverage`` orderings (issue 22) of 1000 and 5000
+  synthetic scans (walls by :func:`floorscan.walls.ransac`, not timed): the cells,
+  the lazy greedy and the plain greedy (:func:`floorscan.core.greedy.plain_greedy`)
+  side by side, and whether their orderings are identical (they must be);
 - KMeans of 200 3D scan samples by :func:`floorscan.hulls.kmeans` and by
   scikit-learn's ``KMeans`` in the same run: ms per fit, ratio, whether the centres
   are identical (they must be), and what importing scikit-learn costs a job.
@@ -199,6 +203,30 @@ def _coverage(n_scans: int, seed: int):
     return ids, geoms, t
 
 
+def _coverage_orderings_bench(n_scans: int, seed: int) -> None:
+    """Both coverage orderings of ``n_scans`` synthetic 2D scans: the cell sets, the
+    lazy greedy and the plain greedy, seconds."""
+    from floorscan.core.greedy import plain_greedy
+    from floorscan.select.coverage import CoverageParams, coverage_ordering, surface_cells, wall_cells
+    from floorscan.walls import ransac
+
+    registered, _ = simulate_scans(n_scans, seed=seed)
+    scans = [(int(s), g[["x", "y"]].to_numpy(np.float64)) for s, g in registered.groupby("scan_id", sort=True)]
+    per_scan = pd.concat([ransac(xy, seed=s).assign(scan_id=s) for s, xy in scans], ignore_index=True)
+    ids = [s for s, _ in scans]
+    params = CoverageParams()
+    for name, make in (("wall_coverage", lambda: wall_cells(per_scan, params)),
+                       ("surface_coverage", lambda: surface_cells(scans, params))):
+        sets, t_cells = _timed(make)
+        lazy, t_lazy = _timed(coverage_ordering, *sets, ids)
+        plain, t_plain = _timed(plain_greedy, sets[0], ids, sets[1], sets[2])
+        same = lazy.equals(plain)
+        adds = int((lazy["gain"] > 0).sum())
+        print(f"{name} of {n_scans} scans: cells {t_cells:.2f} s, lazy greedy {t_lazy:.3f} s, plain greedy "
+              f"{t_plain:.2f} s (ratio {t_plain / max(t_lazy, 1e-9):.0f}x); {adds} scans add coverage; "
+              f"identical ordering {same}")
+
+
 def _hallways3d_cpu(root: Path) -> None:
     """CPU seconds of the hulls, select and selection-figure work on a hallways3d
     result set (issue 8)."""
@@ -256,6 +284,9 @@ def main(argv: list[str] | None = None) -> None:
           f"({stats['evaluations']} gain evaluations), reference Algorithm 1 {t_ref:.2f} s "
           f"({len(ids) * (len(ids) + 1) // 2} evaluations): ratio {t_ref / t_fast:.0f}x; "
           f"identical ordering {same}, identical gains {same_gain}")
+
+    for n in ((200, 1000) if args.quick else (1000, 5000)):
+        _coverage_orderings_bench(n, seed=6)
 
     hall = Path("results/hallways")
     if (hall / "hulls.parquet").exists() and (hall / "registration.parquet").exists():

@@ -44,6 +44,8 @@ ORDERING_COLOURS = {
     "random": "tab:green",
     "sequential": "tab:blue",
     "motion_filter": "tab:purple",
+    "wall_coverage": "tab:brown",
+    "surface_coverage": "tab:pink",
 }
 EXTRACTOR_COLOURS = {"ransac": "tab:blue", "cluster_ransac": "tab:red"}
 #: Stage names recognised in benchmark file names (first token otherwise).

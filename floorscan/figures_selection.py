@@ -43,6 +43,8 @@ _STYLE = {
     "random": dict(color="C2", lw=1.2),
     "sequential": dict(color="C3", lw=1.2),
     "motion_filter": dict(color="C4", lw=1.2),
+    "wall_coverage": dict(color="C5", lw=2.0),
+    "surface_coverage": dict(color="C6", lw=1.5),
 }
 
 

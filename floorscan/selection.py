@@ -129,10 +129,14 @@ class SelectParams:
     def from_config(cls, cfg: Mapping | None) -> "SelectParams":
         """Build from the stage's config dict; unknown keys raise ``ValueError``.
 
-        ``figure_*`` keys belong to :class:`floorscan.figures_selection.FigureParams`
-        and are skipped here.
+        ``figure_*`` keys belong to :class:`floorscan.figures_selection.FigureParams`,
+        ``coverage`` to :class:`floorscan.select.coverage.CoverageParams`, and
+        ``default_ordering`` to the workflow; they are skipped here.
         """
-        cfg = {k: v for k, v in dict(cfg or {}).items() if not k.startswith("figure_")}
+        cfg = {
+            k: v for k, v in dict(cfg or {}).items()
+            if not k.startswith("figure_") and k not in ("coverage", "default_ordering")
+        }  # fmt: skip
         names = {f.name for f in fields(cls)}
         unknown = sorted(set(cfg) - names)
         if unknown:

@@ -231,10 +231,14 @@ def test_select_stage_all_orderings(synthetic):
 
 def test_schema_defaults_match_dataclasses():
     from floorscan.figures_selection import FigureParams
+    from floorscan.select.coverage import CoverageParams
 
     schema = yaml.safe_load((REPO / "workflow/schemas/select.schema.yaml").read_text())
     defaults = {k: v["default"] for k, v in schema["properties"].items()}
     fig = {k: list(v) if isinstance(v, tuple) else v for k, v in FigureParams().__dict__.items()}
+    coverage = {k: v["default"] for k, v in schema["properties"].pop("coverage")["properties"].items()}
+    assert defaults.pop("coverage") == {} and coverage == CoverageParams().__dict__
+    assert defaults.pop("default_ordering") == "wall_coverage"
     assert defaults == {**fs.SelectParams().as_dict(), **fig}
     with pytest.raises(ValueError, match="unknown select config keys"):
         fs.SelectParams.from_config({"tile": 3})

@@ -238,16 +238,18 @@ def sharded(registered, registration, out: Path, shard_scans: int, extractor: st
         {"hulls": str(out / "hulls.parquet"), "convex": str(out / "convex_hulls.parquet"),
          "orderings": orderings, "summary": str(out / "orderings" / "summary.parquet")},
         params={"cfg": {}, "shard_scans": shard_scans}, wildcards={"dataset": "t"})
-    # rule walls merges the wall shards and filters the first k scans of each ordering
+    # rule scan_walls merges the wall shards; rule walls cuts the first k scans of each ordering
+    merge_logs["scan_walls"] = run_script(
+        "scan_walls_merge.py", out, "scan_walls",
+        {"shard_walls": [shard("scan_walls", lb, "per_scan") for lb in labels],
+         "shard_status": [shard("scan_walls", lb, "scan_status") for lb in labels], **res},
+        {"walls": str(out / "per_scan.parquet"), "status": str(out / "scan_status.parquet")},
+        params={"shard_scans": shard_scans}, wildcards={"dataset": "t", "extractor": extractor})
     ordering = out / "orderings" / "sequential.parquet"  # select's: the kept scans in id order
     tables = [str(out / "walls" / "sequential" / extractor / f"k{k}.parquet") for k in ("5", "all")]
-    merge_logs["scan_walls"] = run_script(
-        "walls.py", out, "walls",
-        {"shard_walls": [shard("scan_walls", lb, "per_scan") for lb in labels],
-         "shard_status": [shard("scan_walls", lb, "scan_status") for lb in labels], "orderings": [str(ordering)],
-         **res},
-        {"walls": str(out / "per_scan.parquet"), "status": str(out / "scan_status.parquet"), "tables": tables},
-        params={"run": {"orderings": ["sequential"], "k": ["5", "all"]}, "shard_scans": shard_scans},
+    run_script(
+        "walls.py", out, "walls", {"walls": str(out / "per_scan.parquet"), "orderings": [str(ordering)]},
+        {"tables": tables}, params={"run": {"orderings": ["sequential"], "k": ["5", "all"]}},
         wildcards={"dataset": "t", "extractor": extractor})
     return labels, merge_logs
 
@@ -312,7 +314,7 @@ def test_sharded_scripts_write_the_unsharded_files(tmp_path, shard_scans):
     assert "'too_few_points': 1" in logs["scan_walls"]
     walls = pq.read_table(tmp_path / "many" / "per_scan.parquet").to_pandas()
     assert len(walls) > 4 * 35 and walls.groupby("scan_id").size().index.is_monotonic_increasing
-    # the same job's k tables: all kept scans in the sequential ordering are the walls
+    # the walls job's k tables: all kept scans in the sequential ordering are the walls
     # of the kept scans (dropped scan 30's points, in the points table, have walls too)
     k_dir = tmp_path / "many" / "walls" / "sequential" / "ransac"
     kall = pq.read_table(k_dir / "kall.parquet").to_pandas()

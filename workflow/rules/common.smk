@@ -48,6 +48,8 @@ PRIORITY = {
     "hulls_shard": 33,
     "select": 31,
     "walls": 21,
+    "scan_walls": 23,
+    "select_coverage": 22,
     "floorplan": 20,
     "selection_figures": 14,
     "reference": 36,

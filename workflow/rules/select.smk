@@ -5,8 +5,33 @@ stage_schema_check("select")
 # Shard labels of floorscan.shards.shard_label: scans_<first scan id>-<last scan id>.
 SHARD_LABEL = r"scans_\d+-\d+"
 
-# Must match floorscan.selection.ORDERINGS (kept literal: no package import at parse time).
+# Must match floorscan.selection.ORDERINGS and floorscan.select.coverage.COVERAGE_ORDERINGS
+# (kept literal: no package import at parse time).
 SELECT_ORDERINGS = ["cluster_hull", "convex_hull", "random", "sequential", "motion_filter"]
+COVERAGE_ORDERINGS = ["wall_coverage", "surface_coverage"]
+
+
+def select_coverage_inputs(wildcards):
+    """Inputs of `select_coverage`: the per-scan walls of select.coverage.wall_extractor
+    (one of walls.extractors), the registered points and the cluster hulls."""
+    ds = wildcards.dataset
+    extractor = stage_config("select")(wildcards)["coverage"]["wall_extractor"]
+    extractors = stage_config("walls")(wildcards)["extractors"]
+    if extractor not in extractors:
+        raise ValueError(
+            f"select.coverage.wall_extractor {extractor!r} is not one of walls.extractors {list(extractors)}"
+        )
+    default = stage_config("select")(wildcards)["default_ordering"]
+    if default not in config["walls"]["orderings"]:
+        raise ValueError(
+            f"select.default_ordering {default!r} is not one of walls.orderings {list(config['walls']['orderings'])}"
+        )
+    return {
+        "walls": f"results/{ds}/walls/{extractor}/per_scan.parquet",
+        "registered": f"results/{ds}/registered.parquet",
+        "registration": f"results/{ds}/registration.parquet",
+        "hulls": f"results/{ds}/hulls.parquet",
+    }
 
 
 def hulls_config(wildcards):
@@ -80,6 +105,25 @@ rule select:
         "../../scripts/select.py"
 
 
+# The orderings by what the scans add to the walls (floorscan.select.coverage): after the
+# walls stage's per-scan segments, before the k tables of every ordering are cut.
+rule select_coverage:
+    priority: PRIORITY["select_coverage"]
+    input:
+        unpack(select_coverage_inputs),
+    output:
+        orderings=expand("results/{{dataset}}/orderings/{ordering}.parquet", ordering=COVERAGE_ORDERINGS),
+    params:
+        cfg=stage_config("select"),
+        walls=lambda wc: walls_extract_config(wc),
+    log:
+        log_path("select_coverage"),
+    benchmark:
+        benchmark_path("select_coverage")
+    script:
+        "../../scripts/select_coverage.py"
+
+
 rule selection_figures:
     priority: PRIORITY["selection_figures"]
     input:
@@ -88,7 +132,7 @@ rule selection_figures:
         hulls="results/{dataset}/hulls.parquet",
         convex="results/{dataset}/convex_hulls.parquet",
         orderings=expand(
-            "results/{{dataset}}/orderings/{ordering}.parquet", ordering=SELECT_ORDERINGS
+            "results/{{dataset}}/orderings/{ordering}.parquet", ordering=SELECT_ORDERINGS + COVERAGE_ORDERINGS
         ),
         summary="results/{dataset}/orderings/summary.parquet",
     output:

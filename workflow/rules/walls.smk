@@ -75,9 +75,10 @@ def scan_walls_shards(wildcards):
 
 
 def walls_inputs(wildcards):
-    """Inputs of `walls`: the shards (scan_walls_shards) and the orderings."""
-    orderings = [f"results/{wildcards.dataset}/orderings/{o}.parquet" for o in config["walls"]["orderings"]]
-    return {**scan_walls_shards(wildcards), "orderings": orderings}
+    """Inputs of `walls`: the extractor's per-scan walls (scan_walls) and the orderings."""
+    ds, e = wildcards.dataset, wildcards.extractor
+    orderings = [f"results/{ds}/orderings/{o}.parquet" for o in config["walls"]["orderings"]]
+    return {"walls": f"results/{ds}/walls/{e}/per_scan.parquet", "orderings": orderings}
 
 
 # Sharding (issue 8): the walls of a scan depend only on the scan and (seed, scan_id), so
@@ -116,13 +117,32 @@ def walls_run_params(wildcards):
 # the other's shards are still being extracted (hallways3d: ransac's shards end
 # seconds before cluster_ransac's). The concatenation was a job of its own (rule
 # scan_walls): a job costs ~0.6 s to start, on the critical path of the run.
+# The walls stage merges its own shards: the per-scan walls of every kept scan, which
+# the wall_coverage ordering (select_coverage) reads before the k tables are cut.
+rule scan_walls:
+    priority: PRIORITY["scan_walls"]
+    input:
+        unpack(scan_walls_shards),
+    output:
+        walls="results/{dataset}/walls/{extractor}/per_scan.parquet",
+        status="results/{dataset}/walls/{extractor}/scan_status.parquet",
+    wildcard_constraints:
+        extractor=WALLS_CONSTRAINTS["extractor"],
+    params:
+        shard_scans=walls_shard_scans,
+    log:
+        "results/{dataset}/logs/scan_walls_{extractor}.log",
+    benchmark:
+        "results/{dataset}/benchmarks/scan_walls_{extractor}.tsv"
+    script:
+        "../../scripts/scan_walls_merge.py"
+
+
 rule walls:
     priority: PRIORITY["walls"]
     input:
         unpack(walls_inputs),
     output:
-        walls="results/{dataset}/walls/{extractor}/per_scan.parquet",
-        status="results/{dataset}/walls/{extractor}/scan_status.parquet",
         tables=expand(
             "results/{{dataset}}/walls/{ordering}/{{extractor}}/k{k}.parquet",
             ordering=config["walls"]["orderings"], k=walls_k_names(),
@@ -131,7 +151,6 @@ rule walls:
         extractor=WALLS_CONSTRAINTS["extractor"],
     params:
         run=walls_run_params,
-        shard_scans=walls_shard_scans,
     log:
         "results/{dataset}/logs/walls_{extractor}.log",
     benchmark:
@@ -140,9 +159,6 @@ rule walls:
         "../../scripts/walls.py"
 
 
-# One job per extractor: every ordering and k of it, in the four formats (a job costs
-# ~1 s of start-up and imports; 2 jobs on 2 cores, and each extractor's score_runs
-# starts as soon as its job ends).
 rule floorplan:
     priority: PRIORITY["floorplan"]
     input:
