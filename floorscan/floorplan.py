@@ -593,6 +593,40 @@ def _axis_between(f: np.ndarray, g: np.ndarray) -> tuple[np.ndarray, np.ndarray]
 # --------------------------------------------------------------------------------------
 
 
+def segment_arrays(segments: pd.DataFrame) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """The segments as :func:`build_floorplan` merges them: in scan order (a stable
+    sort by ``scan_id``, when there is one), those with a non-finite coordinate dropped
+    (with a warning).
+
+    Returns
+    -------
+    seg : (M, 4) float64 ndarray
+        ``x0, y0, x1, y1``, metres.
+    weights : (M,) float64 ndarray or None
+        ``n_inliers``, when the table has it.
+    scan_ids : (M,) int64 ndarray or None
+        ``scan_id``, when the table has it.
+
+    Raises
+    ------
+    KeyError
+        When a coordinate column is missing.
+    """
+    missing = [c for c in ("x0", "y0", "x1", "y1") if c not in segments.columns]
+    if missing:
+        raise KeyError(f"wall segments lack columns {missing}; expected x0, y0, x1, y1")
+    segments = _in_scan_order(segments)
+    seg = segments[["x0", "y0", "x1", "y1"]].to_numpy(dtype=np.float64)
+    finite = np.isfinite(seg).all(axis=1)
+    if not finite.all():
+        log.warning("dropping %d wall segments with non-finite coordinates", int((~finite).sum()))
+
+    def column(name, dtype):
+        return segments[name].to_numpy(dtype=dtype)[finite] if name in segments.columns else None
+
+    return seg[finite], column("n_inliers", np.float64), column("scan_id", np.int64)
+
+
 def plan_faces(
     seg: np.ndarray, weights: np.ndarray | None = None, params: FloorplanParams = FloorplanParams()
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -650,16 +684,7 @@ def build_floorplan(segments: pd.DataFrame, params: FloorplanParams = FloorplanP
     KeyError
         When a coordinate column is missing.
     """
-    missing = [c for c in ("x0", "y0", "x1", "y1") if c not in segments.columns]
-    if missing:
-        raise KeyError(f"wall segments lack columns {missing}; expected x0, y0, x1, y1")
-    segments = _in_scan_order(segments)
-    seg = segments[["x0", "y0", "x1", "y1"]].to_numpy(dtype=np.float64)
-    finite = np.isfinite(seg).all(axis=1)
-    if not finite.all():
-        log.warning("dropping %d wall segments with non-finite coordinates", int((~finite).sum()))
-    seg = seg[finite]
-    w = segments["n_inliers"].to_numpy(dtype=np.float64)[finite] if "n_inliers" in segments.columns else None
+    seg, w, _ = segment_arrays(segments)
     faces, face_w, n_seg = plan_faces(seg, w, params)
     flen = np.hypot(faces[:, 2] - faces[:, 0], faces[:, 3] - faces[:, 1])
     axes, thick, wall_of_face = pair_faces(faces, face_w, params)

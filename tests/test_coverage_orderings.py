@@ -5,10 +5,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from floorscan.core.greedy import plain_greedy
+from floorscan.core.greedy import lazy_greedy, plain_greedy
 from floorscan.select.coverage import (
     CoverageParams,
-    coverage_ordering,
     coverage_orderings,
     segment_quality,
     surface_cells,
@@ -21,6 +20,11 @@ C = (0.0, 5.0, 4.0, 5.0)  # 4 m
 D = (10.0, 10.0, 12.0, 10.0)  # seen by one scan only
 
 
+def _order(sets, scan_ids):
+    cover, quality, value = sets
+    return lazy_greedy(cover, scan_ids, quality, value)
+
+
 def _per_scan(rows, n_inliers=40, rmse=0.005):
     return pd.DataFrame(
         [(s, *w, n_inliers, rmse) for s, w in rows], columns=["scan_id", "x0", "y0", "x1", "y1", "n_inliers", "rmse_m"]
@@ -31,7 +35,7 @@ def test_wall_coverage_takes_the_scan_that_adds_most_confirmed_wall():
     # scan 1: A and B; 3: B and C; 2: A; 4: C and D (D nobody else sees: worth 0)
     per_scan = _per_scan([(1, A), (1, B), (2, A), (3, B), (3, C), (4, C), (4, D)])
     cover, quality, value = wall_cells(per_scan, CoverageParams())
-    order = coverage_ordering(cover, quality, value, [1, 2, 3, 4, 5])
+    order = lazy_greedy(cover, [1, 2, 3, 4, 5], quality, value)
     assert order["scan_id"].tolist() == [1, 3, 2, 4, 5]  # 2, 4 add nothing; 5 has no walls
     # gains in cells of 10 cm: A 60 + B 30 (+ the shared corner cell), then C 40 (+1)
     assert order["gain"].tolist()[:2] == pytest.approx([91, 41], abs=2)
@@ -43,8 +47,8 @@ def test_wall_coverage_takes_the_scan_that_adds_most_confirmed_wall():
 def test_wall_quality_prefers_the_better_fit_of_the_same_wall():
     good, poor = _per_scan([(1, A), (2, C), (4, A)]), _per_scan([(3, A), (5, C)], n_inliers=16, rmse=0.025)
     per_scan = pd.concat([good, poor], ignore_index=True)
-    plain = coverage_ordering(*wall_cells(per_scan, CoverageParams()), [1, 2, 3, 4, 5])
-    weighted = coverage_ordering(*wall_cells(per_scan, CoverageParams(wall_quality=True)), [1, 2, 3, 4, 5])
+    plain = _order(wall_cells(per_scan, CoverageParams()), [1, 2, 3, 4, 5])
+    weighted = _order(wall_cells(per_scan, CoverageParams(wall_quality=True)), [1, 2, 3, 4, 5])
     assert plain["scan_id"].tolist()[:2] == [1, 2]  # A is longer; ties to the smaller id
     assert weighted["scan_id"].tolist()[:2] == [1, 2]
     assert weighted["gain"].iloc[0] < plain["gain"].iloc[0]  # a quality below 1
@@ -60,7 +64,7 @@ def test_surface_coverage_counts_density_and_confirmed_cells():
     cover, quality, value = surface_cells(scans, CoverageParams())
     assert quality[2].tolist() == [1.0] * 20 and quality[1].tolist() == pytest.approx([0.4] * 20)
     assert value.sum() == 20 and len(value) == 30
-    order = coverage_ordering(cover, quality, value, [1, 2, 3])
+    order = lazy_greedy(cover, [1, 2, 3], quality, value)
     # 2 and 3 fill the line's 20 cells fully (3's far cells count 0): 2 first by id, then nothing
     assert order["scan_id"].tolist() == [2, 1, 3]
     assert order["gain"].tolist() == pytest.approx([20, 0, 0])
@@ -76,7 +80,7 @@ def test_coverage_orderings_are_the_plain_greedy(seed):
     for params in (CoverageParams(), CoverageParams(wall_quality=True)):
         cover, quality, value = wall_cells(per_scan, params)
         ids = list(range(40))
-        lazy = coverage_ordering(cover, quality, value, ids)
+        lazy = lazy_greedy(cover, ids, quality, value)
         pd.testing.assert_frame_equal(lazy, plain_greedy(cover, ids, quality, value))
 
 
@@ -92,5 +96,5 @@ def test_coverage_orderings_rank_every_kept_scan_and_skip_the_others():
 def test_bad_coverage_settings_name_the_key():
     with pytest.raises(ValueError, match="select.coverage.cell_m"):
         wall_cells(_per_scan([(1, A)]), CoverageParams(cell_m=0))
-    with pytest.raises(ValueError, match="unknown select.coverage keys"):
+    with pytest.raises(ValueError, match="unknown select.coverage config keys"):
         CoverageParams.from_config({"cell": 0.1})

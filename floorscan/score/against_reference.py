@@ -120,7 +120,8 @@ def plan_against_reference(
         return out
     d_plan, _ = ref.tree.query(samples, k=1, distance_upper_bound=max(taus_m) * 10)
     # an unbalanced tree: built for one query, faster to build, the same distances
-    d_ref, _ = cKDTree(samples, balanced_tree=False, compact_nodes=False).query(structure, k=1, distance_upper_bound=within_bound(max(taus_m), sample_m))
+    samples_tree = cKDTree(samples, balanced_tree=False, compact_nodes=False)
+    d_ref, _ = samples_tree.query(structure, k=1, distance_upper_bound=within_bound(max(taus_m), sample_m))
     for tau in taus_m:
         key = _cm(tau)
         correctness = float(weights[d_plan <= tau].sum() / total)

@@ -27,10 +27,11 @@ from typing import Callable
 
 import numpy as np
 import pandas as pd
+from scipy.spatial import cKDTree
 
+from floorscan.core.geometry import sample_segments, samples_per_segment
 from floorscan.core.greedy import lazy_greedy
 from floorscan.register.consistency import FEW_SCANS
-from floorscan.core.geometry import sample_segments, samples_per_segment
 from floorscan.score.against_reference import Structure, plan_against_reference, within_bound
 
 #: Ordering name of the completeness-maximising bound.
@@ -100,8 +101,6 @@ def scan_cover(
     cover = {int(s): np.empty(0, dtype=np.int64) for s in scan_ids}
     if len(per_scan) == 0:
         return cover
-    from scipy.spatial import cKDTree
-
     seg = per_scan[["x0", "y0", "x1", "y1"]].to_numpy(np.float64)
     samples = sample_segments(seg, sample_m)
     scan_of_sample = np.repeat(per_scan["scan_id"].to_numpy(np.int64), samples_per_segment(seg, sample_m))
@@ -363,19 +362,13 @@ def score_curves(
     oracle : pandas.DataFrame
         The oracle ordering (:func:`oracle_ordering`).
     """
-    from floorscan.floorplan import params_from_config, plan_faces
+    from floorscan.floorplan import params_from_config, plan_faces, segment_arrays
     from floorscan.score.reference import read_grid
 
     structure = Structure(read_grid(reference_path))
     fp_params = params_from_config(floorplan_cfg or {})
-    # The segments in scan order (build_floorplan's stable sort), finite ones only (it
-    # drops the others): the plan of a set of scans is plan_faces of its rows.
-    ordered = per_scan.iloc[np.argsort(per_scan["scan_id"].to_numpy(), kind="stable")]
-    seg = ordered[["x0", "y0", "x1", "y1"]].to_numpy(np.float64)
-    finite = np.isfinite(seg).all(axis=1)
-    seg = seg[finite]
-    weights = ordered["n_inliers"].to_numpy(np.float64)[finite] if "n_inliers" in ordered.columns else None
-    seg_scan = ordered["scan_id"].to_numpy(np.int64)[finite]
+    # as build_floorplan takes them: the plan of a set of scans is plan_faces of its rows
+    seg, weights, seg_scan = segment_arrays(per_scan)
     cache: dict[tuple, dict] = {}
 
     def score_scans(scan_ids) -> dict:

@@ -37,12 +37,13 @@ Usage::
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Iterable
 
 import numpy as np
 import pandas as pd
 
+from floorscan.config import dataclass_from_mapping
 from floorscan.core.geometry import sample_segments, samples_per_segment
 from floorscan.core.greedy import lazy_greedy
 
@@ -80,11 +81,7 @@ class CoverageParams:
     @classmethod
     def from_config(cls, cfg) -> "CoverageParams":
         """From the ``select.coverage`` section; an unknown key raises ValueError."""
-        names = {f.name for f in fields(cls)}
-        unknown = sorted(set(cfg or {}) - names)
-        if unknown:
-            raise ValueError(f"unknown select.coverage keys {unknown}; expected {sorted(names)}")
-        return cls(**dict(cfg or {}))
+        return dataclass_from_mapping(cls, cfg, "select.coverage", ValueError)
 
     def check(self) -> None:
         """Raise ValueError naming the key of a value out of range."""
@@ -98,13 +95,13 @@ class CoverageParams:
             raise ValueError(f"select.coverage.full_spacing_m: expected > 0, got {self.full_spacing_m}")
 
 
-def _cell_sets(scan: np.ndarray, xy: np.ndarray, quality: np.ndarray, cell_m: float, min_scans: int):
-    """Per scan its distinct cells (indices 0 ..) with the best quality among its
-    points there, and the value of each cell (1 when >= ``min_scans`` scans cover it)."""
-    if len(xy) == 0:
+def _cell_sets(scan: np.ndarray, ij: np.ndarray, quality: np.ndarray, min_scans: int):
+    """Per scan its distinct cells (indices 0 .., from the (N, 2) integer cell
+    coordinates ``ij``) with the best quality among its entries there, and the value of
+    each cell (1 when >= ``min_scans`` scans cover it)."""
+    if len(ij) == 0:
         return {}, {}, np.zeros(0)
-    ij = np.floor(xy / cell_m).astype(np.int64)
-    ij -= ij.min(axis=0)
+    ij = ij - ij.min(axis=0)
     key = ij[:, 0] * (int(ij[:, 1].max()) + 1) + ij[:, 1]
     cell_key, cell = np.unique(key, return_inverse=True)
     # one row per (scan, cell): the best quality first, then the first of them kept
@@ -172,8 +169,8 @@ def wall_cells(per_scan: pd.DataFrame, params: CoverageParams, min_inliers: int 
         q = np.ones(len(rows))
     n = samples_per_segment(seg, 0.5 * params.cell_m)
     xy = sample_segments(seg, 0.5 * params.cell_m)
-    return _cell_sets(np.repeat(rows["scan_id"].to_numpy(np.int64), n), xy, np.repeat(q, n), params.cell_m,
-                      params.min_scans)
+    ij = np.floor(xy / params.cell_m).astype(np.int64)
+    return _cell_sets(np.repeat(rows["scan_id"].to_numpy(np.int64), n), ij, np.repeat(q, n), params.min_scans)
 
 
 def surface_cells(scans: Iterable[tuple[int, np.ndarray]], params: CoverageParams):
@@ -192,29 +189,21 @@ def surface_cells(scans: Iterable[tuple[int, np.ndarray]], params: CoverageParam
     """
     params.check()
     full = params.cell_m / params.full_spacing_m
-    ids, counts = [], []
-    xy_all = []
+    ids, cells, counts = [], [], []
     for sid, xy in scans:
         xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
         xy = xy[np.isfinite(xy).all(axis=1)]
         if len(xy) == 0:
             continue
-        # the scan's points per cell: one representative point per cell and its count
-        ij = np.floor(xy / params.cell_m).astype(np.int64)
-        uniq, count = np.unique(ij, axis=0, return_counts=True)
-        ids.append(np.full(len(uniq), int(sid), dtype=np.int64))
-        xy_all.append((uniq + 0.5) * params.cell_m)
+        # the scan's cells and its returns in each
+        ij, count = np.unique(np.floor(xy / params.cell_m).astype(np.int64), axis=0, return_counts=True)
+        ids.append(np.full(len(ij), int(sid), dtype=np.int64))
+        cells.append(ij)
         counts.append(count)
     if not ids:
         return {}, {}, np.zeros(0)
     quality = np.clip(np.concatenate(counts) / full, params.min_quality, 1.0)
-    return _cell_sets(np.concatenate(ids), np.concatenate(xy_all), quality, params.cell_m, params.min_scans)
-
-
-def coverage_ordering(cover, quality, value, scan_ids) -> pd.DataFrame:
-    """``rank, scan_id, gain, covered`` of the lazy greedy on these sets (every scan of
-    ``scan_ids``; :func:`floorscan.core.greedy.lazy_greedy`)."""
-    return lazy_greedy(cover, [int(s) for s in scan_ids], quality, value)
+    return _cell_sets(np.concatenate(ids), np.concatenate(cells), quality, params.min_scans)
 
 
 def coverage_orderings(
@@ -254,7 +243,7 @@ def coverage_orderings(
         ("surface_coverage", surface_cells(((s, xy) for s, xy in scans if int(s) in keep), params)),
     ):
         cover, quality, value = sets
-        out[name] = coverage_ordering(cover, quality, value, ids)
+        out[name] = lazy_greedy(cover, ids, quality, value)
         if log is not None:
             adds = out[name][out[name]["gain"] > 0]
             covered = out[name]["covered"].to_numpy()

@@ -266,7 +266,7 @@ rule score:
         cfg=score_check,
         reference_kind=score_reference_kind,
         reference_label=score_reference_label,
-        default_ordering=lambda wc: stage_config("select")(wc)["default_ordering"],
+        default_ordering=select_default_ordering,
     log:
         log_path("score"),
     benchmark:

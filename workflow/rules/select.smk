@@ -21,11 +21,6 @@ def select_coverage_inputs(wildcards):
         raise ValueError(
             f"select.coverage.wall_extractor {extractor!r} is not one of walls.extractors {list(extractors)}"
         )
-    default = stage_config("select")(wildcards)["default_ordering"]
-    if default not in config["walls"]["orderings"]:
-        raise ValueError(
-            f"select.default_ordering {default!r} is not one of walls.orderings {list(config['walls']['orderings'])}"
-        )
     return {
         "walls": f"results/{ds}/walls/{extractor}/per_scan.parquet",
         "registered": f"results/{ds}/registered.parquet",
@@ -107,6 +102,15 @@ rule select:
 
 # The orderings by what the scans add to the walls (floorscan.select.coverage): after the
 # walls stage's per-scan segments, before the k tables of every ordering are cut.
+def select_default_ordering(wildcards):
+    """select.default_ordering, which must be one of walls.orderings (its plans are made)."""
+    default = stage_config("select")(wildcards)["default_ordering"]
+    orderings = list(stage_config("walls")(wildcards)["orderings"])
+    if default not in orderings:
+        raise ValueError(f"select.default_ordering {default!r} is not one of walls.orderings {orderings}")
+    return default
+
+
 rule select_coverage:
     priority: PRIORITY["select_coverage"]
     input:
