@@ -5,25 +5,62 @@ appears as many overlapping segments (thesis section 5.1 names this duplicate
 problem). :func:`merge_segments` merges the segments that describe one wall face;
 :func:`pair_faces` pairs the two faces of a wall (parallel, 5 to 40 cm apart,
 overlapping) into one wall with its thickness; :func:`build_floorplan` does both.
-The plan is written as GeoJSON (people, GIS, the scorer), SVG (a browser), DXF (CAD,
-ezdxf: R12 by default, R2010 on request, see :func:`write_dxf`) and IFC (BIM,
-IfcOpenShell: an ``IfcWall`` per wall in an ``IfcBuildingStorey``), the thesis's
-purpose (Chapter 1). Every file is written
-atomically (:func:`floorscan.io.atomic_path`).
 
-Coordinates are metres in the map frame of the recording (a local frame, no CRS).
+Exports (the thesis's purpose, Chapter 1: a plan people and their tools open). Every
+file is written atomically (:func:`floorscan.io.atomic_path`), carries what it is a
+plan of (:class:`PlanMetadata`: dataset, ordering, extractor, k, number of walls, a
+time stamp) and is byte-identical when written again from the same input. The frame
+is the map frame of the recording: a local engineering frame, x and y in metres, z up,
+no geodetic datum; wall properties (thickness, length, height) are metres everywhere.
+
+- GeoJSON (:func:`write_geojson`; people, GIS, the scorer): a ``FeatureCollection``
+  of wall axes, wall footprints and merged faces (:func:`floorplan_geojson`).
+  Polygons follow RFC 7946 section 3.1.6: counter-clockwise outer rings, clockwise
+  holes. A collection-level foreign member ``floorscan`` holds the frame, units,
+  plan metadata and georeference. Without a georeference the coordinates are map
+  metres, which RFC 7946 allows only "by prior arrangement": GDAL (and so QGIS)
+  reads a file without a ``crs`` member as WGS84 longitude/latitude, but still reads
+  the GeoJSON 2008 ``crs`` member (type ``name``, its ``properties.name`` through
+  ``OGRSpatialReference::SetFromUserInput``, which takes WKT; ogrgeojsonreader.cpp).
+  So the file carries that member with :data:`LOCAL_FRAME_WKT`, a WKT1 ``LOCAL_CS``
+  in metres: GIS tools see a local engineering frame and do not place the plan on
+  a world map at (0 deg, 0 deg) as if its metres were degrees. With
+  ``floorplan.georeference`` (:class:`Georeference`) the coordinates are WGS84
+  longitude, latitude (:func:`map_to_lonlat`), an RFC 7946 file without ``crs``;
+  the scorer (:mod:`floorscan.metrics`) reads coordinates as map metres, so such a
+  plan is scored after :func:`lonlat_to_map`.
+- SVG (:func:`write_svg`; a browser): a plain SVG (no scripts) that scales to any
+  window (``viewBox``, width and height 100 %), with a title, the wall polygons (walls
+  of which one face was seen drawn lighter and dashed), axes, a scale bar of a round
+  length in metres, a legend and the map frame's x (right) and y (up) axes; the map's
+  y is up, SVG's down: the drawing is flipped. With a georeference, a north arrow.
+- DXF (:func:`write_dxf`; CAD, ezdxf): layers :data:`DXF_LAYERS` in the layer table,
+  map coordinates in metres. R2010 (default): ``$INSUNITS`` 6 (metres) and
+  ``$MEASUREMENT`` 1 (metric). R12 (``floorplan.dxf_version: R12``, for old tools)
+  has no units header (``$INSUNITS`` came with R2000): a CAD tool takes its numbers
+  as unitless. ezdxf's audit finds no error in either.
+- IFC4 (:func:`write_ifc`; BIM, IfcOpenShell's API): IfcProject > IfcSite >
+  IfcBuilding > IfcBuildingStorey, an ``IfcWall`` per wall placed relative to its
+  storey, units metres, a STEP header naming the dataset and floorscan's version,
+  a time stamp from the plan's ``timestamp``, else ``SOURCE_DATE_EPOCH``, else 0
+  (:func:`export_time`: never the clock), GlobalIds from the plan's name.
 """
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import hashlib
+import io
 import json
 import logging
+import math
 import os
-import shutil
 import uuid
-from dataclasses import dataclass
-from typing import Any, Mapping
+from dataclasses import dataclass, replace
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any, Callable, Mapping
 
 import numpy as np
 import pandas as pd
@@ -37,8 +74,8 @@ WALL_COLUMNS = [
     "wall_id", "x0", "y0", "x1", "y1", "length_m", "thickness_m", "height_m",
     "paired", "n_faces", "n_segments", "n_inliers",
 ]  # fmt: skip
-#: DXF versions :func:`write_dxf` writes.
-DXF_VERSIONS = ("R12", "R2010")
+#: DXF versions :func:`write_dxf` writes (R2010 the default: R12 has no units header).
+DXF_VERSIONS = ("R2010", "R12")
 #: Layers of the DXF export and their colours (AutoCAD Color Index: red, white, green).
 DXF_LAYERS = {"WALL_AXIS": 1, "WALL_OUTLINE": 7, "WALL_FACE": 3}
 #: Columns of :attr:`FloorPlan.faces`.
@@ -73,7 +110,13 @@ class FloorplanParams:
     min_length_m : float
         Merged faces shorter than this are dropped, metres.
     dxf_version : str
-        DXF export: ``"R12"`` or ``"R2010"`` (see :func:`write_dxf`).
+        DXF export: ``"R2010"`` (units header: metres) or ``"R12"`` (no units
+        header; see :func:`write_dxf`).
+    georeference : Georeference or None
+        Where the map frame lies on the earth (a mapping ``lat``, ``lon``,
+        ``heading_deg`` is converted); with one the GeoJSON coordinates are WGS84
+        longitude and latitude, the SVG gets a north arrow and the IFC site its
+        reference latitude, longitude and true north. None: map metres.
     """
 
     merge_angle_deg: float = 3.0
@@ -87,9 +130,12 @@ class FloorplanParams:
     default_thickness_m: float = 0.10
     wall_height_m: float = 2.5
     min_length_m: float = 0.3
-    dxf_version: str = "R12"
+    dxf_version: str = "R2010"
+    georeference: Georeference | None = None
 
     def __post_init__(self):
+        if self.georeference is not None:  # a config mapping -> Georeference (checked)
+            object.__setattr__(self, "georeference", as_georeference(self.georeference))
         if self.dxf_version not in DXF_VERSIONS:
             raise ValueError(f"floorplan.dxf_version must be one of {list(DXF_VERSIONS)}, got {self.dxf_version!r}")
         if not self.pair_min_m < self.pair_max_m:
@@ -98,8 +144,14 @@ class FloorplanParams:
             )
 
 
+#: Keys of the ``floorplan`` config section that the workflow reads, not the plan:
+#: the recommended plan's extractor and the formats of the evaluation grid's plans.
+WORKFLOW_KEYS = ("extractor", "evaluation_formats")
+
+
 def params_from_config(cfg: Mapping[str, Any] | None) -> FloorplanParams:
-    """:class:`FloorplanParams` of the ``floorplan`` config section.
+    """:class:`FloorplanParams` of the ``floorplan`` config section (without
+    :data:`WORKFLOW_KEYS`).
 
     Raises
     ------
@@ -108,7 +160,8 @@ def params_from_config(cfg: Mapping[str, Any] | None) -> FloorplanParams:
     """
     from floorscan.config import dataclass_from_mapping
 
-    return dataclass_from_mapping(FloorplanParams, cfg, "floorplan")
+    plan_cfg = {k: v for k, v in (cfg or {}).items() if k not in WORKFLOW_KEYS}
+    return dataclass_from_mapping(FloorplanParams, plan_cfg, "floorplan")
 
 
 @dataclass
@@ -724,12 +777,274 @@ def build_floorplan(segments: pd.DataFrame, params: FloorplanParams = FloorplanP
 # --------------------------------------------------------------------------------------
 
 
-def _exterior_rings(polys) -> list:
+#: WGS84 ellipsoid (NIMA TR8350.2): semi-major axis, metres, and flattening.
+WGS84_A = 6378137.0
+WGS84_F = 1.0 / 298.257223563
+#: The GeoJSON 2008 ``crs`` name of a plan in map metres (WKT1 ``LOCAL_CS``): GDAL reads
+#: it as a local engineering CRS in metres (without a ``crs`` member: WGS84 degrees).
+#: EAST and NORTH are WKT1's names of a local frame's x (right) and y (up) axes.
+LOCAL_FRAME_WKT = (
+    'LOCAL_CS["floorscan map frame",LOCAL_DATUM["map frame of the recording",32767],'
+    'UNIT["metre",1],AXIS["x",EAST],AXIS["y",NORTH]]'
+)
+#: Decimals of GeoJSON coordinates: map metres (10 um) and WGS84 degrees (1e-10
+#: degree: 11 um of latitude, the same resolution).
+GEOJSON_DECIMALS = {"map": 5, "WGS84": 10}
+
+
+@dataclass(frozen=True)
+class Georeference:
+    """Where the map frame lies on the earth (config ``floorplan.georeference``).
+
+    The map frame is taken as the plane tangent to the WGS84 ellipsoid at its origin
+    (a local east-north-up frame turned by the heading): a map point ``(x, y)`` lies
+    ``east = x sin(h) - y cos(h)``, ``north = x cos(h) + y sin(h)`` metres from the
+    origin (``h`` the heading). See :func:`map_to_lonlat`.
+
+    Attributes
+    ----------
+    lat : float
+        WGS84 latitude of the map frame's origin, degrees, in (-90, 90) (at a pole
+        east is undefined).
+    lon : float
+        WGS84 longitude of the origin, degrees, in [-180, 180].
+    heading_deg : float
+        Direction of the map frame's +x axis, degrees clockwise from true north (a
+        compass bearing: 0 = +x points north and +y west, 90 = +x east and +y north).
+
+    Raises
+    ------
+    ValueError
+        For a value that is not a finite number or out of its range.
+    """
+
+    lat: float
+    lon: float
+    heading_deg: float = 0.0
+
+    def __post_init__(self):
+        for name in ("lat", "lon", "heading_deg"):
+            value = getattr(self, name)
+            number = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+            if not number or not math.isfinite(value):
+                raise ValueError(f"floorplan.georeference.{name} must be a finite number, got {value!r}")
+            object.__setattr__(self, name, float(value))
+        if not -90.0 < self.lat < 90.0:
+            raise ValueError(f"floorplan.georeference.lat must be in (-90, 90) degrees, got {self.lat}")
+        if not -180.0 <= self.lon <= 180.0:
+            raise ValueError(f"floorplan.georeference.lon must be in [-180, 180] degrees, got {self.lon}")
+
+    def radii(self) -> tuple[float, float]:
+        """WGS84 radii of curvature at :attr:`lat`, metres: meridian ``M = a (1 - e^2)
+        / (1 - e^2 sin^2 lat)^1.5`` and prime vertical ``N = a / (1 - e^2 sin^2 lat)^0.5``."""
+        e2 = WGS84_F * (2.0 - WGS84_F)
+        w2 = 1.0 - e2 * math.sin(math.radians(self.lat)) ** 2
+        return WGS84_A * (1.0 - e2) / w2**1.5, WGS84_A / math.sqrt(w2)
+
+    def as_dict(self) -> dict:
+        """``lat``, ``lon``, ``heading_deg`` and the conventions, for metadata."""
+        return {
+            "lat": self.lat, "lon": self.lon, "heading_deg": self.heading_deg,
+            "heading": "direction of the map frame's +x axis, degrees clockwise from true north",
+            "model": "local tangent plane at (lat, lon): WGS84 meridian and prime-vertical radii of curvature",
+        }  # fmt: skip
+
+
+def as_georeference(value: Georeference | Mapping[str, Any] | None) -> Georeference | None:
+    """:class:`Georeference` of a config mapping (``lat``, ``lon``, optional
+    ``heading_deg``), or the value itself when a Georeference or None.
+
+    Raises
+    ------
+    KeyError
+        For an unknown or missing key.
+    ValueError
+        For a value out of range (see :class:`Georeference`).
+    """
+    if value is None or isinstance(value, Georeference):
+        return value
+    from floorscan.config import dataclass_from_mapping
+
+    missing = sorted({"lat", "lon"} - set(value))
+    if missing:
+        raise KeyError(f"floorplan.georeference lacks {missing}; expected lat, lon and optionally heading_deg")
+    return dataclass_from_mapping(Georeference, value, "floorplan.georeference")
+
+
+def map_to_lonlat(x, y, georeference: Georeference) -> tuple[np.ndarray, np.ndarray]:
+    """WGS84 longitude and latitude of map points, on the local tangent plane.
+
+    ``lat = lat0 + north / M``, ``lon = lon0 + east / (N cos lat0)`` (radians; ``M``,
+    ``N`` the radii of curvature at ``lat0``, :meth:`Georeference.radii`; east and
+    north as in :class:`Georeference`): the first-order (tangent plane) map
+    projection. The neglected curvature moves a point by about ``d^2 / R tan(lat0)``
+    (``d`` its distance from the origin): under a millimetre within 100 m, about
+    10 cm at 1 km at mid latitudes; a building is well inside. Longitudes are not
+    wrapped at the antimeridian.
+
+    Parameters
+    ----------
+    x, y : (N,) float array_like
+        Map coordinates, metres.
+    georeference : Georeference
+
+    Returns
+    -------
+    lon, lat : (N,) float64 ndarray
+        Degrees.
+    """
+    x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+    h = math.radians(georeference.heading_deg)
+    east = x * math.sin(h) - y * math.cos(h)
+    north = x * math.cos(h) + y * math.sin(h)
+    m, n = georeference.radii()
+    lat = georeference.lat + np.degrees(north / m)
+    lon = georeference.lon + np.degrees(east / (n * math.cos(math.radians(georeference.lat))))
+    return lon, lat
+
+
+def lonlat_to_map(lon, lat, georeference: Georeference) -> tuple[np.ndarray, np.ndarray]:
+    """Map coordinates (metres) of WGS84 longitudes and latitudes (degrees): the
+    inverse of :func:`map_to_lonlat`, e.g. to score a georeferenced GeoJSON plan in
+    the map frame. Shapes as there."""
+    lon, lat = np.asarray(lon, dtype=np.float64), np.asarray(lat, dtype=np.float64)
+    m, n = georeference.radii()
+    north = np.radians(lat - georeference.lat) * m
+    east = np.radians(lon - georeference.lon) * (n * math.cos(math.radians(georeference.lat)))
+    h = math.radians(georeference.heading_deg)
+    return east * math.sin(h) + north * math.cos(h), -east * math.cos(h) + north * math.sin(h)
+
+
+def export_time(timestamp: float | None = None) -> int:
+    """Seconds since the epoch (UTC) the exports of a plan are stamped with.
+
+    ``timestamp`` (rounded down: e.g. the recording's first scan stamp) when given,
+    else the environment variable ``SOURCE_DATE_EPOCH`` (reproducible-builds.org),
+    else 0. Never the clock: the same input gives the same files.
+
+    Raises
+    ------
+    ValueError
+        For a ``timestamp`` that is not finite, or a ``SOURCE_DATE_EPOCH`` that is
+        not an integer.
+    """
+    if timestamp is not None:
+        t = float(timestamp)
+        if not math.isfinite(t):
+            raise ValueError(f"export timestamp must be finite seconds since the epoch, got {timestamp!r}")
+        return math.floor(t)
+    env = os.environ.get("SOURCE_DATE_EPOCH", "").strip()
+    if not env:
+        return 0
+    try:
+        return int(env)
+    except ValueError:
+        raise ValueError(f"SOURCE_DATE_EPOCH must be an integer number of seconds, got {env!r}") from None
+
+
+def _iso_time(stamp: int) -> str:
+    """ISO 8601 UTC time of ``stamp`` seconds since the epoch, e.g. ``1970-01-01T00:00:00+00:00``."""
+    return datetime.fromtimestamp(stamp, tz=timezone.utc).isoformat()
+
+
+@functools.lru_cache(maxsize=None)
+def floorscan_version() -> str:
+    """The installed floorscan's version (``"unknown"`` when not installed)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("floorscan")
+    except PackageNotFoundError:  # pragma: no cover
+        return "unknown"
+
+
+@dataclass(frozen=True)
+class PlanMetadata:
+    """What a floor plan is of: written into every one of its exports.
+
+    Attributes
+    ----------
+    dataset, ordering, extractor : str
+        The recording, the scan ordering and the wall extractor of the plan.
+    k : str
+        The number of scans, as in the file names (``"5"``, ``"all"``); an int is
+        converted.
+    timestamp : float or None
+        Seconds since the epoch (UTC) to stamp the exports with, e.g. the
+        recording's first scan stamp; None: :func:`export_time`'s fallbacks.
+    name : str
+        The plan's title (SVG title, IFC project name, from which the IFC GlobalIds
+        derive); empty: "``dataset ordering extractor k<k>``" of the fields given.
+    """
+
+    dataset: str = ""
+    ordering: str = ""
+    extractor: str = ""
+    k: str = ""
+    timestamp: float | None = None
+    name: str = ""
+
+    def __post_init__(self):
+        for f in ("dataset", "ordering", "extractor", "k", "name"):
+            value = getattr(self, f)
+            object.__setattr__(self, f, "" if value is None else str(value))
+
+    @property
+    def title(self) -> str:
+        """:attr:`name`, else the fields given joined (``"intel random ransac k5"``),
+        else ``"floorscan"``."""
+        if self.name:
+            return self.name
+        parts = [self.dataset, self.ordering, self.extractor, f"k{self.k}" if self.k else ""]
+        return " ".join(p for p in parts if p) or "floorscan"
+
+    def stamp(self) -> int:
+        """:func:`export_time` of :attr:`timestamp`."""
+        return export_time(self.timestamp)
+
+
+def _metadata(plan: FloorPlan, meta: PlanMetadata, georeference: Georeference | None = None) -> dict:
+    """The plan's metadata as the GeoJSON member ``floorscan`` holds it (the DXF's
+    metadata are its entries as text)."""
+    paired = int(plan.walls["paired"].sum()) if len(plan.walls) else 0
+    out = {
+        "frame": "map" if georeference is None else "WGS84",
+        "units": "metres" if georeference is None else "degrees",
+        "crs": "local engineering frame of the recording" if georeference is None else (
+            "WGS84 longitude, latitude: the map frame on the local tangent plane of the georeference"),
+        "dataset": meta.dataset, "ordering": meta.ordering, "extractor": meta.extractor, "k": meta.k,
+        "n_walls": len(plan.walls), "n_walls_both_faces": paired, "n_faces": len(plan.faces),
+        "lengths": "metres (thickness_m, height_m, length_m)",
+        "time_stamp": _iso_time(meta.stamp()),
+        "generator": f"floorscan {floorscan_version()}",
+        "georeference": None if georeference is None else georeference.as_dict(),
+    }  # fmt: skip
+    return out
+
+
+# --------------------------------------------------------------------------------------
+# Footprints
+# --------------------------------------------------------------------------------------
+
+
+def _ccw_footprints(plan: FloorPlan):
+    """The plan's wall polygons (:meth:`FloorPlan.footprints`) oriented as RFC 7946
+    wants them (``shapely.orient_polygons``): counter-clockwise exterior rings,
+    clockwise holes (a buffer's exterior is clockwise). Every export draws these."""
+    import shapely
+
+    polys = plan.footprints()
+    return shapely.orient_polygons(polys, exterior_cw=False) if len(polys) else polys
+
+
+def _exterior_rings(polys, transform: Callable[[np.ndarray], np.ndarray] | None = None) -> list:
     """Exterior ring of each footprint as a list of ``[x, y]`` (closed: the first
     point repeated last), or None for a missing or empty footprint.
 
     The coordinates of all the rings come from one ``shapely.get_coordinates`` call
-    (the same doubles as ``poly.exterior.coords``), not a coordinate sequence per wall.
+    (the same doubles as ``poly.exterior.coords``), not a coordinate sequence per wall;
+    ``transform`` ((P, 2) -> (P, 2) array, e.g. to longitude and latitude) is applied
+    to all of them at once.
     """
     import shapely
 
@@ -740,6 +1055,8 @@ def _exterior_rings(polys) -> list:
     if not len(ok):
         return out
     coords, index = shapely.get_coordinates(shapely.get_exterior_ring(polys[ok]), return_index=True)
+    if transform is not None:
+        coords = transform(coords)
     bounds = np.r_[0, np.cumsum(np.bincount(index, minlength=len(ok)))].tolist()
     pts = coords.tolist()
     for n, k in enumerate(ok.tolist()):
@@ -747,21 +1064,58 @@ def _exterior_rings(polys) -> list:
     return out
 
 
-def floorplan_geojson(plan: FloorPlan) -> dict:
-    """GeoJSON FeatureCollection (metres, map frame) of a floor plan.
+def _lonlat_transform(georeference: Georeference) -> Callable[[np.ndarray], np.ndarray]:
+    """(P, 2) map metres -> (P, 2) longitude, latitude degrees (:func:`map_to_lonlat`)."""
+
+    def transform(xy: np.ndarray) -> np.ndarray:
+        xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+        return np.column_stack(map_to_lonlat(xy[:, 0], xy[:, 1], georeference))
+
+    return transform
+
+
+# --------------------------------------------------------------------------------------
+# GeoJSON
+# --------------------------------------------------------------------------------------
+
+
+def floorplan_geojson(
+    plan: FloorPlan, metadata: PlanMetadata | None = None, georeference: Georeference | Mapping | None = None
+) -> dict:
+    """GeoJSON FeatureCollection of a floor plan.
 
     Features, with property ``kind`` as in the ground truth ``walls.geojson``:
     ``axis`` (LineString centre line; ``wall_id``, ``thickness_m``, ``height_m``,
-    ``length_m``, ``paired``, ``n_segments``), ``footprint`` (Polygon of the wall;
-    ``wall_id``, ``thickness_m``), ``face`` (LineString merged face; ``face_id``,
-    ``wall_id``, ``n_segments``, ``n_inliers``). Coordinates are rounded to 5
-    decimals (10 um), thickness and length to 4.
+    ``length_m``, ``paired``, ``n_segments``), ``footprint`` (Polygon of the wall,
+    counter-clockwise; ``wall_id``, ``thickness_m``), ``face`` (LineString merged
+    face; ``face_id``, ``wall_id``, ``n_segments``, ``n_inliers``). Thickness and
+    length are rounded to 4 decimals (metres), coordinates to
+    :data:`GEOJSON_DECIMALS`.
+
+    Collection members: ``crs`` (only in the map frame: :data:`LOCAL_FRAME_WKT`, see
+    the module docstring) and ``floorscan``: ``frame`` (``"map"``, or ``"WGS84"``
+    with a georeference), ``units`` (of the coordinates: ``"metres"`` or
+    ``"degrees"``), ``crs`` (in words), ``dataset``, ``ordering``, ``extractor``,
+    ``k``, ``n_walls``, ``n_walls_both_faces``, ``n_faces``, ``lengths``,
+    ``time_stamp`` (ISO 8601, :func:`export_time`), ``generator``, ``georeference``
+    (None or :meth:`Georeference.as_dict`).
+
+    Parameters
+    ----------
+    plan : FloorPlan
+    metadata : PlanMetadata, optional
+    georeference : Georeference or mapping, optional
+        With one, coordinates are WGS84 longitude, latitude (:func:`map_to_lonlat`).
     """
-    return _floorplan_geojson(plan, plan.footprints())
+    return _floorplan_geojson(plan, _ccw_footprints(plan), None, metadata, as_georeference(georeference))
 
 
-def _floorplan_geojson(plan: FloorPlan, polys, rings: list | None = None) -> dict:
-    """:func:`floorplan_geojson` given the plan's footprints (:meth:`FloorPlan.footprints`).
+def _floorplan_geojson(
+    plan: FloorPlan, polys, rings: list | None = None, metadata: PlanMetadata | None = None,
+    georeference: Georeference | None = None,
+) -> dict:  # fmt: skip
+    """:func:`floorplan_geojson` given the plan's oriented footprints
+    (:func:`_ccw_footprints`) and, in the map frame, their rings.
 
     A footprint's coordinates are its exterior ring's (:func:`_exterior_rings`),
     rounded: what ``shapely.to_geojson`` writes (shortest round-trip digits) read
@@ -771,113 +1125,216 @@ def _floorplan_geojson(plan: FloorPlan, polys, rings: list | None = None) -> dic
     """
     import shapely
 
-    floats = ("x0", "y0", "x1", "y1", "thickness_m", "height_m", "length_m")
+    meta = metadata or PlanMetadata()
+    transform = None if georeference is None else _lonlat_transform(georeference)
+    nd = GEOJSON_DECIMALS["map" if georeference is None else "WGS84"]
+    if rings is None or transform is not None:
+        rings = _exterior_rings(polys, transform)
 
     def col(df, c):  # floats as float64 (not DataFrame.astype: 3 ms a call)
         return df[c].to_numpy(dtype=np.float64).tolist() if c in floats else df[c].tolist()
 
-    def line(x0, y0, x1, y1):
-        return {"type": "LineString", "coordinates": [[round(x0, 5), round(y0, 5)], [round(x1, 5), round(y1, 5)]]}
+    def ends(df) -> list:  # x0, y0, x1, y1 of each row, transformed
+        xy = df[["x0", "y0", "x1", "y1"]].to_numpy(dtype=np.float64).reshape(-1, 4)
+        if transform is not None and len(xy):
+            xy = np.column_stack([transform(xy[:, :2]), transform(xy[:, 2:])])
+        return xy.tolist()
 
+    def line(e):
+        coords = [[round(e[0], nd), round(e[1], nd)], [round(e[2], nd), round(e[3], nd)]]
+        return {"type": "LineString", "coordinates": coords}
+
+    floats = ("thickness_m", "height_m", "length_m")
     feats = []
     w = plan.walls
-    if rings is None:
-        rings = _exterior_rings(polys)
     plain = (
         (shapely.get_type_id(polys) == 3) & (shapely.get_num_interior_rings(polys) == 0)
         if len(polys) else np.zeros(0, bool)
     ).tolist()  # fmt: skip
-    for wall_id, x0, y0, x1, y1, thick, height, length, paired, n_seg, poly, ring, simple in zip(
-        col(w, "wall_id"), col(w, "x0"), col(w, "y0"), col(w, "x1"), col(w, "y1"), col(w, "thickness_m"),
-        col(w, "height_m"), col(w, "length_m"), col(w, "paired"), col(w, "n_segments"), polys, rings, plain,
+    for wall_id, e, thick, height, length, paired, n_seg, poly, ring, simple in zip(
+        col(w, "wall_id"), ends(w), col(w, "thickness_m"), col(w, "height_m"), col(w, "length_m"),
+        col(w, "paired"), col(w, "n_segments"), polys, rings, plain,
     ):  # fmt: skip
         thick = round(thick, 4)
         props = {
             "wall_id": int(wall_id), "thickness_m": thick, "height_m": height, "length_m": round(length, 4),
             "paired": bool(paired), "n_segments": int(n_seg),
         }  # fmt: skip
-        feats.append(_feature("axis", line(x0, y0, x1, y1), props))
+        feats.append(_feature("axis", line(e), props))
         if ring is not None:
             if simple:
-                geom = {"type": "Polygon", "coordinates": [[[round(x, 5), round(y, 5)] for x, y in ring]]}
+                geom = {"type": "Polygon", "coordinates": [[[round(x, nd), round(y, nd)] for x, y in ring]]}
             else:
-                geom = _round_coords(json.loads(shapely.to_geojson(poly)))
+                shape = poly if transform is None else shapely.transform(poly, transform)
+                geom = _round_coords(json.loads(shapely.to_geojson(shape)), nd)
             feats.append(_feature("footprint", geom, {"wall_id": int(wall_id), "thickness_m": thick}))
     f = plan.faces
-    for face_id, wall_id, x0, y0, x1, y1, n_seg, n_inl in zip(
-        col(f, "face_id"), col(f, "wall_id"), col(f, "x0"), col(f, "y0"), col(f, "x1"), col(f, "y1"),
-        col(f, "n_segments"), col(f, "n_inliers"),
-    ):  # fmt: skip
+    for face_id, wall_id, e, n_seg, n_inl in zip(
+        col(f, "face_id"), col(f, "wall_id"), ends(f), col(f, "n_segments"), col(f, "n_inliers")
+    ):
         props = {"face_id": int(face_id), "wall_id": int(wall_id), "n_segments": int(n_seg), "n_inliers": int(n_inl)}
-        feats.append(_feature("face", line(x0, y0, x1, y1), props))
-    return {"type": "FeatureCollection", "features": feats}
+        feats.append(_feature("face", line(e), props))
+    doc: dict = {"type": "FeatureCollection"}
+    if georeference is None:
+        doc["crs"] = {"type": "name", "properties": {"name": LOCAL_FRAME_WKT}}
+    doc["floorscan"] = _metadata(plan, meta, georeference)
+    doc["features"] = feats
+    return doc
 
 
 def _feature(kind: str, geometry: dict, props: dict) -> dict:
     return {"type": "Feature", "geometry": geometry, "properties": {"kind": kind, **props}}
 
 
-def _round_coords(geom: dict) -> dict:
+def _round_coords(geom: dict, decimals: int = 5) -> dict:
     def r(c):
-        return [r(x) for x in c] if isinstance(c, (list, tuple)) else round(float(c), 5)
+        return [r(x) for x in c] if isinstance(c, (list, tuple)) else round(float(c), decimals)
 
     return {**geom, "coordinates": r(geom["coordinates"])}
 
 
-def write_geojson(plan: FloorPlan, path: str | os.PathLike) -> None:
-    """Write :func:`floorplan_geojson` atomically, one feature per line.
+def write_geojson(
+    plan: FloorPlan, path: str | os.PathLike, metadata: PlanMetadata | None = None,
+    georeference: Georeference | Mapping | None = None,
+) -> None:  # fmt: skip
+    """Write :func:`floorplan_geojson` atomically: the collection's members on the
+    first line, then one feature per line.
 
     The layout (a feature per line, ``json.dumps`` defaults within it) lets the C
     encoder of :mod:`json` write it: ``indent`` makes ``json`` use its pure-Python
     encoder, which took 70 % of this function's time on large plans.
     """
-    _write_geojson(plan, path, plan.footprints())
+    _write_geojson(plan, path, _ccw_footprints(plan), None, metadata, as_georeference(georeference))
 
 
-def _write_geojson(plan: FloorPlan, path: str | os.PathLike, polys, rings: list | None = None) -> None:
-    doc = _floorplan_geojson(plan, polys, rings)
+def _write_geojson(
+    plan: FloorPlan, path: str | os.PathLike, polys, rings: list | None = None,
+    metadata: PlanMetadata | None = None, georeference: Georeference | None = None,
+) -> None:  # fmt: skip
+    doc = _floorplan_geojson(plan, polys, rings, metadata, georeference)
+    head = json.dumps({k: v for k, v in doc.items() if k != "features"})[:-1]
     feats = ",\n".join(map(json.dumps, doc["features"]))
-    text = f'{{"type": "FeatureCollection", "features": [\n{feats}\n]}}\n' if feats else json.dumps(doc) + "\n"
+    text = f'{head}, "features": [\n{feats}\n]}}\n' if feats else f'{head}, "features": []}}\n'
     with atomic_path(path) as tmp:
-        tmp.write_text(text)
+        tmp.write_text(text, encoding="utf-8")
 
 
-def write_svg(plan: FloorPlan, path: str | os.PathLike, px_per_m: float = 40.0, title: str = "") -> None:
-    """Write the floor plan as SVG: wall polygons (grey) and axes (red), 1 unit = 1 m.
+# --------------------------------------------------------------------------------------
+# SVG
+# --------------------------------------------------------------------------------------
 
-    The y axis points up as in the map frame (a flip transform); the drawing is
-    ``px_per_m`` pixels per metre.
+#: SVG layout, pixels of the viewBox (the SVG scales to the window): the plan's longer
+#: side, the least canvas width (title, scale bar and legend fit), margins and bands.
+SVG_PLAN_PX, SVG_MIN_WIDTH_PX, SVG_MARGIN_PX, SVG_HEAD_PX, SVG_FOOT_PX = 1000.0, 720.0, 20.0, 56.0, 84.0
+
+
+def _scale_bar_length(max_m: float) -> float:
+    """The longest of 1, 2 and 5 x 10^n metres not above ``max_m`` (> 0), metres."""
+    e = math.floor(math.log10(max_m))
+    for m in (5, 2, 1):
+        length = float(f"{m}e{e}")
+        if length <= max_m * (1 + 1e-12):
+            return length
+    return float(f"1e{e - 1}")  # pragma: no cover (rounding of log10)
+
+
+def write_svg(
+    plan: FloorPlan, path: str | os.PathLike, metadata: PlanMetadata | None = None,
+    georeference: Georeference | Mapping | None = None,
+) -> None:  # fmt: skip
+    """Write the floor plan as a plain SVG that fits any browser window.
+
+    The viewBox is in pixels: the plan's longer side :data:`SVG_PLAN_PX`, a title
+    band above (the plan's title and the number of walls), a band below with a
+    scale bar (a round length in metres, :func:`_scale_bar_length`), the map frame's
+    x (right) and y (up) axes (with a georeference also north) and a legend (wall;
+    wall of which one face was seen, whose thickness is assumed: lighter, dashed;
+    wall axis). ``width`` and ``height`` are 100 %: a browser scales the drawing to
+    its window, aspect kept. The plan is drawn in map metres inside a group whose
+    transform ``matrix(s 0 0 -s tx ty)`` flips y (the map's y is up, SVG's down);
+    ``s`` is pixels per metre. Each axis line has a tooltip (length x thickness).
     """
-    _write_svg(plan, path, plan.footprints(), px_per_m, title)
+    _write_svg(plan, path, _ccw_footprints(plan), None, metadata, as_georeference(georeference))
 
 
 def _write_svg(
-    plan: FloorPlan, path: str | os.PathLike, polys, px_per_m: float = 40.0, title: str = "", rings: list | None = None
-) -> None:
-    if len(plan.walls):
-        xs = plan.walls[["x0", "x1"]].to_numpy()
-        ys = plan.walls[["y0", "y1"]].to_numpy()
-        pad = 0.5 + float(plan.walls["thickness_m"].max())
-        xmin, xmax, ymin, ymax = xs.min() - pad, xs.max() + pad, ys.min() - pad, ys.max() + pad
+    plan: FloorPlan, path: str | os.PathLike, polys, rings: list | None = None,
+    metadata: PlanMetadata | None = None, georeference: Georeference | None = None,
+) -> None:  # fmt: skip
+    text = _svg_text(plan, polys, _exterior_rings(polys) if rings is None else rings, metadata, georeference)
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+
+
+def _svg_text(
+    plan: FloorPlan, polys, rings: list, metadata: PlanMetadata | None, georeference: Georeference | None
+) -> str:
+    """The SVG document of :func:`write_svg`, given the oriented footprints and their rings."""
+    import shapely
+
+    meta = metadata or PlanMetadata()
+    walls = plan.walls
+    n = len(walls)
+    if n:
+        xy = walls[["x0", "y0", "x1", "y1"]].to_numpy(dtype=np.float64)
+        b = shapely.total_bounds(polys) if len(polys) else np.full(4, np.nan)
+        pad = 0.5
+        xmin = float(np.nanmin(np.r_[xy[:, [0, 2]].ravel(), b[0]])) - pad
+        ymin = float(np.nanmin(np.r_[xy[:, [1, 3]].ravel(), b[1]])) - pad
+        xmax = float(np.nanmax(np.r_[xy[:, [0, 2]].ravel(), b[2]])) + pad
+        ymax = float(np.nanmax(np.r_[xy[:, [1, 3]].ravel(), b[3]])) + pad
     else:
-        xmin, xmax, ymin, ymax = 0.0, 1.0, 0.0, 1.0
-    w, h = xmax - xmin, ymax - ymin
+        xmin, ymin, xmax, ymax = 0.0, 0.0, 1.0, 1.0
+    s = SVG_PLAN_PX / max(xmax - xmin, ymax - ymin)  # pixels per metre
+    pw, ph = (xmax - xmin) * s, (ymax - ymin) * s
+    m = SVG_MARGIN_PX
+    width = max(pw + 2 * m, SVG_MIN_WIDTH_PX)
+    height = SVG_HEAD_PX + ph + SVG_FOOT_PX
+    tx, ty = (width - pw) / 2 - s * xmin, SVG_HEAD_PX + s * ymax
+    paired = walls["paired"].to_numpy(dtype=bool) if n else np.zeros(0, bool)
+    n_paired = int(paired.sum())
+    title = meta.title
+    stamp = _iso_time(meta.stamp())
+    sub = (
+        f"{n} walls ({n_paired} with both faces seen, {n - n_paired} with one)"
+        f" \u00b7 map frame of the recording, metres \u00b7 {stamp}"
+    )
+    desc = (
+        f"floorscan {floorscan_version()} floor plan. dataset: {meta.dataset or '-'}; ordering: "
+        f"{meta.ordering or '-'}; extractor: {meta.extractor or '-'}; k: {meta.k or '-'}; walls: {n}. "
+        "Coordinates: map frame of the recording (x right, y up), metres."
+    )
+    if georeference is not None:
+        desc += (
+            f" Georeference: origin lat {georeference.lat}, lon {georeference.lon} (WGS84), "
+            f"+x axis at {georeference.heading_deg} degrees clockwise from north."
+        )
+    px = 1.0 / s  # one pixel, metres
     out = [
         '<?xml version="1.0" encoding="UTF-8"?>',
-        f'<svg xmlns="http://www.w3.org/2000/svg" width="{w * px_per_m:.0f}" height="{h * px_per_m:.0f}" '
-        f'viewBox="{xmin:.3f} {-ymax:.3f} {w:.3f} {h:.3f}">',
-        f"<title>{_xml(title or 'floor plan')}</title>",
-        '<g transform="scale(1,-1)">',
-        '<g id="walls" fill="#9a9a9a" stroke="#333" stroke-width="0.01">',
+        f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="100%" height="100%" '
+        f'viewBox="0 0 {width:.2f} {height:.2f}" preserveAspectRatio="xMidYMid meet" '
+        'font-family="sans-serif">',
+        f"<title>{_xml(title)}</title>",
+        f"<desc>{_xml(desc)}</desc>",
+        f'<rect id="background" width="{width:.2f}" height="{height:.2f}" fill="#ffffff"/>',
+        f'<text id="title" x="{m:.2f}" y="26" font-size="18" font-weight="bold">{_xml(title)}</text>',
+        f'<text id="subtitle" x="{m:.2f}" y="45" font-size="12" fill="#444444">{_xml(sub)}</text>',
+        f'<g id="plan" transform="matrix({s:.10g} 0 0 {-s:.10g} {tx:.6f} {ty:.6f})">',
     ]
-    for ring in _exterior_rings(polys) if rings is None else rings:
-        if ring is None:
-            continue
-        pts = " ".join(f"{x:.4f},{y:.4f}" for x, y in ring[:-1])
-        out.append(f'<polygon points="{pts}"/>')
-    out.append("</g>")
-    out.append('<g id="axes" stroke="#c00" stroke-width="0.02" fill="none">')
-    walls = plan.walls
+    groups = (
+        ("walls", paired, f'fill="#8c8c8c" stroke="#333333" stroke-width="{0.6 * px:.6g}"'),
+        ("walls-one-face", ~paired, f'fill="#dddddd" stroke="#333333" stroke-width="{0.6 * px:.6g}" '
+         f'stroke-dasharray="{3 * px:.6g} {2 * px:.6g}"'),
+    )  # fmt: skip
+    for gid, which, style in groups:
+        out.append(f'<g id="{gid}" {style}>')
+        for ring, keep in zip(rings, which.tolist()):
+            if ring is not None and keep:
+                pts = " ".join(f"{x:.4f},{y:.4f}" for x, y in ring[:-1])
+                out.append(f'<polygon points="{pts}"/>')
+        out.append("</g>")
+    out.append(f'<g id="axes" stroke="#cc0000" stroke-width="{1.0 * px:.6g}" fill="none">')
     for wall_id, x0, y0, x1, y1, length, thickness in zip(
         *(walls[c].tolist() for c in ("wall_id", "x0", "y0", "x1", "y1", "length_m", "thickness_m"))
     ):
@@ -885,100 +1342,239 @@ def _write_svg(
             f'<line x1="{x0:.4f}" y1="{y0:.4f}" x2="{x1:.4f}" y2="{y1:.4f}">'
             f"<title>wall {wall_id}: {length:.2f} m x {thickness:.2f} m</title></line>"
         )
-    out += ["</g>", "</g>", "</svg>"]
-    with atomic_path(path) as tmp:
-        tmp.write_text("\n".join(out) + "\n")
+    out += ["</g>", "</g>"]
+    out += _svg_scale_bar(s, m, height - 30)
+    out += _svg_frame_axes(m + 250, height - 30, georeference)
+    out += _svg_legend(width - m - 270, height - 74)
+    out.append("</svg>")
+    return "\n".join(out) + "\n"
+
+
+def _svg_scale_bar(s: float, x: float, y: float) -> list[str]:
+    """A scale bar of a round length (at most 200 px) at ``(x, y)`` px, ``s`` px a metre."""
+    length = _scale_bar_length(200.0 / s)
+    bar = length * s
+    return [
+        f'<g id="scale-bar" transform="translate({x:.2f} {y:.2f})" stroke="#000000" stroke-width="2">',
+        f'<line x1="0" y1="0" x2="{bar:.4f}" y2="0"/>',
+        '<line x1="0" y1="-5" x2="0" y2="5"/>',
+        f'<line x1="{bar:.4f}" y1="-5" x2="{bar:.4f}" y2="5"/>',
+        f'<text x="{bar / 2:.4f}" y="-8" font-size="12" text-anchor="middle" stroke="none">{length:g} m</text>',
+        "</g>",
+    ]
+
+
+def _svg_arrow(dx: float, dy: float, label: str, colour: str) -> list[str]:
+    """An arrow from the origin to ``(dx, dy)`` px with ``label`` beyond its head."""
+    norm = math.hypot(dx, dy)
+    ux, uy = dx / norm, dy / norm
+    bx, by = dx - 7 * ux, dy - 7 * uy  # base of the head
+    head = f"{dx:.2f},{dy:.2f} {bx - 4 * uy:.2f},{by + 4 * ux:.2f} {bx + 4 * uy:.2f},{by - 4 * ux:.2f}"
+    lx, ly = dx + 9 * ux, dy + 9 * uy + 4
+    return [
+        f'<line x1="0" y1="0" x2="{bx:.2f}" y2="{by:.2f}" stroke="{colour}" stroke-width="2"/>',
+        f'<polygon points="{head}" fill="{colour}"/>',
+        f'<text x="{lx:.2f}" y="{ly:.2f}" font-size="12" text-anchor="middle" fill="{colour}">{label}</text>',
+    ]
+
+
+def _svg_frame_axes(x: float, y: float, georeference: Georeference | None) -> list[str]:
+    """The map frame's x (right) and y (up) axes at ``(x, y)`` px, and with a
+    georeference the direction of true north in the map frame (``(cos h, sin h)``,
+    ``h`` the heading; flipped to SVG's y down)."""
+    out = [f'<g id="frame-axes" transform="translate({x:.2f} {y:.2f})">']
+    out += _svg_arrow(32.0, 0.0, "x", "#000000")
+    out += _svg_arrow(0.0, -32.0, "y", "#000000")
+    if georeference is not None:
+        h = math.radians(georeference.heading_deg)
+        out.append('<g id="north" transform="translate(96 -16)">')
+        out += _svg_arrow(26.0 * math.cos(h), -26.0 * math.sin(h), "N", "#1f4e9c")
+        out.append("</g>")
+    out.append('<text x="0" y="22" font-size="11" fill="#444444">map frame (m)</text>')
+    out.append("</g>")
+    return out
+
+
+def _svg_legend(x: float, y: float) -> list[str]:
+    """The legend at ``(x, y)`` px: the three kinds of things the plan draws."""
+    return [
+        f'<g id="legend" transform="translate({x:.2f} {y:.2f})" font-size="12">',
+        '<rect x="0" y="0" width="22" height="10" fill="#8c8c8c" stroke="#333333" stroke-width="0.6"/>',
+        '<text x="30" y="10">wall (both faces seen)</text>',
+        '<rect x="0" y="20" width="22" height="10" fill="#dddddd" stroke="#333333" stroke-width="0.6" '
+        'stroke-dasharray="3 2"/>',
+        '<text x="30" y="30">wall, one face seen (thickness assumed)</text>',
+        '<line x1="0" y1="45" x2="22" y2="45" stroke="#cc0000" stroke-width="1"/>',
+        '<text x="30" y="50">wall axis</text>',
+        "</g>",
+    ]
 
 
 def _xml(s: str) -> str:
-    return s.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    return s.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace('"', "&quot;")
 
 
-def write_dxf(plan: FloorPlan, path: str | os.PathLike, version: str = "R12") -> None:
-    """Write the floor plan as DXF (ezdxf), coordinates in metres (map frame).
+# --------------------------------------------------------------------------------------
+# DXF
+# --------------------------------------------------------------------------------------
 
-    Layers (:data:`DXF_LAYERS`): ``WALL_AXIS`` (a LINE per wall centre line),
-    ``WALL_OUTLINE`` (a closed polyline per wall polygon), ``WALL_FACE`` (a LINE per
-    merged face).
 
-    ``"R12"`` (default): ezdxf's stream writer (``ezdxf.addons.r12writer``) with its
-    fixed tables; the outline is a closed POLYLINE, each entity carries its layer's
-    colour, and a comment (group 999) says the unit. R12 has no units header
-    (``$INSUNITS`` came with R2000), so CAD tools treat the drawing as unitless. The
-    version every CAD tool reads, and 7-10x cheaper to write than R2010 (ezdxf 1.4,
-    702 walls and 1150 faces: 0.03 against 0.20-0.33 s; the 46 distinct plans of one
-    hallways3d extractor 0.4-0.55 against 2.9-3.7 CPU-s, a third of the floor-plan
-    stage's CPU before; issue 8).
-    ``"R2010"``: a full ezdxf document with a layer table and ``$INSUNITS`` = metres;
-    the outline is an LWPOLYLINE.
+@contextlib.contextmanager
+def _reproducible_ezdxf():
+    """ezdxf with ``options.write_fixed_meta_data_for_testing`` on (restored after):
+    its documented switch for "the same meta data", i.e. fixed ``$TDCREATE`` /
+    ``$TDUPDATE`` (2000-01-01), GUIDs and ezdxf marker instead of the clock's and
+    random ones, so the same plan gives the same bytes. The plan's own time stamp
+    is in the drawing's metadata."""
+    import ezdxf
+
+    logging.getLogger("ezdxf").setLevel(logging.WARNING)  # its INFO lines would flood the stage log
+    old = ezdxf.options.write_fixed_meta_data_for_testing
+    ezdxf.options.write_fixed_meta_data_for_testing = True
+    try:
+        yield ezdxf
+    finally:
+        ezdxf.options.write_fixed_meta_data_for_testing = old
+
+
+def write_dxf(
+    plan: FloorPlan, path: str | os.PathLike, version: str = "R2010", metadata: PlanMetadata | None = None,
+    georeference: Georeference | Mapping | None = None,
+) -> None:  # fmt: skip
+    """Write the floor plan as DXF (ezdxf), coordinates in metres in the map frame.
+
+    Layers (:data:`DXF_LAYERS`, each in the layer table with its colour; entities
+    are coloured BYLAYER): ``WALL_AXIS`` (a LINE per wall centre line),
+    ``WALL_OUTLINE`` (a closed polyline per wall polygon, counter-clockwise),
+    ``WALL_FACE`` (a LINE per merged face). The active viewport and ``$EXTMIN`` /
+    ``$EXTMAX`` frame the plan, so a CAD tool opens on it.
+
+    ``"R2010"`` (default): ``$INSUNITS`` = 6 (metres), ``$MEASUREMENT`` = 1
+    (metric), outlines as LWPOLYLINE; the metadata also as drawing properties
+    (``$CUSTOMPROPERTY``, which AutoCAD shows in DWGPROPS). ``"R12"``: outlines as
+    POLYLINE; R12 has no units header (``$INSUNITS`` came with R2000), so CAD tools
+    take the coordinates as unitless numbers (they are metres). In both, the plan's
+    metadata (:func:`_metadata`: dataset, ordering, extractor, k, walls, frame,
+    units, time stamp, georeference) is ezdxf metadata (``doc.ezdxf_metadata()``).
+    The coordinates stay map metres with a georeference (DXF has no CRS; the
+    metadata says where the frame lies). ``ezdxf.recover`` and ``doc.audit()`` find
+    no error. Creation and update dates are ezdxf's fixed ones
+    (:func:`_reproducible_ezdxf`).
 
     Raises
     ------
     ValueError
         For another ``version``.
     """
-    _write_dxf(plan, path, plan.footprints(), version=version)
+    _write_dxf(plan, path, _ccw_footprints(plan), None, version, metadata, as_georeference(georeference))
 
 
-def _write_dxf(plan: FloorPlan, path: str | os.PathLike, polys, rings: list | None = None, version: str = "R12") -> None:
-    """:func:`write_dxf` given the plan's footprints (:meth:`FloorPlan.footprints`)."""
+def _write_dxf(
+    plan: FloorPlan, path: str | os.PathLike, polys, rings: list | None = None, version: str = "R2010",
+    metadata: PlanMetadata | None = None, georeference: Georeference | None = None,
+) -> None:  # fmt: skip
+    """:func:`write_dxf` given the plan's oriented footprints (:func:`_ccw_footprints`)."""
     if version not in DXF_VERSIONS:
         raise ValueError(f"DXF version must be one of {list(DXF_VERSIONS)}, got {version!r}")
+    import shapely
+
+    meta = metadata or PlanMetadata()
     w, f = plan.walls, plan.faces
     axes = zip(
         w["x0"].tolist(), w["y0"].tolist(), w["x1"].tolist(), w["y1"].tolist(),
         _exterior_rings(polys) if rings is None else rings,
     )  # fmt: skip
     faces = zip(f["x0"].tolist(), f["y0"].tolist(), f["x1"].tolist(), f["y1"].tolist())
-    if version == "R12":
-        from ezdxf.addons.r12writer import R12FastStreamWriter
+    with _reproducible_ezdxf() as ezdxf:
+        from ezdxf import units, zoom
 
-        axis_c, outline_c, face_c = DXF_LAYERS["WALL_AXIS"], DXF_LAYERS["WALL_OUTLINE"], DXF_LAYERS["WALL_FACE"]
-        with atomic_path(path) as tmp, open(tmp, "w", encoding="cp1252", newline="\n") as stream:
-            stream.write("999\nfloorscan floor plan: coordinates in metres (map frame)\n")
-            dxf = R12FastStreamWriter(stream, fixed_tables=True)
-            for x0, y0, x1, y1, ring in axes:
-                dxf.add_line((x0, y0), (x1, y1), layer="WALL_AXIS", color=axis_c)
-                if ring is not None:
-                    dxf.add_polyline_2d(ring[:-1], closed=True, layer="WALL_OUTLINE", color=outline_c)
-            for x0, y0, x1, y1 in faces:
-                dxf.add_line((x0, y0), (x1, y1), layer="WALL_FACE", color=face_c)
-            dxf.close()
-        return
-    import ezdxf
-    from ezdxf import units
-
-    logging.getLogger("ezdxf").setLevel(logging.WARNING)  # its INFO lines would flood the stage log
-    doc = ezdxf.new("R2010")
-    doc.units = units.M
-    for name, color in DXF_LAYERS.items():
-        doc.layers.add(name, color=color)
-    msp = doc.modelspace()
-    for x0, y0, x1, y1, ring in axes:
-        msp.add_line((x0, y0), (x1, y1), dxfattribs={"layer": "WALL_AXIS"})
-        if ring is not None:
-            msp.add_lwpolyline(ring[:-1], close=True, dxfattribs={"layer": "WALL_OUTLINE"})
-    for x0, y0, x1, y1 in faces:
-        msp.add_line((x0, y0), (x1, y1), dxfattribs={"layer": "WALL_FACE"})
+        if version == "R12":
+            ezdxf_log = logging.getLogger("ezdxf")
+            level = ezdxf_log.level
+            ezdxf_log.setLevel(logging.ERROR)  # ezdxf.new warns that R12 cannot carry $INSUNITS
+            try:
+                doc = ezdxf.new("R12")
+            finally:
+                ezdxf_log.setLevel(level)
+        else:
+            doc = ezdxf.new(version, units=units.M)
+            doc.header["$INSUNITS"] = units.M
+            doc.header["$MEASUREMENT"] = 1
+        doc.header["$LUNITS"] = 2  # decimal lengths
+        for name, color in DXF_LAYERS.items():
+            doc.layers.add(name, color=color)
+        msp = doc.modelspace()
+        add_outline = msp.add_polyline2d if version == "R12" else msp.add_lwpolyline
+        for x0, y0, x1, y1, ring in axes:
+            msp.add_line((x0, y0), (x1, y1), dxfattribs={"layer": "WALL_AXIS"})
+            if ring is not None:
+                add_outline(ring[:-1], close=True, dxfattribs={"layer": "WALL_OUTLINE"})
+        for x0, y0, x1, y1 in faces:
+            msp.add_line((x0, y0), (x1, y1), dxfattribs={"layer": "WALL_FACE"})
+        if len(w):
+            xy = w[["x0", "y0", "x1", "y1"]].to_numpy(dtype=np.float64).reshape(-1, 2)
+            b = shapely.total_bounds(polys) if len(polys) else np.full(4, np.nan)
+            lo = np.fmin(xy.min(axis=0), b[:2])
+            hi = np.fmax(xy.max(axis=0), b[2:])
+            msp.dxf.extmin = (float(lo[0]), float(lo[1]), 0.0)
+            msp.dxf.extmax = (float(hi[0]), float(hi[1]), 0.0)
+            zoom.window(msp, (float(lo[0]) - 0.5, float(lo[1]) - 0.5), (float(hi[0]) + 0.5, float(hi[1]) + 0.5))
+        pairs = _dxf_metadata(plan, meta, georeference)
+        ezdxf_meta = doc.ezdxf_metadata()
+        for key, value in pairs:
+            ezdxf_meta[key] = value
+        if version != "R12":
+            for key, value in pairs:
+                doc.header.custom_vars.append(key, value)
+        stream = io.StringIO()
+        doc.write(stream)
+    data = doc.encode(stream.getvalue())
     with atomic_path(path) as tmp:
-        doc.saveas(tmp)
+        tmp.write_bytes(data)
 
 
-def _ifc_model(plan: FloorPlan, name: str):
-    """The IFC model of ``plan`` (see :func:`write_ifc`) for a project named ``name``,
-    its GlobalIds given as each entity is made, as :func:`_name_ifc` sets them."""
+def _dxf_metadata(plan: FloorPlan, meta: PlanMetadata, georeference: Georeference | None) -> list[tuple[str, str]]:
+    """The DXF's metadata: :func:`_metadata` of the map frame (DXF coordinates are map
+    metres), the georeference in words, all as text."""
+    md = _metadata(plan, meta, None)
+    md["georeference"] = "none" if georeference is None else (
+        f"origin lat {georeference.lat}, lon {georeference.lon} (WGS84); map +x axis "
+        f"{georeference.heading_deg} degrees clockwise from true north"
+    )  # fmt: skip
+    return [(f"floorscan_{k}", str(v)) for k, v in md.items()]
+
+
+# --------------------------------------------------------------------------------------
+# IFC
+# --------------------------------------------------------------------------------------
+
+
+def _ifc_model(plan: FloorPlan, metadata: PlanMetadata | None = None, georeference: Georeference | None = None):
+    """The IFC4 model of ``plan`` (see :func:`write_ifc`), named by :func:`_name_ifc`.
+
+    Raises
+    ------
+    ImportError
+        When ifcopenshell is not installed.
+    """
     try:
         import ifcopenshell.api.aggregate
         import ifcopenshell.api.context
+        import ifcopenshell.api.georeference
+        import ifcopenshell.api.geometry
         import ifcopenshell.api.project
+        import ifcopenshell.api.pset
         import ifcopenshell.api.root
+        import ifcopenshell.api.spatial
         import ifcopenshell.api.unit
+        import ifcopenshell.util.geolocation
     except ImportError as e:  # pragma: no cover
         raise ImportError("writing IFC needs ifcopenshell: pip install ifcopenshell") from e
 
+    meta = metadata or PlanMetadata()
     api = ifcopenshell.api
     model = api.project.create_file(version="IFC4")
-    project = api.root.create_entity(model, ifc_class="IfcProject", name=name)
+    project = api.root.create_entity(model, ifc_class="IfcProject", name=meta.title)
     units = [api.unit.add_si_unit(model, unit_type=u) for u in ("LENGTHUNIT", "AREAUNIT", "VOLUMEUNIT")]
     api.unit.assign_unit(model, units=units)
     # assign_unit keeps the units in a set: their order changed from run to run
@@ -996,159 +1592,63 @@ def _ifc_model(plan: FloorPlan, name: str):
     storey = api.root.create_entity(model, ifc_class="IfcBuildingStorey", name="Storey 0")
     for whole, part in ((project, site), (site, building), (building, storey)):
         api.aggregate.assign_object(model, relating_object=whole, products=[part])
+        api.geometry.edit_object_placement(model, product=part)  # identity, relative to its whole's
     storey.Elevation = 0.0
-    # Stable GlobalIds (from the project name and creation order), so a rerun gives
-    # the same ids and BIM tools see the same walls, not new ones: the spatial
-    # structure's in creation order, then 3 a wall, then the container's.
-    roots = sorted(model.by_type("IfcRoot"), key=lambda e: e.id())
-    guids = iter(_ifc_guid_list(name, len(roots) + 3 * len(plan.walls) + 1))
-    guid = guids.__next__
-    for entity in roots:
-        entity.GlobalId = guid()
-    ent = _entity_maker(model)
+    if georeference is not None:
+        dms = ifcopenshell.util.geolocation.dd2dms
+        site.RefLatitude = dms(georeference.lat, use_us=True)
+        site.RefLongitude = dms(georeference.lon, use_us=True)
+        h = math.radians(georeference.heading_deg)
+        api.georeference.edit_true_north(model, true_north=(math.cos(h), math.sin(h)))
 
-    # The walls' entities (those ifcopenshell.api's add_wall_representation,
-    # add_axis_representation, edit_object_placement, add_qto and assign_container
-    # make) come from create_entity (as :func:`_entity_maker` makes them): the API
-    # costs milliseconds per call, which made IFC the slowest export of thousands of
-    # walls. An entity costs ~2 us and each given attribute ~1 us (ifcopenshell
-    # 0.9, 20 entities and 45 attributes a wall, most of this function's time), so
-    # unset (None) attributes are
-    # not passed (keywords instead), and the geometric entities that many walls have
-    # alike are made once: the +Z and +X directions, and per thickness the corner
-    # point of the body profile and its placement (most walls have the default
-    # thickness). Each wall keeps its own profile, representations, placement,
-    # quantities and relations.
-    z_dir = ent("IfcDirection", (0.0, 0.0, 1.0))
-    x_dir = ent("IfcDirection", (1.0, 0.0, 0.0))
-    solid_position: dict[float, Any] = {}  # thickness -> IfcAxis2Placement3D of the profile corner
-    walls = []
     w = plan.walls
-    x0, y0, x1, y1 = (w[c].to_numpy(dtype=np.float64) for c in ("x0", "y0", "x1", "y1"))
-    dxy = np.stack([x1 - x0, y1 - y0], axis=1)
-    for wall_id, p0x, p0y, d, thickness, height in zip(
-        w["wall_id"].tolist(), x0.tolist(), y0.tolist(), dxy,
-        w["thickness_m"].to_numpy(dtype=np.float64).tolist(), w["height_m"].to_numpy(dtype=np.float64).tolist(),
-    ):  # fmt: skip
-        length = float(np.linalg.norm(d))
-        if length <= 0:
-            continue
-        dx, dy = (d / length).tolist()
-        # Body: the rectangle length x thickness, centred on the axis, extruded up.
-        outline = ent(
-            "IfcCartesianPointList2D",
-            ((0.0, 0.0), (0.0, thickness), (length, thickness), (length, 0.0), (0.0, 0.0)),
-        )
-        curve = ent("IfcIndexedPolyCurve", Points=outline, SelfIntersect=False)
-        profile = ent("IfcArbitraryClosedProfileDef", ProfileType="AREA", OuterCurve=curve)
-        position = solid_position.get(thickness)
-        if position is None:
-            corner = ent("IfcCartesianPoint", (0.0, -thickness / 2.0, 0.0))
-            position = solid_position[thickness] = ent("IfcAxis2Placement3D", corner, z_dir, x_dir)
-        solid = ent("IfcExtrudedAreaSolid", profile, position, z_dir, height)
-        body_rep = ent("IfcShapeRepresentation", body, "Body", "SweptSolid", (solid,))
-        axis_pts = ent("IfcCartesianPointList2D", ((0.0, 0.0), (length, 0.0)))
-        axis_curve = ent("IfcIndexedPolyCurve", Points=axis_pts, SelfIntersect=False)
-        axis_rep = ent("IfcShapeRepresentation", axis_ctx, "Axis", "Curve2D", (axis_curve,))
-        start = ent("IfcCartesianPoint", (p0x, p0y, 0.0))
-        along = ent("IfcDirection", (dx, dy, 0.0))
-        placement = ent("IfcLocalPlacement", RelativePlacement=ent("IfcAxis2Placement3D", start, z_dir, along))
-        shape = ent("IfcProductDefinitionShape", Representations=(body_rep, axis_rep))
-        wall = ent(
-            "IfcWall", GlobalId=guid(), Name=f"Wall {wall_id}", ObjectPlacement=placement, Representation=shape
-        )
-        quantities = (
-            ent("IfcQuantityLength", Name="Length", LengthValue=length),
-            ent("IfcQuantityLength", Name="Width", LengthValue=thickness),
-            ent("IfcQuantityLength", Name="Height", LengthValue=height),
-        )
-        qto = ent("IfcElementQuantity", GlobalId=guid(), Name="Qto_WallBaseQuantities", Quantities=quantities)
-        ent("IfcRelDefinesByProperties", GlobalId=guid(), RelatedObjects=(wall,), RelatingPropertyDefinition=qto)
-        walls.append(wall)
+    rows = [
+        r for r in zip(
+            w["wall_id"].tolist(), w["x0"].tolist(), w["y0"].tolist(), w["x1"].tolist(), w["y1"].tolist(),
+            w["thickness_m"].to_numpy(dtype=np.float64).tolist(), w["height_m"].to_numpy(dtype=np.float64).tolist(),
+            w["paired"].tolist(),
+        ) if math.hypot(r[3] - r[1], r[4] - r[2]) > 0
+    ]  # fmt: skip
+    walls = [api.root.create_entity(model, ifc_class="IfcWall", name=f"Wall {r[0]}") for r in rows]
     if walls:
-        ent("IfcRelContainedInSpatialStructure", guid(), None, None, None, walls, storey)
+        api.spatial.assign_container(model, products=walls, relating_structure=storey)
+        # assign_container keeps the walls in a set: their order changed from run to run
+        storey.ContainsElements[0].RelatedElements = tuple(walls)
+    for wall, (wall_id, x0, y0, x1, y1, thickness, height, paired) in zip(walls, rows):
+        length = math.hypot(x1 - x0, y1 - y0)
+        dx, dy = (x1 - x0) / length, (y1 - y0) / length
+        wall.Description = "both faces seen" if paired else "one face seen, thickness assumed"
+        # Placement: at the axis start, x along the axis, relative to the storey's.
+        matrix = np.array([[dx, -dy, 0.0, x0], [dy, dx, 0.0, y0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+        api.geometry.edit_object_placement(model, product=wall, matrix=matrix)
+        # Body: the rectangle length x thickness centred on the axis, extruded up.
+        body_rep = api.geometry.add_wall_representation(
+            model, context=body, length=length, height=height, thickness=thickness, offset=-thickness / 2.0
+        )
+        axis_rep = api.geometry.add_axis_representation(model, context=axis_ctx, axis=[(0.0, 0.0), (length, 0.0)])
+        api.geometry.assign_representation(model, product=wall, representation=body_rep)
+        api.geometry.assign_representation(model, product=wall, representation=axis_rep)
+        qto = api.pset.add_qto(model, product=wall, name="Qto_WallBaseQuantities")
+        api.pset.edit_qto(model, qto=qto, properties={"Length": length, "Width": thickness, "Height": height})
+    _name_ifc(model, plan, meta)
     return model
 
 
-def write_ifc(plan: FloorPlan, path: str | os.PathLike, name: str = "floorscan") -> None:
-    """Write the floor plan as IFC4 (IfcOpenShell), units metres.
-
-    IfcProject > IfcSite > IfcBuilding > IfcBuildingStorey (elevation 0) containing an
-    ``IfcWall`` per wall: a body (SweptSolid, as ``geometry.add_wall_representation``
-    makes it: the rectangle length x thickness centred on the axis, extruded by
-    ``height_m``), an axis representation (Plan/Axis, Curve2D), its placement at the
-    axis start along the axis direction, and the quantities
-    ``Qto_WallBaseQuantities`` Length, Width, Height. The project, units, contexts and
-    spatial structure come from ``ifcopenshell.api``; the walls' entities (those its
-    per-wall calls would make) as ``file.create_entity`` makes them, because those calls,
-    milliseconds each, were the stage's bottleneck (663 walls of hallways3d: 0.6 -
-    0.7 s CPU per file; STEP lines written by hand took 0.19 s, but the library's
-    writer is the one to keep). The units keep a fixed order (``assign_unit`` keeps
-    them in a set, whose order changed from run to run).
-    GlobalIds derive from ``name`` and the creation order (same plan, same ids).
-
-    Raises
-    ------
-    ImportError
-        When ifcopenshell is not installed (``pip install ifcopenshell``).
-    """
-    _save_ifc(_ifc_model(plan, name), path)
-
-
-def _save_ifc(model, path: str | os.PathLike) -> None:
-    """Write ``model`` to ``path`` atomically as IFC-SPF text: ``model.to_string()``
-    (the text ``model.write`` writes) in one write, which took three quarters of
-    ``model.write``'s time (17 against 23 ms for 205 walls, ifcopenshell 0.9)."""
-    text = model.to_string()
-    with atomic_path(path) as tmp:
-        tmp.write_bytes(text.encode("utf-8"))
-
-
-def _entity_maker(model):
-    """``model.create_entity`` (same arguments, same entity), at a third of its cost.
-
-    ``file.create_entity`` sets each given attribute through
-    ``entity_instance.__setitem__``, which makes a Python ``file`` object per call
-    (``entity_instance.file``) to ask it for an open undo transaction: with 20
-    entities and 45 attributes a wall that was half of :func:`_ifc_model`'s time. With
-    no transaction open (none is: this module begins none), the entity is made by
-    ``file.create`` and its attributes set by ``entity_instance.set_attribute_value_py``,
-    the two calls ``create_entity`` and ``__setitem__`` end in; keyword names map to
-    attribute indices once per class. With a transaction open, or an ifcopenshell
-    without those calls, this is ``model.create_entity`` itself.
-    """
-    import ifcopenshell
-
-    create = getattr(model, "create", None)
-    setter = getattr(ifcopenshell.entity_instance, "set_attribute_value_py", None)
-    if create is None or setter is None or getattr(model, "transaction", None) is not None:
-        return model.create_entity
-    index: dict[tuple[str, str], int] = {}
-
-    def ent(cls: str, *args, **kwargs):
-        e = create(cls, -1)
-        for i, v in enumerate(args):
-            setter(e, i, v)
-        for k, v in kwargs.items():
-            i = index.get((cls, k))
-            if i is None:
-                i = e.get_argument_index(k)
-                if i >= len(e):
-                    raise ValueError(f"entity instance of type {cls!r} has no attribute {k!r}")
-                index[(cls, k)] = i
-            setter(e, i, v)
-        return e
-
-    return ent
-
-
-def _name_ifc(model, name: str) -> None:
-    """Name the IFC project ``name`` and derive every GlobalId from it and the
-    creation order: the same plan and name give the same ids, and renaming a model
-    gives the ids a fresh model of that name would have."""
-    model.by_type("IfcProject")[0].Name = name
+def _name_ifc(model, plan: FloorPlan, metadata: PlanMetadata) -> None:
+    """Name the IFC project by the plan's metadata and derive every GlobalId from its
+    title and the creation order (:func:`_ifc_guid_list`): the same plan and title
+    give the same ids (BIM tools see the same walls, not new ones), and renaming a
+    model gives the ids a fresh model of that title would have."""
+    project = model.by_type("IfcProject")[0]
+    project.Name = metadata.title
+    n = len(plan.walls)
+    project.Description = (
+        f"floorscan floor plan: dataset {metadata.dataset or '-'}, ordering {metadata.ordering or '-'}, "
+        f"extractor {metadata.extractor or '-'}, k {metadata.k or '-'}, {n} walls; "
+        "map frame of the recording, metres"
+    )
     roots = sorted(model.by_type("IfcRoot"), key=lambda e: e.id())
-    for entity, guid in zip(roots, _ifc_guid_list(name, len(roots))):
+    for entity, guid in zip(roots, _ifc_guid_list(metadata.title, len(roots))):
         entity.GlobalId = guid
 
 
@@ -1156,7 +1656,7 @@ def _ifc_guid_list(name: str, n: int) -> list[str]:
     """The first ``n`` GlobalIds of the model named ``name``, in creation order:
     ``ifcopenshell.guid.compress(uuid5(ns, str(i)).hex)`` for i = 0 .. n-1, ``ns`` the
     ``uuid5`` of ``floorscan:{name}`` (URL namespace): the same plan and name give the
-    same ids."""
+    same ids (``root.create_entity`` gives random ones)."""
     import ifcopenshell.guid
 
     ns = uuid.uuid5(uuid.NAMESPACE_URL, f"floorscan:{name}")
@@ -1164,20 +1664,125 @@ def _ifc_guid_list(name: str, n: int) -> list[str]:
     return [compress(uuid.uuid5(ns, str(i)).hex) for i in range(n)]
 
 
+def _mvd_text(s: str) -> str:
+    """``s`` in the characters an MVD header value may hold (``[A-Za-z0-9 _.-]``,
+    ifcopenshell.util.mvd_info's grammar), others as ``_``."""
+    return "".join(c if (c.isascii() and c.isalnum()) or c in " _.-" else "_" for c in s)
+
+
+def _save_ifc(model, path: str | os.PathLike, metadata: PlanMetadata) -> None:
+    """Give ``model`` the STEP header of ``path`` and the plan, and write it
+    atomically as IFC-SPF text: ``model.to_string()`` (the text ``model.write``
+    writes) in one write, which took three quarters of ``model.write``'s time.
+
+    Header: ``file_name.name`` the file's name, ``time_stamp`` :func:`export_time`
+    of the plan (ISO 8601, UTC), author and organization ``floorscan``,
+    ``originating_system`` ``floorscan <version>``, ``preprocessor_version``
+    IfcOpenShell's; ``file_description`` the view definition
+    (DesignTransferView) and a comment naming the dataset, ordering, extractor, k.
+    """
+    import ifcopenshell
+
+    meta = metadata
+    header = model.header
+    header.file_name.name = Path(path).name
+    header.file_name.time_stamp = _iso_time(meta.stamp())
+    header.file_name.author = ("floorscan",)
+    header.file_name.organization = ("floorscan",)
+    header.file_name.preprocessor_version = f"IfcOpenShell {ifcopenshell.version}"
+    header.file_name.originating_system = f"floorscan {floorscan_version()}"
+    header.file_name.authorization = ""
+    fields = (("dataset", meta.dataset), ("ordering", meta.ordering), ("extractor", meta.extractor), ("k", meta.k))
+    about = " ".join(f"{k} {_mvd_text(v)}" for k, v in fields if v)
+    header.file_description.description = (
+        "ViewDefinition[DesignTransferView]",
+        f"Comment[floorscan floor plan{' of ' + about if about else ''}]",
+    )
+    text = model.to_string()
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(text.encode("utf-8"))
+
+
+def write_ifc(
+    plan: FloorPlan, path: str | os.PathLike, name: str = "", metadata: PlanMetadata | None = None,
+    georeference: Georeference | Mapping | None = None,
+) -> None:  # fmt: skip
+    """Write the floor plan as IFC4, built with IfcOpenShell's API, units metres.
+
+    IfcProject (named :attr:`PlanMetadata.title`, described by the metadata) >
+    IfcSite > IfcBuilding > IfcBuildingStorey (elevation 0), each placed at its
+    whole's origin (``aggregate.assign_object``, ``geometry.edit_object_placement``),
+    the storey containing (``spatial.assign_container``) an ``IfcWall`` per wall of
+    non-zero length, placed relative to the storey's placement at the axis start
+    with x along the axis (``edit_object_placement``), with a body
+    (``add_wall_representation``: the rectangle length x thickness centred on the
+    axis, extruded by ``height_m``), an axis (``add_axis_representation``,
+    Plan/Axis, Curve2D), the quantities ``Qto_WallBaseQuantities`` Length, Width,
+    Height (``pset.add_qto``, ``edit_qto``) and a description (both faces seen or
+    one). Units (``unit.assign_unit``): metre, square metre, cubic metre. No
+    IfcOwnerHistory (optional in IFC4, and it would carry the clock). With a
+    georeference the site has its reference latitude and longitude and the
+    contexts the true north. The STEP header: :func:`_save_ifc`. GlobalIds:
+    :func:`_name_ifc`. ``ifcopenshell.validate`` finds no issue.
+
+    Parameters
+    ----------
+    plan : FloorPlan
+    path : path
+    name : str
+        The project's name (overrides ``metadata.name``).
+    metadata : PlanMetadata, optional
+    georeference : Georeference or mapping, optional
+
+    Raises
+    ------
+    ImportError
+        When ifcopenshell is not installed (``pip install ifcopenshell``).
+    """
+    meta = metadata or PlanMetadata()
+    if name:
+        meta = replace(meta, name=name)
+    _save_ifc(_ifc_model(plan, meta, as_georeference(georeference)), path, meta)
+
+
+# --------------------------------------------------------------------------------------
+# Writer
+# --------------------------------------------------------------------------------------
+
 FLOORPLAN_FORMATS = ("geojson", "svg", "dxf", "ifc")
+
+
+@dataclass
+class _Built:
+    """A plan :class:`FloorplanWriter` built, and what its exports share: the oriented
+    footprints and their rings (made on first use) and the IFC model."""
+
+    plan: FloorPlan
+    polys: Any = None
+    rings: list | None = None
+    model: Any = None
+
+    def footprints(self) -> tuple[Any, list]:
+        if self.polys is None:
+            self.polys = _ccw_footprints(self.plan)
+            self.rings = _exterior_rings(self.polys)
+        return self.polys, self.rings
 
 
 class FloorplanWriter:
     """Builds and writes floor plans (stage ``floorplan``); a plan of the same segments
-    as one it wrote before is copied, not built and exported again.
+    as one it built before is not built again.
 
     A sweep writes one plan per ordering and k, and every ordering's ``k = all`` (and
     any k past the number of scans) holds the same scans: :func:`build_floorplan`
-    takes segments in scan order, so those plans are the same plan. The copy's GeoJSON
-    and DXF are the first file's bytes (neither names the plan; the DXF keeps the
-    first file's creation time), its SVG title and IFC project name and GlobalIds are
-    its own, as a fresh export would make them. On hallways3d this skips 4 of the 5
-    largest plans per extractor.
+    takes segments in scan order, so those plans are the same plan. The writer keeps
+    each plan it built with its footprints and IFC model; for the same segments it
+    reuses them and writes the exports with the new plan's metadata (each export
+    names its ordering and k): the GeoJSON, SVG and DXF anew (cheap), the IFC model
+    renamed (:func:`_name_ifc`: project name, description, GlobalIds) and saved
+    with its header. Every file equals a fresh export of that plan and metadata.
+    On hallways3d this skips building 4 of the 5 largest plans per extractor and
+    their IFC models, the slowest export.
 
     Parameters
     ----------
@@ -1192,9 +1797,13 @@ class FloorplanWriter:
 
     def __init__(self, cfg: Mapping[str, Any] | None):
         self.params = params_from_config(cfg)
-        self._written: dict[bytes, tuple[FloorPlan, dict[str, str], Any]] = {}
+        self._built: dict[bytes, _Built] = {}
 
-    def write(self, segments: pd.DataFrame, outputs: Mapping[str, str | os.PathLike], name: str = "") -> tuple[FloorPlan, bool]:
+    def write(
+        self, segments: pd.DataFrame, outputs: Mapping[str, str | os.PathLike], name: str = "", *,
+        dataset: str = "", ordering: str = "", extractor: str = "", k: str | int = "",
+        timestamp: float | None = None,
+    ) -> tuple[FloorPlan, bool]:  # fmt: skip
         """Build the floor plan of ``segments`` and write it to ``outputs``.
 
         Parameters
@@ -1204,13 +1813,23 @@ class FloorplanWriter:
         outputs : mapping
             Paths by format: any of :data:`FLOORPLAN_FORMATS`.
         name : str
-            Title of the SVG and name of the IFC project.
+            Title of the plan (SVG title, IFC project name); empty: made of the
+            metadata (:attr:`PlanMetadata.title`).
+        dataset, ordering, extractor : str
+            What the plan is of, written into every export.
+        k : str or int
+            Number of scans label (``"5"``, ``"all"``).
+        timestamp : float, optional
+            Seconds since the epoch to stamp the exports with (e.g. the
+            recording's first scan stamp); None: ``SOURCE_DATE_EPOCH``, else 0
+            (:func:`export_time`).
 
         Returns
         -------
         plan : FloorPlan
-        copied : bool
-            Whether the plan equals one written before (same segments), and so was copied.
+        reused : bool
+            Whether the plan equals one built before (same segments), and so was
+            reused rather than built.
 
         Raises
         ------
@@ -1220,39 +1839,32 @@ class FloorplanWriter:
         unknown = sorted(set(outputs) - set(FLOORPLAN_FORMATS))
         if unknown:
             raise KeyError(f"unknown floor plan formats {unknown}; expected {list(FLOORPLAN_FORMATS)}")
+        meta = PlanMetadata(dataset, ordering, extractor, k, timestamp, name)
+        meta.stamp()  # a bad SOURCE_DATE_EPOCH fails before anything is built
+        geo = self.params.georeference
         segments = _in_scan_order(segments)  # as build_floorplan takes them (sorted once)
         key = _segments_key(segments)
-        done = self._written.get(key)
-        name = name or "floorscan"
-        if done is None:
-            plan = build_floorplan(segments, self.params)
-            model = None
-        else:
-            plan, first, model = done
-        polys = rings = None  # the footprints and their rings, made once for the SVG, GeoJSON and DXF
+        built = self._built.get(key)
+        reused = built is not None
+        if built is None:
+            built = self._built[key] = _Built(build_floorplan(segments, self.params))
+        plan = built.plan
         for fmt, path in outputs.items():
-            copy = fmt in ("geojson", "dxf") and done is not None and fmt in first
-            if fmt != "ifc" and not copy and polys is None:
-                polys = plan.footprints()
-                rings = _exterior_rings(polys)
-            if fmt == "svg":
-                _write_svg(plan, path, polys, title=name, rings=rings)
-            elif fmt == "ifc":
-                if model is None:
-                    model = _ifc_model(plan, name)
+            if fmt == "ifc":
+                if built.model is None:
+                    built.model = _ifc_model(plan, meta, geo)
                 else:
-                    _name_ifc(model, name)
-                _save_ifc(model, path)
-            elif copy:
-                with atomic_path(path) as tmp:
-                    shutil.copyfile(first[fmt], tmp)
+                    _name_ifc(built.model, plan, meta)
+                _save_ifc(built.model, path, meta)
+                continue
+            polys, rings = built.footprints()
+            if fmt == "svg":
+                _write_svg(plan, path, polys, rings, meta, geo)
             elif fmt == "dxf":
-                _write_dxf(plan, path, polys, rings, version=self.params.dxf_version)
+                _write_dxf(plan, path, polys, rings, self.params.dxf_version, meta, geo)
             else:
-                _write_geojson(plan, path, polys, rings)
-        if done is None:
-            self._written[key] = (plan, {f: str(p) for f, p in outputs.items()}, model)
-        return plan, done is not None
+                _write_geojson(plan, path, polys, rings, meta, geo)
+        return plan, reused
 
 
 def _segments_key(segments: pd.DataFrame) -> bytes:
@@ -1271,10 +1883,71 @@ def _in_scan_order(segments: pd.DataFrame) -> pd.DataFrame:
 
 
 def write_floorplan(
-    segments: pd.DataFrame, cfg: Mapping[str, Any] | None, outputs: Mapping[str, str | os.PathLike], name: str = ""
-) -> FloorPlan:
+    segments: pd.DataFrame, cfg: Mapping[str, Any] | None, outputs: Mapping[str, str | os.PathLike], name: str = "",
+    *, dataset: str = "", ordering: str = "", extractor: str = "", k: str | int = "", timestamp: float | None = None,
+) -> FloorPlan:  # fmt: skip
     """Build the floor plan of ``segments`` and write it: ``FloorplanWriter(cfg).write(
-    segments, outputs, name)`` (see there; ``cfg`` is the ``floorplan`` config section),
-    returning the :class:`FloorPlan`. Raises ``KeyError`` for an unknown output format
-    or config key."""
-    return FloorplanWriter(cfg).write(segments, outputs, name)[0]
+    segments, outputs, name, dataset=..., ordering=..., extractor=..., k=...,
+    timestamp=...)`` (see there; ``cfg`` is the ``floorplan`` config section),
+    returning the :class:`FloorPlan`. Raises ``KeyError`` for an unknown output
+    format or config key."""
+    return FloorplanWriter(cfg).write(
+        segments, outputs, name, dataset=dataset, ordering=ordering, extractor=extractor, k=k, timestamp=timestamp
+    )[0]
+
+
+def recording_timestamp(index_path: str | os.PathLike) -> int:
+    """The exports' time stamp: the recording's first scan stamp (``scan_index.parquet``'s
+    least ``t_ns``) in whole seconds since the epoch, 0 for an empty index; the same
+    recording gives the same files."""
+    import pyarrow.parquet as pq
+
+    t_ns = pq.read_table(index_path, columns=["t_ns"]).column("t_ns").to_numpy()
+    return int(t_ns.min()) // 1_000_000_000 if len(t_ns) else 0
+
+
+def write_recommended_floorplan(
+    scans_path: str | os.PathLike,
+    walls_path: str | os.PathLike,
+    index_path: str | os.PathLike,
+    outputs: Mapping[str, str | os.PathLike],
+    cfg: Mapping[str, Any] | None,
+    dataset: str,
+    ordering: str,
+    extractor: str,
+) -> dict:
+    """Write the recommended floor plan: the merged walls of the selected scans.
+
+    Parameters
+    ----------
+    scans_path : path
+        ``selection/scans.csv`` (:func:`floorscan.select.deliverables.write_scan_list`):
+        its ``scan_id`` column names the selected scans.
+    walls_path : path
+        ``walls/<extractor>/per_scan.parquet``: every kept scan's wall segments.
+    index_path : path
+        ``scan_index.parquet``: the first scan's stamp is the exports' time stamp
+        (seconds since the epoch; the same recording gives the same files).
+    outputs : mapping
+        Paths by format (any of :data:`FLOORPLAN_FORMATS`).
+    cfg : mapping
+        The ``floorplan`` config section (``georeference`` applies here).
+    dataset, ordering, extractor : str
+        Named in every export.
+
+    Returns
+    -------
+    dict
+        ``n_scans``, ``n_segments``, ``n_walls``, ``n_faces``.
+    """
+    from floorscan.io import read_table
+
+    selected = pd.read_csv(scans_path, usecols=["rank", "scan_id"])
+    ids = selected["scan_id"].astype(np.int64).to_numpy()
+    walls = read_table(walls_path)
+    segments = walls[walls["scan_id"].isin(ids)]
+    plan, _ = FloorplanWriter(cfg).write(
+        segments, outputs, dataset=dataset, ordering=ordering, extractor=extractor, k=len(ids),
+        timestamp=recording_timestamp(index_path),
+    )
+    return {"n_scans": len(ids), "n_segments": len(segments), "n_walls": len(plan.walls), "n_faces": len(plan.faces)}

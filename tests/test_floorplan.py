@@ -11,12 +11,22 @@ import shapely
 import yaml
 
 from floorscan.floorplan import (
+    DXF_LAYERS,
+    FLOORPLAN_FORMATS,
+    WORKFLOW_KEYS,
+    FloorPlan,
     FloorplanParams,
+    FloorplanWriter,
+    Georeference,
+    PlanMetadata,
     build_floorplan,
     fit_groups,
     fit_segments,
+    lonlat_to_map,
+    map_to_lonlat,
     merge_segments,
     pair_faces,
+    params_from_config,
     write_floorplan,
 )
 from floorscan.walls import cluster_ransac, ransac
@@ -114,79 +124,6 @@ def test_pairing_range_and_overlap():
     assert len(set(w2.tolist())) == 4
 
 
-def test_exports_reopen_with_ifcopenshell_and_ezdxf(tmp_path):
-    import ezdxf
-    import ifcopenshell
-    import ifcopenshell.util.element as ue
-
-    segs = scans_segments(BOX + THICK, [(2, 1.2), (2, -1.0), (1, 1.5), (3, -1.5)], "ransac")
-    out = {f: tmp_path / f"plan.{f}" for f in ("geojson", "svg", "dxf", "ifc")}
-    plan = write_floorplan(segs, {"wall_height_m": 2.7}, out, name="test")
-    n = len(plan.walls)
-    assert n == 5
-    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(p.name for p in out.values())  # no temp files
-
-    model = ifcopenshell.open(str(out["ifc"]))
-    walls = model.by_type("IfcWall")
-    assert len(walls) == n
-    assert all(ue.get_container(w).is_a("IfcBuildingStorey") for w in walls)
-    q = sorted((ue.get_psets(w)["Qto_WallBaseQuantities"]["Length"], ue.get_psets(w)["Qto_WallBaseQuantities"]["Width"]) for w in walls)
-    np.testing.assert_allclose(q, sorted(zip(plan.walls.length_m, plan.walls.thickness_m)), atol=1e-6)
-    assert {ue.get_psets(w)["Qto_WallBaseQuantities"]["Height"] for w in walls} == {2.7}
-    assert model.by_type("IfcProject")[0].Name == "test"
-    write_floorplan(segs, {"wall_height_m": 2.7}, {"ifc": tmp_path / "again.ifc"}, name="test")
-    again = ifcopenshell.open(str(tmp_path / "again.ifc"))
-    assert [w.GlobalId for w in again.by_type("IfcWall")] == [w.GlobalId for w in walls]  # stable ids
-
-    # DXF R12 (default): every entity on its layer with the layer's colour, the
-    # coordinates to the micrometre; R2010: the layer table and units (metres)
-    doc = ezdxf.readfile(out["dxf"])
-    msp = doc.modelspace()
-    assert doc.dxfversion == "AC1009"
-    axes = msp.query('LINE[layer=="WALL_AXIS"]')
-    assert len(axes) == n and {e.dxf.color for e in axes} == {1}
-    got = sorted((e.dxf.start.x, e.dxf.start.y, e.dxf.end.x, e.dxf.end.y) for e in axes)
-    np.testing.assert_allclose(got, sorted(plan.walls[["x0", "y0", "x1", "y1"]].itertuples(index=False)), atol=1e-6)
-    outlines = msp.query('POLYLINE[layer=="WALL_OUTLINE"]')
-    assert len(outlines) == n and all(p.is_closed for p in outlines)
-    rings = sorted(round(shapely.Polygon([(v.dxf.location.x, v.dxf.location.y) for v in p.vertices]).area, 5) for p in outlines)
-    assert rings == sorted(round(a, 5) for a in shapely.area(plan.footprints()))
-    assert len(msp.query('LINE[layer=="WALL_FACE"]')) == len(plan.faces)
-    write_floorplan(segs, {"wall_height_m": 2.7, "dxf_version": "R2010"}, {"dxf": tmp_path / "r2010.dxf"})
-    doc = ezdxf.readfile(tmp_path / "r2010.dxf")
-    msp = doc.modelspace()
-    assert doc.dxfversion == "AC1024" and doc.units == 6  # metres
-    assert {layer.dxf.name: layer.dxf.color for layer in doc.layers if layer.dxf.name.startswith("WALL")} == {
-        "WALL_AXIS": 1, "WALL_OUTLINE": 7, "WALL_FACE": 3}  # fmt: skip
-    assert len(msp.query('LINE[layer=="WALL_AXIS"]')) == n
-    outlines = msp.query('LWPOLYLINE[layer=="WALL_OUTLINE"]')
-    assert len(outlines) == n and all(p.closed for p in outlines)
-    assert len(msp.query('LINE[layer=="WALL_FACE"]')) == len(plan.faces)
-
-    gj = json.loads(out["geojson"].read_text())
-    kinds = pd.Series([f["properties"]["kind"] for f in gj["features"]]).value_counts().to_dict()
-    assert kinds == {"axis": n, "footprint": n, "face": len(plan.faces)}
-    thick = [f["properties"]["thickness_m"] for f in gj["features"] if f["properties"]["kind"] == "axis"]
-    assert sorted(thick)[-1] == pytest.approx(0.20, abs=0.01) and sorted(thick)[0] == 0.10
-    areas = [f for f in gj["features"] if f["properties"]["kind"] == "footprint"]
-    assert areas[0]["geometry"]["type"] == "Polygon"
-
-    svg = ET.parse(out["svg"]).getroot()
-    ns = {"s": "http://www.w3.org/2000/svg"}
-    assert len(svg.findall(".//s:polygon", ns)) == n and len(svg.findall(".//s:line", ns)) == n
-
-
-def test_empty_segments_write_an_empty_plan(tmp_path):
-    empty = pd.DataFrame({c: pd.Series(dtype="float64") for c in ("x0", "y0", "x1", "y1", "rmse_m")})
-    out = {f: tmp_path / f"e.{f}" for f in ("geojson", "svg", "dxf", "ifc")}
-    plan = write_floorplan(empty.assign(n_inliers=pd.Series(dtype="int32")), None, out)
-    assert len(plan.walls) == 0
-    assert json.loads(out["geojson"].read_text())["features"] == []
-    import ifcopenshell
-
-    assert len(ifcopenshell.open(str(out["ifc"])).by_type("IfcWall")) == 0
-
-
 def test_bad_config_and_columns_are_named():
     with pytest.raises(KeyError, match="merge_angle"):
         write_floorplan(pd.DataFrame(), {"merge_angel_deg": 3}, {})
@@ -196,12 +133,23 @@ def test_bad_config_and_columns_are_named():
         FloorplanParams(pair_min_m=0.5, pair_max_m=0.4)
     with pytest.raises(ValueError, match="dxf_version"):
         FloorplanParams(dxf_version="R14")
+    with pytest.raises(ValueError, match="georeference.lat"):
+        FloorplanParams(georeference={"lat": 90.0, "lon": 8.0})
+    with pytest.raises(ValueError, match="georeference.lon"):
+        FloorplanParams(georeference={"lat": 50.0, "lon": 181.0})
+    with pytest.raises(KeyError, match="lat"):
+        FloorplanParams(georeference={"lon": 8.0})
+    with pytest.raises(KeyError, match="heading"):
+        FloorplanParams(georeference={"lat": 50.0, "lon": 8.0, "heading": 3.0})
 
 
 def test_schema_defaults_agree_with_floorplan_params():
     schema = yaml.safe_load((REPO / "workflow/schemas/floorplan.schema.yaml").read_text())["properties"]
-    defaults = {k: v["default"] for k, v in schema.items()}
+    defaults = {k: v.get("default") for k, v in schema.items()}  # georeference: none, unset
+    # the workflow's keys: the recommended plan's extractor, the evaluation grid's formats
+    assert {k: defaults.pop(k) for k in WORKFLOW_KEYS} == {"extractor": "ransac", "evaluation_formats": ["geojson", "svg"]}
     assert defaults == {f: getattr(FloorplanParams(), f) for f in FloorplanParams.__dataclass_fields__}
+    assert params_from_config({"extractor": "cluster_ransac", "evaluation_formats": ["geojson"]}) == FloorplanParams()
 
 
 def test_candidate_pairs_equal_shapely_dwithin():
@@ -225,35 +173,6 @@ def test_candidate_pairs_equal_shapely_dwithin():
     assert (np.minimum(d, np.pi - d) <= np.radians(3.0) + 1e-12).all() and len(i) > 10
 
 
-def test_ifc_wall_placement_and_body(tmp_path):
-    """The walls written as STEP lines: placement, body, axis, and a schema-valid file."""
-    import ifcopenshell
-    import ifcopenshell.util.placement as up
-    import ifcopenshell.validate
-
-    from floorscan.floorplan import FloorPlan, write_ifc
-
-    walls = pd.DataFrame({"wall_id": [0], "x0": [1.0], "y0": [2.0], "x1": [1.0], "y1": [6.0], "length_m": [4.0],
-                          "thickness_m": [0.2], "height_m": [2.7], "paired": [True], "n_faces": [2],
-                          "n_segments": [5], "n_inliers": [100]})
-    write_ifc(FloorPlan(walls=walls, faces=pd.DataFrame()), tmp_path / "w.ifc", name="O'Brien's plan")
-    model = ifcopenshell.open(str(tmp_path / "w.ifc"))
-    log = ifcopenshell.validate.json_logger()
-    ifcopenshell.validate.validate(model, log, express_rules=False)
-    assert log.statements == []
-    assert model.by_type("IfcProject")[0].Name == "O'Brien's plan"
-    (wall,) = model.by_type("IfcWall")
-    m = up.get_local_placement(wall.ObjectPlacement)
-    np.testing.assert_allclose(m[:3, 3], [1.0, 2.0, 0.0], atol=1e-12)
-    np.testing.assert_allclose(m[:3, 0], [0.0, 1.0, 0.0], atol=1e-12)  # x along the axis
-    body, axis = wall.Representation.Representations
-    assert (body.RepresentationIdentifier, body.RepresentationType) == ("Body", "SweptSolid")
-    solid = body.Items[0]
-    assert solid.Depth == pytest.approx(2.7) and solid.Position.Location.Coordinates == pytest.approx((0.0, -0.1, 0.0))
-    assert solid.SweptArea.OuterCurve.Points.CoordList[2] == pytest.approx((4.0, 0.2))
-    assert (axis.RepresentationIdentifier, axis.RepresentationType) == ("Axis", "Curve2D")
-
-
 def test_union_find_numbers_components_by_smallest_node():
     from floorscan.floorplan import _union_find
 
@@ -263,67 +182,6 @@ def test_union_find_numbers_components_by_smallest_node():
     chain = np.arange(999)
     assert (_union_find(1000, chain[::-1], chain[::-1] + 1) == 0).all()
     assert _union_find(3, np.empty(0, int), np.empty(0, int)).tolist() == [0, 1, 2]
-
-
-def test_ifc_walls_sharing_geometry_read_back_their_own_axis_height_thickness(tmp_path):
-    """Walls of one thickness share the body's profile placement (one entity), and
-    every wall still reads back its own axis, height, thickness and name."""
-    import ifcopenshell
-    import ifcopenshell.util.element as ue
-    import ifcopenshell.util.placement as up
-    import ifcopenshell.validate
-
-    from floorscan.floorplan import FloorPlan, write_ifc
-
-    walls = pd.DataFrame({
-        "wall_id": [0, 1, 2], "x0": [0.0, 5.0, 0.0], "y0": [0.0, 0.0, 3.0], "x1": [5.0, 5.0, 3.0],
-        "y1": [0.0, 4.0, 7.0], "length_m": [5.0, 4.0, 5.0], "thickness_m": [0.1, 0.1, 0.25],
-        "height_m": [2.5, 2.5, 3.0], "paired": [False, False, True], "n_faces": [1, 1, 2],
-        "n_segments": [3, 4, 5], "n_inliers": [50, 60, 70],
-    })  # fmt: skip
-    write_ifc(FloorPlan(walls=walls, faces=pd.DataFrame()), tmp_path / "w.ifc", name="shared")
-    model = ifcopenshell.open(str(tmp_path / "w.ifc"))
-    log = ifcopenshell.validate.json_logger()
-    ifcopenshell.validate.validate(model, log, express_rules=False)
-    assert log.statements == []
-    ws = model.by_type("IfcWall")
-    assert [w.Name for w in ws] == ["Wall 0", "Wall 1", "Wall 2"]
-    solids = [w.Representation.Representations[0].Items[0] for w in ws]
-    assert solids[0].Position == solids[1].Position and solids[0].Position.id() == solids[1].Position.id()
-    assert solids[2].Position.id() != solids[0].Position.id()
-    # the model context's world coordinate system, 2 profile placements, 3 wall placements
-    assert len(model.by_type("IfcAxis2Placement3D")) == 1 + 2 + 3
-    for w, solid, want in zip(ws, solids, walls.itertuples(index=False)):
-        m = up.get_local_placement(w.ObjectPlacement)
-        length = np.hypot(want.x1 - want.x0, want.y1 - want.y0)
-        np.testing.assert_allclose(m[:3, 3], [want.x0, want.y0, 0.0], atol=1e-12)
-        along = [(want.x1 - want.x0) / length, (want.y1 - want.y0) / length, 0.0]
-        np.testing.assert_allclose(m[:3, 0], along, atol=1e-12)
-        assert solid.Depth == want.height_m
-        assert solid.Position.Location.Coordinates == pytest.approx((0.0, -want.thickness_m / 2, 0.0))
-        assert solid.SweptArea.OuterCurve.Points.CoordList[2] == pytest.approx((length, want.thickness_m))
-        axis = w.Representation.Representations[1].Items[0].Points.CoordList
-        np.testing.assert_allclose(axis, [[0.0, 0.0], [length, 0.0]], atol=1e-12)
-        q = ue.get_psets(w)["Qto_WallBaseQuantities"]
-        assert (q["Length"], q["Width"], q["Height"]) == pytest.approx((length, want.thickness_m, want.height_m))
-
-
-def test_geojson_is_one_feature_per_line_and_equals_floorplan_geojson(tmp_path):
-    from floorscan.floorplan import floorplan_geojson, write_geojson
-
-    segs = scans_segments(BOX + THICK, [(2, 1.2), (2, -1.0), (1, 1.5), (3, -1.5)], "ransac")
-    plan = build_floorplan(segs, FloorplanParams())
-    write_geojson(plan, tmp_path / "p.geojson")
-    text = (tmp_path / "p.geojson").read_text()
-    lines = text.splitlines()
-    n = len(plan.walls) * 2 + len(plan.faces)
-    assert len(lines) == n + 2 and lines[0] == '{"type": "FeatureCollection", "features": [' and lines[-1] == "]}"
-    assert json.loads(text) == floorplan_geojson(plan)
-    first = json.loads(lines[1].rstrip(","))
-    assert first["properties"]["kind"] == "axis" and len(first["geometry"]["coordinates"]) == 2
-    x0, y0, x1, y1 = plan.walls.loc[0, ["x0", "y0", "x1", "y1"]].to_numpy(float).tolist()
-    assert first["geometry"]["coordinates"] == [[round(x0, 5), round(y0, 5)], [round(x1, 5), round(y1, 5)]]
-    assert abs(first["geometry"]["coordinates"][0][0] - x0) <= 5e-6
 
 
 def test_candidate_pairs_by_direction_bins_equal_dwithin_and_angle():
@@ -378,63 +236,6 @@ def test_merge_skips_connected_pairs_without_changing_faces(monkeypatch):
     np.testing.assert_allclose(faces[labels[0]][[1, 3]], [0, 0], atol=0.01)
 
 
-def test_plan_depends_on_the_scans_not_their_ranking_and_a_repeat_is_copied(tmp_path):
-    """Every ordering's k = all holds the same scans in another order: the same plan.
-    The writer copies it (GeoJSON, DXF bytes) and names it (SVG title, IFC project and
-    GlobalIds, exactly as a fresh export of that name)."""
-    from floorscan.floorplan import FLOORPLAN_FORMATS, FloorplanWriter, write_ifc
-
-    segs = scans_segments(BOX + THICK, [(2, 1.2), (2, -1.0), (1, 1.5), (3, -1.5)], "ransac")
-    reranked = pd.concat([segs[segs.scan_id == s] for s in (2, 0, 3, 1)], ignore_index=True)
-    assert not reranked["scan_id"].is_monotonic_increasing
-    a, b = build_floorplan(segs), build_floorplan(reranked)
-    pd.testing.assert_frame_equal(a.walls, b.walls)
-    pd.testing.assert_frame_equal(a.faces, b.faces)
-
-    writer = FloorplanWriter({})
-    out = {run: {f: tmp_path / f"{run}.{f}" for f in FLOORPLAN_FORMATS} for run in ("first", "again", "fewer")}
-    assert writer.write(segs, out["first"], name="first")[1] is False
-    plan, copied = writer.write(reranked, out["again"], name="again")
-    assert copied is True
-    pd.testing.assert_frame_equal(plan.walls, a.walls)
-    for f in ("geojson", "dxf"):
-        assert out["again"][f].read_bytes() == out["first"][f].read_bytes()
-    assert "<title>again</title>" in out["again"]["svg"].read_text()
-    write_ifc(a, tmp_path / "fresh.ifc", name="again")
-    fresh = [line for line in (tmp_path / "fresh.ifc").read_text().splitlines() if not line.startswith("FILE_NAME")]
-    again = [line for line in out["again"]["ifc"].read_text().splitlines() if not line.startswith("FILE_NAME")]
-    assert again == fresh and "IFCPROJECT(" in "".join(again) and "'again'" in "".join(again)
-    # another scan set is built anew
-    assert writer.write(segs[segs.scan_id != 3], out["fewer"], name="fewer")[1] is False
-    assert out["fewer"]["geojson"].read_bytes() != out["first"]["geojson"].read_bytes()
-
-
-def test_footprint_geojson_equals_shapely_to_geojson_rounded():
-    """Footprint coordinates from the rings equal shapely.to_geojson's, read and rounded."""
-    import shapely
-
-    from floorscan.floorplan import FloorPlan, _round_coords, floorplan_geojson
-
-    rng = np.random.default_rng(3)
-    n = 200
-    p0 = rng.uniform(-30, 30, (n, 2))
-    p1 = p0 + rng.normal(0, 3, (n, 2))
-    p1[0] = p0[0]  # a zero-length wall: an empty footprint, no footprint feature
-    walls = pd.DataFrame({
-        "wall_id": np.arange(n, dtype=np.int32), "x0": p0[:, 0], "y0": p0[:, 1], "x1": p1[:, 0], "y1": p1[:, 1],
-        "length_m": np.hypot(*(p1 - p0).T), "thickness_m": rng.uniform(0.05, 0.4, n), "height_m": 2.5,
-        "paired": True, "n_faces": 2, "n_segments": 3, "n_inliers": 10,
-    })  # fmt: skip
-    faces = pd.DataFrame(columns=["face_id", "wall_id", "x0", "y0", "x1", "y1", "n_segments", "n_inliers"])
-    plan = FloorPlan(walls=walls, faces=faces)
-    feats = [f for f in floorplan_geojson(plan)["features"] if f["properties"]["kind"] == "footprint"]
-    polys = plan.footprints()
-    assert polys[0].is_empty and [f["properties"]["wall_id"] for f in feats] == list(range(1, n))
-    for f, poly in zip(feats, polys[1:]):
-        assert f["geometry"] == _round_coords(json.loads(shapely.to_geojson(poly)))
-        assert len(f["geometry"]["coordinates"][0]) == 5
-
-
 def test_ifc_guid_list_equals_uuid5_compressed_by_ifcopenshell():
     """The batched GlobalIds are ifcopenshell.guid.compress(uuid5(ns, str(i)).hex)."""
     import uuid
@@ -449,30 +250,6 @@ def test_ifc_guid_list_equals_uuid5_compressed_by_ifcopenshell():
         assert ids == [ifcopenshell.guid.compress(uuid.uuid5(ns, str(i)).hex) for i in range(1200)]
         assert len(set(ids)) == 1200 and all(len(g) == 22 for g in ids)
     assert _ifc_guid_list("x", 0) == []
-
-
-def test_ifc_entity_maker_makes_what_create_entity_makes():
-    """Positional and keyword attributes (entities, lists of points, None) set as
-    file.create_entity sets them; an unknown keyword is an error."""
-    import ifcopenshell
-
-    from floorscan.floorplan import _entity_maker
-
-    def build(model, ent):
-        z = ent("IfcDirection", (0.0, 0.0, 1.0))
-        pts = ent("IfcCartesianPointList2D", ((0.0, 0.0), (0.0, 0.25), (3.5, 0.25), (3.5, 0.0), (0.0, 0.0)))
-        curve = ent("IfcIndexedPolyCurve", Points=pts, SelfIntersect=False)
-        place = ent("IfcAxis2Placement3D", ent("IfcCartesianPoint", (1.0, -0.125, 0.0)), z, None)
-        ent("IfcQuantityLength", Name="Width", LengthValue=0.25)
-        ent("IfcExtrudedAreaSolid", ent("IfcArbitraryClosedProfileDef", "AREA", OuterCurve=curve), place, z, 2.5)
-        return model.to_string().split("DATA;")[1]
-
-    ref, fast = ifcopenshell.file(schema="IFC4"), ifcopenshell.file(schema="IFC4")
-    text = build(fast, _entity_maker(fast))
-    assert text == build(ref, ref.create_entity)
-    assert "#8=IFCEXTRUDEDAREASOLID(#7,#5,#1,2.5);" in text and "#3=IFCINDEXEDPOLYCURVE(#2,$,.F.);" in text
-    with pytest.raises(ValueError, match="Width"):
-        _entity_maker(fast)("IfcQuantityLength", Width=1.0)
 
 
 def test_candidate_pairs_by_direction_bins_far_from_the_origin():
@@ -501,3 +278,382 @@ def test_candidate_pairs_by_direction_bins_far_from_the_origin():
         assert (got_i < got_j).all() and len(got) == len(got_i)
     assert {(p, p + 30) for p in range(30)} <= want
     assert any(abs(a[p] - a[q]) > np.pi / 2 for p, q in want)
+
+
+# --------------------------------------------------------------------------------------
+# Exports
+# --------------------------------------------------------------------------------------
+
+META = {"dataset": "intel", "ordering": "random", "extractor": "ransac", "k": 5}
+SVG_NS = {"s": "http://www.w3.org/2000/svg"}
+
+
+@pytest.fixture(scope="module")
+def box_segments():
+    """The box room with one 20 cm wall inside, seen by four scans (ransac): 5 walls,
+    the inner one with both faces seen."""
+    return scans_segments(BOX + THICK, [(2, 1.2), (2, -1.0), (1, 1.5), (3, -1.5)], "ransac")
+
+
+def signed_area(ring) -> float:
+    """Shoelace area of a closed ring: > 0 counter-clockwise."""
+    xy = np.asarray(ring, dtype=float)
+    return 0.5 * float(np.sum(xy[:-1, 0] * xy[1:, 1] - xy[1:, 0] * xy[:-1, 1]))
+
+
+def plan_of(rows) -> FloorPlan:
+    """A plan of walls (x0, y0, x1, y1, thickness_m, height_m, paired), no faces."""
+    x0, y0, x1, y1, t, h, paired = (list(c) for c in zip(*rows))
+    walls = pd.DataFrame({
+        "wall_id": np.arange(len(rows), dtype=np.int32), "x0": x0, "y0": y0, "x1": x1, "y1": y1,
+        "length_m": np.hypot(np.subtract(x1, x0), np.subtract(y1, y0)), "thickness_m": t, "height_m": h,
+        "paired": paired, "n_faces": [2 if p else 1 for p in paired], "n_segments": 3, "n_inliers": 50,
+    })  # fmt: skip
+    columns = ("face_id", "wall_id", "x0", "y0", "x1", "y1", "length_m", "n_segments", "n_inliers")
+    faces = pd.DataFrame({c: pd.Series(dtype="int32" if c in columns[:2] else "float64") for c in columns})
+    return FloorPlan(walls=walls, faces=faces)
+
+
+def test_georeference_puts_a_point_100_m_east_where_the_ellipsoid_says():
+    """(lat 50, lon 8): a degree of longitude is 71.696 km, of latitude 111.229 km
+    (WGS84, published tables): 100 m east is 100 / 71696 degree of longitude."""
+    east_of_x_north = map_to_lonlat([0.0], [-100.0], Georeference(50.0, 8.0, 0.0))  # +x north, +y west
+    east_of_x_east = map_to_lonlat([100.0], [0.0], Georeference(50.0, 8.0, 90.0))  # +x east
+    for lon, lat in (east_of_x_north, east_of_x_east):
+        assert lon[0] - 8.0 == pytest.approx(100.0 / 71_696.0, rel=1e-5)  # the tables' 5 digits
+        assert abs(lon[0] - 8.0013948) < 1e-7 and lat[0] == pytest.approx(50.0, abs=1e-12)
+    lon, lat = map_to_lonlat([100.0], [0.0], Georeference(50.0, 8.0, 0.0))  # 100 m north
+    assert lat[0] - 50.0 == pytest.approx(100.0 / 111_229.0, rel=1e-5) and lon[0] == pytest.approx(8.0, abs=1e-12)
+    # heading 30: +x points 30 degrees east of north
+    lon, lat = map_to_lonlat([100.0], [0.0], Georeference(-33.9, 151.2, 30.0))
+    x, y = lonlat_to_map(lon, lat, Georeference(-33.9, 151.2, 30.0))
+    np.testing.assert_allclose([x[0], y[0]], [100.0, 0.0], atol=1e-9)
+    assert (lon[0] - 151.2) > 0 and (lat[0] + 33.9) > 0  # north-east of the origin
+
+
+def test_geojson_rings_counter_clockwise_members_and_one_feature_per_line(tmp_path, box_segments):
+    from floorscan.floorplan import LOCAL_FRAME_WKT, floorplan_geojson
+
+    out = {"geojson": tmp_path / "p.geojson"}
+    plan = write_floorplan(box_segments, {}, out, **META, timestamp=1_600_000_000.7)
+    text = out["geojson"].read_text()
+    lines = text.splitlines()
+    n = len(plan.walls)
+    assert n == 5 and len(lines) == 2 * n + len(plan.faces) + 2 and lines[-1] == "]}"
+    doc = json.loads(text)
+    assert doc == floorplan_geojson(plan, PlanMetadata(**META, timestamp=1_600_000_000.7))
+    assert lines[0].startswith('{"type": "FeatureCollection", "crs": ') and lines[0].endswith('"features": [')
+    assert doc["crs"] == {"type": "name", "properties": {"name": LOCAL_FRAME_WKT}}
+    assert LOCAL_FRAME_WKT.startswith("LOCAL_CS[") and 'UNIT["metre",1]' in LOCAL_FRAME_WKT
+    member = doc["floorscan"]
+    assert {k: member[k] for k in ("frame", "units", "dataset", "ordering", "extractor", "k", "n_walls")} == {
+        "frame": "map", "units": "metres", "dataset": "intel", "ordering": "random", "extractor": "ransac",
+        "k": "5", "n_walls": 5}  # fmt: skip
+    assert member["n_walls_both_faces"] == 1 and member["n_faces"] == len(plan.faces) == 6
+    assert member["crs"] == "local engineering frame of the recording" and member["georeference"] is None
+    assert member["time_stamp"] == "2020-09-13T12:26:40+00:00"  # 1.6e9 s, the fraction dropped
+    kinds = pd.Series([f["properties"]["kind"] for f in doc["features"]]).value_counts().to_dict()
+    assert kinds == {"axis": n, "footprint": n, "face": len(plan.faces)}
+    footprints = [f["geometry"] for f in doc["features"] if f["properties"]["kind"] == "footprint"]
+    areas = [signed_area(g["coordinates"][0]) for g in footprints]
+    assert all(a > 0 for a in areas)  # RFC 7946: outer rings counter-clockwise
+    np.testing.assert_allclose(sorted(areas), sorted(shapely.area(plan.footprints())), atol=1e-4)
+    first = json.loads(lines[1].rstrip(","))
+    x0, y0, x1, y1 = plan.walls.loc[0, ["x0", "y0", "x1", "y1"]].to_numpy(float).tolist()
+    assert first["geometry"]["coordinates"] == [[round(x0, 5), round(y0, 5)], [round(x1, 5), round(y1, 5)]]
+    thick = sorted(f["properties"]["thickness_m"] for f in doc["features"] if f["properties"]["kind"] == "axis")
+    assert thick[-1] == pytest.approx(0.20, abs=0.01) and thick[0] == 0.10
+
+
+def test_georeferenced_geojson_is_wgs84_lon_lat(tmp_path):
+    """A 10 m wall along +x from the origin, heading 90 (+x east), at (lat 50, lon 8):
+    its axis ends 10 / 71696 degree east; the member says WGS84; no crs member
+    (RFC 7946: WGS84 is the default); rings stay counter-clockwise."""
+    from floorscan.floorplan import write_geojson
+
+    geo = {"lat": 50.0, "lon": 8.0, "heading_deg": 90.0}
+    plan = plan_of([(0.0, 0.0, 10.0, 0.0, 0.2, 2.5, True), (10.0, 0.0, 10.0, 5.0, 0.1, 2.5, False)])
+    write_geojson(plan, tmp_path / "g.geojson", PlanMetadata(**META), geo)
+    doc = json.loads((tmp_path / "g.geojson").read_text())
+    assert "crs" not in doc
+    member = doc["floorscan"]
+    assert (member["frame"], member["units"]) == ("WGS84", "degrees")
+    assert {k: member["georeference"][k] for k in ("lat", "lon", "heading_deg")} == geo
+    axes = [f["geometry"]["coordinates"] for f in doc["features"] if f["properties"]["kind"] == "axis"]
+    assert axes[0][0] == [8.0, 50.0]
+    assert axes[0][1][0] - 8.0 == pytest.approx(10.0 / 71_696.0, rel=1e-5) and axes[0][1][1] == 50.0
+    assert axes[1][1][1] - 50.0 == pytest.approx(5.0 / 111_229.0, rel=1e-5)  # +y is north
+    assert axes[0][1] == [round(v, 10) for v in axes[0][1]]  # 1e-10 degree: 11 um
+    rings = [f["geometry"]["coordinates"][0] for f in doc["features"] if f["properties"]["kind"] == "footprint"]
+    assert len(rings) == 2 and all(signed_area(r) > 0 for r in rings)
+    back = lonlat_to_map(*np.array(axes[0]).T, Georeference(**geo))
+    np.testing.assert_allclose(np.column_stack(back), [[0.0, 0.0], [10.0, 0.0]], atol=2e-5)
+
+
+@pytest.mark.parametrize("version", ["R2010", "R12"])
+def test_dxf_units_layers_metadata_and_a_clean_audit(tmp_path, box_segments, version):
+    import ezdxf
+    from ezdxf import recover
+
+    path = tmp_path / "p.dxf"
+    plan = write_floorplan(box_segments, {"dxf_version": version}, {"dxf": path}, **META)
+    n = len(plan.walls)
+    doc, auditor = recover.readfile(path)
+    assert len(auditor.errors) == 0 and len(doc.audit().errors) == 0
+    assert doc.dxfversion == {"R2010": "AC1024", "R12": "AC1009"}[version]
+    if version == "R2010":
+        assert doc.header["$INSUNITS"] == 6 and doc.header["$MEASUREMENT"] == 1  # metres, metric
+        custom = dict(doc.header.custom_vars)
+        assert custom["floorscan_dataset"] == "intel" and custom["floorscan_units"] == "metres"
+    else:
+        assert "$INSUNITS" not in doc.header and "$MEASUREMENT" not in doc.header  # R12 has none
+    meta = doc.ezdxf_metadata()
+    assert [meta[f"floorscan_{k}"] for k in ("dataset", "ordering", "extractor", "k", "n_walls", "frame")] == [
+        "intel", "random", "ransac", "5", "5", "map"]  # fmt: skip
+    msp = doc.modelspace()
+    assert {e.dxf.layer for e in msp} <= {layer.dxf.name for layer in doc.layers}
+    assert {layer.dxf.name: layer.dxf.color for layer in doc.layers if layer.dxf.name in DXF_LAYERS} == DXF_LAYERS
+    axes = msp.query('LINE[layer=="WALL_AXIS"]')
+    assert len(axes) == n
+    got = sorted((e.dxf.start.x, e.dxf.start.y, e.dxf.end.x, e.dxf.end.y) for e in axes)
+    np.testing.assert_allclose(got, sorted(plan.walls[["x0", "y0", "x1", "y1"]].itertuples(index=False)), atol=1e-6)
+    outlines = msp.query(f'{"POLYLINE" if version == "R12" else "LWPOLYLINE"}[layer=="WALL_OUTLINE"]')
+    assert len(outlines) == n and all(p.is_closed for p in outlines)
+    pts = [[(v.x, v.y) for v in p.points_in_wcs()] if version == "R12" else p.get_points("xy") for p in outlines]
+    areas = sorted(signed_area(list(p) + [p[0]]) for p in pts)
+    np.testing.assert_allclose(areas, sorted(shapely.area(plan.footprints())), atol=1e-9)  # counter-clockwise
+    assert len(msp.query('LINE[layer=="WALL_FACE"]')) == len(plan.faces)
+    assert ezdxf.__version__  # read back by the installed ezdxf
+
+
+def test_svg_fits_the_window_with_title_scale_bar_legend_and_axes(tmp_path, box_segments):
+    path = tmp_path / "p.svg"
+    plan = write_floorplan(box_segments, {}, {"svg": path}, **META)
+    root = ET.parse(path).getroot()
+    assert root.tag == "{http://www.w3.org/2000/svg}svg" and not root.findall(".//s:script", SVG_NS)
+    assert (root.get("width"), root.get("height")) == ("100%", "100%")
+    vb_w, vb_h = (float(v) for v in root.get("viewBox").split()[2:])
+    assert root.find("s:title", SVG_NS).text == "intel random ransac k5"
+    assert "5 walls (1 with both faces seen, 4 with one)" in root.find(".//s:text[@id='subtitle']", SVG_NS).text
+    # the plan group: matrix(s 0 0 -s tx ty), y flipped; the plan's longer side 1000 px
+    plan_g = root.find(".//s:g[@id='plan']", SVG_NS)
+    s, b, c, d, tx, ty = (float(v) for v in plan_g.get("transform")[len("matrix("):-1].split())
+    assert (b, c, d) == (0.0, 0.0, -s)
+    lo, hi = shapely.total_bounds(plan.footprints()).reshape(2, 2)
+    px = np.array([tx + s * lo[0], tx + s * hi[0]])
+    py = np.array([ty - s * hi[1], ty - s * lo[1]])
+    assert (px > 0).all() and (px < vb_w).all() and (py > 0).all() and (py < vb_h).all()  # nothing cut off
+    assert max(px[1] - px[0], py[1] - py[0]) == pytest.approx(1000.0 - 2 * 0.5 * s, abs=0.5)  # fills the canvas
+    n_both = len(root.findall(".//s:g[@id='walls']/s:polygon", SVG_NS))
+    n_one = len(root.findall(".//s:g[@id='walls-one-face']/s:polygon", SVG_NS))
+    assert (n_both, n_one) == (1, 4) and len(root.findall(".//s:g[@id='axes']/s:line", SVG_NS)) == len(plan.walls)
+    # the scale bar: a round length, drawn s pixels a metre
+    bar = root.find(".//s:g[@id='scale-bar']", SVG_NS)
+    label = bar.find("s:text", SVG_NS).text
+    length_m = float(label.removesuffix(" m"))
+    assert label.endswith(" m") and length_m in (1.0, 2.0, 5.0, 10.0)
+    line = bar.find("s:line", SVG_NS)
+    assert float(line.get("x2")) - float(line.get("x1")) == pytest.approx(length_m * s, abs=1e-3)
+    legend = [t.text for t in root.findall(".//s:g[@id='legend']/s:text", SVG_NS)]
+    assert legend == ["wall (both faces seen)", "wall, one face seen (thickness assumed)", "wall axis"]
+    axes = [t.text for t in root.findall(".//s:g[@id='frame-axes']/s:text", SVG_NS)]
+    assert axes[:2] == ["x", "y"] and root.find(".//s:g[@id='north']", SVG_NS) is None
+
+
+def test_svg_of_a_long_thin_plan_fits_and_shows_north(tmp_path):
+    """A 200 m corridor: drawn 1000 px long, a 50 m scale bar; heading 0 puts north
+    along +x, drawn to the right."""
+    from floorscan.floorplan import write_svg
+
+    plan = plan_of([(0.0, 0.0, 200.0, 0.0, 0.2, 2.5, True), (0.0, 2.0, 200.0, 2.0, 0.2, 2.5, True)])
+    write_svg(plan, tmp_path / "c.svg", PlanMetadata(dataset="corridor"), {"lat": 50.0, "lon": 8.0})
+    root = ET.parse(tmp_path / "c.svg").getroot()
+    s = float(root.find(".//s:g[@id='plan']", SVG_NS).get("transform")[len("matrix("):].split()[0])
+    assert s == pytest.approx(1000.0 / 201.0)
+    assert root.find(".//s:g[@id='scale-bar']/s:text", SVG_NS).text == "20 m"  # 200 px budget: 40 m -> 20 m
+    north = root.find(".//s:g[@id='north']/s:line", SVG_NS)
+    assert float(north.get("x2")) > 0 and float(north.get("y2")) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_ifc_hierarchy_placements_header_and_validation(tmp_path, box_segments):
+    import ifcopenshell
+    import ifcopenshell.util.element as ue
+    import ifcopenshell.util.placement as up
+    from ifcopenshell import validate
+
+    from floorscan.floorplan import floorscan_version
+
+    path = tmp_path / "p.ifc"
+    plan = write_floorplan(box_segments, {"wall_height_m": 2.7}, {"ifc": path}, **META, timestamp=1_700_000_000)
+    log = validate.json_logger()
+    validate.validate(str(path), log, express_rules=False)
+    assert log.statements == []
+    model = ifcopenshell.open(str(path))
+    fn, fd = model.header.file_name, model.header.file_description
+    assert (fn.name, fn.time_stamp, fn.author, fn.organization) == (
+        "p.ifc", "2023-11-14T22:13:20+00:00", ("floorscan",), ("floorscan",))  # fmt: skip
+    assert fn.originating_system == f"floorscan {floorscan_version()}"
+    assert fd.description == (
+        "ViewDefinition[DesignTransferView]", "Comment[floorscan floor plan of dataset intel ordering random "
+        "extractor ransac k 5]")  # fmt: skip
+    assert model.mvd.view_definitions == ["DesignTransferView"]
+    assert not model.by_type("IfcOwnerHistory")
+    (project,) = model.by_type("IfcProject")
+    assert project.Name == "intel random ransac k5" and "dataset intel" in project.Description
+    (unit,) = [u for u in model.by_type("IfcSIUnit") if u.UnitType == "LENGTHUNIT"]
+    assert (unit.Name, unit.Prefix) == ("METRE", None)
+    (site,), (building,), (storey,) = (model.by_type(c) for c in ("IfcSite", "IfcBuilding", "IfcBuildingStorey"))
+    assert [ue.get_aggregate(e) for e in (site, building, storey)] == [project, site, building]
+    assert site.ObjectPlacement.PlacementRelTo is None
+    assert building.ObjectPlacement.PlacementRelTo == site.ObjectPlacement
+    assert storey.ObjectPlacement.PlacementRelTo == building.ObjectPlacement
+    walls = model.by_type("IfcWall")
+    assert len(walls) == len(plan.walls) == 5
+    for wall, want in zip(walls, plan.walls.itertuples(index=False)):
+        assert wall.ObjectPlacement.PlacementRelTo == storey.ObjectPlacement
+        assert ue.get_container(wall) == storey
+        m = up.get_local_placement(wall.ObjectPlacement)
+        np.testing.assert_allclose(m[:3, 3], [want.x0, want.y0, 0.0], atol=1e-12)
+        along = np.array([want.x1 - want.x0, want.y1 - want.y0, 0.0]) / want.length_m
+        np.testing.assert_allclose(m[:3, 0], along, atol=1e-12)
+        body, axis = wall.Representation.Representations
+        assert (body.RepresentationIdentifier, body.RepresentationType) == ("Body", "SweptSolid")
+        solid = body.Items[0]
+        assert solid.Depth == pytest.approx(2.7)
+        assert solid.Position.Location.Coordinates == pytest.approx((0.0, -want.thickness_m / 2, 0.0))
+        assert solid.SweptArea.OuterCurve.Points.CoordList[2] == pytest.approx((want.length_m, want.thickness_m))
+        assert (axis.RepresentationIdentifier, axis.RepresentationType) == ("Axis", "Curve2D")
+        np.testing.assert_allclose(axis.Items[0].Points.CoordList, [[0.0, 0.0], [want.length_m, 0.0]], atol=1e-12)
+        q = ue.get_psets(wall)["Qto_WallBaseQuantities"]
+        assert (q["Length"], q["Width"], q["Height"]) == pytest.approx((want.length_m, want.thickness_m, 2.7))
+        assert wall.Description == ("both faces seen" if want.paired else "one face seen, thickness assumed")
+
+
+def test_ifc_georeference_sets_site_latitude_and_true_north(tmp_path):
+    import ifcopenshell
+    from ifcopenshell import validate
+
+    from floorscan.floorplan import write_ifc
+
+    plan = plan_of([(0.0, 0.0, 4.0, 0.0, 0.1, 2.5, False)])
+    geo = {"lat": -33.5, "lon": 151.25, "heading_deg": 90.0}
+    write_ifc(plan, tmp_path / "g.ifc", "O'Brien's plan", georeference=geo)
+    log = validate.json_logger()
+    validate.validate(str(tmp_path / "g.ifc"), log, express_rules=False)
+    assert log.statements == []
+    model = ifcopenshell.open(str(tmp_path / "g.ifc"))
+    assert model.by_type("IfcProject")[0].Name == "O'Brien's plan"
+    site = model.by_type("IfcSite")[0]
+    assert site.RefLatitude == (-33, -30, 0, 0) and site.RefLongitude == (151, 15, 0, 0)
+    north = model.by_type("IfcGeometricRepresentationContext", include_subtypes=False)[0].TrueNorth.DirectionRatios
+    np.testing.assert_allclose(north, [0.0, 1.0], atol=1e-12)  # +x east: north is +y
+
+
+def test_exports_stamp_source_date_epoch_never_the_clock(tmp_path, box_segments, monkeypatch):
+    from floorscan.floorplan import export_time
+
+    outputs = {f: tmp_path / f"p.{f}" for f in ("geojson", "ifc")}
+
+    def stamps():
+        gj = json.loads(outputs["geojson"].read_text())["floorscan"]["time_stamp"]
+        ifc = next(line for line in outputs["ifc"].read_text().splitlines() if line.startswith("FILE_NAME("))
+        return gj, ifc.split(",")[1].strip("'")
+
+    monkeypatch.delenv("SOURCE_DATE_EPOCH", raising=False)
+    writer = FloorplanWriter({})
+    writer.write(box_segments, outputs, **META)
+    assert stamps() == ("1970-01-01T00:00:00+00:00",) * 2
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1700000000")
+    writer.write(box_segments, outputs, **META)
+    assert stamps() == ("2023-11-14T22:13:20+00:00",) * 2
+    writer.write(box_segments, outputs, **META, timestamp=86_400.9)  # the argument wins
+    assert stamps() == ("1970-01-02T00:00:00+00:00",) * 2
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "yesterday")
+    with pytest.raises(ValueError, match="SOURCE_DATE_EPOCH"):
+        writer.write(box_segments, outputs, **META)
+    assert export_time(-1.5) == -2
+
+
+@pytest.mark.parametrize(
+    "cfg", [{}, {"dxf_version": "R12", "georeference": {"lat": 47.37, "lon": 8.54, "heading_deg": 12.5}}]
+)
+def test_same_input_gives_byte_identical_files(tmp_path, box_segments, cfg, monkeypatch):
+    monkeypatch.delenv("SOURCE_DATE_EPOCH", raising=False)
+    for run in ("a", "b"):
+        out = {f: tmp_path / run / f"plan.{f}" for f in FLOORPLAN_FORMATS}
+        FloorplanWriter(cfg).write(box_segments, out, **META, timestamp=1_650_000_000)
+    for f in FLOORPLAN_FORMATS:
+        first, again = (tmp_path / run / f"plan.{f}" for run in ("a", "b"))
+        assert first.read_bytes() == again.read_bytes(), f
+    assert sorted(p.name for p in (tmp_path / "a").iterdir()) == sorted(f"plan.{f}" for f in FLOORPLAN_FORMATS)
+
+
+def test_plan_depends_on_the_scans_not_their_ranking_and_a_repeat_is_reused(tmp_path, box_segments):
+    """Every ordering's k = all holds the same scans in another order: the same plan.
+    The writer reuses it (and its IFC model) and writes each export with the new
+    plan's metadata: every file equals a fresh export of that plan and metadata."""
+    segs = box_segments
+    reranked = pd.concat([segs[segs.scan_id == s] for s in (2, 0, 3, 1)], ignore_index=True)
+    assert not reranked["scan_id"].is_monotonic_increasing
+    a, b = build_floorplan(segs), build_floorplan(reranked)
+    pd.testing.assert_frame_equal(a.walls, b.walls)
+    pd.testing.assert_frame_equal(a.faces, b.faces)
+
+    writer = FloorplanWriter({})
+    out = {run: {f: tmp_path / run / f"plan.{f}" for f in FLOORPLAN_FORMATS} for run in ("first", "again", "fresh")}
+    meta_first = {**META, "ordering": "random", "k": "all"}
+    meta_again = {**META, "ordering": "wall_coverage", "k": "all"}
+    assert writer.write(segs, out["first"], **meta_first)[1] is False
+    plan, reused = writer.write(reranked, out["again"], **meta_again)
+    assert reused is True
+    pd.testing.assert_frame_equal(plan.walls, a.walls)
+    write_floorplan(reranked, {}, out["fresh"], **meta_again)
+    for f in FLOORPLAN_FORMATS:
+        assert out["again"][f].read_bytes() == out["fresh"][f].read_bytes(), f
+        assert out["again"][f].read_bytes() != out["first"][f].read_bytes(), f  # each names its ordering
+    assert json.loads(out["again"]["geojson"].read_text())["floorscan"]["ordering"] == "wall_coverage"
+    # the name given (scripts/floorplan.py passes one) titles the SVG and the IFC project
+    writer.write(segs, {"svg": tmp_path / "named.svg"}, name="intel random ransac kall")
+    assert "<title>intel random ransac kall</title>" in (tmp_path / "named.svg").read_text()
+    # another scan set is built anew
+    assert writer.write(segs[segs.scan_id != 3], {"geojson": tmp_path / "fewer.geojson"}, **META)[1] is False
+
+
+def test_empty_segments_write_an_empty_plan(tmp_path):
+    import ezdxf.recover
+    import ifcopenshell
+    from ifcopenshell import validate
+
+    empty = pd.DataFrame({c: pd.Series(dtype="float64") for c in ("x0", "y0", "x1", "y1", "rmse_m")})
+    out = {f: tmp_path / f"e.{f}" for f in FLOORPLAN_FORMATS}
+    plan = write_floorplan(empty.assign(n_inliers=pd.Series(dtype="int32")), None, out, **META)
+    assert len(plan.walls) == 0
+    doc = json.loads(out["geojson"].read_text())
+    assert doc["features"] == [] and doc["floorscan"]["n_walls"] == 0
+    assert len(ifcopenshell.open(str(out["ifc"])).by_type("IfcWall")) == 0
+    log = validate.json_logger()
+    validate.validate(str(out["ifc"]), log, express_rules=False)
+    assert log.statements == []
+    dxf, auditor = ezdxf.recover.readfile(out["dxf"])
+    assert len(auditor.errors) == 0 and len(dxf.modelspace()) == 0
+    root = ET.parse(out["svg"]).getroot()
+    assert "0 walls" in root.find(".//s:text[@id='subtitle']", SVG_NS).text
+
+
+def test_footprint_geojson_equals_shapely_to_geojson_oriented_and_rounded():
+    """Footprint coordinates from the rings equal shapely.to_geojson's of the
+    counter-clockwise polygon, read and rounded."""
+    from floorscan.floorplan import _round_coords, floorplan_geojson
+
+    rng = np.random.default_rng(3)
+    n = 200
+    p0 = rng.uniform(-30, 30, (n, 2))
+    p1 = p0 + rng.normal(0, 3, (n, 2))
+    p1[0] = p0[0]  # a zero-length wall: an empty footprint, no footprint feature
+    plan = plan_of([(*a, *b, t, 2.5, True) for a, b, t in zip(p0.tolist(), p1.tolist(), rng.uniform(0.05, 0.4, n))])
+    feats = [f for f in floorplan_geojson(plan)["features"] if f["properties"]["kind"] == "footprint"]
+    polys = shapely.orient_polygons(plan.footprints(), exterior_cw=False)
+    assert polys[0].is_empty and [f["properties"]["wall_id"] for f in feats] == list(range(1, n))
+    for f, poly in zip(feats, polys[1:]):
+        assert f["geometry"] == _round_coords(json.loads(shapely.to_geojson(poly)))
+        assert len(f["geometry"]["coordinates"][0]) == 5 and signed_area(f["geometry"]["coordinates"][0]) > 0
