@@ -26,13 +26,27 @@ include: "workflow/rules/ingest.smk"
 include: "workflow/rules/register.smk"
 include: "workflow/rules/select.smk"
 include: "workflow/rules/walls.smk"
+include: "workflow/rules/floorplan.smk"
 include: "workflow/rules/score.smk"
+include: "workflow/rules/report.smk"
 
 
 rule all:
     default_target: True
     input:
         all_outputs(),
+
+
+# The answer alone: the selected scans and the recommended floor plan.
+rule plan:
+    input:
+        plan_outputs(),
+
+
+# The evaluation grid, the reference map, the scores, curves and figures.
+rule evaluation:
+    input:
+        evaluation_outputs(),
 
 
 # Snakemake 9.27 re-checks its job rate limit (--max-jobs-per-timespan, 100/1s) with a
@@ -42,6 +56,10 @@ rule all:
 onsuccess:
     import threading
 
+    from floorscan.select.recommend import answer_lines
+
+    for _line in answer_lines(target_datasets()):
+        print(_line)
     for _timer in threading.enumerate():
         if isinstance(_timer, threading.Timer):
             _timer.cancel()

@@ -144,6 +144,7 @@ def plot_registered_map(
     path : path-like
         Output PNG.
     title : str
+        The dataset, leading the title (which says what the figure shows).
     subtitle : tuple of str
         Lines under the title (the registration's verdict, what ingest detected).
     density_radius_m, cell_m : float
@@ -179,7 +180,8 @@ def plot_registered_map(
     ax.set_xlabel("x (m, map frame)")
     ax.set_ylabel("y (m, map frame)")
     n_scans = len(registration)
-    lines = [f"{title}  {len(kept)} of {n_scans} scans kept".strip(), *subtitle]
+    what = f"registered map and scan locations, {len(kept)} of {n_scans} scans kept"
+    lines = [f"{title}: {what}" if title else what[:1].upper() + what[1:], *subtitle]
     ax.set_title("\n".join(textwrap.fill(line, 72) for line in lines), fontsize=9 if subtitle else None)
     fig.tight_layout()
     with atomic_path(path) as tmp:

@@ -141,16 +141,33 @@ def plot_metrics_vs_k(metrics: pd.DataFrame, out, tau: float = 0.05) -> None:
 
 
 def read_geojson_geometries(path) -> list:
-    """Shapely geometries of a GeoJSON FeatureCollection (walls of a floor plan)."""
+    """Shapely geometries of the walls of a floor plan's GeoJSON, one per wall.
+
+    A floor plan of :func:`floorscan.floorplan.floorplan_geojson` holds an ``axis``, a
+    ``footprint`` and its ``face`` lines for each wall (property ``kind``); a wall is
+    drawn as its footprint, or as its axis when it has none, so the list holds one
+    geometry per wall (``len`` is the plan's wall count, one row of
+    :attr:`floorscan.floorplan.FloorPlan.walls` each). Features without ``kind`` (any
+    other GeoJSON) are all returned.
+    """
     import shapely.geometry
 
     with open(path, encoding="utf-8") as fh:
         doc = json.load(fh)
-    out = []
-    for feat in doc.get("features", []):
-        if feat.get("geometry"):
-            out.append(shapely.geometry.shape(feat["geometry"]))
-    return out
+    plain, axes, footprints = [], {}, {}
+    for i, feat in enumerate(doc.get("features", [])):
+        if not feat.get("geometry"):
+            continue
+        props = feat.get("properties") or {}
+        kind = props.get("kind")
+        if kind is None:
+            plain.append(shapely.geometry.shape(feat["geometry"]))
+        elif kind in ("axis", "footprint"):  # without a wall_id: a wall of its own
+            by_wall = axes if kind == "axis" else footprints
+            by_wall.setdefault(props.get("wall_id", ("feature", i)), shapely.geometry.shape(feat["geometry"]))
+    walls = [footprints.get(w, g) for w, g in axes.items()]
+    walls += [g for w, g in footprints.items() if w not in axes]
+    return plain + walls
 
 
 def _draw_geometry(ax, geom, colour, lw=1.2) -> None:
@@ -174,7 +191,9 @@ def plot_floorplans(panels, reference, reference_kind: str, out, title: str = ""
     Parameters
     ----------
     panels : list of (str, list of shapely geometries)
-        Panel title and the floor plan's walls (lines or polygons), metres.
+        Panel title and the floor plan's walls, one geometry (footprint polygon or
+        axis line) per wall as :func:`read_geojson_geometries` gives them, metres; the
+        title counts them.
     reference : (M, 4) array_like
         Ground-truth or reference wall segments, drawn in light grey.
     reference_kind : str
@@ -351,43 +370,67 @@ def plot_quality_vs_k(curves: pd.DataFrame, out, tau: float = 0.05, up_to: float
     _save(fig, out)
 
 
-def plot_walls_over_points(points, panels, out, title: str = "") -> None:
+def plot_walls_over_points(points, panels, out, title: str = "", max_points: int = 200_000) -> None:
     """Figs. 5.11 and 5.12: wall segments over the registered points, one panel each.
+
+    The points are drawn first, grey and half transparent, so that the walls lie on
+    them and the points show around and between the walls: returns that no wall
+    explains are seen.
 
     Parameters
     ----------
     points : (N, 2) float ndarray
-        Registered points (map frame, metres), already subsampled for plotting.
+        Registered points (map frame, metres), usually already subsampled
+        (:func:`subsample_points`).
     panels : list of (str, (M, 4) segments)
         Panel title and wall segments, metres.
+    max_points : int
+        At most this many points are drawn: beyond, every n-th (deterministic).
     """
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    if len(pts) > max_points:
+        pts = pts[np.linspace(0, len(pts) - 1, max_points).astype(np.int64)]
     n = max(1, len(panels))
     fig, axes = plt.subplots(1, n, figsize=(6 * n, 5), squeeze=False)
     for ax, (name, seg) in zip(axes[0], panels):
-        ax.scatter(pts[:, 0], pts[:, 1], s=0.2, c="0.6", linewidths=0, rasterized=True)
-        ax.add_collection(_segments_collection(seg, colors="tab:red", linewidths=1.0))
+        ax.scatter(pts[:, 0], pts[:, 1], s=1.5, c="0.45", alpha=0.5, linewidths=0, rasterized=True,
+                   zorder=1, label=f"registered points ({len(pts)} drawn)")
+        ax.add_collection(_segments_collection(seg, colors="tab:red", linewidths=0.8, zorder=2,
+                                               label="wall segments"))
         ax.set_title(f"{name} ({len(M.as_segments(seg))} segments)", fontsize=10)
         ax.autoscale()
         _square(ax)
+        ax.legend(fontsize=7, loc="upper right", markerscale=4)
     fig.suptitle(title)
     fig.tight_layout()
     _save(fig, out)
 
 
-def subsample_points(points, max_points: int, seed: int, z_band=None, batch_rows: int = 1 << 20):
+def subsample_points(
+    points, max_points: int, seed: int, z_band=None, batch_rows: int = 1 << 20, planar_tolerance_m: float | None = None
+):
     """``(N, 2)`` x, y of at most ``max_points`` points (seeded), optionally only those
-    with z inside ``z_band`` when the points are 3D (any z not 0).
+    with z inside ``z_band`` when the points are 3D.
+
+    2D against 3D as the walls stage decides it (:func:`floorscan.walls.scan_points_2d`):
+    points whose z spans at most ``planar_tolerance_m`` (default
+    :attr:`floorscan.walls.ScanParams.planar_tolerance_m`) came from a 2D scanner, at
+    whatever height it was mounted (the simulated rovers' 0.3 m), and are all kept;
+    here the span is the whole table's, not each scan's.
 
     ``points`` is a frame (``x, y, z``) or the path of a Parquet points table, which is
     read in batches of ``batch_rows`` (with ``z_band``, first z to count, then x, y of
     the drawn rows):
     the same points as from the whole frame, in memory one batch at a time.
     """
+    if planar_tolerance_m is None:
+        from floorscan.walls import ScanParams
+
+        planar_tolerance_m = ScanParams.planar_tolerance_m
     if isinstance(points, (str, Path)):
-        return _subsample_file(points, max_points, seed, z_band, batch_rows)
+        return _subsample_file(points, max_points, seed, z_band, batch_rows, planar_tolerance_m)
     xyz = points[["x", "y", "z"]].to_numpy(dtype=np.float64)
-    if z_band is not None and len(xyz) and np.any(xyz[:, 2] != 0):
+    if z_band is not None and len(xyz) and _z_span(xyz[:, 2]) > planar_tolerance_m:
         xyz = xyz[(xyz[:, 2] >= z_band[0]) & (xyz[:, 2] <= z_band[1])]
     if len(xyz) > max_points:
         idx = np.random.default_rng(seed).choice(len(xyz), max_points, replace=False)
@@ -395,7 +438,12 @@ def subsample_points(points, max_points: int, seed: int, z_band=None, batch_rows
     return xyz[:, :2].copy()
 
 
-def _subsample_file(path, max_points: int, seed: int, z_band, batch_rows: int) -> np.ndarray:
+def _z_span(z: np.ndarray) -> float:
+    z = z[np.isfinite(z)]
+    return float(z.max() - z.min()) if len(z) else 0.0
+
+
+def _subsample_file(path, max_points: int, seed: int, z_band, batch_rows: int, planar_tolerance_m: float) -> np.ndarray:
     import pyarrow.parquet as pq
 
     pf = pq.ParquetFile(path)
@@ -403,12 +451,15 @@ def _subsample_file(path, max_points: int, seed: int, z_band, batch_rows: int) -
     if missing:
         raise KeyError(f"{path}: columns {missing} missing; expected x, y, z")
     total, three_d = pf.metadata.num_rows, False
-    if z_band is not None:  # one pass over z: is the scan 3D, and how many are in the band
-        n_band = 0
+    if z_band is not None:  # one pass over z: its span (is the table 3D), and how many are in the band
+        n_band, z_lo, z_hi = 0, np.inf, -np.inf
         for b in pf.iter_batches(batch_size=batch_rows, columns=["z"]):
             z = b.column(0).to_numpy(zero_copy_only=False).astype(np.float64)
-            three_d = three_d or bool(np.any(z != 0))
+            finite = z[np.isfinite(z)]
+            if len(finite):
+                z_lo, z_hi = min(z_lo, float(finite.min())), max(z_hi, float(finite.max()))
             n_band += int(np.count_nonzero((z >= z_band[0]) & (z <= z_band[1])))
+        three_d = z_hi - z_lo > planar_tolerance_m
         if three_d:
             total = n_band
     band = (lambda z: (z >= z_band[0]) & (z <= z_band[1])) if three_d else (lambda z: np.ones(len(z), bool))

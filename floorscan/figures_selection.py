@@ -82,6 +82,11 @@ def _save(fig, path: str | os.PathLike) -> None:
     plt.close(fig)
 
 
+def _titled(dataset: str, what: str) -> str:
+    """A figure title: ``"<dataset>: <what it shows>"`` (what, capitalised, alone)."""
+    return f"{dataset}: {what}" if dataset else what[:1].upper() + what[1:]
+
+
 def plot_coverage_vs_scans(orderings: Mapping[str, pd.DataFrame], path: str | os.PathLike, title: str = "") -> None:
     """Fig. 5.6: cumulative covered area (m^2) against number of scans per ordering.
 
@@ -100,7 +105,7 @@ def plot_coverage_vs_scans(orderings: Mapping[str, pd.DataFrame], path: str | os
     ax.set_xscale("log")
     ax.set_xlabel("number of scans")
     ax.set_ylabel("covered area (cluster hulls), m²")
-    ax.set_title(f"Coverage by ordering {title}".strip())
+    ax.set_title(_titled(title, "covered area against the number of scans, per ordering"), fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     _save(fig, path)
@@ -196,7 +201,7 @@ def plot_coverage_vs_clusters(curves: Mapping[int, pd.DataFrame], path: str | os
     ax.set_xscale("log")
     ax.set_xlabel("number of scans (greedy cluster_hull ordering)")
     ax.set_ylabel("covered area, m²")
-    ax.set_title(f"Coverage by number of KMeans clusters {title}".strip())
+    ax.set_title(_titled(title, "covered area against the number of scans, per number of KMeans clusters"), fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     _save(fig, path)
@@ -245,7 +250,7 @@ def plot_selection_time(timing: pd.DataFrame, path: str | os.PathLike, title: st
     ax.set_yscale("log")
     ax.set_xlabel("number of scans")
     ax.set_ylabel("selection time, s")
-    ax.set_title(f"Greedy selection time {title}".strip())
+    ax.set_title(_titled(title, "time to order the scans, lazy against plain greedy"), fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     _save(fig, path)

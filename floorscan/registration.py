@@ -130,6 +130,7 @@ import pandas as pd
 import pyarrow as pa
 from scipy.spatial import cKDTree
 
+from floorscan.core.runtime import progress
 from floorscan.grid import cell_groups, cell_keys, cell_means
 from floorscan.io import InputError
 from floorscan.register.sampling import EveryN, MotionFilter, median_step_m
@@ -1778,7 +1779,8 @@ def register_recording(
     try:
         with pq.ParquetWriter(sampled_path, SCANS, **parquet_options(SCANS, ["scan_id"])) as sampled_writer:
             with ScanRowGroups(sampled_writer) as sampled_out:
-                _first_pass(walk(), sids, screen, store, cfg, sampled_out, edges)
+                _first_pass(progress(walk(), log, total=n, what="scans screened"), sids, screen, store, cfg,
+                            sampled_out, edges)
         ahead = edges.finish() if edges is not None else None
         table, summary = _register_screened(index, aligned, screen.reasons, store, cfg, ahead)
         store = None

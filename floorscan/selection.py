@@ -131,11 +131,12 @@ class SelectParams:
 
         ``figure_*`` keys belong to :class:`floorscan.figures_selection.FigureParams`,
         ``coverage`` to :class:`floorscan.select.coverage.CoverageParams`, and
-        ``default_ordering`` to the workflow; they are skipped here.
+        ``default_ordering``, ``k`` and ``k_coverage`` to the recommended selection
+        (:mod:`floorscan.select.deliverables`); they are skipped here.
         """
         cfg = {
             k: v for k, v in dict(cfg or {}).items()
-            if not k.startswith("figure_") and k not in ("coverage", "default_ordering")
+            if not k.startswith("figure_") and k not in ("coverage", "default_ordering", "k", "k_coverage")
         }  # fmt: skip
         names = {f.name for f in fields(cls)}
         unknown = sorted(set(cfg) - names)
@@ -523,6 +524,43 @@ def greedy_exact(
         }
     )
 
+
+def with_hull_coverage(orderings: Mapping[str, pd.DataFrame], hulls: pd.DataFrame, scan_ids, raster_m: float) -> dict:
+    """The orderings with the hull area they cover along the way (``covered_area_m2``,
+    ``gain_m2`` of :func:`coverage_along`), for the orderings whose tables lack it (the
+    coverage orderings, which rank by their own objective), so that every ordering is
+    compared on the same curve (thesis Fig. 5.6).
+
+    Parameters
+    ----------
+    orderings : mapping of str to DataFrame
+        Ordering tables (``rank, scan_id``, ...).
+    hulls : DataFrame
+        ``hulls.parquet`` (the cluster hulls of the kept scans).
+    scan_ids : (S,) int
+        The kept scans.
+    raster_m : float
+        Coverage raster cell side, metres.
+
+    Returns
+    -------
+    dict of str to DataFrame
+        The same tables; those without ``covered_area_m2`` get both columns (the other
+        columns kept, rows in rank order).
+    """
+    from floorscan.hulls import scan_coverage
+
+    missing = [name for name, o in orderings.items() if "covered_area_m2" not in o.columns]
+    out = dict(orderings)
+    if not missing:
+        return out
+    ids, geoms = scan_coverage(hulls, scan_ids)
+    raster = RasterCoverage(geoms, raster_m)
+    for name in missing:
+        o = orderings[name].sort_values("rank", kind="stable").reset_index(drop=True)
+        along = coverage_along(ids, geoms, o["scan_id"].to_numpy(), raster_m, raster=raster)
+        out[name] = o.assign(covered_area_m2=along["covered_area_m2"].to_numpy(), gain_m2=along["gain_m2"].to_numpy())
+    return out
 
 def coverage_along(
     scan_ids: Sequence[int],

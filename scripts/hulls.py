@@ -4,6 +4,7 @@ scripts/select.py concatenates the shards."""
 import json
 
 from floorscan.hulls import HullParams, compute_hulls, to_table
+from floorscan.core.runtime import progress
 from floorscan.io import iter_scans, write_table
 from floorscan.shards import parse_shard_label, read_scan_range
 from floorscan.workflow import stage_log
@@ -13,7 +14,7 @@ with stage_log(snakemake) as log:
     shard = snakemake.wildcards.shard
     start, stop = parse_shard_label(shard)
     cluster, convex, counts = compute_hulls(
-        iter_scans(snakemake.input.registered, ("x", "y"), scan_range=(start, stop)),
+        progress(iter_scans(snakemake.input.registered, ("x", "y"), scan_range=(start, stop)), log, what="scans"),
         read_scan_range(snakemake.input.registration, start, stop),
         params,
     )

@@ -1,6 +1,7 @@
 """Stage scan_walls, one shard: wall segments of the scans of a scan range with one
 extractor, streamed scan by scan (memory holds one scan, issue 8).
 scripts/walls.py concatenates the shards."""
+from floorscan.core.runtime import progress
 from floorscan.io import iter_scans, write_table
 from floorscan.shards import parse_shard_label
 from floorscan.walls import SCAN_STATUS, WALLS, extract_walls
@@ -11,7 +12,7 @@ with stage_log(snakemake) as log:
     shard = snakemake.wildcards.shard
     start, stop = parse_shard_label(shard)
     scans = iter_scans(snakemake.input.points, ("x", "y", "z"), scan_range=(start, stop))
-    walls, status = extract_walls(scans, extractor, snakemake.params.cfg)
+    walls, status = extract_walls(progress(scans, log, what="scans"), extractor, snakemake.params.cfg)
     meta = {"dataset": snakemake.wildcards.dataset, "extractor": extractor, "units": "metres, map frame", "shard": shard}
     write_table(walls, snakemake.output.walls, schema=WALLS, metadata=meta)
     write_table(status, snakemake.output.status, schema=SCAN_STATUS, metadata=meta)

@@ -2,22 +2,30 @@
 from pathlib import Path
 
 from floorscan.figures_selection import FigureParams, selection_figures
-from floorscan.hulls import HullParams
+from floorscan.hulls import HullParams, kept_scan_ids
 from floorscan.io import read_table
-from floorscan.selection import SelectParams
+from floorscan.selection import SelectParams, with_hull_coverage
 from floorscan.workflow import stage_log
 
 with stage_log(snakemake) as log:
     cfg = dict(snakemake.params.cfg)
     fig_params = FigureParams.from_config(cfg)
+    select_params = SelectParams.from_config(cfg)
+    registration = read_table(snakemake.input.registration)
+    hulls = read_table(snakemake.input.hulls)
+    # the coverage orderings rank by their own objective: the hull area along them here
+    orderings = with_hull_coverage(
+        {Path(p).stem: read_table(p) for p in snakemake.input.orderings}, hulls,
+        kept_scan_ids(registration, snakemake.input.registration), select_params.raster_m,
+    )
     timing = selection_figures(
         registered=snakemake.input.registered,  # streamed scan by scan
-        registration=read_table(snakemake.input.registration),
-        hulls=read_table(snakemake.input.hulls),
+        registration=registration,
+        hulls=hulls,
         convex_hulls=read_table(snakemake.input.convex),  # the k = 1 curve
-        orderings={Path(p).stem: read_table(p) for p in snakemake.input.orderings},
+        orderings=orderings,
         hull_params=HullParams.from_config(snakemake.params.hulls_cfg),
-        select_params=SelectParams.from_config(cfg),
+        select_params=select_params,
         params=fig_params,
         out_coverage=snakemake.output.coverage,
         out_clusters=snakemake.output.clusters,

@@ -59,7 +59,7 @@ def real_run(tmp_path_factory):
     root = tmp_path_factory.mktemp("real")
     wd = copy_workflow(root / "floorscan")
     targets = [
-        f"results/{d}/floorplan/{ORDERING}_{EXTRACTOR}_k{k}.geojson" for d in MEASURED for k in ("all", "50")
+        f"results/{d}/evaluation/floorplan/{ORDERING}_{EXTRACTOR}_k{k}.geojson" for d in MEASURED for k in ("all", "50")
     ] + [f"results/{d}/reference/occupancy.parquet" for d in MEASURED]
     grid = wd / "walls_grid.yaml"
     grid.write_text(f"walls:\n  k: [50, all]\n  orderings: [{ORDERING}]\n  extractors: [{EXTRACTOR}]\n")

@@ -239,6 +239,8 @@ def test_schema_defaults_match_dataclasses():
     coverage = {k: v["default"] for k, v in schema["properties"].pop("coverage")["properties"].items()}
     assert defaults.pop("coverage") == {} and coverage == CoverageParams().__dict__
     assert defaults.pop("default_ordering") == "wall_coverage"
+    # the recommended selection's k (floorscan.select.recommend reads them from the config)
+    assert (defaults.pop("k"), defaults.pop("k_coverage")) == ("auto", 0.99)
     assert defaults == {**fs.SelectParams().as_dict(), **fig}
     with pytest.raises(ValueError, match="unknown select config keys"):
         fs.SelectParams.from_config({"tile": 3})

@@ -107,8 +107,9 @@ def test_default_run_selection_walls_and_scores(default_run):
         assert mi.loc[("cluster_hull", ext, "all"), "plan_f1_5cm"] >= 0.88
         # recall against every face is lower: rooms C and D are only seen through doors
         assert 0.6 < mi.loc[("cluster_hull", ext, "all"), "recall_all_5cm"] < 0.85
-    for fmt in ("geojson", "svg", "dxf", "ifc"):
-        assert (out / "floorplan" / f"cluster_hull_cluster_ransac_k15.{fmt}").stat().st_size > 500
+    for fmt in ("geojson", "svg"):  # floorplan.evaluation_formats; the recommended plan has all four
+        assert (out / "evaluation" / "floorplan" / f"cluster_hull_cluster_ransac_k15.{fmt}").stat().st_size > 500
+    assert not (out / "evaluation" / "floorplan" / "cluster_hull_cluster_ransac_k15.ifc").exists()
 
 
 def test_default_run_reference_map_curves_and_summary(default_run):
@@ -147,4 +148,71 @@ def test_default_run_reference_map_curves_and_summary(default_run):
     assert md.startswith("# Scan reduction summary: demo") and "**Verdict: GOOD" in md
     assert "cluster_hull beats random with ransac" in md
     assert "<table" in (out / "summary.html").read_text()
-    assert (out / "figures" / "quality_vs_k.png").stat().st_size > 20_000
+    assert (out / "figures" / "floorplan_f1_vs_k.png").stat().st_size > 20_000
+    front = (out / "front.html").read_text()  # the report opens on it
+    assert "<svg" in front and "wall_coverage" in front and "GOOD" in front and "<table" in front
+
+
+def test_default_run_writes_the_answer(default_run):
+    """Issue 23 on the demo: the scan list of select.k (auto: 99 % of wall_coverage's
+    cells; measured 10 of 76 kept scans), the reduced recording that reads back with
+    rosbags with one scan message per listed scan, the points as PLY and PCD, and the
+    recommended floor plan in four formats that validate."""
+    import json
+
+    import ezdxf
+    import ifcopenshell
+    import ifcopenshell.validate
+    import open3d as o3d
+    import pandas as pd
+    import shapely
+    from rosbags.highlevel import AnyReader
+
+    out = default_run / "results" / "demo"
+    sel = json.loads((out / "selection" / "selection.json").read_text())
+    scans = pd.read_csv(out / "selection" / "scans.csv")
+    assert sel["k"] == len(scans) == 10 and sel["n_kept"] == 76 and sel["ordering"] == "wall_coverage"
+    assert "99 %" in sel["reason"]
+    assert scans["rank"].tolist() == list(range(1, 11)) and scans["time_iso"].str.endswith("Z").all()
+    order = read_table(out / "orderings" / "wall_coverage.parquet").sort_values("rank")
+    assert scans["scan_id"].tolist() == order["scan_id"].head(10).tolist()
+
+    bag = Path(sel["recording"]["path"])
+    assert bag.parent == Path("results/demo/selection/recording") and bag.suffix == ".bag"
+    with AnyReader([default_run / bag]) as reader:
+        counts = {c.topic: c.msgcount for c in reader.connections}
+        stamps = [t for c, t, _ in reader.messages(connections=[c for c in reader.connections if c.topic == "/scan"])]
+    assert counts["/scan"] == len(scans) and len(stamps) == len(scans)
+    assert sel["recording"]["bytes_out"] < 0.25 * sel["recording"]["bytes_in"]
+
+    n_points = sel["n_points"]
+    assert n_points > 1000
+    for ext in ("ply", "pcd"):
+        cloud = o3d.t.io.read_point_cloud(str(out / "selection" / f"points.{ext}"))
+        assert len(cloud.point.positions) == n_points
+
+    plan = json.loads((out / "floorplan.geojson").read_text())
+    assert plan["floorscan"]["k"] in (10, "10") and plan["floorscan"]["units"] == "metres"
+    rings = [shapely.geometry.shape(f["geometry"]) for f in plan["features"] if f["geometry"]["type"] == "Polygon"]
+    assert rings and all(shapely.Polygon(p.exterior).area > 0 and p.exterior.is_ccw for p in rings)
+    doc = ezdxf.readfile(out / "floorplan.dxf")
+    assert doc.header["$INSUNITS"] == 6 and not doc.audit().has_errors
+    logger = ifcopenshell.validate.json_logger()
+    ifcopenshell.validate.validate(str(out / "floorplan.ifc"), logger)
+    assert logger.statements == []
+    assert len(ifcopenshell.open(str(out / "floorplan.ifc")).by_type("IfcWall")) >= 8
+    assert "<svg" in (out / "floorplan.svg").read_text()
+
+
+def test_a_bare_recording_path_runs_only_the_plan(default_run):
+    """`--config path=...` (a user's own recording) builds the answer and nothing of the
+    evaluation: no hulls, no grid of plans, no reference map, no scores."""
+    res = snakemake(default_run, "--config", "path=results/demo/sim/recording.bag")
+    assert res.returncode == 0, res.stderr[-3000:]
+    out = default_run / "results" / "recording"
+    for name in ("floorplan.geojson", "floorplan.ifc", "selection/scans.csv", "selection/points.ply"):
+        assert (out / name).is_file(), name
+    assert not (out / "evaluation").exists() and not (out / "reference").exists()
+    assert not (out / "hulls.parquet").exists() and not (out / "metrics.parquet").exists()
+    assert not (out / "walls" / "cluster_ransac").exists()  # only the recommended plan's extractor
+    assert "floor plan:" in res.stdout and "results/recording/selection/scans.csv" in res.stdout

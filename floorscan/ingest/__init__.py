@@ -36,6 +36,7 @@ import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 
+from floorscan.core.runtime import progress
 from floorscan.io import POSE_STREAM, SCAN_INDEX, SCANS, InputError, atomic_path, parquet_options, ScanRowGroups, write_table
 
 log = logging.getLogger(__name__)
@@ -206,7 +207,7 @@ def write_recording(
         with pq.ParquetWriter(tmp, SCANS.with_metadata(meta), **parquet_options(SCANS, ["scan_id"])) as writer:
             with ScanRowGroups(writer) as batch:  # row groups written in a thread
                 last_t = None
-                for scan_id, scan in enumerate(recording.scans):
+                for scan_id, scan in enumerate(progress(recording.scans, log, what="scans read")):
                     if last_t is not None and scan.t_ns < last_t:
                         raise InputError(
                             f"{recording.source}: scan timestamps go backwards at scan {scan_id} "

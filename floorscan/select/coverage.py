@@ -42,6 +42,7 @@ from typing import Iterable
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
 
 from floorscan.config import dataclass_from_mapping
 from floorscan.core.geometry import sample_segments, samples_per_segment
@@ -49,6 +50,15 @@ from floorscan.core.greedy import lazy_greedy
 
 #: The orderings of this module.
 COVERAGE_ORDERINGS = ("wall_coverage", "surface_coverage")
+#: Column of a coverage ordering's table: the ordering's own objective ``f`` of its
+#: first rank + 1 scans (weighted cells), which ``select.k: auto`` reads.
+OBJECTIVE_COLUMN = "covered_objective"
+#: ``orderings/{wall,surface}_coverage.parquet``: the lazy greedy's ``rank, scan_id,
+#: gain`` and the objective along the way (the hull orderings' tables have hull areas
+#: instead, :data:`floorscan.selection.ORDERING`).
+COVERAGE_ORDERING = pa.schema(
+    [("rank", pa.int32()), ("scan_id", pa.int32()), ("gain", pa.float64()), (OBJECTIVE_COLUMN, pa.float64())]
+)
 
 
 @dataclass(frozen=True)

@@ -6,9 +6,14 @@ from floorscan.config import validate_config
 
 DATASETS = config["datasets"]
 
-# Each stage file appends the per-dataset outputs that `rule all` builds, as patterns
-# with a {dataset} placeholder (see all_outputs).
-FINAL_OUTPUTS = []
+# Each stage file appends its per-dataset outputs, as patterns with a {dataset}
+# placeholder: PLAN_OUTPUTS are the answer (`rule plan`: the selected scans and the
+# recommended floor plan), EVALUATION_OUTPUTS the grid of plans, scores and figures
+# (`rule evaluation`). `rule all` builds both, or the plan alone (see all_outputs).
+PLAN_OUTPUTS = []
+EVALUATION_OUTPUTS = []
+# The report's front pages (report.smk): they read the evaluation when there is one.
+REPORT_OUTPUTS = []
 
 # Scheduling (issue 8): of the jobs ready at once, Snakemake starts those of higher
 # priority first (the greedy scheduler of workflow/profiles/default; ties go to larger
@@ -50,6 +55,7 @@ PRIORITY = {
     "walls": 21,
     "scan_walls": 23,
     "select_coverage": 22,
+    "selection": 21,
     "floorplan": 20,
     "selection_figures": 14,
     "reference": 36,
@@ -59,6 +65,7 @@ PRIORITY = {
     "score": 4,
     "score_figures": 3,
     "register_figure": 3,
+    "front_page": 3,
 }
 
 
@@ -82,9 +89,28 @@ def target_datasets():
     return list(config["target"])
 
 
+def plan_outputs():
+    """Inputs of `rule plan`: the answer of every target dataset."""
+    return [p.format(dataset=d) for d in target_datasets() for p in PLAN_OUTPUTS]
+
+
+def evaluation_outputs():
+    """Inputs of `rule evaluation`: the evaluation grid, scores and figures of every
+    target dataset."""
+    return [p.format(dataset=d) for d in target_datasets() for p in EVALUATION_OUTPUTS]
+
+
+def evaluate_by_default():
+    """Config `evaluate`; unset: True, but False for a recording given by `path`."""
+    evaluate = config.get("evaluate")
+    return (not config.get("path")) if evaluate is None else bool(evaluate)
+
+
 def all_outputs():
-    """Inputs of `rule all`: every registered final output for every target dataset."""
-    return [p.format(dataset=d) for d in target_datasets() for p in FINAL_OUTPUTS]
+    """Inputs of `rule all` (the default target): the plan, the evaluation unless
+    evaluate_by_default() says no, and the front pages."""
+    outputs = plan_outputs() + (evaluation_outputs() if evaluate_by_default() else [])
+    return outputs + [p.format(dataset=d) for d in target_datasets() for p in REPORT_OUTPUTS]
 
 
 # The stage schemas, beside the main one (workflow/schemas/).
@@ -127,6 +153,17 @@ def stage_config(stage):
         return _deep_merge(config.get(stage, {}), (ds.get("params") or {}).get(stage))
 
     return _stage_config
+
+
+# The `walls` keys that change the per-scan walls (scan_walls_shard, select_coverage).
+WALLS_EXTRACT_KEYS = ("seed", "height_band_m", "planar_tolerance_m", "grid_m", "ransac", "cluster_ransac")
+
+
+def walls_extract_config(wildcards):
+    """The `walls` section without k/orderings/extractors: changing the k list or the
+    orderings must not rerun the (expensive) per-scan extraction."""
+    cfg = stage_config("walls")(wildcards)
+    return {key: cfg[key] for key in WALLS_EXTRACT_KEYS if key in cfg}
 
 
 def dataset_config(wildcards):

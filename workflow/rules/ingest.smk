@@ -69,4 +69,4 @@ rule poses:
         "../../scripts/poses.py"
 
 
-FINAL_OUTPUTS.append("results/{dataset}/poses.parquet")
+PLAN_OUTPUTS.append("results/{dataset}/poses.parquet")

@@ -45,6 +45,8 @@ rule register_figure:
             "results/{dataset}/figures/registered_map.png",
             caption="../report/registered_map.rst",
             category="Registration",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "Registered map and scan locations"},
         ),
     log:
         log_path("register_figure"),
@@ -54,6 +56,6 @@ rule register_figure:
         "../../scripts/register_figure.py"
 
 
-FINAL_OUTPUTS.extend(
+PLAN_OUTPUTS.extend(
     ["results/{dataset}/registration.parquet", "results/{dataset}/figures/registered_map.png"]
 )

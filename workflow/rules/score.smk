@@ -7,7 +7,7 @@
 
 stage_schema_check("score")
 
-# The figure k is in the figure file names (floorplan_k15.png), so it is global: a
+# The figure k is in the figure file names (floorplans_first_k15.png), so it is global: a
 # per-dataset override of score.figure_k is refused by score_check.
 SCORE_FIGURE_K = config["score"]["figure_k"]
 
@@ -94,7 +94,7 @@ def score_runs_inputs(wildcards):
     runs = score_extractor_runs(wildcards)
     return {
         "walls": [f"results/{ds}/walls/{o}/{e}/k{k}.parquet" for o, e, k in runs],
-        "floorplans": [f"results/{ds}/floorplan/{o}_{e}_k{k}.geojson" for o, e, k in runs],
+        "floorplans": [f"results/{ds}/evaluation/floorplan/{o}_{e}_k{k}.geojson" for o, e, k in runs],
         "orderings": [f"results/{ds}/orderings/{o}.parquet" for o in score_orderings(wildcards)],
         "reference_map": f"results/{ds}/reference/occupancy.parquet",
         **_score_reference_inputs(wildcards),
@@ -155,7 +155,7 @@ rule reference:
             caption="../report/reference_map.rst",
             category="Scoring",
             subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "reference map (occupancy grid)"},
+            labels={"dataset": "{dataset}", "figure": "Reference map (occupancy grid of all kept scans)"},
         ),
     params:
         cfg=reference_config,
@@ -241,27 +241,15 @@ rule score:
     output:
         metrics="results/{dataset}/metrics.parquet",
         summary="results/{dataset}/summary.parquet",
-        summary_html=report(
-            "results/{dataset}/summary.html",
-            caption="../report/summary.rst",
-            category="Scoring",
-            subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "summary table"},
-        ),
+        summary_html="results/{dataset}/summary.html",  # the table is on the front page
         quality_vs_k=report(
-            "results/{dataset}/figures/quality_vs_k.png",
+            "results/{dataset}/figures/floorplan_f1_vs_k.png",
             caption="../report/quality_vs_k.rst",
             category="Scoring",
             subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "F1 against k, every ordering and the oracle"},
+            labels={"dataset": "{dataset}", "figure": "Floor-plan F1 against the number of scans, every ordering and the oracle"},
         ),
-        summary_md=report(
-            "results/{dataset}/summary.md",
-            caption="../report/summary.rst",
-            category="Scoring",
-            subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "scan reduction summary"},
-        ),
+        summary_md="results/{dataset}/summary.md",
     params:
         cfg=score_check,
         reference_kind=score_reference_kind,
@@ -281,7 +269,7 @@ def score_walls_figure_inputs(wildcards):
     return {
         "walls": [f"results/{ds}/walls/{o}/{e}/k{kk}.parquet" for o, e, kk in score_figure_runs(wildcards)],
         "floorplans": [
-            f"results/{ds}/floorplan/{o}_{e}_k{k}.geojson" for o, e in score_figure_floorplans(wildcards)
+            f"results/{ds}/evaluation/floorplan/{o}_{e}_k{k}.geojson" for o, e in score_figure_floorplans(wildcards)
         ],
         "registered": f"results/{ds}/registered.parquet",
         "scan_status": [f"results/{ds}/walls/{e}/scan_status.parquet" for e in score_extractors(wildcards)],
@@ -296,39 +284,39 @@ rule score_walls_figures:
         unpack(score_walls_figure_inputs),
     output:
         floorplan=report(
-            f"results/{{dataset}}/figures/floorplan_k{SCORE_FIGURE_K}.png",
+            f"results/{{dataset}}/figures/floorplans_first_k{SCORE_FIGURE_K}.png",
             caption="../report/floorplan.rst",
             category="Scoring",
             subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Fig. 5.5 floor plans, first k scans"},
+            labels={"dataset": "{dataset}", "figure": f"Floor plans from the first {SCORE_FIGURE_K} scans of each ordering"},
         ),
         bitmap_overlay=report(
-            "results/{dataset}/figures/bitmap_overlay.png",
+            f"results/{{dataset}}/figures/bitmap_overlay_first_k{SCORE_FIGURE_K}.png",
             caption="../report/bitmap_overlay.rst",
             category="Scoring",
             subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Fig. 5.1 bitmap overlay"},
+            labels={"dataset": "{dataset}", "figure": f"Walls of the first {SCORE_FIGURE_K} scans as a bitmap over the reference"},
         ),
         walls_over_points_k=report(
-            f"results/{{dataset}}/figures/walls_over_points_k{SCORE_FIGURE_K}.png",
+            f"results/{{dataset}}/figures/walls_over_points_first_k{SCORE_FIGURE_K}.png",
             caption="../report/walls_over_points_k.rst",
             category="Scoring",
             subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Fig. 5.11 walls over points, first k scans"},
+            labels={"dataset": "{dataset}", "figure": f"Walls from the first {SCORE_FIGURE_K} scans over the registered points"},
         ),
         walls_over_points_all=report(
             "results/{dataset}/figures/walls_over_points_all.png",
             caption="../report/walls_over_points_all.rst",
             category="Scoring",
             subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Fig. 5.12 walls over points, all scans"},
+            labels={"dataset": "{dataset}", "figure": "Walls from all kept scans over the registered points"},
         ),
         wall_extraction=report(
-            "results/{dataset}/figures/wall_extraction.png",
+            "results/{dataset}/figures/wall_extraction_per_scan.png",
             caption="../report/wall_extraction.rst",
             category="Timing",
             subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Fig. 5.10 wall extraction per scan"},
+            labels={"dataset": "{dataset}", "figure": "Wall extraction per scan, ransac against cluster_ransac"},
         ),
     params:
         cfg=score_check,
@@ -350,29 +338,29 @@ rule score_figures:
     priority: PRIORITY["score_figures"]
     input:
         metrics="results/{dataset}/metrics.parquet",
-        walls_figures=f"results/{{dataset}}/figures/floorplan_k{SCORE_FIGURE_K}.png",
+        walls_figures=f"results/{{dataset}}/figures/floorplans_first_k{SCORE_FIGURE_K}.png",
         selection_figures="results/{dataset}/figures/coverage_vs_scans.png",
     output:
         metrics_vs_k=report(
-            "results/{dataset}/figures/metrics_vs_k.png",
+            "results/{dataset}/figures/wall_metrics_vs_k.png",
             caption="../report/metrics_vs_k.rst",
             category="Scoring",
             subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Fig. 5.4 metrics against k"},
+            labels={"dataset": "{dataset}", "figure": "Wall metrics against the number of scans, per ordering"},
         ),
         stage_times_png=report(
             "results/{dataset}/figures/stage_times.png",
             caption="../report/stage_times.rst",
             category="Timing",
             subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Table 5.1 time per stage"},
+            labels={"dataset": "{dataset}", "figure": "Time and memory per stage"},
         ),
         stage_times_tsv=report(
             "results/{dataset}/figures/stage_times.tsv",
             caption="../report/stage_times.rst",
             category="Timing",
             subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Table 5.1 time per stage (table)"},
+            labels={"dataset": "{dataset}", "figure": "Time and memory per stage (table)"},
         ),
     params:
         cfg=score_check,
@@ -385,7 +373,7 @@ rule score_figures:
         "../../scripts/score_figures.py"
 
 
-FINAL_OUTPUTS.extend(
+EVALUATION_OUTPUTS.extend(
     [
         "results/{dataset}/metrics.parquet",
         "results/{dataset}/summary.parquet",
@@ -394,14 +382,14 @@ FINAL_OUTPUTS.extend(
     + [
         f"results/{{dataset}}/figures/{name}"
         for name in (
-            "metrics_vs_k.png",
-            f"floorplan_k{SCORE_FIGURE_K}.png",
-            "bitmap_overlay.png",
-            f"walls_over_points_k{SCORE_FIGURE_K}.png",
+            "wall_metrics_vs_k.png",
+            f"floorplans_first_k{SCORE_FIGURE_K}.png",
+            f"bitmap_overlay_first_k{SCORE_FIGURE_K}.png",
+            f"walls_over_points_first_k{SCORE_FIGURE_K}.png",
             "walls_over_points_all.png",
             "stage_times.png",
             "stage_times.tsv",
-            "wall_extraction.png",
+            "wall_extraction_per_scan.png",
         )
     ]
 )

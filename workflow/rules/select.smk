@@ -13,7 +13,7 @@ COVERAGE_ORDERINGS = ["wall_coverage", "surface_coverage"]
 
 def select_coverage_inputs(wildcards):
     """Inputs of `select_coverage`: the per-scan walls of select.coverage.wall_extractor
-    (one of walls.extractors), the registered points and the cluster hulls."""
+    (one of walls.extractors) and the registered points."""
     ds = wildcards.dataset
     extractor = stage_config("select")(wildcards)["coverage"]["wall_extractor"]
     extractors = stage_config("walls")(wildcards)["extractors"]
@@ -25,7 +25,6 @@ def select_coverage_inputs(wildcards):
         "walls": f"results/{ds}/walls/{extractor}/per_scan.parquet",
         "registered": f"results/{ds}/registered.parquet",
         "registration": f"results/{ds}/registration.parquet",
-        "hulls": f"results/{ds}/hulls.parquet",
     }
 
 
@@ -119,13 +118,51 @@ rule select_coverage:
         orderings=expand("results/{{dataset}}/orderings/{ordering}.parquet", ordering=COVERAGE_ORDERINGS),
     params:
         cfg=stage_config("select"),
-        walls=lambda wc: walls_extract_config(wc),
+        walls=walls_extract_config,
     log:
         log_path("select_coverage"),
     benchmark:
         benchmark_path("select_coverage")
     script:
         "../../scripts/select_coverage.py"
+
+
+def selection_inputs(wildcards):
+    """Inputs of `selection`: the default ordering, the scans' stamps and poses, the
+    registered points and the recording the reduced copy is cut from."""
+    ds = wildcards.dataset
+    return {
+        "ordering": f"results/{ds}/orderings/{select_default_ordering(wildcards)}.parquet",
+        "index": f"results/{ds}/scan_index.parquet",
+        "registration": f"results/{ds}/registration.parquet",
+        "registered": f"results/{ds}/registered.parquet",
+        "recording": recording_input(wildcards),
+    }
+
+
+# The answer (issue 23): the first k scans of the default ordering (select.k), as a scan
+# list, their registered points (PLY, PCD) and the recording cut to them
+# (floorscan.select.deliverables, floorscan.select.recording).
+rule selection:
+    priority: PRIORITY["selection"]
+    input:
+        unpack(selection_inputs),
+    output:
+        scans="results/{dataset}/selection/scans.csv",
+        ply="results/{dataset}/selection/points.ply",
+        pcd="results/{dataset}/selection/points.pcd",
+        recording=directory("results/{dataset}/selection/recording"),
+        summary="results/{dataset}/selection/selection.json",
+    params:
+        cfg=stage_config("select"),
+        ordering=select_default_ordering,
+        dataset=ingest_dataset,
+    log:
+        log_path("selection"),
+    benchmark:
+        benchmark_path("selection")
+    script:
+        "../../scripts/selection.py"
 
 
 rule selection_figures:
@@ -144,16 +181,22 @@ rule selection_figures:
             "results/{dataset}/figures/coverage_vs_scans.png",
             caption="../report/coverage_vs_scans.rst",
             category="Selection",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "Covered area against the number of scans, per ordering"},
         ),
         clusters=report(
             "results/{dataset}/figures/coverage_vs_clusters.png",
             caption="../report/coverage_vs_clusters.rst",
             category="Selection",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "Covered area against the number of scans, per number of KMeans clusters"},
         ),
         timing=report(
             "results/{dataset}/figures/selection_time.png",
             caption="../report/selection_time.rst",
             category="Selection",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "Time to order the scans, lazy against plain greedy"},
         ),
     params:
         cfg=stage_config("select"),
@@ -166,7 +209,7 @@ rule selection_figures:
         "../../scripts/selection_figures.py"
 
 
-FINAL_OUTPUTS.extend(
+EVALUATION_OUTPUTS.extend(
     [
         "results/{dataset}/hulls.parquet",
         "results/{dataset}/convex_hulls.parquet",
@@ -176,4 +219,9 @@ FINAL_OUTPUTS.extend(
         "results/{dataset}/figures/coverage_vs_clusters.png",
         "results/{dataset}/figures/selection_time.png",
     ]
+)
+
+PLAN_OUTPUTS.extend(
+    f"results/{{dataset}}/selection/{name}"
+    for name in ("scans.csv", "points.ply", "points.pcd", "recording", "selection.json")
 )

@@ -1,18 +1,15 @@
-# Wall extraction and merged floor plans (issue 6; thesis sections 3.4, 5.3, Algorithm 4).
+# Wall extraction (issue 6; thesis sections 3.4, 5.3, Algorithm 4).
 #
 #   scan_walls_shard: every kept scan once per extractor (walls of a scan depend only
 #               on the scan, the extractor parameters and the seed, never on ordering
 #               or k), in shards of scans (named once the register checkpoint ends)
 #   walls:      the shards merged in scan order (the per-scan tables), and the wall
 #               segments of the first k scans of each ordering (a filter)
-#   floorplan:  merged walls of each (ordering, k) of an extractor as GeoJSON, SVG, DXF, IFC
+# The floor plans made of them: floorplan.smk.
 import re
 
 stage_schema_check("walls")
-stage_schema_check("floorplan")
 
-WALLS_EXTRACT_KEYS = ("seed", "height_band_m", "planar_tolerance_m", "grid_m", "ransac", "cluster_ransac")
-FLOORPLAN_FORMATS = ("geojson", "svg", "dxf", "ifc")
 # Shard labels of floorscan.shards.shard_label: scans_<first scan id>-<last scan id>.
 WALLS_SHARD_LABEL = r"scans_\d+-\d+"
 
@@ -21,31 +18,22 @@ def _alternatives(values):
     return "|".join(re.escape(str(v)) for v in values)
 
 
-def walls_extract_config(wildcards):
-    """The `walls` section without k/orderings/extractors: changing the k list or the
-    orderings must not rerun the (expensive) per-scan extraction."""
-    cfg = stage_config("walls")(wildcards)
-    return {key: cfg[key] for key in WALLS_EXTRACT_KEYS if key in cfg}
-
-
 def walls_k_names():
     """k wildcard values of config walls.k: 5 -> "5", "all" -> "all" (files k5 ... kall)."""
     return [str(k) for k in config["walls"]["k"]]
 
 
 def walls_outputs():
-    """Per-dataset final outputs: k-walls tables and floor plans for every configured
-    ordering x extractor x k (patterns keep {dataset})."""
+    """Per-dataset evaluation outputs: the k-walls tables of every configured ordering x
+    extractor x k (patterns keep {dataset})."""
     w = config["walls"]
-    keys = dict(ordering=w["orderings"], extractor=w["extractors"], k=walls_k_names())
-    walls = expand("results/{{dataset}}/walls/{ordering}/{extractor}/k{k}.parquet", **keys)
-    plans = expand(
-        "results/{{dataset}}/floorplan/{ordering}_{extractor}_k{k}.{fmt}", fmt=FLOORPLAN_FORMATS, **keys
+    return expand(
+        "results/{{dataset}}/walls/{ordering}/{extractor}/k{k}.parquet",
+        ordering=w["orderings"], extractor=w["extractors"], k=walls_k_names(),
     )
-    return walls + plans
 
 
-FINAL_OUTPUTS.extend(walls_outputs())
+EVALUATION_OUTPUTS.extend(walls_outputs())
 
 WALLS_CONSTRAINTS = dict(
     ordering=_alternatives(config["walls"]["orderings"]),
@@ -157,28 +145,3 @@ rule walls:
         "results/{dataset}/benchmarks/walls_{extractor}.tsv"
     script:
         "../../scripts/walls.py"
-
-
-rule floorplan:
-    priority: PRIORITY["floorplan"]
-    input:
-        lambda wc: [
-            f"results/{wc.dataset}/walls/{o}/{wc.extractor}/k{k}.parquet"
-            for o in config["walls"]["orderings"] for k in walls_k_names()
-        ],
-    output:
-        expand(
-            "results/{{dataset}}/floorplan/{ordering}_{{extractor}}_k{k}.{fmt}",
-            ordering=config["walls"]["orderings"], k=walls_k_names(), fmt=FLOORPLAN_FORMATS,
-        ),
-    wildcard_constraints:
-        extractor=WALLS_CONSTRAINTS["extractor"],
-    params:
-        cfg=stage_config("floorplan"),
-        runs=lambda wc: [[o, k] for o in config["walls"]["orderings"] for k in walls_k_names()],
-    log:
-        "results/{dataset}/logs/floorplan_{extractor}.log",
-    benchmark:
-        "results/{dataset}/benchmarks/floorplan_{extractor}.tsv"
-    script:
-        "../../scripts/floorplan.py"

@@ -1,0 +1,180 @@
+"""The recommended selection (rule ``selection``): the answer a user came for.
+
+From the default ordering (``select.default_ordering``) it takes the first k scans
+(``select.k``: ``auto`` by default, :func:`floorscan.select.deliverables.recommended_k`)
+and writes, under ``results/<dataset>/selection/``:
+
+- ``scans.csv``: rank, scan id, stamp (ns and ISO 8601), registered pose, gain;
+- ``points.ply``, ``points.pcd``: the selected scans' points in the map frame;
+- ``recording/``: the recording cut to the selected scans, in its own format
+  (:mod:`floorscan.select.recording`);
+- ``selection.json``: k and the reason for it, the counts, and the size of the
+  recording before and after (what :func:`answer_lines` prints at the end of a run).
+
+The recommended floor plan (``results/<dataset>/floorplan.*``) is made of the walls of
+these scans by the floorplan stage.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+from pathlib import Path
+from typing import Any, Mapping
+
+from floorscan.io import atomic_path, read_table
+from floorscan.select.coverage import OBJECTIVE_COLUMN
+from floorscan.select.deliverables import recommended_k, scan_list, write_scan_list, write_selected_points
+from floorscan.select.recording import read_detection, write_reduced_recording
+
+log = logging.getLogger(__name__)
+
+
+def objective_of(ordering, name: str):
+    """The cumulative objective of an ordering's table in rank order, and its unit:
+    the coverage orderings' own objective (:data:`OBJECTIVE_COLUMN`, weighted cells),
+    else the covered hull area (m2).
+
+    Returns
+    -------
+    covered : (n,) float64 ndarray
+    unit : str
+    """
+    table = ordering.sort_values("rank", kind="stable")
+    if OBJECTIVE_COLUMN in table.columns:
+        return table[OBJECTIVE_COLUMN].to_numpy(dtype="float64"), "cells"
+    return table["covered_area_m2"].to_numpy(dtype="float64"), "m2"
+
+
+def reduced_recording_name(source: str | os.PathLike) -> str:
+    """File or folder name of the reduced recording inside ``selection/recording/``:
+    the recording's own name (a ROS2 bag given by its ``.db3`` / ``.mcap`` file: its
+    folder's name)."""
+    src = Path(source)
+    if src.suffix.lower() in (".db3", ".mcap"):
+        return src.parent.name
+    return src.name
+
+
+def write_selection(
+    ordering_path: str | os.PathLike,
+    ordering_name: str,
+    index_path: str | os.PathLike,
+    registration_path: str | os.PathLike,
+    registered_path: str | os.PathLike,
+    recording_path: str | os.PathLike,
+    dataset: Mapping[str, Any],
+    select_cfg: Mapping[str, Any],
+    outputs: Mapping[str, str | os.PathLike],
+) -> dict:
+    """Pick k, write the scan list, the points and the reduced recording.
+
+    Parameters
+    ----------
+    ordering_path : path
+        ``orderings/<ordering_name>.parquet``.
+    ordering_name : str
+        ``select.default_ordering``.
+    index_path, registration_path, registered_path : path
+        ``scan_index.parquet``, ``registration.parquet``, ``registered.parquet``.
+    recording_path : path
+        The recording ingest read.
+    dataset : mapping
+        The dataset as ingest read it (``format``, ``path``, ``locations``).
+    select_cfg : mapping
+        The ``select`` config section as the schema fills it (``k``, ``k_coverage``).
+    outputs : mapping
+        Paths ``scans`` (CSV), ``ply``, ``pcd``, ``recording`` (a folder, made here) and
+        ``summary`` (JSON).
+
+    Returns
+    -------
+    dict
+        The content of ``selection.json``.
+
+    Raises
+    ------
+    ValueError
+        From :func:`recommended_k` (a bad rule, an empty ordering).
+    floorscan.io.InputError
+        When the recording no longer holds the scans ingest numbered.
+    """
+    ordering = read_table(ordering_path)
+    covered, unit = objective_of(ordering, ordering_name)
+    k, reason = recommended_k(covered, select_cfg["k"], float(select_cfg["k_coverage"]), objective=ordering_name,
+                              unit=unit)
+    log.info("%s", reason)
+    index = read_table(index_path)
+    registration = read_table(registration_path)
+    table = scan_list(ordering, k, index, registration)
+    write_scan_list(table, outputs["scans"])
+    ids = table["scan_id"].astype(int).tolist()
+    n_points = write_selected_points(registered_path, ids, outputs["ply"], outputs["pcd"])
+    log.info("scan list %s; %d points of the %d scans in %s and %s", outputs["scans"], n_points, k,
+             outputs["ply"], outputs["pcd"])
+    detection = read_detection(index_path, dataset)
+    folder = Path(outputs["recording"])
+    folder.mkdir(parents=True, exist_ok=True)
+    out = folder / reduced_recording_name(recording_path)
+    rec = write_reduced_recording(recording_path, detection.get("format") or dataset.get("format"), ids, out,
+                                  detection)
+    log.info("reduced recording %s: %d of %d messages, %d bytes of %d (%.1f %%)", out, rec["messages_out"],
+             rec["messages_in"], rec["bytes_out"], rec["bytes_in"], 100.0 * rec["bytes_out"] / max(rec["bytes_in"], 1))
+    summary = {
+        "dataset": str(dataset.get("name", "")),
+        "ordering": ordering_name,
+        "k": int(k),
+        "k_rule": select_cfg["k"],
+        "k_coverage": float(select_cfg["k_coverage"]),
+        "reason": reason,
+        "n_kept": int(len(ordering)),
+        "n_recorded": int(len(index)),
+        "n_points": int(n_points),
+        "scans": str(outputs["scans"]),
+        "points": [str(outputs["ply"]), str(outputs["pcd"])],
+        "recording": {**{k_: v for k_, v in rec.items() if k_ != "path"}, "path": str(out)},
+    }
+    with atomic_path(outputs["summary"]) as tmp:
+        Path(tmp).write_text(json.dumps(summary, indent=2, sort_keys=True) + "\n")
+    return summary
+
+
+def read_selection(path: str | os.PathLike) -> dict:
+    """``selection.json`` as written by :func:`write_selection`."""
+    return json.loads(Path(path).read_text())
+
+
+def answer_lines(datasets, results: str | os.PathLike = "results") -> list[str]:
+    """What a finished run prints: per dataset, where the floor plan, the scan list,
+    the reduced recording and the report are, and k with its size reduction. Datasets
+    whose selection was not made are skipped."""
+    lines = []
+    root = Path(results)
+    for ds in datasets:
+        summary_path = root / ds / "selection" / "selection.json"
+        if not summary_path.is_file():
+            continue
+        s = read_selection(summary_path)
+        rec = s["recording"]
+        lines.append(f"{ds}: {s['k']} of {s['n_kept']} kept scans ({s['n_recorded']} recorded), {s['ordering']}")
+        plan = root / ds / "floorplan.svg"
+        if plan.is_file():
+            lines.append(f"  floor plan:         {root / ds}/floorplan.{{geojson,svg,dxf,ifc}}")
+        lines.append(f"  scan list:          {s['scans']}")
+        lines.append(
+            f"  reduced recording:  {rec['path']} ({_mb(rec['bytes_out'])} of {_mb(rec['bytes_in'])}, "
+            f"{rec['scan_messages_out'] if 'scan_messages_out' in rec else s['k']} scans)"
+        )
+        lines.append(f"  points (PLY, PCD):  {s['points'][0]}, {s['points'][1]}")
+        front = root / ds / "front.html"
+        if front.is_file():
+            lines.append(f"  front page:         {front}")
+    report = root / "report.html"
+    if lines and report.is_file():
+        lines.append(f"report: {report}")
+    return lines
+
+
+def _mb(n: int) -> str:
+    return f"{n / 1e6:.1f} MB" if n >= 1e5 else f"{n / 1e3:.1f} kB"

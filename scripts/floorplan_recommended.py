@@ -1,0 +1,15 @@
+"""Stage floorplan, the recommended plan: the merged walls of the selected scans
+(selection/scans.csv) as results/<dataset>/floorplan.{geojson,svg,dxf,ifc}."""
+from floorscan.floorplan import write_recommended_floorplan
+from floorscan.workflow import stage_log
+
+with stage_log(snakemake) as log:  # noqa: F821
+    smk = snakemake  # noqa: F821
+    outputs = {path.rsplit(".", 1)[1]: path for path in smk.output}
+    plan = write_recommended_floorplan(
+        smk.input.scans, smk.input.walls, smk.input.index, outputs, smk.params.cfg,
+        dataset=smk.wildcards.dataset, ordering=smk.params.ordering, extractor=smk.params.extractor,
+    )
+    log.info("floor plan of %d selected scans (%s, %s walls): %d walls, %d faces -> %s",
+             plan["n_scans"], smk.params.ordering, smk.params.extractor, plan["n_walls"], plan["n_faces"],
+             ", ".join(outputs.values()))

@@ -1,0 +1,14 @@
+"""The report's front page of a dataset (floorscan.report): the answer on one page."""
+from floorscan.report import write_front_page_of_files
+from floorscan.workflow import stage_log
+
+with stage_log(snakemake) as log:  # noqa: F821
+    smk = snakemake  # noqa: F821
+    write_front_page_of_files(
+        smk.output.front, smk.wildcards.dataset,
+        floorplan_svg=smk.input.floorplan_svg, floorplan_geojson=smk.input.floorplan_geojson,
+        selection=smk.input.selection, registration=smk.input.registration, index=smk.input.index,
+        summary=smk.input.get("summary"), quality_png=smk.input.get("quality_png"),
+        extractor=smk.params.extractor, description=smk.params.description,
+    )
+    log.info("front page %s", smk.output.front)

@@ -1,0 +1,232 @@
+"""The front page (floorscan.report) from small inputs, and workflow.rst including it the
+way Snakemake's report renders its workflow description."""
+
+import json
+import math
+import re
+from html.parser import HTMLParser
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import pandas as pd  # noqa: E402
+import pytest  # noqa: E402
+
+from floorscan import report as R  # noqa: E402
+
+REPO = Path(__file__).resolve().parents[1]
+
+SVG = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n'
+    '<svg xmlns="http://www.w3.org/2000/svg" width="333" height="305" viewBox="-0.8 -7.0 8.3 7.6">\n'
+    "<title>toy plan</title>\n"
+    '<g transform="scale(1,-1)"><g id="walls" fill="#9a9a9a">'
+    '<polygon points="0,0 6,0 6,0.1 0,0.1"/></g>'
+    '<g id="axes" stroke="#c00"><line x1="0" y1="0.05" x2="6" y2="0.05"><title>wall 0</title></line></g></g>\n'
+    "</svg>\n"
+)
+VERDICT = {
+    "ok": True, "line": "GOOD: kept 76 of 76 sampled scans (100 %); map consistency 0.88 (1764 revisited points)",
+    "n_sampled": 76, "n_kept": 76, "kept_fraction": 1.0, "consistency": 0.88, "n_revisited": 1764,
+    "problems": [], "warnings": [],
+}  # fmt: skip
+DETECTED = {"format": "rosbag", "scan_topic": "/scan", "pose_source": "topic /amcl_pose", "stamps": "recorded",
+            "pose_kind": "map", "dataset": "toy"}
+
+
+def _summary() -> pd.DataFrame:
+    nan = math.nan
+    rows = [
+        ("cluster_ransac", "oracle", 1, 4, nan, 0.867, nan, 1.0),
+        ("cluster_ransac", "random", 10, 10, 4, 0.782, 0.028, 2.48),
+        ("cluster_ransac", "wall_coverage", 1, 4, nan, 0.853, nan, 1.0),
+    ]
+    out = []
+    for extractor, ordering, n_seeds, k95, k95_sd, auc, auc_sd, over in rows:
+        out.append({
+            "dataset": "toy", "extractor": extractor, "ordering": ordering, "n_seeds": n_seeds, "f1_all": 0.932,
+            "k_95": float(k95), "fraction_kept_95": k95 / 76, "fraction_recorded_95": k95 / 321,
+            "k_95_seed_sd": float(k95_sd), "k_99": float(k95 + 1), "fraction_kept_99": (k95 + 1) / 76,
+            "fraction_recorded_99": (k95 + 1) / 321, "k_99_seed_sd": nan, "auc": auc, "auc_seed_sd": auc_sd,
+            "k95_over_oracle": over,
+        })  # fmt: skip
+    return pd.DataFrame(out)
+
+
+class _Tables(HTMLParser):
+    """Rows of the page's tables as lists of cell texts, and the class of each row."""
+
+    def __init__(self):
+        super().__init__()
+        self.rows, self.row_classes, self._cell = [], [], None
+
+    def handle_starttag(self, tag, attrs):
+        if tag == "tr":
+            self.rows.append([])
+            self.row_classes.append(dict(attrs).get("class", ""))
+        elif tag in ("td", "th"):
+            self._cell = []
+
+    def handle_endtag(self, tag):
+        if tag in ("td", "th") and self._cell is not None:
+            self.rows[-1].append("".join(self._cell).strip())
+            self._cell = None
+
+    def handle_data(self, data):
+        if self._cell is not None:
+            self._cell.append(data)
+
+
+def _tiny_png(path: Path) -> Path:
+    fig, ax = plt.subplots(figsize=(1, 1))
+    ax.plot([0, 1], [0, 1])
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def _page(tmp_path, **kw):
+    args = dict(
+        floorplan_svg=SVG, summary=_summary(), verdict=VERDICT, detected=DETECTED, mode="pose",
+        quality_png=_tiny_png(tmp_path / "quality_vs_k.png"), scan_list="results/toy/selection/scans.csv",
+        k=4, n_kept=76, n_recorded=321, bytes_in=3_456_789, bytes_out=61_234,
+        k_reason="k = 4: the first k scans reach 99 % of the coverage of all 76.",
+        ordering="wall_coverage", extractor="cluster_ransac", n_walls=16, description="A toy building",
+    )  # fmt: skip
+    args.update(kw)
+    return R.front_page("toy", **args)
+
+
+def test_front_page_holds_the_plan_the_verdict_the_detection_and_the_table(tmp_path):
+    page = _page(tmp_path)
+    # the floor plan inline, scaled by its viewBox, without its XML declaration
+    assert "<?xml" not in page
+    svg = re.search(r"<svg\b[^>]*>", page).group(0)
+    assert 'viewBox="-0.8 -7.0 8.3 7.6"' in svg and "width=" not in svg and "height=" not in svg
+    assert '<line x1="0" y1="0.05" x2="6" y2="0.05">' in page
+    assert "The recommended floor plan, 16 walls, from the first 4 scans of the wall_coverage ordering" in page
+    # the verdict, coloured by its first word
+    assert '<p class="verdict good">Registration: GOOD: kept 76 of 76 sampled scans (100 %)' in page
+    # the quality figure as a data URI: the page stands alone
+    assert 'src="data:image/png;base64,iVBORw0KGgo' in page
+    tables = _Tables()
+    tables.feed(page)
+    rows = {r[0]: r[1:] for r in tables.rows if len(r) == 2}
+    assert rows["scans used"] == ["4 of 76 kept, 321 recorded (1.2 %)"]
+    assert rows["recording"] == ["3.46 MB → 61.2 kB (1.8 %)"]
+    assert rows["scan list"] == ["results/toy/selection/scans.csv"]
+    assert rows["format"] == ["rosbag"] and rows["scan topic"] == ["/scan"]
+    assert rows["pose source"] == ["topic /amcl_pose"] and rows["registered in"] == ["pose mode"]
+    # the summary: one row per ordering, the cells as summary.md has them (± for random's seeds)
+    summary_rows = [(r, c) for r, c in zip(tables.rows, tables.row_classes) if len(r) == len(R.SUMMARY_COLUMNS)]
+    assert [r[0] for r, _ in summary_rows[:1]] == ["extractor"]  # the header
+    body = {r[1]: (r, c) for r, c in summary_rows[1:]}
+    assert sorted(body) == ["oracle", "random", "wall_coverage"]
+    assert body["random"][0] == ["cluster_ransac", "random", "0.932", "10 ± 4", "0.132", "0.031", "11", "0.145",
+                                 "0.034", "0.782 ± 0.028", "2.48"]
+    assert body["wall_coverage"][0][3] == "4" and body["wall_coverage"][1] == "recommended"
+    assert body["oracle"][1] == "bound"
+    assert "wall_coverage beats random with cluster_ransac" in page
+    assert "k = 4: the first k scans reach 99 %" in page
+
+
+def test_front_page_can_sit_in_the_reports_script_string(tmp_path):
+    # Snakemake puts the workflow description, which includes the page, in a <script>
+    page = _page(tmp_path, description="</script><script>alert(1)</script>", verdict="POOR: <b>bad</b>")
+    assert "<script" not in page.lower() and "</script" not in page.lower() and "<!--" not in page
+    assert '<p class="verdict poor">Registration: POOR: &lt;b&gt;bad&lt;/b&gt;</p>' in page
+    with pytest.raises(ValueError, match="script"):
+        R.inline_svg(SVG.replace("<title>toy plan</title>", "<script>x()</script>"))
+    with pytest.raises(ValueError, match="no <svg>"):
+        R.inline_svg("<html></html>")
+
+
+def test_front_page_without_evaluation_or_selection(tmp_path):
+    page = R.front_page("toy", floorplan_svg=SVG, verdict=None, detected={})
+    assert "Not evaluated in this run" in page
+    assert "Registration: no verdict recorded." in page
+    assert "<h3>Scans</h3>" not in page and "data:image/png" not in page
+    assert "registered in</th><td>pose mode" in page
+
+
+def test_write_front_page_writes_the_page_and_no_temporary_file(tmp_path):
+    out = tmp_path / "toy" / "front.html"
+    text = R.write_front_page(out, "toy", floorplan_svg=SVG, summary=_summary(), verdict=VERDICT)
+    assert out.read_text(encoding="utf-8") == text
+    assert [p.name for p in out.parent.iterdir()] == ["front.html"]
+
+
+def test_front_page_of_the_stage_outputs(tmp_path):
+    from floorscan.floorplan import build_floorplan, write_geojson, write_svg
+    from floorscan.io import SCAN_INDEX, write_table
+
+    segments = pd.DataFrame(
+        [(0, 0, 6, 0), (6, 0.2, 0, 0.2), (6, 0, 6, 4), (0, 4, 0, 0)], columns=["x0", "y0", "x1", "y1"]
+    ).assign(n_inliers=100)
+    plan = build_floorplan(segments)
+    write_svg(plan, tmp_path / "floorplan.svg")
+    write_geojson(plan, tmp_path / "floorplan.geojson")
+    selection = {
+        "dataset": "toy", "ordering": "wall_coverage", "k": 3, "reason": "k = 3 by the rule", "n_kept": 30,
+        "n_recorded": 40, "scans": "results/toy/selection/scans.csv",
+        "recording": {"bytes_in": 2_000_000, "bytes_out": 150_000, "path": "results/toy/selection/recording/x.bag"},
+    }  # fmt: skip
+    (tmp_path / "selection.json").write_text(json.dumps(selection))
+    index = pd.DataFrame({"scan_id": range(40), "t_ns": range(40), "n_points": 10, "n_dropped": 0, "frame": "laser"})
+    write_table(index, tmp_path / "scan_index.parquet", SCAN_INDEX, metadata=DETECTED)
+    write_table(pd.DataFrame({"scan_id": [0, 1]}), tmp_path / "registration.parquet",
+                metadata={"verdict": json.dumps(VERDICT), "mode": "odometry"})
+    summary = _summary()
+    write_table(summary, tmp_path / "summary.parquet")
+    out = tmp_path / "front.html"
+    page = R.write_front_page_of_files(
+        out, "toy", floorplan_svg=tmp_path / "floorplan.svg", floorplan_geojson=tmp_path / "floorplan.geojson",
+        selection=tmp_path / "selection.json", registration=tmp_path / "registration.parquet",
+        index=tmp_path / "scan_index.parquet", summary=tmp_path / "summary.parquet",
+        quality_png=_tiny_png(tmp_path / "q.png"), extractor="cluster_ransac",
+    )  # fmt: skip
+    assert out.read_text(encoding="utf-8") == page
+    assert f"The recommended floor plan, {len(plan.walls)} walls, from the first 3 scans" in page
+    assert "toy: floor plan from 3 of 40 recorded scans" in page
+    assert "2 MB → 150 kB (7.5 %)" in page and "k = 3 by the rule" in page
+    assert "odometry mode" in page and "GOOD: kept 76" in page
+    assert page.count("<tr") == len(summary) + 1 + 3 + 5  # summary and header; scans; 4 detected, the mode
+
+
+@pytest.mark.filterwarnings("ignore:Argument \"writer_name\":PendingDeprecationWarning")  # as Snakemake calls it
+def test_workflow_description_includes_each_front_page(tmp_path, monkeypatch):
+    """workflow.rst rendered as Snakemake 9.27 renders the report's workflow description
+    (snakemake/report/__init__.py, auto_report: jinja with ``snakemake.config``,
+    ``categories``, ``files``, then docutils to HTML) includes each dataset's front page,
+    before the text on the workflow, with no docutils error."""
+    from docutils.core import publish_parts
+    from jinja2 import Environment
+    from snakemake.report import Category
+
+    monkeypatch.chdir(tmp_path)  # the report is made in the workflow's directory
+    fronts = {}
+    for ds in ("beta", "alpha"):
+        path = Path("results") / ds / "front.html"
+        R.write_front_page(path, ds, floorplan_svg=SVG, summary=_summary(), verdict=VERDICT)
+        fronts[ds] = type("Record", (), {"name": path.name, "path": path})()
+    figure = type("Record", (), {"name": "quality_vs_k.png", "path": Path("results/alpha/q.png")})()
+    categories = {
+        Category("Scoring"): {Category("alpha"): [figure]},
+        Category("Floor plan"): {Category(ds): [rec] for ds, rec in fronts.items()},
+    }
+
+    class Snakemake:
+        config = {"target": ["beta", "alpha"]}
+
+    text = (REPO / "workflow" / "report" / "workflow.rst").read_text()
+    rst = Environment(trim_blocks=True, lstrip_blocks=True).from_string(text).render(
+        snakemake=Snakemake, categories=categories, files=[figure, *fronts.values()]
+    )
+    body = publish_parts(rst, writer_name="html")["html_body"]
+    assert "System Message" not in body and "system-message" not in body
+    alpha, beta = body.index('id="front-alpha"'), body.index('id="front-beta"')
+    assert alpha < beta < body.index("How the workflow works")
+    assert body.count("<svg") == 2 and "No front page in this report" not in body
+    assert "#app .prose.max-w-lg" in body  # the report's layout opened up for the pages

@@ -1,0 +1,103 @@
+# Floor plans (floorscan.floorplan; thesis Chapter 1's purpose): merged walls, one wall
+# per wall with its thickness, as GeoJSON, SVG, DXF and IFC.
+#
+#   recommended_floorplan: the answer, results/<dataset>/floorplan.*: the walls of the
+#               scans of selection/scans.csv (select.default_ordering, select.k) by
+#               floorplan.extractor
+#   floorplan:  the evaluation grid, evaluation/floorplan/<ordering>_<extractor>_k<k>.*:
+#               every ordering x k of walls.k, one job per extractor, in the formats of
+#               floorplan.evaluation_formats (GeoJSON, which is scored, and SVG)
+stage_schema_check("floorplan")
+
+# Must match floorscan.floorplan.FLOORPLAN_FORMATS (kept literal: no package import at
+# parse time).
+FLOORPLAN_FORMATS = ("geojson", "svg", "dxf", "ifc")
+
+
+def plan_extractor(wildcards):
+    """floorplan.extractor, which must be one of walls.extractors."""
+    extractor = stage_config("floorplan")(wildcards)["extractor"]
+    extractors = list(stage_config("walls")(wildcards)["extractors"])
+    if extractor not in extractors:
+        raise ValueError(f"floorplan.extractor {extractor!r} is not one of walls.extractors {extractors}")
+    return extractor
+
+
+def recommended_floorplan_inputs(wildcards):
+    ds = wildcards.dataset
+    return {
+        "scans": f"results/{ds}/selection/scans.csv",
+        "walls": f"results/{ds}/walls/{plan_extractor(wildcards)}/per_scan.parquet",
+        "index": f"results/{ds}/scan_index.parquet",
+    }
+
+
+def floorplan_grid_inputs(wildcards):
+    return {
+        "tables": [
+            f"results/{wildcards.dataset}/walls/{o}/{wildcards.extractor}/k{k}.parquet"
+            for o in config["walls"]["orderings"] for k in walls_k_names()
+        ],
+        "index": f"results/{wildcards.dataset}/scan_index.parquet",
+    }
+
+
+def floorplan_grid_config(wildcards):
+    """The floorplan section for the evaluation grid: never georeferenced (its plans
+    are scored in the map frame)."""
+    return {**stage_config("floorplan")(wildcards), "georeference": None}
+
+
+def floorplan_grid_runs(wildcards):
+    return [[o, k] for o in config["walls"]["orderings"] for k in walls_k_names()]
+
+
+rule recommended_floorplan:
+    priority: PRIORITY["floorplan"]
+    input:
+        unpack(recommended_floorplan_inputs),
+    output:
+        expand("results/{{dataset}}/floorplan.{fmt}", fmt=FLOORPLAN_FORMATS),
+    params:
+        cfg=stage_config("floorplan"),
+        extractor=plan_extractor,
+        ordering=select_default_ordering,
+    log:
+        log_path("recommended_floorplan"),
+    benchmark:
+        benchmark_path("recommended_floorplan")
+    script:
+        "../../scripts/floorplan_recommended.py"
+
+
+rule floorplan:
+    priority: PRIORITY["floorplan"]
+    input:
+        unpack(floorplan_grid_inputs),
+    output:
+        expand(
+            "results/{{dataset}}/evaluation/floorplan/{ordering}_{{extractor}}_k{k}.{fmt}",
+            ordering=config["walls"]["orderings"], k=walls_k_names(), fmt=config["floorplan"]["evaluation_formats"],
+        ),
+    wildcard_constraints:
+        extractor=WALLS_CONSTRAINTS["extractor"],
+    params:
+        cfg=floorplan_grid_config,
+        runs=floorplan_grid_runs,
+        formats=config["floorplan"]["evaluation_formats"],
+    log:
+        "results/{dataset}/logs/floorplan_{extractor}.log",
+    benchmark:
+        "results/{dataset}/benchmarks/floorplan_{extractor}.tsv"
+    script:
+        "../../scripts/floorplan.py"
+
+
+PLAN_OUTPUTS.extend(f"results/{{dataset}}/floorplan.{fmt}" for fmt in FLOORPLAN_FORMATS)
+EVALUATION_OUTPUTS.extend(
+    expand(
+        "results/{{dataset}}/evaluation/floorplan/{ordering}_{extractor}_k{k}.{fmt}",
+        ordering=config["walls"]["orderings"], extractor=config["walls"]["extractors"],
+        k=walls_k_names(), fmt=config["floorplan"]["evaluation_formats"],
+    )
+)
