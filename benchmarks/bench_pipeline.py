@@ -2,7 +2,8 @@
 and time and peak memory of every stage (issue 8; thesis Table 5.1).
 
 Run: ``.venv/bin/python -m benchmarks pipeline [--datasets hallways hallways3d
-hallways3d_6000] [--cores 2] [--workdir DIR] [--keep] [--snakemake-args '...']``
+hallways3d_6000] [--cores 2] [--target all|plan|evaluation] [--workdir DIR] [--keep]
+[--snakemake-args '...']``
 
 For each dataset the workflow runs in a copy of the repository (so ``results/`` of
 the checkout is never touched; ``PYTHONPATH`` points at the copy): first the
@@ -215,6 +216,12 @@ STAGES = (
 )  # fmt: skip
 
 
+#: Stages of the score stage (config section ``score``): the reference map, the metrics
+#: of the evaluation grid, the curves (counted under ``score``), the summary and the
+#: scoring figures.
+SCORE_STAGES = ("reference", "score_runs", "score", "score_walls_figures", "score_figures")
+
+
 def stage_of(name: str) -> str:
     """Stage of a benchmark file name (``floorplan_random_ransac`` -> ``floorplan``) or a
     script name (``hulls_shard`` -> ``hulls``); the name itself when none matches."""
@@ -280,7 +287,7 @@ def speed_probe(repeats: int = 3) -> float:
     return best * 1e3
 
 
-def run_dataset(repo: Path, dataset: str, cores: int, extra: tuple = ()) -> dict:
+def run_dataset(repo: Path, dataset: str, cores: int, extra: tuple = (), target: str = "all") -> dict:
     res = repo / "results" / dataset
     if res.exists():  # keep the simulated recording only
         for item in res.iterdir():
@@ -293,14 +300,14 @@ def run_dataset(repo: Path, dataset: str, cores: int, extra: tuple = ()) -> dict
         t_sim, _ = snakemake(repo, dataset, cores, [f"results/{dataset}/sim/recording.bag"])
         (res / "benchmarks" / "simulate.tsv").unlink(missing_ok=True)
     load_before, probe_before = os.getloadavg()[0], speed_probe()
-    wall, poller = snakemake(repo, dataset, cores, [], poll=True, extra=extra)
+    wall, poller = snakemake(repo, dataset, cores, [] if target == "all" else [target], poll=True, extra=extra)
     load_after, probe_after = os.getloadavg()[0], speed_probe()
     index = pq.read_table(res / "scan_index.parquet", columns=["t_ns", "n_points"]).to_pandas()
     duration = (index["t_ns"].max() - index["t_ns"].min()) / 1e9
     bag = res / "sim" / "recording.bag"
     kept, largest_reg, reg_points = largest_scan(res / "registered.parquet")
     return {
-        "dataset": dataset, "duration_s": duration, "scans": len(index),
+        "dataset": dataset, "target": target, "duration_s": duration, "scans": len(index),
         "largest_scan": int(index["n_points"].max()), "points": int(index["n_points"].sum()),
         "kept": kept, "largest_registered": largest_reg, "registered_points": reg_points,
         "bag_mb": bag.stat().st_size / 2**20 if bag.exists() else np.nan,
@@ -312,7 +319,7 @@ def run_dataset(repo: Path, dataset: str, cores: int, extra: tuple = ()) -> dict
 
 
 def report(r: dict, cores: int) -> None:
-    print(f"\n### {r['dataset']} (--cores {cores})")
+    print(f"\n### {r['dataset']} (target {r['target']}, --cores {cores})")
     print(f"recording: {r['duration_s']:.1f} s, {r['scans']} scans, {r['points'] / 1e6:.1f} M points, "
           f"largest scan {r['largest_scan']} points" + (f", bag {r['bag_mb']:.0f} MB" if np.isfinite(r["bag_mb"]) else ""))
     print(f"registered: {r['kept']} kept scans, {r['registered_points'] / 1e6:.2f} M points, "
@@ -335,6 +342,10 @@ def report(r: dict, cores: int) -> None:
         print(f"{st:<18}{int(row['jobs']):>5d}{row['s_total']:>10.1f}{row['s_max']:>9.1f}{row['cpu_s']:>8.1f}"
               f"{row['rss_mb']:>9.0f}{row['rss_polled_mb']:>9.0f}{row['start']:>8.1f}{row['end']:>7.1f}")
     print(f"{'sum of jobs':<18}{int(t['jobs'].sum()):>5d}{t['s_total'].sum():>10.1f}{'':>9}{cpu:>8.1f}")
+    scoring = [st for st in SCORE_STAGES if st in t.index]
+    if scoring:
+        score_cpu = t.loc[scoring, "cpu_s"].sum()
+        print(f"score stage ({', '.join(scoring)}): {score_cpu:.1f} of {cpu:.1f} CPU-s ({100 * score_cpu / cpu:.0f} %)")
     print("from s / to s: when the stage's first job started and its last job ended, seconds after Snakemake "
           "started (polled every 0.2 s)")
 
@@ -345,6 +356,8 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--cores", type=int, default=2)
     ap.add_argument("--workdir", type=Path, help="keep the copy here and reuse its simulated recordings")
     ap.add_argument("--keep", action="store_true", help="do not delete the temporary copy")
+    ap.add_argument("--target", default="all", choices=("all", "plan", "evaluation"),
+                    help="the workflow target timed: all (default), plan (the recommended plan alone), evaluation")
     ap.add_argument("--snakemake-args", default="", help="more Snakemake options for the timed run, e.g. '--scheduler greedy'")
     args = ap.parse_args(argv)
     extra = tuple(shlex.split(args.snakemake_args))
@@ -354,7 +367,7 @@ def main(argv: list[str] | None = None) -> None:
     try:
         results = []
         for ds in args.datasets:
-            r = run_dataset(repo, ds, args.cores, extra)
+            r = run_dataset(repo, ds, args.cores, extra, args.target)
             report(r, args.cores)
             results.append(r)
         print("\n### summary")
