@@ -4,7 +4,7 @@
 #      snakemake --cores 2 --config path=/data/run.bag   (a recording of your own)
 from snakemake.utils import min_version
 
-from floorscan.config import add_path_dataset, validate_config
+from floorscan.config import add_path_dataset, check_datasets, config_errors_exit, validate_config
 
 min_version("9.14.8")
 
@@ -15,9 +15,12 @@ configfile: "config/config.yaml"
 report: "workflow/report/workflow.rst"
 
 
-validate_config(config, workflow.basedir + "/workflow/schemas/config.schema.yaml")
-# `--config path=/data/run.bag`: that recording, detected, is the dataset to build
-add_path_dataset(config)
+# A bad config stops the run here with one paragraph naming the key (config_errors_exit)
+with config_errors_exit():
+    validate_config(config, workflow.basedir + "/workflow/schemas/config.schema.yaml")
+    check_datasets(config)  # empty paths, unknown buildings
+    # `--config path=/data/run.bag`: that recording, detected, is the dataset to build
+    add_path_dataset(config)
 
 
 include: "workflow/rules/common.smk"

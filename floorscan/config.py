@@ -1,12 +1,21 @@
-"""Config sections to parameter dataclasses, one rule for every stage."""
+"""The workflow config: validation against the schemas, the checks a schema cannot
+make, and config sections to parameter dataclasses (one rule for every stage).
+
+The Snakefile validates the config before any job starts (:func:`validate_config`,
+:func:`check_datasets`) inside :func:`config_errors_exit`, so that a bad value stops the
+run with one paragraph naming the key, not a traceback.
+"""
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import dataclasses
 import functools
+import math
 import os
-from typing import Any, Mapping, TypeVar
+from pathlib import Path
+from typing import Any, Iterator, Mapping, TypeVar
 
 T = TypeVar("T")
 
@@ -39,6 +48,73 @@ def dataclass_from_mapping(cls: type[T], values: Mapping[str, Any] | None, secti
 
 class ConfigError(ValueError):
     """A config value the schema rejects; the message names the field and the schema."""
+
+
+#: Where the synthetic buildings live, relative to the working directory (the
+#: repository root): ``<BUILDINGS_DIR>/<name>.yaml`` is the building ``name``.
+BUILDINGS_DIR = "config/buildings"
+
+#: What a dataset's ``path`` names, for messages.
+RECORDING_PATH = (
+    "the path of a recording: a ROS1 .bag file, a ROS2 bag folder (or its .db3 / .mcap), "
+    "a CARMEN .log or .log.gz, or a folder of .pcd scans with locations.csv"
+)
+
+
+@contextlib.contextmanager
+def config_errors_exit() -> Iterator[None]:
+    """Stop the program with the message of a :class:`ConfigError` raised inside.
+
+    For the checks of the Snakefile at parse time: Snakemake prints an exception raised
+    there with the rule file, line and a traceback; a ``SystemExit`` with a message it
+    prints as that message alone, and exits with status 1. Other exceptions (bugs) keep
+    their traceback.
+
+    Raises
+    ------
+    SystemExit
+        ``"Config error: <message>"`` for a :class:`ConfigError`.
+    """
+    try:
+        yield
+    except ConfigError as e:
+        raise SystemExit(f"Config error: {e}") from None
+
+
+def _non_finite(data: Any, path: tuple = ()) -> tuple[tuple, float] | None:
+    """The first float of a nested config (mappings and lists) that is NaN or
+    infinite, as (key path, value); None when every number is finite."""
+    if isinstance(data, float):
+        return None if math.isfinite(data) else (path, data)
+    if isinstance(data, Mapping):
+        items = data.items()
+    elif isinstance(data, (list, tuple)):
+        items = enumerate(data)
+    else:
+        return None
+    for key, value in items:
+        found = _non_finite(value, (*path, key))
+        if found is not None:
+            return found
+    return None
+
+
+def _field(section: str, path) -> str:
+    """``section.key.key...``; the keys alone for the whole config (section ``config``)."""
+    keys = [str(p) for p in path]
+    return ".".join(keys if section == "config" and keys else [section, *keys])
+
+
+def _message(error, section: str) -> str:
+    """One line for a jsonschema ``ValidationError``: the field and what is wrong; for
+    an unknown key the known ones (``additionalProperties: false``)."""
+    field = _field(section, error.absolute_path)
+    schema = error.schema if isinstance(error.schema, dict) else {}
+    known = schema.get("properties")
+    if error.validator == "additionalProperties" and error.validator_value is False and known:
+        unknown = sorted(str(k) for k in error.instance if k not in known)
+        return f"{field}: unknown keys {unknown}; expected one of {sorted(known)}"
+    return f"{field}: {error.message}"
 
 
 @functools.lru_cache(maxsize=None)
@@ -85,7 +161,8 @@ def validate_config(data: dict, schema_path: str | os.PathLike, section: str = "
     schema_path : path
         The schema, YAML or JSON.
     section : str
-        Where ``data`` sits in the config, for the message (e.g. ``"walls"``).
+        Where ``data`` sits in the config, for the message (e.g. ``"walls"``);
+        ``"config"``, the whole config: the message names the keys alone.
 
     Returns
     -------
@@ -96,7 +173,10 @@ def validate_config(data: dict, schema_path: str | os.PathLike, section: str = "
     ------
     ConfigError
         The first value the schema rejects, naming its field (``section.key...``), what
-        the schema expects and the schema file.
+        the schema expects and the schema file; an unknown key with the known ones. Any
+        number that is NaN or infinite (YAML ``.nan``, ``.inf``), wherever it is: a JSON
+        schema's ``type: number`` and bounds let them through (NaN compares false with
+        every bound).
     """
     import jsonschema
 
@@ -104,9 +184,49 @@ def validate_config(data: dict, schema_path: str | os.PathLike, section: str = "
     try:
         validator.validate(data)
     except jsonschema.ValidationError as e:
-        field = ".".join([section, *(str(p) for p in e.absolute_path)])
-        raise ConfigError(f"{field}: {e.message} (schema {os.fspath(schema_path)})") from None
+        raise ConfigError(f"{_message(e, section)} (schema {os.fspath(schema_path)})") from None
+    found = _non_finite(data)
+    if found is not None:
+        raise ConfigError(f"{_field(section, found[0])}: {found[1]!r}: expected a finite number, not NaN or infinity")
     return data
+
+
+def known_buildings(buildings_dir: str | os.PathLike = BUILDINGS_DIR) -> list[str]:
+    """Names of the synthetic buildings: the ``<name>.yaml`` files of ``buildings_dir``
+    (:func:`floorscan.building.load_building` reads one), sorted."""
+    folder = Path(buildings_dir)
+    return sorted(p.stem for p in folder.glob("*.yaml")) if folder.is_dir() else []
+
+
+def check_datasets(config: Mapping, buildings_dir: str | os.PathLike = BUILDINGS_DIR) -> None:
+    """What the schema cannot check of a validated config's recordings.
+
+    Parameters
+    ----------
+    config : mapping
+        The workflow config after :func:`validate_config`.
+    buildings_dir : path
+        The folder of the synthetic buildings (``<name>.yaml``).
+
+    Raises
+    ------
+    ConfigError
+        A ``path`` (top-level or of a dataset) that is empty, saying what a path names;
+        a synthetic dataset's ``building`` without a file in ``buildings_dir``, listing
+        the known buildings.
+    """
+    if "path" in config and not str(config["path"] or "").strip():
+        raise ConfigError(f"path (--config path=...) is empty; expected {RECORDING_PATH}")
+    for name, ds in (config.get("datasets") or {}).items():
+        if ds.get("format") == "synthetic":
+            building = str(ds.get("building"))
+            if not (Path(buildings_dir) / f"{building}.yaml").is_file():
+                raise ConfigError(
+                    f"datasets.{name}.building: no building {building!r}; expected one of "
+                    f"{known_buildings(buildings_dir)} (the files {os.fspath(buildings_dir)}/<name>.yaml)"
+                )
+        elif "path" in ds and not str(ds["path"] or "").strip():
+            raise ConfigError(f"datasets.{name}.path is empty; expected {RECORDING_PATH}")
 
 
 def _same_file(a: str | None, b: str) -> bool:

@@ -1526,6 +1526,11 @@ def _write_dxf(
         if version != "R12":
             for key, value in pairs:
                 doc.header.custom_vars.append(key, value)
+            # ezdxf registers a CLASS per entity type in use in the order of a set
+            # (ClassesSection.add_required_classes), which follows the hash seed;
+            # registered all now and sorted, they keep their places when it writes
+            doc.classes.add_required_classes(doc.dxfversion)
+            doc.classes.classes = dict(sorted(doc.classes.classes.items()))
         stream = io.StringIO()
         doc.write(stream)
     data = doc.encode(stream.getvalue())

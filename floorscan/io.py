@@ -3,6 +3,11 @@
 Every stage of the workflow exchanges Parquet files (pyarrow) with the explicit
 schemas below, and geometry as WKB (little-endian, 2D) or GeoJSON. Writers go to a
 temporary name in the target folder and rename, so a crash never leaves a half file.
+A temporary of an output ``name`` is a hidden sibling ``.<name>.*`` (:func:`atomic_path`:
+``.<name>.<8 characters>.tmp``); one left by a killed run is removed by the next run of
+the stage (:func:`remove_stale_temporaries`, called by
+:func:`floorscan.workflow.stage_log` for every output of the job) and by the next
+:func:`atomic_path` of the same file.
 
 Units are in the column names where they are not obvious: ``t_ns`` is nanoseconds
 since the Unix epoch, ``*_m`` metres, ``*_rad`` radians, ``area_m2`` square metres.
@@ -74,6 +79,9 @@ class InputError(ValueError):
 _UMASK = os.umask(0)
 os.umask(_UMASK)
 
+#: The random part of a ``tempfile.mkstemp`` / ``mkdtemp`` name (8 characters).
+_MKSTEMP_CHARS = r"[a-z0-9_]{8}"
+
 
 def _tmp_path(path: Path) -> Path:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
@@ -81,15 +89,66 @@ def _tmp_path(path: Path) -> Path:
     return Path(tmp)
 
 
+def stale_temporaries(path: str | os.PathLike, only_atomic: bool = False) -> list[Path]:
+    """The temporaries of output ``path`` present beside it, sorted.
+
+    A writer of ``path`` names its temporaries ``.<name>.*`` in the same folder: files
+    of :func:`atomic_path` (``.<name>.<8 characters>.tmp``), folders of
+    ``floorscan.select.deliverables.staged_path`` and the simulator (``...tmp``,
+    ``...old``), the register stage's copy of the sampled scans
+    (``.<name>.sampled.parquet``). Run while no job writes ``path`` (a stage's outputs
+    are its own), they are left by a killed run.
+
+    Parameters
+    ----------
+    path : path
+        An output file or folder.
+    only_atomic : bool
+        Only the files :func:`atomic_path` makes.
+
+    Returns
+    -------
+    list of Path
+    """
+    import re
+
+    path = Path(path)
+    if not path.name or not path.parent.is_dir():
+        return []
+    tail = rf"{_MKSTEMP_CHARS}\.tmp" if only_atomic else r".+"
+    pattern = re.compile(rf"\.{re.escape(path.name)}\.{tail}")
+    return sorted(p for p in path.parent.iterdir() if pattern.fullmatch(p.name))
+
+
+def remove_stale_temporaries(path: str | os.PathLike, only_atomic: bool = False) -> list[Path]:
+    """Remove :func:`stale_temporaries` of ``path`` (files and folders); returns them.
+
+    Call it before a stage writes ``path``: a run killed with SIGKILL (or a machine
+    that went down) cannot remove its temporaries, and Snakemake does not know them.
+    """
+    import shutil
+
+    found = stale_temporaries(path, only_atomic)
+    for p in found:
+        if p.is_dir() and not p.is_symlink():
+            shutil.rmtree(p, ignore_errors=True)
+        else:
+            with contextlib.suppress(FileNotFoundError):
+                p.unlink()
+    return found
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it to ``path`` on success.
 
     On an exception the temporary file is removed and ``path`` is left untouched,
-    so a failed stage leaves no half-written output.
+    so a failed stage leaves no half-written output. Temporaries of ``path`` that an
+    earlier, killed writer left (``.<name>.<8 characters>.tmp``) are removed first.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(path, only_atomic=True)
     tmp = _tmp_path(path)
     try:
         yield tmp
@@ -186,6 +245,16 @@ def read_metadata(path: str | os.PathLike) -> dict[str, str]:
     metadata (pyarrow's and pandas' own keys left out); the data is not read."""
     meta = pq.read_schema(path).metadata or {}
     return {k.decode(): v.decode() for k, v in meta.items() if k not in _LIBRARY_METADATA}
+
+
+def recording_source(path: str | os.PathLike) -> str | None:
+    """The user's recording an ingest table (``scans``, ``scan_index``, ``pose_stream``)
+    was read from, for messages: ingest's ``source`` metadata, the file and the scan
+    topic (e.g. ``/data/run.bag /scan``); None when the table has none or is unreadable."""
+    try:
+        return read_metadata(path).get("source")
+    except (OSError, pa.ArrowException):
+        return None
 
 
 def write_json(obj: object, path: str | os.PathLike) -> None:

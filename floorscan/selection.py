@@ -79,7 +79,8 @@ ORDERING = pa.schema(
 TARGET_FRACTIONS = (0.90, 0.95, 0.99)
 
 #: ``orderings/summary.parquet``: per ordering the number of scans reaching 90/95/99 %
-#: of its final covered area.
+#: of its final covered area. No timing: the same input gives the same file (the time
+#: to compute each ordering is in the select stage's log).
 SUMMARY = pa.schema(
     [
         ("ordering", pa.string()),
@@ -89,7 +90,6 @@ SUMMARY = pa.schema(
         ("k_90", pa.int32()),
         ("k_95", pa.int32()),
         ("k_99", pa.int32()),
-        ("seconds", pa.float64()),
     ]
 )
 
@@ -768,7 +768,9 @@ def summarize(orderings: Mapping[str, pd.DataFrame], seconds: Mapping[str, float
               zero_area: int = 0) -> pd.DataFrame:
     """Per ordering the k reaching 90/95/99 % of its final covered area (Fig. 5.6).
 
-    Returns a frame in the :data:`SUMMARY` schema.
+    Returns a frame of the :data:`SUMMARY` columns and ``seconds``, the time to compute
+    each ordering (``seconds``; NaN when not given), for the log: ``write_table(summary,
+    path, schema=SUMMARY)`` leaves it out of the file.
     """
     rows = []
     for name, o in orderings.items():
@@ -783,7 +785,7 @@ def summarize(orderings: Mapping[str, pd.DataFrame], seconds: Mapping[str, float
                 "seconds": float((seconds or {}).get(name, np.nan)),
             }
         )
-    return pd.DataFrame(rows, columns=SUMMARY.names)
+    return pd.DataFrame(rows, columns=[*SUMMARY.names, "seconds"])
 
 
 # ----------------------------------------------------------------------------------
@@ -811,7 +813,7 @@ def select_orderings(
     -------
     orderings : dict name -> DataFrame (``rank, scan_id, covered_area_m2, gain_m2``),
         covered area always of the cluster-hull union, so orderings are comparable.
-    summary : DataFrame in the :data:`SUMMARY` schema.
+    summary : DataFrame of the :data:`SUMMARY` columns and ``seconds`` (:func:`summarize`).
 
     Raises
     ------

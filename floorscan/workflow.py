@@ -6,8 +6,19 @@ A stage script is thin::
     with stage_log(snakemake) as log:
         ...  # read snakemake.input / params, call one package function, write outputs
 
-Everything logged through :mod:`logging` (and any exception with its traceback) goes
-to the rule's ``log:`` file and to stderr.
+Everything logged through :mod:`logging` goes to the rule's ``log:`` file and to
+stderr. A failure goes to the log file alone, which Snakemake prints when the job
+fails (``show-failed-logs`` of the default profile), so it is printed once:
+
+- an expected error (:data:`EXPECTED_ERRORS`: bad input, a bad config value, a
+  recording too poor to register) as one paragraph that names the user's recording,
+  without a traceback; the script then exits with status 1 (``SystemExit``, which
+  Python ends without a traceback);
+- any other exception (a bug) with its traceback, and re-raised: Python prints it.
+
+Either way the job fails and Snakemake removes its outputs. Before the stage runs,
+temporaries of its outputs that a killed run left are removed
+(:func:`floorscan.io.remove_stale_temporaries`).
 
 Profiling: with the environment variable ``FLOORSCAN_PROFILE`` set to a directory, each
 stage's body runs under :mod:`cProfile` and its statistics are written there as
@@ -27,38 +38,115 @@ from typing import Any, Iterator
 
 LOG_FORMAT = "%(asctime)s %(levelname)s %(name)s: %(message)s"
 
+#: Exceptions that report bad input or a bad config, not a bug, as (module, class):
+#: :class:`floorscan.io.InputError`, :class:`floorscan.config.ConfigError`,
+#: :class:`floorscan.registration.RegistrationError` (a recording too poor to
+#: register). Looked up among the modules already imported, so none is imported here.
+EXPECTED_ERRORS = (
+    ("floorscan.io", "InputError"),
+    ("floorscan.config", "ConfigError"),
+    ("floorscan.registration", "RegistrationError"),
+)
+
+#: ``extra`` of the failure record: the stderr handler leaves it to the log file.
+_FAILURE = {"floorscan_failure": True}
+
+
+def is_expected_error(exc: BaseException) -> bool:
+    """Whether ``exc`` is one of :data:`EXPECTED_ERRORS` (or a subclass)."""
+    classes = [getattr(sys.modules.get(module), cls, None) for module, cls in EXPECTED_ERRORS]
+    return isinstance(exc, tuple(c for c in classes if isinstance(c, type)))
+
+
+def failure_message(rule: str, exc: BaseException, source: str | os.PathLike | None = None) -> str:
+    """The paragraph printed for an expected error of stage ``rule``.
+
+    Parameters
+    ----------
+    rule : str
+    exc : BaseException
+        The error; its message names the file, topic or key and what was expected.
+    source : path, optional
+        An ingest table (``scan_index.parquet``, ...) whose metadata names the user's
+        recording (:func:`floorscan.io.recording_source`): named in the paragraph when
+        the message does not name it, so that a later stage's error points at the
+        recording, not at an intermediate table.
+
+    Returns
+    -------
+    str
+        ``"<rule> failed: <message>"`` or ``"<rule> failed on <recording>: <message>"``.
+    """
+    message = str(exc).strip() or type(exc).__name__
+    recording = None
+    if source is not None:
+        from floorscan.io import recording_source
+
+        recording = recording_source(source)
+    if recording and recording.split()[0] not in message:
+        return f"{rule} failed on {recording}: {message}"
+    return f"{rule} failed: {message}"
+
+
+def _outputs(smk: Any) -> list[str]:
+    """The job's output paths (a Snakemake named list, or a mapping of names to paths)."""
+    output = getattr(smk, "output", None) or []
+    values = output.values() if isinstance(output, dict) else output
+    return [str(v) for v in values if isinstance(v, (str, os.PathLike))]
+
 
 @contextlib.contextmanager
-def stage_log(smk: Any, name: str | None = None) -> Iterator[logging.Logger]:
+def stage_log(smk: Any, name: str | None = None, source: str | os.PathLike | None = None) -> Iterator[logging.Logger]:
     """Route logging of a stage script to its Snakemake log file.
 
     Parameters
     ----------
     smk : snakemake.script.Snakemake
-        The ``snakemake`` object of the script; ``smk.log[0]`` is the log file.
+        The ``snakemake`` object of the script; ``smk.log[0]`` is the log file,
+        ``smk.output`` the job's outputs (their stale temporaries are removed first).
     name : str, optional
         Logger name; defaults to ``floorscan.<rule>``.
+    source : path, optional
+        An ingest table whose metadata names the recording, for the message of an
+        expected error (:func:`failure_message`).
 
     Yields
     ------
     logging.Logger
-        The stage's logger. An exception inside the block is logged with its
-        traceback and re-raised, so Snakemake marks the job failed and removes
-        its outputs.
+        The stage's logger.
+
+    Raises
+    ------
+    SystemExit
+        Status 1, for an error of :data:`EXPECTED_ERRORS` inside the block, logged as
+        one paragraph (:func:`failure_message`) to the log file only (to stderr when
+        there is none); the error is its ``__cause__``.
+    Exception
+        Any other exception inside the block, logged with its traceback to the log file
+        only (likewise), and re-raised. Either way Snakemake marks the job failed and
+        removes its outputs.
     """
+    from floorscan.io import remove_stale_temporaries
+
     rule = getattr(smk, "rule", "stage")
     logger = logging.getLogger(name or f"floorscan.{rule}")
     root = logging.getLogger()
     root.setLevel(logging.INFO)
-    handlers: list[logging.Handler] = [logging.StreamHandler(sys.stderr)]
+    stderr = logging.StreamHandler(sys.stderr)
+    handlers: list[logging.Handler] = [stderr]
     if len(smk.log) > 0:
         handlers.append(logging.FileHandler(smk.log[0], mode="w"))
+        # the failure goes to the log file alone, which Snakemake prints when the job fails
+        stderr.addFilter(lambda record: not getattr(record, "floorscan_failure", False))
     for h in handlers:
         h.setFormatter(logging.Formatter(LOG_FORMAT))
         root.addHandler(h)
     wildcards = dict(getattr(smk, "wildcards", {}).items()) if hasattr(smk, "wildcards") else {}
     # CPU time so far: the interpreter start and the script's imports
     logger.info("start %s %s (%.2f s CPU before the stage: start-up and imports)", rule, wildcards, time.process_time())
+    for out in _outputs(smk):
+        for tmp in remove_stale_temporaries(out):
+            logger.info("removed %s, a temporary of %s left by an earlier run that was killed", tmp, out)
     t0, c0 = time.perf_counter(), time.process_time()
     profile_dir = os.environ.get("FLOORSCAN_PROFILE")
     profiler = None
@@ -70,9 +158,12 @@ def stage_log(smk: Any, name: str | None = None) -> Iterator[logging.Logger]:
     try:
         yield logger
         logger.info("done %s in %.2f s (%.2f s CPU)", rule, time.perf_counter() - t0, time.process_time() - c0)
-    except Exception:
-        logger.exception("stage %s failed", rule)
-        raise
+    except Exception as e:
+        if not is_expected_error(e):
+            logger.exception("stage %s failed", rule, extra=_FAILURE)
+            raise
+        logger.error("%s", failure_message(rule, e, source), extra=_FAILURE)
+        raise SystemExit(1) from e
     finally:
         if profiler is not None:
             profiler.disable()

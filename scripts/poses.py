@@ -6,10 +6,13 @@ from floorscan.workflow import stage_log
 with stage_log(snakemake) as log:
     index = read_table(snakemake.input.index)
     stream = read_table(snakemake.input.pose_stream)
-    poses = scan_poses(index, stream, snakemake.params.cfg["max_gap_s"], snakemake.input.pose_stream)
+    # messages name the recording and its pose source, not the intermediate table
+    detected = read_metadata(snakemake.input.pose_stream)
+    source = f"{detected.get('source', snakemake.input.pose_stream)} (poses: {detected.get('pose_source', 'none')})"
+    poses = scan_poses(index, stream, snakemake.params.cfg["max_gap_s"], source)
     write_table(poses, snakemake.output.poses, schema=POSES)
     if stream.empty:
-        found = read_metadata(snakemake.input.pose_stream).get("pose_source", "none")
+        found = detected.get("pose_source", "none")
         log.info(
             "no map pose source in the recording (%s): none of the %d scans has a pose (no_pose_source); "
             "the register stage places them by LIDAR odometry", found, len(poses),

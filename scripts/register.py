@@ -5,7 +5,8 @@ from floorscan.io import read_metadata, read_table, write_table
 from floorscan.registration import REGISTRATION, register_recording
 from floorscan.workflow import stage_log
 
-with stage_log(snakemake) as log:
+# an error names the recording (ingest's metadata of the scan index)
+with stage_log(snakemake, source=snakemake.input.index) as log:
     # the edge ICP runs in the rule's threads (processes); the edges do not depend on it
     cfg = dict(snakemake.params.cfg)
     cfg["graph"] = {**(cfg.get("graph") or {}), "workers": snakemake.threads}

@@ -1,10 +1,11 @@
 """Stage scan_walls, one shard: wall segments of the scans of a scan range with one
 extractor, streamed scan by scan (memory holds one scan, issue 8).
-scripts/walls.py concatenates the shards."""
+scripts/scan_walls_merge.py concatenates the shards. The time of each scan goes to
+the benchmarks folder (output `times`, when the rule names one), not into the status."""
 from floorscan.core.runtime import progress
 from floorscan.io import iter_scans, write_table
 from floorscan.shards import parse_shard_label
-from floorscan.walls import SCAN_STATUS, WALLS, extract_walls
+from floorscan.walls import SCAN_STATUS, SCAN_TIMES, WALLS, extract_walls
 from floorscan.workflow import stage_log
 
 with stage_log(snakemake) as log:
@@ -16,3 +17,5 @@ with stage_log(snakemake) as log:
     meta = {"dataset": snakemake.wildcards.dataset, "extractor": extractor, "units": "metres, map frame", "shard": shard}
     write_table(walls, snakemake.output.walls, schema=WALLS, metadata=meta)
     write_table(status, snakemake.output.status, schema=SCAN_STATUS, metadata=meta)
+    if snakemake.output.get("times"):
+        write_table(status, snakemake.output.times, schema=SCAN_TIMES, metadata=meta)

@@ -1,8 +1,9 @@
 """Stage walls, for one extractor: the wall segments of every kept scan, the shards of
-scan_walls_shard concatenated in scan order (exactly the tables of one unsharded job)."""
+scan_walls_shard concatenated in scan order (exactly the tables of one unsharded job),
+and the times of each scan (benchmarks folder, output `times` when the rule names one)."""
 from floorscan.io import write_table
 from floorscan.shards import plan_from_files, read_shards
-from floorscan.walls import SCAN_STATUS, WALLS
+from floorscan.walls import SCAN_STATUS, SCAN_TIMES, WALLS
 from floorscan.workflow import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821
@@ -20,3 +21,6 @@ with stage_log(snakemake) as log:  # noqa: F821
     # through pandas, as the unsharded stage wrote them: the same file, metadata included
     write_table(walls.cast(WALLS).to_pandas(), smk.output.walls, schema=WALLS, metadata=meta)
     write_table(status, smk.output.status, schema=SCAN_STATUS, metadata=meta)
+    if smk.output.get("times"):
+        times, _ = read_shards(smk.input.shard_times, plan, f"{extractor} scan time shards")
+        write_table(times.cast(SCAN_TIMES), smk.output.times, metadata=meta)

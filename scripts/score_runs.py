@@ -39,6 +39,12 @@ with stage_log(snakemake) as log:  # noqa: F821
     # the plans against the reference map (occupancy grid of all kept scans)
     against_map = score_plans(runs, read_grid(smk.input.reference_map), tuple(cfg["taus_m"]), metrics.floorplan_faces)
     table = table.merge(against_map, on=["ordering", "extractor", "k"], how="left", validate="one_to_one")
+    # the time of each run to this log, not into the metrics (the same input gives the same file)
+    seconds = table.pop(metrics.SCORE_TIME)
+    slowest = int(seconds.to_numpy().argmax()) if len(seconds) else None
+    if slowest is not None:
+        log.info("scored %d runs in %.2f s, the slowest %.2f s (%s)", len(table), seconds.sum(), seconds.iloc[slowest],
+                 "/".join(str(table[c].iloc[slowest]) for c in ("ordering", "extractor", "k")))
     meta = {"dataset": smk.wildcards.dataset, "reference_kind": kind,
             "reference": smk.params.reference_label, "extractor": smk.wildcards.extractor}
     write_table(table, smk.output.metrics, metadata=meta)

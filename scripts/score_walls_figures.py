@@ -26,6 +26,7 @@ with stage_log(snakemake) as log:  # noqa: F821
         floorplans=floorplans,
         points=str(smk.input.registered),  # read in batches, not held whole
         scan_status={e: read_table(p) for e, p in zip(extractors, smk.input.scan_status)},
+        scan_times={e: read_table(p) for e, p in zip(extractors, smk.input.scan_times)},
         outputs=dict(smk.output.items()),
         cfg=smk.params.cfg,
         log=log,

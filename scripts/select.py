@@ -28,6 +28,7 @@ with stage_log(snakemake) as log:
         read_table(snakemake.input.registration),
         params,
     )
+    # the seconds of each ordering go to this log, not into the summary file
     log.info("orderings summary:\n%s", summary.to_string(index=False))
     meta = {"stage": "select", "dataset": snakemake.wildcards.dataset, "raster_m": params.raster_m}
     for path in snakemake.output.orderings:

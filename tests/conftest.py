@@ -278,3 +278,45 @@ def write_detection_bag(
                 for p, c in tf_links])))
     _write_messages(writer, ts, ser, msgs)
     return path
+
+
+# The whole workflow in a copy of its files (tests/test_workflow.py, test_reproducible.py,
+# test_cluster.py): the repository's results/ is never touched.
+SNAKEMAKE = Path(__import__("sys").executable).with_name("snakemake")
+
+
+def copy_workflow(dest: Path) -> Path:
+    """Copy the Snakefile, workflow/, config/ and scripts/ to ``dest`` (made), with
+    ``../shared`` beside it when the shared recordings exist."""
+    import shutil
+
+    dest.mkdir(parents=True)
+    for name in ("Snakefile", "workflow", "config", "scripts"):
+        src = REPO / name
+        if src.is_dir():
+            shutil.copytree(src, dest / name)
+        else:
+            shutil.copy2(src, dest / name)
+    # keep the shipped relative paths to ../shared/data valid from the copy
+    if SHARED_DATA.is_dir() and not (dest.parent / "shared").exists():
+        (dest.parent / "shared").symlink_to(SHARED_DATA.parent)
+    return dest
+
+
+def snakemake(workdir: Path, *args, timeout=900):
+    """``snakemake --cores 2 *args`` in ``workdir``; the CompletedProcess."""
+    import subprocess
+
+    return subprocess.run(
+        [str(SNAKEMAKE), "--cores", "2", *args], cwd=workdir, capture_output=True, text=True, timeout=timeout
+    )
+
+
+@pytest.fixture(scope="session")
+def demo_run(tmp_path_factory):
+    """The demo's default target run once for the session, in a copy of the workflow;
+    the workflow folder. Tests may run more targets in it, not delete its files."""
+    wd = copy_workflow(tmp_path_factory.mktemp("wf") / "floorscan")
+    res = snakemake(wd)
+    assert res.returncode == 0, res.stderr[-4000:]
+    return wd

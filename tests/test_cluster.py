@@ -15,7 +15,7 @@ import shutil
 import pyarrow.parquet as pq
 import pytest
 
-from test_workflow import copy_workflow, snakemake
+from conftest import copy_workflow, snakemake
 
 pytestmark = [pytest.mark.workflow, pytest.mark.slow]
 

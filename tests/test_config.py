@@ -120,3 +120,81 @@ def test_a_dataset_needs_a_path_unless_synthetic():
     with pytest.raises(ConfigError, match=r"datasets\.x: 'building' is a required property"):
         validate_config({"datasets": {"x": {"format": "synthetic"}}}, schema)
     validate_config({"datasets": {"x": {"path": "/d/run.bag"}}}, schema)
+
+
+# ------------------------------------------ issue 24: what a schema lets through
+
+
+SCHEMA = REPO / "workflow" / "schemas" / "config.schema.yaml"
+
+
+@pytest.mark.parametrize("value", [float("nan"), float("inf"), -float("inf")])
+def test_a_number_that_is_not_finite_is_rejected_naming_its_key(value):
+    """NaN passes a JSON schema's `type: number` and every bound (it compares false);
+    infinity passes `minimum`. Anywhere in the config, the key is named."""
+    from floorscan.config import ConfigError, validate_config
+
+    with pytest.raises(ConfigError, match=r"^poses\.max_gap_s: (nan|inf|-inf): expected a finite number"):
+        validate_config({"datasets": {"x": {"path": "/d/r.bag"}}, "poses": {"max_gap_s": value}}, SCHEMA)
+    cfg = {"datasets": {"x": {"path": "/d/r.bag", "params": {"walls": {"k": [5, value]}}}}}
+    with pytest.raises(ConfigError, match=r"^datasets\.x\.params\.walls\.k\.1: "):
+        validate_config(cfg, SCHEMA)
+    with pytest.raises(ConfigError, match=r"^walls\.ransac\.threshold_m: "):
+        validate_config({"ransac": {"threshold_m": value}}, REPO / "workflow" / "schemas" / "walls.schema.yaml", "walls")
+
+
+def test_a_misspelt_stage_under_params_lists_the_stages():
+    from floorscan.config import ConfigError, validate_config
+
+    cfg = {"datasets": {"x": {"path": "/d/r.bag", "params": {"registr": {"every_n": 5}}}}}
+    with pytest.raises(ConfigError, match=r"datasets\.x\.params: unknown keys \['registr'\]; expected one of "
+                                          r"\['floorplan', 'hulls', 'ingest', 'poses', 'register', 'score', "
+                                          r"'select', 'simulate', 'walls'\]"):
+        validate_config(cfg, SCHEMA)
+    stages = {p.name.split(".")[0] for p in SCHEMAS} - {"config"}
+    validate_config({"datasets": {"x": {"path": "/d/r.bag", "params": {s: {} for s in stages}}}}, SCHEMA)
+
+
+def test_an_empty_path_and_an_unknown_building_say_what_is_expected(tmp_path):
+    from floorscan.config import ConfigError, check_datasets
+
+    (tmp_path / "demo.yaml").write_text("")
+    (tmp_path / "office.yaml").write_text("")
+    for cfg, where in (({"datasets": {"x": {"path": ""}}}, r"datasets\.x\.path"),
+                       ({"datasets": {"x": {"path": None}}}, r"datasets\.x\.path"),
+                       ({"path": " ", "datasets": {}}, r"path \(--config path=\.\.\.\)")):
+        with pytest.raises(ConfigError, match=where + r" is empty; expected the path of a recording: a ROS1 \.bag"):
+            check_datasets(cfg, tmp_path)
+    synthetic = {"format": "synthetic", "building": "ofice", "scanner": "2d", "seed": 1}
+    with pytest.raises(ConfigError, match=r"datasets\.s\.building: no building 'ofice'; expected one of \['demo', 'office'\]"):
+        check_datasets({"datasets": {"s": synthetic}}, tmp_path)
+    check_datasets({"datasets": {"s": {**synthetic, "building": "office"}, "r": {"path": "/d/r.bag"}}}, tmp_path)
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("poses: {max_gap_s: .nan}\n", "Config error: poses.max_gap_s: nan: expected a finite number"),
+        ("datasets:\n  demo:\n    params: {registr: {every_n: 5}}\n",
+         "Config error: datasets.demo.params: unknown keys ['registr']; expected one of ['floorplan',"),
+        ("target: [x]\ndatasets:\n  x: {path: ''}\n", "Config error: datasets.x.path is empty; expected the path"),
+        ("target: [x]\ndatasets:\n  x: {format: synthetic, building: hallway, scanner: 2d, seed: 1}\n",
+         "Config error: datasets.x.building: no building 'hallway'; expected one of ['demo', 'hallways']"),
+        ("target: [nowhere]\n", "Config error: target names unknown datasets ['nowhere']"),
+        ("register: {every_nn: 3}\n", "Config error: register: unknown keys ['every_nn']; expected one of"),
+    ],
+    ids=["nan", "params_typo", "empty_path", "unknown_building", "unknown_target", "stage_key_typo"],
+)
+def test_a_bad_config_file_stops_the_run_with_one_paragraph(tmp_path, text, message):
+    """`--configfile`: the run stops before any job with the message alone, no
+    traceback and no rule file (Snakemake prints a SystemExit's message as it is)."""
+    (tmp_path / "my.yaml").write_text(text)
+    res = subprocess.run(
+        [str(SNAKEMAKE), "-n", "--cores", "1", "--configfile", str(tmp_path / "my.yaml")],
+        cwd=REPO, capture_output=True, text=True, timeout=120,
+    )
+    out = res.stdout + res.stderr
+    assert res.returncode == 1, out[-2000:]
+    errors = [line for line in out.splitlines() if "error" in line.lower()]
+    assert len(errors) == 1 and errors[0].startswith(message), out[-2000:]
+    assert 'File "' not in out and "Traceback" not in out

@@ -1,6 +1,7 @@
 """Floor plan: duplicates merge, faces pair into thick walls, exports reopen with their tools."""
 
 import json
+import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -657,3 +658,25 @@ def test_footprint_geojson_equals_shapely_to_geojson_oriented_and_rounded():
     for f, poly in zip(feats, polys[1:]):
         assert f["geometry"] == _round_coords(json.loads(shapely.to_geojson(poly)))
         assert len(f["geometry"]["coordinates"][0]) == 5 and signed_area(f["geometry"]["coordinates"][0]) > 0
+
+
+def test_dxf_bytes_do_not_depend_on_the_hash_seed(tmp_path):
+    """ezdxf orders its CLASSES section by a set of entity types; the writer sorts it, so
+    the same plan gives the same DXF in any process (seed 4 differed before)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, pandas as pd\n"
+        "from floorscan.floorplan import build_floorplan, write_dxf\n"
+        "seg = pd.DataFrame({'scan_id': [0, 0, 1, 1], 'x0': [0, 4, 0, 0.0], 'y0': [0, 0, 0.2, 0],\n"
+        "                    'x1': [4, 4, 4, 0], 'y1': [0, 0.2, 0.2, 0.2]})\n"
+        "write_dxf(build_floorplan(seg), sys.argv[1])\n"
+    )
+    outs = []
+    for seed in ("1", "4", "7"):
+        out = tmp_path / f"seed{seed}.dxf"
+        env = {**os.environ, "PYTHONHASHSEED": seed}
+        subprocess.run([sys.executable, "-c", code, str(out)], check=True, env=env, cwd=REPO)
+        outs.append(out.read_bytes())
+    assert outs[0] == outs[1] == outs[2] and b"CLASSES" in outs[0]

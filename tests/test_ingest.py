@@ -673,3 +673,356 @@ def test_pcd_folder_detected_with_made_up_stamps(tmp_path):
         "format": "pcd", "scan_topic": "pcd files", "pose_source": "embedded (scan locations in locations.csv)",
         "pose_kind": "map", "stamps": "made_up",
     }
+
+
+# --- issue 24: bad input never becomes a wrong result ----------------------------------
+
+
+def _robotlaser1_line(ranges, pose, t_s, remissions=(), start=-1.5, res=0.01, max_range=30.0):
+    """A ROBOTLASER1 line (CARMEN layout: 24 + n + m fields); ``pose`` is the laser pose."""
+    x, y, th = pose
+    r = " ".join(f"{v:.3f}" for v in ranges)
+    m = " ".join(f"{v:.1f}" for v in remissions)
+    return (f"ROBOTLASER1 0 {start} 3.1416 {res} {max_range} 0.01 0 {len(ranges)} {r} {len(remissions)} {m} "
+            f"{x} {y} {th} {x} {y} {th} 0.1 0.0 0.5 0.3 0.2 {t_s} pippo {t_s}").replace("  ", " ")
+
+
+def _one_line_log(tmp_path, line, name="bad.log"):
+    good = [flaser_line([1.0] * 4, (0.0, 0.0, 0.0), 1.0 + i) for i in range(2)]
+    return write_carmen(tmp_path / name, [*good, line])  # the bad line is line 3
+
+
+@pytest.mark.parametrize(
+    "line, match",
+    [
+        # a range missing: the pose would have been read from x..theta shifted by one
+        ("FLASER 4 1.0 1.0 1.0 0.5 0.6 0.7 0.5 0.6 0.7 3.0 pippo 3.0",
+         r"bad.log:3: malformed FLASER line: 14 fields for n = 4 beams; expected 2 \+ n \+ 9 = 15"),
+        # a field too many inside the ranges: x would be read from the last range
+        ("FLASER 4 1.0 1.0 1.0 1.0 1.0 0.5 0.6 0.7 0.5 0.6 0.7 3.0 pippo 3.0",
+         r"bad.log:3: malformed FLASER line: 16 fields for n = 4 beams; expected 2 \+ n \+ 9 = 15"),
+        ("FLASER 4 1.0 1.0 1.0 1.0 0.5 0.6 0.7 0.5 0.6 0.7 3.0 pippo 3.0 extra",
+         r"bad.log:3: malformed FLASER line: 16 fields"),
+        ("FLASER 2.5 1.0 1.0 0.5 0.6 0.7 0.5 0.6 0.7 3.0 pippo 3.0",
+         r"bad.log:3: malformed FLASER line: field 2 \(n, the beam count\) is '2.5'; expected an integer >= 1"),
+        ("FLASER 4 1.0 1.0 1.0 1.0 0.5 north 0.7 0.5 0.6 0.7 3.0 pippo 3.0",
+         r"bad.log:3: malformed FLASER line: field 8 \(y\) is 'north'; expected a number"),
+        ("FLASER 4 1.0 1.0 1.0 1.0 0.5 0.6 0.7 0.5 0.6 0.7 3.0 pippo 3,5",
+         r"bad.log:3: malformed FLASER line: field 15 \(logger_timestamp\) is '3,5'; expected a number"),
+    ],
+    ids=["range_missing", "range_extra", "trailing_field", "beam_count", "pose_word", "logger_stamp"],
+)
+def test_carmen_flaser_field_count_is_exact(tmp_path, line, match):
+    log = _one_line_log(tmp_path, line)
+    ingest_fails({"format": "carmen", "path": str(log)}, tmp_path, match)
+
+
+def test_carmen_robotlaser1_field_count_is_exact(tmp_path):
+    from floorscan.ingest.carmen import parse_carmen
+
+    ok = _robotlaser1_line([1.0, 2.0, 3.0], (0.5, 0.6, 0.7), 3.0, remissions=(10.0, 20.0))
+    assert len(ok.split()) == 24 + 3 + 2
+    log = write_carmen(tmp_path / "ok.log", [ok])
+    (scan,), _ = parse_carmen(log, max_range_m=50.0)
+    assert scan["pose"].tolist() == [0.5, 0.6, 0.7] and scan["t_s"] == 3.0
+    np.testing.assert_allclose(scan["points"][:, 0], [1.0 * math.cos(-1.5), 2.0 * math.cos(-1.49), 3.0 * math.cos(-1.48)], rtol=1e-6)
+    tok = ok.split()
+    for bad, match in [
+        # tok: 0 type, 8 n = 3, 9-11 ranges, 12 m = 2, 13-14 remissions, 15-17 laser pose
+        (tok[:13] + tok[14:], r"28 fields for n = 3 beams and m = 2 remissions; expected 24 \+ n \+ m = 29"),
+        (tok[:10] + tok[11:], r"field 13 \(m, the remission count\) is '10.0'; expected an integer >= 0"),
+        (tok[:10] + ["1.5"] + tok[10:], r"field 13 \(m, the remission count\) is '3.000'"),
+        (tok + ["0"], r"30 fields for n = 3 beams and m = 2 remissions"),
+        (tok[:9], r"9 fields for n = 3 beams; expected 24 \+ n \+ m, at least 27"),
+        (tok[:8] + ["-3"] + tok[9:], r"field 9 \(n, the beam count\) is '-3'; expected an integer >= 1"),
+        (tok[:13] + ["x"] + tok[14:], r"field 14 \(remission 1\) is 'x'; expected a number"),
+    ]:
+        write_carmen(tmp_path / "bad.log", [ok, ok.replace(" 3.0 pippo 3.0", " 4.0 pippo 4.0"), " ".join(bad)])
+        with pytest.raises(InputError, match=rf"bad.log:3: malformed ROBOTLASER1 line: {match}"):
+            parse_carmen(tmp_path / "bad.log")
+
+
+@pytest.mark.parametrize("stamp", ["nan", "inf", "-inf", "-1.5", "1e10"])
+def test_carmen_bad_stamp_names_its_own_line(tmp_path, stamp):
+    lines = [flaser_line([1.0] * 4, (float(i), 0.0, 0.0), t) for i, t in enumerate(["1.0", "1.1", stamp, "1.3", "1.4"])]
+    log = write_carmen(tmp_path / "s.log", lines)
+    ingest_fails(
+        {"format": "carmen", "path": str(log)}, tmp_path,
+        rf"s.log:3: malformed FLASER line: field 13 \(ipc_timestamp\) is {stamp}; expected a finite time in seconds",
+    )
+
+
+@pytest.mark.parametrize("kind", ["FLASER", "ROBOTLASER1"])
+@pytest.mark.parametrize("field, value", [(0, "nan"), (1, "inf"), (2, "-inf")])
+def test_carmen_non_finite_pose_is_an_error_naming_line_and_field(tmp_path, kind, field, value):
+    pose = [0.5, 0.6, 0.7]
+    pose[field] = value
+    line = (flaser_line([1.0] * 4, pose, 3.0) if kind == "FLASER" else _robotlaser1_line([1.0] * 4, pose, 3.0))
+    log = _one_line_log(tmp_path, line)
+    name = ("x", "y", "theta")[field] if kind == "FLASER" else ("laser_x", "laser_y", "laser_theta")[field]
+    ingest_fails({"format": "carmen", "path": str(log)}, tmp_path,
+                 rf"bad.log:3: malformed {kind} line: field \d+ \({name}\) is {value}; expected a finite number")
+
+
+def test_carmen_non_finite_ranges_stay_no_return(tmp_path):
+    from floorscan.ingest.carmen import parse_carmen
+
+    log = write_carmen(tmp_path / "r.log", [flaser_line([1.0, float("nan"), float("inf"), -1.0], (0, 0, 0), 1.0)])
+    (scan,), _ = parse_carmen(log, max_range_m=50.0)
+    assert len(scan["points"]) == 1 and scan["n_dropped"] == 3
+
+
+@pytest.mark.parametrize(
+    "field, name, value", [(3, "start_angle", "nan"), (5, "angular_resolution", "inf"), (6, "maximum_range", "nan")]
+)
+def test_carmen_robotlaser1_non_finite_angles_and_range_are_errors(tmp_path, field, name, value):
+    tok = _robotlaser1_line([1.0] * 4, (0.5, 0.6, 0.7), 3.0).split()
+    tok[field - 1] = value  # field k (1-based, the type is field 1) is tok[k - 1]
+    log = _one_line_log(tmp_path, " ".join(tok))
+    ingest_fails({"format": "carmen", "path": str(log)}, tmp_path,
+                 rf"bad.log:3: malformed ROBOTLASER1 line: field {field} \({name}\) is {value}; expected a finite number")
+
+
+def _pcd_header(fields="x y z", size="4 4 4", type_="F F F", count="1 1 1", width=2, height=1, points=2, data="ascii"):
+    return (f"VERSION .7\nFIELDS {fields}\nSIZE {size}\nTYPE {type_}\nCOUNT {count}\nWIDTH {width}\nHEIGHT {height}\n"
+            f"VIEWPOINT 0 0 0 1 0 0 0\nPOINTS {points}\nDATA {data}\n")
+
+
+@pytest.mark.parametrize(
+    "header, body, match",
+    [
+        (dict(points="abc"), "1 2 3\n4 5 6\n", r"PCD header POINTS is 'abc'; expected a non-negative integer"),
+        (dict(size="2"), "1 2 3\n4 5 6\n", r"PCD header SIZE has 1 values for 3 FIELDS \(x y z\); expected one per field"),
+        (dict(size="2 2 2"), "1 2 3\n4 5 6\n", r"PCD field 'x' is TYPE F SIZE 2; expected F 4 or F 8"),
+        (dict(type_="I F F"), "1 2 3\n4 5 6\n", r"PCD field 'x' is TYPE I SIZE 4; expected F 4 or F 8"),
+        (dict(type_="F F Q"), "1 2 3\n4 5 6\n", r"PCD field 'z' is TYPE Q SIZE 4; expected F 4 or F 8"),
+        (dict(count="2 1 1"), "1 2 3 4\n4 5 6 7\n", r"PCD field 'x' has COUNT 2; expected 1"),
+        (dict(width=3), "1 2 3\n4 5 6\n", r"PCD header POINTS 2 but WIDTH x HEIGHT = 3 x 1 = 3"),
+        (dict(fields="x y"), "1 2 3\n4 5 6\n", r"PCD header FIELDS x y; expected the fields x, y and z"),
+        (dict(), "1 2 3\n", r"1 rows stored, the header says POINTS 2"),
+        (dict(), "1 2 3\n4 5 6\n7 8 9\n", r"3 rows stored, the header says POINTS 2"),
+        (dict(), "1 2\n4 5 6\n", r"p.pcd:11: row of 2 values; expected 3 \(FIELDS x y z, COUNT 1 1 1\)"),
+        (dict(), "1 2 3\n4 5 6 7\n", r"p.pcd:12: row of 4 values; expected 3"),
+        (dict(), "1 a 3\n4 5 6\n", r"p.pcd:11: field 'y' is 'a'; expected a number"),
+        (dict(), "1 2 3\n4 5 1e39\n", r"p.pcd:12: field 'z' is 1e\+39, beyond the range of its TYPE F SIZE 4"),
+    ],
+    ids=["points_abc", "size_2", "size_2_each", "int_x", "type_q", "count_2", "width_x_height", "no_z",
+         "fewer_rows", "more_rows", "short_row", "long_row", "word", "f4_overflow"],
+)
+def test_pcd_header_checked_against_the_data(tmp_path, header, body, match):
+    from floorscan.ingest.pcd import read_pcd_xyz
+
+    p = tmp_path / "p.pcd"
+    p.write_text(_pcd_header(**header) + body)
+    with pytest.raises(InputError, match=rf"p.pcd:?\d*: .*{match}" if not match.startswith("p.pcd") else match):
+        read_pcd_xyz(p)
+
+
+@pytest.mark.parametrize("extra", [-4, 4, 1])
+def test_pcd_binary_size_must_match_points(tmp_path, extra):
+    from floorscan.ingest.pcd import read_pcd_xyz
+
+    pts = np.array([[1.5, 2.0, 3.0], [4.0, 5.0, 6.0]], "<f4")
+    data = pts.tobytes()
+    data = data[:extra] if extra < 0 else data + b"\0" * extra
+    p = tmp_path / "b.pcd"
+    p.write_bytes(_pcd_header(data="binary").encode() + data)
+    with pytest.raises(InputError, match=rf"b.pcd: {len(data)} bytes of binary data; expected POINTS x 12 bytes a point = 24"):
+        read_pcd_xyz(p)
+    p.write_bytes(_pcd_header(data="binary").encode() + pts.tobytes())
+    np.testing.assert_array_equal(read_pcd_xyz(p), pts)
+
+
+def test_pcd_f8_and_padding_fields_and_compressed_read_exactly(tmp_path):
+    import open3d as o3d
+
+    from floorscan.ingest.pcd import read_pcd_xyz
+
+    rng = np.random.default_rng(5)
+    pts = rng.uniform(-10, 10, (7, 3))
+    rec = np.zeros(7, dtype=[("i", "<u2"), ("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("rgb", "<f4", (2,))])
+    rec["x"], rec["y"], rec["z"] = pts.T
+    p = tmp_path / "f8.pcd"
+    p.write_bytes(_pcd_header("intensity x y z rgb", "2 8 8 8 4", "U F F F F", "1 1 1 1 2", 7, 1, 7, "binary").encode()
+                  + rec.tobytes())
+    np.testing.assert_array_equal(read_pcd_xyz(p), pts)
+    c = tmp_path / "c.pcd"
+    o3d.t.io.write_point_cloud(str(c), o3d.t.geometry.PointCloud(o3d.core.Tensor(pts.astype(np.float32))), compressed=True)
+    np.testing.assert_array_equal(read_pcd_xyz(c), pts.astype(np.float32))
+    raw = c.read_bytes()
+    c.write_bytes(raw[:-3])
+    with pytest.raises(InputError, match=r"c.pcd: \d+ bytes of compressed data; the header of the data says \d+"):
+        read_pcd_xyz(c)
+
+
+@pytest.mark.parametrize(
+    "csv, match",
+    [
+        ("file,t_ns,x,y,z,yaw\n0.pcd,1000,0,0,0,nan\n", r"column 'yaw' row 1 is 'nan'; expected a finite number"),
+        ("file,t_ns,x,y,z,yaw\n0.pcd,1000,inf,0,0,0\n", r"column 'x' row 1 is 'inf'; expected a finite number"),
+        ("file,t_ns,x,y,z,yaw\n0.pcd,1000.5,0,0,0,0\n", r"column 't_ns' row 1 is '1000.5'; expected an integer"),
+        ("file,t_ns,x,y,z,yaw\n0.pcd,-5,0,0,0,0\n", r"column 't_ns' row 1 is '-5'; expected an integer"),
+        ("file,t_ns,x,y,z,yaw\n0.pcd,99999999999999999999,0,0,0,0\n", r"column 't_ns' row 1 is '99999999999999999999'"),
+        ("file,t_ns,x,y,z,yaw\n0.pcd,1e21,0,0,0,0\n", r"column 't_ns' row 1 is '1e21'; expected an integer"),
+    ],
+    ids=["nan_yaw", "inf_x", "fractional_t_ns", "negative_t_ns", "t_ns_beyond_int64", "t_ns_float"],
+)
+def test_pcd_locations_fields_checked(tmp_path, csv, match):
+    from floorscan.ingest.pcd import read_locations
+
+    (tmp_path / "0.pcd").write_text(_pcd_header(width=1, points=1) + "1 2 3\n")
+    (tmp_path / "locations.csv").write_text(csv)
+    with pytest.raises(InputError, match=rf"locations.csv: {match}"):
+        read_locations(tmp_path, "locations.csv", 0.1)
+
+
+def _set(msg, dotted, value):
+    *head, last = dotted.split(".")
+    for name in head:
+        msg = getattr(msg, name)
+    setattr(msg, last, value)
+
+
+def _bag_with_bad_value(path, scan=None, pose_type="geometry_msgs/msg/PoseWithCovarianceStamped", pose=None,
+                        tf=None, tf_link=("odom", "base_link"), n=5):
+    """A ROS1 bag: /scan (LaserScan, 181 beams), /pose (``pose_type``), /tf map -> odom ->
+    base_link and base_link -> camera, /tf_static base_link -> laser. ``scan``, ``pose``,
+    ``tf`` ({dotted attribute: value}) are set on message 2 of /scan, /pose and on the
+    ``tf_link`` transform of /tf message 2."""
+    import dataclasses
+
+    from conftest import _bag_writer, _header, _quat, _scan_message, _write_messages
+
+    ts, T, ser, writer = _bag_writer(path, False)
+    Vec, Q = T["geometry_msgs/msg/Vector3"], T["geometry_msgs/msg/Quaternion"]
+    P = T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=1.0, y=2.0, z=0.0), orientation=Q(*_quat(0.3)))
+
+    def transform(parent, child, t, x=0.0):
+        return T["geometry_msgs/msg/TransformStamped"](
+            header=_header(ts, t, parent, True), child_frame_id=child,
+            transform=T["geometry_msgs/msg/Transform"](translation=Vec(x=x, y=0.0, z=0.0), rotation=Q(*_quat(0.0))))
+
+    msgs = [(T0_NS - 1, "/tf_static", T["tf2_msgs/msg/TFMessage"](transforms=[transform("base_link", "laser", T0_NS)]))]
+    cov = np.zeros(36)
+    for i in range(n):
+        t = T0_NS + int(i * 0.1e9)
+        s = _scan_message(ts, t, "laser", scan_ranges(i), False, False)
+        if pose_type.endswith("PoseStamped") and not pose_type.endswith("CovarianceStamped"):
+            p = T[pose_type](header=_header(ts, t - 1000, "map", True), pose=dataclasses.replace(P, position=dataclasses.replace(P.position), orientation=dataclasses.replace(P.orientation)))
+        else:
+            pp = T["geometry_msgs/msg/PoseWithCovariance"](
+                pose=dataclasses.replace(P, position=dataclasses.replace(P.position), orientation=dataclasses.replace(P.orientation)),
+                covariance=cov)
+            if pose_type.endswith("Odometry"):
+                p = T[pose_type](header=_header(ts, t - 1000, "map", True), child_frame_id="base_link", pose=pp,
+                                 twist=T["geometry_msgs/msg/TwistWithCovariance"](twist=T["geometry_msgs/msg/Twist"](
+                                     linear=Vec(x=0.0, y=0.0, z=0.0), angular=Vec(x=0.0, y=0.0, z=0.0)), covariance=cov))
+            else:
+                p = T[pose_type](header=_header(ts, t - 1000, "map", True), pose=pp)
+        links = [transform("map", "odom", t), transform("odom", "base_link", t, x=0.1 * i),
+                 transform("base_link", "camera", t)]
+        if i == 2:
+            for k, v in (scan or {}).items():
+                _set(s, k, v)
+            for k, v in (pose or {}).items():
+                _set(p, k, v)
+            link = next(tr for tr in links if (tr.header.frame_id, tr.child_frame_id) == tf_link)
+            for k, v in (tf or {}).items():
+                _set(link, k, v)
+        msgs += [(t, "/scan", s), (t - 1000, "/pose", p), (t, "/tf", T["tf2_msgs/msg/TFMessage"](transforms=links))]
+    _write_messages(writer, ts, ser, msgs)
+    return path
+
+
+@pytest.mark.parametrize("field", ["angle_min", "angle_increment", "range_min", "range_max"])
+@pytest.mark.parametrize("value", [float("nan"), float("inf")])
+def test_laser_scan_non_finite_header_fields_are_errors(tmp_path, field, value):
+    bag = _bag_with_bad_value(tmp_path / "s.bag", scan={field: value})
+    ds = {"path": str(bag), "scan_topic": "/scan", "pose": {"source": "topic", "topic": "/pose"}}
+    ingest_fails(ds, tmp_path, rf"s.bag: '/scan' message 2 \(t {T0_NS + 200_000_000} ns\): LaserScan {field} is {value}; "
+                               "expected a finite number")
+
+
+def test_laser_scan_non_finite_ranges_stay_no_return(tmp_path):
+    bag = _bag_with_bad_value(tmp_path / "r.bag")
+    index, *_ = ingest({"path": str(bag), "scan_topic": "/scan", "pose": {"source": "topic", "topic": "/pose"}}, tmp_path)
+    assert index["n_dropped"].tolist() == [4] * 5  # NaN, inf, below range_min, beyond range_max
+
+
+POSE_FIELDS = {
+    "geometry_msgs/msg/PoseWithCovarianceStamped": "pose.pose",
+    "geometry_msgs/msg/PoseStamped": "pose",
+    "nav_msgs/msg/Odometry": "pose.pose",
+}
+
+
+@pytest.mark.parametrize("pose_type", list(POSE_FIELDS))
+@pytest.mark.parametrize("field, value", [("position.x", float("nan")), ("position.z", float("inf")),
+                                          ("orientation.w", float("nan"))])
+def test_pose_topic_non_finite_fields_are_errors(tmp_path, pose_type, field, value):
+    prefix = POSE_FIELDS[pose_type]
+    bag = _bag_with_bad_value(tmp_path / "p.bag", pose_type=pose_type, pose={f"{prefix}.{field}": value})
+    ds = {"path": str(bag), "scan_topic": "/scan", "pose": {"source": "topic", "topic": "/pose"}}
+    ingest_fails(ds, tmp_path, rf"p.bag: '/pose' message 2 \(t {T0_NS + 200_000_000 - 1000} ns\): "
+                               rf"{pose_type.rsplit('/', 1)[-1]} {prefix}.{field} is {value}; expected a finite number")
+
+
+def test_pose_topic_zero_quaternion_is_an_error(tmp_path):
+    zero = {f"pose.pose.orientation.{c}": 0.0 for c in "xyzw"}
+    bag = _bag_with_bad_value(tmp_path / "q.bag", pose=zero)
+    ds = {"path": str(bag), "scan_topic": "/scan", "pose": {"source": "topic", "topic": "/pose"}}
+    ingest_fails(ds, tmp_path, r"q.bag: '/pose' message 2 .*: PoseWithCovarianceStamped pose.pose.orientation is "
+                               r"\(0.0, 0.0, 0.0, 0.0\), \|q\|\^2 = 0; expected a unit quaternion")
+
+
+@pytest.mark.parametrize("field, value", [("transform.translation.x", float("nan")),
+                                          ("transform.rotation.z", float("inf")), ("transform.rotation.w", 0.0)])
+def test_tf_non_finite_transform_in_the_chain_is_an_error(tmp_path, field, value):
+    bag = _bag_with_bad_value(tmp_path / "t.bag", tf={field: value})
+    ds = {"path": str(bag), "scan_topic": "/scan", "pose": {"source": "tf", "fixed_frame": "map"}}
+    what = r"transform.rotation is \(0.0, 0.0, 0.0, 0.0\), \|q\|\^2 = 0; expected a unit quaternion" if value == 0.0 else (
+        f"{field} is {value}; expected a finite number")
+    ingest_fails(ds, tmp_path, rf"t.bag: '/tf' message 2 \(t {T0_NS + 200_000_000} ns\): TransformStamped odom -> base_link: "
+                               rf"{what}")
+
+
+def test_tf_bad_link_outside_the_chain_is_not_used(tmp_path):
+    bag = _bag_with_bad_value(tmp_path / "c.bag", tf={"transform.translation.x": float("nan")},
+                              tf_link=("base_link", "camera"))
+    index, stream, *_ = ingest({"path": str(bag), "scan_topic": "/scan", "pose": {"source": "tf", "fixed_frame": "map"}},
+                               tmp_path)
+    assert len(index) == 5 and np.isfinite(stream[["x", "y", "z", "yaw"]].to_numpy()).all()
+
+
+def test_pointcloud2_every_point_non_finite_is_an_error():
+    from floorscan.ingest.rosbag import pointcloud2_xyz
+
+    pts = np.array([[np.nan, 1.0, 2.0], [1.0, np.inf, 0.0]])
+    with pytest.raises(InputError, match=r"c.bag: PointCloud2 on '/cloud' has no finite point \(2 points\)"):
+        pointcloud2_xyz(_pc2(pts, "f4", 16), "c.bag", "/cloud")
+    # one finite point is enough: the others are dropped and counted by ingest
+    assert len(pointcloud2_xyz(_pc2(np.r_[pts, [[1.0, 2.0, 3.0]]], "f4", 16))) == 3
+
+
+@pytest.mark.parametrize(
+    "change, match",
+    [
+        (dict(point_step=10), r"field 'z' \(offset 8, 4 bytes\) ends beyond point_step 10"),
+        (dict(row_step=8), r"row_step 8 is less than width x point_step = 3 x 16 = 48"),
+        (dict(height=2, width=2, row_step=32), r"has 48 bytes of data; expected row_step x height = 32 x 2 = 64"),
+        (dict(data_cut=4), r"has 44 bytes of data; expected row_step x height = 48 x 1 = 48"),
+        (dict(data_extra=16), r"has 64 bytes of data; expected row_step x height = 48 x 1 = 48"),
+    ],
+    ids=["field_beyond_point", "row_step_short", "rows_missing", "data_cut", "data_extra"],
+)
+def test_pointcloud2_layout_checked(change, match):
+    from floorscan.ingest.rosbag import pointcloud2_xyz
+
+    msg = _pc2(np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0], [7.0, 8.0, 9.0]]), "f4", 16)
+    cut, extra = change.pop("data_cut", 0), change.pop("data_extra", 0)
+    for k, v in change.items():
+        setattr(msg, k, v)
+    if cut or extra:
+        msg.data = np.r_[msg.data[: len(msg.data) - cut], np.zeros(extra, np.uint8)]
+    with pytest.raises(InputError, match=rf"c.bag: PointCloud2 on '/cloud' {match}"):
+        pointcloud2_xyz(msg, "c.bag", "/cloud")

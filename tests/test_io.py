@@ -81,3 +81,57 @@ def test_an_error_of_the_caller_waits_for_the_row_group_in_the_thread(tmp_path):
                 raise ValueError("bad scan")
     # the writer closed after the thread's last row group: a readable file
     assert pq.ParquetFile(path).metadata.num_rows > 0
+
+
+# ------------------------------------- issue 24: temporaries left by a killed run
+
+
+def _stale(folder, *names):
+    for name in names:
+        p = folder / name
+        if name.endswith("/"):
+            p.mkdir()
+            (p / "half.bag").write_bytes(b"half")
+        else:
+            p.write_bytes(b"half a file")
+    return [folder / n.rstrip("/") for n in names]
+
+
+def test_a_writer_removes_the_temporaries_a_killed_writer_left(tmp_path):
+    """SIGKILL leaves atomic_path's `.<name>.<8 characters>.tmp`: the next write of the
+    same file removes it; another file's temporaries and other names stay (the register
+    stage's `.registered.parquet.sampled.parquet` is in use while registered.parquet
+    is written)."""
+    import pandas as pd
+
+    from floorscan.io import write_table
+
+    stale, other, sampled = _stale(tmp_path, ".t.parquet.k3x_9a0q.tmp", ".u.parquet.k3x_9a0q.tmp",
+                                   ".t.parquet.sampled.parquet")
+    write_table(pd.DataFrame({"a": [1, 2]}), tmp_path / "t.parquet")
+    assert not stale.exists() and other.exists() and sampled.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".t.parquet.sampled.parquet", ".u.parquet.k3x_9a0q.tmp", "t.parquet"]
+
+
+def test_a_stage_removes_the_temporaries_of_its_outputs_before_it_runs(tmp_path):
+    """Every temporary name a writer of the outputs uses (atomic_path's files, the
+    staged folders of the deliverables and the simulator, the register stage's copy of
+    the sampled scans) is removed when the stage starts, and logged; the temporaries of
+    other files stay."""
+    from types import SimpleNamespace
+
+    from floorscan.io import stale_temporaries
+    from floorscan.workflow import stage_log
+
+    gone = _stale(tmp_path, ".registered.parquet.sampled.parquet", ".registered.parquet.0a1b2c3d.tmp",
+                  ".recording.abcdefgh.tmp/", ".pcd.zz_yy_xx.old/")
+    kept = _stale(tmp_path, ".registration.parquet.x.tmp", ".other.parquet.0a1b2c3d.tmp", ".registered.parquetx.tmp")
+    outputs = {"registered": str(tmp_path / "registered.parquet"), "recording": str(tmp_path / "recording"),
+               "pcd": str(tmp_path / "pcd")}
+    smk = SimpleNamespace(rule="register", log=[str(tmp_path / "register.log")], wildcards={}, output=outputs)
+    assert stale_temporaries(tmp_path / "registered.parquet") == sorted(gone[:2])
+    with stage_log(smk):
+        assert not any(p.exists() for p in gone)
+    assert all(p.exists() for p in kept)
+    log = (tmp_path / "register.log").read_text()
+    assert log.count("left by an earlier run that was killed") == 4

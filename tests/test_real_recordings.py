@@ -19,7 +19,7 @@ from shapely.geometry import shape
 
 from conftest import SHARED_DATA, needs_shared
 from floorscan.io import read_metadata, read_table
-from test_workflow import copy_workflow, snakemake
+from conftest import copy_workflow, snakemake
 
 pytestmark = [needs_shared, pytest.mark.realdata, pytest.mark.workflow, pytest.mark.slow]
 
@@ -88,8 +88,8 @@ def test_recording_runs_on_defaults_to_a_recognisable_plan(real_run, name):
     assert abs(verdict["n_sampled"] - n_sampled) <= max(2, 0.02 * n_sampled)
     assert abs(int(reg["kept"].sum()) - n_kept) <= max(2, 0.02 * n_kept)
     assert verdict["kept_fraction"] >= 0.9
-    all_m = _plan_length_m(out / "floorplan" / f"{ORDERING}_{EXTRACTOR}_kall.geojson")
-    part_m = _plan_length_m(out / "floorplan" / f"{ORDERING}_{EXTRACTOR}_k50.geojson")
+    all_m = _plan_length_m(out / "evaluation" / "floorplan" / f"{ORDERING}_{EXTRACTOR}_kall.geojson")
+    part_m = _plan_length_m(out / "evaluation" / "floorplan" / f"{ORDERING}_{EXTRACTOR}_k50.geojson")
     assert all_m == pytest.approx(length_all, rel=0.1)
     assert part_m / all_m >= fraction - 0.1
 
@@ -106,7 +106,7 @@ def test_the_plan_against_the_reference_map_sees_a_wall_through_free_space(real_
 
     out = real_run / name
     grid = read_grid(out / "reference" / "occupancy.parquet")
-    faces = floorplan_faces(out / "floorplan" / f"{ORDERING}_{EXTRACTOR}_kall.geojson")
+    faces = floorplan_faces(out / "evaluation" / "floorplan" / f"{ORDERING}_{EXTRACTOR}_kall.geojson")
     got = plan_against_reference(faces, grid)
     completeness, correctness = MEASURED_MAP[name]
     assert got["completeness_5cm"] == pytest.approx(completeness, abs=0.03)

@@ -4,49 +4,21 @@ The workflow files are copied to a temporary folder and run there with
 ``snakemake --cores 2``, so the test never touches the repository's ``results/``.
 """
 
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from conftest import REPO, SHARED_DATA
+from conftest import snakemake
 from floorscan.io import read_table
-
-SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 
 pytestmark = [pytest.mark.workflow, pytest.mark.slow]
 
 
-def copy_workflow(dest: Path) -> Path:
-    dest.mkdir(parents=True)
-    for name in ("Snakefile", "workflow", "config", "scripts"):
-        src = REPO / name
-        if src.is_dir():
-            shutil.copytree(src, dest / name)
-        else:
-            shutil.copy2(src, dest / name)
-    # keep the shipped relative paths to ../shared/data valid from the copy
-    if SHARED_DATA.is_dir() and not (dest.parent / "shared").exists():
-        (dest.parent / "shared").symlink_to(SHARED_DATA.parent)
-    return dest
-
-
-def snakemake(workdir: Path, *args, timeout=900):
-    return subprocess.run(
-        [str(SNAKEMAKE), "--cores", "2", *args], cwd=workdir, capture_output=True, text=True, timeout=timeout
-    )
-
-
 @pytest.fixture(scope="module")
-def default_run(tmp_path_factory):
-    root = tmp_path_factory.mktemp("wf")
-    wd = copy_workflow(root / "floorscan")
-    res = snakemake(wd)
-    assert res.returncode == 0, res.stderr[-4000:]
-    return wd
+def default_run(demo_run):
+    """The demo's default target, run once for the session (conftest.demo_run)."""
+    return demo_run
 
 
 def test_default_target_runs_and_writes_consistent_tables(default_run):

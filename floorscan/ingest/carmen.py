@@ -41,6 +41,16 @@ Stamps (:func:`classify_stamps`), one of:
   their index times ``missing_time_period_s`` from the first stamp.
 
 Zero stamps among non-zero ones mean a corrupt log and are rejected.
+
+Malformed lines (issue 24). A laser line is read only when it has exactly the fields its
+counts imply: ``2 + n + 9`` for FLASER, ``24 + n + m`` for ROBOTLASER1 (n beams, m
+remissions); a field too many or too few would shift every later field (a range read as
+the pose, the pose as the stamp), so it is an ``InputError`` naming ``file:line``, the
+counts and the layout, never parsed from shifted positions. Every numeric field must be a
+number; the corrected pose, ROBOTLASER1's ``start_angle``, ``angular_resolution`` and
+``maximum_range`` must be finite; ``ipc_timestamp`` must be finite, 0 or more and below
+:data:`MAX_STAMP_S`. The error names the line and the field. Non-finite *ranges* are not
+errors: they are "no return", dropped and counted like the others.
 """
 
 from __future__ import annotations
@@ -49,6 +59,7 @@ import dataclasses
 import gzip
 import logging
 import math
+import re
 import zlib
 from pathlib import Path
 from typing import Any, Iterator, Mapping, Sequence
@@ -61,6 +72,21 @@ from floorscan.io import InputError
 log = logging.getLogger(__name__)
 
 LASER_TYPES = ("FLASER", "ROBOTLASER1")
+#: The field layout of each laser line, for error messages.
+LAYOUTS = {
+    "FLASER": "FLASER n r1..rn x y theta odom_x odom_y odom_theta ipc_timestamp ipc_hostname logger_timestamp",
+    "ROBOTLASER1": (
+        "ROBOTLASER1 laser_type start_angle fov angular_resolution maximum_range accuracy remission_mode "
+        "n r1..rn m v1..vm laser_x laser_y laser_theta robot_x robot_y robot_theta tv rv forward_safety "
+        "side_safety turn_axis ipc_timestamp ipc_hostname logger_timestamp"
+    ),
+}
+#: Fields of a FLASER line besides its n ranges.
+FLASER_FIXED_FIELDS = 11
+#: Fields of a ROBOTLASER1 line besides its n ranges and m remissions.
+ROBOTLASER1_FIXED_FIELDS = 24
+#: Largest ``ipc_timestamp`` read, seconds: its nanoseconds still fit in int64 (2261).
+MAX_STAMP_S = 9.2e9
 
 
 def _open_text(path: Path):
@@ -257,8 +283,10 @@ def parse_carmen(
     Raises
     ------
     InputError
-        Unreadable or truncated file, a malformed laser line (names the line), or no
-        laser lines at all.
+        Unreadable or truncated file; a malformed laser line: a field count other than
+        its layout's, a field that is not a number, a non-finite pose, angle or maximum
+        range, a stamp not finite and in [0, ``MAX_STAMP_S``) (names ``file:line``, the
+        field and the layout); or no laser lines at all.
     """
     scans, counts, _ = _parse(Path(path), max_range_m, fov_rad)
     return scans, counts
@@ -279,12 +307,8 @@ def _parse(path: Path, max_range_m: float | None, fov_rad: float) -> tuple[list[
                     continue
                 try:
                     lines.append(_parse_laser_line(kind, tok, fov_rad, lineno))
-                except (ValueError, IndexError) as e:
-                    raise InputError(
-                        f"{path}:{lineno}: malformed {kind} line ({e}); expected "
-                        + ("'FLASER n r1..rn x y theta odom_x odom_y odom_theta ipc_timestamp host logger_timestamp'"
-                           if kind == "FLASER" else "the ROBOTLASER1 field layout")
-                    ) from None
+                except _Malformed as e:
+                    raise InputError(f"{path}:{lineno}: malformed {kind} line: {e} ('{LAYOUTS[kind]}')") from None
     except (EOFError, OSError, zlib.error) as e:
         raise InputError(f"{path}: cannot read the log, truncated or corrupt ({e})") from None
     if not lines:
@@ -303,34 +327,116 @@ def _parse(path: Path, max_range_m: float | None, fov_rad: float) -> tuple[list[
     return scans, counts, limit
 
 
-def _parse_laser_line(kind, tok, fov_rad, lineno) -> dict:
+_INTEGER = re.compile(r"\+?[0-9]+")
+
+
+class _Malformed(ValueError):
+    """A laser line that does not follow its layout (the message says how)."""
+
+
+def _number(tok: list[str], i: int, name: str) -> float:
+    t = tok[i]
+    try:
+        if "_" in t:  # Python reads "1_0" as 10, C's strtod as 1
+            raise ValueError
+        return float(t)
+    except ValueError:
+        raise _Malformed(f"field {i + 1} ({name}) is {t!r}; expected a number") from None
+
+
+def _finite(tok: list[str], i: int, name: str) -> float:
+    v = _number(tok, i, name)
+    if not math.isfinite(v):
+        raise _Malformed(f"field {i + 1} ({name}) is {tok[i]}; expected a finite number")
+    return v
+
+
+def _count(tok: list[str], i: int, name: str, minimum: int) -> int:
+    t = tok[i]
+    if not _INTEGER.fullmatch(t) or int(t) < minimum:
+        raise _Malformed(f"field {i + 1} ({name}) is {t!r}; expected an integer >= {minimum}")
+    return int(t)
+
+
+def _numbers(tok: list[str], a: int, b: int, what: str) -> np.ndarray:
+    """Fields ``a:b`` as float64, any value (NaN and inf included)."""
+    try:
+        if any("_" in t for t in tok[a:b]):
+            raise ValueError
+        return np.array(tok[a:b], dtype=np.float64)
+    except ValueError:  # name the field (one by one: slow, but only on a bad line)
+        return np.array([_number(tok, i, f"{what} {i - a + 1}") for i in range(a, b)], dtype=np.float64)
+
+
+def _stamp(tok: list[str], i: int) -> float:
+    t = _number(tok, i, "ipc_timestamp")
+    if not 0.0 <= t < MAX_STAMP_S:  # NaN fails too
+        raise _Malformed(
+            f"field {i + 1} (ipc_timestamp) is {tok[i]}; expected a finite time in seconds, "
+            f"0 or more and below {MAX_STAMP_S:g}"
+        )
+    return t
+
+
+def _parse_laser_line(kind: str, tok: list[str], fov_rad: float, lineno: int) -> dict:
+    """One laser line's fields, read only when their count is exactly the layout's.
+
+    Raises
+    ------
+    _Malformed
+        A field count other than the layout's (FLASER ``2 + n + 9``, ROBOTLASER1
+        ``24 + n + m``), a non-numeric field, a non-finite pose, angle or maximum
+        range, a stamp that is not finite and >= 0.
+    """
     rmax = math.inf
     if kind == "FLASER":
-        n = int(tok[1])
-        if n <= 0:
-            raise ValueError(f"beam count {n}")
-        need = 2 + n + 6 + 3
-        if len(tok) < need:
-            raise ValueError(f"{len(tok)} fields, {need} needed for {n} beams")
-        ranges = np.array(tok[2 : 2 + n], dtype=np.float64)
-        pose = np.array(tok[2 + n : 5 + n], dtype=np.float64)
-        t_s = float(tok[8 + n])
+        if len(tok) < 2:
+            raise _Malformed(f"{len(tok)} fields; expected 2 + n + 9")
+        n = _count(tok, 1, "n, the beam count", 1)
+        need = n + FLASER_FIXED_FIELDS
+        if len(tok) != need:
+            raise _Malformed(f"{len(tok)} fields for n = {n} beams; expected 2 + n + 9 = {need}")
+        ranges = _numbers(tok, 2, 2 + n, "range")
+        k = 2 + n
+        names = ("x", "y", "theta")
         inc = fov_rad / (n - 1) if n % 2 == 1 and n > 1 else fov_rad / n
         start = -fov_rad / 2.0
+        others = ("odom_x", "odom_y", "odom_theta")
+        stamp_at = k + 6
     else:
-        start, _fov, inc, line_rmax = (float(v) for v in tok[2:6])
-        n = int(tok[8])
-        ranges = np.array(tok[9 : 9 + n], dtype=np.float64)
-        if len(ranges) != n:
-            raise ValueError(f"{len(ranges)} ranges for {n} beams")
-        m = int(tok[9 + n])
+        if len(tok) < 9:
+            raise _Malformed(f"{len(tok)} fields; expected 24 + n + m (n at field 9)")
+        n = _count(tok, 8, "n, the beam count", 1)
+        if len(tok) < 10 + n:
+            raise _Malformed(
+                f"{len(tok)} fields for n = {n} beams; expected 24 + n + m, at least {ROBOTLASER1_FIXED_FIELDS + n}"
+            )
+        m = _count(tok, 9 + n, "m, the remission count", 0)
+        need = ROBOTLASER1_FIXED_FIELDS + n + m
+        if len(tok) != need:
+            raise _Malformed(
+                f"{len(tok)} fields for n = {n} beams and m = {m} remissions; expected 24 + n + m = {need}"
+            )
+        _number(tok, 1, "laser_type")
+        start = _finite(tok, 2, "start_angle")
+        _number(tok, 3, "fov")
+        inc = _finite(tok, 4, "angular_resolution")
+        line_rmax = _finite(tok, 5, "maximum_range")
+        _number(tok, 6, "accuracy")
+        _number(tok, 7, "remission_mode")
+        ranges = _numbers(tok, 9, 9 + n, "range")
+        _numbers(tok, 10 + n, 10 + n + m, "remission")
         k = 10 + n + m
-        pose = np.array(tok[k : k + 3], dtype=np.float64)
-        t_s = float(tok[k + 11])
+        names = ("laser_x", "laser_y", "laser_theta")
+        others = ("robot_x", "robot_y", "robot_theta", "tv", "rv", "forward_safety", "side_safety", "turn_axis")
+        stamp_at = k + 11
         if line_rmax > 0:
             rmax = line_rmax
-    if not np.isfinite(pose).all():
-        raise ValueError(f"non-finite pose {pose}")
+    pose = np.array([_finite(tok, k + j, name) for j, name in enumerate(names)])
+    for j, name in enumerate(others):
+        _number(tok, k + 3 + j, name)
+    t_s = _stamp(tok, stamp_at)
+    _number(tok, stamp_at + 2, "logger_timestamp")
     return {
         "t_s": t_s, "ranges": ranges, "start": start, "inc": inc, "rmax": rmax, "pose": pose, "line": lineno, "kind": kind,
     }

@@ -14,11 +14,30 @@ it is 0. Rows are taken in ``t_ns`` order (file order when there is no ``t_ns``)
 Points are moved into the scanner frame with the inverse pose, so a PCD recording flows
 through the same stages as a bag; the pose stream is the locations themselves (pose kind
 ``map``, source ``embedded``; stamps ``recorded`` with ``t_ns``, else ``made_up``).
+
+Checks (issue 24): bad input is an ``InputError`` naming the file (and line, field or
+column), never a wrong point or pose.
+
+- PCD header (the PCD v0.7 format of the Point Cloud Library): ``FIELDS``, ``SIZE``,
+  ``TYPE``, ``WIDTH``, ``HEIGHT``, ``POINTS`` and ``DATA`` present once each (``VERSION``,
+  ``VIEWPOINT`` optional; ``COUNT`` optional, 1 each), no other key; one ``SIZE``,
+  ``TYPE`` and ``COUNT`` per field; sizes 1, 2, 4 or 8, types I, U or F (F only 4 or 8);
+  ``x``, ``y`` and ``z`` once each, ``F 4`` or ``F 8``, ``COUNT 1``; ``POINTS`` =
+  ``WIDTH x HEIGHT``.
+- PCD data: ``ascii`` has exactly ``POINTS`` non-blank rows of exactly sum(``COUNT``)
+  numbers (an ``F 4`` value must fit in float32); ``binary`` exactly ``POINTS`` x the point
+  size bytes; ``binary_compressed`` the sizes its own header states (then decompressed
+  by Open3D, PCL's reader, to exactly ``POINTS`` points). NaN or inf points are read as
+  they are: ingest drops and counts them.
+- Locations CSV: ``x, y, z, yaw`` finite numbers, ``t_ns`` a decimal integer in
+  [0, 2^63), strictly increasing.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import logging
+import re
 from pathlib import Path
 from typing import Any, Iterator, Mapping
 
@@ -31,50 +50,281 @@ from floorscan.io import InputError
 log = logging.getLogger(__name__)
 
 
+#: Header keys of a PCD v0.7 file, in their order.
+PCD_KEYS = ("VERSION", "FIELDS", "SIZE", "TYPE", "COUNT", "WIDTH", "HEIGHT", "VIEWPOINT", "POINTS", "DATA")
+#: Keys a PCD header must have.
+PCD_REQUIRED = ("FIELDS", "SIZE", "TYPE", "WIDTH", "HEIGHT", "POINTS", "DATA")
+#: PCD TYPE and SIZE -> numpy type (little-endian, as PCL writes binary data).
+PCD_DTYPES = {
+    **{("I", n): f"<i{n}" for n in (1, 2, 4, 8)},
+    **{("U", n): f"<u{n}" for n in (1, 2, 4, 8)},
+    ("F", 4): "<f4",
+    ("F", 8): "<f8",
+}
+PCD_DATA = ("ascii", "binary", "binary_compressed")
+#: A header longer than this many lines has no DATA line: not a PCD file.
+PCD_MAX_HEADER_LINES = 1000
+
+
+@dataclasses.dataclass(frozen=True)
+class PcdHeader:
+    """A checked PCD header.
+
+    Attributes
+    ----------
+    fields : tuple of str
+    types, sizes, counts : tuple
+        TYPE letter, SIZE in bytes and COUNT of each field.
+    width, height, points : int
+    data : str
+        ``ascii``, ``binary`` or ``binary_compressed``.
+    offset : int
+        Byte offset of the data (after the DATA line).
+    n_lines : int
+        Lines of the header (the first data row is line ``n_lines + 1``).
+    """
+
+    fields: tuple[str, ...]
+    types: tuple[str, ...]
+    sizes: tuple[int, ...]
+    counts: tuple[int, ...]
+    width: int
+    height: int
+    points: int
+    data: str
+    offset: int
+    n_lines: int
+
+    def dtype(self) -> np.dtype:
+        """The record of one point (fields with COUNT > 1 as sub-arrays)."""
+        layout = zip(self.types, self.sizes, self.counts)
+        return np.dtype([(f"f{i}", PCD_DTYPES[t, s], (c,) if c > 1 else ()) for i, (t, s, c) in enumerate(layout)])
+
+
 def read_pcd_xyz(path: str | Path) -> np.ndarray:
     """Read the ``x, y, z`` of a ``.pcd`` file (ascii, binary or binary_compressed).
+
+    The header is checked (:func:`read_pcd_header`) and the data against it (see the
+    module docstring).
 
     Returns
     -------
     (N, 3) float64 ndarray
-        Points as stored, NaN included (the caller drops and counts them).
+        Points as stored (F 4 values exactly their float32), NaN included (the caller
+        drops and counts them).
 
     Raises
     ------
     InputError
-        Missing, unreadable or truncated file (the point count read differs from the
-        header's ``POINTS``), or no x/y/z fields.
+        Missing file, a header that breaks the rules above, data that is not what the
+        header says (row count, row length, non-numbers, byte count, a compressed block
+        that does not decompress to its stated size), or an F 4 ascii value beyond
+        float32. The message names the file and the line or field.
     """
+    path = Path(path)
+    h = read_pcd_header(path)
+    with open(path, "rb") as f:
+        f.seek(h.offset)
+        raw = f.read()
+    if h.data == "ascii":
+        return _ascii_xyz(path, h, raw)
+    if h.data == "binary":
+        need = h.points * h.dtype().itemsize
+        if len(raw) != need:
+            raise InputError(
+                f"{path}: {len(raw)} bytes of binary data; expected POINTS x {h.dtype().itemsize} bytes a point "
+                f"= {need} (POINTS {h.points}); truncated or corrupt"
+            )
+        rec = np.frombuffer(raw, dtype=h.dtype(), count=h.points)
+        return np.stack([rec[f"f{h.fields.index(n)}"].astype(np.float64) for n in "xyz"], axis=1)
+    return _compressed_xyz(path, h, raw)
+
+
+def _ascii_xyz(path: Path, h: PcdHeader, raw: bytes) -> np.ndarray:
+    try:
+        text = raw.decode("ascii")
+    except UnicodeDecodeError as e:
+        raise InputError(f"{path}: non-ASCII byte at data offset {e.start} of an ascii PCD") from None
+    rows = [(i, line.split()) for i, line in enumerate(text.split("\n"), h.n_lines + 1) if line.strip()]
+    if len(rows) != h.points:
+        raise InputError(f"{path}: {len(rows)} rows stored, the header says POINTS {h.points}; truncated or corrupt")
+    width = sum(h.counts)
+    cols = np.cumsum((0,) + h.counts[:-1])  # column of each field's first value
+    for lineno, tok in rows:
+        if len(tok) != width:
+            raise InputError(
+                f"{path}:{lineno}: row of {len(tok)} values; expected {width} "
+                f"(FIELDS {' '.join(h.fields)}, COUNT {' '.join(map(str, h.counts))})"
+            )
+    out = np.empty((h.points, 3), dtype=np.float64)
+    for k, name in enumerate("xyz"):
+        j = h.fields.index(name)
+        v = _ascii_column(path, rows, cols[j], name)
+        if h.sizes[j] == 4:
+            big = np.isfinite(v) & (np.abs(v) > np.finfo(np.float32).max)
+            if big.any():
+                i = int(np.flatnonzero(big)[0])
+                raise InputError(
+                    f"{path}:{rows[i][0]}: field {name!r} is {v[i]:g}, beyond the range of its TYPE F SIZE 4 (float32)"
+                )
+            v = v.astype(np.float32).astype(np.float64)
+        out[:, k] = v
+    # the other fields must be numbers too (a word there is a malformed row)
+    for j, name in enumerate(h.fields):
+        if name not in ("x", "y", "z"):
+            for c in range(h.counts[j]):
+                _ascii_column(path, rows, cols[j] + c, name)
+    return out
+
+
+def _ascii_column(path: Path, rows: list[tuple[int, list[str]]], col: int, name: str) -> np.ndarray:
+    """Column ``col`` of the ascii rows as float64; a value that is not a number is an
+    ``InputError`` naming its line and field."""
+    values = [tok[col] for _, tok in rows]
+    try:
+        if any("_" in t for t in values):  # Python reads "1_0" as 10; PCL does not
+            raise ValueError
+        return np.array(values, dtype=np.float64)
+    except ValueError:
+        for lineno, tok in rows:
+            if not _is_number(tok[col]):
+                raise InputError(f"{path}:{lineno}: field {name!r} is {tok[col]!r}; expected a number") from None
+        return np.array([float(t) for t in values])  # numpy refused what Python reads
+
+
+def _is_number(t: str) -> bool:
+    try:
+        float(t)
+    except ValueError:
+        return False
+    return "_" not in t
+
+
+def _compressed_xyz(path: Path, h: PcdHeader, raw: bytes) -> np.ndarray:
+    need = h.points * h.dtype().itemsize
+    if len(raw) < 8:
+        raise InputError(f"{path}: {len(raw)} bytes of binary_compressed data; expected at least the 8-byte sizes")
+    compressed, uncompressed = (int(v) for v in np.frombuffer(raw[:8], dtype="<u4"))
+    if uncompressed != need:
+        raise InputError(
+            f"{path}: binary_compressed data of {uncompressed} bytes; expected POINTS x {h.dtype().itemsize} "
+            f"bytes a point = {need} (POINTS {h.points})"
+        )
+    if len(raw) - 8 != compressed:
+        raise InputError(
+            f"{path}: {len(raw) - 8} bytes of compressed data; the header of the data says {compressed}; "
+            "truncated or corrupt"
+        )
+    xyz = {(h.types[h.fields.index(n)], h.sizes[h.fields.index(n)]) for n in "xyz"}
+    if len(xyz) != 1:
+        raise InputError(
+            f"{path}: binary_compressed data with x, y, z of different TYPE/SIZE {sorted(xyz)}; expected one of "
+            "F 4 or F 8 for all three (Open3D, which decompresses it, reads no other)"
+        )
+    # the sizes agree: Open3D (PCL's reader) decompresses the LZF block and splits the
+    # fields (stored field by field: every x, then every y, ...)
     from floorscan.o3d import o3d
 
+    try:
+        cloud = o3d.t.io.read_point_cloud(str(path), format="pcd")
+    except RuntimeError as e:
+        raise InputError(f"{path}: the binary_compressed data does not decompress ({e}); truncated or corrupt") from None
+    positions = cloud.point.positions.numpy() if "positions" in cloud.point else np.empty((0, 3))
+    if len(positions) != h.points:
+        raise InputError(
+            f"{path}: the binary_compressed data holds {len(positions)} points; expected POINTS {h.points}; "
+            "truncated or corrupt"
+        )
+    return positions.astype(np.float64)
+
+
+def read_pcd_header(path: str | Path) -> PcdHeader:
+    """Read and check the header of a ``.pcd`` file (rules in the module docstring).
+
+    Raises
+    ------
+    InputError
+        Missing file, no DATA line, an unknown or repeated key, a missing required key,
+        a value that is not what its key takes, or x, y, z not F 4 / F 8 with COUNT 1.
+        The message names the file and the key or field.
+    """
     path = Path(path)
-    header = _pcd_header(path)
-    if not {"x", "y", "z"} <= set(header.get("FIELDS", [])):
-        raise InputError(f"{path}: PCD has fields {header.get('FIELDS')}; expected x, y, z")
-    expected = int(header.get("POINTS", ["-1"])[0])
-    pcd = o3d.t.io.read_point_cloud(str(path), remove_nan_points=False, remove_infinite_points=False)
-    pts = pcd.point.positions.numpy().astype(np.float64) if "positions" in pcd.point else np.zeros((0, 3))
-    if expected >= 0 and len(pts) != expected:
-        raise InputError(f"{path}: read {len(pts)} points, header says POINTS {expected}; truncated or corrupt")
-    return pts
-
-
-def _pcd_header(path: Path) -> dict[str, list[str]]:
     if not path.is_file():
         raise InputError(f"{path}: PCD file not found")
     header: dict[str, list[str]] = {}
+    n_lines = 0
     with open(path, "rb") as f:
-        for _ in range(20):
-            line = f.readline().decode("ascii", errors="replace").strip()
-            if not line or line.startswith("#"):
+        while "DATA" not in header:
+            line = f.readline()
+            n_lines += 1
+            if not line or n_lines > PCD_MAX_HEADER_LINES:
+                raise InputError(f"{path}: not a PCD file (no DATA line in the header)")
+            text = line.decode("ascii", errors="replace").strip()
+            if not text or text.startswith("#"):
                 continue
-            key, *vals = line.split()
-            header[key.upper()] = vals
-            if key.upper() == "DATA":
-                break
-    if "DATA" not in header:
-        raise InputError(f"{path}: not a PCD file (no DATA line in the header)")
-    return header
+            key, *vals = text.split()
+            key = key.upper()
+            if key not in PCD_KEYS:
+                raise InputError(
+                    f"{path}:{n_lines}: unknown PCD header key {key!r}; expected one of {', '.join(PCD_KEYS)}"
+                )
+            if key in header:
+                raise InputError(f"{path}:{n_lines}: PCD header {key} given twice")
+            header[key] = vals
+        offset = f.tell()
+    missing = [k for k in PCD_REQUIRED if k not in header]
+    if missing:
+        raise InputError(f"{path}: PCD header lacks {', '.join(missing)}; expected {' '.join(PCD_KEYS)}")
+    fields = tuple(header["FIELDS"])
+    if not all(fields.count(n) == 1 for n in "xyz"):
+        raise InputError(f"{path}: PCD header FIELDS {' '.join(fields)}; expected the fields x, y and z, once each")
+    counts_raw = header.get("COUNT", ["1"] * len(fields))
+    for key, vals in (("SIZE", header["SIZE"]), ("TYPE", header["TYPE"]), ("COUNT", counts_raw)):
+        if len(vals) != len(fields):
+            raise InputError(
+                f"{path}: PCD header {key} has {len(vals)} values for {len(fields)} FIELDS ({' '.join(fields)}); "
+                "expected one per field"
+            )
+    sizes = tuple(_pcd_int(path, "SIZE", v, 1) for v in header["SIZE"])
+    counts = tuple(_pcd_int(path, "COUNT", v, 1) for v in counts_raw)
+    types = tuple(t.upper() for t in header["TYPE"])
+    for name, t, size, count in zip(fields, types, sizes, counts):
+        if name in ("x", "y", "z"):
+            if (t, size) not in (("F", 4), ("F", 8)):
+                raise InputError(
+                    f"{path}: PCD field {name!r} is TYPE {t} SIZE {size}; expected F 4 or F 8 (float32, float64)"
+                )
+            if count != 1:
+                raise InputError(f"{path}: PCD field {name!r} has COUNT {count}; expected 1")
+        elif (t, size) not in PCD_DTYPES:
+            raise InputError(
+                f"{path}: PCD field {name!r} is TYPE {t} SIZE {size}; "
+                "expected I or U of 1, 2, 4 or 8 bytes, or F 4 or F 8"
+            )
+    dims = {}
+    for key in ("WIDTH", "HEIGHT", "POINTS"):
+        vals = header[key]
+        if len(vals) != 1:
+            raise InputError(f"{path}: PCD header {key} is {' '.join(vals)!r}; expected one non-negative integer")
+        dims[key] = _pcd_int(path, key, vals[0], 0)
+    if dims["POINTS"] != dims["WIDTH"] * dims["HEIGHT"]:
+        raise InputError(
+            f"{path}: PCD header POINTS {dims['POINTS']} but WIDTH x HEIGHT = {dims['WIDTH']} x {dims['HEIGHT']} "
+            f"= {dims['WIDTH'] * dims['HEIGHT']}; expected them equal"
+        )
+    if "VIEWPOINT" in header and (len(header["VIEWPOINT"]) != 7 or not all(map(_is_number, header["VIEWPOINT"]))):
+        raise InputError(f"{path}: PCD header VIEWPOINT is {' '.join(header['VIEWPOINT'])!r}; expected 7 numbers")
+    data = " ".join(header["DATA"]).lower()
+    if data not in PCD_DATA:
+        raise InputError(f"{path}: PCD header DATA is {data!r}; expected one of {', '.join(PCD_DATA)}")
+    return PcdHeader(fields, types, sizes, counts, dims["WIDTH"], dims["HEIGHT"], dims["POINTS"], data, offset, n_lines)
+
+
+def _pcd_int(path: Path, key: str, v: str, minimum: int) -> int:
+    if not re.fullmatch(r"[0-9]+", v) or int(v) < minimum:
+        what = "a non-negative integer" if minimum == 0 else f"integers >= {minimum}"
+        raise InputError(f"{path}: PCD header {key} is {v!r}; expected {what}")
+    return int(v)
 
 
 def read_locations(folder: Path, name: str, period_s: float) -> pd.DataFrame:
@@ -96,8 +346,8 @@ def read_locations(folder: Path, name: str, period_s: float) -> pd.DataFrame:
     path = folder / name
     if not path.is_file():
         raise InputError(f"{path}: scan locations CSV not found (dataset option 'locations')")
-    try:
-        df = pd.read_csv(path)
+    try:  # every cell as text: each column is parsed here, so nothing is guessed or rounded
+        df = pd.read_csv(path, dtype=str, keep_default_na=False)
     except Exception as e:
         raise InputError(f"{path}: cannot read the CSV ({e})") from None
     need = ["file", "x", "y", "z"]
@@ -106,12 +356,10 @@ def read_locations(folder: Path, name: str, period_s: float) -> pd.DataFrame:
         raise InputError(f"{path}: columns {missing} missing; expected file,t_ns,x,y,z,yaw (t_ns, yaw optional)")
     if df.empty:
         raise InputError(f"{path}: no scan locations")
-    for c in ["x", "y", "z"] + [c for c in ("yaw", "t_ns") if c in df.columns]:
-        vals = pd.to_numeric(df[c], errors="coerce")
-        if vals.isna().any() or not np.isfinite(vals.to_numpy(dtype=float)).all():
-            row = int(np.flatnonzero(vals.isna().to_numpy() | ~np.isfinite(vals.to_numpy(dtype=float)))[0])
-            raise InputError(f"{path}: column {c!r} row {row + 1} is not a finite number")
-        df[c] = vals
+    for c in ["x", "y", "z"] + [c for c in ("yaw",) if c in df.columns]:
+        df[c] = _finite_column(path, c, df[c])
+    if "t_ns" in df.columns:
+        df["t_ns"] = _stamp_column(path, df["t_ns"])
     if "yaw" not in df.columns:
         df["yaw"] = 0.0
     df.attrs["stamps"] = "recorded" if "t_ns" in df.columns else "made_up"
@@ -127,6 +375,36 @@ def read_locations(folder: Path, name: str, period_s: float) -> pd.DataFrame:
         if not (folder / str(f)).is_file():
             raise InputError(f"{path}: names {f!r}, which is not in {folder}")
     return df
+
+
+def _finite_column(path: Path, name: str, col: pd.Series) -> np.ndarray:
+    """A CSV column of finite numbers as float64; else an InputError naming the row."""
+    out = np.empty(len(col), dtype=np.float64)
+    for i, v in enumerate(col):
+        t = str(v).strip()
+        try:
+            if "_" in t:  # Python reads "1_0" as 10
+                raise ValueError
+            out[i] = float(t)
+        except ValueError:
+            out[i] = np.nan
+        if not np.isfinite(out[i]):
+            raise InputError(f"{path}: column {name!r} row {i + 1} is {t!r}; expected a finite number")
+    return out
+
+
+def _stamp_column(path: Path, col: pd.Series) -> np.ndarray:
+    """The ``t_ns`` column: decimal integers in [0, 2^63) as int64."""
+    out = np.empty(len(col), dtype=np.int64)
+    for i, v in enumerate(col):
+        t = str(v).strip()
+        if not re.fullmatch(r"\+?[0-9]+", t) or int(t) >= 2**63:
+            raise InputError(
+                f"{path}: column 't_ns' row {i + 1} is {t!r}; expected an integer number of nanoseconds, "
+                "0 to 2^63 - 1"
+            )
+        out[i] = int(t)
+    return out
 
 
 def open_pcd_folder(path: Path, dataset: Mapping[str, Any], cfg: Mapping[str, Any]) -> Recording:

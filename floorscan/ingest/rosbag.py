@@ -27,6 +27,17 @@ Detection (issue 20), when the dataset does not name them:
 
 ROS2 bags that store no message definitions are read with the Humble typestore. A
 ``.db3`` / ``.mcap`` file is read as its folder's bag.
+
+Bad values (issue 24) are an ``InputError`` naming the file, the topic, the message and
+the field, never a wrong pose or point: a LaserScan's ``angle_min``,
+``angle_increment``, ``range_min`` or ``range_max`` not finite; a pose message's position
+or orientation not finite, or its quaternion not a unit one (``|q|^2`` off 1 by more than
+:data:`QUATERNION_TOLERANCE`, the bound tf2 applies to the transforms it accepts); a TF
+transform the same, when its link is in the chain the poses come from (a broken link
+elsewhere in the tree is not read); a PointCloud2 whose layout does not hold its points
+(a field beyond ``point_step``, ``row_step`` short of a row, data not ``row_step x
+height`` bytes) or with no finite point at all. Non-finite *ranges* and single
+non-finite *points* are not errors: they are "no return", dropped and counted.
 """
 
 from __future__ import annotations
@@ -66,6 +77,9 @@ MAP_FRAME = "map"
 TF_TOPICS = ("/tf", "/tf_static")
 #: A scanner tilted more than this (degrees) cannot be treated as planar.
 MAX_TILT_DEG = 10.0
+#: A quaternion whose squared norm is off 1 by more than this is not a rotation (tf2's
+#: ``BufferCore::setTransform`` rejects such transforms with the same bound).
+QUATERNION_TOLERANCE = 0.01
 
 
 def _reader(path: Path):
@@ -233,13 +247,10 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float = 0.5) -> 
                     t_ns = _stamp_ns(msg.header, bag_t)
                     frame = msg.header.frame_id.lstrip("/")
                     if c.msgtype.endswith("LaserScan"):
-                        rmin = max(float(msg.range_min), rmin_cfg if rmin_cfg is not None else 0.0)
-                        rmax = min(float(msg.range_max), rmax_cfg if rmax_cfg is not None else np.inf)
-                        pts, dropped = laser_scan_points(
-                            np.asarray(msg.ranges), float(msg.angle_min), float(msg.angle_increment), rmin, rmax
-                        )
+                        pts, dropped = laser_scan_xyz(msg, path, scan_topic, i, t_ns, rmin_cfg, rmax_cfg)
                     else:
-                        pts, dropped = filter_points(pointcloud2_xyz(msg, path, scan_topic), rmin_cfg, rmax_cfg)
+                        xyz = pointcloud2_xyz(msg, path, scan_topic, index=i, t_ns=t_ns)
+                        pts, dropped = filter_points(xyz, rmin_cfg, rmax_cfg)
                     yield Scan(t_ns, frame, pts, dropped)
         except InputError:
             raise
@@ -342,63 +353,169 @@ def detect_pose_source(
     return None, phrase, note
 
 
-_PC2_DTYPES = {1: "i1", 2: "u1", 3: "i2", 4: "u2", 5: "i4", 6: "u4", 7: "f4", 8: "f8"}
+def _message(path: Path | str, topic: str, index: int, t_ns: int) -> str:
+    """How an error names one message: ``file: 'topic' message i (t ... ns)``."""
+    return f"{path}: {topic!r} message {index} (t {t_ns} ns)"
 
 
-def pointcloud2_xyz(msg, path: Path | str = "", topic: str = "") -> np.ndarray:
-    """The ``x, y, z`` fields of a ``sensor_msgs/PointCloud2`` as an (N, 3) array.
+def laser_scan_xyz(
+    msg,
+    path: Path | str = "",
+    topic: str = "",
+    index: int = 0,
+    t_ns: int = 0,
+    range_min_m: float | None = None,
+    range_max_m: float | None = None,
+) -> tuple[np.ndarray, int]:
+    """Points of a ``sensor_msgs/LaserScan`` in the scanner frame.
 
-    float32 when the three fields are little-endian float32 (the usual LIDAR driver
-    layout: the values as they are, without a float64 copy that the float32 scan table
-    would round back), else float64. Handles any point step, field offsets, endianness
-    and organised clouds (height > 1). Non-finite points are returned as they are (the
-    caller drops and counts them).
+    Beam ``i`` points at ``angle_min + i * angle_increment``; returns are kept in
+    ``[max(range_min, range_min_m), min(range_max, range_max_m))``
+    (:func:`floorscan.ingest.laser_scan_points`).
+
+    Parameters
+    ----------
+    msg : sensor_msgs/LaserScan
+        ``angle_min``, ``angle_increment``, ``range_min``, ``range_max`` (radians,
+        metres) and ``ranges`` ((B,) float32, metres).
+    path, topic, index, t_ns
+        The bag, topic, message index and stamp, for error messages.
+    range_min_m, range_max_m : float, optional
+        The dataset's limits, metres: they only tighten the message's.
+
+    Returns
+    -------
+    points : (N, 3) float32 ndarray
+        Valid returns, z = 0, metres.
+    n_dropped : int
+        Beams dropped: NaN, inf (no return) or out of the range limits.
 
     Raises
     ------
     InputError
-        The message has no float x, y or z field.
+        ``angle_min``, ``angle_increment``, ``range_min`` or ``range_max`` is not finite
+        (names the file, topic, message and field).
     """
+    for name in ("angle_min", "angle_increment", "range_min", "range_max"):
+        v = float(getattr(msg, name))
+        if not np.isfinite(v):
+            raise InputError(f"{_message(path, topic, index, t_ns)}: LaserScan {name} is {v}; expected a finite number")
+    rmin = max(float(msg.range_min), range_min_m if range_min_m is not None else 0.0)
+    rmax = min(float(msg.range_max), range_max_m if range_max_m is not None else np.inf)
+    return laser_scan_points(np.asarray(msg.ranges), float(msg.angle_min), float(msg.angle_increment), rmin, rmax)
+
+
+_PC2_DTYPES = {1: "i1", 2: "u1", 3: "i2", 4: "u2", 5: "i4", 6: "u4", 7: "f4", 8: "f8"}
+
+
+def pointcloud2_xyz(msg, path: Path | str = "", topic: str = "", index: int | None = None, t_ns: int = 0) -> np.ndarray:
+    """The ``x, y, z`` fields of a ``sensor_msgs/PointCloud2`` as an (N, 3) array.
+
+    float32 when the three fields are little-endian float32 (the usual LIDAR driver
+    layout: the values as they are, without a float64 copy that the float32 scan table
+    would round back), else float64. Handles any point step, field offsets, endianness,
+    row padding (``row_step`` beyond ``width x point_step``; 0 is taken as unpadded) and
+    organised clouds (height > 1). Non-finite points are returned as they are (the
+    caller drops and counts them).
+
+    Parameters
+    ----------
+    index, t_ns : int, optional
+        The message's index on the topic and stamp, named in error messages.
+
+    Raises
+    ------
+    InputError
+        The message has no x, y or z field, one of unknown datatype or ending beyond
+        ``point_step``; ``row_step`` is short of ``width x point_step``; the data is not
+        ``row_step x height`` bytes; or no point is finite (the cloud holds nothing).
+    """
+    what = f"PointCloud2 on {topic!r}" if index is None else f"{topic!r} message {index} (t {t_ns} ns): PointCloud2"
     fields = {f.name: f for f in msg.fields}
     missing = [n for n in "xyz" if n not in fields]
     if missing:
         raise InputError(
-            f"{path}: PointCloud2 on {topic!r} lacks fields {missing}; expected x, y, z "
+            f"{path}: {what} lacks fields {missing}; expected x, y, z "
             f"(fields: {sorted(fields)})"
         )
     order = ">" if msg.is_bigendian else "<"
+    step, width, height, row_step = int(msg.point_step), int(msg.width), int(msg.height), int(msg.row_step)
     names, formats, offsets = [], [], []
     for n in "xyz":
         f = fields[n]
         if f.datatype not in _PC2_DTYPES:
-            raise InputError(f"{path}: PointCloud2 field {n!r} on {topic!r} has unknown datatype {f.datatype}")
+            raise InputError(f"{path}: {what} field {n!r} has unknown datatype {f.datatype}")
+        size = np.dtype(_PC2_DTYPES[f.datatype]).itemsize
+        if not 0 <= int(f.offset) <= step - size:
+            raise InputError(
+                f"{path}: {what} field {n!r} (offset {int(f.offset)}, {size} bytes) ends beyond point_step {step}"
+            )
         names.append(n)
         formats.append(order + _PC2_DTYPES[f.datatype])
         offsets.append(int(f.offset))
-    dt = np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": int(msg.point_step)})
-    n_points = int(msg.width) * int(msg.height)
+    if row_step and row_step < width * step:
+        raise InputError(
+            f"{path}: {what} row_step {row_step} is less than width x point_step = {width} x {step} = {width * step}"
+        )
+    rs = row_step or width * step  # 0: a driver that left it unset, rows packed
     data = np.asarray(msg.data, dtype=np.uint8)
-    if msg.row_step and msg.height > 1 and msg.row_step != msg.width * msg.point_step:
-        rows = data.reshape(int(msg.height), int(msg.row_step))[:, : int(msg.width) * int(msg.point_step)]
-        data = np.ascontiguousarray(rows).reshape(-1)
-    if data.size < n_points * msg.point_step:
-        raise InputError(f"{path}: PointCloud2 on {topic!r} has {data.size} bytes for {n_points} points")
-    arr = np.frombuffer(data, dtype=dt, count=n_points)  # a view: count bounds it
+    if data.size != rs * height:
+        raise InputError(
+            f"{path}: {what} has {data.size} bytes of data; "
+            f"expected row_step x height = {rs} x {height} = {rs * height}"
+        )
+    n_points = width * height
     out_dtype = np.float32 if all(f == "<f4" for f in formats) else np.float64
+    if n_points == 0:
+        return np.zeros((0, 3), dtype=out_dtype)
+    if rs != width * step:
+        data = np.ascontiguousarray(data.reshape(height, rs)[:, : width * step]).reshape(-1)
+    dt = np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": step})
+    arr = np.frombuffer(data, dtype=dt, count=n_points)  # a view: count bounds it
     out = np.empty((n_points, 3), dtype=out_dtype)
     for i, n in enumerate("xyz"):
         out[:, i] = arr[n]
+    if not (np.isfinite(out[:, 0]) & np.isfinite(out[:, 1]) & np.isfinite(out[:, 2])).any():
+        raise InputError(
+            f"{path}: {what} has no finite point ({n_points} points); expected a cloud with at least one return"
+        )
     return out
+
+
+def _pose_problem(
+    position, orientation, prefix: str, parts: tuple[str, str] = ("position", "orientation")
+) -> str | None:
+    """What is wrong with a pose's values (``prefix.position.x is nan; ...``), or None:
+    a non-finite component, or a quaternion off unit length by more than
+    :data:`QUATERNION_TOLERANCE` (in ``|q|^2``)."""
+    (p_name, q_name) = parts
+    for part, vec, comps in ((p_name, position, "xyz"), (q_name, orientation, "xyzw")):
+        for c in comps:
+            v = float(getattr(vec, c))
+            if not np.isfinite(v):
+                return f"{prefix}.{part}.{c} is {v}; expected a finite number"
+    q = tuple(float(getattr(orientation, c)) for c in "xyzw")
+    n2 = sum(v * v for v in q)
+    if abs(n2 - 1.0) > QUATERNION_TOLERANCE:
+        return (
+            f"{prefix}.{q_name} is {q}, |q|^2 = {n2:g}; expected a unit quaternion "
+            f"(|q|^2 within {QUATERNION_TOLERANCE} of 1, as tf2 requires)"
+        )
+    return None
 
 
 def _pose_topic_stream(reader, path: Path, pose_cfg: Mapping[str, Any], scan_frame: str, tf: "_LazyTF"):
     topic = pose_cfg["topic"]
     conns = _connections(reader, path, topic, POSE_TYPES, "poses")
     t, xyz, quat = [], [], []
-    for c, bag_t, raw in reader.messages(connections=conns):
+    for i, (c, bag_t, raw) in enumerate(reader.messages(connections=conns)):
         msg = reader.deserialize(raw, c.msgtype)
-        pose = msg.pose if c.msgtype.endswith("PoseStamped") else msg.pose.pose
+        stamped = c.msgtype.endswith("/PoseStamped")
+        pose = msg.pose if stamped else msg.pose.pose
         t.append(_stamp_ns(msg.header, bag_t))
+        bad = _pose_problem(pose.position, pose.orientation, "pose" if stamped else "pose.pose")
+        if bad:
+            raise InputError(f"{_message(path, topic, i, t[-1])}: {_short(c.msgtype)} {bad}")
         xyz.append((pose.position.x, pose.position.y, pose.position.z))
         q = pose.orientation
         quat.append((q.x, q.y, q.z, q.w))
@@ -452,8 +569,14 @@ class _Edge:
         self.trans: list[tuple[float, float, float]] = []
         self.quat: list[tuple[float, float, float, float]] = []
         self.static = False
+        #: The first bad sample (file, topic, message, field), left out; the link is
+        #: refused when a chain uses it (:func:`_check_links`).
+        self.bad: str | None = None
 
     def finish(self) -> None:
+        if not self.t:  # every sample was bad
+            self.t_arr, self.trans_arr, self.rot = np.zeros(0, np.int64), np.zeros((0, 3)), None
+            return
         t = np.asarray(self.t, dtype=np.int64)
         order = np.argsort(t, kind="stable")
         t, trans, quat = t[order], np.asarray(self.trans)[order], np.asarray(self.quat)[order]
@@ -484,16 +607,25 @@ class _Edge:
 def _read_tf(reader, path: Path) -> dict[tuple[str, str], _Edge]:
     conns = [c for c in reader.connections if c.topic in TF_TOPICS]
     edges: dict[tuple[str, str], _Edge] = {}
+    seen: dict[str, int] = defaultdict(int)
     for c, bag_t, raw in reader.messages(connections=conns):
         msg = reader.deserialize(raw, c.msgtype)
+        index = seen[c.topic]
+        seen[c.topic] += 1
         for tr in msg.transforms:
             key = (tr.header.frame_id.lstrip("/"), tr.child_frame_id.lstrip("/"))
             e = edges.get(key)
             if e is None:
                 e = edges[key] = _Edge(*key)
             e.static |= c.topic == "/tf_static"
-            e.t.append(_stamp_ns(tr.header, bag_t))
+            t_ns = _stamp_ns(tr.header, bag_t)
             v, q = tr.transform.translation, tr.transform.rotation
+            bad = _pose_problem(v, q, "transform", ("translation", "rotation"))
+            if bad:
+                if e.bad is None:
+                    e.bad = f"{_message(path, c.topic, index, t_ns)}: TransformStamped {key[0]} -> {key[1]}: {bad}"
+                continue
+            e.t.append(t_ns)
             e.trans.append((v.x, v.y, v.z))
             e.quat.append((q.x, q.y, q.z, q.w))
     for e in edges.values():
@@ -545,6 +677,13 @@ def _chain_from_root(edges, frame: str) -> list[str]:
     return out[::-1]
 
 
+def _check_links(chain: list[_Edge]) -> None:
+    """Refuse a chain with a link that had a bad sample (its message names it)."""
+    for e in chain:
+        if e.bad is not None:
+            raise InputError(e.bad)
+
+
 def _static_chain(edges, base: str, frame: str):
     if base == frame:
         return Rotation.identity(), np.zeros(3)
@@ -552,6 +691,7 @@ def _static_chain(edges, base: str, frame: str):
         chain = _chain(edges, base, frame, Path())
     except InputError:
         return None
+    _check_links(chain)
     if not all(e.static for e in chain):
         return None
     rot, trans = Rotation.identity(), np.zeros(3)
@@ -566,6 +706,7 @@ def _tf_stream(edges, path: Path, fixed: str, frame: str, max_gap_s: float):
     if not edges:
         raise InputError(f"{path}: pose.source is 'tf' but the bag has no /tf or /tf_static messages")
     chain = _chain(edges, fixed, frame, path)
+    _check_links(chain)
     moving = [e for e in chain if not e.static]
     if not moving:
         raise InputError(f"{path}: the TF chain {fixed!r} -> {frame!r} never changes; the scanner does not move")

@@ -2,7 +2,7 @@
 import copy
 from pathlib import Path
 
-from floorscan.config import validate_config
+from floorscan.config import ConfigError, config_errors_exit, validate_config
 
 DATASETS = config["datasets"]
 
@@ -79,13 +79,19 @@ wildcard_constraints:
     dataset="|".join(sorted(DATASETS)) or "NO_DATASET",
 
 
+def config_error(message):
+    """Stop the run on a config value the schemas cannot judge alone (one key against
+    another): Snakemake prints the message, one paragraph, no traceback
+    (floorscan.config.config_errors_exit)."""
+    with config_errors_exit():
+        raise ConfigError(message)
+
+
 def target_datasets():
     """Datasets built by `rule all`: config `target`, checked against `datasets`."""
     unknown = [d for d in config["target"] if d not in DATASETS]
     if unknown:
-        raise ValueError(
-            f"config 'target' names unknown datasets {unknown}; known: {sorted(DATASETS)}"
-        )
+        config_error(f"target names unknown datasets {unknown}; known: {sorted(DATASETS)}")
     return list(config["target"])
 
 
@@ -126,11 +132,12 @@ def stage_schema_check(stage):
     each schema parsed once (16 validations took Snakemake ~0.5 s at every start)."""
     schema = SCHEMA_DIR / f"{stage}.schema.yaml"
     config.setdefault(stage, {})
-    validate_config(config[stage], schema, stage)
-    for name, ds in DATASETS.items():
-        override = (ds.get("params") or {}).get(stage)
-        if override:
-            validate_config(_deep_merge(config[stage], override), schema, f"datasets.{name}.params.{stage}")
+    with config_errors_exit():  # a bad value: one paragraph, no traceback
+        validate_config(config[stage], schema, stage)
+        for name, ds in DATASETS.items():
+            override = (ds.get("params") or {}).get(stage)
+            if override:
+                validate_config(_deep_merge(config[stage], override), schema, f"datasets.{name}.params.{stage}")
 
 
 def _deep_merge(base, override):

@@ -19,7 +19,7 @@ def plan_extractor(wildcards):
     extractor = stage_config("floorplan")(wildcards)["extractor"]
     extractors = list(stage_config("walls")(wildcards)["extractors"])
     if extractor not in extractors:
-        raise ValueError(f"floorplan.extractor {extractor!r} is not one of walls.extractors {extractors}")
+        config_error(f"floorplan.extractor {extractor!r} is not one of walls.extractors {extractors}")
     return extractor
 
 

@@ -71,16 +71,16 @@ def score_check(wildcards):
     cfg = stage_config("score")(wildcards)
     taus = [float(t) for t in cfg["taus_m"]]
     if not any(abs(float(cfg["summary_tau_m"]) - t) < 1e-12 for t in taus):
-        raise ValueError(f"score.summary_tau_m {cfg['summary_tau_m']} is not in score.taus_m {taus}")
+        config_error(f"score.summary_tau_m {cfg['summary_tau_m']} is not in score.taus_m {taus}")
     if cfg["figure_k"] != SCORE_FIGURE_K:
-        raise ValueError(
+        config_error(
             f"datasets.{wildcards.dataset}.params.score.figure_k: the figure k names the figure "
             f"files and cannot be overridden per dataset (global {SCORE_FIGURE_K})"
         )
     if str(cfg["figure_k"]) not in score_ks(wildcards):
-        raise ValueError(f"score.figure_k {cfg['figure_k']} is not in walls.k {score_ks(wildcards)}")
+        config_error(f"score.figure_k {cfg['figure_k']} is not in walls.k {score_ks(wildcards)}")
     if "all" not in score_ks(wildcards):
-        raise ValueError("walls.k must contain 'all': the summary compares with the all-scan F1")
+        config_error("walls.k must contain 'all': the summary compares with the all-scan F1")
     return cfg
 
 
@@ -273,6 +273,7 @@ def score_walls_figure_inputs(wildcards):
         ],
         "registered": f"results/{ds}/registered.parquet",
         "scan_status": [f"results/{ds}/walls/{e}/scan_status.parquet" for e in score_extractors(wildcards)],
+        "scan_times": [f"results/{ds}/benchmarks/scan_walls_{e}_times.parquet" for e in score_extractors(wildcards)],
         **_score_reference_inputs(wildcards),
     }
 

@@ -18,7 +18,7 @@ def select_coverage_inputs(wildcards):
     extractor = stage_config("select")(wildcards)["coverage"]["wall_extractor"]
     extractors = stage_config("walls")(wildcards)["extractors"]
     if extractor not in extractors:
-        raise ValueError(
+        config_error(
             f"select.coverage.wall_extractor {extractor!r} is not one of walls.extractors {list(extractors)}"
         )
     return {
@@ -106,7 +106,7 @@ def select_default_ordering(wildcards):
     default = stage_config("select")(wildcards)["default_ordering"]
     orderings = list(stage_config("walls")(wildcards)["orderings"])
     if default not in orderings:
-        raise ValueError(f"select.default_ordering {default!r} is not one of walls.orderings {orderings}")
+        config_error(f"select.default_ordering {default!r} is not one of walls.orderings {orderings}")
     return default
 
 

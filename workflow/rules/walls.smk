@@ -54,9 +54,11 @@ def scan_walls_shards(wildcards):
         name: [shard.format(dataset=wildcards.dataset, extractor=wildcards.extractor, shard=s, name=name) for s in labels]
         for name in ("per_scan", "scan_status")
     }
+    times = "results/{dataset}/benchmarks/shards/walls/{extractor}/{shard}/times.parquet"
     return {
         "shard_walls": files["per_scan"],
         "shard_status": files["scan_status"],
+        "shard_times": [times.format(dataset=wildcards.dataset, extractor=wildcards.extractor, shard=s) for s in labels],
         "registered": f"results/{wildcards.dataset}/registered.parquet",
         "registration": f"results/{wildcards.dataset}/registration.parquet",
     }
@@ -80,6 +82,8 @@ rule scan_walls_shard:
     output:
         walls="results/{dataset}/shards/walls/{extractor}/{shard}/per_scan.parquet",
         status="results/{dataset}/shards/walls/{extractor}/{shard}/scan_status.parquet",
+        # the time of each scan, beside the benchmark files: it changes from run to run
+        times="results/{dataset}/benchmarks/shards/walls/{extractor}/{shard}/times.parquet",
     wildcard_constraints:
         extractor=WALLS_CONSTRAINTS["extractor"],
         shard=WALLS_SHARD_LABEL,
@@ -114,6 +118,7 @@ rule scan_walls:
     output:
         walls="results/{dataset}/walls/{extractor}/per_scan.parquet",
         status="results/{dataset}/walls/{extractor}/scan_status.parquet",
+        times="results/{dataset}/benchmarks/scan_walls_{extractor}_times.parquet",  # Fig. 5.10
     wildcard_constraints:
         extractor=WALLS_CONSTRAINTS["extractor"],
     params:
