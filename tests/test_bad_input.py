@@ -127,3 +127,136 @@ def test_a_corrupt_bag_is_reported_once_without_a_traceback(tmp_path, ros1_bag):
     assert str(bag) in lines[0] and "cannot read the bag" in lines[0]
     assert "Traceback" not in out and "InputError" not in out
     assert not list((wd / "results" / "lab").glob("*.parquet"))
+
+
+def _bad_recordings(root: Path, ros1_bag: Path, ros2_bag: Path) -> dict[str, Path]:
+    """A corpus of bad recordings as users bring them, each in its own file or folder:
+    truncated and corrupted bags, CARMEN logs with broken lines, PCD folders whose
+    headers, data or locations disagree."""
+    from conftest import flaser_line, write_carmen
+
+    corpus: dict[str, Path] = {}
+    data = ros1_bag.read_bytes()
+    for frac in (0.05, 0.2, 0.5, 0.8, 0.97):  # truncated ROS1 bags
+        p = root / f"truncated_{int(frac * 100)}.bag"
+        p.write_bytes(data[: int(len(data) * frac)])
+        corpus[p.name] = p
+    for at in (0.1, 0.4, 0.7):  # a run of zeros over the middle of the bag
+        p = root / f"zeroed_{int(at * 100)}.bag"
+        b = bytearray(data)
+        i = int(len(b) * at)
+        b[i : i + 4096] = bytes(4096)
+        p.write_bytes(bytes(b))
+        corpus[p.name] = p
+    p = root / "empty.bag"
+    p.write_bytes(b"")
+    corpus[p.name] = p
+    p = root / "not_a_bag.bag"
+    p.write_bytes(b"#ROSBAG V2.0\n" + bytes(range(256)) * 8)
+    corpus[p.name] = p
+    # ROS2: a bag folder without its storage file, or with a truncated one
+    db3 = next(ros2_bag.glob("*.db3"))
+    for frac in (0.0, 0.3):
+        folder = root / f"ros2_truncated_{int(frac * 100)}"
+        shutil.copytree(ros2_bag, folder)
+        (folder / db3.name).write_bytes(db3.read_bytes()[: int(db3.stat().st_size * frac)])
+        corpus[folder.name] = folder
+    folder = root / "ros2_no_metadata"
+    shutil.copytree(ros2_bag, folder)
+    (folder / "metadata.yaml").unlink()
+    corpus[folder.name] = folder
+    # CARMEN logs: a good line with a broken one among them
+    good = [flaser_line(np.full(180, 2.0), (1.0, 2.0, 0.1), 100.0 + 0.1 * i) for i in range(5)]
+    broken = {
+        "short": "FLASER 180 " + " ".join(["2.0"] * 179) + " 1 2 0.1 1 2 0.1 100.9 host 100.9",
+        "long": "FLASER 180 " + " ".join(["2.0"] * 181) + " 1 2 0.1 1 2 0.1 100.9 host 100.9",
+        "count_word": "FLASER abc 2.0 2.0 1 2 0.1 1 2 0.1 100.9 host 100.9",
+        "count_float": "FLASER 2.5 2.0 2.0 1 2 0.1 1 2 0.1 100.9 host 100.9",
+        "nan_pose": "FLASER 2 2.0 2.0 nan 2 0.1 1 2 0.1 100.9 host 100.9",
+        "inf_theta": "FLASER 2 2.0 2.0 1 2 inf 1 2 0.1 100.9 host 100.9",
+        "nan_stamp": "FLASER 2 2.0 2.0 1 2 0.1 1 2 0.1 nan host 100.9",
+        "negative_stamp": "FLASER 2 2.0 2.0 1 2 0.1 1 2 0.1 -5 host 100.9",
+        "word_range": "FLASER 2 2.0 two 1 2 0.1 1 2 0.1 100.9 host 100.9",
+        "robotlaser_short": "ROBOTLASER1 0 -1.5 3.14 0.01 30 0.1 0 3 2.0 2.0 2.0 0",
+    }
+    for name, line in broken.items():
+        corpus[f"carmen_{name}.log"] = write_carmen(root / f"carmen_{name}.log", good[:3] + [line] + good[3:])
+    p = root / "carmen_no_laser.log"
+    p.write_text("# a log without laser lines\nODOM 1 2 0.1 0 0 0 100.0 host 100.0\n")
+    corpus[p.name] = p
+    p = root / "carmen_gzip_truncated.log.gz"
+    import gzip
+
+    p.write_bytes(gzip.compress(("\n".join(good) + "\n").encode())[:-20])
+    corpus[p.name] = p
+    # PCD folders
+    header = "VERSION 0.7\nFIELDS x y z\nSIZE {size}\nTYPE F F F\nCOUNT 1 1 1\nWIDTH {w}\nHEIGHT 1\nPOINTS {n}\nDATA {data}\n"
+    pcd_cases = {
+        "points_word": (header.format(size="4 4 4", w=2, n="abc", data="ascii") + "1 2 3\n4 5 6\n", None),
+        "size_2": (header.format(size="2 4 4", w=2, n=2, data="ascii") + "1 2 3\n4 5 6\n", None),
+        "rows_missing": (header.format(size="4 4 4", w=3, n=3, data="ascii") + "1 2 3\n4 5 6\n", None),
+        "row_short": (header.format(size="4 4 4", w=2, n=2, data="ascii") + "1 2 3\n4 5\n", None),
+        "word_in_data": (header.format(size="4 4 4", w=2, n=2, data="ascii") + "1 2 3\n4 five 6\n", None),
+        "width_mismatch": (header.format(size="4 4 4", w=5, n=2, data="ascii") + "1 2 3\n4 5 6\n", None),
+        "binary_short": (header.format(size="4 4 4", w=2, n=2, data="binary"), bytes(20)),
+        "compressed_sizes": (header.format(size="4 4 4", w=2, n=2, data="binary_compressed"), bytes([9, 0, 0, 0, 24, 0, 0, 0, 1])),
+        "unknown_data": (header.format(size="4 4 4", w=2, n=2, data="zip") + "1 2 3\n4 5 6\n", None),
+        "integer_x": (header.format(size="4 4 4", w=2, n=2, data="ascii").replace("TYPE F F F", "TYPE I F F")
+                      + "1 2 3\n4 5 6\n", None),
+        "x_count_2": (header.format(size="4 4 4", w=2, n=2, data="ascii").replace("COUNT 1 1 1", "COUNT 2 1 1")
+                      + "1 1 2 3\n4 4 5 6\n", None),
+        "no_z": (header.format(size="4 4 4", w=2, n=2, data="ascii").replace("FIELDS x y z", "FIELDS x y w")
+                 + "1 2 3\n4 5 6\n", None),
+    }
+    good_pcd = header.format(size="4 4 4", w=2, n=2, data="ascii") + "1 2 3\n4 5 6\n"
+    for name, (text, blob) in pcd_cases.items():
+        folder = root / f"pcd_{name}"
+        folder.mkdir()
+        (folder / "a.pcd").write_text(good_pcd)
+        (folder / "b.pcd").write_bytes(text.encode() + (blob or b""))
+        (folder / "locations.csv").write_text("file,t_ns,x,y,z,yaw\na.pcd,0,0,0,0,0\nb.pcd,100,1,0,0,0\n")
+        corpus[folder.name] = folder
+    for name, rows in {
+        "nan_x": "a.pcd,0,nan,0,0,0\nb.pcd,100,1,0,0,0\n",
+        "fraction_stamp": "a.pcd,0.5,0,0,0,0\nb.pcd,100,1,0,0,0\n",
+        "missing_file": "a.pcd,0,0,0,0,0\nc.pcd,100,1,0,0,0\n",
+        "word_yaw": "a.pcd,0,0,0,0,north\nb.pcd,100,1,0,0,0\n",
+    }.items():
+        folder = root / f"pcd_locations_{name}"
+        folder.mkdir()
+        (folder / "a.pcd").write_text(good_pcd)
+        (folder / "b.pcd").write_text(good_pcd)
+        (folder / "locations.csv").write_text("file,t_ns,x,y,z,yaw\n" + rows)
+        corpus[folder.name] = folder
+    folder = root / "pcd_no_locations"
+    folder.mkdir()
+    (folder / "a.pcd").write_text(good_pcd)
+    corpus[folder.name] = folder
+    return corpus
+
+
+def test_a_corpus_of_bad_recordings_gives_one_input_error_each_and_leaves_nothing(tmp_path, ros1_bag, ros2_bag):
+    """Issue 24: at least 40 bad recordings through the ingest stage (open_recording
+    and write_recording, what scripts/ingest.py runs): each ends in the project's
+    InputError naming the recording, never another exception or a table written from
+    a misread, and no output or hidden temporary is left behind."""
+    from floorscan.ingest import open_recording, write_recording
+
+    (tmp_path / "in").mkdir()
+    corpus = _bad_recordings(tmp_path / "in", ros1_bag, ros2_bag)
+    assert len(corpus) >= 40
+    outcomes = {}
+    for name, path in corpus.items():
+        out = tmp_path / "out" / name
+        out.mkdir(parents=True)
+        try:
+            rec = open_recording({"name": name, "path": str(path)}, {}, max_gap_s=0.5)
+            write_recording(rec, out / "scans.parquet", out / "scan_index.parquet", out / "pose_stream.parquet")
+            outcomes[name] = "read"
+        except InputError as e:
+            assert path.name in str(e) or str(path) in str(e), (name, str(e))
+            outcomes[name] = "InputError"
+        left = sorted(p.name for p in out.iterdir())
+        assert outcomes[name] == "read" or left == [], (name, left)
+    wrong = {k: v for k, v in outcomes.items() if v != "InputError"}
+    assert wrong == {}, f"{len(wrong)} of {len(corpus)} bad recordings were read: {sorted(wrong)}"
