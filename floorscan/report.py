@@ -188,6 +188,8 @@ def front_page(
     parts.append('<div class="facts">')
     parts += _verdict_html(verdict)
     parts += _scans_html(k, n_kept, n_recorded, bytes_in, bytes_out, scan_list, k_reason)
+    if table is not None:
+        parts += _quality_html(table, ordering, extractor)
     parts += _detected_html(detected, mode)
     parts.append("</div></div>")
 
@@ -328,6 +330,35 @@ def plan_caption(k=None, ordering: str = "", extractor: str = "", n_walls=None) 
     if extractor:
         text += f", walls by {extractor}"
     return text + ": floorplan.svg, also as GeoJSON, DXF and IFC."
+
+
+#: Rows of the compact quality table beside the plan (the full table is below it).
+QUALITY_ROWS = ("oracle", THESIS_ORDERING, "random")
+#: Its columns: summary column and header.
+QUALITY_COLUMNS = (("ordering", "ordering"), ("k_95", "k95"), ("k_99", "k99"), ("auc", "AUC 20 %"))
+
+
+def _quality_html(summary: "pd.DataFrame", ordering: str, extractor: str) -> list[str]:
+    """The recommended ordering against the thesis's, random and the oracle, for the
+    recommended plan's extractor: k95, k99 and the AUC (the summary's cells), so the
+    page's first screen says how few scans the plan needs."""
+    esc = html.escape
+    rows = summary[summary["extractor"] == extractor] if extractor and "extractor" in summary else summary
+    order = [ordering] + [o for o in QUALITY_ROWS if o != ordering]
+    records = {r["ordering"]: r for r in rows.to_dict("records")}
+    out = [f"<h3>Scans needed ({esc(extractor)} walls)</h3>" if extractor else "<h3>Scans needed</h3>", "<table>",
+           "<thead><tr>" + "".join(f"<th>{esc(h)}</th>" for _, h in QUALITY_COLUMNS) + "</tr></thead><tbody>"]
+    for name in order:
+        r = records.get(name)
+        if r is None:
+            continue
+        cls = "recommended" if name == ordering else ("bound" if name == "oracle" else "")
+        cells = [f"<td>{esc(name)}</td>"] + [
+            f'<td class="num">{esc(summary_cell(r, col))}</td>' for col, _ in QUALITY_COLUMNS[1:]
+        ]
+        out.append(f'<tr class="{cls}">' + "".join(cells) + "</tr>")
+    out.append("</tbody></table>")
+    return out
 
 
 def summary_table_html(

@@ -128,6 +128,14 @@ def test_front_page_holds_the_plan_the_verdict_the_detection_and_the_table(tmp_p
                                  "0.034", "0.782 ± 0.028", "2.48"]
     assert body["wall_coverage"][0][3] == "4" and body["wall_coverage"][1] == "recommended"
     assert body["oracle"][1] == "bound"
+    # beside the plan, before the full table: the scans the recommended ordering needs
+    # against random and the oracle (no cluster_hull row in this summary)
+    quality = [(r, c) for r, c in zip(tables.rows, tables.row_classes) if len(r) == len(R.QUALITY_COLUMNS)]
+    assert quality[0][0] == ["ordering", "k95", "k99", "AUC 20 %"]
+    assert [r[0] for r, _ in quality[1:]] == ["wall_coverage", "oracle", "random"]
+    assert quality[1][0][1] == "4" and quality[1][1] == "recommended" and quality[2][1] == "bound"
+    assert quality[3][0][1] == "10 ± 4"
+    assert page.index("Scans needed (cluster_ransac walls)") < page.index("What ingest detected")
     assert "wall_coverage beats random with cluster_ransac" in page
     assert "k = 4: the first k scans reach 99 %" in page
 
@@ -192,7 +200,8 @@ def test_front_page_of_the_stage_outputs(tmp_path):
     assert "toy: floor plan from 3 of 40 recorded scans" in page
     assert "2 MB → 150 kB (7.5 %)" in page and "k = 3 by the rule" in page
     assert "odometry mode" in page and "GOOD: kept 76" in page
-    assert page.count("<tr") == len(summary) + 1 + 3 + 5  # summary and header; scans; 4 detected, the mode
+    # summary and header; scans; the quality table (header, wall_coverage, oracle, random); 4 detected, the mode
+    assert page.count("<tr") == len(summary) + 1 + 3 + 4 + 5
 
 
 @pytest.mark.filterwarnings("ignore:Argument \"writer_name\":PendingDeprecationWarning")  # as Snakemake calls it
