@@ -59,7 +59,7 @@ rule evaluation:
 onsuccess:
     import threading
 
-    from floorscan.select.recommend import answer_lines
+    from floorscan.report import answer_lines
 
     for _line in answer_lines(target_datasets()):
         print(_line)

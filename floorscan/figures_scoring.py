@@ -566,16 +566,15 @@ def plot_stage_times(table: pd.DataFrame, out, title: str = "") -> None:
 # ----------------------------------------------------------------------- Fig. 5.10
 
 
-def plot_wall_extraction(status: dict, out, title: str = "", times: dict | None = None) -> None:
+def plot_wall_extraction(status: dict, times: dict, out, title: str = "") -> None:
     """Fig. 5.10: wall extraction time per scan and cumulative walls, per extractor.
 
     Parameters
     ----------
     status : dict
         ``{extractor: DataFrame}`` of ``walls/{extractor}/scan_status.parquet``
-        (``scan_id``, ``n_walls``, ``reason``; ``time_s`` when ``times`` is None);
-        scans in recording order.
-    times : dict, optional
+        (``scan_id``, ``n_walls``, ``reason``); scans in recording order.
+    times : dict
         ``{extractor: DataFrame}`` of ``benchmarks/scan_walls_{extractor}_times.parquet``
         (``scan_id``, ``time_s``, :data:`floorscan.walls.SCAN_TIMES`), the seconds of
         each scan's extraction; a scan without a time is drawn without one.
@@ -583,9 +582,8 @@ def plot_wall_extraction(status: dict, out, title: str = "", times: dict | None 
     fig, axes = plt.subplots(1, 3, figsize=(15, 4))
     for ext, df in sorted(status.items()):
         df = df.sort_values("scan_id")
-        if times is not None:
-            t_ext = times.get(ext, pd.DataFrame({"scan_id": [], "time_s": []}))[["scan_id", "time_s"]]
-            df = df.drop(columns="time_s", errors="ignore").merge(t_ext, on="scan_id", how="left")
+        t_ext = times.get(ext, pd.DataFrame({"scan_id": [], "time_s": []}))[["scan_id", "time_s"]]
+        df = df.merge(t_ext, on="scan_id", how="left")
         colour = EXTRACTOR_COLOURS.get(ext)
         t = pd.to_numeric(df["time_s"], errors="coerce").to_numpy() * 1e3
         n = pd.to_numeric(df["n_walls"], errors="coerce").fillna(0).to_numpy()
@@ -619,10 +617,10 @@ def make_walls_figures(
     floorplans: dict,
     points,
     scan_status: dict,
+    scan_times: dict,
     outputs: dict,
     cfg: dict,
     log=None,
-    scan_times: dict | None = None,
 ) -> None:
     """Write the figures of a dataset's walls and floor plans (thesis Figs. 5.1, 5.5,
     5.10 - 5.12); they need no metrics, so they are drawn while the runs are scored.
@@ -646,9 +644,9 @@ def make_walls_figures(
         (read in batches); subsampled here (:func:`subsample_points`).
     scan_status : dict
         ``{extractor: DataFrame}`` wall extraction status per scan.
-    scan_times : dict, optional
+    scan_times : dict
         ``{extractor: DataFrame}`` seconds of each scan's wall extraction
-        (:func:`plot_wall_extraction`); None: ``time_s`` of ``scan_status``.
+        (:func:`plot_wall_extraction`).
     outputs : dict
         Paths: ``floorplan``, ``bitmap_overlay``, ``walls_over_points_k``,
         ``walls_over_points_all``, ``wall_extraction``.
@@ -691,8 +689,8 @@ def make_walls_figures(
         plot_walls_over_points(xy, panels, outputs[key],
                                f"{dataset}: walls from {label} over the registered points")
 
-    plot_wall_extraction(scan_status, outputs["wall_extraction"],
-                         f"{dataset}: wall extraction per scan, ransac against cluster_ransac", scan_times)
+    plot_wall_extraction(scan_status, scan_times, outputs["wall_extraction"],
+                         f"{dataset}: wall extraction per scan, ransac against cluster_ransac")
     if log is not None:
         log.info("walls figures written for %s", dataset)
 

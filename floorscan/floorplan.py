@@ -942,11 +942,6 @@ def export_time(timestamp: float | None = None) -> int:
         raise ValueError(f"SOURCE_DATE_EPOCH must be an integer number of seconds, got {env!r}") from None
 
 
-def _iso_time(stamp: int) -> str:
-    """ISO 8601 UTC time of ``stamp`` seconds since the epoch, e.g. ``1970-01-01T00:00:00+00:00``."""
-    return datetime.fromtimestamp(stamp, tz=timezone.utc).isoformat()
-
-
 @functools.lru_cache(maxsize=None)
 def floorscan_version() -> str:
     """The installed floorscan's version (``"unknown"`` when not installed)."""
@@ -990,6 +985,11 @@ class PlanMetadata:
             object.__setattr__(self, f, "" if value is None else str(value))
 
     @property
+    def fields(self) -> tuple[tuple[str, str], ...]:
+        """``(name, value)`` of dataset, ordering, extractor and k, as every export names them."""
+        return ("dataset", self.dataset), ("ordering", self.ordering), ("extractor", self.extractor), ("k", self.k)
+
+    @property
     def title(self) -> str:
         """:attr:`name`, else the fields given joined (``"intel random ransac k5"``),
         else ``"floorscan"``."""
@@ -998,28 +998,27 @@ class PlanMetadata:
         parts = [self.dataset, self.ordering, self.extractor, f"k{self.k}" if self.k else ""]
         return " ".join(p for p in parts if p) or "floorscan"
 
-    def stamp(self) -> int:
-        """:func:`export_time` of :attr:`timestamp`."""
-        return export_time(self.timestamp)
+    @property
+    def time_stamp(self) -> str:
+        """:func:`export_time` of :attr:`timestamp` in ISO 8601, UTC (``1970-01-01T00:00:00+00:00``)."""
+        return datetime.fromtimestamp(export_time(self.timestamp), tz=timezone.utc).isoformat()
 
 
 def _metadata(plan: FloorPlan, meta: PlanMetadata, georeference: Georeference | None = None) -> dict:
     """The plan's metadata as the GeoJSON member ``floorscan`` holds it (the DXF's
     metadata are its entries as text)."""
-    paired = int(plan.walls["paired"].sum()) if len(plan.walls) else 0
-    out = {
+    return {
         "frame": "map" if georeference is None else "WGS84",
         "units": "metres" if georeference is None else "degrees",
         "crs": "local engineering frame of the recording" if georeference is None else (
             "WGS84 longitude, latitude: the map frame on the local tangent plane of the georeference"),
-        "dataset": meta.dataset, "ordering": meta.ordering, "extractor": meta.extractor, "k": meta.k,
-        "n_walls": len(plan.walls), "n_walls_both_faces": paired, "n_faces": len(plan.faces),
+        **dict(meta.fields),
+        "n_walls": len(plan.walls), "n_walls_both_faces": int(plan.walls["paired"].sum()), "n_faces": len(plan.faces),
         "lengths": "metres (thickness_m, height_m, length_m)",
-        "time_stamp": _iso_time(meta.stamp()),
+        "time_stamp": meta.time_stamp,
         "generator": f"floorscan {floorscan_version()}",
         "georeference": None if georeference is None else georeference.as_dict(),
     }  # fmt: skip
-    return out
 
 
 # --------------------------------------------------------------------------------------
@@ -1027,14 +1026,38 @@ def _metadata(plan: FloorPlan, meta: PlanMetadata, georeference: Georeference | 
 # --------------------------------------------------------------------------------------
 
 
-def _ccw_footprints(plan: FloorPlan):
-    """The plan's wall polygons (:meth:`FloorPlan.footprints`) oriented as RFC 7946
-    wants them (``shapely.orient_polygons``): counter-clockwise exterior rings,
-    clockwise holes (a buffer's exterior is clockwise). Every export draws these."""
-    import shapely
+@dataclass
+class _PlanExports:
+    """A plan and what its exports share, each made once, on first use: the oriented
+    footprints, their rings, the extent and the IFC model (:func:`_ifc_model`, kept
+    by :class:`FloorplanWriter` for a plan it writes again)."""
 
-    polys = plan.footprints()
-    return shapely.orient_polygons(polys, exterior_cw=False) if len(polys) else polys
+    plan: FloorPlan
+    model: Any = None
+
+    @functools.cached_property
+    def polys(self):
+        """The wall polygons (:meth:`FloorPlan.footprints`) oriented as RFC 7946 wants
+        them (``shapely.orient_polygons``): counter-clockwise exterior rings, clockwise
+        holes (a buffer's exterior is clockwise). Every export draws these."""
+        import shapely
+
+        return shapely.orient_polygons(self.plan.footprints(), exterior_cw=False)
+
+    @functools.cached_property
+    def rings(self) -> list:
+        """:func:`_exterior_rings` of :attr:`polys`, map metres."""
+        return _exterior_rings(self.polys)
+
+    @functools.cached_property
+    def extent(self) -> tuple[np.ndarray, np.ndarray]:
+        """Least and greatest ``(x, y)`` of the wall axes and footprints, metres (a
+        plan with walls)."""
+        import shapely
+
+        xy = self.plan.walls[["x0", "y0", "x1", "y1"]].to_numpy(dtype=np.float64).reshape(-1, 2)
+        b = shapely.total_bounds(self.polys)  # NaN when every footprint is empty
+        return np.fmin(xy.min(axis=0), b[:2]), np.fmax(xy.max(axis=0), b[2:])
 
 
 def _exterior_rings(polys, transform: Callable[[np.ndarray], np.ndarray] | None = None) -> list:
@@ -1049,8 +1072,6 @@ def _exterior_rings(polys, transform: Callable[[np.ndarray], np.ndarray] | None 
     import shapely
 
     out: list = [None] * len(polys)
-    if not len(polys):
-        return out
     ok = np.flatnonzero(~(shapely.is_missing(polys) | shapely.is_empty(polys)))
     if not len(ok):
         return out
@@ -1066,12 +1087,7 @@ def _exterior_rings(polys, transform: Callable[[np.ndarray], np.ndarray] | None 
 
 def _lonlat_transform(georeference: Georeference) -> Callable[[np.ndarray], np.ndarray]:
     """(P, 2) map metres -> (P, 2) longitude, latitude degrees (:func:`map_to_lonlat`)."""
-
-    def transform(xy: np.ndarray) -> np.ndarray:
-        xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
-        return np.column_stack(map_to_lonlat(xy[:, 0], xy[:, 1], georeference))
-
-    return transform
+    return lambda xy: np.column_stack(map_to_lonlat(xy[:, 0], xy[:, 1], georeference))
 
 
 # --------------------------------------------------------------------------------------
@@ -1107,15 +1123,11 @@ def floorplan_geojson(
     georeference : Georeference or mapping, optional
         With one, coordinates are WGS84 longitude, latitude (:func:`map_to_lonlat`).
     """
-    return _floorplan_geojson(plan, _ccw_footprints(plan), None, metadata, as_georeference(georeference))
+    return _floorplan_geojson(_PlanExports(plan), metadata or PlanMetadata(), as_georeference(georeference))
 
 
-def _floorplan_geojson(
-    plan: FloorPlan, polys, rings: list | None = None, metadata: PlanMetadata | None = None,
-    georeference: Georeference | None = None,
-) -> dict:  # fmt: skip
-    """:func:`floorplan_geojson` given the plan's oriented footprints
-    (:func:`_ccw_footprints`) and, in the map frame, their rings.
+def _floorplan_geojson(exports: _PlanExports, meta: PlanMetadata, georeference: Georeference | None) -> dict:
+    """:func:`floorplan_geojson` of a plan's :class:`_PlanExports`.
 
     A footprint's coordinates are its exterior ring's (:func:`_exterior_rings`),
     rounded: what ``shapely.to_geojson`` writes (shortest round-trip digits) read
@@ -1125,18 +1137,20 @@ def _floorplan_geojson(
     """
     import shapely
 
-    meta = metadata or PlanMetadata()
-    transform = None if georeference is None else _lonlat_transform(georeference)
-    nd = GEOJSON_DECIMALS["map" if georeference is None else "WGS84"]
-    if rings is None or transform is not None:
-        rings = _exterior_rings(polys, transform)
+    plan, polys = exports.plan, exports.polys
+    if georeference is None:
+        transform, nd, rings = None, GEOJSON_DECIMALS["map"], exports.rings
+    else:
+        transform = _lonlat_transform(georeference)
+        nd, rings = GEOJSON_DECIMALS["WGS84"], _exterior_rings(polys, transform)
+    floats = ("thickness_m", "height_m", "length_m")
 
     def col(df, c):  # floats as float64 (not DataFrame.astype: 3 ms a call)
         return df[c].to_numpy(dtype=np.float64).tolist() if c in floats else df[c].tolist()
 
     def ends(df) -> list:  # x0, y0, x1, y1 of each row, transformed
-        xy = df[["x0", "y0", "x1", "y1"]].to_numpy(dtype=np.float64).reshape(-1, 4)
-        if transform is not None and len(xy):
+        xy = df[["x0", "y0", "x1", "y1"]].to_numpy(dtype=np.float64)
+        if transform is not None:
             xy = np.column_stack([transform(xy[:, :2]), transform(xy[:, 2:])])
         return xy.tolist()
 
@@ -1144,13 +1158,9 @@ def _floorplan_geojson(
         coords = [[round(e[0], nd), round(e[1], nd)], [round(e[2], nd), round(e[3], nd)]]
         return {"type": "LineString", "coordinates": coords}
 
-    floats = ("thickness_m", "height_m", "length_m")
     feats = []
     w = plan.walls
-    plain = (
-        (shapely.get_type_id(polys) == 3) & (shapely.get_num_interior_rings(polys) == 0)
-        if len(polys) else np.zeros(0, bool)
-    ).tolist()  # fmt: skip
+    plain = ((shapely.get_type_id(polys) == 3) & (shapely.get_num_interior_rings(polys) == 0)).tolist()
     for wall_id, e, thick, height, length, paired, n_seg, poly, ring, simple in zip(
         col(w, "wall_id"), ends(w), col(w, "thickness_m"), col(w, "height_m"), col(w, "length_m"),
         col(w, "paired"), col(w, "n_segments"), polys, rings, plain,
@@ -1204,14 +1214,13 @@ def write_geojson(
     encoder of :mod:`json` write it: ``indent`` makes ``json`` use its pure-Python
     encoder, which took 70 % of this function's time on large plans.
     """
-    _write_geojson(plan, path, _ccw_footprints(plan), None, metadata, as_georeference(georeference))
+    _write_geojson(_PlanExports(plan), path, metadata or PlanMetadata(), as_georeference(georeference))
 
 
 def _write_geojson(
-    plan: FloorPlan, path: str | os.PathLike, polys, rings: list | None = None,
-    metadata: PlanMetadata | None = None, georeference: Georeference | None = None,
-) -> None:  # fmt: skip
-    doc = _floorplan_geojson(plan, polys, rings, metadata, georeference)
+    exports: _PlanExports, path: str | os.PathLike, meta: PlanMetadata, georeference: Georeference | None
+) -> None:
+    doc = _floorplan_geojson(exports, meta, georeference)
     head = json.dumps({k: v for k, v in doc.items() if k != "features"})[:-1]
     feats = ",\n".join(map(json.dumps, doc["features"]))
     text = f'{head}, "features": [\n{feats}\n]}}\n' if feats else f'{head}, "features": []}}\n'
@@ -1254,35 +1263,18 @@ def write_svg(
     transform ``matrix(s 0 0 -s tx ty)`` flips y (the map's y is up, SVG's down);
     ``s`` is pixels per metre. Each axis line has a tooltip (length x thickness).
     """
-    _write_svg(plan, path, _ccw_footprints(plan), None, metadata, as_georeference(georeference))
+    _write_svg(_PlanExports(plan), path, metadata or PlanMetadata(), as_georeference(georeference))
 
 
 def _write_svg(
-    plan: FloorPlan, path: str | os.PathLike, polys, rings: list | None = None,
-    metadata: PlanMetadata | None = None, georeference: Georeference | None = None,
-) -> None:  # fmt: skip
-    text = _svg_text(plan, polys, _exterior_rings(polys) if rings is None else rings, metadata, georeference)
-    with atomic_path(path) as tmp:
-        tmp.write_text(text, encoding="utf-8")
-
-
-def _svg_text(
-    plan: FloorPlan, polys, rings: list, metadata: PlanMetadata | None, georeference: Georeference | None
-) -> str:
-    """The SVG document of :func:`write_svg`, given the oriented footprints and their rings."""
-    import shapely
-
-    meta = metadata or PlanMetadata()
-    walls = plan.walls
+    exports: _PlanExports, path: str | os.PathLike, meta: PlanMetadata, georeference: Georeference | None
+) -> None:
+    """:func:`write_svg` of a plan's :class:`_PlanExports`."""
+    walls = exports.plan.walls
     n = len(walls)
     if n:
-        xy = walls[["x0", "y0", "x1", "y1"]].to_numpy(dtype=np.float64)
-        b = shapely.total_bounds(polys) if len(polys) else np.full(4, np.nan)
-        pad = 0.5
-        xmin = float(np.nanmin(np.r_[xy[:, [0, 2]].ravel(), b[0]])) - pad
-        ymin = float(np.nanmin(np.r_[xy[:, [1, 3]].ravel(), b[1]])) - pad
-        xmax = float(np.nanmax(np.r_[xy[:, [0, 2]].ravel(), b[2]])) + pad
-        ymax = float(np.nanmax(np.r_[xy[:, [1, 3]].ravel(), b[3]])) + pad
+        lo, hi = exports.extent
+        (xmin, ymin), (xmax, ymax) = (lo - 0.5).tolist(), (hi + 0.5).tolist()  # a margin, metres
     else:
         xmin, ymin, xmax, ymax = 0.0, 0.0, 1.0, 1.0
     s = SVG_PLAN_PX / max(xmax - xmin, ymax - ymin)  # pixels per metre
@@ -1291,17 +1283,16 @@ def _svg_text(
     width = max(pw + 2 * m, SVG_MIN_WIDTH_PX)
     height = SVG_HEAD_PX + ph + SVG_FOOT_PX
     tx, ty = (width - pw) / 2 - s * xmin, SVG_HEAD_PX + s * ymax
-    paired = walls["paired"].to_numpy(dtype=bool) if n else np.zeros(0, bool)
+    paired = walls["paired"].to_numpy(dtype=bool)
     n_paired = int(paired.sum())
     title = meta.title
-    stamp = _iso_time(meta.stamp())
     sub = (
         f"{n} walls ({n_paired} with both faces seen, {n - n_paired} with one)"
-        f" \u00b7 map frame of the recording, metres \u00b7 {stamp}"
+        f" \u00b7 map frame of the recording, metres \u00b7 {meta.time_stamp}"
     )
+    about = "; ".join(f"{k}: {v or '-'}" for k, v in meta.fields)
     desc = (
-        f"floorscan {floorscan_version()} floor plan. dataset: {meta.dataset or '-'}; ordering: "
-        f"{meta.ordering or '-'}; extractor: {meta.extractor or '-'}; k: {meta.k or '-'}; walls: {n}. "
+        f"floorscan {floorscan_version()} floor plan. {about}; walls: {n}. "
         "Coordinates: map frame of the recording (x right, y up), metres."
     )
     if georeference is not None:
@@ -1329,7 +1320,7 @@ def _svg_text(
     )  # fmt: skip
     for gid, which, style in groups:
         out.append(f'<g id="{gid}" {style}>')
-        for ring, keep in zip(rings, which.tolist()):
+        for ring, keep in zip(exports.rings, which.tolist()):
             if ring is not None and keep:
                 pts = " ".join(f"{x:.4f},{y:.4f}" for x, y in ring[:-1])
                 out.append(f'<polygon points="{pts}"/>')
@@ -1347,7 +1338,8 @@ def _svg_text(
     out += _svg_frame_axes(m + 250, height - 30, georeference)
     out += _svg_legend(width - m - 270, height - 74)
     out.append("</svg>")
-    return "\n".join(out) + "\n"
+    with atomic_path(path) as tmp:
+        tmp.write_text("\n".join(out) + "\n", encoding="utf-8")
 
 
 def _svg_scale_bar(s: float, x: float, y: float) -> list[str]:
@@ -1466,24 +1458,19 @@ def write_dxf(
     ValueError
         For another ``version``.
     """
-    _write_dxf(plan, path, _ccw_footprints(plan), None, version, metadata, as_georeference(georeference))
+    _write_dxf(_PlanExports(plan), path, version, metadata or PlanMetadata(), as_georeference(georeference))
 
 
 def _write_dxf(
-    plan: FloorPlan, path: str | os.PathLike, polys, rings: list | None = None, version: str = "R2010",
-    metadata: PlanMetadata | None = None, georeference: Georeference | None = None,
+    exports: _PlanExports, path: str | os.PathLike, version: str, meta: PlanMetadata,
+    georeference: Georeference | None,
 ) -> None:  # fmt: skip
-    """:func:`write_dxf` given the plan's oriented footprints (:func:`_ccw_footprints`)."""
+    """:func:`write_dxf` of a plan's :class:`_PlanExports`."""
     if version not in DXF_VERSIONS:
         raise ValueError(f"DXF version must be one of {list(DXF_VERSIONS)}, got {version!r}")
-    import shapely
-
-    meta = metadata or PlanMetadata()
+    plan = exports.plan
     w, f = plan.walls, plan.faces
-    axes = zip(
-        w["x0"].tolist(), w["y0"].tolist(), w["x1"].tolist(), w["y1"].tolist(),
-        _exterior_rings(polys) if rings is None else rings,
-    )  # fmt: skip
+    axes = zip(w["x0"].tolist(), w["y0"].tolist(), w["x1"].tolist(), w["y1"].tolist(), exports.rings)
     faces = zip(f["x0"].tolist(), f["y0"].tolist(), f["x1"].tolist(), f["y1"].tolist())
     with _reproducible_ezdxf() as ezdxf:
         from ezdxf import units, zoom
@@ -1497,9 +1484,7 @@ def _write_dxf(
             finally:
                 ezdxf_log.setLevel(level)
         else:
-            doc = ezdxf.new(version, units=units.M)
-            doc.header["$INSUNITS"] = units.M
-            doc.header["$MEASUREMENT"] = 1
+            doc = ezdxf.new(version, units=units.M)  # $INSUNITS 6 and $MEASUREMENT 1 (metric)
         doc.header["$LUNITS"] = 2  # decimal lengths
         for name, color in DXF_LAYERS.items():
             doc.layers.add(name, color=color)
@@ -1512,13 +1497,9 @@ def _write_dxf(
         for x0, y0, x1, y1 in faces:
             msp.add_line((x0, y0), (x1, y1), dxfattribs={"layer": "WALL_FACE"})
         if len(w):
-            xy = w[["x0", "y0", "x1", "y1"]].to_numpy(dtype=np.float64).reshape(-1, 2)
-            b = shapely.total_bounds(polys) if len(polys) else np.full(4, np.nan)
-            lo = np.fmin(xy.min(axis=0), b[:2])
-            hi = np.fmax(xy.max(axis=0), b[2:])
-            msp.dxf.extmin = (float(lo[0]), float(lo[1]), 0.0)
-            msp.dxf.extmax = (float(hi[0]), float(hi[1]), 0.0)
-            zoom.window(msp, (float(lo[0]) - 0.5, float(lo[1]) - 0.5), (float(hi[0]) + 0.5, float(hi[1]) + 0.5))
+            lo, hi = exports.extent
+            msp.dxf.extmin, msp.dxf.extmax = (*lo.tolist(), 0.0), (*hi.tolist(), 0.0)
+            zoom.window(msp, (lo - 0.5).tolist(), (hi + 0.5).tolist())
         pairs = _dxf_metadata(plan, meta, georeference)
         ezdxf_meta = doc.ezdxf_metadata()
         for key, value in pairs:
@@ -1554,8 +1535,9 @@ def _dxf_metadata(plan: FloorPlan, meta: PlanMetadata, georeference: Georeferenc
 # --------------------------------------------------------------------------------------
 
 
-def _ifc_model(plan: FloorPlan, metadata: PlanMetadata | None = None, georeference: Georeference | None = None):
-    """The IFC4 model of ``plan`` (see :func:`write_ifc`), named by :func:`_name_ifc`.
+def _ifc_model(plan: FloorPlan, georeference: Georeference | None):
+    """The IFC4 model of ``plan`` (see :func:`write_ifc`), not yet named: :func:`_save_ifc`
+    names it (:func:`_name_ifc`) by the metadata of each file it is saved as.
 
     Raises
     ------
@@ -1576,10 +1558,9 @@ def _ifc_model(plan: FloorPlan, metadata: PlanMetadata | None = None, georeferen
     except ImportError as e:  # pragma: no cover
         raise ImportError("writing IFC needs ifcopenshell: pip install ifcopenshell") from e
 
-    meta = metadata or PlanMetadata()
     api = ifcopenshell.api
     model = api.project.create_file(version="IFC4")
-    project = api.root.create_entity(model, ifc_class="IfcProject", name=meta.title)
+    project = api.root.create_entity(model, ifc_class="IfcProject")
     units = [api.unit.add_si_unit(model, unit_type=u) for u in ("LENGTHUNIT", "AREAUNIT", "VOLUMEUNIT")]
     api.unit.assign_unit(model, units=units)
     # assign_unit keeps the units in a set: their order changed from run to run
@@ -1635,7 +1616,6 @@ def _ifc_model(plan: FloorPlan, metadata: PlanMetadata | None = None, georeferen
         api.geometry.assign_representation(model, product=wall, representation=axis_rep)
         qto = api.pset.add_qto(model, product=wall, name="Qto_WallBaseQuantities")
         api.pset.edit_qto(model, qto=qto, properties={"Length": length, "Width": thickness, "Height": height})
-    _name_ifc(model, plan, meta)
     return model
 
 
@@ -1646,12 +1626,8 @@ def _name_ifc(model, plan: FloorPlan, metadata: PlanMetadata) -> None:
     model gives the ids a fresh model of that title would have."""
     project = model.by_type("IfcProject")[0]
     project.Name = metadata.title
-    n = len(plan.walls)
-    project.Description = (
-        f"floorscan floor plan: dataset {metadata.dataset or '-'}, ordering {metadata.ordering or '-'}, "
-        f"extractor {metadata.extractor or '-'}, k {metadata.k or '-'}, {n} walls; "
-        "map frame of the recording, metres"
-    )
+    about = ", ".join(f"{k} {v or '-'}" for k, v in metadata.fields)
+    project.Description = f"floorscan floor plan: {about}, {len(plan.walls)} walls; map frame of the recording, metres"
     roots = sorted(model.by_type("IfcRoot"), key=lambda e: e.id())
     for entity, guid in zip(roots, _ifc_guid_list(metadata.title, len(roots))):
         entity.GlobalId = guid
@@ -1675,8 +1651,9 @@ def _mvd_text(s: str) -> str:
     return "".join(c if (c.isascii() and c.isalnum()) or c in " _.-" else "_" for c in s)
 
 
-def _save_ifc(model, path: str | os.PathLike, metadata: PlanMetadata) -> None:
-    """Give ``model`` the STEP header of ``path`` and the plan, and write it
+def _save_ifc(model, plan: FloorPlan, path: str | os.PathLike, meta: PlanMetadata) -> None:
+    """Name ``model`` (the IFC model of ``plan``) by the plan's metadata
+    (:func:`_name_ifc`), give it the STEP header of ``path`` and write it
     atomically as IFC-SPF text: ``model.to_string()`` (the text ``model.write``
     writes) in one write, which took three quarters of ``model.write``'s time.
 
@@ -1688,17 +1665,16 @@ def _save_ifc(model, path: str | os.PathLike, metadata: PlanMetadata) -> None:
     """
     import ifcopenshell
 
-    meta = metadata
+    _name_ifc(model, plan, meta)
     header = model.header
     header.file_name.name = Path(path).name
-    header.file_name.time_stamp = _iso_time(meta.stamp())
+    header.file_name.time_stamp = meta.time_stamp
     header.file_name.author = ("floorscan",)
     header.file_name.organization = ("floorscan",)
     header.file_name.preprocessor_version = f"IfcOpenShell {ifcopenshell.version}"
     header.file_name.originating_system = f"floorscan {floorscan_version()}"
     header.file_name.authorization = ""
-    fields = (("dataset", meta.dataset), ("ordering", meta.ordering), ("extractor", meta.extractor), ("k", meta.k))
-    about = " ".join(f"{k} {_mvd_text(v)}" for k, v in fields if v)
+    about = " ".join(f"{k} {_mvd_text(v)}" for k, v in meta.fields if v)
     header.file_description.description = (
         "ViewDefinition[DesignTransferView]",
         f"Comment[floorscan floor plan{' of ' + about if about else ''}]",
@@ -1747,7 +1723,7 @@ def write_ifc(
     meta = metadata or PlanMetadata()
     if name:
         meta = replace(meta, name=name)
-    _save_ifc(_ifc_model(plan, meta, as_georeference(georeference)), path, meta)
+    _save_ifc(_ifc_model(plan, as_georeference(georeference)), plan, path, meta)
 
 
 # --------------------------------------------------------------------------------------
@@ -1755,23 +1731,6 @@ def write_ifc(
 # --------------------------------------------------------------------------------------
 
 FLOORPLAN_FORMATS = ("geojson", "svg", "dxf", "ifc")
-
-
-@dataclass
-class _Built:
-    """A plan :class:`FloorplanWriter` built, and what its exports share: the oriented
-    footprints and their rings (made on first use) and the IFC model."""
-
-    plan: FloorPlan
-    polys: Any = None
-    rings: list | None = None
-    model: Any = None
-
-    def footprints(self) -> tuple[Any, list]:
-        if self.polys is None:
-            self.polys = _ccw_footprints(self.plan)
-            self.rings = _exterior_rings(self.polys)
-        return self.polys, self.rings
 
 
 class FloorplanWriter:
@@ -1802,7 +1761,7 @@ class FloorplanWriter:
 
     def __init__(self, cfg: Mapping[str, Any] | None):
         self.params = params_from_config(cfg)
-        self._built: dict[bytes, _Built] = {}
+        self._built: dict[bytes, _PlanExports] = {}
 
     def write(
         self, segments: pd.DataFrame, outputs: Mapping[str, str | os.PathLike], name: str = "", *,
@@ -1845,31 +1804,26 @@ class FloorplanWriter:
         if unknown:
             raise KeyError(f"unknown floor plan formats {unknown}; expected {list(FLOORPLAN_FORMATS)}")
         meta = PlanMetadata(dataset, ordering, extractor, k, timestamp, name)
-        meta.stamp()  # a bad SOURCE_DATE_EPOCH fails before anything is built
+        export_time(timestamp)  # a bad SOURCE_DATE_EPOCH fails before anything is built
         geo = self.params.georeference
         segments = _in_scan_order(segments)  # as build_floorplan takes them (sorted once)
         key = _segments_key(segments)
         built = self._built.get(key)
         reused = built is not None
         if built is None:
-            built = self._built[key] = _Built(build_floorplan(segments, self.params))
-        plan = built.plan
+            built = self._built[key] = _PlanExports(build_floorplan(segments, self.params))
         for fmt, path in outputs.items():
             if fmt == "ifc":
                 if built.model is None:
-                    built.model = _ifc_model(plan, meta, geo)
-                else:
-                    _name_ifc(built.model, plan, meta)
-                _save_ifc(built.model, path, meta)
-                continue
-            polys, rings = built.footprints()
-            if fmt == "svg":
-                _write_svg(plan, path, polys, rings, meta, geo)
+                    built.model = _ifc_model(built.plan, geo)
+                _save_ifc(built.model, built.plan, path, meta)
+            elif fmt == "svg":
+                _write_svg(built, path, meta, geo)
             elif fmt == "dxf":
-                _write_dxf(plan, path, polys, rings, self.params.dxf_version, meta, geo)
+                _write_dxf(built, path, self.params.dxf_version, meta, geo)
             else:
-                _write_geojson(plan, path, polys, rings, meta, geo)
-        return plan, reused
+                _write_geojson(built, path, meta, geo)
+        return built.plan, reused
 
 
 def _segments_key(segments: pd.DataFrame) -> bytes:

@@ -2,12 +2,14 @@
 
 Every stage of the workflow exchanges Parquet files (pyarrow) with the explicit
 schemas below, and geometry as WKB (little-endian, 2D) or GeoJSON. Writers go to a
-temporary name in the target folder and rename, so a crash never leaves a half file.
+temporary name in the target folder and rename, so a crash never leaves a half file
+(:func:`atomic_path` for a file; :func:`staged_path` for a folder, or for a writer that
+chooses its format by the file's extension).
 A temporary of an output ``name`` is a hidden sibling ``.<name>.*`` (:func:`atomic_path`:
 ``.<name>.<8 characters>.tmp``); one left by a killed run is removed by the next run of
 the stage (:func:`remove_stale_temporaries`, called by
-:func:`floorscan.workflow.stage_log` for every output of the job) and by the next
-:func:`atomic_path` of the same file.
+:func:`floorscan.workflow.stage_log` for the outputs of the job) and by the first
+:func:`atomic_path` of the same file in a process.
 
 Units are in the column names where they are not obvious: ``t_ns`` is nanoseconds
 since the Unix epoch, ``*_m`` metres, ``*_rad`` radians, ``area_m2`` square metres.
@@ -19,9 +21,10 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import shutil
 import tempfile
 from pathlib import Path
-from typing import TYPE_CHECKING, Iterator, Mapping
+from typing import TYPE_CHECKING, Iterable, Iterator, Mapping
 
 import numpy as np
 import pyarrow as pa
@@ -94,7 +97,7 @@ def stale_temporaries(path: str | os.PathLike, only_atomic: bool = False) -> lis
 
     A writer of ``path`` names its temporaries ``.<name>.*`` in the same folder: files
     of :func:`atomic_path` (``.<name>.<8 characters>.tmp``), folders of
-    ``floorscan.select.deliverables.staged_path`` and the simulator (``...tmp``,
+    :func:`staged_path` and the simulator (``...tmp``,
     ``...old``), the register stage's copy of the sampled scans
     (``.<name>.sampled.parquet``). Run while no job writes ``path`` (a stage's outputs
     are its own), they are left by a killed run.
@@ -110,32 +113,66 @@ def stale_temporaries(path: str | os.PathLike, only_atomic: bool = False) -> lis
     -------
     list of Path
     """
+    path = Path(path)
+    return _temporaries_of(path, _listing(path.parent), only_atomic) if path.name else []
+
+
+def _listing(folder: Path) -> set[str]:
+    """The hidden entries of ``folder`` (every temporary is one; usually there are none)."""
+    try:
+        return {n for n in os.listdir(folder) if n.startswith(".")}
+    except (FileNotFoundError, NotADirectoryError):
+        return set()
+
+
+def _temporaries_of(path: Path, names: Iterable[str], only_atomic: bool) -> list[Path]:
+    """The names among ``names`` (hidden entries of ``path``'s folder) that are
+    temporaries of ``path``."""
     import re
 
-    path = Path(path)
-    if not path.name or not path.parent.is_dir():
-        return []
+    prefix = f".{path.name}."
     tail = rf"{_MKSTEMP_CHARS}\.tmp" if only_atomic else r".+"
-    pattern = re.compile(rf"\.{re.escape(path.name)}\.{tail}")
-    return sorted(p for p in path.parent.iterdir() if pattern.fullmatch(p.name))
+    pattern = re.compile(rf"{re.escape(prefix)}{tail}")
+    return sorted(path.parent / n for n in names if pattern.fullmatch(n))
 
 
-def remove_stale_temporaries(path: str | os.PathLike, only_atomic: bool = False) -> list[Path]:
-    """Remove :func:`stale_temporaries` of ``path`` (files and folders); returns them.
+#: Outputs whose stale temporaries this process removed already (:func:`atomic_path`
+#: looks for them once, not at every write: only a killed process leaves one).
+_SWEPT: set[Path] = set()
 
-    Call it before a stage writes ``path``: a run killed with SIGKILL (or a machine
+
+def remove_stale_temporaries(
+    paths: Iterable[str | os.PathLike], only_atomic: bool = False
+) -> list[tuple[Path, Path]]:
+    """Remove :func:`stale_temporaries` of each of ``paths`` (files and folders), each
+    folder listed once.
+
+    Call it before a stage writes ``paths``: a run killed with SIGKILL (or a machine
     that went down) cannot remove its temporaries, and Snakemake does not know them.
-    """
-    import shutil
 
-    found = stale_temporaries(path, only_atomic)
-    for p in found:
-        if p.is_dir() and not p.is_symlink():
-            shutil.rmtree(p, ignore_errors=True)
-        else:
-            with contextlib.suppress(FileNotFoundError):
-                p.unlink()
-    return found
+    Returns
+    -------
+    list of (Path, Path)
+        Each temporary removed and the output it belonged to.
+    """
+    listings: dict[Path, set[str]] = {}
+    removed = []
+    for path in map(Path, paths):
+        if not path.name:
+            continue
+        names = listings.get(path.parent)
+        if names is None:
+            names = listings[path.parent] = _listing(path.parent)
+        for p in _temporaries_of(path, names, only_atomic):
+            names.discard(p.name)
+            if p.is_dir() and not p.is_symlink():
+                shutil.rmtree(p, ignore_errors=True)
+            else:
+                with contextlib.suppress(FileNotFoundError):
+                    p.unlink()
+            removed.append((p, path))
+        _SWEPT.add(path)
+    return removed
 
 
 @contextlib.contextmanager
@@ -144,11 +181,13 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
 
     On an exception the temporary file is removed and ``path`` is left untouched,
     so a failed stage leaves no half-written output. Temporaries of ``path`` that an
-    earlier, killed writer left (``.<name>.<8 characters>.tmp``) are removed first.
+    earlier, killed writer left (``.<name>.<8 characters>.tmp``) are removed first,
+    unless this process removed them already (:func:`remove_stale_temporaries`).
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(path, only_atomic=True)
+    if path not in _SWEPT:
+        remove_stale_temporaries([path], only_atomic=True)
     tmp = _tmp_path(path)
     try:
         yield tmp
@@ -159,6 +198,39 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         with contextlib.suppress(FileNotFoundError):
             tmp.unlink()
         raise
+
+
+@contextlib.contextmanager
+def staged_path(path: str | os.PathLike) -> Iterator[Path]:
+    """Yield a path with the name of ``path`` inside a temporary folder beside it; on
+    success move it to ``path`` (replacing a file or folder there).
+
+    For writers that choose the format by the extension (Open3D) or write a folder
+    (a ROS2 bag, a PCD folder) and so cannot use :func:`atomic_path`. On an exception
+    the temporary folder is removed and ``path`` is left untouched. A folder at
+    ``path`` is replaced by two renames (the old one moved aside first), so a reader
+    sees the old or the new folder, or for an instant none. What the writer creates
+    inside the private temporary folder keeps the mode it was created with (the
+    umask's), and only it is moved out.
+
+    Raises
+    ------
+    FileNotFoundError
+        The writer wrote nothing at the yielded path.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent))
+    try:
+        tmp = stage / path.name
+        yield tmp
+        if not tmp.exists():
+            raise FileNotFoundError(f"{path}: nothing was written")
+        if path.is_dir() and not path.is_symlink():
+            os.replace(path, stage / (path.name + ".old"))
+        os.replace(tmp, path)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
 
 
 def table_from_frame(df: pd.DataFrame, schema: pa.Schema) -> pa.Table:

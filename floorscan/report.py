@@ -22,34 +22,19 @@ from __future__ import annotations
 import base64
 import html
 import json
-import math
 import os
 import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Mapping, Sequence
 
 from floorscan.io import atomic_path
+from floorscan.score.curves import SUMMARY_COLUMNS, summary_cell
 
 if TYPE_CHECKING:  # pandas is imported by the functions that use it
     import pandas as pd
 
 #: Class of the page's outer element; every style rule of the page is under it.
 ROOT_CLASS = "floorscan-front"
-
-#: Columns of the summary table: ``summary.parquet`` column and header.
-SUMMARY_COLUMNS = (
-    ("extractor", "extractor"),
-    ("ordering", "ordering"),
-    ("f1_all", "F1 all scans"),
-    ("k_95", "k95"),
-    ("fraction_kept_95", "k95 / kept"),
-    ("fraction_recorded_95", "k95 / recorded"),
-    ("k_99", "k99"),
-    ("fraction_kept_99", "k99 / kept"),
-    ("fraction_recorded_99", "k99 / recorded"),
-    ("auc", "AUC 20 %"),
-    ("k95_over_oracle", "k95 / oracle's"),
-)
 
 #: What ingest detected (keys of the scan index's metadata) and how the page names them.
 DETECTED_FIELDS = (
@@ -369,8 +354,6 @@ def summary_table_html(
     ``ordering`` (with ``extractor``, when given: the recommended plan) highlighted, the
     oracle's in grey. An F1 from fewer than
     :data:`floorscan.register.consistency.FEW_SCANS` kept scans is marked."""
-    from floorscan.register.consistency import FEW_SCANS
-
     esc = html.escape
     out = [
         "<table>",
@@ -383,38 +366,46 @@ def summary_table_html(
             cls.append("recommended")
         if r.get("ordering") == "oracle":
             cls.append("bound")
-        cells = []
-        for col, _ in SUMMARY_COLUMNS:
-            text = summary_cell(r, col)
-            if col == "f1_all" and n_kept is not None and n_kept < FEW_SCANS:
-                text += f" (warning: from {n_kept} scans)"
-            if col in ("extractor", "ordering"):
-                cells.append(f"<td>{esc(text)}</td>")
-            else:
-                cells.append(f'<td class="num">{esc(text)}</td>')
+        cells = [
+            f"<td>{esc(summary_cell(r, col, n_kept))}</td>" if col in ("extractor", "ordering")
+            else f'<td class="num">{esc(summary_cell(r, col, n_kept))}</td>'
+            for col, _ in SUMMARY_COLUMNS
+        ]
         attr = f' class="{" ".join(cls)}"' if cls else ""
         out.append(f"<tr{attr}>" + "".join(cells) + "</tr>")
     out += ["</tbody>", "</table>"]
     return "\n".join(out)
 
 
-def summary_cell(row: Mapping, col: str) -> str:
-    """One cell of the summary table: k as a count, with random's seed spread (±),
-    fractions and F1 to 3 decimals, k95 / oracle's to 2; ``-`` for a missing value."""
-    v = row.get(col)
-    if col in ("extractor", "ordering"):
-        return str(v)
-    if not _finite(v):
-        return "-"
-    if col in ("k_95", "k_99"):
-        sd = row.get(f"{col}_seed_sd")
-        return f"{v:.0f}" + (f" ± {sd:.0f}" if _finite(sd) else "")
-    if col == "auc":
-        sd = row.get("auc_seed_sd")
-        return f"{v:.3f}" + (f" ± {sd:.3f}" if _finite(sd) else "")
-    if col == "k95_over_oracle":
-        return f"{v:.2f}"
-    return f"{v:.3f}"
+def answer_lines(datasets, results: str | os.PathLike = "results") -> list[str]:
+    """What a finished run prints: per dataset, where the floor plan, the scan list,
+    the reduced recording and the report are, and k with its size reduction. Datasets
+    whose selection was not made are skipped."""
+    lines = []
+    root = Path(results)
+    for ds in datasets:
+        summary_path = root / ds / "selection" / "selection.json"
+        if not summary_path.is_file():
+            continue
+        s = json.loads(summary_path.read_text())
+        rec = s["recording"]
+        lines.append(f"{ds}: {s['k']} of {s['n_kept']} kept scans ({s['n_recorded']} recorded), {s['ordering']}")
+        plan = root / ds / "floorplan.svg"
+        if plan.is_file():
+            lines.append(f"  floor plan:         {root / ds}/floorplan.{{geojson,svg,dxf,ifc}}")
+        lines.append(f"  scan list:          {s['scans']}")
+        lines.append(
+            f"  reduced recording:  {rec['path']} ({format_bytes(rec['bytes_out'])} of {format_bytes(rec['bytes_in'])}, "
+            f"{rec['scan_messages_out']} scans)"
+        )
+        lines.append(f"  points (PLY, PCD):  {s['points'][0]}, {s['points'][1]}")
+        front = root / ds / "front.html"
+        if front.is_file():
+            lines.append(f"  front page:         {front}")
+    report = root / "report.html"
+    if lines and report.is_file():
+        lines.append(f"report: {report}")
+    return lines
 
 
 def format_bytes(n: int) -> str:
@@ -425,13 +416,6 @@ def format_bytes(n: int) -> str:
             v = n / size
             return f"{v:.3g} {unit}" if v < 100 else f"{v:.0f} {unit}"
     return f"{n} B"
-
-
-def _finite(v) -> bool:
-    try:
-        return v is not None and math.isfinite(float(v))
-    except (TypeError, ValueError):
-        return False
 
 
 def _read_summary(summary) -> "pd.DataFrame | None":

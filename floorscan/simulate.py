@@ -33,12 +33,9 @@ Written outputs (:func:`run_simulation`), all deterministic for a seed:
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import math
 import os
-import shutil
-import tempfile
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any, Iterator, Mapping
@@ -51,7 +48,7 @@ from scipy.signal import lfilter
 
 from floorscan import building as bld
 from floorscan import lidar
-from floorscan.io import InputError, atomic_path, write_json, write_table
+from floorscan.io import InputError, atomic_path, staged_path, write_json, write_table
 
 log = logging.getLogger(__name__)
 
@@ -593,28 +590,6 @@ def pcd_bytes(points: np.ndarray, viewpoint: np.ndarray | None = None) -> bytes:
     return header.encode("ascii") + pts.tobytes()
 
 
-@contextlib.contextmanager
-def _atomic_dir(path: Path) -> Iterator[Path]:
-    """Yield a temporary folder beside ``path``; it replaces ``path`` on success."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent))
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o777 & ~umask)  # mkdtemp makes it private; a folder output should not be
-    try:
-        yield tmp
-        if path.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".old", dir=path.parent))
-            os.replace(path, old / path.name)
-            os.replace(tmp, path)
-            shutil.rmtree(old)
-        else:
-            os.replace(tmp, path)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-
-
 def scan_file_name(k: int) -> str:
     """File name of scan ``k`` in the pcd folder (zero-padded: sorts in time order)."""
     return f"scan_{k:05d}.pcd"
@@ -651,8 +626,9 @@ def write_recording(rec: Recording, bag_path: str | os.PathLike, pcd_dir: str | 
     )
     n_points = n_missing = 0
     cells: list[np.ndarray] = []  # 1 cm plan cells of the returns (observed faces)
-    with atomic_path(bag_path) as tmp_bag, _atomic_dir(pcd_dir) as tmp_dir:
+    with atomic_path(bag_path) as tmp_bag, staged_path(pcd_dir) as tmp_dir:
         tmp_bag.unlink()  # rosbags refuses to overwrite
+        tmp_dir.mkdir()
         with Writer(tmp_bag) as w:
             ts = msgs.ts
             c_tf = w.add_connection("/tf_static", "tf2_msgs/msg/TFMessage", typestore=ts, latching=1)

@@ -144,9 +144,8 @@ def stage_log(smk: Any, name: str | None = None, source: str | os.PathLike | Non
     wildcards = dict(getattr(smk, "wildcards", {}).items()) if hasattr(smk, "wildcards") else {}
     # CPU time so far: the interpreter start and the script's imports
     logger.info("start %s %s (%.2f s CPU before the stage: start-up and imports)", rule, wildcards, time.process_time())
-    for out in _outputs(smk):
-        for tmp in remove_stale_temporaries(out):
-            logger.info("removed %s, a temporary of %s left by an earlier run that was killed", tmp, out)
+    for tmp, out in remove_stale_temporaries(_outputs(smk)):
+        logger.info("removed %s, a temporary of %s left by an earlier run that was killed", tmp, out)
     t0, c0 = time.perf_counter(), time.process_time()
     profile_dir = os.environ.get("FLOORSCAN_PROFILE")
     profiler = None

@@ -9,6 +9,7 @@ import pandas as pd
 from floorscan import metrics
 from floorscan.figures_scoring import plot_quality_vs_k
 from floorscan.io import atomic_path, read_metadata, read_table, write_table
+from floorscan.report import summary_table_html
 from floorscan.score import curves as C
 from floorscan.workflow import stage_log
 
@@ -47,15 +48,12 @@ with stage_log(snakemake) as log:  # noqa: F821
                        + C.summary_markdown(summary, tau, n_kept, n_recorded, line)
                        + "\n## Walls of k scans on the configured k grid\n\n"
                        + metrics.grid_summary_markdown(grid_summary, tau, cfg["summary_levels"]))
-    with atomic_path(smk.output.summary_html) as tmp:
-        cols = ["extractor", "ordering", "f1_all", "k_95", "fraction_kept_95", "fraction_recorded_95", "k_99",
-                "fraction_kept_99", "fraction_recorded_99", "auc", "auc_seed_sd", "k95_over_oracle"]
+    with atomic_path(smk.output.summary_html) as tmp:  # the front page's table, on its own
         tmp.write_text(
             f"<html><head><meta charset='utf-8'><title>{dataset} summary</title></head><body>"
             f"<h1>{dataset}</h1>"
             + (f"<p><b>Verdict: {verdict['line']}</b></p>" if verdict else "")
             + f"<p>{line}</p>"
-            + summary[cols].to_html(index=False, float_format=lambda v: f"{v:.3f}", na_rep="-",
-                                    formatters={c: "{:g}".format for c in ("k_95", "k_99")})
+            + summary_table_html(summary, n_kept, smk.params.default_ordering)
             + "</body></html>\n"
         )

@@ -41,8 +41,8 @@ with stage_log(snakemake) as log:  # noqa: F821
     table = table.merge(against_map, on=["ordering", "extractor", "k"], how="left", validate="one_to_one")
     # the time of each run to this log, not into the metrics (the same input gives the same file)
     seconds = table.pop(metrics.SCORE_TIME)
-    slowest = int(seconds.to_numpy().argmax()) if len(seconds) else None
-    if slowest is not None:
+    if len(seconds):
+        slowest = int(seconds.to_numpy().argmax())
         log.info("scored %d runs in %.2f s, the slowest %.2f s (%s)", len(table), seconds.sum(), seconds.iloc[slowest],
                  "/".join(str(table[c].iloc[slowest]) for c in ("ordering", "extractor", "k")))
     meta = {"dataset": smk.wildcards.dataset, "reference_kind": kind,

@@ -103,10 +103,10 @@ def test_all_figures_from_tiny_tables(tmp_path):
     rng = np.random.default_rng(0)
     pts = pd.DataFrame(rng.uniform(0, 10, size=(3000, 3)), columns=["x", "y", "z"])
     status = {
-        e: pd.DataFrame({"scan_id": np.arange(30), "n_walls": np.arange(30) % 4,
-                         "reason": [""] * 30, "time_s": np.linspace(0.01, 0.05, 30)})
+        e: pd.DataFrame({"scan_id": np.arange(30), "n_walls": np.arange(30) % 4, "reason": [""] * 30})
         for e in ("ransac", "cluster_ransac")
     }
+    times = {e: pd.DataFrame({"scan_id": np.arange(30), "time_s": np.linspace(0.01, 0.05, 30)}) for e in status}
     bench = tmp_path / "benchmarks"
     bench.mkdir()
     (bench / "hulls.tsv").write_text(BENCH_HEADER + "1.5\t0:00:01\t80\t90\t1\t1\t0\t0\t1\t1\n")
@@ -120,7 +120,8 @@ def test_all_figures_from_tiny_tables(tmp_path):
            "seed": 0, "points_z_band_m": [0.5, 2.0]}
     F.make_walls_figures(
         dataset="toy", reference={"ransac": gt, "cluster_ransac": gt}, reference_kind=M.GROUND_TRUTH,
-        walls=walls, floorplans=floorplans, points=pts, scan_status=status, outputs=outputs, cfg=cfg,
+        walls=walls, floorplans=floorplans, points=pts, scan_status=status, scan_times=times, outputs=outputs,
+        cfg=cfg,
     )
     table = F.make_score_figures(dataset="toy", metrics=_metrics(), bench_dir=bench, outputs=outputs, cfg=cfg)
     for n in names:

@@ -393,7 +393,6 @@ def test_georeferenced_geojson_is_wgs84_lon_lat(tmp_path):
 
 @pytest.mark.parametrize("version", ["R2010", "R12"])
 def test_dxf_units_layers_metadata_and_a_clean_audit(tmp_path, box_segments, version):
-    import ezdxf
     from ezdxf import recover
 
     path = tmp_path / "p.dxf"
@@ -424,7 +423,6 @@ def test_dxf_units_layers_metadata_and_a_clean_audit(tmp_path, box_segments, ver
     areas = sorted(signed_area(list(p) + [p[0]]) for p in pts)
     np.testing.assert_allclose(areas, sorted(shapely.area(plan.footprints())), atol=1e-9)  # counter-clockwise
     assert len(msp.query('LINE[layer=="WALL_FACE"]')) == len(plan.faces)
-    assert ezdxf.__version__  # read back by the installed ezdxf
 
 
 def test_svg_fits_the_window_with_title_scale_bar_legend_and_axes(tmp_path, box_segments):
@@ -462,7 +460,7 @@ def test_svg_fits_the_window_with_title_scale_bar_legend_and_axes(tmp_path, box_
 
 
 def test_svg_of_a_long_thin_plan_fits_and_shows_north(tmp_path):
-    """A 200 m corridor: drawn 1000 px long, a 50 m scale bar; heading 0 puts north
+    """A 200 m corridor: drawn 1000 px long, a 20 m scale bar; heading 0 puts north
     along +x, drawn to the right."""
     from floorscan.floorplan import write_svg
 

@@ -32,17 +32,10 @@ settings.register_profile(
 settings.register_profile("dev", deadline=None, database=None, suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile(os.environ.get("FLOORSCAN_HYPOTHESIS_PROFILE", "ci"))
 
-F32_MAX = float(np.finfo(np.float32).max)
-
 
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory):
     return tmp_path_factory.mktemp("property")
-
-
-def _same(a, b) -> bool:
-    """Equal floats, NaN equal to NaN."""
-    return (math.isnan(a) and math.isnan(b)) or a == b
 
 
 # --- CARMEN lines ------------------------------------------------------------------------
@@ -224,8 +217,6 @@ def test_carmen_fuzzed_lines_never_misread(workdir):
 
 
 # --- LaserScan and PointCloud2 arrays ----------------------------------------------------
-
-F32 = st.floats(width=32, allow_nan=False, allow_infinity=False)
 
 
 def _maybe_non_finite(strategy):

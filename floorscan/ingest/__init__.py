@@ -18,7 +18,9 @@ in the schema metadata of ``scan_index.parquet`` and ``pose_stream.parquet``.
 
 Every reader keeps the same returns (:func:`laser_scan_points`, :func:`filter_points`):
 finite, at or beyond the minimum range and strictly short of the maximum range; a return
-at the maximum is the scanner's "no return" and would draw an arc of fake wall.
+at the maximum is the scanner's "no return" and would draw an arc of fake wall. The
+text formats (a CARMEN log, an ascii PCD, the locations CSV) read a number field the
+same way (:func:`parse_number`, :func:`parse_numbers`).
 
 Every reader yields :class:`Scan` records in recording order plus a pose stream; the
 writer :func:`write_recording` streams the points to ``scans.parquet`` one batch at a
@@ -30,7 +32,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 from pathlib import Path
-from typing import Any, Iterable, Iterator, Mapping
+from typing import Any, Iterable, Iterator, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -309,6 +311,32 @@ def filter_points(
     n_ok = int(np.count_nonzero(ok))
     kept = p.astype(np.float32, copy=False) if n_ok == len(p) else p[ok].astype(np.float32, copy=False)
     return kept, len(p) - n_ok
+
+
+def parse_number(text: str) -> float | None:
+    """A number field of a text recording, or None when ``text`` is not a number.
+
+    Python's ``float`` (``nan`` and ``inf`` included, for the caller to judge), except
+    for ``1_0``: Python reads 10, the C readers of these formats (``strtod``) read 1.
+    """
+    if "_" in text:
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        return None
+
+
+def parse_numbers(texts: Sequence[str]) -> np.ndarray | None:
+    """:func:`parse_number` of every text as a (N,) float64 ndarray, parsed by numpy in
+    one call (it reads what ``float`` reads); None when one of them is not a number
+    (the caller finds which, one by one, for its message)."""
+    if "_" in "".join(texts):
+        return None
+    try:
+        return np.array(texts, dtype=np.float64)
+    except ValueError:
+        return None
 
 
 def yaw_from_quaternion(qx, qy, qz, qw):

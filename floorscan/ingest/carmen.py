@@ -66,7 +66,7 @@ from typing import Any, Iterator, Mapping, Sequence
 
 import numpy as np
 
-from floorscan.ingest import Recording, Scan, laser_scan_points, pose_stream_frame
+from floorscan.ingest import Recording, Scan, laser_scan_points, parse_number, parse_numbers, pose_stream_frame
 from floorscan.io import InputError
 
 log = logging.getLogger(__name__)
@@ -335,13 +335,10 @@ class _Malformed(ValueError):
 
 
 def _number(tok: list[str], i: int, name: str) -> float:
-    t = tok[i]
-    try:
-        if "_" in t:  # Python reads "1_0" as 10, C's strtod as 1
-            raise ValueError
-        return float(t)
-    except ValueError:
-        raise _Malformed(f"field {i + 1} ({name}) is {t!r}; expected a number") from None
+    v = parse_number(tok[i])
+    if v is None:
+        raise _Malformed(f"field {i + 1} ({name}) is {tok[i]!r}; expected a number")
+    return v
 
 
 def _finite(tok: list[str], i: int, name: str) -> float:
@@ -360,12 +357,10 @@ def _count(tok: list[str], i: int, name: str, minimum: int) -> int:
 
 def _numbers(tok: list[str], a: int, b: int, what: str) -> np.ndarray:
     """Fields ``a:b`` as float64, any value (NaN and inf included)."""
-    try:
-        if any("_" in t for t in tok[a:b]):
-            raise ValueError
-        return np.array(tok[a:b], dtype=np.float64)
-    except ValueError:  # name the field (one by one: slow, but only on a bad line)
-        return np.array([_number(tok, i, f"{what} {i - a + 1}") for i in range(a, b)], dtype=np.float64)
+    values = parse_numbers(tok[a:b])
+    if values is None:  # name the field (one by one: slow, but only on a bad line)
+        values = np.array([_number(tok, i, f"{what} {i - a + 1}") for i in range(a, b)], dtype=np.float64)
+    return values
 
 
 def _stamp(tok: list[str], i: int) -> float:

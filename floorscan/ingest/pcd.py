@@ -38,13 +38,14 @@ from __future__ import annotations
 import dataclasses
 import logging
 import re
+import warnings
 from pathlib import Path
 from typing import Any, Iterator, Mapping
 
 import numpy as np
 import pandas as pd
 
-from floorscan.ingest import Recording, Scan, filter_points, pose_stream_frame
+from floorscan.ingest import Recording, Scan, filter_points, parse_number, parse_numbers, pose_stream_frame
 from floorscan.io import InputError
 
 log = logging.getLogger(__name__)
@@ -129,13 +130,14 @@ def read_pcd_xyz(path: str | Path) -> np.ndarray:
     if h.data == "ascii":
         return _ascii_xyz(path, h, raw)
     if h.data == "binary":
-        need = h.points * h.dtype().itemsize
+        point = h.dtype()
+        need = h.points * point.itemsize
         if len(raw) != need:
             raise InputError(
-                f"{path}: {len(raw)} bytes of binary data; expected POINTS x {h.dtype().itemsize} bytes a point "
+                f"{path}: {len(raw)} bytes of binary data; expected POINTS x {point.itemsize} bytes a point "
                 f"= {need} (POINTS {h.points}); truncated or corrupt"
             )
-        rec = np.frombuffer(raw, dtype=h.dtype(), count=h.points)
+        rec = np.frombuffer(raw, dtype=point, count=h.points)
         return np.stack([rec[f"f{h.fields.index(n)}"].astype(np.float64) for n in "xyz"], axis=1)
     return _compressed_xyz(path, h, raw)
 
@@ -145,69 +147,83 @@ def _ascii_xyz(path: Path, h: PcdHeader, raw: bytes) -> np.ndarray:
         text = raw.decode("ascii")
     except UnicodeDecodeError as e:
         raise InputError(f"{path}: non-ASCII byte at data offset {e.start} of an ascii PCD") from None
-    rows = [(i, line.split()) for i, line in enumerate(text.split("\n"), h.n_lines + 1) if line.strip()]
-    if len(rows) != h.points:
-        raise InputError(f"{path}: {len(rows)} rows stored, the header says POINTS {h.points}; truncated or corrupt")
+    lines = text.split("\n")
     width = sum(h.counts)
+    table = _ascii_table(lines, h.points, width)
+    rows = None
+    if table is None:  # numpy refused the rows: find which row or value, one by one
+        rows = _ascii_rows(lines, h.n_lines)
+        if len(rows) != h.points:
+            raise InputError(f"{path}: {len(rows)} rows stored, the header says POINTS {h.points}; truncated or corrupt")
+        for lineno, tok in rows:
+            if len(tok) != width:
+                raise InputError(
+                    f"{path}:{lineno}: row of {len(tok)} values; expected {width} "
+                    f"(FIELDS {' '.join(h.fields)}, COUNT {' '.join(map(str, h.counts))})"
+                )
     cols = np.cumsum((0,) + h.counts[:-1])  # column of each field's first value
-    for lineno, tok in rows:
-        if len(tok) != width:
-            raise InputError(
-                f"{path}:{lineno}: row of {len(tok)} values; expected {width} "
-                f"(FIELDS {' '.join(h.fields)}, COUNT {' '.join(map(str, h.counts))})"
-            )
     out = np.empty((h.points, 3), dtype=np.float64)
     for k, name in enumerate("xyz"):
         j = h.fields.index(name)
-        v = _ascii_column(path, rows, cols[j], name)
+        v = table[:, cols[j]] if rows is None else _ascii_column(path, rows, cols[j], name)
         if h.sizes[j] == 4:
             big = np.isfinite(v) & (np.abs(v) > np.finfo(np.float32).max)
             if big.any():
                 i = int(np.flatnonzero(big)[0])
+                lineno = (rows or _ascii_rows(lines, h.n_lines))[i][0]
                 raise InputError(
-                    f"{path}:{rows[i][0]}: field {name!r} is {v[i]:g}, beyond the range of its TYPE F SIZE 4 (float32)"
+                    f"{path}:{lineno}: field {name!r} is {v[i]:g}, beyond the range of its TYPE F SIZE 4 (float32)"
                 )
             v = v.astype(np.float32).astype(np.float64)
         out[:, k] = v
-    # the other fields must be numbers too (a word there is a malformed row)
-    for j, name in enumerate(h.fields):
-        if name not in ("x", "y", "z"):
-            for c in range(h.counts[j]):
-                _ascii_column(path, rows, cols[j] + c, name)
+    if rows is not None:  # the other fields must be numbers too (a word there is a malformed row)
+        for j, name in enumerate(h.fields):
+            if name not in ("x", "y", "z"):
+                for c in range(h.counts[j]):
+                    _ascii_column(path, rows, cols[j] + c, name)
     return out
+
+
+def _ascii_table(lines: list[str], points: int, width: int) -> np.ndarray | None:
+    """The ascii rows as a (points, width) float64 table, parsed by numpy in one call
+    (whitespace between values, blank lines skipped; no number that
+    :func:`floorscan.ingest.parse_number` refuses, ``1_0`` included); None when numpy
+    refuses a value or the table has another shape (the caller then reads row by row)."""
+    if points == 0:
+        return None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # "input contained no data": the shape says so
+            table = np.loadtxt(lines, dtype=np.float64, comments=None, ndmin=2)
+    except ValueError:
+        return None
+    return table if table.shape == (points, width) else None
+
+
+def _ascii_rows(lines: list[str], header_lines: int) -> list[tuple[int, list[str]]]:
+    """The non-blank ascii rows as (line number in the file, values)."""
+    return [(i, line.split()) for i, line in enumerate(lines, header_lines + 1) if line.strip()]
 
 
 def _ascii_column(path: Path, rows: list[tuple[int, list[str]]], col: int, name: str) -> np.ndarray:
     """Column ``col`` of the ascii rows as float64; a value that is not a number is an
     ``InputError`` naming its line and field."""
-    values = [tok[col] for _, tok in rows]
-    try:
-        if any("_" in t for t in values):  # Python reads "1_0" as 10; PCL does not
-            raise ValueError
-        return np.array(values, dtype=np.float64)
-    except ValueError:
-        for lineno, tok in rows:
-            if not _is_number(tok[col]):
-                raise InputError(f"{path}:{lineno}: field {name!r} is {tok[col]!r}; expected a number") from None
-        return np.array([float(t) for t in values])  # numpy refused what Python reads
-
-
-def _is_number(t: str) -> bool:
-    try:
-        float(t)
-    except ValueError:
-        return False
-    return "_" not in t
+    values = parse_numbers([tok[col] for _, tok in rows])
+    if values is None:  # name the first that is not (one by one: only on a bad file)
+        lineno, t = next((lineno, tok[col]) for lineno, tok in rows if parse_number(tok[col]) is None)
+        raise InputError(f"{path}:{lineno}: field {name!r} is {t!r}; expected a number")
+    return values
 
 
 def _compressed_xyz(path: Path, h: PcdHeader, raw: bytes) -> np.ndarray:
-    need = h.points * h.dtype().itemsize
+    point_size = h.dtype().itemsize
+    need = h.points * point_size
     if len(raw) < 8:
         raise InputError(f"{path}: {len(raw)} bytes of binary_compressed data; expected at least the 8-byte sizes")
     compressed, uncompressed = (int(v) for v in np.frombuffer(raw[:8], dtype="<u4"))
     if uncompressed != need:
         raise InputError(
-            f"{path}: binary_compressed data of {uncompressed} bytes; expected POINTS x {h.dtype().itemsize} "
+            f"{path}: binary_compressed data of {uncompressed} bytes; expected POINTS x {point_size} "
             f"bytes a point = {need} (POINTS {h.points})"
         )
     if len(raw) - 8 != compressed:
@@ -312,7 +328,7 @@ def read_pcd_header(path: str | Path) -> PcdHeader:
             f"{path}: PCD header POINTS {dims['POINTS']} but WIDTH x HEIGHT = {dims['WIDTH']} x {dims['HEIGHT']} "
             f"= {dims['WIDTH'] * dims['HEIGHT']}; expected them equal"
         )
-    if "VIEWPOINT" in header and (len(header["VIEWPOINT"]) != 7 or not all(map(_is_number, header["VIEWPOINT"]))):
+    if "VIEWPOINT" in header and (len(header["VIEWPOINT"]) != 7 or parse_numbers(header["VIEWPOINT"]) is None):
         raise InputError(f"{path}: PCD header VIEWPOINT is {' '.join(header['VIEWPOINT'])!r}; expected 7 numbers")
     data = " ".join(header["DATA"]).lower()
     if data not in PCD_DATA:
@@ -382,14 +398,10 @@ def _finite_column(path: Path, name: str, col: pd.Series) -> np.ndarray:
     out = np.empty(len(col), dtype=np.float64)
     for i, v in enumerate(col):
         t = str(v).strip()
-        try:
-            if "_" in t:  # Python reads "1_0" as 10
-                raise ValueError
-            out[i] = float(t)
-        except ValueError:
-            out[i] = np.nan
-        if not np.isfinite(out[i]):
+        x = parse_number(t)
+        if x is None or not np.isfinite(x):
             raise InputError(f"{path}: column {name!r} row {i + 1} is {t!r}; expected a finite number")
+        out[i] = x
     return out
 
 

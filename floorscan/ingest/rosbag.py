@@ -43,6 +43,7 @@ non-finite *points* are not errors: they are "no return", dropped and counted.
 from __future__ import annotations
 
 import logging
+import math
 from collections import defaultdict
 from pathlib import Path
 from typing import Any, Iterator, Mapping
@@ -396,13 +397,14 @@ def laser_scan_xyz(
         ``angle_min``, ``angle_increment``, ``range_min`` or ``range_max`` is not finite
         (names the file, topic, message and field).
     """
-    for name in ("angle_min", "angle_increment", "range_min", "range_max"):
-        v = float(getattr(msg, name))
-        if not np.isfinite(v):
+    values = (float(msg.angle_min), float(msg.angle_increment), float(msg.range_min), float(msg.range_max))
+    for name, v in zip(("angle_min", "angle_increment", "range_min", "range_max"), values):
+        if not math.isfinite(v):
             raise InputError(f"{_message(path, topic, index, t_ns)}: LaserScan {name} is {v}; expected a finite number")
-    rmin = max(float(msg.range_min), range_min_m if range_min_m is not None else 0.0)
-    rmax = min(float(msg.range_max), range_max_m if range_max_m is not None else np.inf)
-    return laser_scan_points(np.asarray(msg.ranges), float(msg.angle_min), float(msg.angle_increment), rmin, rmax)
+    angle_min, angle_increment, range_min, range_max = values
+    rmin = max(range_min, range_min_m if range_min_m is not None else 0.0)
+    rmax = min(range_max, range_max_m if range_max_m is not None else math.inf)
+    return laser_scan_points(np.asarray(msg.ranges), angle_min, angle_increment, rmin, rmax)
 
 
 _PC2_DTYPES = {1: "i1", 2: "u1", 3: "i2", 4: "u2", 5: "i4", 6: "u4", 7: "f4", 8: "f8"}
@@ -430,12 +432,12 @@ def pointcloud2_xyz(msg, path: Path | str = "", topic: str = "", index: int | No
         ``point_step``; ``row_step`` is short of ``width x point_step``; the data is not
         ``row_step x height`` bytes; or no point is finite (the cloud holds nothing).
     """
-    what = f"PointCloud2 on {topic!r}" if index is None else f"{topic!r} message {index} (t {t_ns} ns): PointCloud2"
+    what = f"{path}: PointCloud2 on {topic!r}" if index is None else f"{_message(path, topic, index, t_ns)}: PointCloud2"
     fields = {f.name: f for f in msg.fields}
     missing = [n for n in "xyz" if n not in fields]
     if missing:
         raise InputError(
-            f"{path}: {what} lacks fields {missing}; expected x, y, z "
+            f"{what} lacks fields {missing}; expected x, y, z "
             f"(fields: {sorted(fields)})"
         )
     order = ">" if msg.is_bigendian else "<"
@@ -444,24 +446,24 @@ def pointcloud2_xyz(msg, path: Path | str = "", topic: str = "", index: int | No
     for n in "xyz":
         f = fields[n]
         if f.datatype not in _PC2_DTYPES:
-            raise InputError(f"{path}: {what} field {n!r} has unknown datatype {f.datatype}")
+            raise InputError(f"{what} field {n!r} has unknown datatype {f.datatype}")
         size = np.dtype(_PC2_DTYPES[f.datatype]).itemsize
         if not 0 <= int(f.offset) <= step - size:
             raise InputError(
-                f"{path}: {what} field {n!r} (offset {int(f.offset)}, {size} bytes) ends beyond point_step {step}"
+                f"{what} field {n!r} (offset {int(f.offset)}, {size} bytes) ends beyond point_step {step}"
             )
         names.append(n)
         formats.append(order + _PC2_DTYPES[f.datatype])
         offsets.append(int(f.offset))
     if row_step and row_step < width * step:
         raise InputError(
-            f"{path}: {what} row_step {row_step} is less than width x point_step = {width} x {step} = {width * step}"
+            f"{what} row_step {row_step} is less than width x point_step = {width} x {step} = {width * step}"
         )
     rs = row_step or width * step  # 0: a driver that left it unset, rows packed
     data = np.asarray(msg.data, dtype=np.uint8)
     if data.size != rs * height:
         raise InputError(
-            f"{path}: {what} has {data.size} bytes of data; "
+            f"{what} has {data.size} bytes of data; "
             f"expected row_step x height = {rs} x {height} = {rs * height}"
         )
     n_points = width * height
@@ -477,31 +479,38 @@ def pointcloud2_xyz(msg, path: Path | str = "", topic: str = "", index: int | No
         out[:, i] = arr[n]
     if not (np.isfinite(out[:, 0]) & np.isfinite(out[:, 1]) & np.isfinite(out[:, 2])).any():
         raise InputError(
-            f"{path}: {what} has no finite point ({n_points} points); expected a cloud with at least one return"
+            f"{what} has no finite point ({n_points} points); expected a cloud with at least one return"
         )
     return out
 
 
 def _pose_problem(
-    position, orientation, prefix: str, parts: tuple[str, str] = ("position", "orientation")
+    position: tuple[float, float, float],
+    quat: tuple[float, float, float, float],
+    prefix: str,
+    parts: tuple[str, str] = ("position", "orientation"),
 ) -> str | None:
     """What is wrong with a pose's values (``prefix.position.x is nan; ...``), or None:
-    a non-finite component, or a quaternion off unit length by more than
-    :data:`QUATERNION_TOLERANCE` (in ``|q|^2``)."""
+    a non-finite component of ``position`` (x, y, z) or ``quat`` (x, y, z, w), or a
+    quaternion off unit length by more than :data:`QUATERNION_TOLERANCE` (in ``|q|^2``).
+
+    Called for every pose and TF message: a good pose costs one test (a NaN or inf
+    component fails it); the loops below only explain a bad one.
+    """
+    n2 = quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2] + quat[3] * quat[3]
+    if abs(n2 - 1.0) <= QUATERNION_TOLERANCE and math.isfinite(position[0] + position[1] + position[2]):
+        return None
     (p_name, q_name) = parts
-    for part, vec, comps in ((p_name, position, "xyz"), (q_name, orientation, "xyzw")):
-        for c in comps:
-            v = float(getattr(vec, c))
-            if not np.isfinite(v):
-                return f"{prefix}.{part}.{c} is {v}; expected a finite number"
-    q = tuple(float(getattr(orientation, c)) for c in "xyzw")
-    n2 = sum(v * v for v in q)
+    for part, values in ((p_name, position), (q_name, quat)):
+        for c, v in zip("xyzw", values):
+            if not math.isfinite(v):
+                return f"{prefix}.{part}.{c} is {float(v)}; expected a finite number"
     if abs(n2 - 1.0) > QUATERNION_TOLERANCE:
         return (
-            f"{prefix}.{q_name} is {q}, |q|^2 = {n2:g}; expected a unit quaternion "
+            f"{prefix}.{q_name} is {tuple(map(float, quat))}, |q|^2 = {n2:g}; expected a unit quaternion "
             f"(|q|^2 within {QUATERNION_TOLERANCE} of 1, as tf2 requires)"
         )
-    return None
+    return None  # finite values whose sum overflowed
 
 
 def _pose_topic_stream(reader, path: Path, pose_cfg: Mapping[str, Any], scan_frame: str, tf: "_LazyTF"):
@@ -513,12 +522,12 @@ def _pose_topic_stream(reader, path: Path, pose_cfg: Mapping[str, Any], scan_fra
         stamped = c.msgtype.endswith("/PoseStamped")
         pose = msg.pose if stamped else msg.pose.pose
         t.append(_stamp_ns(msg.header, bag_t))
-        bad = _pose_problem(pose.position, pose.orientation, "pose" if stamped else "pose.pose")
+        v, q = pose.position, pose.orientation
+        xyz.append((v.x, v.y, v.z))
+        quat.append((q.x, q.y, q.z, q.w))
+        bad = _pose_problem(xyz[-1], quat[-1], "pose" if stamped else "pose.pose")
         if bad:
             raise InputError(f"{_message(path, topic, i, t[-1])}: {_short(c.msgtype)} {bad}")
-        xyz.append((pose.position.x, pose.position.y, pose.position.z))
-        q = pose.orientation
-        quat.append((q.x, q.y, q.z, q.w))
     if not t:
         raise InputError(f"{path}: pose topic {topic!r} has no messages")
     t = np.asarray(t, dtype=np.int64)
@@ -620,14 +629,15 @@ def _read_tf(reader, path: Path) -> dict[tuple[str, str], _Edge]:
             e.static |= c.topic == "/tf_static"
             t_ns = _stamp_ns(tr.header, bag_t)
             v, q = tr.transform.translation, tr.transform.rotation
-            bad = _pose_problem(v, q, "transform", ("translation", "rotation"))
+            trans, quat = (v.x, v.y, v.z), (q.x, q.y, q.z, q.w)
+            bad = _pose_problem(trans, quat, "transform", ("translation", "rotation"))
             if bad:
                 if e.bad is None:
                     e.bad = f"{_message(path, c.topic, index, t_ns)}: TransformStamped {key[0]} -> {key[1]}: {bad}"
                 continue
             e.t.append(t_ns)
-            e.trans.append((v.x, v.y, v.z))
-            e.quat.append((q.x, q.y, q.z, q.w))
+            e.trans.append(trans)
+            e.quat.append(quat)
     for e in edges.values():
         e.finish()
     return edges

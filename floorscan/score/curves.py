@@ -418,11 +418,47 @@ def _curve_of(name, seed, ordering, n_kept, score_scans, step_fraction, dense_fr
     return c
 
 
+#: Columns of the summary tables (``summary.md``, ``summary.html``, the report's front
+#: page): ``summary.parquet`` column and header.
+SUMMARY_COLUMNS = (
+    ("extractor", "extractor"),
+    ("ordering", "ordering"),
+    ("f1_all", "F1 all"),
+    ("k_95", "k95"),
+    ("fraction_kept_95", "k95 / kept"),
+    ("fraction_recorded_95", "k95 / recorded"),
+    ("k_99", "k99"),
+    ("fraction_kept_99", "k99 / kept"),
+    ("fraction_recorded_99", "k99 / recorded"),
+    ("auc", "AUC 20 %"),
+    ("k95_over_oracle", "k95 / oracle's"),
+)
+
+
+def summary_cell(row, col: str, n_kept: int | None = None, pm: str = "±") -> str:
+    """One cell of a summary table: k as a count with random's seed spread (``pm``),
+    the AUC likewise, fractions and F1 to 3 decimals, k95 / oracle's to 2; ``-`` for a
+    missing value; an F1 from fewer than ``FEW_SCANS`` kept scans (``n_kept``) marked."""
+    v = row.get(col)
+    if col in ("extractor", "ordering"):
+        return str(v)
+    if v is None or not np.isfinite(float(v)):
+        return "-"
+    if col in ("k_95", "k_99", "auc"):
+        sd = row.get(f"{col}_seed_sd" if col != "auc" else "auc_seed_sd")
+        digits = 3 if col == "auc" else 0
+        return f"{v:.{digits}f}" + (f" {pm} {sd:.{digits}f}" if sd is not None and np.isfinite(sd) else "")
+    if col == "k95_over_oracle":
+        return f"{v:.2f}"
+    text = f"{v:.3f}"
+    if col == "f1_all" and n_kept is not None and n_kept < FEW_SCANS:
+        text += f" (warning: from {n_kept} scans)"
+    return text
+
+
 def summary_markdown(summary: pd.DataFrame, tau_m: float, n_kept: int, n_recorded: int, line: str) -> str:
     """The curve summary (:func:`curve_summary`) as a Markdown table for ``summary.md``,
     headed by ``line`` (:func:`beats_random_line`)."""
-    head = ["extractor", "ordering", "F1 all", "k95", "k95 / kept", "k95 / recorded", "k99", "k99 / kept",
-            "k99 / recorded", "AUC 20 %", "k95 / oracle's"]
     lines = [
         f"Floor plans against the reference map at tau = {tau_m * 100:.0f} cm; {n_kept} kept of {n_recorded} "
         "recorded scans. k95 / k99: the first k whose plan reaches 95 / 99 % of the all-scan plan's F1; "
@@ -430,27 +466,9 @@ def summary_markdown(summary: pd.DataFrame, tau_m: float, n_kept: int, n_recorde
         "",
         line,
         "",
-        "| " + " | ".join(head) + " |",
-        "|" + "---|" * len(head),
+        "| " + " | ".join(h for _, h in SUMMARY_COLUMNS) + " |",
+        "|" + "---|" * len(SUMMARY_COLUMNS),
     ]
-
-    def k_text(r, p):
-        k = r[f"k_{p}"]
-        if not np.isfinite(k):
-            return "-"
-        sd = r[f"k_{p}_seed_sd"]
-        return f"{k:.0f}" + (f" +- {sd:.0f}" if np.isfinite(sd) else "")
-
-    for _, r in summary.iterrows():
-        auc = f"{r['auc']:.3f}" + (f" +- {r['auc_seed_sd']:.3f}" if np.isfinite(r["auc_seed_sd"]) else "")
-        f1_all = f"{r['f1_all']:.3f}"
-        if n_kept < FEW_SCANS:
-            f1_all += f" (warning: from {n_kept} scans)"
-        cells = [
-            r["extractor"], r["ordering"], f1_all,
-            k_text(r, "95"), f"{r['fraction_kept_95']:.3f}", f"{r['fraction_recorded_95']:.3f}",
-            k_text(r, "99"), f"{r['fraction_kept_99']:.3f}", f"{r['fraction_recorded_99']:.3f}",
-            auc, f"{r['k95_over_oracle']:.2f}",
-        ]
-        lines.append("| " + " | ".join(cells) + " |")
+    for r in summary.to_dict("records"):
+        lines.append("| " + " | ".join(summary_cell(r, c, n_kept, pm="+-") for c, _ in SUMMARY_COLUMNS) + " |")
     return "\n".join(lines) + "\n"

@@ -26,24 +26,20 @@ Usage::
     write_selected_points("results/demo/registered.parquet", table["scan_id"], "scans.ply", "scans.pcd")
 
 Every file is written under a temporary name beside its target and renamed
-(:func:`staged_path`).
+(:func:`floorscan.io.atomic_path`, :func:`floorscan.io.staged_path`).
 """
 
 from __future__ import annotations
 
-import contextlib
 import math
 import numbers
 import os
-import shutil
-import tempfile
-from pathlib import Path
-from typing import Iterable, Iterator
+from typing import Iterable
 
 import numpy as np
 import pandas as pd
 
-from floorscan.io import atomic_path, iter_scans
+from floorscan.io import atomic_path, iter_scans, staged_path
 
 #: Columns of :func:`scan_list`, in order.
 SCAN_LIST_COLUMNS = ("rank", "scan_id", "t_ns", "time_iso", "x_m", "y_m", "yaw_rad", "gain")
@@ -52,9 +48,6 @@ GAIN_COLUMNS = ("gain", "gain_m2")
 #: ``printf`` format of every float column of the scan list CSV: micrometres and
 #: microradians, more than any registration resolves, and the same bytes every run.
 CSV_FLOAT_FORMAT = "%.6f"
-
-_UMASK = os.umask(0)
-os.umask(_UMASK)
 
 
 def recommended_k(
@@ -298,7 +291,7 @@ def write_selected_points(
         The selected scans (kept scans of the registration).
     ply_path, pcd_path : path
         Outputs; each is written under a temporary name with its extension beside it
-        and renamed (:func:`staged_path`).
+        and renamed (:func:`floorscan.io.staged_path`).
 
     Returns
     -------
@@ -336,32 +329,3 @@ def write_selected_points(
             if not o3d.t.io.write_point_cloud(str(tmp), cloud, write_ascii=False, compressed=False):
                 raise OSError(f"{path}: Open3D could not write the point cloud")
     return len(xyz)
-
-
-@contextlib.contextmanager
-def staged_path(path: str | os.PathLike) -> Iterator[Path]:
-    """Yield a path with the name of ``path`` inside a temporary folder beside it; on
-    success move it to ``path`` (replacing a file or folder there).
-
-    For writers that choose the format by the extension (Open3D) or write a folder
-    (a ROS2 bag, a PCD folder) and so cannot use :func:`floorscan.io.atomic_path`. On
-    an exception the temporary folder is removed and ``path`` is left untouched. A
-    folder at ``path`` is replaced by two renames (the old one moved aside first), so a
-    reader sees the old or the new folder, or for an instant none.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent))
-    try:
-        tmp = stage / path.name
-        yield tmp
-        if not tmp.exists():
-            raise FileNotFoundError(f"{path}: nothing was written")
-        if tmp.is_file():  # give it the usual mode (a writer may make it private)
-            tmp.chmod(0o666 & ~_UMASK)
-        if path.is_dir() and not path.is_symlink():
-            old = stage / (path.name + ".old")
-            os.replace(path, old)
-        os.replace(tmp, path)
-    finally:
-        shutil.rmtree(stage, ignore_errors=True)

@@ -9,7 +9,7 @@ and writes, under ``results/<dataset>/selection/``:
 - ``recording/``: the recording cut to the selected scans, in its own format
   (:mod:`floorscan.select.recording`);
 - ``selection.json``: k and the reason for it, the counts, and the size of the
-  recording before and after (what :func:`answer_lines` prints at the end of a run).
+  recording before and after (what :func:`floorscan.report.answer_lines` prints at the end of a run).
 
 The recommended floor plan (``results/<dataset>/floorplan.*``) is made of the walls of
 these scans by the floorplan stage.
@@ -23,7 +23,11 @@ import os
 from pathlib import Path
 from typing import Any, Mapping
 
-from floorscan.io import atomic_path, read_table
+import numpy as np
+import pandas as pd
+
+from floorscan.ingest.detect import bag_path
+from floorscan.io import read_table, write_json
 from floorscan.select.coverage import OBJECTIVE_COLUMN
 from floorscan.select.deliverables import recommended_k, scan_list, write_scan_list, write_selected_points
 from floorscan.select.recording import read_detection, write_reduced_recording
@@ -31,7 +35,7 @@ from floorscan.select.recording import read_detection, write_reduced_recording
 log = logging.getLogger(__name__)
 
 
-def objective_of(ordering, name: str):
+def objective_of(ordering):
     """The cumulative objective of an ordering's table in rank order, and its unit:
     the coverage orderings' own objective (:data:`OBJECTIVE_COLUMN`, weighted cells),
     else the covered hull area (m2).
@@ -45,16 +49,6 @@ def objective_of(ordering, name: str):
     if OBJECTIVE_COLUMN in table.columns:
         return table[OBJECTIVE_COLUMN].to_numpy(dtype="float64"), "cells"
     return table["covered_area_m2"].to_numpy(dtype="float64"), "m2"
-
-
-def reduced_recording_name(source: str | os.PathLike) -> str:
-    """File or folder name of the reduced recording inside ``selection/recording/``:
-    the recording's own name (a ROS2 bag given by its ``.db3`` / ``.mcap`` file: its
-    folder's name)."""
-    src = Path(source)
-    if src.suffix.lower() in (".db3", ".mcap"):
-        return src.parent.name
-    return src.name
 
 
 def write_selection(
@@ -101,22 +95,21 @@ def write_selection(
         When the recording no longer holds the scans ingest numbered.
     """
     ordering = read_table(ordering_path)
-    covered, unit = objective_of(ordering, ordering_name)
+    covered, unit = objective_of(ordering)
     k, reason = recommended_k(covered, select_cfg["k"], float(select_cfg["k_coverage"]), objective=ordering_name,
                               unit=unit)
     log.info("%s", reason)
-    index = read_table(index_path)
-    registration = read_table(registration_path)
-    table = scan_list(ordering, k, index, registration)
+    detection = read_detection(index_path, dataset)  # checks scan_id is 0..N-1: t_ns[i] is scan i's
+    t_ns = detection["t_ns"]
+    index = pd.DataFrame({"scan_id": np.arange(len(t_ns), dtype=np.int64), "t_ns": t_ns})
+    table = scan_list(ordering, k, index, read_table(registration_path))
     write_scan_list(table, outputs["scans"])
     ids = table["scan_id"].astype(int).tolist()
     n_points = write_selected_points(registered_path, ids, outputs["ply"], outputs["pcd"])
     log.info("scan list %s; %d points of the %d scans in %s and %s", outputs["scans"], n_points, k,
              outputs["ply"], outputs["pcd"])
-    detection = read_detection(index_path, dataset)
-    folder = Path(outputs["recording"])
-    folder.mkdir(parents=True, exist_ok=True)
-    out = folder / reduced_recording_name(recording_path)
+    # the recording's own name (a ROS2 bag given by its .db3 / .mcap file: its folder's)
+    out = Path(outputs["recording"]) / bag_path(recording_path).name
     rec = write_reduced_recording(recording_path, detection.get("format") or dataset.get("format"), ids, out,
                                   detection)
     log.info("reduced recording %s: %d of %d messages, %d bytes of %d (%.1f %%)", out, rec["messages_out"],
@@ -129,52 +122,16 @@ def write_selection(
         "k_coverage": float(select_cfg["k_coverage"]),
         "reason": reason,
         "n_kept": int(len(ordering)),
-        "n_recorded": int(len(index)),
+        "n_recorded": int(len(t_ns)),
         "n_points": int(n_points),
         "scans": str(outputs["scans"]),
         "points": [str(outputs["ply"]), str(outputs["pcd"])],
-        "recording": {**{k_: v for k_, v in rec.items() if k_ != "path"}, "path": str(out)},
+        "recording": rec,
     }
-    with atomic_path(outputs["summary"]) as tmp:
-        Path(tmp).write_text(json.dumps(summary, indent=2, sort_keys=True) + "\n")
+    write_json(summary, outputs["summary"])
     return summary
 
 
 def read_selection(path: str | os.PathLike) -> dict:
     """``selection.json`` as written by :func:`write_selection`."""
     return json.loads(Path(path).read_text())
-
-
-def answer_lines(datasets, results: str | os.PathLike = "results") -> list[str]:
-    """What a finished run prints: per dataset, where the floor plan, the scan list,
-    the reduced recording and the report are, and k with its size reduction. Datasets
-    whose selection was not made are skipped."""
-    lines = []
-    root = Path(results)
-    for ds in datasets:
-        summary_path = root / ds / "selection" / "selection.json"
-        if not summary_path.is_file():
-            continue
-        s = read_selection(summary_path)
-        rec = s["recording"]
-        lines.append(f"{ds}: {s['k']} of {s['n_kept']} kept scans ({s['n_recorded']} recorded), {s['ordering']}")
-        plan = root / ds / "floorplan.svg"
-        if plan.is_file():
-            lines.append(f"  floor plan:         {root / ds}/floorplan.{{geojson,svg,dxf,ifc}}")
-        lines.append(f"  scan list:          {s['scans']}")
-        lines.append(
-            f"  reduced recording:  {rec['path']} ({_mb(rec['bytes_out'])} of {_mb(rec['bytes_in'])}, "
-            f"{rec['scan_messages_out'] if 'scan_messages_out' in rec else s['k']} scans)"
-        )
-        lines.append(f"  points (PLY, PCD):  {s['points'][0]}, {s['points'][1]}")
-        front = root / ds / "front.html"
-        if front.is_file():
-            lines.append(f"  front page:         {front}")
-    report = root / "report.html"
-    if lines and report.is_file():
-        lines.append(f"report: {report}")
-    return lines
-
-
-def _mb(n: int) -> str:
-    return f"{n / 1e6:.1f} MB" if n >= 1e5 else f"{n / 1e3:.1f} kB"

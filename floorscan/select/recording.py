@@ -36,7 +36,7 @@ What is kept, per format:
   copied and the CSV reduced to their rows (field text as it was).
 
 Outputs are written under a temporary name beside the target and renamed
-(:func:`floorscan.select.deliverables.staged_path`).
+(:func:`floorscan.io.atomic_path`, :func:`floorscan.io.staged_path`).
 
 Usage (the workflow)::
 
@@ -63,8 +63,7 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 import pandas as pd
 
-from floorscan.io import InputError, atomic_path, read_metadata
-from floorscan.select.deliverables import staged_path
+from floorscan.io import InputError, atomic_path, read_metadata, staged_path
 
 log = logging.getLogger(__name__)
 
@@ -80,10 +79,9 @@ POSE_MSGTYPES = (
 )
 #: Topics kept whole whatever their QoS or latching.
 STATIC_TOPICS = ("/tf_static",)
-#: CARMEN laser lines ingest reads (:data:`floorscan.ingest.carmen.LASER_TYPES`).
-CARMEN_LASER_LINES = ("FLASER", "ROBOTLASER1")
-#: CARMEN pose lines kept within the window; their ``ipc_timestamp`` is the third
-#: field from the end (``ODOM x y theta tv rv accel ipc_timestamp host logger_timestamp``).
+#: CARMEN pose lines kept within the window. Their ``ipc_timestamp`` is the third field
+#: from the end (``ODOM x y theta tv rv accel ipc_timestamp host logger_timestamp``), as
+#: in every CARMEN message, the laser lines too (:data:`floorscan.ingest.carmen.LAYOUTS`).
 CARMEN_POSE_LINES = ("ODOM", "TRUEPOS")
 #: CARMEN lines always kept (besides ``#`` comments).
 CARMEN_KEPT_LINES = ("PARAM",)
@@ -442,16 +440,6 @@ def _out_connection(writer, c, out_conns: list, ros2: bool):
 # ----------------------------------------------------------------------------------
 # CARMEN logs
 # ----------------------------------------------------------------------------------
-def _laser_stamp(tok: list[str]) -> float:
-    """``ipc_timestamp`` of a laser line (field layouts of :mod:`floorscan.ingest.carmen`)."""
-    if tok[0] == "FLASER":
-        n = int(tok[1])
-        return float(tok[8 + n])
-    n = int(tok[8])
-    m = int(tok[9 + n])
-    return float(tok[10 + n + m + 11])
-
-
 def _read_lines(path: Path) -> tuple[list[str], bool]:
     """The log's lines with their line ends, as latin-1 text (byte for byte), split as
     ingest splits them (universal newlines); and whether it is gzip."""
@@ -468,15 +456,17 @@ def _read_lines(path: Path) -> tuple[list[str], bool]:
 
 
 def _reduce_carmen(source: Path, ids, out_path: Path, detection, t_ns, window_s: float) -> dict:
-    from floorscan.ingest.carmen import classify_stamps, spread_stamps
+    from floorscan.ingest.carmen import LASER_TYPES, classify_stamps, spread_stamps
 
     lines, gz = _read_lines(source)
     tokens = [ln.encode("latin-1").decode("ascii", errors="replace").split() for ln in lines]
     laser_line, t_s = [], []  # laser ordinal -> line index, ipc stamp
     for i, tok in enumerate(tokens):
-        if tok and tok[0] in CARMEN_LASER_LINES:
+        if tok and tok[0] in LASER_TYPES:
+            # ingest checked each laser line's layout; a log changed since fails the count
+            # and stamp checks against the scan index below
             try:
-                t_s.append(_laser_stamp(tok))
+                t_s.append(float(tok[-3]))
             except (ValueError, IndexError) as e:
                 raise InputError(f"{source}:{i + 1}: malformed {tok[0]} line ({e}); expected ingest's field layout") from None
             laser_line.append(i)
@@ -550,7 +540,7 @@ def _reduce_carmen(source: Path, ids, out_path: Path, detection, t_ns, window_s:
         "bytes_out": _size(out_path),
         "messages_in": n_in,
         "messages_out": len(keep),
-        "scan_messages_out": int(sum(counts[k] for k in CARMEN_LASER_LINES)),
+        "scan_messages_out": int(sum(counts[k] for k in LASER_TYPES)),
         "topics": dict(sorted(counts.items())),
     }
 

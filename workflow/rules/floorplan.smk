@@ -7,11 +7,9 @@
 #   floorplan:  the evaluation grid, evaluation/floorplan/<ordering>_<extractor>_k<k>.*:
 #               every ordering x k of walls.k, one job per extractor, in the formats of
 #               floorplan.evaluation_formats (GeoJSON, which is scored, and SVG)
-stage_schema_check("floorplan")
+from floorscan.floorplan import FLOORPLAN_FORMATS
 
-# Must match floorscan.floorplan.FLOORPLAN_FORMATS (kept literal: no package import at
-# parse time).
-FLOORPLAN_FORMATS = ("geojson", "svg", "dxf", "ifc")
+stage_schema_check("floorplan")
 
 
 def plan_extractor(wildcards):

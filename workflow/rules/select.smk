@@ -1,14 +1,12 @@
 # Coverage hulls and scan orderings (issue 5; thesis section 3.3, Algorithms 1 and 2).
+from floorscan.select.coverage import COVERAGE_ORDERINGS
+from floorscan.selection import ORDERINGS as SELECT_ORDERINGS
+
 stage_schema_check("hulls")
 stage_schema_check("select")
 
 # Shard labels of floorscan.shards.shard_label: scans_<first scan id>-<last scan id>.
 SHARD_LABEL = r"scans_\d+-\d+"
-
-# Must match floorscan.selection.ORDERINGS and floorscan.select.coverage.COVERAGE_ORDERINGS
-# (kept literal: no package import at parse time).
-SELECT_ORDERINGS = ["cluster_hull", "convex_hull", "random", "sequential", "motion_filter"]
-COVERAGE_ORDERINGS = ["wall_coverage", "surface_coverage"]
 
 
 def select_coverage_inputs(wildcards):
@@ -173,7 +171,7 @@ rule selection_figures:
         hulls="results/{dataset}/hulls.parquet",
         convex="results/{dataset}/convex_hulls.parquet",
         orderings=expand(
-            "results/{{dataset}}/orderings/{ordering}.parquet", ordering=SELECT_ORDERINGS + COVERAGE_ORDERINGS
+            "results/{{dataset}}/orderings/{ordering}.parquet", ordering=[*SELECT_ORDERINGS, *COVERAGE_ORDERINGS]
         ),
         summary="results/{dataset}/orderings/summary.parquet",
     output:
