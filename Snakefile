@@ -4,7 +4,7 @@
 #      snakemake --cores 2 --config path=/data/run.bag   (a recording of your own)
 from snakemake.utils import min_version
 
-from floorscan.config import add_path_dataset, check_datasets, config_errors_exit, validate_config
+from floorscan.core.config import add_path_dataset, check_datasets, config_errors_exit, validate_config
 
 min_version("9.14.8")
 
@@ -59,7 +59,7 @@ rule evaluation:
 onsuccess:
     import threading
 
-    from floorscan.report import answer_lines
+    from floorscan.figures.report import answer_lines
 
     for _line in answer_lines(target_datasets()):
         print(_line)

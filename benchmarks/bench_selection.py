@@ -16,10 +16,10 @@ Prints
   first 509 kept scans, of the select stage and of the three selection figures
   (issue 8: these stages' CPU counts toward the 10x real-time target);
 - the ``wall_coverage`` and ``surface_coverage`` orderings (issue 22) of 1000 and 5000
-  synthetic scans (walls by :func:`floorscan.walls.ransac`, not timed): the cells,
+  synthetic scans (walls by :func:`floorscan.walls.extract.ransac`, not timed): the cells,
   the lazy greedy and the plain greedy (:func:`floorscan.core.greedy.plain_greedy`)
   side by side, and whether their orderings are identical (they must be);
-- KMeans of 200 3D scan samples by :func:`floorscan.hulls.kmeans` and by
+- KMeans of 200 3D scan samples by :func:`floorscan.select.hulls.kmeans` and by
   scikit-learn's ``KMeans`` in the same run: ms per fit, ratio, whether the centres
   are identical (they must be), and what importing scikit-learn costs a job.
 
@@ -39,8 +39,8 @@ import pandas as pd
 import shapely
 from shapely.geometry import box
 
-from floorscan import hulls as fh
-from floorscan import selection as fs
+from floorscan.select import hulls as fh
+from floorscan.select import orderings as fs
 
 
 # ----------------------------------------------------------------------------------
@@ -164,7 +164,7 @@ def _hull_bench(n_scans: int, three_d: bool) -> None:
 
 
 def _kmeans_bench(n_scans: int) -> None:
-    """floorscan's KMeans (:func:`floorscan.hulls.kmeans`) against scikit-learn's on
+    """floorscan's KMeans (:func:`floorscan.select.hulls.kmeans`) against scikit-learn's on
     the hulls stage's samples of 3D scans, side by side (issue 8)."""
     import subprocess
 
@@ -208,7 +208,7 @@ def _coverage_orderings_bench(n_scans: int, seed: int) -> None:
     lazy greedy and the plain greedy, seconds."""
     from floorscan.core.greedy import lazy_greedy, plain_greedy
     from floorscan.select.coverage import CoverageParams, surface_cells, wall_cells
-    from floorscan.walls import ransac
+    from floorscan.walls.extract import ransac
 
     registered, _ = simulate_scans(n_scans, seed=seed)
     scans = [(int(s), g[["x", "y"]].to_numpy(np.float64)) for s, g in registered.groupby("scan_id", sort=True)]
@@ -232,8 +232,8 @@ def _hallways3d_cpu(root: Path) -> None:
     result set (issue 8)."""
     import tempfile
 
-    from floorscan.figures_selection import FigureParams, selection_figures
-    from floorscan.io import iter_scans, read_table
+    from floorscan.figures.selection import FigureParams, selection_figures
+    from floorscan.core.io import iter_scans, read_table
 
     registration = read_table(root / "registration.parquet")
     kept = fh.kept_scan_ids(registration)
@@ -290,7 +290,7 @@ def main(argv: list[str] | None = None) -> None:
 
     hall = Path("results/hallways")
     if (hall / "hulls.parquet").exists() and (hall / "registration.parquet").exists():
-        from floorscan.io import read_table
+        from floorscan.core.io import read_table
 
         registration = read_table(hall / "registration.parquet")
         ids, geoms = fh.scan_coverage(read_table(hall / "hulls.parquet"), fh.kept_scan_ids(registration))

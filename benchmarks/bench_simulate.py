@@ -1,6 +1,6 @@
 """Simulation speed and size: demo and hallways (2D and 3D), scans/s and bytes on disk.
 
-For each case it times the whole ``simulate`` stage (:func:`floorscan.simulate.run_simulation`:
+For each case it times the whole ``simulate`` stage (:func:`floorscan.sim.simulate.run_simulation`:
 trajectory, ray casting, ROS1 bag, PCD folder, ground truth) into a temporary folder,
 and separately the ray casting alone (Embree via Open3D), so the share of the writers is
 visible. ``python -m benchmarks.bench_simulate [--no-3d]``; the 3D case writes about
@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from floorscan import building as bld
-from floorscan import lidar
-from floorscan import simulate as sim
+from floorscan.sim import building as bld
+from floorscan.sim import lidar
+from floorscan.sim import simulate as sim
 
 REPO = Path(__file__).resolve().parents[1]
 CFG = {"scanners": {"2d": {}, "3d": {}}}  # the schema's defaults

@@ -20,7 +20,7 @@ segments (no gap splitting), so its count is of lines, not wall segments.
 Run: ``.venv/bin/python -m benchmarks.bench_walls [--max-scans N] [datasets ...]``.
 
 Shard mode (issue 8: the cost of one ``scan_walls`` job): ``--shard PATH START STOP``
-times :func:`floorscan.walls.extract_walls` on the scans START..STOP of a points
+times :func:`floorscan.walls.extract.extract_walls` on the scans START..STOP of a points
 table (e.g. hallways3d's ``registered.parquet``, scans 0..1694), per extractor with
 the default config: CPU seconds (``time.process_time``) and wall seconds, ms per
 scan, ``--repeats`` times (the scans are read once, before timing).
@@ -37,9 +37,9 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from floorscan.floorplan import build_floorplan
-from floorscan.io import iter_scans, read_table, split_by_scan
-from floorscan.walls import EXTRACTORS, extract_scan, extract_walls, params_from_config, scan_points_2d
+from floorscan.floorplan.plan import build_floorplan
+from floorscan.core.io import iter_scans, read_table, split_by_scan
+from floorscan.walls.extract import EXTRACTORS, extract_scan, extract_walls, params_from_config, scan_points_2d
 
 REPO = Path(__file__).resolve().parents[1]
 DATASETS = ["intel", "aces", "freiburg101", "orebro", "trace0", "mac_ros2"]
@@ -121,7 +121,7 @@ def main(argv: list[str] | None = None) -> None:
         return
     cfg = schema_defaults(REPO / "workflow/schemas/walls.schema.yaml")
     scan_p, rp, cp = params_from_config(cfg)
-    from floorscan.walls import cluster_ransac  # noqa: F401  (warm imports)
+    from floorscan.walls.extract import cluster_ransac  # noqa: F401  (warm imports)
     import open3d  # noqa: F401
     import sklearn.cluster  # noqa: F401
 

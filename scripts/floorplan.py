@@ -1,8 +1,8 @@
 """Stage floorplan, the evaluation grid: merged walls of one extractor for every ordering
 and k, in the formats of floorplan.evaluation_formats, in the map frame."""
-from floorscan.floorplan import FloorplanWriter, recording_timestamp
-from floorscan.io import read_table
-from floorscan.workflow import stage_log
+from floorscan.floorplan.plan import FloorplanWriter, recording_timestamp
+from floorscan.core.io import read_table
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821

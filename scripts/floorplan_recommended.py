@@ -1,7 +1,7 @@
 """Stage floorplan, the recommended plan: the merged walls of the selected scans
 (selection/scans.csv) as results/<dataset>/floorplan.{geojson,svg,dxf,ifc}."""
-from floorscan.floorplan import write_recommended_floorplan
-from floorscan.workflow import stage_log
+from floorscan.floorplan.plan import write_recommended_floorplan
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821

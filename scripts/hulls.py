@@ -3,11 +3,11 @@ range (thesis Algorithm 2), streamed scan by scan (memory holds one scan, issue 
 scripts/select.py concatenates the shards."""
 import json
 
-from floorscan.hulls import HullParams, compute_hulls, to_table
+from floorscan.select.hulls import HullParams, compute_hulls, to_table
 from floorscan.core.runtime import progress
-from floorscan.io import iter_scans, write_table
-from floorscan.shards import parse_shard_label, read_scan_range
-from floorscan.workflow import stage_log
+from floorscan.core.io import iter_scans, write_table
+from floorscan.core.shards import parse_shard_label, read_scan_range
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:
     params = HullParams.from_config(snakemake.params.cfg)

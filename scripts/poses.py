@@ -1,7 +1,7 @@
 """Stage poses: the pose of each scan at its timestamp (thesis Algorithm 3 step 1)."""
-from floorscan.io import POSES, read_metadata, read_table, write_table
-from floorscan.poses import scan_poses
-from floorscan.workflow import stage_log
+from floorscan.core.io import POSES, read_metadata, read_table, write_table
+from floorscan.ingest.poses import scan_poses
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:
     index = read_table(snakemake.input.index)

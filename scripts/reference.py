@@ -1,9 +1,9 @@
 """Stage reference: the occupancy grid of all kept scans (the reference map), written
 as a ROS map_server map, a cell table and a figure."""
-from floorscan.figures_scoring import plot_reference_map
-from floorscan.io import read_table
+from floorscan.figures.scoring import plot_reference_map
+from floorscan.core.io import read_table
 from floorscan.score import reference as ref
-from floorscan.workflow import stage_log
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
@@ -16,7 +16,7 @@ with stage_log(snakemake) as log:  # noqa: F821
              counts["structure"], params.min_scans, counts["single_scan"])
     quality = {}
     if smk.input.get("ground_truth"):  # synthetic: how good the reference is
-        from floorscan.metrics import OBSERVED_FACE, read_wall_faces
+        from floorscan.score.metrics import OBSERVED_FACE, read_wall_faces
         from floorscan.score.against_reference import reference_against_ground_truth
 
         quality = reference_against_ground_truth(grid, read_wall_faces(smk.input.ground_truth, "face"),

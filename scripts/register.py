@@ -1,9 +1,9 @@
 """Stage register: scans in the map frame, refined by ICP (thesis Algorithm 3 steps 2-6)."""
 import json
 
-from floorscan.io import read_metadata, read_table, write_table
-from floorscan.registration import REGISTRATION, register_recording
-from floorscan.workflow import stage_log
+from floorscan.core.io import read_metadata, read_table, write_table
+from floorscan.register.registration import REGISTRATION, register_recording
+from floorscan.core.stage import stage_log
 
 # an error names the recording (ingest's metadata of the scan index)
 with stage_log(snakemake, source=snakemake.input.index) as log:

@@ -3,10 +3,10 @@ locations (thesis Fig. 5.9), in its own job so the per-scan stages need not wait
 its title leads with the registration's verdict and what ingest detected."""
 import json
 
-from floorscan.figures_registration import density_of_file, plot_registered_map
+from floorscan.figures.registration import density_of_file, plot_registered_map
 from floorscan.ingest import describe_recording
-from floorscan.io import read_metadata, read_table
-from floorscan.workflow import stage_log
+from floorscan.core.io import read_metadata, read_table
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:
     density = density_of_file(snakemake.input.registered)  # streamed scan by scan

@@ -3,10 +3,10 @@ extractor, streamed scan by scan (memory holds one scan, issue 8).
 scripts/scan_walls_merge.py concatenates the shards. The time of each scan goes to
 the benchmarks folder (output `times`, when the rule names one), not into the status."""
 from floorscan.core.runtime import progress
-from floorscan.io import iter_scans, write_table
-from floorscan.shards import parse_shard_label
-from floorscan.walls import SCAN_STATUS, SCAN_TIMES, WALLS, extract_walls
-from floorscan.workflow import stage_log
+from floorscan.core.io import iter_scans, write_table
+from floorscan.core.shards import parse_shard_label
+from floorscan.walls.extract import SCAN_STATUS, SCAN_TIMES, WALLS, extract_walls
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:
     extractor = snakemake.wildcards.extractor

@@ -1,10 +1,10 @@
 """Stage walls, for one extractor: the wall segments of every kept scan, the shards of
 scan_walls_shard concatenated in scan order (exactly the tables of one unsharded job),
 and the times of each scan (benchmarks folder, output `times` when the rule names one)."""
-from floorscan.io import write_table
-from floorscan.shards import plan_from_files, read_shards
-from floorscan.walls import SCAN_STATUS, SCAN_TIMES, WALLS
-from floorscan.workflow import stage_log
+from floorscan.core.io import write_table
+from floorscan.core.shards import plan_from_files, read_shards
+from floorscan.walls.extract import SCAN_STATUS, SCAN_TIMES, WALLS
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821

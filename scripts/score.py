@@ -6,12 +6,12 @@ import json
 
 import pandas as pd
 
-from floorscan import metrics
-from floorscan.figures_scoring import plot_quality_vs_k
-from floorscan.io import atomic_path, read_metadata, read_table, write_table
-from floorscan.report import summary_table_html
+from floorscan.score import metrics
+from floorscan.figures.scoring import plot_quality_vs_k
+from floorscan.core.io import atomic_path, read_metadata, read_table, write_table
+from floorscan.figures.report import summary_table_html
 from floorscan.score import curves as C
-from floorscan.workflow import stage_log
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821

@@ -1,9 +1,9 @@
 """Stage `score`, the last figures of a dataset: metrics against k (thesis Fig. 5.4)
 and the time and memory of every stage (Table 5.1)."""
 
-from floorscan import figures_scoring
-from floorscan.io import read_table
-from floorscan.workflow import stage_log
+from floorscan.figures import scoring as figures_scoring
+from floorscan.core.io import read_table
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821

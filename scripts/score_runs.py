@@ -2,11 +2,11 @@
 section 5.1 and ISPRS-style tolerance metrics). scripts/score.py merges the
 extractors and writes the scan-reduction summary."""
 
-from floorscan import metrics
-from floorscan.io import read_table, write_table
+from floorscan.score import metrics
+from floorscan.core.io import read_table, write_table
 from floorscan.score.against_reference import score_plans
 from floorscan.score.reference import read_grid
-from floorscan.workflow import stage_log
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821

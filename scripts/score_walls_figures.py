@@ -2,9 +2,11 @@
 5.1, 5.5, 5.10 - 5.12): they need no metrics, so they are drawn while the runs are
 scored."""
 
-from floorscan import figures_scoring, metrics
-from floorscan.io import read_table
-from floorscan.workflow import stage_log
+from floorscan.figures import scoring as figures_scoring
+
+from floorscan.score import metrics
+from floorscan.core.io import read_table
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821

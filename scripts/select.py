@@ -4,11 +4,11 @@ orderings and their coverage summary (thesis Algorithm 1). One job, not a merge 
 and a select job: a job costs ~0.6 s to start, on the path to the walls' k tables."""
 from pathlib import Path
 
-from floorscan.hulls import HULLS
-from floorscan.io import read_table, write_table
-from floorscan.selection import ORDERING, SUMMARY, SelectParams, select_stage
-from floorscan.shards import plan_from_files, read_shards
-from floorscan.workflow import stage_log
+from floorscan.select.hulls import HULLS
+from floorscan.core.io import read_table, write_table
+from floorscan.select.orderings import ORDERING, SUMMARY, SelectParams, select_stage
+from floorscan.core.shards import plan_from_files, read_shards
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:
     # the plan the workflow named the shards by, from the register stage's files

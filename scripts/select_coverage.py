@@ -4,11 +4,11 @@ written with its own objective along the way (covered_objective). The hull area 
 cover, to compare them with the hull orderings, is the selection figures' work."""
 from pathlib import Path
 
-from floorscan.hulls import kept_scan_ids
-from floorscan.io import iter_scans, read_table, write_table
+from floorscan.select.hulls import kept_scan_ids
+from floorscan.core.io import iter_scans, read_table, write_table
 from floorscan.select.coverage import COVERAGE_ORDERING, OBJECTIVE_COLUMN, CoverageParams, coverage_orderings
-from floorscan.walls import params_from_config, scan_points_2d
-from floorscan.workflow import stage_log
+from floorscan.walls.extract import params_from_config, scan_points_2d
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821

@@ -2,7 +2,7 @@
 scans of the default ordering as a scan list, PLY and PCD points and a reduced copy
 of the recording, with selection.json saying why k."""
 from floorscan.select.recommend import write_selection
-from floorscan.workflow import stage_log
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821

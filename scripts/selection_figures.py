@@ -1,11 +1,11 @@
 """Figures of the select stage: thesis Figs 5.6, 5.7 and 5.8."""
 from pathlib import Path
 
-from floorscan.figures_selection import FigureParams, selection_figures
-from floorscan.hulls import HullParams, kept_scan_ids
-from floorscan.io import read_table
-from floorscan.selection import SelectParams, with_hull_coverage
-from floorscan.workflow import stage_log
+from floorscan.figures.selection import FigureParams, selection_figures
+from floorscan.select.hulls import HullParams, kept_scan_ids
+from floorscan.core.io import read_table
+from floorscan.select.orderings import SelectParams, with_hull_coverage
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:
     cfg = dict(snakemake.params.cfg)

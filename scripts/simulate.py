@@ -1,7 +1,7 @@
-"""Simulate stage: a rover records a synthetic building (floorscan.simulate.run_simulation)."""
+"""Simulate stage: a rover records a synthetic building (floorscan.sim.simulate.run_simulation)."""
 
-from floorscan.simulate import run_simulation
-from floorscan.workflow import stage_log
+from floorscan.sim.simulate import run_simulation
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821 (injected by Snakemake)
     out = snakemake.output  # noqa: F821

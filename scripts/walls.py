@@ -2,9 +2,9 @@
 ordering, cut from the per-scan walls (rule scan_walls)."""
 from pathlib import Path
 
-from floorscan.io import read_table, write_table
-from floorscan.walls import WALLS, first_k_walls
-from floorscan.workflow import stage_log
+from floorscan.core.io import read_table, write_table
+from floorscan.walls.extract import WALLS, first_k_walls
+from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821

@@ -1,7 +1,7 @@
 """A stage that fails on bad input says so once, as one paragraph naming the user's
 file; a bug keeps its traceback (issue 24 item 5).
 
-floorscan.workflow.stage_log logs the failure to the stage's log file only (Snakemake
+floorscan.core.stage.stage_log logs the failure to the stage's log file only (Snakemake
 prints that file when a job fails: ``show-failed-logs`` of the default profile) and
 ends the script with status 1 without a traceback; Snakemake removes the job's outputs.
 """
@@ -18,9 +18,9 @@ import pandas as pd
 import pytest
 
 from conftest import REPO
-from floorscan.config import ConfigError
-from floorscan.io import POSE_STREAM, SCAN_INDEX, InputError, write_table
-from floorscan.workflow import stage_log
+from floorscan.core.config import ConfigError
+from floorscan.core.io import POSE_STREAM, SCAN_INDEX, InputError, write_table
+from floorscan.core.stage import stage_log
 
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 
@@ -57,7 +57,7 @@ def test_a_bug_keeps_its_traceback_and_is_reraised(tmp_path, capsys):
 def test_a_later_stage_names_the_recording_not_an_intermediate_table(tmp_path):
     """The message of a stage after ingest names the recording (and its topic) that
     ingest read, from the metadata of its tables."""
-    from floorscan.workflow import failure_message
+    from floorscan.core.stage import failure_message
 
     index = tmp_path / "scan_index.parquet"
     meta = {"source": "/data/lab.bag /scan"}

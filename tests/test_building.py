@@ -8,8 +8,8 @@ import yaml
 from shapely.geometry import LineString
 from shapely.ops import unary_union
 
-from floorscan import building as bld
-from floorscan.io import InputError
+from floorscan.sim import building as bld
+from floorscan.core.io import InputError
 
 REPO = Path(__file__).resolve().parents[1]
 BUILDINGS = REPO / "config" / "buildings"

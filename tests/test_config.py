@@ -47,7 +47,7 @@ def test_validate_config_fills_the_defaults_snakemake_validate_fills(schema):
     import yaml
     from snakemake.utils import validate
 
-    from floorscan.config import validate_config
+    from floorscan.core.config import validate_config
 
     cfg = yaml.safe_load((REPO / "config" / "config.yaml").read_text())
     stage = schema.name.split(".")[0]
@@ -61,7 +61,7 @@ def test_validate_config_fills_the_defaults_snakemake_validate_fills(schema):
 
 
 def test_validate_config_names_the_field_and_copies_defaults():
-    from floorscan.config import ConfigError, validate_config
+    from floorscan.core.config import ConfigError, validate_config
 
     schema = REPO / "workflow" / "schemas" / "walls.schema.yaml"
     with pytest.raises(ConfigError, match=r"datasets\.x\.params\.walls\.k\.0: .*schema .*walls\.schema\.yaml"):
@@ -73,7 +73,7 @@ def test_validate_config_names_the_field_and_copies_defaults():
 def test_a_path_alone_is_a_dataset():
     """`--config path=...`: the recording becomes a dataset named after the file, with
     nothing but its path, and the only target; the schema accepts it."""
-    from floorscan.config import add_path_dataset, validate_config
+    from floorscan.core.config import add_path_dataset, validate_config
 
     schema = REPO / "workflow" / "schemas" / "config.schema.yaml"
     cfg = {"datasets": {"demo": {"format": "synthetic", "building": "demo", "scanner": "2d", "seed": 1}},
@@ -95,7 +95,7 @@ def test_a_path_alone_is_a_dataset():
 def test_a_path_to_a_shipped_recording_reuses_its_dataset(tmp_path, monkeypatch):
     """The shipped config names recordings by relative paths; the same file given by
     its absolute path (or through a symbolic link) is that dataset, not simpath2_2."""
-    from floorscan.config import add_path_dataset
+    from floorscan.core.config import add_path_dataset
 
     (tmp_path / "data").mkdir()
     bag = tmp_path / "data" / "simpath2.bag"
@@ -112,7 +112,7 @@ def test_a_path_to_a_shipped_recording_reuses_its_dataset(tmp_path, monkeypatch)
 
 
 def test_a_dataset_needs_a_path_unless_synthetic():
-    from floorscan.config import ConfigError, validate_config
+    from floorscan.core.config import ConfigError, validate_config
 
     schema = REPO / "workflow" / "schemas" / "config.schema.yaml"
     with pytest.raises(ConfigError, match=r"datasets\.x: 'path' is a required property"):
@@ -132,7 +132,7 @@ SCHEMA = REPO / "workflow" / "schemas" / "config.schema.yaml"
 def test_a_number_that_is_not_finite_is_rejected_naming_its_key(value):
     """NaN passes a JSON schema's `type: number` and every bound (it compares false);
     infinity passes `minimum`. Anywhere in the config, the key is named."""
-    from floorscan.config import ConfigError, validate_config
+    from floorscan.core.config import ConfigError, validate_config
 
     with pytest.raises(ConfigError, match=r"^poses\.max_gap_s: (nan|inf|-inf): expected a finite number"):
         validate_config({"datasets": {"x": {"path": "/d/r.bag"}}, "poses": {"max_gap_s": value}}, SCHEMA)
@@ -144,7 +144,7 @@ def test_a_number_that_is_not_finite_is_rejected_naming_its_key(value):
 
 
 def test_a_misspelt_stage_under_params_lists_the_stages():
-    from floorscan.config import ConfigError, validate_config
+    from floorscan.core.config import ConfigError, validate_config
 
     cfg = {"datasets": {"x": {"path": "/d/r.bag", "params": {"registr": {"every_n": 5}}}}}
     with pytest.raises(ConfigError, match=r"datasets\.x\.params: unknown keys \['registr'\]; expected one of "
@@ -156,7 +156,7 @@ def test_a_misspelt_stage_under_params_lists_the_stages():
 
 
 def test_an_empty_path_and_an_unknown_building_say_what_is_expected(tmp_path):
-    from floorscan.config import ConfigError, check_datasets
+    from floorscan.core.config import ConfigError, check_datasets
 
     (tmp_path / "demo.yaml").write_text("")
     (tmp_path / "office.yaml").write_text("")

@@ -11,7 +11,7 @@ import pytest
 
 from conftest import SHARED_DATA, T0_NS, flaser_line, needs_shared, scan_ranges, write_carmen
 from floorscan.ingest import open_recording, write_recording
-from floorscan.io import REGISTERED, InputError, staged_path, write_table
+from floorscan.core.io import REGISTERED, InputError, staged_path, write_table
 from floorscan.select.deliverables import recommended_k, scan_list, write_scan_list, write_selected_points
 from floorscan.select.recording import read_detection, write_reduced_recording
 
@@ -154,7 +154,7 @@ def test_scan_list_rejects_mismatched_tables():
 
 
 def test_selected_points_as_ply_and_pcd(tmp_path):
-    from floorscan.o3d import o3d
+    import open3d as o3d
 
     rng = np.random.default_rng(3)
     sizes = {0: 5, 1: 7, 2: 11, 4: 3}
@@ -410,7 +410,7 @@ def test_reduced_carmen_log_with_made_up_stamps_keeps_odometry_beside_the_scans(
 
 
 def _pcd_folder(folder, n=4):
-    from floorscan.o3d import o3d
+    import open3d as o3d
 
     folder.mkdir()
     rng = np.random.default_rng(1)

@@ -10,8 +10,8 @@ import pytest
 import shapely
 from matplotlib.collections import LineCollection, PathCollection
 
-from floorscan import figures_scoring as F
-from floorscan import metrics as M
+from floorscan.figures import scoring as F
+from floorscan.score import metrics as M
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -153,7 +153,7 @@ def test_block_any_keeps_thin_walls():
 
 
 def test_subsample_points_from_file_equals_the_frame(tmp_path):
-    from floorscan.io import write_table
+    from floorscan.core.io import write_table
 
     rng = np.random.default_rng(2)
     pts = pd.DataFrame({"scan_id": np.repeat(np.arange(30, dtype=np.int32), 200),
@@ -192,7 +192,7 @@ def _capture_figures(monkeypatch):
 
 
 def test_floorplan_figure_title_counts_the_plans_walls(tmp_path, monkeypatch):
-    from floorscan.floorplan import build_floorplan, write_geojson
+    from floorscan.floorplan.plan import build_floorplan, write_geojson
 
     # a room's four walls seen from both faces (20 cm thick) and a lone wall of one face
     faces = []

@@ -11,7 +11,7 @@ import pytest
 import shapely
 import yaml
 
-from floorscan.floorplan import (
+from floorscan.floorplan.plan import (
     DXF_LAYERS,
     FLOORPLAN_FORMATS,
     WORKFLOW_KEYS,
@@ -30,7 +30,7 @@ from floorscan.floorplan import (
     params_from_config,
     write_floorplan,
 )
-from floorscan.walls import cluster_ransac, ransac
+from floorscan.walls.extract import cluster_ransac, ransac
 from test_walls import ROOM, match, raycast
 
 REPO = Path(__file__).resolve().parents[1]
@@ -156,7 +156,7 @@ def test_schema_defaults_agree_with_floorplan_params():
 def test_candidate_pairs_equal_shapely_dwithin():
     import shapely
 
-    from floorscan.floorplan import _candidate_pairs
+    from floorscan.floorplan.plan import _candidate_pairs
 
     rng = np.random.default_rng(7)
     p0 = rng.uniform(0, 6, (300, 2))
@@ -175,7 +175,7 @@ def test_candidate_pairs_equal_shapely_dwithin():
 
 
 def test_union_find_numbers_components_by_smallest_node():
-    from floorscan.floorplan import _union_find
+    from floorscan.floorplan.plan import _union_find
 
     # Components {0}, {1, 3, 5} (a chain 5-3-1), {2, 4}, {6}; numbered by smallest node.
     labels = _union_find(7, np.array([5, 3, 2]), np.array([3, 1, 4]))
@@ -190,7 +190,7 @@ def test_candidate_pairs_by_direction_bins_equal_dwithin_and_angle():
     exactly the dwithin pairs within the angle."""
     import shapely
 
-    from floorscan.floorplan import _angle_diff, _axial_angle, _candidate_pairs
+    from floorscan.floorplan.plan import _angle_diff, _axial_angle, _candidate_pairs
 
     rng = np.random.default_rng(11)
     p0 = rng.uniform(0, 5, (400, 2))
@@ -212,7 +212,7 @@ def test_candidate_pairs_by_direction_bins_equal_dwithin_and_angle():
 def test_merge_skips_connected_pairs_without_changing_faces(monkeypatch):
     """Testing the candidates a few at a time and skipping pairs already connected
     gives the faces that testing all of them gives."""
-    import floorscan.floorplan as fp
+    import floorscan.floorplan.plan as fp
 
     rng = np.random.default_rng(5)
     walls = np.array([[0, 0, 6, 0], [0, 0.2, 6, 0.2], [6.5, -1, 6.5, 4], [0, 3, 3, 3.02]], dtype=float)
@@ -243,7 +243,7 @@ def test_ifc_guid_list_equals_uuid5_compressed_by_ifcopenshell():
 
     import ifcopenshell.guid
 
-    from floorscan.floorplan import _ifc_guid_list
+    from floorscan.floorplan.plan import _ifc_guid_list
 
     for name in ("hallways3d random ransac k5", "O'Brien's plan", "é"):
         ns = uuid.uuid5(uuid.NAMESPACE_URL, f"floorscan:{name}")
@@ -259,7 +259,7 @@ def test_candidate_pairs_by_direction_bins_far_from_the_origin():
     at the distance and across the 0/180 degree wrap."""
     import shapely
 
-    from floorscan.floorplan import _angle_diff, _axial_angle, _candidate_pairs
+    from floorscan.floorplan.plan import _angle_diff, _axial_angle, _candidate_pairs
 
     rng = np.random.default_rng(12)
     p0 = rng.uniform(0, 40, (500, 2))
@@ -333,7 +333,7 @@ def test_georeference_puts_a_point_100_m_east_where_the_ellipsoid_says():
 
 
 def test_geojson_rings_counter_clockwise_members_and_one_feature_per_line(tmp_path, box_segments):
-    from floorscan.floorplan import LOCAL_FRAME_WKT, floorplan_geojson
+    from floorscan.floorplan.plan import LOCAL_FRAME_WKT, floorplan_geojson
 
     out = {"geojson": tmp_path / "p.geojson"}
     plan = write_floorplan(box_segments, {}, out, **META, timestamp=1_600_000_000.7)
@@ -370,7 +370,7 @@ def test_georeferenced_geojson_is_wgs84_lon_lat(tmp_path):
     """A 10 m wall along +x from the origin, heading 90 (+x east), at (lat 50, lon 8):
     its axis ends 10 / 71696 degree east; the member says WGS84; no crs member
     (RFC 7946: WGS84 is the default); rings stay counter-clockwise."""
-    from floorscan.floorplan import write_geojson
+    from floorscan.floorplan.plan import write_geojson
 
     geo = {"lat": 50.0, "lon": 8.0, "heading_deg": 90.0}
     plan = plan_of([(0.0, 0.0, 10.0, 0.0, 0.2, 2.5, True), (10.0, 0.0, 10.0, 5.0, 0.1, 2.5, False)])
@@ -462,7 +462,7 @@ def test_svg_fits_the_window_with_title_scale_bar_legend_and_axes(tmp_path, box_
 def test_svg_of_a_long_thin_plan_fits_and_shows_north(tmp_path):
     """A 200 m corridor: drawn 1000 px long, a 20 m scale bar; heading 0 puts north
     along +x, drawn to the right."""
-    from floorscan.floorplan import write_svg
+    from floorscan.floorplan.plan import write_svg
 
     plan = plan_of([(0.0, 0.0, 200.0, 0.0, 0.2, 2.5, True), (0.0, 2.0, 200.0, 2.0, 0.2, 2.5, True)])
     write_svg(plan, tmp_path / "c.svg", PlanMetadata(dataset="corridor"), {"lat": 50.0, "lon": 8.0})
@@ -480,7 +480,7 @@ def test_ifc_hierarchy_placements_header_and_validation(tmp_path, box_segments):
     import ifcopenshell.util.placement as up
     from ifcopenshell import validate
 
-    from floorscan.floorplan import floorscan_version
+    from floorscan.floorplan.plan import floorscan_version
 
     path = tmp_path / "p.ifc"
     plan = write_floorplan(box_segments, {"wall_height_m": 2.7}, {"ifc": path}, **META, timestamp=1_700_000_000)
@@ -532,7 +532,7 @@ def test_ifc_georeference_sets_site_latitude_and_true_north(tmp_path):
     import ifcopenshell
     from ifcopenshell import validate
 
-    from floorscan.floorplan import write_ifc
+    from floorscan.floorplan.plan import write_ifc
 
     plan = plan_of([(0.0, 0.0, 4.0, 0.0, 0.1, 2.5, False)])
     geo = {"lat": -33.5, "lon": 151.25, "heading_deg": 90.0}
@@ -549,7 +549,7 @@ def test_ifc_georeference_sets_site_latitude_and_true_north(tmp_path):
 
 
 def test_exports_stamp_source_date_epoch_never_the_clock(tmp_path, box_segments, monkeypatch):
-    from floorscan.floorplan import export_time
+    from floorscan.floorplan.plan import export_time
 
     outputs = {f: tmp_path / f"p.{f}" for f in ("geojson", "ifc")}
 
@@ -642,7 +642,7 @@ def test_empty_segments_write_an_empty_plan(tmp_path):
 def test_footprint_geojson_equals_shapely_to_geojson_oriented_and_rounded():
     """Footprint coordinates from the rings equal shapely.to_geojson's of the
     counter-clockwise polygon, read and rounded."""
-    from floorscan.floorplan import _round_coords, floorplan_geojson
+    from floorscan.floorplan.plan import _round_coords, floorplan_geojson
 
     rng = np.random.default_rng(3)
     n = 200
@@ -666,7 +666,7 @@ def test_dxf_bytes_do_not_depend_on_the_hash_seed(tmp_path):
 
     code = (
         "import sys, pandas as pd\n"
-        "from floorscan.floorplan import build_floorplan, write_dxf\n"
+        "from floorscan.floorplan.plan import build_floorplan, write_dxf\n"
         "seg = pd.DataFrame({'scan_id': [0, 0, 1, 1], 'x0': [0, 4, 0, 0.0], 'y0': [0, 0, 0.2, 0],\n"
         "                    'x1': [4, 4, 4, 0], 'y1': [0, 0.2, 0.2, 0.2]})\n"
         "write_dxf(build_floorplan(seg), sys.argv[1])\n"

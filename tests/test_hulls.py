@@ -1,4 +1,4 @@
-"""Coverage hulls (floorscan.hulls; thesis section 3.3.2, Algorithm 2)."""
+"""Coverage hulls (floorscan.select.hulls; thesis section 3.3.2, Algorithm 2)."""
 
 from pathlib import Path
 
@@ -8,7 +8,7 @@ import pytest
 import shapely
 import yaml
 
-from floorscan import hulls as fh
+from floorscan.select import hulls as fh
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -211,7 +211,7 @@ def test_n_distinct_matches_unique():
 
 
 def test_scan_hulls_streamed_from_parquet_equal_the_frame(tmp_path):
-    from floorscan.io import iter_scans, write_table
+    from floorscan.core.io import iter_scans, write_table
 
     pts = _scans_3d(5, seed=1)
     pts[7] = l_shape(0.2)
@@ -238,7 +238,7 @@ def test_scan_hulls_streamed_from_parquet_equal_the_frame(tmp_path):
 
 
 def test_iter_scans_range_and_non_contiguous_rows(tmp_path):
-    from floorscan.io import InputError, iter_scans, write_table
+    from floorscan.core.io import InputError, iter_scans, write_table
 
     reg = frame({3: l_shape(0.5), 5: l_shape(0.5) + 1, 8: l_shape(0.5) + 2})
     path = tmp_path / "r.parquet"
@@ -314,7 +314,7 @@ def test_scan_hulls_runs_kmeans_single_threaded_in_a_fresh_interpreter():
 
     code = (
         "import numpy as np, threadpoolctl\n"
-        "from floorscan import hulls as fh\n"
+        "from floorscan.select import hulls as fh\n"
         "seen = []\n"
         "def scans():\n"
         "    rng = np.random.default_rng(0)\n"
@@ -336,7 +336,7 @@ def test_default_hulls_do_not_import_sklearn():
 
     code = (
         "import sys, numpy as np\n"
-        "from floorscan import hulls as fh\n"
+        "from floorscan.select import hulls as fh\n"
         "rng = np.random.default_rng(0)\n"
         "out, _, _ = fh.scan_hulls([(0, rng.uniform(0, 5, (400, 2)))], [fh.HullParams(k_clusters=3)])\n"
         "print(len(out[0]), 'sklearn' in sys.modules, 'scipy' in sys.modules)\n"

@@ -18,8 +18,8 @@ from conftest import (
     write_carmen,
 )
 from floorscan.ingest import open_recording, write_recording
-from floorscan.io import InputError, read_table
-from floorscan.poses import scan_poses
+from floorscan.core.io import InputError, read_table
+from floorscan.ingest.poses import scan_poses
 
 
 def ingest(ds, out, cfg=None, max_gap_s=0.5, sensor_height_m=0.0):
@@ -393,7 +393,7 @@ def test_carmen_max_range_detected_and_stored(tmp_path):
 
 
 def _meta(path):
-    from floorscan.io import read_metadata
+    from floorscan.core.io import read_metadata
 
     return read_metadata(path)
 

@@ -1,10 +1,10 @@
-"""floorscan.io: the points writer (row groups written in a thread) and reader."""
+"""floorscan.core.io: the points writer (row groups written in a thread) and reader."""
 
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from floorscan.io import SCANS, ScanRowGroups, iter_scans, parquet_options
+from floorscan.core.io import SCANS, ScanRowGroups, iter_scans, parquet_options
 
 
 def _scans(n=7, seed=0):
@@ -104,7 +104,7 @@ def test_a_writer_removes_the_temporaries_a_killed_writer_left(tmp_path):
     is written)."""
     import pandas as pd
 
-    from floorscan.io import write_table
+    from floorscan.core.io import write_table
 
     stale, other, sampled = _stale(tmp_path, ".t.parquet.k3x_9a0q.tmp", ".u.parquet.k3x_9a0q.tmp",
                                    ".t.parquet.sampled.parquet")
@@ -120,8 +120,8 @@ def test_a_stage_removes_the_temporaries_of_its_outputs_before_it_runs(tmp_path)
     other files stay."""
     from types import SimpleNamespace
 
-    from floorscan.io import stale_temporaries
-    from floorscan.workflow import stage_log
+    from floorscan.core.io import stale_temporaries
+    from floorscan.core.stage import stage_log
 
     gone = _stale(tmp_path, ".registered.parquet.sampled.parquet", ".registered.parquet.0a1b2c3d.tmp",
                   ".recording.abcdefgh.tmp/", ".pcd.zz_yy_xx.old/")

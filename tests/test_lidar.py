@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from floorscan import building as bld
-from floorscan import lidar
-from floorscan.io import InputError
+from floorscan.sim import building as bld
+from floorscan.sim import lidar
+from floorscan.core.io import InputError
 
 HALF_X, HALF_Y, HEIGHT = 2.0, 3.0, 2.5  # inner faces x = +-2, y = +-3, ceiling 2.5 m
 

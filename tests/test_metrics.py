@@ -9,8 +9,8 @@ import pandas as pd
 import pytest
 import shapely
 
-from floorscan import metrics as M
-from floorscan.io import InputError
+from floorscan.score import metrics as M
+from floorscan.core.io import InputError
 
 WALL = [[0.0, 0.0, 10.0, 0.0]]
 

@@ -1,11 +1,11 @@
-"""floorscan.parallel: calls in fresh worker processes, started on demand or ahead."""
+"""floorscan.core.parallel: calls in fresh worker processes, started on demand or ahead."""
 
 import os
 import sys
 
 import pytest
 
-from floorscan import parallel
+from floorscan.core import parallel
 
 
 def _whoami(x):

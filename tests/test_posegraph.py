@@ -1,4 +1,4 @@
-"""Pose-graph registration (floorscan.posegraph): ICP edges and the sparse planar optimiser
+"""Pose-graph registration (floorscan.register.posegraph): ICP edges and the sparse planar optimiser
 (against Open3D's)."""
 
 import dataclasses
@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from floorscan import posegraph as G
+from floorscan.register import posegraph as G
 
 # An L-shaped room (metres): walls as segments, so every scan constrains x, y and yaw.
 ROOM = np.array(
@@ -247,7 +247,7 @@ def test_candidate_pairs_out_and_back():
     """A rover driving 9 m out and back along a line (1 m, 1 s between scans): each
     scan pairs with its successor, and with the scan at its place on the way back
     once the two are 3 s apart; the nearest loop per scan is kept."""
-    from floorscan.posegraph import GraphParams, candidate_pairs
+    from floorscan.register.posegraph import GraphParams, candidate_pairs
 
     x = np.r_[np.arange(10.0), np.arange(9.0, -1.0, -1.0)]
     poses = np.c_[x, np.zeros(20), np.zeros(20), np.zeros(20)]

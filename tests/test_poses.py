@@ -4,8 +4,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from floorscan.io import InputError
-from floorscan.poses import interpolate_poses, scan_poses, wrap_angle
+from floorscan.core.io import InputError
+from floorscan.ingest.poses import interpolate_poses, scan_poses, wrap_angle
 
 
 def stream(t_s, x, y, yaw, z=None):

@@ -23,7 +23,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from floorscan.io import InputError
+from floorscan.core.io import InputError
 
 settings.register_profile(
     "ci", derandomize=True, deadline=None, database=None, print_blob=True,

@@ -18,7 +18,7 @@ import pytest
 from shapely.geometry import shape
 
 from conftest import SHARED_DATA, needs_shared
-from floorscan.io import read_metadata, read_table
+from floorscan.core.io import read_metadata, read_table
 from conftest import copy_workflow, snakemake
 
 pytestmark = [needs_shared, pytest.mark.realdata, pytest.mark.workflow, pytest.mark.slow]
@@ -100,7 +100,7 @@ def test_the_plan_against_the_reference_map_sees_a_wall_through_free_space(real_
     correctness is below 1 on every recording), and walls drawn along the rover's own
     path, through space every scan saw free, lower correctness by their share of the
     plan's length while completeness stays."""
-    from floorscan.metrics import floorplan_faces
+    from floorscan.score.metrics import floorplan_faces
     from floorscan.score.against_reference import plan_against_reference
     from floorscan.score.reference import read_grid
 

@@ -1,6 +1,6 @@
 """The register stage's motion filter, map consistency and verdict
 (floorscan.register.sampling, floorscan.register.consistency), and the settings it
-derives from what ingest found (floorscan.registration.resolve_config)."""
+derives from what ingest found (floorscan.register.registration.resolve_config)."""
 
 from __future__ import annotations
 
@@ -9,10 +9,10 @@ import math
 import numpy as np
 import pytest
 
-from floorscan.io import InputError
+from floorscan.core.io import InputError
 from floorscan.register.consistency import map_consistency, path_length_m, verdict
 from floorscan.register.sampling import EveryN, MotionFilter, choose_thresholds, typical_range_m
-from floorscan.registration import RegistrationConfig, resolve_config
+from floorscan.register.registration import RegistrationConfig, resolve_config
 
 
 def test_motion_filter_keeps_a_scan_per_distance_or_turn():

@@ -1,4 +1,4 @@
-"""Tests of floorscan.registration (thesis 3.2.2, 3.5, Algorithm 3): exact synthetic
+"""Tests of floorscan.register.registration (thesis 3.2.2, 3.5, Algorithm 3): exact synthetic
 geometry, drop reasons, and checks on the real recordings in ../shared/data."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from floorscan.registration import (
+from floorscan.register.registration import (
     RegistrationConfig,
     RegistrationError,
     fitness_against,
@@ -358,7 +358,7 @@ def test_constant_velocity_prediction_keeps_turning():
     """The motion between the last two poses, in the first one's frame, is repeated
     (scaled by the time ratio): 1 m ahead then a quarter turn -> another metre along
     the new heading and another quarter turn."""
-    from floorscan.registration import predict_constant_velocity
+    from floorscan.register.registration import predict_constant_velocity
 
     p = predict_constant_velocity((0.0, 0.0, 0.5, 0.0), 0, (1.0, 0.0, 0.5, math.pi / 2), 10**9, 2 * 10**9)
     np.testing.assert_allclose(p[:3], (1.0, 1.0, 0.5), atol=1e-12)
@@ -392,7 +392,7 @@ def test_odometry_drops_a_failed_scan_and_goes_on_from_the_prediction():
 def test_scan_clouds_drop_floor_and_ceiling_from_3d_icp():
     """3D scans: the ICP cloud keeps the walls (vertical normals) on the coarse grid and
     none of the floor; 2D scans keep every point for fitness."""
-    from floorscan.registration import graph_cloud, scan_clouds
+    from floorscan.register.registration import graph_cloud, scan_clouds
 
     g = np.arange(-3.0, 3.0, 0.05)
     gx, gy = np.meshgrid(g, g)
@@ -433,8 +433,8 @@ def test_streamed_registration_matches_the_in_memory_one(tmp_path, z_beams):
     """register_recording (points streamed from a file, written scan by scan) gives the
     table and points of register_scans, and the figure's density raster of the file
     counts every point."""
-    from floorscan.io import SCANS, read_table, write_table
-    from floorscan.registration import register_recording
+    from floorscan.core.io import SCANS, read_table, write_table
+    from floorscan.register.registration import register_recording
 
     true, t = trajectory(16)
     rng = np.random.default_rng(2)
@@ -453,7 +453,7 @@ def test_streamed_registration_matches_the_in_memory_one(tmp_path, z_beams):
     assert b.registered is None
     assert not list(tmp_path.glob(".reg.parquet*"))  # the temporary file of the sampled scans is gone
     # the figure job's raster, streamed from the file, counts every point
-    from floorscan.figures_registration import density_of_file
+    from floorscan.figures.registration import density_of_file
 
     f = density_of_file(tmp_path / "reg.parquet", 0.05)
     assert f.grid()[2].sum() == len(reg)
@@ -473,8 +473,8 @@ def test_edges_aligned_while_reading_are_the_edges(tmp_path, caplog):
     aligned afterwards. Same table and points as without workers, in memory."""
     import logging
 
-    from floorscan.io import SCANS, read_table, write_table
-    from floorscan.registration import register_recording
+    from floorscan.core.io import SCANS, read_table, write_table
+    from floorscan.register.registration import register_recording
 
     true, t = trajectory(16)
     err = np.random.default_rng(2).normal(0, [0.03, 0.03, 0.01], (16, 3))
@@ -482,7 +482,7 @@ def test_edges_aligned_while_reading_are_the_edges(tmp_path, caplog):
     scans = scans[scans["scan_id"] != 5]
     write_table(scans, tmp_path / "scans.parquet", schema=SCANS)
     a = register_scans(scans, index, poses, {"every_n": 1})
-    with caplog.at_level(logging.INFO, logger="floorscan.posegraph"):
+    with caplog.at_level(logging.INFO, logger="floorscan.register.posegraph"):
         b = register_recording(tmp_path / "scans.parquet", index, poses, {"every_n": 1, "graph": {"workers": 2}},
                                tmp_path / "reg.parquet")
     pd.testing.assert_frame_equal(a.table, b.table)
@@ -497,7 +497,7 @@ def test_edges_aligned_while_reading_are_the_edges(tmp_path, caplog):
 def test_bad_input_errors():
     true, t = trajectory(5)
     scans, index, poses = recording(true, t)
-    from floorscan.io import InputError
+    from floorscan.core.io import InputError
 
     with pytest.raises(InputError, match="poses.parquet.*no row for 1 scans"):
         register_scans(scans, index, poses.iloc[:4], {})
@@ -526,8 +526,8 @@ def test_schema_defaults_match_dataclass():
 
 def _ingest(tmp_path, ds, cfg=None):
     ingest = pytest.importorskip("floorscan.ingest")
-    from floorscan.io import read_table
-    from floorscan.poses import scan_poses
+    from floorscan.core.io import read_table
+    from floorscan.ingest.poses import scan_poses
 
     rec = ingest.open_recording(ds, cfg or {}, max_gap_s=0.5)
     index = ingest.write_recording(rec, tmp_path / "s.parquet", tmp_path / "i.parquet", tmp_path / "p.parquet")
@@ -579,7 +579,7 @@ def test_freiburg101_corrections_fix_the_logs_own_pose_error(tmp_path):
     assert 0.015 < s["median_correction_m"] < 0.025
     assert math.degrees(s["median_correction_rad"]) < 0.5
     assert s["n_kept"] == len(index)
-    from floorscan.io import split_by_scan
+    from floorscan.core.io import split_by_scan
 
     by = split_by_scan(scans)
     t = r.table.set_index("scan_id")
@@ -648,9 +648,9 @@ def _simulated_demo(seed=1, every=5):
     """The demo building driven by the simulator (AMCL-like Gauss-Markov pose error: 5 cm,
     0.02 rad, 2 s correlation time), every ``every``-th scan: scans, index, the
     localizer's poses interpolated at the scans, and the true scanner poses (~2 s)."""
-    from floorscan import building as bld
-    from floorscan import lidar
-    from floorscan import simulate as sim
+    from floorscan.sim import building as bld
+    from floorscan.sim import lidar
+    from floorscan.sim import simulate as sim
 
     b = bld.load_building(REPO / "config" / "buildings" / "demo.yaml")
     rec = sim.simulate_recording(b, lidar.Scanner2D(), sim.SimParams(), seed=seed)
@@ -718,7 +718,7 @@ def test_pose_graph_registration_halves_amcl_like_pose_error():
 def test_map_references_exclude_the_correlation_window():
     """The references of a scan are >= exclude_window_s away in time and spread by
     reference_spacing_s; with none outside the window it falls back to the nearest."""
-    from floorscan.registration import _select_references
+    from floorscan.register.registration import _select_references
 
     t = np.arange(10) * 0.5
     pose = np.column_stack([np.arange(10) * 0.1, np.zeros(10), np.zeros(10), np.zeros(10)])
@@ -790,8 +790,8 @@ def test_odometry_mode_on_real_recordings(name, tmp_path):
 def test_graph_cloud_one_sort_equals_the_grouped_path(monkeypatch):
     """graph_cloud sorts once by (cell key, height); the same cloud as grouping the
     cells first (its path for extents beyond the int64 key), bit for bit."""
-    import floorscan.registration as R
-    from floorscan.grid import cell_keys
+    import floorscan.register.registration as R
+    from floorscan.core.grid import cell_keys
 
     rng = np.random.default_rng(5)
     wall = np.column_stack([rng.uniform(-3, 3, 3000), np.full(3000, 2.0) + rng.normal(0, 0.01, 3000),
@@ -811,7 +811,7 @@ def test_cell_height_order_is_lexsort_by_cell_then_height():
     """The one-key sort of graph_cloud orders as numpy.lexsort((z, key)) (equal
     heights in a cell may swap): float32 heights of both signs, -0.0 and ties; keys
     past 2**31 or float64 heights take the lexsort itself."""
-    from floorscan.registration import _cell_height_order
+    from floorscan.register.registration import _cell_height_order
 
     rng = np.random.default_rng(3)
     for n in (1, 2, 50, 3000):
@@ -856,7 +856,7 @@ def test_simpath2_registration_error_against_the_simulators_truth(tmp_path):
     1.14 deg. Odometry mode restarts its motion model after a stop (the simulator's
     identical scans while the robot stands); carrying the velocity across the stops
     gave 3.2 m / 34 deg."""
-    from floorscan.simulate import gauss_markov
+    from floorscan.sim.simulate import gauss_markov
 
     ds = {"path": str(SHARED_DATA / "stage-sim" / "simpath2.bag"),
           "pose": {"source": "topic", "topic": "/base_pose_ground_truth"}}

@@ -1,4 +1,4 @@
-"""The front page (floorscan.report) from small inputs, and workflow.rst including it the
+"""The front page (floorscan.figures.report) from small inputs, and workflow.rst including it the
 way Snakemake's report renders its workflow description."""
 
 import json
@@ -14,7 +14,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 
-from floorscan import report as R  # noqa: E402
+from floorscan.figures import report as R  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -167,8 +167,8 @@ def test_write_front_page_writes_the_page_and_no_temporary_file(tmp_path):
 
 
 def test_front_page_of_the_stage_outputs(tmp_path):
-    from floorscan.floorplan import build_floorplan, write_geojson, write_svg
-    from floorscan.io import SCAN_INDEX, write_table
+    from floorscan.floorplan.plan import build_floorplan, write_geojson, write_svg
+    from floorscan.core.io import SCAN_INDEX, write_table
 
     segments = pd.DataFrame(
         [(0, 0, 6, 0), (6, 0.2, 0, 0.2), (6, 0, 6, 4), (0, 4, 0, 0)], columns=["x0", "y0", "x1", "y1"]

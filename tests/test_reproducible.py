@@ -19,9 +19,9 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from floorscan.io import POSE_STREAM, POSES, SCAN_INDEX, SCANS, write_table
-from floorscan.selection import SUMMARY, summarize
-from floorscan.walls import SCAN_STATUS
+from floorscan.core.io import POSE_STREAM, POSES, SCAN_INDEX, SCANS, write_table
+from floorscan.select.orderings import SUMMARY, summarize
+from floorscan.walls.extract import SCAN_STATUS
 
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 

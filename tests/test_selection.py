@@ -1,4 +1,4 @@
-"""Scan orderings (floorscan.selection; thesis section 3.3, Algorithm 1) and figures."""
+"""Scan orderings (floorscan.select.orderings; thesis section 3.3, Algorithm 1) and figures."""
 
 from pathlib import Path
 
@@ -9,8 +9,8 @@ import shapely
 import yaml
 from shapely.geometry import box
 
-from floorscan import hulls as fh
-from floorscan import selection as fs
+from floorscan.select import hulls as fh
+from floorscan.select import orderings as fs
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
@@ -130,7 +130,7 @@ def _intel_registered(step: int = 3):
     reg = REPO / "results" / "intel" / "registered.parquet"
     rgn = REPO / "results" / "intel" / "registration.parquet"
     if reg.exists() and rgn.exists():
-        from floorscan.io import read_table
+        from floorscan.core.io import read_table
 
         registered, registration = read_table(reg), read_table(rgn)
         keep = registration.loc[registration["kept"], "scan_id"].to_numpy()[::step]
@@ -230,7 +230,7 @@ def test_select_stage_all_orderings(synthetic):
 
 
 def test_schema_defaults_match_dataclasses():
-    from floorscan.figures_selection import FigureParams
+    from floorscan.figures.selection import FigureParams
     from floorscan.select.coverage import CoverageParams
 
     schema = yaml.safe_load((REPO / "workflow/schemas/select.schema.yaml").read_text())
@@ -247,7 +247,7 @@ def test_schema_defaults_match_dataclasses():
 
 
 def test_figures(synthetic, tmp_path):
-    from floorscan.figures_selection import FigureParams, selection_figures
+    from floorscan.figures.selection import FigureParams, selection_figures
 
     registered, registration, hulls, convex, ids, _ = synthetic
     orderings, _ = fs.select_stage(hulls, convex, registration)
@@ -262,8 +262,8 @@ def test_figures(synthetic, tmp_path):
 
 
 def test_coverage_vs_clusters_streamed_and_reusing_the_stage_hulls(synthetic, tmp_path):
-    from floorscan.figures_selection import coverage_vs_clusters
-    from floorscan.io import write_table
+    from floorscan.figures.selection import coverage_vs_clusters
+    from floorscan.core.io import write_table
 
     registered, _, hulls, convex, ids, _ = synthetic
     sub = ids[::3]
@@ -280,7 +280,7 @@ def test_coverage_vs_clusters_streamed_and_reusing_the_stage_hulls(synthetic, tm
     for k in ks:
         assert from_frame[k].equals(plain[k]) and streamed[k].equals(plain[k]), k
     assert reused[1].equals(plain[1]) and reused[10].equals(plain[10])
-    # the k = 1 curve against hulls made here without floorscan.hulls: GEOS's convex hull
+    # the k = 1 curve against hulls made here without floorscan.select.hulls: GEOS's convex hull
     # of each scan's points
     import shapely
 
@@ -364,8 +364,8 @@ def test_crossings_ordered_as_lexsort():
 def test_coverage_vs_clusters_streams_float64_tables_unrounded(synthetic, tmp_path, monkeypatch):
     """registered.parquet is float32 (read as stored, widened exactly); a table stored
     in float64 is read as float64, not rounded to float32."""
-    import floorscan.figures_selection as fsel
-    from floorscan.io import write_table
+    import floorscan.figures.selection as fsel
+    from floorscan.core.io import write_table
 
     registered, _, _, _, ids, _ = synthetic
     sub = ids[::4]

@@ -1,4 +1,4 @@
-"""Shards of the per-scan stages (floorscan.shards; issue 8 item 3).
+"""Shards of the per-scan stages (floorscan.core.shards; issue 8 item 3).
 
 The hulls and scan_walls stages run as shard jobs over scan ranges and a merge. Here
 the real stage scripts run in-process (a stand-in for the ``snakemake`` object) on a
@@ -19,10 +19,10 @@ import pyarrow.parquet as pq
 import pytest
 
 from conftest import REPO, SHARED_DATA, needs_shared
-from floorscan.hulls import HullParams, compute_hulls, to_table
-from floorscan.io import InputError, REGISTERED, write_table
-from floorscan.selection import ORDERINGS
-from floorscan.shards import (
+from floorscan.select.hulls import HullParams, compute_hulls, to_table
+from floorscan.core.io import InputError, REGISTERED, write_table
+from floorscan.select.orderings import ORDERINGS
+from floorscan.core.shards import (
     concat_shards,
     parse_shard_label,
     plan_from_files,
@@ -33,7 +33,7 @@ from floorscan.shards import (
     shard_label,
     shard_ranges,
 )
-from floorscan.walls import SCAN_STATUS, WALLS, extract_walls
+from floorscan.walls.extract import SCAN_STATUS, WALLS, extract_walls
 
 SCRIPTS = REPO / "scripts"
 WALLS_CFG = {"seed": 3}  # the rest are the package defaults

@@ -8,10 +8,10 @@ import pandas as pd
 import pytest
 import yaml
 
-from floorscan import building as bld
-from floorscan import lidar
-from floorscan import simulate as sim
-from floorscan.io import InputError, read_table
+from floorscan.sim import building as bld
+from floorscan.sim import lidar
+from floorscan.sim import simulate as sim
+from floorscan.core.io import InputError, read_table
 
 REPO = Path(__file__).resolve().parents[1]
 SCHEMA = REPO / "workflow" / "schemas" / "simulate.schema.yaml"

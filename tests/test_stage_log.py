@@ -1,11 +1,11 @@
-"""floorscan.workflow.stage_log: the stage's log file, failures, and the profile option."""
+"""floorscan.core.stage.stage_log: the stage's log file, failures, and the profile option."""
 
 import pstats
 from types import SimpleNamespace
 
 import pytest
 
-from floorscan.workflow import stage_log
+from floorscan.core.stage import stage_log
 
 
 def _work(n):

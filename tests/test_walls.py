@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from floorscan.walls import (
+from floorscan.walls.extract import (
     ClusterParams,
     RansacParams,
     ScanParams,
@@ -157,7 +157,7 @@ def test_open3d_normals_are_z_for_planar_points_so_covariances_are_used():
 def test_covariances_are_open3d_estimate_covariances_bit_for_bit():
     import open3d as o3d
 
-    from floorscan.walls import neighbourhood_covariances
+    from floorscan.walls.extract import neighbourhood_covariances
 
     rng = np.random.default_rng(8)
     # two walls, a corner, clutter, an isolated point (< 3 neighbours: identity)
@@ -177,8 +177,8 @@ def test_covariances_are_open3d_estimate_covariances_bit_for_bit():
 
 
 def test_fast_grid_means_and_inlier_counts_equal_the_plain_numpy():
-    from floorscan.grid import cell_groups, cell_means
-    from floorscan.walls import _inlier_counts
+    from floorscan.core.grid import cell_groups, cell_means
+    from floorscan.walls.extract import _inlier_counts
 
     def _grid_means(p, cell):
         return cell_means(p, cell)[0]
@@ -373,7 +373,7 @@ def test_a_wall_seen_at_a_grazing_angle_is_covered():
 
 def _plain_mean_shift(x, bandwidth, min_bin_freq):
     """mean_shift in its plain form (before issue 8's shortcuts): the reference."""
-    from floorscan.grid import cell_groups
+    from floorscan.core.grid import cell_groups
 
     cells = np.round(x / bandwidth)
     _, counts, first = cell_groups(cells, first=True)
@@ -416,8 +416,8 @@ def test_issue8_shortcuts_equal_the_plain_forms_bit_for_bit():
     """mean_shift (one BLAS product for the squared distances, only the moving seeds),
     the bin counts and the inlier counts beyond 2**16 points give exactly what the
     plain forms give; a line's segments do not depend on the order of its points."""
-    from floorscan.grid import cell_groups
-    from floorscan.walls import _claimed_segments, _inlier_counts
+    from floorscan.core.grid import cell_groups
+    from floorscan.walls.extract import _claimed_segments, _inlier_counts
 
     rng = np.random.default_rng(11)
     one = np.r_[rng.normal(0, 0.01, 120), rng.normal(0.2, 0.01, 80), rng.normal(1.0, 0.02, 40), rng.uniform(-1, 2, 20)]
@@ -487,8 +487,8 @@ def test_issue8_third_round_shortcuts_equal_the_plain_forms_bit_for_bit():
     """fit_line's sums in one reduction, the covariances' zeros by a product, MeanShift's
     1D bin seeds by a sort, the squared distances term by term, the cell keys without
     ravel_multi_index and ``integers(n)`` for ``integers(0, n)`` give the same numbers."""
-    from floorscan.grid import cell_groups, cell_keys
-    from floorscan.walls import _bin_seeds, _pair_squares, _row_squares, fit_line, neighbourhood_covariances
+    from floorscan.core.grid import cell_groups, cell_keys
+    from floorscan.walls.extract import _bin_seeds, _pair_squares, _row_squares, fit_line, neighbourhood_covariances
 
     rng = np.random.default_rng(12)
     for n in (*range(2, 40), 129, 1000, 9000):
@@ -529,7 +529,7 @@ def test_issue8_third_round_shortcuts_equal_the_plain_forms_bit_for_bit():
 
 def _plain_best_line(points, rng, params):
     """_best_line as written before issue 8's fourth round (row gathers, einsum offsets)."""
-    from floorscan.walls import _inlier_counts, _refine_line
+    from floorscan.walls.extract import _inlier_counts, _refine_line
 
     n = len(points)
     i = rng.integers(n, size=params.iterations)
@@ -553,8 +553,8 @@ def test_issue8_fourth_round_shortcuts_equal_the_plain_forms_bit_for_bit():
     """The RANSAC hypotheses built on coordinate columns (offsets as a sum of two
     products instead of einsum) and the 3D grid thinning on contiguous columns give
     the same lines and points as the plain forms; the same seed, the same line."""
-    from floorscan.grid import cell_means
-    from floorscan.walls import _best_line
+    from floorscan.core.grid import cell_means
+    from floorscan.walls.extract import _best_line
 
     rng = np.random.default_rng(13)
     nrm = rng.normal(size=(100000, 2))

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from conftest import snakemake
-from floorscan.io import read_table
+from floorscan.core.io import read_table
 
 pytestmark = [pytest.mark.workflow, pytest.mark.slow]
 

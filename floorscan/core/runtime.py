@@ -1,7 +1,7 @@
 """Run-time helpers shared by the stages: progress lines in a stage's log.
 
 A stage that takes more than a few seconds wraps its main loop in :func:`progress`, so
-its log (and the terminal, through :func:`floorscan.workflow.stage_log`) says how far it
+its log (and the terminal, through :func:`floorscan.core.stage.stage_log`) says how far it
 is and how fast it goes, at most every ``every_s`` seconds::
 
     for scan_id, xyz in progress(iter_scans(path), log, total=n, what="scans"):

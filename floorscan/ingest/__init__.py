@@ -39,7 +39,7 @@ import pandas as pd
 import pyarrow.parquet as pq
 
 from floorscan.core.runtime import progress
-from floorscan.io import POSE_STREAM, SCAN_INDEX, SCANS, InputError, atomic_path, parquet_options, ScanRowGroups, write_table
+from floorscan.core.io import POSE_STREAM, SCAN_INDEX, SCANS, InputError, atomic_path, parquet_options, ScanRowGroups, write_table
 
 log = logging.getLogger(__name__)
 
@@ -83,7 +83,7 @@ class Recording:
 
     ``scans`` is consumed once. ``pose_stream`` is filled by the time ``scans`` is
     exhausted (a bag reader may read poses first); it has the columns of
-    :data:`floorscan.io.POSE_STREAM`, and is empty when ``detected["pose_kind"]`` is
+    :data:`floorscan.core.io.POSE_STREAM`, and is empty when ``detected["pose_kind"]`` is
     ``"none"`` (no map pose source: the register stage runs LIDAR odometry).
 
     Attributes
@@ -168,7 +168,7 @@ def describe_recording(detected: Mapping[str, str], mode: str = "") -> str:
     report's figure title, ``summary.md``): ``format rosbag, scan_topic /scan,
     pose_source ..., stamps recorded; registered in odometry mode``.
 
-    ``detected``: the scan index's schema metadata (:func:`floorscan.io.read_metadata`);
+    ``detected``: the scan index's schema metadata (:func:`floorscan.core.io.read_metadata`);
     ``mode``: the register mode used (``pose`` when not given).
     """
     found = ", ".join(f"{k} {detected[k]}" for k in ("format", "scan_topic", "pose_source", "stamps") if k in detected)
@@ -194,7 +194,7 @@ def write_recording(
     Returns
     -------
     pandas.DataFrame
-        The scan index (columns of :data:`floorscan.io.SCAN_INDEX`).
+        The scan index (columns of :data:`floorscan.core.io.SCAN_INDEX`).
 
     Raises
     ------
@@ -346,7 +346,7 @@ def yaw_from_quaternion(qx, qy, qz, qw):
 
 
 def pose_stream_frame(t_ns: Iterable[int], x, y, z, yaw) -> pd.DataFrame:
-    """Build a pose stream table (columns of :data:`floorscan.io.POSE_STREAM`)."""
+    """Build a pose stream table (columns of :data:`floorscan.core.io.POSE_STREAM`)."""
     return pd.DataFrame(
         {
             "t_ns": np.asarray(list(t_ns) if not isinstance(t_ns, np.ndarray) else t_ns, dtype=np.int64),

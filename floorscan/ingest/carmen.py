@@ -67,7 +67,7 @@ from typing import Any, Iterator, Mapping, Sequence
 import numpy as np
 
 from floorscan.ingest import Recording, Scan, laser_scan_points, parse_number, parse_numbers, pose_stream_frame
-from floorscan.io import InputError
+from floorscan.core.io import InputError
 
 log = logging.getLogger(__name__)
 

@@ -12,7 +12,7 @@ A dataset without ``format`` is read as what its path is:
 - ``pcd``: a folder holding ``.pcd`` files (with the locations CSV read by
   :mod:`floorscan.ingest.pcd`).
 
-Anything else is an :class:`~floorscan.io.InputError` naming the path and listing what
+Anything else is an :class:`~floorscan.core.io.InputError` naming the path and listing what
 is expected. An explicit ``format`` in the dataset always wins over detection.
 """
 
@@ -22,7 +22,7 @@ import gzip
 import zlib
 from pathlib import Path
 
-from floorscan.io import InputError
+from floorscan.core.io import InputError
 
 #: File suffixes of a ROS2 bag's storage (sqlite3, MCAP).
 ROS2_STORAGE_SUFFIXES = (".db3", ".mcap")

@@ -46,7 +46,7 @@ import numpy as np
 import pandas as pd
 
 from floorscan.ingest import Recording, Scan, filter_points, parse_number, parse_numbers, pose_stream_frame
-from floorscan.io import InputError
+from floorscan.core.io import InputError
 
 log = logging.getLogger(__name__)
 
@@ -239,7 +239,7 @@ def _compressed_xyz(path: Path, h: PcdHeader, raw: bytes) -> np.ndarray:
         )
     # the sizes agree: Open3D (PCL's reader) decompresses the LZF block and splits the
     # fields (stored field by field: every x, then every y, ...)
-    from floorscan.o3d import o3d
+    import open3d as o3d
 
     try:
         cloud = o3d.t.io.read_point_cloud(str(path), format="pcd")

@@ -58,7 +58,7 @@ from floorscan.ingest import (
     laser_scan_points,
     pose_stream_frame,
 )
-from floorscan.io import InputError
+from floorscan.core.io import InputError
 
 log = logging.getLogger(__name__)
 

@@ -1,5 +1,5 @@
 """The register stage's parts that decide what a recording needs and whether its result
-holds (``floorscan.registration`` holds the registration itself until the stage's
+holds (``floorscan.register.registration`` holds the registration itself until the stage's
 package move, see ``../shared/ARCHITECTURE.md``).
 
 - :mod:`floorscan.register.sampling`: which scans to register, by the rover's motion

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
-from floorscan.grid import cell_means
+from floorscan.core.grid import cell_means
 
 #: Fewer revisited sample points than this: consistency undefined.
 MIN_REVISITED = 300

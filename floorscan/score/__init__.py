@@ -1,5 +1,5 @@
 """The score stage: the reference map of a recording and the quality of floor plans
-against it (the reference-and-metrics work; :mod:`floorscan.metrics` holds the
+against it (the reference-and-metrics work; :mod:`floorscan.score.metrics` holds the
 thesis's section 5.1 metrics and moves here with the architecture step).
 
 Modules:

@@ -1,7 +1,7 @@
 """Floor-plan quality against the number of scans, and the bound of any selection.
 
 For an ordering of the kept scans, the floor plan of its first k scans (the walls
-stage's per-scan segments of those scans, merged by :func:`floorscan.floorplan.build_floorplan`
+stage's per-scan segments of those scans, merged by :func:`floorscan.floorplan.plan.build_floorplan`
 as the floorplan stage merges them) is scored against the reference map
 (:func:`floorscan.score.against_reference.plan_against_reference`) at every k of a
 grid (:func:`k_grid`: a step of at most 2 % of the kept scans, so that the k reaching a
@@ -362,7 +362,7 @@ def score_curves(
     oracle : pandas.DataFrame
         The oracle ordering (:func:`oracle_ordering`).
     """
-    from floorscan.floorplan import params_from_config, plan_faces, segment_arrays
+    from floorscan.floorplan.plan import params_from_config, plan_faces, segment_arrays
     from floorscan.score.reference import read_grid
 
     structure = Structure(read_grid(reference_path))

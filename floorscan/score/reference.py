@@ -23,7 +23,7 @@ the returns evidence of an obstacle. Each cell's log-odds is the sum of its upda
 Rays are sampled every ``step_fraction`` of a cell along their length (the cells a
 ray crosses, up to a corner clipped by less than a quarter cell); the return's own
 cell is not a miss of that scan. 3D scans are cut to the walls' height band first
-(:func:`floorscan.walls.scan_points_2d`), so the grid is the plan view the floor plan
+(:func:`floorscan.walls.extract.scan_points_2d`), so the grid is the plan view the floor plan
 is drawn in.
 
 Usage::
@@ -44,7 +44,7 @@ from typing import Iterable
 import numpy as np
 import pandas as pd
 
-from floorscan.io import atomic_path
+from floorscan.core.io import atomic_path
 
 #: map_server's PGM values (trinary mode): occupied, free, unknown.
 PGM_OCCUPIED, PGM_FREE, PGM_UNKNOWN = 0, 254, 205
@@ -317,7 +317,7 @@ def grid_metadata(grid: OccupancyGrid) -> dict[str, str]:
 def write_grid(grid: OccupancyGrid, path: str | Path, metadata: dict[str, str] | None = None) -> None:
     """Write the grid as a cell table (:func:`grid_table`) whose schema metadata
     (:func:`grid_metadata`, the cell counts per class and ``metadata``) restores it."""
-    from floorscan.io import write_table
+    from floorscan.core.io import write_table
 
     counts = {f"n_{k}_cells": str(v) for k, v in grid.counts().items()}
     write_table(grid_table(grid), path, metadata={**grid_metadata(grid), **counts, **(metadata or {})})
@@ -325,7 +325,7 @@ def write_grid(grid: OccupancyGrid, path: str | Path, metadata: dict[str, str] |
 
 def read_grid(path: str | Path) -> OccupancyGrid:
     """The grid :func:`write_grid` wrote (``reference/occupancy.parquet``)."""
-    from floorscan.io import read_metadata, read_table
+    from floorscan.core.io import read_metadata, read_table
 
     return grid_from_table(read_table(path), read_metadata(path))
 
@@ -367,7 +367,7 @@ def reference_of_recording(
         registered position, the rays' origin).
     walls_config : mapping, optional
         The ``walls`` config section: its height band cuts 3D scans
-        (:func:`floorscan.walls.scan_points_2d`), as for the walls themselves.
+        (:func:`floorscan.walls.extract.scan_points_2d`), as for the walls themselves.
     params : OccupancyParams
 
     Returns
@@ -380,8 +380,8 @@ def reference_of_recording(
         When a scan of ``registered_path`` has no kept row with a pose, or none has a
         return in the height band.
     """
-    from floorscan.io import iter_scans
-    from floorscan.walls import params_from_config, scan_points_2d
+    from floorscan.core.io import iter_scans
+    from floorscan.walls.extract import params_from_config, scan_points_2d
 
     scan_params = params_from_config(walls_config or {})[0]
     reg = registration[registration["kept"]].set_index("scan_id")

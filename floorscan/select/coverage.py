@@ -44,7 +44,7 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 
-from floorscan.config import dataclass_from_mapping
+from floorscan.core.config import dataclass_from_mapping
 from floorscan.core.geometry import sample_segments, samples_per_segment
 from floorscan.core.greedy import lazy_greedy
 
@@ -55,7 +55,7 @@ COVERAGE_ORDERINGS = ("wall_coverage", "surface_coverage")
 OBJECTIVE_COLUMN = "covered_objective"
 #: ``orderings/{wall,surface}_coverage.parquet``: the lazy greedy's ``rank, scan_id,
 #: gain`` and the objective along the way (the hull orderings' tables have hull areas
-#: instead, :data:`floorscan.selection.ORDERING`).
+#: instead, :data:`floorscan.select.orderings.ORDERING`).
 COVERAGE_ORDERING = pa.schema(
     [("rank", pa.int32()), ("scan_id", pa.int32()), ("gain", pa.float64()), (OBJECTIVE_COLUMN, pa.float64())]
 )
@@ -190,7 +190,7 @@ def surface_cells(scans: Iterable[tuple[int, np.ndarray]], params: CoverageParam
     ----------
     scans : iterable of (scan_id, (M, 2) float ndarray)
         Each scan's plan-view points in the map frame, metres (for 3D scans the
-        walls' height band, :func:`floorscan.walls.scan_points_2d`).
+        walls' height band, :func:`floorscan.walls.extract.scan_points_2d`).
     params : CoverageParams
 
     Returns

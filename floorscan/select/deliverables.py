@@ -26,7 +26,7 @@ Usage::
     write_selected_points("results/demo/registered.parquet", table["scan_id"], "scans.ply", "scans.pcd")
 
 Every file is written under a temporary name beside its target and renamed
-(:func:`floorscan.io.atomic_path`, :func:`floorscan.io.staged_path`).
+(:func:`floorscan.core.io.atomic_path`, :func:`floorscan.core.io.staged_path`).
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ from typing import Iterable
 import numpy as np
 import pandas as pd
 
-from floorscan.io import atomic_path, iter_scans, staged_path
+from floorscan.core.io import atomic_path, iter_scans, staged_path
 
 #: Columns of :func:`scan_list`, in order.
 SCAN_LIST_COLUMNS = ("rank", "scan_id", "t_ns", "time_iso", "x_m", "y_m", "yaw_rad", "gain")
@@ -279,7 +279,7 @@ def write_selected_points(
     """Write the selected scans' map-frame points as a binary PLY and a binary PCD.
 
     The points are read from ``registered.parquet`` scan by scan
-    (:func:`floorscan.io.iter_scans`), in scan id order, with their stored float32
+    (:func:`floorscan.core.io.iter_scans`), in scan id order, with their stored float32
     coordinates; both files hold one plain cloud of float32 ``x, y, z`` (metres, map
     frame), written with Open3D's tensor API (``open3d.t.io.write_point_cloud``).
 
@@ -291,7 +291,7 @@ def write_selected_points(
         The selected scans (kept scans of the registration).
     ply_path, pcd_path : path
         Outputs; each is written under a temporary name with its extension beside it
-        and renamed (:func:`floorscan.io.staged_path`).
+        and renamed (:func:`floorscan.core.io.staged_path`).
 
     Returns
     -------
@@ -306,7 +306,7 @@ def write_selected_points(
     OSError
         Open3D could not write a file.
     """
-    from floorscan.o3d import o3d
+    import open3d as o3d
 
     wanted = sorted({int(s) for s in scan_ids})
     if not wanted:

@@ -2,7 +2,7 @@
 import copy
 from pathlib import Path
 
-from floorscan.config import ConfigError, config_errors_exit, validate_config
+from floorscan.core.config import ConfigError, config_errors_exit, validate_config
 
 DATASETS = config["datasets"]
 
@@ -82,7 +82,7 @@ wildcard_constraints:
 def config_error(message):
     """Stop the run on a config value the schemas cannot judge alone (one key against
     another): Snakemake prints the message, one paragraph, no traceback
-    (floorscan.config.config_errors_exit)."""
+    (floorscan.core.config.config_errors_exit)."""
     with config_errors_exit():
         raise ConfigError(message)
 
@@ -128,7 +128,7 @@ def stage_schema_check(stage):
     workflow/schemas/<stage>.schema.yaml (filling defaults), and each dataset's
     `params: {stage: ...}` overrides merged over it.
 
-    floorscan.config.validate_config: snakemake.utils.validate's checks and defaults,
+    floorscan.core.config.validate_config: snakemake.utils.validate's checks and defaults,
     each schema parsed once (16 validations took Snakemake ~0.5 s at every start)."""
     schema = SCHEMA_DIR / f"{stage}.schema.yaml"
     config.setdefault(stage, {})
@@ -192,14 +192,14 @@ def benchmark_path(stage):
     return f"results/{{dataset}}/benchmarks/{stage}.tsv"
 
 
-# Shard plans (issue 8; floorscan.shards): `register` is a checkpoint, and once it has
+# Shard plans (issue 8; floorscan.core.shards): `register` is a checkpoint, and once it has
 # ended the shard jobs of a per-scan stage are named from its files. Input functions
 # run several times per job; the plan is read once per file version and shard size.
 _SHARD_PLANS = {}
 
 
 def shard_plan(wildcards, stage):
-    """The shard plan (floorscan.shards.plan_shards) of per-scan stage `stage` (`hulls`
+    """The shard plan (floorscan.core.shards.plan_shards) of per-scan stage `stage` (`hulls`
     or `walls`, whose config holds shard_scans) from the register checkpoint's files.
     Before `register` has run this raises Snakemake's IncompleteCheckpointException,
     which defers the jobs that depend on it until then."""
@@ -210,7 +210,7 @@ def shard_plan(wildcards, stage):
         str(out.registered), Path(out.registered).stat().st_mtime_ns, shard_scans,
     )
     if key not in _SHARD_PLANS:
-        from floorscan.shards import plan_from_files
+        from floorscan.core.shards import plan_from_files
 
         _SHARD_PLANS[key] = plan_from_files(out.registration, out.registered, shard_scans)
     return _SHARD_PLANS[key]

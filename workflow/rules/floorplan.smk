@@ -1,4 +1,4 @@
-# Floor plans (floorscan.floorplan; thesis Chapter 1's purpose): merged walls, one wall
+# Floor plans (floorscan.floorplan.plan; thesis Chapter 1's purpose): merged walls, one wall
 # per wall with its thickness, as GeoJSON, SVG, DXF and IFC.
 #
 #   recommended_floorplan: the answer, results/<dataset>/floorplan.*: the walls of the
@@ -7,7 +7,7 @@
 #   floorplan:  the evaluation grid, evaluation/floorplan/<ordering>_<extractor>_k<k>.*:
 #               every ordering x k of walls.k, one job per extractor, in the formats of
 #               floorplan.evaluation_formats (GeoJSON, which is scored, and SVG)
-from floorscan.floorplan import FLOORPLAN_FORMATS
+from floorscan.floorplan.plan import FLOORPLAN_FORMATS
 
 stage_schema_check("floorplan")
 

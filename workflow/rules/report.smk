@@ -1,4 +1,4 @@
-# The report's front page (floorscan.report): per dataset, the answer on one page - the
+# The report's front page (floorscan.figures.report): per dataset, the answer on one page - the
 # recommended floor plan, the selection and its size reduction, the registration's
 # verdict, what ingest detected and (when evaluated) the summary table and the F1
 # curves. workflow/report/workflow.rst includes every front page, so the report opens

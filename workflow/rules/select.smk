@@ -1,11 +1,11 @@
 # Coverage hulls and scan orderings (issue 5; thesis section 3.3, Algorithms 1 and 2).
 from floorscan.select.coverage import COVERAGE_ORDERINGS
-from floorscan.selection import ORDERINGS as SELECT_ORDERINGS
+from floorscan.select.orderings import ORDERINGS as SELECT_ORDERINGS
 
 stage_schema_check("hulls")
 stage_schema_check("select")
 
-# Shard labels of floorscan.shards.shard_label: scans_<first scan id>-<last scan id>.
+# Shard labels of floorscan.core.shards.shard_label: scans_<first scan id>-<last scan id>.
 SHARD_LABEL = r"scans_\d+-\d+"
 
 

@@ -3,7 +3,7 @@
 # through ingest like a real one (sim/recording.bag, or sim/pcd for `recording: pcd`).
 import re
 
-from floorscan.config import BUILDINGS_DIR
+from floorscan.core.config import BUILDINGS_DIR
 
 stage_schema_check("simulate")
 
@@ -12,7 +12,7 @@ SYNTHETIC_DATASETS = sorted(d for d in DATASETS if is_synthetic(d))
 
 def simulate_building_yaml(wildcards):
     """The building file a synthetic dataset names: config/buildings/<building>.yaml
-    (its existence is checked at start, floorscan.config.check_datasets)."""
+    (its existence is checked at start, floorscan.core.config.check_datasets)."""
     return f"{BUILDINGS_DIR}/{DATASETS[wildcards.dataset]['building']}.yaml"
 
 

@@ -10,7 +10,7 @@ import re
 
 stage_schema_check("walls")
 
-# Shard labels of floorscan.shards.shard_label: scans_<first scan id>-<last scan id>.
+# Shard labels of floorscan.core.shards.shard_label: scans_<first scan id>-<last scan id>.
 WALLS_SHARD_LABEL = r"scans_\d+-\d+"
 
 

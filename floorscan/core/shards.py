@@ -1,7 +1,7 @@
 """Shards: the per-scan stages split by scan range into independent jobs.
 
-The hulls of a scan (:mod:`floorscan.hulls`) and its wall segments
-(:mod:`floorscan.walls`) depend only on that scan's points, the stage parameters and
+The hulls of a scan (:mod:`floorscan.select.hulls`) and its wall segments
+(:mod:`floorscan.walls.extract`) depend only on that scan's points, the stage parameters and
 a random generator seeded with ``(seed, scan_id)``, never on the other scans a job
 processes. So the stages ``hulls`` and ``scan_walls`` can run on contiguous scan id
 ranges (shards) in separate jobs, in parallel on local cores or cluster nodes, and
@@ -44,7 +44,7 @@ import pyarrow.parquet as pq
 if TYPE_CHECKING:
     import pandas as pd
 
-from floorscan.io import InputError
+from floorscan.core.io import InputError
 
 _LABEL = re.compile(r"^scans_(\d+)-(\d+)$")
 

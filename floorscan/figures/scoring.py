@@ -16,7 +16,7 @@
   extractor (Fig. 5.10).
 
 Matplotlib with the Agg backend; every figure is written atomically
-(:func:`floorscan.io.atomic_path`). On real recordings the walls scored against are a
+(:func:`floorscan.core.io.atomic_path`). On real recordings the walls scored against are a
 *reference* (walls from all kept scans), never called ground truth.
 """
 
@@ -34,8 +34,8 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 
-from floorscan import metrics as M  # noqa: E402
-from floorscan.io import atomic_path  # noqa: E402
+from floorscan.score import metrics as M  # noqa: E402
+from floorscan.core.io import atomic_path  # noqa: E402
 
 DPI = 110
 ORDERING_COLOURS = {
@@ -92,7 +92,7 @@ def plot_metrics_vs_k(metrics: pd.DataFrame, out, tau: float = 0.05) -> None:
     Parameters
     ----------
     metrics : pandas.DataFrame
-        ``metrics.parquet`` (:func:`floorscan.metrics.score_dataset`).
+        ``metrics.parquet`` (:func:`floorscan.score.metrics.score_dataset`).
     out : path
         PNG to write.
     tau : float
@@ -143,11 +143,11 @@ def plot_metrics_vs_k(metrics: pd.DataFrame, out, tau: float = 0.05) -> None:
 def read_geojson_geometries(path) -> list:
     """Shapely geometries of the walls of a floor plan's GeoJSON, one per wall.
 
-    A floor plan of :func:`floorscan.floorplan.floorplan_geojson` holds an ``axis``, a
+    A floor plan of :func:`floorscan.floorplan.plan.floorplan_geojson` holds an ``axis``, a
     ``footprint`` and its ``face`` lines for each wall (property ``kind``); a wall is
     drawn as its footprint, or as its axis when it has none, so the list holds one
     geometry per wall (``len`` is the plan's wall count, one row of
-    :attr:`floorscan.floorplan.FloorPlan.walls` each). Features without ``kind`` (any
+    :attr:`floorscan.floorplan.plan.FloorPlan.walls` each). Features without ``kind`` (any
     other GeoJSON) are all returned.
     """
     import shapely.geometry
@@ -264,7 +264,7 @@ def plot_bitmap_overlay(
         Panel title and inferred wall segments, metres.
     reference : (K, 4) segments
         Ground truth or reference, metres.
-    grid : floorscan.metrics.Grid
+    grid : floorscan.score.metrics.Grid
         The scoring grid (the same as ``metrics.parquet``'s).
     wall_width_m : float
         Drawn wall width, metres.
@@ -412,9 +412,9 @@ def subsample_points(
     """``(N, 2)`` x, y of at most ``max_points`` points (seeded), optionally only those
     with z inside ``z_band`` when the points are 3D.
 
-    2D against 3D as the walls stage decides it (:func:`floorscan.walls.scan_points_2d`):
+    2D against 3D as the walls stage decides it (:func:`floorscan.walls.extract.scan_points_2d`):
     points whose z spans at most ``planar_tolerance_m`` (default
-    :attr:`floorscan.walls.ScanParams.planar_tolerance_m`) came from a 2D scanner, at
+    :attr:`floorscan.walls.extract.ScanParams.planar_tolerance_m`) came from a 2D scanner, at
     whatever height it was mounted (the simulated rovers' 0.3 m), and are all kept;
     here the span is the whole table's, not each scan's.
 
@@ -424,7 +424,7 @@ def subsample_points(
     the same points as from the whole frame, in memory one batch at a time.
     """
     if planar_tolerance_m is None:
-        from floorscan.walls import ScanParams
+        from floorscan.walls.extract import ScanParams
 
         planar_tolerance_m = ScanParams.planar_tolerance_m
     if isinstance(points, (str, Path)):
@@ -576,7 +576,7 @@ def plot_wall_extraction(status: dict, times: dict, out, title: str = "") -> Non
         (``scan_id``, ``n_walls``, ``reason``); scans in recording order.
     times : dict
         ``{extractor: DataFrame}`` of ``benchmarks/scan_walls_{extractor}_times.parquet``
-        (``scan_id``, ``time_s``, :data:`floorscan.walls.SCAN_TIMES`), the seconds of
+        (``scan_id``, ``time_s``, :data:`floorscan.walls.extract.SCAN_TIMES`), the seconds of
         each scan's extraction; a scan without a time is drawn without one.
     """
     fig, axes = plt.subplots(1, 3, figsize=(15, 4))

@@ -28,7 +28,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from floorscan.io import InputError
+from floorscan.core.io import InputError
 
 
 @dataclass(frozen=True)
@@ -225,7 +225,7 @@ class RayCaster:
     """
 
     def __init__(self, vertices: np.ndarray, triangles: np.ndarray) -> None:
-        from floorscan.o3d import o3d
+        import open3d as o3d
 
         self._o3d = o3d
         self.scene = o3d.t.geometry.RaycastingScene()

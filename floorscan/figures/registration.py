@@ -86,12 +86,12 @@ def density_of_file(path: str | os.PathLike, cell_m: float = 0.05) -> DensityRas
 
     Raises
     ------
-    floorscan.io.InputError
+    floorscan.core.io.InputError
         When ``x`` or ``y`` is missing (naming the file).
     """
     import pyarrow.parquet as pq
 
-    from floorscan.io import iter_scans
+    from floorscan.core.io import iter_scans
 
     md = pq.ParquetFile(path).metadata
     names = [md.schema.column(i).name for i in range(md.num_columns)]
@@ -159,7 +159,7 @@ def plot_registered_map(
     from matplotlib.colors import LogNorm
     from scipy.spatial import cKDTree
 
-    from floorscan.io import atomic_path
+    from floorscan.core.io import atomic_path
 
     raster = (registered if isinstance(registered, DensityRaster)
               else DensityRaster.of_points(registered[["x", "y"]].to_numpy(np.float64), cell_m))

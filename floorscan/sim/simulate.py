@@ -3,12 +3,12 @@
 The thesis validates its method on a simulated building whose walls are known exactly
 (sections 4.1 and 5.2); its real rover (section 3.5) drove at about 0.3 m/s, scanned at
 about 10 Hz and logged AMCL poses at about 10 Hz, not synchronized with the scans. This
-module reproduces both kinds of data for a building of :mod:`floorscan.building`:
+module reproduces both kinds of data for a building of :mod:`floorscan.sim.building`:
 
 - the rover path (:func:`rover_trajectory`): a unicycle that drives from waypoint to
   waypoint at ``speed_mps``, turning smoothly toward its direction of travel (yaw rate
   limited, slowing down while it turns);
-- scans at ``scan_rate_hz`` cast with :mod:`floorscan.lidar`;
+- scans at ``scan_rate_hz`` cast with :mod:`floorscan.sim.lidar`;
 - an AMCL-like pose stream: the true ``base_link`` pose plus a first-order
   Gauss-Markov error (:func:`gauss_markov`) at ``pose_rate_hz`` with a phase offset and
   timing jitter;
@@ -46,9 +46,9 @@ import pyarrow as pa
 import shapely
 from scipy.signal import lfilter
 
-from floorscan import building as bld
-from floorscan import lidar
-from floorscan.io import InputError, atomic_path, staged_path, write_json, write_table
+from floorscan.sim import building as bld
+from floorscan.sim import lidar
+from floorscan.core.io import InputError, atomic_path, staged_path, write_json, write_table
 
 log = logging.getLogger(__name__)
 
@@ -612,7 +612,7 @@ def write_recording(rec: Recording, bag_path: str | os.PathLike, pcd_dir: str | 
         Counts: ``n_scans``, ``n_points``, ``n_no_return`` (beams without a return),
         ``n_pose``, ``n_odom``; and ``observed_xy``, ``(C, 2)`` float64, the centres of
         the 1 cm plan cells holding a return (3D: a return in ``OBSERVED_BAND_3D_M``),
-        metres, for :func:`floorscan.building.observed_faces`.
+        metres, for :func:`floorscan.sim.building.observed_faces`.
     """
     from rosbags.rosbag1 import Writer
 

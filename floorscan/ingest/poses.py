@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from floorscan.io import InputError
+from floorscan.core.io import InputError
 
 #: Reasons a scan has no pose.
 BEFORE = "before_pose_stream"
@@ -117,7 +117,7 @@ def interpolate_poses(
 
 
 def scan_poses(scan_index: pd.DataFrame, stream: pd.DataFrame, max_gap_s: float, source: str) -> pd.DataFrame:
-    """The pose of every scan of ``scan_index`` (columns of :data:`floorscan.io.POSES`).
+    """The pose of every scan of ``scan_index`` (columns of :data:`floorscan.core.io.POSES`).
 
     See :func:`interpolate_poses` for the rules and errors.
     """

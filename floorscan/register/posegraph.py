@@ -46,7 +46,7 @@ import numpy as np
 import pandas as pd
 from scipy.spatial import cKDTree
 
-from floorscan.registration import se2_between, transform_points, voxel_downsample, wrap_angle
+from floorscan.register.registration import se2_between, transform_points, voxel_downsample, wrap_angle
 
 log = logging.getLogger(__name__)
 
@@ -111,7 +111,7 @@ class GraphParams:
         0.6 without), leaving one of 72 scans without an edge (on its prior).
     vertical_extent_m : float
         A 3D scan keeps the 2D cells whose points span at least this height, metres
-        (floor and ceiling drop out; :func:`floorscan.registration.graph_cloud`).
+        (floor and ceiling drop out; :func:`floorscan.register.registration.graph_cloud`).
     max_height_gap_m : float
         ... counting heights without a gap wider than this between them, metres.
     inlier_m : float
@@ -153,7 +153,7 @@ class GraphParams:
     @classmethod
     def from_mapping(cls, cfg) -> "GraphParams":
         """From a config mapping (unknown keys raise ``KeyError``)."""
-        from floorscan.config import dataclass_from_mapping
+        from floorscan.core.config import dataclass_from_mapping
 
         values = dict(cfg or {})
         if "icp_distances_m" in values:
@@ -174,7 +174,7 @@ def _one_openmp_thread():
 
 @functools.lru_cache(maxsize=1)
 def _openmp_controller():
-    from floorscan.o3d import o3d  # noqa: F401  (its OpenMP runtime must be loaded before the scan)
+    import open3d as o3d  # noqa: F401  (its OpenMP runtime must be loaded before the scan)
     from threadpoolctl import ThreadpoolController
 
     return ThreadpoolController()
@@ -264,7 +264,7 @@ def scan_pair_edges(
     from the relative pose of ``poses``. The clouds are projected to the xy plane
     (z = 0) and voxel-downsampled on ``voxel_size_m``; Open3D's ``registration_icp``
     (point-to-point) on coplanar clouds stays planar (x, y, yaw), and gives the same
-    result as :func:`floorscan.registration.icp_planar` (median difference 0, 95th
+    result as :func:`floorscan.register.registration.icp_planar` (median difference 0, 95th
     percentile 0.27 mm over 1500 pairs of hallways) at half the CPU time (single
     thread: 2.7 vs 5.5 s), since its iterations run in C++. Its convergence criteria stay
     tight (relative fitness and RMSE 1e-6): 1e-4 moved 5 % of the edges by > 2 cm.
@@ -361,12 +361,12 @@ class EdgeStream:
     icp_kinds : tuple of str
         As :func:`scan_pair_edges`.
     workers : int
-        Worker processes (:class:`floorscan.parallel.CallStream`; ones started ahead
-        by :func:`floorscan.parallel.prestart` first).
+        Worker processes (:class:`floorscan.core.parallel.CallStream`; ones started ahead
+        by :func:`floorscan.core.parallel.prestart` first).
     """
 
     def __init__(self, scan_ids, poses, t_s, params: GraphParams, icp_kinds: tuple[str, ...], workers: int):
-        from floorscan.parallel import CallStream
+        from floorscan.core.parallel import CallStream
 
         ids = [int(s) for s in scan_ids]
         poses = np.asarray(poses, dtype=np.float64)
@@ -444,12 +444,12 @@ def _chunks(pairs: list, n: int) -> list[list]:
 
 
 def _parallel_pair_rows(pts, poses, chunks, params, icp_kinds) -> list[tuple]:
-    """:func:`_pair_rows` of each chunk (:func:`floorscan.parallel.map_in_processes`:
+    """:func:`_pair_rows` of each chunk (:func:`floorscan.core.parallel.map_in_processes`:
     the first here and the others in worker processes, or all in workers started ahead
-    by :func:`floorscan.parallel.prestart`, as the register stage does while it reads
+    by :func:`floorscan.core.parallel.prestart`, as the register stage does while it reads
     the scans: this process then never imports Open3D, 1.5 - 3 s of CPU on the stage's
     critical path), each fed only the clouds of its pairs; rows in pair order."""
-    from floorscan.parallel import map_in_processes
+    from floorscan.core.parallel import map_in_processes
 
     calls = []
     for chunk in chunks:
@@ -462,7 +462,7 @@ def _pair_rows(pts, poses: np.ndarray, pairs, params: GraphParams, icp_kinds) ->
     """The :data:`EDGE_COLUMNS` rows of ``pairs`` (see :func:`scan_pair_edges`);
     ``pts[k]`` is scan k's projected, downsampled cloud and ``poses[k]`` its initial
     pose (lists, arrays or dicts by scan id)."""
-    from floorscan.o3d import o3d
+    import open3d as o3d
 
     reg = o3d.pipelines.registration
     trees: dict[int, cKDTree] = {}
@@ -718,7 +718,7 @@ def _optimize_open3d(poses: np.ndarray, edges: pd.DataFrame, priors, params: Gra
     Gauss-Newton converges in a few iterations from the
     localizer's poses; its Levenberg-Marquardt needed ~50 (9.3 s CPU on hallways) to the
     same poses. Returns the poses and the number of loop edges pruned."""
-    from floorscan.o3d import o3d
+    import open3d as o3d
 
     reg = o3d.pipelines.registration
     n = len(poses)

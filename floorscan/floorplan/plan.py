@@ -7,7 +7,7 @@ problem). :func:`merge_segments` merges the segments that describe one wall face
 overlapping) into one wall with its thickness; :func:`build_floorplan` does both.
 
 Exports (the thesis's purpose, Chapter 1: a plan people and their tools open). Every
-file is written atomically (:func:`floorscan.io.atomic_path`), carries what it is a
+file is written atomically (:func:`floorscan.core.io.atomic_path`), carries what it is a
 plan of (:class:`PlanMetadata`: dataset, ordering, extractor, k, number of walls, a
 time stamp) and is byte-identical when written again from the same input. The frame
 is the map frame of the recording: a local engineering frame, x and y in metres, z up,
@@ -27,7 +27,7 @@ no geodetic datum; wall properties (thickness, length, height) are metres everyw
   a world map at (0 deg, 0 deg) as if its metres were degrees. With
   ``floorplan.georeference`` (:class:`Georeference`) the coordinates are WGS84
   longitude, latitude (:func:`map_to_lonlat`), an RFC 7946 file without ``crs``;
-  the scorer (:mod:`floorscan.metrics`) reads coordinates as map metres, so such a
+  the scorer (:mod:`floorscan.score.metrics`) reads coordinates as map metres, so such a
   plan is scored after :func:`lonlat_to_map`.
 - SVG (:func:`write_svg`; a browser): a plain SVG (no scripts) that scales to any
   window (``viewBox``, width and height 100 %), with a title, the wall polygons (walls
@@ -65,7 +65,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 import pandas as pd
 
-from floorscan.io import atomic_path
+from floorscan.core.io import atomic_path
 
 log = logging.getLogger(__name__)
 
@@ -158,7 +158,7 @@ def params_from_config(cfg: Mapping[str, Any] | None) -> FloorplanParams:
     KeyError
         For a key the class does not know.
     """
-    from floorscan.config import dataclass_from_mapping
+    from floorscan.core.config import dataclass_from_mapping
 
     plan_cfg = {k: v for k, v in (cfg or {}).items() if k not in WORKFLOW_KEYS}
     return dataclass_from_mapping(FloorplanParams, plan_cfg, "floorplan")
@@ -304,7 +304,7 @@ def _within_distance(seg: np.ndarray, i: np.ndarray, j: np.ndarray, distance: fl
 def point_segment_dist2(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> np.ndarray:
     """Squared distance (square metres) from points ``(px, py)`` (P,) to the matching
     rows of segments ``seg`` (P, 4) ``x0, y0, x1, y1`` (a zero-length segment is its
-    point). Used here and by :mod:`floorscan.metrics`."""
+    point). Used here and by :mod:`floorscan.score.metrics`."""
     ax, ay, bx, by = seg[:, 0], seg[:, 1], seg[:, 2], seg[:, 3]
     dx, dy = bx - ax, by - ay
     l2 = dx * dx + dy * dy
@@ -863,7 +863,7 @@ def as_georeference(value: Georeference | Mapping[str, Any] | None) -> Georefere
     """
     if value is None or isinstance(value, Georeference):
         return value
-    from floorscan.config import dataclass_from_mapping
+    from floorscan.core.config import dataclass_from_mapping
 
     missing = sorted({"lat", "lon"} - set(value))
     if missing:
@@ -1899,7 +1899,7 @@ def write_recommended_floorplan(
     dict
         ``n_scans``, ``n_segments``, ``n_walls``, ``n_faces``.
     """
-    from floorscan.io import read_table
+    from floorscan.core.io import read_table
 
     selected = pd.read_csv(scans_path, usecols=["rank", "scan_id"])
     ids = selected["scan_id"].astype(np.int64).to_numpy()

@@ -1,7 +1,7 @@
 """Scan orderings: greedy maximum coverage and its baselines (thesis section 3.3).
 
 Every ordering ranks all scans; along each ordering the covered area is measured the
-same way (the union of the scans' cluster hulls, :mod:`floorscan.hulls`), so the
+same way (the union of the scans' cluster hulls, :mod:`floorscan.select.hulls`), so the
 orderings are comparable (thesis Fig. 5.6):
 
 ``cluster_hull``
@@ -129,7 +129,7 @@ class SelectParams:
     def from_config(cls, cfg: Mapping | None) -> "SelectParams":
         """Build from the stage's config dict; unknown keys raise ``ValueError``.
 
-        ``figure_*`` keys belong to :class:`floorscan.figures_selection.FigureParams`,
+        ``figure_*`` keys belong to :class:`floorscan.figures.selection.FigureParams`,
         ``coverage`` to :class:`floorscan.select.coverage.CoverageParams`, and
         ``default_ordering``, ``k`` and ``k_coverage`` to the recommended selection
         (:mod:`floorscan.select.deliverables`); they are skipped here.
@@ -158,7 +158,7 @@ class RasterCoverage:
     ----------
     geometries : (S,) object ndarray of Shapely Polygon / MultiPolygon
         Valid coverage of each scan (map frame, metres), e.g. from
-        :func:`floorscan.hulls.scan_coverage`; empty allowed. Not modified.
+        :func:`floorscan.select.hulls.scan_coverage`; empty allowed. Not modified.
     raster_m : float
         Cell side, metres. The grid is anchored at multiples of ``raster_m`` in the map
         frame, so a scan's cells do not depend on the other scans.
@@ -548,7 +548,7 @@ def with_hull_coverage(orderings: Mapping[str, pd.DataFrame], hulls: pd.DataFram
         The same tables; those without ``covered_area_m2`` get both columns (the other
         columns kept, rows in rank order).
     """
-    from floorscan.hulls import scan_coverage
+    from floorscan.select.hulls import scan_coverage
 
     missing = [name for name, o in orderings.items() if "covered_area_m2" not in o.columns]
     out = dict(orderings)
@@ -802,7 +802,7 @@ def select_orderings(
     Parameters
     ----------
     cluster_geometries : (scan_ids, geometries)
-        Cluster-hull coverage per scan (:func:`floorscan.hulls.scan_coverage`).
+        Cluster-hull coverage per scan (:func:`floorscan.select.hulls.scan_coverage`).
     convex_geometries : (scan_ids, geometries)
         Convex-hull coverage per scan, the same scan ids.
     poses : DataFrame
@@ -885,7 +885,7 @@ def select_stage(
     KeyError
         When a required column is missing (the message names the table).
     """
-    from floorscan.hulls import kept_scan_ids, scan_coverage
+    from floorscan.select.hulls import kept_scan_ids, scan_coverage
 
     need = ("scan_id", "t_ns", "kept", "x_m", "y_m", "yaw_rad")
     missing = [c for c in need if c not in registration.columns]

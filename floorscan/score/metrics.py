@@ -67,7 +67,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from floorscan.floorplan import point_segment_dist2
+from floorscan.floorplan.plan import point_segment_dist2
 
 #: Segments shorter than this (metres) have no length and are ignored.
 MIN_SEGMENT_M = 1e-9
@@ -634,7 +634,7 @@ class _SegmentIndex:
         point whose radius is at most a reach of :data:`REACHES_M` in the grown boxes
         of the pieces (:meth:`reach_tree`), the others by their square of half-side
         the radius in the segments' boxes. The candidates' distances are measured in
-        numpy (:func:`floorscan.floorplan.point_segment_dist2`, to the whole segment)
+        numpy (:func:`floorscan.floorplan.plan.point_segment_dist2`, to the whole segment)
         and those beyond the radius dropped: the same minimum as measuring every
         segment within the radius.
         """
@@ -918,7 +918,7 @@ class _SamplePairs:
 
     A fixed ``(S, 2)`` sample set, an STRtree of its points and a cache ``{row key of
     a wall: (sample indices, distances)}``: every sample whose exact distance
-    (numpy, :func:`floorscan.floorplan.point_segment_dist2`) to the wall is at most
+    (numpy, :func:`floorscan.floorplan.plan.point_segment_dist2`) to the wall is at most
     ``reach``. Candidates are the samples in the boxes of the wall's pieces (no longer
     than :data:`PAIR_PIECE_M`) grown by ``reach``; a sample within ``reach`` of a wall
     is within ``reach`` of one of its pieces, hence in that piece's grown box.
@@ -1147,10 +1147,10 @@ def read_wall_faces(path, kind: str = "face") -> np.ndarray:
 
     Raises
     ------
-    floorscan.io.InputError
+    floorscan.core.io.InputError
         When the file is not a FeatureCollection or has no feature of ``kind``.
     """
-    from floorscan.io import InputError
+    from floorscan.core.io import InputError
 
     seg = _wall_faces(_feature_collection(path), kind)
     if not len(seg):
@@ -1161,7 +1161,7 @@ def read_wall_faces(path, kind: str = "face") -> np.ndarray:
 def _feature_collection(path) -> dict:
     import json
 
-    from floorscan.io import InputError
+    from floorscan.core.io import InputError
 
     with open(path, encoding="utf-8") as fh:
         doc = json.load(fh)
@@ -1278,12 +1278,12 @@ def score_dataset(
     recall_references : dict, optional
         ``{extractor: (M, 4) segments}`` that recall (completeness) and the distances
         are measured against instead of ``references``: on synthetic datasets the
-        observed faces (:func:`floorscan.building.observed_faces`; thesis 5.2, walls
+        observed faces (:func:`floorscan.sim.building.observed_faces`; thesis 5.2, walls
         never visible from the LIDAR cannot be recovered). Precision and the bitmap
         metrics stay against ``references``, and ``recall_all_<tau>`` gives recall
         against ``references`` too.
     workers : int
-        Processes (:func:`floorscan.parallel.map_in_processes`; the score rule's
+        Processes (:func:`floorscan.core.parallel.map_in_processes`; the score rule's
         ``threads``) over which the orderings x extractors are split. Each ordering and
         extractor is scored in one process, so the table does not depend on it
         (tested); the walls are then best given as paths (runs are pickled to the
@@ -1314,7 +1314,7 @@ def score_dataset(
     if n == 1:
         rows = _score_rows(runs, *args)
     else:
-        from floorscan.parallel import map_in_processes
+        from floorscan.core.parallel import map_in_processes
 
         shares = [[r for key in keys[w::n] for r in groups[key]] for w in range(n)]
         rows = [row for part in map_in_processes(_score_rows, [(share, *args) for share in shares]) for row in part]
@@ -1392,7 +1392,7 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
         t0 = time.perf_counter()
         walls = run["walls"]
         if isinstance(walls, (str, os.PathLike)):
-            from floorscan.io import read_table
+            from floorscan.core.io import read_table
 
             walls = read_table(walls, columns=["x0", "y0", "x1", "y1"])
         walls = as_segments(walls)
@@ -1621,7 +1621,7 @@ def load_recall_references(kind: str, extractors, ground_truth=None, recall_kind
 
     Synthetic datasets (``kind`` ground_truth): the ``recall_kind`` features of
     ``walls.geojson`` (``observed_face``: the parts of the faces the recording saw,
-    :func:`floorscan.building.observed_faces`); ``face`` gives None (recall against
+    :func:`floorscan.sim.building.observed_faces`); ``face`` gives None (recall against
     all faces, like precision). Real recordings: None (the reference is already made
     of what the scans saw).
     """
@@ -1643,6 +1643,6 @@ def load_references(kind: str, extractors, ground_truth=None, reference_paths=()
     if kind == GROUND_TRUTH:
         gt = read_wall_faces(ground_truth, kind="face")
         return {e: gt for e in extractors}
-    from floorscan.io import read_table
+    from floorscan.core.io import read_table
 
     return {e: as_segments(read_table(p)) for e, p in zip(extractors, reference_paths)}

@@ -27,7 +27,7 @@ import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Mapping, Sequence
 
-from floorscan.io import atomic_path
+from floorscan.core.io import atomic_path
 from floorscan.score.curves import SUMMARY_COLUMNS, summary_cell
 
 if TYPE_CHECKING:  # pandas is imported by the functions that use it
@@ -111,7 +111,7 @@ def front_page(
         Dataset name (title).
     floorplan_svg : str
         The recommended floor plan as SVG text (``results/<dataset>/floorplan.svg``,
-        :func:`floorscan.floorplan.write_svg`), inlined by :func:`inline_svg`.
+        :func:`floorscan.floorplan.plan.write_svg`), inlined by :func:`inline_svg`.
     summary : pandas.DataFrame or path, optional
         The scan-reduction summary (:func:`floorscan.score.curves.curve_summary`), or
         the path of ``summary.parquet``. None: the run did not evaluate (config
@@ -122,7 +122,7 @@ def front_page(
         line(s) themselves. The first word (GOOD, WARNING, POOR) colours it.
     detected : mapping, optional
         What ingest detected: the scan index's schema metadata
-        (:func:`floorscan.io.read_metadata` of ``scan_index.parquet``); the keys of
+        (:func:`floorscan.core.io.read_metadata` of ``scan_index.parquet``); the keys of
         :data:`DETECTED_FIELDS` are shown.
     mode : str
         The register mode used (``pose`` or ``odometry``; empty: ``pose``).
@@ -249,8 +249,8 @@ def write_front_page_of_files(
     extractor, description : str
         As :func:`front_page`.
     """
-    from floorscan.figures_scoring import read_geojson_geometries
-    from floorscan.io import read_metadata
+    from floorscan.figures.scoring import read_geojson_geometries
+    from floorscan.core.io import read_metadata
     from floorscan.select.recommend import read_selection
 
     sel = read_selection(selection)
@@ -423,7 +423,7 @@ def _read_summary(summary) -> "pd.DataFrame | None":
         return summary
     if Path(summary).suffix != ".parquet":
         raise ValueError(f"summary {summary}: expected summary.parquet (a table), not {Path(summary).suffix!r}")
-    from floorscan.io import read_table
+    from floorscan.core.io import read_table
 
     return read_table(summary)
 

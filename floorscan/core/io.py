@@ -8,7 +8,7 @@ chooses its format by the file's extension).
 A temporary of an output ``name`` is a hidden sibling ``.<name>.*`` (:func:`atomic_path`:
 ``.<name>.<8 characters>.tmp``); one left by a killed run is removed by the next run of
 the stage (:func:`remove_stale_temporaries`, called by
-:func:`floorscan.workflow.stage_log` for the outputs of the job) and by the first
+:func:`floorscan.core.stage.stage_log` for the outputs of the job) and by the first
 :func:`atomic_path` of the same file in a process.
 
 Units are in the column names where they are not obvious: ``t_ns`` is nanoseconds

@@ -66,7 +66,7 @@ Speed (issue 8). Exact shortcuts, giving the same hulls bit for bit:
   ``xy[mask]`` on (n, 2) arrays) and cluster sizes from the sorted labels.
 
 :func:`scan_hulls` runs the stage scan by scan over any iterable of scans (e.g.
-:func:`floorscan.io.iter_scans` streaming ``registered.parquet``), so memory follows
+:func:`floorscan.core.io.iter_scans` streaming ``registered.parquet``), so memory follows
 the largest scan, not the recording.
 """
 
@@ -82,7 +82,7 @@ import pandas as pd
 import pyarrow as pa
 import shapely
 
-from floorscan.io import split_by_scan
+from floorscan.core.io import split_by_scan
 
 # scikit-learn (KMeans, hulls.kmeans: sklearn) and threadpoolctl are imported where
 # used: importing scikit-learn costs 1.4-1.7 CPU-s, which the stages that only merge
@@ -623,7 +623,7 @@ def scan_hulls(
     scans : iterable of (int, (n, >=2) float ndarray)
         ``(scan_id, points)`` of each scan, map frame, metres; only columns 0 and 1
         (x, y) are used. Consumed once, one scan at a time (e.g.
-        :func:`floorscan.io.iter_scans` or :func:`floorscan.io.split_by_scan`), so memory holds
+        :func:`floorscan.core.io.iter_scans` or :func:`floorscan.core.io.split_by_scan`), so memory holds
         one scan plus up to ``batch_points`` points waiting for GEOS.
     params : sequence of HullParams
         One cluster-hull table per entry (Fig. 5.7 needs several ``k_clusters``).
@@ -857,7 +857,7 @@ def compute_hulls(
     ----------
     registered : DataFrame or iterable of (int, (n, >=2) ndarray)
         ``registered.parquet``: map-frame points ``scan_id, x, y, z`` (metres), as a
-        frame, or streamed scan by scan (:func:`floorscan.io.iter_scans`), which
+        frame, or streamed scan by scan (:func:`floorscan.core.io.iter_scans`), which
         keeps memory to one scan.
     registration : DataFrame
         ``registration.parquet``: one row per scan with ``scan_id`` and ``kept``.

@@ -20,7 +20,7 @@ import sys
 import tempfile
 from typing import Any, Callable, Sequence
 
-_WORKER = "from floorscan.parallel import _worker; _worker()"
+_WORKER = "from floorscan.core.parallel import _worker; _worker()"
 
 #: Workers started ahead by :func:`prestart`, waiting for their call on stdin.
 _READY: list[tuple[subprocess.Popen, Any]] = []

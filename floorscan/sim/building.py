@@ -50,7 +50,7 @@ import yaml
 from shapely.geometry import LineString, LinearRing, MultiLineString, Point, Polygon
 from shapely.ops import polygonize, unary_union
 
-from floorscan.io import InputError
+from floorscan.core.io import InputError
 
 #: Default head height of a door, metres.
 DOOR_HEAD_M = 2.1

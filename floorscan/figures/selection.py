@@ -26,10 +26,10 @@ import pandas as pd  # noqa: E402
 import pyarrow as pa  # noqa: E402
 import pyarrow.parquet as pq  # noqa: E402
 
-from floorscan.hulls import HullParams, kept_scan_ids, scan_coverage, scan_hulls  # noqa: E402
-from floorscan.io import split_by_scan  # noqa: E402
-from floorscan.io import atomic_path, iter_scans  # noqa: E402
-from floorscan.selection import (  # noqa: E402
+from floorscan.select.hulls import HullParams, kept_scan_ids, scan_coverage, scan_hulls  # noqa: E402
+from floorscan.core.io import split_by_scan  # noqa: E402
+from floorscan.core.io import atomic_path, iter_scans  # noqa: E402
+from floorscan.select.orderings import (  # noqa: E402
     ORDERINGS,
     SelectParams,
     greedy_coverage,
@@ -132,7 +132,7 @@ def coverage_vs_clusters(
     ----------
     registered : DataFrame, path or iterable of (int, (n, >=2) ndarray)
         Map-frame points ``scan_id, x, y`` (metres): a frame, ``registered.parquet``
-        (streamed scan by scan, :func:`floorscan.io.iter_scans`), or the scans.
+        (streamed scan by scan, :func:`floorscan.core.io.iter_scans`), or the scans.
         Read once for all ``k_values``.
     scan_ids : sequence of int
         The scans to order.

@@ -11,7 +11,7 @@ Algorithm 3 of the thesis, steps 2-6 (step 1, pose interpolation, is the ``poses
 
 Step 5 departs from the thesis. The default, ``reference: graph``, is a pose graph of
 scan-to-scan ICP edges with the localizer's poses as priors (:func:`_register_graph`,
-:mod:`floorscan.posegraph`). The older ``reference: map`` works as follows. The thesis registers
+:mod:`floorscan.register.posegraph`). The older ``reference: map`` works as follows. The thesis registers
 "sequentially every two pointclouds" (3.5), i.e. each scan against its predecessors at
 their localizer poses (kept as ``reference: previous``). An AMCL-like localizer error is
 correlated in time (simulated: Gauss-Markov, 2 s correlation time, scans 0.5 s apart),
@@ -131,8 +131,8 @@ import pyarrow as pa
 from scipy.spatial import cKDTree
 
 from floorscan.core.runtime import progress
-from floorscan.grid import cell_groups, cell_keys, cell_means
-from floorscan.io import InputError
+from floorscan.core.grid import cell_groups, cell_keys, cell_means
+from floorscan.core.io import InputError
 from floorscan.register.sampling import EveryN, MotionFilter, median_step_m
 
 log = logging.getLogger(__name__)
@@ -265,7 +265,7 @@ class RegistrationConfig:
             raise InputError(
                 f"config register.reference: expected 'graph', 'map' or 'previous', got {self.reference!r}"
             )
-        from floorscan.posegraph import GraphParams
+        from floorscan.register.posegraph import GraphParams
 
         try:
             GraphParams.from_mapping(self.graph)
@@ -450,9 +450,9 @@ def normals_3d(points: np.ndarray, k: int) -> np.ndarray:
     -------
     (N, 3) float64 ndarray
     """
-    from floorscan.o3d import o3d
+    import open3d as o3d
 
-    from floorscan.posegraph import _one_openmp_thread
+    from floorscan.register.posegraph import _one_openmp_thread
 
     pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.asarray(points, dtype=np.float64)))
     with _one_openmp_thread():  # deterministic, and less CPU time on shared cores
@@ -577,7 +577,7 @@ def graph_cloud(points: np.ndarray, cfg: RegistrationConfig) -> np.ndarray:
     p = np.array(points, dtype=np.float64)
     if len(p) == 0 or np.ptp(p[:, 2]) == 0:
         return p
-    from floorscan.posegraph import GraphParams
+    from floorscan.register.posegraph import GraphParams
 
     params = GraphParams.from_mapping(cfg.graph)
     cell = params.voxel_size_m if params.voxel_size_m > 0 else 0.05
@@ -1417,7 +1417,7 @@ def register_scans(
     cfg = _config(config)
     _check_columns(scans, "scans.parquet", ["scan_id", "x", "y", "z"])
     index = _prepare_index(scan_index)
-    from floorscan.io import split_by_scan
+    from floorscan.core.io import split_by_scan
 
     bad = ~np.isfinite(scans[["x", "y", "z"]].to_numpy(np.float64)).all(axis=1)
     if bad.any():
@@ -1577,7 +1577,7 @@ def _aligned_poses(index: pd.DataFrame, poses: pd.DataFrame | None, cfg: Registr
 def _register_screened(index, aligned, reasons, clouds: "_ScanStore", cfg, ahead=None) -> tuple[pd.DataFrame, dict]:
     """Algorithm 3 steps 2-6 after the per-scan checks: sampling, then the registration
     of the configured mode (``ahead``: pose-graph edges aligned ahead, a finished
-    :class:`floorscan.posegraph.EdgeStream`). Returns
+    :class:`floorscan.register.posegraph.EdgeStream`). Returns
     the :data:`REGISTRATION` table and the summary; raises :class:`RegistrationError`
     when nothing could be registered."""
     n = len(index)
@@ -1666,17 +1666,17 @@ def register_recording(
 
     Issue 8 ("Speed and scale"): the whole ``scans.parquet`` of a 3D recording is 73 M
     points (hallways3d; 6.4 GB RSS when loaded as a table). Here it is read once in
-    record batches (:func:`floorscan.io.iter_scans`): each scan is screened as it
+    record batches (:func:`floorscan.core.io.iter_scans`): each scan is screened as it
     arrives (every check of :func:`screen_scans` depends on the scan and the ones before
     it only) and the sampled ones keep only the small clouds registration needs
     (:func:`graph_cloud` for ``reference: graph``, ~570 points of a 14k-point 3D scan),
     their points going to a temporary Parquet file beside ``registered_path`` (the kept
     scans are sampled ones: 1 in ``every_n``). After registration that file is read
     back and each kept scan's points are transformed into the map frame and written to
-    ``registered_path`` (a Parquet writer on :func:`floorscan.io.atomic_path`, a row group
+    ``registered_path`` (a Parquet writer on :func:`floorscan.core.io.atomic_path`, a row group
     per ~1 M points). Same output as :func:`register_scans` (tested), given the same
     input. The figure of the registered map is drawn from that file
-    (:func:`floorscan.figures_registration.density_of_file`, rule ``register_figure``).
+    (:func:`floorscan.figures.registration.density_of_file`, rule ``register_figure``).
 
     Parameters
     ----------
@@ -1686,7 +1686,7 @@ def register_recording(
     scan_index, poses, config
         As for :func:`register_scans`.
     registered_path : path
-        Output ``registered.parquet`` (schema :data:`floorscan.io.REGISTERED`).
+        Output ``registered.parquet`` (schema :data:`floorscan.core.io.REGISTERED`).
     metadata : mapping, optional
         Key/value strings stored in the output's schema metadata.
     recording : mapping, optional
@@ -1707,14 +1707,14 @@ def register_recording(
     """
     import pyarrow.parquet as pq
 
-    from floorscan.io import SCANS, ScanRowGroups, iter_scans, parquet_options
+    from floorscan.core.io import SCANS, ScanRowGroups, iter_scans, parquet_options
 
     cfg = _config(config)
     cfg = resolve_config(cfg, recording, math.nan if cfg.every_n else _range_of_file(scans_path))
     n_workers = 0
     if cfg.reference == "graph" or (cfg.mode == "odometry" and cfg.loop_closure):
-        from floorscan.parallel import prestart
-        from floorscan.posegraph import GraphParams
+        from floorscan.core.parallel import prestart
+        from floorscan.register.posegraph import GraphParams
 
         # the edge ICP's worker processes import Open3D while the scans are read, on
         # the core this reading leaves idle (with one worker the ICP runs here); as
@@ -1723,7 +1723,7 @@ def register_recording(
         workers = GraphParams.from_mapping(cfg.graph).workers
         pairs = 3 * len(scan_index) // max(1, cfg.every_n or 5)
         n_workers = min(workers, max(1, pairs // 200)) if workers > 1 else 0
-        prestart(n_workers, preload=("floorscan.o3d", "floorscan.posegraph"))
+        prestart(n_workers, preload=("open3d", "floorscan.register.posegraph"))
     index = _prepare_index(scan_index)
     aligned = _aligned_poses(index, poses, cfg)
     sids = index["scan_id"].to_numpy()
@@ -1735,7 +1735,7 @@ def register_recording(
         # the pose graph's edges are aligned in the workers while the scans are read
         # (posegraph.EdgeStream), for the scans that the index and poses say will be
         # sampled; a scan the points drop after all only costs its pairs again
-        from floorscan.posegraph import EdgeStream
+        from floorscan.register.posegraph import EdgeStream
 
         expected = _expected_sampled(index, aligned, cfg)
         if len(expected):
@@ -1822,7 +1822,7 @@ def _sample(usable: np.ndarray, aligned: pd.DataFrame, cfg: RegistrationConfig) 
 def _first_pass(scans, sids, screen, store, cfg, sampled_out, edges=None) -> None:
     """Screen the scans as they stream by; keep the sampled ones' registration clouds
     (``store``) and points (``sampled_out``); hand the graph clouds to ``edges``
-    (a :class:`floorscan.posegraph.EdgeStream`)."""
+    (a :class:`floorscan.register.posegraph.EdgeStream`)."""
     odometry = cfg.mode == "odometry"
     # sampled as _register_screened samples; odometry without every_n samples on its
     # own poses later, so every usable scan may be sampled
@@ -1856,7 +1856,7 @@ def _second_pass(table, sids, sampled_path, registered_path, metadata) -> None:
     """The kept scans, read back from ``sampled_path``, into the map frame: ``registered_path``."""
     import pyarrow.parquet as pq
 
-    from floorscan.io import REGISTERED, ScanRowGroups, atomic_path, iter_scans, parquet_options
+    from floorscan.core.io import REGISTERED, ScanRowGroups, atomic_path, iter_scans, parquet_options
 
     kept = table["kept"].to_numpy(bool)
     final = table[["x_m", "y_m", "z_m", "yaw_rad"]].to_numpy(np.float64)
@@ -1952,7 +1952,7 @@ def _worst_drop(failures: Mapping[str, int], cfg: RegistrationConfig) -> tuple[s
 
 
 def _register_graph(scans, clouds, sids, t, cfg, out, priors: bool, ahead=None) -> int:
-    """Pose-graph registration (``reference: graph``, :mod:`floorscan.posegraph`).
+    """Pose-graph registration (``reference: graph``, :mod:`floorscan.register.posegraph`).
 
     ``scans`` (indices into the scan index, time order) start at ``final`` (the
     localizer's poses, or the odometry chain). Planar ICP between each scan and its
@@ -1967,7 +1967,7 @@ def _register_graph(scans, clouds, sids, t, cfg, out, priors: bool, ahead=None) 
     are not edges, so a scan that fits nothing does not pull the others. Fills ``out``
     in place; returns the number of scans without any edge (held by their prior only).
     """
-    from floorscan import posegraph
+    from floorscan.register import posegraph
 
     kept, reasons, fit_prior, fit_icp, rmse, corr, final = out
     scans = np.asarray(scans, dtype=np.int64)

@@ -58,7 +58,7 @@ scan of hallways and hallways3d against the plain forms, and in the tests):
   same distance, as on a lattice, where the order of the tied ones may differ), the
   RANSAC hypotheses built on coordinate columns straight into the rows of the
   distance product (:func:`_hypothesis_counts`), the 3D band cut and grid thinning
-  on contiguous columns (:func:`floorscan.grid.cell_means`), MeanShift's kernel weights in
+  on contiguous columns (:func:`floorscan.core.grid.cell_means`), MeanShift's kernel weights in
   place, and fewer temporaries in :func:`neighbourhood_covariances`.
 """
 
@@ -75,7 +75,7 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 
-from floorscan.grid import cell_groups, cell_means
+from floorscan.core.grid import cell_groups, cell_means
 
 log = logging.getLogger(__name__)
 
@@ -249,7 +249,7 @@ def params_from_config(cfg: Mapping[str, Any]) -> tuple[ScanParams, RansacParams
         planar_tolerance_m=float(cfg.get("planar_tolerance_m", ScanParams.planar_tolerance_m)),
         grid_m=float(cfg.get("grid_m", ScanParams.grid_m)),
     )
-    from floorscan.config import dataclass_from_mapping
+    from floorscan.core.config import dataclass_from_mapping
 
     return (
         scan,
@@ -766,7 +766,7 @@ def _bin_seeds(x: np.ndarray, bandwidth: float, min_bin_freq: int) -> np.ndarray
     """MeanShift's bin seeds of (N, d) ``x``: the grid cells ``round(x / bandwidth)``
     holding at least ``min_bin_freq`` points, times ``bandwidth``, in lexicographic
     order of the cells, (S, d). In 1D (the offsets: most calls) by a sort and a
-    comparison of neighbours instead of :func:`floorscan.grid.cell_groups` (same
+    comparison of neighbours instead of :func:`floorscan.core.grid.cell_groups` (same
     cells, fewer calls)."""
     cells = np.round(x / bandwidth)
     if x.shape[1] == 1:
@@ -1079,7 +1079,7 @@ def extract_walls(
     points : pandas.DataFrame or iterable of (int, (n, 3) float ndarray)
         ``registered.parquet``: ``scan_id, x, y, z`` (map frame, metres, z above
         floor) as a frame, or streamed scan by scan as ``(scan_id, xyz)``
-        (:func:`floorscan.io.iter_scans`; memory then holds one scan, issue 8).
+        (:func:`floorscan.core.io.iter_scans`; memory then holds one scan, issue 8).
     extractor : {"ransac", "cluster_ransac"}
     cfg : mapping
         The ``walls`` config section (``seed``, ``height_band_m``, ``planar_tolerance_m``,
@@ -1104,7 +1104,7 @@ def extract_walls(
         For an unknown extractor, or a streamed scan id that comes twice.
     """
     if isinstance(points, pd.DataFrame):
-        from floorscan.io import split_by_scan
+        from floorscan.core.io import split_by_scan
 
         scans: Iterable[tuple[int, np.ndarray]] = split_by_scan(points).items()
     else:

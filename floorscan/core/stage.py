@@ -2,7 +2,7 @@
 
 A stage script is thin::
 
-    from floorscan.workflow import stage_log
+    from floorscan.core.stage import stage_log
     with stage_log(snakemake) as log:
         ...  # read snakemake.input / params, call one package function, write outputs
 
@@ -18,7 +18,7 @@ fails (``show-failed-logs`` of the default profile), so it is printed once:
 
 Either way the job fails and Snakemake removes its outputs. Before the stage runs,
 temporaries of its outputs that a killed run left are removed
-(:func:`floorscan.io.remove_stale_temporaries`).
+(:func:`floorscan.core.io.remove_stale_temporaries`).
 
 Profiling: with the environment variable ``FLOORSCAN_PROFILE`` set to a directory, each
 stage's body runs under :mod:`cProfile` and its statistics are written there as
@@ -39,13 +39,13 @@ from typing import Any, Iterator
 LOG_FORMAT = "%(asctime)s %(levelname)s %(name)s: %(message)s"
 
 #: Exceptions that report bad input or a bad config, not a bug, as (module, class):
-#: :class:`floorscan.io.InputError`, :class:`floorscan.config.ConfigError`,
-#: :class:`floorscan.registration.RegistrationError` (a recording too poor to
+#: :class:`floorscan.core.io.InputError`, :class:`floorscan.core.config.ConfigError`,
+#: :class:`floorscan.register.registration.RegistrationError` (a recording too poor to
 #: register). Looked up among the modules already imported, so none is imported here.
 EXPECTED_ERRORS = (
-    ("floorscan.io", "InputError"),
-    ("floorscan.config", "ConfigError"),
-    ("floorscan.registration", "RegistrationError"),
+    ("floorscan.core.io", "InputError"),
+    ("floorscan.core.config", "ConfigError"),
+    ("floorscan.register.registration", "RegistrationError"),
 )
 
 #: ``extra`` of the failure record: the stderr handler leaves it to the log file.
@@ -68,7 +68,7 @@ def failure_message(rule: str, exc: BaseException, source: str | os.PathLike | N
         The error; its message names the file, topic or key and what was expected.
     source : path, optional
         An ingest table (``scan_index.parquet``, ...) whose metadata names the user's
-        recording (:func:`floorscan.io.recording_source`): named in the paragraph when
+        recording (:func:`floorscan.core.io.recording_source`): named in the paragraph when
         the message does not name it, so that a later stage's error points at the
         recording, not at an intermediate table.
 
@@ -80,7 +80,7 @@ def failure_message(rule: str, exc: BaseException, source: str | os.PathLike | N
     message = str(exc).strip() or type(exc).__name__
     recording = None
     if source is not None:
-        from floorscan.io import recording_source
+        from floorscan.core.io import recording_source
 
         recording = recording_source(source)
     if recording and recording.split()[0] not in message:
@@ -126,7 +126,7 @@ def stage_log(smk: Any, name: str | None = None, source: str | os.PathLike | Non
         only (likewise), and re-raised. Either way Snakemake marks the job failed and
         removes its outputs.
     """
-    from floorscan.io import remove_stale_temporaries
+    from floorscan.core.io import remove_stale_temporaries
 
     rule = getattr(smk, "rule", "stage")
     logger = logging.getLogger(name or f"floorscan.{rule}")

@@ -1,0 +1,1 @@
+"""The synthetic buildings and their simulated recordings (stage ``simulate``)."""

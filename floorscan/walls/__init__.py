@@ -1,0 +1,1 @@
+"""Wall extraction (stage ``walls``)."""
