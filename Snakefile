@@ -52,17 +52,9 @@ rule evaluation:
         evaluation_outputs(),
 
 
-# Snakemake 9.27 re-checks its job rate limit (--max-jobs-per-timespan, 100/1s) with a
-# threading.Timer of one second after every scheduling round
-# (JobScheduler._schedule_reevalutation); the timers are not daemons, so the last ones
-# kept a finished run alive for up to a second. Nothing is scheduled after success.
+# The answer: where the floor plan, the scan list and the reduced recording are.
 onsuccess:
-    import threading
-
     from floorscan.figures.report import answer_lines
 
     for _line in answer_lines(target_datasets()):
         print(_line)
-    for _timer in threading.enumerate():
-        if isinstance(_timer, threading.Timer):
-            _timer.cancel()

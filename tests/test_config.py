@@ -198,3 +198,39 @@ def test_a_bad_config_file_stops_the_run_with_one_paragraph(tmp_path, text, mess
     errors = [line for line in out.splitlines() if "error" in line.lower()]
     assert len(errors) == 1 and errors[0].startswith(message), out[-2000:]
     assert 'File "' not in out and "Traceback" not in out
+
+
+def test_schema_defaults_give_a_dataclass_the_schema_defaults_once():
+    """A field without a default takes the schema's; a list default is a fresh copy per
+    instance; a default written in the class and the schema, or in neither, is refused."""
+    import dataclasses
+
+    from floorscan.core.config import schema_defaults, schema_section_defaults
+
+    ransac = schema_section_defaults("walls.ransac")
+    assert ransac["threshold_m"] == 0.03 and ransac["iterations"] == 200
+
+    @dataclasses.dataclass(frozen=True)
+    @schema_defaults("walls")
+    class Walls:
+        seed: int
+        height_band_m: list
+        extra: int = 7  # not config: the class's own default
+
+    a, b = Walls(), Walls(seed=3)
+    assert (a.seed, b.seed, a.extra) == (0, 3, 7)
+    assert a.height_band_m == schema_section_defaults("walls")["height_band_m"]
+    assert a.height_band_m is not b.height_band_m
+
+    with pytest.raises(TypeError, match="written in the class and in schema walls"):
+        @schema_defaults("walls")
+        class Twice:
+            seed: int = 1
+
+    with pytest.raises(TypeError, match="no default in schema walls"):
+        @schema_defaults("walls")
+        class Neither:
+            not_a_key: int
+
+    with pytest.raises(KeyError, match="no property 'nope'"):
+        schema_section_defaults("walls.nope")

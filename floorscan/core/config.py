@@ -1,9 +1,14 @@
 """The workflow config: validation against the schemas, the checks a schema cannot
 make, and config sections to parameter dataclasses (one rule for every stage).
 
-The Snakefile validates the config before any job starts (:func:`validate_config`,
-:func:`check_datasets`) inside :func:`config_errors_exit`, so that a bad value stops the
-run with one paragraph naming the key, not a traceback.
+Defaults are written once, in the stage schemas (``workflow/schemas/<stage>.schema.yaml``,
+the config a user reads and writes). The Snakefile validates the config before any job
+starts (:func:`validate_config`, which fills the defaults, and :func:`check_datasets`)
+inside :func:`config_errors_exit`, so that a bad value stops the run with one paragraph
+naming the key, not a traceback. The package reads a section through its stage's typed
+parameter dataclass: :func:`schema_defaults` gives the dataclass's fields the schema's
+defaults, :func:`dataclass_from_mapping` builds it from a section and is the one place
+that rejects unknown keys.
 """
 
 from __future__ import annotations
@@ -15,9 +20,12 @@ import functools
 import math
 import os
 from pathlib import Path
-from typing import Any, Iterator, Mapping, TypeVar
+from typing import Any, Callable, Iterator, Mapping, TypeVar
 
 T = TypeVar("T")
+
+#: The stage schemas: ``<SCHEMA_DIR>/<stage>.schema.yaml``.
+SCHEMA_DIR = Path(__file__).resolve().parents[2] / "workflow" / "schemas"
 
 
 def dataclass_from_mapping(cls: type[T], values: Mapping[str, Any] | None, section: str, error=KeyError) -> T:
@@ -44,6 +52,91 @@ def dataclass_from_mapping(cls: type[T], values: Mapping[str, Any] | None, secti
     if unknown:
         raise error(f"unknown {section} config keys {unknown}; expected {sorted(names)}")
     return cls(**values)
+
+
+@functools.lru_cache(maxsize=None)
+def _schema(stage: str) -> dict:
+    """The parsed schema of ``stage`` (``workflow/schemas/<stage>.schema.yaml``)."""
+    import yaml
+
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    with open(SCHEMA_DIR / f"{stage}.schema.yaml", encoding="utf-8") as f:
+        return yaml.load(f, Loader=loader)
+
+
+def schema_section_defaults(section: str) -> dict[str, Any]:
+    """The defaults the schema gives the properties of a config section.
+
+    Parameters
+    ----------
+    section : str
+        ``"<stage>"`` or ``"<stage>.<key>[.<key>...]"`` for a nested object, e.g.
+        ``"walls.ransac"``.
+
+    Returns
+    -------
+    dict
+        Property name to its ``default`` (a deep copy), for the properties that have one.
+
+    Raises
+    ------
+    KeyError
+        ``section`` names no object of the schema.
+    """
+    stage, *keys = section.split(".")
+    node = _schema(stage)
+    for key in keys:
+        props = node.get("properties") or {}
+        if key not in props:
+            raise KeyError(f"{section}: no property {key!r} in {SCHEMA_DIR / (stage + '.schema.yaml')}")
+        node = props[key]
+    props = node.get("properties") or {}
+    return {name: copy.deepcopy(p["default"]) for name, p in props.items() if isinstance(p, dict) and "default" in p}
+
+
+def schema_defaults(section: str, **derived: Callable[[], Any]) -> Callable[[type[T]], type[T]]:
+    """Class decorator (under ``@dataclass``): each field without a default in the class
+    gets the schema's default of the property of that name in ``section``.
+
+    So a stage's defaults are written once, in its schema, and the parameter dataclass
+    the package reads has the same defaults::
+
+        @dataclass(frozen=True)
+        @schema_defaults("walls.ransac")
+        class RansacParams:
+            threshold_m: float
+            iterations: int
+
+    A list or mapping default becomes a ``default_factory`` (each instance its own copy).
+    ``derived`` gives defaults the schema cannot (computed, or fields that are not
+    config), as factories.
+
+    Raises
+    ------
+    TypeError
+        At import: a field has neither a default in the class nor in the schema, or has
+        one in both (a default written twice).
+    """
+
+    def wrap(cls: type[T]) -> type[T]:
+        defaults = schema_section_defaults(section)
+        for name in cls.__dict__.get("__annotations__", {}):
+            in_class = name in cls.__dict__
+            if name in derived:
+                setattr(cls, name, dataclasses.field(default_factory=derived[name]))
+            elif name in defaults:
+                if in_class:
+                    raise TypeError(f"{cls.__name__}.{name}: default written in the class and in schema {section}")
+                value = defaults[name]
+                if isinstance(value, (list, dict)):
+                    setattr(cls, name, dataclasses.field(default_factory=functools.partial(copy.deepcopy, value)))
+                else:
+                    setattr(cls, name, value)
+            elif not in_class:
+                raise TypeError(f"{cls.__name__}.{name}: no default in schema {section}")
+        return cls
+
+    return wrap
 
 
 class ConfigError(ValueError):

@@ -1,0 +1,145 @@
+"""The layout of ../shared/ARCHITECTURE.md, checked on the source (issue 25).
+
+- Modules are small: none over :data:`MAX_LINES` lines.
+- Imports point down only: a stage package imports ``floorscan.core`` and the packages
+  of earlier stages (:data:`LAYER`), never a later one; ``core`` imports no stage.
+- No import cycle between modules, counting imports inside functions.
+"""
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "floorscan"
+MAX_LINES = 500
+
+#: Layer of each subpackage: a module may import its own package and lower layers.
+#: The simulator stands beside ingest (both make the input of the pipeline).
+LAYER = {
+    "core": 0,
+    "ingest": 1,
+    "sim": 1,
+    "register": 2,
+    "select": 3,
+    "walls": 4,
+    "floorplan": 5,
+    "score": 6,
+    "figures": 7,
+}
+
+
+def modules() -> dict[str, Path]:
+    """Dotted module name -> file, for every module of the package."""
+    out = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        out[".".join(parts)] = path
+    return out
+
+
+def imports(name: str, path: Path, known: set[str]) -> set[str]:
+    """The floorscan modules ``name`` imports anywhere in its file (top level or inside
+    functions): ``from a.b import c`` counts ``a.b.c`` when that is a module, else ``a.b``."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    found = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            targets = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                up = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join(up + ([base] if base else []))
+            targets = [f"{base}.{a.name}" if f"{base}.{a.name}" in known else base for a in node.names]
+        else:
+            continue
+        for t in targets:
+            while t and t not in known:
+                t = t.rpartition(".")[0]
+            if t and t.startswith("floorscan") and t != name:
+                found.add(t)
+    return found
+
+
+def graph() -> dict[str, set[str]]:
+    mods = modules()
+    known = set(mods)
+    return {name: imports(name, path, known) for name, path in mods.items()}
+
+
+def layer(module: str) -> tuple[str, int | None]:
+    parts = module.split(".")
+    sub = parts[1] if len(parts) > 1 else ""
+    return sub, LAYER.get(sub)
+
+
+def test_every_subpackage_has_a_layer():
+    subs = {p.name for p in PACKAGE.iterdir() if p.is_dir() and (p / "__init__.py").exists()}
+    assert subs == set(LAYER), f"subpackages without a layer: {sorted(subs - set(LAYER))}"
+    stray = sorted(p.name for p in PACKAGE.glob("*.py") if p.name != "__init__.py")
+    assert stray == [], f"modules outside the stage packages and core: {stray}"
+
+
+@pytest.mark.parametrize("name", sorted(modules()))
+def test_no_module_is_over_the_limit(name):
+    n = len(modules()[name].read_text().splitlines())
+    assert n <= MAX_LINES, f"{name}: {n} lines (at most {MAX_LINES}); split it by operation"
+
+
+def test_imports_point_down_only():
+    wrong = []
+    for name, targets in graph().items():
+        sub, rank = layer(name)
+        for t in sorted(targets):
+            tsub, trank = layer(t)
+            if tsub == sub or rank is None or trank is None:
+                continue
+            if trank >= rank:
+                wrong.append(f"{name} -> {t}")
+    assert wrong == [], "imports of a later (or a sibling) stage:\n" + "\n".join(wrong)
+
+
+def test_no_import_cycle():
+    g = graph()
+    index, low, on_stack, stack, cycles = {}, {}, set(), [], []
+    counter = [0]
+
+    def visit(v):  # Tarjan's strongly connected components
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on_stack.add(v)
+        for w in g.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                cycles.append(sorted(comp))
+
+    for v in sorted(g):
+        if v not in index:
+            visit(v)
+    assert cycles == [], f"modules that import each other (directly or around a cycle): {cycles}"
+
+
+def test_the_graph_sees_imports_inside_functions(tmp_path):
+    """The checks above would pass vacuously if the parser missed lazy imports."""
+    g = graph()
+    assert "floorscan.core.io" in g["floorscan.core.stage"] | set().union(*g.values())
+    src = tmp_path / "m.py"
+    src.write_text("def f():\n    from floorscan.core import io\n    import floorscan.core.grid\n")
+    assert imports("floorscan.x.m", src, set(modules())) == {"floorscan.core.io", "floorscan.core.grid"}
