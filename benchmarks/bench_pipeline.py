@@ -57,7 +57,7 @@ import pandas as pd
 import pyarrow.parquet as pq
 import yaml
 
-from floorscan.figures.scoring import read_benchmark
+from floorscan.figures.stage_times import read_benchmark
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_DATASETS = ("hallways", "hallways3d", "hallways3d_6000")

@@ -1,6 +1,6 @@
 """The report's front page of a dataset (floorscan.figures.report): the answer on one page."""
-from floorscan.figures.report import write_front_page_of_files
 from floorscan.core.stage import stage_log
+from floorscan.figures.report import write_front_page_of_files
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821

@@ -1,9 +1,9 @@
 """Stage reference: the occupancy grid of all kept scans (the reference map), written
 as a ROS map_server map, a cell table and a figure."""
-from floorscan.figures.scoring import plot_reference_map
 from floorscan.core.io import read_table
-from floorscan.score import reference as ref
 from floorscan.core.stage import stage_log
+from floorscan.figures.maps import plot_reference_map
+from floorscan.score import reference as ref
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
@@ -16,8 +16,9 @@ with stage_log(snakemake) as log:  # noqa: F821
              counts["structure"], params.min_scans, counts["single_scan"])
     quality = {}
     if smk.input.get("ground_truth"):  # synthetic: how good the reference is
-        from floorscan.score.metrics import OBSERVED_FACE, read_wall_faces
         from floorscan.score.against_reference import reference_against_ground_truth
+        from floorscan.score.geojson import read_wall_faces
+        from floorscan.score.ground_truth import OBSERVED_FACE
 
         quality = reference_against_ground_truth(grid, read_wall_faces(smk.input.ground_truth, "face"),
                                                  read_wall_faces(smk.input.ground_truth, OBSERVED_FACE))

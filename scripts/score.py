@@ -6,20 +6,21 @@ import json
 
 import pandas as pd
 
-from floorscan.score import metrics
-from floorscan.figures.scoring import plot_quality_vs_k
 from floorscan.core.io import atomic_path, read_metadata, read_table, write_table
+from floorscan.core.stage import stage_log
+from floorscan.figures.curves import plot_quality_vs_k
 from floorscan.figures.report import summary_table_html
 from floorscan.score import curves as C
-from floorscan.core.stage import stage_log
+from floorscan.score.runs import sort_scores
+from floorscan.score.summary import grid_summary_markdown, summarize, summary_header
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
     cfg = smk.params.cfg
     dataset = smk.wildcards.dataset
     tau = float(cfg["summary_tau_m"])
-    table = metrics.sort_scores(pd.concat([read_table(p) for p in smk.input.runs], ignore_index=True))
-    grid_summary = metrics.summarize(table, tau, cfg["summary_levels"])
+    table = sort_scores(pd.concat([read_table(p) for p in smk.input.runs], ignore_index=True))
+    grid_summary = summarize(table, tau, cfg["summary_levels"])
     meta = {"dataset": dataset, "reference_kind": smk.params.reference_kind, "reference": smk.params.reference_label}
     write_table(table, smk.output.metrics, metadata=meta)
     # the curves of every extractor: k95 / k99, area under the curve, the oracle's bound
@@ -42,12 +43,12 @@ with stage_log(snakemake) as log:  # noqa: F821
     verdict = json.loads(reg["verdict"]) if "verdict" in reg else None
     if verdict:
         (log.info if verdict["ok"] and not verdict["warnings"] else log.warning)("verdict: %s", verdict["line"])
-    head = metrics.summary_header(dataset, verdict, read_metadata(smk.input.index), reg.get("mode", ""))
+    head = summary_header(dataset, verdict, read_metadata(smk.input.index), reg.get("mode", ""))
     with atomic_path(smk.output.summary_md) as tmp:
         tmp.write_text("\n".join(head) + "\n## Floor plans against the reference map\n\n"
                        + C.summary_markdown(summary, tau, n_kept, n_recorded, line)
                        + "\n## Walls of k scans on the configured k grid\n\n"
-                       + metrics.grid_summary_markdown(grid_summary, tau, cfg["summary_levels"]))
+                       + grid_summary_markdown(grid_summary, tau, cfg["summary_levels"]))
     with atomic_path(smk.output.summary_html) as tmp:  # the front page's table, on its own
         tmp.write_text(
             f"<html><head><meta charset='utf-8'><title>{dataset} summary</title></head><body>"

@@ -2,9 +2,9 @@
 every ordering (the workflow's, seeded random ones, and the completeness oracle)
 against the reference map, on a k grid of 2 % of the kept scans (every k up to 20 %,
 beyond it where the levels of the all-scan F1 are crossed: floorscan.score.curves)."""
-from floorscan.score import curves as C
 from floorscan.core.io import read_table, write_table
 from floorscan.core.stage import stage_log
+from floorscan.score import curves as C
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821

@@ -2,11 +2,13 @@
 section 5.1 and ISPRS-style tolerance metrics). scripts/score.py merges the
 extractors and writes the scan-reduction summary."""
 
-from floorscan.score import metrics
 from floorscan.core.io import read_table, write_table
-from floorscan.score.against_reference import score_plans
-from floorscan.score.reference import read_grid
 from floorscan.core.stage import stage_log
+from floorscan.score.against_reference import score_plans
+from floorscan.score.geojson import floorplan_faces
+from floorscan.score.ground_truth import load_recall_references, load_references
+from floorscan.score.reference import read_grid
+from floorscan.score.runs import SCORE_TIME, score_dataset
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
@@ -14,10 +16,10 @@ with stage_log(snakemake) as log:  # noqa: F821
     kind = smk.params.reference_kind
     # every extractor's reference: the bitmap grid spans all of them, as in one job
     extractors = list(smk.params.extractors)
-    references = metrics.load_references(
+    references = load_references(
         kind, extractors, smk.input.get("ground_truth"), smk.input.get("reference", [])
     )
-    recall_refs = metrics.load_recall_references(
+    recall_refs = load_recall_references(
         kind, extractors, smk.input.get("ground_truth"), cfg["recall_reference"]
     )
     log.info("scoring %s against the %s: %s", smk.wildcards.extractor, smk.params.reference_label,
@@ -32,15 +34,15 @@ with stage_log(snakemake) as log:  # noqa: F821
         {"ordering": o, "extractor": e, "k": k, "walls": wp, "n_kept": n_kept[o], "floorplan": fp}
         for (o, e, k), wp, fp in zip(smk.params.runs, smk.input.walls, smk.input.floorplans)
     ]
-    table = metrics.score_dataset(
+    table = score_dataset(
         runs, references, kind, cfg, smk.wildcards.dataset, log, recall_references=recall_refs,
         workers=smk.threads,
     )
     # the plans against the reference map (occupancy grid of all kept scans)
-    against_map = score_plans(runs, read_grid(smk.input.reference_map), tuple(cfg["taus_m"]), metrics.floorplan_faces)
+    against_map = score_plans(runs, read_grid(smk.input.reference_map), tuple(cfg["taus_m"]), floorplan_faces)
     table = table.merge(against_map, on=["ordering", "extractor", "k"], how="left", validate="one_to_one")
     # the time of each run to this log, not into the metrics (the same input gives the same file)
-    seconds = table.pop(metrics.SCORE_TIME)
+    seconds = table.pop(SCORE_TIME)
     if len(seconds):
         slowest = int(seconds.to_numpy().argmax())
         log.info("scored %d runs in %.2f s, the slowest %.2f s (%s)", len(table), seconds.sum(), seconds.iloc[slowest],

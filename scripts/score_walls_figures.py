@@ -2,25 +2,25 @@
 5.1, 5.5, 5.10 - 5.12): they need no metrics, so they are drawn while the runs are
 scored."""
 
-from floorscan.figures import scoring as figures_scoring
-
-from floorscan.score import metrics
 from floorscan.core.io import read_table
 from floorscan.core.stage import stage_log
+from floorscan.figures.floorplans import read_geojson_geometries
+from floorscan.figures.scoring import make_walls_figures
+from floorscan.score.ground_truth import load_references
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
     kind = smk.params.reference_kind
     extractors = list(smk.params.extractors)
-    reference = metrics.load_references(
+    reference = load_references(
         kind, extractors, smk.input.get("ground_truth"), smk.input.get("reference", [])
     )
     walls = {tuple(r): read_table(p) for r, p in zip(smk.params.walls_runs, smk.input.walls)}
     floorplans = {
-        tuple(r): figures_scoring.read_geojson_geometries(p)
+        tuple(r): read_geojson_geometries(p)
         for r, p in zip(smk.params.floorplan_runs, smk.input.floorplans)
     }
-    figures_scoring.make_walls_figures(
+    make_walls_figures(
         dataset=smk.wildcards.dataset,
         reference=reference,
         reference_kind=kind,

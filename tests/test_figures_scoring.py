@@ -10,8 +10,16 @@ import pytest
 import shapely
 from matplotlib.collections import LineCollection, PathCollection
 
-from floorscan.figures import scoring as F
-from floorscan.score import metrics as M
+from floorscan.figures import floorplans as figures_floorplans
+from floorscan.figures import maps as figures_maps
+from floorscan.figures.bitmaps import block_any, overlay_image
+from floorscan.figures.curves import plot_metrics_vs_k
+from floorscan.figures.floorplans import plot_floorplans, read_geojson_geometries
+from floorscan.figures.maps import plot_walls_over_points, subsample_points
+from floorscan.figures.scoring import make_score_figures, make_walls_figures
+from floorscan.figures.stage_times import plot_stage_times, stage_of, stage_times
+from floorscan.figures.style import DPI
+from floorscan.score.ground_truth import GROUND_TRUTH
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -51,7 +59,7 @@ def test_stage_times_from_hand_written_benchmarks(tmp_path):
     )
     (b / "register.tsv").write_text(BENCH_HEADER + "40\t0:00:40\tNA\tNA\tNA\tNA\tNA\tNA\tNA\tNA\n")
     (b / "broken.tsv").write_text("")
-    t = F.stage_times(b)
+    t = stage_times(b)
     assert t["stage"].tolist() == ["ingest", "register", "walls"]
     walls = t.set_index("stage").loc["walls"]
     assert walls["n_jobs"] == 2
@@ -61,28 +69,28 @@ def test_stage_times_from_hand_written_benchmarks(tmp_path):
     assert t.set_index("stage").loc["ingest", "max_rss_mb"] == pytest.approx(300.5)
     assert np.isnan(t.set_index("stage").loc["register", "max_rss_mb"])
     out = tmp_path / "stage_times.png"
-    F.plot_stage_times(t, out, "toy")
+    plot_stage_times(t, out, "toy")
     assert _is_png(out)
-    assert F.stage_times(tmp_path / "missing").empty
+    assert stage_times(tmp_path / "missing").empty
 
 
 def test_stage_of_names():
-    assert F.stage_of("walls/sequential/ransac/k5") == "walls"
-    assert F.stage_of("select") == "select"
-    assert F.stage_of("score_figures") == "score"
-    assert F.stage_of("custom_thing") == "custom"
+    assert stage_of("walls/sequential/ransac/k5") == "walls"
+    assert stage_of("select") == "select"
+    assert stage_of("score_figures") == "score"
+    assert stage_of("custom_thing") == "custom"
 
 
 def test_metrics_vs_k_figure(tmp_path):
     out = tmp_path / "metrics_vs_k.png"
-    F.plot_metrics_vs_k(_metrics(), out, 0.05)
+    plot_metrics_vs_k(_metrics(), out, 0.05)
     assert _is_png(out, 20000)
 
 
 def test_overlay_colours():
     bi = np.array([[1, 1, 0]], bool)
     bg = np.array([[1, 0, 1]], bool)
-    img = F.overlay_image(bi, bg)
+    img = overlay_image(bi, bg)
     assert tuple(img[0, 0]) == (0.55, 0.0, 0.65)  # both: purple
     assert tuple(img[0, 1]) == (1.0, 0.1, 0.1)  # inferred only: red
     assert tuple(img[0, 2]) == (0.1, 0.2, 1.0)  # ground truth only: blue
@@ -118,12 +126,12 @@ def test_all_figures_from_tiny_tables(tmp_path):
            "figure_ordering": "cluster_hull", "figure_orderings": ["sequential", "cluster_hull"],
            "cell_m": 0.05, "margin_m": 1.0, "wall_width_m": 0.1, "max_plot_points": 1000,
            "seed": 0, "points_z_band_m": [0.5, 2.0]}
-    F.make_walls_figures(
-        dataset="toy", reference={"ransac": gt, "cluster_ransac": gt}, reference_kind=M.GROUND_TRUTH,
+    make_walls_figures(
+        dataset="toy", reference={"ransac": gt, "cluster_ransac": gt}, reference_kind=GROUND_TRUTH,
         walls=walls, floorplans=floorplans, points=pts, scan_status=status, scan_times=times, outputs=outputs,
         cfg=cfg,
     )
-    table = F.make_score_figures(dataset="toy", metrics=_metrics(), bench_dir=bench, outputs=outputs, cfg=cfg)
+    table = make_score_figures(dataset="toy", metrics=_metrics(), bench_dir=bench, outputs=outputs, cfg=cfg)
     for n in names:
         assert _is_png(outputs[n]), n
     assert table["stage"].tolist() == ["hulls"]
@@ -135,21 +143,21 @@ def test_all_figures_from_tiny_tables(tmp_path):
 def test_subsample_points_is_seeded_and_cuts_the_height_band():
     rng = np.random.default_rng(2)
     pts = pd.DataFrame(rng.uniform(0, 3, size=(5000, 3)), columns=["x", "y", "z"])
-    a = F.subsample_points(pts, 500, seed=4, z_band=(0.5, 2.0))
-    b = F.subsample_points(pts, 500, seed=4, z_band=(0.5, 2.0))
+    a = subsample_points(pts, 500, seed=4, z_band=(0.5, 2.0))
+    b = subsample_points(pts, 500, seed=4, z_band=(0.5, 2.0))
     np.testing.assert_array_equal(a, b)
     assert a.shape == (500, 2)
     flat = pts.assign(z=0.0)
-    assert F.subsample_points(flat, 10**6, seed=0, z_band=(0.5, 2.0)).shape == (5000, 2)
+    assert subsample_points(flat, 10**6, seed=0, z_band=(0.5, 2.0)).shape == (5000, 2)
 
 
 def test_block_any_keeps_thin_walls():
     b = np.zeros((5, 7), bool)
     b[2, :] = True
-    r = F.block_any(b, 2)
+    r = block_any(b, 2)
     assert r.shape == (3, 4)
     assert r[1].all() and not r[0].any() and not r[2].any()
-    np.testing.assert_array_equal(F.block_any(b, 1), b)
+    np.testing.assert_array_equal(block_any(b, 1), b)
 
 
 def test_subsample_points_from_file_equals_the_frame(tmp_path):
@@ -163,31 +171,31 @@ def test_subsample_points_from_file_equals_the_frame(tmp_path):
     path = tmp_path / "registered.parquet"
     write_table(pts, path)
     for max_points, band in ((500, (0.5, 2.0)), (10**6, (0.5, 2.0)), (700, None)):
-        a = F.subsample_points(pts, max_points, seed=4, z_band=band)
-        b = F.subsample_points(str(path), max_points, seed=4, z_band=band, batch_rows=999)
+        a = subsample_points(pts, max_points, seed=4, z_band=band)
+        b = subsample_points(str(path), max_points, seed=4, z_band=band, batch_rows=999)
         assert np.array_equal(a, b), (max_points, band)
-    assert len(F.subsample_points(str(path), 10**6, seed=0, z_band=(0.5, 2.0))) == int(
+    assert len(subsample_points(str(path), 10**6, seed=0, z_band=(0.5, 2.0))) == int(
         ((pts["z"] >= 0.5) & (pts["z"] <= 2.0)).sum())
     # a 2D table (all z = 0): the band does not apply, every point can be drawn
     flat = pts.assign(z=np.float32(0))
     write_table(flat, path)
     for max_points in (500, 10**6):
-        a = F.subsample_points(flat, max_points, seed=4, z_band=(0.5, 2.0))
-        b = F.subsample_points(str(path), max_points, seed=4, z_band=(0.5, 2.0), batch_rows=999)
+        a = subsample_points(flat, max_points, seed=4, z_band=(0.5, 2.0))
+        b = subsample_points(str(path), max_points, seed=4, z_band=(0.5, 2.0), batch_rows=999)
         assert len(b) == min(max_points, 6000) and np.array_equal(a, b)
 
 
-def _capture_figures(monkeypatch):
-    """Keep the figures the plot functions save (the PNG is written as well)."""
+def _capture_figures(monkeypatch, module):
+    """Keep the figures the plot functions of ``module`` save (the PNG is written as well)."""
     figures = []
-    save = F._save
+    save = module._save
 
-    def keep(fig, path, dpi=F.DPI):
+    def keep(fig, path, dpi=DPI):
         figures.append(fig)
         fig.canvas.draw()  # lay out before the figure is closed
         save(fig, path, dpi)
 
-    monkeypatch.setattr(F, "_save", keep)
+    monkeypatch.setattr(module, "_save", keep)
     return figures
 
 
@@ -204,11 +212,11 @@ def test_floorplan_figure_title_counts_the_plans_walls(tmp_path, monkeypatch):
     plan = build_floorplan(segments)
     path = tmp_path / "plan.geojson"
     write_geojson(plan, path)
-    geoms = F.read_geojson_geometries(path)
+    geoms = read_geojson_geometries(path)
     n_features = len(json.loads(path.read_text())["features"])
     assert len(geoms) == len(plan.walls) < n_features  # axes, footprints and faces: one per wall
-    figures = _capture_figures(monkeypatch)
-    F.plot_floorplans([("cluster_hull, first 15 scans", geoms)], np.array(faces, float), M.GROUND_TRUTH,
+    figures = _capture_figures(monkeypatch, figures_floorplans)
+    plot_floorplans([("cluster_hull, first 15 scans", geoms)], np.array(faces, float), GROUND_TRUTH,
                       tmp_path / "floorplans.png", "toy")
     title = figures[0].axes[0].get_title()
     assert int(re.search(r"\((\d+) walls\)", title).group(1)) == len(plan.walls)
@@ -223,19 +231,19 @@ def test_read_geojson_geometries_of_other_geojson_returns_every_feature(tmp_path
          "geometry": {"type": "LineString", "coordinates": [[0, 1], [1, 1]]}},
         {"type": "Feature", "properties": {}, "geometry": None},
     ]}))
-    assert len(F.read_geojson_geometries(path)) == 2
+    assert len(read_geojson_geometries(path)) == 2
 
 
 def test_walls_over_points_draws_the_points_under_the_walls(tmp_path, monkeypatch):
     # points of a 2D scanner mounted 0.3 m high (z constant, not 0): all of them are drawn
     rng = np.random.default_rng(3)
     pts = pd.DataFrame({"x": rng.uniform(0, 10, 20000), "y": rng.uniform(0, 6, 20000), "z": 0.3})
-    xy = F.subsample_points(pts, 5000, seed=1, z_band=(0.5, 2.0))
+    xy = subsample_points(pts, 5000, seed=1, z_band=(0.5, 2.0))
     assert xy.shape == (5000, 2)
     walls = np.array([[0, 0, 10, 0], [10, 0, 10, 6]], float)
-    figures = _capture_figures(monkeypatch)
+    figures = _capture_figures(monkeypatch, figures_maps)
     out = tmp_path / "walls_over_points.png"
-    F.plot_walls_over_points(xy, [("ransac, all kept scans", walls)], out, "toy", max_points=3000)
+    plot_walls_over_points(xy, [("ransac, all kept scans", walls)], out, "toy", max_points=3000)
     ax = figures[0].axes[0]
     scatter = [c for c in ax.collections if isinstance(c, PathCollection)]
     lines = [c for c in ax.collections if isinstance(c, LineCollection)]
@@ -255,6 +263,6 @@ def test_subsample_points_3d_is_cut_to_the_band_2d_at_any_height_is_not():
     n = 4000
     three_d = pd.DataFrame({"x": rng.uniform(0, 5, n), "y": rng.uniform(0, 5, n), "z": rng.uniform(0, 3, n)})
     in_band = int(((three_d["z"] >= 0.5) & (three_d["z"] <= 2.0)).sum())
-    assert len(F.subsample_points(three_d, 10**6, seed=0, z_band=(0.5, 2.0))) == in_band
+    assert len(subsample_points(three_d, 10**6, seed=0, z_band=(0.5, 2.0))) == in_band
     mounted = three_d.assign(z=0.3 + rng.uniform(0, 0.005, n))  # within the planar tolerance
-    assert len(F.subsample_points(mounted, 10**6, seed=0, z_band=(0.5, 2.0))) == n
+    assert len(subsample_points(mounted, 10**6, seed=0, z_band=(0.5, 2.0))) == n

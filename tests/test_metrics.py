@@ -9,8 +9,32 @@ import pandas as pd
 import pytest
 import shapely
 
-from floorscan.score import metrics as M
 from floorscan.core.io import InputError
+from floorscan.floorplan.plan import point_segment_dist2
+from floorscan.score.bitmap import (
+    Grid,
+    _raster_cells,
+    bitmap_metrics,
+    error_map,
+    grid_for,
+    rasterize_segments,
+)
+from floorscan.score.capsule import length_within
+from floorscan.score.geojson import _wall_faces, floorplan_faces, floorplan_wall_count, read_wall_faces
+from floorscan.score.ground_truth import GROUND_TRUTH, REFERENCE, load_recall_references
+from floorscan.score.growing import _SamplePairs, score_walls
+from floorscan.score.nearest import _SegmentIndex, _nearest_below, nearest_distances
+from floorscan.score.runs import score_dataset
+from floorscan.score.segments import (
+    _row_keys,
+    as_segments,
+    dedupe_samples,
+    gt_samples,
+    sample_segments,
+    segment_lengths,
+)
+from floorscan.score.summary import summarize, summary_markdown
+from floorscan.score.tolerance import tolerance_metrics
 
 WALL = [[0.0, 0.0, 10.0, 0.0]]
 
@@ -21,9 +45,9 @@ WALL = [[0.0, 0.0, 10.0, 0.0]]
 def test_thesis_fractions_on_hand_made_bitmaps():
     bi = np.array([[1, 1, 0], [0, 0, 0], [0, 1, 0]], bool)
     bg = np.array([[1, 0, 0], [1, 0, 0], [0, 1, 0]], bool)
-    be = M.error_map(bi, bg)
+    be = error_map(bi, bg)
     assert be.tolist() == [[0, 1, 0], [-1, 0, 0], [0, 0, 0]]
-    m = M.bitmap_metrics(bi, bg)
+    m = bitmap_metrics(bi, bg)
     assert m["correct_match"] == pytest.approx(7 / 9)
     assert m["false_positive"] == pytest.approx(1 / 9)
     assert m["false_negative"] == pytest.approx(1 / 9)
@@ -38,18 +62,18 @@ def test_thesis_fractions_on_hand_made_bitmaps():
 
 def test_bitmaps_of_different_shape_raise():
     with pytest.raises(ValueError, match="shape"):
-        M.error_map(np.zeros((2, 2), bool), np.zeros((2, 3), bool))
+        error_map(np.zeros((2, 2), bool), np.zeros((2, 3), bool))
 
 
 def test_crossing_walls_on_a_tiny_grid():
     # 10 x 10 cells of 1 m; a horizontal ground-truth wall through the centres of row 2,
     # an inferred vertical wall through the centres of column 2: one cell in both.
-    grid = M.Grid(0.0, 0.0, 1.0, 10, 10)
-    bg = M.rasterize_segments([[0.5, 2.5, 9.5, 2.5]], grid, width_m=0.5)
-    bi = M.rasterize_segments([[2.5, 0.5, 2.5, 9.5]], grid, width_m=0.5)
+    grid = Grid(0.0, 0.0, 1.0, 10, 10)
+    bg = rasterize_segments([[0.5, 2.5, 9.5, 2.5]], grid, width_m=0.5)
+    bi = rasterize_segments([[2.5, 0.5, 2.5, 9.5]], grid, width_m=0.5)
     assert bg.sum() == 10 and bg[2].all()
     assert bi.sum() == 10 and bi[:, 2].all()
-    m = M.bitmap_metrics(bi, bg)
+    m = bitmap_metrics(bi, bg)
     assert m["false_positive"] == pytest.approx(0.09)
     assert m["false_negative"] == pytest.approx(0.09)
     assert m["correct_match"] == pytest.approx(0.82)
@@ -59,8 +83,8 @@ def test_crossing_walls_on_a_tiny_grid():
 
 def test_identical_walls_match_every_wall_cell():
     gt = [[0, 0, 10, 0], [10, 0, 10, 6], [0, 0, 3, 4.2]]
-    grid = M.grid_for(gt, cell_m=0.05, margin_m=0.5)
-    m = M.score_walls(gt, gt, grid, wall_width_m=0.10)
+    grid = grid_for(gt, cell_m=0.05, margin_m=0.5)
+    m = score_walls(gt, gt, grid, wall_width_m=0.10)
     assert m["wall_correct_match"] == 1.0
     assert m["false_positive"] == 0.0 and m["false_negative"] == 0.0
     assert m["correct_match"] == 1.0
@@ -70,8 +94,8 @@ def test_rasterize_equals_shapely_buffer_on_cell_centres():
     rng = np.random.default_rng(3)
     seg = rng.uniform(0, 6, size=(12, 4))
     seg[0] = [1.0, 1.0, 1.0, 1.0]  # a point: its buffer is a disk
-    grid = M.Grid(-0.5, -0.5, 0.05, 140, 140)
-    got = M.rasterize_segments(seg, grid, width_m=0.13)
+    grid = Grid(-0.5, -0.5, 0.05, 140, 140)
+    got = rasterize_segments(seg, grid, width_m=0.13)
     ix, iy = np.meshgrid(np.arange(grid.nx), np.arange(grid.ny))
     cx = grid.x0 + (ix + 0.5) * grid.cell_m
     cy = grid.y0 + (iy + 0.5) * grid.cell_m
@@ -88,23 +112,23 @@ def test_rasterize_equals_shapely_buffer_on_cell_centres():
 
 
 def test_rasterize_clips_walls_outside_the_grid_and_keeps_input():
-    grid = M.Grid(0.0, 0.0, 0.1, 20, 10)
+    grid = Grid(0.0, 0.0, 0.1, 20, 10)
     seg = np.array([[-5.0, 0.55, 5.0, 0.55], [50.0, 50.0, 60.0, 50.0]])
     copy = seg.copy()
-    b = M.rasterize_segments(seg, grid, width_m=0.05)
+    b = rasterize_segments(seg, grid, width_m=0.05)
     assert b.shape == (10, 20)
     assert b.sum() == 20 and b[5].all()
     np.testing.assert_array_equal(seg, copy)
 
 
 def test_grid_is_snapped_and_covers_margin():
-    g = M.grid_for([[0.02, 0.03, 10.0, 5.0]], cell_m=0.05, margin_m=1.0)
+    g = grid_for([[0.02, 0.03, 10.0, 5.0]], cell_m=0.05, margin_m=1.0)
     assert g.x0 == pytest.approx(-1.0) and g.y0 == pytest.approx(-1.0)
     xmin, xmax, ymin, ymax = g.extent
     assert xmax >= 11.0 - 1e-9 and ymax >= 6.0 - 1e-9
     assert g.nx == 240 and g.ny == 140
     with pytest.raises(ValueError, match="no wall segment"):
-        M.grid_for(np.zeros((0, 4)))
+        grid_for(np.zeros((0, 4)))
 
 
 def test_rasterize_a_50_by_30_m_map_of_many_walls():
@@ -112,8 +136,8 @@ def test_rasterize_a_50_by_30_m_map_of_many_walls():
     start = rng.uniform([0, 0], [50, 30], size=(3000, 2))
     ang = rng.uniform(0, np.pi, 3000)
     seg = np.column_stack([start, start + 3 * np.column_stack([np.cos(ang), np.sin(ang)])])
-    grid = M.grid_for(seg, 0.05, 1.0)
-    b = M.rasterize_segments(seg, grid, 0.10)
+    grid = grid_for(seg, 0.05, 1.0)
+    b = rasterize_segments(seg, grid, 0.10)
     # 9 km of 10 cm wide walls, overlapping: at most 9000 * 0.1 / 0.0025 cells.
     assert 0.5 * 360_000 < b.sum() < 1.1 * 360_000
 
@@ -123,7 +147,7 @@ def test_rasterize_a_50_by_30_m_map_of_many_walls():
 
 def test_identical_segments_have_precision_and_recall_one():
     gt = [[0, 0, 10, 0], [10, 0, 10, 6]]
-    m = M.tolerance_metrics(gt, gt, taus=(0.05, 0.10))
+    m = tolerance_metrics(gt, gt, taus=(0.05, 0.10))
     for lab in ("5cm", "10cm"):
         assert m[f"precision_{lab}"] == pytest.approx(1.0)
         assert m[f"recall_{lab}"] == pytest.approx(1.0)
@@ -134,7 +158,7 @@ def test_identical_segments_have_precision_and_recall_one():
 
 def test_a_wall_shifted_3_cm_is_within_5_cm_but_not_2_cm():
     inferred = [[0, 0.03, 10, 0.03]]
-    m = M.tolerance_metrics(inferred, WALL, taus=(0.02, 0.05))
+    m = tolerance_metrics(inferred, WALL, taus=(0.02, 0.05))
     assert m["precision_5cm"] == pytest.approx(1.0)
     assert m["recall_5cm"] == pytest.approx(1.0)
     assert m["precision_2cm"] == 0.0
@@ -145,7 +169,7 @@ def test_a_wall_shifted_3_cm_is_within_5_cm_but_not_2_cm():
 
 def test_a_missing_wall_halves_recall():
     gt = [[0, 0, 5, 0], [0, 3, 5, 3]]
-    m = M.tolerance_metrics([[0, 0, 5, 0]], gt, taus=(0.05,))
+    m = tolerance_metrics([[0, 0, 5, 0]], gt, taus=(0.05,))
     assert m["recall_5cm"] == pytest.approx(0.5)
     assert m["precision_5cm"] == pytest.approx(1.0)
     assert m["f1_5cm"] == pytest.approx(2 / 3)
@@ -156,16 +180,16 @@ def test_a_missing_wall_halves_recall():
 def test_partial_overlap_counts_the_end_disk():
     # Inferred 0..4 m, ground truth 2..6 m on the same line: within tau of the ground
     # truth are x in [2 - tau, 4], i.e. 2 + tau metres of 4.
-    m = M.tolerance_metrics([[0, 0, 4, 0]], [[2, 0, 6, 0]], taus=(0.05,))
+    m = tolerance_metrics([[0, 0, 4, 0]], [[2, 0, 6, 0]], taus=(0.05,))
     assert m["precision_5cm"] == pytest.approx(2.05 / 4)
     assert m["recall_5cm"] == pytest.approx(2.05 / 4)
 
 
 def test_crossing_segment_is_covered_over_two_tau():
-    lw = M.length_within([[0, -1, 0, 1]], [[-1, 0, 1, 0]], 0.05)
+    lw = length_within([[0, -1, 0, 1]], [[-1, 0, 1, 0]], 0.05)
     assert lw[0] == pytest.approx(0.10)
     # Duplicate and overlapping others do not count twice.
-    lw = M.length_within([[0, 0, 4, 0]], [[0, 0, 3, 0], [1, 0, 4, 0], [1, 0, 4, 0]], 0.01)
+    lw = length_within([[0, 0, 4, 0]], [[0, 0, 3, 0], [1, 0, 4, 0], [1, 0, 4, 0]], 0.01)
     assert lw[0] == pytest.approx(4.0)
 
 
@@ -174,47 +198,47 @@ def test_exact_lengths_agree_with_dense_sampling():
     gt = rng.uniform(0, 5, size=(15, 4))
     inferred = gt + rng.normal(0, 0.04, size=gt.shape)
     tau = 0.05
-    exact = M.length_within(inferred, gt, tau).sum()
-    pts, w = M.sample_segments(inferred, 0.0005)
-    d = M.nearest_distances(pts, gt)
+    exact = length_within(inferred, gt, tau).sum()
+    pts, w = sample_segments(inferred, 0.0005)
+    d = nearest_distances(pts, gt)
     sampled = w[d <= tau].sum()
     assert exact == pytest.approx(sampled, rel=2e-3)
-    assert 0 < exact < M.segment_lengths(inferred).sum()
+    assert 0 < exact < segment_lengths(inferred).sum()
 
 
 def test_sample_segments_weights_sum_to_length():
-    pts, w = M.sample_segments([[0, 0, 0.025, 0], [0, 0, 3, 4]], 0.01)
+    pts, w = sample_segments([[0, 0, 0.025, 0], [0, 0, 3, 4]], 0.01)
     assert len(pts) == 3 + 500
     assert w.sum() == pytest.approx(5.025)
     assert pts[0] == pytest.approx([0.025 / 6, 0])
 
 
 def test_empty_inferred_walls_never_crash():
-    m = M.tolerance_metrics(np.zeros((0, 4)), WALL, taus=(0.05,))
+    m = tolerance_metrics(np.zeros((0, 4)), WALL, taus=(0.05,))
     assert math.isnan(m["precision_5cm"])
     assert m["recall_5cm"] == 0.0
     assert m["f1_5cm"] == 0.0
     assert math.isnan(m["median_distance_m"])
-    grid = M.grid_for(WALL, 0.05, 1.0)
-    s = M.score_walls(pd.DataFrame(columns=["x0", "y0", "x1", "y1"]), WALL, grid)
+    grid = grid_for(WALL, 0.05, 1.0)
+    s = score_walls(pd.DataFrame(columns=["x0", "y0", "x1", "y1"]), WALL, grid)
     assert s["false_positive"] == 0.0
     assert s["wall_correct_match"] == 0.0
     assert s["false_negative"] == pytest.approx(s["n_gt_cells"] / s["n_cells"])
 
 
 def test_empty_ground_truth_gives_nan_recall():
-    m = M.tolerance_metrics(WALL, [], taus=(0.05,))
+    m = tolerance_metrics(WALL, [], taus=(0.05,))
     assert m["precision_5cm"] == 0.0
     assert math.isnan(m["recall_5cm"])
     assert m["f1_5cm"] == 0.0
-    assert math.isnan(M.tolerance_metrics([], [], taus=(0.05,))["f1_5cm"])
+    assert math.isnan(tolerance_metrics([], [], taus=(0.05,))["f1_5cm"])
 
 
 def test_nan_rows_are_dropped_and_bad_shapes_raise():
-    m = M.tolerance_metrics([[0, 0, 10, 0], [np.nan, 0, 1, 1]], WALL, taus=(0.05,))
+    m = tolerance_metrics([[0, 0, 10, 0], [np.nan, 0, 1, 1]], WALL, taus=(0.05,))
     assert m["precision_5cm"] == pytest.approx(1.0)
     with pytest.raises(ValueError, match=r"\(M, 4\)"):
-        M.as_segments(np.zeros((3, 3)))
+        as_segments(np.zeros((3, 3)))
 
 
 def test_metrics_are_deterministic_and_do_not_mutate_inputs():
@@ -222,9 +246,9 @@ def test_metrics_are_deterministic_and_do_not_mutate_inputs():
     gt = rng.uniform(0, 8, size=(20, 4))
     inf = gt + rng.normal(0, 0.03, size=gt.shape)
     keep = inf.copy()
-    grid = M.grid_for(gt, 0.05, 1.0)
-    a = M.score_walls(inf, gt, grid)
-    b = M.score_walls(inf, gt, grid)
+    grid = grid_for(gt, 0.05, 1.0)
+    a = score_walls(inf, gt, grid)
+    b = score_walls(inf, gt, grid)
     assert a == b
     np.testing.assert_array_equal(inf, keep)
 
@@ -250,10 +274,10 @@ def _geojson(tmp_path):
 
 
 def test_read_wall_faces_keeps_faces_only(tmp_path):
-    seg = M.read_wall_faces(_geojson(tmp_path))
+    seg = read_wall_faces(_geojson(tmp_path))
     np.testing.assert_allclose(seg, [[0, 0, 10, 0], [10, 0, 10, 6]])
     with pytest.raises(InputError, match="kind='door'"):
-        M.read_wall_faces(_geojson(tmp_path), kind="door")
+        read_wall_faces(_geojson(tmp_path), kind="door")
 
 
 def test_wall_faces_splits_lines_and_multilines_into_pieces():
@@ -267,9 +291,9 @@ def test_wall_faces_splits_lines_and_multilines_into_pieces():
         {"properties": {"kind": "face"}, "geometry": {"type": "Point", "coordinates": [9, 9]}},
         {"properties": {"kind": "face"}, "geometry": line([[9, 9], [8, 8.5], [7, 7]])},
     ]}  # fmt: skip
-    seg = M._wall_faces(doc, "face")
+    seg = _wall_faces(doc, "face")
     assert seg.tolist() == [[0, 0, 1, 0], [1, 0, 1, 2], [2, 2, 3, 3], [9, 9, 8, 8.5], [8, 8.5, 7, 7]]
-    assert M._wall_faces(doc, "footprint").shape == (0, 4)
+    assert _wall_faces(doc, "footprint").shape == (0, 4)
 
 
 def test_floorplan_wall_count(tmp_path):
@@ -283,15 +307,15 @@ def test_floorplan_wall_count(tmp_path):
         feat("footprint", 1, poly), feat("axis", 2, line)]}
     p = tmp_path / "plan.geojson"
     p.write_text(json.dumps(doc))
-    assert M.floorplan_wall_count(p) == 3
+    assert floorplan_wall_count(p) == 3
     for f in doc["features"]:
         del f["properties"]["wall_id"]
     p.write_text(json.dumps(doc))
-    assert M.floorplan_wall_count(p) == 3
+    assert floorplan_wall_count(p) == 3
 
 
 def test_score_dataset_and_summary(tmp_path):
-    gt = M.read_wall_faces(_geojson(tmp_path))
+    gt = read_wall_faces(_geojson(tmp_path))
     walls = {
         "5": pd.DataFrame([[0, 0, 5, 0]], columns=["x0", "y0", "x1", "y1"]),
         "10": pd.DataFrame([[0, 0, 10, 0], [10, 0, 10, 3]], columns=["x0", "y0", "x1", "y1"]),
@@ -304,7 +328,7 @@ def test_score_dataset_and_summary(tmp_path):
     ]
     cfg = {"cell_m": 0.05, "wall_width_m": 0.1, "margin_m": 1.0, "taus_m": [0.05, 0.1],
            "sample_step_m": 0.01}
-    df = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg, dataset="toy")
+    df = score_dataset(runs, {"ransac": gt}, GROUND_TRUTH, cfg, dataset="toy")
     assert list(df["k"]) == ["5", "10", "all"]
     assert list(df["n_scans"]) == [5, 10, 40]
     # End disks: each partial wall covers tau more of the ground truth.
@@ -312,21 +336,21 @@ def test_score_dataset_and_summary(tmp_path):
     assert (df["reference_kind"] == "ground_truth").all()
     # The same grid for every run.
     assert df["n_cells"].nunique() == 1
-    s = M.summarize(df, tau=0.05, levels=(0.8, 0.95))
+    s = summarize(df, tau=0.05, levels=(0.8, 0.95))
     r = s.iloc[0]
     f1_10 = 2 * 13.05 / 16 / (1 + 13.05 / 16)
     assert f1_10 > 0.8 and f1_10 < 0.95
     assert r["k_80"] == "10" and r["n_scans_80"] == 10
     assert r["fraction_80"] == pytest.approx(0.25) and r["reduction_80"] == pytest.approx(4.0)
     assert r["k_95"] == "all" and r["fraction_95"] == pytest.approx(1.0)
-    md = M.summary_markdown(s, 0.05, (0.8, 0.95))
+    md = summary_markdown(s, 0.05, (0.8, 0.95))
     assert "ground-truth" in md and "| sequential | ransac | 40 |" in md
 
 
 def test_score_dataset_in_worker_processes_gives_the_same_table(tmp_path):
     """Orderings x extractors split over two processes: the same rows, in the same
     order, except the timing column."""
-    gt = M.read_wall_faces(_geojson(tmp_path))
+    gt = read_wall_faces(_geojson(tmp_path))
     runs = []
     for o, shift in (("sequential", 0.0), ("random", 0.02), ("cluster_hull", 0.04)):
         for k, w in (("5", [[0, shift, 5, shift]]), ("all", [[0, shift, 10, shift], [10, 0, 10, 6]])):
@@ -336,8 +360,8 @@ def test_score_dataset_in_worker_processes_gives_the_same_table(tmp_path):
                          "n_floorplan_walls": 2})
     cfg = {"cell_m": 0.05, "wall_width_m": 0.1, "margin_m": 1.0, "taus_m": [0.05, 0.025],
            "sample_step_m": 0.01}
-    one = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg, dataset="toy")
-    two = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg, dataset="toy", workers=2)
+    one = score_dataset(runs, {"ransac": gt}, GROUND_TRUTH, cfg, dataset="toy")
+    two = score_dataset(runs, {"ransac": gt}, GROUND_TRUTH, cfg, dataset="toy", workers=2)
     assert len(two) == 6 and list(two["ordering"]) == ["cluster_hull"] * 2 + ["random"] * 2 + ["sequential"] * 2
     assert two.loc[two["ordering"] == "sequential", "recall_5cm"].tolist() == pytest.approx([5.05 / 16, 1.0])
     pd.testing.assert_frame_equal(one.drop(columns="score_time_s"), two.drop(columns="score_time_s"))
@@ -349,13 +373,13 @@ def test_score_dataset_labels_a_reference():
              "n_kept": 3, "n_floorplan_walls": None}]
     cfg = {"cell_m": 0.05, "wall_width_m": 0.1, "margin_m": 0.5, "taus_m": [0.05],
            "sample_step_m": 0.01}
-    df = M.score_dataset(runs, {"ransac": ref}, M.REFERENCE, cfg)
+    df = score_dataset(runs, {"ransac": ref}, REFERENCE, cfg)
     assert df["reference_kind"].iloc[0] == "reference"
     assert df["f1_5cm"].iloc[0] == pytest.approx(1.0)
     assert df["n_scans"].iloc[0] == 3 and df["n_floorplan_walls"].iloc[0] == -1
     with pytest.raises(ValueError, match="empty"):
-        M.score_dataset(runs, {"ransac": np.zeros((0, 4))}, M.REFERENCE, cfg)
-    assert "not ground truth" in M.summary_markdown(M.summarize(df, 0.05, (0.95,)), 0.05, (0.95,))
+        score_dataset(runs, {"ransac": np.zeros((0, 4))}, REFERENCE, cfg)
+    assert "not ground truth" in summary_markdown(summarize(df, 0.05, (0.95,)), 0.05, (0.95,))
 
 
 def test_overlapping_reference_walls_count_once_in_recall():
@@ -363,10 +387,10 @@ def test_overlapping_reference_walls_count_once_in_recall():
     # wall B, both 10 m; the inferred walls cover half of A: recall is 5 of 20 m.
     a = [[0.0, 0.0, 10.0, 0.0]] * 30
     b = [[0.0, 5.0, 10.0, 5.0]]
-    m = M.tolerance_metrics([[0, 0, 5, 0]], a + b, taus=(0.05,))
+    m = tolerance_metrics([[0, 0, 5, 0]], a + b, taus=(0.05,))
     assert m["recall_5cm"] == pytest.approx(5.05 / 20, abs=1e-3)
     assert m["precision_5cm"] == pytest.approx(1.0)
-    pts = M.dedupe_samples(np.array([[0.001, 0.001], [0.002, 0.003], [0.5, 0.5]]), 0.01)
+    pts = dedupe_samples(np.array([[0.001, 0.001], [0.002, 0.003], [0.5, 0.5]]), 0.01)
     np.testing.assert_array_equal(pts, [[0.001, 0.001], [0.5, 0.5]])
 
 
@@ -380,16 +404,16 @@ def test_recall_against_observed_faces_precision_against_all(tmp_path):
              "n_kept": 3, "n_floorplan_walls": 1}]
     cfg = {"cell_m": 0.05, "wall_width_m": 0.1, "margin_m": 1.0, "taus_m": [0.05],
            "sample_step_m": 0.01}
-    r = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg, recall_references=observed).iloc[0]
+    r = score_dataset(runs, {"ransac": gt}, GROUND_TRUTH, cfg, recall_references=observed).iloc[0]
     assert r["precision_5cm"] == pytest.approx(8 / 9)
     assert r["recall_5cm"] == pytest.approx(1.0)
     # against every face: 8 m + the 5 cm end disk of 16 m
     assert r["recall_all_5cm"] == pytest.approx(8.05 / 16, abs=2e-3)
     # without recall references there is no recall_all column and recall is against all
-    r2 = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg).iloc[0]
+    r2 = score_dataset(runs, {"ransac": gt}, GROUND_TRUTH, cfg).iloc[0]
     assert "recall_all_5cm" not in r2 and r2["recall_5cm"] == pytest.approx(8.05 / 16, abs=2e-3)
     with pytest.raises(ValueError, match="recall reference"):
-        M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg, recall_references={})
+        score_dataset(runs, {"ransac": gt}, GROUND_TRUTH, cfg, recall_references={})
 
 
 def test_load_recall_references(tmp_path):
@@ -398,10 +422,10 @@ def test_load_recall_references(tmp_path):
     doc["features"].append({"type": "Feature", "properties": {"kind": "observed_face"},
                             "geometry": {"type": "LineString", "coordinates": [[0, 0], [4, 0]]}})
     p.write_text(json.dumps(doc))
-    refs = M.load_recall_references(M.GROUND_TRUTH, ["ransac", "cluster_ransac"], p)
+    refs = load_recall_references(GROUND_TRUTH, ["ransac", "cluster_ransac"], p)
     np.testing.assert_allclose(refs["cluster_ransac"], [[0, 0, 4, 0]])
-    assert M.load_recall_references(M.GROUND_TRUTH, ["ransac"], p, recall_kind="face") is None
-    assert M.load_recall_references(M.REFERENCE, ["ransac"], p) is None
+    assert load_recall_references(GROUND_TRUTH, ["ransac"], p, recall_kind="face") is None
+    assert load_recall_references(REFERENCE, ["ransac"], p) is None
 
 
 def test_floorplan_faces_are_scored_too(tmp_path):
@@ -412,7 +436,7 @@ def test_floorplan_faces_are_scored_too(tmp_path):
              "n_kept": 3, "n_floorplan_walls": 1, "floorplan_faces": plan}]
     cfg = {"cell_m": 0.05, "wall_width_m": 0.1, "margin_m": 1.0, "taus_m": [0.05],
            "sample_step_m": 0.01}
-    r = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg).iloc[0]
+    r = score_dataset(runs, {"ransac": gt}, GROUND_TRUTH, cfg).iloc[0]
     assert r["precision_5cm"] == pytest.approx(0.5)  # the segment 8 cm off is not within 5 cm
     assert r["plan_precision_5cm"] == pytest.approx(1.0)
     assert r["plan_recall_5cm"] == pytest.approx(6.05 / 10, abs=2e-3)
@@ -421,7 +445,7 @@ def test_floorplan_faces_are_scored_too(tmp_path):
          "geometry": {"type": "LineString", "coordinates": [[0, 0], [1, 0]]}}]}
     p = tmp_path / "plan.geojson"
     p.write_text(json.dumps(doc))
-    assert M.floorplan_faces(p).shape == (0, 4)
+    assert floorplan_faces(p).shape == (0, 4)
 
 
 # ------------------------------------------------------- speed paths give the same numbers
@@ -448,10 +472,10 @@ def test_nearest_distances_equal_brute_force_on_stacked_duplicates():
     rng = np.random.default_rng(4)
     pts = np.vstack([rng.uniform([-30, -30], [40, 36], (300, 2)), rng.uniform([0, -0.1], [10, 0.1], (300, 2))])
     brute = np.sqrt(
-        M.point_segment_dist2(np.repeat(pts[:, 0], len(seg)), np.repeat(pts[:, 1], len(seg)), np.tile(seg, (len(pts), 1)))
+        point_segment_dist2(np.repeat(pts[:, 0], len(seg)), np.repeat(pts[:, 1], len(seg)), np.tile(seg, (len(pts), 1)))
     ).reshape(len(pts), len(seg)).min(axis=1)
-    np.testing.assert_allclose(M.nearest_distances(pts, seg), brute, rtol=1e-12, atol=1e-12)
-    assert np.isinf(M.nearest_distances(pts[:3], np.zeros((0, 4)))).all()
+    np.testing.assert_allclose(nearest_distances(pts, seg), brute, rtol=1e-12, atol=1e-12)
+    assert np.isinf(nearest_distances(pts[:3], np.zeros((0, 4)))).all()
 
 
 def test_growing_runs_score_as_from_scratch(tmp_path):
@@ -471,14 +495,14 @@ def test_growing_runs_score_as_from_scratch(tmp_path):
     runs.append({"ordering": "o", "extractor": "ransac", "k": "1", "walls": pd.DataFrame(seg[:3], columns=cols),
                  "n_kept": 30})  # not a superset of the previous run: scored from scratch
     observed = gt[:4]
-    df = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg, recall_references={"ransac": observed})
-    grid = M.grid_for(gt, 0.05, 1.0)
-    samples = M.gt_samples(observed)
+    df = score_dataset(runs, {"ransac": gt}, GROUND_TRUTH, cfg, recall_references={"ransac": observed})
+    grid = grid_for(gt, 0.05, 1.0)
+    samples = gt_samples(observed)
     for n, (_, row) in zip([3, 8, 20, len(seg)], df.iterrows()):
-        want = M.score_walls(seg[:n], gt, grid, 0.1, cfg["taus_m"], 0.01, samples=samples)
+        want = score_walls(seg[:n], gt, grid, 0.1, cfg["taus_m"], 0.01, samples=samples)
         for key, value in want.items():
             assert row[key] == pytest.approx(value, rel=1e-12, abs=1e-12, nan_ok=True), key
-        d_all = M.nearest_distances(M.gt_samples(gt), seg[:n])
+        d_all = nearest_distances(gt_samples(gt), seg[:n])
         assert row["recall_all_5cm"] == pytest.approx(np.mean(d_all <= 0.05), rel=1e-12)
     assert df["recall_5cm"].iloc[-1] > 0.9 and df["precision_5cm"].iloc[-1] < 1.0
 
@@ -486,7 +510,7 @@ def test_growing_runs_score_as_from_scratch(tmp_path):
 def _brute_d(pts, seg):
     """(S, M) exact distances, the way the metrics measure them (numpy)."""
     return np.sqrt(
-        M.point_segment_dist2(np.repeat(pts[:, 0], len(seg)), np.repeat(pts[:, 1], len(seg)), np.tile(seg, (len(pts), 1)))
+        point_segment_dist2(np.repeat(pts[:, 0], len(seg)), np.repeat(pts[:, 1], len(seg)), np.tile(seg, (len(pts), 1)))
     ).reshape(len(pts), len(seg))
 
 
@@ -494,9 +518,9 @@ def test_sample_pairs_are_every_wall_sample_pair_within_reach():
     """The pairs a wall set gets from _SamplePairs (measured in batches, cached by row)
     are exactly the (wall, sample) pairs within the reach, with the same distances."""
     seg = np.vstack([_stacked_walls(25, seed=7), [[2.0, 2.0, 2.0, 2.0], [5.0, 1.0, 5.3, 1.7]]])
-    samples = M.gt_samples(np.array([[0, 0, 10, 0], [10, 0, 10, 6], [3, 1, 7, 3]], float), 0.02)
-    pairs = M._SamplePairs(samples, 0.1)
-    keys = M._row_keys(seg)
+    samples = gt_samples(np.array([[0, 0, 10, 0], [10, 0, 10, 6], [3, 1, 7, 3]], float), 0.02)
+    pairs = _SamplePairs(samples, 0.1)
+    keys = _row_keys(seg)
     pairs.of(seg[5:40], keys[5:40])  # an earlier batch, cached
     brute = _brute_d(samples, seg)
     for i in (0, 7, 39, len(seg) - 2, len(seg) - 1):
@@ -517,14 +541,14 @@ def test_segment_index_exact_and_nearest_below_match_brute_force():
     rng = np.random.default_rng(12)
     pts = np.vstack([rng.uniform([-3, -3], [13, 9], (400, 2)), rng.uniform([0, -0.05], [10, 0.05], (400, 2))])
     brute = _brute_d(pts, seg)
-    index = M._SegmentIndex(seg)
+    index = _SegmentIndex(seg)
     radius = rng.choice([0.005, 0.02, 0.05, 0.1, 0.4, 3.0], len(pts))
     ids = np.arange(len(pts))
     got = index.exact(pts, ids, radius)
     want = np.where(brute <= radius[:, None] * (1 + 1e-9) + 1e-9, brute, np.inf).min(axis=1)
     assert np.array_equal(got, want)
     bound = rng.choice([np.inf, 0.01, 0.08, 0.6, 2.0, 50.0], len(pts))
-    got = M._nearest_below(pts, M._SegmentIndex(seg[:20]), bound)
+    got = _nearest_below(pts, _SegmentIndex(seg[:20]), bound)
     assert np.array_equal(got, np.minimum(bound, brute[:, :20].min(axis=1)))
 
 
@@ -532,11 +556,11 @@ def test_wall_cells_of_batches_union_to_the_bitmap():
     """Rasterizing walls one by one (the cache shared by the orderings) gives the
     bitmap of rasterizing them all at once."""
     seg = _stacked_walls(15, seed=13)
-    grid = M.grid_for([[0, 0, 10, 6]], 0.05, 0.5)
-    whole = M.rasterize_segments(seg, grid, 0.1)
+    grid = grid_for([[0, 0, 10, 6]], 0.05, 0.5)
+    whole = rasterize_segments(seg, grid, 0.1)
     parts = np.zeros(grid.shape, bool)
     for i in range(len(seg)):
-        owner, flat = M._raster_cells(seg[i:i + 1], grid, 0.1)
+        owner, flat = _raster_cells(seg[i:i + 1], grid, 0.1)
         assert (owner == 0).all()
         parts.reshape(-1)[flat] = True
     assert np.array_equal(parts, whole) and whole.sum() > 1000
@@ -553,20 +577,20 @@ def test_orderings_sharing_caches_score_as_from_scratch(tmp_path):
     runs = [{"ordering": o, "extractor": "ransac", "k": str(n), "walls": pd.DataFrame(w[:n], columns=cols),
              "n_kept": 20, "n_floorplan_walls": 2, "floorplan_faces": w[n // 2:n]}
             for o, w in (("a", seg), ("b", rev)) for n in (4, 15, len(seg))]
-    df = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg, recall_references={"ransac": gt[:4]})
-    grid = M.grid_for(gt, 0.05, 1.0)
-    samples = M.gt_samples(gt[:4])
+    df = score_dataset(runs, {"ransac": gt}, GROUND_TRUTH, cfg, recall_references={"ransac": gt[:4]})
+    grid = grid_for(gt, 0.05, 1.0)
+    samples = gt_samples(gt[:4])
     for (_, row), run in zip(df.iterrows(), runs):
         w = run["walls"].to_numpy()
-        want = M.score_walls(w, gt, grid, 0.1, cfg["taus_m"], 0.01, samples=samples)
+        want = score_walls(w, gt, grid, 0.1, cfg["taus_m"], 0.01, samples=samples)
         for key in ("n_both_cells", "n_inferred_cells", "median_distance_m", "mean_distance_m", "recall_2cm",
                     "recall_5cm"):
             assert row[key] == want[key], key
         for key in ("precision_2cm", "f1_5cm"):
             assert row[key] == pytest.approx(want[key], rel=1e-12), key
-        d_all = M.nearest_distances(M.gt_samples(gt), w)
+        d_all = nearest_distances(gt_samples(gt), w)
         assert row["recall_all_2cm"] == np.mean(d_all <= 0.02)
-        plan = M.tolerance_metrics(run["floorplan_faces"], gt, cfg["taus_m"], samples=samples)
+        plan = tolerance_metrics(run["floorplan_faces"], gt, cfg["taus_m"], samples=samples)
         assert row["plan_recall_2cm"] == plan["recall_2cm"] and row["plan_recall_5cm"] == plan["recall_5cm"]
         assert row["plan_f1_5cm"] == pytest.approx(plan["f1_5cm"], rel=1e-12)
     assert df["recall_5cm"].iloc[-1] > 0.9 and 0 < df["plan_recall_5cm"].iloc[0] < df["plan_recall_5cm"].iloc[-1]
@@ -584,15 +608,15 @@ def test_a_last_run_with_the_walls_and_plan_of_an_earlier_one_takes_its_metrics(
     runs = [{"ordering": o, "extractor": "ransac", "k": k, "walls": pd.DataFrame(w[:n], columns=cols),
              "n_kept": 20, "n_floorplan_walls": 3, "floorplan_faces": seg[:6] if k == "all" else w[:2]}
             for o, w in (("a", seg), ("b", seg[order])) for k, n in (("5", 5), ("all", len(seg)))]
-    df = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg)
+    df = score_dataset(runs, {"ransac": gt}, GROUND_TRUTH, cfg)
     metric_cols = [c for c in df.columns if c not in ("ordering", "score_time_s")]
     a_all, b_all = (df[(df.ordering == o) & (df.k == "all")][metric_cols].reset_index(drop=True) for o in "ab")
     pd.testing.assert_frame_equal(a_all, b_all, check_exact=True)
-    want = M.score_walls(seg, gt, M.grid_for(gt, 0.05, 1.0), 0.1, cfg["taus_m"], 0.01)
+    want = score_walls(seg, gt, grid_for(gt, 0.05, 1.0), 0.1, cfg["taus_m"], 0.01)
     assert b_all.loc[0, "f1_5cm"] == pytest.approx(want["f1_5cm"], rel=1e-12) and want["f1_5cm"] > 0.5
     # a different plan for the same walls is scored, not taken
     runs[3] = {**runs[3], "floorplan_faces": seg[6:9]}
-    df2 = M.score_dataset(runs, {"ransac": gt}, M.GROUND_TRUTH, cfg)
+    df2 = score_dataset(runs, {"ransac": gt}, GROUND_TRUTH, cfg)
     b2 = df2[(df2.ordering == "b") & (df2.k == "all")].iloc[0]
-    plan = M.tolerance_metrics(seg[6:9], gt, cfg["taus_m"], samples=M.gt_samples(gt))
+    plan = tolerance_metrics(seg[6:9], gt, cfg["taus_m"], samples=gt_samples(gt))
     assert b2["plan_recall_5cm"] == plan["recall_5cm"] != a_all.loc[0, "plan_recall_5cm"]

@@ -100,7 +100,7 @@ def test_the_plan_against_the_reference_map_sees_a_wall_through_free_space(real_
     correctness is below 1 on every recording), and walls drawn along the rover's own
     path, through space every scan saw free, lower correctness by their share of the
     plan's length while completeness stays."""
-    from floorscan.score.metrics import floorplan_faces
+    from floorscan.score.geojson import floorplan_faces
     from floorscan.score.against_reference import plan_against_reference
     from floorscan.score.reference import read_grid
 

@@ -1,4 +1,4 @@
-"""The front page of a dataset's result: what the report opens on (issue 23).
+"""The front page of a dataset's result: what the report opens on.
 
 :func:`front_page` renders one self-contained HTML page per dataset from plain inputs:
 the recommended floor plan (its SVG inlined), how few scans it took (k of the kept and
@@ -249,7 +249,7 @@ def write_front_page_of_files(
     extractor, description : str
         As :func:`front_page`.
     """
-    from floorscan.figures.scoring import read_geojson_geometries
+    from floorscan.figures.floorplans import read_geojson_geometries
     from floorscan.core.io import read_metadata
     from floorscan.select.recommend import read_selection
 

@@ -1,11 +1,34 @@
-"""The score stage: the reference map of a recording and the quality of floor plans
-against it (the reference-and-metrics work; :mod:`floorscan.score.metrics` holds the
-thesis's section 5.1 metrics and moves here with the architecture step).
+"""The score stage: the reference map of a recording, and the quality of the walls and
+floor plans of the first k scans of every ordering against the ground truth
+(synthetic datasets) or a reference (real recordings); thesis Chapter 5.
 
-Modules:
+Modules, from the segments up:
 
+- :mod:`floorscan.score.segments`: wall segments as ``(M, 4)`` arrays, samples along
+  them;
+- :mod:`floorscan.score.bitmap`: the thesis's section 5.1 bitmap metrics (correct
+  match, false positive, false negative) on a raster of the walls;
+- :mod:`floorscan.score.capsule`, :mod:`floorscan.score.nearest`: the exact length of
+  walls within a tolerance of others, the exact distance of points to the nearest
+  wall;
+- :mod:`floorscan.score.tolerance`: precision (correctness), recall (completeness),
+  F1 and median distance at each tolerance (ISPRS indoor benchmark terms);
+- :mod:`floorscan.score.growing`: all metrics of a wall set, from scratch or for a
+  set growing with k;
+- :mod:`floorscan.score.geojson`, :mod:`floorscan.score.ground_truth`: what is read
+  from GeoJSON (the simulator's walls, a floor plan's faces) and what the walls are
+  scored against;
+- :mod:`floorscan.score.runs`: the per-run scores table of a dataset (rule
+  ``score_runs``); :mod:`floorscan.score.summary`: its scan-reduction summary;
 - :mod:`floorscan.score.reference`: the occupancy grid of all kept scans (mapping with
   known poses), written in ROS map_server format;
 - :mod:`floorscan.score.against_reference`: completeness, correctness, F1 and median
-  distance of a floor plan against that map (ISPRS indoor benchmark terms).
+  distance of a floor plan against that map;
+- :mod:`floorscan.score.curves`: floor-plan quality against k for every ordering,
+  random's seeds and the oracle, and their summary (k95, k99, area under the curve).
+
+A new metric of a wall set is computed in :func:`floorscan.score.growing.score_walls`
+(and its incremental twin ``_GrowingWalls.score``, tested equal) and becomes a column
+of the scores table; a new metric of a floor plan against the reference map goes to
+:func:`floorscan.score.against_reference.plan_against_reference`.
 """

@@ -153,7 +153,7 @@ def score_plans(runs: list[dict], grid: OccupancyGrid, taus_m: tuple[float, ...]
     grid : OccupancyGrid
     taus_m : tuple of float
     faces_of : callable
-        Path -> (F, 4) faces of the plan (:func:`floorscan.score.metrics.floorplan_faces`).
+        Path -> (F, 4) faces of the plan (:func:`floorscan.score.geojson.floorplan_faces`).
 
     Returns
     -------

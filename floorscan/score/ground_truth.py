@@ -1,0 +1,53 @@
+"""What the walls are scored against: the simulator's ground truth on synthetic
+datasets, the reference on real recordings (the walls of the same extractor from all
+kept scans, as the thesis does in section 5.4; never called ground truth).
+
+:func:`load_references` gives the walls precision and the bitmap metrics are measured
+against, :func:`load_recall_references` those recall is measured against (on synthetic
+datasets the observed parts of the faces, thesis 5.2: walls never visible from the
+LIDAR cannot be recovered). :data:`GROUND_TRUTH` and :data:`REFERENCE` are the values
+of the ``reference_kind`` column.
+"""
+
+from __future__ import annotations
+
+from floorscan.score.geojson import read_wall_faces
+from floorscan.score.segments import as_segments
+
+#: Values of the ``reference_kind`` column: what the inferred walls are scored against.
+GROUND_TRUTH = "ground_truth"
+REFERENCE = "reference"
+#: Ground-truth feature kind of the observed parts of the faces (recall's reference).
+OBSERVED_FACE = "observed_face"
+
+
+def load_recall_references(kind: str, extractors, ground_truth=None, recall_kind: str = OBSERVED_FACE):
+    """What recall is measured against, ``{extractor: (M, 4) segments}``, or None.
+
+    Synthetic datasets (``kind`` ground_truth): the ``recall_kind`` features of
+    ``walls.geojson`` (``observed_face``: the parts of the faces the recording saw,
+    :func:`floorscan.sim.building.observed_faces`); ``face`` gives None (recall against
+    all faces, like precision). Real recordings: None (the reference is already made
+    of what the scans saw).
+    """
+    if kind != GROUND_TRUTH or recall_kind == "face":
+        return None
+    seg = read_wall_faces(ground_truth, kind=recall_kind)
+    return {e: seg for e in extractors}
+
+
+def load_references(kind: str, extractors, ground_truth=None, reference_paths=()) -> dict:
+    """The walls each extractor is scored against, as ``{extractor: (M, 4) segments}``.
+
+    ``kind`` ground_truth: the ``face`` features of the simulator's ``walls.geojson``
+    (``ground_truth``), the same for every extractor. Otherwise the reference: the
+    walls of each extractor from all kept scans (``reference_paths``, one Parquet
+    table per extractor, in the order of ``extractors``).
+    """
+    extractors = list(extractors)
+    if kind == GROUND_TRUTH:
+        gt = read_wall_faces(ground_truth, kind="face")
+        return {e: gt for e in extractors}
+    from floorscan.core.io import read_table
+
+    return {e: as_segments(read_table(p)) for e, p in zip(extractors, reference_paths)}

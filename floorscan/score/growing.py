@@ -1,0 +1,237 @@
+"""All metrics of a wall set: from scratch (:func:`score_walls`), or for a growing set,
+the walls of the first k scans of an ordering for increasing k, from the previous set's
+state and the new walls only (:class:`_GrowingWalls`, same result).
+
+Every metric is either a minimum over the walls (the samples' nearest distances), a
+union of them (the bitmap, the samples within tau) or a sum over them (the length within
+tau), so a larger set is scored from the smaller one's state: the bitmap metrics of
+thesis section 5.1 (:mod:`floorscan.score.bitmap`) and the ISPRS-benchmark tolerance
+metrics (:mod:`floorscan.score.tolerance`). The runs of every ordering of one extractor
+are subsets of the same walls, so the ground-truth samples near each wall
+(:class:`_SamplePairs`) and each wall's bitmap cells are measured once and shared.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import shapely
+
+from floorscan.score.bitmap import Grid, _raster_cells, bitmap_metrics, rasterize_segments
+from floorscan.score.capsule import _lengths_within
+from floorscan.score.nearest import _grown_boxes, _nearest_below, _SegmentIndex
+from floorscan.score.segments import MIN_SEGMENT_M, _row_keys, _split_long, segment_lengths
+from floorscan.score.tolerance import _tolerance_from, tau_label, tolerance_metrics
+
+
+def score_walls(
+    inferred,
+    ground_truth,
+    grid: Grid,
+    wall_width_m: float = 0.10,
+    taus=(0.05, 0.10),
+    sample_step_m: float = 0.01,
+    gt_bitmap: np.ndarray | None = None,
+    samples: np.ndarray | None = None,
+) -> dict[str, float]:
+    """All metrics of one inferred wall set:
+    :func:`floorscan.score.bitmap.bitmap_metrics` on ``grid`` and
+    :func:`floorscan.score.tolerance.tolerance_metrics`.
+
+    ``gt_bitmap`` (the rasterized ground truth on ``grid``) and ``samples``
+    (:func:`floorscan.score.segments.gt_samples`) may be passed to avoid recomputing
+    them for every ordering and k.
+    """
+    if gt_bitmap is None:
+        gt_bitmap = rasterize_segments(ground_truth, grid, wall_width_m)
+    bi = rasterize_segments(inferred, grid, wall_width_m)
+    out = bitmap_metrics(bi, gt_bitmap)
+    out.update(tolerance_metrics(inferred, ground_truth, taus, sample_step_m, samples))
+    return out
+
+
+#: Reach (metres) of the wall-to-sample pairs that give the samples' nearest distances
+#: (:class:`_SamplePairs`); samples farther from every wall are measured by
+#: :func:`floorscan.score.nearest._nearest_below`.
+PAIR_REACH_M = 0.1
+#: Longest piece (metres) of the walls whose grown boxes find their samples in
+#: :class:`_SamplePairs`.
+PAIR_PIECE_M = 2.0
+
+
+class _SamplePairs:
+    """The ground-truth samples within ``reach`` of each wall, for walls met again and
+    again: the runs of every ordering of one extractor are subsets of the same walls.
+
+    A fixed ``(S, 2)`` sample set, an STRtree of its points and a cache ``{row key of
+    a wall: (sample indices, distances)}``: every sample whose exact distance
+    (numpy, :func:`floorscan.floorplan.plan.point_segment_dist2`) to the wall is at most
+    ``reach``. Candidates are the samples in the boxes of the wall's pieces (no longer
+    than :data:`PAIR_PIECE_M`) grown by ``reach``; a sample within ``reach`` of a wall
+    is within ``reach`` of one of its pieces, hence in that piece's grown box.
+    """
+
+    def __init__(self, samples: np.ndarray, reach: float):
+        self.samples = samples
+        self.reach = float(reach)
+        self.geoms = shapely.points(samples)
+        self._x, self._y = samples[:, 0].copy(), samples[:, 1].copy()
+        self._tree = None
+        self.cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+
+    def of(self, walls: np.ndarray, keys: list[bytes]) -> tuple[np.ndarray, np.ndarray]:
+        """``(sample indices, distances)`` of the pairs of the finite ``(M, 4)``
+        ``walls`` (row keys ``keys``), concatenated; a sample may repeat."""
+        cache = self.cache
+        todo = [i for i, k in enumerate(keys) if k not in cache]
+        if todo:
+            self._measure(walls[todo], [keys[i] for i in todo])
+        if not keys:
+            return np.zeros(0, np.int64), np.zeros(0)
+        parts = [cache[k] for k in keys]
+        return np.concatenate([q[0] for q in parts]), np.concatenate([q[1] for q in parts])
+
+    def _measure(self, seg: np.ndarray, keys: list[bytes]) -> None:
+        if self._tree is None:
+            self._tree = shapely.STRtree(self.geoms)
+        pc, owner = _split_long(seg, PAIR_PIECE_M, return_owner=True)
+        qi, si = self._tree.query(_grown_boxes(pc, self.reach))
+        if len(qi) > 1 and not (qi[1:] >= qi[:-1]).all():
+            order = np.argsort(qi, kind="stable")
+            qi, si = qi[order], si[order]
+        # One pair per (wall, sample): the piece holding the sample's closest point of
+        # the wall (the sample is in that piece's box when within reach of the wall).
+        # The projection and distance are point_segment_dist2's, from per-wall terms
+        # looked up per piece: every candidate is measured (most are kept).
+        n = np.bincount(owner, minlength=len(seg))
+        rank = np.arange(len(pc)) - (np.cumsum(n) - n)[owner]  # of the piece in its wall
+        ax, ay = seg[:, 0], seg[:, 1]
+        dx, dy = seg[:, 2] - ax, seg[:, 3] - ay
+        l2 = dx * dx + dy * dy
+        axq, ayq, dxq, dyq, l2q, nq = (v[owner][qi] for v in (ax, ay, dx, dy, l2, n))
+        px, py = self._x[si], self._y[si]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            t = ((px - axq) * dxq + (py - ayq) * dyq) / l2q
+        t = np.where(l2q > 0, np.clip(t, 0.0, 1.0), 0.0)
+        ex = axq + t * dxq - px
+        ey = ayq + t * dyq - py
+        d = np.sqrt(ex * ex + ey * ey)
+        piece = np.minimum(np.floor(t * nq).astype(np.int64), nq - 1)
+        keep = np.flatnonzero((piece == rank[qi]) & (d <= self.reach))
+        wi, si, d = owner[qi[keep]], si[keep].astype(np.int32), d[keep]
+        bounds = np.searchsorted(wi, np.arange(len(seg) + 1))
+        for j, k in enumerate(keys):
+            self.cache[k] = (si[bounds[j]:bounds[j + 1]], d[bounds[j]:bounds[j + 1]])
+
+
+class _GrowingWalls:
+    """Metrics of a growing wall set: the walls of the first k scans of one ordering
+    and extractor, for increasing k.
+
+    The walls of k scans are a subset of those of more scans, and every metric is
+    either a minimum over the walls (the samples' nearest distances), a union of them
+    (the bitmap, the samples within tau) or a sum over them (the length within tau),
+    so a larger set is scored from the smaller set's state and its new walls only;
+    the result is that of :func:`score_walls` from scratch (exact minima and unions,
+    sums in the same order up to the last bits). A set that is not a superset of the
+    previous one is scored from scratch.
+
+    The samples within :data:`PAIR_REACH_M` of a new wall take their distance from
+    the wall's :class:`_SamplePairs` (the nearest wall of a sample within the reach
+    of a wall is within it too); the samples no wall has come within reach of yet
+    are measured by :func:`floorscan.score.nearest._nearest_below`.
+    ``recall_all_<tau>`` takes the pairs within the largest tau of ``all_pairs``. The
+    pairs and ``raster_cache`` (``{row key: flat wall cells}``, see
+    :func:`floorscan.score.bitmap._raster_cells`) may be shared by the growing sets of
+    one extractor (same samples, grid and wall width), so that a wall is measured and
+    rasterized once for all orderings.
+
+    ``samples`` (recall, distances) and ``all_samples`` (``recall_all_<tau>``, or
+    None) are ground-truth samples (:func:`floorscan.score.segments.gt_samples`).
+    """
+
+    def __init__(self, gt, gt_bitmap, grid, wall_width_m, taus, samples, all_samples,
+                 pairs, all_pairs, raster_cache):  # fmt: skip
+        self.gt, self.grid, self.width, self.taus = gt, grid, wall_width_m, list(taus)
+        self.gt_bitmap = gt_bitmap
+        self.len_g = float(segment_lengths(gt).sum())
+        self.samples = samples
+        self.all_samples = all_samples
+        self.pairs = pairs
+        self.all_pairs = all_pairs
+        self.raster_cache = raster_cache
+        self.keys: set[bytes] | None = None
+        self.covered: dict[float, dict[bytes, float]] = {tau: {} for tau in self.taus}
+
+    def _reset(self):
+        self.keys = set()
+        self.d_near = np.full(len(self.samples), np.inf)
+        self.d_far = np.full(len(self.samples), np.inf)
+        self.d = np.full(len(self.samples), np.inf)
+        if self.all_samples is not None:
+            self.hit_all = np.zeros((len(self.taus), len(self.all_samples)), dtype=bool)
+        self.bitmap = np.zeros(self.grid.shape, dtype=bool)
+
+    def _wall_cells(self, add: np.ndarray, add_keys: list[bytes]) -> np.ndarray:
+        """Flat bitmap cells of the walls ``add`` (rows keyed ``add_keys``), from the
+        raster cache, rasterizing the walls it lacks."""
+        cache = self.raster_cache
+        todo = [i for i, k in enumerate(add_keys) if k not in cache]
+        if todo:
+            owner, flat = _raster_cells(add[todo], self.grid, self.width)  # owner ascending
+            bounds = np.searchsorted(owner, np.arange(len(todo) + 1))
+            flat = flat.astype(np.int32 if self.grid.nx * self.grid.ny < 2**31 else np.int64)
+            for j, i in enumerate(todo):
+                cache[add_keys[i]] = flat[bounds[j]:bounds[j + 1]]
+        return np.concatenate([cache[k] for k in add_keys])
+
+    def score(self, walls: np.ndarray) -> dict[str, float]:
+        """:func:`score_walls` of ``(M, 4)`` finite ``walls`` (and ``recall_all_<tau>``
+        against ``all_samples`` when given)."""
+        keys = _row_keys(walls)
+        cur = set(keys)
+        if self.keys is None or not self.keys <= cur:
+            self._reset()
+        new = np.fromiter((k not in self.keys for k in keys), dtype=bool, count=len(keys))
+        add = walls[new]
+        if len(add):
+            add_keys = [k for k, n in zip(keys, new) if n]
+            si, d = self.pairs.of(add, add_keys)
+            np.minimum.at(self.d_near, si, d)
+            far = np.flatnonzero(np.isinf(self.d_near))
+            if len(far):
+                self.d_far[far] = _nearest_below(
+                    self.samples[far], _SegmentIndex(add), self.d_far[far], self.pairs.geoms[far]
+                )
+            self.d = np.where(np.isinf(self.d_near), self.d_far, self.d_near)
+            if self.all_samples is not None:
+                si, d = self.all_pairs.of(add, add_keys)
+                for t, tau in enumerate(self.taus):
+                    self.hit_all[t, si[d <= tau]] = True
+            self.bitmap.reshape(-1)[self._wall_cells(add, add_keys)] = True
+            # Measured once per wall for every tau (the caches of the taus hold the
+            # same walls), in the same batches as tau by tau: a wall's covered length
+            # depends, in its last bits, on its row in the batch (the sweep's offset).
+            todo = [i for i, k in enumerate(add_keys) if any(k not in self.covered[tau] for tau in self.taus)]
+            if todo:
+                covs = _lengths_within(add[todo], self.gt, self.taus)
+                for tau, cov in zip(self.taus, covs):
+                    self.covered[tau].update(zip((add_keys[i] for i in todo), cov.tolist()))
+        self.keys = cur
+        out = bitmap_metrics(self.bitmap, self.gt_bitmap)
+        len_i = float(segment_lengths(walls).sum())
+        has_i, has_g = len_i > MIN_SEGMENT_M, self.len_g > MIN_SEGMENT_M
+        d = self.d if has_i else np.full(len(self.samples), np.inf)
+        covered = {
+            tau: float(np.array([self.covered[tau][k] for k in keys], dtype=np.float64).sum())
+            if has_i and has_g else 0.0
+            for tau in self.taus
+        }  # fmt: skip
+        out.update(_tolerance_from(len_i, self.len_g, len(self.samples), d, covered, self.taus))
+        if self.all_samples is not None:
+            n = len(self.all_samples)
+            for t, tau in enumerate(self.taus):
+                frac = float(np.mean(self.hit_all[t])) if len(walls) else 0.0
+                out[f"recall_all_{tau_label(tau)}"] = frac if n else math.nan
+        return out
