@@ -346,6 +346,21 @@ def _quality_html(summary: "pd.DataFrame", ordering: str, extractor: str) -> lis
     return out
 
 
+def write_summary_page(path: str | os.PathLike, dataset: str, summary: "pd.DataFrame", n_kept: int,
+                       beats_random: str, verdict: dict | None, ordering: str) -> None:
+    """``summary.html``: the verdict, the beats-random line and :func:`summary_table_html`
+    of one dataset, a page of its own (the front page includes the same table)."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(
+            f"<html><head><meta charset='utf-8'><title>{dataset} summary</title></head><body>"
+            f"<h1>{dataset}</h1>"
+            + (f"<p><b>Verdict: {verdict['line']}</b></p>" if verdict else "")
+            + f"<p>{beats_random}</p>"
+            + summary_table_html(summary, n_kept, ordering)
+            + "</body></html>\n"
+        )
+
+
 def summary_table_html(
     summary: "pd.DataFrame", n_kept: int | None = None, ordering: str = "", extractor: str = ""
 ) -> str:

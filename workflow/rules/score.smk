@@ -25,6 +25,16 @@ def score_extractors(wildcards):
     return list(_walls_section(wildcards)["extractors"])
 
 
+def score_run_tables(wildcards):
+    """The scores table of every extractor (rule score_runs)."""
+    return [f"results/{wildcards.dataset}/score/{e}.parquet" for e in score_extractors(wildcards)]
+
+
+def score_curve_tables(wildcards):
+    """The quality-vs-k curves of every extractor (rule score_curves)."""
+    return [f"results/{wildcards.dataset}/score/curves_{e}.parquet" for e in score_extractors(wildcards)]
+
+
 def score_ks(wildcards):
     return [str(k) for k in _walls_section(wildcards)["k"]]
 
@@ -232,10 +242,8 @@ rule score_curves:
 rule score:
     priority: PRIORITY["score"]
     input:
-        runs=lambda wc: expand("results/{dataset}/score/{extractor}.parquet", dataset=wc.dataset,
-                               extractor=score_extractors(wc)),
-        curves=lambda wc: expand("results/{dataset}/score/curves_{extractor}.parquet", dataset=wc.dataset,
-                                 extractor=score_extractors(wc)),
+        runs=score_run_tables,
+        curves=score_curve_tables,
         registration="results/{dataset}/registration.parquet",
         index="results/{dataset}/scan_index.parquet",  # what ingest detected
     output:
