@@ -412,9 +412,9 @@ def subsample_points(
     """``(N, 2)`` x, y of at most ``max_points`` points (seeded), optionally only those
     with z inside ``z_band`` when the points are 3D.
 
-    2D against 3D as the walls stage decides it (:func:`floorscan.walls.extract.scan_points_2d`):
+    2D against 3D as the walls stage decides it (:func:`floorscan.walls.points.scan_points_2d`):
     points whose z spans at most ``planar_tolerance_m`` (default
-    :attr:`floorscan.walls.extract.ScanParams.planar_tolerance_m`) came from a 2D scanner, at
+    :attr:`floorscan.walls.params.ScanParams.planar_tolerance_m`) came from a 2D scanner, at
     whatever height it was mounted (the simulated rovers' 0.3 m), and are all kept;
     here the span is the whole table's, not each scan's.
 
@@ -424,7 +424,7 @@ def subsample_points(
     the same points as from the whole frame, in memory one batch at a time.
     """
     if planar_tolerance_m is None:
-        from floorscan.walls.extract import ScanParams
+        from floorscan.walls.params import ScanParams
 
         planar_tolerance_m = ScanParams.planar_tolerance_m
     if isinstance(points, (str, Path)):
@@ -576,7 +576,7 @@ def plot_wall_extraction(status: dict, times: dict, out, title: str = "") -> Non
         (``scan_id``, ``n_walls``, ``reason``); scans in recording order.
     times : dict
         ``{extractor: DataFrame}`` of ``benchmarks/scan_walls_{extractor}_times.parquet``
-        (``scan_id``, ``time_s``, :data:`floorscan.walls.extract.SCAN_TIMES`), the seconds of
+        (``scan_id``, ``time_s``, :data:`floorscan.walls.tables.SCAN_TIMES`), the seconds of
         each scan's extraction; a scan without a time is drawn without one.
     """
     fig, axes = plt.subplots(1, 3, figsize=(15, 4))
