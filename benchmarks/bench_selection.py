@@ -16,7 +16,7 @@ Prints
   first 509 kept scans, of the select stage and of the three selection figures
   (issue 8: these stages' CPU counts toward the 10x real-time target);
 - the ``wall_coverage`` and ``surface_coverage`` orderings (issue 22) of 1000 and 5000
-  synthetic scans (walls by :func:`floorscan.walls.extract.ransac`, not timed): the cells,
+  synthetic scans (walls by :func:`floorscan.walls.ransac.ransac`, not timed): the cells,
   the lazy greedy and the plain greedy (:func:`floorscan.core.greedy.plain_greedy`)
   side by side, and whether their orderings are identical (they must be);
 - KMeans of 200 3D scan samples by :func:`floorscan.select.hulls.kmeans` and by
@@ -208,7 +208,7 @@ def _coverage_orderings_bench(n_scans: int, seed: int) -> None:
     lazy greedy and the plain greedy, seconds."""
     from floorscan.core.greedy import lazy_greedy, plain_greedy
     from floorscan.select.coverage import CoverageParams, surface_cells, wall_cells
-    from floorscan.walls.extract import ransac
+    from floorscan.walls.ransac import ransac
 
     registered, _ = simulate_scans(n_scans, seed=seed)
     scans = [(int(s), g[["x", "y"]].to_numpy(np.float64)) for s, g in registered.groupby("scan_id", sort=True)]

@@ -39,7 +39,10 @@ import yaml
 
 from floorscan.floorplan.plan import build_floorplan
 from floorscan.core.io import iter_scans, read_table, split_by_scan
-from floorscan.walls.extract import EXTRACTORS, extract_scan, extract_walls, params_from_config, scan_points_2d
+from floorscan.walls.extract import extract_scan, extract_walls
+from floorscan.walls.extractors import EXTRACTORS, config_params
+from floorscan.walls.params import params_from_config
+from floorscan.walls.points import scan_points_2d
 
 REPO = Path(__file__).resolve().parents[1]
 DATASETS = ["intel", "aces", "freiburg101", "orebro", "trace0", "mac_ros2"]
@@ -121,7 +124,7 @@ def main(argv: list[str] | None = None) -> None:
         return
     cfg = schema_defaults(REPO / "workflow/schemas/walls.schema.yaml")
     scan_p, rp, cp = params_from_config(cfg)
-    from floorscan.walls.extract import cluster_ransac  # noqa: F401  (warm imports)
+    from floorscan.walls.cluster import cluster_ransac  # noqa: F401  (warm imports)
     import open3d  # noqa: F401
     import sklearn.cluster  # noqa: F401
 
@@ -139,13 +142,15 @@ def main(argv: list[str] | None = None) -> None:
         npts = np.mean([len(scans[s]) for s in ids])
         print(f"\n{ds}: {len(ids)} of {len(scans)} scans from {source}, {npts:.0f} points/scan")
         res = {}
-        cp_sk = dataclasses.replace(cp, meanshift="sklearn")
-        runs = (("ransac", "ransac", cp), ("cluster_ransac", "cluster_ransac", cp), ("cluster_sklearn", "cluster_ransac", cp_sk))
-        for label, ex, cpp in runs:
+        params = config_params(cfg)
+        params_sk = {**params, "cluster_ransac": dataclasses.replace(cp, meanshift="sklearn")}
+        runs = (("ransac", "ransac", params), ("cluster_ransac", "cluster_ransac", params),
+                ("cluster_sklearn", "cluster_ransac", params_sk))
+        for label, ex, pp in runs:
             times, walls, fails, segs = [], [], 0, []
             for s in ids:
                 t0 = time.perf_counter()
-                seg, reason, _ = extract_scan(scans[s], ex, scan_p, rp, cpp, (0, s))
+                seg, reason, _ = extract_scan(scans[s], ex, scan_p, pp, (0, s))
                 times.append(time.perf_counter() - t0)
                 walls.append(len(seg))
                 fails += bool(reason)

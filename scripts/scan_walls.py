@@ -1,12 +1,14 @@
 """Stage scan_walls, one shard: wall segments of the scans of a scan range with one
-extractor, streamed scan by scan (memory holds one scan, issue 8).
-scripts/scan_walls_merge.py concatenates the shards. The time of each scan goes to
-the benchmarks folder (output `times`, when the rule names one), not into the status."""
-from floorscan.core.runtime import progress
+extractor (floorscan.walls.extract.extract_walls), streamed scan by scan (memory holds
+one scan). scripts/scan_walls_merge.py concatenates the shards. The time of each scan
+goes to the benchmarks folder (output `times`, when the rule names one), not into the
+status."""
 from floorscan.core.io import iter_scans, write_table
+from floorscan.core.runtime import progress
 from floorscan.core.shards import parse_shard_label
-from floorscan.walls.extract import SCAN_STATUS, SCAN_TIMES, WALLS, extract_walls
 from floorscan.core.stage import stage_log
+from floorscan.walls.extract import extract_walls
+from floorscan.walls.tables import SCAN_STATUS, SCAN_TIMES, WALLS
 
 with stage_log(snakemake) as log:
     extractor = snakemake.wildcards.extractor

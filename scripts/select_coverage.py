@@ -7,7 +7,8 @@ from pathlib import Path
 from floorscan.select.hulls import kept_scan_ids
 from floorscan.core.io import iter_scans, read_table, write_table
 from floorscan.select.coverage import COVERAGE_ORDERING, OBJECTIVE_COLUMN, CoverageParams, coverage_orderings
-from floorscan.walls.extract import params_from_config, scan_points_2d
+from floorscan.walls.params import params_from_config
+from floorscan.walls.points import scan_points_2d
 from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821

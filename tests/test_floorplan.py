@@ -30,7 +30,8 @@ from floorscan.floorplan.plan import (
     params_from_config,
     write_floorplan,
 )
-from floorscan.walls.extract import cluster_ransac, ransac
+from floorscan.walls.cluster import cluster_ransac
+from floorscan.walls.ransac import ransac
 from test_walls import ROOM, match, raycast
 
 REPO = Path(__file__).resolve().parents[1]

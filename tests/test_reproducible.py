@@ -21,7 +21,7 @@ import pytest
 
 from floorscan.core.io import POSE_STREAM, POSES, SCAN_INDEX, SCANS, write_table
 from floorscan.select.orderings import SUMMARY, summarize
-from floorscan.walls.extract import SCAN_STATUS
+from floorscan.walls.tables import SCAN_STATUS
 
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 

@@ -33,7 +33,8 @@ from floorscan.core.shards import (
     shard_label,
     shard_ranges,
 )
-from floorscan.walls.extract import SCAN_STATUS, WALLS, extract_walls
+from floorscan.walls.extract import extract_walls
+from floorscan.walls.tables import SCAN_STATUS, WALLS
 
 SCRIPTS = REPO / "scripts"
 WALLS_CFG = {"seed": 3}  # the rest are the package defaults

@@ -7,20 +7,14 @@ import pandas as pd
 import pytest
 import yaml
 
-from floorscan.walls.extract import (
-    ClusterParams,
-    RansacParams,
-    ScanParams,
-    cluster_ransac,
-    extract_walls,
-    mean_shift,
-    first_k_walls,
-    parse_k,
-    point_normals,
-    ransac,
-    scan_points_2d,
-    wall_signature,
-)
+from floorscan.walls.cluster import cluster_ransac, wall_signature
+from floorscan.walls.extract import extract_walls
+from floorscan.walls.first_k import first_k_walls, parse_k
+from floorscan.walls.meanshift import mean_shift
+from floorscan.walls.normals import point_normals
+from floorscan.walls.params import ClusterParams, RansacParams, ScanParams
+from floorscan.walls.points import scan_points_2d
+from floorscan.walls.ransac import ransac
 
 REPO = Path(__file__).resolve().parents[1]
 ROOM = [(0, 0, 4, 0), (4, 0, 4, 6), (4, 6, 0, 6), (0, 6, 0, 0)]  # 4 x 6 m room, metres
@@ -157,7 +151,7 @@ def test_open3d_normals_are_z_for_planar_points_so_covariances_are_used():
 def test_covariances_are_open3d_estimate_covariances_bit_for_bit():
     import open3d as o3d
 
-    from floorscan.walls.extract import neighbourhood_covariances
+    from floorscan.walls.normals import neighbourhood_covariances
 
     rng = np.random.default_rng(8)
     # two walls, a corner, clutter, an isolated point (< 3 neighbours: identity)
@@ -178,7 +172,7 @@ def test_covariances_are_open3d_estimate_covariances_bit_for_bit():
 
 def test_fast_grid_means_and_inlier_counts_equal_the_plain_numpy():
     from floorscan.core.grid import cell_groups, cell_means
-    from floorscan.walls.extract import _inlier_counts
+    from floorscan.walls.ransac import _inlier_counts
 
     def _grid_means(p, cell):
         return cell_means(p, cell)[0]
@@ -417,7 +411,8 @@ def test_issue8_shortcuts_equal_the_plain_forms_bit_for_bit():
     the bin counts and the inlier counts beyond 2**16 points give exactly what the
     plain forms give; a line's segments do not depend on the order of its points."""
     from floorscan.core.grid import cell_groups
-    from floorscan.walls.extract import _claimed_segments, _inlier_counts
+    from floorscan.walls.ransac import _inlier_counts
+    from floorscan.walls.segments import _claimed_segments
 
     rng = np.random.default_rng(11)
     one = np.r_[rng.normal(0, 0.01, 120), rng.normal(0.2, 0.01, 80), rng.normal(1.0, 0.02, 40), rng.uniform(-1, 2, 20)]
@@ -488,7 +483,9 @@ def test_issue8_third_round_shortcuts_equal_the_plain_forms_bit_for_bit():
     1D bin seeds by a sort, the squared distances term by term, the cell keys without
     ravel_multi_index and ``integers(n)`` for ``integers(0, n)`` give the same numbers."""
     from floorscan.core.grid import cell_groups, cell_keys
-    from floorscan.walls.extract import _bin_seeds, _pair_squares, _row_squares, fit_line, neighbourhood_covariances
+    from floorscan.walls.meanshift import _bin_seeds, _pair_squares, _row_squares
+    from floorscan.walls.normals import neighbourhood_covariances
+    from floorscan.walls.segments import fit_line
 
     rng = np.random.default_rng(12)
     for n in (*range(2, 40), 129, 1000, 9000):
@@ -529,7 +526,7 @@ def test_issue8_third_round_shortcuts_equal_the_plain_forms_bit_for_bit():
 
 def _plain_best_line(points, rng, params):
     """_best_line as written before issue 8's fourth round (row gathers, einsum offsets)."""
-    from floorscan.walls.extract import _inlier_counts, _refine_line
+    from floorscan.walls.ransac import _inlier_counts, _refine_line
 
     n = len(points)
     i = rng.integers(n, size=params.iterations)
@@ -554,7 +551,7 @@ def test_issue8_fourth_round_shortcuts_equal_the_plain_forms_bit_for_bit():
     products instead of einsum) and the 3D grid thinning on contiguous columns give
     the same lines and points as the plain forms; the same seed, the same line."""
     from floorscan.core.grid import cell_means
-    from floorscan.walls.extract import _best_line
+    from floorscan.walls.ransac import _best_line
 
     rng = np.random.default_rng(13)
     nrm = rng.normal(size=(100000, 2))
@@ -588,3 +585,47 @@ def test_issue8_fourth_round_shortcuts_equal_the_plain_forms_bit_for_bit():
         assert reason == "" and got.shape == want.shape and len(got) > 100
         np.testing.assert_array_equal(got, want)
     assert scan_points_2d(xyz, ScanParams(min_height_m=5.0, max_height_m=6.0))[1] == "no_points_in_height_band"
+
+
+def test_the_schema_enum_names_the_registered_extractors():
+    from floorscan.walls.extractors import EXTRACT_KEYS, EXTRACTORS, get_extractor
+
+    schema = yaml.safe_load((REPO / "workflow/schemas/walls.schema.yaml").read_text())["properties"]
+    assert schema["extractors"]["items"]["enum"] == list(EXTRACTORS) == ["ransac", "cluster_ransac"]
+    assert EXTRACT_KEYS == ("seed", "height_band_m", "planar_tolerance_m", "grid_m", "ransac", "cluster_ransac")
+    assert all(key in schema for key in EXTRACT_KEYS)
+    with pytest.raises(ValueError, match="unknown extractor 'hough'; expected one of"):
+        get_extractor("hough")
+
+
+def test_a_registered_extractor_runs_with_its_config_sections(monkeypatch):
+    from floorscan.walls import extractors
+
+    calls = []
+
+    def rows(points, params, cluster, seed):
+        calls.append((len(points), params.min_points, cluster.min_cluster_points, seed))
+        return [(0.0, 0.0, 1.0, 0.0, 20, 0.01)] if len(calls) == 1 else []
+
+    entry = extractors.Extractor(rows=rows, config={"ransac": RansacParams, "cluster_ransac": ClusterParams}, cost=1.0)
+    monkeypatch.setitem(extractors.REGISTRY, "fake", entry)
+    scans = {4: with_z(raycast(ROOM, (1, 1), seed=0)), 7: with_z(raycast(ROOM, (2, 3), seed=1))}
+    cfg = {"seed": 2, "ransac": {"min_points": 25}, "cluster_ransac": {"min_cluster_points": 9}}
+    walls, status = extract_walls(scans_frame(scans), "fake", cfg)
+    assert calls == [(len(scans[4]), 25, 9, (2, 4)), (len(scans[7]), 25, 9, (2, 7))]
+    assert walls["scan_id"].tolist() == [4] and walls["n_inliers"].tolist() == [20]
+    assert status["reason"].tolist() == ["", "no_wall_found"]
+
+
+def test_k_walls_tables_in_the_order_of_the_rule():
+    from floorscan.walls.first_k import k_walls_tables
+
+    walls = pd.DataFrame(
+        {"scan_id": np.array([0, 1, 2], dtype=np.int32), "x0": [0.0, 1, 2], "y0": 0.0,
+         "x1": 1.0, "y1": 1.0, "n_inliers": np.int32(20), "rmse_m": 0.01}  # fmt: skip
+    )
+    orderings = {"a": pd.DataFrame({"rank": [0, 1, 2], "scan_id": [2, 0, 1]}),
+                 "b": pd.DataFrame({"rank": [0, 1, 2], "scan_id": [1, 2, 0]})}
+    got = [(o, k, seg["scan_id"].tolist(), ids) for o, k, seg, ids in k_walls_tables(walls, orderings, ["b", "a"], ["1", "all"])]
+    assert got == [("b", "1", [1], [1]), ("b", "all", [1, 2, 0], [1, 2, 0]),
+                   ("a", "1", [2], [2]), ("a", "all", [2, 0, 1], [2, 0, 1])]

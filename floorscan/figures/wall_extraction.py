@@ -24,7 +24,7 @@ def plot_wall_extraction(status: dict, times: dict, out, title: str = "") -> Non
         (``scan_id``, ``n_walls``, ``reason``); scans in recording order.
     times : dict
         ``{extractor: DataFrame}`` of ``benchmarks/scan_walls_{extractor}_times.parquet``
-        (``scan_id``, ``time_s``, :data:`floorscan.walls.extract.SCAN_TIMES`), the seconds of
+        (``scan_id``, ``time_s``, :data:`floorscan.walls.tables.SCAN_TIMES`), the seconds of
         each scan's extraction; a scan without a time is drawn without one.
     """
     fig, axes = plt.subplots(1, 3, figsize=(15, 4))

@@ -23,7 +23,7 @@ the returns evidence of an obstacle. Each cell's log-odds is the sum of its upda
 Rays are sampled every ``step_fraction`` of a cell along their length (the cells a
 ray crosses, up to a corner clipped by less than a quarter cell); the return's own
 cell is not a miss of that scan. 3D scans are cut to the walls' height band first
-(:func:`floorscan.walls.extract.scan_points_2d`), so the grid is the plan view the floor plan
+(:func:`floorscan.walls.points.scan_points_2d`), so the grid is the plan view the floor plan
 is drawn in.
 
 Usage::
@@ -367,7 +367,7 @@ def reference_of_recording(
         registered position, the rays' origin).
     walls_config : mapping, optional
         The ``walls`` config section: its height band cuts 3D scans
-        (:func:`floorscan.walls.extract.scan_points_2d`), as for the walls themselves.
+        (:func:`floorscan.walls.points.scan_points_2d`), as for the walls themselves.
     params : OccupancyParams
 
     Returns
@@ -381,7 +381,8 @@ def reference_of_recording(
         return in the height band.
     """
     from floorscan.core.io import iter_scans
-    from floorscan.walls.extract import params_from_config, scan_points_2d
+    from floorscan.walls.params import params_from_config
+    from floorscan.walls.points import scan_points_2d
 
     scan_params = params_from_config(walls_config or {})[0]
     reg = registration[registration["kept"]].set_index("scan_id")

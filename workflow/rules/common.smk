@@ -48,8 +48,15 @@ REPORT_OUTPUTS = []
 # figures next (the order before), the cluster_ransac shard started 12 s after
 # registration and the chain of floor plans and scores behind it ended the run.
 # Ingest, poses and register run alone (0).
+#
+# A walls shard's priority is by its extractor: the chain after the shard (walls 1.2
+# -> floorplan 11.5 -> score_runs 5 -> score 0.8 -> score_figures 3 = 21.5 s) plus the
+# shard, ransac's 7.5 s times the extractor's relative cost (the registry of
+# floorscan.walls.extractors): ransac 29, cluster_ransac 35.
+from floorscan.walls.extractors import REGISTRY as WALLS_REGISTRY
+
 PRIORITY = {
-    "scan_walls_shard": {"cluster_ransac": 35, "ransac": 29},
+    "scan_walls_shard": {name: round(21.5 + 7.5 * e.cost) for name, e in WALLS_REGISTRY.items()},
     "hulls_shard": 33,
     "select": 31,
     "walls": 21,
@@ -70,9 +77,12 @@ PRIORITY = {
 
 
 def shard_priority(wildcards):
-    """Priority of a walls shard job: by its extractor (PRIORITY; unknown: ransac's)."""
+    """Priority of a walls shard job: by its extractor (PRIORITY; an extractor that is
+    not registered in floorscan.walls.extractors raises)."""
     by_extractor = PRIORITY["scan_walls_shard"]
-    return by_extractor.get(wildcards.extractor, by_extractor["ransac"])
+    if wildcards.extractor not in by_extractor:
+        raise ValueError(f"unknown extractor {wildcards.extractor!r}; expected one of {list(by_extractor)}")
+    return by_extractor[wildcards.extractor]
 
 
 wildcard_constraints:
@@ -162,8 +172,9 @@ def stage_config(stage):
     return _stage_config
 
 
-# The `walls` keys that change the per-scan walls (scan_walls_shard, select_coverage).
-WALLS_EXTRACT_KEYS = ("seed", "height_band_m", "planar_tolerance_m", "grid_m", "ransac", "cluster_ransac")
+# The `walls` keys that change the per-scan walls (scan_walls_shard, select_coverage):
+# the scan points, the seed and the config sections of the registered extractors.
+from floorscan.walls.extractors import EXTRACT_KEYS as WALLS_EXTRACT_KEYS
 
 
 def walls_extract_config(wildcards):

@@ -1,4 +1,4 @@
-# Wall extraction (issue 6; thesis sections 3.4, 5.3, Algorithm 4).
+# Wall extraction (issue 6; thesis sections 3.4, 5.3, Algorithm 4; floorscan.walls).
 #
 #   scan_walls_shard: every kept scan once per extractor (walls of a scan depend only
 #               on the scan, the extractor parameters and the seed, never on ordering
@@ -9,6 +9,26 @@
 import re
 
 stage_schema_check("walls")
+
+
+def check_walls_extractors():
+    """Stop the run when walls.extractors (or a dataset's override of it) names an
+    extractor that floorscan.walls.extractors.REGISTRY does not hold."""
+    named = {"walls.extractors": config["walls"]["extractors"]}
+    for name, ds in DATASETS.items():
+        override = ((ds.get("params") or {}).get("walls") or {}).get("extractors")
+        if override:
+            named[f"datasets.{name}.params.walls.extractors"] = override
+    for where, extractors in named.items():
+        unknown = [e for e in extractors if e not in WALLS_REGISTRY]
+        if unknown:
+            config_error(
+                f"{where} names {unknown}, which are not registered in floorscan.walls.extractors; "
+                f"registered: {list(WALLS_REGISTRY)}"
+            )
+
+
+check_walls_extractors()
 
 # Shard labels of floorscan.core.shards.shard_label: scans_<first scan id>-<last scan id>.
 WALLS_SHARD_LABEL = r"scans_\d+-\d+"
@@ -102,15 +122,14 @@ def walls_run_params(wildcards):
     return {"orderings": list(config["walls"]["orderings"]), "k": walls_k_names()}
 
 
-# One job per dataset and extractor: the shards concatenated into the extractor's
-# per-scan tables, then the first k scans of each ordering, a cheap filter, so the 50
-# tables of an extractor (default config) come from one process. Per extractor, not
-# per dataset, so that the faster extractor's walls, floor plans and scores run while
-# the other's shards are still being extracted (hallways3d: ransac's shards end
-# seconds before cluster_ransac's). The concatenation was a job of its own (rule
-# scan_walls): a job costs ~0.6 s to start, on the critical path of the run.
-# The walls stage merges its own shards: the per-scan walls of every kept scan, which
-# the wall_coverage ordering (select_coverage) reads before the k tables are cut.
+# Per dataset and extractor: the shards merged into the extractor's per-scan tables
+# (scan_walls, floorscan.walls.shards), then the first k scans of each ordering, a
+# cheap filter (walls, floorscan.walls.first_k), so the 50 tables of an extractor
+# (default config) come from one process. Per extractor, not per dataset, so that the
+# faster extractor's walls, floor plans and scores run while the other's shards are
+# still being extracted. The walls stage merges its own shards: the per-scan walls of
+# every kept scan, which the wall_coverage ordering (select_coverage) reads before the
+# k tables are cut.
 rule scan_walls:
     priority: PRIORITY["scan_walls"]
     input:

@@ -1,0 +1,121 @@
+"""The registry of wall extractors: what each one is called, computes, reads and costs.
+
+:data:`REGISTRY` maps an extractor's name (config ``walls.extractors``, wildcard
+``{extractor}``, folder ``walls/{extractor}/``) to an :class:`Extractor`: its function,
+the config sections it reads with their parameter classes, and its relative cost. The
+rest follows from it: :func:`floorscan.walls.extract.extract_walls` looks the name up
+(:func:`get_extractor`; an unknown name raises), and the workflow
+(``workflow/rules/common.smk``) imports :data:`REGISTRY` and :data:`EXTRACT_KEYS` for
+the config that decides the per-scan extraction and for the priority of its shard jobs.
+
+How to add an extractor: see the package docstring (:mod:`floorscan.walls`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable, Mapping
+
+from floorscan.walls.cluster import _cluster_ransac_rows, _import_cluster_modules
+from floorscan.walls.params import ClusterParams, RansacParams
+from floorscan.walls.ransac import _ransac_rows
+
+
+@dataclass(frozen=True)
+class Extractor:
+    """One wall extractor of :data:`REGISTRY`.
+
+    Attributes
+    ----------
+    rows : callable
+        ``rows(points, *params, seed)``: the wall segments of one scan, a list of
+        ``(x0, y0, x1, y1, n_inliers, rmse_m)`` tuples (metres; see
+        :func:`floorscan.walls.tables.segments_frame`). ``points`` is the scan's (N, 2)
+        float64 wall points in the map frame, metres (not to be modified); ``params``
+        the parameter objects of ``config``, in its order; ``seed`` seeds
+        ``numpy.random.default_rng`` (the same seed, the same walls). Called only for
+        scans with at least ``RansacParams.min_points`` points; an empty list means
+        ``no_wall_found``.
+    config : mapping of str to dataclass type
+        The sections ``walls.<key>`` of the config it reads and their parameter
+        classes, in the order ``rows`` takes them. Every extractor reads ``ransac``
+        (:class:`~floorscan.walls.params.RansacParams`, the segment rules all share).
+    cost : float
+        Its seconds per scan relative to ransac's; the priority of its
+        ``scan_walls_shard`` jobs is derived from it (``workflow/rules/common.smk``),
+        so the slower extractor's shards start first.
+    prepare : callable or None
+        ``prepare(*params)``, called once per job before the first scan is timed
+        (imports the extractor makes on its first scan).
+    """
+
+    rows: Callable[..., list[tuple]]
+    config: Mapping[str, type]
+    cost: float
+    prepare: Callable[..., None] | None = None
+
+
+#: The wall extractors by name, in the order of the config's default.
+REGISTRY: dict[str, Extractor] = {
+    # iterative RANSAC, thesis section 5.3, Algorithm 4 (floorscan.walls.ransac)
+    "ransac": Extractor(rows=_ransac_rows, config={"ransac": RansacParams}, cost=1.0),
+    # clustering RANSAC, thesis section 3.4 (floorscan.walls.cluster): about twice
+    # ransac's time a scan
+    "cluster_ransac": Extractor(
+        rows=_cluster_ransac_rows,
+        config={"ransac": RansacParams, "cluster_ransac": ClusterParams},
+        cost=1.8,
+        prepare=_import_cluster_modules,
+    ),
+}
+
+#: Extractor names (config ``walls.extractors``, wildcard ``{extractor}``).
+EXTRACTORS = tuple(REGISTRY)
+
+#: The keys of the ``walls`` config section that decide the per-scan walls: the scan
+#: points (:class:`~floorscan.walls.params.ScanParams`), the seed and the sections the
+#: extractors read. The workflow passes only these to the per-scan extraction
+#: (``walls_extract_config``, common.smk), so that a change of k or of the orderings
+#: does not rerun it.
+EXTRACT_KEYS = ("seed", "height_band_m", "planar_tolerance_m", "grid_m") + tuple(
+    dict.fromkeys(key for e in REGISTRY.values() for key in e.config)
+)
+
+
+def get_extractor(name: str) -> Extractor:
+    """The registered extractor ``name``.
+
+    Raises
+    ------
+    ValueError
+        When ``name`` is not in :data:`REGISTRY`.
+    """
+    try:
+        return REGISTRY[name]
+    except (KeyError, TypeError):
+        raise ValueError(f"unknown extractor {name!r}; expected one of {EXTRACTORS}") from None
+
+
+def config_params(cfg: Mapping[str, Any]) -> dict[str, Any]:
+    """The parameter objects of every config section the registered extractors read.
+
+    Parameters
+    ----------
+    cfg : mapping
+        The ``walls`` config section; a missing section takes its class's defaults.
+
+    Returns
+    -------
+    dict
+        ``{key: params}`` for every key of the extractors' ``config`` (``ransac``,
+        ``cluster_ransac``, ...).
+
+    Raises
+    ------
+    KeyError
+        When a section has a key its parameter class does not know.
+    """
+    from floorscan.core.config import dataclass_from_mapping
+
+    classes = {key: cls for e in REGISTRY.values() for key, cls in e.config.items()}
+    return {key: dataclass_from_mapping(cls, cfg.get(key), cls.__name__) for key, cls in classes.items()}

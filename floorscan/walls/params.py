@@ -1,0 +1,156 @@
+"""Parameters of the wall extraction (config section ``walls``), with their defaults.
+
+* :class:`ScanParams`: how a scan becomes 2D wall points (height band, 2D rule, grid;
+  :func:`floorscan.walls.points.scan_points_2d`);
+* :class:`RansacParams` (``walls.ransac``): RANSAC and the wall segment rules, shared
+  by every extractor (thesis section 5.3, Algorithm 4);
+* :class:`ClusterParams` (``walls.cluster_ransac``): the clustering of
+  :func:`floorscan.walls.cluster.cluster_ransac` (thesis section 3.4).
+
+:func:`params_from_config` reads them from the ``walls`` config section; the schema
+``workflow/schemas/walls.schema.yaml`` documents the same defaults (a test checks that
+they agree).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+
+@dataclass(frozen=True)
+class RansacParams:
+    """RANSAC and segment parameters (config ``walls.ransac``), used by both extractors.
+
+    Attributes
+    ----------
+    threshold_m : float
+        A point is an inlier of a line when closer than this, metres.
+    iterations : int
+        Line hypotheses (pairs of points) tried per RANSAC run.
+    refine_iterations : int
+        Least-squares refits of the best hypothesis on its inliers.
+    min_points : int
+        Iterative RANSAC stops when fewer points remain; a scan with fewer wall
+        points gives no walls (reason ``too_few_points``).
+    max_lines : int
+        Iterative RANSAC stops after this many lines (``ransac`` only).
+    min_inliers : int
+        Fewest inliers of a line and of each of its segments.
+    min_length_m : float
+        Shortest wall segment kept, metres.
+    max_gap_m : float
+        A line is split into segments where consecutive inliers (along the line)
+        are further apart than this, metres.
+    min_coverage : float
+        A segment is kept when its inliers cover at least this fraction of its length:
+        gaps between consecutive inliers wider than ``coverage_gap_m`` count as
+        uncovered. Rejects "walls" through a few isolated objects, e.g. the legs of a
+        table or chairs (clutter, thesis 2.3), which RANSAC lines up as readily as a
+        wall; a wall is covered nearly everywhere it is seen. Our rule; 0 disables it.
+    coverage_gap_m : float
+        A gap between consecutive inliers is uncovered when wider than this and than
+        3 times both neighbouring gaps, metres: a jump, as between table legs, not the
+        spacing that grows smoothly along a wall seen at a grazing angle.
+    """
+
+    threshold_m: float = 0.03
+    iterations: int = 200
+    refine_iterations: int = 2
+    min_points: int = 20
+    max_lines: int = 30
+    min_inliers: int = 15
+    min_length_m: float = 0.3
+    max_gap_m: float = 0.5
+    min_coverage: float = 0.6
+    coverage_gap_m: float = 0.10
+
+
+@dataclass(frozen=True)
+class ClusterParams:
+    """Clustering parameters of :func:`cluster_ransac` (config ``walls.cluster_ransac``).
+
+    Attributes
+    ----------
+    normal_radius_m : float
+        Neighbourhood radius of the normal estimation, metres.
+    normal_max_nn : int
+        At most this many neighbours within the radius (Open3D hybrid search).
+    angle_bandwidth_rad : float
+        MeanShift bandwidth of the normal direction, radians.
+    offset_bandwidth_m : float or None
+        MeanShift bandwidth of the offset along the normal, metres; None estimates it
+        per direction with :func:`sklearn.cluster.estimate_bandwidth`.
+    min_cluster_points : int
+        Clusters with fewer points are not fitted; MeanShift seeds need a third of it
+        (``min_bin_freq = min_cluster_points // 3``).
+    bin_seeding : bool
+        Seed MeanShift on a grid of the bandwidth's size (much faster).
+    meanshift : {"numpy", "sklearn"}
+        MeanShift implementation: :func:`mean_shift` (same algorithm vectorised,
+        needs ``bin_seeding``) or :class:`sklearn.cluster.MeanShift`.
+    """
+
+    normal_radius_m: float = 0.25
+    normal_max_nn: int = 20
+    angle_bandwidth_rad: float = 0.1
+    offset_bandwidth_m: float | None = 0.05
+    min_cluster_points: int = 15
+    bin_seeding: bool = True
+    meanshift: str = "numpy"
+
+    def __post_init__(self):
+        if self.meanshift not in ("numpy", "sklearn"):
+            raise ValueError(f"cluster_ransac.meanshift must be 'numpy' or 'sklearn', got {self.meanshift!r}")
+        if self.meanshift == "numpy" and not self.bin_seeding:
+            raise ValueError("cluster_ransac.meanshift 'numpy' needs bin_seeding true")
+
+
+@dataclass(frozen=True)
+class ScanParams:
+    """How a scan becomes 2D wall points (config ``walls``: height band and grid).
+
+    Attributes
+    ----------
+    min_height_m, max_height_m : float
+        Height band (above the floor) kept of 3D scans, metres.
+    planar_tolerance_m : float
+        A scan whose finite ``z`` values span at most this is 2D and passes unchanged
+        (a 2D scanner has one height whatever it is); otherwise it is 3D.
+    grid_m : float
+        3D scans only: after the band cut and the projection to (x, y), keep one
+        point (the mean) per grid cell of this size, metres; 0 keeps all points.
+    """
+
+    min_height_m: float = 0.5
+    max_height_m: float = 2.0
+    planar_tolerance_m: float = 0.01
+    grid_m: float = 0.02
+
+
+def params_from_config(cfg: Mapping[str, Any]) -> tuple[ScanParams, RansacParams, ClusterParams]:
+    """The parameter objects of the ``walls`` config section (defaults filled in).
+
+    Raises
+    ------
+    KeyError
+        When the section has a key the parameter classes do not know.
+    ValueError
+        For a height band that is not [min, max] with min < max.
+    """
+    band = cfg.get("height_band_m", [ScanParams.min_height_m, ScanParams.max_height_m])
+    if len(band) != 2 or not float(band[0]) < float(band[1]):
+        raise ValueError(f"walls.height_band_m must be [min, max] with min < max, got {band!r}")
+    scan = ScanParams(
+        min_height_m=float(band[0]),
+        max_height_m=float(band[1]),
+        planar_tolerance_m=float(cfg.get("planar_tolerance_m", ScanParams.planar_tolerance_m)),
+        grid_m=float(cfg.get("grid_m", ScanParams.grid_m)),
+    )
+    from floorscan.core.config import dataclass_from_mapping
+
+    return (
+        scan,
+        dataclass_from_mapping(RansacParams, cfg.get("ransac"), "RansacParams"),
+        dataclass_from_mapping(ClusterParams, cfg.get("cluster_ransac"), "ClusterParams"),
+    )

@@ -1,0 +1,61 @@
+"""The 2D wall points of a scan: the 2D/3D rule, the height band and the grid thinning.
+
+A scan's registered points (map frame, metres, ``z`` = height above the floor) become
+the 2D points the extractors fit lines to (:func:`scan_points_2d`, parameters
+:class:`~floorscan.walls.params.ScanParams`): a 2D scan passes unchanged, a 3D scan
+is cut to the height band of the walls (above furniture, below the ceiling, thesis
+section 5.3), projected to the floor plane and thinned to one mean point per grid
+cell (:func:`floorscan.core.grid.cell_means`). The reference map
+(:mod:`floorscan.score.reference`) and the coverage orderings use the same points.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from floorscan.core.grid import cell_means
+from floorscan.walls.params import ScanParams
+
+
+def scan_points_2d(xyz: np.ndarray, params: ScanParams = ScanParams()) -> tuple[np.ndarray, str]:
+    """The 2D wall points of one scan, or a reason why it has none.
+
+    Rule for 2D against 3D: a scan whose ``z`` values span at most
+    ``planar_tolerance_m`` came from a 2D scanner and passes unchanged (its single
+    height may be anywhere, e.g. 0.3 m). Otherwise the scan is 3D: points with
+    ``min_height_m <= z <= max_height_m`` are kept (above furniture, below the
+    ceiling), projected to (x, y) and thinned to one mean point per ``grid_m`` cell.
+
+    Parameters
+    ----------
+    xyz : (N, 3) float ndarray
+        Scan points in the map frame, metres; ``z`` is height above the floor.
+    params : ScanParams
+
+    Returns
+    -------
+    points : (M, 2) float64 ndarray
+        Wall points (x, y), metres; empty when ``reason`` is not "".
+    reason : str
+        "" or one of :data:`~floorscan.walls.tables.REASONS` (``non_finite_coordinates``,
+        ``no_points_in_height_band``).
+    """
+    xyz = np.asarray(xyz, dtype=np.float64)
+    if xyz.ndim != 2 or xyz.shape[1] < 2:
+        raise ValueError(f"scan points must be (N, 3), got shape {xyz.shape}")
+    empty = np.empty((0, 2))
+    if len(xyz) == 0:
+        return empty, ""
+    if not np.isfinite(xyz).all():
+        return empty, "non_finite_coordinates"
+    if xyz.shape[1] == 2:
+        return xyz.copy(), ""
+    z = xyz[:, 2].copy()  # contiguous: quicker min, max and band cut
+    if float(z.max() - z.min()) <= params.planar_tolerance_m:
+        return xyz[:, :2].copy(), ""
+    band = np.flatnonzero((z >= params.min_height_m) & (z <= params.max_height_m))
+    if len(band) == 0:
+        return empty, "no_points_in_height_band"
+    if params.grid_m > 0:
+        return cell_means(xyz[band, :2], params.grid_m)[0], ""  # one mean point per occupied cell
+    return xyz[band, :2], ""

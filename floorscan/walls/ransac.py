@@ -1,0 +1,202 @@
+"""Iterative RANSAC: the wall segments of one scan (thesis section 5.3, Algorithm 4).
+
+:func:`ransac` repeats: the best of ``iterations`` lines through two random points
+(most points closer than ``threshold_m``, :func:`_best_line`), refit by total least
+squares on its inliers (:func:`_refine_line`), turned into wall segments
+(:func:`floorscan.walls.segments._claimed_segments`), its inliers removed; until fewer
+than ``min_points`` points remain, the best line has fewer than ``min_inliers``
+inliers, or ``max_lines`` lines were found. It tends to find several candidates for
+one wall (section 5.3). Fischler and Bolles (1981), Random sample consensus.
+
+:func:`_fit_wall` (one RANSAC line and its segments) is also the last step of
+:func:`floorscan.walls.cluster.cluster_ransac`, once per cluster.
+
+The inlier counts of all hypotheses are one BLAS product per cache-sized block
+(:func:`_hypothesis_counts`): the same counts as ``abs(points @ normals.T - offsets)
+< threshold`` (the tests check it bit for bit). Parameters:
+:class:`~floorscan.walls.params.RansacParams`; randomness from
+``numpy.random.default_rng(seed)``: the same seed, the same walls.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from floorscan.walls.params import RansacParams
+from floorscan.walls.segments import _claimed_segments, fit_line
+from floorscan.walls.tables import segments_frame
+
+
+def ransac(points: np.ndarray, params: RansacParams = RansacParams(), seed=0) -> pd.DataFrame:
+    """Wall segments of one scan by iterative RANSAC (thesis section 5.3, Algorithm 4).
+
+    Repeat: the best of ``iterations`` lines through two random points (most points
+    closer than ``threshold_m``), refit by total least squares on its inliers
+    (``refine_iterations`` times), split into segments (:func:`_claimed_segments`),
+    remove its inliers. The segment ends come from all points of the scan near the
+    line (:func:`_claimed_segments`), so a corner point claimed by the first of two
+    walls still ends the second one. Stop when fewer than ``min_points`` points
+    remain, the best line has fewer than ``min_inliers`` inliers, or ``max_lines``
+    lines were found.
+    Fischler and Bolles (1981), Random sample consensus.
+
+    Parameters
+    ----------
+    points : (N, 2) float ndarray
+        Wall points of one scan (map frame), metres. Not modified.
+    params : RansacParams
+    seed : int, sequence of int or numpy.random.Generator
+        Seeds the generator (``numpy.random.default_rng(seed)``); same seed, same walls.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per wall segment: ``x0, y0, x1, y1`` (metres), ``n_inliers`` (int32),
+        ``rmse_m`` (RMS distance of its inliers to it, metres); in order of discovery.
+    """
+    return segments_frame(_ransac_rows(points, params, seed))
+
+
+def _ransac_rows(points: np.ndarray, params: RansacParams, seed) -> list[tuple]:
+    """:func:`ransac` as a list of (x0, y0, x1, y1, n_inliers, rmse_m) tuples."""
+    rng = np.random.default_rng(seed)
+    all_pts = np.asarray(points, dtype=np.float64)
+    alive = np.arange(len(all_pts))  # indices of the points not yet claimed by a line
+    rows: list[tuple] = []
+    n_lines = 0
+    while len(alive) >= params.min_points and n_lines < params.max_lines:
+        fit = _fit_wall(all_pts, alive, rng, params)
+        if fit is None:
+            break
+        mask, segments = fit
+        rows += segments
+        alive = alive[~mask]
+        n_lines += 1
+    return rows
+
+
+def _fit_wall(pts: np.ndarray, idx: np.ndarray, rng: np.random.Generator, params: RansacParams):
+    """One RANSAC line on ``pts[idx]``: its inlier mask over ``idx`` and its wall segments.
+
+    Returns None when no line has at least ``params.min_inliers`` inliers. The
+    segments' ends and gaps come from all of ``pts`` near the line (see
+    :func:`_claimed_segments`).
+    """
+    found = _best_line(pts[idx], rng, params)
+    if found is None:
+        return None
+    mask, c, direction = found
+    if np.count_nonzero(mask) < params.min_inliers:
+        return None
+    claimed = np.zeros(len(pts), dtype=bool)
+    claimed[idx[mask]] = True
+    return mask, _claimed_segments(pts, c, direction, claimed, params)
+
+
+def _best_line(points: np.ndarray, rng: np.random.Generator, params: RansacParams):
+    """One RANSAC run: the line with most inliers among ``iterations`` point pairs,
+    refit by total least squares on its inliers. Returns (inlier mask, centroid,
+    direction) or None when no hypothesis is possible.
+
+    The hypotheses are built on contiguous coordinate columns, straight into the rows
+    ``(nx, ny, -offset)`` of :func:`_hypothesis_counts`: the same floats as
+    ``normals = (-dy, dx) / length`` and ``offsets = einsum("ij,ij->i", normals,
+    start)`` (a sum of two products, rounded term by term; a test checks it)."""
+    n = len(points)
+    if n < 2:
+        return None
+    # integers(n) is integers(0, n) (the same draws), without the checks of low
+    i = rng.integers(n, size=params.iterations)
+    j = rng.integers(n - 1, size=params.iterations)
+    j += j >= i  # j != i
+    pt = np.empty((3, n))  # rows x, y, 1 (the columns of _hypothesis_counts)
+    pt[:2] = points.T
+    pt[2] = 1.0
+    sx, sy = pt[0, i], pt[1, i]
+    dx, dy = pt[0, j], pt[1, j]
+    dx -= sx
+    dy -= sy
+    length = np.hypot(dx, dy)
+    ok = length > 1e-9
+    if not ok.all():
+        if not ok.any():
+            return None
+        dx, dy, length, sx, sy = dx[ok], dy[ok], length[ok], sx[ok], sy[ok]
+    hyp = np.empty((3, len(length)))  # rows nx = -dy / length, ny = dx / length, offset
+    np.negative(dy, out=dy)
+    np.divide(dy, length, out=hyp[0])
+    np.divide(dx, length, out=hyp[1])
+    np.multiply(hyp[0], sx, out=sx)
+    np.multiply(hyp[1], sy, out=sy)
+    np.add(sx, sy, out=hyp[2])  # the offsets
+    best = int(np.argmax(_hypothesis_counts(pt, hyp.T, params.threshold_m, negate=True)))
+    return _refine_line(points, hyp[:2, best].copy(), hyp[2, best], params)
+
+
+def _refine_line(points: np.ndarray, normal: np.ndarray, offset: float, params: RansacParams):
+    """The inliers of the line ``points @ normal == offset`` refitted (least squares)
+    to their own inliers up to ``params.refine_iterations`` times, until they no longer
+    change: ``(mask, centre, direction)`` as :func:`_best_line` returns them."""
+    mask = np.abs(points @ normal - offset) < params.threshold_m
+    n_mask = np.count_nonzero(mask)
+    c, direction = None, np.array([normal[1], -normal[0]])
+    for _ in range(params.refine_iterations):
+        if n_mask < 2:
+            break
+        c, direction = fit_line(points[mask])
+        normal = np.array([-direction[1], direction[0]])
+        new = np.abs((points - c) @ normal) < params.threshold_m
+        n_new = np.count_nonzero(new)
+        if n_new < 2 or (n_new == n_mask and (new == mask).all()):
+            mask = new if n_new >= 2 else mask
+            break
+        mask, n_mask = new, n_new
+    if c is None:  # no refit: the line through the inliers' mean
+        c = points[mask].mean(axis=0)
+    return mask, c, direction
+
+
+def _inlier_counts(points: np.ndarray, normals: np.ndarray, offsets: np.ndarray, threshold: float) -> np.ndarray:
+    """Points closer than ``threshold`` to each line ``normals[h] . p = offsets[h]``
+    (:func:`_hypothesis_counts` of the points and hypotheses)."""
+    n = len(points)
+    pt = np.empty((3, n))
+    pt[:2] = points.T
+    pt[2] = 1.0
+    hyp = np.empty((len(normals), 3))
+    hyp[:, :2] = normals
+    np.negative(offsets, out=hyp[:, 2])
+    return _hypothesis_counts(pt, hyp, threshold)
+
+
+def _hypothesis_counts(pt: np.ndarray, hyp: np.ndarray, threshold: float, negate: bool = False) -> np.ndarray:
+    """Columns ``pt`` (3, N) = (x, y, 1) closer than ``threshold`` to each line ``hyp``
+    (H, 3) = (nx, ny, -offset), or (nx, ny, offset) with ``negate`` (the offsets are
+    negated in a copy; ``hyp`` is not modified).
+
+    Hypotheses in blocks of about 64k distances (at least 4; the block stays in the CPU
+    cache), laid out (hypothesis, point) so the count runs along contiguous memory,
+    into reused buffers. The signed distance is one BLAS product of ``(nx, ny,
+    -offset)`` with ``(x, y, 1)``: the kernel accumulates along the 3 terms in order
+    with fused multiply-adds, so it rounds as ``points @ normals.T`` then ``- offsets``
+    (the tests check it bit for bit), without a second pass over the block. The count
+    sums the bytes of the boolean block (exact, and quicker than
+    ``count_nonzero(axis=1)``).
+    """
+    n = pt.shape[1]
+    if negate:
+        hyp = hyp * np.array([1.0, 1.0, -1.0])  # a C-ordered copy, exact
+    counts = np.empty(len(hyp), dtype=np.int64)
+    block = max(4, 65536 // max(n, 1))
+    dist = np.empty((min(block, len(hyp)), n))
+    inlier = np.empty(dist.shape, dtype=bool)
+    count_type = np.uint16 if n < 2**16 else np.int64
+    for s in range(0, len(hyp), block):
+        e = min(s + block, len(hyp))
+        d, m = dist[: e - s], inlier[: e - s]
+        np.matmul(hyp[s:e], pt, out=d)
+        np.abs(d, out=d)
+        np.less(d, threshold, out=m)
+        counts[s:e] = m.view(np.uint8).sum(axis=1, dtype=count_type)
+    return counts
