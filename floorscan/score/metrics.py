@@ -1278,7 +1278,7 @@ def score_dataset(
     recall_references : dict, optional
         ``{extractor: (M, 4) segments}`` that recall (completeness) and the distances
         are measured against instead of ``references``: on synthetic datasets the
-        observed faces (:func:`floorscan.sim.building.observed_faces`; thesis 5.2, walls
+        observed faces (:func:`floorscan.sim.ground_truth.observed_faces`; thesis 5.2, walls
         never visible from the LIDAR cannot be recovered). Precision and the bitmap
         metrics stay against ``references``, and ``recall_all_<tau>`` gives recall
         against ``references`` too.
@@ -1539,8 +1539,8 @@ def summary_header(dataset: str, verdict=None, recording=None, mode: str = "") -
     """The lines that head ``summary.md``: the title, the registration's verdict
     (``verdict``: :meth:`floorscan.register.consistency.Verdict.as_dict`) and what the
     recording was found to be (``recording``: ingest's detection; ``mode``: the register
-    mode used; :func:`floorscan.ingest.describe_recording`)."""
-    from floorscan.ingest import describe_recording
+    mode used; :func:`floorscan.ingest.recording.describe_recording`)."""
+    from floorscan.ingest.recording import describe_recording
 
     lines = [f"# Scan reduction summary: {dataset}" if dataset else "# Scan reduction summary", ""]
     if verdict:
@@ -1621,7 +1621,7 @@ def load_recall_references(kind: str, extractors, ground_truth=None, recall_kind
 
     Synthetic datasets (``kind`` ground_truth): the ``recall_kind`` features of
     ``walls.geojson`` (``observed_face``: the parts of the faces the recording saw,
-    :func:`floorscan.sim.building.observed_faces`); ``face`` gives None (recall against
+    :func:`floorscan.sim.ground_truth.observed_faces`); ``face`` gives None (recall against
     all faces, like precision). Real recordings: None (the reference is already made
     of what the scans saw).
     """
