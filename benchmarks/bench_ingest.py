@@ -12,7 +12,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from floorscan.ingest import open_recording, write_recording
+from floorscan.ingest.readers import open_recording
+from floorscan.ingest.writer import write_recording
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED = REPO.parent / "shared" / "data"

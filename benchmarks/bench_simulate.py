@@ -14,9 +14,12 @@ from pathlib import Path
 
 import numpy as np
 
-from floorscan.sim import building as bld
-from floorscan.sim import lidar
-from floorscan.sim import simulate as sim
+from floorscan.sim.building_file import load_building
+from floorscan.sim.params import SimParams
+from floorscan.sim.raycast import RayCaster, iter_scan_batches, measure_ranges
+from floorscan.sim.recording import simulate_recording
+from floorscan.sim.scanners import scanner_from_config
+from floorscan.sim.simulate import run_simulation
 
 REPO = Path(__file__).resolve().parents[1]
 CFG = {"scanners": {"2d": {}, "3d": {}}}  # the schema's defaults
@@ -33,15 +36,15 @@ def _mb(n: int) -> str:
 
 def cast_only(building: str, scanner_name: str) -> tuple[float, int, int]:
     """Seconds to cast every ray of the recording (no writers), scans, rays."""
-    b = bld.load_building(REPO / "config" / "buildings" / f"{building}.yaml")
-    sc = lidar.scanner_from_config(scanner_name, CFG["scanners"][scanner_name])
-    rec = sim.simulate_recording(b, sc, sim.SimParams(), seed=1)
-    caster = lidar.RayCaster.from_mesh(rec.mesh)
+    b = load_building(REPO / "config" / "buildings" / f"{building}.yaml")
+    sc = scanner_from_config(scanner_name, CFG["scanners"][scanner_name])
+    rec = simulate_recording(b, sc, SimParams(), seed=1)
+    caster = RayCaster.from_mesh(rec.mesh)
     rng = np.random.default_rng(0)
     n_rays = len(sc.directions())
     t0 = time.perf_counter()
-    for s in lidar.iter_scan_batches(len(rec.scan_t_ns), n_rays):
-        lidar.measure_ranges(caster, sc, rec.scan_poses[s], rng)
+    for s in iter_scan_batches(len(rec.scan_t_ns), n_rays):
+        measure_ranges(caster, sc, rec.scan_poses[s], rng)
     return time.perf_counter() - t0, len(rec.scan_t_ns), len(rec.scan_t_ns) * n_rays
 
 
@@ -57,7 +60,7 @@ def main(argv: list[str] | None = None) -> None:
                     {"bag": "recording.bag", "pcd": "pcd", "true_poses": "true_poses.parquet",
                      "stl": "building.stl", "walls": "walls.geojson"}.items()}
             t0 = time.perf_counter()
-            counts = sim.run_simulation(
+            counts = run_simulation(
                 REPO / "config" / "buildings" / f"{building}.yaml",
                 {"name": building, "scanner": scanner, "seed": 1}, CFG, outs,
             )

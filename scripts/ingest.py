@@ -2,7 +2,9 @@
 
 What ingest detected (format, scan topic, pose source and kind, stamps, a CARMEN log's
 max range) is logged and stored in the schema metadata of the index and pose stream."""
-from floorscan.ingest import detected_line, open_recording, write_recording
+from floorscan.ingest.readers import open_recording
+from floorscan.ingest.recording import detected_line
+from floorscan.ingest.writer import write_recording
 from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:

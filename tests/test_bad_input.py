@@ -240,7 +240,8 @@ def test_a_corpus_of_bad_recordings_gives_one_input_error_each_and_leaves_nothin
     and write_recording, what scripts/ingest.py runs): each ends in the project's
     InputError naming the recording, never another exception or a table written from
     a misread, and no output or hidden temporary is left behind."""
-    from floorscan.ingest import open_recording, write_recording
+    from floorscan.ingest.readers import open_recording
+    from floorscan.ingest.writer import write_recording
 
     (tmp_path / "in").mkdir()
     corpus = _bad_recordings(tmp_path / "in", ros1_bag, ros2_bag)

@@ -17,7 +17,8 @@ from conftest import (
     write_bag,
     write_carmen,
 )
-from floorscan.ingest import open_recording, write_recording
+from floorscan.ingest.readers import open_recording
+from floorscan.ingest.writer import write_recording
 from floorscan.core.io import InputError, read_table
 from floorscan.ingest.poses import scan_poses
 
@@ -260,7 +261,7 @@ def test_real_recordings(name, tmp_path):
 
 
 def test_filter_points_float32_input_keeps_the_same_points_as_float64():
-    from floorscan.ingest import filter_points
+    from floorscan.ingest.points import filter_points
 
     rng = np.random.default_rng(3)
     p = rng.uniform(-10, 10, (2000, 3)).astype(np.float32)
@@ -292,7 +293,7 @@ def _pc2(points, fmt, point_step, offsets=(0, 4, 8), bigendian=False):
 
 
 def test_pointcloud2_xyz_keeps_float32_fields_and_widens_the_others():
-    from floorscan.ingest.rosbag import pointcloud2_xyz
+    from floorscan.ingest.ros_messages import pointcloud2_xyz
 
     pts = np.array([[1.5, -2.25, 0.125], [3.1, 4.2, np.nan], [0.1, 0.2, 0.3]])
     little = pointcloud2_xyz(_pc2(pts, "f4", 16))  # x y z + 4 bytes of intensity
@@ -310,7 +311,7 @@ def test_pointcloud2_xyz_keeps_float32_fields_and_widens_the_others():
 
 
 def test_laser_scan_returns_at_range_max_are_no_return():
-    from floorscan.ingest import laser_scan_points
+    from floorscan.ingest.points import laser_scan_points
 
     r = np.array([0.04, 0.05, 1.0, 29.999, 30.0, 30.5, np.nan, np.inf])
     pts, dropped = laser_scan_points(r, 0.0, 0.0, 0.05, 30.0)  # all beams along +x
@@ -320,7 +321,7 @@ def test_laser_scan_returns_at_range_max_are_no_return():
 
 
 def test_filter_points_upper_bound_is_strict_too():
-    from floorscan.ingest import filter_points
+    from floorscan.ingest.points import filter_points
 
     p = np.array([[3.0, 4.0, 0.0], [0.6, 0.8, 0.0], [0.0, 0.0, 4.999], [6.0, 8.0, 0.0], [0.1, 0.0, 0.0]])
     kept, dropped = filter_points(p, 0.5, 5.0)  # distances 5, 1, 4.999, 10, 0.1
@@ -358,7 +359,7 @@ def _carmen_scans(n_scans, far, n_far_per_scan, t0=10.0):
 
 
 def test_no_return_range_rules():
-    from floorscan.ingest.carmen import no_return_range
+    from floorscan.ingest.carmen_ranges import no_return_range
 
     # 50 readings at 32.767 m among 20 000 (0.25 %), codes a few mm below, a real wall at 32.6 m
     r = np.r_[np.full(19_930, 2.0), np.full(50, 32.767), np.full(15, 32.763), [32.6] * 5]
@@ -578,7 +579,7 @@ def test_odometry_given_as_pose_is_used_as_the_map_pose(tmp_path):
 
 
 def test_empty_pose_stream_is_an_error_for_a_map_pose_source(tmp_path):
-    from floorscan.ingest import Recording, Scan, pose_stream_frame
+    from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
 
     def scans():
         yield Scan(0, "laser", np.zeros((1, 3), np.float32), 0)
@@ -995,7 +996,7 @@ def test_tf_bad_link_outside_the_chain_is_not_used(tmp_path):
 
 
 def test_pointcloud2_every_point_non_finite_is_an_error():
-    from floorscan.ingest.rosbag import pointcloud2_xyz
+    from floorscan.ingest.ros_messages import pointcloud2_xyz
 
     pts = np.array([[np.nan, 1.0, 2.0], [1.0, np.inf, 0.0]])
     with pytest.raises(InputError, match=r"c.bag: PointCloud2 on '/cloud' has no finite point \(2 points\)"):
@@ -1016,7 +1017,7 @@ def test_pointcloud2_every_point_non_finite_is_an_error():
     ids=["field_beyond_point", "row_step_short", "rows_missing", "data_cut", "data_extra"],
 )
 def test_pointcloud2_layout_checked(change, match):
-    from floorscan.ingest.rosbag import pointcloud2_xyz
+    from floorscan.ingest.ros_messages import pointcloud2_xyz
 
     msg = _pc2(np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0], [7.0, 8.0, 9.0]]), "f4", 16)
     cut, extra = change.pop("data_cut", 0), change.pop("data_extra", 0)

@@ -3,8 +3,10 @@
 import numpy as np
 import pytest
 
-from floorscan.sim import building as bld
-from floorscan.sim import lidar
+from floorscan.sim.building_file import parse_building
+from floorscan.sim.mesh import building_mesh
+from floorscan.sim.raycast import RayCaster, iter_scan_batches, measure_ranges, scanner_points, to_map
+from floorscan.sim.scanners import scanner_from_config
 from floorscan.core.io import InputError
 
 HALF_X, HALF_Y, HEIGHT = 2.0, 3.0, 2.5  # inner faces x = +-2, y = +-3, ceiling 2.5 m
@@ -13,7 +15,7 @@ HALF_X, HALF_Y, HEIGHT = 2.0, 3.0, 2.5  # inner faces x = +-2, y = +-3, ceiling 
 def room(openings=()):
     t = 0.1
     hx, hy = HALF_X + t / 2, HALF_Y + t / 2
-    return bld.parse_building(
+    return parse_building(
         {
             "height_m": HEIGHT,
             "walls": [{"id": "room", "closed": True, "thickness_m": t,
@@ -27,7 +29,7 @@ def room(openings=()):
 
 @pytest.fixture(scope="module")
 def caster():
-    return lidar.RayCaster.from_mesh(bld.building_mesh(room()))
+    return RayCaster.from_mesh(building_mesh(room()))
 
 
 def exact_2d(x, y, yaw, angles):
@@ -41,22 +43,22 @@ def exact_2d(x, y, yaw, angles):
 
 
 def test_2d_scanner_beams_match_a_laserscan():
-    sc = lidar.scanner_from_config("2d", {})
+    sc = scanner_from_config("2d", {})
     assert sc.n_beams == 1081
     assert sc.angle_min == pytest.approx(-3 * np.pi / 4, abs=1e-7)
     assert sc.angle_max == pytest.approx(3 * np.pi / 4, abs=1e-6)
     assert np.float32(sc.angle_increment) == sc.angle_increment  # float32, as in the message
-    full = lidar.scanner_from_config("lidar360", {"kind": "2d", "fov_deg": 360, "angular_resolution_deg": 1})
+    full = scanner_from_config("lidar360", {"kind": "2d", "fov_deg": 360, "angular_resolution_deg": 1})
     assert full.n_beams == 360  # -180 and +180 are the same beam
 
 
 def test_exact_distances_and_range_noise_std_is_1cm(caster):
-    sc = lidar.scanner_from_config("2d", {})
+    sc = scanner_from_config("2d", {})
     rng = np.random.default_rng(7)
     xs = np.linspace(-1.0, 1.0, 8)
     poses = np.column_stack([xs, xs * 1.2, np.full(8, 0.3), np.linspace(0, 3, 8)])
     poses = np.repeat(poses, 6, axis=0)  # 48 scans, 51888 beams
-    ranges, exact = lidar.measure_ranges(caster, sc, poses, rng, return_exact=True)
+    ranges, exact = measure_ranges(caster, sc, poses, rng, return_exact=True)
     truth = np.stack([exact_2d(p[0], p[1], p[3], sc.angles()) for p in poses])
     # Embree's hit distances are the analytic ones (float32)
     assert np.abs(exact - truth).max() < 2e-5
@@ -76,12 +78,12 @@ def fit_line(p):
 
 
 def test_single_scan_from_the_centre_recovers_the_four_walls(caster):
-    sc = lidar.scanner_from_config("2d", {})
+    sc = scanner_from_config("2d", {})
     pose = np.array([0.0, 0.0, 0.3, 0.4])
-    ranges = lidar.measure_ranges(caster, sc, pose[None], np.random.default_rng(3))[0]
-    pts, valid = lidar.scanner_points(sc, ranges)
+    ranges = measure_ranges(caster, sc, pose[None], np.random.default_rng(3))[0]
+    pts, valid = scanner_points(sc, ranges)
     assert valid.all()  # closed room, all within 20 m
-    m = lidar.to_map(pts, pose)
+    m = to_map(pts, pose)
     assert np.allclose(m[:, 2], 0.3)
     xy = m[:, :2]
     # assign each point to the wall it is nearest to, fit a line to each group
@@ -101,9 +103,9 @@ def test_single_scan_from_the_centre_recovers_the_four_walls(caster):
 
 
 def test_no_return_beyond_max_range(caster):
-    sc = lidar.scanner_from_config("short", {"kind": "2d", "range_max_m": 2.5, "range_noise_std_m": 0.0})
+    sc = scanner_from_config("short", {"kind": "2d", "range_max_m": 2.5, "range_noise_std_m": 0.0})
     pose = np.array([0.5, 0.0, 0.3, 0.0])
-    ranges = lidar.measure_ranges(caster, sc, pose[None], np.random.default_rng(0))[0]
+    ranges = measure_ranges(caster, sc, pose[None], np.random.default_rng(0))[0]
     truth = exact_2d(0.5, 0.0, 0.0, sc.angles())
     assert np.all(np.isposinf(ranges[truth > 2.5 + 1e-4]))
     near = truth < 2.5 - 1e-4
@@ -115,10 +117,10 @@ def test_rays_pass_through_a_door_but_not_a_window_above_the_scanner():
     door = {"id": "door", "kind": "door", "segment": 0, "offset_m": 1.05, "width_m": 2.0}  # x -1..1, y = -3
     window = {"id": "win", "kind": "window", "segment": 2, "offset_m": 1.05, "width_m": 2.0,
               "sill_m": 0.9, "head_m": 2.0}  # x 1..-1 on y = +3
-    c = lidar.RayCaster.from_mesh(bld.building_mesh(room([door, window])))
-    sc = lidar.scanner_from_config("lidar360", {"kind": "2d", "fov_deg": 360, "angular_resolution_deg": 0.5,
+    c = RayCaster.from_mesh(building_mesh(room([door, window])))
+    sc = scanner_from_config("lidar360", {"kind": "2d", "fov_deg": 360, "angular_resolution_deg": 0.5,
                                                 "range_noise_std_m": 0.0})
-    ranges = lidar.measure_ranges(c, sc, np.array([[0.0, 0.0, 0.3, 0.0]]), np.random.default_rng(0))[0]
+    ranges = measure_ranges(c, sc, np.array([[0.0, 0.0, 0.3, 0.0]]), np.random.default_rng(0))[0]
     a = sc.angles()
     # beams toward the door gap leave the building: no return (the door jambs are 0.1 m deep)
     through_door = (np.sin(a) < 0) & (np.abs(3.1 * np.cos(a) / np.sin(a)) < 0.99)
@@ -130,14 +132,14 @@ def test_rays_pass_through_a_door_but_not_a_window_above_the_scanner():
 
 
 def test_3d_scan_points_lie_on_walls_floor_and_ceiling(caster):
-    sc = lidar.scanner_from_config("3d", {"horizontal_resolution_deg": 2.0})
+    sc = scanner_from_config("3d", {"horizontal_resolution_deg": 2.0})
     assert len(sc.directions()) == 180 * 16
     assert np.degrees(sc.elevations()).tolist() == pytest.approx(np.arange(-15, 16, 2).tolist())
     pose = np.array([0.3, -0.2, 0.3, 1.0])
-    ranges = lidar.measure_ranges(caster, sc, pose[None], np.random.default_rng(5))[0]
-    pts, valid = lidar.scanner_points(sc, ranges)
+    ranges = measure_ranges(caster, sc, pose[None], np.random.default_rng(5))[0]
+    pts, valid = scanner_points(sc, ranges)
     assert valid.all()
-    m = lidar.to_map(pts, pose)
+    m = to_map(pts, pose)
     dist = np.stack([np.abs(np.abs(m[:, 0]) - HALF_X), np.abs(np.abs(m[:, 1]) - HALF_Y),
                      np.abs(m[:, 2]), np.abs(m[:, 2] - HEIGHT)], 1).min(axis=1)
     assert np.quantile(dist, 0.99) < 0.03 and dist.max() < 0.06  # 1 cm noise
@@ -147,27 +149,27 @@ def test_3d_scan_points_lie_on_walls_floor_and_ceiling(caster):
 
 
 def test_noise_is_seeded_and_independent_of_batching(caster):
-    sc = lidar.scanner_from_config("2d", {})
+    sc = scanner_from_config("2d", {})
     poses = np.column_stack([np.zeros(10), np.linspace(-1, 1, 10), np.full(10, 0.3), np.zeros(10)])
-    a = lidar.measure_ranges(caster, sc, poses, np.random.default_rng(11))
-    b = lidar.measure_ranges(caster, sc, poses, np.random.default_rng(11))
+    a = measure_ranges(caster, sc, poses, np.random.default_rng(11))
+    b = measure_ranges(caster, sc, poses, np.random.default_rng(11))
     rng = np.random.default_rng(11)
-    batches = lidar.iter_scan_batches(10, sc.n_beams, max_rays=3000)
-    parts = [lidar.measure_ranges(caster, sc, poses[s], rng) for s in batches]
+    batches = iter_scan_batches(10, sc.n_beams, max_rays=3000)
+    parts = [measure_ranges(caster, sc, poses[s], rng) for s in batches]
     assert len(parts) == 5  # 2 scans per call
     np.testing.assert_array_equal(a, b)
     np.testing.assert_array_equal(a, np.concatenate(parts))
-    c = lidar.measure_ranges(caster, sc, poses, np.random.default_rng(12))
+    c = measure_ranges(caster, sc, poses, np.random.default_rng(12))
     assert not np.array_equal(a, c)
 
 
 def test_inputs_are_not_mutated(caster):
-    sc = lidar.scanner_from_config("2d", {})
+    sc = scanner_from_config("2d", {})
     pose = np.array([0.0, 0.0, 0.3, 0.2])
     before = pose.copy()
-    r = lidar.measure_ranges(caster, sc, pose[None], np.random.default_rng(0))[0]
+    r = measure_ranges(caster, sc, pose[None], np.random.default_rng(0))[0]
     r0 = r.copy()
-    lidar.to_map(lidar.scanner_points(sc, r)[0], pose)
+    to_map(scanner_points(sc, r)[0], pose)
     np.testing.assert_array_equal(pose, before)
     np.testing.assert_array_equal(r, r0)
 
@@ -186,4 +188,4 @@ def test_inputs_are_not_mutated(caster):
 )
 def test_bad_scanner_config(name, cfg, match):
     with pytest.raises(InputError, match=match):
-        lidar.scanner_from_config(name, cfg)
+        scanner_from_config(name, cfg)

@@ -234,7 +234,7 @@ def _maybe_non_finite(strategy):
     limits=st.tuples(st.one_of(st.none(), st.floats(0, 2)), st.one_of(st.none(), st.floats(2, 50))),
 )
 def test_laser_scan_read_exactly_or_rejected(ranges, angle_min, angle_increment, range_min, range_max, limits):
-    from floorscan.ingest.rosbag import laser_scan_xyz
+    from floorscan.ingest.ros_messages import laser_scan_xyz
 
     msg = SimpleNamespace(angle_min=angle_min, angle_increment=angle_increment, range_min=range_min,
                           range_max=range_max, ranges=np.array(ranges, dtype=np.float32))
@@ -320,7 +320,7 @@ def pointclouds(draw):
 @settings(max_examples=300)
 @given(case=pointclouds())
 def test_pointcloud2_read_exactly_or_rejected(case):
-    from floorscan.ingest.rosbag import pointcloud2_xyz
+    from floorscan.ingest.ros_messages import pointcloud2_xyz
 
     msg, expected, as_f32 = case
     if expected is None:

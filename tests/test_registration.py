@@ -525,12 +525,13 @@ def test_schema_defaults_match_dataclass():
 
 
 def _ingest(tmp_path, ds, cfg=None):
-    ingest = pytest.importorskip("floorscan.ingest")
+    readers = pytest.importorskip("floorscan.ingest.readers")
+    writer = pytest.importorskip("floorscan.ingest.writer")
     from floorscan.core.io import read_table
     from floorscan.ingest.poses import scan_poses
 
-    rec = ingest.open_recording(ds, cfg or {}, max_gap_s=0.5)
-    index = ingest.write_recording(rec, tmp_path / "s.parquet", tmp_path / "i.parquet", tmp_path / "p.parquet")
+    rec = readers.open_recording(ds, cfg or {}, max_gap_s=0.5)
+    index = writer.write_recording(rec, tmp_path / "s.parquet", tmp_path / "i.parquet", tmp_path / "p.parquet")
     poses = scan_poses(index, read_table(tmp_path / "p.parquet"), 0.5, "stream")
     return read_table(tmp_path / "s.parquet"), index, poses
 
@@ -648,16 +649,18 @@ def _simulated_demo(seed=1, every=5):
     """The demo building driven by the simulator (AMCL-like Gauss-Markov pose error: 5 cm,
     0.02 rad, 2 s correlation time), every ``every``-th scan: scans, index, the
     localizer's poses interpolated at the scans, and the true scanner poses (~2 s)."""
-    from floorscan.sim import building as bld
-    from floorscan.sim import lidar
-    from floorscan.sim import simulate as sim
+    from floorscan.sim.building_file import load_building
+    from floorscan.sim.params import SimParams
+    from floorscan.sim.raycast import scanner_points
+    from floorscan.sim.recording import simulate_recording
+    from floorscan.sim.scanners import Scanner2D
 
-    b = bld.load_building(REPO / "config" / "buildings" / "demo.yaml")
-    rec = sim.simulate_recording(b, lidar.Scanner2D(), sim.SimParams(), seed=seed)
+    b = load_building(REPO / "config" / "buildings" / "demo.yaml")
+    rec = simulate_recording(b, Scanner2D(), SimParams(), seed=seed)
     rows, ks = [], []
     for k, rng in rec.iter_scans():
         if k % every == 0:
-            pts, _ = lidar.scanner_points(rec.scanner, rng)
+            pts, _ = scanner_points(rec.scanner, rng)
             rows.append(pd.DataFrame({"scan_id": np.int32(len(ks)), "x": pts[:, 0], "y": pts[:, 1], "z": pts[:, 2]}))
             ks.append(k)
     ks = np.asarray(ks)
@@ -856,7 +859,7 @@ def test_simpath2_registration_error_against_the_simulators_truth(tmp_path):
     1.14 deg. Odometry mode restarts its motion model after a stop (the simulator's
     identical scans while the robot stands); carrying the velocity across the stops
     gave 3.2 m / 34 deg."""
-    from floorscan.sim.simulate import gauss_markov
+    from floorscan.sim.recording import gauss_markov
 
     ds = {"path": str(SHARED_DATA / "stage-sim" / "simpath2.bag"),
           "pose": {"source": "topic", "topic": "/base_pose_ground_truth"}}

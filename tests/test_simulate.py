@@ -8,9 +8,12 @@ import pandas as pd
 import pytest
 import yaml
 
-from floorscan.sim import building as bld
-from floorscan.sim import lidar
-from floorscan.sim import simulate as sim
+from floorscan.sim.building_file import parse_building
+from floorscan.sim.params import SimParams
+from floorscan.sim.recording import gauss_markov, simulate_recording
+from floorscan.sim.scanners import Scanner2D, Scanner3D, scanner_from_config
+from floorscan.sim.simulate import run_simulation
+from floorscan.sim.trajectory import rover_trajectory
 from floorscan.core.io import InputError, read_table
 
 REPO = Path(__file__).resolve().parents[1]
@@ -46,7 +49,7 @@ def run(tmp: Path, scanner="2d", seed=1, cfg=CFG, building=ROOM):
     byaml = tmp / "tiny.yaml"
     byaml.write_text(yaml.safe_dump(building))
     outs = {k: tmp / "sim" / v for k, v in OUTS.items()}
-    counts = sim.run_simulation(byaml, {"name": "tiny", "scanner": scanner, "seed": seed}, cfg, outs)
+    counts = run_simulation(byaml, {"name": "tiny", "scanner": scanner, "seed": seed}, cfg, outs)
     return outs, counts
 
 
@@ -180,10 +183,10 @@ def test_bag_topics_frames_and_static_transform(rec2d):
 
 
 def test_amcl_pose_is_the_true_pose_plus_the_recorded_error(tmp_path):
-    b = bld.parse_building(ROOM, "tiny.yaml")
-    rec = sim.simulate_recording(b, lidar.scanner_from_config("2d", {}), sim.SimParams(), seed=4)
-    traj = sim.rover_trajectory(b.waypoints, 0.3, 1.0)
-    truth = traj.at((rec.pose_t_ns - sim.SimParams().start_time_ns) / 1e9)
+    b = parse_building(ROOM, "tiny.yaml")
+    rec = simulate_recording(b, scanner_from_config("2d", {}), SimParams(), seed=4)
+    traj = rover_trajectory(b.waypoints, 0.3, 1.0)
+    truth = traj.at((rec.pose_t_ns - SimParams().start_time_ns) / 1e9)
     d = rec.amcl - truth
     d[:, 2] = (d[:, 2] + np.pi) % (2 * np.pi) - np.pi
     np.testing.assert_allclose(d, rec.amcl_error, atol=1e-9)
@@ -192,21 +195,21 @@ def test_amcl_pose_is_the_true_pose_plus_the_recorded_error(tmp_path):
 
 def test_gauss_markov_std_and_correlation():
     rng = np.random.default_rng(0)
-    e = sim.gauss_markov(200_000, 0.1, 0.05, 2.0, rng)
+    e = gauss_markov(200_000, 0.1, 0.05, 2.0, rng)
     assert e.std() == pytest.approx(0.05, rel=0.05)
     lag1 = np.corrcoef(e[:-1], e[1:])[0, 1]
     assert lag1 == pytest.approx(math.exp(-0.1 / 2.0), abs=0.005)
     lag20 = np.corrcoef(e[:-20], e[20:])[0, 1]  # 2 s = one correlation time
     assert lag20 == pytest.approx(math.exp(-1), abs=0.03)
-    white = sim.gauss_markov(100_000, 0.1, 1.0, 0.0, np.random.default_rng(1))
+    white = gauss_markov(100_000, 0.1, 1.0, 0.0, np.random.default_rng(1))
     assert abs(np.corrcoef(white[:-1], white[1:])[0, 1]) < 0.01
-    again = sim.gauss_markov(200_000, 0.1, 0.05, 2.0, np.random.default_rng(0))
+    again = gauss_markov(200_000, 0.1, 0.05, 2.0, np.random.default_rng(0))
     np.testing.assert_array_equal(e, again)
 
 
 def test_trajectory_drives_the_waypoints_at_speed_and_turns_smoothly():
     wps = np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 2.0], [0.0, 2.0]])
-    tr = sim.rover_trajectory(wps, 0.3, 1.0)
+    tr = rover_trajectory(wps, 0.3, 1.0)
     for w in wps:
         assert np.hypot(*(tr.xy - w).T).min() < 0.021
     step = np.hypot(*np.diff(tr.xy, axis=0).T) / np.diff(tr.t)
@@ -227,15 +230,15 @@ def test_true_poses_and_scan_count(rec2d):
     assert np.all(tp["z"] == 0.3)
     assert tp[["x", "y"]].iloc[0].tolist() == [-1.0, 0.0]
     assert np.hypot(tp["x"].iloc[-1] - 0.2, tp["y"].iloc[-1] + 0.6) < 0.021 + 0.03  # last scan <= 0.1 s early
-    tr = sim.rover_trajectory(np.array(ROOM["waypoints"]), 0.3, 1.0)
+    tr = rover_trajectory(np.array(ROOM["waypoints"]), 0.3, 1.0)
     assert len(tp) == math.floor(tr.duration_s * 10) + 1
 
 
 def test_odometry_drifts_by_its_scale_error(tmp_path):
     straight = dict(ROOM, waypoints=[[-1.5, 0.0], [1.5, 0.0]])
-    b = bld.parse_building(straight, "tiny.yaml")
-    p = sim.SimParams(odom_scale_error=0.05, odom_yaw_drift_rad_s=0.0)
-    rec = sim.simulate_recording(b, lidar.scanner_from_config("2d", {}), p, seed=0)
+    b = parse_building(straight, "tiny.yaml")
+    p = SimParams(odom_scale_error=0.05, odom_yaw_drift_rad_s=0.0)
+    rec = simulate_recording(b, scanner_from_config("2d", {}), p, seed=0)
     assert rec.odom[0, :3].tolist() == [0.0, 0.0, 0.0]
     assert rec.odom[-1, 0] == pytest.approx(3.0 * 1.05, abs=0.03)
     assert abs(rec.odom[-1, 1]) < 0.02
@@ -289,10 +292,10 @@ def test_schema_defaults_equal_the_dataclass_defaults():
 
     schema = yaml.safe_load(SCHEMA.read_text())
     props = schema["properties"]
-    for f in fields(sim.SimParams):
+    for f in fields(SimParams):
         assert props[f.name]["default"] == f.default, f.name
-    assert set(props) == {f.name for f in fields(sim.SimParams)} | {"scanners"}
-    for cls, key in [(lidar.Scanner2D, "scanner2d"), (lidar.Scanner3D, "scanner3d")]:
+    assert set(props) == {f.name for f in fields(SimParams)} | {"scanners"}
+    for cls, key in [(Scanner2D, "scanner2d"), (Scanner3D, "scanner3d")]:
         sprops = schema["$defs"][key]["properties"]
         assert set(sprops) == {f.name for f in fields(cls)}
         for f in fields(cls):

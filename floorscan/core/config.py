@@ -286,7 +286,7 @@ def validate_config(data: dict, schema_path: str | os.PathLike, section: str = "
 
 def known_buildings(buildings_dir: str | os.PathLike = BUILDINGS_DIR) -> list[str]:
     """Names of the synthetic buildings: the ``<name>.yaml`` files of ``buildings_dir``
-    (:func:`floorscan.sim.building.load_building` reads one), sorted."""
+    (:func:`floorscan.sim.building_file.load_building` reads one), sorted."""
     folder = Path(buildings_dir)
     return sorted(p.stem for p in folder.glob("*.yaml")) if folder.is_dir() else []
 

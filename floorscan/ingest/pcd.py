@@ -45,8 +45,10 @@ from typing import Any, Iterator, Mapping
 import numpy as np
 import pandas as pd
 
-from floorscan.ingest import Recording, Scan, filter_points, parse_number, parse_numbers, pose_stream_frame
 from floorscan.core.io import InputError
+from floorscan.ingest.points import filter_points
+from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
+from floorscan.ingest.text import parse_number, parse_numbers
 
 log = logging.getLogger(__name__)
 
@@ -187,7 +189,7 @@ def _ascii_xyz(path: Path, h: PcdHeader, raw: bytes) -> np.ndarray:
 def _ascii_table(lines: list[str], points: int, width: int) -> np.ndarray | None:
     """The ascii rows as a (points, width) float64 table, parsed by numpy in one call
     (whitespace between values, blank lines skipped; no number that
-    :func:`floorscan.ingest.parse_number` refuses, ``1_0`` included); None when numpy
+    :func:`floorscan.ingest.text.parse_number` refuses, ``1_0`` included); None when numpy
     refuses a value or the table has another shape (the caller then reads row by row)."""
     if points == 0:
         return None
@@ -420,7 +422,7 @@ def _stamp_column(path: Path, col: pd.Series) -> np.ndarray:
 
 
 def open_pcd_folder(path: Path, dataset: Mapping[str, Any], cfg: Mapping[str, Any]) -> Recording:
-    """Open a folder of map-frame ``.pcd`` scans as a :class:`~floorscan.ingest.Recording`.
+    """Open a folder of map-frame ``.pcd`` scans as a :class:`~floorscan.ingest.recording.Recording`.
 
     ``Recording.detected``: scan topic ``pcd files``, pose source embedded (the
     locations CSV), pose kind ``map``, stamps from :func:`read_locations`.

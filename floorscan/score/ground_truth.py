@@ -26,7 +26,7 @@ def load_recall_references(kind: str, extractors, ground_truth=None, recall_kind
 
     Synthetic datasets (``kind`` ground_truth): the ``recall_kind`` features of
     ``walls.geojson`` (``observed_face``: the parts of the faces the recording saw,
-    :func:`floorscan.sim.building.observed_faces`); ``face`` gives None (recall against
+    :func:`floorscan.sim.ground_truth.observed_faces`); ``face`` gives None (recall against
     all faces, like precision). Real recordings: None (the reference is already made
     of what the scans saw).
     """

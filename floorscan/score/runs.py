@@ -78,7 +78,7 @@ def score_dataset(
     recall_references : dict, optional
         ``{extractor: (M, 4) segments}`` that recall (completeness) and the distances
         are measured against instead of ``references``: on synthetic datasets the
-        observed faces (:func:`floorscan.sim.building.observed_faces`; thesis 5.2, walls
+        observed faces (:func:`floorscan.sim.ground_truth.observed_faces`; thesis 5.2, walls
         never visible from the LIDAR cannot be recovered). Precision and the bitmap
         metrics stay against ``references``, and ``recall_all_<tau>`` gives recall
         against ``references`` too.

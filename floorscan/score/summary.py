@@ -90,8 +90,8 @@ def summary_header(dataset: str, verdict=None, recording=None, mode: str = "") -
     """The lines that head ``summary.md``: the title, the registration's verdict
     (``verdict``: :meth:`floorscan.register.consistency.Verdict.as_dict`) and what the
     recording was found to be (``recording``: ingest's detection; ``mode``: the register
-    mode used; :func:`floorscan.ingest.describe_recording`)."""
-    from floorscan.ingest import describe_recording
+    mode used; :func:`floorscan.ingest.recording.describe_recording`)."""
+    from floorscan.ingest.recording import describe_recording
 
     lines = [f"# Scan reduction summary: {dataset}" if dataset else "# Scan reduction summary", ""]
     if verdict:

@@ -81,7 +81,7 @@ POSE_MSGTYPES = (
 STATIC_TOPICS = ("/tf_static",)
 #: CARMEN pose lines kept within the window. Their ``ipc_timestamp`` is the third field
 #: from the end (``ODOM x y theta tv rv accel ipc_timestamp host logger_timestamp``), as
-#: in every CARMEN message, the laser lines too (:data:`floorscan.ingest.carmen.LAYOUTS`).
+#: in every CARMEN message, the laser lines too (:data:`floorscan.ingest.carmen_lines.LAYOUTS`).
 CARMEN_POSE_LINES = ("ODOM", "TRUEPOS")
 #: CARMEN lines always kept (besides ``#`` comments).
 CARMEN_KEPT_LINES = ("PARAM",)
@@ -97,7 +97,7 @@ def read_detection(index_path: str | os.PathLike, dataset: Mapping[str, Any] | N
     index_path : path
         The ingest stage's ``scan_index.parquet``: its ``t_ns`` column and the schema
         metadata ingest stored (``format``, ``scan_topic``, ``stamps``, a CARMEN log's
-        ``max_range_m``; :attr:`floorscan.ingest.Recording.detected`).
+        ``max_range_m``; :attr:`floorscan.ingest.recording.Recording.detected`).
     dataset : mapping, optional
         The dataset's config entry; its ``locations`` (PCD folders) is passed on.
 
@@ -456,7 +456,8 @@ def _read_lines(path: Path) -> tuple[list[str], bool]:
 
 
 def _reduce_carmen(source: Path, ids, out_path: Path, detection, t_ns, window_s: float) -> dict:
-    from floorscan.ingest.carmen import LASER_TYPES, classify_stamps, spread_stamps
+    from floorscan.ingest.carmen_lines import LASER_TYPES
+    from floorscan.ingest.carmen_stamps import classify_stamps, spread_stamps
 
     lines, gz = _read_lines(source)
     tokens = [ln.encode("latin-1").decode("ascii", errors="replace").split() for ln in lines]

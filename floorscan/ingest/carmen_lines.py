@@ -1,0 +1,164 @@
+"""The laser lines of a CARMEN log: their layouts, and one line's fields read and checked.
+
+Line formats (CARMEN logger documentation, as in the Radish datasets)::
+
+    FLASER n r1..rn x y theta odom_x odom_y odom_theta ipc_timestamp ipc_hostname logger_timestamp
+    ROBOTLASER1 laser_type start_angle fov angular_resolution max_range accuracy
+        remission_mode n r1..rn n_remissions v1..vm laser_x laser_y laser_theta
+        robot_x robot_y robot_theta tv rv forward_safety side_safety turn_axis
+        ipc_timestamp ipc_hostname logger_timestamp
+
+``x y theta`` (FLASER) and ``laser_x laser_y laser_theta`` (ROBOTLASER1) are the laser's
+corrected pose in the map frame.
+
+FLASER beams span the field of view (default 180 degrees) starting at -fov/2. With an
+even beam count (180, 360) the increment is fov/n; with an odd one (181, 361) both ends
+are included and it is fov/(n-1): the convention of the Radish logs' readers.
+
+Malformed lines (issue 24). A laser line is read only when it has exactly the fields its
+counts imply: ``2 + n + 9`` for FLASER, ``24 + n + m`` for ROBOTLASER1 (n beams, m
+remissions); a field too many or too few would shift every later field (a range read as
+the pose, the pose as the stamp), so it is an ``InputError`` naming ``file:line``, the
+counts and the layout, never parsed from shifted positions. Every numeric field must be a
+number; the corrected pose, ROBOTLASER1's ``start_angle``, ``angular_resolution`` and
+``maximum_range`` must be finite; ``ipc_timestamp`` must be finite, 0 or more and below
+:data:`MAX_STAMP_S`. The error names the line and the field. Non-finite *ranges* are not
+errors: they are "no return", dropped and counted like the others.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+
+from floorscan.ingest.text import parse_number, parse_numbers
+
+
+LASER_TYPES = ("FLASER", "ROBOTLASER1")
+#: The field layout of each laser line, for error messages.
+LAYOUTS = {
+    "FLASER": "FLASER n r1..rn x y theta odom_x odom_y odom_theta ipc_timestamp ipc_hostname logger_timestamp",
+    "ROBOTLASER1": (
+        "ROBOTLASER1 laser_type start_angle fov angular_resolution maximum_range accuracy remission_mode "
+        "n r1..rn m v1..vm laser_x laser_y laser_theta robot_x robot_y robot_theta tv rv forward_safety "
+        "side_safety turn_axis ipc_timestamp ipc_hostname logger_timestamp"
+    ),
+}
+#: Fields of a FLASER line besides its n ranges.
+FLASER_FIXED_FIELDS = 11
+#: Fields of a ROBOTLASER1 line besides its n ranges and m remissions.
+ROBOTLASER1_FIXED_FIELDS = 24
+#: Largest ``ipc_timestamp`` read, seconds: its nanoseconds still fit in int64 (2261).
+MAX_STAMP_S = 9.2e9
+
+
+_INTEGER = re.compile(r"\+?[0-9]+")
+
+
+class MalformedLine(ValueError):
+    """A laser line that does not follow its layout (the message says how)."""
+
+
+def _number(tok: list[str], i: int, name: str) -> float:
+    v = parse_number(tok[i])
+    if v is None:
+        raise MalformedLine(f"field {i + 1} ({name}) is {tok[i]!r}; expected a number")
+    return v
+
+
+def _finite(tok: list[str], i: int, name: str) -> float:
+    v = _number(tok, i, name)
+    if not math.isfinite(v):
+        raise MalformedLine(f"field {i + 1} ({name}) is {tok[i]}; expected a finite number")
+    return v
+
+
+def _count(tok: list[str], i: int, name: str, minimum: int) -> int:
+    t = tok[i]
+    if not _INTEGER.fullmatch(t) or int(t) < minimum:
+        raise MalformedLine(f"field {i + 1} ({name}) is {t!r}; expected an integer >= {minimum}")
+    return int(t)
+
+
+def _numbers(tok: list[str], a: int, b: int, what: str) -> np.ndarray:
+    """Fields ``a:b`` as float64, any value (NaN and inf included)."""
+    values = parse_numbers(tok[a:b])
+    if values is None:  # name the field (one by one: slow, but only on a bad line)
+        values = np.array([_number(tok, i, f"{what} {i - a + 1}") for i in range(a, b)], dtype=np.float64)
+    return values
+
+
+def _stamp(tok: list[str], i: int) -> float:
+    t = _number(tok, i, "ipc_timestamp")
+    if not 0.0 <= t < MAX_STAMP_S:  # NaN fails too
+        raise MalformedLine(
+            f"field {i + 1} (ipc_timestamp) is {tok[i]}; expected a finite time in seconds, "
+            f"0 or more and below {MAX_STAMP_S:g}"
+        )
+    return t
+
+
+def parse_laser_line(kind: str, tok: list[str], fov_rad: float, lineno: int) -> dict:
+    """One laser line's fields, read only when their count is exactly the layout's.
+
+    Raises
+    ------
+    MalformedLine
+        A field count other than the layout's (FLASER ``2 + n + 9``, ROBOTLASER1
+        ``24 + n + m``), a non-numeric field, a non-finite pose, angle or maximum
+        range, a stamp that is not finite and >= 0.
+    """
+    rmax = math.inf
+    if kind == "FLASER":
+        if len(tok) < 2:
+            raise MalformedLine(f"{len(tok)} fields; expected 2 + n + 9")
+        n = _count(tok, 1, "n, the beam count", 1)
+        need = n + FLASER_FIXED_FIELDS
+        if len(tok) != need:
+            raise MalformedLine(f"{len(tok)} fields for n = {n} beams; expected 2 + n + 9 = {need}")
+        ranges = _numbers(tok, 2, 2 + n, "range")
+        k = 2 + n
+        names = ("x", "y", "theta")
+        inc = fov_rad / (n - 1) if n % 2 == 1 and n > 1 else fov_rad / n
+        start = -fov_rad / 2.0
+        others = ("odom_x", "odom_y", "odom_theta")
+        stamp_at = k + 6
+    else:
+        if len(tok) < 9:
+            raise MalformedLine(f"{len(tok)} fields; expected 24 + n + m (n at field 9)")
+        n = _count(tok, 8, "n, the beam count", 1)
+        if len(tok) < 10 + n:
+            raise MalformedLine(
+                f"{len(tok)} fields for n = {n} beams; expected 24 + n + m, at least {ROBOTLASER1_FIXED_FIELDS + n}"
+            )
+        m = _count(tok, 9 + n, "m, the remission count", 0)
+        need = ROBOTLASER1_FIXED_FIELDS + n + m
+        if len(tok) != need:
+            raise MalformedLine(
+                f"{len(tok)} fields for n = {n} beams and m = {m} remissions; expected 24 + n + m = {need}"
+            )
+        _number(tok, 1, "laser_type")
+        start = _finite(tok, 2, "start_angle")
+        _number(tok, 3, "fov")
+        inc = _finite(tok, 4, "angular_resolution")
+        line_rmax = _finite(tok, 5, "maximum_range")
+        _number(tok, 6, "accuracy")
+        _number(tok, 7, "remission_mode")
+        ranges = _numbers(tok, 9, 9 + n, "range")
+        _numbers(tok, 10 + n, 10 + n + m, "remission")
+        k = 10 + n + m
+        names = ("laser_x", "laser_y", "laser_theta")
+        others = ("robot_x", "robot_y", "robot_theta", "tv", "rv", "forward_safety", "side_safety", "turn_axis")
+        stamp_at = k + 11
+        if line_rmax > 0:
+            rmax = line_rmax
+    pose = np.array([_finite(tok, k + j, name) for j, name in enumerate(names)])
+    for j, name in enumerate(others):
+        _number(tok, k + 3 + j, name)
+    t_s = _stamp(tok, stamp_at)
+    _number(tok, stamp_at + 2, "logger_timestamp")
+    return {
+        "t_s": t_s, "ranges": ranges, "start": start, "inc": inc, "rmax": rmax, "pose": pose, "line": lineno, "kind": kind,
+    }

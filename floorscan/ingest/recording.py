@@ -1,0 +1,115 @@
+"""What a reader hands to ingest: a recording's scans, its pose stream, what was detected.
+
+A reader (:mod:`floorscan.ingest.rosbag`, :mod:`floorscan.ingest.carmen`,
+:mod:`floorscan.ingest.pcd`) returns a :class:`Recording`: an iterator of :class:`Scan`
+records in recording order, the pose stream (:func:`pose_stream_frame`: the columns of
+:data:`floorscan.core.io.POSE_STREAM`), notes for the stage log and what it detected
+(:data:`DETECTED_KEYS`; one log line by :func:`detected_line`, a phrase for people by
+:func:`describe_recording`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Iterable, Iterator, Mapping
+
+import numpy as np
+import pandas as pd
+
+
+@dataclasses.dataclass(frozen=True)
+class Scan:
+    """One scan of a recording.
+
+    Attributes
+    ----------
+    t_ns : int
+        Time of the scan, nanoseconds since the Unix epoch (header stamp).
+    frame : str
+        Frame of the points (the scanner frame).
+    points : (N, 3) float32 ndarray
+        Valid returns in the scanner frame, metres.
+    n_dropped : int
+        Returns dropped as invalid (NaN, inf, or outside the range limits).
+    """
+
+    t_ns: int
+    frame: str
+    points: np.ndarray
+    n_dropped: int
+
+
+#: Keys of :attr:`Recording.detected`, in the order they are logged.
+DETECTED_KEYS = ("format", "scan_topic", "pose_source", "stamps", "pose_kind", "max_range_m")
+#: Pose kinds: ``map`` poses (a localizer, the TF chain from ``map``, a log's corrected
+#: poses, a PCD folder's locations, or a pose source set in the dataset), or ``none``.
+POSE_KINDS = ("map", "none")
+#: Stamp classes: ``recorded`` (strictly increasing, after sorting the few lines out of
+#: order), ``spread`` (some repeated stamps spread in line order), ``made_up`` (all zero
+#: or mostly repeated: index x period).
+STAMP_CLASSES = ("recorded", "spread", "made_up")
+
+
+@dataclasses.dataclass
+class Recording:
+    """A recording opened for ingest: a scan iterator and its pose stream.
+
+    ``scans`` is consumed once. ``pose_stream`` is filled by the time ``scans`` is
+    exhausted (a bag reader may read poses first); it has the columns of
+    :data:`floorscan.core.io.POSE_STREAM`, and is empty when ``detected["pose_kind"]`` is
+    ``"none"`` (no map pose source: the register stage runs LIDAR odometry).
+
+    Attributes
+    ----------
+    detected : dict of str to str
+        What the reader found or was told (keys of :data:`DETECTED_KEYS`): ``format``
+        (rosbag, carmen, pcd), ``scan_topic`` (a bag's topic, a CARMEN log's laser line
+        type, ``pcd files``), ``pose_source`` (a readable phrase), ``pose_kind``
+        (:data:`POSE_KINDS`), ``stamps`` (:data:`STAMP_CLASSES`) and, for CARMEN,
+        ``max_range_m`` (returns at or beyond it were dropped, metres).
+    notes : list of str
+        What the reader noticed and did about it, one line each, for the stage log.
+    """
+
+    scans: Iterator[Scan]
+    pose_stream: pd.DataFrame | None = None
+    source: str = ""
+    notes: list[str] = dataclasses.field(default_factory=list)
+    detected: dict[str, str] = dataclasses.field(default_factory=dict)
+
+
+def detected_line(detected: Mapping[str, str]) -> str:
+    """One log line of what ingest detected: ``format=..., scan_topic=..., ...``."""
+    keys = [k for k in DETECTED_KEYS if k in detected] + sorted(k for k in detected if k not in DETECTED_KEYS)
+    return ", ".join(f"{k}={detected[k]}" for k in keys)
+
+
+def describe_recording(detected: Mapping[str, str], mode: str = "") -> str:
+    """What a recording was found to be and how it was registered, for people (the
+    report's figure title, ``summary.md``): ``format rosbag, scan_topic /scan,
+    pose_source ..., stamps recorded; registered in odometry mode``.
+
+    ``detected``: the scan index's schema metadata (:func:`floorscan.core.io.read_metadata`);
+    ``mode``: the register mode used (``pose`` when not given).
+    """
+    found = ", ".join(f"{k} {detected[k]}" for k in ("format", "scan_topic", "pose_source", "stamps") if k in detected)
+    return f"{found or 'as configured'}; registered in {mode or 'pose'} mode"
+
+
+def yaw_from_quaternion(qx, qy, qz, qw):
+    """Yaw (rotation about +z, radians in (-pi, pi]) of quaternions (x, y, z, w)."""
+    qx, qy, qz, qw = (np.asarray(v, dtype=np.float64) for v in (qx, qy, qz, qw))
+    return np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+
+
+def pose_stream_frame(t_ns: Iterable[int], x, y, z, yaw) -> pd.DataFrame:
+    """Build a pose stream table (columns of :data:`floorscan.core.io.POSE_STREAM`)."""
+    return pd.DataFrame(
+        {
+            "t_ns": np.asarray(list(t_ns) if not isinstance(t_ns, np.ndarray) else t_ns, dtype=np.int64),
+            "x": np.asarray(x, dtype=np.float64),
+            "y": np.asarray(y, dtype=np.float64),
+            "z": np.asarray(z, dtype=np.float64),
+            "yaw": np.asarray(yaw, dtype=np.float64),
+        }
+    )

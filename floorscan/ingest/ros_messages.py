@@ -1,0 +1,198 @@
+"""Decode the ROS messages ingest reads: LaserScan, PointCloud2, header stamps, pose values.
+
+A message's time is its header stamp (the bag's receive time when the stamp is zero:
+:func:`stamp_ns`). A ``sensor_msgs/LaserScan`` gives the points of its beams
+(:func:`laser_scan_xyz`), a ``sensor_msgs/PointCloud2`` its ``x, y, z`` fields, whatever
+their layout (:func:`pointcloud2_xyz`).
+
+Bad values (issue 24) are an ``InputError`` naming the file, the topic, the message
+(:func:`message_label`) and the field, never a wrong pose or point: a LaserScan's
+``angle_min``, ``angle_increment``, ``range_min`` or ``range_max`` not finite; a pose
+message's position or orientation not finite, or its quaternion not a unit one (``|q|^2``
+off 1 by more than :data:`QUATERNION_TOLERANCE`, the bound tf2 applies to the transforms
+it accepts: :func:`pose_problem`; a TF transform the same, when its link is in the chain
+the poses come from, :mod:`floorscan.ingest.tf_chains`); a PointCloud2 whose layout does
+not hold its points (a field beyond ``point_step``, ``row_step`` short of a row, data not
+``row_step x height`` bytes) or with no finite point at all. Non-finite *ranges* and
+single non-finite *points* are not errors: they are "no return", dropped and counted.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from floorscan.core.io import InputError
+from floorscan.ingest.points import laser_scan_points
+
+
+#: A quaternion whose squared norm is off 1 by more than this is not a rotation (tf2's
+#: ``BufferCore::setTransform`` rejects such transforms with the same bound).
+QUATERNION_TOLERANCE = 0.01
+
+
+def stamp_ns(header, bag_t: int) -> int:
+    """A header's stamp in ns; the bag's receive time ``bag_t`` when the stamp is zero."""
+    t = int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
+    return t if t > 0 else int(bag_t)
+
+
+def message_label(path: Path | str, topic: str, index: int, t_ns: int) -> str:
+    """How an error names one message: ``file: 'topic' message i (t ... ns)``."""
+    return f"{path}: {topic!r} message {index} (t {t_ns} ns)"
+
+
+def laser_scan_xyz(
+    msg,
+    path: Path | str = "",
+    topic: str = "",
+    index: int = 0,
+    t_ns: int = 0,
+    range_min_m: float | None = None,
+    range_max_m: float | None = None,
+) -> tuple[np.ndarray, int]:
+    """Points of a ``sensor_msgs/LaserScan`` in the scanner frame.
+
+    Beam ``i`` points at ``angle_min + i * angle_increment``; returns are kept in
+    ``[max(range_min, range_min_m), min(range_max, range_max_m))``
+    (:func:`floorscan.ingest.points.laser_scan_points`).
+
+    Parameters
+    ----------
+    msg : sensor_msgs/LaserScan
+        ``angle_min``, ``angle_increment``, ``range_min``, ``range_max`` (radians,
+        metres) and ``ranges`` ((B,) float32, metres).
+    path, topic, index, t_ns
+        The bag, topic, message index and stamp, for error messages.
+    range_min_m, range_max_m : float, optional
+        The dataset's limits, metres: they only tighten the message's.
+
+    Returns
+    -------
+    points : (N, 3) float32 ndarray
+        Valid returns, z = 0, metres.
+    n_dropped : int
+        Beams dropped: NaN, inf (no return) or out of the range limits.
+
+    Raises
+    ------
+    InputError
+        ``angle_min``, ``angle_increment``, ``range_min`` or ``range_max`` is not finite
+        (names the file, topic, message and field).
+    """
+    values = (float(msg.angle_min), float(msg.angle_increment), float(msg.range_min), float(msg.range_max))
+    for name, v in zip(("angle_min", "angle_increment", "range_min", "range_max"), values):
+        if not math.isfinite(v):
+            raise InputError(f"{message_label(path, topic, index, t_ns)}: LaserScan {name} is {v}; expected a finite number")
+    angle_min, angle_increment, range_min, range_max = values
+    rmin = max(range_min, range_min_m if range_min_m is not None else 0.0)
+    rmax = min(range_max, range_max_m if range_max_m is not None else math.inf)
+    return laser_scan_points(np.asarray(msg.ranges), angle_min, angle_increment, rmin, rmax)
+
+
+_PC2_DTYPES = {1: "i1", 2: "u1", 3: "i2", 4: "u2", 5: "i4", 6: "u4", 7: "f4", 8: "f8"}
+
+
+def pointcloud2_xyz(msg, path: Path | str = "", topic: str = "", index: int | None = None, t_ns: int = 0) -> np.ndarray:
+    """The ``x, y, z`` fields of a ``sensor_msgs/PointCloud2`` as an (N, 3) array.
+
+    float32 when the three fields are little-endian float32 (the usual LIDAR driver
+    layout: the values as they are, without a float64 copy that the float32 scan table
+    would round back), else float64. Handles any point step, field offsets, endianness,
+    row padding (``row_step`` beyond ``width x point_step``; 0 is taken as unpadded) and
+    organised clouds (height > 1). Non-finite points are returned as they are (the
+    caller drops and counts them).
+
+    Parameters
+    ----------
+    index, t_ns : int, optional
+        The message's index on the topic and stamp, named in error messages.
+
+    Raises
+    ------
+    InputError
+        The message has no x, y or z field, one of unknown datatype or ending beyond
+        ``point_step``; ``row_step`` is short of ``width x point_step``; the data is not
+        ``row_step x height`` bytes; or no point is finite (the cloud holds nothing).
+    """
+    what = f"{path}: PointCloud2 on {topic!r}" if index is None else f"{message_label(path, topic, index, t_ns)}: PointCloud2"
+    fields = {f.name: f for f in msg.fields}
+    missing = [n for n in "xyz" if n not in fields]
+    if missing:
+        raise InputError(
+            f"{what} lacks fields {missing}; expected x, y, z "
+            f"(fields: {sorted(fields)})"
+        )
+    order = ">" if msg.is_bigendian else "<"
+    step, width, height, row_step = int(msg.point_step), int(msg.width), int(msg.height), int(msg.row_step)
+    names, formats, offsets = [], [], []
+    for n in "xyz":
+        f = fields[n]
+        if f.datatype not in _PC2_DTYPES:
+            raise InputError(f"{what} field {n!r} has unknown datatype {f.datatype}")
+        size = np.dtype(_PC2_DTYPES[f.datatype]).itemsize
+        if not 0 <= int(f.offset) <= step - size:
+            raise InputError(
+                f"{what} field {n!r} (offset {int(f.offset)}, {size} bytes) ends beyond point_step {step}"
+            )
+        names.append(n)
+        formats.append(order + _PC2_DTYPES[f.datatype])
+        offsets.append(int(f.offset))
+    if row_step and row_step < width * step:
+        raise InputError(
+            f"{what} row_step {row_step} is less than width x point_step = {width} x {step} = {width * step}"
+        )
+    rs = row_step or width * step  # 0: a driver that left it unset, rows packed
+    data = np.asarray(msg.data, dtype=np.uint8)
+    if data.size != rs * height:
+        raise InputError(
+            f"{what} has {data.size} bytes of data; "
+            f"expected row_step x height = {rs} x {height} = {rs * height}"
+        )
+    n_points = width * height
+    out_dtype = np.float32 if all(f == "<f4" for f in formats) else np.float64
+    if n_points == 0:
+        return np.zeros((0, 3), dtype=out_dtype)
+    if rs != width * step:
+        data = np.ascontiguousarray(data.reshape(height, rs)[:, : width * step]).reshape(-1)
+    dt = np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": step})
+    arr = np.frombuffer(data, dtype=dt, count=n_points)  # a view: count bounds it
+    out = np.empty((n_points, 3), dtype=out_dtype)
+    for i, n in enumerate("xyz"):
+        out[:, i] = arr[n]
+    if not (np.isfinite(out[:, 0]) & np.isfinite(out[:, 1]) & np.isfinite(out[:, 2])).any():
+        raise InputError(
+            f"{what} has no finite point ({n_points} points); expected a cloud with at least one return"
+        )
+    return out
+
+
+def pose_problem(
+    position: tuple[float, float, float],
+    quat: tuple[float, float, float, float],
+    prefix: str,
+    parts: tuple[str, str] = ("position", "orientation"),
+) -> str | None:
+    """What is wrong with a pose's values (``prefix.position.x is nan; ...``), or None:
+    a non-finite component of ``position`` (x, y, z) or ``quat`` (x, y, z, w), or a
+    quaternion off unit length by more than :data:`QUATERNION_TOLERANCE` (in ``|q|^2``).
+
+    Called for every pose and TF message: a good pose costs one test (a NaN or inf
+    component fails it); the loops below only explain a bad one.
+    """
+    n2 = quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2] + quat[3] * quat[3]
+    if abs(n2 - 1.0) <= QUATERNION_TOLERANCE and math.isfinite(position[0] + position[1] + position[2]):
+        return None
+    (p_name, q_name) = parts
+    for part, values in ((p_name, position), (q_name, quat)):
+        for c, v in zip("xyzw", values):
+            if not math.isfinite(v):
+                return f"{prefix}.{part}.{c} is {float(v)}; expected a finite number"
+    if abs(n2 - 1.0) > QUATERNION_TOLERANCE:
+        return (
+            f"{prefix}.{q_name} is {tuple(map(float, quat))}, |q|^2 = {n2:g}; expected a unit quaternion "
+            f"(|q|^2 within {QUATERNION_TOLERANCE} of 1, as tf2 requires)"
+        )
+    return None  # finite values whose sum overflowed

@@ -1,0 +1,158 @@
+"""Which topics of a bag carry its scans and its map poses, when the dataset does not say.
+
+Detection (issue 20):
+
+- scan topic (:func:`detect_scan_topic`): the bag's one topic of LaserScan or
+  PointCloud2 messages; with several or none, an ``InputError`` lists the candidates
+  (or the bag's topics) and asks for ``scan_topic``;
+- pose source (:func:`detect_pose_source`), in this order: (a) a
+  PoseWithCovarianceStamped or PoseStamped topic (with several, ``/amcl_pose``); (b) the
+  TF chain from ``map`` to the scan frame; (c) none. Wheel odometry (nav_msgs/Odometry
+  topics, TF chains from ``odom``) drifts and is never taken for the map pose: without
+  (a) or (b) the pose stream is empty, the pose kind ``none``, and the register stage
+  runs LIDAR odometry. A pose source set in the dataset is used as given (pose kind
+  ``map``: the user's choice).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Mapping
+
+from floorscan.core.io import InputError
+from floorscan.ingest.tf_chains import TfLink, tf_chain_from_root, tf_chain_or_none
+
+
+SCAN_TYPES = ("sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCloud2")
+POSE_TYPES = (
+    "geometry_msgs/msg/PoseWithCovarianceStamped",
+    "geometry_msgs/msg/PoseStamped",
+    "nav_msgs/msg/Odometry",
+)
+#: Pose topics detection takes for map poses (a localizer's output); odometry is not one.
+MAP_POSE_TYPES = POSE_TYPES[:2]
+ODOMETRY_TYPE = "nav_msgs/msg/Odometry"
+#: The pose topic detection prefers among several (AMCL's output).
+PREFERRED_POSE_TOPIC = "/amcl_pose"
+#: The map frame of a TF chain detection looks for.
+MAP_FRAME = "map"
+
+
+def short_type(msgtype: str) -> str:
+    """A message type's last part: ``sensor_msgs/msg/LaserScan`` -> ``LaserScan``."""
+    return msgtype.rsplit("/", 1)[-1]
+
+
+def _listing(topics: Mapping[str, tuple[str, int]]) -> str:
+    return ", ".join(f"{t} ({m}, {n} messages)" for t, (m, n) in sorted(topics.items()))
+
+
+def detect_scan_topic(topics: Mapping[str, tuple[str, int]], path: Path | str = "") -> tuple[str, str]:
+    """The bag's one scan topic.
+
+    Parameters
+    ----------
+    topics : mapping of str to (str, int)
+        Topic -> (message type, message count), as rosbags names the types
+        (``sensor_msgs/msg/LaserScan``).
+
+    Returns
+    -------
+    topic : str
+    note : str
+        Why it was chosen, for the stage log.
+
+    Raises
+    ------
+    InputError
+        Several topics with LaserScan or PointCloud2 messages (listed with their type
+        and message count; set the dataset's ``scan_topic``), or none (the bag's topics
+        are listed).
+    """
+    scans = {t: (m, n) for t, (m, n) in topics.items() if m in SCAN_TYPES and n > 0}
+    if len(scans) == 1:
+        (topic, (msgtype, n)), = scans.items()
+        return topic, f"scan topic {topic} (detected: the bag's one {short_type(msgtype)} topic, {n} messages)"
+    if scans:
+        raise InputError(
+            f"{path}: several scan topics: {_listing(scans)}; set the dataset's 'scan_topic' to one of them"
+        )
+    raise InputError(
+        f"{path}: no topic with sensor_msgs/LaserScan or sensor_msgs/PointCloud2 messages; "
+        f"topics in the bag: {_listing(topics) or 'none'}"
+    )
+
+
+def detect_pose_source(
+    topics: Mapping[str, tuple[str, int]],
+    edges: Mapping[tuple[str, str], TfLink],
+    scan_frame: str,
+    path: Path | str = "",
+) -> tuple[dict | None, str, str]:
+    """The map pose source of a bag, or none (see the module docstring for the order).
+
+    Parameters
+    ----------
+    topics : mapping of str to (str, int)
+        Topic -> (message type, message count).
+    edges : mapping
+        The bag's TF links (parent, child) -> link, as :func:`floorscan.ingest.tf_chains.read_tf` returns them.
+    scan_frame : str
+        Frame of the scans (no leading slash).
+
+    Returns
+    -------
+    pose : dict or None
+        A dataset ``pose`` entry (``{source: topic, topic, base_frame}`` or
+        ``{source: tf, fixed_frame: map}``), or None: no map pose (pose kind ``none``).
+    phrase : str
+        The pose source for people, e.g. ``topic /amcl_pose (PoseWithCovarianceStamped)``,
+        ``TF map -> odom -> base_link -> laser`` or ``none: wheel odometry only (TF odom ->
+        base_link -> laser); LIDAR odometry``.
+    note : str
+        Why, for the stage log.
+
+    Raises
+    ------
+    InputError
+        Several PoseWithCovarianceStamped / PoseStamped topics, none of them
+        ``/amcl_pose`` (they are listed; set the dataset's ``pose``).
+    """
+    poses = {t: (m, n) for t, (m, n) in topics.items() if m in MAP_POSE_TYPES and n > 0}
+    if len(poses) > 1 and PREFERRED_POSE_TOPIC in poses:
+        poses = {PREFERRED_POSE_TOPIC: poses[PREFERRED_POSE_TOPIC]}
+        why = f"{PREFERRED_POSE_TOPIC} among several pose topics"
+    else:
+        why = "the bag's one map pose topic"
+    if len(poses) > 1:
+        raise InputError(
+            f"{path}: several pose topics: {_listing(poses)}; set the dataset's "
+            f"'pose' (e.g. {{source: topic, topic: {sorted(poses)[0]}}})"
+        )
+    if poses:
+        (topic, (msgtype, n)), = poses.items()
+        phrase = f"topic {topic} ({short_type(msgtype)})"
+        note = f"pose source {phrase} (detected: {why}, {n} messages)"
+        return {"source": "topic", "topic": topic, "base_frame": "base_link"}, phrase, note
+    chain = tf_chain_or_none(edges, MAP_FRAME, scan_frame)
+    if chain is not None:
+        phrase = "TF " + " -> ".join([MAP_FRAME] + [e.child for e in chain])
+        note = f"pose source {phrase} (detected: no pose topic, and the TF chain from {MAP_FRAME!r} to the scan frame)"
+        return {"source": "tf", "fixed_frame": MAP_FRAME}, phrase, note
+    wheel = []
+    root_chain = tf_chain_from_root(edges, scan_frame)
+    if len(root_chain) > 1:
+        wheel.append("TF " + " -> ".join(root_chain))
+    odom = sorted(t for t, (m, n) in topics.items() if m == ODOMETRY_TYPE and n > 0)
+    if odom:
+        wheel.append(f"Odometry on {', '.join(odom)}")
+    if wheel:
+        phrase = f"none: wheel odometry only ({'; '.join(wheel)}); LIDAR odometry"
+    else:
+        phrase = "none: no pose topic and no TF; LIDAR odometry"
+    note = (
+        f"pose source none (detected: no PoseWithCovarianceStamped or PoseStamped topic and no TF chain "
+        f"from {MAP_FRAME!r} to {scan_frame!r}; wheel odometry drifts and is never taken for the map pose): "
+        "the pose stream is empty (pose kind none) and the register stage runs LIDAR odometry"
+    )
+    return None, phrase, note

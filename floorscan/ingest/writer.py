@@ -1,0 +1,86 @@
+"""Write a recording's tables: ``scans.parquet``, ``scan_index.parquet``, ``pose_stream.parquet``.
+
+:func:`write_recording` streams the points of each scan to ``scans.parquet`` one batch
+at a time (row groups written in a thread by :class:`floorscan.core.io.ScanRowGroups`),
+so memory grows with the largest scan, not with the recording. The three files are
+written atomically, and what the reader detected goes into the schema metadata of the
+scan index and the pose stream.
+"""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+from typing import Mapping
+
+import numpy as np
+import pandas as pd
+import pyarrow.parquet as pq
+
+from floorscan.core.runtime import progress
+from floorscan.core.io import POSE_STREAM, SCAN_INDEX, SCANS, InputError, atomic_path, parquet_options, ScanRowGroups, write_table
+from floorscan.ingest.recording import Recording, pose_stream_frame
+
+log = logging.getLogger(__name__)
+
+
+def write_recording(
+    recording: Recording,
+    scans_path: str | Path,
+    index_path: str | Path,
+    pose_stream_path: str | Path,
+    sensor_height_m: float = 0.0,
+    metadata: Mapping[str, str] | None = None,
+) -> pd.DataFrame:
+    """Stream a recording's scans to Parquet and write its index and pose stream.
+
+    Scans get ``scan_id`` 0..N-1 in recording order. ``sensor_height_m`` is added to
+    the pose stream's z. All three files are written atomically: on any error none
+    of them is left behind. ``recording.detected`` (string values) and ``metadata`` are
+    stored in the schema metadata of the scan index and the pose stream; the register
+    stage reads ``pose_kind`` and ``stamps`` from the scan index's.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The scan index (columns of :data:`floorscan.core.io.SCAN_INDEX`).
+
+    Raises
+    ------
+    InputError
+        No scans, scan timestamps going backwards, or no poses while the pose kind is
+        not ``none`` (a map pose source was found or set but has no poses).
+    """
+    rows: list[tuple[int, int, int, int, str]] = []
+    table_meta = {**{k: str(v) for k, v in recording.detected.items()}, **(metadata or {})}
+    meta = {k.encode(): str(v).encode() for k, v in (metadata or {}).items()}
+    with atomic_path(scans_path) as tmp:
+        with pq.ParquetWriter(tmp, SCANS.with_metadata(meta), **parquet_options(SCANS, ["scan_id"])) as writer:
+            with ScanRowGroups(writer) as batch:  # row groups written in a thread
+                last_t = None
+                for scan_id, scan in enumerate(progress(recording.scans, log, what="scans read")):
+                    if last_t is not None and scan.t_ns < last_t:
+                        raise InputError(
+                            f"{recording.source}: scan timestamps go backwards at scan {scan_id} "
+                            f"({scan.t_ns} ns after {last_t} ns); expected non-decreasing stamps"
+                        )
+                    last_t = scan.t_ns
+                    pts = np.asarray(scan.points, dtype=np.float32).reshape(-1, 3)
+                    n = len(pts)
+                    rows.append((scan_id, int(scan.t_ns), n, int(scan.n_dropped), scan.frame))
+                    if n:
+                        batch.add(scan_id, pts)
+        if not rows:
+            raise InputError(f"{recording.source}: no scans found")
+        index = pd.DataFrame(rows, columns=["scan_id", "t_ns", "n_points", "n_dropped", "frame"])
+        stream = recording.pose_stream
+        if stream is None or stream.empty:
+            if recording.detected.get("pose_kind") != "none":
+                what = recording.detected.get("pose_source", "the pose source")
+                raise InputError(f"{recording.source}: no poses found for the pose source ({what})")
+            stream = pose_stream_frame([], [], [], [], [])  # no map pose: LIDAR odometry
+        stream = stream.copy()
+        stream["z"] = stream["z"].astype(np.float64) + float(sensor_height_m)
+        write_table(index, index_path, schema=SCAN_INDEX, metadata=table_meta)
+        write_table(stream, pose_stream_path, schema=POSE_STREAM, metadata=table_meta)
+    return index
