@@ -54,7 +54,7 @@ rule evaluation:
 
 # The answer: where the floor plan, the scan list and the reduced recording are.
 onsuccess:
-    from floorscan.figures.report import answer_lines
+    from floorscan.figures.answer import answer_lines
 
     for _line in answer_lines(target_datasets()):
         print(_line)

@@ -4,7 +4,7 @@ of scripts/score_runs.py, in one table), the quality-vs-k summary of the curves
 
 from floorscan.core.stage import stage_log
 from floorscan.figures.curves import plot_quality_vs_k
-from floorscan.figures.report import write_summary_page
+from floorscan.figures.summary_page import write_summary_page
 from floorscan.score.stage import write_scores
 
 with stage_log(snakemake) as log:  # noqa: F821

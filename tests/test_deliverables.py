@@ -12,7 +12,8 @@ import pytest
 from conftest import SHARED_DATA, T0_NS, flaser_line, needs_shared, scan_ranges, write_carmen
 from floorscan.ingest.readers import open_recording
 from floorscan.ingest.writer import write_recording
-from floorscan.core.io import REGISTERED, InputError, staged_path, write_table
+from floorscan.core.io import REGISTERED, InputError, write_table
+from floorscan.core.files import staged_path
 from floorscan.select.deliverables import recommended_k, scan_list, write_scan_list, write_selected_points
 from floorscan.select.recording import read_detection, write_reduced_recording
 

@@ -120,7 +120,7 @@ def test_a_stage_removes_the_temporaries_of_its_outputs_before_it_runs(tmp_path)
     other files stay."""
     from types import SimpleNamespace
 
-    from floorscan.core.io import stale_temporaries
+    from floorscan.core.files import stale_temporaries
     from floorscan.core.stage import stage_log
 
     gone = _stale(tmp_path, ".registered.parquet.sampled.parquet", ".registered.parquet.0a1b2c3d.tmp",

@@ -3,11 +3,9 @@
 
 from __future__ import annotations
 
-import json
 import math
 
 import numpy as np
-import pyarrow.parquet as pq
 import pytest
 
 from floorscan.core.geometry import sample_segments, segment_weights

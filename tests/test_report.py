@@ -15,6 +15,7 @@ import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 
 from floorscan.figures import report as R  # noqa: E402
+from floorscan.score.curves import SUMMARY_COLUMNS  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -120,7 +121,7 @@ def test_front_page_holds_the_plan_the_verdict_the_detection_and_the_table(tmp_p
     assert rows["format"] == ["rosbag"] and rows["scan topic"] == ["/scan"]
     assert rows["pose source"] == ["topic /amcl_pose"] and rows["registered in"] == ["pose mode"]
     # the summary: one row per ordering, the cells as summary.md has them (± for random's seeds)
-    summary_rows = [(r, c) for r, c in zip(tables.rows, tables.row_classes) if len(r) == len(R.SUMMARY_COLUMNS)]
+    summary_rows = [(r, c) for r, c in zip(tables.rows, tables.row_classes) if len(r) == len(SUMMARY_COLUMNS)]
     assert [r[0] for r, _ in summary_rows[:1]] == ["extractor"]  # the header
     body = {r[1]: (r, c) for r, c in summary_rows[1:]}
     assert sorted(body) == ["oracle", "random", "wall_coverage"]

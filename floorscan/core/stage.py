@@ -18,7 +18,7 @@ fails (``show-failed-logs`` of the default profile), so it is printed once:
 
 Either way the job fails and Snakemake removes its outputs. Before the stage runs,
 temporaries of its outputs that a killed run left are removed
-(:func:`floorscan.core.io.remove_stale_temporaries`).
+(:func:`floorscan.core.files.remove_stale_temporaries`).
 
 Profiling: with the environment variable ``FLOORSCAN_PROFILE`` set to a directory, each
 stage's body runs under :mod:`cProfile` and its statistics are written there as
@@ -126,7 +126,7 @@ def stage_log(smk: Any, name: str | None = None, source: str | os.PathLike | Non
         only (likewise), and re-raised. Either way Snakemake marks the job failed and
         removes its outputs.
     """
-    from floorscan.core.io import remove_stale_temporaries
+    from floorscan.core.files import remove_stale_temporaries
 
     rule = getattr(smk, "rule", "stage")
     logger = logging.getLogger(name or f"floorscan.{rule}")

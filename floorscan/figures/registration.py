@@ -159,7 +159,7 @@ def plot_registered_map(
     from matplotlib.colors import LogNorm
     from scipy.spatial import cKDTree
 
-    from floorscan.core.io import atomic_path
+    from floorscan.core.files import atomic_path
 
     raster = (registered if isinstance(registered, DensityRaster)
               else DensityRaster.of_points(registered[["x", "y"]].to_numpy(np.float64), cell_m))

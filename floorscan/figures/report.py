@@ -27,8 +27,10 @@ import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Mapping, Sequence
 
-from floorscan.core.io import atomic_path
-from floorscan.score.curves import SUMMARY_COLUMNS, summary_cell
+from floorscan.core.files import atomic_path
+from floorscan.figures.answer import format_bytes
+from floorscan.figures.summary_page import summary_table_html
+from floorscan.score.curves import summary_cell
 
 if TYPE_CHECKING:  # pandas is imported by the functions that use it
     import pandas as pd
@@ -344,93 +346,6 @@ def _quality_html(summary: "pd.DataFrame", ordering: str, extractor: str) -> lis
         out.append(f'<tr class="{cls}">' + "".join(cells) + "</tr>")
     out.append("</tbody></table>")
     return out
-
-
-def write_summary_page(path: str | os.PathLike, dataset: str, summary: "pd.DataFrame", n_kept: int,
-                       beats_random: str, verdict: dict | None, ordering: str) -> None:
-    """``summary.html``: the verdict, the beats-random line and :func:`summary_table_html`
-    of one dataset, a page of its own (the front page includes the same table)."""
-    with atomic_path(path) as tmp:
-        tmp.write_text(
-            f"<html><head><meta charset='utf-8'><title>{dataset} summary</title></head><body>"
-            f"<h1>{dataset}</h1>"
-            + (f"<p><b>Verdict: {verdict['line']}</b></p>" if verdict else "")
-            + f"<p>{beats_random}</p>"
-            + summary_table_html(summary, n_kept, ordering)
-            + "</body></html>\n"
-        )
-
-
-def summary_table_html(
-    summary: "pd.DataFrame", n_kept: int | None = None, ordering: str = "", extractor: str = ""
-) -> str:
-    """The summary (:func:`floorscan.score.curves.curve_summary`) as an HTML table, the
-    cells as in ``summary.md`` (random's k and AUC with their seeds' spread); the rows of
-    ``ordering`` (with ``extractor``, when given: the recommended plan) highlighted, the
-    oracle's in grey. An F1 from fewer than
-    :data:`floorscan.register.consistency.FEW_SCANS` kept scans is marked."""
-    esc = html.escape
-    out = [
-        "<table>",
-        "<thead><tr>" + "".join(f"<th>{esc(h)}</th>" for _, h in SUMMARY_COLUMNS) + "</tr></thead>",
-        "<tbody>",
-    ]
-    for r in summary.to_dict("records"):
-        cls = []
-        if ordering and r.get("ordering") == ordering and (not extractor or r.get("extractor") == extractor):
-            cls.append("recommended")
-        if r.get("ordering") == "oracle":
-            cls.append("bound")
-        cells = [
-            f"<td>{esc(summary_cell(r, col, n_kept))}</td>" if col in ("extractor", "ordering")
-            else f'<td class="num">{esc(summary_cell(r, col, n_kept))}</td>'
-            for col, _ in SUMMARY_COLUMNS
-        ]
-        attr = f' class="{" ".join(cls)}"' if cls else ""
-        out.append(f"<tr{attr}>" + "".join(cells) + "</tr>")
-    out += ["</tbody>", "</table>"]
-    return "\n".join(out)
-
-
-def answer_lines(datasets, results: str | os.PathLike = "results") -> list[str]:
-    """What a finished run prints: per dataset, where the floor plan, the scan list,
-    the reduced recording and the report are, and k with its size reduction. Datasets
-    whose selection was not made are skipped."""
-    lines = []
-    root = Path(results)
-    for ds in datasets:
-        summary_path = root / ds / "selection" / "selection.json"
-        if not summary_path.is_file():
-            continue
-        s = json.loads(summary_path.read_text())
-        rec = s["recording"]
-        lines.append(f"{ds}: {s['k']} of {s['n_kept']} kept scans ({s['n_recorded']} recorded), {s['ordering']}")
-        plan = root / ds / "floorplan.svg"
-        if plan.is_file():
-            lines.append(f"  floor plan:         {root / ds}/floorplan.{{geojson,svg,dxf,ifc}}")
-        lines.append(f"  scan list:          {s['scans']}")
-        lines.append(
-            f"  reduced recording:  {rec['path']} ({format_bytes(rec['bytes_out'])} of {format_bytes(rec['bytes_in'])}, "
-            f"{rec['scan_messages_out']} scans)"
-        )
-        lines.append(f"  points (PLY, PCD):  {s['points'][0]}, {s['points'][1]}")
-        front = root / ds / "front.html"
-        if front.is_file():
-            lines.append(f"  front page:         {front}")
-    report = root / "report.html"
-    if lines and report.is_file():
-        lines.append(f"report: {report}")
-    return lines
-
-
-def format_bytes(n: int) -> str:
-    """``n`` bytes for people, SI units: ``812 B``, ``12.3 kB``, ``4.56 MB``, ``120 MB``."""
-    n = int(n)
-    for unit, size in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
-        if n >= size:
-            v = n / size
-            return f"{v:.3g} {unit}" if v < 100 else f"{v:.0f} {unit}"
-    return f"{n} B"
 
 
 def _read_summary(summary) -> "pd.DataFrame | None":

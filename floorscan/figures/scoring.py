@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from floorscan.core.io import atomic_path
+from floorscan.core.files import atomic_path
 from floorscan.figures.bitmaps import plot_bitmap_overlay
 from floorscan.figures.curves import plot_metrics_vs_k
 from floorscan.figures.floorplans import plot_floorplans

@@ -28,7 +28,8 @@ import pyarrow.parquet as pq  # noqa: E402
 
 from floorscan.select.hulls import HullParams, kept_scan_ids, scan_coverage, scan_hulls  # noqa: E402
 from floorscan.core.io import split_by_scan  # noqa: E402
-from floorscan.core.io import atomic_path, iter_scans  # noqa: E402
+from floorscan.core.files import atomic_path
+from floorscan.core.io import iter_scans  # noqa: E402
 from floorscan.select.orderings import (  # noqa: E402
     ORDERINGS,
     SelectParams,

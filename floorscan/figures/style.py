@@ -2,7 +2,7 @@
 extractor, the name of what walls are scored against, and the atomic save.
 
 Matplotlib with the Agg backend; every figure is written atomically
-(:func:`floorscan.core.io.atomic_path`) by :func:`_save`. On real recordings the walls
+(:func:`floorscan.core.files.atomic_path`) by :func:`_save`. On real recordings the walls
 scored against are a *reference* (walls from all kept scans), never called ground truth
 (:func:`reference_name`). A new ordering or extractor gets its colour in
 :data:`ORDERING_COLOURS` or :data:`EXTRACTOR_COLOURS`.
@@ -18,7 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 
-from floorscan.core.io import atomic_path  # noqa: E402
+from floorscan.core.files import atomic_path  # noqa: E402
 from floorscan.score.ground_truth import GROUND_TRUTH  # noqa: E402
 from floorscan.score.segments import as_segments  # noqa: E402
 

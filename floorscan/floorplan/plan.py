@@ -7,7 +7,7 @@ problem). :func:`merge_segments` merges the segments that describe one wall face
 overlapping) into one wall with its thickness; :func:`build_floorplan` does both.
 
 Exports (the thesis's purpose, Chapter 1: a plan people and their tools open). Every
-file is written atomically (:func:`floorscan.core.io.atomic_path`), carries what it is a
+file is written atomically (:func:`floorscan.core.files.atomic_path`), carries what it is a
 plan of (:class:`PlanMetadata`: dataset, ordering, extractor, k, number of walls, a
 time stamp) and is byte-identical when written again from the same input. The frame
 is the map frame of the recording: a local engineering frame, x and y in metres, z up,
@@ -65,7 +65,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 import pandas as pd
 
-from floorscan.core.io import atomic_path
+from floorscan.core.files import atomic_path
 
 log = logging.getLogger(__name__)
 

@@ -18,7 +18,16 @@ import pandas as pd
 import pyarrow.parquet as pq
 
 from floorscan.core.runtime import progress
-from floorscan.core.io import POSE_STREAM, SCAN_INDEX, SCANS, InputError, atomic_path, parquet_options, ScanRowGroups, write_table
+from floorscan.core.io import (
+    POSE_STREAM,
+    SCAN_INDEX,
+    SCANS,
+    InputError,
+    parquet_options,
+    ScanRowGroups,
+    write_table,
+)
+from floorscan.core.files import atomic_path
 from floorscan.ingest.recording import Recording, pose_stream_frame
 
 log = logging.getLogger(__name__)

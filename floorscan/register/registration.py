@@ -1673,7 +1673,7 @@ def register_recording(
     their points going to a temporary Parquet file beside ``registered_path`` (the kept
     scans are sampled ones: 1 in ``every_n``). After registration that file is read
     back and each kept scan's points are transformed into the map frame and written to
-    ``registered_path`` (a Parquet writer on :func:`floorscan.core.io.atomic_path`, a row group
+    ``registered_path`` (a Parquet writer on :func:`floorscan.core.files.atomic_path`, a row group
     per ~1 M points). Same output as :func:`register_scans` (tested), given the same
     input. The figure of the registered map is drawn from that file
     (:func:`floorscan.figures.registration.density_of_file`, rule ``register_figure``).
@@ -1856,7 +1856,8 @@ def _second_pass(table, sids, sampled_path, registered_path, metadata) -> None:
     """The kept scans, read back from ``sampled_path``, into the map frame: ``registered_path``."""
     import pyarrow.parquet as pq
 
-    from floorscan.core.io import REGISTERED, ScanRowGroups, atomic_path, iter_scans, parquet_options
+    from floorscan.core.io import REGISTERED, ScanRowGroups, iter_scans, parquet_options
+    from floorscan.core.files import atomic_path
 
     kept = table["kept"].to_numpy(bool)
     final = table[["x_m", "y_m", "z_m", "yaw_rad"]].to_numpy(np.float64)

@@ -26,12 +26,16 @@ is not meaningful.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from floorscan.core.geometry import sample_segments, segment_weights
 from floorscan.score.reference import OccupancyGrid
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 
 class Structure:

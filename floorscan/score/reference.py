@@ -44,7 +44,7 @@ from typing import Iterable
 import numpy as np
 import pandas as pd
 
-from floorscan.core.io import atomic_path
+from floorscan.core.files import atomic_path
 
 #: map_server's PGM values (trinary mode): occupied, free, unknown.
 PGM_OCCUPIED, PGM_FREE, PGM_UNKNOWN = 0, 254, 205

@@ -16,7 +16,8 @@ from typing import Mapping, Sequence
 
 import pandas as pd
 
-from floorscan.core.io import atomic_path, read_metadata, read_table, write_table
+from floorscan.core.files import atomic_path
+from floorscan.core.io import read_metadata, read_table, write_table
 from floorscan.score import curves as C
 from floorscan.score.runs import sort_scores
 from floorscan.score.summary import grid_summary_markdown, summarize, summary_header

@@ -26,7 +26,7 @@ Usage::
     write_selected_points("results/demo/registered.parquet", table["scan_id"], "scans.ply", "scans.pcd")
 
 Every file is written under a temporary name beside its target and renamed
-(:func:`floorscan.core.io.atomic_path`, :func:`floorscan.core.io.staged_path`).
+(:func:`floorscan.core.files.atomic_path`, :func:`floorscan.core.files.staged_path`).
 """
 
 from __future__ import annotations
@@ -39,7 +39,8 @@ from typing import Iterable
 import numpy as np
 import pandas as pd
 
-from floorscan.core.io import atomic_path, iter_scans, staged_path
+from floorscan.core.files import atomic_path, staged_path
+from floorscan.core.io import iter_scans
 
 #: Columns of :func:`scan_list`, in order.
 SCAN_LIST_COLUMNS = ("rank", "scan_id", "t_ns", "time_iso", "x_m", "y_m", "yaw_rad", "gain")
@@ -291,7 +292,7 @@ def write_selected_points(
         The selected scans (kept scans of the registration).
     ply_path, pcd_path : path
         Outputs; each is written under a temporary name with its extension beside it
-        and renamed (:func:`floorscan.core.io.staged_path`).
+        and renamed (:func:`floorscan.core.files.staged_path`).
 
     Returns
     -------

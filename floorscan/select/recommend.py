@@ -9,7 +9,7 @@ and writes, under ``results/<dataset>/selection/``:
 - ``recording/``: the recording cut to the selected scans, in its own format
   (:mod:`floorscan.select.recording`);
 - ``selection.json``: k and the reason for it, the counts, and the size of the
-  recording before and after (what :func:`floorscan.figures.report.answer_lines` prints at the end of a run).
+  recording before and after (what :func:`floorscan.figures.answer.answer_lines` prints at the end of a run).
 
 The recommended floor plan (``results/<dataset>/floorplan.*``) is made of the walls of
 these scans by the floorplan stage.
@@ -27,7 +27,8 @@ import numpy as np
 import pandas as pd
 
 from floorscan.ingest.detect import bag_path
-from floorscan.core.io import read_table, write_json
+from floorscan.core.io import read_table
+from floorscan.core.files import write_json
 from floorscan.select.coverage import OBJECTIVE_COLUMN
 from floorscan.select.deliverables import recommended_k, scan_list, write_scan_list, write_selected_points
 from floorscan.select.recording import read_detection, write_reduced_recording

@@ -36,7 +36,7 @@ What is kept, per format:
   copied and the CSV reduced to their rows (field text as it was).
 
 Outputs are written under a temporary name beside the target and renamed
-(:func:`floorscan.core.io.atomic_path`, :func:`floorscan.core.io.staged_path`).
+(:func:`floorscan.core.files.atomic_path`, :func:`floorscan.core.files.staged_path`).
 
 Usage (the workflow)::
 
@@ -63,7 +63,8 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 import pandas as pd
 
-from floorscan.core.io import InputError, atomic_path, read_metadata, staged_path
+from floorscan.core.io import InputError, read_metadata
+from floorscan.core.files import atomic_path, staged_path
 
 log = logging.getLogger(__name__)
 

@@ -18,7 +18,7 @@ import trimesh
 from shapely.geometry import MultiLineString, Polygon
 from shapely.ops import polygonize, unary_union
 
-from floorscan.core.io import atomic_path
+from floorscan.core.files import atomic_path
 from floorscan.sim.building import TABLE_TOP_M, Building, Furniture
 from floorscan.sim.footprint import CUT_MARGIN_M, building_outline, opening_polygon, walls_union
 

@@ -19,7 +19,8 @@ import logging
 import os
 from typing import Any, Mapping
 
-from floorscan.core.io import InputError, write_json, write_table
+from floorscan.core.io import InputError, write_table
+from floorscan.core.files import write_json
 from floorscan.sim.building_file import load_building
 from floorscan.sim.ground_truth import TRUE_POSES, ground_truth_walls, true_poses_frame
 from floorscan.sim.mesh import write_stl

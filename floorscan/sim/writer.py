@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from floorscan.core.io import atomic_path, staged_path
+from floorscan.core.files import atomic_path, staged_path
 from floorscan.sim.raycast import scanner_points, to_map
 from floorscan.sim.recording import Recording
 from floorscan.sim.ros1 import Ros1Messages

@@ -1,0 +1,61 @@
+"""The scan-reduction summary of a dataset as HTML: the table the front page shows and
+``summary.html``, a page of its own (the same cells as ``summary.md``,
+:func:`floorscan.score.curves.summary_cell`)."""
+
+from __future__ import annotations
+
+import html
+import os
+from typing import TYPE_CHECKING
+
+from floorscan.core.files import atomic_path
+from floorscan.score.curves import SUMMARY_COLUMNS, summary_cell
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+
+def write_summary_page(path: str | os.PathLike, dataset: str, summary: "pd.DataFrame", n_kept: int,
+                       beats_random: str, verdict: dict | None, ordering: str) -> None:
+    """``summary.html``: the verdict, the beats-random line and :func:`summary_table_html`
+    of one dataset, a page of its own (the front page includes the same table)."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(
+            f"<html><head><meta charset='utf-8'><title>{dataset} summary</title></head><body>"
+            f"<h1>{dataset}</h1>"
+            + (f"<p><b>Verdict: {verdict['line']}</b></p>" if verdict else "")
+            + f"<p>{beats_random}</p>"
+            + summary_table_html(summary, n_kept, ordering)
+            + "</body></html>\n"
+        )
+
+
+def summary_table_html(
+    summary: "pd.DataFrame", n_kept: int | None = None, ordering: str = "", extractor: str = ""
+) -> str:
+    """The summary (:func:`floorscan.score.curves.curve_summary`) as an HTML table, the
+    cells as in ``summary.md`` (random's k and AUC with their seeds' spread); the rows of
+    ``ordering`` (with ``extractor``, when given: the recommended plan) highlighted, the
+    oracle's in grey. An F1 from fewer than
+    :data:`floorscan.register.consistency.FEW_SCANS` kept scans is marked."""
+    esc = html.escape
+    out = [
+        "<table>",
+        "<thead><tr>" + "".join(f"<th>{esc(h)}</th>" for _, h in SUMMARY_COLUMNS) + "</tr></thead>",
+        "<tbody>",
+    ]
+    for r in summary.to_dict("records"):
+        cls = []
+        if ordering and r.get("ordering") == ordering and (not extractor or r.get("extractor") == extractor):
+            cls.append("recommended")
+        if r.get("ordering") == "oracle":
+            cls.append("bound")
+        cells = [
+            f"<td>{esc(summary_cell(r, col, n_kept))}</td>" if col in ("extractor", "ordering")
+            else f'<td class="num">{esc(summary_cell(r, col, n_kept))}</td>'
+            for col, _ in SUMMARY_COLUMNS
+        ]
+        attr = f' class="{" ".join(cls)}"' if cls else ""
+        out.append(f"<tr{attr}>" + "".join(cells) + "</tr>")
+    out += ["</tbody>", "</table>"]
+    return "\n".join(out)
