@@ -211,14 +211,15 @@ def test_schema_defaults_give_a_dataclass_the_schema_defaults_once():
     assert ransac["threshold_m"] == 0.03 and ransac["iterations"] == 200
 
     @dataclasses.dataclass(frozen=True)
-    @schema_defaults("walls")
+    @schema_defaults("walls", low_m=lambda d: d["height_band_m"][0])
     class Walls:
         seed: int
         height_band_m: list
+        low_m: float
         extra: int = 7  # not config: the class's own default
 
     a, b = Walls(), Walls(seed=3)
-    assert (a.seed, b.seed, a.extra) == (0, 3, 7)
+    assert (a.seed, b.seed, a.extra, a.low_m) == (0, 3, 7, a.height_band_m[0])
     assert a.height_band_m == schema_section_defaults("walls")["height_band_m"]
     assert a.height_band_m is not b.height_band_m
 

@@ -94,7 +94,7 @@ def schema_section_defaults(section: str) -> dict[str, Any]:
     return {name: copy.deepcopy(p["default"]) for name, p in props.items() if isinstance(p, dict) and "default" in p}
 
 
-def schema_defaults(section: str, **derived: Callable[[], Any]) -> Callable[[type[T]], type[T]]:
+def schema_defaults(section: str, **derived: Callable[[dict], Any]) -> Callable[[type[T]], type[T]]:
     """Class decorator (under ``@dataclass``): each field without a default in the class
     gets the schema's default of the property of that name in ``section``.
 
@@ -108,8 +108,8 @@ def schema_defaults(section: str, **derived: Callable[[], Any]) -> Callable[[typ
             iterations: int
 
     A list or mapping default becomes a ``default_factory`` (each instance its own copy).
-    ``derived`` gives defaults the schema cannot (computed, or fields that are not
-    config), as factories.
+    ``derived`` gives the default of a field that is not a key of the section but follows
+    from its defaults: ``min_height_m=lambda d: d["height_band_m"][0]``.
 
     Raises
     ------
@@ -123,7 +123,9 @@ def schema_defaults(section: str, **derived: Callable[[], Any]) -> Callable[[typ
         for name in cls.__dict__.get("__annotations__", {}):
             in_class = name in cls.__dict__
             if name in derived:
-                setattr(cls, name, dataclasses.field(default_factory=derived[name]))
+                if in_class:
+                    raise TypeError(f"{cls.__name__}.{name}: default written in the class and derived from {section}")
+                setattr(cls, name, derived[name](defaults))
             elif name in defaults:
                 if in_class:
                     raise TypeError(f"{cls.__name__}.{name}: default written in the class and in schema {section}")

@@ -17,8 +17,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Mapping
 
+from floorscan.core.config import schema_defaults
+
 
 @dataclass(frozen=True)
+@schema_defaults("walls.ransac")
 class RansacParams:
     """RANSAC and segment parameters (config ``walls.ransac``), used by both extractors.
 
@@ -54,19 +57,20 @@ class RansacParams:
         spacing that grows smoothly along a wall seen at a grazing angle.
     """
 
-    threshold_m: float = 0.03
-    iterations: int = 200
-    refine_iterations: int = 2
-    min_points: int = 20
-    max_lines: int = 30
-    min_inliers: int = 15
-    min_length_m: float = 0.3
-    max_gap_m: float = 0.5
-    min_coverage: float = 0.6
-    coverage_gap_m: float = 0.10
+    threshold_m: float
+    iterations: int
+    refine_iterations: int
+    min_points: int
+    max_lines: int
+    min_inliers: int
+    min_length_m: float
+    max_gap_m: float
+    min_coverage: float
+    coverage_gap_m: float
 
 
 @dataclass(frozen=True)
+@schema_defaults("walls.cluster_ransac")
 class ClusterParams:
     """Clustering parameters of :func:`cluster_ransac` (config ``walls.cluster_ransac``).
 
@@ -91,13 +95,13 @@ class ClusterParams:
         needs ``bin_seeding``) or :class:`sklearn.cluster.MeanShift`.
     """
 
-    normal_radius_m: float = 0.25
-    normal_max_nn: int = 20
-    angle_bandwidth_rad: float = 0.1
-    offset_bandwidth_m: float | None = 0.05
-    min_cluster_points: int = 15
-    bin_seeding: bool = True
-    meanshift: str = "numpy"
+    normal_radius_m: float
+    normal_max_nn: int
+    angle_bandwidth_rad: float
+    offset_bandwidth_m: float | None
+    min_cluster_points: int
+    bin_seeding: bool
+    meanshift: str
 
     def __post_init__(self):
         if self.meanshift not in ("numpy", "sklearn"):
@@ -107,6 +111,7 @@ class ClusterParams:
 
 
 @dataclass(frozen=True)
+@schema_defaults("walls", min_height_m=lambda d: d["height_band_m"][0], max_height_m=lambda d: d["height_band_m"][1])
 class ScanParams:
     """How a scan becomes 2D wall points (config ``walls``: height band and grid).
 
@@ -122,10 +127,10 @@ class ScanParams:
         point (the mean) per grid cell of this size, metres; 0 keeps all points.
     """
 
-    min_height_m: float = 0.5
-    max_height_m: float = 2.0
-    planar_tolerance_m: float = 0.01
-    grid_m: float = 0.02
+    min_height_m: float
+    max_height_m: float
+    planar_tolerance_m: float
+    grid_m: float
 
 
 def params_from_config(cfg: Mapping[str, Any]) -> tuple[ScanParams, RansacParams, ClusterParams]:
