@@ -67,7 +67,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from floorscan.floorplan.plan import point_segment_dist2
+from floorscan.floorplan.candidates import point_segment_dist2
 
 #: Segments shorter than this (metres) have no length and are ignored.
 MIN_SEGMENT_M = 1e-9
@@ -634,7 +634,7 @@ class _SegmentIndex:
         point whose radius is at most a reach of :data:`REACHES_M` in the grown boxes
         of the pieces (:meth:`reach_tree`), the others by their square of half-side
         the radius in the segments' boxes. The candidates' distances are measured in
-        numpy (:func:`floorscan.floorplan.plan.point_segment_dist2`, to the whole segment)
+        numpy (:func:`floorscan.floorplan.candidates.point_segment_dist2`, to the whole segment)
         and those beyond the radius dropped: the same minimum as measuring every
         segment within the radius.
         """
@@ -918,7 +918,7 @@ class _SamplePairs:
 
     A fixed ``(S, 2)`` sample set, an STRtree of its points and a cache ``{row key of
     a wall: (sample indices, distances)}``: every sample whose exact distance
-    (numpy, :func:`floorscan.floorplan.plan.point_segment_dist2`) to the wall is at most
+    (numpy, :func:`floorscan.floorplan.candidates.point_segment_dist2`) to the wall is at most
     ``reach``. Candidates are the samples in the boxes of the wall's pieces (no longer
     than :data:`PAIR_PIECE_M`) grown by ``reach``; a sample within ``reach`` of a wall
     is within ``reach`` of one of its pieces, hence in that piece's grown box.
