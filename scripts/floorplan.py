@@ -1,6 +1,8 @@
 """Stage floorplan, the evaluation grid: merged walls of one extractor for every ordering
 and k, in the formats of floorplan.evaluation_formats, in the map frame."""
-from floorscan.floorplan.plan import FloorplanWriter, recording_timestamp
+from floorscan.floorplan import floorplan_outputs
+from floorscan.floorplan.metadata import recording_timestamp
+from floorscan.floorplan.writer import FloorplanWriter
 from floorscan.core.io import read_table
 from floorscan.core.stage import stage_log
 
@@ -12,7 +14,7 @@ with stage_log(snakemake) as log:  # noqa: F821
     for (ordering, k), table in zip(smk.params.runs, smk.input.tables, strict=True):
         assert table.endswith(f"/{ordering}/{wc.extractor}/k{k}.parquet"), (ordering, k, table)
         stem = f"results/{wc.dataset}/evaluation/floorplan/{ordering}_{wc.extractor}_k{k}"
-        outputs = {fmt: f"{stem}.{fmt}" for fmt in smk.params.formats}
+        outputs = floorplan_outputs(stem, smk.params.formats)
         _, reused = writer.write(read_table(table), outputs, dataset=wc.dataset, ordering=ordering,
                                  extractor=wc.extractor, k=k, timestamp=timestamp)
         log.info("%s k=%s: floor plan %s (%s)", ordering, k, stem, "reused: same scans as an earlier plan" if reused else "built")

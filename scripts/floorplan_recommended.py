@@ -1,11 +1,12 @@
 """Stage floorplan, the recommended plan: the merged walls of the selected scans
-(selection/scans.csv) as results/<dataset>/floorplan.{geojson,svg,dxf,ifc}."""
-from floorscan.floorplan.plan import write_recommended_floorplan
+(selection/scans.csv) as results/<dataset>/floorplan.* in every export format
+(floorscan.floorplan.EXPORT_FORMATS: GeoJSON, SVG, DXF, IFC)."""
+from floorscan.floorplan.writer import write_recommended_floorplan
 from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
-    outputs = {path.rsplit(".", 1)[1]: path for path in smk.output}
+    outputs = dict(smk.output.items())  # named by format (floorscan.floorplan.floorplan_outputs)
     plan = write_recommended_floorplan(
         smk.input.scans, smk.input.walls, smk.input.index, outputs, smk.params.cfg,
         dataset=smk.wildcards.dataset, ordering=smk.params.ordering, extractor=smk.params.extractor,

@@ -200,7 +200,8 @@ def _capture_figures(monkeypatch, module):
 
 
 def test_floorplan_figure_title_counts_the_plans_walls(tmp_path, monkeypatch):
-    from floorscan.floorplan.plan import build_floorplan, write_geojson
+    from floorscan.floorplan.geojson import write_geojson
+    from floorscan.floorplan.plan import build_floorplan
 
     # a room's four walls seen from both faces (20 cm thick) and a lone wall of one face
     faces = []

@@ -11,25 +11,16 @@ import pytest
 import shapely
 import yaml
 
-from floorscan.floorplan.plan import (
-    DXF_LAYERS,
-    FLOORPLAN_FORMATS,
-    WORKFLOW_KEYS,
-    FloorPlan,
-    FloorplanParams,
-    FloorplanWriter,
-    Georeference,
-    PlanMetadata,
-    build_floorplan,
-    fit_groups,
-    fit_segments,
-    lonlat_to_map,
-    map_to_lonlat,
-    merge_segments,
-    pair_faces,
-    params_from_config,
-    write_floorplan,
-)
+from floorscan.floorplan import EXPORT_FORMATS, FLOORPLAN_FORMATS, floorplan_outputs
+from floorscan.floorplan.dxf import DXF_LAYERS
+from floorscan.floorplan.fit import fit_groups, fit_segments
+from floorscan.floorplan.georeference import Georeference, lonlat_to_map, map_to_lonlat
+from floorscan.floorplan.merge import merge_segments
+from floorscan.floorplan.metadata import PlanMetadata
+from floorscan.floorplan.pairing import pair_faces
+from floorscan.floorplan.params import WORKFLOW_KEYS, FloorplanParams, params_from_config
+from floorscan.floorplan.plan import FloorPlan, build_floorplan
+from floorscan.floorplan.writer import FloorplanWriter, write_floorplan
 from floorscan.walls.cluster import cluster_ransac
 from floorscan.walls.ransac import ransac
 from test_walls import ROOM, match, raycast
@@ -154,10 +145,23 @@ def test_schema_defaults_agree_with_floorplan_params():
     assert params_from_config({"extractor": "cluster_ransac", "evaluation_formats": ["geojson"]}) == FloorplanParams()
 
 
+def test_export_registry_names_the_formats_of_the_schema():
+    """FLOORPLAN_FORMATS is the registry's; the schema's evaluation formats are its
+    names; a plan's files are its stem and each format's suffix."""
+    schema = yaml.safe_load((REPO / "workflow/schemas/floorplan.schema.yaml").read_text())["properties"]
+    assert FLOORPLAN_FORMATS == tuple(EXPORT_FORMATS) and {"geojson", "svg", "dxf", "ifc"} <= set(FLOORPLAN_FORMATS)
+    assert sorted(schema["evaluation_formats"]["items"]["enum"]) == sorted(FLOORPLAN_FORMATS)
+    assert floorplan_outputs("r/floorplan", ["svg", "geojson"]) == {"svg": "r/floorplan.svg", "geojson": "r/floorplan.geojson"}
+    with pytest.raises(KeyError, match="pdf"):
+        floorplan_outputs("r/floorplan", ["pdf"])
+    with pytest.raises(KeyError, match="pdf"):
+        write_floorplan(pd.DataFrame({c: [0.0] for c in ("x0", "y0", "x1", "y1")}), {}, {"pdf": "p.pdf"})
+
+
 def test_candidate_pairs_equal_shapely_dwithin():
     import shapely
 
-    from floorscan.floorplan.plan import _candidate_pairs
+    from floorscan.floorplan.candidates import _candidate_pairs
 
     rng = np.random.default_rng(7)
     p0 = rng.uniform(0, 6, (300, 2))
@@ -175,15 +179,17 @@ def test_candidate_pairs_equal_shapely_dwithin():
     assert (np.minimum(d, np.pi - d) <= np.radians(3.0) + 1e-12).all() and len(i) > 10
 
 
-def test_union_find_numbers_components_by_smallest_node():
-    from floorscan.floorplan.plan import _union_find
+def test_merge_components_are_numbered_by_smallest_node():
+    """The merge numbers its faces as SciPy numbers connected components (the order of
+    their smallest segment), which the merged faces' order depends on."""
+    from floorscan.floorplan.merge import _components
 
     # Components {0}, {1, 3, 5} (a chain 5-3-1), {2, 4}, {6}; numbered by smallest node.
-    labels = _union_find(7, np.array([5, 3, 2]), np.array([3, 1, 4]))
-    assert labels.tolist() == [0, 1, 2, 1, 2, 1, 3]
+    labels = _components(7, np.array([5, 3, 2]), np.array([3, 1, 4]))
+    assert labels.tolist() == [0, 1, 2, 1, 2, 1, 3] and labels.dtype == np.int64
     chain = np.arange(999)
-    assert (_union_find(1000, chain[::-1], chain[::-1] + 1) == 0).all()
-    assert _union_find(3, np.empty(0, int), np.empty(0, int)).tolist() == [0, 1, 2]
+    assert (_components(1000, chain[::-1], chain[::-1] + 1) == 0).all()
+    assert _components(3, np.empty(0, int), np.empty(0, int)).tolist() == [0, 1, 2]
 
 
 def test_candidate_pairs_by_direction_bins_equal_dwithin_and_angle():
@@ -191,7 +197,7 @@ def test_candidate_pairs_by_direction_bins_equal_dwithin_and_angle():
     exactly the dwithin pairs within the angle."""
     import shapely
 
-    from floorscan.floorplan.plan import _angle_diff, _axial_angle, _candidate_pairs
+    from floorscan.floorplan.candidates import _angle_diff, _axial_angle, _candidate_pairs
 
     rng = np.random.default_rng(11)
     p0 = rng.uniform(0, 5, (400, 2))
@@ -213,7 +219,7 @@ def test_candidate_pairs_by_direction_bins_equal_dwithin_and_angle():
 def test_merge_skips_connected_pairs_without_changing_faces(monkeypatch):
     """Testing the candidates a few at a time and skipping pairs already connected
     gives the faces that testing all of them gives."""
-    import floorscan.floorplan.plan as fp
+    import floorscan.floorplan.merge as fp
 
     rng = np.random.default_rng(5)
     walls = np.array([[0, 0, 6, 0], [0, 0.2, 6, 0.2], [6.5, -1, 6.5, 4], [0, 3, 3, 3.02]], dtype=float)
@@ -244,7 +250,7 @@ def test_ifc_guid_list_equals_uuid5_compressed_by_ifcopenshell():
 
     import ifcopenshell.guid
 
-    from floorscan.floorplan.plan import _ifc_guid_list
+    from floorscan.floorplan.ifc import _ifc_guid_list
 
     for name in ("hallways3d random ransac k5", "O'Brien's plan", "é"):
         ns = uuid.uuid5(uuid.NAMESPACE_URL, f"floorscan:{name}")
@@ -260,7 +266,7 @@ def test_candidate_pairs_by_direction_bins_far_from_the_origin():
     at the distance and across the 0/180 degree wrap."""
     import shapely
 
-    from floorscan.floorplan.plan import _angle_diff, _axial_angle, _candidate_pairs
+    from floorscan.floorplan.candidates import _angle_diff, _axial_angle, _candidate_pairs
 
     rng = np.random.default_rng(12)
     p0 = rng.uniform(0, 40, (500, 2))
@@ -334,7 +340,7 @@ def test_georeference_puts_a_point_100_m_east_where_the_ellipsoid_says():
 
 
 def test_geojson_rings_counter_clockwise_members_and_one_feature_per_line(tmp_path, box_segments):
-    from floorscan.floorplan.plan import LOCAL_FRAME_WKT, floorplan_geojson
+    from floorscan.floorplan.geojson import LOCAL_FRAME_WKT, floorplan_geojson
 
     out = {"geojson": tmp_path / "p.geojson"}
     plan = write_floorplan(box_segments, {}, out, **META, timestamp=1_600_000_000.7)
@@ -371,7 +377,7 @@ def test_georeferenced_geojson_is_wgs84_lon_lat(tmp_path):
     """A 10 m wall along +x from the origin, heading 90 (+x east), at (lat 50, lon 8):
     its axis ends 10 / 71696 degree east; the member says WGS84; no crs member
     (RFC 7946: WGS84 is the default); rings stay counter-clockwise."""
-    from floorscan.floorplan.plan import write_geojson
+    from floorscan.floorplan.geojson import write_geojson
 
     geo = {"lat": 50.0, "lon": 8.0, "heading_deg": 90.0}
     plan = plan_of([(0.0, 0.0, 10.0, 0.0, 0.2, 2.5, True), (10.0, 0.0, 10.0, 5.0, 0.1, 2.5, False)])
@@ -463,7 +469,7 @@ def test_svg_fits_the_window_with_title_scale_bar_legend_and_axes(tmp_path, box_
 def test_svg_of_a_long_thin_plan_fits_and_shows_north(tmp_path):
     """A 200 m corridor: drawn 1000 px long, a 20 m scale bar; heading 0 puts north
     along +x, drawn to the right."""
-    from floorscan.floorplan.plan import write_svg
+    from floorscan.floorplan.svg import write_svg
 
     plan = plan_of([(0.0, 0.0, 200.0, 0.0, 0.2, 2.5, True), (0.0, 2.0, 200.0, 2.0, 0.2, 2.5, True)])
     write_svg(plan, tmp_path / "c.svg", PlanMetadata(dataset="corridor"), {"lat": 50.0, "lon": 8.0})
@@ -481,7 +487,7 @@ def test_ifc_hierarchy_placements_header_and_validation(tmp_path, box_segments):
     import ifcopenshell.util.placement as up
     from ifcopenshell import validate
 
-    from floorscan.floorplan.plan import floorscan_version
+    from floorscan.floorplan.metadata import floorscan_version
 
     path = tmp_path / "p.ifc"
     plan = write_floorplan(box_segments, {"wall_height_m": 2.7}, {"ifc": path}, **META, timestamp=1_700_000_000)
@@ -533,7 +539,7 @@ def test_ifc_georeference_sets_site_latitude_and_true_north(tmp_path):
     import ifcopenshell
     from ifcopenshell import validate
 
-    from floorscan.floorplan.plan import write_ifc
+    from floorscan.floorplan.ifc import write_ifc
 
     plan = plan_of([(0.0, 0.0, 4.0, 0.0, 0.1, 2.5, False)])
     geo = {"lat": -33.5, "lon": 151.25, "heading_deg": 90.0}
@@ -550,7 +556,7 @@ def test_ifc_georeference_sets_site_latitude_and_true_north(tmp_path):
 
 
 def test_exports_stamp_source_date_epoch_never_the_clock(tmp_path, box_segments, monkeypatch):
-    from floorscan.floorplan.plan import export_time
+    from floorscan.floorplan.metadata import export_time
 
     outputs = {f: tmp_path / f"p.{f}" for f in ("geojson", "ifc")}
 
@@ -643,7 +649,7 @@ def test_empty_segments_write_an_empty_plan(tmp_path):
 def test_footprint_geojson_equals_shapely_to_geojson_oriented_and_rounded():
     """Footprint coordinates from the rings equal shapely.to_geojson's of the
     counter-clockwise polygon, read and rounded."""
-    from floorscan.floorplan.plan import _round_coords, floorplan_geojson
+    from floorscan.floorplan.geojson import _round_coords, floorplan_geojson
 
     rng = np.random.default_rng(3)
     n = 200
@@ -667,7 +673,8 @@ def test_dxf_bytes_do_not_depend_on_the_hash_seed(tmp_path):
 
     code = (
         "import sys, pandas as pd\n"
-        "from floorscan.floorplan.plan import build_floorplan, write_dxf\n"
+        "from floorscan.floorplan.dxf import write_dxf\n"
+        "from floorscan.floorplan.plan import build_floorplan\n"
         "seg = pd.DataFrame({'scan_id': [0, 0, 1, 1], 'x0': [0, 4, 0, 0.0], 'y0': [0, 0, 0.2, 0],\n"
         "                    'x1': [4, 4, 4, 0], 'y1': [0, 0.2, 0.2, 0.2]})\n"
         "write_dxf(build_floorplan(seg), sys.argv[1])\n"

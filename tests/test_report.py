@@ -168,7 +168,9 @@ def test_write_front_page_writes_the_page_and_no_temporary_file(tmp_path):
 
 
 def test_front_page_of_the_stage_outputs(tmp_path):
-    from floorscan.floorplan.plan import build_floorplan, write_geojson, write_svg
+    from floorscan.floorplan.geojson import write_geojson
+    from floorscan.floorplan.plan import build_floorplan
+    from floorscan.floorplan.svg import write_svg
     from floorscan.core.io import SCAN_INDEX, write_table
 
     segments = pd.DataFrame(

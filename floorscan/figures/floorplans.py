@@ -20,7 +20,7 @@ from floorscan.figures.style import _save, _segments_collection, _square, refere
 def read_geojson_geometries(path) -> list:
     """Shapely geometries of the walls of a floor plan's GeoJSON, one per wall.
 
-    A floor plan of :func:`floorscan.floorplan.plan.floorplan_geojson` holds an ``axis``, a
+    A floor plan of :func:`floorscan.floorplan.geojson.floorplan_geojson` holds an ``axis``, a
     ``footprint`` and its ``face`` lines for each wall (property ``kind``); a wall is
     drawn as its footprint, or as its axis when it has none, so the list holds one
     geometry per wall (``len`` is the plan's wall count, one row of

@@ -113,7 +113,7 @@ def front_page(
         Dataset name (title).
     floorplan_svg : str
         The recommended floor plan as SVG text (``results/<dataset>/floorplan.svg``,
-        :func:`floorscan.floorplan.plan.write_svg`), inlined by :func:`inline_svg`.
+        :func:`floorscan.floorplan.svg.write_svg`), inlined by :func:`inline_svg`.
     summary : pandas.DataFrame or path, optional
         The scan-reduction summary (:func:`floorscan.score.curves.curve_summary`), or
         the path of ``summary.parquet``. None: the run did not evaluate (config

@@ -1,1 +1,120 @@
-"""Floor plans (stage ``floorplan``)."""
+"""Floor plans (stage ``floorplan``): one wall per wall from the wall segments of many
+scans, and its exports.
+
+Wall extraction runs per scan, so one wall of the building is seen by many scans and
+appears as many overlapping segments (thesis section 5.1 names this duplicate
+problem). The segments that describe one wall face are merged, and the two faces of a
+wall are paired into one wall with its thickness. The modules, in the order a plan is
+made and written:
+
+- :mod:`~floorscan.floorplan.params`: :class:`~floorscan.floorplan.params.FloorplanParams`,
+  the config section ``floorplan``.
+- :mod:`~floorscan.floorplan.candidates`: pairs of segments near each other in place
+  and direction.
+- :mod:`~floorscan.floorplan.fit`: one segment fitted to several.
+- :mod:`~floorscan.floorplan.merge`: the segments of one wall face merged into one.
+- :mod:`~floorscan.floorplan.pairing`: the two faces of a wall paired into one wall.
+- :mod:`~floorscan.floorplan.plan`: :class:`~floorscan.floorplan.plan.FloorPlan` and
+  :func:`~floorscan.floorplan.plan.build_floorplan`, the steps above in one.
+- :mod:`~floorscan.floorplan.georeference`: where the map frame lies on the earth.
+- :mod:`~floorscan.floorplan.metadata`: what a plan is of, its time stamp.
+- :mod:`~floorscan.floorplan.footprints`: what all exports of a plan share.
+- one module per export format: :mod:`~floorscan.floorplan.geojson` (people, GIS, the
+  scorer), :mod:`~floorscan.floorplan.svg` (a browser), :mod:`~floorscan.floorplan.dxf`
+  (CAD), :mod:`~floorscan.floorplan.ifc` (BIM), registered in :data:`EXPORT_FORMATS`.
+- :mod:`~floorscan.floorplan.writer`: :class:`~floorscan.floorplan.writer.FloorplanWriter`
+  builds plans and writes them in the formats asked for; the stage's scripts call it.
+
+Exports (the thesis's purpose, Chapter 1: a plan people and their tools open). Every
+file is written atomically (:func:`floorscan.core.files.atomic_path`), carries what it is
+a plan of (:class:`~floorscan.floorplan.metadata.PlanMetadata`: dataset, ordering,
+extractor, k, number of walls, a time stamp) and is byte-identical when written again
+from the same input. The frame is the map frame of the recording: a local engineering
+frame, x and y in metres, z up, no geodetic datum, unless ``floorplan.georeference``
+places it on the earth; wall properties (thickness, length, height) are metres
+everywhere.
+
+Adding an export format
+-----------------------
+1. Write its module, ``floorscan/floorplan/<name>.py``, with a public
+   ``write_<name>(plan, path, metadata=None, ...)`` for use outside the workflow and
+   the writer the registry calls, ``export(exports, path, meta, params)``: it writes
+   the plan ``exports.plan`` (a :class:`~floorscan.floorplan.plan.FloorPlan`; the
+   oriented footprints and their rings in
+   :class:`~floorscan.floorplan.footprints.PlanExports`) to ``path`` atomically
+   (:func:`floorscan.core.files.atomic_path`), names ``meta``
+   (:class:`~floorscan.floorplan.metadata.PlanMetadata`), reads its options from
+   ``params`` (:class:`~floorscan.floorplan.params.FloorplanParams`) and gives the same
+   bytes for the same input (no clock, no random ids).
+2. Register it in :data:`EXPORT_FORMATS` below: ``"<name>": ExportFormat("<suffix>",
+   <name>.export)``. :data:`FLOORPLAN_FORMATS` follows, and with it the formats
+   :class:`~floorscan.floorplan.writer.FloorplanWriter` writes and the files of the
+   recommended plan (``results/<dataset>/floorplan<suffix>``,
+   workflow/rules/floorplan.smk).
+3. Add ``<name>`` to the enum of ``evaluation_formats`` in
+   workflow/schemas/floorplan.schema.yaml, so the evaluation grid may write it too.
+
+tests/test_floorplan.py writes every registered format twice and compares the bytes;
+add a test that opens the new format with its own tool.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Callable, Iterable
+
+from floorscan.floorplan import dxf, geojson, ifc, svg
+
+if TYPE_CHECKING:
+    from floorscan.floorplan.footprints import PlanExports
+    from floorscan.floorplan.metadata import PlanMetadata
+    from floorscan.floorplan.params import FloorplanParams
+
+
+@dataclass(frozen=True)
+class ExportFormat:
+    """An export format of :data:`EXPORT_FORMATS`.
+
+    Attributes
+    ----------
+    suffix : str
+        The file name suffix, with its dot (``".geojson"``).
+    write : callable
+        ``write(exports, path, meta, params)``: writes ``exports.plan``
+        (:class:`~floorscan.floorplan.footprints.PlanExports`) to ``path`` named by
+        ``meta`` (:class:`~floorscan.floorplan.metadata.PlanMetadata`), with the
+        options of ``params`` (:class:`~floorscan.floorplan.params.FloorplanParams`).
+    """
+
+    suffix: str
+    write: Callable[[PlanExports, str | os.PathLike, PlanMetadata, FloorplanParams], None]
+
+
+#: The export formats: name (as in ``floorplan.evaluation_formats``) -> file suffix and
+#: writer. The one place a format is registered (see the package docstring).
+EXPORT_FORMATS: dict[str, ExportFormat] = {
+    "geojson": ExportFormat(".geojson", geojson.export),
+    "svg": ExportFormat(".svg", svg.export),
+    "dxf": ExportFormat(".dxf", dxf.export),
+    "ifc": ExportFormat(".ifc", ifc.export),
+}
+
+#: Names of the export formats, in the order of :data:`EXPORT_FORMATS` (the recommended
+#: plan is written in all of them; workflow/rules/floorplan.smk imports this).
+FLOORPLAN_FORMATS = tuple(EXPORT_FORMATS)
+
+
+def floorplan_outputs(stem: str, formats: Iterable[str]) -> dict[str, str]:
+    """The files of a plan in ``formats``: format -> ``stem`` + the format's suffix.
+
+    Raises
+    ------
+    KeyError
+        For a format not in :data:`EXPORT_FORMATS`.
+    """
+    formats = list(formats)
+    unknown = [fmt for fmt in formats if fmt not in EXPORT_FORMATS]
+    if unknown:
+        raise KeyError(f"unknown floor plan formats {unknown}; expected {list(FLOORPLAN_FORMATS)}")
+    return {fmt: f"{stem}{EXPORT_FORMATS[fmt].suffix}" for fmt in formats}

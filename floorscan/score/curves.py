@@ -362,7 +362,8 @@ def score_curves(
     oracle : pandas.DataFrame
         The oracle ordering (:func:`oracle_ordering`).
     """
-    from floorscan.floorplan.plan import params_from_config, plan_faces, segment_arrays
+    from floorscan.floorplan.params import params_from_config
+    from floorscan.floorplan.plan import plan_faces, segment_arrays
     from floorscan.score.reference import read_grid
 
     structure = Structure(read_grid(reference_path))

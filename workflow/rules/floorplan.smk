@@ -1,5 +1,6 @@
-# Floor plans (floorscan.floorplan.plan; thesis Chapter 1's purpose): merged walls, one wall
-# per wall with its thickness, as GeoJSON, SVG, DXF and IFC.
+# Floor plans (floorscan.floorplan; thesis Chapter 1's purpose): merged walls, one wall
+# per wall with its thickness, in every export format of floorscan.floorplan.EXPORT_FORMATS
+# (GeoJSON, SVG, DXF, IFC; a file's suffix is its format's).
 #
 #   recommended_floorplan: the answer, results/<dataset>/floorplan.*: the walls of the
 #               scans of selection/scans.csv (select.default_ordering, select.k) by
@@ -7,7 +8,7 @@
 #   floorplan:  the evaluation grid, evaluation/floorplan/<ordering>_<extractor>_k<k>.*:
 #               every ordering x k of walls.k, one job per extractor, in the formats of
 #               floorplan.evaluation_formats (GeoJSON, which is scored, and SVG)
-from floorscan.floorplan.plan import FLOORPLAN_FORMATS
+from floorscan.floorplan import EXPORT_FORMATS, FLOORPLAN_FORMATS, floorplan_outputs
 
 stage_schema_check("floorplan")
 
@@ -50,12 +51,17 @@ def floorplan_grid_runs(wildcards):
     return [[o, k] for o in config["walls"]["orderings"] for k in walls_k_names()]
 
 
+def floorplan_suffixes(formats):
+    """The file suffixes of floor plan formats (floorscan.floorplan.EXPORT_FORMATS)."""
+    return [EXPORT_FORMATS[fmt].suffix for fmt in formats]
+
+
 rule recommended_floorplan:
     priority: PRIORITY["floorplan"]
     input:
         unpack(recommended_floorplan_inputs),
     output:
-        expand("results/{{dataset}}/floorplan.{fmt}", fmt=FLOORPLAN_FORMATS),
+        **floorplan_outputs("results/{dataset}/floorplan", FLOORPLAN_FORMATS),
     params:
         cfg=stage_config("floorplan"),
         extractor=plan_extractor,
@@ -74,8 +80,9 @@ rule floorplan:
         unpack(floorplan_grid_inputs),
     output:
         expand(
-            "results/{{dataset}}/evaluation/floorplan/{ordering}_{{extractor}}_k{k}.{fmt}",
-            ordering=config["walls"]["orderings"], k=walls_k_names(), fmt=config["floorplan"]["evaluation_formats"],
+            "results/{{dataset}}/evaluation/floorplan/{ordering}_{{extractor}}_k{k}{suffix}",
+            ordering=config["walls"]["orderings"], k=walls_k_names(),
+            suffix=floorplan_suffixes(config["floorplan"]["evaluation_formats"]),
         ),
     wildcard_constraints:
         extractor=WALLS_CONSTRAINTS["extractor"],
@@ -91,11 +98,11 @@ rule floorplan:
         "../../scripts/floorplan.py"
 
 
-PLAN_OUTPUTS.extend(f"results/{{dataset}}/floorplan.{fmt}" for fmt in FLOORPLAN_FORMATS)
+PLAN_OUTPUTS.extend(floorplan_outputs("results/{dataset}/floorplan", FLOORPLAN_FORMATS).values())
 EVALUATION_OUTPUTS.extend(
     expand(
-        "results/{{dataset}}/evaluation/floorplan/{ordering}_{extractor}_k{k}.{fmt}",
+        "results/{{dataset}}/evaluation/floorplan/{ordering}_{extractor}_k{k}{suffix}",
         ordering=config["walls"]["orderings"], extractor=config["walls"]["extractors"],
-        k=walls_k_names(), fmt=config["floorplan"]["evaluation_formats"],
+        k=walls_k_names(), suffix=floorplan_suffixes(config["floorplan"]["evaluation_formats"]),
     )
 )

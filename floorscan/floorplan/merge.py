@@ -1,0 +1,133 @@
+"""Merge the wall segments that describe one wall face into one segment
+(:func:`merge_segments`).
+
+Wall extraction runs per scan, so one wall of the building is seen by many scans and
+appears as many overlapping segments (the duplicate problem of thesis section 5.1).
+Two segments belong to one face when they are near parallel, close to each other's
+line and overlap or nearly meet along it; a face is a connected group of such pairs
+(SciPy's ``connected_components``), fitted by :func:`~floorscan.floorplan.fit.fit_groups`.
+The candidates come from :func:`~floorscan.floorplan.candidates._candidate_pairs`.
+Source: thesis section 5.1 (the problem); the rule is ours.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.sparse import coo_array
+from scipy.sparse.csgraph import connected_components
+
+from floorscan.floorplan.candidates import _candidate_pairs, _line_geometry, _within_distance
+from floorscan.floorplan.fit import fit_groups
+from floorscan.floorplan.params import FloorplanParams
+
+
+def _components(n: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Connected component (0..) of each of ``n`` nodes given the edges (i, j), numbered
+    in the order of their smallest node: ``scipy.sparse.csgraph.connected_components``
+    of the undirected graph, as an (n,) int64 ndarray."""
+    graph = coo_array((np.ones(len(i)), (np.asarray(i), np.asarray(j))), shape=(n, n))
+    return connected_components(graph, directed=False)[1].astype(np.int64)
+
+
+#: Candidate pairs tested at once by :func:`_merge_groups`.
+_MERGE_CHUNK = 1 << 15
+
+
+def _merge_groups(cur: np.ndarray, i: np.ndarray, j: np.ndarray, params: FloorplanParams) -> np.ndarray | None:
+    """The faces of :func:`merge_segments`: the connected groups of the candidate
+    pairs (i, j) that pass its merge test, as a group per segment (numbered 0..G-1 by
+    their smallest segment, as :func:`_components`), or None when no pair passes.
+
+    The candidates (within the merge angle already) are tested a chunk at a time,
+    and a pair whose two segments are already connected by the pairs passed so far
+    is not tested: it could not change the groups. A wall seen by hundreds of scans
+    is a stack of hundreds of segments whose pairs nearly all pass; after the first
+    chunk most of them are connected. The groups, and so the merged faces, are those
+    of all the passing pairs.
+    """
+    reach = max(params.merge_gap_m, params.merge_distance_m)
+    label = np.arange(len(cur))  # a component label per segment, of the pairs passed so far
+    merged = False
+    for start in range(0, len(i), _MERGE_CHUNK):
+        ci, cj = i[start : start + _MERGE_CHUNK], j[start : start + _MERGE_CHUNK]
+        apart = label[ci] != label[cj]
+        ci, cj = ci[apart], cj[apart]
+        if len(ci) == 0:
+            continue
+        a, b, d, n, length = _line_geometry(cur, ci, cj)
+        dist = np.maximum(
+            np.abs(np.einsum("ij,ij->i", cur[b, :2] - cur[a, :2], n)),
+            np.abs(np.einsum("ij,ij->i", cur[b, 2:] - cur[a, :2], n)),
+        )
+        ta = np.zeros(len(a)), length[a]
+        tb0 = np.einsum("ij,ij->i", cur[b, :2] - cur[a, :2], d)
+        tb1 = np.einsum("ij,ij->i", cur[b, 2:] - cur[a, :2], d)
+        gap = np.maximum(np.minimum(tb0, tb1) - ta[1], ta[0] - np.maximum(tb0, tb1))
+        ok = (dist <= params.merge_distance_m) & (gap <= params.merge_gap_m)
+        # Overlapping along the line (gap <= 0), a point of the shorter projects
+        # onto the longer and lies within dist of it: within reach for sure.
+        sure = ok & (gap <= 0) & (dist < reach * (1 - 1e-9))
+        wi, wj = _within_distance(cur, ci[ok & ~sure], cj[ok & ~sure], reach)
+        pi, pj = np.r_[ci[sure], wi], np.r_[cj[sure], wj]
+        if len(pi):
+            merged = True
+            label = _components(len(cur), label[pi], label[pj])[label]
+    return label if merged else None
+
+
+def merge_segments(
+    segments: np.ndarray, weights: np.ndarray, params: FloorplanParams = FloorplanParams()
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Merge the segments that describe one wall face into one segment.
+
+    Two segments belong to one face when their directions differ by at most
+    ``merge_angle_deg``, both ends of the shorter are within ``merge_distance_m`` of
+    the longer's line, and along that line they overlap or leave a gap of at most
+    ``merge_gap_m``. Faces are the connected groups of this relation (so a chain of
+    pairwise-close segments is one face) and each is fitted by :func:`fit_segments`.
+    This is repeated (``max_passes``) on the merged faces until nothing changes.
+    Source: the duplicate problem of thesis section 5.1; the rule is ours.
+
+    Parameters
+    ----------
+    segments : (M, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    weights : (M,) float ndarray
+        Weight of each segment in the fit (inlier count).
+    params : FloorplanParams
+
+    Returns
+    -------
+    faces : (F, 4) float64 ndarray
+        Merged segments.
+    face_weights : (F,) float64 ndarray
+        Sum of the member weights.
+    labels : (M,) int64 ndarray
+        Face of each input segment.
+    """
+    seg = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
+    w = np.asarray(weights, dtype=np.float64).reshape(-1)
+    if len(seg) != len(w):
+        raise ValueError(f"{len(seg)} segments but {len(w)} weights")
+    labels = np.arange(len(seg))
+    cur, cur_w = seg, w
+    for _ in range(max(1, params.max_passes)):
+        reach = max(params.merge_gap_m, params.merge_distance_m)
+        i, j = _candidate_pairs(cur, reach, np.radians(params.merge_angle_deg), exact=False)
+        group = _merge_groups(cur, i, j, params)
+        if group is None:
+            break
+        size = np.bincount(group)
+        # A group of one keeps its segment (as fit_segments would): only the others are fitted.
+        new = np.empty((len(size), 4))
+        new[group] = cur  # the groups of one
+        several = size[group] > 1
+        if several.any():
+            fitted = np.flatnonzero(size > 1)
+            rank = np.full(len(size), -1, dtype=np.int64)
+            rank[fitted] = np.arange(len(fitted))
+            new[fitted] = fit_groups(cur[several], cur_w[several], rank[group[several]], len(fitted))
+        new_w = np.bincount(group, weights=cur_w)
+        labels = group[labels]
+        cur, cur_w = new, new_w
+    return cur, cur_w, labels

@@ -1,0 +1,138 @@
+"""What a floor plan is of, written into every one of its exports: :class:`PlanMetadata`
+(dataset, ordering, extractor, k, title, time stamp) and the time stamp itself.
+
+The time stamp is never the clock, so the same input gives the same files: the plan's
+``timestamp`` (the recording's first scan, :func:`recording_timestamp`), else the
+environment's ``SOURCE_DATE_EPOCH``, else 0 (:func:`export_time`; source:
+reproducible-builds.org's SOURCE_DATE_EPOCH specification). :func:`floorscan_version`
+names the generator.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import os
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from floorscan.floorplan.georeference import Georeference
+    from floorscan.floorplan.plan import FloorPlan
+
+
+def export_time(timestamp: float | None = None) -> int:
+    """Seconds since the epoch (UTC) the exports of a plan are stamped with.
+
+    ``timestamp`` (rounded down: e.g. the recording's first scan stamp) when given,
+    else the environment variable ``SOURCE_DATE_EPOCH`` (reproducible-builds.org),
+    else 0. Never the clock: the same input gives the same files.
+
+    Raises
+    ------
+    ValueError
+        For a ``timestamp`` that is not finite, or a ``SOURCE_DATE_EPOCH`` that is
+        not an integer.
+    """
+    if timestamp is not None:
+        t = float(timestamp)
+        if not math.isfinite(t):
+            raise ValueError(f"export timestamp must be finite seconds since the epoch, got {timestamp!r}")
+        return math.floor(t)
+    env = os.environ.get("SOURCE_DATE_EPOCH", "").strip()
+    if not env:
+        return 0
+    try:
+        return int(env)
+    except ValueError:
+        raise ValueError(f"SOURCE_DATE_EPOCH must be an integer number of seconds, got {env!r}") from None
+
+
+@functools.lru_cache(maxsize=None)
+def floorscan_version() -> str:
+    """The installed floorscan's version (``"unknown"`` when not installed)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("floorscan")
+    except PackageNotFoundError:  # pragma: no cover
+        return "unknown"
+
+
+@dataclass(frozen=True)
+class PlanMetadata:
+    """What a floor plan is of: written into every one of its exports.
+
+    Attributes
+    ----------
+    dataset, ordering, extractor : str
+        The recording, the scan ordering and the wall extractor of the plan.
+    k : str
+        The number of scans, as in the file names (``"5"``, ``"all"``); an int is
+        converted.
+    timestamp : float or None
+        Seconds since the epoch (UTC) to stamp the exports with, e.g. the
+        recording's first scan stamp; None: :func:`export_time`'s fallbacks.
+    name : str
+        The plan's title (SVG title, IFC project name, from which the IFC GlobalIds
+        derive); empty: "``dataset ordering extractor k<k>``" of the fields given.
+    """
+
+    dataset: str = ""
+    ordering: str = ""
+    extractor: str = ""
+    k: str = ""
+    timestamp: float | None = None
+    name: str = ""
+
+    def __post_init__(self):
+        for f in ("dataset", "ordering", "extractor", "k", "name"):
+            value = getattr(self, f)
+            object.__setattr__(self, f, "" if value is None else str(value))
+
+    @property
+    def fields(self) -> tuple[tuple[str, str], ...]:
+        """``(name, value)`` of dataset, ordering, extractor and k, as every export names them."""
+        return ("dataset", self.dataset), ("ordering", self.ordering), ("extractor", self.extractor), ("k", self.k)
+
+    @property
+    def title(self) -> str:
+        """:attr:`name`, else the fields given joined (``"intel random ransac k5"``),
+        else ``"floorscan"``."""
+        if self.name:
+            return self.name
+        parts = [self.dataset, self.ordering, self.extractor, f"k{self.k}" if self.k else ""]
+        return " ".join(p for p in parts if p) or "floorscan"
+
+    @property
+    def time_stamp(self) -> str:
+        """:func:`export_time` of :attr:`timestamp` in ISO 8601, UTC (``1970-01-01T00:00:00+00:00``)."""
+        return datetime.fromtimestamp(export_time(self.timestamp), tz=timezone.utc).isoformat()
+
+
+def _metadata(plan: FloorPlan, meta: PlanMetadata, georeference: Georeference | None = None) -> dict:
+    """The plan's metadata as the GeoJSON member ``floorscan`` holds it (the DXF's
+    metadata are its entries as text, :func:`floorscan.floorplan.dxf._dxf_metadata`)."""
+    return {
+        "frame": "map" if georeference is None else "WGS84",
+        "units": "metres" if georeference is None else "degrees",
+        "crs": "local engineering frame of the recording" if georeference is None else (
+            "WGS84 longitude, latitude: the map frame on the local tangent plane of the georeference"),
+        **dict(meta.fields),
+        "n_walls": len(plan.walls), "n_walls_both_faces": int(plan.walls["paired"].sum()), "n_faces": len(plan.faces),
+        "lengths": "metres (thickness_m, height_m, length_m)",
+        "time_stamp": meta.time_stamp,
+        "generator": f"floorscan {floorscan_version()}",
+        "georeference": None if georeference is None else georeference.as_dict(),
+    }  # fmt: skip
+
+
+def recording_timestamp(index_path: str | os.PathLike) -> int:
+    """The exports' time stamp: the recording's first scan stamp (``scan_index.parquet``'s
+    least ``t_ns``) in whole seconds since the epoch, 0 for an empty index; the same
+    recording gives the same files."""
+    import pyarrow.parquet as pq
+
+    t_ns = pq.read_table(index_path, columns=["t_ns"]).column("t_ns").to_numpy()
+    return int(t_ns.min()) // 1_000_000_000 if len(t_ns) else 0

@@ -1,0 +1,98 @@
+"""Parameters of the floor plan, config section ``floorplan``: :class:`FloorplanParams`
+(merge, pairing, wall height, DXF version, georeference) and :func:`params_from_config`,
+which reads the section.
+
+The defaults are those of workflow/schemas/floorplan.schema.yaml (a test checks that
+they agree). The section's keys that the workflow reads, not the plan, are
+:data:`WORKFLOW_KEYS`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+from floorscan.floorplan.dxf import DXF_VERSIONS
+from floorscan.floorplan.georeference import Georeference, as_georeference
+
+
+@dataclass(frozen=True)
+class FloorplanParams:
+    """Merge and pairing parameters (config section ``floorplan``).
+
+    Attributes
+    ----------
+    merge_angle_deg : float
+        Segments of one face differ in direction by at most this, degrees.
+    merge_distance_m : float
+        ... and the ends of the shorter lie within this of the longer's line, metres.
+    merge_gap_m : float
+        ... and they overlap or leave a gap of at most this along the line, metres.
+    max_passes : int
+        Merge passes (merged faces may touch faces they did not touch before).
+    pair_angle_deg : float
+        Two faces of one wall differ in direction by at most this, degrees.
+    pair_min_m, pair_max_m : float
+        Distance between the two faces of one wall (its thickness), metres.
+    pair_min_overlap : float
+        The two faces overlap along the wall by at least this fraction of the
+        shorter face.
+    default_thickness_m : float
+        Thickness of a wall of which one face was seen, metres.
+    wall_height_m : float
+        Height of every wall (IFC extrusion, GeoJSON ``height_m``), metres.
+    min_length_m : float
+        Merged faces shorter than this are dropped, metres.
+    dxf_version : str
+        DXF export: ``"R2010"`` (units header: metres) or ``"R12"`` (no units
+        header; see :func:`~floorscan.floorplan.dxf.write_dxf`).
+    georeference : ~floorscan.floorplan.georeference.Georeference or None
+        Where the map frame lies on the earth (a mapping ``lat``, ``lon``,
+        ``heading_deg`` is converted); with one the GeoJSON coordinates are WGS84
+        longitude and latitude, the SVG gets a north arrow and the IFC site its
+        reference latitude, longitude and true north. None: map metres.
+    """
+
+    merge_angle_deg: float = 3.0
+    merge_distance_m: float = 0.05
+    merge_gap_m: float = 0.3
+    max_passes: int = 3
+    pair_angle_deg: float = 3.0
+    pair_min_m: float = 0.05
+    pair_max_m: float = 0.40
+    pair_min_overlap: float = 0.5
+    default_thickness_m: float = 0.10
+    wall_height_m: float = 2.5
+    min_length_m: float = 0.3
+    dxf_version: str = "R2010"
+    georeference: Georeference | None = None
+
+    def __post_init__(self):
+        if self.georeference is not None:  # a config mapping -> Georeference (checked)
+            object.__setattr__(self, "georeference", as_georeference(self.georeference))
+        if self.dxf_version not in DXF_VERSIONS:
+            raise ValueError(f"floorplan.dxf_version must be one of {list(DXF_VERSIONS)}, got {self.dxf_version!r}")
+        if not self.pair_min_m < self.pair_max_m:
+            raise ValueError(
+                f"floorplan.pair_min_m ({self.pair_min_m}) must be below pair_max_m ({self.pair_max_m})"
+            )
+
+
+#: Keys of the ``floorplan`` config section that the workflow reads, not the plan:
+#: the recommended plan's extractor and the formats of the evaluation grid's plans.
+WORKFLOW_KEYS = ("extractor", "evaluation_formats")
+
+
+def params_from_config(cfg: Mapping[str, Any] | None) -> FloorplanParams:
+    """:class:`FloorplanParams` of the ``floorplan`` config section (without
+    :data:`WORKFLOW_KEYS`).
+
+    Raises
+    ------
+    KeyError
+        For a key the class does not know.
+    """
+    from floorscan.core.config import dataclass_from_mapping
+
+    plan_cfg = {k: v for k, v in (cfg or {}).items() if k not in WORKFLOW_KEYS}
+    return dataclass_from_mapping(FloorplanParams, plan_cfg, "floorplan")

@@ -1,0 +1,207 @@
+"""The SVG export of a floor plan (:func:`write_svg`; a browser): a plain SVG (no
+scripts) that scales to any window (``viewBox``, width and height 100 %), with a title,
+the wall polygons (walls of which one face was seen drawn lighter and dashed), axes, a
+scale bar of a round length in metres, a legend and the map frame's x (right) and y
+(up) axes; the map's y is up, SVG's down: the drawing is flipped. With a georeference
+(:class:`~floorscan.floorplan.georeference.Georeference`), a north arrow. The file is
+written atomically and is byte-identical when written again from the same input.
+Source: SVG 1.1 (W3C).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from typing import TYPE_CHECKING, Mapping
+from xml.sax.saxutils import escape
+
+from floorscan.core.files import atomic_path
+from floorscan.floorplan.footprints import PlanExports
+from floorscan.floorplan.georeference import Georeference, as_georeference
+from floorscan.floorplan.metadata import PlanMetadata, floorscan_version
+
+if TYPE_CHECKING:
+    from floorscan.floorplan.params import FloorplanParams
+    from floorscan.floorplan.plan import FloorPlan
+
+
+#: SVG layout, pixels of the viewBox (the SVG scales to the window): the plan's longer
+#: side, the least canvas width (title, scale bar and legend fit), margins and bands.
+SVG_PLAN_PX, SVG_MIN_WIDTH_PX, SVG_MARGIN_PX, SVG_HEAD_PX, SVG_FOOT_PX = 1000.0, 720.0, 20.0, 56.0, 84.0
+
+
+def _scale_bar_length(max_m: float) -> float:
+    """The longest of 1, 2 and 5 x 10^n metres not above ``max_m`` (> 0), metres."""
+    e = math.floor(math.log10(max_m))
+    for m in (5, 2, 1):
+        length = float(f"{m}e{e}")
+        if length <= max_m * (1 + 1e-12):
+            return length
+    return float(f"1e{e - 1}")  # pragma: no cover (rounding of log10)
+
+
+def write_svg(
+    plan: FloorPlan, path: str | os.PathLike, metadata: PlanMetadata | None = None,
+    georeference: Georeference | Mapping | None = None,
+) -> None:  # fmt: skip
+    """Write the floor plan as a plain SVG that fits any browser window.
+
+    The viewBox is in pixels: the plan's longer side :data:`SVG_PLAN_PX`, a title
+    band above (the plan's title and the number of walls), a band below with a
+    scale bar (a round length in metres, :func:`_scale_bar_length`), the map frame's
+    x (right) and y (up) axes (with a georeference also north) and a legend (wall;
+    wall of which one face was seen, whose thickness is assumed: lighter, dashed;
+    wall axis). ``width`` and ``height`` are 100 %: a browser scales the drawing to
+    its window, aspect kept. The plan is drawn in map metres inside a group whose
+    transform ``matrix(s 0 0 -s tx ty)`` flips y (the map's y is up, SVG's down);
+    ``s`` is pixels per metre. Each axis line has a tooltip (length x thickness).
+    """
+    _write_svg(PlanExports(plan), path, metadata or PlanMetadata(), as_georeference(georeference))
+
+
+def _write_svg(
+    exports: PlanExports, path: str | os.PathLike, meta: PlanMetadata, georeference: Georeference | None
+) -> None:
+    """:func:`write_svg` of a plan's :class:`~floorscan.floorplan.footprints.PlanExports`."""
+    walls = exports.plan.walls
+    n = len(walls)
+    if n:
+        lo, hi = exports.extent
+        (xmin, ymin), (xmax, ymax) = (lo - 0.5).tolist(), (hi + 0.5).tolist()  # a margin, metres
+    else:
+        xmin, ymin, xmax, ymax = 0.0, 0.0, 1.0, 1.0
+    s = SVG_PLAN_PX / max(xmax - xmin, ymax - ymin)  # pixels per metre
+    pw, ph = (xmax - xmin) * s, (ymax - ymin) * s
+    m = SVG_MARGIN_PX
+    width = max(pw + 2 * m, SVG_MIN_WIDTH_PX)
+    height = SVG_HEAD_PX + ph + SVG_FOOT_PX
+    tx, ty = (width - pw) / 2 - s * xmin, SVG_HEAD_PX + s * ymax
+    paired = walls["paired"].to_numpy(dtype=bool)
+    n_paired = int(paired.sum())
+    title = meta.title
+    sub = (
+        f"{n} walls ({n_paired} with both faces seen, {n - n_paired} with one)"
+        f" \u00b7 map frame of the recording, metres \u00b7 {meta.time_stamp}"
+    )
+    about = "; ".join(f"{k}: {v or '-'}" for k, v in meta.fields)
+    desc = (
+        f"floorscan {floorscan_version()} floor plan. {about}; walls: {n}. "
+        "Coordinates: map frame of the recording (x right, y up), metres."
+    )
+    if georeference is not None:
+        desc += (
+            f" Georeference: origin lat {georeference.lat}, lon {georeference.lon} (WGS84), "
+            f"+x axis at {georeference.heading_deg} degrees clockwise from north."
+        )
+    px = 1.0 / s  # one pixel, metres
+    out = [
+        '<?xml version="1.0" encoding="UTF-8"?>',
+        f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="100%" height="100%" '
+        f'viewBox="0 0 {width:.2f} {height:.2f}" preserveAspectRatio="xMidYMid meet" '
+        'font-family="sans-serif">',
+        f"<title>{_xml(title)}</title>",
+        f"<desc>{_xml(desc)}</desc>",
+        f'<rect id="background" width="{width:.2f}" height="{height:.2f}" fill="#ffffff"/>',
+        f'<text id="title" x="{m:.2f}" y="26" font-size="18" font-weight="bold">{_xml(title)}</text>',
+        f'<text id="subtitle" x="{m:.2f}" y="45" font-size="12" fill="#444444">{_xml(sub)}</text>',
+        f'<g id="plan" transform="matrix({s:.10g} 0 0 {-s:.10g} {tx:.6f} {ty:.6f})">',
+    ]
+    groups = (
+        ("walls", paired, f'fill="#8c8c8c" stroke="#333333" stroke-width="{0.6 * px:.6g}"'),
+        ("walls-one-face", ~paired, f'fill="#dddddd" stroke="#333333" stroke-width="{0.6 * px:.6g}" '
+         f'stroke-dasharray="{3 * px:.6g} {2 * px:.6g}"'),
+    )  # fmt: skip
+    for gid, which, style in groups:
+        out.append(f'<g id="{gid}" {style}>')
+        for ring, keep in zip(exports.rings, which.tolist()):
+            if ring is not None and keep:
+                pts = " ".join(f"{x:.4f},{y:.4f}" for x, y in ring[:-1])
+                out.append(f'<polygon points="{pts}"/>')
+        out.append("</g>")
+    out.append(f'<g id="axes" stroke="#cc0000" stroke-width="{1.0 * px:.6g}" fill="none">')
+    for wall_id, x0, y0, x1, y1, length, thickness in zip(
+        *(walls[c].tolist() for c in ("wall_id", "x0", "y0", "x1", "y1", "length_m", "thickness_m"))
+    ):
+        out.append(
+            f'<line x1="{x0:.4f}" y1="{y0:.4f}" x2="{x1:.4f}" y2="{y1:.4f}">'
+            f"<title>wall {wall_id}: {length:.2f} m x {thickness:.2f} m</title></line>"
+        )
+    out += ["</g>", "</g>"]
+    out += _svg_scale_bar(s, m, height - 30)
+    out += _svg_frame_axes(m + 250, height - 30, georeference)
+    out += _svg_legend(width - m - 270, height - 74)
+    out.append("</svg>")
+    with atomic_path(path) as tmp:
+        tmp.write_text("\n".join(out) + "\n", encoding="utf-8")
+
+
+def _svg_scale_bar(s: float, x: float, y: float) -> list[str]:
+    """A scale bar of a round length (at most 200 px) at ``(x, y)`` px, ``s`` px a metre."""
+    length = _scale_bar_length(200.0 / s)
+    bar = length * s
+    return [
+        f'<g id="scale-bar" transform="translate({x:.2f} {y:.2f})" stroke="#000000" stroke-width="2">',
+        f'<line x1="0" y1="0" x2="{bar:.4f}" y2="0"/>',
+        '<line x1="0" y1="-5" x2="0" y2="5"/>',
+        f'<line x1="{bar:.4f}" y1="-5" x2="{bar:.4f}" y2="5"/>',
+        f'<text x="{bar / 2:.4f}" y="-8" font-size="12" text-anchor="middle" stroke="none">{length:g} m</text>',
+        "</g>",
+    ]
+
+
+def _svg_arrow(dx: float, dy: float, label: str, colour: str) -> list[str]:
+    """An arrow from the origin to ``(dx, dy)`` px with ``label`` beyond its head."""
+    norm = math.hypot(dx, dy)
+    ux, uy = dx / norm, dy / norm
+    bx, by = dx - 7 * ux, dy - 7 * uy  # base of the head
+    head = f"{dx:.2f},{dy:.2f} {bx - 4 * uy:.2f},{by + 4 * ux:.2f} {bx + 4 * uy:.2f},{by - 4 * ux:.2f}"
+    lx, ly = dx + 9 * ux, dy + 9 * uy + 4
+    return [
+        f'<line x1="0" y1="0" x2="{bx:.2f}" y2="{by:.2f}" stroke="{colour}" stroke-width="2"/>',
+        f'<polygon points="{head}" fill="{colour}"/>',
+        f'<text x="{lx:.2f}" y="{ly:.2f}" font-size="12" text-anchor="middle" fill="{colour}">{label}</text>',
+    ]
+
+
+def _svg_frame_axes(x: float, y: float, georeference: Georeference | None) -> list[str]:
+    """The map frame's x (right) and y (up) axes at ``(x, y)`` px, and with a
+    georeference the direction of true north in the map frame (``(cos h, sin h)``,
+    ``h`` the heading; flipped to SVG's y down)."""
+    out = [f'<g id="frame-axes" transform="translate({x:.2f} {y:.2f})">']
+    out += _svg_arrow(32.0, 0.0, "x", "#000000")
+    out += _svg_arrow(0.0, -32.0, "y", "#000000")
+    if georeference is not None:
+        h = math.radians(georeference.heading_deg)
+        out.append('<g id="north" transform="translate(96 -16)">')
+        out += _svg_arrow(26.0 * math.cos(h), -26.0 * math.sin(h), "N", "#1f4e9c")
+        out.append("</g>")
+    out.append('<text x="0" y="22" font-size="11" fill="#444444">map frame (m)</text>')
+    out.append("</g>")
+    return out
+
+
+def _svg_legend(x: float, y: float) -> list[str]:
+    """The legend at ``(x, y)`` px: the three kinds of things the plan draws."""
+    return [
+        f'<g id="legend" transform="translate({x:.2f} {y:.2f})" font-size="12">',
+        '<rect x="0" y="0" width="22" height="10" fill="#8c8c8c" stroke="#333333" stroke-width="0.6"/>',
+        '<text x="30" y="10">wall (both faces seen)</text>',
+        '<rect x="0" y="20" width="22" height="10" fill="#dddddd" stroke="#333333" stroke-width="0.6" '
+        'stroke-dasharray="3 2"/>',
+        '<text x="30" y="30">wall, one face seen (thickness assumed)</text>',
+        '<line x1="0" y1="45" x2="22" y2="45" stroke="#cc0000" stroke-width="1"/>',
+        '<text x="30" y="50">wall axis</text>',
+        "</g>",
+    ]
+
+
+def _xml(s: str) -> str:
+    """``s`` escaped for XML text and attribute values (``xml.sax.saxutils.escape``,
+    and ``"``)."""
+    return escape(s, {'"': "&quot;"})
+
+
+def export(exports: PlanExports, path: str | os.PathLike, meta: PlanMetadata, params: FloorplanParams) -> None:
+    """The SVG writer of :data:`floorscan.floorplan.EXPORT_FORMATS`: :func:`write_svg`
+    of a plan's exports, with north when ``params.georeference`` is set."""
+    _write_svg(exports, path, meta, params.georeference)

@@ -1,0 +1,176 @@
+"""Build and write floor plans (stage ``floorplan``): :class:`FloorplanWriter` builds the
+plan of a table of wall segments (:func:`~floorscan.floorplan.plan.build_floorplan`)
+and writes it in the formats asked for, each by its writer in
+:data:`floorscan.floorplan.EXPORT_FORMATS`, with the plan's metadata
+(:class:`~floorscan.floorplan.metadata.PlanMetadata`); a plan of the same segments as
+one it built before is reused. :func:`write_floorplan` does one plan;
+:func:`write_recommended_floorplan` the plan of the selected scans
+(``results/<dataset>/floorplan.*``). The stage's scripts call these.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from typing import Any, Mapping
+
+import numpy as np
+import pandas as pd
+
+from floorscan.floorplan import EXPORT_FORMATS, FLOORPLAN_FORMATS
+from floorscan.floorplan.footprints import PlanExports
+from floorscan.floorplan.metadata import PlanMetadata, export_time, recording_timestamp
+from floorscan.floorplan.params import params_from_config
+from floorscan.floorplan.plan import FloorPlan, _in_scan_order, build_floorplan
+
+
+class FloorplanWriter:
+    """Builds and writes floor plans (stage ``floorplan``); a plan of the same segments
+    as one it built before is not built again.
+
+    A sweep writes one plan per ordering and k, and every ordering's ``k = all`` (and
+    any k past the number of scans) holds the same scans: :func:`build_floorplan`
+    takes segments in scan order, so those plans are the same plan. The writer keeps
+    each plan it built with its footprints and IFC model; for the same segments it
+    reuses them and writes the exports with the new plan's metadata (each export
+    names its ordering and k): the GeoJSON, SVG and DXF anew (cheap), the IFC model
+    renamed (:func:`floorscan.floorplan.ifc._name_ifc`: project name, description,
+    GlobalIds) and saved with its header. Every file equals a fresh export of that
+    plan and metadata. Each format is written by its writer in
+    :data:`floorscan.floorplan.EXPORT_FORMATS`.
+
+    Parameters
+    ----------
+    cfg : mapping
+        The ``floorplan`` config section.
+
+    Raises
+    ------
+    KeyError
+        For an unknown config key (on construction) or output format (:meth:`write`).
+    """
+
+    def __init__(self, cfg: Mapping[str, Any] | None):
+        self.params = params_from_config(cfg)
+        self._built: dict[bytes, PlanExports] = {}
+
+    def write(
+        self, segments: pd.DataFrame, outputs: Mapping[str, str | os.PathLike], name: str = "", *,
+        dataset: str = "", ordering: str = "", extractor: str = "", k: str | int = "",
+        timestamp: float | None = None,
+    ) -> tuple[FloorPlan, bool]:  # fmt: skip
+        """Build the floor plan of ``segments`` and write it to ``outputs``.
+
+        Parameters
+        ----------
+        segments : pandas.DataFrame
+            Wall segments (``walls/{ordering}/{extractor}/k{k}.parquet``).
+        outputs : mapping
+            Paths by format: any of :data:`FLOORPLAN_FORMATS`.
+        name : str
+            Title of the plan (SVG title, IFC project name); empty: made of the
+            metadata (:attr:`~floorscan.floorplan.metadata.PlanMetadata.title`).
+        dataset, ordering, extractor : str
+            What the plan is of, written into every export.
+        k : str or int
+            Number of scans label (``"5"``, ``"all"``).
+        timestamp : float, optional
+            Seconds since the epoch to stamp the exports with (e.g. the
+            recording's first scan stamp); None: ``SOURCE_DATE_EPOCH``, else 0
+            (:func:`~floorscan.floorplan.metadata.export_time`).
+
+        Returns
+        -------
+        plan : FloorPlan
+        reused : bool
+            Whether the plan equals one built before (same segments), and so was
+            reused rather than built.
+
+        Raises
+        ------
+        KeyError
+            For an unknown output format, or a missing coordinate column.
+        """
+        unknown = sorted(set(outputs) - set(FLOORPLAN_FORMATS))
+        if unknown:
+            raise KeyError(f"unknown floor plan formats {unknown}; expected {list(FLOORPLAN_FORMATS)}")
+        meta = PlanMetadata(dataset, ordering, extractor, k, timestamp, name)
+        export_time(timestamp)  # a bad SOURCE_DATE_EPOCH fails before anything is built
+        segments = _in_scan_order(segments)  # as build_floorplan takes them (sorted once)
+        key = _segments_key(segments)
+        built = self._built.get(key)
+        reused = built is not None
+        if built is None:
+            built = self._built[key] = PlanExports(build_floorplan(segments, self.params))
+        for fmt, path in outputs.items():
+            EXPORT_FORMATS[fmt].write(built, path, meta, self.params)
+        return built.plan, reused
+
+
+def _segments_key(segments: pd.DataFrame) -> bytes:
+    """Digest of the segments (in scan order: what :func:`build_floorplan` reads)."""
+    h = hashlib.sha256()
+    for c in segments.columns:
+        h.update(c.encode() + b"\0" + np.ascontiguousarray(segments[c].to_numpy()).tobytes())
+    return h.digest()
+
+
+def write_floorplan(
+    segments: pd.DataFrame, cfg: Mapping[str, Any] | None, outputs: Mapping[str, str | os.PathLike], name: str = "",
+    *, dataset: str = "", ordering: str = "", extractor: str = "", k: str | int = "", timestamp: float | None = None,
+) -> FloorPlan:  # fmt: skip
+    """Build the floor plan of ``segments`` and write it: ``FloorplanWriter(cfg).write(
+    segments, outputs, name, dataset=..., ordering=..., extractor=..., k=...,
+    timestamp=...)`` (see there; ``cfg`` is the ``floorplan`` config section),
+    returning the :class:`FloorPlan`. Raises ``KeyError`` for an unknown output
+    format or config key."""
+    return FloorplanWriter(cfg).write(
+        segments, outputs, name, dataset=dataset, ordering=ordering, extractor=extractor, k=k, timestamp=timestamp
+    )[0]
+
+
+def write_recommended_floorplan(
+    scans_path: str | os.PathLike,
+    walls_path: str | os.PathLike,
+    index_path: str | os.PathLike,
+    outputs: Mapping[str, str | os.PathLike],
+    cfg: Mapping[str, Any] | None,
+    dataset: str,
+    ordering: str,
+    extractor: str,
+) -> dict:
+    """Write the recommended floor plan: the merged walls of the selected scans.
+
+    Parameters
+    ----------
+    scans_path : path
+        ``selection/scans.csv`` (:func:`floorscan.select.deliverables.write_scan_list`):
+        its ``scan_id`` column names the selected scans.
+    walls_path : path
+        ``walls/<extractor>/per_scan.parquet``: every kept scan's wall segments.
+    index_path : path
+        ``scan_index.parquet``: the first scan's stamp is the exports' time stamp
+        (seconds since the epoch; the same recording gives the same files).
+    outputs : mapping
+        Paths by format (any of :data:`FLOORPLAN_FORMATS`).
+    cfg : mapping
+        The ``floorplan`` config section (``georeference`` applies here).
+    dataset, ordering, extractor : str
+        Named in every export.
+
+    Returns
+    -------
+    dict
+        ``n_scans``, ``n_segments``, ``n_walls``, ``n_faces``.
+    """
+    from floorscan.core.io import read_table
+
+    selected = pd.read_csv(scans_path, usecols=["rank", "scan_id"])
+    ids = selected["scan_id"].astype(np.int64).to_numpy()
+    walls = read_table(walls_path)
+    segments = walls[walls["scan_id"].isin(ids)]
+    plan, _ = FloorplanWriter(cfg).write(
+        segments, outputs, dataset=dataset, ordering=ordering, extractor=extractor, k=len(ids),
+        timestamp=recording_timestamp(index_path),
+    )
+    return {"n_scans": len(ids), "n_segments": len(segments), "n_walls": len(plan.walls), "n_faces": len(plan.faces)}
