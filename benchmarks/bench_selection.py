@@ -18,10 +18,7 @@ Prints
 - the ``wall_coverage`` and ``surface_coverage`` orderings (issue 22) of 1000 and 5000
   synthetic scans (walls by :func:`floorscan.walls.ransac.ransac`, not timed): the cells,
   the lazy greedy and the plain greedy (:func:`floorscan.core.greedy.plain_greedy`)
-  side by side, and whether their orderings are identical (they must be);
-- KMeans of 200 3D scan samples by :func:`floorscan.select.hulls.kmeans` and by
-  scikit-learn's ``KMeans`` in the same run: ms per fit, ratio, whether the centres
-  are identical (they must be), and what importing scikit-learn costs a job.
+  side by side, and whether their orderings are identical (they must be).
 
 The synthetic scans are ray cast in numpy against a Shapely floor plan (corridor
 ring with rooms off it), a rover path along the corridors; no timed assertions.
@@ -37,10 +34,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import shapely
+import sklearn.cluster  # noqa: F401  (imported first: the hull timings exclude its import)
 from shapely.geometry import box
 
+from floorscan.select import greedy
 from floorscan.select import hulls as fh
-from floorscan.select import orderings as fs
+from floorscan.select.orderings import select_stage
+from floorscan.select.params import HullParams, SelectParams
+from floorscan.select.raster import RasterCoverage
+from floorscan.select.summary import k_for_fraction
 
 
 # ----------------------------------------------------------------------------------
@@ -156,49 +158,16 @@ def _timed(fn, *a, **k):
 def _hull_bench(n_scans: int, three_d: bool) -> None:
     reg, _ = simulate_scans(n_scans, seed=3, three_d=three_d)
     pts = len(reg) / n_scans
-    _, t_cluster = _timed(fh.cluster_hulls, reg, fh.HullParams())
+    _, t_cluster = _timed(fh.cluster_hulls, reg, HullParams())
     _, t_convex = _timed(fh.convex_hulls, reg)
     kind = "3D" if three_d else "2D"
     print(f"hull creation {kind}: {n_scans} scans, {pts:.0f} points/scan: "
           f"cluster hulls {t_cluster / n_scans * 1e3:.2f} ms/scan, convex hull {t_convex / n_scans * 1e3:.3f} ms/scan")
 
 
-def _kmeans_bench(n_scans: int) -> None:
-    """floorscan's KMeans (:func:`floorscan.select.hulls.kmeans`) against scikit-learn's on
-    the hulls stage's samples of 3D scans, side by side (issue 8)."""
-    import subprocess
-
-    from sklearn.cluster import KMeans
-    from threadpoolctl import threadpool_limits
-
-    reg, _ = simulate_scans(n_scans, seed=3, three_d=True)
-    p = fh.HullParams()
-    fits = []
-    for sid, xy in fh.split_by_scan(reg, ("x", "y")).items():
-        sample, distinct, state = fh._kmeans_sample(xy, p, sid)
-        if state is not None:
-            fits.append((sample, min(p.k_clusters, distinct), state))
-    code = "import time; t = time.process_time(); import sklearn.cluster; print(time.process_time() - t)"
-    t_import = float(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout)
-    # as the stage runs scikit-learn (hulls.kmeans: sklearn): one thread, no per-call checks
-    with threadpool_limits(limits=1), fh._kmeans_config(True):
-        t0 = time.process_time()
-        ref = [KMeans(n_clusters=k, n_init=p.n_init, max_iter=p.max_iter, random_state=st, algorithm="lloyd")
-               .fit(s).cluster_centers_ for s, k, st in fits]
-        t_sk = time.process_time() - t0
-        t0 = time.process_time()
-        ours = [fh.kmeans(s, k, n_init=p.n_init, max_iter=p.max_iter, random_state=st)[0] for s, k, st in fits]
-        t_ours = time.process_time() - t0
-    same = all(np.array_equal(a, b) for a, b in zip(ours, ref))
-    n = len(fits)
-    print(f"KMeans of {n} 3D scan samples ({p.sample_size} points, k {p.k_clusters}): floorscan "
-          f"{t_ours / n * 1e3:.2f} ms/fit, scikit-learn {t_sk / n * 1e3:.2f} ms/fit (CPU): ratio "
-          f"{t_sk / t_ours:.1f}x; identical centres {same}; importing sklearn.cluster {t_import:.2f} CPU-s a job")
-
-
 def _coverage(n_scans: int, seed: int):
     reg, regi = simulate_scans(n_scans, seed=seed)
-    hulls, t = _timed(fh.cluster_hulls, reg, fh.HullParams())
+    hulls, t = _timed(fh.cluster_hulls, reg, HullParams())
     ids, geoms = fh.scan_coverage(hulls)
     return ids, geoms, t
 
@@ -207,7 +176,8 @@ def _coverage_orderings_bench(n_scans: int, seed: int) -> None:
     """Both coverage orderings of ``n_scans`` synthetic 2D scans: the cell sets, the
     lazy greedy and the plain greedy, seconds."""
     from floorscan.core.greedy import lazy_greedy, plain_greedy
-    from floorscan.select.coverage import CoverageParams, surface_cells, wall_cells
+    from floorscan.select.coverage import surface_cells, wall_cells
+    from floorscan.select.params import CoverageParams
     from floorscan.walls.ransac import ransac
 
     registered, _ = simulate_scans(n_scans, seed=seed)
@@ -240,16 +210,16 @@ def _hallways3d_cpu(root: Path) -> None:
     last = int(kept[len(kept) // 2 - 1])  # the first of two shards
     t0 = time.process_time()
     _, _, counts = fh.compute_hulls(iter_scans(root / "registered.parquet", ("x", "y"), scan_range=(0, last)),
-                                    registration[registration["scan_id"] <= last], fh.HullParams())
+                                    registration[registration["scan_id"] <= last], HullParams())
     t_hulls = time.process_time() - t0
     hulls, convex = read_table(root / "hulls.parquet"), read_table(root / "convex_hulls.parquet")
     t0 = time.process_time()
-    orderings, _ = fs.select_stage(hulls, convex, registration)
+    orderings, _ = select_stage(hulls, convex, registration)
     t_select = time.process_time() - t0
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.process_time()
-        selection_figures(root / "registered.parquet", registration, hulls, orderings, fh.HullParams(),
-                          fs.SelectParams(), FigureParams(), *(Path(tmp) / f"{n}.png" for n in "abc"),
+        selection_figures(root / "registered.parquet", registration, hulls, orderings, HullParams(),
+                          SelectParams(), FigureParams(), *(Path(tmp) / f"{n}.png" for n in "abc"),
                           title="hallways3d", convex_hulls=convex)
         t_fig = time.process_time() - t0
     print(f"hallways3d [{root}]: hulls of {counts['n_scans']} scans {t_hulls:.2f} CPU-s, select of "
@@ -259,7 +229,7 @@ def _hallways3d_cpu(root: Path) -> None:
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="smaller sizes (smoke run)")
-    ap.add_argument("--raster-m", type=float, default=fs.SelectParams().raster_m)
+    ap.add_argument("--raster-m", type=float, default=SelectParams().raster_m)
     ap.add_argument("--hallways3d", type=Path, help="a hallways3d result set: time its hulls/select/figures")
     args = ap.parse_args(argv)
     if args.hallways3d:
@@ -272,12 +242,11 @@ def main(argv: list[str] | None = None) -> None:
 
     _hull_bench(50 if args.quick else 200, three_d=False)
     _hull_bench(5 if args.quick else 20, three_d=True)
-    _kmeans_bench(20 if args.quick else 200)
 
     ids, geoms, _ = _coverage(n_ref, seed=4)
     stats: dict = {}
-    fast, t_fast = _timed(fs.greedy_coverage, ids, geoms, res, stats=stats)
-    ref, t_ref = _timed(fs.greedy_reference, ids, geoms, res)
+    fast, t_fast = _timed(greedy.greedy_coverage, ids, geoms, res, stats=stats)
+    ref, t_ref = _timed(greedy.greedy_reference, ids, geoms, res)
     same = np.array_equal(fast["scan_id"].to_numpy(), ref["scan_id"].to_numpy())
     same_gain = np.array_equal(fast["gain_m2"].to_numpy(), ref["gain_m2"].to_numpy())
     print(f"full ordering of {len(ids)} scans: lazy greedy {t_fast:.3f} s "
@@ -299,12 +268,12 @@ def main(argv: list[str] | None = None) -> None:
         ids, geoms, t_h = _coverage(n_big, seed=5)
         source = f"synthetic ({n_big} scans; hull creation {t_h:.1f} s, not counted)"
     stats = {}
-    big, t_big = _timed(fs.greedy_coverage, ids, geoms, res, stats=stats)
-    _, t_raster = _timed(fs.RasterCoverage, geoms, res)
+    big, t_big = _timed(greedy.greedy_coverage, ids, geoms, res, stats=stats)
+    _, t_raster = _timed(RasterCoverage, geoms, res)
     print(f"full cluster_hull ordering of {len(ids)} scans [{source}]: {t_big:.2f} s "
           f"(of which rasterisation {t_raster:.2f} s; {stats['evaluations']} evaluations; "
           f"target < 10 s), covered {big['covered_area_m2'].iloc[-1]:.1f} m2, "
-          f"99 % after {fs.k_for_fraction(big, 0.99)} scans")
+          f"99 % after {k_for_fraction(big, 0.99)} scans")
 
 
 if __name__ == "__main__":

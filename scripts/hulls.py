@@ -1,9 +1,10 @@
 """Stage `hulls`, one shard: cluster hulls and convex hulls of the kept scans of a scan
 range (thesis Algorithm 2), streamed scan by scan (memory holds one scan, issue 8).
-scripts/select.py concatenates the shards."""
+scripts/select.py concatenates the shards (floorscan.select.hulls.merge_hull_shards)."""
 import json
 
-from floorscan.select.hulls import HullParams, compute_hulls, to_table
+from floorscan.select.hulls import compute_hulls, to_table
+from floorscan.select.params import HullParams
 from floorscan.core.runtime import progress
 from floorscan.core.io import iter_scans, write_table
 from floorscan.core.shards import parse_shard_label, read_scan_range

@@ -1,12 +1,15 @@
-"""Stage select, the coverage orderings (floorscan.select.coverage): wall_coverage from
-the walls stage's per-scan segments, surface_coverage from the registered points, each
-written with its own objective along the way (covered_objective). The hull area they
-cover, to compare them with the hull orderings, is the selection figures' work."""
+"""Stage select, the coverage orderings (floorscan.select.registry.COVERAGE_SETS):
+wall_coverage from the walls stage's per-scan segments, surface_coverage from the
+registered points, each written with its own objective along the way
+(covered_objective). The hull area they cover, to compare them with the hull
+orderings, is the selection figures' work."""
 from pathlib import Path
 
 from floorscan.select.hulls import kept_scan_ids
 from floorscan.core.io import iter_scans, read_table, write_table
-from floorscan.select.coverage import COVERAGE_ORDERING, OBJECTIVE_COLUMN, CoverageParams, coverage_orderings
+from floorscan.select.coverage import COVERAGE_ORDERING, OBJECTIVE_COLUMN
+from floorscan.select.orderings import coverage_orderings
+from floorscan.select.params import CoverageParams
 from floorscan.walls.params import params_from_config
 from floorscan.walls.points import scan_points_2d
 from floorscan.core.stage import stage_log

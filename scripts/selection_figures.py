@@ -2,9 +2,10 @@
 from pathlib import Path
 
 from floorscan.figures.selection import FigureParams, selection_figures
-from floorscan.select.hulls import HullParams, kept_scan_ids
+from floorscan.select.hulls import kept_scan_ids
 from floorscan.core.io import read_table
-from floorscan.select.orderings import SelectParams, with_hull_coverage
+from floorscan.select.orderings import with_hull_coverage
+from floorscan.select.params import HullParams, SelectParams
 from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:

@@ -6,13 +6,9 @@ import pandas as pd
 import pytest
 
 from floorscan.core.greedy import lazy_greedy, plain_greedy
-from floorscan.select.coverage import (
-    CoverageParams,
-    coverage_orderings,
-    segment_quality,
-    surface_cells,
-    wall_cells,
-)
+from floorscan.select.coverage import segment_quality, surface_cells, wall_cells
+from floorscan.select.orderings import coverage_orderings
+from floorscan.select.params import CoverageParams
 
 A = (0.0, 0.0, 6.0, 0.0)  # 6 m
 B = (6.0, 0.0, 6.0, 3.0)  # 3 m

@@ -1,4 +1,4 @@
-"""Coverage hulls (floorscan.select.hulls; thesis section 3.3.2, Algorithm 2)."""
+"""Coverage hulls (floorscan.select.hulls, clusters, convex; thesis section 3.3.2, Algorithm 2)."""
 
 from pathlib import Path
 
@@ -8,7 +8,10 @@ import pytest
 import shapely
 import yaml
 
+from floorscan.core.io import split_by_scan
+from floorscan.select import clusters as cl
 from floorscan.select import hulls as fh
+from floorscan.select.params import HullParams
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -37,7 +40,7 @@ def test_l_shape_convex_vs_cluster_hull_area():
     convex = fh.convex_hulls(frame(pts))
     assert convex["cluster"].tolist() == [fh.CONVEX_CLUSTER]
     assert convex["area_m2"].iloc[0] == pytest.approx(11.5, abs=1e-4)  # hull (0,0)(4,0)(4,1)(1,4)(0,4)
-    h = fh.cluster_hulls(frame(pts), fh.HullParams(k_clusters=10, seed=3))
+    h = fh.cluster_hulls(frame(pts), HullParams(k_clusters=10, seed=3))
     assert len(h) == 10 and (h["area_m2"] > 0).all()
     _, cov = fh.scan_coverage(h)
     # cluster hulls follow the L (area 7): thin gaps between clusters are lost, and only
@@ -49,7 +52,7 @@ def test_l_shape_convex_vs_cluster_hull_area():
 
 def test_k1_is_the_convex_hull():
     pts = {4: l_shape(0.1)}
-    one = fh.cluster_hulls(frame(pts), fh.HullParams(k_clusters=1))
+    one = fh.cluster_hulls(frame(pts), HullParams(k_clusters=1))
     assert one["area_m2"].sum() == pytest.approx(11.5, abs=1e-4)
 
 
@@ -59,23 +62,23 @@ def test_outlier_is_not_covered():
     blob = np.column_stack([xx.ravel(), yy.ravel()])
     pts = {1: np.vstack([blob, [[30.0, 0.5]]])}
     assert fh.convex_hulls(frame(pts))["area_m2"].iloc[0] > 14.0  # the outlier inflates the hull
-    h = fh.cluster_hulls(frame(pts), fh.HullParams(k_clusters=10, seed=0))
+    h = fh.cluster_hulls(frame(pts), HullParams(k_clusters=10, seed=0))
     total = fh.scan_coverage(h)[1][0].area
     assert 0.8 < total <= 1.0 + 1e-6
 
 
 def test_radius_rules_and_labels():
     p = l_shape(0.1)
-    near = fh.cluster_labels(p, fh.HullParams(radius_rule="nearest_centre", seed=1), scan_id=7)
-    glob = fh.cluster_labels(p, fh.HullParams(radius_rule="global_min", seed=1), scan_id=7)
-    tight = fh.cluster_labels(p, fh.HullParams(radius_factor=0.25, seed=1), scan_id=7)
+    near = cl.cluster_labels(p, HullParams(radius_rule="nearest_centre", seed=1), scan_id=7)
+    glob = cl.cluster_labels(p, HullParams(radius_rule="global_min", seed=1), scan_id=7)
+    tight = cl.cluster_labels(p, HullParams(radius_factor=0.25, seed=1), scan_id=7)
     assert near.shape == (len(p),) and set(np.unique(near)) <= set(range(-1, 10))
     # the global radius is the smallest per-centre radius: it keeps a subset
     assert np.all((glob == -1) | (glob == near))
     assert (glob >= 0).sum() <= (near >= 0).sum()
     assert (tight >= 0).sum() < (near >= 0).sum()
     # same centres for the same seed, so a point kept by both has the same label
-    assert np.array_equal(near, fh.cluster_labels(p, fh.HullParams(seed=1), scan_id=7))
+    assert np.array_equal(near, cl.cluster_labels(p, HullParams(seed=1), scan_id=7))
 
 
 def test_degenerate_scans_have_zero_area_and_do_not_crash():
@@ -86,7 +89,7 @@ def test_degenerate_scans_have_zero_area_and_do_not_crash():
         3: l_shape(0.2),
     }
     ids = [0, 1, 2, 3, 9]  # 9: kept but no points
-    h = fh.cluster_hulls(frame(pts), fh.HullParams(k_clusters=10), scan_ids=ids)
+    h = fh.cluster_hulls(frame(pts), HullParams(k_clusters=10), scan_ids=ids)
     per = h.groupby("scan_id")["area_m2"].sum()
     assert per.loc[[0, 1, 2, 9]].tolist() == [0.0, 0.0, 0.0, 0.0]
     assert per.loc[3] > 5.0
@@ -102,7 +105,7 @@ def test_degenerate_scans_have_zero_area_and_do_not_crash():
 def test_seeded_determinism_and_independence_of_other_scans():
     rng = np.random.default_rng(0)
     pts = {s: rng.uniform(0, 10, (600, 2)) for s in range(4)}
-    p = fh.HullParams(sample_size=200, seed=11)
+    p = HullParams(sample_size=200, seed=11)
     a = fh.to_table(fh.cluster_hulls(frame(pts), p))
     b = fh.to_table(fh.cluster_hulls(frame(pts), p))
     assert a.equals(b)
@@ -112,7 +115,7 @@ def test_seeded_determinism_and_independence_of_other_scans():
 
 
 def test_wkb_table_roundtrip_little_endian_2d():
-    h = fh.cluster_hulls(frame({0: l_shape(0.2)}), fh.HullParams(k_clusters=3))
+    h = fh.cluster_hulls(frame({0: l_shape(0.2)}), HullParams(k_clusters=3))
     t = fh.to_table(h)
     assert t.schema.equals(fh.HULLS)
     wkb = t["geometry"].to_pylist()
@@ -127,7 +130,7 @@ def test_wkb_table_roundtrip_little_endian_2d():
 def test_compute_hulls_counts_and_kept_only():
     pts = {0: l_shape(0.2), 1: l_shape(0.2) + 10, 2: np.array([[0.0, 0.0]])}
     registration = pd.DataFrame({"scan_id": [0, 1, 2, 3], "kept": [True, False, True, True]})
-    cluster, convex, counts = fh.compute_hulls(frame(pts), registration, fh.HullParams(k_clusters=4))
+    cluster, convex, counts = fh.compute_hulls(frame(pts), registration, HullParams(k_clusters=4))
     assert sorted(cluster["scan_id"].unique()) == [0, 2, 3]
     assert convex["scan_id"].tolist() == [0, 2, 3]
     assert counts["n_scans"] == 3 and counts["n_no_points"] == 1 and counts["n_zero_area"] == 2
@@ -138,20 +141,20 @@ def test_compute_hulls_counts_and_kept_only():
 
 def test_bad_input_errors():
     with pytest.raises(ValueError, match=r"\(N, 2\)"):
-        fh.cluster_labels(np.zeros((5, 3)))
+        cl.cluster_labels(np.zeros((5, 3)))
     with pytest.raises(ValueError, match="NaN"):
-        fh.cluster_labels(np.array([[0.0, np.nan], [1, 1], [2, 2]]), scan_id=4)
+        cl.cluster_labels(np.array([[0.0, np.nan], [1, 1], [2, 2]]), scan_id=4)
     with pytest.raises(ValueError, match="unknown hulls config keys"):
-        fh.HullParams.from_config({"k": 3})
+        HullParams.from_config({"k": 3})
     with pytest.raises(ValueError, match="k_clusters"):
-        fh.HullParams(k_clusters=0)
+        HullParams(k_clusters=0)
 
 
 def test_schema_defaults_match_dataclass():
     schema = yaml.safe_load((REPO / "workflow/schemas/hulls.schema.yaml").read_text())
     # shard_scans is runtime (how the scans are split into jobs), not a hull parameter
     defaults = {k: v["default"] for k, v in schema["properties"].items() if k != "shard_scans"}
-    assert defaults == fh.HullParams().as_dict()
+    assert defaults == HullParams().as_dict()
 
 
 # ----------------------------------------------------------------------------------
@@ -184,13 +187,13 @@ def _scans_3d(n_scans: int, seed: int = 0) -> dict[int, np.ndarray]:
 
 def test_hulls_equal_the_multipoint_formulation():
     pts = {0: l_shape(0.1), 1: _scans_3d(1, seed=5)[0], 2: np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]])}
-    p = fh.HullParams(k_clusters=6, seed=2)
+    p = HullParams(k_clusters=6, seed=2)
     h = fh.cluster_hulls(frame(pts), p)
     c = fh.convex_hulls(frame(pts))
     reg = frame(pts)  # float32 on disk: compare on the same coordinates
     for sid in pts:
         xy = reg.loc[reg["scan_id"] == sid, ["x", "y"]].to_numpy(np.float64)
-        lab = fh.cluster_labels(xy, p, scan_id=sid)
+        lab = cl.cluster_labels(xy, p, scan_id=sid)
         k = int(lab.max()) + 1
         want = _multipoint_hulls(xy, lab, k)
         got = h.loc[h["scan_id"] == sid, "geometry"].to_numpy()
@@ -207,7 +210,7 @@ def test_n_distinct_matches_unique():
     rng = np.random.default_rng(1)
     for xy in (rng.integers(0, 4, (200, 2)).astype(float), np.zeros((0, 2)), np.ones((1, 2)),
                np.array([[0.0, -0.0], [-0.0, 0.0], [1.0, 0.0]])):
-        assert fh._n_distinct(xy) == len(np.unique(xy, axis=0))
+        assert cl._n_distinct(xy) == len(np.unique(xy, axis=0))
 
 
 def test_scan_hulls_streamed_from_parquet_equal_the_frame(tmp_path):
@@ -219,7 +222,7 @@ def test_scan_hulls_streamed_from_parquet_equal_the_frame(tmp_path):
     path = tmp_path / "registered.parquet"
     write_table(reg, path)
     ids = [0, 2, 3, 7, 9]  # 1 and 4 not kept, 9 kept without points
-    params = [fh.HullParams(k_clusters=k, seed=3) for k in (1, 4, 10)]
+    params = [HullParams(k_clusters=k, seed=3) for k in (1, 4, 10)]
     # batches of 1000 rows: every scan is cut across batches
     streamed, convex, counts = fh.scan_hulls(iter_scans(path, ("x", "y"), batch_rows=1000), params, ids)
     for p, got in zip(params, streamed):
@@ -264,7 +267,7 @@ def test_nearest_centre_is_argmin_of_the_squared_distances_ties_to_the_first():
     centres[3] = [20.0, 5.0]
     centres[12] = [20.0, 1.0]
     d2 = ((xy[:, None, :] - centres[None, :, :]) ** 2).sum(axis=2)
-    labels, best = fh._nearest_centre(xy, centres)
+    labels, best = cl._nearest_centre(xy, centres)
     np.testing.assert_array_equal(labels, d2.argmin(axis=1))
     np.testing.assert_array_equal(best, d2.min(axis=1))
     assert (labels[:10] == 3).all() and best[0] == 4.0
@@ -289,7 +292,7 @@ def test_convex_hull_from_cluster_hull_vertices_equals_the_direct_hull():
     reg = frame(pts)
     direct = fh.convex_hulls(reg)  # no clustering: the hull of every point
     for k, factor, batch in ((10, 1.0, 1 << 20), (4, 0.3, 500), (3, 1e-6, 50)):  # 1e-6: all points outliers
-        p = fh.HullParams(k_clusters=k, radius_factor=factor, seed=1)
+        p = HullParams(k_clusters=k, radius_factor=factor, seed=1)
         scans = [(s, reg.loc[reg["scan_id"] == s, ["x", "y"]].to_numpy(np.float64)) for s in pts]
         (cl,), conv, _ = fh.scan_hulls(scans, [p], batch_points=batch)
         assert fh.to_table(conv).equals(fh.to_table(direct)), (k, factor, batch)
@@ -306,22 +309,22 @@ def test_convex_hull_from_cluster_hull_vertices_equals_the_direct_hull():
 @pytest.mark.skipif((__import__("os").cpu_count() or 1) < 2,
                     reason="one CPU: OpenMP runs one thread anyway, the limit cannot be seen")
 def test_scan_hulls_runs_kmeans_single_threaded_in_a_fresh_interpreter():
-    """With ``kmeans: sklearn``: threadpoolctl limits only loaded libraries, so
-    scikit-learn (its OpenMP) must be loaded before the limit, also when nothing
-    imported it yet."""
+    """threadpoolctl limits only loaded libraries, so scikit-learn (its OpenMP) must
+    be loaded before the limit, also when nothing imported it yet."""
     import subprocess
     import sys
 
     code = (
         "import numpy as np, threadpoolctl\n"
         "from floorscan.select import hulls as fh\n"
+        "from floorscan.select.params import HullParams\n"
         "seen = []\n"
         "def scans():\n"
         "    rng = np.random.default_rng(0)\n"
         "    for s in range(2):\n"
         "        yield s, rng.uniform(0, 5, (400, 2))\n"
         "        seen.extend((i['user_api'], i['num_threads']) for i in threadpoolctl.threadpool_info())\n"
-        "fh.scan_hulls(scans(), [fh.HullParams(k_clusters=3, kmeans='sklearn')])\n"
+        "fh.scan_hulls(scans(), [HullParams(k_clusters=3)])\n"
         "print(sorted(set(seen)))\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, check=True)
@@ -329,123 +332,33 @@ def test_scan_hulls_runs_kmeans_single_threaded_in_a_fresh_interpreter():
     assert ("openmp", 1) in seen and all(n == 1 for _, n in seen), seen
 
 
-def test_default_hulls_do_not_import_sklearn():
-    """The default KMeans is floorscan's: a hulls job does not pay scikit-learn's imports."""
+def test_select_modules_do_not_import_sklearn():
+    """scikit-learn is imported where KMeans runs: the select job, which merges and
+    reads hulls, does not pay its imports."""
     import subprocess
     import sys
 
     code = (
-        "import sys, numpy as np\n"
-        "from floorscan.select import hulls as fh\n"
-        "rng = np.random.default_rng(0)\n"
-        "out, _, _ = fh.scan_hulls([(0, rng.uniform(0, 5, (400, 2)))], [fh.HullParams(k_clusters=3)])\n"
-        "print(len(out[0]), 'sklearn' in sys.modules, 'scipy' in sys.modules)\n"
+        "import sys\n"
+        "import floorscan.select.hulls, floorscan.select.orderings, floorscan.select.registry\n"
+        "print('sklearn' in sys.modules)\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, check=True)
-    assert out.stdout.split() == ["3", "False", "False"]
+    assert out.stdout.split() == ["False"]
 
 
-def _kmeans_cases():
-    """Scan-like samples: noisy wall segments of a room, a floor patch, duplicates."""
-    rng = np.random.default_rng(11)
-    for case in range(24):
-        n_walls = int(rng.integers(2, 7))
-        parts = []
-        for _ in range(n_walls):
-            a, b = rng.uniform(-6, 6, 2), rng.uniform(-6, 6, 2)
-            t = rng.uniform(0, 1, int(rng.integers(50, 300)))
-            parts.append(a + t[:, None] * (b - a) + rng.normal(0, 0.01, (len(t), 2)))
-        x = np.vstack(parts + [rng.uniform(-1, 1, (int(rng.integers(0, 200)), 2))])
-        if case % 4 == 3:  # repeated returns
-            x = np.vstack([x, x[: len(x) // 3]])
-        yield case, x + rng.uniform(-50, 50, 2)
-
-
-@pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")
-def test_kmeans_gives_the_centres_of_sklearn_bit_for_bit():
-    """scikit-learn on one thread, as the hulls stage runs it (on more threads its
-    sums are split between threads and can differ in the last bit)."""
-    from sklearn.cluster import KMeans
-    from threadpoolctl import threadpool_limits
-
-    with threadpool_limits(limits=1):
-        _compare_kmeans(KMeans)
-
-
-def _compare_kmeans(KMeans):
-    n_fits = 0
-    for case, x in _kmeans_cases():
-        for k, n_init in ((2, 1), (10, 1), (20, 1), (10, 3)):
-            state = 1000 * case + k
-            ref = KMeans(n_clusters=k, n_init=n_init, max_iter=100, random_state=state, algorithm="lloyd").fit(x)
-            centres, labels = fh.kmeans(x, k, n_init=n_init, max_iter=100, random_state=state)
-            np.testing.assert_array_equal(centres, ref.cluster_centers_, err_msg=f"case {case} k {k}")
-            np.testing.assert_array_equal(labels, ref.labels_, err_msg=f"case {case} k {k}")
-            assert labels.dtype == np.int64 and centres.shape == (k, 2)
-            n_fits += 1
-    assert n_fits == 96
-    # a few Lloyd steps at most: the tolerance and max_iter stops, not only convergence
-    x = next(_kmeans_cases())[1]
-    for max_iter in (1, 2, 3):
-        ref = KMeans(n_clusters=10, n_init=1, max_iter=max_iter, random_state=5, algorithm="lloyd").fit(x)
-        np.testing.assert_array_equal(fh.kmeans(x, 10, max_iter=max_iter, random_state=5)[0], ref.cluster_centers_)
-    ref = KMeans(n_clusters=10, n_init=1, tol=0.5, random_state=5, algorithm="lloyd").fit(x)
-    np.testing.assert_array_equal(fh.kmeans(x, 10, tol=0.5, random_state=5)[0], ref.cluster_centers_)
-
-
-@pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")
-def test_kmeans_empty_clusters_as_sklearn():
-    """An empty cluster takes the point farthest from its centre; with every point on
-    its centre (fewer distinct points than clusters) it copies the largest cluster's
-    centre, as scikit-learn does (before that centre is averaged, when it comes later)."""
-    from sklearn.cluster import KMeans
-    from threadpoolctl import threadpool_limits
-
-    rng = np.random.default_rng(3)
-    x = np.vstack([rng.normal([0, 0], 0.1, (40, 2)), rng.normal([3, 0], 0.1, (40, 2)), [[9.0, 9.0]]])
-    inits = [np.array([[0.0, 0.0], [3.0, 0.0], [50.0, 50.0]]),  # the far centre gets no point
-             np.array([[50.0, 50.0], [-50.0, 0.0], [0.0, 0.0], [3.0, 0.0]])]
-    dup = np.array([[2.0, 0.0]] * 5 + [[1.0, 0.0]] * 5)
-    cases = [(x, inits[0]), (x, inits[1]), (dup, np.array([[5.0, 5.0], [2.0, 0.0], [1.0, 0.0]]))]
-    for data, init in cases:
-        with threadpool_limits(limits=1):
-            ref = KMeans(n_clusters=len(init), init=init, n_init=1, random_state=0, algorithm="lloyd").fit(data)
-        centres, labels = fh.kmeans(data, len(init), init=init)
-        np.testing.assert_array_equal(centres, ref.cluster_centers_)
-        np.testing.assert_array_equal(labels, ref.labels_)
-    # the relocated cluster holds the outlier at (9, 9); the duplicates' empty cluster
-    # copies the unaveraged sum of the next cluster: 5 x 0.5 m about the mean x = 1.5 m
-    assert [9.0, 9.0] in fh.kmeans(x, 3, init=inits[0])[0].tolist()
-    assert fh.kmeans(dup, 3, init=cases[2][1])[0].tolist() == [[4.0, 0.0], [2.0, 0.0], [1.0, 0.0]]
-
-
-def test_kmeans_bad_input():
-    x = np.zeros((3, 2))
-    with pytest.raises(ValueError, match=r"1 <= k <= N, got shape \(3, 2\) and k=4"):
-        fh.kmeans(x, 4)
-    with pytest.raises(ValueError, match="1 <= k <= N"):
-        fh.kmeans(np.zeros(3), 1)
-    with pytest.raises(ValueError, match=r"init must be \(2, 2\) with n_init 1"):
-        fh.kmeans(x, 2, init=np.zeros((3, 2)))
-    with pytest.raises(ValueError, match="hulls.kmeans must be one of"):
-        fh.HullParams(kmeans="scipy")
-
-
-def test_hulls_with_sklearn_kmeans_are_the_same():
+def test_k_is_at_most_the_distinct_points():
     reg = frame({0: l_shape(0.1), 1: _scans_3d(1, seed=5)[0], 2: np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]])})
-    ours = fh.cluster_hulls(reg, fh.HullParams(k_clusters=7, seed=2))
-    ref = fh.cluster_hulls(reg, fh.HullParams(k_clusters=7, seed=2, kmeans="sklearn"))
-    assert ours[["scan_id", "cluster", "area_m2"]].equals(ref[["scan_id", "cluster", "area_m2"]])
-    assert shapely.to_wkb(ours["geometry"].to_numpy()).tolist() == shapely.to_wkb(ref["geometry"].to_numpy()).tolist()
-    assert ours["scan_id"].tolist() == [0] * 7 + [1] * 7 + [2] * 3  # k = min(7, distinct points)
+    h = fh.cluster_hulls(reg, HullParams(k_clusters=7, seed=2))
+    assert h["scan_id"].tolist() == [0] * 7 + [1] * 7 + [2] * 3  # k = min(7, distinct points)
 
 
 def test_hull_params_must_be_integers():
     with pytest.raises(ValueError, match="hulls.k_clusters must be an integer"):
-        fh.HullParams(k_clusters=2.5)
+        HullParams(k_clusters=2.5)
     with pytest.raises(ValueError, match="hulls.n_init must be an integer"):
-        fh.HullParams(n_init=True)
-    assert fh.HullParams(k_clusters=np.int64(4)).k_clusters == 4
+        HullParams(n_init=True)
+    assert HullParams(k_clusters=np.int64(4)).k_clusters == 4
 
 
 def test_several_parameter_sets_in_one_pass_equal_separate_runs():
@@ -455,9 +368,9 @@ def test_several_parameter_sets_in_one_pass_equal_separate_runs():
     pts = {0: l_shape(0.1), 1: _scans_3d(1, seed=5)[0], 2: np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]),
            3: np.array([[1.0, 1.0]] * 4)}
     reg = frame(pts)
-    sets = [fh.HullParams(k_clusters=k, seed=s, sample_size=n) for k, s, n in
+    sets = [HullParams(k_clusters=k, seed=s, sample_size=n) for k, s, n in
             ((1, 0, 1000), (2, 0, 1000), (7, 0, 1000), (7, 4, 1000), (7, 0, 300))]
-    scans = fh.split_by_scan(reg, ("x", "y")).items()
+    scans = split_by_scan(reg, ("x", "y")).items()
     together, conv, counts = fh.scan_hulls(scans, sets, convex=True)
     assert counts["n_scans"] == 4 and counts["n_points"] == len(reg)
     for p, got in zip(sets, together):

@@ -20,7 +20,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from floorscan.core.io import POSE_STREAM, POSES, SCAN_INDEX, SCANS, write_table
-from floorscan.select.orderings import SUMMARY, summarize
+from floorscan.select.summary import SUMMARY, summarize
 from floorscan.walls.tables import SCAN_STATUS
 
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")

@@ -1,4 +1,5 @@
-"""Scan orderings (floorscan.select.orderings; thesis section 3.3, Algorithm 1) and figures."""
+"""Scan orderings (floorscan.select.orderings, registry, greedy, raster, baselines, summary;
+thesis section 3.3, Algorithm 1) and figures."""
 
 from pathlib import Path
 
@@ -10,7 +11,13 @@ import yaml
 from shapely.geometry import box
 
 from floorscan.select import hulls as fh
-from floorscan.select import orderings as fs
+from floorscan.select.baselines import motion_filter_mask, motion_filter_order, random_order, sequential_order
+from floorscan.select.greedy import greedy_coverage, greedy_exact, greedy_reference
+from floorscan.select.orderings import coverage_along, select_stage
+from floorscan.select.params import HullParams, SelectParams
+from floorscan.select.raster import RasterCoverage, _order_crossings
+from floorscan.select.registry import ORDERINGS
+from floorscan.select.summary import first_k, k_for_fraction, summarize
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
@@ -72,7 +79,7 @@ def raycast_scans(n_scans: int, seed: int = 0, n_beams: int = 360, max_range_m: 
 @pytest.fixture(scope="module")
 def synthetic():
     registered, registration = raycast_scans(60, seed=2)
-    hulls = fh.cluster_hulls(registered, fh.HullParams(seed=0))
+    hulls = fh.cluster_hulls(registered, HullParams(seed=0))
     convex = fh.convex_hulls(registered)
     ids, geoms = fh.scan_coverage(hulls)
     return registered, registration, hulls, convex, ids, geoms
@@ -82,7 +89,7 @@ def synthetic():
 def test_raster_counts_cells_by_centre():
     sq = box(0.01, 0.01, 1.01, 2.01)
     holed = box(0, 0, 2, 2).difference(box(0.5, 0.5, 1.5, 1.5))
-    cov = fs.RasterCoverage(np.array([sq, shapely.Polygon(), holed, shapely.MultiPolygon([box(5, 5, 6, 6), box(7, 5, 7.5, 6)])], dtype=object), 0.1)
+    cov = RasterCoverage(np.array([sq, shapely.Polygon(), holed, shapely.MultiPolygon([box(5, 5, 6, 6), box(7, 5, 7.5, 6)])], dtype=object), 0.1)
     assert cov.counts.tolist() == [200, 0, 300, 150]
     assert len(np.unique(cov.cells_of(2))) == 300
     assert cov.gains([0, 2]).tolist() == [200, 300]
@@ -95,7 +102,7 @@ def test_greedy_hand_geometry_ties_and_zero_area_last():
     ids = [5, 3, 8, 0, 1]
     geoms = [box(0, 0, 2, 2), box(1, 0, 3, 2), box(10, 0, 11, 1), shapely.Polygon(),
              shapely.LineString([(0, 0), (5, 5)]).buffer(0)]  # empty after buffer(0): zero area
-    for fn in (fs.greedy_coverage, fs.greedy_reference):
+    for fn in (greedy_coverage, greedy_reference):
         o = fn(ids, geoms, raster_m=0.1)
         # 5 and 3 tie at 4 m^2: lowest id (3) first; then 5 adds 2, 8 adds 1; empties last by id
         assert o["scan_id"].tolist() == [3, 5, 8, 0, 1]
@@ -107,8 +114,8 @@ def test_greedy_hand_geometry_ties_and_zero_area_last():
 def test_fast_greedy_equals_reference_on_synthetic_scans(synthetic):
     *_, ids, geoms = synthetic
     stats = {}
-    fast = fs.greedy_coverage(ids, geoms, 0.05, stats=stats)
-    ref = fs.greedy_reference(ids, geoms, 0.05)
+    fast = greedy_coverage(ids, geoms, 0.05, stats=stats)
+    ref = greedy_reference(ids, geoms, 0.05)
     pd.testing.assert_frame_equal(fast, ref)
     assert stats["evaluations"] < len(ids) * (len(ids) + 1) / 2  # lazy did less work
     assert fast["covered_area_m2"].iloc[-1] == pytest.approx(shapely.union_all(geoms).area, rel=0.03)
@@ -119,8 +126,8 @@ def test_raster_greedy_picks_what_exact_algorithm1_picks(synthetic):
     first scans; afterwards only near-tied scans (gains within the raster's error) may
     swap, and the covered areas stay within 1 %."""
     *_, ids, geoms = synthetic
-    exact = fs.greedy_exact(ids, geoms, max_scans=12)
-    raster = fs.greedy_coverage(ids, geoms, 0.02)
+    exact = greedy_exact(ids, geoms, max_scans=12)
+    raster = greedy_coverage(ids, geoms, 0.02)
     assert raster["scan_id"].tolist()[:8] == exact["scan_id"].tolist()[:8]
     along = [shapely.union_all(geoms[np.isin(ids, raster["scan_id"].to_numpy()[:k])]).area for k in range(1, 13)]
     assert np.allclose(along, exact["covered_area_m2"], rtol=0.01)
@@ -155,11 +162,11 @@ def _intel_registered(step: int = 3):
 @pytest.mark.slow
 def test_fast_greedy_equals_reference_on_intel():
     registered, _ = _intel_registered(step=3)  # ~300 scans of the Intel Research Lab
-    hulls = fh.cluster_hulls(registered, fh.HullParams())
+    hulls = fh.cluster_hulls(registered, HullParams())
     ids, geoms = fh.scan_coverage(hulls)
     assert len(ids) > 250
-    fast = fs.greedy_coverage(ids, geoms, 0.1)
-    ref = fs.greedy_reference(ids, geoms, 0.1)
+    fast = greedy_coverage(ids, geoms, 0.1)
+    ref = greedy_reference(ids, geoms, 0.1)
     pd.testing.assert_frame_equal(fast, ref)
     assert fast["covered_area_m2"].iloc[-1] > 100.0
 
@@ -168,17 +175,17 @@ def test_motion_filter_hand_poses():
     t = np.array([0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 6.0, 6.1, 6.2])
     x = np.array([0.0, 0.10, 0.25, 0.40, 0.40, 0.40, 0.41, 0.41, np.nan, 0.41])
     yaw = np.deg2rad([0, 0, 0, 0, 0.5, 1.5, 1.5, 1.5, 1.5, 1.5])
-    kept = fs.motion_filter_mask((t * 1e9).astype(np.int64), x, np.zeros_like(x), yaw)
+    kept = motion_filter_mask((t * 1e9).astype(np.int64), x, np.zeros_like(x), yaw)
     # 0 first; 2 moved 0.25 m; 5 turned 1.5 deg; 7 after 5.4 s; 8 has no pose
     assert np.flatnonzero(kept).tolist() == [0, 2, 5, 7]
     poses = pd.DataFrame({"scan_id": np.arange(10)[::-1], "t_ns": (t * 1e9).astype(np.int64)[::-1],
                           "x_m": x[::-1], "y_m": 0.0, "yaw_rad": yaw[::-1]})
     poses["scan_id"] = np.arange(10)[::-1]
-    assert fs.motion_filter_order(poses).tolist() == [0, 2, 5, 7, 1, 3, 4, 6, 8, 9]
+    assert motion_filter_order(poses).tolist() == [0, 2, 5, 7, 1, 3, 4, 6, 8, 9]
     # thresholds are configurable; yaw wraps at +-pi (179.8 -> -179.8 deg is 0.4 deg)
-    wrap = fs.motion_filter_mask(np.array([0, 1, 2]), np.zeros(3), np.zeros(3), np.deg2rad([179.8, -179.8, -178.0]))
+    wrap = motion_filter_mask(np.array([0, 1, 2]), np.zeros(3), np.zeros(3), np.deg2rad([179.8, -179.8, -178.0]))
     assert wrap.tolist() == [True, False, True]
-    loose = fs.motion_filter_mask((t[:8] * 1e9).astype(np.int64), x[:8], np.zeros(8), yaw[:8],
+    loose = motion_filter_mask((t[:8] * 1e9).astype(np.int64), x[:8], np.zeros(8), yaw[:8],
                                   max_distance_m=1.0, max_angle_rad=1.0, max_time_s=10.0)
     assert np.flatnonzero(loose).tolist() == [0]
 
@@ -186,35 +193,35 @@ def test_motion_filter_hand_poses():
 def test_coverage_fraction_and_first_k():
     o = pd.DataFrame({"rank": [0, 1, 2, 3], "scan_id": [7, 2, 9, 4],
                       "covered_area_m2": [4.0, 6.0, 7.0, 7.0], "gain_m2": [4.0, 2.0, 1.0, 0.0]})
-    assert fs.k_for_fraction(o, 0.5) == 1
-    assert fs.k_for_fraction(o, 0.85) == 2  # 5.95 m^2
-    assert fs.k_for_fraction(o, 0.9) == 3  # 6.3 m^2
-    assert fs.k_for_fraction(o, 1.0) == 3
-    assert fs.first_k(o, fraction=0.85).tolist() == [7, 2]
-    assert fs.first_k(o, count=3).tolist() == [7, 2, 9]
-    assert fs.first_k(o, count=10).tolist() == [7, 2, 9, 4]
+    assert k_for_fraction(o, 0.5) == 1
+    assert k_for_fraction(o, 0.85) == 2  # 5.95 m^2
+    assert k_for_fraction(o, 0.9) == 3  # 6.3 m^2
+    assert k_for_fraction(o, 1.0) == 3
+    assert first_k(o, fraction=0.85).tolist() == [7, 2]
+    assert first_k(o, count=3).tolist() == [7, 2, 9]
+    assert first_k(o, count=10).tolist() == [7, 2, 9, 4]
     with pytest.raises(ValueError, match="exactly one"):
-        fs.first_k(o, count=2, fraction=0.5)
+        first_k(o, count=2, fraction=0.5)
     with pytest.raises(ValueError, match="fraction"):
-        fs.first_k(o, fraction=1.5)
-    s = fs.summarize({"x": o})
+        first_k(o, fraction=1.5)
+    s = summarize({"x": o})
     assert s[["k_90", "k_95", "k_99"]].iloc[0].tolist() == [3, 3, 3]
 
 
 def test_random_and_sequential_orders():
     ids = np.arange(50)[::-1]
-    a, b = fs.random_order(ids, 4), fs.random_order(ids, 4)
+    a, b = random_order(ids, 4), random_order(ids, 4)
     assert np.array_equal(a, b) and sorted(a.tolist()) == list(range(50))
-    assert not np.array_equal(a, fs.random_order(ids, 5))
-    assert fs.sequential_order([3, 1, 2], [30, 10, 10]).tolist() == [1, 2, 3]
+    assert not np.array_equal(a, random_order(ids, 5))
+    assert sequential_order([3, 1, 2], [30, 10, 10]).tolist() == [1, 2, 3]
 
 
 def test_select_stage_all_orderings(synthetic):
     _, registration, hulls, convex, ids, _ = synthetic
     h = fh.from_table(fh.to_table(hulls).to_pandas())  # as read from hulls.parquet
     c = fh.to_table(convex).to_pandas()  # WKB geometry is accepted as well
-    orderings, summary = fs.select_stage(h, c, registration, fs.SelectParams())
-    assert list(orderings) == list(fs.ORDERINGS)
+    orderings, summary = select_stage(h, c, registration, SelectParams())
+    assert list(orderings) == list(ORDERINGS)
     finals = []
     for name, o in orderings.items():
         assert sorted(o["scan_id"].tolist()) == sorted(ids.tolist()), name
@@ -229,9 +236,23 @@ def test_select_stage_all_orderings(synthetic):
     assert orderings["motion_filter"]["scan_id"].iloc[0] == 0
 
 
+def test_a_registered_ordering_is_made_measured_and_summarised(synthetic, monkeypatch):
+    """Adding an ordering is an entry of the registry: the select job ranks with it,
+    measures the cluster-hull area along it and summarises it; the names follow."""
+    from floorscan.select import registry
+
+    _, registration, hulls, convex, ids, geoms = synthetic
+    assert registry.ORDERINGS == tuple(registry.RANKERS) and ORDERINGS[0] == "cluster_hull"
+    assert registry.COVERAGE_ORDERINGS == ("wall_coverage", "surface_coverage")
+    monkeypatch.setitem(registry.RANKERS, "reverse", lambda inputs: inputs.scan_ids[::-1])
+    orderings, summary = select_stage(hulls, convex, registration, SelectParams())
+    assert list(orderings) == [*ORDERINGS, "reverse"] and summary["ordering"].tolist() == list(orderings)
+    assert orderings["reverse"].equals(coverage_along(ids, geoms, ids[::-1], 0.05))
+
+
 def test_schema_defaults_match_dataclasses():
     from floorscan.figures.selection import FigureParams
-    from floorscan.select.coverage import CoverageParams
+    from floorscan.select.params import CoverageParams
 
     schema = yaml.safe_load((REPO / "workflow/schemas/select.schema.yaml").read_text())
     defaults = {k: v["default"] for k, v in schema["properties"].items()}
@@ -241,18 +262,18 @@ def test_schema_defaults_match_dataclasses():
     assert defaults.pop("default_ordering") == "wall_coverage"
     # the recommended selection's k (floorscan.select.recommend reads them from the config)
     assert (defaults.pop("k"), defaults.pop("k_coverage")) == ("auto", 0.99)
-    assert defaults == {**fs.SelectParams().as_dict(), **fig}
+    assert defaults == {**SelectParams().as_dict(), **fig}
     with pytest.raises(ValueError, match="unknown select config keys"):
-        fs.SelectParams.from_config({"tile": 3})
+        SelectParams.from_config({"tile": 3})
 
 
 def test_figures(synthetic, tmp_path):
     from floorscan.figures.selection import FigureParams, selection_figures
 
     registered, registration, hulls, convex, ids, _ = synthetic
-    orderings, _ = fs.select_stage(hulls, convex, registration)
+    orderings, _ = select_stage(hulls, convex, registration)
     out = [tmp_path / f"{n}.png" for n in ("cov", "clu", "time")]
-    timing = selection_figures(registered, registration, hulls, orderings, fh.HullParams(), fs.SelectParams(),
+    timing = selection_figures(registered, registration, hulls, orderings, HullParams(), SelectParams(),
                                FigureParams(figure_k_clusters=(1, 10), figure_reference_max_scans=30),
                                *out, title="synthetic", convex_hulls=convex)
     assert all(p.stat().st_size > 10_000 for p in out)
@@ -270,12 +291,12 @@ def test_coverage_vs_clusters_streamed_and_reusing_the_stage_hulls(synthetic, tm
     path = tmp_path / "registered.parquet"
     write_table(registered, path)
     ks = (1, 3, 10)
-    plain = {k: fs.greedy_coverage(*fh.scan_coverage(fh.cluster_hulls(registered, fh.HullParams(k_clusters=k)), sub))
+    plain = {k: greedy_coverage(*fh.scan_coverage(fh.cluster_hulls(registered, HullParams(k_clusters=k)), sub))
              for k in ks}
-    from_frame = coverage_vs_clusters(registered, sub, ks, fh.HullParams())
-    streamed = coverage_vs_clusters(str(path), sub, ks, fh.HullParams(), hulls=fh.to_table(hulls).to_pandas())
+    from_frame = coverage_vs_clusters(registered, sub, ks, HullParams())
+    streamed = coverage_vs_clusters(str(path), sub, ks, HullParams(), hulls=fh.to_table(hulls).to_pandas())
     # k = 1 from the stage's convex hulls (WKB as on disk): the same curve, no hulling
-    reused = coverage_vs_clusters(iter(()), sub, (1, 10), fh.HullParams(), hulls=fh.to_table(hulls).to_pandas(),
+    reused = coverage_vs_clusters(iter(()), sub, (1, 10), HullParams(), hulls=fh.to_table(hulls).to_pandas(),
                                   convex=fh.to_table(convex).to_pandas())
     for k in ks:
         assert from_frame[k].equals(plain[k]) and streamed[k].equals(plain[k]), k
@@ -285,7 +306,7 @@ def test_coverage_vs_clusters_streamed_and_reusing_the_stage_hulls(synthetic, tm
     import shapely
 
     xy = {s: g[["x", "y"]].to_numpy() for s, g in registered.groupby("scan_id")}
-    direct = fs.greedy_coverage(sub, np.array([shapely.convex_hull(shapely.multipoints(xy[s])) for s in sub]))
+    direct = greedy_coverage(sub, np.array([shapely.convex_hull(shapely.multipoints(xy[s])) for s in sub]))
     assert plain[1]["scan_id"].tolist() == direct["scan_id"].tolist()
     np.testing.assert_allclose(plain[1]["covered_area_m2"], direct["covered_area_m2"], rtol=1e-9)
     # fewer clusters cover more (a coarser hull spans the gaps), k=1 is the convex hull
@@ -295,15 +316,15 @@ def test_coverage_vs_clusters_streamed_and_reusing_the_stage_hulls(synthetic, tm
 
 def test_one_raster_reused_for_every_ordering(synthetic):
     _, _, _, _, ids, geoms = synthetic
-    raster = fs.RasterCoverage(geoms, 0.05)
-    a = fs.greedy_coverage(ids, geoms, 0.05, raster=raster)
-    assert a.equals(fs.greedy_coverage(ids, geoms, 0.05))
+    raster = RasterCoverage(geoms, 0.05)
+    a = greedy_coverage(ids, geoms, 0.05, raster=raster)
+    assert a.equals(greedy_coverage(ids, geoms, 0.05))
     order = ids[::-1]
-    b = fs.coverage_along(ids, geoms, order, 0.05, raster=raster)  # the union is emptied first
-    assert b.equals(fs.coverage_along(ids, geoms, order, 0.05))
+    b = coverage_along(ids, geoms, order, 0.05, raster=raster)  # the union is emptied first
+    assert b.equals(coverage_along(ids, geoms, order, 0.05))
     assert b["covered_area_m2"].iloc[-1] == pytest.approx(a["covered_area_m2"].iloc[-1], abs=1e-9)
     with pytest.raises(ValueError, match="raster"):
-        fs.greedy_coverage(ids, geoms, 0.1, raster=raster)
+        greedy_coverage(ids, geoms, 0.1, raster=raster)
 
 
 def _set_greedy(cells: list[set]) -> tuple[list[int], list[int]]:
@@ -329,12 +350,12 @@ def test_greedies_equal_set_arithmetic_on_overlapping_boxes():
     geoms = np.array([box(x, y, x + w, y + h) for (x, y), w, h in
                       zip(lo, rng.uniform(0.2, 2.5, 70), rng.uniform(0.2, 2.5, 70))] + [shapely.Polygon()], dtype=object)
     ids = np.arange(len(geoms))[::-1] * 3  # ids descending: ties go by id, not position
-    cov = fs.RasterCoverage(geoms, 0.1)
+    cov = RasterCoverage(geoms, 0.1)
     cells = [set(cov.cells_of(j).tolist()) for j in range(len(geoms))]
     pos = np.argsort(ids)  # positions in ascending id, so index ties = id ties
     order, gains = _set_greedy([cells[j] for j in pos])
     want_ids = ids[pos[order]].tolist() + [ids[-1]]
-    for fn in (fs.greedy_reference, fs.greedy_coverage):
+    for fn in (greedy_reference, greedy_coverage):
         o = fn(ids, geoms, 0.1)
         assert o["scan_id"].tolist() == want_ids
         np.testing.assert_allclose(o["gain_m2"], np.r_[gains, 0] * 0.01, rtol=0, atol=1e-12)
@@ -352,12 +373,12 @@ def test_crossings_ordered_as_lexsort():
     key[::7] = rng.integers(0, 400, len(key[::7]))  # not quite sorted
     x = rng.integers(0, 5, len(key)).astype(float)  # ties in x too
     want = np.lexsort((x, key))
-    got = fs._order_crossings(key, x)
+    got = _order_crossings(key, x)
     assert sorted(got.tolist()) == list(range(len(key)))
     np.testing.assert_array_equal(key[got], key[want])
     np.testing.assert_array_equal(x[got], x[want])
     pairs = np.array([3, 3, 1, 1, 2, 2]), np.array([0.5, 0.2, 0.1, 0.9, 4.0, 4.0])
-    assert fs._order_crossings(*pairs).tolist() == [2, 3, 4, 5, 1, 0]  # the pair of key 3 swapped
+    assert _order_crossings(*pairs).tolist() == [2, 3, 4, 5, 1, 0]  # the pair of key 3 swapped
 
 
 
@@ -382,7 +403,7 @@ def test_coverage_vs_clusters_streams_float64_tables_unrounded(synthetic, tmp_pa
     for name, df in (("f32", registered), ("f64", wide)):
         seen.clear()
         write_table(df, tmp_path / f"{name}.parquet")
-        fsel.coverage_vs_clusters(str(tmp_path / f"{name}.parquet"), sub, (3,), fh.HullParams())
+        fsel.coverage_vs_clusters(str(tmp_path / f"{name}.parquet"), sub, (3,), HullParams())
         s = int(sub[1])
         want = df.loc[df["scan_id"] == s, ["x", "y"]].to_numpy()
         assert seen[s].dtype == want.dtype and np.array_equal(seen[s], want), name

@@ -19,9 +19,10 @@ import pyarrow.parquet as pq
 import pytest
 
 from conftest import REPO, SHARED_DATA, needs_shared
-from floorscan.select.hulls import HullParams, compute_hulls, to_table
+from floorscan.select.hulls import compute_hulls, to_table
 from floorscan.core.io import InputError, REGISTERED, write_table
-from floorscan.select.orderings import ORDERINGS
+from floorscan.select.params import HullParams
+from floorscan.select.registry import ORDERINGS
 from floorscan.core.shards import (
     concat_shards,
     parse_shard_label,

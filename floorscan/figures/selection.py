@@ -6,8 +6,8 @@
   ``cluster_hull`` coverage curve for several numbers of KMeans clusters (Fig. 5.7).
 - :func:`selection_timing` / :func:`plot_selection_time`: time to order n scans, the
   lazy greedy against the reference Algorithm 1 (Fig. 5.8). The reference is
-  O(n^2) and is timed only up to ``reference_max_scans`` (default 150: about 1-2 s on
-  a 2D recording), so the figure stage stays a few seconds on a 300-scan dataset.
+  O(n^2) and is timed only up to ``reference_max_scans`` (default 150), so that the
+  figure stage stays short.
 """
 
 from __future__ import annotations
@@ -26,17 +26,14 @@ import pandas as pd  # noqa: E402
 import pyarrow as pa  # noqa: E402
 import pyarrow.parquet as pq  # noqa: E402
 
-from floorscan.select.hulls import HullParams, kept_scan_ids, scan_coverage, scan_hulls  # noqa: E402
+from floorscan.select.hulls import kept_scan_ids, scan_coverage, scan_hulls  # noqa: E402
 from floorscan.core.io import split_by_scan  # noqa: E402
 from floorscan.core.files import atomic_path
 from floorscan.core.io import iter_scans  # noqa: E402
-from floorscan.select.orderings import (  # noqa: E402
-    ORDERINGS,
-    SelectParams,
-    greedy_coverage,
-    greedy_reference,
-    k_for_fraction,
-)
+from floorscan.select.greedy import greedy_coverage, greedy_reference  # noqa: E402
+from floorscan.select.params import HullParams, SelectParams  # noqa: E402
+from floorscan.select.registry import ORDERINGS  # noqa: E402
+from floorscan.select.summary import k_for_fraction  # noqa: E402
 
 _STYLE = {
     "cluster_hull": dict(color="C0", lw=2.0),
@@ -150,7 +147,7 @@ def coverage_vs_clusters(
     convex : DataFrame, optional
         The hulls stage's convex hulls (``convex_hulls.parquet``): used for ``k = 1``,
         whose cluster hull is the convex hull of the scan (one cluster, every point
-        kept), instead of hulling every scan again (a quarter of the stage's time).
+        kept), instead of hulling every scan again.
 
     Returns
     -------

@@ -1,3 +1,45 @@
-"""The select stage's orderings of the kept scans (thesis section 3.3). New orderings
-live here (:mod:`floorscan.select.coverage`); the thesis's hull orderings and the
-baselines are in :mod:`floorscan.select.orderings` until the move of issue 25."""
+"""The hulls and select stages: which scans cover the floor, and in what order to take
+them (thesis section 3.3, Algorithms 1 and 2).
+
+Stage ``hulls`` (``scripts/hulls.py``, one job per shard of the kept scans):
+
+- :mod:`~floorscan.select.hulls`: the coverage hulls of each scan (Algorithm 2), the
+  stage's tables, and the merge of its shards;
+- :mod:`~floorscan.select.clusters`: KMeans clusters of a scan and the outlier rule;
+- :mod:`~floorscan.select.convex`: the convex hulls of many clusters at once (GEOS).
+
+Stage ``select`` (``scripts/select.py``: merges the hull shards, then orders the scans;
+``scripts/select_coverage.py``: the coverage orderings after the walls stage;
+``scripts/selection.py``: the recommended selection):
+
+- :mod:`~floorscan.select.registry`: every ordering by name (see below);
+- :mod:`~floorscan.select.orderings`: runs the registered orderings, measures the hull
+  area along each;
+- :mod:`~floorscan.select.raster`: coverage polygons as raster cells;
+- :mod:`~floorscan.select.greedy`: greedy maximum coverage (Algorithm 1: ``cluster_hull``,
+  ``convex_hull``);
+- :mod:`~floorscan.select.baselines`: ``random``, ``sequential``, ``motion_filter``;
+- :mod:`~floorscan.select.coverage`: ``wall_coverage``, ``surface_coverage`` cell sets;
+- :mod:`~floorscan.select.summary`: the k reaching 90/95/99 % coverage;
+- :mod:`~floorscan.select.deliverables`, :mod:`~floorscan.select.recommend`: how many
+  scans to keep, the scan list and their points;
+- :mod:`~floorscan.select.recording` (and ``recording_bag``, ``recording_carmen``,
+  ``recording_pcd``, ``recording_checks``): the recording cut to the selected scans;
+- :mod:`~floorscan.select.params`: ``HullParams``, ``SelectParams``, ``CoverageParams``.
+
+Adding an ordering
+------------------
+1. Write the function that ranks the scans, in the module of its family (or a new
+   module named by what it does).
+2. Register it in :mod:`floorscan.select.registry`: an entry of ``RANKERS`` (ranked in
+   the ``select`` job from the hulls and poses: ``rank(HullInputs) -> scan ids``) or
+   of ``COVERAGE_SETS`` (ranked by the lazy greedy in the ``select_coverage`` job from
+   the walls' per-scan segments and the points: ``cells(CoverageInputs) -> (cover,
+   quality, value)``).
+3. Add its name to the enums of ``select.default_ordering``
+   (``workflow/schemas/select.schema.yaml``) and ``walls.orderings``
+   (``workflow/schemas/walls.schema.yaml``).
+
+``ORDERINGS`` and ``COVERAGE_ORDERINGS`` of the registry follow, and with them the
+rules' outputs, the summary table and the figures.
+"""

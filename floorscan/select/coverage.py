@@ -16,7 +16,7 @@ cells of side ``cell_m`` in the map frame,
   times ``1 - rmse / threshold`` (a line whose inliers spread to the RANSAC threshold
   counts nothing), at least ``min_quality``; the best segment of the scan in the cell.
   The weighting is off by default: against the reference map it lowered the area
-  under the F1 curve on 8 of the 11 recordings measured (``benchmarks/README.md``).
+  under the F1 curve on most recordings (``benchmarks/README.md``).
 - ``surface_coverage``: a scan covers the cells its points fall in (3D scans cut to
   the walls' height band first, as the walls stage cuts them). ``q`` is the point
   density the scan gives the cell, ``min(1, points / (cell_m / full_spacing_m))``:
@@ -29,7 +29,9 @@ otherwise: what only one scan sees (a person walking by, a door in motion, a
 spurious line) is not structure, as the reference map counts it
 (:mod:`floorscan.score.reference`). Scans that add nothing follow in scan id order.
 
-Usage::
+The two are entries of :data:`floorscan.select.registry.COVERAGE_SETS`;
+:func:`floorscan.select.orderings.coverage_orderings` runs them (the ``select_coverage``
+job). Usage::
 
     cover, quality, value = wall_cells(per_scan, CoverageParams())
     order = lazy_greedy(cover, scan_ids, quality, value)
@@ -37,19 +39,14 @@ Usage::
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Iterable
 
 import numpy as np
 import pandas as pd
 import pyarrow as pa
 
-from floorscan.core.config import dataclass_from_mapping
 from floorscan.core.geometry import sample_segments, samples_per_segment
-from floorscan.core.greedy import lazy_greedy
-
-#: The orderings of this module.
-COVERAGE_ORDERINGS = ("wall_coverage", "surface_coverage")
+from floorscan.select.params import CoverageParams
 #: Column of a coverage ordering's table: the ordering's own objective ``f`` of its
 #: first rank + 1 scans (weighted cells), which ``select.k: auto`` reads.
 OBJECTIVE_COLUMN = "covered_objective"
@@ -59,50 +56,6 @@ OBJECTIVE_COLUMN = "covered_objective"
 COVERAGE_ORDERING = pa.schema(
     [("rank", pa.int32()), ("scan_id", pa.int32()), ("gain", pa.float64()), (OBJECTIVE_COLUMN, pa.float64())]
 )
-
-
-@dataclass(frozen=True)
-class CoverageParams:
-    """Settings of the coverage orderings (``select.coverage`` config section).
-
-    Attributes
-    ----------
-    cell_m : float
-        Side of the coverage cells, metres.
-    min_scans : int
-        A cell counts (``v`` = 1) when at least this many scans cover it.
-    min_quality : float
-        Least quality of a covered cell, in (0, 1].
-    full_spacing_m : float
-        ``surface_coverage``: return spacing at which a cell counts fully, metres.
-    wall_extractor : str
-        ``wall_coverage``: the extractor whose per-scan segments are used.
-    wall_quality : bool
-        ``wall_coverage``: weight cells by the segments' fit quality.
-    """
-
-    cell_m: float = 0.1
-    min_scans: int = 2
-    min_quality: float = 0.05
-    full_spacing_m: float = 0.02
-    wall_extractor: str = "ransac"
-    wall_quality: bool = False
-
-    @classmethod
-    def from_config(cls, cfg) -> "CoverageParams":
-        """From the ``select.coverage`` section; an unknown key raises ValueError."""
-        return dataclass_from_mapping(cls, cfg, "select.coverage", ValueError)
-
-    def check(self) -> None:
-        """Raise ValueError naming the key of a value out of range."""
-        if not self.cell_m > 0:
-            raise ValueError(f"select.coverage.cell_m: expected > 0, got {self.cell_m}")
-        if int(self.min_scans) < 1:
-            raise ValueError(f"select.coverage.min_scans: expected >= 1, got {self.min_scans}")
-        if not 0 < self.min_quality <= 1:
-            raise ValueError(f"select.coverage.min_quality: expected 0 < value <= 1, got {self.min_quality}")
-        if not self.full_spacing_m > 0:
-            raise ValueError(f"select.coverage.full_spacing_m: expected > 0, got {self.full_spacing_m}")
 
 
 def _cell_sets(scan: np.ndarray, ij: np.ndarray, quality: np.ndarray, min_scans: int):
@@ -214,51 +167,3 @@ def surface_cells(scans: Iterable[tuple[int, np.ndarray]], params: CoverageParam
         return {}, {}, np.zeros(0)
     quality = np.clip(np.concatenate(counts) / full, params.min_quality, 1.0)
     return _cell_sets(np.concatenate(ids), np.concatenate(cells), quality, params.min_scans)
-
-
-def coverage_orderings(
-    per_scan: pd.DataFrame,
-    scans: Iterable[tuple[int, np.ndarray]],
-    scan_ids,
-    params: CoverageParams = CoverageParams(),
-    min_inliers: int = 15,
-    threshold_m: float = 0.03,
-    log=None,
-) -> dict[str, pd.DataFrame]:
-    """Both orderings of the kept scans (the ``select_coverage`` job).
-
-    Parameters
-    ----------
-    per_scan : pandas.DataFrame
-        ``walls/<wall_extractor>/per_scan.parquet``.
-    scans : iterable of (scan_id, (M, 2) float ndarray)
-        Plan-view points of the kept scans, metres (:func:`surface_cells`).
-    scan_ids : sequence of int
-        The kept scans.
-    params : CoverageParams
-    min_inliers, threshold_m : int, float
-        The extractor's RANSAC settings.
-    log : logging.Logger, optional
-
-    Returns
-    -------
-    dict of str to pandas.DataFrame
-        ``wall_coverage`` and ``surface_coverage``: ``rank, scan_id, gain, covered``.
-    """
-    ids = [int(s) for s in scan_ids]
-    keep = set(ids)
-    out = {}
-    for name, sets in (
-        ("wall_coverage", wall_cells(per_scan[per_scan["scan_id"].isin(keep)], params, min_inliers, threshold_m)),
-        ("surface_coverage", surface_cells(((s, xy) for s, xy in scans if int(s) in keep), params)),
-    ):
-        cover, quality, value = sets
-        out[name] = lazy_greedy(cover, ids, quality, value)
-        if log is not None:
-            adds = out[name][out[name]["gain"] > 0]
-            covered = out[name]["covered"].to_numpy()
-            k95 = int(np.searchsorted(covered, 0.95 * covered[-1] - 1e-9) + 1) if len(adds) else 0
-            log.info("%s: %d cells of %.2f m, %d of them covered by >= %d scans; %d of %d scans add to them, "
-                     "95 %% of the coverage from %d scans", name, len(value), params.cell_m, int(value.sum()),
-                     params.min_scans, len(adds), len(ids), k95)
-    return out

@@ -1,6 +1,6 @@
 # Coverage hulls and scan orderings (issue 5; thesis section 3.3, Algorithms 1 and 2).
-from floorscan.select.coverage import COVERAGE_ORDERINGS
-from floorscan.select.orderings import ORDERINGS as SELECT_ORDERINGS
+from floorscan.select.registry import COVERAGE_ORDERINGS
+from floorscan.select.registry import ORDERINGS as SELECT_ORDERINGS
 
 stage_schema_check("hulls")
 stage_schema_check("select")

@@ -1,0 +1,184 @@
+"""Parameters of the hulls and select stages, one typed object per config section.
+
+- :class:`HullParams`: the ``hulls`` section (``workflow/schemas/hulls.schema.yaml``),
+  the clustering of thesis Algorithm 2 (:mod:`floorscan.select.hulls`);
+- :class:`SelectParams`: the ``select`` section (``workflow/schemas/select.schema.yaml``)
+  read by the hull orderings and the baselines (:mod:`floorscan.select.orderings`);
+- :class:`CoverageParams`: its ``select.coverage`` subsection, the coverage orderings
+  (:mod:`floorscan.select.coverage`).
+
+Each is built from its config section with ``from_config`` (an unknown key raises
+``ValueError``) and checks its values; the schema documents the same defaults.
+"""
+
+from __future__ import annotations
+
+import numbers
+from dataclasses import asdict, dataclass, fields
+from typing import Mapping
+
+from floorscan.core.config import dataclass_from_mapping
+
+#: ``hulls.radius_rule`` values (:class:`HullParams`).
+RADIUS_RULES = ("nearest_centre", "global_min")
+
+
+@dataclass(frozen=True)
+class HullParams:
+    """Parameters of the ``hulls`` stage (``workflow/schemas/hulls.schema.yaml``).
+
+    Attributes
+    ----------
+    k_clusters : int
+        KMeans clusters per scan (thesis: 10).
+    sample_size : int
+        Points per scan drawn (seeded, without replacement) for KMeans.
+    radius_factor : float
+        A point is kept when within ``radius_factor * d`` of its centre (see
+        ``radius_rule``).
+    radius_rule : {"nearest_centre", "global_min"}
+        What ``d`` is: the centre's distance to its nearest other centre, or the
+        minimum distance between any two centres of the scan.
+    n_init : int
+        KMeans initialisations (k-means++), fixed for determinism.
+    max_iter : int
+        KMeans Lloyd iterations at most.
+    seed : int
+        Base seed of the subsample and KMeans.
+    """
+
+    k_clusters: int = 10
+    sample_size: int = 1000
+    radius_factor: float = 1.0
+    radius_rule: str = "nearest_centre"
+    n_init: int = 1
+    max_iter: int = 100
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        # scikit-learn's parameter validation is off in the loop (floorscan.select.clusters)
+        for name in ("k_clusters", "sample_size", "n_init", "max_iter", "seed"):
+            value = getattr(self, name)
+            if not isinstance(value, numbers.Integral) or isinstance(value, bool):
+                raise ValueError(f"hulls.{name} must be an integer, got {value!r}")
+        if self.k_clusters < 1:
+            raise ValueError(f"hulls.k_clusters must be >= 1, got {self.k_clusters}")
+        if self.sample_size < 1:
+            raise ValueError(f"hulls.sample_size must be >= 1, got {self.sample_size}")
+        if not self.radius_factor > 0:
+            raise ValueError(f"hulls.radius_factor must be > 0, got {self.radius_factor}")
+        if self.radius_rule not in RADIUS_RULES:
+            raise ValueError(f"hulls.radius_rule must be one of {RADIUS_RULES}, got {self.radius_rule!r}")
+        if self.n_init < 1 or self.max_iter < 1:
+            raise ValueError("hulls.n_init and hulls.max_iter must be >= 1")
+
+    @classmethod
+    def from_config(cls, cfg: Mapping | None) -> "HullParams":
+        """Build from the stage's config dict; unknown keys raise ``ValueError``."""
+        cfg = dict(cfg or {})
+        names = {f.name for f in fields(cls)}
+        unknown = sorted(set(cfg) - names)
+        if unknown:
+            raise ValueError(f"unknown hulls config keys {unknown}; expected {sorted(names)}")
+        return cls(**cfg)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class SelectParams:
+    """Parameters of the ``select`` stage (``workflow/schemas/select.schema.yaml``).
+
+    Attributes
+    ----------
+    raster_m : float
+        Cell side of the coverage raster, metres.
+    seed : int
+        Seed of the ``random`` ordering.
+    motion_max_distance_m : float
+        Motion filter: keep a scan once the scanner moved more than this, metres.
+    motion_max_angle_deg : float
+        Motion filter: ... or turned more than this, degrees.
+    motion_max_time_s : float
+        Motion filter: ... or more than this passed, seconds.
+    """
+
+    raster_m: float = 0.05
+    seed: int = 0
+    motion_max_distance_m: float = 0.2
+    motion_max_angle_deg: float = 1.0
+    motion_max_time_s: float = 5.0
+
+    def __post_init__(self) -> None:
+        if not self.raster_m > 0:
+            raise ValueError(f"select.raster_m must be > 0, got {self.raster_m}")
+        for name in ("motion_max_distance_m", "motion_max_angle_deg", "motion_max_time_s"):
+            if not getattr(self, name) >= 0:
+                raise ValueError(f"select.{name} must be >= 0, got {getattr(self, name)}")
+
+    @classmethod
+    def from_config(cls, cfg: Mapping | None) -> "SelectParams":
+        """Build from the stage's config dict; unknown keys raise ``ValueError``.
+
+        ``figure_*`` keys belong to :class:`floorscan.figures.selection.FigureParams`,
+        ``coverage`` to :class:`CoverageParams`, and ``default_ordering``, ``k`` and
+        ``k_coverage`` to the recommended selection (:mod:`floorscan.select.recommend`);
+        they are skipped here.
+        """
+        cfg = {
+            k: v for k, v in dict(cfg or {}).items()
+            if not k.startswith("figure_") and k not in ("coverage", "default_ordering", "k", "k_coverage")
+        }  # fmt: skip
+        names = {f.name for f in fields(cls)}
+        unknown = sorted(set(cfg) - names)
+        if unknown:
+            raise ValueError(f"unknown select config keys {unknown}; expected {sorted(names)}")
+        return cls(**cfg)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class CoverageParams:
+    """Settings of the coverage orderings (``select.coverage`` config section).
+
+    Attributes
+    ----------
+    cell_m : float
+        Side of the coverage cells, metres.
+    min_scans : int
+        A cell counts (``v`` = 1) when at least this many scans cover it.
+    min_quality : float
+        Least quality of a covered cell, in (0, 1].
+    full_spacing_m : float
+        ``surface_coverage``: return spacing at which a cell counts fully, metres.
+    wall_extractor : str
+        ``wall_coverage``: the extractor whose per-scan segments are used.
+    wall_quality : bool
+        ``wall_coverage``: weight cells by the segments' fit quality.
+    """
+
+    cell_m: float = 0.1
+    min_scans: int = 2
+    min_quality: float = 0.05
+    full_spacing_m: float = 0.02
+    wall_extractor: str = "ransac"
+    wall_quality: bool = False
+
+    @classmethod
+    def from_config(cls, cfg) -> "CoverageParams":
+        """From the ``select.coverage`` section; an unknown key raises ValueError."""
+        return dataclass_from_mapping(cls, cfg, "select.coverage", ValueError)
+
+    def check(self) -> None:
+        """Raise ValueError naming the key of a value out of range."""
+        if not self.cell_m > 0:
+            raise ValueError(f"select.coverage.cell_m: expected > 0, got {self.cell_m}")
+        if int(self.min_scans) < 1:
+            raise ValueError(f"select.coverage.min_scans: expected >= 1, got {self.min_scans}")
+        if not 0 < self.min_quality <= 1:
+            raise ValueError(f"select.coverage.min_quality: expected 0 < value <= 1, got {self.min_quality}")
+        if not self.full_spacing_m > 0:
+            raise ValueError(f"select.coverage.full_spacing_m: expected > 0, got {self.full_spacing_m}")

@@ -1,0 +1,63 @@
+"""The reduced recording of a PCD folder (issue 23): a folder with the selected ``.pcd``
+files copied and the locations CSV reduced to their rows (field text as it was).
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from floorscan.core.io import InputError
+from floorscan.core.files import staged_path
+from floorscan.select.recording_checks import check_count, check_stamps, size_of
+
+
+def reduce_pcd(source: Path, ids, out_path: Path, detection, t_ns, window_s: float = 0.0) -> dict:
+    """The reduced copy of a PCD folder (module docstring); the dict of
+    :func:`floorscan.select.recording.write_reduced_recording`. ``window_s`` is not
+    used (a PCD folder has no pose messages)."""
+    if not source.is_dir():
+        raise InputError(f"{source}: expected a folder of .pcd files")
+    name = str(detection.get("locations") or "locations.csv")
+    csv = source / name
+    if not csv.is_file():
+        raise InputError(f"{csv}: scan locations CSV not found (dataset option 'locations')")
+    try:  # the same parser as ingest (floorscan.ingest.pcd.read_locations), the fields as text
+        loc = pd.read_csv(csv, dtype=str, keep_default_na=False)
+    except Exception as e:
+        raise InputError(f"{csv}: cannot read the CSV ({e})") from None
+    if "file" not in loc.columns:
+        raise InputError(f"{csv}: no 'file' column; expected file,t_ns,x,y,z,yaw")
+    check_count(csv, len(loc), ids, t_ns, "scan locations")
+    rows = loc.iloc[ids]
+    if "t_ns" in loc.columns:
+        got = pd.to_numeric(rows["t_ns"], errors="coerce").to_numpy(dtype=np.float64)
+        check_stamps(csv, ids, np.nan_to_num(got, nan=-1).astype(np.int64), t_ns)
+    files = []
+    for f in rows["file"]:
+        rel = Path(str(f))
+        if rel.is_absolute() or ".." in rel.parts:
+            raise InputError(f"{csv}: names {f!r}; expected a path inside {source}")
+        if not (source / rel).is_file():
+            raise InputError(f"{csv}: names {f!r}, which is not in {source}")
+        files.append(rel)
+    with staged_path(out_path) as tmp:
+        tmp.mkdir()
+        for rel in files:
+            (tmp / rel).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(source / rel, tmp / rel)
+        (tmp / name).parent.mkdir(parents=True, exist_ok=True)
+        rows.to_csv(tmp / name, index=False, lineterminator="\n")
+    return {
+        "format": "pcd",
+        "path": str(out_path),
+        "bytes_in": size_of(source),
+        "bytes_out": size_of(out_path),
+        "messages_in": len(loc),
+        "messages_out": len(rows),
+        "scan_messages_out": len(rows),
+        "topics": {"pcd files": len(rows)},
+    }
