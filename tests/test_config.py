@@ -4,6 +4,7 @@ import sys
 from pathlib import Path
 
 import pytest
+import yaml
 
 REPO = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
@@ -235,3 +236,25 @@ def test_schema_defaults_give_a_dataclass_the_schema_defaults_once():
 
     with pytest.raises(KeyError, match="no property 'nope'"):
         schema_section_defaults("walls.nope")
+
+
+@pytest.mark.slow
+def test_a_per_dataset_override_of_a_file_grid_key_is_refused_at_start(tmp_path):
+    """walls.k names the evaluation files of every dataset: a dataset's override of it
+    would be half applied (the rules' file grid is global), so the run refuses it before
+    any job, naming the dataset and the key; an override of any other key is applied."""
+
+    def run(params):
+        demo = {"format": "synthetic", "building": "demo", "scanner": "2d", "seed": 1, "params": params}
+        f = tmp_path / "overlay.yaml"
+        f.write_text(yaml.safe_dump({"datasets": {"demo": demo}}))
+        return subprocess.run([str(SNAKEMAKE), "-n", "--forceall", "--cores", "1", "--configfile",
+                               "config/config.yaml", str(f)], cwd=REPO, capture_output=True, text=True, timeout=120)
+
+    res = run({"walls": {"k": [5, "all"]}})
+    assert res.returncode == 1
+    out = res.stdout + res.stderr
+    assert "Config error: datasets.demo.params.walls: ['k'] name the workflow's files" in out
+    assert "Traceback" not in out
+    res = run({"walls": {"seed": 3}})
+    assert res.returncode == 0, res.stderr[-2000:]

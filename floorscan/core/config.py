@@ -64,6 +64,18 @@ def _schema(stage: str) -> dict:
         return yaml.load(f, Loader=loader)
 
 
+def _section_properties(section: str) -> dict[str, Any]:
+    """The ``properties`` of a section of a stage schema (``"walls"``, ``"walls.ransac"``)."""
+    stage, *keys = section.split(".")
+    node = _schema(stage)
+    for key in keys:
+        props = node.get("properties") or {}
+        if key not in props:
+            raise KeyError(f"{section}: no property {key!r} in {SCHEMA_DIR / (stage + '.schema.yaml')}")
+        node = props[key]
+    return node.get("properties") or {}
+
+
 def schema_section_defaults(section: str) -> dict[str, Any]:
     """The defaults the schema gives the properties of a config section.
 
@@ -83,14 +95,7 @@ def schema_section_defaults(section: str) -> dict[str, Any]:
     KeyError
         ``section`` names no object of the schema.
     """
-    stage, *keys = section.split(".")
-    node = _schema(stage)
-    for key in keys:
-        props = node.get("properties") or {}
-        if key not in props:
-            raise KeyError(f"{section}: no property {key!r} in {SCHEMA_DIR / (stage + '.schema.yaml')}")
-        node = props[key]
-    props = node.get("properties") or {}
+    props = _section_properties(section)
     return {name: copy.deepcopy(p["default"]) for name, p in props.items() if isinstance(p, dict) and "default" in p}
 
 
@@ -107,7 +112,9 @@ def schema_defaults(section: str, **derived: Callable[[dict], Any]) -> Callable[
             threshold_m: float
             iterations: int
 
-    A list or mapping default becomes a ``default_factory`` (each instance its own copy).
+    A property without a default (``required`` in the schema) stays a field without a
+    default. A list or mapping default becomes a ``default_factory`` (each instance its
+    own copy).
     ``derived`` gives the default of a field that is not a key of the section but follows
     from its defaults: ``min_height_m=lambda d: d["height_band_m"][0]``.
 
@@ -120,6 +127,7 @@ def schema_defaults(section: str, **derived: Callable[[dict], Any]) -> Callable[
 
     def wrap(cls: type[T]) -> type[T]:
         defaults = schema_section_defaults(section)
+        properties = _section_properties(section)
         for name in cls.__dict__.get("__annotations__", {}):
             in_class = name in cls.__dict__
             if name in derived:
@@ -134,7 +142,7 @@ def schema_defaults(section: str, **derived: Callable[[dict], Any]) -> Callable[
                     setattr(cls, name, dataclasses.field(default_factory=functools.partial(copy.deepcopy, value)))
                 else:
                     setattr(cls, name, value)
-            elif not in_class:
+            elif not in_class and name not in properties:
                 raise TypeError(f"{cls.__name__}.{name}: no default in schema {section}")
         return cls
 

@@ -34,6 +34,7 @@ from floorscan.select.greedy import greedy_coverage, greedy_reference  # noqa: E
 from floorscan.select.params import HullParams, SelectParams  # noqa: E402
 from floorscan.select.registry import ORDERINGS  # noqa: E402
 from floorscan.select.summary import k_for_fraction  # noqa: E402
+from floorscan.core.config import schema_defaults
 
 _STYLE = {
     "cluster_hull": dict(color="C0", lw=2.0),
@@ -47,6 +48,7 @@ _STYLE = {
 
 
 @dataclass(frozen=True)
+@schema_defaults("select", figure_k_clusters=lambda d: tuple(d["figure_k_clusters"]))
 class FigureParams:
     """The ``figure_*`` keys of the ``select`` config section.
 
@@ -60,9 +62,9 @@ class FigureParams:
         Fig. 5.8 times the reference greedy only up to this many scans.
     """
 
-    figure_k_clusters: tuple[int, ...] = (1, 2, 5, 10, 20)
-    figure_max_scans: int = 300
-    figure_reference_max_scans: int = 150
+    figure_k_clusters: tuple[int, ...]
+    figure_max_scans: int
+    figure_reference_max_scans: int
 
     @classmethod
     def from_config(cls, cfg: Mapping | None) -> "FigureParams":

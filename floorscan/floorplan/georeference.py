@@ -22,6 +22,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from floorscan.core.config import schema_defaults
+
 
 #: WGS84 ellipsoid (NIMA TR8350.2): semi-major axis, metres, and flattening.
 WGS84_A = 6378137.0
@@ -29,6 +31,7 @@ WGS84_F = 1.0 / 298.257223563
 
 
 @dataclass(frozen=True)
+@schema_defaults("floorplan.georeference")
 class Georeference:
     """Where the map frame lies on the earth (config ``floorplan.georeference``).
 
@@ -56,7 +59,7 @@ class Georeference:
 
     lat: float
     lon: float
-    heading_deg: float = 0.0
+    heading_deg: float
 
     def __post_init__(self):
         for name in ("lat", "lon", "heading_deg"):

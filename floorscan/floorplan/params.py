@@ -2,8 +2,8 @@
 (merge, pairing, wall height, DXF version, georeference) and :func:`params_from_config`,
 which reads the section.
 
-The defaults are those of workflow/schemas/floorplan.schema.yaml (a test checks that
-they agree). The section's keys that the workflow reads, not the plan, are
+The defaults are written once, in workflow/schemas/floorplan.schema.yaml
+(:func:`floorscan.core.config.schema_defaults`). The section's keys that the workflow reads, not the plan, are
 :data:`WORKFLOW_KEYS`.
 """
 
@@ -14,9 +14,11 @@ from typing import Any, Mapping
 
 from floorscan.floorplan.dxf import DXF_VERSIONS
 from floorscan.floorplan.georeference import Georeference, as_georeference
+from floorscan.core.config import schema_defaults
 
 
 @dataclass(frozen=True)
+@schema_defaults("floorplan")
 class FloorplanParams:
     """Merge and pairing parameters (config section ``floorplan``).
 
@@ -53,18 +55,18 @@ class FloorplanParams:
         reference latitude, longitude and true north. None: map metres.
     """
 
-    merge_angle_deg: float = 3.0
-    merge_distance_m: float = 0.05
-    merge_gap_m: float = 0.3
-    max_passes: int = 3
-    pair_angle_deg: float = 3.0
-    pair_min_m: float = 0.05
-    pair_max_m: float = 0.40
-    pair_min_overlap: float = 0.5
-    default_thickness_m: float = 0.10
-    wall_height_m: float = 2.5
-    min_length_m: float = 0.3
-    dxf_version: str = "R2010"
+    merge_angle_deg: float
+    merge_distance_m: float
+    merge_gap_m: float
+    max_passes: int
+    pair_angle_deg: float
+    pair_min_m: float
+    pair_max_m: float
+    pair_min_overlap: float
+    default_thickness_m: float
+    wall_height_m: float
+    min_length_m: float
+    dxf_version: str
     georeference: Georeference | None = None
 
     def __post_init__(self):

@@ -45,6 +45,7 @@ import numpy as np
 import pandas as pd
 
 from floorscan.core.files import atomic_path
+from floorscan.core.config import schema_defaults
 
 #: map_server's PGM values (trinary mode): occupied, free, unknown.
 PGM_OCCUPIED, PGM_FREE, PGM_UNKNOWN = 0, 254, 205
@@ -56,6 +57,7 @@ def logit(p: float) -> float:
 
 
 @dataclass(frozen=True)
+@schema_defaults("score.reference")
 class OccupancyParams:
     """Settings of the reference map (the ``score.reference`` config section).
 
@@ -75,14 +77,14 @@ class OccupancyParams:
         Grid margin around the scans' returns and origins, metres.
     """
 
-    resolution_m: float = 0.05
-    prob_hit: float = 0.7
-    prob_miss: float = 0.4
-    occupied_thresh: float = 0.65
-    free_thresh: float = 0.196
-    min_scans: int = 2
-    step_fraction: float = 0.5
-    margin_m: float = 0.5
+    resolution_m: float
+    prob_hit: float
+    prob_miss: float
+    occupied_thresh: float
+    free_thresh: float
+    min_scans: int
+    step_fraction: float
+    margin_m: float
 
     def check(self) -> None:
         """Raise ValueError naming the key when a value is out of range."""

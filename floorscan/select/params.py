@@ -14,16 +14,17 @@ Each is built from its config section with ``from_config`` (an unknown key raise
 from __future__ import annotations
 
 import numbers
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass
 from typing import Mapping
 
-from floorscan.core.config import dataclass_from_mapping
+from floorscan.core.config import dataclass_from_mapping, schema_defaults
 
 #: ``hulls.radius_rule`` values (:class:`HullParams`).
 RADIUS_RULES = ("nearest_centre", "global_min")
 
 
 @dataclass(frozen=True)
+@schema_defaults("hulls")
 class HullParams:
     """Parameters of the ``hulls`` stage (``workflow/schemas/hulls.schema.yaml``).
 
@@ -47,13 +48,13 @@ class HullParams:
         Base seed of the subsample and KMeans.
     """
 
-    k_clusters: int = 10
-    sample_size: int = 1000
-    radius_factor: float = 1.0
-    radius_rule: str = "nearest_centre"
-    n_init: int = 1
-    max_iter: int = 100
-    seed: int = 0
+    k_clusters: int
+    sample_size: int
+    radius_factor: float
+    radius_rule: str
+    n_init: int
+    max_iter: int
+    seed: int
 
     def __post_init__(self) -> None:
         # scikit-learn's parameter validation is off in the loop (floorscan.select.clusters)
@@ -75,18 +76,14 @@ class HullParams:
     @classmethod
     def from_config(cls, cfg: Mapping | None) -> "HullParams":
         """Build from the stage's config dict; unknown keys raise ``ValueError``."""
-        cfg = dict(cfg or {})
-        names = {f.name for f in fields(cls)}
-        unknown = sorted(set(cfg) - names)
-        if unknown:
-            raise ValueError(f"unknown hulls config keys {unknown}; expected {sorted(names)}")
-        return cls(**cfg)
+        return dataclass_from_mapping(cls, cfg, "hulls", ValueError)
 
     def as_dict(self) -> dict:
         return asdict(self)
 
 
 @dataclass(frozen=True)
+@schema_defaults("select")
 class SelectParams:
     """Parameters of the ``select`` stage (``workflow/schemas/select.schema.yaml``).
 
@@ -104,11 +101,11 @@ class SelectParams:
         Motion filter: ... or more than this passed, seconds.
     """
 
-    raster_m: float = 0.05
-    seed: int = 0
-    motion_max_distance_m: float = 0.2
-    motion_max_angle_deg: float = 1.0
-    motion_max_time_s: float = 5.0
+    raster_m: float
+    seed: int
+    motion_max_distance_m: float
+    motion_max_angle_deg: float
+    motion_max_time_s: float
 
     def __post_init__(self) -> None:
         if not self.raster_m > 0:
@@ -130,17 +127,14 @@ class SelectParams:
             k: v for k, v in dict(cfg or {}).items()
             if not k.startswith("figure_") and k not in ("coverage", "default_ordering", "k", "k_coverage")
         }  # fmt: skip
-        names = {f.name for f in fields(cls)}
-        unknown = sorted(set(cfg) - names)
-        if unknown:
-            raise ValueError(f"unknown select config keys {unknown}; expected {sorted(names)}")
-        return cls(**cfg)
+        return dataclass_from_mapping(cls, cfg, "select", ValueError)
 
     def as_dict(self) -> dict:
         return asdict(self)
 
 
 @dataclass(frozen=True)
+@schema_defaults("select.coverage")
 class CoverageParams:
     """Settings of the coverage orderings (``select.coverage`` config section).
 
@@ -160,12 +154,12 @@ class CoverageParams:
         ``wall_coverage``: weight cells by the segments' fit quality.
     """
 
-    cell_m: float = 0.1
-    min_scans: int = 2
-    min_quality: float = 0.05
-    full_spacing_m: float = 0.02
-    wall_extractor: str = "ransac"
-    wall_quality: bool = False
+    cell_m: float
+    min_scans: int
+    min_quality: float
+    full_spacing_m: float
+    wall_extractor: str
+    wall_quality: bool
 
     @classmethod
     def from_config(cls, cfg) -> "CoverageParams":

@@ -6,13 +6,15 @@ models are :mod:`floorscan.sim.scanners`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Any, Mapping
 
 from floorscan.core.io import InputError
+from floorscan.core.config import dataclass_from_mapping, schema_defaults
 
 
 @dataclass(frozen=True)
+@schema_defaults("simulate")
 class SimParams:
     """Rover, timing and error parameters (the ``simulate`` section, minus ``scanners``).
 
@@ -20,21 +22,21 @@ class SimParams:
     Units are in the names: metres, seconds, radians, hertz, nanoseconds.
     """
 
-    speed_mps: float = 0.3
-    max_yaw_rate_rad_s: float = 1.0
-    scan_rate_hz: float = 10.0
-    pose_rate_hz: float = 10.0
-    pose_phase_s: float = 0.037
-    pose_jitter_std_s: float = 0.002
-    odom_rate_hz: float = 20.0
-    sensor_height_m: float = 0.3
-    pose_position_std_m: float = 0.05
-    pose_yaw_std_rad: float = 0.02
-    pose_correlation_time_s: float = 2.0
-    odom_scale_error: float = 0.02
-    odom_noise_frac: float = 0.01
-    odom_yaw_drift_rad_s: float = 0.0002
-    start_time_ns: int = 1_600_000_000_000_000_000
+    speed_mps: float
+    max_yaw_rate_rad_s: float
+    scan_rate_hz: float
+    pose_rate_hz: float
+    pose_phase_s: float
+    pose_jitter_std_s: float
+    odom_rate_hz: float
+    sensor_height_m: float
+    pose_position_std_m: float
+    pose_yaw_std_rad: float
+    pose_correlation_time_s: float
+    odom_scale_error: float
+    odom_noise_frac: float
+    odom_yaw_drift_rad_s: float
+    start_time_ns: int
 
     @classmethod
     def from_config(cls, cfg: Mapping[str, Any], where: str = "config simulate") -> "SimParams":
@@ -46,11 +48,8 @@ class SimParams:
             Unknown key, a non-positive rate, speed or height, a negative std, naming
             ``where.<key>``.
         """
-        names = {f.name for f in fields(cls)}
-        unknown = sorted(set(cfg) - names - {"scanners"})
-        if unknown:
-            raise InputError(f"{where}: unknown keys {unknown}; allowed {sorted(names | {'scanners'})}")
-        p = cls(**{k: v for k, v in cfg.items() if k in names})
+        p = dataclass_from_mapping(cls, {k: v for k, v in cfg.items() if k != "scanners"}, where.removeprefix("config "),
+                                   InputError)
         positive = ["speed_mps", "max_yaw_rate_rad_s", "scan_rate_hz", "pose_rate_hz",
                     "odom_rate_hz", "sensor_height_m"]
         non_negative = ["pose_phase_s", "pose_jitter_std_s", "pose_position_std_m",

@@ -7,9 +7,9 @@
 * :class:`ClusterParams` (``walls.cluster_ransac``): the clustering of
   :func:`floorscan.walls.cluster.cluster_ransac` (thesis section 3.4).
 
-:func:`params_from_config` reads them from the ``walls`` config section; the schema
-``workflow/schemas/walls.schema.yaml`` documents the same defaults (a test checks that
-they agree).
+:func:`params_from_config` reads them from the ``walls`` config section; the defaults are written
+once, in ``workflow/schemas/walls.schema.yaml``
+(:func:`floorscan.core.config.schema_defaults`).
 """
 
 from __future__ import annotations

@@ -133,6 +133,17 @@ def all_outputs():
 SCHEMA_DIR = Path(workflow.basedir) / "workflow" / "schemas"
 
 
+# Keys that decide which files the workflow makes (the evaluation grid's file names):
+# the same for every dataset, so a dataset's `params:` cannot override them and the
+# rules read them from the global section. Every other key goes through
+# stage_config(stage), with the dataset's overrides, in every rule.
+FILE_GRID_KEYS = {
+    "walls": ("k", "orderings", "extractors"),
+    "floorplan": ("evaluation_formats",),
+    "score": ("figure_k",),
+}
+
+
 def stage_schema_check(stage):
     """Validate the `stage` section of the config against its schema,
     workflow/schemas/<stage>.schema.yaml (filling defaults), and each dataset's
@@ -147,6 +158,12 @@ def stage_schema_check(stage):
         for name, ds in DATASETS.items():
             override = (ds.get("params") or {}).get(stage)
             if override:
+                fixed = sorted(set(override) & set(FILE_GRID_KEYS.get(stage, ())))
+                if fixed:
+                    raise ConfigError(
+                        f"datasets.{name}.params.{stage}: {fixed} name the workflow's files "
+                        f"(every dataset has the same grid of outputs), so they are set once, under `{stage}:`"
+                    )
                 validate_config(_deep_merge(config[stage], override), schema, f"datasets.{name}.params.{stage}")
 
 

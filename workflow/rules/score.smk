@@ -7,8 +7,8 @@
 
 stage_schema_check("score")
 
-# The figure k is in the figure file names (floorplans_first_k15.png), so it is global: a
-# per-dataset override of score.figure_k is refused by score_check.
+# The figure k is in the figure file names (floorplans_first_k15.png), so it is global
+# (FILE_GRID_KEYS: a per-dataset override is refused).
 SCORE_FIGURE_K = config["score"]["figure_k"]
 
 
@@ -82,11 +82,6 @@ def score_check(wildcards):
     taus = [float(t) for t in cfg["taus_m"]]
     if not any(abs(float(cfg["summary_tau_m"]) - t) < 1e-12 for t in taus):
         config_error(f"score.summary_tau_m {cfg['summary_tau_m']} is not in score.taus_m {taus}")
-    if cfg["figure_k"] != SCORE_FIGURE_K:
-        config_error(
-            f"datasets.{wildcards.dataset}.params.score.figure_k: the figure k names the figure "
-            f"files and cannot be overridden per dataset (global {SCORE_FIGURE_K})"
-        )
     if str(cfg["figure_k"]) not in score_ks(wildcards):
         config_error(f"score.figure_k {cfg['figure_k']} is not in walls.k {score_ks(wildcards)}")
     if "all" not in score_ks(wildcards):
