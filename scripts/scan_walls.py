@@ -1,23 +1,22 @@
-"""Stage scan_walls, one shard: wall segments of the scans of a scan range with one
-extractor (floorscan.walls.extract.extract_walls), streamed scan by scan (memory holds
-one scan). scripts/scan_walls_merge.py concatenates the shards. The time of each scan
-goes to the benchmarks folder (output `times`, when the rule names one), not into the
-status."""
-from floorscan.core.io import iter_scans, write_table
-from floorscan.core.runtime import progress
-from floorscan.core.shards import parse_shard_label
+"""Stage walls, for one extractor: the wall segments of every kept scan, the shards of
+scan_walls_shard concatenated in scan order (exactly the tables of one unsharded job,
+floorscan.walls.shards.merge_shards), and the times of each scan (benchmarks folder,
+output `times` when the rule names one)."""
+from floorscan.core.io import write_table
 from floorscan.core.stage import stage_log
-from floorscan.walls.extract import extract_walls
-from floorscan.walls.tables import SCAN_STATUS, SCAN_TIMES, WALLS
+from floorscan.walls.shards import merge_shards
+from floorscan.walls.tables import SCAN_STATUS, WALLS
 
-with stage_log(snakemake) as log:
-    extractor = snakemake.wildcards.extractor
-    shard = snakemake.wildcards.shard
-    start, stop = parse_shard_label(shard)
-    scans = iter_scans(snakemake.input.points, ("x", "y", "z"), scan_range=(start, stop))
-    walls, status = extract_walls(progress(scans, log, what="scans"), extractor, snakemake.params.cfg)
-    meta = {"dataset": snakemake.wildcards.dataset, "extractor": extractor, "units": "metres, map frame", "shard": shard}
-    write_table(walls, snakemake.output.walls, schema=WALLS, metadata=meta)
-    write_table(status, snakemake.output.status, schema=SCAN_STATUS, metadata=meta)
-    if snakemake.output.get("times"):
-        write_table(status, snakemake.output.times, schema=SCAN_TIMES, metadata=meta)
+with stage_log(snakemake) as log:  # noqa: F821
+    smk = snakemake  # noqa: F821
+    dataset, extractor = smk.wildcards.dataset, smk.wildcards.extractor
+    walls, status, times = merge_shards(
+        extractor, smk.input.registration, smk.input.registered, smk.params.shard_scans,
+        smk.input.shard_walls, smk.input.shard_status,
+        shard_times=smk.input.shard_times if smk.output.get("times") else None, log=log,
+    )
+    meta = {"dataset": dataset, "extractor": extractor, "units": "metres, map frame"}
+    write_table(walls, smk.output.walls, schema=WALLS, metadata=meta)
+    write_table(status, smk.output.status, schema=SCAN_STATUS, metadata=meta)
+    if times is not None:
+        write_table(times, smk.output.times, metadata=meta)

@@ -143,3 +143,21 @@ def test_the_graph_sees_imports_inside_functions(tmp_path):
     src = tmp_path / "m.py"
     src.write_text("def f():\n    from floorscan.core import io\n    import floorscan.core.grid\n")
     assert imports("floorscan.x.m", src, set(modules())) == {"floorscan.core.io", "floorscan.core.grid"}
+
+
+def test_every_rule_runs_the_script_of_its_name():
+    """One name per stage: rule ``x`` runs ``scripts/x.py``, and every script has its rule."""
+    import re
+
+    rules_dir = PACKAGE.parent / "workflow" / "rules"
+    pairs = {}
+    for smk in sorted(rules_dir.glob("*.smk")):
+        text = smk.read_text()
+        for m in re.finditer(r"^(?:rule|checkpoint) (\w+):\n(.*?)(?=^(?:rule|checkpoint) |\Z)", text, re.S | re.M):
+            script = re.search(r'script:\s*\n\s*"\.\./\.\./scripts/(\w+)\.py"', m.group(2))
+            if script:
+                pairs[m.group(1)] = script.group(1)
+    assert len(pairs) >= 20
+    assert {rule: script for rule, script in pairs.items() if rule != script} == {}
+    scripts = {p.stem for p in (PACKAGE.parent / "scripts").glob("*.py")}
+    assert scripts == set(pairs.values())

@@ -225,10 +225,10 @@ def sharded(registered, registration, out: Path, shard_scans: int, extractor: st
     labels = [s["label"] for s in plan_from_files(registration, registered, shard_scans)["shards"]]
     shard = lambda stage, lb, name: str(out / "shards" / stage / lb / f"{name}.parquet")  # noqa: E731
     for lb in labels:
-        run_script("hulls.py", out, "hulls_shard", res,
+        run_script("hulls_shard.py", out, "hulls_shard", res,
                    {"hulls": shard("hulls", lb, "hulls"), "convex": shard("hulls", lb, "convex_hulls")},
                    {"cfg": {}}, {"dataset": "t", "shard": lb})
-        run_script("scan_walls.py", out, "scan_walls_shard", {"points": str(registered)},
+        run_script("scan_walls_shard.py", out, "scan_walls_shard", {"points": str(registered)},
                    {"walls": shard("scan_walls", lb, "per_scan"), "status": shard("scan_walls", lb, "scan_status")},
                    {"cfg": WALLS_CFG}, {"dataset": "t", "extractor": extractor, "shard": lb})
     # rule select merges the hull shards and orders the scans
@@ -242,7 +242,7 @@ def sharded(registered, registration, out: Path, shard_scans: int, extractor: st
         params={"cfg": {}, "shard_scans": shard_scans}, wildcards={"dataset": "t"})
     # rule scan_walls merges the wall shards; rule walls cuts the first k scans of each ordering
     merge_logs["scan_walls"] = run_script(
-        "scan_walls_merge.py", out, "scan_walls",
+        "scan_walls.py", out, "scan_walls",
         {"shard_walls": [shard("scan_walls", lb, "per_scan") for lb in labels],
          "shard_status": [shard("scan_walls", lb, "scan_status") for lb in labels], **res},
         {"walls": str(out / "per_scan.parquet"), "status": str(out / "scan_status.parquet")},

@@ -1,7 +1,7 @@
 """The hulls and select stages: which scans cover the floor, and in what order to take
 them (thesis section 3.3, Algorithms 1 and 2).
 
-Stage ``hulls`` (``scripts/hulls.py``, one job per shard of the kept scans):
+Stage ``hulls`` (``scripts/hulls_shard.py``, one job per shard of the kept scans):
 
 - :mod:`~floorscan.select.hulls`: the coverage hulls of each scan (Algorithm 2), the
   stage's tables, and the merge of its shards;

@@ -71,7 +71,7 @@ rule recommended_floorplan:
     benchmark:
         benchmark_path("recommended_floorplan")
     script:
-        "../../scripts/floorplan_recommended.py"
+        "../../scripts/recommended_floorplan.py"
 
 
 rule floorplan:

@@ -70,7 +70,7 @@ rule hulls_shard:
     benchmark:
         "results/{dataset}/benchmarks/hulls_shard_{shard}.tsv"
     script:
-        "../../scripts/hulls.py"
+        "../../scripts/hulls_shard.py"
 
 
 # One job merges the hull shards (hulls.parquet, convex_hulls.parquet) and orders the

@@ -114,7 +114,7 @@ rule scan_walls_shard:
     benchmark:
         "results/{dataset}/benchmarks/scan_walls_shard_{extractor}_{shard}.tsv"
     script:
-        "../../scripts/scan_walls.py"
+        "../../scripts/scan_walls_shard.py"
 
 
 def walls_run_params(wildcards):
@@ -147,7 +147,7 @@ rule scan_walls:
     benchmark:
         "results/{dataset}/benchmarks/scan_walls_{extractor}.tsv"
     script:
-        "../../scripts/scan_walls_merge.py"
+        "../../scripts/scan_walls.py"
 
 
 rule walls:
