@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from floorscan.register.registration import register_scans
+from floorscan.register.pipeline import register_scans
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "results"
@@ -178,7 +178,7 @@ _STAGE = """
 import json, resource, sys, tempfile, time
 from pathlib import Path
 from floorscan.core.io import read_table
-from floorscan.register.registration import register_recording
+from floorscan.register.stream import register_recording
 d, workers = Path(sys.argv[1]), int(sys.argv[2])
 t0, c0 = time.perf_counter(), time.process_time()
 index = read_table(d / "scan_index.parquet")
