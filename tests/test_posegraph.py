@@ -1,5 +1,5 @@
-"""Pose-graph registration (floorscan.register.posegraph): ICP edges and the sparse planar optimiser
-(against Open3D's)."""
+"""Pose-graph registration (floorscan.register.posegraph, edges, solver): ICP edges and the
+sparse planar optimiser (against Open3D's)."""
 
 import dataclasses
 import math
@@ -8,7 +8,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from floorscan.register import posegraph as G
+from floorscan.core.geometry import se2_between
+from floorscan.register import edges as E
+from floorscan.register.edges import EDGE_COLUMNS, candidate_pairs, scan_pair_edges
+from floorscan.register.params import GraphParams
+from floorscan.register.posegraph import refine_poses
+from floorscan.register.solver import optimize_pose_graph
 
 # An L-shaped room (metres): walls as segments, so every scan constrains x, y and yaw.
 ROOM = np.array(
@@ -63,23 +68,23 @@ def recording():
 @pytest.fixture(scope="module")
 def edges(recording):
     truth, clouds, t, priors = recording
-    return G.scan_pair_edges(clouds, priors, t)
+    return scan_pair_edges(clouds, priors, t)
 
 
 def test_candidate_pairs_sequential_and_loops():
     pos = np.array([[0, 0], [1, 0], [2, 0], [2, 1], [0.2, 0.1]], dtype=float)
     t = np.array([0.0, 1.0, 2.0, 3.0, 10.0])
-    p = G.GraphParams(sequential_neighbours=1, loop_radius_m=0.5, loop_min_separation_s=3.0)
-    assert G.candidate_pairs(pos, t, p) == [
+    p = GraphParams(sequential_neighbours=1, loop_radius_m=0.5, loop_min_separation_s=3.0)
+    assert candidate_pairs(pos, t, p) == [
         (0, 1, "sequential"), (0, 4, "loop"), (1, 2, "sequential"),
         (2, 3, "sequential"), (3, 4, "sequential"),
     ]
     # a loop closer in time than loop_min_separation_s is not a loop
     t2 = np.array([0.0, 1.0, 2.0, 3.0, 2.5])
-    assert (0, 4, "loop") not in G.candidate_pairs(pos, t2, p)
+    assert (0, 4, "loop") not in candidate_pairs(pos, t2, p)
     # loop_max_per_scan 0: sequential only
-    p0 = G.GraphParams(sequential_neighbours=2, loop_max_per_scan=0)
-    assert {k for *_, k in G.candidate_pairs(pos, t, p0)} == {"sequential"}
+    p0 = GraphParams(sequential_neighbours=2, loop_max_per_scan=0)
+    assert {k for *_, k in candidate_pairs(pos, t, p0)} == {"sequential"}
 
 
 def test_edges_match_the_true_relative_poses(recording, edges):
@@ -88,7 +93,7 @@ def test_edges_match_the_true_relative_poses(recording, edges):
     assert set(edges["kind"]) == {"sequential", "loop"}
     err_xy, err_yaw = [], []
     for e in edges[edges["fitness"] >= 0.6].itertuples():
-        dx, dy, dyaw = G.se2_between(truth[e.i], truth[e.j])
+        dx, dy, dyaw = se2_between(truth[e.i], truth[e.j])
         err_xy.append(math.hypot(e.dx_m - dx, e.dy_m - dy))
         err_yaw.append(abs(e.dyaw_rad - dyaw))
     # priors are 5 cm / 1 degree off; ICP edges are millimetre-accurate
@@ -99,7 +104,7 @@ def test_edges_match_the_true_relative_poses(recording, edges):
 
 def test_graph_keeps_icp_geometry_and_localizer_placement(recording, edges):
     truth, clouds, t, priors = recording
-    out, info = G.optimize_pose_graph(priors, edges, priors=priors)
+    out, info = optimize_pose_graph(priors, edges, priors=priors)
     before, after = _rms(priors, truth), _rms(out, truth)
     assert before > 0.06
     # 40 independent 5 cm priors on a rigid trajectory: placement error ~ 5 / sqrt(40) cm
@@ -113,18 +118,18 @@ def test_without_priors_the_first_scan_is_held(recording, edges):
     truth, clouds, t, _ = recording
     start = truth.copy()
     start[1:, :2] += 0.03  # a wrong initial guess for all but the first scan
-    out, info = G.optimize_pose_graph(start, edges, priors=None)
+    out, info = optimize_pose_graph(start, edges, priors=None)
     np.testing.assert_allclose(out[0], start[0], atol=1e-9)
     assert _rms(out, truth) < 0.005
 
 
 def test_same_input_same_output(recording):
     truth, clouds, t, priors = recording
-    a = G.scan_pair_edges(clouds[:10], priors[:10], t[:10])
-    b = G.scan_pair_edges(clouds[:10], priors[:10], t[:10])
+    a = scan_pair_edges(clouds[:10], priors[:10], t[:10])
+    b = scan_pair_edges(clouds[:10], priors[:10], t[:10])
     pd.testing.assert_frame_equal(a, b)
-    pa, _ = G.optimize_pose_graph(priors[:10], a, priors=priors[:10])
-    pb, _ = G.optimize_pose_graph(priors[:10], b, priors=priors[:10])
+    pa, _ = optimize_pose_graph(priors[:10], a, priors=priors[:10])
+    pb, _ = optimize_pose_graph(priors[:10], b, priors=priors[:10])
     np.testing.assert_array_equal(pa, pb)
 
 
@@ -132,27 +137,27 @@ def test_edge_icp_in_worker_processes_gives_the_same_edges(recording, edges, mon
     """``workers`` splits the pairs over processes (the register rule's threads); every
     edge is the single-process one, in the same order."""
     truth, clouds, t, priors = recording
-    monkeypatch.setattr(G, "_MIN_PAIRS_PER_WORKER", 10)
-    assert len(G._chunks(list(range(len(edges))), 3)) == 3
-    par = G.scan_pair_edges(clouds, priors, t, G.GraphParams(workers=3))
+    monkeypatch.setattr(E, "_MIN_PAIRS_PER_WORKER", 10)
+    assert len(E._chunks(list(range(len(edges))), 3)) == 3
+    par = scan_pair_edges(clouds, priors, t, GraphParams(workers=3))
     assert len(par) == len(edges) > 30
     pd.testing.assert_frame_equal(par, edges)
 
 
 def test_bad_input():
     poses = np.zeros((3, 4))
-    edges = pd.DataFrame([(0, 5, "sequential", 0.0, 0.0, 0.0, 1.0, 1.0, 0.0)], columns=G.EDGE_COLUMNS)
+    edges = pd.DataFrame([(0, 5, "sequential", 0.0, 0.0, 0.0, 1.0, 1.0, 0.0)], columns=EDGE_COLUMNS)
     with pytest.raises(ValueError, match="outside 0..2"):
-        G.optimize_pose_graph(poses, edges)
+        optimize_pose_graph(poses, edges)
     with pytest.raises(ValueError, match="priors"):
-        G.optimize_pose_graph(poses, edges.iloc[:0], priors=np.zeros((2, 4)))
+        optimize_pose_graph(poses, edges.iloc[:0], priors=np.zeros((2, 4)))
     with pytest.raises(KeyError, match="unknown register.graph config keys"):
-        G.GraphParams.from_mapping({"loop_radius": 3})
+        GraphParams.from_mapping({"loop_radius": 3})
 
 
 def test_refine_poses_reports_fitness_per_scan(recording):
     truth, clouds, t, priors = recording
-    poses, fit0, fitness, rmse, info = G.refine_poses(clouds[:12], priors[:12], t[:12], priors[:12])
+    poses, fit0, fitness, rmse, info = refine_poses(clouds[:12], priors[:12], t[:12], priors[:12])
     assert np.all(fit0 < fitness)  # the priors are 5 cm / 1 degree off
     assert poses.shape == (12, 4)
     # nearest-neighbour distances between 5 cm voxel means: about 1 cm on a wall
@@ -176,8 +181,8 @@ def test_sparse_solver_matches_open3d(recording, edges, with_priors):
         start = truth.copy()
         start[1:] += [0.03, -0.02, 0.0, 0.01]
     pr = priors if with_priors else None
-    a, ia = G.optimize_pose_graph(start, edges, pr, G.GraphParams(solver="sparse"))
-    b, ib = G.optimize_pose_graph(start, edges, pr, G.GraphParams(solver="open3d"))
+    a, ia = optimize_pose_graph(start, edges, pr, GraphParams(solver="sparse"))
+    b, ib = optimize_pose_graph(start, edges, pr, GraphParams(solver="open3d"))
     d_xy, d_yaw = _diff(a, b)
     assert d_xy < 1e-4 and d_yaw < 1e-5
     assert ia == ib and ia["n_pruned"] == 0
@@ -193,10 +198,10 @@ def test_a_wrong_loop_edge_is_pruned(recording, edges):
     k = bad.index[(bad["kind"] == "loop") & (bad["fitness"] >= 0.6)][0]
     bad.loc[k, "dx_m"] += 2.0
     before, prior_before = bad.copy(), priors.copy()
-    out, info = G.optimize_pose_graph(priors, bad, priors)
+    out, info = optimize_pose_graph(priors, bad, priors)
     pd.testing.assert_frame_equal(bad, before)  # the caller's arrays are not changed
     np.testing.assert_array_equal(priors, prior_before)
-    without, info0 = G.optimize_pose_graph(priors, edges.drop(k), priors)
+    without, info0 = optimize_pose_graph(priors, edges.drop(k), priors)
     assert info["n_pruned"] == 1 and info0["n_pruned"] == 0
     assert info["n_edges"] == info0["n_edges"] + 1
     d_xy, d_yaw = _diff(out, without)
@@ -206,7 +211,7 @@ def test_a_wrong_loop_edge_is_pruned(recording, edges):
     seq = edges.copy()
     k = seq.index[(seq["kind"] == "sequential") & (seq["fitness"] >= 0.6)][0]
     seq.loc[k, "dx_m"] += 2.0
-    _, info_seq = G.optimize_pose_graph(priors, seq, priors)
+    _, info_seq = optimize_pose_graph(priors, seq, priors)
     assert info_seq["n_pruned"] == 0
 
 
@@ -219,15 +224,15 @@ def test_long_path_is_sparse():
     s = np.arange(n) * 0.2
     yaw = (s / 20 + math.pi / 2 + math.pi) % (2 * math.pi) - math.pi
     truth = np.c_[20 * np.cos(s / 20), 20 * np.sin(s / 20), np.full(n, 0.4), yaw]
-    rel = [G.se2_between(truth[k], truth[k + 1]) for k in range(n - 1)]
+    rel = [se2_between(truth[k], truth[k + 1]) for k in range(n - 1)]
     edges = pd.DataFrame(
         [(k, k + 1, "sequential", *r, 1.0, 1.0, 0.001) for k, r in enumerate(rel) if k not in (2999, 3000)],
-        columns=G.EDGE_COLUMNS,
+        columns=EDGE_COLUMNS,
     )  # scan 3000 has no edge
     priors = truth.copy()
     priors[:, :2] += rng.normal(0, 0.05, (n, 2))
     priors[:, 3] += rng.normal(0, math.radians(1.0), n)
-    out, info = G.optimize_pose_graph(priors, edges, priors)
+    out, info = optimize_pose_graph(priors, edges, priors)
     assert info["n_isolated"] == 1 and info["n_edges"] == n - 3
     np.testing.assert_allclose(out[3000, :3], priors[3000, :3], atol=1e-9)
     assert abs(math.remainder(out[3000, 3] - priors[3000, 3], 2 * math.pi)) < 1e-9
@@ -238,17 +243,15 @@ def test_long_path_is_sparse():
 
 def test_unknown_solver():
     with pytest.raises(ValueError, match="solver"):
-        G.optimize_pose_graph(np.zeros((2, 4)), pd.DataFrame(columns=G.EDGE_COLUMNS), params=G.GraphParams(solver="dense"))
-    assert G.GraphParams.from_mapping({"solver": "open3d"}).solver == "open3d"
-    assert dataclasses.replace(G.GraphParams(), solver="sparse") == G.GraphParams()
+        optimize_pose_graph(np.zeros((2, 4)), pd.DataFrame(columns=EDGE_COLUMNS), params=GraphParams(solver="dense"))
+    assert GraphParams.from_mapping({"solver": "open3d"}).solver == "open3d"
+    assert dataclasses.replace(GraphParams(), solver="sparse") == GraphParams()
 
 
 def test_candidate_pairs_out_and_back():
     """A rover driving 9 m out and back along a line (1 m, 1 s between scans): each
     scan pairs with its successor, and with the scan at its place on the way back
     once the two are 3 s apart; the nearest loop per scan is kept."""
-    from floorscan.register.posegraph import GraphParams, candidate_pairs
-
     x = np.r_[np.arange(10.0), np.arange(9.0, -1.0, -1.0)]
     poses = np.c_[x, np.zeros(20), np.zeros(20), np.zeros(20)]
     t = np.arange(20.0)
@@ -279,10 +282,10 @@ def test_loop_partners_come_from_different_passes():
     poses, t = np.c_[x, y], np.arange(90.0)
 
     def partners(sep):
-        p = G.GraphParams(sequential_neighbours=1, loop_radius_m=1.5, loop_min_separation_s=3.0,
+        p = GraphParams(sequential_neighbours=1, loop_radius_m=1.5, loop_min_separation_s=3.0,
                           loop_max_per_scan=2, loop_partner_separation_m=sep)
         out = {a: [] for a in range(90)}
-        for i, j, kind in G.candidate_pairs(poses, t, p):
+        for i, j, kind in candidate_pairs(poses, t, p):
             if kind == "loop":
                 out[i].append(j)
                 out[j].append(i)
@@ -302,16 +305,16 @@ def test_coarse_icp_stage_keeps_edges_accurate(recording):
     voxel_size_m, is plain two-stage ICP on the full clouds (the same edges)."""
     truth, clouds, t, priors = recording
     n = 14
-    off = G.scan_pair_edges(clouds[:n], priors[:n], t[:n], G.GraphParams(coarse_voxel_size_m=0.0))
-    same = G.scan_pair_edges(clouds[:n], priors[:n], t[:n], G.GraphParams(coarse_voxel_size_m=0.05))
+    off = scan_pair_edges(clouds[:n], priors[:n], t[:n], GraphParams(coarse_voxel_size_m=0.0))
+    same = scan_pair_edges(clouds[:n], priors[:n], t[:n], GraphParams(coarse_voxel_size_m=0.05))
     pd.testing.assert_frame_equal(off, same)
-    on = G.scan_pair_edges(clouds[:n], priors[:n], t[:n], G.GraphParams(coarse_voxel_size_m=0.1))
+    on = scan_pair_edges(clouds[:n], priors[:n], t[:n], GraphParams(coarse_voxel_size_m=0.1))
     assert len(on) == len(off) and (on["fitness"] >= 0.6).sum() == (off["fitness"] >= 0.6).sum()
     for e in (off, on):
         err = [
             math.hypot(r.dx_m - dx, r.dy_m - dy)
             for r in e.itertuples()
-            for dx, dy, _ in [G.se2_between(truth[r.i], truth[r.j])]
+            for dx, dy, _ in [se2_between(truth[r.i], truth[r.j])]
         ]
         assert np.median(err) < 0.004  # the priors are 5 cm off
     assert not np.array_equal(on[["dx_m", "dy_m"]].to_numpy(), off[["dx_m", "dy_m"]].to_numpy())

@@ -1,6 +1,6 @@
 """The register stage's motion filter, map consistency and verdict
 (floorscan.register.sampling, floorscan.register.consistency), and the settings it
-derives from what ingest found (floorscan.register.registration.resolve_config)."""
+derives from what ingest found (floorscan.register.pipeline.resolve_config)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,8 @@ import pytest
 from floorscan.core.io import InputError
 from floorscan.register.consistency import map_consistency, path_length_m, verdict
 from floorscan.register.sampling import EveryN, MotionFilter, choose_thresholds, typical_range_m
-from floorscan.register.registration import RegistrationConfig, resolve_config
+from floorscan.register.params import RegistrationConfig
+from floorscan.register.pipeline import resolve_config
 
 
 def test_motion_filter_keeps_a_scan_per_distance_or_turn():
@@ -106,3 +107,28 @@ def test_resolve_config_from_what_ingest_found():
         resolve_config(RegistrationConfig(mode="pose"), {"pose_kind": "none", "pose_source": "none"}, 4.0)
     with pytest.raises(InputError, match="odometry_scans 'sampled' needs register.every_n"):
         resolve_config(RegistrationConfig(odometry_scans="sampled"), {"pose_kind": "none"}, 4.0)
+
+
+def test_the_graph_section_is_parsed_once_per_run(monkeypatch, tmp_path):
+    """RegistrationConfig parses ``graph`` into GraphParams once (graph_params); the
+    copies resolve_config makes keep it, so a streamed run parses it once; a bad key
+    still names the section."""
+    from test_registration import recording, trajectory
+
+    from floorscan.core.io import SCANS, write_table
+    from floorscan.register.params import GraphParams
+    from floorscan.register.stream import register_recording
+
+    calls = []
+    parse = GraphParams.from_mapping.__func__
+    monkeypatch.setattr(GraphParams, "from_mapping", classmethod(lambda cls, m: calls.append(m) or parse(cls, m)))
+    true, t = trajectory(12)
+    scans, index, poses = recording(true, t)
+    write_table(scans, tmp_path / "scans.parquet", schema=SCANS)
+    cfg = RegistrationConfig.from_mapping({"every_n": 2, "graph": {"loop_radius_m": 2.5}})
+    register_recording(tmp_path / "scans.parquet", index, poses, cfg, tmp_path / "reg.parquet")
+    assert calls == [{"loop_radius_m": 2.5}]
+    resolved = resolve_config(cfg, None, 4.0)
+    assert resolved.graph_params is cfg.graph_params and len(calls) == 1
+    with pytest.raises(InputError, match="config register.graph"):
+        RegistrationConfig.from_mapping({"graph": {"loop_radius": 3}})

@@ -1,4 +1,5 @@
-"""Tests of floorscan.register.registration (thesis 3.2.2, 3.5, Algorithm 3): exact synthetic
+"""Tests of the register stage's registration (floorscan.register: pipeline, stream,
+icp, prepare and the strategies; thesis 3.2.2, 3.5, Algorithm 3): exact synthetic
 geometry, drop reasons, and checks on the real recordings in ../shared/data."""
 
 from __future__ import annotations
@@ -12,15 +13,12 @@ import pandas as pd
 import pytest
 import yaml
 
-from floorscan.register.registration import (
-    RegistrationConfig,
-    RegistrationError,
-    fitness_against,
-    icp_planar,
-    normals_2d,
-    register_scans,
-    transform_points,
-)
+from floorscan.core.geometry import transform_points
+from floorscan.register.icp import fitness_against, icp_planar
+from floorscan.register.params import RegistrationConfig
+from floorscan.register.pipeline import register_scans
+from floorscan.register.prepare import normals_2d
+from floorscan.register.result import RegistrationError
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED_DATA = (REPO / ".." / "shared" / "data").resolve()
@@ -358,7 +356,7 @@ def test_constant_velocity_prediction_keeps_turning():
     """The motion between the last two poses, in the first one's frame, is repeated
     (scaled by the time ratio): 1 m ahead then a quarter turn -> another metre along
     the new heading and another quarter turn."""
-    from floorscan.register.registration import predict_constant_velocity
+    from floorscan.register.odometry import predict_constant_velocity
 
     p = predict_constant_velocity((0.0, 0.0, 0.5, 0.0), 0, (1.0, 0.0, 0.5, math.pi / 2), 10**9, 2 * 10**9)
     np.testing.assert_allclose(p[:3], (1.0, 1.0, 0.5), atol=1e-12)
@@ -392,7 +390,7 @@ def test_odometry_drops_a_failed_scan_and_goes_on_from_the_prediction():
 def test_scan_clouds_drop_floor_and_ceiling_from_3d_icp():
     """3D scans: the ICP cloud keeps the walls (vertical normals) on the coarse grid and
     none of the floor; 2D scans keep every point for fitness."""
-    from floorscan.register.registration import graph_cloud, scan_clouds
+    from floorscan.register.prepare import graph_cloud, scan_clouds
 
     g = np.arange(-3.0, 3.0, 0.05)
     gx, gy = np.meshgrid(g, g)
@@ -434,7 +432,7 @@ def test_streamed_registration_matches_the_in_memory_one(tmp_path, z_beams):
     table and points of register_scans, and the figure's density raster of the file
     counts every point."""
     from floorscan.core.io import SCANS, read_table, write_table
-    from floorscan.register.registration import register_recording
+    from floorscan.register.stream import register_recording
 
     true, t = trajectory(16)
     rng = np.random.default_rng(2)
@@ -474,7 +472,7 @@ def test_edges_aligned_while_reading_are_the_edges(tmp_path, caplog):
     import logging
 
     from floorscan.core.io import SCANS, read_table, write_table
-    from floorscan.register.registration import register_recording
+    from floorscan.register.stream import register_recording
 
     true, t = trajectory(16)
     err = np.random.default_rng(2).normal(0, [0.03, 0.03, 0.01], (16, 3))
@@ -482,7 +480,7 @@ def test_edges_aligned_while_reading_are_the_edges(tmp_path, caplog):
     scans = scans[scans["scan_id"] != 5]
     write_table(scans, tmp_path / "scans.parquet", schema=SCANS)
     a = register_scans(scans, index, poses, {"every_n": 1})
-    with caplog.at_level(logging.INFO, logger="floorscan.register.posegraph"):
+    with caplog.at_level(logging.INFO, logger="floorscan.register.edges"):
         b = register_recording(tmp_path / "scans.parquet", index, poses, {"every_n": 1, "graph": {"workers": 2}},
                                tmp_path / "reg.parquet")
     pd.testing.assert_frame_equal(a.table, b.table)
@@ -721,7 +719,7 @@ def test_pose_graph_registration_halves_amcl_like_pose_error():
 def test_map_references_exclude_the_correlation_window():
     """The references of a scan are >= exclude_window_s away in time and spread by
     reference_spacing_s; with none outside the window it falls back to the nearest."""
-    from floorscan.register.registration import _select_references
+    from floorscan.register.scan_to_map import _select_references
 
     t = np.arange(10) * 0.5
     pose = np.column_stack([np.arange(10) * 0.1, np.zeros(10), np.zeros(10), np.zeros(10)])
@@ -793,7 +791,7 @@ def test_odometry_mode_on_real_recordings(name, tmp_path):
 def test_graph_cloud_one_sort_equals_the_grouped_path(monkeypatch):
     """graph_cloud sorts once by (cell key, height); the same cloud as grouping the
     cells first (its path for extents beyond the int64 key), bit for bit."""
-    import floorscan.register.registration as R
+    import floorscan.register.prepare as R
     from floorscan.core.grid import cell_keys
 
     rng = np.random.default_rng(5)
@@ -814,7 +812,7 @@ def test_cell_height_order_is_lexsort_by_cell_then_height():
     """The one-key sort of graph_cloud orders as numpy.lexsort((z, key)) (equal
     heights in a cell may swap): float32 heights of both signs, -0.0 and ties; keys
     past 2**31 or float64 heights take the lexsort itself."""
-    from floorscan.register.registration import _cell_height_order
+    from floorscan.register.prepare import _cell_height_order
 
     rng = np.random.default_rng(3)
     for n in (1, 2, 50, 3000):

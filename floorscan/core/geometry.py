@@ -1,12 +1,21 @@
-"""Plane geometry shared by the stages: points along wall segments.
+"""Plane geometry shared by the stages: points along wall segments, and the planar
+rigid motions (SE(2)) of a rover's poses.
 
 Usage::
 
     samples = sample_segments(segments, 0.02)        # (N, 2), segment after segment
     per_segment = samples_per_segment(segments, 0.02)
+    dx, dy, dyaw = se2_between(pose_a, pose_b)       # b in a's frame
+    pose_b = se2_compose(pose_a, (dx, dy, dyaw))
+    in_map = transform_points(points, x, y, z, yaw)  # Rz(yaw) @ p + (x, y, z)
+
+SE(2) as in Lynch and Park, "Modern Robotics" (2017), ch. 3, and the relative-pose
+convention of graph SLAM (Grisetti et al. 2010).
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -53,3 +62,66 @@ def segment_weights(segments: np.ndarray, sample_m: float) -> np.ndarray:
         return np.empty(0)
     n = samples_per_segment(seg, sample_m)
     return np.repeat(np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]) / n, n)
+
+
+# --------------------------------------------------------------------------- SE(2)
+# A planar pose is ``(x, y, z, yaw)`` (metres, radians CCW from +x): the rover moves in
+# x, y, yaw; z rides along unchanged.
+
+
+def wrap_angle(a: np.ndarray | float) -> np.ndarray | float:
+    """Wrap angles (radians) to [-pi, pi)."""
+    return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def se2_between(a, b) -> tuple[float, float, float]:
+    """Planar motion (dx, dy, dyaw) from pose ``a`` to pose ``b``, in ``a``'s frame.
+
+    Poses are ``(x, y, z, yaw)`` or ``(x, y, yaw)`` sequences; metres, radians.
+    """
+    ya, yb = a[-1], b[-1]
+    c, s = math.cos(ya), math.sin(ya)
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    return c * dx + s * dy, -s * dx + c * dy, float(wrap_angle(yb - ya))
+
+
+def se2_compose(a, d) -> tuple[float, float, float, float]:
+    """Pose ``a`` (x, y, z, yaw) followed by the planar motion ``d`` (dx, dy, dyaw) in its
+    frame: the inverse of :func:`se2_between`."""
+    c, s = math.cos(a[3]), math.sin(a[3])
+    return (a[0] + c * d[0] - s * d[1], a[1] + s * d[0] + c * d[1], a[2], float(wrap_angle(a[3] + d[2])))
+
+
+def se2_matrix(x: float, y: float, yaw: float) -> np.ndarray:
+    """(4, 4) float64 homogeneous transform of a planar pose (z 0), as Open3D takes it."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    m = np.eye(4)
+    m[:2, :2] = [[c, -s], [s, c]]
+    m[0, 3], m[1, 3] = x, y
+    return m
+
+
+def transform_points(points: np.ndarray, x: float, y: float, z: float, yaw: float) -> np.ndarray:
+    """Apply a planar pose to points: ``Rz(yaw) @ p + (x, y, z)``.
+
+    Parameters
+    ----------
+    points : (N, 3) float ndarray
+        Points in the scanner frame, metres.
+    x, y, z : float
+        Scanner position in the map frame, metres.
+    yaw : float
+        Heading, radians CCW from +x.
+
+    Returns
+    -------
+    (N, 3) float64 ndarray
+        New array of points in the map frame.
+    """
+    c, s = math.cos(yaw), math.sin(yaw)
+    p = np.asarray(points, dtype=np.float64)
+    out = np.empty((len(p), 3), dtype=np.float64)
+    out[:, 0] = c * p[:, 0] - s * p[:, 1] + x
+    out[:, 1] = s * p[:, 0] + c * p[:, 1] + y
+    out[:, 2] = p[:, 2] + z
+    return out

@@ -1,4 +1,5 @@
-"""Run-time helpers shared by the stages: progress lines in a stage's log.
+"""Run-time helpers shared by the stages: progress lines in a stage's log, worker
+processes, and Open3D's OpenMP threads.
 
 A stage that takes more than a few seconds wraps its main loop in :func:`progress`, so
 its log (and the terminal, through :func:`floorscan.core.stage.stage_log`) says how far it
@@ -6,13 +7,32 @@ is and how fast it goes, at most every ``every_s`` seconds::
 
     for scan_id, xyz in progress(iter_scans(path), log, total=n, what="scans"):
         ...
+
+A stage runs independent calls in the processes its Snakemake rule's ``threads`` give
+it with the standard library's :class:`concurrent.futures.ProcessPoolExecutor`::
+
+    rows = map_in_processes(fn, calls, workers)        # a pool for this one map
+    with process_pool(workers, preload=("open3d",)) as pool:
+        start_workers(pool, workers)                   # their imports overlap our work
+        future = pool.submit(fn, *args)                # ... one pool for the whole job
+
+The workers are spawned, not forked: Open3D's and scikit-learn's OpenMP runtimes are not
+safe across ``fork``. A spawned worker imports the parent's main module again (as
+``__mp_main__``), so a stage script that reaches a pool keeps its work under
+``if __name__ == "__main__":`` (Snakemake runs a ``script:`` as ``__main__``). A worker
+takes about a second to start (interpreter and imports): start one pool per job and give
+each call at least a second of work.
 """
 
 from __future__ import annotations
 
+import functools
+import importlib
 import logging
+import multiprocessing
 import time
-from typing import Callable, Iterable, Iterator, TypeVar
+from concurrent.futures import Executor, ProcessPoolExecutor
+from typing import Any, Callable, Iterable, Iterator, Sequence, TypeVar
 
 T = TypeVar("T")
 
@@ -73,3 +93,118 @@ def _line(done: int, total: int | None, what: str, seconds: float) -> str:
     rate = done / seconds if seconds > 0 else float("inf")
     of = f" of {total} {what} ({100.0 * done / total:.0f} %)" if total else f" {what}"
     return f"{done}{of} in {seconds:.1f} s, {rate:.1f} {what}/s"
+
+
+# --------------------------------------------------------------------------- processes
+
+
+def process_pool(workers: int, preload: Sequence[str] = ()) -> ProcessPoolExecutor:
+    """A pool of ``workers`` spawned worker processes, each importing the ``preload``
+    modules before its first call (the pool starts a worker at a call that finds none
+    idle; :func:`start_workers` starts them ahead).
+
+    Parameters
+    ----------
+    workers : int
+        Worker processes (at least 1).
+    preload : sequence of str
+        Module names each worker imports when it starts.
+
+    Returns
+    -------
+    concurrent.futures.ProcessPoolExecutor
+        To be shut down by the caller (``with`` block or ``shutdown()``).
+    """
+    return ProcessPoolExecutor(
+        max_workers=max(1, int(workers)),
+        mp_context=multiprocessing.get_context("spawn"),
+        initializer=_import_modules,
+        initargs=(tuple(preload),),
+    )
+
+
+def _import_modules(names: tuple[str, ...]) -> None:
+    for name in names:
+        importlib.import_module(name)
+
+
+def _nothing() -> None:
+    return None
+
+
+def start_workers(pool: ProcessPoolExecutor, n: int) -> None:
+    """Start ``n`` workers of ``pool`` now, so that their start-up (interpreter, main
+    module, ``preload``) overlaps the caller's work instead of delaying the first
+    results: ``n`` empty calls, each finding no idle worker, start one each."""
+    for _ in range(max(0, int(n))):
+        pool.submit(_nothing)
+
+
+def map_in_processes(fn: Callable, calls: Sequence[tuple], workers: int = 1,
+                     pool: Executor | None = None) -> list[Any]:
+    """``[fn(*args) for args in calls]`` in worker processes.
+
+    With ``pool``, every call runs in it. Without, the first call runs here and the
+    others in a pool of ``min(workers, len(calls)) - 1`` processes made for this map (a
+    process fewer to start); with one worker or one call, every call runs here.
+
+    Parameters
+    ----------
+    fn : callable
+        A module-level function (the workers import it by module and name); its
+        arguments and result must pickle.
+    calls : sequence of tuple
+        Positional arguments of each call.
+    workers : int
+        Processes to use, this one included (the rule's ``threads``).
+    pool : concurrent.futures.Executor, optional
+        A pool to run every call in (:func:`process_pool`).
+
+    Returns
+    -------
+    list
+        The results, in the order of ``calls``.
+
+    Raises
+    ------
+    Exception
+        The first failed call's exception, raised again here with its message (a
+        worker's traceback is attached as its ``__cause__``);
+        :class:`concurrent.futures.process.BrokenProcessPool` when a worker died.
+    """
+    calls = list(calls)
+    if pool is not None:
+        futures = [pool.submit(fn, *args) for args in calls]
+        return [f.result() for f in futures]
+    n = min(int(workers), len(calls)) - 1
+    if n < 1:
+        return [fn(*args) for args in calls]
+    with process_pool(n) as own:
+        futures = [own.submit(fn, *args) for args in calls[1:]]
+        try:
+            first = fn(*calls[0])
+            return [first] + [f.result() for f in futures]
+        except BaseException:
+            own.shutdown(wait=True, cancel_futures=True)
+            raise
+
+
+# --------------------------------------------------------------------------- threads
+
+
+def one_openmp_thread():
+    """Context: Open3D's OpenMP loops on one thread (threadpoolctl, a scikit-learn
+    dependency). Its multi-threaded reductions sum in varying order, so results (the
+    pose graph) would differ from run to run in the last bits (same input, same output
+    is a house rule); and on the 2-core target one thread costs less CPU. The
+    controller is made once: ``threadpool_limits`` scans the loaded libraries on every
+    call."""
+    return _openmp_controller().limit(limits=1, user_api="openmp")
+
+
+@functools.lru_cache(maxsize=1)
+def _openmp_controller():
+    import open3d as o3d  # noqa: F401  (its OpenMP runtime must be loaded before the scan)
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()

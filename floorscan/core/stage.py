@@ -40,12 +40,12 @@ LOG_FORMAT = "%(asctime)s %(levelname)s %(name)s: %(message)s"
 
 #: Exceptions that report bad input or a bad config, not a bug, as (module, class):
 #: :class:`floorscan.core.io.InputError`, :class:`floorscan.core.config.ConfigError`,
-#: :class:`floorscan.register.registration.RegistrationError` (a recording too poor to
+#: :class:`floorscan.register.result.RegistrationError` (a recording too poor to
 #: register). Looked up among the modules already imported, so none is imported here.
 EXPECTED_ERRORS = (
     ("floorscan.core.io", "InputError"),
     ("floorscan.core.config", "ConfigError"),
-    ("floorscan.register.registration", "RegistrationError"),
+    ("floorscan.register.result", "RegistrationError"),
 )
 
 #: ``extra`` of the failure record: the stderr handler leaves it to the log file.

@@ -6,7 +6,7 @@
 :mod:`floorscan.score.tolerance`), and its floor plan's faces with the latter
 (``plan_*`` columns); the runs of one ordering and extractor in increasing k are scored
 incrementally (:class:`floorscan.score.growing._GrowingWalls`). The orderings x
-extractors are split over processes by :func:`floorscan.core.parallel.map_in_processes`
+extractors are split over processes by :func:`floorscan.core.runtime.map_in_processes`
 (the only process pool of the score package); the table does not depend on their
 number. :func:`sort_scores` orders the rows (and the concatenated tables of the
 per-extractor jobs) as one call over all runs would.
@@ -83,7 +83,7 @@ def score_dataset(
         metrics stay against ``references``, and ``recall_all_<tau>`` gives recall
         against ``references`` too.
     workers : int
-        Processes (:func:`floorscan.core.parallel.map_in_processes`; the score rule's
+        Processes (:func:`floorscan.core.runtime.map_in_processes`; the score rule's
         ``threads``) over which the orderings x extractors are split. Each ordering and
         extractor is scored in one process, so the table does not depend on it
         (tested); the walls are then best given as paths (runs are pickled to the
@@ -114,10 +114,10 @@ def score_dataset(
     if n == 1:
         rows = _score_rows(runs, *args)
     else:
-        from floorscan.core.parallel import map_in_processes
+        from floorscan.core.runtime import map_in_processes
 
         shares = [[r for key in keys[w::n] for r in groups[key]] for w in range(n)]
-        rows = [row for part in map_in_processes(_score_rows, [(share, *args) for share in shares]) for row in part]
+        rows = [row for part in map_in_processes(_score_rows, [(share, *args) for share in shares], n) for row in part]
     df = sort_scores(pd.DataFrame(rows))
     if log is not None:
         tau = tau_label(cfg["taus_m"][0])

@@ -117,3 +117,81 @@ def write_scores(
                        + "\n## Walls of k scans on the configured k grid\n\n"
                        + grid_summary_markdown(grid_summary, tau, cfg["summary_levels"]))
     return Scores(curve_table, summary, n_kept, line, verdict)
+
+
+def write_run_scores(
+    inputs: Mapping,
+    runs: Sequence[Sequence],
+    orderings: Sequence[str],
+    output: str | os.PathLike,
+    cfg: Mapping,
+    dataset: str,
+    extractor: str,
+    reference: Mapping[str, str],
+    extractors: Sequence[str],
+    workers: int = 1,
+) -> pd.DataFrame:
+    """Score every wall set and floor plan of one extractor (rule ``score_runs``) and write
+    the table: the thesis's bitmap CM/FP/FN (section 5.1) and the tolerance metrics
+    against the ground truth or reference walls (:func:`floorscan.score.runs.score_dataset`),
+    and each plan against the reference map (:func:`floorscan.score.against_reference.score_plans`).
+
+    Parameters
+    ----------
+    inputs : mapping
+        The rule's inputs: ``walls`` and ``floorplans`` (one per run, in ``runs`` order),
+        ``orderings`` (one per ordering), ``reference_map``, and ``ground_truth`` or
+        ``reference`` (the reference walls of every extractor).
+    runs : sequence of [ordering, extractor, k label]
+    orderings : sequence of str
+        The orderings of ``inputs["orderings"]``.
+    output : path
+        The table (``score/<extractor>.parquet``).
+    cfg : mapping
+        The ``score`` config section.
+    dataset, extractor : str
+    reference : mapping
+        ``kind`` (ground truth or reference) and ``label``.
+    extractors : sequence of str
+        Every extractor of the dataset: the bitmap grid spans all their references.
+    workers : int
+        Processes for the scoring (the rule's threads).
+
+    Returns
+    -------
+    DataFrame
+        The table written (one row per run).
+    """
+    from floorscan.score.against_reference import score_plans
+    from floorscan.score.geojson import floorplan_faces
+    from floorscan.score.ground_truth import load_recall_references, load_references
+    from floorscan.score.reference import read_grid
+    from floorscan.score.runs import SCORE_TIME, score_dataset
+
+    kind = reference["kind"]
+    references = load_references(kind, list(extractors), inputs.get("ground_truth"), inputs.get("reference", []))
+    recall_refs = load_recall_references(kind, list(extractors), inputs.get("ground_truth"), cfg["recall_reference"])
+    log.info("scoring %s against the %s: %s", extractor, reference["label"], {e: len(s) for e, s in references.items()})
+    if recall_refs is not None:
+        log.info("recall against the %s features: %s segments", cfg["recall_reference"],
+                 {e: len(s) for e, s in recall_refs.items()})
+    n_kept = {o: len(read_table(p, columns=["scan_id"])) for o, p in zip(orderings, inputs["orderings"])}
+    # paths, not tables: score_dataset reads one run's walls and floor plan at a time
+    run_files = [
+        {"ordering": o, "extractor": e, "k": k, "walls": wp, "n_kept": n_kept[o], "floorplan": fp}
+        for (o, e, k), wp, fp in zip(runs, inputs["walls"], inputs["floorplans"], strict=True)
+    ]
+    table = score_dataset(run_files, references, kind, cfg, dataset, log, recall_references=recall_refs,
+                          workers=workers)
+    # the plans against the reference map (occupancy grid of all kept scans)
+    against_map = score_plans(run_files, read_grid(inputs["reference_map"]), tuple(cfg["taus_m"]), floorplan_faces)
+    table = table.merge(against_map, on=["ordering", "extractor", "k"], how="left", validate="one_to_one")
+    # the time of each run to the log, not into the metrics (the same input gives the same file)
+    seconds = table.pop(SCORE_TIME)
+    if len(seconds):
+        slowest = int(seconds.to_numpy().argmax())
+        log.info("scored %d runs in %.2f s, the slowest %.2f s (%s)", len(table), seconds.sum(), seconds.iloc[slowest],
+                 "/".join(str(table[c].iloc[slowest]) for c in ("ordering", "extractor", "k")))
+    meta = {"dataset": dataset, "reference_kind": kind, "reference": reference["label"], "extractor": extractor}
+    write_table(table, output, metadata=meta)
+    return table

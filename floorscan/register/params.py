@@ -1,0 +1,271 @@
+"""The parameters of the register stage: :class:`RegistrationConfig` (config section
+``register``) and :class:`GraphParams` (its ``graph`` subsection, the pose graph).
+
+Keys and defaults match ``workflow/schemas/register.schema.yaml`` (a test checks they
+agree); the schema documents each key, its bounds and the reasons for the defaults. A
+new key goes into the schema and the dataclass with the same default, and into
+:meth:`RegistrationConfig.check` when it has bounds. The stage parses its section once::
+
+    cfg = RegistrationConfig.from_mapping(config["register"])   # InputError on a bad key
+    cfg.graph_params.loop_radius_m                               # the graph section, parsed once
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+from floorscan.core.io import InputError
+
+
+@dataclass(frozen=True)
+class GraphParams:
+    """Parameters of the pose graph (config ``register.graph``).
+
+    Attributes
+    ----------
+    sequential_neighbours : int
+        Edges from each sampled scan to this many following sampled scans.
+    loop_radius_m : float
+        Loop-closure candidates: scans whose positions are within this, metres.
+    loop_min_separation_s : float
+        ... and at least this far apart in time, seconds.
+    loop_max_per_scan : int
+        Nearest candidates tried per scan.
+    loop_partner_separation_m : float
+        The loop partners of a scan are at least this far apart along the path (the
+        distance travelled between them under the initial poses), metres: one per
+        revisit, as a pass through the ``loop_radius_m`` disc is about twice the
+        radius long; 0: the nearest candidates, however close to each other. Loop
+        closure from distinct passes is what ties the passes together; neighbouring
+        scans of one pass add ICP time and little information.
+    icp_distances_m : tuple of float
+        Coarse-to-fine maximum correspondence distances of the edge ICP, metres.
+    icp_max_iterations : int
+        Per distance.
+    voxel_size_m : float
+        Voxel downsampling of the scans before the edge ICP, metres (0: none).
+    coarse_voxel_size_m : float
+        Every ICP stage but the last (the coarser ``icp_distances_m``) aligns the
+        clouds voxel-downsampled again on this, metres (0, or not above
+        ``voxel_size_m``: the clouds themselves); the last stage and the fitness use
+        the full clouds. Coarse-to-fine multi-scale ICP, as Open3D's multi-scale ICP
+        (its tutorial halves the voxel with the distance).
+    vertical_extent_m : float
+        A 3D scan keeps the 2D cells whose points span at least this height, metres
+        (floor and ceiling drop out; :func:`floorscan.register.prepare.graph_cloud`).
+    max_height_gap_m : float
+        ... counting heights without a gap wider than this between them, metres.
+    inlier_m : float
+        A source point is an inlier when its nearest target point is this close, metres.
+    min_edge_fitness : float
+        Inlier fraction an edge needs after ICP.
+    edge_sigma_m, edge_sigma_rad : float
+        Standard deviation of an ICP edge's translation (metres) and yaw (radians).
+    prior_sigma_m, prior_sigma_rad : float
+        Standard deviation of a localizer pose (metres, radians).
+    workers : int
+        Processes for the edge ICP (the ``register`` rule passes its Snakemake
+        ``threads``). The edges do not depend on it: each pair is aligned alone.
+    solver : str
+        ``"sparse"`` (planar Gauss-Newton on sparse normal equations) or ``"open3d"``
+        (Open3D's dense 6-DoF Gauss-Newton); see :func:`optimize_pose_graph`.
+    """
+
+    sequential_neighbours: int = 2
+    loop_radius_m: float = 3.0
+    loop_min_separation_s: float = 3.0
+    loop_max_per_scan: int = 2
+    loop_partner_separation_m: float = 6.0
+    icp_distances_m: tuple[float, ...] = (0.3, 0.1)
+    icp_max_iterations: int = 10
+    voxel_size_m: float = 0.05
+    coarse_voxel_size_m: float = 0.1
+    vertical_extent_m: float = 0.2
+    max_height_gap_m: float = 0.5
+    inlier_m: float = 0.05
+    min_edge_fitness: float = 0.6
+    edge_sigma_m: float = 0.005
+    edge_sigma_rad: float = 0.002
+    prior_sigma_m: float = 0.05
+    prior_sigma_rad: float = 0.02
+    workers: int = 1
+    solver: str = "sparse"
+
+    @classmethod
+    def from_mapping(cls, cfg) -> "GraphParams":
+        """From a config mapping (unknown keys raise ``KeyError``)."""
+        from floorscan.core.config import dataclass_from_mapping
+
+        values = dict(cfg or {})
+        if "icp_distances_m" in values:
+            values["icp_distances_m"] = tuple(float(v) for v in values["icp_distances_m"])
+        return dataclass_from_mapping(cls, values, "register.graph")
+
+
+@dataclass(frozen=True)
+class RegistrationConfig:
+    """Parameters of the ``register`` stage; keys and defaults match
+    ``workflow/schemas/register.schema.yaml`` (a test checks they agree).
+
+    See the schema for each key's description, bounds and the reasons for the defaults.
+    The ``graph`` section is parsed once per config into :attr:`graph_params`.
+    """
+
+    mode: str = "auto"
+    reference: str = "graph"
+    every_n: int | None = None
+    keep_distance_m: float | None = None
+    keep_angle_rad: float | None = None
+    keep_range_fraction: float = 0.1
+    min_kept_fraction: float = 0.2
+    min_consistency: float = 0.3
+    n_previous: int = 5
+    min_points: int = 30
+    fitness_max_correspondence_m: float = 0.15
+    min_prior_fitness: float = 0.15
+    min_icp_fitness: float = 0.25
+    icp_method: str = "point_to_point"
+    icp_max_correspondence_m: tuple[float, ...] = (0.3, 0.15)
+    icp_max_iterations: int = 30
+    icp_tolerance_m: float = 1e-5
+    voxel_size_m: float = 0.05
+    normal_neighbours: int = 10
+    max_reference_distance_m: float = 8.0
+    reference_pose: str = "localizer"
+    n_references: int = 8
+    exclude_window_s: float = 3.0
+    reference_spacing_s: float = 1.0
+    passes: int = 3
+    relaxation: float = 0.5
+    max_speed_m_s: float = 2.0
+    max_turn_rate_rad_s: float = 3.0
+    pose_jump_slack_m: float = 0.1
+    pose_jump_slack_rad: float = 0.1
+    icp_voxel_size_3d_m: float = 0.2
+    odometry_scans: str = "all"
+    odometry_icp_method: str = "point_to_plane"
+    odometry_window: int = 20
+    odometry_keyframe_m: float = 0.25
+    odometry_keyframe_rad: float = 0.2
+    odometry_max_correspondence_m: float = 1.0
+    graph: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    loop_closure: bool = True
+
+    @classmethod
+    def from_mapping(cls, cfg: Mapping[str, Any] | None) -> "RegistrationConfig":
+        """Build from a config dict (the ``register`` section), rejecting unknown keys.
+
+        Raises
+        ------
+        InputError
+            On an unknown key or a value outside its range.
+        """
+        cfg = dict(cfg or {})
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(cfg) - names)
+        if unknown:
+            raise InputError(f"config register: unknown keys {unknown}; known: {sorted(names)}")
+        if "icp_max_correspondence_m" in cfg and not isinstance(cfg["icp_max_correspondence_m"], (int, float)):
+            cfg["icp_max_correspondence_m"] = tuple(float(v) for v in cfg["icp_max_correspondence_m"])
+        out = cls(**cfg)
+        out.check()
+        return out
+
+    @functools.cached_property
+    def graph_params(self) -> GraphParams:
+        """The ``graph`` section as :class:`GraphParams`, parsed on first use and kept.
+
+        Raises
+        ------
+        InputError
+            On an unknown key or a value of the wrong type in ``graph``.
+        """
+        try:
+            return GraphParams.from_mapping(self.graph)
+        except (KeyError, TypeError) as exc:
+            raise InputError(f"config register.graph: {exc}") from None
+
+    def replace(self, **changes: Any) -> "RegistrationConfig":
+        """:func:`dataclasses.replace` that keeps the parsed :attr:`graph_params` when
+        ``graph`` is not among the ``changes``."""
+        out = dataclasses.replace(self, **changes)
+        if "graph" not in changes and "graph_params" in self.__dict__:
+            out.__dict__["graph_params"] = self.__dict__["graph_params"]
+        return out
+
+    def check(self) -> None:
+        """Raise :class:`InputError` naming the key when a value is out of range."""
+        if self.mode not in ("auto", "pose", "odometry"):
+            raise InputError(f"config register.mode: expected 'auto', 'pose' or 'odometry', got {self.mode!r}")
+        if self.every_n is not None and int(self.every_n) < 1:
+            raise InputError(f"config register.every_n: expected >= 1 or null, got {self.every_n}")
+        for key in ("keep_distance_m", "keep_angle_rad"):
+            v = getattr(self, key)
+            if v is not None and not (math.isfinite(v) and v >= 0):
+                raise InputError(f"config register.{key}: expected >= 0 or null (chosen from the recording), got {v}")
+        if not 0.0 < self.keep_range_fraction <= 1.0:
+            raise InputError(f"config register.keep_range_fraction: expected 0 < value <= 1, got {self.keep_range_fraction}")
+        for key in ("min_kept_fraction", "min_consistency"):
+            if not 0.0 <= getattr(self, key) <= 1.0:
+                raise InputError(f"config register.{key}: expected 0..1, got {getattr(self, key)}")
+        if self.reference not in ("graph", "map", "previous"):
+            raise InputError(
+                f"config register.reference: expected 'graph', 'map' or 'previous', got {self.reference!r}"
+            )
+        self.graph_params  # parsed once, here: an error names the key
+        if not 0.0 < self.relaxation <= 1.0:
+            raise InputError(f"config register.relaxation: expected 0 < value <= 1, got {self.relaxation}")
+        if self.reference_pose not in ("localizer", "registered"):
+            raise InputError(
+                "config register.reference_pose: expected 'localizer' or 'registered', "
+                f"got {self.reference_pose!r}"
+            )
+        if self.icp_method not in ("point_to_point", "point_to_plane"):
+            raise InputError(
+                "config register.icp_method: expected 'point_to_point' or 'point_to_plane', "
+                f"got {self.icp_method!r}"
+            )
+        if self.odometry_scans not in ("all", "sampled"):
+            raise InputError(
+                f"config register.odometry_scans: expected 'all' or 'sampled', got {self.odometry_scans!r}"
+            )
+        if self.odometry_icp_method not in ("point_to_point", "point_to_plane"):
+            raise InputError(
+                "config register.odometry_icp_method: expected 'point_to_point' or 'point_to_plane', "
+                f"got {self.odometry_icp_method!r}"
+            )
+        for key in ("n_previous", "n_references", "passes", "icp_max_iterations", "odometry_window"):
+            if int(getattr(self, key)) < 1:
+                raise InputError(f"config register.{key}: expected >= 1, got {getattr(self, key)}")
+        if self.normal_neighbours < 3:
+            raise InputError(f"config register.normal_neighbours: expected >= 3, got {self.normal_neighbours}")
+        for key in ("min_prior_fitness", "min_icp_fitness"):
+            v = getattr(self, key)
+            if not 0.0 <= v <= 1.0:
+                raise InputError(f"config register.{key}: expected 0..1, got {v}")
+        for key in (
+            "fitness_max_correspondence_m",
+            "icp_tolerance_m",
+            "max_reference_distance_m",
+            "max_speed_m_s",
+            "max_turn_rate_rad_s",
+            "odometry_max_correspondence_m",
+            "icp_voxel_size_3d_m",
+        ):
+            if not getattr(self, key) > 0:
+                raise InputError(f"config register.{key}: expected > 0, got {getattr(self, key)}")
+        d = self.icp_max_correspondence_m
+        if isinstance(d, (int, float)) or len(d) == 0 or any(not v > 0 for v in d):
+            raise InputError(
+                f"config register.icp_max_correspondence_m: expected a non-empty list of "
+                f"distances > 0 (metres, coarse to fine), got {d!r}"
+            )
+        for key in ("voxel_size_m", "pose_jump_slack_m", "pose_jump_slack_rad", "min_points",
+                    "exclude_window_s", "reference_spacing_s",
+                    "odometry_keyframe_m", "odometry_keyframe_rad"):
+            if getattr(self, key) < 0:
+                raise InputError(f"config register.{key}: expected >= 0, got {getattr(self, key)}")

@@ -1,0 +1,301 @@
+"""Registration: every kept scan in one map frame, refined by planar ICP (thesis 3.2.2,
+3.5); the register stage's steps in order, on a recording in memory.
+
+Algorithm 3 of the thesis, steps 2-6 (step 1, pose interpolation, is the ``poses``
+stage):
+
+2. keep the scans that pass the per-scan checks and, among them, those the sampling
+   rule takes (``every_n``, or the motion filter; :mod:`floorscan.register.screening`);
+3. apply the localizer's pose (``map_point = Rz(yaw) @ p + (x, y, z)``);
+4. fitness of the scan against its references under the pose alone; drop the scan
+   when the mean is below ``min_prior_fitness``;
+5. refine the pose by ICP against references;
+6. drop the scan when the mean fitness after ICP is below ``min_icp_fitness``.
+
+Step 5 departs from the thesis: the strategy is ``register.reference`` (``graph``, the
+default: :mod:`floorscan.register.posegraph`; ``map``:
+:mod:`floorscan.register.scan_to_map`; ``previous``, the thesis's:
+:mod:`floorscan.register.sequential`), or without map poses ``mode: odometry``
+(:mod:`floorscan.register.odometry`). A strategy is a function
+``(sampled, clouds, sids, t, cfg, out) -> n_anchors`` that fills the per-scan arrays
+``out``; a new one is a module beside them, a branch of :func:`register_screened` and a
+value of ``reference`` in the schema.
+
+Usage::
+
+    result = register_scans(scans, scan_index, poses, {"reference": "graph"})
+    result.table, result.summary["verdict"]
+
+The register stage itself streams its points from the file
+(:func:`floorscan.register.stream.register_recording`, same output).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from typing import Any, Mapping
+
+import numpy as np
+import pandas as pd
+
+from floorscan.core.geometry import transform_points
+from floorscan.core.io import InputError, split_by_scan
+from floorscan.register.odometry import register_odometry
+from floorscan.register.params import RegistrationConfig
+from floorscan.register.posegraph import register_graph
+from floorscan.register.prepare import ScanStore
+from floorscan.register.result import (
+    RegistrationError,
+    RegistrationResult,
+    judge,
+    raise_if_nothing_registered,
+    summarize,
+)
+from floorscan.register.sampling import choose_thresholds, median_step_m, typical_range_m
+from floorscan.register.scan_to_map import register_map
+from floorscan.register.screening import aligned_poses, check_columns, prepare_index, sample_scans, screen_scans
+from floorscan.register.sequential import register_sequential
+
+log = logging.getLogger(__name__)
+
+
+def register_scans(
+    scans: pd.DataFrame,
+    scan_index: pd.DataFrame,
+    poses: pd.DataFrame | None = None,
+    config: RegistrationConfig | Mapping[str, Any] | None = None,
+    recording: Mapping[str, str] | None = None,
+) -> RegistrationResult:
+    """Register the scans of a recording into the map frame (thesis Algorithm 3, steps 2-6).
+
+    Parameters
+    ----------
+    scans : pandas.DataFrame
+        ``scan_id, x, y, z``: points in the scanner frame, metres (``scans.parquet``).
+    scan_index : pandas.DataFrame
+        ``scan_id, t_ns``: one row per scan (``scan_index.parquet``).
+    poses : pandas.DataFrame, optional
+        ``scan_id, x, y, z, yaw, valid, reason`` (``poses.parquet``): scanner pose in the
+        map frame per scan. Required in ``mode="pose"``, ignored in ``mode="odometry"``
+        (scan-to-scan ICP from the first usable scan, which defines the map frame).
+    config : RegistrationConfig or mapping, optional
+        The ``register`` config section; defaults from :class:`RegistrationConfig`.
+    recording : mapping of str to str, optional
+        What ingest found in the recording (``scan_index.parquet``'s schema metadata:
+        ``pose_kind``, ``stamps``), for :func:`resolve_config`.
+
+    Returns
+    -------
+    RegistrationResult
+        Registered points of the kept scans, one table row per scan, a summary (its
+        ``verdict``: :class:`floorscan.register.consistency.Verdict` as a dict), see
+        :mod:`floorscan.register.result`.
+
+    Raises
+    ------
+    InputError
+        When a table lacks a column, a point is not finite, the poses do not cover the scan
+        index, or poses are missing in pose mode.
+    RegistrationError
+        When no scan could be registered (the message gives the count per reason and the
+        threshold that dropped most scans), or the result is poor: fewer than
+        ``min_kept_fraction`` of the sampled scans kept, or a map consistency below
+        ``min_consistency`` (:mod:`floorscan.register.consistency`).
+
+    Notes
+    -----
+    The sampling is :func:`floorscan.register.screening.sample_scans`; the strategies
+    are described in their modules (``reference: graph``
+    :mod:`floorscan.register.posegraph`, ``map`` :mod:`floorscan.register.scan_to_map`,
+    ``previous`` :mod:`floorscan.register.sequential`, ``mode: odometry``
+    :mod:`floorscan.register.odometry`), the clouds of each scan in
+    :func:`floorscan.register.prepare.scan_clouds` and
+    :func:`~floorscan.register.prepare.graph_cloud`. There is no randomness: the same
+    input gives the same output.
+    """
+    cfg = coerce_config(config)
+    check_columns(scans, "scans.parquet", ["scan_id", "x", "y", "z"])
+    index = prepare_index(scan_index)
+    bad = ~np.isfinite(scans[["x", "y", "z"]].to_numpy(np.float64)).all(axis=1)
+    if bad.any():
+        raise InputError(
+            f"scans.parquet: {int(bad.sum())} points with non-finite x, y or z (first in scan "
+            f"{int(scans['scan_id'].to_numpy()[bad][0])}); expected finite metres"
+        )
+    clouds = split_by_scan(scans)
+    cfg = resolve_config(cfg, recording, math.nan if cfg.every_n else _range_sample(clouds))
+    aligned = aligned_poses(index, poses, cfg)
+    reasons = screen_scans(index, clouds, aligned, cfg)
+    table, summary = register_screened(index, aligned, reasons, ScanStore(cfg, clouds), cfg)
+    sids = table["scan_id"].to_numpy()
+    final = table[["x_m", "y_m", "z_m", "yaw_rad"]].to_numpy(np.float64)
+    kept = table["kept"].to_numpy(bool)
+    keep_ids = sids[kept]
+    parts = [transform_points(clouds[int(s)], *f) for s, f in zip(keep_ids, final[kept])]
+    registered = pd.DataFrame(
+        {
+            "scan_id": np.repeat(keep_ids.astype(np.int32), [len(p) for p in parts]),
+            **{
+                c: (np.concatenate(parts)[:, k] if parts else np.empty(0)).astype(np.float32)
+                for k, c in enumerate("xyz")
+            },
+        }
+    )
+    return RegistrationResult(registered=registered, table=table, summary=summary)
+
+
+def coerce_config(config) -> RegistrationConfig:
+    """``config`` as a checked :class:`RegistrationConfig` (a mapping is parsed)."""
+    cfg = config if isinstance(config, RegistrationConfig) else RegistrationConfig.from_mapping(config)
+    cfg.check()
+    return cfg
+
+
+def resolve_config(
+    cfg: RegistrationConfig, recording: Mapping[str, str] | None, range_m: float
+) -> RegistrationConfig:
+    """The settings a recording needs, from what ingest found in it (logged with why).
+
+    - ``mode: auto``: ``pose`` when the recording has map poses (``pose_kind`` ``map``:
+      a localizer topic, the TF chain from ``map``, a log's corrected poses), else
+      ``odometry`` (LIDAR odometry: wheel odometry alone is never the map pose);
+    - made-up stamps (``stamps`` ``made_up``: all zero, or mostly repeated) carry no
+      speed, so the pose-jump checks (``max_speed_m_s``, ``max_turn_rate_rad_s``) are off;
+    - without ``every_n``, the motion filter's thresholds not configured are chosen from
+      the scanner's typical range ``range_m`` (:mod:`floorscan.register.sampling`).
+
+    Parameters
+    ----------
+    cfg : RegistrationConfig
+    recording : mapping of str to str, or None
+        The schema metadata of ``scan_index.parquet`` (keys ``pose_kind``, ``stamps``);
+        None or missing keys: map poses, recorded stamps.
+    range_m : float
+        Typical range of the scanner, metres (:func:`floorscan.register.sampling.typical_range_m`).
+
+    Returns
+    -------
+    RegistrationConfig
+        With ``mode`` ``pose`` or ``odometry`` and the sampling thresholds set.
+
+    Raises
+    ------
+    InputError
+        ``mode: pose`` on a recording without map poses, or ``odometry_scans: sampled``
+        without ``every_n``.
+    """
+    rec = dict(recording or {})
+    pose_kind = rec.get("pose_kind", "map")
+    changes: dict[str, Any] = {}
+    if cfg.mode == "auto":
+        changes["mode"] = "pose" if pose_kind == "map" else "odometry"
+        log.info(
+            "register.mode auto -> %s (pose source: %s)", changes["mode"], rec.get("pose_source", "map poses")
+        )
+    elif cfg.mode == "pose" and pose_kind != "map":
+        raise InputError(
+            f"register.mode 'pose' needs map poses, but the recording has none ({rec.get('pose_source', pose_kind)}); "
+            "use register.mode auto or odometry, or name a pose source (dataset 'pose')"
+        )
+    if rec.get("stamps") == "made_up":
+        changes.update(max_speed_m_s=math.inf, max_turn_rate_rad_s=math.inf)
+        log.info("the scan stamps are made up (%s): pose-jump checks on speed and turn rate are off", rec.get("stamps"))
+    if cfg.every_n:
+        log.info("sampling: every %d-th usable scan (register.every_n)", cfg.every_n)
+    else:
+        th = choose_thresholds(range_m, cfg.keep_distance_m, cfg.keep_angle_rad, cfg.keep_range_fraction)
+        changes.update(keep_distance_m=th.distance_m, keep_angle_rad=th.angle_rad)
+        log.info("sampling: motion filter, %s", th.reason)
+        if changes.get("mode", cfg.mode) == "odometry" and cfg.odometry_scans == "sampled":
+            raise InputError("register.odometry_scans 'sampled' needs register.every_n (the motion filter samples the odometry's own poses)")
+    return cfg.replace(**changes)
+
+
+def _range_sample(clouds: Mapping[int, np.ndarray], n: int = 200) -> float:
+    """Typical range of a recording from up to ``n`` of its scans, evenly spread."""
+    ids = sorted(clouds)
+    pick = ids[:: max(1, len(ids) // n)]
+    return typical_range_m(clouds[i] for i in pick)
+
+
+def register_screened(index, aligned, reasons, clouds: ScanStore, cfg: RegistrationConfig, ahead=None,
+                      pool=None) -> tuple[pd.DataFrame, dict]:
+    """Algorithm 3 steps 2-6 after the per-scan checks: sampling, then the registration
+    of the configured mode (``ahead``: pose-graph edges aligned ahead, a finished
+    :class:`floorscan.register.edge_stream.EdgeStream`; ``pool``: the worker processes
+    of the pose graph's edge ICP). Returns the
+    :data:`~floorscan.register.result.REGISTRATION` table and the summary; raises
+    :class:`~floorscan.register.result.RegistrationError` when nothing could be
+    registered or the verdict fails."""
+    n = len(index)
+    odometry = cfg.mode == "odometry"
+    usable = np.flatnonzero(reasons == "")
+    if odometry:  # sampled on the odometry's own poses unless every_n is set
+        sampled = usable[:: cfg.every_n] if cfg.every_n else None
+    else:
+        sampled = sample_scans(usable, aligned, cfg)
+
+    kept = np.zeros(n, dtype=bool)
+    fit_prior = np.full(n, np.nan)
+    fit_icp = np.full(n, np.nan)
+    rmse = np.full(n, np.nan)
+    corr = np.full((n, 3), np.nan)
+    final = np.full((n, 4), np.nan)
+    if aligned is not None:
+        ok = aligned["valid"].to_numpy(bool)
+        final[ok] = aligned.loc[ok, ["x", "y", "z", "yaw"]].to_numpy(np.float64)
+
+    t = index["t_ns"].to_numpy(np.int64)
+    sids = index["scan_id"].to_numpy()
+    out = (kept, reasons, fit_prior, fit_icp, rmse, corr, final)
+    if odometry:
+        n_anchor, sampled = register_odometry(usable, sampled, clouds, sids, t, cfg, out)
+        if cfg.loop_closure:
+            register_graph(np.flatnonzero(kept), clouds, sids, t, cfg, out, priors=False, pool=pool)
+    elif cfg.reference == "graph":
+        n_anchor = register_graph(sampled, clouds, sids, t, cfg, out, priors=True, ahead=ahead, pool=pool)
+    elif cfg.reference == "previous":
+        n_anchor = register_sequential(sampled, clouds, sids, t, cfg, out)
+    else:
+        n_anchor = register_map(sampled, clouds, sids, t, cfg, out)
+    reasons[np.setdiff1d(usable, sampled)] = "not_sampled"
+    if not cfg.every_n and len(usable) > 1:
+        at = final[usable] if odometry else aligned[["x", "y"]].to_numpy(np.float64)[usable]
+        at = at[np.isfinite(at[:, 0])]
+        log.info(
+            "sampling: %d of %d usable scans (the recording's median step between scans %.3f m; "
+            "keep_distance_m %.3f, keep_angle_rad %.3f)",
+            len(sampled), len(usable), median_step_m(at[:, 0], at[:, 1]), cfg.keep_distance_m, cfg.keep_angle_rad,
+        )
+
+    table = pd.DataFrame(
+        {
+            "scan_id": sids.astype(np.int32),
+            "t_ns": t,
+            "kept": kept,
+            "reason": reasons.astype(str),
+            "fitness_prior": fit_prior,
+            "fitness_icp": fit_icp,
+            "inlier_rmse_m": rmse,
+            "dx_m": corr[:, 0],
+            "dy_m": corr[:, 1],
+            "dyaw_rad": corr[:, 2],
+            "x_m": final[:, 0],
+            "y_m": final[:, 1],
+            "z_m": final[:, 2],
+            "yaw_rad": final[:, 3],
+        }
+    )
+    summary = summarize(table, cfg)
+    raise_if_nothing_registered(table, cfg, summary)
+    judged = judge(table, clouds, cfg, summary)
+    summary["verdict"] = judged.as_dict()
+    log.info(
+        "register (%s): %d scans, %d sampled, %d kept (%d anchors); drops %s",
+        cfg.mode, n, len(sampled), int(kept.sum()), n_anchor, summary["drops"],
+    )
+    (log.info if judged.ok and not judged.warnings else log.warning)("verdict: %s", judged.line())
+    if not judged.ok:
+        raise RegistrationError(f"register: the result is poor: {judged.line()}")
+    return table, summary

@@ -1,0 +1,187 @@
+"""What the register stage gives: the per-scan table (:data:`REGISTRATION`, the drop
+reason of each scan), its summary, the verdict, and :class:`RegistrationError` when
+nothing or too little registers.
+
+Drop reasons (``reason`` column; kept scans have ``""``, or ``"anchor"`` for a scan kept
+without a reference, and the first scan in odometry mode):
+
+- ``no_pose:<reason>``: the poses table has no valid pose (reason from ``poses``);
+- ``duplicate``: same timestamp as the previous scan, or exactly the same points;
+- ``too_few_points``: fewer than ``min_points`` points;
+- ``pose_jump``: the pose moved faster than ``max_speed_m_s`` or turned faster than
+  ``max_turn_rate_rad_s`` since the last plausible pose;
+- ``not_sampled``: skipped by the sampling rule (not a failure);
+- ``low_prior_fitness`` / ``low_icp_fitness``: Algorithm 3 steps 4 and 6 (odometry
+  mode: no prior check; ``fitness_prior`` is then the fitness at the constant-velocity
+  prediction);
+- ``icp_failed``: ICP found fewer than 3 correspondences.
+
+A new reason gets its config key in :data:`REASON_THRESHOLD`, so that the "every scan
+dropped" error names it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections import Counter
+from dataclasses import dataclass
+from typing import Mapping
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+
+from floorscan.core.geometry import transform_points
+from floorscan.register.consistency import map_consistency, path_length_m, verdict
+from floorscan.register.params import RegistrationConfig
+
+#: One row per scan of ``scan_index`` (``registration.parquet``).
+REGISTRATION = pa.schema(
+    [
+        ("scan_id", pa.int32()),
+        ("t_ns", pa.int64()),
+        ("kept", pa.bool_()),
+        ("reason", pa.string()),
+        ("fitness_prior", pa.float64()),
+        ("fitness_icp", pa.float64()),
+        ("inlier_rmse_m", pa.float64()),
+        ("dx_m", pa.float64()),
+        ("dy_m", pa.float64()),
+        ("dyaw_rad", pa.float64()),
+        ("x_m", pa.float64()),
+        ("y_m", pa.float64()),
+        ("z_m", pa.float64()),
+        ("yaw_rad", pa.float64()),
+    ]
+)
+
+#: Config key behind each failure reason, for the "every scan dropped" error.
+REASON_THRESHOLD = {
+    "too_few_points": "min_points",
+    "pose_jump": "max_speed_m_s / max_turn_rate_rad_s",
+    "low_prior_fitness": "min_prior_fitness",
+    "low_icp_fitness": "min_icp_fitness",
+    "icp_failed": "icp_max_correspondence_m",
+    "duplicate": "(duplicate scans: no threshold)",
+    "no_pose": "(poses stage: no valid pose)",
+}
+
+
+class RegistrationError(ValueError):
+    """No scan could be registered; the message counts the drops per reason and names
+    the config threshold responsible for most of them."""
+
+
+
+@dataclass
+class RegistrationResult:
+    """Output of :func:`floorscan.register.pipeline.register_scans` and
+    :func:`floorscan.register.stream.register_recording`.
+
+    Attributes
+    ----------
+    registered : pandas.DataFrame
+        ``scan_id`` int32, ``x, y, z`` float32: points of the kept scans in the map frame
+        (metres), in scan order.
+    table : pandas.DataFrame
+        One row per scan of the scan index, columns of :data:`REGISTRATION`.
+    summary : dict
+        Counts per reason, drop fractions per threshold, median corrections.
+    """
+
+    registered: pd.DataFrame | None
+    table: pd.DataFrame
+    summary: dict
+
+
+def summarize(table: pd.DataFrame, cfg: RegistrationConfig | None = None) -> dict:
+    """Counts per reason (``counts``: every scan, ``""`` and ``"anchor"`` are kept;
+    ``drops``: the scans not kept), fraction dropped by each threshold, median corrections.
+
+    Drop fractions are given twice: of all scans (``fraction_of_scans``) and of the
+    scans that reached the check (``fraction_of_checked``: sampled scans for the fitness
+    thresholds, i.e. those passing the prior check for ``low_icp_fitness``).
+
+    Returns
+    -------
+    dict
+        JSON-serialisable.
+    """
+    reasons = table["reason"].str.replace(r"^no_pose:.*", "no_pose", regex=True)
+    counts = dict(sorted(Counter(reasons).items()))
+    drops = dict(sorted(Counter(reasons[~table["kept"].to_numpy(bool)]).items()))
+    n = len(table)
+    sampled = int(table["kept"].sum() + reasons.isin(["low_prior_fitness", "low_icp_fitness", "icp_failed"]).sum())
+    n_prior = int((reasons == "low_prior_fitness").sum())
+    n_icp = int((reasons == "low_icp_fitness").sum())
+    checked_prior = int(table["fitness_prior"].notna().sum())
+    checked_icp = int(table["fitness_icp"].notna().sum())
+    registered = table["kept"] & table["fitness_icp"].notna()
+    dxy = np.hypot(table.loc[registered, "dx_m"], table.loc[registered, "dy_m"])
+    dyaw = np.abs(table.loc[registered, "dyaw_rad"])
+    out = {
+        "n_scans": n,
+        "n_sampled": sampled,
+        "n_kept": int(table["kept"].sum()),
+        "n_registered": int(registered.sum()),
+        "counts": counts,
+        "drops": drops,
+        "fraction_of_scans": {k: v / n for k, v in counts.items()} if n else {},
+        "fraction_of_checked": {
+            "low_prior_fitness": n_prior / checked_prior if checked_prior else 0.0,
+            "low_icp_fitness": n_icp / checked_icp if checked_icp else 0.0,
+        },
+        "median_fitness_prior": float(table["fitness_prior"].median()) if checked_prior else math.nan,
+        "median_fitness_icp": float(table["fitness_icp"].median()) if checked_icp else math.nan,
+        "median_correction_m": float(np.median(dxy)) if len(dxy) else math.nan,
+        "median_correction_rad": float(np.median(dyaw)) if len(dyaw) else math.nan,
+        "p90_correction_m": float(np.percentile(dxy, 90)) if len(dxy) else math.nan,
+    }
+    if cfg is not None:
+        out["config"] = dataclasses.asdict(cfg)
+    return out
+
+
+def raise_if_nothing_registered(table: pd.DataFrame, cfg: RegistrationConfig, summary: dict) -> None:
+    """Raise :class:`RegistrationError` when no scan was registered: the counts per
+    reason and the threshold behind most drops (:func:`worst_drop`)."""
+    counts = summary["counts"]
+    failures = {k: v for k, v in counts.items() if k not in ("", "anchor", "not_sampled")}
+    n_kept = summary["n_kept"]
+    checked = int(table["fitness_icp"].notna().sum() + (table["reason"] == "low_prior_fitness").sum())
+    if n_kept > 0 and not (summary["n_registered"] == 0 and checked > 0):
+        return
+    if not failures:
+        raise RegistrationError(f"register: no scans to register ({len(table)} scans in the index)")
+    worst, option = worst_drop(failures, cfg)
+    raise RegistrationError(
+        f"register: no scan could be registered ({n_kept} kept without a reference) of "
+        f"{len(table)}; drops per reason {failures}; most were dropped by '{worst}' (threshold {option})"
+    )
+
+
+def worst_drop(failures: Mapping[str, int], cfg: RegistrationConfig) -> tuple[str, str]:
+    """The drop reason behind most lost scans and the option(s) that set it with their
+    values (``register.min_prior_fitness=0.15``); ``("", "")`` without drops."""
+    if not failures:
+        return "", ""
+    worst = max(failures, key=lambda k: failures[k])
+    parts = REASON_THRESHOLD.get(worst, worst).split(" / ")
+    return worst, " / ".join(f"register.{p}={getattr(cfg, p)}" if hasattr(cfg, p) else p for p in parts)
+
+
+def judge(table: pd.DataFrame, clouds, cfg: RegistrationConfig, summary: dict):
+    """The verdict on the registration (:func:`floorscan.register.consistency.verdict`):
+    the map's consistency measured on each kept scan's ``clouds.map_cloud`` (a
+    :class:`floorscan.register.prepare.ScanStore`) at its final pose."""
+    kept = table["kept"].to_numpy(bool)
+    sids = table["scan_id"].to_numpy()[kept]
+    final = table[["x_m", "y_m", "z_m", "yaw_rad"]].to_numpy(np.float64)[kept]
+    parts = [transform_points(clouds.map_cloud(int(s)), *f) for s, f in zip(sids, final)]
+    cons, n_rev = map_consistency(parts, path_length_m(final[:, 0], final[:, 1]), final[:, :2])
+    worst, option = worst_drop({k: v for k, v in summary["drops"].items() if k != "not_sampled"}, cfg)
+    return verdict(
+        summary["n_sampled"], summary["n_kept"], cons, n_rev, cfg.min_kept_fraction, cfg.min_consistency,
+        worst, option,
+    )
