@@ -22,14 +22,13 @@ from floorscan.core.files import atomic_path
 from floorscan.floorplan.footprints import PlanExports
 from floorscan.floorplan.georeference import Georeference, as_georeference
 from floorscan.floorplan.metadata import PlanMetadata, _metadata
+from floorscan.floorplan.params import DXF_VERSIONS
 
 if TYPE_CHECKING:
     from floorscan.floorplan.params import FloorplanParams
     from floorscan.floorplan.plan import FloorPlan
 
 
-#: DXF versions :func:`write_dxf` writes (R2010 the default: R12 has no units header).
-DXF_VERSIONS = ("R2010", "R12")
 
 
 #: Layers of the DXF export and their colours (AutoCAD Color Index: red, white, green).

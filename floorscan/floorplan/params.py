@@ -12,9 +12,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Mapping
 
-from floorscan.floorplan.dxf import DXF_VERSIONS
-from floorscan.floorplan.georeference import Georeference, as_georeference
 from floorscan.core.config import schema_defaults
+from floorscan.floorplan.georeference import Georeference, as_georeference
+
+
+#: DXF versions :func:`write_dxf` writes (R2010 the default: R12 has no units header).
+DXF_VERSIONS = ("R2010", "R12")
 
 
 @dataclass(frozen=True)

@@ -30,15 +30,8 @@ import pandas as pd
 import pyarrow.parquet as pq
 
 from floorscan.core.geometry import transform_points
-from floorscan.core.io import (
-    REGISTERED,
-    SCANS,
-    InputError,
-    ScanRowGroups,
-    atomic_path,
-    iter_scans,
-    parquet_options,
-)
+from floorscan.core.io import REGISTERED, SCANS, InputError, ScanRowGroups, iter_scans, parquet_options
+from floorscan.core.files import atomic_path
 from floorscan.core.runtime import process_pool, progress, start_workers
 from floorscan.register.edge_stream import EdgeStream
 from floorscan.register.params import RegistrationConfig
@@ -72,7 +65,7 @@ def register_recording(
     their points going to a temporary Parquet file beside ``registered_path`` (the kept
     scans are sampled ones: 1 in ``every_n``). After registration that file is read
     back and each kept scan's points are transformed into the map frame and written to
-    ``registered_path`` (a Parquet writer on :func:`floorscan.core.io.atomic_path`, a row group
+    ``registered_path`` (a Parquet writer on :func:`floorscan.core.files.atomic_path`, a row group
     per ~1 M points). Same output as
     :func:`~floorscan.register.pipeline.register_scans` (tested), given the same input.
     With ``graph.workers`` above 1 the pose graph's edge ICP runs in a pool of worker
