@@ -252,10 +252,8 @@ def validate_config(data: dict, schema_path: str | os.PathLike, section: str = "
 
     The checks and defaults of ``snakemake.utils.validate(data, schema_path)`` (a
     ``jsonschema`` Draft 2020-12 validator that sets each missing property with a
-    ``default``), the schema parsed once per process with libyaml: the workflow
-    validates 16 config sections at every start, which took Snakemake's validate
-    0.34 s for the 10 schemas (pure-Python YAML, a schema read per call) and this
-    0.02 s (issue 8: the start of every run).
+    ``default``), each schema parsed once per process with libyaml (the workflow
+    validates every stage's section at every start).
 
     Parameters
     ----------

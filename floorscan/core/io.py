@@ -114,19 +114,14 @@ def parquet_options(schema: pa.Schema, statistics: list[str] | None = None) -> d
     """Keyword arguments for ``pyarrow.parquet.write_table`` / ``ParquetWriter``: LZ4
     (pyarrow's ``"lz4"`` is the interoperable LZ4_RAW codec of the Parquet format);
     floating-point columns BYTE_STREAM_SPLIT-encoded without a dictionary (coordinates
-    rarely repeat: a dictionary is built and dropped, which cost half the time of
-    writing a points table), the other columns dictionary-encoded. Measured on 8 M points
-    of hallways3d (scan_id, x, y, z): write 0.80 -> 0.38 s, read 0.25 -> 0.14 s, file
-    105 -> 76 MB. LZ4 rather than zstd (issue 8): on 16 M points of hallways3d the file
-    is as small (146 against 145 MB; the byte-split floats compress alike) and it takes
-    0.57 against 1.07 CPU-s to write and 0.31 against 0.44 CPU-s to read (the ingest
-    stage writes 72 M points, the register stage reads them).
+    rarely repeat: a dictionary is built and dropped), the other columns
+    dictionary-encoded. LZ4 rather than zstd: as small on points tables, and faster to
+    write and read (benchmarks/README.md).
 
     ``statistics`` names the columns whose row-group min/max are written (default:
     all). The points tables keep them for ``scan_id`` (row groups of a scan range,
-    :func:`iter_scans`) and, where a reader uses them, ``x`` and ``y``: min/max of
-    the float columns took 40 % of writing a points table (0.20 of 0.53 CPU-s for
-    12.6 M points of hallways3d).
+    :func:`iter_scans`) and, where a reader uses them, ``x`` and ``y`` (the min/max of
+    every float column is a large share of writing a points table).
     """
     floats = [f.name for f in schema if pa.types.is_floating(f.type)]
     options = {
@@ -274,7 +269,7 @@ def iter_scans(
     """Stream a points table (``scan_id, x, y, z``) scan by scan.
 
     Reads ``path`` in record batches, so memory holds one batch and one scan, never
-    the whole recording (issue 8: peak memory follows the largest scan).
+    the whole recording (peak memory follows the largest scan).
 
     Parameters
     ----------

@@ -17,11 +17,6 @@ possible. The ranges cover every scan id (kept or not) exactly once, so each poi
 of ``registered.parquet`` falls in exactly one shard. A shard's range is in its file
 name (:func:`shard_label`), so a shard job needs only its inputs and its wildcards.
 
-The plan was a checkpoint job of its own per stage (issue 8): two jobs and a DAG
-update between registration and the shards. On hallways3d the first shard started
-1.0-1.4 s after registration had ended with those jobs, 0.4 s without them (3
-interleaved runs each).
-
 Why shards of kept scans rather than fixed ranges of scan ids: the kept scans
 are spread unevenly over the recording (hallways keeps 1017 of 5081 scans), so fixed
 id ranges would give unequal jobs, and a fixed number of shards would split small

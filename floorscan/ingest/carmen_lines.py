@@ -15,7 +15,7 @@ FLASER beams span the field of view (default 180 degrees) starting at -fov/2. Wi
 even beam count (180, 360) the increment is fov/n; with an odd one (181, 361) both ends
 are included and it is fov/(n-1): the convention of the Radish logs' readers.
 
-Malformed lines (issue 24). A laser line is read only when it has exactly the fields its
+Malformed lines. A laser line is read only when it has exactly the fields its
 counts imply: ``2 + n + 9`` for FLASER, ``24 + n + m`` for ROBOTLASER1 (n beams, m
 remissions); a field too many or too few would shift every later field (a range read as
 the pose, the pose as the stamp), so it is an ``InputError`` naming ``file:line``, the

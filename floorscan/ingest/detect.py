@@ -1,4 +1,4 @@
-"""The format of a recording, from its path (issue 20: a user gives only ``path``).
+"""The format of a recording, from its path (a user may give only ``path``).
 
 A dataset without ``format`` is read as what its path is:
 

@@ -15,7 +15,7 @@ Points are moved into the scanner frame with the inverse pose, so a PCD recordin
 through the same stages as a bag; the pose stream is the locations themselves (pose kind
 ``map``, source ``embedded``; stamps ``recorded`` with ``t_ns``, else ``made_up``).
 
-Checks (issue 24): bad input is an ``InputError`` naming the file (and line, field or
+Checks: bad input is an ``InputError`` naming the file (and line, field or
 column), never a wrong point or pose.
 
 - PCD header (the PCD v0.7 format of the Point Cloud Library): ``FIELDS``, ``SIZE``,

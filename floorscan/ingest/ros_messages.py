@@ -5,7 +5,7 @@ A message's time is its header stamp (the bag's receive time when the stamp is z
 (:func:`laser_scan_xyz`), a ``sensor_msgs/PointCloud2`` its ``x, y, z`` fields, whatever
 their layout (:func:`pointcloud2_xyz`).
 
-Bad values (issue 24) are an ``InputError`` naming the file, the topic, the message
+Bad values are an ``InputError`` naming the file, the topic, the message
 (:func:`message_label`) and the field, never a wrong pose or point: a LaserScan's
 ``angle_min``, ``angle_increment``, ``range_min`` or ``range_max`` not finite; a pose
 message's position or orientation not finite, or its quaternion not a unit one (``|q|^2``

@@ -1,6 +1,6 @@
 """Which topics of a bag carry its scans and its map poses, when the dataset does not say.
 
-Detection (issue 20):
+Detection:
 
 - scan topic (:func:`detect_scan_topic`): the bag's one topic of LaserScan or
   PointCloud2 messages; with several or none, an ``InputError`` lists the candidates

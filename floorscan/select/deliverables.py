@@ -1,5 +1,5 @@
 """What a user takes home from the select stage: how many scans to keep, which ones,
-and their points (issue 23).
+and their points.
 
 An ordering (``orderings/<name>.parquet``) ranks every kept scan by what it adds; its
 cumulative objective (covered area, covered cells) rises quickly, then flattens. Three

@@ -1,5 +1,5 @@
 """The reduced recording: the user's recording with only the selected scans and the
-messages needed to use them (issue 23), in the recording's own format.
+messages needed to use them, in the recording's own format.
 
 The selected scans are found exactly as ingest numbered them (``scan_id`` = the
 position of the scan in ingest's reading order, :mod:`floorscan.ingest`), never by a

@@ -1,4 +1,4 @@
-"""The reduced recording of a ROS1 ``.bag`` or a ROS2 bag folder (issue 23).
+"""The reduced recording of a ROS1 ``.bag`` or a ROS2 bag folder.
 
 ROS1 ``.bag`` -> ROS1 ``.bag`` (``rosbags.rosbag1.Writer``, the input's chunk
 compression); ROS2 bag folder (or its ``.db3`` / ``.mcap`` file) -> ROS2 bag folder

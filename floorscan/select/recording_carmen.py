@@ -1,4 +1,4 @@
-"""The reduced recording of a CARMEN ``.log`` / ``.log.gz`` (issue 23).
+"""The reduced recording of a CARMEN ``.log`` / ``.log.gz``.
 
 Written with the input's compression (gzip with mtime 0, so the same selection gives
 the same bytes). Kept:

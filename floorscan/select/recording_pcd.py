@@ -1,4 +1,4 @@
-"""The reduced recording of a PCD folder (issue 23): a folder with the selected ``.pcd``
+"""The reduced recording of a PCD folder: a folder with the selected ``.pcd``
 files copied and the locations CSV reduced to their rows (field text as it was).
 """
 
