@@ -18,10 +18,12 @@ import math
 from dataclasses import dataclass
 from typing import Any, Mapping
 
+from floorscan.core.config import dataclass_from_mapping, schema_defaults
 from floorscan.core.io import InputError
 
 
 @dataclass(frozen=True)
+@schema_defaults("register.graph", icp_distances_m=lambda d: tuple(d["icp_distances_m"]))
 class GraphParams:
     """Parameters of the pose graph (config ``register.graph``).
 
@@ -75,31 +77,29 @@ class GraphParams:
         (Open3D's dense 6-DoF Gauss-Newton); see :func:`optimize_pose_graph`.
     """
 
-    sequential_neighbours: int = 2
-    loop_radius_m: float = 3.0
-    loop_min_separation_s: float = 3.0
-    loop_max_per_scan: int = 2
-    loop_partner_separation_m: float = 6.0
-    icp_distances_m: tuple[float, ...] = (0.3, 0.1)
-    icp_max_iterations: int = 10
-    voxel_size_m: float = 0.05
-    coarse_voxel_size_m: float = 0.1
-    vertical_extent_m: float = 0.2
-    max_height_gap_m: float = 0.5
-    inlier_m: float = 0.05
-    min_edge_fitness: float = 0.6
-    edge_sigma_m: float = 0.005
-    edge_sigma_rad: float = 0.002
-    prior_sigma_m: float = 0.05
-    prior_sigma_rad: float = 0.02
+    sequential_neighbours: int
+    loop_radius_m: float
+    loop_min_separation_s: float
+    loop_max_per_scan: int
+    loop_partner_separation_m: float
+    icp_distances_m: tuple[float, ...]
+    icp_max_iterations: int
+    voxel_size_m: float
+    coarse_voxel_size_m: float
+    vertical_extent_m: float
+    max_height_gap_m: float
+    inlier_m: float
+    min_edge_fitness: float
+    edge_sigma_m: float
+    edge_sigma_rad: float
+    prior_sigma_m: float
+    prior_sigma_rad: float
     workers: int = 1
-    solver: str = "sparse"
+    solver: str
 
     @classmethod
     def from_mapping(cls, cfg) -> "GraphParams":
         """From a config mapping (unknown keys raise ``KeyError``)."""
-        from floorscan.core.config import dataclass_from_mapping
-
         values = dict(cfg or {})
         if "icp_distances_m" in values:
             values["icp_distances_m"] = tuple(float(v) for v in values["icp_distances_m"])
@@ -107,53 +107,54 @@ class GraphParams:
 
 
 @dataclass(frozen=True)
+@schema_defaults("register", icp_max_correspondence_m=lambda d: tuple(d["icp_max_correspondence_m"]))
 class RegistrationConfig:
-    """Parameters of the ``register`` stage; keys and defaults match
-    ``workflow/schemas/register.schema.yaml`` (a test checks they agree).
+    """Parameters of the ``register`` stage; keys and defaults are those of
+    ``workflow/schemas/register.schema.yaml`` (:func:`floorscan.core.config.schema_defaults`).
 
     See the schema for each key's description, bounds and the reasons for the defaults.
     The ``graph`` section is parsed once per config into :attr:`graph_params`.
     """
 
-    mode: str = "auto"
-    reference: str = "graph"
-    every_n: int | None = None
-    keep_distance_m: float | None = None
-    keep_angle_rad: float | None = None
-    keep_range_fraction: float = 0.1
-    min_kept_fraction: float = 0.2
-    min_consistency: float = 0.3
-    n_previous: int = 5
-    min_points: int = 30
-    fitness_max_correspondence_m: float = 0.15
-    min_prior_fitness: float = 0.15
-    min_icp_fitness: float = 0.25
-    icp_method: str = "point_to_point"
-    icp_max_correspondence_m: tuple[float, ...] = (0.3, 0.15)
-    icp_max_iterations: int = 30
-    icp_tolerance_m: float = 1e-5
-    voxel_size_m: float = 0.05
-    normal_neighbours: int = 10
-    max_reference_distance_m: float = 8.0
-    reference_pose: str = "localizer"
-    n_references: int = 8
-    exclude_window_s: float = 3.0
-    reference_spacing_s: float = 1.0
-    passes: int = 3
-    relaxation: float = 0.5
-    max_speed_m_s: float = 2.0
-    max_turn_rate_rad_s: float = 3.0
-    pose_jump_slack_m: float = 0.1
-    pose_jump_slack_rad: float = 0.1
-    icp_voxel_size_3d_m: float = 0.2
-    odometry_scans: str = "all"
-    odometry_icp_method: str = "point_to_plane"
-    odometry_window: int = 20
-    odometry_keyframe_m: float = 0.25
-    odometry_keyframe_rad: float = 0.2
-    odometry_max_correspondence_m: float = 1.0
-    graph: Mapping[str, Any] = dataclasses.field(default_factory=dict)
-    loop_closure: bool = True
+    mode: str
+    reference: str
+    every_n: int | None
+    keep_distance_m: float | None
+    keep_angle_rad: float | None
+    keep_range_fraction: float
+    min_kept_fraction: float
+    min_consistency: float
+    n_previous: int
+    min_points: int
+    fitness_max_correspondence_m: float
+    min_prior_fitness: float
+    min_icp_fitness: float
+    icp_method: str
+    icp_max_correspondence_m: tuple[float, ...]
+    icp_max_iterations: int
+    icp_tolerance_m: float
+    voxel_size_m: float
+    normal_neighbours: int
+    max_reference_distance_m: float
+    reference_pose: str
+    n_references: int
+    exclude_window_s: float
+    reference_spacing_s: float
+    passes: int
+    relaxation: float
+    max_speed_m_s: float
+    max_turn_rate_rad_s: float
+    pose_jump_slack_m: float
+    pose_jump_slack_rad: float
+    icp_voxel_size_3d_m: float
+    odometry_scans: str
+    odometry_icp_method: str
+    odometry_window: int
+    odometry_keyframe_m: float
+    odometry_keyframe_rad: float
+    odometry_max_correspondence_m: float
+    graph: Mapping[str, Any]
+    loop_closure: bool
 
     @classmethod
     def from_mapping(cls, cfg: Mapping[str, Any] | None) -> "RegistrationConfig":
@@ -165,13 +166,9 @@ class RegistrationConfig:
             On an unknown key or a value outside its range.
         """
         cfg = dict(cfg or {})
-        names = {f.name for f in dataclasses.fields(cls)}
-        unknown = sorted(set(cfg) - names)
-        if unknown:
-            raise InputError(f"config register: unknown keys {unknown}; known: {sorted(names)}")
         if "icp_max_correspondence_m" in cfg and not isinstance(cfg["icp_max_correspondence_m"], (int, float)):
             cfg["icp_max_correspondence_m"] = tuple(float(v) for v in cfg["icp_max_correspondence_m"])
-        out = cls(**cfg)
+        out = dataclass_from_mapping(cls, cfg, "register", InputError)
         out.check()
         return out
 
