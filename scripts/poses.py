@@ -1,5 +1,7 @@
 """Stage poses: the pose of each scan at its timestamp (thesis Algorithm 3 step 1)."""
 from floorscan.core.io import POSES, read_metadata, read_table, write_table
+from floorscan.core.config import dataclass_from_mapping
+from floorscan.ingest.params import PosesParams
 from floorscan.ingest.poses import scan_poses
 from floorscan.core.stage import stage_log
 
@@ -9,7 +11,8 @@ with stage_log(snakemake) as log:
     # messages name the recording and its pose source, not the intermediate table
     detected = read_metadata(snakemake.input.pose_stream)
     source = f"{detected.get('source', snakemake.input.pose_stream)} (poses: {detected.get('pose_source', 'none')})"
-    poses = scan_poses(index, stream, snakemake.params.cfg["max_gap_s"], source)
+    params = dataclass_from_mapping(PosesParams, snakemake.params.cfg, "poses")
+    poses = scan_poses(index, stream, params.max_gap_s, source)
     write_table(poses, snakemake.output.poses, schema=POSES)
     if stream.empty:
         found = detected.get("pose_source", "none")

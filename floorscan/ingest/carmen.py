@@ -16,7 +16,6 @@ sorted by stamp (a stable sort; each line carries its own pose, so nothing is lo
 from __future__ import annotations
 
 import gzip
-import math
 import zlib
 from pathlib import Path
 from typing import Any, Iterator, Mapping
@@ -27,6 +26,7 @@ from floorscan.core.io import InputError
 from floorscan.ingest.carmen_lines import LASER_TYPES, LAYOUTS, MalformedLine, parse_laser_line
 from floorscan.ingest.carmen_ranges import NoReturn, no_return_range
 from floorscan.ingest.carmen_stamps import classify_stamps, spread_stamps
+from floorscan.ingest.params import IngestParams
 from floorscan.ingest.points import laser_scan_points
 from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
 
@@ -42,7 +42,7 @@ def _open_text(path: Path):
 def parse_carmen(
     path: str | Path,
     max_range_m: float | None = None,
-    fov_rad: float = math.pi,
+    fov_rad: float | None = None,
 ) -> tuple[list[dict], dict[str, int]]:
     """Parse the laser lines of a CARMEN log.
 
@@ -53,8 +53,8 @@ def parse_carmen(
     max_range_m : float, optional
         Returns at or beyond this range (metres) are "no return" and dropped; None:
         detected from the log's readings (:func:`no_return_range`).
-    fov_rad : float
-        FLASER field of view, radians.
+    fov_rad : float, optional
+        FLASER field of view, radians; None: ``ingest.carmen_fov_rad``'s default.
 
     Returns
     -------
@@ -73,7 +73,8 @@ def parse_carmen(
         range, a stamp not finite and in [0, ``MAX_STAMP_S``) (names ``file:line``, the
         field and the layout); or no laser lines at all.
     """
-    scans, counts, _ = _parse(Path(path), max_range_m, fov_rad)
+    fov = IngestParams().carmen_fov_rad if fov_rad is None else fov_rad
+    scans, counts, _ = _parse(Path(path), max_range_m, fov)
     return scans, counts
 
 
@@ -112,7 +113,7 @@ def _parse(path: Path, max_range_m: float | None, fov_rad: float) -> tuple[list[
     return scans, counts, limit
 
 
-def open_carmen(path: Path, dataset: Mapping[str, Any], cfg: Mapping[str, Any]) -> Recording:
+def open_carmen(path: Path, dataset: Mapping[str, Any], cfg: "IngestParams | Mapping[str, Any] | None") -> Recording:
     """Open a CARMEN log as a :class:`~floorscan.ingest.recording.Recording`.
 
     The pose stream holds the corrected laser pose of every laser line (z = 0; the
@@ -126,11 +127,12 @@ def open_carmen(path: Path, dataset: Mapping[str, Any], cfg: Mapping[str, Any]) 
     InputError
         See :func:`parse_carmen`; also zero stamps among non-zero ones (a corrupt log).
     """
-    cfg_max = cfg.get("carmen_max_range_m")
+    params = IngestParams.from_config(cfg)
+    cfg_max = params.carmen_max_range_m
     scans, counts, limit = _parse(
         path,
         max_range_m=None if cfg_max is None else float(cfg_max),
-        fov_rad=float(cfg.get("carmen_fov_rad", math.pi)),
+        fov_rad=float(params.carmen_fov_rad),
     )
     notes = [f"message types: {dict(sorted(counts.items()))}", limit.note()]
     t = np.array([s["t_s"] for s in scans])
@@ -143,7 +145,7 @@ def open_carmen(path: Path, dataset: Mapping[str, Any], cfg: Mapping[str, Any]) 
         ) from None
     n = len(scans)
     if stamps == "made_up":
-        period = float(cfg.get("missing_time_period_s", 0.1))
+        period = float(params.missing_time_period_s)
         why = "every laser timestamp is 0" if np.all(t == 0) else (
             f"{n_rep} of {n} laser lines repeat an earlier timestamp ({len(np.unique(t))} distinct values), "
             "more than half"

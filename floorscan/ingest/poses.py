@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 from floorscan.core.io import InputError
+from floorscan.ingest.params import PosesParams
 
 #: Reasons a scan has no pose.
 BEFORE = "before_pose_stream"
@@ -31,7 +32,7 @@ def wrap_angle(a):
 
 
 def interpolate_poses(
-    stream: pd.DataFrame, t_ns: np.ndarray, max_gap_s: float = 0.5, source: str = "pose stream"
+    stream: pd.DataFrame, t_ns: np.ndarray, max_gap_s: float | None = None, source: str = "pose stream"
 ) -> pd.DataFrame:
     """Interpolate a pose stream at the given times.
 
@@ -43,8 +44,9 @@ def interpolate_poses(
         source, and every query gets reason ``no_pose_source``.
     t_ns : (S,) int64 ndarray
         Query times (scan stamps), nanoseconds.
-    max_gap_s : float
-        Largest time between the two bracketing poses, seconds.
+    max_gap_s : float, optional
+        Largest time between the two bracketing poses, seconds; None: ``poses.max_gap_s``'s
+        default.
     source : str
         Name of the stream in error messages (e.g. the file).
 
@@ -62,6 +64,8 @@ def interpolate_poses(
         Unsorted or duplicate stream stamps, or no query time within the stream's span
         (the stream does not overlap the scans).
     """
+    if max_gap_s is None:
+        max_gap_s = PosesParams().max_gap_s
     ts = stream["t_ns"].to_numpy(dtype=np.int64)
     q = np.asarray(t_ns, dtype=np.int64)
     if ts.size == 0:

@@ -30,6 +30,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from floorscan.core.io import InputError
+from floorscan.ingest.params import PosesParams
 from floorscan.ingest.points import filter_points
 from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
 from floorscan.ingest.ros_messages import laser_scan_xyz, message_label, pointcloud2_xyz, pose_problem, stamp_ns
@@ -74,7 +75,7 @@ def _connections(reader, path: Path, topic: str, allowed: tuple[str, ...], what:
     return conns
 
 
-def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float = 0.5) -> Recording:
+def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = None) -> Recording:
     """Open a ROS1 ``.bag`` or ROS2 bag folder as a :class:`~floorscan.ingest.recording.Recording`.
 
     Parameters
@@ -85,9 +86,10 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float = 0.5) -> 
         Optional ``scan_topic`` and ``pose`` (``source``, ``topic``, ``fixed_frame``,
         ``base_frame``), detected when absent (:mod:`floorscan.ingest.rosbag_detect`); optional
         ``range_min_m`` / ``range_max_m`` (tighten the message's limits).
-    max_gap_s : float
+    max_gap_s : float, optional
         TF chains: samples inside a gap longer than this in any moving link are left
-        out of the pose stream, so the pose stage sees the gap.
+        out of the pose stream, so the pose stage sees the gap; None: ``poses.max_gap_s``'s
+        default.
 
     Returns
     -------
@@ -103,6 +105,8 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float = 0.5) -> 
         or duplicated; without ``scan_topic``, several or no scan topics; without
         ``pose``, several map pose topics and none of them ``/amcl_pose``.
     """
+    if max_gap_s is None:
+        max_gap_s = PosesParams().max_gap_s
     from floorscan.ingest.detect import bag_path
 
     path = bag_path(path)
