@@ -46,6 +46,7 @@ import numpy as np
 import pandas as pd
 
 from floorscan.core.io import InputError
+from floorscan.ingest.params import IngestParams
 from floorscan.ingest.points import filter_points
 from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
 from floorscan.ingest.text import parse_number, parse_numbers
@@ -434,7 +435,8 @@ def open_pcd_folder(path: Path, dataset: Mapping[str, Any], cfg: Mapping[str, An
     """
     if not path.is_dir():
         raise InputError(f"{path}: expected a folder of .pcd files")
-    loc = read_locations(path, dataset.get("locations", "locations.csv"), float(cfg.get("missing_time_period_s", 0.1)))
+    period = IngestParams.from_config(cfg).missing_time_period_s
+    loc = read_locations(path, dataset.get("locations", "locations.csv"), float(period))
     stream = pose_stream_frame(loc["t_ns"].to_numpy(), loc["x"], loc["y"], loc["z"], loc["yaw"])
     rmin, rmax = dataset.get("range_min_m"), dataset.get("range_max_m")
 

@@ -29,6 +29,7 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 import pandas as pd
 
+from floorscan.core.config import schema_section_defaults
 from floorscan.walls.extractors import Extractor, config_params, get_extractor
 from floorscan.walls.params import RansacParams, ScanParams, params_from_config
 from floorscan.walls.points import scan_points_2d
@@ -143,7 +144,7 @@ def extract_walls(
     scan_p = params_from_config(cfg)[0]  # checks the height band and every section
     params = config_params(cfg)
     ransac_p, own = params["ransac"], [params[key] for key in entry.config]
-    seed = int(cfg.get("seed", 0))
+    seed = int(cfg.get("seed", schema_section_defaults("walls")["seed"]))
     if entry.prepare is not None:  # imports before timing the first scan
         entry.prepare(*own)
     per_scan: dict[int, list[tuple]] = {}

@@ -68,8 +68,8 @@ def _score_reference_inputs(wildcards):
     if is_synthetic(ds):
         return {"ground_truth": f"results/{ds}/sim/walls.geojson"}
     cfg = stage_config("score")(wildcards)
-    if cfg.get("reference_source", "per_scan") == "kall":
-        o = cfg.get("figure_ordering", "cluster_hull")
+    if cfg["reference_source"] == "kall":
+        o = cfg["figure_ordering"]
         refs = [f"results/{ds}/walls/{o}/{e}/kall.parquet" for e in score_extractors(wildcards)]
     else:
         refs = [f"results/{ds}/walls/{e}/per_scan.parquet" for e in score_extractors(wildcards)]
