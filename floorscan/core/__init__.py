@@ -1,6 +1,16 @@
-"""What several stages need (../shared/ARCHITECTURE.md): imports point down to here only.
+"""What several stages need (../shared/ARCHITECTURE.md); it imports no stage.
 
-Modules: :mod:`floorscan.core.greedy` (lazy greedy maximum coverage, used by the select
-stage's coverage orderings and the score stage's oracle) and :mod:`floorscan.core.geometry`
-(points along wall segments).
+- :mod:`~floorscan.core.io`: the tables the stages exchange (Parquet schemas, reading,
+  writing, streaming a points table scan by scan);
+- :mod:`~floorscan.core.files`: files written atomically, and the temporaries a killed
+  run left;
+- :mod:`~floorscan.core.config`: the config's validation against the stage schemas and
+  the parameter dataclasses' defaults from them (written once, in the schemas);
+- :mod:`~floorscan.core.stage`: a stage script's logging and error reporting;
+- :mod:`~floorscan.core.runtime`: progress lines, worker processes
+  (``concurrent.futures`` with spawn), thread limits;
+- :mod:`~floorscan.core.shards`: the per-scan stages split by scan range into jobs;
+- :mod:`~floorscan.core.geometry` (SE(2), points along wall segments),
+  :mod:`~floorscan.core.grid` (integer grid cells), :mod:`~floorscan.core.greedy` (lazy
+  greedy maximum coverage, for the coverage orderings and the score stage's oracle).
 """

@@ -1,1 +1,15 @@
-"""Figures and the report (stage ``figures``)."""
+"""Figures and the report (stage ``figures``): the thesis's Chapter 5 figures and the
+dataset's front page. The top layer: it reads every stage's outputs and may import any
+stage package.
+
+- :mod:`~floorscan.figures.registration` (the registered map),
+  :mod:`~floorscan.figures.selection` (coverage against scans and clusters, Figs 5.6-5.8);
+- :mod:`~floorscan.figures.scoring` (the score stage's figures, drawn by
+  :mod:`~floorscan.figures.curves`, :mod:`~floorscan.figures.floorplans`,
+  :mod:`~floorscan.figures.bitmaps`, :mod:`~floorscan.figures.maps`,
+  :mod:`~floorscan.figures.wall_extraction`, :mod:`~floorscan.figures.stage_times`, in
+  the style of :mod:`~floorscan.figures.style`);
+- :mod:`~floorscan.figures.report` (the front page), :mod:`~floorscan.figures.summary_page`
+  (the summary table as HTML), :mod:`~floorscan.figures.answer` (what a finished run
+  prints).
+"""
