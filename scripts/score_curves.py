@@ -4,22 +4,23 @@ against the reference map, on a k grid of 2 % of the kept scans (every k up to 2
 beyond it where the levels of the all-scan F1 are crossed: floorscan.score.curves)."""
 from floorscan.core.io import read_table, write_table
 from floorscan.core.stage import stage_log
+from floorscan.score.params import ScoreParams
 from floorscan.score import curves as C
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
-    cfg = smk.params.cfg
+    cfg = ScoreParams.from_config(smk.params.cfg)
     curves, oracle = C.score_curves(
         per_scan=read_table(smk.input.walls),
         orderings={o: read_table(p) for o, p in zip(smk.params.orderings, smk.input.orderings)},
         reference_path=smk.input.reference_map,
         floorplan_cfg=smk.params.floorplan,
-        taus_m=tuple(cfg["taus_m"]),
-        oracle_tau_m=float(cfg["summary_tau_m"]),
-        step_fraction=float(cfg["curve_step_fraction"]),
-        random_seeds=int(cfg["random_seeds"]),
-        dense_fraction=float(cfg["curve_auc_fraction"]),
-        levels=tuple(float(v) for v in cfg["summary_levels"]),
+        taus_m=tuple(cfg.taus_m),
+        oracle_tau_m=float(cfg.summary_tau_m),
+        step_fraction=float(cfg.curve_step_fraction),
+        random_seeds=int(cfg.random_seeds),
+        dense_fraction=float(cfg.curve_auc_fraction),
+        levels=tuple(float(v) for v in cfg.summary_levels),
         log=log,
     )
     meta = {"dataset": smk.wildcards.dataset, "extractor": smk.wildcards.extractor,

@@ -29,6 +29,7 @@ from floorscan.figures.stage_times import plot_stage_times, stage_times
 from floorscan.figures.style import reference_name
 from floorscan.figures.wall_extraction import plot_wall_extraction
 from floorscan.score.bitmap import grid_for
+from floorscan.score.params import ScoreParams
 from floorscan.score.segments import as_segments
 
 
@@ -59,10 +60,10 @@ def make_walls_figures(
         ``"ground_truth"`` or ``"reference"``.
     walls : dict
         ``{(ordering, extractor, k_label): DataFrame}`` raw wall segments for the
-        figure runs (``cfg["figure_k"]`` and ``"all"``).
+        figure runs (``cfg.figure_k`` and ``"all"``).
     floorplans : dict
         ``{(ordering, extractor): list of geometries}`` merged floor plans at
-        ``cfg["figure_k"]``.
+        ``cfg.figure_k``.
     points : pandas.DataFrame or path
         Registered points (``x, y, z``), or the path of ``registered.parquet``
         (read in batches); subsampled here
@@ -75,34 +76,35 @@ def make_walls_figures(
     outputs : dict
         Paths: ``floorplan``, ``bitmap_overlay``, ``walls_over_points_k``,
         ``walls_over_points_all``, ``wall_extraction``.
-    cfg : dict
+    cfg : ScoreParams or mapping
         The ``score`` config section.
     """
-    k = str(cfg["figure_k"])
-    ext_fig = cfg["figure_extractor"]
-    ordering_fig = cfg["figure_ordering"]
+    cfg = ScoreParams.from_config(cfg)
+    k = str(cfg.figure_k)
+    ext_fig = cfg.figure_extractor
+    ordering_fig = cfg.figure_ordering
     ref_name = reference_name(reference_kind)
     extractors = sorted(scan_status) or sorted(reference)
 
     ref_fig = reference.get(ext_fig, next(iter(reference.values())))
     panels = [
         (f"{o}, {ext_fig}: first {k} scans", floorplans.get((o, ext_fig), []))
-        for o in cfg["figure_orderings"]
+        for o in cfg.figure_orderings
     ]
     plot_floorplans(panels, ref_fig, reference_kind, outputs["floorplan"],
                     f"{dataset}: merged floor plans from the first {k} scans over the {ref_name}")
 
     all_refs = [as_segments(s) for s in reference.values() if len(as_segments(s))]
-    grid = grid_for(np.vstack(all_refs), cfg["cell_m"], cfg["margin_m"])
+    grid = grid_for(np.vstack(all_refs), cfg.cell_m, cfg.margin_m)
     panels = [
         (f"{o}, {ext_fig}, first {k} scans", walls.get((o, ext_fig, k), np.zeros((0, 4))))
-        for o in cfg["figure_orderings"]
+        for o in cfg.figure_orderings
     ]
-    plot_bitmap_overlay(panels, ref_fig, reference_kind, grid, cfg["wall_width_m"],
+    plot_bitmap_overlay(panels, ref_fig, reference_kind, grid, cfg.wall_width_m,
                         outputs["bitmap_overlay"],
                         f"{dataset}: inferred walls (red) over the {ref_name} (blue)")
 
-    xy = subsample_points(points, cfg["max_plot_points"], cfg["seed"], cfg["points_z_band_m"])
+    xy = subsample_points(points, cfg.max_plot_points, cfg.seed, cfg.points_z_band_m)
     for key, kk, label in (
         ("walls_over_points_k", k, f"the first {k} scans ({ordering_fig})"),
         ("walls_over_points_all", "all", "all kept scans"),
@@ -135,10 +137,11 @@ def make_score_figures(*, dataset: str, metrics: pd.DataFrame, bench_dir, output
         (the rule runs last, after the other figures).
     outputs : dict
         Paths: ``metrics_vs_k``, ``stage_times_png``, ``stage_times_tsv``.
-    cfg : dict
+    cfg : ScoreParams or mapping
         The ``score`` config section.
     """
-    plot_metrics_vs_k(metrics, outputs["metrics_vs_k"], cfg["summary_tau_m"])
+    cfg = ScoreParams.from_config(cfg)
+    plot_metrics_vs_k(metrics, outputs["metrics_vs_k"], cfg.summary_tau_m)
     table = stage_times(bench_dir)
     with atomic_path(outputs["stage_times_tsv"]) as tmp:
         table.to_csv(tmp, sep="\t", index=False, float_format="%.3f")

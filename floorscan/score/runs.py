@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import os
+from typing import Mapping
 
 import numpy as np
 
@@ -23,6 +24,7 @@ from floorscan.score.bitmap import grid_for, rasterize_segments
 from floorscan.score.geojson import read_floorplan
 from floorscan.score.ground_truth import GROUND_TRUTH, REFERENCE
 from floorscan.score.growing import PAIR_REACH_M, _GrowingWalls, _SamplePairs
+from floorscan.score.params import ScoreParams
 from floorscan.score.segments import as_segments, gt_samples
 from floorscan.score.tolerance import _recall_precision, tau_label
 
@@ -38,7 +40,7 @@ def score_dataset(
     runs: list[dict],
     references: dict[str, np.ndarray],
     reference_kind: str,
-    cfg: dict,
+    cfg: "ScoreParams | Mapping",
     dataset: str = "",
     log=None,
     recall_references: dict[str, np.ndarray] | None = None,
@@ -70,7 +72,7 @@ def score_dataset(
         all kept scans.
     reference_kind : {"ground_truth", "reference"}
         Written to the ``reference_kind`` column.
-    cfg : dict
+    cfg : ScoreParams or mapping
         The ``score`` config section: ``cell_m``, ``wall_width_m``, ``margin_m``,
         ``taus_m``, ``sample_step_m``.
     dataset : str
@@ -101,6 +103,7 @@ def score_dataset(
         When ``reference_kind`` is unknown, a run's extractor has no reference, or the
         references are all empty (no grid can be built).
     """
+    cfg = ScoreParams.from_config(cfg)
     import pandas as pd
 
     if reference_kind not in (GROUND_TRUTH, REFERENCE):
@@ -120,7 +123,7 @@ def score_dataset(
         rows = [row for part in map_in_processes(_score_rows, [(share, *args) for share in shares], n) for row in part]
     df = sort_scores(pd.DataFrame(rows))
     if log is not None:
-        tau = tau_label(cfg["taus_m"][0])
+        tau = tau_label(cfg.taus_m[0])
         for r in rows:
             log.info("%s %s k=%s: %d segments, F1@%s %.3f, wall CM %.3f", r["ordering"], r["extractor"], r["k"],
                      r["n_segments"], tau, r[f"f1_{tau}"], r["wall_correct_match"])
@@ -156,7 +159,7 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
     if not nonempty:
         raise ValueError(f"dataset {dataset!r}: every {reference_kind} wall set is empty")
     # One grid for the whole dataset: the bounds of all references plus the margin.
-    grid = grid_for(np.vstack(nonempty), cfg["cell_m"], cfg["margin_m"])
+    grid = grid_for(np.vstack(nonempty), cfg.cell_m, cfg.margin_m)
     ref_bitmaps: dict[str, np.ndarray] = {}
     ref_samples: dict[str, np.ndarray] = {}
     all_samples: dict[str, np.ndarray] = {}
@@ -177,16 +180,16 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
         if recall_references is not None and ext not in recall_references:
             raise ValueError(f"no recall reference walls for extractor {ext!r}")
         if ext not in ref_bitmaps:
-            ref_bitmaps[ext] = rasterize_segments(refs[ext], grid, cfg["wall_width_m"])
-            all_samples[ext] = gt_samples(refs[ext], cfg["sample_step_m"])
+            ref_bitmaps[ext] = rasterize_segments(refs[ext], grid, cfg.wall_width_m)
+            all_samples[ext] = gt_samples(refs[ext], cfg.sample_step_m)
             ref_samples[ext] = (
                 all_samples[ext] if recall_references is None
-                else gt_samples(as_segments(recall_references[ext]), cfg["sample_step_m"])
+                else gt_samples(as_segments(recall_references[ext]), cfg.sample_step_m)
             )
             # Shared by the orderings of an extractor: its samples' pairs and wall cells.
             sample_pairs[ext] = _SamplePairs(ref_samples[ext], PAIR_REACH_M)
             all_pairs[ext] = (
-                None if recall_references is None else _SamplePairs(all_samples[ext], max(cfg["taus_m"]))
+                None if recall_references is None else _SamplePairs(all_samples[ext], max(cfg.taus_m))
             )
             raster_caches[ext] = {}
         t0 = time.perf_counter()
@@ -210,15 +213,15 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
         if key not in growing:
             # One state per ordering and extractor: its k grow in the order of runs.
             growing[key] = _GrowingWalls(
-                refs[ext], ref_bitmaps[ext], grid, cfg["wall_width_m"], cfg["taus_m"],
+                refs[ext], ref_bitmaps[ext], grid, cfg.wall_width_m, cfg.taus_m,
                 ref_samples[ext],
                 None if recall_references is None else all_samples[ext],
                 pairs=sample_pairs[ext], all_pairs=all_pairs[ext], raster_cache=raster_caches[ext],
             )  # fmt: skip
         m = growing[key].score(walls)
         if plan is not None:
-            pm = _recall_precision(plan, refs[ext], cfg["taus_m"], ref_samples[ext], pairs=sample_pairs[ext])
-            for tau in cfg["taus_m"]:
+            pm = _recall_precision(plan, refs[ext], cfg.taus_m, ref_samples[ext], pairs=sample_pairs[ext])
+            for tau in cfg.taus_m:
                 for what in ("precision", "recall", "f1"):
                     m[f"plan_{what}_{tau_label(tau)}"] = pm[f"{what}_{tau_label(tau)}"]
         scored.setdefault(same, dict(m))
@@ -249,7 +252,7 @@ def _score_row(run, dataset, reference_kind, walls, nfp, grid, cfg, m: dict, t0:
         "n_segments": int(len(walls)),
         "n_floorplan_walls": -1 if nfp is None else int(nfp),
         "cell_m": float(grid.cell_m),
-        "wall_width_m": float(cfg["wall_width_m"]),
+        "wall_width_m": float(cfg.wall_width_m),
         **m,
         SCORE_TIME: time.perf_counter() - t0,
     }

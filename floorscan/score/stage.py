@@ -19,6 +19,7 @@ import pandas as pd
 from floorscan.core.files import atomic_path
 from floorscan.core.io import read_metadata, read_table, write_table
 from floorscan.score import curves as C
+from floorscan.score.params import ScoreParams
 from floorscan.score.runs import sort_scores
 from floorscan.score.summary import grid_summary_markdown, summarize, summary_header
 
@@ -75,7 +76,7 @@ def write_scores(
         ``registration.parquet`` (the register stage's verdict in its metadata).
     outputs : mapping
         Paths ``metrics``, ``summary`` and ``summary_md``.
-    cfg : mapping
+    cfg : ScoreParams or mapping
         The ``score`` config section (``summary_tau_m``, ``summary_levels``,
         ``curve_auc_fraction``).
     dataset, default_ordering : str
@@ -87,17 +88,18 @@ def write_scores(
     -------
     Scores
     """
-    tau = float(cfg["summary_tau_m"])
+    cfg = ScoreParams.from_config(cfg)
+    tau = float(cfg.summary_tau_m)
     table = sort_scores(pd.concat([read_table(p) for p in runs], ignore_index=True))
-    grid_summary = summarize(table, tau, cfg["summary_levels"])
+    grid_summary = summarize(table, tau, cfg.summary_levels)
     meta = {"dataset": dataset, "reference_kind": reference["kind"], "reference": reference["label"]}
     write_table(table, outputs["metrics"], metadata=meta)
     # the curves of every extractor: k95 / k99, area under the curve, the oracle's bound
     frames = [read_table(p).assign(extractor=read_metadata(p)["extractor"]) for p in curves]
     curve_table = pd.concat(frames, ignore_index=True)
     n_kept, n_recorded = int(curve_table["n_kept"].iloc[0]), len(read_table(index, columns=["scan_id"]))
-    summary = C.curve_summary(curve_table, n_kept, n_recorded, tau, tuple(cfg["summary_levels"]),
-                              float(cfg["curve_auc_fraction"]))
+    summary = C.curve_summary(curve_table, n_kept, n_recorded, tau, tuple(cfg.summary_levels),
+                              float(cfg.curve_auc_fraction))
     summary.insert(0, "dataset", dataset)
     # the recommended ordering first, then the thesis's (Algorithm 1)
     shown = list(dict.fromkeys([default_ordering, "cluster_hull"]))
@@ -115,7 +117,7 @@ def write_scores(
         tmp.write_text("\n".join(head) + "\n## Floor plans against the reference map\n\n"
                        + C.summary_markdown(summary, tau, n_kept, n_recorded, line)
                        + "\n## Walls of k scans on the configured k grid\n\n"
-                       + grid_summary_markdown(grid_summary, tau, cfg["summary_levels"]))
+                       + grid_summary_markdown(grid_summary, tau, cfg.summary_levels))
     return Scores(curve_table, summary, n_kept, line, verdict)
 
 
@@ -147,7 +149,7 @@ def write_run_scores(
         The orderings of ``inputs["orderings"]``.
     output : path
         The table (``score/<extractor>.parquet``).
-    cfg : mapping
+    cfg : ScoreParams or mapping
         The ``score`` config section.
     dataset, extractor : str
     reference : mapping
@@ -162,6 +164,7 @@ def write_run_scores(
     DataFrame
         The table written (one row per run).
     """
+    cfg = ScoreParams.from_config(cfg)
     from floorscan.score.against_reference import score_plans
     from floorscan.score.geojson import floorplan_faces
     from floorscan.score.ground_truth import load_recall_references, load_references
@@ -170,10 +173,10 @@ def write_run_scores(
 
     kind = reference["kind"]
     references = load_references(kind, list(extractors), inputs.get("ground_truth"), inputs.get("reference", []))
-    recall_refs = load_recall_references(kind, list(extractors), inputs.get("ground_truth"), cfg["recall_reference"])
+    recall_refs = load_recall_references(kind, list(extractors), inputs.get("ground_truth"), cfg.recall_reference)
     log.info("scoring %s against the %s: %s", extractor, reference["label"], {e: len(s) for e, s in references.items()})
     if recall_refs is not None:
-        log.info("recall against the %s features: %s segments", cfg["recall_reference"],
+        log.info("recall against the %s features: %s segments", cfg.recall_reference,
                  {e: len(s) for e, s in recall_refs.items()})
     n_kept = {o: len(read_table(p, columns=["scan_id"])) for o, p in zip(orderings, inputs["orderings"])}
     # paths, not tables: score_dataset reads one run's walls and floor plan at a time
@@ -184,7 +187,7 @@ def write_run_scores(
     table = score_dataset(run_files, references, kind, cfg, dataset, log, recall_references=recall_refs,
                           workers=workers)
     # the plans against the reference map (occupancy grid of all kept scans)
-    against_map = score_plans(run_files, read_grid(inputs["reference_map"]), tuple(cfg["taus_m"]), floorplan_faces)
+    against_map = score_plans(run_files, read_grid(inputs["reference_map"]), tuple(cfg.taus_m), floorplan_faces)
     table = table.merge(against_map, on=["ordering", "extractor", "k"], how="left", validate="one_to_one")
     # the time of each run to the log, not into the metrics (the same input gives the same file)
     seconds = table.pop(SCORE_TIME)
