@@ -115,14 +115,17 @@ def schema_defaults(section: str, **derived: Callable[[dict], Any]) -> Callable[
     A property without a default (``required`` in the schema) stays a field without a
     default. A list or mapping default becomes a ``default_factory`` (each instance its
     own copy).
-    ``derived`` gives the default of a field that is not a key of the section but follows
-    from its defaults: ``min_height_m=lambda d: d["height_band_m"][0]``.
+    ``derived`` gives a field's default as a function of the section's defaults: for a
+    field that is not a key of the section (``min_height_m=lambda d:
+    d["height_band_m"][0]``), or a key whose default the class holds in another type
+    (``icp_distances_m=lambda d: tuple(d["icp_distances_m"])``).
 
     Raises
     ------
     TypeError
-        At import: a field has neither a default in the class nor in the schema, or has
-        one in both (a default written twice).
+        At import: a field that is not a property of the section has no default in the
+        class, or a field has a default both in the class and in the schema or
+        ``derived`` (a default written twice).
     """
 
     def wrap(cls: type[T]) -> type[T]:
