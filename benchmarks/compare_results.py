@@ -4,7 +4,8 @@ For a change that must not change the outputs (a refactoring, a faster implement
 run the workflow with the old tree and with the new one on the same datasets, then
 compare ``results/`` of both. Every file under ``OLD/<dataset>/`` and ``NEW/<dataset>/``
 is compared by its sha256, except what holds timing by design (the ``logs/`` and
-``benchmarks/`` folders and the timing figures, as in ``tests/test_reproducible.py``).
+``benchmarks/`` folders and the timing figures; ``tests/test_reproducible.py`` uses the
+same :func:`digests`).
 
 The files the answer and the stages exchange are the *required* ones: floor plans
 (GeoJSON, SVG, DXF, IFC), orderings, walls, registered points and poses, the selection

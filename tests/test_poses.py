@@ -5,7 +5,8 @@ import pandas as pd
 import pytest
 
 from floorscan.core.io import InputError
-from floorscan.ingest.poses import interpolate_poses, scan_poses, wrap_angle
+from floorscan.core.geometry import wrap_angle
+from floorscan.ingest.poses import interpolate_poses, scan_poses
 
 
 def stream(t_s, x, y, yaw, z=None):

@@ -8,9 +8,7 @@ compared too: matplotlib writes no creation time into a PNG (its ``Software`` en
 names the version only).
 """
 
-import hashlib
 import re
-import subprocess
 import sys
 from pathlib import Path
 
@@ -19,22 +17,13 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
+from benchmarks.compare_results import TIMING_FIGURES, digests
 from floorscan.core.io import POSE_STREAM, POSES, SCAN_INDEX, SCANS, write_table
 from floorscan.select.summary import SUMMARY, summarize
 from floorscan.walls.tables import SCAN_STATUS
 
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 
-#: Folders of results/<dataset>/ that hold timing by design.
-TIMING_FOLDERS = {"logs", "benchmarks"}
-#: Figures that show time (thesis Fig. 5.8, Table 5.1, Fig. 5.10): measured anew by
-#: every run. Their data comes from the benchmarks folder or the figure job itself.
-TIMING_FIGURES = {
-    "figures/selection_time.png",
-    "figures/stage_times.png",
-    "figures/stage_times.tsv",
-    "figures/wall_extraction_per_scan.png",
-}
 #: A column name that says it is a duration.
 TIMING_COLUMN = re.compile(r"(^|_)(s|ms|sec|secs|seconds|time_s|time_ms)$")
 
@@ -55,20 +44,6 @@ def test_the_tables_of_the_stages_hold_no_timing(tmp_path):
     assert timing_columns(pq.read_schema(tmp_path / "summary.parquet")) == []
 
 
-def digests(results: Path) -> dict[str, str]:
-    """sha256 of every file under ``results`` outside the timing folders and figures,
-    by path relative to ``results``."""
-    out = {}
-    for p in sorted(results.rglob("*")):
-        rel = p.relative_to(results)
-        if p.is_dir() or TIMING_FOLDERS & set(rel.parts[1:-1]):
-            continue
-        if Path(*rel.parts[1:]).as_posix() in TIMING_FIGURES:
-            continue
-        out[rel.as_posix()] = hashlib.sha256(p.read_bytes()).hexdigest()
-    return out
-
-
 @pytest.mark.workflow
 @pytest.mark.slow
 def test_two_runs_of_the_demo_give_the_same_bytes(tmp_path, demo_run):
@@ -81,7 +56,7 @@ def test_two_runs_of_the_demo_give_the_same_bytes(tmp_path, demo_run):
     res = snakemake(wd)
     assert res.returncode == 0, res.stderr[-4000:]
     runs = [demo_run / "results", wd / "results"]
-    a, b = ({k: v for k, v in digests(r).items() if k.startswith("demo/")} for r in runs)
+    a, b = (digests(r / "demo") for r in runs)
     assert len(a) > 500  # the whole evaluation of the demo
     assert sorted(set(a) ^ set(b)) == []
     differ = sorted(k for k in a if a[k] != b[k])

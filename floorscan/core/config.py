@@ -34,8 +34,9 @@ def dataclass_from_mapping(cls: type[T], values: Mapping[str, Any] | None, secti
     Parameters
     ----------
     cls : dataclass type
-    values : mapping or None
-        The config section (None: all defaults).
+    values : mapping, None or cls
+        The config section (None: all defaults); an instance of ``cls`` is returned as
+        it is.
     section : str
         The section's name for the message, e.g. ``"floorplan"`` or ``"register.graph"``.
     error : exception type
@@ -46,6 +47,8 @@ def dataclass_from_mapping(cls: type[T], values: Mapping[str, Any] | None, secti
     error
         Naming the unknown keys and the known ones.
     """
+    if isinstance(values, cls):
+        return values
     values = dict(values or {})
     names = {f.name for f in dataclasses.fields(cls)}
     unknown = sorted(set(values) - names)
@@ -57,11 +60,21 @@ def dataclass_from_mapping(cls: type[T], values: Mapping[str, Any] | None, secti
 @functools.lru_cache(maxsize=None)
 def _schema(stage: str) -> dict:
     """The parsed schema of ``stage`` (``workflow/schemas/<stage>.schema.yaml``)."""
+    return _load_schema(os.path.realpath(SCHEMA_DIR / f"{stage}.schema.yaml"))
+
+
+@functools.lru_cache(maxsize=None)
+def _load_schema(path: str) -> dict:
+    """The YAML schema at ``path`` (a resolved path), parsed once per process with libyaml
+    when PyYAML has it; shared, not to be changed."""
     import yaml
 
     loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-    with open(SCHEMA_DIR / f"{stage}.schema.yaml", encoding="utf-8") as f:
-        return yaml.load(f, Loader=loader)
+    with open(path, encoding="utf-8") as f:
+        schema = yaml.load(f, Loader=loader)
+    if not isinstance(schema, dict):
+        raise ConfigError(f"{path}: expected a JSON schema (a mapping), got {type(schema).__name__}")
+    return schema
 
 
 def _section_properties(section: str) -> dict[str, Any]:
@@ -226,15 +239,10 @@ def _message(error, section: str) -> str:
 @functools.lru_cache(maxsize=None)
 def _schema_validator(path: str):
     """The default-filling JSON Schema (draft 2020-12) validator of the YAML schema at
-    ``path``, loaded once per process with libyaml when PyYAML has it."""
-    import yaml
+    ``path`` (:func:`_load_schema`)."""
     from jsonschema import Draft202012Validator, validators
 
-    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-    with open(path, encoding="utf-8") as f:
-        schema = yaml.load(f, Loader=loader)
-    if not isinstance(schema, dict):
-        raise ConfigError(f"{path}: expected a JSON schema (a mapping), got {type(schema).__name__}")
+    schema = _load_schema(os.path.realpath(path))
     Draft202012Validator.check_schema(schema)
     properties = Draft202012Validator.VALIDATORS["properties"]
 

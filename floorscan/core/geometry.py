@@ -71,7 +71,7 @@ def segment_weights(segments: np.ndarray, sample_m: float) -> np.ndarray:
 
 def wrap_angle(a: np.ndarray | float) -> np.ndarray | float:
     """Wrap angles (radians) to [-pi, pi)."""
-    return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
+    return (np.asarray(a, dtype=np.float64) + np.pi) % (2.0 * np.pi) - np.pi
 
 
 def se2_between(a, b) -> tuple[float, float, float]:

@@ -40,8 +40,6 @@ class IngestParams:
         InputError
             An unknown key.
         """
-        if isinstance(cfg, cls):
-            return cfg
         return dataclass_from_mapping(cls, cfg, "ingest", InputError)
 
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from floorscan.core.geometry import wrap_angle
 from floorscan.core.io import InputError
 from floorscan.ingest.params import PosesParams
 
@@ -24,11 +25,6 @@ BEFORE = "before_pose_stream"
 AFTER = "after_pose_stream"
 GAP = "pose_gap"
 NO_POSE_SOURCE = "no_pose_source"
-
-
-def wrap_angle(a):
-    """Wrap angles (radians) to [-pi, pi)."""
-    return (np.asarray(a, dtype=np.float64) + np.pi) % (2.0 * np.pi) - np.pi
 
 
 def interpolate_poses(

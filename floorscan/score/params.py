@@ -75,6 +75,4 @@ class ScoreParams:
         ValueError
             An unknown key.
         """
-        if isinstance(cfg, cls):
-            return cfg
         return dataclass_from_mapping(cls, cfg, "score", ValueError)

@@ -31,7 +31,7 @@ import pandas as pd
 
 from floorscan.core.config import schema_section_defaults
 from floorscan.walls.extractors import Extractor, config_params, get_extractor
-from floorscan.walls.params import RansacParams, ScanParams, params_from_config
+from floorscan.walls.params import RansacParams, ScanParams, scan_params
 from floorscan.walls.points import scan_points_2d
 from floorscan.walls.tables import SCAN_STATUS, WALLS, segments_frame
 
@@ -141,8 +141,8 @@ def extract_walls(
     else:
         scans = points
     entry = get_extractor(extractor)
-    scan_p = params_from_config(cfg)[0]  # checks the height band and every section
-    params = config_params(cfg)
+    scan_p = scan_params(cfg)
+    params = config_params(cfg)  # every extractor's section, checked
     ransac_p, own = params["ransac"], [params[key] for key in entry.config]
     seed = int(cfg.get("seed", schema_section_defaults("walls")["seed"]))
     if entry.prepare is not None:  # imports before timing the first scan

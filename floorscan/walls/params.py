@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Mapping
 
-from floorscan.core.config import schema_defaults
+from floorscan.core.config import dataclass_from_mapping, schema_defaults
 
 
 @dataclass(frozen=True)
@@ -133,6 +133,25 @@ class ScanParams:
     grid_m: float
 
 
+def scan_params(cfg: Mapping[str, Any]) -> ScanParams:
+    """The :class:`ScanParams` of the ``walls`` config section (defaults filled in).
+
+    Raises
+    ------
+    ValueError
+        For a height band that is not [min, max] with min < max.
+    """
+    band = cfg.get("height_band_m", [ScanParams.min_height_m, ScanParams.max_height_m])
+    if len(band) != 2 or not float(band[0]) < float(band[1]):
+        raise ValueError(f"walls.height_band_m must be [min, max] with min < max, got {band!r}")
+    return ScanParams(
+        min_height_m=float(band[0]),
+        max_height_m=float(band[1]),
+        planar_tolerance_m=float(cfg.get("planar_tolerance_m", ScanParams.planar_tolerance_m)),
+        grid_m=float(cfg.get("grid_m", ScanParams.grid_m)),
+    )
+
+
 def params_from_config(cfg: Mapping[str, Any]) -> tuple[ScanParams, RansacParams, ClusterParams]:
     """The parameter objects of the ``walls`` config section (defaults filled in).
 
@@ -143,19 +162,8 @@ def params_from_config(cfg: Mapping[str, Any]) -> tuple[ScanParams, RansacParams
     ValueError
         For a height band that is not [min, max] with min < max.
     """
-    band = cfg.get("height_band_m", [ScanParams.min_height_m, ScanParams.max_height_m])
-    if len(band) != 2 or not float(band[0]) < float(band[1]):
-        raise ValueError(f"walls.height_band_m must be [min, max] with min < max, got {band!r}")
-    scan = ScanParams(
-        min_height_m=float(band[0]),
-        max_height_m=float(band[1]),
-        planar_tolerance_m=float(cfg.get("planar_tolerance_m", ScanParams.planar_tolerance_m)),
-        grid_m=float(cfg.get("grid_m", ScanParams.grid_m)),
-    )
-    from floorscan.core.config import dataclass_from_mapping
-
     return (
-        scan,
+        scan_params(cfg),
         dataclass_from_mapping(RansacParams, cfg.get("ransac"), "RansacParams"),
         dataclass_from_mapping(ClusterParams, cfg.get("cluster_ransac"), "ClusterParams"),
     )
