@@ -244,6 +244,35 @@ def test_merge_skips_connected_pairs_without_changing_faces(monkeypatch):
     np.testing.assert_allclose(faces[labels[0]][[1, 3]], [0, 0], atol=0.01)
 
 
+def test_first_merge_pass_prepared_once_gives_every_subsets_faces():
+    """The merge's first pass prepared for the whole set (every candidate pair tested
+    once) gives each subset the faces, weights and labels of merging it alone: the
+    first k scans of an ordering, a subset where nothing merges, and an empty one."""
+    from floorscan.floorplan.merge import FirstMergePass
+
+    rng = np.random.default_rng(11)
+    walls = np.array([[0, 0, 6, 0], [0, 0.2, 6, 0.2], [6.5, -1, 6.5, 4], [0, 3, 3, 3.02], [4.5, 3.5, 4.5, 6]])
+    scan = np.repeat(np.arange(40), len(walls))
+    t = np.sort(rng.uniform(0, 1, (len(scan), 2)), axis=1)
+    t[:, 1] = np.maximum(t[:, 1], t[:, 0] + 0.2)
+    a, b = walls[np.tile(np.arange(len(walls)), 40), :2], walls[np.tile(np.arange(len(walls)), 40), 2:]
+    seg = np.hstack([a + t[:, :1] * (b - a), a + np.minimum(t[:, 1:], 1) * (b - a)]) + rng.normal(0, 0.01, (len(scan), 4))
+    w = rng.integers(20, 200, len(scan)).astype(float)
+    first = FirstMergePass(seg)
+    order = rng.permutation(40)
+    subsets = [np.isin(scan, order[:k]) for k in (1, 2, 5, 17, 40)]
+    subsets += [np.arange(len(scan)) == 3, np.zeros(len(scan), bool), scan == 0]
+    n_faces = []
+    for rows in subsets:
+        want = merge_segments(seg[rows], w[rows])
+        got = merge_segments(seg[rows], w[rows], first_groups=first.groups(rows))
+        for x, y in zip(got, want):
+            np.testing.assert_array_equal(x, y)
+        n_faces.append(len(want[0]))
+    assert n_faces[4] == 5 and n_faces[5] == 1 and n_faces[6] == 0 and n_faces[7] == 5
+    assert FirstMergePass(seg, max_pairs=10).groups(subsets[0]) is None
+
+
 def test_ifc_guid_list_equals_uuid5_compressed_by_ifcopenshell():
     """The batched GlobalIds are ifcopenshell.guid.compress(uuid5(ns, str(i)).hex)."""
     import uuid

@@ -9,12 +9,18 @@ import numpy as np
 import pytest
 
 from floorscan.core.geometry import sample_segments, segment_weights
-from floorscan.score.against_reference import plan_against_reference, reference_against_ground_truth
+from floorscan.score.against_reference import (
+    Structure,
+    plan_against_reference,
+    reference_against_ground_truth,
+    within_bound,
+)
 from floorscan.score.reference import (
     PGM_FREE,
     PGM_OCCUPIED,
     PGM_UNKNOWN,
     OccupancyParams,
+    _sample_cells,
     map_image,
     occupancy_grid,
     read_grid,
@@ -176,6 +182,53 @@ def test_a_plan_of_the_true_walls_scores_high_and_a_spurious_wall_lowers_correct
     assert 0.6 < half["completeness_5cm"] < 0.75 and half["correctness_5cm"] > 0.9
     empty = plan_against_reference(np.empty((0, 4)), grid)
     assert empty["completeness_5cm"] == 0.0 and math.isnan(empty["correctness_5cm"])
+
+
+def _brute_force_plan(faces, structure, taus=(0.05, 0.10), sample_m=0.02):
+    """The definition of plan_against_reference, every sample against every cell."""
+    samples, weights = sample_segments(faces, sample_m), segment_weights(faces, sample_m)
+    d = np.sqrt(((samples[:, None, :] - structure.xy[None]) ** 2).sum(axis=2))  # (samples, cells)
+    d_plan, d_ref = d.min(axis=1), d.min(axis=0)
+    out = {}
+    for tau in taus:
+        key = f"{round(tau * 100):d}cm"
+        out[f"correctness_{key}"] = weights[d_plan <= tau].sum() / weights.sum()
+        out[f"completeness_{key}"] = np.mean(d_ref <= within_bound(tau, sample_m))
+    out["median_distance_m"] = np.median(np.where(d_plan <= 10 * max(taus), d_plan, np.inf))
+    return out
+
+
+def test_plans_sharing_faces_score_as_each_alone_and_as_the_definition():
+    """Plans scored one after another against one Structure reuse the work of the faces
+    they share; each scores exactly as against a fresh Structure, and as the
+    brute-force definition (every sample against every structure cell)."""
+    grid = occupancy_grid(_scans())
+    shared = Structure(grid)
+    rng = np.random.default_rng(3)
+    spurious = np.array([[2.5, 2.5, 5.5, 2.5], [1.0, 1.0, 1.0, 1.0]]) + np.tile(SHIFT, 2)  # one of zero length
+    noisy = WALLS + rng.normal(0, 0.02, WALLS.shape)
+    plans = [WALLS[:3], WALLS, np.vstack([WALLS, spurious]), np.vstack([noisy[:5], WALLS[5:]]),
+             np.vstack([WALLS[2:], WALLS[2:3]]), noisy, WALLS[:3]]  # fmt: skip
+    for faces in plans:
+        got = plan_against_reference(faces, shared)
+        alone = plan_against_reference(faces, Structure(grid))
+        assert got == alone
+        want = _brute_force_plan(faces, shared)
+        for key, value in want.items():
+            assert got[key] == pytest.approx(value, abs=1e-12), key
+    assert 0.5 < plan_against_reference(noisy, shared)["correctness_5cm"] < 0.95
+
+
+def test_ray_samples_fall_in_the_cells_of_the_whole_expression():
+    """The grid's in-place per-axis cell computation equals floor((o + d * frac -
+    origin) / r) of the (N, 2) arrays, to the cell, on rays of any direction."""
+    rng = np.random.default_rng(5)
+    o, origin, r, width = rng.uniform(-3, 3, 2), np.array([-7.35, -4.1]), 0.05, 400
+    d = rng.uniform(-6, 6, (500, 2))
+    ray = np.repeat(np.arange(500), 40)
+    frac = np.tile(np.arange(40), 500) / 40
+    c = np.floor((o + d[ray] * frac[:, None] - origin) / r).astype(np.int64)
+    assert np.array_equal(_sample_cells(o, d, ray, frac, origin, r, width), c[:, 1] * width + c[:, 0])
 
 
 def test_reference_against_the_true_walls():

@@ -45,38 +45,88 @@ def _merge_groups(cur: np.ndarray, i: np.ndarray, j: np.ndarray, params: Floorpl
     chunk most of them are connected. The groups, and so the merged faces, are those
     of all the passing pairs.
     """
-    reach = max(params.merge_gap_m, params.merge_distance_m)
     label = np.arange(len(cur))  # a component label per segment, of the pairs passed so far
     merged = False
     for start in range(0, len(i), _MERGE_CHUNK):
         ci, cj = i[start : start + _MERGE_CHUNK], j[start : start + _MERGE_CHUNK]
         apart = label[ci] != label[cj]
-        ci, cj = ci[apart], cj[apart]
-        if len(ci) == 0:
-            continue
-        a, b, d, n, length = _line_geometry(cur, ci, cj)
-        dist = np.maximum(
-            np.abs(np.einsum("ij,ij->i", cur[b, :2] - cur[a, :2], n)),
-            np.abs(np.einsum("ij,ij->i", cur[b, 2:] - cur[a, :2], n)),
-        )
-        ta = np.zeros(len(a)), length[a]
-        tb0 = np.einsum("ij,ij->i", cur[b, :2] - cur[a, :2], d)
-        tb1 = np.einsum("ij,ij->i", cur[b, 2:] - cur[a, :2], d)
-        gap = np.maximum(np.minimum(tb0, tb1) - ta[1], ta[0] - np.maximum(tb0, tb1))
-        ok = (dist <= params.merge_distance_m) & (gap <= params.merge_gap_m)
-        # Overlapping along the line (gap <= 0), a point of the shorter projects
-        # onto the longer and lies within dist of it: within reach for sure.
-        sure = ok & (gap <= 0) & (dist < reach * (1 - 1e-9))
-        wi, wj = _within_distance(cur, ci[ok & ~sure], cj[ok & ~sure], reach)
-        pi, pj = np.r_[ci[sure], wi], np.r_[cj[sure], wj]
+        pi, pj = _passing(cur, ci[apart], cj[apart], params)
         if len(pi):
             merged = True
             label = _components(len(cur), label[pi], label[pj])[label]
     return label if merged else None
 
 
+def _passing(cur: np.ndarray, ci: np.ndarray, cj: np.ndarray, params: FloorplanParams) -> tuple[np.ndarray, np.ndarray]:
+    """The candidate pairs (ci, cj) of segments ``cur`` that pass the merge test of
+    :func:`merge_segments` (a test of the two segments alone)."""
+    if len(ci) == 0:
+        return ci, cj
+    reach = max(params.merge_gap_m, params.merge_distance_m)
+    a, b, d, n, length = _line_geometry(cur, ci, cj)
+    dist = np.maximum(
+        np.abs(np.einsum("ij,ij->i", cur[b, :2] - cur[a, :2], n)),
+        np.abs(np.einsum("ij,ij->i", cur[b, 2:] - cur[a, :2], n)),
+    )
+    ta = np.zeros(len(a)), length[a]
+    tb0 = np.einsum("ij,ij->i", cur[b, :2] - cur[a, :2], d)
+    tb1 = np.einsum("ij,ij->i", cur[b, 2:] - cur[a, :2], d)
+    gap = np.maximum(np.minimum(tb0, tb1) - ta[1], ta[0] - np.maximum(tb0, tb1))
+    ok = (dist <= params.merge_distance_m) & (gap <= params.merge_gap_m)
+    # Overlapping along the line (gap <= 0), a point of the shorter projects
+    # onto the longer and lies within dist of it: within reach for sure.
+    sure = ok & (gap <= 0) & (dist < reach * (1 - 1e-9))
+    wi, wj = _within_distance(cur, ci[ok & ~sure], cj[ok & ~sure], reach)
+    return np.r_[ci[sure], wi], np.r_[cj[sure], wj]
+
+
+class FirstMergePass:
+    """The first pass of :func:`merge_segments` for any subset of one segment set,
+    prepared once: for the floor plans of many subsets of the same segments (the first
+    k scans of an ordering, for many k and orderings).
+
+    The merge test is a test of two segments alone, so the first pass's faces of a
+    subset are the connected groups of the passing pairs whose two segments are both
+    in it. Every candidate pair of the whole set is tested here once; :meth:`groups`
+    keeps those of a subset. Later passes run on the subset's faces as before.
+
+    Parameters
+    ----------
+    segments : (M, 4) float ndarray
+        The whole set, metres.
+    params : FloorplanParams
+    max_pairs : int
+        Above this many candidate pairs (16 bytes each) nothing is prepared and
+        :meth:`groups` returns None.
+    """
+
+    def __init__(self, segments: np.ndarray, params: FloorplanParams = FloorplanParams(), max_pairs: int = 20_000_000):
+        seg = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
+        self.n = len(seg)
+        reach = max(params.merge_gap_m, params.merge_distance_m)
+        i, j = _candidate_pairs(seg, reach, np.radians(params.merge_angle_deg), exact=False)
+        self.i = self.j = None
+        if len(i) <= max_pairs:
+            parts = [_passing(seg, i[s : s + _MERGE_CHUNK], j[s : s + _MERGE_CHUNK], params)
+                     for s in range(0, len(i), _MERGE_CHUNK)]  # fmt: skip
+            self.i = np.concatenate([p[0] for p in parts]) if parts else np.empty(0, np.int64)
+            self.j = np.concatenate([p[1] for p in parts]) if parts else np.empty(0, np.int64)
+
+    def groups(self, rows: np.ndarray) -> np.ndarray | None:
+        """The first pass's group of each segment of the subset ``rows`` ((M,) bool
+        mask of the whole set), numbered as :func:`_merge_groups` numbers them (each
+        segment its own group when no pair passes); None when not prepared."""
+        if self.i is None:
+            return None
+        inside = np.asarray(rows, dtype=bool)
+        local = np.cumsum(inside) - 1
+        keep = inside[self.i] & inside[self.j]
+        return _components(int(inside.sum()), local[self.i[keep]], local[self.j[keep]])
+
+
 def merge_segments(
-    segments: np.ndarray, weights: np.ndarray, params: FloorplanParams = FloorplanParams()
+    segments: np.ndarray, weights: np.ndarray, params: FloorplanParams = FloorplanParams(),
+    first_groups: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Merge the segments that describe one wall face into one segment.
 
@@ -95,6 +145,8 @@ def merge_segments(
     weights : (M,) float ndarray
         Weight of each segment in the fit (inlier count).
     params : FloorplanParams
+    first_groups : (M,) int64 ndarray, optional
+        The first pass's groups, from :meth:`FirstMergePass.groups` (the same faces).
 
     Returns
     -------
@@ -111,10 +163,13 @@ def merge_segments(
         raise ValueError(f"{len(seg)} segments but {len(w)} weights")
     labels = np.arange(len(seg))
     cur, cur_w = seg, w
-    for _ in range(max(1, params.max_passes)):
-        reach = max(params.merge_gap_m, params.merge_distance_m)
-        i, j = _candidate_pairs(cur, reach, np.radians(params.merge_angle_deg), exact=False)
-        group = _merge_groups(cur, i, j, params)
+    for n_pass in range(max(1, params.max_passes)):
+        if n_pass == 0 and first_groups is not None:
+            group = first_groups if len(first_groups) and first_groups.max() + 1 < len(cur) else None
+        else:
+            reach = max(params.merge_gap_m, params.merge_distance_m)
+            i, j = _candidate_pairs(cur, reach, np.radians(params.merge_angle_deg), exact=False)
+            group = _merge_groups(cur, i, j, params)
         if group is None:
             break
         size = np.bincount(group)

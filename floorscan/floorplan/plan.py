@@ -101,7 +101,8 @@ def _in_scan_order(segments: pd.DataFrame) -> pd.DataFrame:
 
 
 def plan_faces(
-    seg: np.ndarray, weights: np.ndarray | None = None, params: FloorplanParams = FloorplanParams()
+    seg: np.ndarray, weights: np.ndarray | None = None, params: FloorplanParams = FloorplanParams(),
+    first_groups: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The wall faces of a floor plan: the segments merged (:func:`merge_segments`),
     faces shorter than ``min_length_m`` dropped (:func:`build_floorplan`'s faces).
@@ -114,6 +115,8 @@ def plan_faces(
         Merge weights (inlier counts); a weight that is not positive, or no weights,
         is replaced by the segment's length.
     params : FloorplanParams
+    first_groups : (M,) int64 ndarray, optional
+        The merge's first pass, prepared (:class:`~floorscan.floorplan.merge.FirstMergePass`).
 
     Returns
     -------
@@ -127,7 +130,7 @@ def plan_faces(
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
     w = length if weights is None else np.asarray(weights, dtype=np.float64)
     w = np.where(w > 0, w, np.maximum(length, 1e-6))
-    faces, face_w, labels = merge_segments(seg, w, params)
+    faces, face_w, labels = merge_segments(seg, w, params, first_groups)
     n_seg = np.bincount(labels, minlength=len(faces))
     flen = np.hypot(faces[:, 2] - faces[:, 0], faces[:, 3] - faces[:, 1]) if len(faces) else np.empty(0)
     keep = flen >= params.min_length_m

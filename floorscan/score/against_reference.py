@@ -25,13 +25,15 @@ is not meaningful.
 
 from __future__ import annotations
 
+import itertools
 import math
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from floorscan.core.geometry import sample_segments, segment_weights
+from floorscan.core.geometry import sample_segments, samples_per_segment
 from floorscan.score.reference import OccupancyGrid
 
 if TYPE_CHECKING:
@@ -40,6 +42,13 @@ if TYPE_CHECKING:
 
 class Structure:
     """The reference map's structure, prepared once for scoring many plans.
+
+    Plans scored against one Structure share the work per wall face: the distances
+    of a face's samples do not depend on the other faces of its plan, and the plans
+    of one ordering at growing k, or of several orderings, share most of their faces.
+    A face seen before (the same four coordinates, the same ``taus_m`` and
+    ``sample_m``) is not sampled or queried again; its plan's metrics are those of
+    scoring all its samples at once.
 
     Attributes
     ----------
@@ -57,6 +66,10 @@ class Structure:
         When the reference map has no structure cell.
     """
 
+    #: Samples kept in the face cache before it is emptied (with their faces' cells,
+    #: about 20 bytes each).
+    CACHE_SAMPLES = 5_000_000
+
     def __init__(self, grid: OccupancyGrid):
         self.grid = grid
         self.xy = grid.cell_centres(grid.structure())
@@ -64,6 +77,122 @@ class Structure:
             raise ValueError("the reference map has no structure cell (occupied and hit by enough scans)")
         self.tree = cKDTree(self.xy)
         self.free = grid.free()
+        self._faces: dict[tuple, dict[bytes, _FaceScore]] = {}
+        self._cached_samples = 0
+
+    def face_scores(self, seg: np.ndarray, taus_m: tuple[float, ...], sample_m: float) -> list[_FaceScore]:
+        """The :class:`_FaceScore` of each row of ``seg`` ((F, 4) float64, metres), in
+        order; those not seen before are computed together."""
+        if self._cached_samples > self.CACHE_SAMPLES:
+            self._faces.clear()
+            self._cached_samples = 0
+        cache = self._faces.setdefault((tuple(float(t) for t in taus_m), float(sample_m)), {})
+        keys = [row.tobytes() for row in seg]
+        new = list(dict.fromkeys(k for k in keys if k not in cache))
+        if new:
+            rows = np.frombuffer(b"".join(new), dtype=np.float64).reshape(-1, 4)
+            for key, score in zip(new, _score_faces(self, rows, taus_m, sample_m)):
+                cache[key] = score
+                self._cached_samples += score.n
+        return [cache[k] for k in keys]
+
+
+@dataclass(frozen=True)
+class _FaceScore:
+    """What one wall face adds to its plan's metrics (:func:`plan_against_reference`).
+
+    Attributes
+    ----------
+    n : int
+        Its samples (:func:`floorscan.core.geometry.samples_per_segment`).
+    weight : float
+        Metres of face each sample stands for.
+    distance : (n,) float64 ndarray
+        Each sample's distance to the nearest structure cell centre, metres (inf
+        beyond ten times the largest tau).
+    on_free : (n,) bool ndarray
+        Samples on free cells and beyond the largest tau from structure.
+    near : tuple of int32 ndarray
+        Per tau, the structure cells (indices into ``Structure.xy``) within
+        :func:`within_bound` of a sample.
+    """
+
+    n: int
+    weight: float
+    distance: np.ndarray
+    on_free: np.ndarray
+    near: tuple[np.ndarray, ...]
+
+
+def _score_faces(ref: Structure, seg: np.ndarray, taus_m: tuple[float, ...], sample_m: float) -> list[_FaceScore]:
+    """:class:`_FaceScore` of each row of ``seg`` ((F, 4) float64): the distances the
+    whole-plan queries of :func:`plan_against_reference` give, one face at a time."""
+    n = samples_per_segment(seg, sample_m)
+    samples = sample_segments(seg, sample_m)
+    weight = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]) / n  # as segment_weights
+    distance, _ = ref.tree.query(samples, k=1, distance_upper_bound=max(taus_m) * 10)
+    rows, cols, inside = ref.grid.cells_of(samples)
+    on_free = np.zeros(len(samples), dtype=bool)
+    on_free[inside] = ref.free[rows[inside], cols[inside]]
+    # beside a wall the free cells begin within a cell of its face: only samples beyond
+    # the largest tolerance from structure are a wall drawn through free space
+    on_free &= distance > max(taus_m)
+    near_cell, near_face, near_distance = _cells_near_samples(ref, seg, n, within_bound(max(taus_m), sample_m))
+    near, cell_type = [], np.int32 if len(ref.xy) < 2**31 else np.int64
+    for tau in taus_m:
+        keep = near_distance <= within_bound(tau, sample_m)
+        cells, faces = near_cell[keep], near_face[keep]
+        near.append(np.split(cells.astype(cell_type), np.searchsorted(faces, np.arange(1, len(seg)))))
+    starts = np.r_[0, np.cumsum(n)]
+    return [
+        _FaceScore(int(n[f]), float(weight[f]), distance[starts[f] : starts[f + 1]],
+                   on_free[starts[f] : starts[f + 1]], tuple(per_tau[f] for per_tau in near))
+        for f in range(len(seg))
+    ]  # fmt: skip
+
+
+def _cells_near_samples(ref: Structure, seg: np.ndarray, n: np.ndarray, bound: float):
+    """The (structure cell, face) pairs whose nearest face sample lies within about
+    ``bound`` metres, grouped by face, with that distance.
+
+    The samples of a face are equally spaced along it (:func:`sample_segments`,
+    ``n`` per face), so a cell's nearest sample is one of the two around its
+    projection on the face: the four around it are measured, each as the whole-plan
+    query measures it (cell minus sample, squares summed, square root). Candidate
+    cells are those within ``bound`` (plus a little) of the face's segment.
+
+    Returns
+    -------
+    cell, face : (P,) int64 ndarray
+        Indices into ``ref.xy`` and into ``seg``, by face.
+    distance : (P,) float64 ndarray
+        Metres.
+    """
+    from floorscan.floorplan.candidates import point_segment_dist2
+
+    reach = bound * (1 + 1e-6) + 1e-9
+    a, b = seg[:, :2], seg[:, 2:]
+    lists = ref.tree.query_ball_point((a + b) / 2, np.hypot(b[:, 0] - a[:, 0], b[:, 1] - a[:, 1]) / 2 + reach)
+    counts = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(seg))
+    cell = np.fromiter(itertools.chain.from_iterable(lists), dtype=np.int64, count=int(counts.sum()))
+    face = np.repeat(np.arange(len(seg)), counts)
+    cx, cy = ref.xy[cell, 0], ref.xy[cell, 1]
+    keep = point_segment_dist2(cx, cy, seg[face]) <= reach * reach
+    cell, face, cx, cy = cell[keep], face[keep], cx[keep], cy[keep]
+    a, ab = seg[face, :2], seg[face, 2:] - seg[face, :2]
+    length2 = ab[:, 0] * ab[:, 0] + ab[:, 1] * ab[:, 1]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.where(length2 > 0, ((cx - a[:, 0]) * ab[:, 0] + (cy - a[:, 1]) * ab[:, 1]) / length2, 0.0)
+    last = n[face] - 1
+    i0 = np.floor(np.clip(t, 0.0, 1.0) * last).astype(np.int64)
+    distance = np.full(len(cell), np.inf)
+    for offset in (-1, 0, 1, 2):
+        i = np.clip(i0 + offset, 0, last)
+        s = a + ab * (i / last)[:, None]  # the sample as sample_segments computes it
+        dx, dy = cx - s[:, 0], cy - s[:, 1]
+        distance = np.minimum(distance, np.sqrt(dx * dx + dy * dy))
+    keep = distance <= bound
+    return cell[keep], face[keep], distance[keep]
 
 
 def within_bound(tau_m: float, sample_m: float) -> float:
@@ -109,36 +238,30 @@ def plan_against_reference(
         When the reference map has no structure cell.
     """
     ref = reference if isinstance(reference, Structure) else Structure(reference)
-    structure = ref.xy
-    seg = np.asarray(faces, dtype=np.float64).reshape(-1, 4)
-    out: dict[str, float] = {"n_structure_cells": float(len(structure))}
-    samples = sample_segments(seg, sample_m)
-    weights = segment_weights(seg, sample_m)
+    seg = np.ascontiguousarray(faces, dtype=np.float64).reshape(-1, 4)
+    out: dict[str, float] = {"n_structure_cells": float(len(ref.xy))}
+    scores = ref.face_scores(seg, tuple(taus_m), sample_m)
+    # the plan's samples, face after face, as sample_segments gives them
+    weights = np.repeat(np.array([s.weight for s in scores]), [s.n for s in scores])
     total = float(weights.sum())
     out["plan_length_m"] = total
-    if len(samples) == 0 or total <= 0:
+    if len(weights) == 0 or total <= 0:
         for tau in taus_m:
             key = _cm(tau)
             out[f"completeness_{key}"], out[f"correctness_{key}"], out[f"f1_{key}"] = 0.0, math.nan, math.nan
         out["median_distance_m"], out["free_fraction"] = math.nan, math.nan
         return out
-    d_plan, _ = ref.tree.query(samples, k=1, distance_upper_bound=max(taus_m) * 10)
-    # an unbalanced tree: built for one query, faster to build, the same distances
-    samples_tree = cKDTree(samples, balanced_tree=False, compact_nodes=False)
-    d_ref, _ = samples_tree.query(structure, k=1, distance_upper_bound=within_bound(max(taus_m), sample_m))
-    for tau in taus_m:
+    d_plan = np.concatenate([s.distance for s in scores])
+    for t, tau in enumerate(taus_m):
         key = _cm(tau)
         correctness = float(weights[d_plan <= tau].sum() / total)
-        completeness = float(np.mean(d_ref <= within_bound(tau, sample_m)))
+        complete = np.zeros(len(ref.xy), dtype=bool)
+        complete[np.concatenate([s.near[t] for s in scores])] = True
+        completeness = float(np.mean(complete))
         f1 = 2 * correctness * completeness / (correctness + completeness) if correctness + completeness > 0 else 0.0
         out[f"completeness_{key}"], out[f"correctness_{key}"], out[f"f1_{key}"] = completeness, correctness, f1
     out["median_distance_m"] = float(np.median(d_plan))
-    rows, cols, inside = ref.grid.cells_of(samples)
-    on_free = np.zeros(len(samples), dtype=bool)
-    on_free[inside] = ref.free[rows[inside], cols[inside]]
-    # beside a wall the free cells begin within a cell of its face: only samples beyond
-    # the largest tolerance from structure are a wall drawn through free space
-    on_free &= d_plan > max(taus_m)
+    on_free = np.concatenate([s.on_free for s in scores])
     out["free_fraction"] = float(weights[on_free].sum() / total)
     return out
 

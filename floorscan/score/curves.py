@@ -103,17 +103,29 @@ def scan_cover(
         return cover
     seg = per_scan[["x0", "y0", "x1", "y1"]].to_numpy(np.float64)
     samples = sample_segments(seg, sample_m)
-    scan_of_sample = np.repeat(per_scan["scan_id"].to_numpy(np.int64), samples_per_segment(seg, sample_m))
+    scan_ids_of_rows, scan_of_row = np.unique(per_scan["scan_id"].to_numpy(np.int64), return_inverse=True)
+    scan_of_sample = np.repeat(scan_of_row, samples_per_segment(seg, sample_m))
     # every (sample, structure cell) pair within the bound, found in C
     pairs = cKDTree(samples).sparse_distance_matrix(structure.tree, within_bound(tau_m, sample_m), output_type="ndarray")
     n_cells = len(structure.xy)
-    keys = np.unique(scan_of_sample[pairs["i"]] * n_cells + pairs["j"])  # by scan, then cell
-    scans, cells = keys // n_cells, keys % n_cells
+    keys = scan_of_sample[pairs["i"]] * n_cells + pairs["j"]
+    if len(scan_ids_of_rows) * n_cells <= _MARK_CELLS:  # distinct and sorted, by scan then cell
+        mark = np.zeros(len(scan_ids_of_rows) * n_cells, dtype=bool)
+        mark[keys] = True
+        keys = np.flatnonzero(mark)
+    else:
+        keys = np.unique(keys)
+    scans, cells = scan_ids_of_rows[keys // n_cells], keys % n_cells
     bounds = np.flatnonzero(np.diff(scans)) + 1
     for chunk_scans, chunk_cells in zip(np.split(scans, bounds), np.split(cells, bounds)):
         if len(chunk_scans) and int(chunk_scans[0]) in cover:
             cover[int(chunk_scans[0])] = chunk_cells
     return cover
+
+
+#: Largest scans x structure cells for which :func:`scan_cover` marks its pairs in one
+#: boolean array (one byte each) rather than sorting them.
+_MARK_CELLS = 1 << 28
 
 
 def random_orderings(scan_ids: list[int], seeds: list[int]) -> dict[int, pd.DataFrame]:
@@ -362,6 +374,7 @@ def score_curves(
     oracle : pandas.DataFrame
         The oracle ordering (:func:`oracle_ordering`).
     """
+    from floorscan.floorplan.merge import FirstMergePass
     from floorscan.floorplan.params import params_from_config
     from floorscan.floorplan.plan import plan_faces, segment_arrays
     from floorscan.score.reference import read_grid
@@ -370,6 +383,7 @@ def score_curves(
     fp_params = params_from_config(floorplan_cfg or {})
     # as build_floorplan takes them: the plan of a set of scans is plan_faces of its rows
     seg, weights, seg_scan = segment_arrays(per_scan)
+    first_pass = FirstMergePass(seg, fp_params)  # the merge's first pass of every subset, from one test
     cache: dict[tuple, dict] = {}
 
     def score_scans(scan_ids) -> dict:
@@ -378,7 +392,8 @@ def score_curves(
         key = tuple(sorted(int(s) for s in scan_ids))
         if key not in cache:
             rows = np.isin(seg_scan, key)
-            faces = plan_faces(seg[rows], None if weights is None else weights[rows], fp_params)[0]
+            faces = plan_faces(seg[rows], None if weights is None else weights[rows], fp_params,
+                               first_pass.groups(rows))[0]
             cache[key] = plan_against_reference(faces, structure, taus_m)
         return cache[key]
 

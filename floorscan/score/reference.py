@@ -230,8 +230,7 @@ def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: Occup
         n = np.maximum(np.ceil(length / step).astype(np.int64), 1)
         ray = np.repeat(np.arange(len(n)), n)
         frac = (np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n, n)
-        c = np.floor((o + d[ray] * frac[:, None] - origin) / r).astype(np.int64)
-        crossed = _distinct(c[:, 1] * width + c[:, 0], last)
+        crossed = _distinct(_sample_cells(o, d, ray, frac, origin, r, width), last)
         hits[hit] += 1
         misses[crossed[hit_by[crossed] != i]] += 1
     return OccupancyGrid(
@@ -241,6 +240,24 @@ def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: Occup
         n_miss_scans=misses.reshape(height, width),
         params=params,
     )
+
+
+def _sample_cells(o, d, ray, frac, origin, r: float, width: int) -> np.ndarray:
+    """Flat cell index of each ray sample ``o + d[ray] * frac``: floor((o + d[ray] *
+    frac - origin) / r) per axis, computed in place one axis at a time (the same
+    values as the whole expression, without its (N, 2) temporaries)."""
+    axes = []
+    for a in (0, 1):
+        v = np.ascontiguousarray(d[:, a])[ray]
+        v *= frac
+        v += o[a]
+        v -= origin[a]
+        v /= r
+        axes.append(np.floor(v, out=v).astype(np.int64))
+    cells = axes[1]
+    cells *= width
+    cells += axes[0]
+    return cells
 
 
 def _distinct(cells: np.ndarray, last: np.ndarray) -> np.ndarray:

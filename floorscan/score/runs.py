@@ -60,7 +60,8 @@ def score_dataset(
         tolerance metrics into the ``plan_precision_<tau>``, ``plan_recall_<tau>`` and
         ``plan_f1_<tau>`` columns (one wall per wall: the product a user opens, not the
         per-scan segments); or ``floorplan``, the path of the plan's ``.geojson``, from
-        which both are read when the run is scored. Runs of one ordering and extractor
+        which both are read when the run is scored (unless ``floorplan_faces`` is
+        given too). Runs of one ordering and extractor
         in increasing k (each wall set containing the previous one) are scored
         incrementally, from the new walls only, with the same result. The last run of
         an ordering whose walls (as a set) and plan faces equal an earlier run's of
@@ -200,7 +201,7 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
             walls = read_table(walls, columns=["x0", "y0", "x1", "y1"])
         walls = as_segments(walls)
         plan_path = run.get("floorplan")
-        if plan_path is not None:
+        if plan_path is not None and run.get("floorplan_faces") is None:
             plan, nfp = read_floorplan(plan_path)
         else:
             plan, nfp = run.get("floorplan_faces"), run.get("n_floorplan_walls")

@@ -166,7 +166,7 @@ def write_run_scores(
     """
     cfg = ScoreParams.from_config(cfg)
     from floorscan.score.against_reference import score_plans
-    from floorscan.score.geojson import floorplan_faces
+    from floorscan.score.geojson import read_floorplan
     from floorscan.score.ground_truth import load_recall_references, load_references
     from floorscan.score.reference import read_grid
     from floorscan.score.runs import SCORE_TIME, score_dataset
@@ -179,15 +179,19 @@ def write_run_scores(
         log.info("recall against the %s features: %s segments", cfg.recall_reference,
                  {e: len(s) for e, s in recall_refs.items()})
     n_kept = {o: len(read_table(p, columns=["scan_id"])) for o, p in zip(orderings, inputs["orderings"])}
-    # paths, not tables: score_dataset reads one run's walls and floor plan at a time
+    # the walls as paths, not tables: score_dataset reads one run's walls at a time; the
+    # plans (a few hundred faces each) are read once for both scorings
+    plans = {fp: read_floorplan(fp) for fp in dict.fromkeys(inputs["floorplans"])}
     run_files = [
-        {"ordering": o, "extractor": e, "k": k, "walls": wp, "n_kept": n_kept[o], "floorplan": fp}
+        {"ordering": o, "extractor": e, "k": k, "walls": wp, "n_kept": n_kept[o], "floorplan": fp,
+         "floorplan_faces": plans[fp][0], "n_floorplan_walls": plans[fp][1]}
         for (o, e, k), wp, fp in zip(runs, inputs["walls"], inputs["floorplans"], strict=True)
     ]
     table = score_dataset(run_files, references, kind, cfg, dataset, log, recall_references=recall_refs,
                           workers=workers)
     # the plans against the reference map (occupancy grid of all kept scans)
-    against_map = score_plans(run_files, read_grid(inputs["reference_map"]), tuple(cfg.taus_m), floorplan_faces)
+    against_map = score_plans(run_files, read_grid(inputs["reference_map"]), tuple(cfg.taus_m),
+                              lambda path: plans[path][0])
     table = table.merge(against_map, on=["ordering", "extractor", "k"], how="left", validate="one_to_one")
     # the time of each run to the log, not into the metrics (the same input gives the same file)
     seconds = table.pop(SCORE_TIME)
