@@ -267,3 +267,26 @@ def test_subsample_points_3d_is_cut_to_the_band_2d_at_any_height_is_not():
     assert len(subsample_points(three_d, 10**6, seed=0, z_band=(0.5, 2.0))) == in_band
     mounted = three_d.assign(z=0.3 + rng.uniform(0, 0.005, n))  # within the planar tolerance
     assert len(subsample_points(mounted, 10**6, seed=0, z_band=(0.5, 2.0))) == n
+
+
+def test_reference_map_shows_one_cell_walls_of_a_large_building(tmp_path):
+    """On an 80 m map a 5 cm structure cell is a fifth of a pixel: the walls are drawn
+    as markers of a visible size (dark pixels along the wall), structure over the
+    single-scan cells."""
+    import matplotlib.image as mpimg
+
+    from floorscan.score.reference import OccupancyGrid, OccupancyParams
+
+    h, w = 1600, 1600  # 80 m x 80 m of 5 cm cells
+    hits, misses = np.zeros((h, w), np.int32), np.zeros((h, w), np.int32)
+    misses[200:1400, 200:1400] = 5  # free inside
+    hits[800, 200:1400] = 4  # a wall seen by 4 scans, one cell thick, along x at y = 40 m
+    hits[200:1400, 800], misses[200:1400, 800] = 1, 0  # a line one scan saw, crossing it
+    grid = OccupancyGrid(np.zeros(2), 0.05, hits, misses, OccupancyParams())
+    out = tmp_path / "reference_map.png"
+    figures_maps.plot_reference_map(grid, out, title="large")
+    img = mpimg.imread(out)[..., :3]
+    dark = (img.max(axis=2) < 0.35).sum(axis=1)  # black pixels per image row
+    assert dark.max() > 400  # the wall: a dark line across most of the 600-pixel axes
+    red = ((img[..., 0] > 0.6) & (img[..., 1] < 0.35)).sum(axis=0)
+    assert red.max() > 300

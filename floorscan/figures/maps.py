@@ -18,7 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from floorscan.figures.style import _save, _segments_collection, _square  # noqa: E402
+from floorscan.figures.style import DPI, _save, _segments_collection, _square  # noqa: E402
 from floorscan.score.segments import as_segments  # noqa: E402
 
 
@@ -34,10 +34,11 @@ def plot_reference_map(grid, out, title: str = "", faces=None) -> None:
     counts = grid.counts()
     fig, ax = plt.subplots(figsize=(8, 8))
     ax.imshow(rgb, origin="lower", extent=(x0, x0 + w * r, y0, y0 + h * r), interpolation="nearest")
-    # occupied cells as markers of at least a pixel: at a building's scale a 5 cm cell
-    # is a tenth of one, and the image alone would hide them
-    size = max(0.3, (72.0 * 8 * r / max(w * r, h * r)) ** 2)
-    for mask, colour in ((grid.structure(), "black"), (grid.single_scan(), (0.85, 0.1, 0.1))):
+    # occupied cells as markers of at least one and a half pixels (marker area in
+    # points squared): at a building's scale a 5 cm cell is less than a pixel, and
+    # the image alone, or smaller markers, would hide the walls
+    size = max((1.5 * 72.0 / DPI) ** 2, (72.0 * 8 * r / max(w * r, h * r)) ** 2)
+    for mask, colour in ((grid.single_scan(), (0.85, 0.1, 0.1)), (grid.structure(), "black")):  # structure on top
         xy = grid.cell_centres(mask)
         ax.scatter(xy[:, 0], xy[:, 1], s=size, c=[colour], marker="s", linewidths=0)
     if faces is not None and len(faces):
