@@ -216,10 +216,13 @@ STAGES = (
 )  # fmt: skip
 
 
-#: Stages of the score stage (config section ``score``): the reference map, the metrics
-#: of the evaluation grid, the curves (counted under ``score``), the summary and the
-#: scoring figures.
-SCORE_STAGES = ("reference", "score_runs", "score", "score_walls_figures", "score_figures")
+#: The score stage as ARCHITECTURE.md draws it (config section ``score``): the
+#: reference map, the metrics of the evaluation grid, the curves (counted under
+#: ``score``) and the summary.
+SCORE_STAGES = ("reference", "score_runs", "score")
+#: The scoring figures: the figures stage's, printed beside the score stage (issue 21
+#: measured the two together).
+SCORE_FIGURES = ("score_walls_figures", "score_figures")
 
 
 def stage_of(name: str) -> str:
@@ -345,7 +348,11 @@ def report(r: dict, cores: int) -> None:
     scoring = [st for st in SCORE_STAGES if st in t.index]
     if scoring:
         score_cpu = t.loc[scoring, "cpu_s"].sum()
-        print(f"score stage ({', '.join(scoring)}): {score_cpu:.1f} of {cpu:.1f} CPU-s ({100 * score_cpu / cpu:.0f} %)")
+        figures = [st for st in SCORE_FIGURES if st in t.index]
+        with_figures = score_cpu + t.loc[figures, "cpu_s"].sum()
+        print(f"score stage ({', '.join(scoring)}; score counts score_curves): {score_cpu:.1f} of {cpu:.1f} CPU-s "
+              f"({100 * score_cpu / cpu:.1f} %); with the scoring figures ({', '.join(figures)}): "
+              f"{with_figures:.1f} CPU-s ({100 * with_figures / cpu:.1f} %)")
     print("from s / to s: when the stage's first job started and its last job ended, seconds after Snakemake "
           "started (polled every 0.2 s)")
 
