@@ -229,6 +229,15 @@ def test_ray_samples_fall_in_the_cells_of_the_whole_expression():
     frac = np.tile(np.arange(40), 500) / 40
     c = np.floor((o + d[ray] * frac[:, None] - origin) / r).astype(np.int64)
     assert np.array_equal(_sample_cells(o, d, ray, frac, origin, r, width), c[:, 1] * width + c[:, 0])
+    # exact binary fractions: many samples fall on cell edges, where a floor off by a
+    # rounding or taken on the other side of zero would show
+    o, origin, r = np.array([0.5, -0.25]), np.array([-8.0, -4.0]), 0.25
+    d = rng.integers(-24, 25, (300, 2)) * 0.25
+    ray, frac = np.repeat(np.arange(300), 32), np.tile(np.arange(32), 300) / 32
+    c = np.floor((o + d[ray] * frac[:, None] - origin) / r).astype(np.int64)
+    edge = (o + d[ray] * frac[:, None] - origin) / r
+    assert (edge == np.round(edge)).mean() > 0.05
+    assert np.array_equal(_sample_cells(o, d, ray, frac, origin, r, width), c[:, 1] * width + c[:, 0])
 
 
 def test_reference_against_the_true_walls():

@@ -102,7 +102,6 @@ class FirstMergePass:
 
     def __init__(self, segments: np.ndarray, params: FloorplanParams = FloorplanParams(), max_pairs: int = 20_000_000):
         seg = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
-        self.n = len(seg)
         reach = max(params.merge_gap_m, params.merge_distance_m)
         i, j = _candidate_pairs(seg, reach, np.radians(params.merge_angle_deg), exact=False)
         self.i = self.j = None

@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.spatial import cKDTree
 
-from floorscan.core.geometry import sample_segments, samples_per_segment
+from floorscan.core.geometry import sample_segments, samples_per_segment, segment_weights
 from floorscan.score.reference import OccupancyGrid
 
 if TYPE_CHECKING:
@@ -128,8 +128,9 @@ def _score_faces(ref: Structure, seg: np.ndarray, taus_m: tuple[float, ...], sam
     """:class:`_FaceScore` of each row of ``seg`` ((F, 4) float64): the distances the
     whole-plan queries of :func:`plan_against_reference` give, one face at a time."""
     n = samples_per_segment(seg, sample_m)
+    starts = np.r_[0, np.cumsum(n)]
     samples = sample_segments(seg, sample_m)
-    weight = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]) / n  # as segment_weights
+    weight = segment_weights(seg, sample_m)[starts[:-1]]  # equal within a face
     distance, _ = ref.tree.query(samples, k=1, distance_upper_bound=max(taus_m) * 10)
     rows, cols, inside = ref.grid.cells_of(samples)
     on_free = np.zeros(len(samples), dtype=bool)
@@ -137,13 +138,13 @@ def _score_faces(ref: Structure, seg: np.ndarray, taus_m: tuple[float, ...], sam
     # beside a wall the free cells begin within a cell of its face: only samples beyond
     # the largest tolerance from structure are a wall drawn through free space
     on_free &= distance > max(taus_m)
-    near_cell, near_face, near_distance = _cells_near_samples(ref, seg, n, within_bound(max(taus_m), sample_m))
+    near_cell, near_face, near_distance = _cells_near_samples(ref, seg, samples, starts,
+                                                              within_bound(max(taus_m), sample_m))
     near, cell_type = [], np.int32 if len(ref.xy) < 2**31 else np.int64
     for tau in taus_m:
         keep = near_distance <= within_bound(tau, sample_m)
         cells, faces = near_cell[keep], near_face[keep]
         near.append(np.split(cells.astype(cell_type), np.searchsorted(faces, np.arange(1, len(seg)))))
-    starts = np.r_[0, np.cumsum(n)]
     return [
         _FaceScore(int(n[f]), float(weight[f]), distance[starts[f] : starts[f + 1]],
                    on_free[starts[f] : starts[f + 1]], tuple(per_tau[f] for per_tau in near))
@@ -151,15 +152,16 @@ def _score_faces(ref: Structure, seg: np.ndarray, taus_m: tuple[float, ...], sam
     ]  # fmt: skip
 
 
-def _cells_near_samples(ref: Structure, seg: np.ndarray, n: np.ndarray, bound: float):
-    """The (structure cell, face) pairs whose nearest face sample lies within about
+def _cells_near_samples(ref: Structure, seg: np.ndarray, samples: np.ndarray, starts: np.ndarray, bound: float):
+    """The (structure cell, face) pairs whose nearest face sample lies within
     ``bound`` metres, grouped by face, with that distance.
 
-    The samples of a face are equally spaced along it (:func:`sample_segments`,
-    ``n`` per face), so a cell's nearest sample is one of the two around its
-    projection on the face: the four around it are measured, each as the whole-plan
-    query measures it (cell minus sample, squares summed, square root). Candidate
-    cells are those within ``bound`` (plus a little) of the face's segment.
+    ``samples`` are :func:`sample_segments` of ``seg``, face ``f``'s from
+    ``starts[f]`` to ``starts[f + 1]``. They are equally spaced along the face, so a
+    cell's nearest sample is one of the two around its projection on the face: the
+    four around it are measured, each as the whole-plan query measures it (cell minus
+    sample, squares summed, square root). Candidate cells are those within ``bound``
+    (plus a little) of the face's segment.
 
     Returns
     -------
@@ -183,12 +185,11 @@ def _cells_near_samples(ref: Structure, seg: np.ndarray, n: np.ndarray, bound: f
     length2 = ab[:, 0] * ab[:, 0] + ab[:, 1] * ab[:, 1]
     with np.errstate(invalid="ignore", divide="ignore"):
         t = np.where(length2 > 0, ((cx - a[:, 0]) * ab[:, 0] + (cy - a[:, 1]) * ab[:, 1]) / length2, 0.0)
-    last = n[face] - 1
-    i0 = np.floor(np.clip(t, 0.0, 1.0) * last).astype(np.int64)
+    first, last = starts[face], starts[face + 1] - 1
+    i0 = first + np.floor(np.clip(t, 0.0, 1.0) * (last - first)).astype(np.int64)
     distance = np.full(len(cell), np.inf)
     for offset in (-1, 0, 1, 2):
-        i = np.clip(i0 + offset, 0, last)
-        s = a + ab * (i / last)[:, None]  # the sample as sample_segments computes it
+        s = samples[np.clip(i0 + offset, first, last)]
         dx, dy = cx - s[:, 0], cy - s[:, 1]
         distance = np.minimum(distance, np.sqrt(dx * dx + dy * dy))
     keep = distance <= bound
