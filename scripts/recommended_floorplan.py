@@ -8,9 +8,9 @@ with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
     outputs = dict(smk.output.items())  # named by format (floorscan.floorplan.floorplan_outputs)
     plan = write_recommended_floorplan(
-        smk.input.scans, smk.input.walls, smk.input.index, outputs, smk.params.cfg,
+        smk.input.scans, smk.input.walls, smk.input.index, outputs, smk.params.cfg, grid_path=smk.input.grid,
         dataset=smk.wildcards.dataset, ordering=smk.params.ordering, extractor=smk.params.extractor,
     )
-    log.info("floor plan of %d selected scans (%s, %s walls): %d walls, %d faces -> %s",
+    log.info("floor plan of %d selected scans (%s, %s walls): %d walls, %d faces, %d clutter, %d junctions -> %s",
              plan["n_scans"], smk.params.ordering, smk.params.extractor, plan["n_walls"], plan["n_faces"],
-             ", ".join(outputs.values()))
+             plan["n_clutter"], plan["n_junctions"], ", ".join(outputs.values()))

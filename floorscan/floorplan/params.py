@@ -14,6 +14,7 @@ from typing import Any, Mapping
 
 from floorscan.core.config import schema_defaults
 from floorscan.floorplan.georeference import Georeference, as_georeference
+from floorscan.floorplan.structure import StructureParams
 
 
 #: DXF versions :func:`write_dxf` writes (R2010 the default: R12 has no units header).
@@ -70,9 +71,16 @@ class FloorplanParams:
     wall_height_m: float
     min_length_m: float
     dxf_version: str
+    structure: StructureParams
     georeference: Georeference | None = None
 
     def __post_init__(self):
+        if not isinstance(self.structure, StructureParams):  # the config's mapping
+            from floorscan.core.config import dataclass_from_mapping
+
+            object.__setattr__(
+                self, "structure", dataclass_from_mapping(StructureParams, self.structure, "floorplan.structure")
+            )
         if self.georeference is not None:  # a config mapping -> Georeference (checked)
             object.__setattr__(self, "georeference", as_georeference(self.georeference))
         if self.dxf_version not in DXF_VERSIONS:

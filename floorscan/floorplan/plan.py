@@ -12,7 +12,8 @@ Source: the duplicate problem of thesis section 5.1.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -20,6 +21,9 @@ import pandas as pd
 from floorscan.floorplan.merge import merge_segments
 from floorscan.floorplan.pairing import pair_faces
 from floorscan.floorplan.params import FloorplanParams
+
+if TYPE_CHECKING:
+    from floorscan.core.occupancy import OccupancyGrid
 
 log = logging.getLogger(__name__)
 
@@ -31,6 +35,14 @@ WALL_COLUMNS = [
 ]  # fmt: skip
 #: Columns of :attr:`FloorPlan.faces`.
 FACE_COLUMNS = ["face_id", "wall_id", "x0", "y0", "x1", "y1", "length_m", "n_segments", "n_inliers"]
+#: Columns of :attr:`FloorPlan.clutter`.
+CLUTTER_COLUMNS = ["clutter_id", "x0", "y0", "x1", "y1", "length_m", "reason"]
+#: Columns of :attr:`FloorPlan.junctions`; ``kind`` is ``L``, ``T`` or ``X``.
+JUNCTION_COLUMNS = ["x", "y", "kind", "wall_a", "wall_b"]
+
+
+def _empty(columns: list[str]) -> pd.DataFrame:
+    return pd.DataFrame({c: pd.Series(dtype=object if c in ("reason", "kind") else np.float64) for c in columns})
 
 
 @dataclass
@@ -44,10 +56,19 @@ class FloorPlan:
         line, metres), ``thickness_m``, ``height_m``, ``paired`` (both faces seen).
     faces : pandas.DataFrame
         One row per merged face (:data:`FACE_COLUMNS`), ``wall_id`` of its wall.
+    clutter : pandas.DataFrame
+        Faces that are not structure (:data:`CLUTTER_COLUMNS`: furniture, lines
+        through objects, single-scan returns, with the ``reason``), from the structure
+        passes (:mod:`floorscan.floorplan.structure`); empty without them.
+    junctions : pandas.DataFrame
+        Where walls meet (:data:`JUNCTION_COLUMNS`: the point, metres, ``L``, ``T`` or
+        ``X``, the two walls' ids); empty without the structure passes.
     """
 
     walls: pd.DataFrame
     faces: pd.DataFrame
+    clutter: pd.DataFrame = field(default_factory=lambda: _empty(CLUTTER_COLUMNS))
+    junctions: pd.DataFrame = field(default_factory=lambda: _empty(JUNCTION_COLUMNS))
 
     def footprints(self):
         """Wall polygons (shapely), the axis buffered by half the thickness, flat ends."""
@@ -137,7 +158,9 @@ def plan_faces(
     return faces[keep].reshape(-1, 4), face_w[keep], n_seg[keep]
 
 
-def build_floorplan(segments: pd.DataFrame, params: FloorplanParams = FloorplanParams()) -> FloorPlan:
+def build_floorplan(
+    segments: pd.DataFrame, params: FloorplanParams = FloorplanParams(), grid: OccupancyGrid | None = None
+) -> FloorPlan:
     """The floor plan of wall segments from many scans: merged faces, paired walls.
 
     Parameters
@@ -150,6 +173,13 @@ def build_floorplan(segments: pd.DataFrame, params: FloorplanParams = FloorplanP
         depends on which scans gave them, not on the order an ordering ranked
         the scans (every ordering's ``k = all`` gives the same plan).
     params : FloorplanParams
+    grid : OccupancyGrid, optional
+        The free space of the segments' scans. With it, the merged faces go through
+        the structure passes (:func:`floorscan.floorplan.structure.structure_passes`:
+        clutter out, collinear faces joined across gaps the free space does not pass
+        through, junctions), a one-faced wall's axis lies half its thickness behind
+        its face (away from the free space), and the wall axes are snapped into
+        junctions (:attr:`FloorPlan.junctions`).
 
     Returns
     -------
@@ -162,9 +192,28 @@ def build_floorplan(segments: pd.DataFrame, params: FloorplanParams = FloorplanP
     """
     seg, w, _ = segment_arrays(segments)
     faces, face_w, n_seg = plan_faces(seg, w, params)
+    clutter = _empty(CLUTTER_COLUMNS)
+    if grid is not None:
+        from floorscan.floorplan.structure import structure_passes
+
+        n_before = len(faces)
+        faces, face_w, side, cl, reason = structure_passes(faces, face_w, grid, params.structure)
+        n_seg = np.ones(len(faces), dtype=np.int64)
+        clutter = pd.DataFrame(
+            {
+                "clutter_id": np.arange(len(cl), dtype=np.int32),
+                "x0": cl[:, 0], "y0": cl[:, 1], "x1": cl[:, 2], "y1": cl[:, 3],
+                "length_m": np.hypot(cl[:, 2] - cl[:, 0], cl[:, 3] - cl[:, 1]),
+                "reason": reason.astype(str),
+            }  # fmt: skip
+        )
+        log.info("structure passes: %d faces -> %d wall faces, %d clutter", n_before, len(faces), len(cl))
     flen = np.hypot(faces[:, 2] - faces[:, 0], faces[:, 3] - faces[:, 1])
     axes, thick, wall_of_face = pair_faces(faces, face_w, params)
     nw = len(axes)
+    junctions = _empty(JUNCTION_COLUMNS)
+    if grid is not None:
+        axes, junctions = _wall_junctions(axes, thick, wall_of_face, side, params)
     faces_df = pd.DataFrame(
         {
             "face_id": np.arange(len(faces), dtype=np.int32),
@@ -192,4 +241,33 @@ def build_floorplan(segments: pd.DataFrame, params: FloorplanParams = FloorplanP
         "%d segments -> %d faces -> %d walls (%d with both faces)",
         len(seg), len(faces), nw, int(walls["paired"].sum()),
     )
-    return FloorPlan(walls=walls[WALL_COLUMNS], faces=faces_df[FACE_COLUMNS])
+    return FloorPlan(walls=walls[WALL_COLUMNS], faces=faces_df[FACE_COLUMNS], clutter=clutter, junctions=junctions)
+
+
+def _wall_junctions(axes, thick, wall_of_face, side, params: FloorplanParams):
+    """Wall axes of a plan with structure: a one-faced wall's axis moved half its
+    thickness behind its face (away from the free side), then the axes snapped into
+    junctions (:func:`floorscan.floorplan.structure.snap_junctions`, the tolerance
+    ``snap_m`` plus the thickest wall). Returns the axes and the junction table."""
+    from dataclasses import replace
+
+    from floorscan.floorplan.structure import snap_junctions
+
+    axes = axes.copy()
+    n_faces = np.bincount(wall_of_face, minlength=len(axes))
+    for f, wall in enumerate(wall_of_face.tolist()):
+        if n_faces[wall] == 1 and side[f] != 0:
+            d = axes[wall, 2:] - axes[wall, :2]
+            n = np.array([-d[1], d[0]]) / max(float(np.hypot(*d)), 1e-12)
+            shift = -float(side[f]) * 0.5 * thick[wall] * n  # away from the free side
+            axes[wall] += np.r_[shift, shift]
+    tol = replace(params.structure, snap_m=params.structure.snap_m + (float(thick.max()) if len(thick) else 0.0))
+    axes, junc = snap_junctions(axes, tol)
+    kinds = np.array(["", "L", "T", "X"], dtype=object)
+    junctions = pd.DataFrame(
+        {
+            "x": junc[:, 0], "y": junc[:, 1], "kind": kinds[junc[:, 4].astype(np.int64)].astype(str),
+            "wall_a": junc[:, 2].astype(np.int32), "wall_b": junc[:, 3].astype(np.int32),
+        }  # fmt: skip
+    )
+    return axes, junctions

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import hashlib
 import os
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 import pandas as pd
@@ -22,6 +22,9 @@ from floorscan.floorplan.footprints import PlanExports
 from floorscan.floorplan.metadata import PlanMetadata, export_time, recording_timestamp
 from floorscan.floorplan.params import params_from_config
 from floorscan.floorplan.plan import FloorPlan, _in_scan_order, build_floorplan
+
+if TYPE_CHECKING:
+    from floorscan.core.occupancy import OccupancyGrid
 
 
 class FloorplanWriter:
@@ -57,7 +60,7 @@ class FloorplanWriter:
     def write(
         self, segments: pd.DataFrame, outputs: Mapping[str, str | os.PathLike], name: str = "", *,
         dataset: str = "", ordering: str = "", extractor: str = "", k: str | int = "",
-        timestamp: float | None = None,
+        timestamp: float | None = None, grid: OccupancyGrid | None = None,
     ) -> tuple[FloorPlan, bool]:  # fmt: skip
         """Build the floor plan of ``segments`` and write it to ``outputs``.
 
@@ -78,6 +81,9 @@ class FloorplanWriter:
             Seconds since the epoch to stamp the exports with (e.g. the
             recording's first scan stamp); None: ``SOURCE_DATE_EPOCH``, else 0
             (:func:`~floorscan.floorplan.metadata.export_time`).
+        grid : OccupancyGrid, optional
+            The free space of the segments' scans: the plan goes through the
+            structure passes (:func:`~floorscan.floorplan.plan.build_floorplan`).
 
         Returns
         -------
@@ -97,11 +103,11 @@ class FloorplanWriter:
         meta = PlanMetadata(dataset, ordering, extractor, k, timestamp, name)
         export_time(timestamp)  # a bad SOURCE_DATE_EPOCH fails before anything is built
         segments = _in_scan_order(segments)  # as build_floorplan takes them (sorted once)
-        key = _segments_key(segments)
+        key = _segments_key(segments) + (b"" if grid is None else _grid_key(grid))
         built = self._built.get(key)
         reused = built is not None
         if built is None:
-            built = self._built[key] = PlanExports(build_floorplan(segments, self.params))
+            built = self._built[key] = PlanExports(build_floorplan(segments, self.params, grid))
         for fmt, path in outputs.items():
             EXPORT_FORMATS[fmt].write(built, path, meta, self.params)
         return built.plan, reused
@@ -112,6 +118,14 @@ def _segments_key(segments: pd.DataFrame) -> bytes:
     h = hashlib.sha256()
     for c in segments.columns:
         h.update(c.encode() + b"\0" + np.ascontiguousarray(segments[c].to_numpy()).tobytes())
+    return h.digest()
+
+
+def _grid_key(grid: OccupancyGrid) -> bytes:
+    """Digest of an occupancy grid (origin, resolution, counts)."""
+    h = hashlib.sha256(np.r_[grid.origin_xy, grid.resolution_m].tobytes())
+    h.update(grid.n_hit_scans.tobytes())
+    h.update(grid.n_miss_scans.tobytes())
     return h.digest()
 
 
@@ -138,8 +152,9 @@ def write_recommended_floorplan(
     dataset: str,
     ordering: str,
     extractor: str,
+    grid_path: str | os.PathLike | None = None,
 ) -> dict:
-    """Write the recommended floor plan: the merged walls of the selected scans.
+    """Write the recommended floor plan: the walls of the selected scans.
 
     Parameters
     ----------
@@ -147,7 +162,9 @@ def write_recommended_floorplan(
         ``selection/scans.csv`` (:func:`floorscan.select.deliverables.write_scan_list`):
         its ``scan_id`` column names the selected scans.
     walls_path : path
-        ``walls/<extractor>/per_scan.parquet``: every kept scan's wall segments.
+        ``walls/<extractor>/per_scan.parquet`` (every kept scan's wall segments, the
+        selected scans' are taken) or, for the map extractor,
+        ``walls/map/selected.parquet`` (the map of the selected scans, taken whole).
     index_path : path
         ``scan_index.parquet``: the first scan's stamp is the exports' time stamp
         (seconds since the epoch; the same recording gives the same files).
@@ -157,20 +174,28 @@ def write_recommended_floorplan(
         The ``floorplan`` config section (``georeference`` applies here).
     dataset, ordering, extractor : str
         Named in every export.
+    grid_path : path, optional
+        ``walls/map/selected_grid.parquet``: the free space of the selected scans; with
+        it the plan goes through the structure passes (clutter, joins, junctions).
 
     Returns
     -------
     dict
-        ``n_scans``, ``n_segments``, ``n_walls``, ``n_faces``.
+        ``n_scans``, ``n_segments``, ``n_walls``, ``n_faces``, ``n_clutter``,
+        ``n_junctions``.
     """
     from floorscan.core.io import read_table
+    from floorscan.core.occupancy import read_grid
 
     selected = pd.read_csv(scans_path, usecols=["rank", "scan_id"])
     ids = selected["scan_id"].astype(np.int64).to_numpy()
     walls = read_table(walls_path)
-    segments = walls[walls["scan_id"].isin(ids)]
+    segments = walls if extractor == "map" else walls[walls["scan_id"].isin(ids)]
     plan, _ = FloorplanWriter(cfg).write(
         segments, outputs, dataset=dataset, ordering=ordering, extractor=extractor, k=len(ids),
-        timestamp=recording_timestamp(index_path),
+        timestamp=recording_timestamp(index_path), grid=None if grid_path is None else read_grid(grid_path),
     )
-    return {"n_scans": len(ids), "n_segments": len(segments), "n_walls": len(plan.walls), "n_faces": len(plan.faces)}
+    return {
+        "n_scans": len(ids), "n_segments": len(segments), "n_walls": len(plan.walls), "n_faces": len(plan.faces),
+        "n_clutter": len(plan.clutter), "n_junctions": len(plan.junctions),
+    }  # fmt: skip

@@ -1,371 +1,39 @@
-"""The reference map of a recording: an occupancy grid from all kept scans.
-
-Mapping with known poses (Thrun, Burgard, Fox, *Probabilistic Robotics*, ch. 9,
-Table 9.1): every kept scan, at its registered pose, casts a ray from the scanner to
-each of its returns; the cells the rays cross are evidence of free space, the cells of
-the returns evidence of an obstacle. Each cell's log-odds is the sum of its updates
-(prior 0.5, log-odds 0):
-
-- one update per scan and cell (a scan is one measurement of a cell, however many of
-  its beams cross it): ``l_hit = logit(prob_hit)`` when a return of the scan falls in
-  the cell, else ``l_miss = logit(prob_miss)`` when one of its rays crosses it. Without
-  clamping the sum does not depend on the scans' order, so the map is the same for
-  any order of the inputs (OctoMap's 0.7 / 0.4 are the defaults; OctoMap clamps for
-  a changing world, which an offline reference does not need);
-- a cell is occupied when its probability exceeds ``occupied_thresh`` (0.65), free
-  below ``free_thresh`` (0.196), unknown between: the thresholds of ROS map_server's
-  maps, which :func:`write_map_server` writes (PGM + YAML, ``mode: trinary``) so that
-  RViz, nav2 and GIMP open the reference;
-- the reference *structure* is the occupied cells hit by at least ``min_scans`` (2)
-  scans; occupied cells hit by one scan only (people walking by, a door in motion,
-  a stray return) are counted apart and are not structure.
-
-Rays are sampled every ``step_fraction`` of a cell along their length (the cells a
-ray crosses, up to a corner clipped by less than a quarter cell); the return's own
-cell is not a miss of that scan. 3D scans are cut to the walls' height band first
-(:func:`floorscan.walls.points.scan_points_2d`), so the grid is the plan view the floor plan
-is drawn in.
+"""The reference map of a recording: the occupancy grid of all its kept scans
+(:func:`reference_of_recording`; the grid itself, its parameters and files are
+:mod:`floorscan.core.occupancy`, shared with the floor plan's structure passes).
 
 Usage::
 
-    grid = occupancy_grid(((pose_xy, points_xy) for ...), OccupancyParams())
+    grid = reference_of_recording("registered.parquet", registration, walls_config)
     write_map_server(grid, "map.pgm", "map.yaml")
-    write_grid(grid, "occupancy.parquet")  # read_grid restores it
     structure_xy = grid.cell_centres(grid.structure())
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterable
 
 import numpy as np
 import pandas as pd
 
-from floorscan.core.files import atomic_path
-from floorscan.core.config import schema_defaults
-
-#: map_server's PGM values (trinary mode): occupied, free, unknown.
-PGM_OCCUPIED, PGM_FREE, PGM_UNKNOWN = 0, 254, 205
-
-
-def logit(p: float) -> float:
-    """Log-odds of a probability in (0, 1)."""
-    return math.log(p / (1.0 - p))
-
-
-@dataclass(frozen=True)
-@schema_defaults("score.reference")
-class OccupancyParams:
-    """Settings of the reference map (the ``score.reference`` config section).
-
-    Attributes
-    ----------
-    resolution_m : float
-        Cell size, metres.
-    prob_hit, prob_miss : float
-        Probability of occupancy after one scan's return in the cell / ray through it.
-    occupied_thresh, free_thresh : float
-        map_server's thresholds on the cell's probability.
-    min_scans : int
-        Occupied cells hit by fewer scans are not structure.
-    step_fraction : float
-        Sample spacing along a ray, in cells.
-    margin_m : float
-        Grid margin around the scans' returns and origins, metres.
-    """
-
-    resolution_m: float
-    prob_hit: float
-    prob_miss: float
-    occupied_thresh: float
-    free_thresh: float
-    min_scans: int
-    step_fraction: float
-    margin_m: float
-
-    def check(self) -> None:
-        """Raise ValueError naming the key when a value is out of range."""
-        if not self.resolution_m > 0:
-            raise ValueError(f"score.reference.resolution_m: expected > 0, got {self.resolution_m}")
-        if not 0.5 < self.prob_hit < 1.0:
-            raise ValueError(f"score.reference.prob_hit: expected 0.5 < p < 1, got {self.prob_hit}")
-        if not 0.0 < self.prob_miss < 0.5:
-            raise ValueError(f"score.reference.prob_miss: expected 0 < p < 0.5, got {self.prob_miss}")
-        if not 0.0 < self.free_thresh < 0.5 < self.occupied_thresh < 1.0:
-            raise ValueError(
-                "score.reference: expected 0 < free_thresh < 0.5 < occupied_thresh < 1, got "
-                f"{self.free_thresh}, {self.occupied_thresh}"
-            )
-        if int(self.min_scans) < 1:
-            raise ValueError(f"score.reference.min_scans: expected >= 1, got {self.min_scans}")
-        if not 0.0 < self.step_fraction <= 1.0:
-            raise ValueError(f"score.reference.step_fraction: expected 0 < value <= 1, got {self.step_fraction}")
-        if not self.margin_m >= 0:
-            raise ValueError(f"score.reference.margin_m: expected >= 0, got {self.margin_m}")
-
-
-@dataclass
-class OccupancyGrid:
-    """A 2D occupancy grid in the map frame.
-
-    Attributes
-    ----------
-    origin_xy : (2,) float ndarray
-        Map-frame position of the lower-left corner of cell (row 0, column 0), metres
-        (map_server's ``origin``).
-    resolution_m : float
-        Cell size, metres.
-    n_hit_scans, n_miss_scans : (H, W) int32 ndarray
-        Scans with a return in the cell / with a ray through it and no return in it;
-        row ``i`` at ``y = origin_y + (i + 0.5) r``.
-    params : OccupancyParams
-    """
-
-    origin_xy: np.ndarray
-    resolution_m: float
-    n_hit_scans: np.ndarray
-    n_miss_scans: np.ndarray
-    params: OccupancyParams
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        return self.n_hit_scans.shape
-
-    @property
-    def log_odds(self) -> np.ndarray:
-        """(H, W) float64 log-odds of occupancy: the sum of the scans' updates."""
-        return self.n_hit_scans * logit(self.params.prob_hit) + self.n_miss_scans * logit(self.params.prob_miss)
-
-    def probability(self) -> np.ndarray:
-        """(H, W) probability of occupancy."""
-        return 1.0 / (1.0 + np.exp(-self.log_odds))
-
-    def occupied(self) -> np.ndarray:
-        """(H, W) bool: probability above ``occupied_thresh``."""
-        return self.log_odds > logit(self.params.occupied_thresh)
-
-    def free(self) -> np.ndarray:
-        """(H, W) bool: probability below ``free_thresh``."""
-        return self.log_odds < logit(self.params.free_thresh)
-
-    def structure(self) -> np.ndarray:
-        """(H, W) bool: occupied and hit by at least ``min_scans`` scans."""
-        return self.occupied() & (self.n_hit_scans >= self.params.min_scans)
-
-    def single_scan(self) -> np.ndarray:
-        """(H, W) bool: occupied but hit by fewer than ``min_scans`` scans."""
-        return self.occupied() & (self.n_hit_scans < self.params.min_scans)
-
-    def cell_centres(self, mask: np.ndarray) -> np.ndarray:
-        """(N, 2) float64 map-frame centres of the cells where ``mask`` is True, metres."""
-        iy, ix = np.nonzero(mask)
-        return np.column_stack([ix + 0.5, iy + 0.5]) * self.resolution_m + self.origin_xy
-
-    def cells_of(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Row, column of each map-frame point (N, 2) and whether it is inside the grid."""
-        c = np.floor((np.asarray(xy, dtype=np.float64) - self.origin_xy) / self.resolution_m).astype(np.int64)
-        inside = (c[:, 0] >= 0) & (c[:, 1] >= 0) & (c[:, 0] < self.shape[1]) & (c[:, 1] < self.shape[0])
-        return c[:, 1], c[:, 0], inside
-
-    def counts(self) -> dict[str, int]:
-        """Cells per class: occupied, structure, single_scan, free, unknown."""
-        occ, free = self.occupied(), self.free()
-        return {
-            "occupied": int(occ.sum()),
-            "structure": int(self.structure().sum()),
-            "single_scan": int(self.single_scan().sum()),
-            "free": int(free.sum()),
-            "unknown": int(occ.size - occ.sum() - free.sum()),
-        }
-
-
-def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: OccupancyParams = OccupancyParams()) -> OccupancyGrid:
-    """Build the occupancy grid of a set of registered scans (see the module docstring).
-
-    Parameters
-    ----------
-    scans : iterable of (origin, points)
-        Per scan the scanner's position in the map frame ((2,) float, metres) and its
-        returns in the map frame ((M, 2) float, metres, plan view).
-    params : OccupancyParams
-
-    Returns
-    -------
-    OccupancyGrid
-
-    Raises
-    ------
-    ValueError
-        When no scan has a return, or a coordinate is not finite.
-    """
-    params.check()
-    scans = [(np.asarray(o, dtype=np.float64)[:2], np.asarray(p, dtype=np.float64)[:, :2]) for o, p in scans]
-    scans = [(o, p) for o, p in scans if len(p)]
-    if not scans:
-        raise ValueError("occupancy grid: no scan has a return")
-    lo = np.min([np.minimum(o, p.min(axis=0)) for o, p in scans], axis=0)
-    hi = np.max([np.maximum(o, p.max(axis=0)) for o, p in scans], axis=0)
-    if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
-        raise ValueError("occupancy grid: a scan origin or return is not finite")
-    r = float(params.resolution_m)
-    origin = np.floor((lo - params.margin_m) / r) * r
-    width, height = (np.floor((hi + params.margin_m - origin) / r).astype(np.int64) + 1).tolist()
-    n_cells = width * height
-    hits = np.zeros(n_cells, dtype=np.int32)
-    misses = np.zeros(n_cells, dtype=np.int32)
-    last = np.zeros(n_cells, dtype=np.int64)  # scratch of _distinct
-    hit_by = np.full(n_cells, -1, dtype=np.int64)  # the last scan with a return in the cell
-    step = params.step_fraction * r
-    for i, (o, p) in enumerate(scans):
-        end = np.floor((p - origin) / r).astype(np.int64)
-        hit = _distinct(end[:, 1] * width + end[:, 0], last)
-        hit_by[hit] = i
-        # one ray per return cell (rays to the same cell cross the same cells)
-        tip = (np.column_stack([hit % width, hit // width]) + 0.5) * r + origin
-        d = tip - o
-        length = np.hypot(d[:, 0], d[:, 1])
-        n = np.maximum(np.ceil(length / step).astype(np.int64), 1)
-        ray = np.repeat(np.arange(len(n)), n)
-        frac = (np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n, n)
-        crossed = _distinct(_sample_cells(o, d, ray, frac, origin, r, width), last)
-        hits[hit] += 1
-        misses[crossed[hit_by[crossed] != i]] += 1
-    return OccupancyGrid(
-        origin_xy=origin,
-        resolution_m=r,
-        n_hit_scans=hits.reshape(height, width),
-        n_miss_scans=misses.reshape(height, width),
-        params=params,
-    )
-
-
-def _sample_cells(o, d, ray, frac, origin, r: float, width: int) -> np.ndarray:
-    """Flat cell index of each ray sample ``o + d[ray] * frac``: floor((o + d[ray] *
-    frac - origin) / r) per axis, computed in place one axis at a time (the same
-    values as the whole expression, without its (N, 2) temporaries)."""
-    axes = []
-    for a in (0, 1):
-        v = np.ascontiguousarray(d[:, a])[ray]
-        v *= frac
-        v += o[a]
-        v -= origin[a]
-        v /= r
-        axes.append(np.floor(v, out=v).astype(np.int64))
-    cells = axes[1]
-    cells *= width
-    cells += axes[0]
-    return cells
-
-
-def _distinct(cells: np.ndarray, last: np.ndarray) -> np.ndarray:
-    """The distinct values of ``cells`` (cell indices below ``len(last)``), without a
-    sort: every entry writes its position into the scratch array ``last`` at its cell;
-    whichever write stays, exactly one position per distinct cell finds itself there."""
-    pos = np.arange(len(cells))
-    last[cells] = pos
-    return cells[last[cells] == pos]
-
-
-def map_image(grid: OccupancyGrid) -> np.ndarray:
-    """(H, W) uint8 map_server image, row 0 at the top (largest y): occupied 0,
-    free 254, unknown 205."""
-    img = np.full(grid.shape, PGM_UNKNOWN, dtype=np.uint8)
-    img[grid.free()] = PGM_FREE
-    img[grid.occupied()] = PGM_OCCUPIED
-    return img[::-1]
-
-
-def write_map_server(grid: OccupancyGrid, pgm_path: str | Path, yaml_path: str | Path) -> None:
-    """Write the grid as a ROS map_server map: a binary PGM (P5) and its YAML.
-
-    The YAML names the image by its file name (map_server resolves it beside the
-    YAML), the resolution (m/cell), the origin (x, y, yaw of the lower-left pixel) and
-    the thresholds, ``negate: 0``, ``mode: trinary``.
-    """
-    img = map_image(grid)
-    h, w = img.shape
-    with atomic_path(pgm_path) as tmp:
-        with open(tmp, "wb") as f:
-            f.write(f"P5\n# floorscan reference map, {grid.resolution_m} m/cell\n{w} {h}\n255\n".encode("ascii"))
-            f.write(img.tobytes())
-    p = grid.params
-    text = (
-        f"image: {Path(pgm_path).name}\n"
-        f"resolution: {grid.resolution_m}\n"
-        f"origin: [{float(grid.origin_xy[0])!r}, {float(grid.origin_xy[1])!r}, 0.0]\n"
-        f"negate: 0\n"
-        f"occupied_thresh: {p.occupied_thresh}\n"
-        f"free_thresh: {p.free_thresh}\n"
-        f"mode: trinary\n"
-    )
-    with atomic_path(yaml_path) as tmp:
-        Path(tmp).write_text(text)
-
-
-def grid_table(grid: OccupancyGrid) -> pd.DataFrame:
-    """The known cells (hit or crossed by a scan) as a table: ``row``, ``col``,
-    ``n_hit_scans``, ``n_miss_scans`` (int32)."""
-    known = (grid.n_hit_scans > 0) | (grid.n_miss_scans > 0)
-    iy, ix = np.nonzero(known)
-    return pd.DataFrame(
-        {
-            "row": iy.astype(np.int32),
-            "col": ix.astype(np.int32),
-            "n_hit_scans": grid.n_hit_scans[known].astype(np.int32),
-            "n_miss_scans": grid.n_miss_scans[known].astype(np.int32),
-        }
-    )
-
-
-def grid_metadata(grid: OccupancyGrid) -> dict[str, str]:
-    """Schema metadata that, with :func:`grid_table`, restores the grid."""
-    p = grid.params
-    return {
-        "origin_x_m": repr(float(grid.origin_xy[0])),
-        "origin_y_m": repr(float(grid.origin_xy[1])),
-        "resolution_m": repr(grid.resolution_m),
-        "height": str(grid.shape[0]),
-        "width": str(grid.shape[1]),
-        **{f"param_{k}": repr(getattr(p, k)) for k in OccupancyParams.__dataclass_fields__},
-    }
-
-
-def write_grid(grid: OccupancyGrid, path: str | Path, metadata: dict[str, str] | None = None) -> None:
-    """Write the grid as a cell table (:func:`grid_table`) whose schema metadata
-    (:func:`grid_metadata`, the cell counts per class and ``metadata``) restores it."""
-    from floorscan.core.io import write_table
-
-    counts = {f"n_{k}_cells": str(v) for k, v in grid.counts().items()}
-    write_table(grid_table(grid), path, metadata={**grid_metadata(grid), **counts, **(metadata or {})})
-
-
-def read_grid(path: str | Path) -> OccupancyGrid:
-    """The grid :func:`write_grid` wrote (``reference/occupancy.parquet``)."""
-    from floorscan.core.io import read_metadata, read_table
-
-    return grid_from_table(read_table(path), read_metadata(path))
-
-
-def grid_from_table(table: pd.DataFrame, metadata: dict[str, str]) -> OccupancyGrid:
-    """The grid of :func:`grid_table` and :func:`grid_metadata`, exactly."""
-    fields = OccupancyParams.__dataclass_fields__
-    params = OccupancyParams(**{k: type(fields[k].default)(float(metadata[f"param_{k}"])) for k in fields})
-    h, w = int(metadata["height"]), int(metadata["width"])
-    hits = np.zeros((h, w), dtype=np.int32)
-    misses = np.zeros((h, w), dtype=np.int32)
-    rows, cols = table["row"].to_numpy(), table["col"].to_numpy()
-    hits[rows, cols] = table["n_hit_scans"].to_numpy()
-    misses[rows, cols] = table["n_miss_scans"].to_numpy()
-    return OccupancyGrid(
-        origin_xy=np.array([float(metadata["origin_x_m"]), float(metadata["origin_y_m"])]),
-        resolution_m=float(metadata["resolution_m"]),
-        n_hit_scans=hits,
-        n_miss_scans=misses,
-        params=params,
-    )
+from floorscan.core.occupancy import (  # noqa: F401  (the score stage's names for them)
+    PGM_OCCUPIED,
+    PGM_FREE,
+    PGM_UNKNOWN,
+    logit,
+    OccupancyParams,
+    OccupancyGrid,
+    occupancy_grid,
+    _sample_cells,
+    _distinct,
+    map_image,
+    write_map_server,
+    grid_table,
+    grid_metadata,
+    write_grid,
+    read_grid,
+    grid_from_table,
+)
 
 
 def reference_of_recording(

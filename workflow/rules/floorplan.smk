@@ -14,19 +14,23 @@ stage_schema_check("floorplan")
 
 
 def plan_extractor(wildcards):
-    """floorplan.extractor, which must be one of walls.extractors."""
+    """floorplan.extractor: map (the map extractor, floorscan.walls.map_lines) or one of
+    walls.extractors."""
     extractor = stage_config("floorplan")(wildcards)["extractor"]
     extractors = list(stage_config("walls")(wildcards)["extractors"])
-    if extractor not in extractors:
-        config_error(f"floorplan.extractor {extractor!r} is not one of walls.extractors {extractors}")
+    if extractor != "map" and extractor not in extractors:
+        config_error(f"floorplan.extractor {extractor!r} is neither map nor one of walls.extractors {extractors}")
     return extractor
 
 
 def recommended_floorplan_inputs(wildcards):
     ds = wildcards.dataset
+    extractor = plan_extractor(wildcards)
+    walls = f"results/{ds}/walls/map/selected.parquet" if extractor == "map" else f"results/{ds}/walls/{extractor}/per_scan.parquet"
     return {
         "scans": f"results/{ds}/selection/scans.csv",
-        "walls": f"results/{ds}/walls/{plan_extractor(wildcards)}/per_scan.parquet",
+        "walls": walls,
+        "grid": f"results/{ds}/walls/map/selected_grid.parquet",
         "index": f"results/{ds}/scan_index.parquet",
     }
 
@@ -98,7 +102,28 @@ rule floorplan:
         "../../scripts/floorplan.py"
 
 
+# The plan of the map of all kept scans, with the structure passes: what the recording
+# can give at most (scored by score_answer beside the recommended plan).
+rule all_scans_floorplan:
+    priority: PRIORITY["floorplan"]
+    input:
+        walls="results/{dataset}/walls/map/all.parquet",
+        grid="results/{dataset}/walls/map/all_grid.parquet",
+        index="results/{dataset}/scan_index.parquet",
+    output:
+        **floorplan_outputs("results/{dataset}/evaluation/floorplan/all_scans_map", ["geojson", "svg"]),
+    params:
+        cfg=floorplan_grid_config,
+    log:
+        "results/{dataset}/logs/all_scans_floorplan.log",
+    benchmark:
+        "results/{dataset}/benchmarks/all_scans_floorplan.tsv"
+    script:
+        "../../scripts/all_scans_floorplan.py"
+
+
 PLAN_OUTPUTS.extend(floorplan_outputs("results/{dataset}/floorplan", FLOORPLAN_FORMATS).values())
+EVALUATION_OUTPUTS.extend(floorplan_outputs("results/{dataset}/evaluation/floorplan/all_scans_map", ["geojson", "svg"]).values())
 EVALUATION_OUTPUTS.extend(
     expand(
         "results/{{dataset}}/evaluation/floorplan/{ordering}_{extractor}_k{k}{suffix}",

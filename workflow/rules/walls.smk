@@ -169,3 +169,40 @@ rule walls:
         "results/{dataset}/benchmarks/walls_{extractor}.tsv"
     script:
         "../../scripts/walls.py"
+
+
+def map_walls_inputs(wildcards):
+    """The registered scans, and for the selected scans their list."""
+    ds = wildcards.dataset
+    inputs = {"registered": f"results/{ds}/registered.parquet", "registration": f"results/{ds}/registration.parquet"}
+    if wildcards.scans == "selected":
+        inputs["scans"] = f"results/{ds}/selection/scans.csv"
+    return inputs
+
+
+def walls_map_config(wildcards):
+    """The `walls` keys the map extractor reads: the scan points, the seed, `map`."""
+    cfg = stage_config("walls")(wildcards)
+    return {key: cfg[key] for key in ("seed", "height_band_m", "planar_tolerance_m", "grid_m", "map") if key in cfg}
+
+
+# The map extractor (floorscan.walls.map_lines): walls fitted on the map of the selected
+# scans (the answer's floor plan) or of all kept scans (the evaluation), with the
+# occupancy grid of the same scans that the floor plan's structure passes read.
+rule map_walls:
+    priority: PRIORITY["floorplan"]
+    input:
+        unpack(map_walls_inputs),
+    output:
+        walls="results/{dataset}/walls/map/{scans}.parquet",
+        grid="results/{dataset}/walls/map/{scans}_grid.parquet",
+    wildcard_constraints:
+        scans="selected|all",
+    params:
+        cfg=walls_map_config,
+    log:
+        "results/{dataset}/logs/map_walls_{scans}.log",
+    benchmark:
+        "results/{dataset}/benchmarks/map_walls_{scans}.tsv"
+    script:
+        "../../scripts/map_walls.py"

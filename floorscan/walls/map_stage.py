@@ -1,0 +1,121 @@
+"""The map extractor as a job (rule ``map_walls``): the wall segments of the map of a
+set of scans (:func:`floorscan.walls.map_lines.map_segments`) and the occupancy grid of
+the same scans (:func:`floorscan.core.occupancy.occupancy_grid`, the free space the
+floor plan's structure passes read), for the selected scans (the answer) or all kept
+scans (the evaluation).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from dataclasses import replace
+from typing import Any, Mapping
+
+import numpy as np
+import pandas as pd
+
+from floorscan.core.occupancy import OccupancyGrid, OccupancyParams, occupancy_grid
+from floorscan.walls.map_lines import MapParams, map_segments
+
+log = logging.getLogger(__name__)
+
+
+def map_params(cfg: Mapping[str, Any] | None) -> MapParams:
+    """:class:`~floorscan.walls.map_lines.MapParams` of the ``walls`` config section's
+    ``map`` (defaults filled in).
+
+    Raises
+    ------
+    KeyError
+        For a key :class:`MapParams` does not know.
+    """
+    from floorscan.core.config import dataclass_from_mapping
+
+    return dataclass_from_mapping(MapParams, (cfg or {}).get("map"), "walls.map")
+
+
+def map_of_scans(
+    registered_path: str | os.PathLike,
+    registration: pd.DataFrame,
+    scan_ids: np.ndarray | None,
+    cfg: Mapping[str, Any] | None,
+) -> tuple[pd.DataFrame, OccupancyGrid]:
+    """The map extractor's wall segments and the occupancy grid of a set of scans.
+
+    Parameters
+    ----------
+    registered_path : path
+        ``registered.parquet``: the kept scans' points in the map frame, metres.
+    registration : pandas.DataFrame
+        ``registration.parquet``: ``scan_id``, ``kept``, ``x_m``, ``y_m`` (the scanner's
+        registered position in the map frame, metres: the rays' origin).
+    scan_ids : (K,) int ndarray or None
+        The scans to use; None: every kept scan.
+    cfg : mapping
+        The ``walls`` config section (height band, ``map``, ``seed``).
+
+    Returns
+    -------
+    segments : pandas.DataFrame
+        :data:`floorscan.walls.tables.WALLS` columns, ``scan_id`` -1 (a segment of
+        many scans).
+    grid : OccupancyGrid
+        Cells of ``map.support_cell_m``; the other settings the reference map's
+        defaults (:class:`~floorscan.core.occupancy.OccupancyParams`).
+
+    Raises
+    ------
+    ValueError
+        When a scan to use has no kept row, or none of them has a wall point.
+    """
+    from floorscan.core.io import iter_scans
+    from floorscan.walls.params import scan_params
+    from floorscan.walls.points import scan_points_2d
+
+    cfg = cfg or {}
+    params = map_params(cfg)
+    sp = scan_params(cfg)
+    reg = registration[registration["kept"]].set_index("scan_id")
+    wanted = set(reg.index.tolist() if scan_ids is None else np.asarray(scan_ids).tolist())
+    missing = sorted(wanted - set(reg.index.tolist()))
+    if missing:
+        raise ValueError(f"scans {missing[:5]} are not kept scans of the registration table")
+    points, owners, origins = [], [], []
+    for sid, xyz in iter_scans(registered_path):
+        if sid not in wanted:
+            continue
+        xy, _ = scan_points_2d(xyz, sp)
+        points.append(xy)
+        owners.append(np.full(len(xy), sid, dtype=np.int64))
+        origins.append(reg.loc[sid, ["x_m", "y_m"]].to_numpy(np.float64))
+    pts = np.concatenate(points) if points else np.empty((0, 2))
+    if len(pts) == 0:
+        raise ValueError(f"none of the {len(wanted)} scans has a wall point")
+    sid = np.concatenate(owners)
+    segments = map_segments(pts, sid, params, seed=int(cfg.get("seed", 0)))
+    segments.insert(0, "scan_id", np.full(len(segments), -1, dtype=np.int32))
+    grid = occupancy_grid(zip(origins, points), replace(OccupancyParams(), resolution_m=params.support_cell_m))
+    log.info("map of %d scans (%d wall points): %d wall segments; grid %d x %d cells of %.3f m",
+             len(origins), len(pts), len(segments), grid.shape[1], grid.shape[0], grid.resolution_m)
+    return segments, grid
+
+
+def write_map_walls(
+    registered_path, registration_path, scans_path, cfg, walls_path, grid_path
+) -> dict:
+    """Rule ``map_walls``: :func:`map_of_scans` of the scans of ``scans_path``
+    (``selection/scans.csv``; None: all kept scans), the segments written to
+    ``walls_path`` (:data:`floorscan.walls.tables.WALLS`) and the grid to ``grid_path``
+    (:func:`floorscan.core.occupancy.write_grid`). Returns the counts."""
+    from floorscan.core.io import read_table, write_table
+    from floorscan.core.occupancy import write_grid
+    from floorscan.walls.tables import WALLS
+
+    registration = read_table(registration_path)
+    ids = None if scans_path is None else pd.read_csv(scans_path, usecols=["scan_id"])["scan_id"].to_numpy(np.int64)
+    segments, grid = map_of_scans(registered_path, registration, ids, cfg)
+    n_scans = int(registration["kept"].sum()) if ids is None else len(ids)
+    write_table(segments, walls_path, WALLS, metadata={"extractor": "map", "n_scans": str(n_scans)})
+    write_grid(grid, grid_path, metadata={"n_scans": str(n_scans)})
+    return {"n_scans": n_scans, "n_segments": len(segments)}
