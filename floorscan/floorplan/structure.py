@@ -6,8 +6,9 @@ order (:func:`structure_passes`):
 1. **Structure or clutter** (:func:`border_and_support`). A wall is a boundary of the
    free space seen from more than one position: a face is structure when the cells
    beside it on at least one side are free space (the rover's rays passed there,
-   :func:`passable`) over ``min_free_side`` of its length, and its cells were hit by at
-   least ``min_scans`` scans. Lines through the inside of a piece of furniture (a
+   :func:`passable`) over ``min_free_side`` of its length, and its own cells are
+   occupied (its returns outweigh the rays of other scans through them: a person
+   walking by is seen through by the next scan). Lines through the inside of a piece of furniture (a
    table top in a 3D scanner's height band) and single-scan returns fail it.
 2. **Joins** (:func:`join_collinear`). Collinear faces (``join_angle_deg``,
    ``join_offset_m``) less than ``join_max_gap_m`` apart are one face when the rover's
@@ -49,7 +50,6 @@ class StructureParams:
     """Parameters of the structure passes (config ``floorplan.structure``; see the
     module docstring). Lengths in metres, angles in degrees."""
 
-    min_scans: int
     side_offset_m: float
     min_free_side: float
     join_max_gap_m: float
@@ -94,7 +94,8 @@ def _samples(seg: np.ndarray, step: float, trim: float = 0.0):
 
 
 def border_and_support(seg: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams()):
-    """Step 1: which faces border free space and were seen by ``min_scans`` scans.
+    """Step 1: which faces border free space and lie on occupied cells (over half
+    their length).
 
     Parameters
     ----------
@@ -120,24 +121,21 @@ def border_and_support(seg: np.ndarray, grid: OccupancyGrid, params: StructurePa
     count = np.bincount(owner, minlength=len(seg)).astype(np.float64)
     left = np.bincount(owner, weights=_lookup(grid, free, pts + off), minlength=len(seg)) / count
     right = np.bincount(owner, weights=_lookup(grid, free, pts - off), minlength=len(seg)) / count
-    hits = np.zeros(len(pts))
+    occupied_cells = grid.occupied()
+    on = np.zeros(len(pts), dtype=bool)
     rows, cols, inside = grid.cells_of(pts)
     for dr in (-1, 0, 1):  # the face's own cell or a neighbour (the face lies on a cell edge)
         for dc in (-1, 0, 1):
             r, c = np.clip(rows + dr, 0, grid.shape[0] - 1), np.clip(cols + dc, 0, grid.shape[1] - 1)
-            hits = np.maximum(hits, np.where(inside, grid.n_hit_scans[r, c], 0))
-    seen = np.zeros(len(seg))
-    order = np.lexsort((hits, owner))
-    starts = np.searchsorted(owner[order], np.arange(len(seg)))
-    median_at = starts + (count.astype(np.int64) - 1) // 2
-    seen = hits[order][median_at]
+            on |= inside & occupied_cells[r, c]
+    seen = np.bincount(owner, weights=on, minlength=len(seg)) / count
     hit = grid.n_hit_scans > 0
     occupied = np.minimum(
         np.bincount(owner, weights=_lookup(grid, hit, pts + off), minlength=len(seg)),
         np.bincount(owner, weights=_lookup(grid, hit, pts - off), minlength=len(seg)),
     ) / count  # returns on both sides: a line through the inside of an object
     structure = (
-        (np.maximum(left, right) >= params.min_free_side) & (seen >= params.min_scans)
+        (np.maximum(left, right) >= params.min_free_side) & (seen >= 0.5)
         & (occupied < params.min_free_side)
     )  # fmt: skip
     side = np.where(
@@ -424,7 +422,7 @@ def structure_passes(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, 
     clutter : (C, 4) float64 ndarray
         The faces that are not structure (furniture, single-scan returns), metres.
     reason : (C,) object ndarray
-        Why each clutter face is clutter: ``not_a_boundary`` (no free space beside it, or returns on both sides, or seen by too few scans),
+        Why each clutter face is clutter: ``not_a_boundary`` (no free space beside it, or returns on both sides, or on cells that are not occupied),
         ``free_standing_object`` or ``short``.
     """
     seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)

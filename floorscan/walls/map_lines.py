@@ -11,10 +11,13 @@ is. The per-scan extractors (:mod:`~floorscan.walls.ransac`,
 :func:`map_segments` works on the union of the scans' 2D wall points
 (:func:`floorscan.walls.points.scan_points_2d`, in the map frame):
 
-1. **Support** (:func:`supported_points`). A point counts when its ``support_cell_m``
-   cell is hit by at least ``min_scans`` scans: structure is seen from more than one
-   position, people walking by and stray returns are not (the structure rule of the
-   reference map, :mod:`floorscan.core.occupancy`).
+1. **Support** (:func:`supported_points`). A point counts when its cell of the
+   occupancy grid of the same scans (:mod:`floorscan.core.occupancy`, cells of
+   ``support_cell_m``) is occupied: its returns outweigh the rays of the other scans
+   that passed through it (log-odds, Thrun et al., *Probabilistic Robotics*, ch. 9). A
+   person walking by, seen by one scan and seen through by the next, is not; a wall
+   seen by one selected scan and contradicted by none is (the selection keeps few scans
+   per wall, so a count of scans would drop it).
 2. **Thinning** to one mean point per ``grid_m`` cell
    (:func:`floorscan.core.grid.cell_means`), so a wall seen by many scans weighs as
    much as one seen by few, and the cost follows the map's size, not the scan count.
@@ -38,6 +41,7 @@ import numpy as np
 import pandas as pd
 
 from floorscan.core.config import schema_defaults
+from floorscan.core.occupancy import OccupancyGrid
 from floorscan.core.grid import cell_means
 from floorscan.walls.params import RansacParams
 from floorscan.walls.ransac import _ransac_rows
@@ -52,9 +56,7 @@ class MapParams:
     Attributes
     ----------
     support_cell_m : float
-        Cell of the support test, metres.
-    min_scans : int
-        Scans that must hit a point's support cell.
+        Cell of the occupancy grid of the support test, metres.
     grid_m : float
         Thinning cell, metres.
     threshold_m : float
@@ -72,7 +74,6 @@ class MapParams:
     """
 
     support_cell_m: float
-    min_scans: int
     grid_m: float
     threshold_m: float
     iterations: int
@@ -92,55 +93,47 @@ class MapParams:
         )  # fmt: skip
 
 
-def supported_points(points: np.ndarray, scan_of_point: np.ndarray, params: MapParams = MapParams()) -> np.ndarray:
-    """Which points lie in a ``support_cell_m`` cell hit by at least ``min_scans``
-    scans (every point when fewer scans than that are given).
+def supported_points(points: np.ndarray, grid: OccupancyGrid) -> np.ndarray:
+    """Which points lie in an occupied cell of ``grid`` (the occupancy grid of their
+    scans; outside it, none).
 
     Parameters
     ----------
     points : (N, 2) float ndarray
         Wall points of many scans in the map frame, metres.
-    scan_of_point : (N,) int ndarray
-        The scan of each point.
-    params : MapParams
+    grid : OccupancyGrid
 
     Returns
     -------
     (N,) bool ndarray
     """
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-    _, scan_index = np.unique(np.asarray(scan_of_point).ravel(), return_inverse=True)
-    if len(pts) == 0:
-        return np.zeros(0, dtype=bool)
-    n_scans = int(scan_index.max()) + 1
-    need = min(int(params.min_scans), n_scans)
-    if need <= 1:
-        return np.ones(len(pts), dtype=bool)
-    cell = np.floor(pts / params.support_cell_m).astype(np.int64)
-    _, cell_index = np.unique(cell, axis=0, return_inverse=True)
-    cell_index = cell_index.ravel()
-    pairs = np.unique(cell_index * n_scans + scan_index.ravel())
-    scans_per_cell = np.bincount(pairs // n_scans, minlength=int(cell_index.max()) + 1)
-    return scans_per_cell[cell_index] >= need
+    rows, cols, inside = grid.cells_of(pts)
+    out = np.zeros(len(pts), dtype=bool)
+    out[inside] = grid.occupied()[rows[inside], cols[inside]]
+    return out
 
 
-def map_points(points: np.ndarray, scan_of_point: np.ndarray, params: MapParams = MapParams()) -> np.ndarray:
-    """Steps 1 and 2 of :func:`map_segments`: the supported points thinned to one mean
-    point per ``grid_m`` cell, (M, 2) float64, metres (cells in lexicographic order)."""
+def map_points(points: np.ndarray, grid: OccupancyGrid | None, params: MapParams = MapParams()) -> np.ndarray:
+    """Steps 1 and 2 of :func:`map_segments`: the supported points (all of them without
+    a grid) thinned to one mean point per ``grid_m`` cell, (M, 2) float64, metres (cells
+    in lexicographic order)."""
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-    pts = pts[supported_points(pts, scan_of_point, params)]
+    if grid is not None:
+        pts = pts[supported_points(pts, grid)]
     return cell_means(pts, params.grid_m)[0] if len(pts) else np.empty((0, 2))
 
 
-def map_segments(points: np.ndarray, scan_of_point: np.ndarray, params: MapParams = MapParams(), seed=0) -> pd.DataFrame:
+def map_segments(points: np.ndarray, grid: OccupancyGrid | None, params: MapParams = MapParams(), seed=0) -> pd.DataFrame:
     """Wall segments of the map of many registered scans (see the module docstring).
 
     Parameters
     ----------
     points : (N, 2) float ndarray
         The scans' 2D wall points in the map frame, metres. Not modified.
-    scan_of_point : (N,) int ndarray
-        The scan of each point (the support test counts distinct scans).
+    grid : OccupancyGrid or None
+        The occupancy grid of the same scans (the support test); None: every point
+        counts.
     params : MapParams
     seed : int, sequence of int or numpy.random.Generator
         Seeds RANSAC (``numpy.random.default_rng(seed)``); same seed, same walls.
@@ -155,18 +148,14 @@ def map_segments(points: np.ndarray, scan_of_point: np.ndarray, params: MapParam
     Raises
     ------
     ValueError
-        When ``points`` is not (N, 2), has a non-finite coordinate, or its length
-        differs from ``scan_of_point``'s.
+        When ``points`` is not (N, 2) or has a non-finite coordinate.
     """
     pts = np.asarray(points, dtype=np.float64)
-    scans = np.asarray(scan_of_point).ravel()
     if pts.ndim != 2 or pts.shape[1] != 2:
         raise ValueError(f"map points must be (N, 2), got shape {pts.shape}")
-    if len(pts) != len(scans):
-        raise ValueError(f"{len(pts)} map points but {len(scans)} scan ids")
     if not np.isfinite(pts).all():
         raise ValueError("map points: a coordinate is not finite")
-    q = map_points(pts, scans, params)
+    q = map_points(pts, grid, params)
     if len(q) < params.min_inliers:
         return segments_frame([])
     return segments_frame(_ransac_rows(q, params.ransac(), seed))

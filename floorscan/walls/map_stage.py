@@ -81,21 +81,19 @@ def map_of_scans(
     missing = sorted(wanted - set(reg.index.tolist()))
     if missing:
         raise ValueError(f"scans {missing[:5]} are not kept scans of the registration table")
-    points, owners, origins = [], [], []
+    points, origins = [], []
     for sid, xyz in iter_scans(registered_path):
         if sid not in wanted:
             continue
         xy, _ = scan_points_2d(xyz, sp)
         points.append(xy)
-        owners.append(np.full(len(xy), sid, dtype=np.int64))
         origins.append(reg.loc[sid, ["x_m", "y_m"]].to_numpy(np.float64))
     pts = np.concatenate(points) if points else np.empty((0, 2))
     if len(pts) == 0:
         raise ValueError(f"none of the {len(wanted)} scans has a wall point")
-    sid = np.concatenate(owners)
-    segments = map_segments(pts, sid, params, seed=int(cfg.get("seed", 0)))
-    segments.insert(0, "scan_id", np.full(len(segments), -1, dtype=np.int32))
     grid = occupancy_grid(zip(origins, points), replace(OccupancyParams(), resolution_m=params.support_cell_m))
+    segments = map_segments(pts, grid, params, seed=int(cfg.get("seed", 0)))
+    segments.insert(0, "scan_id", np.full(len(segments), -1, dtype=np.int32))
     log.info("map of %d scans (%d wall points): %d wall segments; grid %d x %d cells of %.3f m",
              len(origins), len(pts), len(segments), grid.shape[1], grid.shape[0], grid.resolution_m)
     return segments, grid

@@ -397,3 +397,35 @@ EVALUATION_OUTPUTS.extend(
         )
     ]
 )
+
+
+def score_answer_inputs(wildcards):
+    ds = wildcards.dataset
+    inputs = {
+        "recommended": f"results/{ds}/floorplan.geojson",
+        "all_scans_map": f"results/{ds}/evaluation/floorplan/all_scans_map.geojson",
+        "reference": f"results/{ds}/reference/occupancy.parquet",
+    }
+    if is_synthetic(ds):
+        inputs["ground_truth"] = f"results/{ds}/sim/walls.geojson"
+    return inputs
+
+
+# How good the answer is (floorscan.score.answer): the recommended plan and the plan of
+# the map of all kept scans, against the reference map and, on a synthetic recording,
+# the true walls, corners and wall count.
+rule score_answer:
+    priority: PRIORITY["score_runs"]
+    input:
+        unpack(score_answer_inputs),
+    output:
+        table="results/{dataset}/evaluation/answer_scores.csv",
+    log:
+        log_path("score_answer"),
+    benchmark:
+        benchmark_path("score_answer")
+    script:
+        "../../scripts/score_answer.py"
+
+
+EVALUATION_OUTPUTS.append("results/{dataset}/evaluation/answer_scores.csv")

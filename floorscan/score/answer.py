@@ -1,0 +1,229 @@
+"""How good the answer is: the recommended floor plan (``floorplan.geojson``) and the
+plan of all kept scans by the map extractor (``evaluation/floorplan/all_scans_map``),
+scored as plans a person opens (rule ``score_answer``).
+
+Per plan (:func:`score_answer_plan`):
+
+- against the reference map (all kept scans' occupancy grid,
+  :func:`floorscan.score.against_reference.plan_against_reference`): completeness,
+  correctness and F1 of the wall faces at 5 and 10 cm, and completeness of the walls and
+  clutter together (``map_completeness_all_<t>cm``: the reference map counts furniture
+  as structure);
+- on a synthetic recording, against the simulator's true walls
+  (:func:`floorscan.score.tolerance.tolerance_metrics`): precision of the wall faces
+  against all true faces, recall against the observed faces (thesis 5.2), F1; the number
+  of walls against the true count of observed wall pieces (:func:`true_wall_pieces`);
+  the share of the observed true corners that are junctions of the plan
+  (:func:`true_corners`, within ``corner_tolerance_m``);
+- the plan's own shape: walls, clutter pieces, junctions, the share of walls shorter
+  than 0.5 m, and the pairs of walls that cross away from a junction
+  (:func:`crossings`).
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+
+from floorscan.score.geojson import _feature_collection, _wall_faces
+
+#: Plans a person should not see: walls shorter than this, metres.
+SHORT_WALL_M = 0.5
+
+
+def plan_parts(path) -> dict[str, np.ndarray]:
+    """The faces, wall axes, clutter lines ((N, 4) metres) and junction points ((J, 2)
+    metres) of a floor plan ``.geojson``."""
+    doc = _feature_collection(path)
+    junctions = [
+        f["geometry"]["coordinates"][:2] for f in doc.get("features", [])
+        if (f.get("properties") or {}).get("kind") == "junction" and (f.get("geometry") or {}).get("type") == "Point"
+    ]  # fmt: skip
+    return {
+        "faces": _wall_faces(doc, "face"),
+        "axes": _wall_faces(doc, "axis"),
+        "clutter": _wall_faces(doc, "clutter"),
+        "junctions": np.array(junctions, dtype=np.float64).reshape(-1, 2),
+    }
+
+
+def crossings(axes: np.ndarray, junctions: np.ndarray, tolerance_m: float = 0.05) -> int:
+    """Pairs of wall axes (N, 4) that cross at a point farther than ``tolerance_m`` from
+    every junction (J, 2) and from both walls' ends: walls drawn through each other."""
+    import shapely
+
+    axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
+    if len(axes) < 2:
+        return 0
+    lines = shapely.linestrings(axes.reshape(-1, 2, 2))
+    i, j = shapely.STRtree(lines).query(lines, predicate="crosses")
+    keep = i < j
+    i, j = i[keep], j[keep]
+    n = 0
+    for a, b in zip(i.tolist(), j.tolist()):
+        x = shapely.get_coordinates(shapely.intersection(lines[a], lines[b]))
+        if len(x) == 0:
+            continue
+        p = x[0]
+        ends = axes[[a, a, b, b]].reshape(4, 2, 2)[[0, 1, 2, 3], [0, 1, 0, 1]]
+        if np.hypot(*(ends - p).T).min() <= tolerance_m:
+            continue
+        if len(junctions) and np.hypot(*(junctions - p).T).min() <= tolerance_m:
+            continue
+        n += 1
+    return n
+
+
+def true_wall_pieces(truth: dict, gap_m: float = 0.3) -> np.ndarray:
+    """The observed wall pieces of a synthetic building: each true axis cut where
+    neither of its faces was observed over more than ``gap_m`` (an opening or an unseen
+    stretch); (P, 4) metres along the axes."""
+    axes, observed = truth["axis"], truth["observed_face"]
+    pieces = []
+    for a in axes:
+        d = a[2:] - a[:2]
+        length = float(np.hypot(*d))
+        if length <= 0:
+            continue
+        u = d / length
+        n = np.array([-u[1], u[0]])
+        rel0, rel1 = observed[:, :2] - a[:2], observed[:, 2:] - a[:2]
+        off = np.maximum(np.abs(rel0 @ n), np.abs(rel1 @ n))
+        par = np.abs((observed[:, 2:] - observed[:, :2]) @ n) < 1e-6 + 0.05 * np.hypot(*(observed[:, 2:] - observed[:, :2]).T)
+        near = par & (off <= truth["thickness"].get(tuple(a), 0.3) / 2 + 0.02)
+        iv = np.sort(np.column_stack([rel0[near] @ u, rel1[near] @ u]), axis=1)
+        iv = iv[np.argsort(iv[:, 0])]
+        start, end = None, None
+        for lo, hi in np.clip(iv, 0, length).tolist():
+            if start is None:
+                start, end = lo, hi
+            elif lo - end > gap_m:
+                pieces.append(np.r_[a[:2] + start * u, a[:2] + end * u])
+                start, end = lo, hi
+            else:
+                end = max(end, hi)
+        if start is not None and end - start > gap_m:
+            pieces.append(np.r_[a[:2] + start * u, a[:2] + end * u])
+    return np.array(pieces, dtype=np.float64).reshape(-1, 4)
+
+
+def true_corners(truth: dict, near_observed_m: float = 0.4) -> np.ndarray:
+    """The observed corners of a synthetic building, (C, 2) metres: the ends of the true
+    axes that lie on another axis (L and T junctions), kept when an observed face passes
+    within ``near_observed_m``."""
+    axes = truth["axis"]
+    pts = []
+    for k, a in enumerate(axes):
+        for e in (a[:2], a[2:]):
+            others = np.delete(axes, k, axis=0)
+            if len(others) == 0:
+                continue
+            d = _point_segment_distance(e, others)
+            if d.min() <= 0.02:
+                pts.append(e)
+    if not pts:
+        return np.empty((0, 2))
+    pts = np.unique(np.round(np.array(pts), 3), axis=0)
+    obs = truth["observed_face"]
+    keep = [p for p in pts if len(obs) and _point_segment_distance(p, obs).min() <= near_observed_m]
+    return np.array(keep, dtype=np.float64).reshape(-1, 2)
+
+
+def _point_segment_distance(p: np.ndarray, seg: np.ndarray) -> np.ndarray:
+    d = seg[:, 2:] - seg[:, :2]
+    l2 = np.maximum((d * d).sum(axis=1), 1e-12)
+    t = np.clip(((p - seg[:, :2]) * d).sum(axis=1) / l2, 0, 1)
+    return np.hypot(*(seg[:, :2] + t[:, None] * d - p).T)
+
+
+def read_truth(path) -> dict:
+    """The simulator's ``walls.geojson``: ``face``, ``observed_face``, ``axis`` ((N, 4)
+    metres) and ``thickness`` (axis row tuple -> metres)."""
+    with open(path, encoding="utf-8") as fh:
+        doc = json.load(fh)
+    out = {kind: _wall_faces(doc, kind) for kind in ("face", "observed_face", "axis")}
+    out["thickness"] = {}
+    for f in doc.get("features", []):
+        p = f.get("properties") or {}
+        if p.get("kind") == "axis" and f["geometry"]["type"] == "LineString":
+            c = f["geometry"]["coordinates"]
+            out["thickness"][tuple(np.asarray([*c[0][:2], *c[1][:2]], dtype=np.float64))] = float(p.get("thickness_m", 0.3))
+    return out
+
+
+def score_answer_plan(path, reference=None, truth: dict | None = None, taus_m=(0.05, 0.10),
+                      corner_tolerance_m: float = 0.3) -> dict:  # fmt: skip
+    """The scores of one plan (see the module docstring).
+
+    Parameters
+    ----------
+    path : path
+        The plan's ``.geojson`` (floorplan stage).
+    reference : OccupancyGrid or Structure, optional
+        The reference map.
+    truth : dict, optional
+        :func:`read_truth` of a synthetic recording.
+    taus_m : tuple of float
+        Tolerances, metres.
+    corner_tolerance_m : float
+        A true corner is a junction of the plan when one lies within this, metres.
+
+    Returns
+    -------
+    dict
+        Counts (``n_walls``, ``n_clutter``, ``n_junctions``, ``short_wall_share``,
+        ``n_crossings``), ``map_*`` against the reference map, ``gt_*`` against the
+        truth.
+    """
+    from floorscan.score.against_reference import plan_against_reference
+    from floorscan.score.tolerance import tolerance_metrics
+
+    parts = plan_parts(path)
+    faces, axes, clutter, junctions = parts["faces"], parts["axes"], parts["clutter"], parts["junctions"]
+    length = np.hypot(axes[:, 2] - axes[:, 0], axes[:, 3] - axes[:, 1])
+    out = {
+        "n_walls": len(axes), "n_clutter": len(clutter), "n_junctions": len(junctions),
+        "short_wall_share": float((length < SHORT_WALL_M).mean()) if len(axes) else 0.0,
+        "n_crossings": crossings(axes, junctions),
+    }  # fmt: skip
+    if reference is not None:
+        walls_only = plan_against_reference(faces, reference, tuple(taus_m))
+        both = plan_against_reference(np.r_[faces, clutter].reshape(-1, 4), reference, tuple(taus_m))
+        for key, value in walls_only.items():
+            out[f"map_{key}"] = value
+        for tau in taus_m:
+            cm = f"{round(tau * 100):d}cm"
+            out[f"map_completeness_all_{cm}"] = both[f"completeness_{cm}"]
+    if truth is not None:
+        precision = tolerance_metrics(faces, truth["face"], taus_m)
+        recall = tolerance_metrics(faces, truth["observed_face"], taus_m)
+        for tau in taus_m:
+            cm = f"{round(tau * 100):d}cm"
+            p, r = precision[f"precision_{cm}"], recall[f"recall_{cm}"]
+            out[f"gt_precision_{cm}"], out[f"gt_recall_{cm}"] = p, r
+            out[f"gt_f1_{cm}"] = 2 * p * r / (p + r) if p + r > 0 else 0.0
+        pieces = true_wall_pieces(truth)
+        corners = true_corners(truth)
+        out["gt_n_walls"] = len(pieces)
+        if len(corners):
+            if len(junctions):
+                d = np.hypot(*(corners[:, None, :] - junctions[None, :, :]).transpose(2, 0, 1)).min(axis=1)
+            else:
+                d = np.full(len(corners), np.inf)
+            out["gt_corners_as_junctions"] = float((d <= corner_tolerance_m).mean())
+        out["gt_n_corners"] = len(corners)
+    return out
+
+
+def score_answer(plans: dict, reference_path=None, truth_path=None) -> pd.DataFrame:
+    """:func:`score_answer_plan` of every plan: ``{name: geojson path}`` -> one row per
+    plan, ``plan`` its name (``recommended``, ``all_scans_map``)."""
+    from floorscan.core.occupancy import read_grid
+    from floorscan.score.against_reference import Structure
+
+    reference = None if reference_path is None else Structure(read_grid(reference_path))
+    truth = None if truth_path is None else read_truth(truth_path)
+    rows = [{"plan": name, **score_answer_plan(path, reference, truth)} for name, path in plans.items()]
+    return pd.DataFrame(rows)

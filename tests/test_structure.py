@@ -1,0 +1,178 @@
+"""The map extractor (floorscan.walls.map_lines), the floor plan's structure passes
+(floorscan.floorplan.structure) and the answer's scores (floorscan.score.answer) on a
+small room scanned by a ray caster: known walls, a door, an occluded stretch of wall
+and a table standing in the room."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+import shapely
+
+from floorscan.core.occupancy import OccupancyParams, occupancy_grid
+from floorscan.floorplan.params import FloorplanParams
+from floorscan.floorplan.plan import build_floorplan, plan_faces
+from floorscan.floorplan.structure import (
+    StructureParams,
+    border_and_support,
+    join_collinear,
+    snap_junctions,
+    structure_passes,
+)
+from floorscan.score.answer import crossings, true_corners, true_wall_pieces
+from floorscan.walls.map_lines import MapParams, map_segments, supported_points
+
+# A room 8 x 5 m (wall faces), a door 0.9 m wide in the south wall at x 2.0..2.9 with a
+# corridor behind it, and a table 1.2 x 0.6 m standing free in the room; the cabinet
+# in front of the north wall hides a stretch of it from every scan position.
+ROOM = [((0, 0), (2.0, 0)), ((2.9, 0), (8, 0)), ((8, 0), (8, 5)), ((8, 5), (0, 5)), ((0, 5), (0, 0))]
+CORRIDOR = [((2.0, 0), (2.0, -1.5)), ((2.9, 0), (2.9, -1.5))]
+TABLE = shapely.box(5.0, 2.0, 6.2, 2.6).exterior
+CABINET = shapely.box(3.0, 4.3, 4.0, 4.6).exterior
+POSES = [(1.5, 2.5), (4.0, 1.2), (6.5, 3.8), (2.45, -0.8), (3.0, 2.0), (6.8, 1.0)]
+
+
+def _scan(origin, rng, geoms, n_rays=720, noise=0.005):
+    lines = shapely.MultiLineString([list(g.coords) for g in geoms])
+    o = np.asarray(origin, dtype=np.float64)
+    pts = []
+    for a in np.linspace(-np.pi, np.pi, n_rays, endpoint=False):
+        ray = shapely.LineString([o, o + 20 * np.array([np.cos(a), np.sin(a)])])
+        hit = ray.intersection(lines)
+        if hit.is_empty:
+            continue
+        coords = shapely.get_coordinates(hit)
+        d = np.hypot(*(coords - o).T)
+        r = d.min() + rng.normal(0, noise)
+        pts.append(o + r * np.array([np.cos(a), np.sin(a)]))
+    return np.array(pts)
+
+
+@pytest.fixture(scope="module")
+def room():
+    rng = np.random.default_rng(3)
+    geoms = [shapely.LineString(s) for s in ROOM + CORRIDOR] + [TABLE, CABINET]
+    scans = [(np.array(p, dtype=np.float64), _scan(p, rng, geoms)) for p in POSES]
+    pts = np.concatenate([s for _, s in scans])
+    sid = np.concatenate([np.full(len(s), i) for i, (_, s) in enumerate(scans)])
+    grid = occupancy_grid(scans, OccupancyParams())
+    return pts, sid, grid
+
+
+def _length(seg):
+    return np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+
+
+def test_support_drops_a_return_that_other_scans_see_through():
+    # a person at (2, 0) seen by the first scan; the second and third see the wall
+    # behind through that place; the wall at x = 4 is seen by one scan alone
+    o = np.array([0.0, 0.0])
+    person = (o, np.array([[2.0, 0.0], [4.0, 1.0]]))
+    through = [(o + [0.0, 0.01], np.array([[4.0, 0.0]])), (o - [0.0, 0.01], np.array([[4.0, 0.0]]))]
+    grid = occupancy_grid([person, *through], OccupancyParams())
+    pts = np.array([[2.0, 0.0], [4.0, 1.0], [4.0, 0.0]])
+    assert supported_points(pts, grid).tolist() == [False, True, True]
+
+
+def test_map_extractor_finds_the_long_walls_and_is_seeded(room):
+    pts, _, grid = room
+    seg = map_segments(pts, grid, MapParams(), seed=0)
+    again = map_segments(pts, grid, MapParams(), seed=0)
+    pd.testing.assert_frame_equal(seg, again)
+    s = seg[["x0", "y0", "x1", "y1"]].to_numpy()
+    # the east wall x = 8 (5 m) is found whole, within 2 cm
+    east = s[(np.abs(s[:, 0] - 8) < 0.05) & (np.abs(s[:, 2] - 8) < 0.05)]
+    assert len(east) >= 1 and _length(east).max() > 4.8
+    with pytest.raises(ValueError, match="finite"):
+        map_segments(np.array([[np.nan, 0.0]] * 10), None)
+
+
+def test_structure_passes_on_the_room(room):
+    pts, _, grid = room
+    seg = map_segments(pts, grid, MapParams(), seed=0)
+    faces, w, _ = plan_faces(seg[["x0", "y0", "x1", "y1"]].to_numpy(), seg["n_inliers"].to_numpy(float))
+    walls, ww, side, clutter, reason = structure_passes(faces, w, grid, StructureParams())
+    # the table's faces are clutter, no wall lies on it
+    table = shapely.box(4.95, 1.95, 6.25, 2.65)
+    wall_lines = shapely.linestrings(walls.reshape(-1, 2, 2))
+    assert not shapely.intersects(wall_lines, table).any()
+    assert shapely.intersects(shapely.linestrings(clutter.reshape(-1, 2, 2)), table).sum() >= 2
+    assert set(reason) <= {"not_a_boundary", "free_standing_object", "short"}
+    # the north wall behind the cabinet is one face: the occluded stretch is joined
+    north = walls[(np.abs(walls[:, 1] - 5) < 0.05) & (np.abs(walls[:, 3] - 5) < 0.05)]
+    assert len(north) == 1 and _length(north)[0] > 7.5
+    # the door stays open: the south wall is two faces, none across x 2.1..2.8
+    south = walls[(np.abs(walls[:, 1]) < 0.05) & (np.abs(walls[:, 3]) < 0.05)]
+    assert len(south) == 2
+    for s in south:
+        lo, hi = sorted((s[0], s[2]))
+        assert hi < 2.1 or lo > 2.8
+    # the room's four corners are junctions: an end of a wall within 2 cm of each
+    ends = walls.reshape(-1, 2)
+    for corner in [(0, 0), (8, 0), (8, 5), (0, 5)]:
+        assert np.hypot(*(ends - corner).T).min() < 0.03, corner
+    # the free space is inside the room for the room's walls
+    assert (side != 0).mean() > 0.5
+
+
+def test_join_keeps_a_gap_free_space_passes_and_joins_an_unseen_one():
+    # two collinear faces with a 1 m gap; free cells fill the gap in one grid only
+    faces = np.array([[0.0, 0.0, 3.0, 0.0], [4.0, 0.0, 7.0, 0.0]])
+    origin = np.array([3.5, 2.0])
+    scans = [(origin, np.array([[x, 0.0] for x in np.arange(0.0, 7.0, 0.05) if not 3.0 < x < 4.0]))]
+    unseen = occupancy_grid(scans, OccupancyParams())
+    seen = occupancy_grid(scans + [(origin, np.array([[x, -1.0] for x in np.arange(3.1, 3.95, 0.05)]))],
+                          OccupancyParams())
+    joined, jw, group = join_collinear(faces, np.ones(2), unseen, StructureParams())
+    assert len(joined) == 1 and np.allclose(joined[0], [0, 0, 7, 0]) and group.tolist() == [0, 0]
+    assert jw.tolist() == [2.0]
+    opened, _, _ = join_collinear(faces, np.ones(2), seen, StructureParams())
+    assert len(opened) == 2
+
+
+def test_snap_makes_l_and_t_junctions_and_trims_an_overshoot():
+    seg = np.array([
+        [0.0, 0.0, 4.9, 0.0],    # stops 0.1 short of the corner at x = 5
+        [5.0, 0.2, 5.0, 4.0],    # stops 0.2 short of it
+        [2.0, -0.15, 2.0, 3.0],  # overshoots the first wall by 0.15: a T
+    ])  # fmt: skip
+    out, junctions = snap_junctions(seg, StructureParams())
+    assert np.allclose(out[0], [0, 0, 5, 0]) and np.allclose(out[1], [5, 0, 5, 4])
+    assert np.allclose(out[2], [2, 0, 2, 3])
+    kinds = sorted(junctions[:, 4].astype(int).tolist())
+    assert kinds == [1, 2]  # one L, one T
+    assert crossings(out, junctions[:, :2]) == 0
+    assert crossings(seg[[0, 2]] + np.array([0, 0, 0, 0]), np.empty((0, 2))) == 1
+
+
+def test_border_rule_drops_a_line_through_an_object(room):
+    _, _, grid = room
+    # a line through the middle of the table (returns on both sides) and the east wall
+    seg = np.array([[5.1, 2.3, 6.1, 2.3], [8.0, 0.2, 8.0, 4.8]])
+    structure, side = border_and_support(seg, grid, StructureParams())
+    assert structure.tolist() == [False, True]
+    assert side[1] != 0
+
+
+def test_plan_with_a_grid_has_clutter_and_junctions(room):
+    pts, _, grid = room
+    seg = map_segments(pts, grid, MapParams(), seed=0)
+    plain = build_floorplan(seg)
+    plan = build_floorplan(seg, FloorplanParams(), grid)
+    assert len(plain.clutter) == 0 and len(plain.junctions) == 0
+    assert len(plan.clutter) >= 2 and len(plan.junctions) >= 4
+    assert set(plan.junctions["kind"]) <= {"L", "T", "X"}
+    assert len(plan.walls) < len(plain.walls)
+
+
+def test_true_pieces_and_corners():
+    truth = {
+        "axis": np.array([[0.0, 0.0, 4.0, 0.0], [4.0, 0.0, 4.0, 3.0]]),
+        "observed_face": np.array([[0.0, 0.05, 1.0, 0.05], [2.0, 0.05, 3.95, 0.05], [3.95, 0.05, 3.95, 3.0]]),
+        "thickness": {},
+    }
+    pieces = true_wall_pieces(truth)
+    assert len(pieces) == 3  # the south wall has an unseen gap of 1 m: two pieces
+    corners = true_corners(truth)
+    assert corners.tolist() == [[4.0, 0.0]]
