@@ -15,6 +15,7 @@ from floorscan.floorplan.params import FloorplanParams
 from floorscan.floorplan.plan import build_floorplan, plan_faces
 from floorscan.floorplan.structure import (
     StructureParams,
+    merge_parallel_duplicates,
     border_and_support,
     join_collinear,
     snap_junctions,
@@ -98,7 +99,11 @@ def test_structure_passes_on_the_room(room):
     wall_lines = shapely.linestrings(walls.reshape(-1, 2, 2))
     assert not shapely.intersects(wall_lines, table).any()
     assert shapely.intersects(shapely.linestrings(clutter.reshape(-1, 2, 2)), table).sum() >= 2
-    assert set(reason) <= {"not_a_boundary", "free_standing_object", "short"}
+    assert set(reason) <= {"not_a_boundary", "free_standing_object", "in_front_of_wall", "short"}
+    # the cabinet's front (y = 4.3, x 3..4) stands in front of the north wall: clutter
+    front = clutter[(np.abs(clutter[:, 1] - 4.3) < 0.05) & (np.abs(clutter[:, 3] - 4.3) < 0.05)]
+    assert len(front) == 1 and reason[np.flatnonzero((np.abs(clutter[:, 1] - 4.3) < 0.05))[0]] == "in_front_of_wall"
+    assert not ((np.abs(walls[:, 1] - 4.3) < 0.05) & (np.abs(walls[:, 3] - 4.3) < 0.05)).any()
     # the north wall behind the cabinet is one face: the occluded stretch is joined
     north = walls[(np.abs(walls[:, 1] - 5) < 0.05) & (np.abs(walls[:, 3] - 5) < 0.05)]
     assert len(north) == 1 and _length(north)[0] > 7.5
@@ -176,3 +181,19 @@ def test_true_pieces_and_corners():
     assert len(pieces) == 3  # the south wall has an unseen gap of 1 m: two pieces
     corners = true_corners(truth)
     assert corners.tolist() == [[4.0, 0.0]]
+
+
+def test_duplicates_merge_and_shallow_crossings_meet():
+    # a wall and a skewed copy across its 12 cm thickness: one wall; a third wall apart
+    axes = np.array([[0.0, 0.0, 4.0, 0.0], [1.0, -0.08, 3.0, 0.1], [0.0, 2.0, 4.0, 2.0]])
+    merged, thick, group = merge_parallel_duplicates(axes, np.array([0.1, 0.1, 0.2]))
+    assert group.tolist() == [0, 0, 1] and len(merged) == 2
+    assert np.allclose(merged[0, [0, 2]], [0.0, 4.0], atol=0.01) and abs(merged[0, 1]) < 0.05
+    assert thick.tolist() == [0.1, 0.2]
+    # two pieces of a curved wall that overlap at 10 degrees meet where they cross
+    a = np.array([0.0, 0.0, 3.0, 0.0])
+    d = np.radians(10)
+    b = np.array([2.6, -0.2 * np.tan(d) * 0 - 0.05, 2.6 + 3 * np.cos(d), -0.05 + 3 * np.sin(d)])
+    out, junctions = snap_junctions(np.array([a, b]), StructureParams(), trim_shallow=True)
+    assert crossings(out, np.empty((0, 2))) == 0
+    assert np.allclose(out[0, 2:], out[1, :2], atol=1e-9)

@@ -210,10 +210,35 @@ def build_floorplan(
         log.info("structure passes: %d faces -> %d wall faces, %d clutter", n_before, len(faces), len(cl))
     flen = np.hypot(faces[:, 2] - faces[:, 0], faces[:, 3] - faces[:, 1])
     axes, thick, wall_of_face = pair_faces(faces, face_w, params)
-    nw = len(axes)
     junctions = _empty(JUNCTION_COLUMNS)
     if grid is not None:
+        axes, thick, wall_of_face = _one_wall_per_wall(axes, thick, wall_of_face, params)
         axes, junctions = _wall_junctions(axes, thick, wall_of_face, side, params)
+        # a wall whose snapped axis is short and not between two junctions is clutter
+        # (the wall passes can shorten a wall again: up to three rounds)
+        from floorscan.floorplan.structure import _short_loose
+
+        for _ in range(3):
+            junc = np.column_stack([junctions[["x", "y", "wall_a", "wall_b"]].to_numpy(np.float64), np.zeros(len(junctions))])
+            loose = _short_loose(axes, junc, params.structure.min_wall_length_m)
+            if not loose.any():
+                break
+            drop = loose[wall_of_face]
+            dropped = pd.DataFrame(
+                {
+                    "clutter_id": np.arange(len(clutter), len(clutter) + int(drop.sum()), dtype=np.int32),
+                    "x0": faces[drop, 0], "y0": faces[drop, 1], "x1": faces[drop, 2], "y1": faces[drop, 3],
+                    "length_m": np.hypot(faces[drop, 2] - faces[drop, 0], faces[drop, 3] - faces[drop, 1]),
+                    "reason": "short",
+                }  # fmt: skip
+            )
+            clutter = pd.concat([clutter, dropped], ignore_index=True)
+            faces, face_w, n_seg, side = faces[~drop], face_w[~drop], n_seg[~drop], side[~drop]
+            flen = flen[~drop]
+            axes, thick, wall_of_face = pair_faces(faces, face_w, params)
+            axes, thick, wall_of_face = _one_wall_per_wall(axes, thick, wall_of_face, params)
+            axes, junctions = _wall_junctions(axes, thick, wall_of_face, side, params)
+    nw = len(axes)
     faces_df = pd.DataFrame(
         {
             "face_id": np.arange(len(faces), dtype=np.int32),
@@ -244,6 +269,16 @@ def build_floorplan(
     return FloorPlan(walls=walls[WALL_COLUMNS], faces=faces_df[FACE_COLUMNS], clutter=clutter, junctions=junctions)
 
 
+def _one_wall_per_wall(axes, thick, wall_of_face, params: FloorplanParams):
+    """Near-parallel duplicate walls merged
+    (:func:`floorscan.floorplan.structure.merge_parallel_duplicates`, within the
+    thickest wall ``pair_max_m``); the faces follow their walls."""
+    from floorscan.floorplan.structure import merge_parallel_duplicates
+
+    axes, thick, group = merge_parallel_duplicates(axes, thick, params.structure, params.pair_max_m)
+    return axes, thick, group[wall_of_face]
+
+
 def _wall_junctions(axes, thick, wall_of_face, side, params: FloorplanParams):
     """Wall axes of a plan with structure: a one-faced wall's axis moved half its
     thickness behind its face (away from the free side), then the axes snapped into
@@ -254,6 +289,7 @@ def _wall_junctions(axes, thick, wall_of_face, side, params: FloorplanParams):
     from floorscan.floorplan.structure import snap_junctions
 
     axes = axes.copy()
+    thick = thick.copy()
     n_faces = np.bincount(wall_of_face, minlength=len(axes))
     for f, wall in enumerate(wall_of_face.tolist()):
         if n_faces[wall] == 1 and side[f] != 0:
@@ -262,7 +298,7 @@ def _wall_junctions(axes, thick, wall_of_face, side, params: FloorplanParams):
             shift = -float(side[f]) * 0.5 * thick[wall] * n  # away from the free side
             axes[wall] += np.r_[shift, shift]
     tol = replace(params.structure, snap_m=params.structure.snap_m + (float(thick.max()) if len(thick) else 0.0))
-    axes, junc = snap_junctions(axes, tol)
+    axes, junc = snap_junctions(axes, tol, trim_shallow=True)
     kinds = np.array(["", "L", "T", "X"], dtype=object)
     junctions = pd.DataFrame(
         {

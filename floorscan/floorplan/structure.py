@@ -8,7 +8,9 @@ order (:func:`structure_passes`):
    beside it on at least one side are free space (the rover's rays passed there,
    :func:`passable`) over ``min_free_side`` of its length, and its own cells are
    occupied (its returns outweigh the rays of other scans through them: a person
-   walking by is seen through by the next scan). Lines through the inside of a piece of furniture (a
+   walking by is seen through by the next scan), and it does not have returns on both
+   sides at once ``side_offset_m`` and twice that away (a line through the inside of an
+   object, such as a table top in a 3D scanner's height band). Lines through the inside of a piece of furniture (a
    table top in a 3D scanner's height band) and single-scan returns fail it.
 2. **Joins** (:func:`join_collinear`). Collinear faces (``join_angle_deg``,
    ``join_offset_m``) less than ``join_max_gap_m`` apart are one face when the rover's
@@ -22,8 +24,12 @@ order (:func:`structure_passes`):
    face (``clutter_max_length_m``) fall apart into objects; an object smaller than
    ``clutter_max_length_m`` that the free space surrounds (a chair, a desk, a shelf, a
    table top in a 3D scanner's height band) is furniture, and the faces on it are
-   clutter unless they meet a wall in a junction. A face shorter than
-   ``min_wall_length_m`` is clutter unless it connects two junctions.
+   clutter. A face shorter than ``min_wall_length_m`` is clutter unless it connects
+   two junctions.
+5. **In front of a wall** (:func:`in_front_of_walls`). A face shorter than
+   ``clutter_max_length_m`` parallel to a long wall face, ``front_min_m`` to
+   ``front_max_m`` in front of it on its free side, is the front of a desk, a cabinet
+   or a shelf standing against the wall: clutter.
 
 The rule of step 1 and 4 is the issue's (walls are the boundaries of the free space,
 long enough and seen from more than one position; short pieces standing inside free
@@ -59,6 +65,10 @@ class StructureParams:
     snap_m: float
     junction_min_angle_deg: float
     object_free_around: float
+    front_min_m: float
+    front_max_m: float
+    front_overlap: float
+    duplicate_angle_deg: float
     clutter_max_length_m: float
     min_wall_length_m: float
 
@@ -130,10 +140,12 @@ def border_and_support(seg: np.ndarray, grid: OccupancyGrid, params: StructurePa
             on |= inside & occupied_cells[r, c]
     seen = np.bincount(owner, weights=on, minlength=len(seg)) / count
     hit = grid.n_hit_scans > 0
-    occupied = np.minimum(
-        np.bincount(owner, weights=_lookup(grid, hit, pts + off), minlength=len(seg)),
-        np.bincount(owner, weights=_lookup(grid, hit, pts - off), minlength=len(seg)),
-    ) / count  # returns on both sides: a line through the inside of an object
+    # returns on both sides, near and twice as far: a line through the inside of an
+    # object (a wall's own far face, or a desk right in front of it, is only near)
+    occupied = np.min(
+        [np.bincount(owner, weights=_lookup(grid, hit, pts + k * off), minlength=len(seg)) for k in (-2, -1, 1, 2)],
+        axis=0,
+    ) / count
     structure = (
         (np.maximum(left, right) >= params.min_free_side) & (seen >= 0.5)
         & (occupied < params.min_free_side)
@@ -229,7 +241,7 @@ def _fit_group(seg: np.ndarray, length: np.ndarray) -> np.ndarray:
     return np.r_[off * n + t.min() * u, off * n + t.max() * u]
 
 
-def snap_junctions(seg: np.ndarray, params: StructureParams = StructureParams()):
+def snap_junctions(seg: np.ndarray, params: StructureParams = StructureParams(), trim_shallow: bool = False):
     """Step 3: ends moved onto the lines of the faces they meet (L, T and X junctions).
 
     Every end of a face is tested against the faces within ``snap_m`` of it whose
@@ -237,13 +249,16 @@ def snap_junctions(seg: np.ndarray, params: StructureParams = StructureParams())
     two lines cross is a junction when it lies within ``snap_m`` of the end and within
     the other face extended by ``snap_m``; the end moves to the nearest such ``X``
     (trimming an overshoot, extending a short end). All moves are computed on the
-    input, then applied, so an L corner's two ends meet at one point.
+    input, then applied, so an L corner's two ends meet at one point. With
+    ``trim_shallow`` (the wall axes), axes that cross at a shallow angle (overlapping
+    pieces of a curved wall) are then trimmed to meet where they cross.
 
     Parameters
     ----------
     seg : (F, 4) float ndarray
         Faces or wall axes, metres.
     params : StructureParams
+    trim_shallow : bool
 
     Returns
     -------
@@ -263,7 +278,9 @@ def snap_junctions(seg: np.ndarray, params: StructureParams = StructureParams())
     ok = _angle_diff(ang[i], ang[j]) >= np.radians(params.junction_min_angle_deg)
     i, j = np.r_[i[ok], j[ok]], np.r_[j[ok], i[ok]]  # both directions: the end of i on j
     if len(i) == 0:
-        return out, np.empty((0, 5))
+        if trim_shallow:
+            _trim_shallow_crossings(out, params)
+        return out, _junctions(out, params)
     x = _line_crossings(seg[i], seg[j])
     lj = np.hypot(seg[j, 2] - seg[j, 0], seg[j, 3] - seg[j, 1])
     uj = (seg[j, 2:] - seg[j, :2]) / np.maximum(lj, 1e-12)[:, None]
@@ -286,7 +303,34 @@ def snap_junctions(seg: np.ndarray, params: StructureParams = StructureParams())
     moved = np.isfinite(best)
     for end in (0, 1):
         out[moved[:, end], 2 * end : 2 * end + 2] = target[moved[:, end], end]
+    if trim_shallow:
+        _trim_shallow_crossings(out, params)
     return out, _junctions(out, params)
+
+
+def _trim_shallow_crossings(seg: np.ndarray, params: StructureParams) -> None:
+    """Two faces that cross at less than ``junction_min_angle_deg`` (consecutive pieces
+    of a curved wall that overlap) are trimmed, in place, to meet at the crossing: each
+    one's end nearer to it moves there when that end lies within half the face's length."""
+    import shapely
+
+    if len(seg) < 2:
+        return
+    lines = shapely.linestrings(seg.reshape(-1, 2, 2))
+    i, j = shapely.STRtree(lines).query(lines, predicate="crosses")
+    keep = i < j
+    i, j = i[keep], j[keep]
+    ang = _axial_angle(seg)
+    shallow = _angle_diff(ang[i], ang[j]) < np.radians(params.junction_min_angle_deg)
+    for a, b in zip(i[shallow].tolist(), j[shallow].tolist()):
+        x = _line_crossings(seg[[a]], seg[[b]])[0]
+        if not np.isfinite(x).all():
+            continue
+        for k in (a, b):
+            d = np.hypot(*(seg[k].reshape(2, 2) - x).T)
+            end = int(np.argmin(d))
+            if d[end] <= 0.5 * np.hypot(*(seg[k, 2:] - seg[k, :2])):
+                seg[k, 2 * end : 2 * end + 2] = x
 
 
 def _line_crossings(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -423,7 +467,7 @@ def structure_passes(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, 
         The faces that are not structure (furniture, single-scan returns), metres.
     reason : (C,) object ndarray
         Why each clutter face is clutter: ``not_a_boundary`` (no free space beside it, or returns on both sides, or on cells that are not occupied),
-        ``free_standing_object`` or ``short``.
+        ``free_standing_object``, ``in_front_of_wall`` or ``short``.
     """
     seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
     w = np.asarray(weights, dtype=np.float64).ravel()
@@ -435,24 +479,129 @@ def structure_passes(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, 
     length = np.hypot(snapped[:, 2] - snapped[:, 0], snapped[:, 3] - snapped[:, 1])
     anchor = length >= params.clutter_max_length_m
     standing = on_objects(snapped, grid, free_standing_objects(grid, params, snapped[anchor])) & ~anchor
-    # a junction with a wall (a face not on an object) makes a short face a wall
-    ji, jj = junctions[:, 2].astype(np.int64), junctions[:, 3].astype(np.int64)
-    anchored = np.zeros(len(snapped), dtype=bool)
-    anchored[ji[~standing[jj]]] = True
-    anchored[jj[~standing[ji]]] = True
-    short = _short_loose(snapped, junctions, params.min_wall_length_m) & ~standing
-    keep = ~standing & ~short
-    clutter += [joined[standing], joined[short]]
+    _, side = border_and_support(snapped, grid, params)
+    front = in_front_of_walls(snapped, side, anchor, params) & ~standing
+    short = _short_loose(snapped, junctions, params.min_wall_length_m) & ~standing & ~front
+    keep = ~standing & ~front & ~short
+    clutter += [snapped[standing], snapped[front], snapped[short]]
     reason += [np.full(int(standing.sum()), "free_standing_object", dtype=object),
+               np.full(int(front.sum()), "in_front_of_wall", dtype=object),
                np.full(int(short.sum()), "short", dtype=object)]  # fmt: skip
     # the walls meet again without the clutter; a face the new ends left short goes
     walls, junctions = snap_junctions(joined[keep], params)
     still = ~_short_loose(walls, junctions, params.min_wall_length_m)
-    clutter.append(joined[keep][~still])
+    clutter.append(walls[~still])
     reason.append(np.full(int((~still).sum()), "short", dtype=object))
     walls, _ = snap_junctions(joined[keep][still], params)
     _, side = border_and_support(walls, grid, params)
     return walls, jw[keep][still], side, np.concatenate(clutter).reshape(-1, 4), np.concatenate(reason)
+
+
+def in_front_of_walls(seg: np.ndarray, side: np.ndarray, wall: np.ndarray, params: StructureParams = StructureParams()):
+    """Step 5: faces shorter than ``clutter_max_length_m`` that stand parallel in front
+    of a long wall face, on its free side, between ``front_min_m`` and ``front_max_m``
+    from it and along it over ``front_overlap`` of their length: the fronts of desks,
+    cabinets and shelves against a wall (the thesis's clutter, sections 1.3 and 2.3).
+
+    Parameters
+    ----------
+    seg : (F, 4) float ndarray
+        Faces, metres.
+    side : (F,) int ndarray
+        Their free sides (:func:`border_and_support`).
+    wall : (F,) bool ndarray
+        Which faces are long walls (the candidates behind).
+    params : StructureParams
+
+    Returns
+    -------
+    (F,) bool ndarray
+    """
+    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
+    out = np.zeros(len(seg), dtype=bool)
+    i, j = _candidate_pairs(seg, params.front_max_m, np.radians(params.join_angle_deg))
+    if len(i) == 0:
+        return out
+    i, j = np.r_[i, j], np.r_[j, i]  # face i in front of wall j
+    ok = wall[j] & ~wall[i]
+    i, j = i[ok], j[ok]
+    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    u = (seg[j, 2:] - seg[j, :2]) / np.maximum(length[j], 1e-12)[:, None]
+    n = np.column_stack([-u[:, 1], u[:, 0]]) * side[j][:, None]  # towards the wall's free side
+    mid = 0.5 * (seg[i, :2] + seg[i, 2:])
+    dist = np.einsum("ij,ij->i", mid - seg[j, :2], n)
+    t0 = np.einsum("ij,ij->i", seg[i, :2] - seg[j, :2], u)
+    t1 = np.einsum("ij,ij->i", seg[i, 2:] - seg[j, :2], u)
+    overlap = np.minimum(np.maximum(t0, t1), length[j]) - np.maximum(np.minimum(t0, t1), 0.0)
+    hit = (side[j] != 0) & (dist >= params.front_min_m) & (dist <= params.front_max_m) & (
+        overlap >= params.front_overlap * length[i]
+    )
+    out[i[hit]] = True
+    return out
+
+
+def merge_parallel_duplicates(axes: np.ndarray, thickness: np.ndarray, params: StructureParams = StructureParams(),
+                              max_distance_m: float = 0.4):  # fmt: skip
+    """One wall per wall: near-parallel walls that lie on each other, whatever their
+    length, merged into one (duplicate lines a fit left across a thin wall's two faces,
+    a skewed copy of a wall).
+
+    Two wall axes are duplicates when their directions differ by at most
+    ``duplicate_angle_deg`` and both ends of the shorter lie within ``max_distance_m``
+    (the thickest wall, ``floorplan.pair_max_m``) of the longer's axis, between its ends
+    (give or take ``max_distance_m``). Groups of duplicates (connected components)
+    become one axis: the length-weighted mean line over the extent of all ends; its
+    thickness the largest of theirs.
+
+    Parameters
+    ----------
+    axes : (W, 4) float ndarray
+        Wall axes, metres.
+    thickness : (W,) float ndarray
+        Metres.
+    params : StructureParams
+    max_distance_m : float
+
+    Returns
+    -------
+    merged : (M, 4) float64 ndarray
+    merged_thickness : (M,) float64 ndarray
+    group : (W,) int64 ndarray
+        The merged wall of each input wall.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
+    thickness = np.asarray(thickness, dtype=np.float64).ravel()
+    n = len(axes)
+    if n < 2:
+        return axes.copy(), thickness.copy(), np.arange(n)
+    i, j = _candidate_pairs(axes, max_distance_m, np.radians(params.duplicate_angle_deg))
+    length = np.hypot(axes[:, 2] - axes[:, 0], axes[:, 3] - axes[:, 1])
+    a = np.where(length[i] >= length[j], i, j)
+    b = np.where(length[i] >= length[j], j, i)
+    u = (axes[a, 2:] - axes[a, :2]) / np.maximum(length[a], 1e-12)[:, None]
+    nrm = np.column_stack([-u[:, 1], u[:, 0]])
+    ok = np.ones(len(a), dtype=bool)
+    for end in (0, 2):
+        rel = axes[b, end : end + 2] - axes[a, :2]
+        t = np.einsum("ij,ij->i", rel, u)
+        ok &= (np.abs(np.einsum("ij,ij->i", rel, nrm)) <= max_distance_m) & (t >= -max_distance_m) & (
+            t <= length[a] + max_distance_m
+        )
+    graph = coo_matrix((np.ones(int(ok.sum())), (a[ok], b[ok])), shape=(n, n))
+    n_groups, group = connected_components(graph, directed=False)
+    merged = np.empty((n_groups, 4))
+    merged_thickness = np.zeros(n_groups)
+    np.maximum.at(merged_thickness, group, thickness)
+    for g in range(n_groups):
+        members = np.flatnonzero(group == g)
+        longest = axes[members[np.argmax(length[members])]]
+        u = (longest[2:] - longest[:2]) / max(float(np.hypot(*(longest[2:] - longest[:2]))), 1e-12)
+        t = (axes[members].reshape(-1, 2) - longest[:2]) @ u
+        merged[g] = np.r_[longest[:2] + t.min() * u, longest[:2] + t.max() * u]
+    return merged, merged_thickness, group.astype(np.int64)
 
 
 def _short_loose(seg: np.ndarray, junctions: np.ndarray, min_length: float) -> np.ndarray:
