@@ -13,14 +13,9 @@ import shapely
 from floorscan.core.occupancy import OccupancyParams, occupancy_grid
 from floorscan.floorplan.params import FloorplanParams
 from floorscan.floorplan.plan import build_floorplan, plan_faces
-from floorscan.floorplan.structure import (
-    StructureParams,
-    merge_parallel_duplicates,
-    border_and_support,
-    join_collinear,
-    snap_junctions,
-    structure_passes,
-)
+from floorscan.floorplan.free_space import StructureParams
+from floorscan.floorplan.junctions import merge_parallel_duplicates, snap_junctions
+from floorscan.floorplan.structure import border_and_support, join_collinear, structure_passes
 from floorscan.score.answer import crossings, true_corners, true_wall_pieces
 from floorscan.walls.map_lines import MapParams, map_segments, supported_points
 

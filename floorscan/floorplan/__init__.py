@@ -14,6 +14,12 @@ made and written:
 - :mod:`~floorscan.floorplan.fit`: one segment fitted to several.
 - :mod:`~floorscan.floorplan.merge`: the segments of one wall face merged into one.
 - :mod:`~floorscan.floorplan.pairing`: the two faces of a wall paired into one wall.
+- :mod:`~floorscan.floorplan.structure`: the structure passes, when the free space of
+  the plan's scans is known (an occupancy grid): walls that bound the free space,
+  collinear pieces joined across unseen gaps, with :mod:`~floorscan.floorplan.clutter`
+  (furniture out), :mod:`~floorscan.floorplan.junctions` (L, T and X junctions, one
+  wall per wall) and :mod:`~floorscan.floorplan.free_space` (their parameters and the
+  grid probes).
 - :mod:`~floorscan.floorplan.plan`: :class:`~floorscan.floorplan.plan.FloorPlan` and
   :func:`~floorscan.floorplan.plan.build_floorplan`, the steps above in one.
 - :mod:`~floorscan.floorplan.georeference`: where the map frame lies on the earth.

@@ -14,7 +14,7 @@ from typing import Any, Mapping
 
 from floorscan.core.config import schema_defaults
 from floorscan.floorplan.georeference import Georeference, as_georeference
-from floorscan.floorplan.structure import StructureParams
+from floorscan.floorplan.free_space import StructureParams
 
 
 #: DXF versions :func:`write_dxf` writes (R2010 the default: R12 has no units header).

@@ -216,11 +216,11 @@ def build_floorplan(
         axes, junctions = _wall_junctions(axes, thick, wall_of_face, side, params)
         # a wall whose snapped axis is short and not between two junctions is clutter
         # (the wall passes can shorten a wall again: up to three rounds)
-        from floorscan.floorplan.structure import _short_loose
+        from floorscan.floorplan.junctions import short_loose
 
         for _ in range(3):
             junc = np.column_stack([junctions[["x", "y", "wall_a", "wall_b"]].to_numpy(np.float64), np.zeros(len(junctions))])
-            loose = _short_loose(axes, junc, params.structure.min_wall_length_m)
+            loose = short_loose(axes, junc, params.structure.min_wall_length_m)
             if not loose.any():
                 break
             drop = loose[wall_of_face]
@@ -273,7 +273,7 @@ def _one_wall_per_wall(axes, thick, wall_of_face, params: FloorplanParams):
     """Near-parallel duplicate walls merged
     (:func:`floorscan.floorplan.structure.merge_parallel_duplicates`, within the
     thickest wall ``pair_max_m``); the faces follow their walls."""
-    from floorscan.floorplan.structure import merge_parallel_duplicates
+    from floorscan.floorplan.junctions import merge_parallel_duplicates
 
     axes, thick, group = merge_parallel_duplicates(axes, thick, params.structure, params.pair_max_m)
     return axes, thick, group[wall_of_face]
@@ -286,7 +286,7 @@ def _wall_junctions(axes, thick, wall_of_face, side, params: FloorplanParams):
     ``snap_m`` plus the thickest wall). Returns the axes and the junction table."""
     from dataclasses import replace
 
-    from floorscan.floorplan.structure import snap_junctions
+    from floorscan.floorplan.junctions import snap_junctions
 
     axes = axes.copy()
     thick = thick.copy()
