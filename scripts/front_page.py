@@ -9,6 +9,7 @@ with stage_log(snakemake) as log:  # noqa: F821
         floorplan_svg=smk.input.floorplan_svg, floorplan_geojson=smk.input.floorplan_geojson,
         selection=smk.input.selection, registration=smk.input.registration, index=smk.input.index,
         summary=smk.input.get("summary"), quality_png=smk.input.get("quality_png"),
-        extractor=smk.params.extractor, description=smk.params.description,
+        extractor=smk.params.extractor, description=smk.params.description, answer=smk.input.get("answer"),
+        answer_curve=smk.input.get("answer_curve"),
     )
     log.info("front page %s", smk.output.front)

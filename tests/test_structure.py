@@ -192,3 +192,14 @@ def test_duplicates_merge_and_shallow_crossings_meet():
     out, junctions = snap_junctions(np.array([a, b]), StructureParams(), trim_shallow=True)
     assert crossings(out, np.empty((0, 2))) == 0
     assert np.allclose(out[0, 2:], out[1, :2], atol=1e-9)
+
+
+def test_answer_curve_grid_and_k_reaching():
+    from floorscan.score.answer_curve import curve_ks, k_reaching
+
+    assert curve_ks(1) == [1] and curve_ks(0) == []
+    ks = curve_ks(100, 10)
+    assert ks[0] == 1 and ks[-1] == 100 and ks == sorted(set(ks)) and 8 <= len(ks) <= 11
+    curve = pd.DataFrame({"k": [1, 2, 4, 8], "f1_5cm": [0.2, 0.85, 0.95, 0.9]})
+    # 95 % and 99 % of the last row's F1 (0.9): 0.855 and 0.891
+    assert k_reaching(curve, 0.95) == 4 and k_reaching(curve, 0.99) == 4 and k_reaching(curve, 0.9) == 2

@@ -104,6 +104,8 @@ def front_page(
     extractor: str = "",
     n_walls: int | None = None,
     description: str = "",
+    answer: "pd.DataFrame | str | os.PathLike | None" = None,
+    answer_curve: "pd.DataFrame | str | os.PathLike | None" = None,
 ) -> str:
     """The front page of a dataset's result as one self-contained HTML document.
 
@@ -147,6 +149,13 @@ def front_page(
         Walls of the recommended plan.
     description : str
         The dataset's description (config ``datasets.<name>.description``).
+    answer : pandas.DataFrame or path, optional
+        The scores of the recommended plan and of the all-scan map plan
+        (``evaluation/answer_scores.csv``, :func:`floorscan.score.answer.score_answer`),
+        shown as "How good the plan is".
+    answer_curve : pandas.DataFrame or path, optional
+        The answer's quality curve (``evaluation/answer_curve.csv``,
+        :func:`floorscan.score.answer_curve.answer_curve`): its k95 and k99 join that table.
 
     Returns
     -------
@@ -175,6 +184,8 @@ def front_page(
     parts.append('<div class="facts">')
     parts += _verdict_html(verdict)
     parts += _scans_html(k, n_kept, n_recorded, bytes_in, bytes_out, scan_list, k_reason)
+    if answer is not None:
+        parts += _answer_html(answer, answer_curve)
     if table is not None:
         parts += _quality_html(table, ordering, extractor)
     parts += _detected_html(detected, mode)
@@ -229,6 +240,8 @@ def write_front_page_of_files(
     quality_png: "str | os.PathLike | None" = None,
     extractor: str = "",
     description: str = "",
+    answer: "str | os.PathLike | None" = None,
+    answer_curve: "str | os.PathLike | None" = None,
 ) -> str:
     """:func:`write_front_page` of a dataset's stage outputs (rule ``front_page``).
 
@@ -250,6 +263,9 @@ def write_front_page_of_files(
         ``summary.parquet`` and ``figures/quality_vs_k.png`` (None: not evaluated).
     extractor, description : str
         As :func:`front_page`.
+    answer, answer_curve : path, optional
+        ``evaluation/answer_scores.csv`` and ``evaluation/answer_curve.csv`` (None: not
+        evaluated).
     """
     from floorscan.figures.floorplans import read_geojson_geometries
     from floorscan.core.io import read_metadata
@@ -274,6 +290,7 @@ def write_front_page_of_files(
         extractor=extractor,
         n_walls=len(read_geojson_geometries(floorplan_geojson)),
         description=description,
+        answer=answer, answer_curve=answer_curve,
     )  # fmt: skip
 
 
@@ -325,11 +342,65 @@ QUALITY_ROWS = ("oracle", THESIS_ORDERING, "random")
 QUALITY_COLUMNS = (("ordering", "ordering"), ("k_95", "k95"), ("k_99", "k99"), ("auc", "AUC 20 %"))
 
 
+#: Rows of the answer's table: the column of ``answer_scores.csv`` and its label.
+ANSWER_ROWS = (
+    ("n_walls", "walls"), ("n_junctions", "junctions"), ("n_clutter", "clutter pieces (furniture)"),
+    ("short_wall_share", "walls under 0.5 m"), ("n_crossings", "walls crossing away from a junction"),
+    ("map_completeness_5cm", "completeness at 5 cm (reference map)"),
+    ("map_completeness_all_5cm", "... with the clutter"), ("map_correctness_5cm", "correctness at 5 cm (reference map)"),
+    ("gt_precision_5cm", "precision at 5 cm (true walls)"), ("gt_recall_5cm", "recall at 5 cm (observed true walls)"),
+    ("gt_corners_as_junctions", "true corners that are junctions"),
+)  # fmt: skip
+
+
+def _answer_html(answer, curve=None) -> list[str]:
+    """"How good the plan is": the recommended plan beside the plan of all kept scans
+    (``answer_scores.csv``), and how many scans of the default ordering its plan needs
+    (``answer_curve.csv``: k95 and k99)."""
+    import pandas as pd
+
+    from floorscan.score.answer_curve import k_reaching
+
+    table = answer if isinstance(answer, pd.DataFrame) else pd.read_csv(answer)
+    by_plan = {row["plan"]: row for row in table.to_dict("records")}
+    plans = [p for p in ("recommended", "all_scans_map") if p in by_plan]
+    if not plans:
+        return []
+    head = "".join(f"<th>{html.escape(h)}</th>" for h in ("", "this plan", "all kept scans")[: len(plans) + 1])
+    rows = []
+    for col, label in ANSWER_ROWS:
+        values = [by_plan[p].get(col) for p in plans]
+        if all(v is None or (isinstance(v, float) and v != v) for v in values):
+            continue
+        cells = "".join(f'<td class="num">{_answer_cell(col, v)}</td>' for v in values)
+        rows.append(f"<tr><th>{html.escape(label)}</th>{cells}</tr>")
+    if curve is not None:
+        c = curve if isinstance(curve, pd.DataFrame) else pd.read_csv(curve)
+        for level in (0.95, 0.99):
+            k = k_reaching(c, level)
+            if k is not None:
+                label = f"scans for {round(level * 100)} % of the all-scan plan's F1 (k{round(level * 100)})"
+                rows.append(f'<tr><th>{html.escape(label)}</th><td class="num">{k}</td></tr>')
+    return ["<h4>How good the plan is</h4>", f'<table class="facts-table"><tr>{head}</tr>{"".join(rows)}</table>']
+
+
+def _answer_cell(col: str, value) -> str:
+    if value is None or (isinstance(value, float) and value != value):
+        return "&ndash;"
+    if col.startswith("n_"):
+        return f"{int(value)}"
+    return f"{100 * float(value):.0f} %"
+
+
 def _quality_html(summary: "pd.DataFrame", ordering: str, extractor: str) -> list[str]:
     """The recommended ordering against the thesis's, random and the oracle, for the
     recommended plan's extractor: k95, k99 and the AUC (the summary's cells), so the
     page's first screen says how few scans the plan needs."""
     esc = html.escape
+    if extractor and "extractor" in summary and not (summary["extractor"] == extractor).any():
+        # the answer's extractor has no curves of every ordering (the map extractor: its
+        # own curve is in the answer table); show the thesis's per-scan extractor's
+        extractor = "ransac" if (summary["extractor"] == "ransac").any() else str(summary["extractor"].iloc[0])
     rows = summary[summary["extractor"] == extractor] if extractor and "extractor" in summary else summary
     order = [ordering] + [o for o in QUALITY_ROWS if o != ordering]
     records = {r["ordering"]: r for r in rows.to_dict("records")}

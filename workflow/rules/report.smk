@@ -17,6 +17,8 @@ def front_page_inputs(wildcards):
     if evaluate_by_default():
         inputs["summary"] = f"results/{ds}/summary.parquet"
         inputs["quality_png"] = f"results/{ds}/figures/floorplan_f1_vs_k.png"
+        inputs["answer"] = f"results/{ds}/evaluation/answer_scores.csv"
+        inputs["answer_curve"] = f"results/{ds}/evaluation/answer_curve.csv"
     return inputs
 
 

@@ -1,0 +1,109 @@
+"""The quality curve of the answer's floor plan: the plan the answer is made with (the
+map extractor and the structure passes) of the first k scans of the default ordering,
+against the reference map, for k on a geometric grid (rule ``answer_curve``).
+
+The thesis's quality curves (thesis Fig. 5.8; :mod:`floorscan.score.curves`) score the
+per-scan extractors' plans of every ordering on a dense grid; this curve scores the plan
+a user gets, so its k95 and k99 (the first k whose plan reaches 95 / 99 % of the F1 of
+the plan of all kept scans) are what the automatic k (``select.k: auto``) is measured
+against.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import replace
+from typing import Any, Mapping
+
+import numpy as np
+import pandas as pd
+
+
+def curve_ks(n_kept: int, n_points: int = 24) -> list[int]:
+    """About ``n_points`` values of k from 1 to ``n_kept``, geometrically spaced
+    (distinct, increasing, ``n_kept`` last)."""
+    if n_kept < 1:
+        return []
+    ks = np.unique(np.round(np.geomspace(1, n_kept, max(2, n_points))).astype(np.int64))
+    return sorted(set(ks.tolist()) | {int(n_kept)})
+
+
+def answer_curve(
+    registered_path: str | os.PathLike,
+    registration: pd.DataFrame,
+    ordering: pd.DataFrame,
+    reference,
+    walls_cfg: Mapping[str, Any] | None = None,
+    floorplan_cfg: Mapping[str, Any] | None = None,
+    n_points: int = 24,
+) -> pd.DataFrame:
+    """F1, completeness and correctness at 5 cm against the reference map of the
+    answer's plan of the first k scans of ``ordering``, for k in :func:`curve_ks`.
+
+    Parameters
+    ----------
+    registered_path : path
+        ``registered.parquet`` (kept scans' points in the map frame, metres).
+    registration : pandas.DataFrame
+        ``registration.parquet`` (``scan_id``, ``kept``, ``x_m``, ``y_m``).
+    ordering : pandas.DataFrame
+        ``orderings/<ordering>.parquet``: ``rank`` and ``scan_id``.
+    reference : OccupancyGrid or Structure
+        The reference map.
+    walls_cfg, floorplan_cfg : mapping, optional
+        The ``walls`` and ``floorplan`` config sections.
+    n_points : int
+        Grid size (:func:`curve_ks`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``k``, ``n_walls``, ``completeness_5cm``, ``correctness_5cm``, ``f1_5cm``, one row
+        per k.
+    """
+    from floorscan.core.io import iter_scans
+    from floorscan.core.occupancy import OccupancyParams, occupancy_grid
+    from floorscan.floorplan.params import params_from_config as floorplan_params
+    from floorscan.floorplan.plan import build_floorplan
+    from floorscan.score.against_reference import Structure, plan_against_reference
+    from floorscan.walls.map_lines import map_segments
+    from floorscan.walls.map_stage import map_params
+    from floorscan.walls.params import scan_params
+    from floorscan.walls.points import scan_points_2d
+
+    walls_cfg = walls_cfg or {}
+    mp, sp = map_params(walls_cfg), scan_params(walls_cfg)
+    fp = floorplan_params(floorplan_cfg)
+    grid_params = replace(OccupancyParams(), resolution_m=mp.support_cell_m)
+    structure = reference if isinstance(reference, Structure) else Structure(reference)
+    reg = registration[registration["kept"]].set_index("scan_id")
+    order = ordering.sort_values("rank")["scan_id"].to_numpy(np.int64)
+    points = {}
+    for sid, xyz in iter_scans(registered_path):
+        if sid in reg.index:
+            points[sid] = scan_points_2d(xyz, sp)[0]
+    order = order[np.isin(order, list(points))]
+    rows = []
+    for k in curve_ks(len(order), n_points):
+        ids = order[:k]
+        scans = [(reg.loc[s, ["x_m", "y_m"]].to_numpy(np.float64), points[s]) for s in ids]
+        pts = np.concatenate([p for _, p in scans]) if scans else np.empty((0, 2))
+        if not any(len(p) for _, p in scans):
+            rows.append({"k": k, "n_walls": 0, "completeness_5cm": 0.0, "correctness_5cm": np.nan, "f1_5cm": 0.0})
+            continue
+        grid = occupancy_grid(scans, grid_params)
+        plan = build_floorplan(map_segments(pts, grid, mp, seed=int(walls_cfg.get("seed", 0))), fp, grid)
+        m = plan_against_reference(plan.faces[["x0", "y0", "x1", "y1"]].to_numpy(np.float64), structure, (0.05,))
+        rows.append({"k": k, "n_walls": len(plan.walls), "completeness_5cm": m["completeness_5cm"],
+                     "correctness_5cm": m["correctness_5cm"], "f1_5cm": m["f1_5cm"]})  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def k_reaching(curve: pd.DataFrame, level: float) -> int | None:
+    """The first k of ``curve`` whose ``f1_5cm`` reaches ``level`` times the F1 of its
+    last row (all kept scans); None for an empty curve."""
+    if curve.empty:
+        return None
+    target = level * float(curve["f1_5cm"].iloc[-1])
+    hit = curve["f1_5cm"].to_numpy() >= target
+    return int(curve["k"].to_numpy()[int(np.argmax(hit))]) if hit.any() else int(curve["k"].iloc[-1])
