@@ -203,3 +203,40 @@ def test_answer_curve_grid_and_k_reaching():
     curve = pd.DataFrame({"k": [1, 2, 4, 8], "f1_5cm": [0.2, 0.85, 0.95, 0.9]})
     # 95 % and 99 % of the last row's F1 (0.9): 0.855 and 0.891
     assert k_reaching(curve, 0.95) == 4 and k_reaching(curve, 0.99) == 4 and k_reaching(curve, 0.9) == 2
+
+
+def test_exports_carry_clutter_and_junctions(room, tmp_path):
+    """Every export of a plan with structure: GeoJSON kinds clutter and junction, the
+    DXF layer CLUTTER (audit clean), the SVG clutter group, IFC path connections per
+    junction and furniture per clutter piece (validate clean); the same bytes twice."""
+    import json
+
+    import ezdxf
+    import ifcopenshell
+    import ifcopenshell.validate
+
+    from floorscan.floorplan.writer import FloorplanWriter
+
+    pts, _, grid = room
+    plan = build_floorplan(map_segments(pts, grid, MapParams(), seed=0), FloorplanParams(), grid)
+    stems = [tmp_path / "a", tmp_path / "b"]
+    for stem in stems:
+        FloorplanWriter({}).write(map_segments(pts, grid, MapParams(), seed=0), {
+            f: f"{stem}.{f}" for f in ("geojson", "svg", "dxf", "ifc")}, dataset="room", grid=grid)
+    for f in ("geojson", "svg", "dxf", "ifc"):  # the IFC header names its file
+        a, b = ((tmp_path / f"{s}.{f}").read_text().replace(f"{s}.{f}", "") for s in "ab")
+        assert a == b, f
+    doc = json.loads((tmp_path / "a.geojson").read_text())
+    kinds = [feat["properties"]["kind"] for feat in doc["features"]]
+    assert kinds.count("clutter") == len(plan.clutter) >= 2 and kinds.count("junction") == len(plan.junctions) >= 4
+    assert doc["floorscan"]["n_clutter"] == len(plan.clutter)
+    dxf = ezdxf.readfile(tmp_path / "a.dxf")
+    assert len(dxf.modelspace().query('LINE[layer=="CLUTTER"]')) == len(plan.clutter)
+    assert not dxf.audit().has_errors
+    assert '<g id="clutter"' in (tmp_path / "a.svg").read_text()
+    model = ifcopenshell.open(str(tmp_path / "a.ifc"))
+    assert len(model.by_type("IfcFurniture")) == len(plan.clutter)
+    assert 1 <= len(model.by_type("IfcRelConnectsPathElements")) <= len(plan.junctions)
+    logger = ifcopenshell.validate.json_logger()
+    ifcopenshell.validate.validate(str(tmp_path / "a.ifc"), logger)
+    assert logger.statements == []

@@ -32,7 +32,7 @@ if TYPE_CHECKING:
 
 
 #: Layers of the DXF export and their colours (AutoCAD Color Index: red, white, green).
-DXF_LAYERS = {"WALL_AXIS": 1, "WALL_OUTLINE": 7, "WALL_FACE": 3}
+DXF_LAYERS = {"WALL_AXIS": 1, "WALL_OUTLINE": 7, "WALL_FACE": 3, "CLUTTER": 8}
 
 
 @contextlib.contextmanager
@@ -62,7 +62,8 @@ def write_dxf(
     Layers (:data:`DXF_LAYERS`, each in the layer table with its colour; entities
     are coloured BYLAYER): ``WALL_AXIS`` (a LINE per wall centre line),
     ``WALL_OUTLINE`` (a closed polyline per wall polygon, counter-clockwise),
-    ``WALL_FACE`` (a LINE per merged face). The active viewport and ``$EXTMIN`` /
+    ``WALL_FACE`` (a LINE per merged face), ``CLUTTER`` (a LINE per piece that is not
+    a wall: furniture, from the structure passes). The active viewport and ``$EXTMIN`` /
     ``$EXTMAX`` frame the plan, so a CAD tool opens on it.
 
     ``"R2010"`` (default): ``$INSUNITS`` = 6 (metres), ``$MEASUREMENT`` = 1
@@ -120,6 +121,9 @@ def _write_dxf(
                 add_outline(ring[:-1], close=True, dxfattribs={"layer": "WALL_OUTLINE"})
         for x0, y0, x1, y1 in faces:
             msp.add_line((x0, y0), (x1, y1), dxfattribs={"layer": "WALL_FACE"})
+        c = plan.clutter
+        for x0, y0, x1, y1 in zip(c["x0"].tolist(), c["y0"].tolist(), c["x1"].tolist(), c["y1"].tolist()):
+            msp.add_line((x0, y0), (x1, y1), dxfattribs={"layer": "CLUTTER"})
         if len(w):
             lo, hi = exports.extent
             msp.dxf.extmin, msp.dxf.extmax = (*lo.tolist(), 0.0), (*hi.tolist(), 0.0)

@@ -62,9 +62,11 @@ def floorplan_geojson(
     ``axis`` (LineString centre line; ``wall_id``, ``thickness_m``, ``height_m``,
     ``length_m``, ``paired``, ``n_segments``), ``footprint`` (Polygon of the wall,
     counter-clockwise; ``wall_id``, ``thickness_m``), ``face`` (LineString merged
-    face; ``face_id``, ``wall_id``, ``n_segments``, ``n_inliers``). Thickness and
-    length are rounded to 4 decimals (metres), coordinates to
-    :data:`GEOJSON_DECIMALS`.
+    face; ``face_id``, ``wall_id``, ``n_segments``, ``n_inliers``); after the
+    structure passes also ``clutter`` (LineString of a piece that is not a wall:
+    ``clutter_id``, ``length_m``, ``reason``) and ``junction`` (Point where two walls
+    meet: ``junction`` L, T or X, ``wall_a``, ``wall_b``). Thickness and length are
+    rounded to 4 decimals (metres), coordinates to :data:`GEOJSON_DECIMALS`.
 
     Collection members: ``crs`` (only in the map frame: :data:`LOCAL_FRAME_WKT`, see
     the module docstring) and ``floorscan``: ``frame`` (``"map"``, or ``"WGS84"``
@@ -142,6 +144,17 @@ def _floorplan_geojson(exports: PlanExports, meta: PlanMetadata, georeference: G
     ):
         props = {"face_id": int(face_id), "wall_id": int(wall_id), "n_segments": int(n_seg), "n_inliers": int(n_inl)}
         feats.append(_feature("face", line(e), props))
+    c = plan.clutter
+    for clutter_id, e, length, reason in zip(col(c, "clutter_id"), ends(c), col(c, "length_m"), col(c, "reason")):
+        props = {"clutter_id": int(clutter_id), "length_m": round(float(length), 4), "reason": str(reason)}
+        feats.append(_feature("clutter", line(e), props))
+    j = plan.junctions
+    if len(j):
+        xy = j[["x", "y"]].to_numpy(dtype=np.float64)
+        xy = xy if transform is None else transform(xy)
+        for (x, y), kind, a, b in zip(xy.tolist(), col(j, "kind"), col(j, "wall_a"), col(j, "wall_b")):
+            geom = {"type": "Point", "coordinates": [round(x, nd), round(y, nd)]}
+            feats.append(_feature("junction", geom, {"junction": str(kind), "wall_a": int(a), "wall_b": int(b)}))
     doc: dict = {"type": "FeatureCollection"}
     if georeference is None:
         doc["crs"] = {"type": "name", "properties": {"name": LOCAL_FRAME_WKT}}

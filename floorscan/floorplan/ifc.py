@@ -1,6 +1,7 @@
 """The IFC4 export of a floor plan (:func:`write_ifc`; BIM, with IfcOpenShell's API):
 IfcProject > IfcSite > IfcBuilding > IfcBuildingStorey, an ``IfcWall`` per wall placed
-relative to its storey, units metres, a STEP header naming the dataset and floorscan's
+relative to its storey, an ``IfcRelConnectsPathElements`` per junction of two walls, an
+``IfcFurniture`` per clutter piece, units metres, a STEP header naming the dataset and floorscan's
 version, a time stamp from the plan's ``timestamp``, else ``SOURCE_DATE_EPOCH``, else 0
 (:func:`~floorscan.floorplan.metadata.export_time`: never the clock), GlobalIds from
 the plan's name (:func:`_name_ifc`), so the same plan gives the same bytes.
@@ -112,7 +113,65 @@ def _ifc_model(plan: FloorPlan, georeference: Georeference | None):
         api.geometry.assign_representation(model, product=wall, representation=axis_rep)
         qto = api.pset.add_qto(model, product=wall, name="Qto_WallBaseQuantities")
         api.pset.edit_qto(model, qto=qto, properties={"Length": length, "Width": thickness, "Height": height})
+    _connect_walls(model, plan, dict(zip([r[0] for r in rows], walls)), {r[0]: r[1:5] for r in rows})
+    _add_clutter(model, plan, storey, body)
     return model
+
+
+def _connect_walls(model, plan: FloorPlan, wall_of_id: dict, axis_of_id: dict) -> None:
+    """An ``IfcRelConnectsPathElements`` per junction of the plan (ifcopenshell's
+    ``geometry.connect_path``): ``ATSTART`` / ``ATEND`` where the junction is an end of
+    a wall's axis (within 2 cm), ``ATPATH`` where it lies along it."""
+    import ifcopenshell.api.geometry
+
+    def where(wall_id, x, y):
+        x0, y0, x1, y1 = axis_of_id[wall_id]
+        if math.hypot(x - x0, y - y0) <= 0.02:
+            return "ATSTART"
+        return "ATEND" if math.hypot(x - x1, y - y1) <= 0.02 else "ATPATH"
+
+    j = plan.junctions
+    for x, y, a, b in zip(j["x"].tolist(), j["y"].tolist(), j["wall_a"].tolist(), j["wall_b"].tolist()):
+        if a in wall_of_id and b in wall_of_id and a != b:
+            ifcopenshell.api.geometry.connect_path(
+                model, relating_element=wall_of_id[a], related_element=wall_of_id[b],
+                relating_connection=where(a, x, y), related_connection=where(b, x, y),
+            )
+
+
+#: Clutter in IFC: an ``IfcFurniture`` per piece, a box this thick and high along it, metres.
+CLUTTER_IFC_THICKNESS_M, CLUTTER_IFC_HEIGHT_M = 0.05, 0.75
+
+
+def _add_clutter(model, plan: FloorPlan, storey, body) -> None:
+    """An ``IfcFurniture`` (``ObjectType`` "clutter", ``Description`` the reason) per
+    clutter piece of the plan, in the storey: a box :data:`CLUTTER_IFC_THICKNESS_M`
+    thick and :data:`CLUTTER_IFC_HEIGHT_M` high along the piece."""
+    import ifcopenshell.api
+
+    api = ifcopenshell.api
+    c = plan.clutter
+    rows = [
+        r for r in zip(c["clutter_id"].tolist(), c["x0"].tolist(), c["y0"].tolist(), c["x1"].tolist(),
+                       c["y1"].tolist(), c["reason"].tolist())
+        if math.hypot(r[3] - r[1], r[4] - r[2]) > 0
+    ]  # fmt: skip
+    items = [api.root.create_entity(model, ifc_class="IfcFurniture", name=f"Clutter {r[0]}") for r in rows]
+    if not items:
+        return
+    api.spatial.assign_container(model, products=items, relating_structure=storey)
+    storey.ContainsElements[-1].RelatedElements = tuple(items)  # a set in the API: fix the order
+    for item, (_, x0, y0, x1, y1, reason) in zip(items, rows):
+        length = math.hypot(x1 - x0, y1 - y0)
+        dx, dy = (x1 - x0) / length, (y1 - y0) / length
+        item.ObjectType, item.Description = "clutter", str(reason)
+        matrix = np.array([[dx, -dy, 0.0, x0], [dy, dx, 0.0, y0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+        api.geometry.edit_object_placement(model, product=item, matrix=matrix)
+        rep = api.geometry.add_wall_representation(
+            model, context=body, length=length, height=CLUTTER_IFC_HEIGHT_M, thickness=CLUTTER_IFC_THICKNESS_M,
+            offset=-CLUTTER_IFC_THICKNESS_M / 2.0,
+        )
+        api.geometry.assign_representation(model, product=item, representation=rep)
 
 
 def _name_ifc(model, plan: FloorPlan, metadata: PlanMetadata) -> None:

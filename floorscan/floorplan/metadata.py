@@ -125,6 +125,9 @@ def _metadata(plan: FloorPlan, meta: PlanMetadata, georeference: Georeference | 
         "time_stamp": meta.time_stamp,
         "generator": f"floorscan {floorscan_version()}",
         "georeference": None if georeference is None else georeference.as_dict(),
+        # a plan through the structure passes names its clutter and junctions
+        **({"n_clutter": len(plan.clutter), "n_junctions": len(plan.junctions)}
+           if len(plan.clutter) or len(plan.junctions) else {}),
     }  # fmt: skip
 
 

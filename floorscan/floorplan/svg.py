@@ -1,6 +1,7 @@
 """The SVG export of a floor plan (:func:`write_svg`; a browser): a plain SVG (no
 scripts) that scales to any window (``viewBox``, width and height 100 %), with a title,
-the wall polygons (walls of which one face was seen drawn lighter and dashed), axes, a
+the wall polygons (walls of which one face was seen drawn lighter and dashed), axes,
+the clutter (thin dashed lines under the walls, when the plan has some), a
 scale bar of a round length in metres, a legend and the map frame's x (right) and y
 (up) axes; the map's y is up, SVG's down: the drawing is flipped. With a georeference
 (:class:`~floorscan.floorplan.georeference.Georeference`), a north arrow. The file is
@@ -106,6 +107,14 @@ def _write_svg(
         f'<text id="subtitle" x="{m:.2f}" y="45" font-size="12" fill="#444444">{_xml(sub)}</text>',
         f'<g id="plan" transform="matrix({s:.10g} 0 0 {-s:.10g} {tx:.6f} {ty:.6f})">',
     ]
+    clutter = exports.plan.clutter
+    if len(clutter):  # under the walls: thin, dashed, light
+        out.append(f'<g id="clutter" stroke="#9aa5b1" stroke-width="{1.2 * px:.6g}" '
+                   f'stroke-dasharray="{4 * px:.6g} {3 * px:.6g}" fill="none">')
+        for cid, x0, y0, x1, y1, reason in zip(*(clutter[c].tolist() for c in ("clutter_id", "x0", "y0", "x1", "y1", "reason"))):
+            out.append(f'<line x1="{x0:.4f}" y1="{y0:.4f}" x2="{x1:.4f}" y2="{y1:.4f}"><title>clutter {cid}: '
+                       f"{_xml(str(reason))}</title></line>")
+        out.append("</g>")
     groups = (
         ("walls", paired, f'fill="#8c8c8c" stroke="#333333" stroke-width="{0.6 * px:.6g}"'),
         ("walls-one-face", ~paired, f'fill="#dddddd" stroke="#333333" stroke-width="{0.6 * px:.6g}" '
@@ -129,7 +138,7 @@ def _write_svg(
     out += ["</g>", "</g>"]
     out += _svg_scale_bar(s, m, height - 30)
     out += _svg_frame_axes(m + 250, height - 30, georeference)
-    out += _svg_legend(width - m - 270, height - 74)
+    out += _svg_legend(width - m - 270, height - 74, with_clutter=bool(len(clutter)))
     out.append("</svg>")
     with atomic_path(path) as tmp:
         tmp.write_text("\n".join(out) + "\n", encoding="utf-8")
@@ -180,8 +189,13 @@ def _svg_frame_axes(x: float, y: float, georeference: Georeference | None) -> li
     return out
 
 
-def _svg_legend(x: float, y: float) -> list[str]:
-    """The legend at ``(x, y)`` px: the three kinds of things the plan draws."""
+def _svg_legend(x: float, y: float, with_clutter: bool = False) -> list[str]:
+    """The legend at ``(x, y)`` px: the kinds of things the plan draws (clutter only
+    when the plan has some)."""
+    clutter = [
+        '<line x1="0" y1="60" x2="22" y2="60" stroke="#9aa5b1" stroke-width="1.2" stroke-dasharray="4 3"/>',
+        '<text x="30" y="64">clutter (furniture, not a wall)</text>',
+    ] if with_clutter else []  # fmt: skip
     return [
         f'<g id="legend" transform="translate({x:.2f} {y:.2f})" font-size="12">',
         '<rect x="0" y="0" width="22" height="10" fill="#8c8c8c" stroke="#333333" stroke-width="0.6"/>',
@@ -191,6 +205,7 @@ def _svg_legend(x: float, y: float) -> list[str]:
         '<text x="30" y="30">wall, one face seen (thickness assumed)</text>',
         '<line x1="0" y1="45" x2="22" y2="45" stroke="#cc0000" stroke-width="1"/>',
         '<text x="30" y="50">wall axis</text>',
+        *clutter,
         "</g>",
     ]
 
