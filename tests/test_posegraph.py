@@ -146,7 +146,7 @@ def test_edge_icp_in_worker_processes_gives_the_same_edges(recording, edges, mon
 
 def test_bad_input():
     poses = np.zeros((3, 4))
-    edges = pd.DataFrame([(0, 5, "sequential", 0.0, 0.0, 0.0, 1.0, 1.0, 0.0)], columns=EDGE_COLUMNS)
+    edges = pd.DataFrame([(0, 5, "sequential", 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 1.0, 1.0)], columns=EDGE_COLUMNS)
     with pytest.raises(ValueError, match="outside 0..2"):
         optimize_pose_graph(poses, edges)
     with pytest.raises(ValueError, match="priors"):
@@ -226,7 +226,7 @@ def test_long_path_is_sparse():
     truth = np.c_[20 * np.cos(s / 20), 20 * np.sin(s / 20), np.full(n, 0.4), yaw]
     rel = [se2_between(truth[k], truth[k + 1]) for k in range(n - 1)]
     edges = pd.DataFrame(
-        [(k, k + 1, "sequential", *r, 1.0, 1.0, 0.001) for k, r in enumerate(rel) if k not in (2999, 3000)],
+        [(k, k + 1, "sequential", *r, 1.0, 1.0, 0.001, 1.0, 1.0) for k, r in enumerate(rel) if k not in (2999, 3000)],
         columns=EDGE_COLUMNS,
     )  # scan 3000 has no edge
     priors = truth.copy()

@@ -35,7 +35,46 @@ from floorscan.register.prepare import plane_cloud
 log = logging.getLogger(__name__)
 
 #: Columns of the edge table of :func:`scan_pair_edges`.
-EDGE_COLUMNS = ["i", "j", "kind", "dx_m", "dy_m", "dyaw_rad", "fitness_prior", "fitness", "inlier_rmse_m"]
+EDGE_COLUMNS = [
+    "i", "j", "kind", "dx_m", "dy_m", "dyaw_rad", "fitness_prior", "fitness", "inlier_rmse_m",
+    "overlap_fitness_prior", "overlap_fitness",
+]  # fmt: skip
+
+#: Bearing bins of a scan's range profile (:func:`visible_to`), and the least number of
+#: the other scan's points it must be able to see for an overlap fitness.
+PROFILE_BINS, MIN_VISIBLE_POINTS = 360, 30
+
+
+def range_profile(points: np.ndarray, bins: int = PROFILE_BINS) -> np.ndarray:
+    """The farthest return of a scan per bearing bin, from its own origin: (bins,)
+    float64 metres, 0 where it has none. ``points`` (N, >=2) in the scan's frame."""
+    bearing = np.arctan2(points[:, 1], points[:, 0])
+    b = np.minimum(((bearing + math.pi) * (bins / (2 * math.pi))).astype(np.int64), bins - 1)
+    profile = np.zeros(bins)
+    np.maximum.at(profile, b, np.hypot(points[:, 0], points[:, 1]))
+    return profile
+
+
+def visible_to(profile: np.ndarray, points: np.ndarray, margin_m: float) -> np.ndarray:
+    """Which ``points`` (N, >=2, in the frame of the scan of ``profile``) that scan could
+    have seen: in a bearing bin where it has returns, not farther than its farthest
+    return there (plus ``margin_m``): not behind what it saw, not where it saw nothing."""
+    bins = len(profile)
+    bearing = np.arctan2(points[:, 1], points[:, 0])
+    b = np.minimum(((bearing + math.pi) * (bins / (2 * math.pi))).astype(np.int64), bins - 1)
+    reach = profile[b]
+    return (reach > 0) & (np.hypot(points[:, 0], points[:, 1]) <= reach + margin_m)
+
+
+def overlap_fitness(inlier: np.ndarray, visible: np.ndarray) -> float:
+    """Fitness over the points the reference scan could see: inliers among the
+    ``visible`` points over their number (NaN with fewer than
+    :data:`MIN_VISIBLE_POINTS`). The overlap-normalised fitness of Pomerleau et al.,
+    "Comparing ICP variants on real-world data sets", Autonomous Robots 2013: a scan
+    in an open hall, which sees few of the other scan's walls within range, is judged
+    on those it can see."""
+    n = int(visible.sum())
+    return float((inlier & visible).sum() / n) if n >= MIN_VISIBLE_POINTS else math.nan
 
 
 def candidate_pairs(
@@ -146,8 +185,11 @@ def scan_pair_edges(
         pose of scan ``j`` in scan ``i``'s frame; ``fitness_prior`` the inlier fraction
         under the initial poses (thesis Algorithm 3 step 3), ``fitness`` the inlier
         fraction and ``inlier_rmse_m`` the RMS inlier distance after ICP (fitness 0 and the initial
-        relative pose when ICP found no correspondences). :func:`optimize_pose_graph`
-        uses the pairs with ``fitness >= min_edge_fitness``.
+        relative pose when ICP found no correspondences); ``overlap_fitness_prior`` and
+        ``overlap_fitness`` the same over the points of ``j`` that ``i`` could see
+        (:func:`overlap_fitness`; NaN when it could see too few), which the keep test
+        reads. :func:`optimize_pose_graph` uses the pairs with ``fitness >=
+        min_edge_fitness``.
     """
     poses = np.asarray(poses, dtype=np.float64)
     if ahead is not None and (scan_ids is None or len(scan_ids) != len(clouds)):
@@ -173,7 +215,8 @@ def scan_pair_edges(
         log.info("edges: %d of %d pairs aligned while the scans were read", len(done), len(pairs))
     return pd.DataFrame(rows, columns=EDGE_COLUMNS).astype(
         {"i": np.int64, "j": np.int64, "kind": str, "dx_m": float, "dy_m": float,
-         "dyaw_rad": float, "fitness_prior": float, "fitness": float, "inlier_rmse_m": float}
+         "dyaw_rad": float, "fitness_prior": float, "fitness": float, "inlier_rmse_m": float,
+         "overlap_fitness_prior": float, "overlap_fitness": float}
     )
 
 
@@ -234,17 +277,19 @@ def pair_rows(pts, poses: np.ndarray, pairs, params: GraphParams, icp_kinds) -> 
     criteria = reg.ICPConvergenceCriteria(1e-6, 1e-6, int(params.icp_max_iterations))
     estimation = reg.TransformationEstimationPointToPoint()
     rows = []
+    profiles: dict[int, np.ndarray] = {}
     with one_openmp_thread():
         for i, j, kind in pairs:
             if i not in trees:
                 trees[i] = cKDTree(pts[i])
+                profiles[i] = range_profile(np.asarray(pts[i]))
             rel = se2_between(poses[i], poses[j])
-            d0, _ = trees[i].query(
-                transform_points(pts[j], rel[0], rel[1], 0.0, rel[2]), distance_upper_bound=params.inlier_m
-            )
+            src0 = transform_points(pts[j], rel[0], rel[1], 0.0, rel[2])
+            d0, _ = trees[i].query(src0, distance_upper_bound=params.inlier_m)
             fitness_prior = float(np.isfinite(d0).mean())
+            overlap_prior = overlap_fitness(np.isfinite(d0), visible_to(profiles[i], src0, params.inlier_m))
             if kind not in icp_kinds:
-                rows.append((i, j, kind, rel[0], rel[1], rel[2], fitness_prior, 1.0, 0.0))
+                rows.append((i, j, kind, rel[0], rel[1], rel[2], fitness_prior, 1.0, 0.0, overlap_prior, 1.0))
                 continue
             T = se2_matrix(*rel)
             ok = True
@@ -257,7 +302,7 @@ def pair_rows(pts, poses: np.ndarray, pairs, params: GraphParams, icp_kinds) -> 
                     break
                 T = np.asarray(res.transformation)
             if not ok:
-                rows.append((i, j, kind, rel[0], rel[1], rel[2], fitness_prior, 0.0, math.nan))
+                rows.append((i, j, kind, rel[0], rel[1], rel[2], fitness_prior, 0.0, math.nan, overlap_prior, 0.0))
                 continue
             pose = (float(T[0, 3]), float(T[1, 3]), 0.0, math.atan2(T[1, 0], T[0, 0]))
             src = transform_points(pts[j], pose[0], pose[1], 0.0, pose[3])
@@ -265,5 +310,6 @@ def pair_rows(pts, poses: np.ndarray, pairs, params: GraphParams, icp_kinds) -> 
             inl = np.isfinite(d)
             fitness = float(inl.mean())
             rmse = float(np.sqrt(np.mean(d[inl] ** 2))) if inl.any() else math.nan
-            rows.append((i, j, kind, pose[0], pose[1], pose[3], fitness_prior, fitness, rmse))
+            overlap = overlap_fitness(inl, visible_to(profiles[i], src, params.inlier_m))
+            rows.append((i, j, kind, pose[0], pose[1], pose[3], fitness_prior, fitness, rmse, overlap_prior, overlap))
     return rows

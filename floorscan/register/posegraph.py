@@ -74,7 +74,9 @@ def refine_poses(
         Optimised poses.
     fitness_prior : (N,) float64 ndarray
         Mean fitness of each scan under the initial poses over the pairs it was tried
-        in (NaN: none).
+        in (NaN: none): the overlap fitness (over the points its partners could see,
+        :func:`floorscan.register.edges.overlap_fitness`) where its pairs give one,
+        else the plain one.
     fitness : (N,) float64 ndarray
         The same after ICP.
     inlier_rmse_m : (N,) float64 ndarray
@@ -97,6 +99,11 @@ def refine_poses(
             return np.bincount(both, weights=v, minlength=n) / cnt
 
     fitness_prior, fitness = per_scan("fitness_prior"), per_scan("fitness")
+    # the keep test judges a scan on the points its partners could see (overlap
+    # fitness, floorscan.register.edges.overlap_fitness) where they could see enough
+    overlap_prior, overlap = _per_scan_nanmean(edges, "overlap_fitness_prior", n), _per_scan_nanmean(edges, "overlap_fitness", n)
+    fitness_prior = np.where(np.isfinite(overlap_prior), overlap_prior, fitness_prior)
+    fitness = np.where(np.isfinite(overlap), overlap, fitness)
     good = edges["fitness"].to_numpy() >= params.min_edge_fitness
     gi = np.r_[edges["i"].to_numpy()[good], edges["j"].to_numpy()[good]]
     gr = np.r_[edges["inlier_rmse_m"].to_numpy()[good], edges["inlier_rmse_m"].to_numpy()[good]]
@@ -104,6 +111,17 @@ def refine_poses(
     with np.errstate(invalid="ignore", divide="ignore"):
         rmse = np.bincount(gi, weights=gr, minlength=n) / gc
     return poses, fitness_prior, fitness, rmse, info
+
+
+def _per_scan_nanmean(edges, col: str, n: int) -> np.ndarray:
+    """Mean of ``col`` over the finite values of the pairs each of ``n`` scans is in
+    (NaN: none)."""
+    both = np.r_[edges["i"].to_numpy(), edges["j"].to_numpy()]
+    v = np.r_[edges[col].to_numpy(), edges[col].to_numpy()] if col in edges else np.full(len(both), np.nan)
+    ok = np.isfinite(v)
+    cnt = np.bincount(both[ok], minlength=n)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.bincount(both[ok], weights=v[ok], minlength=n) / cnt
 
 
 def register_graph(scans, clouds, sids, t, cfg: RegistrationConfig, out, priors: bool, ahead=None, pool=None) -> int:
