@@ -12,7 +12,8 @@ For each dataset it builds, from the same selected scans:
 
 and scores each with :func:`floorscan.score.answer.score_answer_plan`.
 
-``python -m benchmarks answer --datasets demo hallways intel [--scans all]``
+``python -m benchmarks answer --datasets demo hallways intel [--scans all] [--figure grid.png]``
+(``--figure``: the plans before and after, side by side, one row per dataset).
 """
 from __future__ import annotations
 
@@ -68,10 +69,12 @@ def main(argv=None):
     ap = argparse.ArgumentParser(prog="benchmarks answer")
     ap.add_argument("--datasets", nargs="+", default=["demo", "hallways", "hallways3d"])
     ap.add_argument("--scans", choices=["selected", "all"], default="selected")
+    ap.add_argument("--figure", help="write the before/after grid of the plans here (PNG)")
     args = ap.parse_args(argv)
-    rows = []
+    rows, drawn = [], {}
     for ds in args.datasets:
         plans, times = plans_of(ds, args.scans)
+        drawn[ds] = plans
         ref_path = f"results/{ds}/reference/occupancy.parquet"
         reference = Structure(read_grid(ref_path)) if os.path.exists(ref_path) else None
         truth_path = f"results/{ds}/sim/walls.geojson"
@@ -81,9 +84,43 @@ def main(argv=None):
         print(ds, {k: round(v, 2) for k, v in times.items()}, flush=True)
     table = pd.DataFrame(rows)
     cols = ["dataset", "plan"] + [c for c in COLUMNS if c in table.columns]
+    if args.figure:
+        plan_grid(drawn, args.figure)
     with pd.option_context("display.width", 250, "display.max_columns", 40, "display.float_format", "{:.3f}".format):
         print(table[cols].to_string(index=False))
     return table
+
+
+def plan_grid(plans: dict, path) -> None:
+    """Before (``per_scan``) and after (``map+structure``) of each dataset side by side:
+    walls black, clutter orange, junctions as dots."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    from floorscan.score.answer import plan_parts
+
+    names = list(plans)
+    fig, axes = plt.subplots(len(names), 2, figsize=(12, 5 * len(names)))
+    axes = np.atleast_2d(axes)
+    for row, ds in zip(axes, names):
+        for ax, (label, key) in zip(row, (("before: per-scan walls, merged", "per_scan"),
+                                         ("after: map walls, structure passes", "map+structure"))):
+            parts = plan_parts(plans[ds][key])
+            ax.add_collection(LineCollection(parts["clutter"].reshape(-1, 2, 2), colors="#f59e0b", linewidths=0.6))
+            ax.add_collection(LineCollection(parts["axes"].reshape(-1, 2, 2), colors="k", linewidths=0.9))
+            if len(parts["junctions"]):
+                ax.plot(parts["junctions"][:, 0], parts["junctions"][:, 1], ".", ms=2, color="#2563eb")
+            ax.autoscale()
+            ax.set_aspect("equal")
+            ax.set_xticks([])
+            ax.set_yticks([])
+            ax.set_title(f"{ds}: {label} ({len(parts['axes'])} walls)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=70)
+    plt.close(fig)
 
 
 if __name__ == "__main__":

@@ -113,7 +113,10 @@ def plan_outputs():
 def evaluation_outputs():
     """Inputs of `rule evaluation`: the evaluation grid, scores and figures of every
     target dataset."""
-    return [p.format(dataset=d) for d in target_datasets() for p in EVALUATION_OUTPUTS]
+    outputs = [p.format(dataset=d) for d in target_datasets() for p in EVALUATION_OUTPUTS]
+    # a plan drawn by people, for the datasets that name one (score_drawn, score.smk)
+    outputs += [p.format(dataset=d) for d in target_datasets() if DATASETS[d].get("reference") for p in drawn_outputs()]
+    return outputs
 
 
 def evaluate_by_default():
@@ -202,8 +205,9 @@ def walls_extract_config(wildcards):
 
 
 def dataset_config(wildcards):
-    """The dataset's own entry (format, path, options), without `params`."""
-    ds = {k: v for k, v in DATASETS[wildcards.dataset].items() if k != "params"}
+    """The dataset's own entry (format, path, options), without `params` and the drawn
+    `reference` (evaluation data, read by score_drawn)."""
+    ds = {k: v for k, v in DATASETS[wildcards.dataset].items() if k not in ("params", "reference")}
     ds["name"] = wildcards.dataset
     return ds
 

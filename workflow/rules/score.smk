@@ -463,3 +463,49 @@ rule answer_curve:
 
 
 EVALUATION_OUTPUTS.append("results/{dataset}/evaluation/answer_curve.csv")
+
+
+def drawn_reference(wildcards):
+    """The dataset's plan drawn by people (config datasets.<name>.reference)."""
+    return DATASETS[wildcards.dataset].get("reference") or {}
+
+
+def score_drawn_inputs(wildcards):
+    ds = wildcards.dataset
+    return {
+        "recommended": f"results/{ds}/floorplan.geojson",
+        "all_scans_map": f"results/{ds}/evaluation/floorplan/all_scans_map.geojson",
+        "reference": f"results/{ds}/reference/occupancy.parquet",
+        "drawn": drawn_reference(wildcards)["plan"],
+    }
+
+
+# A plan drawn by people (floorscan.score.drawn), for the datasets that name one:
+# aligned to the map frame, the recommended and the all-scan map plans scored against
+# it at 10 and 20 cm, and the overlay figure.
+rule score_drawn:
+    priority: PRIORITY["score_runs"]
+    input:
+        unpack(score_drawn_inputs),
+    output:
+        table="results/{dataset}/evaluation/drawn_scores.csv",
+        figure=report(
+            "results/{dataset}/figures/drawn_overlay.png",
+            caption="../report/drawn_overlay.rst",
+            category="Scoring",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "The plan drawn by people, aligned, with the floor plan"},
+        ),
+    params:
+        reference=drawn_reference,
+    log:
+        log_path("score_drawn"),
+    benchmark:
+        benchmark_path("score_drawn")
+    script:
+        "../../scripts/score_drawn.py"
+
+
+def drawn_outputs():
+    """score_drawn's files for the datasets that name a drawn plan (patterns keep {dataset})."""
+    return ["results/{dataset}/evaluation/drawn_scores.csv", "results/{dataset}/figures/drawn_overlay.png"]
