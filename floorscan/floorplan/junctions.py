@@ -138,6 +138,32 @@ def _junctions(seg: np.ndarray, params: StructureParams) -> np.ndarray:
     return np.column_stack([x[good], i[good], j[good], kind[good]]).astype(np.float64)
 
 
+def shorter_on_longer(seg: np.ndarray, i: np.ndarray, j: np.ndarray):
+    """The ends of the shorter of each pair of segments ``(i, j)`` in the frame of the
+    longer one's line.
+
+    Returns
+    -------
+    length : (F,) float64 ndarray
+        Every segment's length, metres.
+    a, b : (P,) int64 ndarray
+        The longer and the shorter of each pair.
+    t, off : (P, 2) float64 ndarray
+        The shorter's two ends along the longer's line from its start, and across it
+        (signed, left positive), metres.
+    """
+    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
+    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    a = np.where(length[i] >= length[j], i, j)
+    b = np.where(length[i] >= length[j], j, i)
+    u = (seg[a, 2:] - seg[a, :2]) / np.maximum(length[a], 1e-12)[:, None]
+    nrm = np.column_stack([-u[:, 1], u[:, 0]])
+    rel = [seg[b, k : k + 2] - seg[a, :2] for k in (0, 2)]
+    t = np.column_stack([np.einsum("ij,ij->i", r, u) for r in rel])
+    off = np.column_stack([np.einsum("ij,ij->i", r, nrm) for r in rel])
+    return length, a, b, t, off
+
+
 def merge_parallel_duplicates(axes: np.ndarray, thickness: np.ndarray, params: StructureParams = StructureParams(),
                               max_distance_m: float = 0.4):  # fmt: skip
     """One wall per wall: near-parallel walls that lie on each other, whatever their
@@ -176,18 +202,11 @@ def merge_parallel_duplicates(axes: np.ndarray, thickness: np.ndarray, params: S
     if n < 2:
         return axes.copy(), thickness.copy(), np.arange(n)
     i, j = _candidate_pairs(axes, max_distance_m, np.radians(params.duplicate_angle_deg))
-    length = np.hypot(axes[:, 2] - axes[:, 0], axes[:, 3] - axes[:, 1])
-    a = np.where(length[i] >= length[j], i, j)
-    b = np.where(length[i] >= length[j], j, i)
-    u = (axes[a, 2:] - axes[a, :2]) / np.maximum(length[a], 1e-12)[:, None]
-    nrm = np.column_stack([-u[:, 1], u[:, 0]])
-    ok = np.ones(len(a), dtype=bool)
-    for end in (0, 2):
-        rel = axes[b, end : end + 2] - axes[a, :2]
-        t = np.einsum("ij,ij->i", rel, u)
-        ok &= (np.abs(np.einsum("ij,ij->i", rel, nrm)) <= max_distance_m) & (t >= -max_distance_m) & (
-            t <= length[a] + max_distance_m
-        )
+    length, a, b, t, off = shorter_on_longer(axes, i, j)
+    ok = (
+        (np.abs(off) <= max_distance_m).all(axis=1) & (t >= -max_distance_m).all(axis=1)
+        & (t <= length[a, None] + max_distance_m).all(axis=1)
+    )  # fmt: skip
     graph = coo_matrix((np.ones(int(ok.sum())), (a[ok], b[ok])), shape=(n, n))
     n_groups, group = connected_components(graph, directed=False)
     merged = np.empty((n_groups, 4))

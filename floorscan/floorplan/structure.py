@@ -48,7 +48,7 @@ from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import _candidate_pairs
 from floorscan.floorplan.clutter import free_standing_objects, in_front_of_walls, on_objects
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
-from floorscan.floorplan.junctions import short_loose, snap_junctions
+from floorscan.floorplan.junctions import short_loose, shorter_on_longer, snap_junctions
 
 
 def border_and_support(seg: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams()):
@@ -134,20 +134,13 @@ def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, pa
     if nf < 2:
         return seg.copy(), w.copy(), np.arange(nf)
     i, j = _candidate_pairs(seg, params.join_max_gap_m, np.radians(params.join_angle_deg))
-    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    length, a, b, tb, off = shorter_on_longer(seg, i, j)  # along and across the longer face's line
     keep = np.zeros(len(i), dtype=bool)
     if len(i):
-        a = np.where(length[i] >= length[j], i, j)  # the longer face's line
-        b = np.where(length[i] >= length[j], j, i)
         u = (seg[a, 2:] - seg[a, :2]) / np.maximum(length[a], 1e-12)[:, None]
-        nrm = np.column_stack([-u[:, 1], u[:, 0]])
-        off0 = np.abs(np.einsum("ij,ij->i", seg[b, :2] - seg[a, :2], nrm))
-        off1 = np.abs(np.einsum("ij,ij->i", seg[b, 2:] - seg[a, :2], nrm))
-        tb0 = np.einsum("ij,ij->i", seg[b, :2] - seg[a, :2], u)
-        tb1 = np.einsum("ij,ij->i", seg[b, 2:] - seg[a, :2], u)
-        lo_b, hi_b = np.minimum(tb0, tb1), np.maximum(tb0, tb1)
+        lo_b, hi_b = tb.min(axis=1), tb.max(axis=1)
         gap = np.maximum(lo_b - length[a], -hi_b)
-        keep = (np.maximum(off0, off1) <= params.join_offset_m) & (gap <= params.join_max_gap_m)
+        keep = (np.abs(off).max(axis=1) <= params.join_offset_m) & (gap <= params.join_max_gap_m)
         free = passable(grid)
         step = grid.resolution_m / 2
         for k in np.flatnonzero(keep & (gap > step)).tolist():
