@@ -258,3 +258,21 @@ def test_a_per_dataset_override_of_a_file_grid_key_is_refused_at_start(tmp_path)
     assert "Traceback" not in out
     res = run({"walls": {"seed": 3}})
     assert res.returncode == 0, res.stderr[-2000:]
+
+
+def test_command_line_strings_reach_the_schema_with_their_types():
+    """Snakemake's --config gives strings (evaluate=true, poses={'max_gap_s': 0.7}): they
+    are read as YAML where the schema wants a boolean, a number, a list or a mapping; a
+    string the schema allows stays one; a string that is no such value is refused."""
+    from floorscan.core.config import ConfigError, validate_config
+
+    schemas = REPO / "workflow" / "schemas"
+    cfg = {"evaluate": "true", "datasets": {"x": {"path": "1.5", "seed": "3", "description": "0.7"}}}
+    validate_config(cfg, schemas / "config.schema.yaml")
+    assert cfg["evaluate"] is True and cfg["datasets"]["x"]["seed"] == 3
+    assert cfg["datasets"]["x"]["path"] == "1.5" and cfg["datasets"]["x"]["description"] == "0.7"
+    poses = {"max_gap_s": "0.7"}
+    validate_config(poses, schemas / "poses.schema.yaml", "poses")
+    assert poses["max_gap_s"] == 0.7
+    with pytest.raises(ConfigError, match="max_gap_s"):
+        validate_config({"max_gap_s": "soon"}, schemas / "poses.schema.yaml", "poses")

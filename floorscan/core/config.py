@@ -289,10 +289,17 @@ def validate_config(data: dict, schema_path: str | os.PathLike, section: str = "
         number that is NaN or infinite (YAML ``.nan``, ``.inf``), wherever it is: a JSON
         schema's ``type: number`` and bounds let them through (NaN compares false with
         every bound).
+
+    Strings where the schema wants a boolean, a number, a list or a mapping (Snakemake's
+    ``--config evaluate=true`` and ``poses={'max_gap_s': 0.7}`` arrive as strings) are
+    read as YAML first and taken when the result has a type the schema allows
+    (:func:`_typed_strings`); a string the schema allows stays a string.
     """
     import jsonschema
 
     validator = _schema_validator(os.fspath(schema_path))
+    schema = _load_schema(os.path.realpath(os.fspath(schema_path)))
+    _typed_strings(data, schema, schema)
     try:
         validator.validate(data)
     except jsonschema.ValidationError as e:
@@ -300,6 +307,49 @@ def validate_config(data: dict, schema_path: str | os.PathLike, section: str = "
     found = _non_finite(data)
     if found is not None:
         raise ConfigError(f"{_field(section, found[0])}: {found[1]!r}: expected a finite number, not NaN or infinity")
+    return data
+
+
+#: JSON schema types and the Python types of a YAML value that is one.
+_SCHEMA_TYPES = {"boolean": (bool,), "integer": (int,), "number": (int, float), "array": (list,), "object": (dict,)}
+
+
+def _typed_strings(data: Any, schema: dict, root: dict) -> Any:
+    """``data`` with its strings read as YAML where ``schema`` (resolved against ``root``'s
+    local ``$ref``) wants another type and the YAML value has it; mappings and lists
+    changed in place, the (possibly new) value returned."""
+    import yaml
+
+    while isinstance(schema, dict) and isinstance(schema.get("$ref"), str) and schema["$ref"].startswith("#/"):
+        node: Any = root
+        for part in schema["$ref"][2:].split("/"):
+            node = node.get(part, {}) if isinstance(node, dict) else {}
+        schema = node
+    if not isinstance(schema, dict):
+        return data
+    if isinstance(data, str):
+        types = schema.get("type")
+        types = [types] if isinstance(types, str) else list(types or [])
+        wanted = tuple(t for name in types if name != "string" for t in _SCHEMA_TYPES.get(name, ()))
+        if not wanted or "string" in types:
+            return data
+        try:
+            value = yaml.safe_load(data)
+        except yaml.YAMLError:
+            return data
+        if isinstance(value, bool) and bool not in wanted:
+            return data
+        return _typed_strings(value, schema, root) if isinstance(value, wanted) else data
+    if isinstance(data, dict):
+        props = schema.get("properties") or {}
+        extra = schema.get("additionalProperties")
+        for key in list(data):
+            sub = props.get(key, extra if isinstance(extra, dict) else None)
+            if sub is not None:
+                data[key] = _typed_strings(data[key], sub, root)
+    elif isinstance(data, list) and isinstance(schema.get("items"), dict):
+        for i, item in enumerate(data):
+            data[i] = _typed_strings(item, schema["items"], root)
     return data
 
 
