@@ -1,3 +1,4 @@
+import gzip
 import math
 import shutil
 
@@ -1027,3 +1028,18 @@ def test_pointcloud2_layout_checked(change, match):
         msg.data = np.r_[msg.data[: len(msg.data) - cut], np.zeros(extra, np.uint8)]
     with pytest.raises(InputError, match=rf"c.bag: PointCloud2 on '/cloud' {match}"):
         pointcloud2_xyz(msg, "c.bag", "/cloud")
+
+
+def test_carmen_log_with_a_byte_order_mark_keeps_its_first_scan(tmp_path):
+    """Issue 35: a log saved by an editor with a UTF-8 byte-order mark lost its first
+    scan (its line type read as unknown); the mark is dropped, plain or gzip."""
+    lines = [flaser_line([1.0] * 180, (1.0, 2.0, 0.5), 10.0), flaser_line([1.0] * 180, (1.5, 2.0, 0.5), 10.2)]
+    for name in ("bom.log", "bom.log.gz"):
+        log = write_carmen(tmp_path / name, lines)
+        raw = log.read_bytes() if name.endswith(".log") else gzip.decompress(log.read_bytes())
+        data = b"\xef\xbb\xbf" + raw
+        log.write_bytes(data if name.endswith(".log") else gzip.compress(data))
+        out = tmp_path / name.replace(".", "_")
+        out.mkdir()
+        index, _, _, poses = ingest({"format": "carmen", "path": str(log)}, out, {})
+        assert len(index) == 2 and poses["x"].tolist() == [1.0, 1.5]

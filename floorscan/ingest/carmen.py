@@ -32,11 +32,13 @@ from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
 
 
 def _open_text(path: Path):
+    """The log as text; a UTF-8 byte-order mark before its first line is dropped (an
+    editor's: read as ASCII it made the first line's type unknown, and its scan was lost)."""
     with open(path, "rb") as f:
         magic = f.read(2)
     if magic == b"\x1f\x8b":
-        return gzip.open(path, "rt", encoding="ascii", errors="replace")
-    return open(path, "rt", encoding="ascii", errors="replace")
+        return gzip.open(path, "rt", encoding="utf-8-sig", errors="replace")
+    return open(path, "rt", encoding="utf-8-sig", errors="replace")
 
 
 def parse_carmen(
