@@ -138,7 +138,7 @@ def _write_svg(
     out += ["</g>", "</g>"]
     out += _svg_scale_bar(s, m, height - 30)
     out += _svg_frame_axes(m + 250, height - 30, georeference)
-    out += _svg_legend(width - m - 270, height - 74, with_clutter=bool(len(clutter)))
+    out += _svg_legend(width - m - 270, height - (80 if len(clutter) else 74), with_clutter=bool(len(clutter)))
     out.append("</svg>")
     with atomic_path(path) as tmp:
         tmp.write_text("\n".join(out) + "\n", encoding="utf-8")
@@ -193,8 +193,8 @@ def _svg_legend(x: float, y: float, with_clutter: bool = False) -> list[str]:
     """The legend at ``(x, y)`` px: the kinds of things the plan draws (clutter only
     when the plan has some)."""
     clutter = [
-        '<line x1="0" y1="60" x2="22" y2="60" stroke="#9aa5b1" stroke-width="1.2" stroke-dasharray="4 3"/>',
-        '<text x="30" y="64">clutter (furniture, not a wall)</text>',
+        '<line x1="0" y1="64" x2="22" y2="64" stroke="#9aa5b1" stroke-width="1.2" stroke-dasharray="4 3"/>',
+        '<text x="30" y="69">clutter (furniture, not a wall)</text>',
     ] if with_clutter else []  # fmt: skip
     return [
         f'<g id="legend" transform="translate({x:.2f} {y:.2f})" font-size="12">',
