@@ -240,3 +240,15 @@ def test_exports_carry_clutter_and_junctions(room, tmp_path):
     logger = ifcopenshell.validate.json_logger()
     ifcopenshell.validate.validate(str(tmp_path / "a.ifc"), logger)
     assert logger.statements == []
+
+
+def test_answer_line_names_the_plan_counts(tmp_path):
+    import json
+
+    from floorscan.figures.answer import plan_counts
+
+    path = tmp_path / "floorplan.geojson"
+    path.write_text(json.dumps({"type": "FeatureCollection", "features": [],
+                                "floorscan": {"n_walls": 12, "n_junctions": 9, "n_clutter": 3}}))
+    assert plan_counts(path) == " (12 walls, 9 junctions, 3 clutter pieces)"
+    assert plan_counts(tmp_path / "missing.geojson") == ""

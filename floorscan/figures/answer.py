@@ -23,7 +23,7 @@ def answer_lines(datasets, results: str | os.PathLike = "results") -> list[str]:
         lines.append(f"{ds}: {s['k']} of {s['n_kept']} kept scans ({s['n_recorded']} recorded), {s['ordering']}")
         plan = root / ds / "floorplan.svg"
         if plan.is_file():
-            lines.append(f"  floor plan:         {root / ds}/floorplan.{{geojson,svg,dxf,ifc}}")
+            lines.append(f"  floor plan:         {root / ds}/floorplan.{{geojson,svg,dxf,ifc}}{plan_counts(root / ds / 'floorplan.geojson')}")
         lines.append(f"  scan list:          {s['scans']}")
         lines.append(
             f"  reduced recording:  {rec['path']} ({format_bytes(rec['bytes_out'])} of {format_bytes(rec['bytes_in'])}, "
@@ -37,6 +37,18 @@ def answer_lines(datasets, results: str | os.PathLike = "results") -> list[str]:
     if lines and report.is_file():
         lines.append(f"report: {report}")
     return lines
+
+
+def plan_counts(geojson: str | os.PathLike) -> str:
+    """`` (172 walls, 109 junctions, 105 clutter pieces)`` from a plan's GeoJSON
+    metadata (``floorscan`` member); empty when it cannot be read."""
+    try:
+        meta = json.loads(Path(geojson).read_text()).get("floorscan") or {}
+    except (OSError, ValueError):
+        return ""
+    parts = [f"{meta['n_walls']} walls"] if "n_walls" in meta else []
+    parts += [f"{meta[k]} {label}" for k, label in (("n_junctions", "junctions"), ("n_clutter", "clutter pieces")) if k in meta]
+    return f" ({', '.join(parts)})" if parts else ""
 
 
 def format_bytes(n: int) -> str:
