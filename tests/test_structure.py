@@ -230,6 +230,11 @@ def test_exports_carry_clutter_and_junctions(room, tmp_path):
     kinds = [feat["properties"]["kind"] for feat in doc["features"]]
     assert kinds.count("clutter") == len(plan.clutter) >= 2 and kinds.count("junction") == len(plan.junctions) >= 4
     assert doc["floorscan"]["n_clutter"] == len(plan.clutter)
+    # the scorer's reader takes the faces and counts the walls, not clutter or junctions
+    from floorscan.score.geojson import read_floorplan
+
+    faces, n_walls = read_floorplan(tmp_path / "a.geojson")
+    assert len(faces) == len(plan.faces) and n_walls == len(plan.walls)
     dxf = ezdxf.readfile(tmp_path / "a.dxf")
     assert len(dxf.modelspace().query('LINE[layer=="CLUTTER"]')) == len(plan.clutter)
     assert not dxf.audit().has_errors
