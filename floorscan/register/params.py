@@ -69,9 +69,9 @@ class GraphParams:
         The keep test (:mod:`floorscan.register.agreement`): a pair agrees with the
         registered poses when its ICP relative pose is within this translation
         (metres) and yaw (radians) of theirs.
-    min_agreement_fitness : float
-        ... and it is supported (has structure to agree on) when its overlap fitness
-        after ICP is at least this.
+    agreement_fitness_ratio : float
+        ... and it counts (has structure to agree on) when its overlap fitness after
+        ICP is at least this times the median over the recording's pairs.
     edge_sigma_m, edge_sigma_rad : float
         Standard deviation of an ICP edge's translation (metres) and yaw (radians).
     prior_sigma_m, prior_sigma_rad : float
@@ -99,7 +99,7 @@ class GraphParams:
     min_edge_fitness: float
     agreement_m: float
     agreement_rad: float
-    min_agreement_fitness: float
+    agreement_fitness_ratio: float
     edge_sigma_m: float
     edge_sigma_rad: float
     prior_sigma_m: float

@@ -36,7 +36,7 @@ import numpy as np
 import pandas as pd
 
 from floorscan.core.geometry import wrap_angle
-from floorscan.register.agreement import agreement_counts, keep_test
+from floorscan.register.agreement import agreement_counts, keep_test, support_floor
 from floorscan.register.edges import scan_pair_edges
 from floorscan.register.params import GraphParams, RegistrationConfig
 from floorscan.register.solver import optimize_pose_graph
@@ -212,8 +212,8 @@ def register_graph(scans, clouds, sids, t, cfg: RegistrationConfig, out, priors:
         by_fitness = (fp >= cfg.min_prior_fitness) & (fi >= cfg.min_icp_fitness)
     log.info(
         "keep test: %d of %d scans confirmed by their pairs' ICP (%d of them below the fitness thresholds), "
-        "%d contradicted (icp_disagrees), %d judged by fitness alone",
+        "%d contradicted (icp_disagrees), %d judged by fitness alone; a pair counts from fitness %.3f",
         int(confirmed.sum()), n, int((confirmed & ~by_fitness).sum()), int((why == "icp_disagrees").sum()),
-        int((~confirmed & (why != "icp_disagrees")).sum()),
+        int((~confirmed & (why != "icp_disagrees")).sum()), support_floor(edges, params),
     )
     return int(info["n_isolated"])

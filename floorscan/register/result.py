@@ -67,7 +67,7 @@ REASON_THRESHOLD = {
     "low_prior_fitness": "min_prior_fitness",
     "low_icp_fitness": "min_icp_fitness",
     "icp_failed": "icp_max_correspondence_m",
-    "icp_disagrees": "graph.agreement_m / graph.agreement_rad / graph.min_agreement_fitness",
+    "icp_disagrees": "graph.agreement_m / graph.agreement_rad / graph.agreement_fitness_ratio",
     "duplicate": "(duplicate scans: no threshold)",
     "no_pose": "(poses stage: no valid pose)",
 }
