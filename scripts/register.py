@@ -30,7 +30,7 @@ if __name__ == "__main__":
         write_table(result.table, smk.output.registration, schema=REGISTRATION, metadata=out_meta)
         log.info(
             "kept %d of %d scans (%d sampled); dropped by reason %s; fraction of the checked scans each "
-            "fitness threshold drops %s; median correction %.3f m, %.3f rad",
+            "keep test drops %s; median correction %.3f m, %.3f rad",
             s["n_kept"], s["n_scans"], s["n_sampled"], s["drops"], s["fraction_of_checked"],
             s["median_correction_m"], s["median_correction_rad"],
         )

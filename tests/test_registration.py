@@ -464,6 +464,26 @@ def test_streamed_registration_matches_the_in_memory_one(tmp_path, z_beams):
     np.testing.assert_allclose(f.lo, xy.min(axis=0), atol=1e-6)
 
 
+def test_registered_map_figure_sums_cells_into_blocks(tmp_path):
+    """A map wider than the figure is drawn on blocks of cells, their counts summed
+    (a one-point cell of a far wall stays visible instead of being skipped)."""
+    from floorscan.figures.registration import coarsen_counts, plot_registered_map
+
+    h = np.arange(35, dtype=float).reshape(5, 7)
+    ex, ey = np.arange(8) * 0.05, 1.0 + np.arange(6) * 0.05
+    ex2, ey2, h2, factor = coarsen_counts(ex, ey, h, 3)
+    assert factor == 3 and h2.shape == (2, 3)
+    assert h2[0, 0] == h[:3, :3].sum() and h2[1, 2] == h[3:, 6:].sum() and h2.sum() == h.sum()
+    np.testing.assert_allclose(ex2, [0.0, 0.15, 0.3, 0.45])
+    np.testing.assert_allclose(ey2, [1.0, 1.15, 1.3])
+    assert coarsen_counts(ex, ey, h, 7)[3] == 1
+    # a 150 m wide map of 5 cm cells: drawn, on 30 cm blocks
+    xy = np.c_[np.linspace(0, 150, 2000), np.zeros(2000)]
+    table = pd.DataFrame({"kept": [True], "x_m": [0.0], "y_m": [0.0]})
+    plot_registered_map(pd.DataFrame({"x": xy[:, 0], "y": xy[:, 1]}), table, tmp_path / "map.png")
+    assert (tmp_path / "map.png").stat().st_size > 10_000
+
+
 def test_edges_aligned_while_reading_are_the_edges(tmp_path, caplog):
     """With edge workers the pose graph's pairs are aligned while the scans are read,
     for the scans the index and poses say will be sampled; a scan the points drop

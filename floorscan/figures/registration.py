@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 
 import numpy as np
@@ -116,6 +117,27 @@ def density_of_file(path: str | os.PathLike, cell_m: float = 0.05) -> DensityRas
     return raster
 
 
+#: Most cells across the registered map figure (about its axes' width in pixels).
+FIGURE_CELLS = 500
+
+
+def coarsen_counts(ex: np.ndarray, ey: np.ndarray, h: np.ndarray, max_cells: int):
+    """Counts ``h`` (ny, nx) on cell edges ``ex`` (nx+1,), ``ey`` (ny+1,) summed over
+    square blocks of ``factor`` cells so that neither side exceeds ``max_cells``:
+    ``(ex, ey, h, factor)``; the blocks at the far edges may be partial."""
+    ny, nx = h.shape
+    factor = max(1, math.ceil(max(nx, ny) / max_cells))
+    if factor == 1:
+        return ex, ey, h, 1
+    py, px = -ny % factor, -nx % factor
+    padded = np.pad(h, ((0, py), (0, px)))
+    out = padded.reshape((ny + py) // factor, factor, (nx + px) // factor, factor).sum(axis=(1, 3))
+    step = ex[1] - ex[0]
+    ex2 = ex[0] + np.arange(out.shape[1] + 1) * step * factor
+    ey2 = ey[0] + np.arange(out.shape[0] + 1) * step * factor
+    return ex2, ey2, out, factor
+
+
 def plot_registered_map(
     registered: "pd.DataFrame | DensityRaster",
     registration: pd.DataFrame,
@@ -168,9 +190,14 @@ def plot_registered_map(
     loc = kept[["x_m", "y_m"]].to_numpy(np.float64)
     fig, ax = plt.subplots(figsize=(8, 8), dpi=120)
     ex, ey, h = raster.grid()
+    # a map wider than the figure's pixels would lose its thin walls when drawn, one
+    # cell per pixel picked: cells are summed into blocks, at most FIGURE_CELLS across
+    ex, ey, h, factor = coarsen_counts(ex, ey, h, FIGURE_CELLS)
+    cell_m = cell_m * factor
     if h.size and h.max() > 0:
         h = np.ma.masked_equal(h, 0)
-        im = ax.pcolormesh(ex, ey, h, cmap="Greys", norm=LogNorm(vmin=1, vmax=max(h.max(), 2)), shading="flat", rasterized=True)
+        # vmin below 1: a cell of one point (a sparse scanner's far wall) is grey, not white
+        im = ax.pcolormesh(ex, ey, h, cmap="Greys", norm=LogNorm(vmin=0.5, vmax=max(h.max(), 2)), shading="flat", rasterized=True)
         fig.colorbar(im, ax=ax, shrink=0.6, label=f"points per {cell_m * 100:.0f} cm cell")
     if len(loc):
         counts = np.array([len(n) for n in cKDTree(loc).query_ball_point(loc, density_radius_m)])

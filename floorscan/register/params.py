@@ -65,6 +65,13 @@ class GraphParams:
         A source point is an inlier when its nearest target point is this close, metres.
     min_edge_fitness : float
         Inlier fraction an edge needs after ICP.
+    agreement_m, agreement_rad : float
+        The keep test (:mod:`floorscan.register.agreement`): a pair agrees with the
+        registered poses when its ICP relative pose is within this translation
+        (metres) and yaw (radians) of theirs.
+    agreement_fitness_ratio : float
+        ... and it counts (has structure to agree on) when its overlap fitness after
+        ICP is at least this times the median over the recording's pairs.
     edge_sigma_m, edge_sigma_rad : float
         Standard deviation of an ICP edge's translation (metres) and yaw (radians).
     prior_sigma_m, prior_sigma_rad : float
@@ -90,6 +97,9 @@ class GraphParams:
     max_height_gap_m: float
     inlier_m: float
     min_edge_fitness: float
+    agreement_m: float
+    agreement_rad: float
+    agreement_fitness_ratio: float
     edge_sigma_m: float
     edge_sigma_rad: float
     prior_sigma_m: float

@@ -18,6 +18,8 @@ The parts, each in its module:
   target scan after ICP; loop edges are "uncertain" in Open3D's sense;
 - :mod:`floorscan.register.edge_stream`: the same ICP while the scans are read;
 - :mod:`floorscan.register.solver`: the planar optimiser with robust loop edges;
+- :mod:`floorscan.register.agreement`: the keep test (does ICP agree with each scan's
+  registered pose? fitness thresholds only where it cannot tell);
 - here, :func:`refine_poses` (edges, then optimisation, per-scan fitness) and
   :func:`register_graph`, the register stage's strategy. Usage::
 
@@ -31,8 +33,10 @@ from concurrent.futures import Executor
 from typing import Sequence
 
 import numpy as np
+import pandas as pd
 
 from floorscan.core.geometry import wrap_angle
+from floorscan.register.agreement import agreement_counts, keep_test, support_floor
 from floorscan.register.edges import scan_pair_edges
 from floorscan.register.params import GraphParams, RegistrationConfig
 from floorscan.register.solver import optimize_pose_graph
@@ -85,11 +89,38 @@ def refine_poses(
         :func:`floorscan.register.solver.optimize_pose_graph`'s, plus ``n_pairs``
         (pairs tried).
     """
+    poses, edges, info = graph_poses(clouds, initial, t_s, priors, params, icp_kinds, ahead, scan_ids, pool)
+    fitness_prior, fitness, rmse = scan_fitness(edges, len(poses), params)
+    return poses, fitness_prior, fitness, rmse, info
+
+
+def graph_poses(
+    clouds: Sequence[np.ndarray],
+    initial: np.ndarray,
+    t_s: np.ndarray,
+    priors: np.ndarray | None,
+    params: GraphParams = GraphParams(),
+    icp_kinds: tuple[str, ...] = ("sequential", "loop"),
+    ahead=None,
+    scan_ids: Sequence[int] | None = None,
+    pool: Executor | None = None,
+) -> tuple[np.ndarray, pd.DataFrame, dict]:
+    """The edges and the optimised poses of :func:`refine_poses` (same parameters):
+    ``(poses, edges, info)``, ``edges`` the table of
+    :func:`floorscan.register.edges.scan_pair_edges` (the keep test reads it,
+    :mod:`floorscan.register.agreement`)."""
     initial = np.asarray(initial, dtype=np.float64)
-    n = len(initial)
     edges = scan_pair_edges(clouds, initial, t_s, params, icp_kinds, ahead, scan_ids, pool)
     poses, info = optimize_pose_graph(initial, edges, priors, params)
     info["n_pairs"] = int(len(edges))
+    return poses, edges, info
+
+
+def scan_fitness(edges: pd.DataFrame, n: int, params: GraphParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per scan of ``n``: mean fitness over its pairs under the initial poses and after
+    ICP (the overlap fitness where its pairs give one, else the plain one; NaN: no
+    pair), and the mean inlier RMSE over its edges in the graph (metres; NaN: none).
+    See :func:`refine_poses`."""
     both = np.r_[edges["i"].to_numpy(), edges["j"].to_numpy()]
     cnt = np.bincount(both, minlength=n)
 
@@ -99,8 +130,8 @@ def refine_poses(
             return np.bincount(both, weights=v, minlength=n) / cnt
 
     fitness_prior, fitness = per_scan("fitness_prior"), per_scan("fitness")
-    # the keep test judges a scan on the points its partners could see (overlap
-    # fitness, floorscan.register.edges.overlap_fitness) where they could see enough
+    # judged on the points its partners could see (overlap fitness,
+    # floorscan.register.edges.overlap_fitness) where they could see enough
     overlap_prior, overlap = _per_scan_nanmean(edges, "overlap_fitness_prior", n), _per_scan_nanmean(edges, "overlap_fitness", n)
     fitness_prior = np.where(np.isfinite(overlap_prior), overlap_prior, fitness_prior)
     fitness = np.where(np.isfinite(overlap), overlap, fitness)
@@ -110,7 +141,7 @@ def refine_poses(
     gc = np.bincount(gi, minlength=n)
     with np.errstate(invalid="ignore", divide="ignore"):
         rmse = np.bincount(gi, weights=gr, minlength=n) / gc
-    return poses, fitness_prior, fitness, rmse, info
+    return fitness_prior, fitness, rmse
 
 
 def _per_scan_nanmean(edges, col: str, n: int) -> np.ndarray:
@@ -133,11 +164,14 @@ def register_graph(scans, clouds, sids, t, cfg: RegistrationConfig, out, priors:
     the localizer's poses are absolute constraints, otherwise the first scan is held
     (odometry mode: the chain's own motion is the sequential edges and ICP only closes
     loops, which then remove the chain's drift). Thesis Algorithm 3
-    steps 3 and 5 become the drops: a scan whose mean fitness over its pairs is below
-    ``min_prior_fitness`` under the initial poses (``low_prior_fitness``) or below
-    ``min_icp_fitness`` after ICP (``low_icp_fitness``) is not kept. The optimisation
-    runs once, with those scans in it: their pairs below ``graph.min_edge_fitness``
-    are not edges, so a scan that fits nothing does not pull the others.
+    steps 3 and 5 become the keep test of :mod:`floorscan.register.agreement`: a scan
+    is kept when most of its pairs' ICP agrees with its registered pose, dropped
+    (``icp_disagrees``) when most of the pairs with structure put it elsewhere, and
+    otherwise judged by its mean fitness over its pairs: below ``min_prior_fitness``
+    under the initial poses (``low_prior_fitness``) or below ``min_icp_fitness`` after
+    ICP (``low_icp_fitness``) it is not kept. The optimisation runs once, with the
+    dropped scans in it: their pairs below ``graph.min_edge_fitness`` are not edges,
+    so a scan that fits nothing does not pull the others.
 
     ``clouds`` is a :class:`floorscan.register.prepare.ScanStore`, ``sids`` and ``t``
     the scan ids and times (ns) of the scan index, ``out`` the per-scan output arrays
@@ -155,7 +189,7 @@ def register_graph(scans, clouds, sids, t, cfg: RegistrationConfig, out, priors:
     t_s = (t[scans] - t[scans[0]]) * 1e-9
     cl = [clouds.graph(int(sids[i])) for i in scans]
     kinds = ("sequential", "loop") if priors else ("loop",)
-    poses, fp, fi, rm, info = refine_poses(
+    poses, edges, info = graph_poses(
         cl, init, t_s, init if priors else None, params, icp_kinds=kinds, ahead=ahead, scan_ids=sids[scans],
         pool=pool,
     )
@@ -163,15 +197,23 @@ def register_graph(scans, clouds, sids, t, cfg: RegistrationConfig, out, priors:
     log.info("pose graph: %d scans, %s", n, info)
     if not priors:
         return int(info["n_isolated"])
+    fp, fi, rm = scan_fitness(edges, n, params)
     fit_prior[scans] = fp
     fit_icp[scans] = fi
     rmse[scans] = rm
     corr[scans, 0] = poses[:, 0] - init[:, 0]
     corr[scans, 1] = poses[:, 1] - init[:, 1]
     corr[scans, 2] = wrap_angle(poses[:, 3] - init[:, 3])
-    low_prior = fp < cfg.min_prior_fitness
-    low_icp = ~low_prior & (fi < cfg.min_icp_fitness)
-    reasons[scans[low_prior]] = "low_prior_fitness"
-    reasons[scans[low_icp]] = "low_icp_fitness"
-    kept[scans] = ~(low_prior | low_icp)
+    n_agree, n_supported, n_pairs = agreement_counts(edges, poses, n, params)
+    why, confirmed = keep_test(fp, fi, n_agree, n_supported, n_pairs, cfg)
+    reasons[scans] = why
+    kept[scans] = why == ""
+    with np.errstate(invalid="ignore"):
+        by_fitness = (fp >= cfg.min_prior_fitness) & (fi >= cfg.min_icp_fitness)
+    log.info(
+        "keep test: %d of %d scans confirmed by their pairs' ICP (%d of them below the fitness thresholds), "
+        "%d contradicted (icp_disagrees), %d judged by fitness alone; a pair counts from fitness %.3f",
+        int(confirmed.sum()), n, int((confirmed & ~by_fitness).sum()), int((why == "icp_disagrees").sum()),
+        int((~confirmed & (why != "icp_disagrees")).sum()), support_floor(edges, params),
+    )
     return int(info["n_isolated"])

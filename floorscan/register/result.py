@@ -14,6 +14,10 @@ without a reference, and the first scan in odometry mode):
 - ``low_prior_fitness`` / ``low_icp_fitness``: Algorithm 3 steps 4 and 6 (odometry
   mode: no prior check; ``fitness_prior`` is then the fitness at the constant-velocity
   prediction);
+- ``icp_disagrees``: ``reference: graph``, most of the scan's pairs with structure
+  (ICP's relative pose) put it elsewhere than its registered pose
+  (:mod:`floorscan.register.agreement`; there a scan whose pairs agree with its pose is
+  kept whatever its fitness);
 - ``icp_failed``: ICP found fewer than 3 correspondences.
 
 A new reason gets its config key in :data:`REASON_THRESHOLD`, so that the "every scan
@@ -63,9 +67,14 @@ REASON_THRESHOLD = {
     "low_prior_fitness": "min_prior_fitness",
     "low_icp_fitness": "min_icp_fitness",
     "icp_failed": "icp_max_correspondence_m",
+    "icp_disagrees": "graph.agreement_m / graph.agreement_rad / graph.agreement_fitness_ratio",
     "duplicate": "(duplicate scans: no threshold)",
     "no_pose": "(poses stage: no valid pose)",
 }
+
+
+#: Drop reasons of sampled scans (registration's own checks, after sampling).
+SAMPLED_DROPS = ("low_prior_fitness", "low_icp_fitness", "icp_disagrees", "icp_failed")
 
 
 class RegistrationError(ValueError):
@@ -112,9 +121,10 @@ def summarize(table: pd.DataFrame, cfg: RegistrationConfig | None = None) -> dic
     counts = dict(sorted(Counter(reasons).items()))
     drops = dict(sorted(Counter(reasons[~table["kept"].to_numpy(bool)]).items()))
     n = len(table)
-    sampled = int(table["kept"].sum() + reasons.isin(["low_prior_fitness", "low_icp_fitness", "icp_failed"]).sum())
+    sampled = int(table["kept"].sum() + reasons.isin(list(SAMPLED_DROPS)).sum())
     n_prior = int((reasons == "low_prior_fitness").sum())
     n_icp = int((reasons == "low_icp_fitness").sum())
+    n_disagree = int((reasons == "icp_disagrees").sum())
     checked_prior = int(table["fitness_prior"].notna().sum())
     checked_icp = int(table["fitness_icp"].notna().sum())
     registered = table["kept"] & table["fitness_icp"].notna()
@@ -131,6 +141,7 @@ def summarize(table: pd.DataFrame, cfg: RegistrationConfig | None = None) -> dic
         "fraction_of_checked": {
             "low_prior_fitness": n_prior / checked_prior if checked_prior else 0.0,
             "low_icp_fitness": n_icp / checked_icp if checked_icp else 0.0,
+            "icp_disagrees": n_disagree / checked_prior if checked_prior else 0.0,
         },
         "median_fitness_prior": float(table["fitness_prior"].median()) if checked_prior else math.nan,
         "median_fitness_icp": float(table["fitness_icp"].median()) if checked_icp else math.nan,
@@ -168,7 +179,15 @@ def worst_drop(failures: Mapping[str, int], cfg: RegistrationConfig) -> tuple[st
         return "", ""
     worst = max(failures, key=lambda k: failures[k])
     parts = REASON_THRESHOLD.get(worst, worst).split(" / ")
-    return worst, " / ".join(f"register.{p}={getattr(cfg, p)}" if hasattr(cfg, p) else p for p in parts)
+    return worst, " / ".join(_option(cfg, p) for p in parts)
+
+
+def _option(cfg: RegistrationConfig, key: str) -> str:
+    """``register.<key>=<value>`` (``graph.<name>`` read from the graph section);
+    ``key`` itself when it is no option."""
+    section, _, name = key.rpartition(".")
+    obj = cfg.graph_params if section == "graph" else (cfg if not section else None)
+    return f"register.{key}={getattr(obj, name)}" if obj is not None and hasattr(obj, name) else key
 
 
 def judge(table: pd.DataFrame, clouds, cfg: RegistrationConfig, summary: dict):
