@@ -121,38 +121,24 @@ def scan_fitness(edges: pd.DataFrame, n: int, params: GraphParams) -> tuple[np.n
     ICP (the overlap fitness where its pairs give one, else the plain one; NaN: no
     pair), and the mean inlier RMSE over its edges in the graph (metres; NaN: none).
     See :func:`refine_poses`."""
-    both = np.r_[edges["i"].to_numpy(), edges["j"].to_numpy()]
-    cnt = np.bincount(both, minlength=n)
-
-    def per_scan(col: str) -> np.ndarray:
-        v = np.r_[edges[col].to_numpy(), edges[col].to_numpy()]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return np.bincount(both, weights=v, minlength=n) / cnt
-
-    fitness_prior, fitness = per_scan("fitness_prior"), per_scan("fitness")
+    fitness_prior, fitness = _pair_mean(edges, "fitness_prior", n), _pair_mean(edges, "fitness", n)
     # judged on the points its partners could see (overlap fitness,
     # floorscan.register.edges.overlap_fitness) where they could see enough
-    overlap_prior, overlap = _per_scan_nanmean(edges, "overlap_fitness_prior", n), _per_scan_nanmean(edges, "overlap_fitness", n)
+    overlap_prior, overlap = _pair_mean(edges, "overlap_fitness_prior", n), _pair_mean(edges, "overlap_fitness", n)
     fitness_prior = np.where(np.isfinite(overlap_prior), overlap_prior, fitness_prior)
     fitness = np.where(np.isfinite(overlap), overlap, fitness)
-    good = edges["fitness"].to_numpy() >= params.min_edge_fitness
-    gi = np.r_[edges["i"].to_numpy()[good], edges["j"].to_numpy()[good]]
-    gr = np.r_[edges["inlier_rmse_m"].to_numpy()[good], edges["inlier_rmse_m"].to_numpy()[good]]
-    gc = np.bincount(gi, minlength=n)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        rmse = np.bincount(gi, weights=gr, minlength=n) / gc
+    rmse = _pair_mean(edges, "inlier_rmse_m", n, edges["fitness"].to_numpy() >= params.min_edge_fitness)
     return fitness_prior, fitness, rmse
 
 
-def _per_scan_nanmean(edges, col: str, n: int) -> np.ndarray:
-    """Mean of ``col`` over the finite values of the pairs each of ``n`` scans is in
-    (NaN: none)."""
+def _pair_mean(edges: pd.DataFrame, col: str, n: int, use: np.ndarray | None = None) -> np.ndarray:
+    """Per scan of ``n``: the mean of ``col`` over the finite values of the pairs it is
+    in (only the pairs where ``use`` is True, when given); NaN: none."""
     both = np.r_[edges["i"].to_numpy(), edges["j"].to_numpy()]
     v = np.r_[edges[col].to_numpy(), edges[col].to_numpy()] if col in edges else np.full(len(both), np.nan)
-    ok = np.isfinite(v)
-    cnt = np.bincount(both[ok], minlength=n)
+    ok = np.isfinite(v) if use is None else np.isfinite(v) & np.r_[use, use]
     with np.errstate(invalid="ignore", divide="ignore"):
-        return np.bincount(both[ok], weights=v[ok], minlength=n) / cnt
+        return np.bincount(both[ok], weights=v[ok], minlength=n) / np.bincount(both[ok], minlength=n)
 
 
 def register_graph(scans, clouds, sids, t, cfg: RegistrationConfig, out, priors: bool, ahead=None, pool=None) -> int:
