@@ -188,6 +188,22 @@ def ros2_bag(tmp_path_factory) -> Path:
     return write_bag(tmp_path_factory.mktemp("bags2") / "tiny_ros2", ros2=True)
 
 
+def cast_rays(segments: np.ndarray, origin, angles: np.ndarray) -> np.ndarray:
+    """The range of each ray from ``origin`` (x, y) at ``angles`` (radians, map frame) to
+    the nearest of ``segments`` ((S, 2, 2) or (S, 4), metres); inf where it hits none.
+    The tests' 2D ray caster (the simulator's is floorscan.sim.raycast, in 3D)."""
+    seg = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
+    d = np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    a, e = seg[:, :2], seg[:, 2:] - seg[:, :2]
+    w = a[None] - np.asarray(origin, dtype=np.float64)[:2]
+    den = d[:, None, 0] * e[None, :, 1] - d[:, None, 1] * e[None, :, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (w[..., 0] * e[None, :, 1] - w[..., 1] * e[None, :, 0]) / den
+        u = (w[..., 0] * d[:, None, 1] - w[..., 1] * d[:, None, 0]) / den
+    t = np.where((np.abs(den) > 1e-12) & (t > 0) & (u >= 0) & (u <= 1), t, np.inf)
+    return t.min(axis=1) if len(seg) else np.full(len(d), np.inf)
+
+
 def write_carmen(path: Path, lines: list[str]) -> Path:
     data = "\n".join(lines) + "\n"
     if path.suffix == ".gz":

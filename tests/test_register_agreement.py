@@ -8,6 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from conftest import cast_rays
 from floorscan.register.agreement import agreement_counts, keep_test, pair_residuals, support_floor
 from floorscan.register.params import GraphParams, RegistrationConfig
 from floorscan.register.pipeline import register_scans
@@ -86,15 +87,7 @@ def _ray_cast(segs, pose, rng, n_beams=181, max_range=50.0, noise=0.02):
     (N, 3) points in the scanner frame, beams without a return within range dropped."""
     x, y, yaw = pose
     ang = yaw - math.pi / 2 + np.arange(n_beams) * math.pi / (n_beams - 1)
-    d = np.stack([np.cos(ang), np.sin(ang)], axis=1)
-    a, e = segs[:, :2], segs[:, 2:] - segs[:, :2]
-    w = a[None] - np.array([x, y])
-    den = d[:, None, 0] * e[None, :, 1] - d[:, None, 1] * e[None, :, 0]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (w[..., 0] * e[None, :, 1] - w[..., 1] * e[None, :, 0]) / den
-        u = (w[..., 0] * d[:, None, 1] - w[..., 1] * d[:, None, 0]) / den
-    t = np.where((np.abs(den) > 1e-12) & (t > 0) & (u >= 0) & (u <= 1), t, np.inf)
-    r = t.min(axis=1)
+    r = cast_rays(segs, (x, y), ang)
     ok = r < max_range
     r = r + rng.normal(0.0, noise, len(r))
     return np.stack([r * np.cos(ang - yaw), r * np.sin(ang - yaw), np.zeros(n_beams)], axis=1)[ok]

@@ -13,6 +13,7 @@ import pandas as pd
 import pytest
 import yaml
 
+from conftest import cast_rays
 from floorscan.core.geometry import transform_points
 from floorscan.register.icp import fitness_against, icp_planar
 from floorscan.register.params import RegistrationConfig
@@ -40,17 +41,7 @@ def ray_cast(pose, n_beams=360, fov=2 * np.pi, max_range=20.0, noise=0.0, rng=No
     elevation (radians) for 3D scans (walls are vertical; floor and ceiling not modelled)."""
     x, y, yaw = pose
     ang = yaw - fov / 2 + np.arange(n_beams) * fov / n_beams
-    d = np.stack([np.cos(ang), np.sin(ang)], axis=1)
-    a, b = SEGMENTS[:, 0], SEGMENTS[:, 1]
-    e = b - a
-    o = np.array([x, y])
-    den = d[:, None, 0] * e[None, :, 1] - d[:, None, 1] * e[None, :, 0]
-    w = a[None] - o
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (w[..., 0] * e[None, :, 1] - w[..., 1] * e[None, :, 0]) / den
-        u = (w[..., 0] * d[:, None, 1] - w[..., 1] * d[:, None, 0]) / den
-    t = np.where((np.abs(den) > 1e-12) & (t > 0) & (u >= 0) & (u <= 1), t, np.inf)
-    r = t.min(axis=1)
+    r = cast_rays(SEGMENTS, (x, y), ang)
     ok = r < max_range
     if noise and rng is not None:
         r = r + rng.normal(0, noise, len(r))

@@ -10,6 +10,7 @@ import pandas as pd
 import pytest
 import shapely
 
+from conftest import cast_rays
 from floorscan.core.occupancy import OccupancyParams, occupancy_grid
 from floorscan.floorplan.params import FloorplanParams
 from floorscan.floorplan.plan import build_floorplan, plan_faces
@@ -29,27 +30,22 @@ CABINET = shapely.box(3.0, 4.3, 4.0, 4.6).exterior
 POSES = [(1.5, 2.5), (4.0, 1.2), (6.5, 3.8), (2.45, -0.8), (3.0, 2.0), (6.8, 1.0)]
 
 
-def _scan(origin, rng, geoms, n_rays=720, noise=0.005):
-    lines = shapely.MultiLineString([list(g.coords) for g in geoms])
+def _scan(origin, rng, segments, n_rays=720, noise=0.005):
+    """A 360-degree 2D scan from ``origin``: its returns in the map frame (cast_rays)."""
     o = np.asarray(origin, dtype=np.float64)
-    pts = []
-    for a in np.linspace(-np.pi, np.pi, n_rays, endpoint=False):
-        ray = shapely.LineString([o, o + 20 * np.array([np.cos(a), np.sin(a)])])
-        hit = ray.intersection(lines)
-        if hit.is_empty:
-            continue
-        coords = shapely.get_coordinates(hit)
-        d = np.hypot(*(coords - o).T)
-        r = d.min() + rng.normal(0, noise)
-        pts.append(o + r * np.array([np.cos(a), np.sin(a)]))
-    return np.array(pts)
+    a = np.linspace(-np.pi, np.pi, n_rays, endpoint=False)
+    r = cast_rays(segments, o, a)
+    hit = np.isfinite(r)
+    r = r[hit] + rng.normal(0, noise, int(hit.sum()))
+    return o + r[:, None] * np.column_stack([np.cos(a[hit]), np.sin(a[hit])])
 
 
 @pytest.fixture(scope="module")
 def room():
     rng = np.random.default_rng(3)
-    geoms = [shapely.LineString(s) for s in ROOM + CORRIDOR] + [TABLE, CABINET]
-    scans = [(np.array(p, dtype=np.float64), _scan(p, rng, geoms)) for p in POSES]
+    rings = [np.asarray(g.coords) for g in (TABLE, CABINET)]
+    segments = np.array([[*a, *b] for a, b in ROOM + CORRIDOR] + [[*r[k], *r[k + 1]] for r in rings for k in range(len(r) - 1)])
+    scans = [(np.array(p, dtype=np.float64), _scan(p, rng, segments)) for p in POSES]
     pts = np.concatenate([s for _, s in scans])
     sid = np.concatenate([np.full(len(s), i) for i, (_, s) in enumerate(scans)])
     grid = occupancy_grid(scans, OccupancyParams())
