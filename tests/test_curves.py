@@ -10,7 +10,7 @@ import pytest
 
 from floorscan.score import curves as C
 from floorscan.score.against_reference import Structure
-from floorscan.score.reference import occupancy_grid
+from floorscan.core.occupancy import occupancy_grid
 from test_reference import WALLS, _scans
 
 

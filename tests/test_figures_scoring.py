@@ -275,7 +275,7 @@ def test_reference_map_shows_one_cell_walls_of_a_large_building(tmp_path):
     single-scan cells."""
     import matplotlib.image as mpimg
 
-    from floorscan.score.reference import OccupancyGrid, OccupancyParams
+    from floorscan.core.occupancy import OccupancyGrid, OccupancyParams
 
     h, w = 1600, 1600  # 80 m x 80 m of 5 cm cells
     hits, misses = np.zeros((h, w), np.int32), np.zeros((h, w), np.int32)

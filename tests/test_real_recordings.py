@@ -104,7 +104,7 @@ def test_the_plan_against_the_reference_map_sees_a_wall_through_free_space(real_
     plan's length while completeness stays."""
     from floorscan.score.geojson import floorplan_faces
     from floorscan.score.against_reference import plan_against_reference
-    from floorscan.score.reference import read_grid
+    from floorscan.core.occupancy import read_grid
 
     out = real_run / name
     grid = read_grid(out / "reference" / "occupancy.parquet")

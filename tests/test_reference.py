@@ -15,7 +15,7 @@ from floorscan.score.against_reference import (
     reference_against_ground_truth,
     within_bound,
 )
-from floorscan.score.reference import (
+from floorscan.core.occupancy import (
     PGM_FREE,
     PGM_OCCUPIED,
     PGM_UNKNOWN,

@@ -2,7 +2,7 @@
 points (thesis Figs. 5.11, 5.12).
 
 - :func:`plot_reference_map`: the occupancy grid of all kept scans
-  (:class:`floorscan.score.reference.OccupancyGrid`), its structure, single-scan, free
+  (:class:`floorscan.core.occupancy.OccupancyGrid`), its structure, single-scan, free
   and unknown cells, optionally a floor plan's faces over it;
 - :func:`plot_walls_over_points`: wall segments over a subsample of the registered
   points (:func:`subsample_points`, seeded, cut to the walls' height band on 3D data).
@@ -23,7 +23,7 @@ from floorscan.score.segments import as_segments  # noqa: E402
 
 
 def plot_reference_map(grid, out, title: str = "", faces=None) -> None:
-    """The reference map (:class:`floorscan.score.reference.OccupancyGrid`): free
+    """The reference map (:class:`floorscan.core.occupancy.OccupancyGrid`): free
     cells white, unknown grey, structure black, occupied cells hit by a single scan
     red; optionally a floor plan's faces ((F, 4) segments, metres) in blue over it."""
     rgb = np.full(grid.shape + (3,), 0.80)

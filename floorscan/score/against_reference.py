@@ -34,7 +34,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from floorscan.core.geometry import sample_segments, samples_per_segment, segment_weights
-from floorscan.score.reference import OccupancyGrid
+from floorscan.core.occupancy import OccupancyGrid
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -113,29 +113,22 @@ def true_corners(truth: dict, near_observed_m: float = 0.4) -> np.ndarray:
     """The observed corners of a synthetic building, (C, 2) metres: the ends of the true
     axes that lie on another axis (L and T junctions), kept when an observed face passes
     within ``near_observed_m``."""
+    from floorscan.score.nearest import nearest_distances
+
     axes = truth["axis"]
     pts = []
     for k, a in enumerate(axes):
-        for e in (a[:2], a[2:]):
-            others = np.delete(axes, k, axis=0)
-            if len(others) == 0:
-                continue
-            d = _point_segment_distance(e, others)
-            if d.min() <= 0.02:
-                pts.append(e)
+        others = np.delete(axes, k, axis=0)
+        if len(others):
+            ends = a.reshape(2, 2)
+            pts += list(ends[nearest_distances(ends, others) <= 0.02])
     if not pts:
         return np.empty((0, 2))
     pts = np.unique(np.round(np.array(pts), 3), axis=0)
     obs = truth["observed_face"]
-    keep = [p for p in pts if len(obs) and _point_segment_distance(p, obs).min() <= near_observed_m]
-    return np.array(keep, dtype=np.float64).reshape(-1, 2)
-
-
-def _point_segment_distance(p: np.ndarray, seg: np.ndarray) -> np.ndarray:
-    d = seg[:, 2:] - seg[:, :2]
-    l2 = np.maximum((d * d).sum(axis=1), 1e-12)
-    t = np.clip(((p - seg[:, :2]) * d).sum(axis=1) / l2, 0, 1)
-    return np.hypot(*(seg[:, :2] + t[:, None] * d - p).T)
+    if not len(obs):
+        return np.empty((0, 2))
+    return pts[nearest_distances(pts, obs) <= near_observed_m].astype(np.float64)
 
 
 def read_truth(path) -> dict:

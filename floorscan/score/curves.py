@@ -377,7 +377,7 @@ def score_curves(
     from floorscan.floorplan.merge import FirstMergePass
     from floorscan.floorplan.params import params_from_config
     from floorscan.floorplan.plan import plan_faces, segment_arrays
-    from floorscan.score.reference import read_grid
+    from floorscan.core.occupancy import read_grid
 
     structure = Structure(read_grid(reference_path))
     fp_params = params_from_config(floorplan_cfg or {})

@@ -36,7 +36,7 @@ class ScoreParams:
         The figures' k, orderings, extractor, point budget, height band (metres) and
         seed of the point subsample.
     reference : mapping
-        The reference map's section (:class:`floorscan.score.reference.OccupancyParams`).
+        The reference map's section (:class:`floorscan.core.occupancy.OccupancyParams`).
     curve_step_fraction : float
         Step of the quality-vs-k curves, a fraction of the kept scans.
     random_seeds : int

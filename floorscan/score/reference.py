@@ -5,7 +5,7 @@
 Usage::
 
     grid = reference_of_recording("registered.parquet", registration, walls_config)
-    write_map_server(grid, "map.pgm", "map.yaml")
+    floorscan.core.occupancy.write_map_server(grid, "map.pgm", "map.yaml")
     structure_xy = grid.cell_centres(grid.structure())
 """
 
@@ -16,24 +16,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from floorscan.core.occupancy import (  # noqa: F401  (the score stage's names for them)
-    PGM_OCCUPIED,
-    PGM_FREE,
-    PGM_UNKNOWN,
-    logit,
-    OccupancyParams,
-    OccupancyGrid,
-    occupancy_grid,
-    _sample_cells,
-    _distinct,
-    map_image,
-    write_map_server,
-    grid_table,
-    grid_metadata,
-    write_grid,
-    read_grid,
-    grid_from_table,
-)
+from floorscan.core.occupancy import OccupancyGrid, OccupancyParams, occupancy_grid
 
 
 def reference_of_recording(

@@ -168,7 +168,7 @@ def write_run_scores(
     from floorscan.score.against_reference import score_plans
     from floorscan.score.geojson import read_floorplan
     from floorscan.score.ground_truth import load_recall_references, load_references
-    from floorscan.score.reference import read_grid
+    from floorscan.core.occupancy import read_grid
     from floorscan.score.runs import SCORE_TIME, score_dataset
 
     kind = reference["kind"]
