@@ -63,16 +63,11 @@ def free_standing_objects(
     syy = np.bincount(lab, dy * dy, n + 1)
     sxy = np.bincount(lab, dx * dy, n + 1)
     phi = 0.5 * np.arctan2(2 * sxy, sxx - syy)
-    u = dx * np.cos(phi[lab]) + dy * np.sin(phi[lab])
-    v = -dx * np.sin(phi[lab]) + dy * np.cos(phi[lab])
-    length = np.zeros(n + 1)
-    width = np.zeros(n + 1)
-    for arr, out in ((u, length), (v, width)):
-        hi = np.full(n + 1, -np.inf)
-        lo = np.full(n + 1, np.inf)
-        np.maximum.at(hi, lab, arr)
-        np.minimum.at(lo, lab, arr)
-        out[:] = np.where(np.isfinite(hi), hi - lo + r, 0.0)
+    u = dx * np.cos(phi[lab]) + dy * np.sin(phi[lab])  # along the principal axis
+    hi, lo = np.full(n + 1, -np.inf), np.full(n + 1, np.inf)
+    np.maximum.at(hi, lab, u)
+    np.minimum.at(lo, lab, u)
+    length = np.where(np.isfinite(hi), hi - lo + r, 0.0)
     mean_width = cnt * r * r / np.maximum(length, r)  # area over length: stray returns aside
     wall_like = (mean_width < 2 * params.side_offset_m + 2 * r) & (length >= params.min_wall_length_m)
     is_object = surrounded & (length < params.clutter_max_length_m) & ~wall_like
