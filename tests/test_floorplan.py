@@ -141,11 +141,12 @@ def test_schema_defaults_agree_with_floorplan_params():
     defaults = {k: v.get("default") for k, v in schema.items()}  # georeference: none, unset
     # the workflow's keys: the recommended plan's extractor, the evaluation grid's formats
     assert {k: defaults.pop(k) for k in WORKFLOW_KEYS} == {"extractor": "map", "evaluation_formats": ["geojson", "svg"]}
-    # the structure passes' section: its own dataclass, filled from the schema's defaults
-    assert defaults.pop("structure") == {}
-    structure = schema["structure"]["properties"]
-    assert {k: v["default"] for k, v in structure.items()} == vars(FloorplanParams().structure)
-    fields = [f for f in FloorplanParams.__dataclass_fields__ if f != "structure"]
+    # the structure passes' and the rooms' sections: their own dataclasses, filled from the schema's defaults
+    for section in ("structure", "rooms"):
+        assert defaults.pop(section) == {}
+        properties = schema[section]["properties"]
+        assert {k: v["default"] for k, v in properties.items()} == vars(getattr(FloorplanParams(), section))
+    fields = [f for f in FloorplanParams.__dataclass_fields__ if f not in ("structure", "rooms")]
     assert defaults == {f: getattr(FloorplanParams(), f) for f in fields}
     assert params_from_config({"extractor": "cluster_ransac", "evaluation_formats": ["geojson"]}) == FloorplanParams()
 

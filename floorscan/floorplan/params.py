@@ -15,6 +15,7 @@ from typing import Any, Mapping
 from floorscan.core.config import schema_defaults
 from floorscan.floorplan.georeference import Georeference, as_georeference
 from floorscan.floorplan.free_space import StructureParams
+from floorscan.floorplan.room_space import RoomParams
 
 
 #: DXF versions :func:`write_dxf` writes (R2010 the default: R12 has no units header).
@@ -57,6 +58,10 @@ class FloorplanParams:
         ``heading_deg`` is converted); with one the GeoJSON coordinates are WGS84
         longitude and latitude, the SVG gets a north arrow and the IFC site its
         reference latitude, longitude and true north. None: map metres.
+    structure : ~floorscan.floorplan.free_space.StructureParams
+        The structure passes (config ``floorplan.structure``).
+    rooms : ~floorscan.floorplan.rooms.RoomParams
+        The rooms and doors (config ``floorplan.rooms``).
     """
 
     merge_angle_deg: float
@@ -72,6 +77,7 @@ class FloorplanParams:
     min_length_m: float
     dxf_version: str
     structure: StructureParams
+    rooms: RoomParams
     georeference: Georeference | None = None
 
     def __post_init__(self):
@@ -81,6 +87,10 @@ class FloorplanParams:
             object.__setattr__(
                 self, "structure", dataclass_from_mapping(StructureParams, self.structure, "floorplan.structure")
             )
+        if not isinstance(self.rooms, RoomParams):  # the config's mapping
+            from floorscan.core.config import dataclass_from_mapping
+
+            object.__setattr__(self, "rooms", dataclass_from_mapping(RoomParams, self.rooms, "floorplan.rooms"))
         if self.georeference is not None:  # a config mapping -> Georeference (checked)
             object.__setattr__(self, "georeference", as_georeference(self.georeference))
         if self.dxf_version not in DXF_VERSIONS:

@@ -39,10 +39,17 @@ FACE_COLUMNS = ["face_id", "wall_id", "x0", "y0", "x1", "y1", "length_m", "n_seg
 CLUTTER_COLUMNS = ["clutter_id", "x0", "y0", "x1", "y1", "length_m", "reason"]
 #: Columns of :attr:`FloorPlan.junctions`; ``kind`` is ``L``, ``T`` or ``X``.
 JUNCTION_COLUMNS = ["x", "y", "kind", "wall_a", "wall_b"]
+#: Columns of :attr:`FloorPlan.rooms`; ``kind`` is ``room``, ``corridor`` or ``space``,
+#: ``polygon`` a shapely Polygon (holes allowed) in map metres.
+ROOM_COLUMNS = ["room_id", "name", "kind", "area_m2", "perimeter_m", "polygon"]
+#: Columns of :attr:`FloorPlan.doors`: the opening as a segment in its wall's line.
+DOOR_COLUMNS = ["door_id", "x0", "y0", "x1", "y1", "width_m", "wall_id", "room_a", "room_b"]
+
+_TEXT_COLUMNS = ("reason", "kind", "name", "polygon")
 
 
 def _empty(columns: list[str]) -> pd.DataFrame:
-    return pd.DataFrame({c: pd.Series(dtype=object if c in ("reason", "kind") else np.float64) for c in columns})
+    return pd.DataFrame({c: pd.Series(dtype=object if c in _TEXT_COLUMNS else np.float64) for c in columns})
 
 
 @dataclass
@@ -63,12 +70,25 @@ class FloorPlan:
     junctions : pandas.DataFrame
         Where walls meet (:data:`JUNCTION_COLUMNS`: the point, metres, ``L``, ``T`` or
         ``X``, the two walls' ids); empty without the structure passes.
+    rooms : pandas.DataFrame
+        The rooms (:data:`ROOM_COLUMNS`): ``room_id``, ``name`` (``"Room 1"``,
+        ``"Corridor 1"``, ``"Space 1"``), ``kind`` (``room``, ``corridor``, or
+        ``space`` for free space that no walls close into rooms), ``area_m2``,
+        ``perimeter_m`` and ``polygon`` (a valid shapely Polygon, holes allowed, map
+        metres); from :mod:`floorscan.floorplan.rooms`, empty without the free space.
+    doors : pandas.DataFrame
+        The doors (:data:`DOOR_COLUMNS`): the opening ``x0, y0, x1, y1`` (metres) in
+        the line of the wall ``wall_id`` (-1 when no plan wall lies on it), its
+        ``width_m`` and the two rooms it joins (``room_a < room_b``); from
+        :mod:`floorscan.floorplan.doors`.
     """
 
     walls: pd.DataFrame
     faces: pd.DataFrame
     clutter: pd.DataFrame = field(default_factory=lambda: _empty(CLUTTER_COLUMNS))
     junctions: pd.DataFrame = field(default_factory=lambda: _empty(JUNCTION_COLUMNS))
+    rooms: pd.DataFrame = field(default_factory=lambda: _empty(ROOM_COLUMNS))
+    doors: pd.DataFrame = field(default_factory=lambda: _empty(DOOR_COLUMNS))
 
     def footprints(self):
         """Wall polygons (shapely), the axis buffered by half the thickness, flat ends."""
@@ -178,8 +198,9 @@ def build_floorplan(
         the structure passes (:func:`floorscan.floorplan.structure.structure_passes`:
         clutter out, collinear faces joined across gaps the free space does not pass
         through, junctions), a one-faced wall's axis lies half its thickness behind
-        its face (away from the free space), and the wall axes are snapped into
-        junctions (:attr:`FloorPlan.junctions`).
+        its face (away from the free space), the wall axes are snapped into
+        junctions (:attr:`FloorPlan.junctions`), and the free space is cut into rooms
+        at its doors (:func:`floorscan.floorplan.rooms.plan_rooms`).
 
     Returns
     -------
@@ -238,6 +259,11 @@ def build_floorplan(
             axes, thick, wall_of_face = pair_faces(faces, face_w, params)
             axes, thick, wall_of_face = _one_wall_per_wall(axes, thick, wall_of_face, params)
             axes, junctions = _wall_junctions(axes, thick, wall_of_face, side, params)
+    rooms, doors = _empty(ROOM_COLUMNS), _empty(DOOR_COLUMNS)
+    if grid is not None and len(axes):
+        from floorscan.floorplan.rooms import plan_rooms
+
+        rooms, doors = plan_rooms(axes, thick, grid, params.rooms)
     nw = len(axes)
     faces_df = pd.DataFrame(
         {
@@ -266,7 +292,10 @@ def build_floorplan(
         "%d segments -> %d faces -> %d walls (%d with both faces)",
         len(seg), len(faces), nw, int(walls["paired"].sum()),
     )
-    return FloorPlan(walls=walls[WALL_COLUMNS], faces=faces_df[FACE_COLUMNS], clutter=clutter, junctions=junctions)
+    return FloorPlan(
+        walls=walls[WALL_COLUMNS], faces=faces_df[FACE_COLUMNS], clutter=clutter, junctions=junctions,
+        rooms=rooms[ROOM_COLUMNS], doors=doors[DOOR_COLUMNS],
+    )
 
 
 def _one_wall_per_wall(axes, thick, wall_of_face, params: FloorplanParams):

@@ -1,0 +1,235 @@
+"""Doors of a floor plan: openings in the line of a wall, 0.6 to 2.0 m wide
+(``floorplan.rooms.door_min_m``, ``door_max_m``), through which the free space of
+two rooms meets (:mod:`floorscan.floorplan.rooms`).
+
+Two ways to find one, both in the wall's line, as a plan drawn by people shows a door:
+
+- :func:`wall_gaps`: the gap between the facing ends of two collinear walls (their
+  directions within ``door_angle_deg``, each end within half the thicker wall plus
+  ``jamb_m`` of the other's line) when the scans saw free space in it and on both of
+  its sides. The rooms are cut along these before they are segmented, so a room seen
+  only through its door (a fan of rays) ends at the door.
+- :func:`contact_door`: where two regions of the segmentation meet: the contact is a
+  door when it is ``door_min_m`` to ``door_max_m`` wide, both of its ends lie within
+  ``jamb_m`` of a wall (the jambs; one may be the side of a wall, a door beside a
+  corner), it lies in the line of a wall whose end is within ``jamb_m`` of one of its
+  ends, and the space on both sides is wider than it by ``door_narrowing_m`` (a
+  corridor cut where a partition meets it is not a door). Anywhere else the two
+  regions are one room.
+
+A door is kept only when the rooms on its two sides differ (:func:`doors_table`).
+Source: the door criterion of ipa_room_segmentation's Voronoi segmentation (Bormann et
+al., ICRA 2016: a room boundary is a narrow passage between two wall points), here
+restricted to openings in a plan wall's line.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+import pandas as pd
+
+from floorscan.floorplan.room_space import RoomParams, RoomRaster
+
+
+def _units(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    d = axes[:, 2:] - axes[:, :2]
+    length = np.hypot(d[:, 0], d[:, 1])
+    return d / np.maximum(length, 1e-12)[:, None], length
+
+
+def wall_gaps(axes: np.ndarray, thickness: np.ndarray, params: RoomParams) -> list[tuple[np.ndarray, np.ndarray, int]]:
+    """Door candidates between the facing ends of collinear walls.
+
+    Parameters
+    ----------
+    axes : (N, 4) float ndarray
+        Wall axes ``x0, y0, x1, y1``, metres.
+    thickness : (N,) float ndarray
+        Metres.
+    params : RoomParams
+
+    Returns
+    -------
+    list of (p, q, wall)
+        The opening from ``p`` to ``q`` ((2,) metres, on the line of wall ``wall``,
+        the longer of the two), ``door_min_m <= |q - p| <= door_max_m``.
+    """
+    axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
+    u, length = _units(axes)
+    cos_max = np.cos(np.radians(params.door_angle_deg))
+    ends = axes.reshape(-1, 2, 2)
+    out = []
+    for i in range(len(axes)):
+        for j in range(i + 1, len(axes)):
+            if abs(float(u[i] @ u[j])) < cos_max:
+                continue
+            a, b = (i, j) if length[i] >= length[j] else (j, i)
+            n = np.array([-u[a, 1], u[a, 0]])
+            off = max(thickness[a], thickness[b]) / 2 + params.line_offset_m
+            if np.abs((ends[b] - ends[a, 0]) @ n).max() > off:
+                continue
+            ta = (ends[a] - ends[a, 0]) @ u[a]
+            tb = (ends[b] - ends[a, 0]) @ u[a]
+            if tb.min() >= ta.max():  # a's end ka faces b's end kb
+                ka, kb = int(np.argmax(ta)), int(np.argmin(tb))
+                gap = (ta.max(), tb.min())
+            elif tb.max() <= ta.min():
+                ka, kb = int(np.argmin(ta)), int(np.argmax(tb))
+                gap = (tb.max(), ta.min())
+            else:
+                continue
+            if junction_end(axes, thickness, a, ka) or junction_end(axes, thickness, b, kb):
+                continue  # an end in an L or T junction is a corner, not a jamb
+            width = gap[1] - gap[0]
+            if params.door_min_m <= width <= params.door_max_m:
+                p = ends[a, 0] + u[a] * gap[0]
+                q = ends[a, 0] + u[a] * gap[1]
+                out.append((p, q, a))
+    return out
+
+
+def passes_through(raster: RoomRaster, p: np.ndarray, q: np.ndarray, side_m: float = 0.3) -> bool:
+    """Whether the space holds the middle of the opening ``p``-``q`` ((2,) metres) and
+    points ``side_m`` to each side of it."""
+    mid = (p + q) / 2
+    d = q - p
+    n = np.array([-d[1], d[0]]) / max(float(np.hypot(*d)), 1e-12)
+    pts = np.array([mid, mid + side_m * n, mid - side_m * n])
+    c = np.floor((pts - raster.origin_xy) / raster.resolution_m).astype(np.int64)
+    h, w = raster.space.shape
+    if ((c < 0) | (c[:, ::-1] >= (h, w))).any():
+        return False
+    return bool(raster.space[c[:, 1], c[:, 0]].all())
+
+
+def barrier_cells(raster: RoomRaster, p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rows and columns of an 8-connected line of cells from ``p`` to ``q`` ((2,)
+    metres), one cell longer at each end (it closes the opening to the 4-connected
+    space)."""
+    from skimage.draw import line
+
+    d = q - p
+    e = d / max(float(np.hypot(*d)), 1e-12) * raster.resolution_m
+    a = np.floor((p - e - raster.origin_xy) / raster.resolution_m).astype(np.int64)
+    b = np.floor((q + e - raster.origin_xy) / raster.resolution_m).astype(np.int64)
+    rr, cc = line(a[1], a[0], b[1], b[0])
+    h, w = raster.space.shape
+    ok = (rr >= 0) & (cc >= 0) & (rr < h) & (cc < w)
+    return rr[ok], cc[ok]
+
+
+def contacts(labels: np.ndarray) -> dict[tuple[int, int], np.ndarray]:
+    """Where regions touch: for each pair ``(a, b)``, ``a < b``, the (K, 2) row, column
+    midpoints of the 4-neighbour cell pairs of ``a`` and ``b`` (in cell units)."""
+    out: dict[tuple[int, int], list] = {}
+    for axis in (0, 1):
+        a = labels[:-1, :] if axis == 0 else labels[:, :-1]
+        b = labels[1:, :] if axis == 0 else labels[:, 1:]
+        m = (a != b) & (a > 0) & (b > 0)
+        if not m.any():
+            continue
+        rr, cc = np.nonzero(m)
+        mid = np.column_stack([rr + (0.5 if axis == 0 else 0.0), cc + (0.5 if axis == 1 else 0.0)])
+        lo, hi = np.minimum(a[m], b[m]), np.maximum(a[m], b[m])
+        key = lo.astype(np.int64) * (int(labels.max()) + 1) + hi
+        order = np.argsort(key, kind="stable")
+        key, mid, lo, hi = key[order], mid[order], lo[order], hi[order]
+        starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
+        for s, e in zip(starts, np.r_[starts[1:], len(key)]):
+            out.setdefault((int(lo[s]), int(hi[s])), []).append(mid[s:e])
+    return {k: np.concatenate(v) for k, v in out.items()}
+
+
+def contact_segment(raster: RoomRaster, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The contact of two regions as a segment ``p``, ``q`` ((2,) metres): the extent of
+    its cell midpoints ((K, 2) row, column) along their principal direction, half a
+    cell longer at each end."""
+    xy = (cells[:, ::-1] + 0.5) * raster.resolution_m + raster.origin_xy
+    c = xy.mean(axis=0)
+    if len(xy) > 1:
+        _, _, vt = np.linalg.svd(xy - c, full_matrices=False)
+        v = vt[0]
+    else:
+        v = np.array([1.0, 0.0])
+    t = (xy - c) @ v
+    h = raster.resolution_m / 2
+    return c + v * (t.min() - h), c + v * (t.max() + h)
+
+
+def junction_end(axes: np.ndarray, thickness: np.ndarray, i: int, k: int, tol_m: float = 0.05) -> bool:
+    """Whether end ``k`` (0, 1) of wall ``i`` of ``axes`` ((N, 4) metres, ``thickness``
+    (N,) metres) meets another wall: lies within the two half thicknesses and ``tol_m``
+    of its axis (an L or T junction)."""
+    others = np.delete(np.asarray(axes, dtype=np.float64).reshape(-1, 4), i, axis=0)
+    if not len(others):
+        return False
+    end = axes[i, 2 * k : 2 * k + 2]
+    gap = _point_segment_distance(end, others) - np.delete(thickness, i) / 2
+    return bool(gap.min() <= thickness[i] / 2 + tol_m)
+
+
+def near_walls(p: np.ndarray, axes: np.ndarray, thickness: np.ndarray, within_m: float) -> bool:
+    """Whether the point ``p`` ((2,) metres) lies within ``within_m`` of a wall's
+    footprint (axes (N, 4), thickness (N,), metres)."""
+    if not len(axes):
+        return False
+    return bool((_point_segment_distance(p, axes) - thickness / 2).min() <= within_m)
+
+
+def _point_segment_distance(p: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    a, b = axes[:, :2], axes[:, 2:]
+    d = b - a
+    t = np.clip(((p - a) * d).sum(axis=1) / np.maximum((d * d).sum(axis=1), 1e-12), 0, 1)
+    return np.hypot(*(a + d * t[:, None] - p).T)
+
+
+def contact_door(
+    p: np.ndarray, q: np.ndarray, axes: np.ndarray, thickness: np.ndarray, params: RoomParams,
+    side_width: Callable[[np.ndarray, np.ndarray], tuple[float, float]] | None = None,
+) -> tuple[np.ndarray, np.ndarray, int] | None:
+    """The door a contact ``p``-``q`` ((2,) metres) is, or None (module docstring).
+
+    ``side_width(centre, normal)`` gives the width of the space on either side of the
+    contact (metres); a door is narrower than both by ``door_narrowing_m`` (a corridor
+    cut where a wall meets it is as wide as the corridor).
+
+    Returns
+    -------
+    (p, q, wall) or None
+        The opening in the line of wall ``wall``: from that wall's end to the other
+        jamb's projection on its line, metres.
+    """
+    if not len(axes):
+        return None
+    u, _ = _units(axes)
+    d = q - p
+    width = float(np.hypot(*d))
+    if not params.door_min_m <= width <= params.door_max_m:
+        return None  # a slit, or a passage wider than a door
+    if not (near_walls(p, axes, thickness, params.jamb_m) and near_walls(q, axes, thickness, params.jamb_m)):
+        return None  # a jamb is missing: the contact ends in open or unseen space
+    v = d / width
+    mid = (p + q) / 2
+    if side_width is not None:
+        wa, wb = side_width(mid, np.array([-v[1], v[0]]))
+        if min(wa, wb) < width + params.door_narrowing_m:
+            return None  # no narrowing: the space is as wide on a side as the contact
+    cos_max = np.cos(np.radians(params.door_angle_deg))
+    ends = axes.reshape(-1, 2, 2)
+    best = None
+    for i in np.flatnonzero(np.abs(u @ v) >= cos_max):
+        n = np.array([-u[i, 1], u[i, 0]])
+        if abs(float((mid - ends[i, 0]) @ n)) > thickness[i] / 2 + params.jamb_m:
+            continue
+        for k in (0, 1):
+            end, away = ends[i, k], ends[i, 1 - k]
+            g = (end - away) / max(float(np.hypot(*(end - away))), 1e-12)  # from the wall into the gap
+            tp, tq = (p - end) @ g, (q - end) @ g
+            t_near, t_far = min(tp, tq), max(tp, tq)
+            if not (-params.jamb_m <= t_near <= params.jamb_m and params.door_min_m <= t_far <= params.door_max_m):
+                continue
+            if best is None or abs(t_near) < best[0]:
+                best = (abs(t_near), (end.copy(), end + g * t_far, int(i)))  # to the far jamb, on the line
+    return None if best is None else best[1]

@@ -1,0 +1,184 @@
+"""The raster the rooms of a floor plan are cut from (:mod:`floorscan.floorplan.rooms`,
+steps 1 and 2): :class:`RoomParams` (config ``floorplan.rooms``), the space the plan's
+scans saw free bounded by its walls (:func:`room_space`, a :class:`RoomRaster`) and its
+watershed regions (:func:`space_regions`). Source: the distance-transform room
+segmentation of Bormann et al., ICRA 2016 (see :mod:`floorscan.floorplan.rooms`).
+"""
+
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from floorscan.core.config import schema_defaults
+from floorscan.core.occupancy import OccupancyGrid
+from floorscan.floorplan.free_space import passable
+
+
+
+@dataclass(frozen=True)
+@schema_defaults("floorplan.rooms")
+class RoomParams:
+    """Parameters of the room segmentation (config ``floorplan.rooms``; see the module
+    docstring). Lengths in metres, areas in square metres, angles in degrees."""
+
+    resolution_m: float
+    free_open_m: float
+    close_m: float
+    marker_depth_m: float
+    door_min_m: float
+    door_max_m: float
+    door_angle_deg: float
+    line_offset_m: float
+    jamb_m: float
+    door_narrowing_m: float
+    min_room_area_m2: float
+    corridor_elongation: float
+    corridor_max_width_m: float
+
+
+@dataclass
+class RoomRaster:
+    """The raster the rooms are segmented on.
+
+    Attributes
+    ----------
+    origin_xy : (2,) float ndarray
+        Map-frame corner of cell (row 0, column 0), metres.
+    resolution_m : float
+        Cell size, metres.
+    walls : (H, W) bool ndarray
+        Cells of the plan's wall footprints.
+    space : (H, W) bool ndarray
+        The space to segment (module docstring, step 1).
+    """
+
+    origin_xy: np.ndarray
+    resolution_m: float
+    walls: np.ndarray
+    space: np.ndarray
+
+    def centres(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """(N, 2) map-frame centres of cells ``rows``, ``cols``, metres."""
+        return (np.column_stack([cols, rows]) + 0.5) * self.resolution_m + self.origin_xy
+
+
+def _disk(radius_cells: float) -> np.ndarray:
+    r = int(np.floor(radius_cells))
+    yy, xx = np.mgrid[-r : r + 1, -r : r + 1]
+    return (xx * xx + yy * yy) <= radius_cells * radius_cells + 1e-9
+
+
+def _closing(mask: np.ndarray, radius_cells: float) -> np.ndarray:
+    """Morphological closing of ``mask`` by a disc (radius in cells), the border
+    padded so that it does not erode the edges."""
+    from scipy import ndimage
+
+    r = int(np.ceil(radius_cells)) + 1
+    if radius_cells <= 0:
+        return mask.copy()
+    return ndimage.binary_closing(np.pad(mask, r), structure=_disk(radius_cells))[r:-r, r:-r]
+
+
+def wall_mask(axes: np.ndarray, thickness: np.ndarray, origin_xy: np.ndarray, res: float, shape) -> np.ndarray:
+    """(H, W) bool: the cells of the walls' footprints (axis ``x0, y0, x1, y1`` (N, 4)
+    buffered by half of ``thickness`` (N,), metres, at least 0.75 cell), each axis also
+    drawn as an 8-connected line, so a wall blocks the 4-connected space."""
+    from skimage.draw import line, polygon
+
+    mask = np.zeros(shape, dtype=bool)
+    for (x0, y0, x1, y1), t in zip(np.asarray(axes, dtype=np.float64).reshape(-1, 4), np.asarray(thickness, dtype=np.float64)):
+        d = np.array([x1 - x0, y1 - y0])
+        length = float(np.hypot(*d))
+        if length <= 0:
+            continue
+        n = np.array([-d[1], d[0]]) / length * max(0.5 * t, 0.75 * res)
+        corners = np.array([[x0, y0] + n, [x1, y1] + n, [x1, y1] - n, [x0, y0] - n])
+        c = (corners - origin_xy) / res - 0.5  # cell-centre coordinates
+        rr, cc = polygon(c[:, 1], c[:, 0], shape)
+        mask[rr, cc] = True
+        e = np.round((np.array([[x0, y0], [x1, y1]]) - origin_xy) / res - 0.5).astype(np.int64)
+        rr, cc = line(e[0, 1], e[0, 0], e[1, 1], e[1, 0])
+        ok = (rr >= 0) & (cc >= 0) & (rr < shape[0]) & (cc < shape[1])
+        mask[rr[ok], cc[ok]] = True
+    return mask
+
+
+def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, params: RoomParams) -> RoomRaster:
+    """The space the rooms are cut from (module docstring, step 1).
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+        The free space of the plan's scans.
+    axes : (N, 4) float ndarray
+        The plan's wall axes ``x0, y0, x1, y1``, metres.
+    thickness : (N,) float ndarray
+        Their thickness, metres.
+    params : RoomParams
+
+    Returns
+    -------
+    RoomRaster
+        At ``resolution_m`` rounded to a whole number of the grid's cells.
+    """
+    from scipy import ndimage
+
+    f = max(1, int(round(params.resolution_m / grid.resolution_m)))
+    res = grid.resolution_m * f
+    free = passable(grid)
+    h, w = -(-free.shape[0] // f), -(-free.shape[1] // f)
+    padded = np.zeros((h * f, w * f), dtype=bool)
+    padded[: free.shape[0], : free.shape[1]] = free
+    free = padded.reshape(h, f, w, f).any(axis=(1, 3))
+    walls = wall_mask(axes, thickness, grid.origin_xy, res, (h, w))
+    # gaps between walls narrower than a door are wall: nobody passes them
+    walls = _closing(walls, params.door_min_m / 2 / res) | walls
+    opened = ndimage.binary_opening(free, structure=_disk(params.free_open_m / res))
+    space = opened & ~walls
+    space = _closing(space | walls, params.close_m / res) & ~walls
+    # the closing fills unseen cells, never the cells the scans saw occupied (a wall
+    # the plan lacks stays a boundary)
+    padded[:] = False
+    padded[: grid.shape[0], : grid.shape[1]] = grid.structure()
+    space &= ~padded.reshape(h, f, w, f).any(axis=(1, 3)) | opened
+    # holes without a wall in them: the floor under furniture, shadows of objects
+    holes, n = ndimage.label(~space)
+    if n:
+        border = np.unique(np.r_[holes[0], holes[-1], holes[:, 0], holes[:, -1]])
+        with_wall = np.unique(holes[walls])
+        fill = np.ones(n + 1, dtype=bool)
+        fill[0] = False
+        fill[border] = False
+        fill[with_wall] = False
+        space |= fill[holes]
+    return RoomRaster(origin_xy=np.asarray(grid.origin_xy, dtype=np.float64), resolution_m=res, walls=walls, space=space)
+
+
+def space_regions(raster: RoomRaster, params: RoomParams) -> tuple[np.ndarray, np.ndarray]:
+    """The watershed regions of the space (module docstring, step 2).
+
+    Returns
+    -------
+    labels : (H, W) int32 ndarray
+        0 outside the space, else the region (1..R).
+    distance : (H, W) float64 ndarray
+        Distance from each space cell to the nearest cell outside it, metres.
+    """
+    from scipy import ndimage
+    from skimage.morphology import h_maxima
+    from skimage.segmentation import watershed
+
+    space = raster.space
+    distance = ndimage.distance_transform_edt(np.pad(space, 1))[1:-1, 1:-1] * raster.resolution_m
+    if not space.any():
+        return np.zeros(space.shape, dtype=np.int32), distance
+    peaks = h_maxima(distance, params.marker_depth_m)
+    markers, _ = ndimage.label(peaks & space, structure=np.ones((3, 3)))
+    labels = watershed(-distance, markers, mask=space, connectivity=1)
+    # space cells no marker reached (a component without a peak): a region each
+    rest, n_rest = ndimage.label(space & (labels == 0))
+    labels = np.where(rest > 0, rest + labels.max(), labels)
+    return labels.astype(np.int32), distance

@@ -1,0 +1,387 @@
+"""Rooms of a floor plan (:func:`plan_rooms`): the free space the plan's scans saw,
+bounded by the plan's walls, segmented into rooms at its doors.
+
+The method is the distance-transform segmentation of Bormann et al., "Room
+segmentation: survey, implementation, and analysis" (ICRA 2016; ipa_room_segmentation),
+on a map whose obstacles are the plan's walls, not the raw returns, and with doors
+taken from the walls:
+
+1. **Space** (:func:`~floorscan.floorplan.room_space.room_space`): the cells the scans
+   saw free (:func:`~floorscan.floorplan.free_space.passable`) on a raster of
+   ``rooms.resolution_m``, opened by a disc of radius ``free_open_m`` (the thin fans
+   of rays through windows and doorways into the outside go), minus the plan's wall
+   footprints, whose gaps narrower than ``door_min_m`` are closed (nobody passes
+   them); closed together with the walls by a disc of ``close_m`` (the unseen strips
+   behind furniture along a wall and the shadows of objects join the room; the cells
+   the scans saw occupied stay out, so a wall the plan lacks is not bridged) and its
+   holes without walls filled (the floor under a table). Furniture and clutter are
+   not obstacles: a room's area is its floor area.
+2. **Regions**: a watershed (scikit-image) of the negated distance to the nearest wall
+   or unseen cell, from the maxima of that distance that stand ``marker_depth_m`` above
+   the saddles around them (h-maxima): every narrowing of the space is a candidate
+   boundary between two rooms.
+3. **Doors** (:mod:`floorscan.floorplan.doors`): two regions stay apart only where they
+   meet through a door: an opening ``door_min_m`` to ``door_max_m`` wide in the line
+   of a plan wall, with a wall at both of its ends (the jambs). Regions that meet
+   anywhere else (a narrowing of a corridor, a passage wider than a door, an
+   over-segmented room) are merged.
+4. **Rooms**: each region of at least ``min_room_area_m2`` is a room; a smaller one
+   joins its neighbour of the longest contact. A room is a ``corridor`` when it is
+   long for its width (area at least ``corridor_elongation`` times its width squared,
+   the width being the diameter of the largest circle inside its polygon, at most
+   ``corridor_max_width_m``). When no door separates the space (an open hall, one
+   corridor, a campus), it is one region of kind ``space``.
+5. **Polygons** (:func:`room_polygons`): each room's cells traced (contourpy), grown up
+   to the wall faces and cut by the wall footprints (shapely), simplified by half a
+   cell: valid polygons, holes allowed, in map metres, numbered ``Room 1``,
+   ``Corridor 1``, ``Space 1`` in reading order (top to bottom, left to right).
+
+Parameters: :class:`RoomParams` (config ``floorplan.rooms``).
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+import pandas as pd
+
+from floorscan.core.occupancy import OccupancyGrid
+from floorscan.floorplan import doors as D
+from floorscan.floorplan.room_space import RoomParams, RoomRaster, room_space, space_regions
+
+log = logging.getLogger(__name__)
+
+
+class _Union:
+    """Union-find over region labels 0..n (0: no region)."""
+
+    def __init__(self, n: int):
+        self.parent = np.arange(n + 1)
+
+    def find(self, a: int) -> int:
+        while self.parent[a] != a:
+            self.parent[a] = self.parent[self.parent[a]]
+            a = self.parent[a]
+        return int(a)
+
+    def union(self, a: int, b: int) -> None:
+        a, b = self.find(a), self.find(b)
+        if a != b:
+            self.parent[max(a, b)] = min(a, b)
+
+    def roots(self) -> np.ndarray:
+        return np.array([self.find(a) for a in range(len(self.parent))])
+
+
+def _label_at(labels: np.ndarray, raster: RoomRaster, xy: np.ndarray) -> int:
+    c = np.floor((xy - raster.origin_xy) / raster.resolution_m).astype(np.int64)
+    h, w = labels.shape
+    if not (0 <= c[1] < h and 0 <= c[0] < w):
+        return 0
+    return int(labels[c[1], c[0]])
+
+
+def segment_rooms(
+    grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, params: RoomParams = RoomParams()
+) -> tuple[RoomRaster, np.ndarray, list[tuple[np.ndarray, np.ndarray, int, int, int]]]:
+    """The rooms and doors on the raster (module docstring, steps 1-4).
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+        The free space of the plan's scans.
+    axes : (N, 4) float ndarray
+        Wall axes ``x0, y0, x1, y1``, metres.
+    thickness : (N,) float ndarray
+        Metres.
+    params : RoomParams
+
+    Returns
+    -------
+    raster : RoomRaster
+    labels : (H, W) int32 ndarray
+        0 outside every room, else the room (1..R, in reading order: the first cell
+        of each room from the top row down, left to right).
+    doors : list of (p, q, wall, room_a, room_b)
+        Each door's opening from ``p`` to ``q`` ((2,) metres) in the line of wall
+        ``wall`` and the rooms it joins (``room_a < room_b``, labels).
+    """
+
+    axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
+    thickness = np.asarray(thickness, dtype=np.float64).reshape(-1)
+    raster = room_space(grid, axes, thickness, params)
+    gaps = [g for g in D.wall_gaps(axes, thickness, params) if D.passes_through(raster, g[0], g[1])]
+    barrier = np.zeros(raster.space.shape, dtype=bool)
+    for p, q, _ in gaps:
+        rr, cc = D.barrier_cells(raster, p, q)
+        barrier[rr, cc] = True
+    cut = RoomRaster(raster.origin_xy, raster.resolution_m, raster.walls | barrier, raster.space & ~barrier)
+    labels, distance = space_regions(cut, params)
+    n = int(labels.max())
+    res = raster.resolution_m
+    steps = np.arange(0.2, 1.2 + 1e-9, res)
+
+    def side_width(centre: np.ndarray, normal: np.ndarray) -> tuple[float, float]:
+        out = []
+        for sign in (1.0, -1.0):
+            c = np.floor((centre + sign * steps[:, None] * normal - raster.origin_xy) / res).astype(np.int64)
+            ok = (c[:, 0] >= 0) & (c[:, 1] >= 0) & (c[:, 0] < labels.shape[1]) & (c[:, 1] < labels.shape[0])
+            out.append(2.0 * float(distance[c[ok, 1], c[ok, 0]].max()) if ok.any() else 0.0)
+        return out[0], out[1]
+
+    sets = _Union(n)
+    found = []  # (p, q, wall, a, b)
+    touching: dict[tuple[int, int], float] = {}  # contact length between regions, metres
+    for (a, b), cells in D.contacts(labels).items():
+        p, q = D.contact_segment(cut, cells)
+        touching[(a, b)] = len(cells) * raster.resolution_m
+        if np.hypot(*(q - p)) < params.door_min_m and D.near_walls(p, axes, thickness, params.jamb_m) and D.near_walls(
+            q, axes, thickness, params.jamb_m
+        ):
+            continue  # a slit between wall pieces, too narrow to pass: neither door nor one room
+        door = D.contact_door(p, q, axes, thickness, params, side_width)
+        if door is None:
+            sets.union(a, b)
+        else:
+            found.append((*door, a, b))
+    for p, q, wall in gaps:
+        d = q - p
+        nrm = np.array([-d[1], d[0]]) / max(float(np.hypot(*d)), 1e-12) * 2 * raster.resolution_m
+        a, b = _label_at(labels, raster, (p + q) / 2 + nrm), _label_at(labels, raster, (p + q) / 2 - nrm)
+        if a and b and a != b:
+            found.append((p, q, wall, min(a, b), max(a, b)))
+            touching[(min(a, b), max(a, b))] = touching.get((min(a, b), max(a, b)), 0.0) + float(np.hypot(*d))
+    # regions below the room area join the neighbour they touch most (through a door too)
+    area = np.bincount(labels.ravel(), minlength=n + 1) * raster.resolution_m**2
+    for _ in range(n):
+        roots = sets.roots()
+        room_area = np.bincount(roots, weights=area, minlength=n + 1)
+        small = [r for r in np.flatnonzero(room_area > 0) if r and room_area[r] < params.min_room_area_m2]
+        best = None
+        for r in small:
+            links: dict[int, float] = {}
+            for (a, b), length in touching.items():
+                ra, rb = roots[a], roots[b]
+                if ra != rb and r in (ra, rb):
+                    other = rb if ra == r else ra
+                    links[other] = links.get(other, 0.0) + length
+            if links:
+                other = max(sorted(links), key=links.get)
+                best = (r, other)
+                break
+        if best is None:
+            break
+        sets.union(*best)
+    roots = sets.roots()
+    merged = roots[labels]
+    # drop what is still below the room area (an isolated scrap of space)
+    room_area = np.bincount(merged.ravel(), minlength=n + 1) * raster.resolution_m**2
+    merged[room_area[merged] < params.min_room_area_m2] = 0
+    # number the rooms in reading order (first cell from the top row down)
+    flat = merged[::-1].ravel()
+    ids, first = np.unique(flat, return_index=True)
+    order = ids[ids > 0][np.argsort(first[ids > 0], kind="stable")]
+    renum = np.zeros(n + 1, dtype=np.int32)
+    renum[order] = np.arange(1, len(order) + 1, dtype=np.int32)
+    final = renum[merged]
+    # a door cell belongs to a room beside it
+    from skimage.segmentation import expand_labels
+
+    grown = expand_labels(final, 1)
+    final = np.where(barrier & raster.space, grown, final).astype(np.int32)
+    doors = []
+    for p, q, wall, a, b in found:
+        ra, rb = renum[roots[a]], renum[roots[b]]
+        if ra and rb and ra != rb:
+            doors.append((p, q, wall, int(min(ra, rb)), int(max(ra, rb))))
+    return raster, final, _distinct_doors(doors)
+
+
+def _distinct_doors(doors: list) -> list:
+    """One door per opening: of doors between the same rooms whose centres lie within
+    half a metre, the first (gaps between walls come after contacts, so a contact
+    found twice is kept as its contact)."""
+    out: list = []
+    for d in doors:
+        c = (d[0] + d[1]) / 2
+        if any(o[3:] == d[3:] and np.hypot(*((o[0] + o[1]) / 2 - c)) < 0.5 for o in out):
+            continue
+        out.append(d)
+    return out
+
+
+def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thickness: np.ndarray) -> list:
+    """A valid shapely Polygon per room of ``labels`` (1..R; module docstring, step 5):
+    its cells traced, grown by a cell up to the wall faces and cut by the walls'
+    footprints and the other rooms, simplified by half a cell; the largest part when
+    the cut leaves several. Map metres."""
+    import contourpy
+    import shapely
+    from scipy import ndimage
+
+    res = raster.resolution_m
+    walls = shapely.union_all(_footprints(axes, thickness)) if len(axes) else shapely.Polygon()
+    traced = []
+    for k, box in enumerate(ndimage.find_objects(labels), start=1):
+        if box is None:
+            traced.append(shapely.Polygon())
+            continue
+        r0, c0 = box[0].start, box[1].start
+        z = np.pad(labels[box] == k, 1).astype(np.float64)
+        filled, offsets = contourpy.contour_generator(z=z, fill_type="OuterOffset").filled(0.5, 2.0)
+        parts = []
+        for pts, off in zip(filled, offsets):
+            xy = (pts + [c0 - 1 + 0.5, r0 - 1 + 0.5]) * res + raster.origin_xy
+            rings = [xy[a:b] for a, b in zip(off[:-1], off[1:])]
+            parts.append(shapely.Polygon(rings[0], rings[1:]))
+        traced.append(shapely.make_valid(shapely.union_all(parts)))
+    out = []
+    for k, poly in enumerate(traced):
+        others = shapely.union_all([p for j, p in enumerate(traced) if j != k and shapely.distance(p, poly) < 2 * res])
+        grown = shapely.buffer(poly, res, join_style="mitre").difference(walls).difference(others)
+        out.append(_largest(shapely.simplify(grown, res / 2)))
+    for k, poly in enumerate(out):
+        others = shapely.union_all([p for j, p in enumerate(out) if j != k])
+        out[k] = _bounded_by_walls(poly, axes, thickness, walls, others, res)
+    return out
+
+
+#: Rooms' vertices are snapped to this grid, metres: the exports' precision (GeoJSON's
+#: 5 decimals), so a polygon stays valid when written.
+POLYGON_GRID_M = 1e-5
+
+
+def _largest(geom):
+    """The largest polygon of a geometry made valid on the grid of
+    :data:`POLYGON_GRID_M` (an empty Polygon if none)."""
+    import shapely
+
+    geom = shapely.set_precision(shapely.make_valid(geom), POLYGON_GRID_M)
+    pieces = [g for g in getattr(geom, "geoms", [geom]) if isinstance(g, shapely.Polygon) and not g.is_empty]
+    return max(pieces, key=lambda g: g.area) if pieces else shapely.Polygon()
+
+
+def _bounded_by_walls(poly, axes: np.ndarray, thickness: np.ndarray, walls, others, res: float, near_m: float = 0.3):
+    """A room seen only in part (through its door) completed up to its walls: the
+    bounding box of its seen floor cut by the half-plane of the room's side of each
+    wall within ``near_m`` of it (on the wall's face), without the wall footprints and
+    the other rooms; taken when it keeps all but 5 % of the seen floor (the room is
+    convex between its walls: an L-shaped room or a ring corridor keeps its traced
+    outline). Metres."""
+    import shapely
+
+    if poly.is_empty or not len(axes):
+        return poly
+    foot = _footprints(axes, thickness)
+    near = np.flatnonzero(shapely.distance(foot, poly) <= near_m)
+    if not len(near):
+        return poly
+    x0, y0, x1, y1 = poly.bounds
+    region = shapely.box(x0, y0, x1, y1)
+    big = 4.0 * max(x1 - x0, y1 - y0, 1.0)
+    inside = poly.representative_point()
+    for i in near.tolist():
+        a, b = axes[i, :2], axes[i, 2:]
+        d = b - a
+        length = float(np.hypot(*d))
+        if length < 0.5:
+            continue
+        u = d / length
+        n = np.array([-u[1], u[0]])
+        side = 1.0 if float((np.array(inside.coords[0]) - a) @ n) >= 0 else -1.0
+        face = a + side * n * thickness[i] / 2
+        c = face - u * big
+        half = shapely.Polygon([c, c + 2 * big * u, c + 2 * big * u + side * big * n, c + side * big * n])
+        region = region.intersection(half)
+    region = _largest(region.difference(walls).difference(others))
+    if region.is_empty or poly.difference(region).area > 0.05 * poly.area or region.area < poly.area:
+        return poly
+    return _largest(shapely.simplify(region, res / 2))
+
+
+def _footprints(axes: np.ndarray, thickness: np.ndarray):
+    import shapely
+
+    lines = shapely.linestrings(np.asarray(axes, dtype=np.float64).reshape(-1, 2, 2))
+    return shapely.buffer(lines, np.asarray(thickness, dtype=np.float64) / 2, cap_style="flat")
+
+
+def plan_rooms(
+    axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, params: RoomParams = RoomParams()
+) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The rooms and doors of a plan (the module docstring): the tables of
+    :attr:`~floorscan.floorplan.plan.FloorPlan.rooms` and
+    :attr:`~floorscan.floorplan.plan.FloorPlan.doors`.
+
+    Parameters
+    ----------
+    axes : (N, 4) float ndarray
+        The plan's wall axes ``x0, y0, x1, y1``, metres (a door's ``wall_id`` is a row).
+    thickness : (N,) float ndarray
+        Metres.
+    grid : OccupancyGrid
+        The free space of the plan's scans.
+    params : RoomParams
+
+    Returns
+    -------
+    rooms : pandas.DataFrame
+        ``room_id`` (0..R-1), ``name``, ``kind``, ``area_m2``, ``perimeter_m``,
+        ``polygon`` (shapely Polygon, map metres).
+    doors : pandas.DataFrame
+        ``door_id``, ``x0, y0, x1, y1`` (metres), ``width_m``, ``wall_id``, ``room_a``,
+        ``room_b`` (room ids).
+    """
+    import shapely
+
+    raster, labels, doors = segment_rooms(grid, axes, thickness, params)
+    n = int(labels.max())
+    polys = room_polygons(raster, labels, axes, thickness)
+    if doors:  # the opening in the wall belongs to neither room: rooms end at the wall faces
+        openings = shapely.union_all(
+            [shapely.buffer(shapely.LineString([p, q]), thickness[w] / 2 + raster.resolution_m / 2, cap_style="square")
+             for p, q, w, *_ in doors]
+        )  # fmt: skip
+        polys = [_largest(shapely.simplify(p.difference(openings), raster.resolution_m / 4)) for p in polys]
+    keep = [k for k in range(n) if not polys[k].is_empty and polys[k].area >= params.min_room_area_m2]
+    new_id = {k + 1: i for i, k in enumerate(keep)}
+    polys = [polys[k] for k in keep]
+    kinds = []
+    for poly in polys:
+        # width: the largest circle inside the room (its radius: the circle's centre to the wall)
+        width = 2.0 * float(shapely.maximum_inscribed_circle(poly, raster.resolution_m / 2).length)
+        long = width <= params.corridor_max_width_m and poly.area >= params.corridor_elongation * width * width
+        kinds.append("corridor" if long else "room")
+    doors = [(p, q, w, new_id[a], new_id[b]) for p, q, w, a, b in doors if a in new_id and b in new_id]
+    if len(polys) == 1 and not doors:
+        kinds = ["space"]
+        log.info("rooms: no door separates the free space (an open hall, one corridor): one space of %.1f m2", polys[0].area)
+    names, counts = [], {}
+    for kind in kinds:
+        counts[kind] = counts.get(kind, 0) + 1
+        names.append(f"{kind.capitalize()} {counts[kind]}")
+    rooms = pd.DataFrame(
+        {
+            "room_id": np.arange(len(polys), dtype=np.int32),
+            "name": pd.Series(names, dtype=object),
+            "kind": pd.Series(kinds, dtype=object),
+            "area_m2": np.array([p.area for p in polys], dtype=np.float64),
+            "perimeter_m": np.array([p.length for p in polys], dtype=np.float64),
+            "polygon": pd.Series(polys, dtype=object),
+        }
+    )
+    ends = np.array([np.r_[p, q] for p, q, *_ in doors], dtype=np.float64).reshape(-1, 4)
+    doors_df = pd.DataFrame(
+        {
+            "door_id": np.arange(len(doors), dtype=np.int32),
+            "x0": ends[:, 0], "y0": ends[:, 1], "x1": ends[:, 2], "y1": ends[:, 3],
+            "width_m": np.hypot(ends[:, 2] - ends[:, 0], ends[:, 3] - ends[:, 1]),
+            "wall_id": np.array([d[2] for d in doors], dtype=np.int32),
+            "room_a": np.array([d[3] for d in doors], dtype=np.int32),
+            "room_b": np.array([d[4] for d in doors], dtype=np.int32),
+        }  # fmt: skip
+    )
+    log.info("rooms: %d rooms (%d corridors), %d doors, %.1f m2 in all", len(polys), kinds.count("corridor"),
+             len(doors_df), float(rooms["area_m2"].sum()))
+    return rooms, doors_df

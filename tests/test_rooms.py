@@ -1,0 +1,123 @@
+"""Rooms and doors of a floor plan (floorscan.floorplan.rooms, floorscan.floorplan.doors)
+on small buildings scanned by a ray caster: the plan's walls are given (their axes and
+thickness), the free space comes from the scans' occupancy grid."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapely
+
+from conftest import cast_rays
+from floorscan.core.occupancy import OccupancyParams, occupancy_grid
+from floorscan.floorplan.doors import wall_gaps
+from floorscan.floorplan.room_space import RoomParams
+from floorscan.floorplan.rooms import plan_rooms
+
+T = 0.12  # wall thickness, metres
+
+
+def _grid(walls: list, poses: list, seed: int = 1):
+    """The occupancy grid of 360-degree scans from ``poses`` of the wall faces of
+    ``walls`` ((x0, y0, x1, y1) axes, thickness T)."""
+    rng = np.random.default_rng(seed)
+    faces = []
+    for x0, y0, x1, y1 in walls:
+        d = np.array([x1 - x0, y1 - y0]) / np.hypot(x1 - x0, y1 - y0)
+        n = np.array([-d[1], d[0]]) * T / 2
+        faces += [[x0 + n[0], y0 + n[1], x1 + n[0], y1 + n[1]], [x0 - n[0], y0 - n[1], x1 - n[0], y1 - n[1]]]
+    faces = np.array(faces)
+    a = np.linspace(-np.pi, np.pi, 1440, endpoint=False)
+    scans = []
+    for p in poses:
+        o = np.asarray(p, dtype=np.float64)
+        r = cast_rays(faces, o, a)
+        hit = np.isfinite(r) & (r < 12.0)
+        r = r[hit] + rng.normal(0, 0.005, int(hit.sum()))
+        scans.append((o, o + r[:, None] * np.column_stack([np.cos(a[hit]), np.sin(a[hit])])))
+    return occupancy_grid(scans, OccupancyParams())
+
+
+def _rooms(walls, poses, params=RoomParams()):
+    axes = np.array(walls, dtype=np.float64)
+    return plan_rooms(axes, np.full(len(axes), T), _grid(walls, poses), params)
+
+
+# Two rooms 4 x 4 m side by side, joined by a 0.9 m door in the partition (y 1.5..2.4).
+BOX = [(0, 0, 8, 0), (8, 0, 8, 4), (8, 4, 0, 4), (0, 4, 0, 0)]
+TWO_ROOMS = BOX + [(4, 0, 4, 1.5), (4, 2.4, 4, 4)]
+
+
+def test_two_rooms_and_their_door():
+    rooms, doors = _rooms(TWO_ROOMS, [(2, 2), (6, 2), (3.5, 1.95), (4.5, 1.95)])
+    assert len(rooms) == 2 and list(rooms["kind"]) == ["room", "room"]
+    assert list(rooms["name"]) == ["Room 1", "Room 2"]
+    # floor area of each: 4 x 4 m between wall axes, less half of each wall
+    for poly, area in zip(rooms["polygon"], rooms["area_m2"]):
+        assert poly.is_valid and poly.geom_type == "Polygon"
+        assert area == pytest.approx(poly.area) and 14.5 < area < 15.9
+    west = rooms["polygon"][int(np.argmin([p.centroid.x for p in rooms["polygon"]]))]
+    assert shapely.box(0.06, 0.06, 3.94, 3.94).difference(west).area < 0.3
+    assert len(doors) == 1
+    d = doors.iloc[0]
+    centre = np.array([(d.x0 + d.x1) / 2, (d.y0 + d.y1) / 2])
+    assert np.hypot(*(centre - [4.0, 1.95])) < 0.1 and d.width_m == pytest.approx(0.9, abs=0.1)
+    assert {d.room_a, d.room_b} == {0, 1} and d.wall_id in (4, 5)
+
+
+def test_an_open_hall_is_one_space():
+    rooms, doors = _rooms(BOX, [(2, 2), (6, 2)])
+    assert list(rooms["kind"]) == ["space"] and list(rooms["name"]) == ["Space 1"] and len(doors) == 0
+    assert 30.0 < rooms["area_m2"].iloc[0] < 32.0
+
+
+def test_a_wide_opening_is_a_passage_not_a_door():
+    # the partition leaves 2.5 m open: wider than door_max_m (2.0), the two halves are one room
+    rooms, doors = _rooms(BOX + [(4, 0, 4, 1.0), (4, 3.5, 4, 4)], [(2, 2), (6, 2)])
+    assert len(rooms) == 1 and len(doors) == 0
+
+
+def test_a_gap_narrower_than_a_door_joins_nothing():
+    # a 0.4 m slit in the partition is not passable: two rooms, no door between them
+    rooms, doors = _rooms(BOX + [(4, 0, 4, 1.8), (4, 2.2, 4, 4)], [(2, 2), (6, 2)])
+    assert len(rooms) == 2 and len(doors) == 0
+
+
+# A corridor 1.4 m wide (y 0..1.4) under two rooms (y 1.4..4.4) split by a partition at
+# x = 4 that meets the corridor wall in a T; a door from the corridor into each room.
+CORRIDOR = [
+    (0, 0, 8, 0), (8, 0, 8, 4.4), (8, 4.4, 0, 4.4), (0, 4.4, 0, 0),
+    (0, 1.4, 1.5, 1.4), (2.4, 1.4, 5.5, 1.4), (6.4, 1.4, 8, 1.4), (4, 1.4, 4, 4.4),
+]  # fmt: skip
+
+
+def test_a_corridor_is_not_cut_where_a_partition_meets_it():
+    rooms, doors = _rooms(CORRIDOR, [(1, 0.7), (4, 0.7), (7, 0.7), (2, 3), (6, 3), (1.95, 1.2), (5.95, 1.2)])
+    kinds = sorted(rooms["kind"])
+    assert kinds == ["corridor", "room", "room"]
+    corridor = rooms[rooms["kind"] == "corridor"].iloc[0]
+    assert corridor["name"] == "Corridor 1" and 9.5 < corridor["area_m2"] < 11.2
+    centres = sorted(((d.x0 + d.x1) / 2, (d.y0 + d.y1) / 2) for d in doors.itertuples())
+    assert len(centres) == 2
+    assert np.allclose(centres, [(1.95, 1.4), (5.95, 1.4)], atol=0.1)
+
+
+def test_a_room_seen_only_through_its_door_is_completed_to_its_walls():
+    # the scans stay in the corridor: the east room is seen as a fan through its door
+    rooms, _ = _rooms(CORRIDOR, [(1, 0.7), (4, 0.7), (7, 0.7), (2, 3), (5.95, 1.0)])
+    east = rooms["polygon"][int(np.argmax([p.centroid.x + p.centroid.y for p in rooms["polygon"]]))]
+    true_room = shapely.box(4.06, 1.46, 7.94, 4.34)
+    assert east.intersection(true_room).area / east.union(true_room).area > 0.9
+
+
+def test_wall_gaps_between_collinear_ends():
+    params = RoomParams()
+    axes = np.array(TWO_ROOMS, dtype=np.float64)
+    gaps = wall_gaps(axes, np.full(len(axes), T), params)
+    assert len(gaps) == 1
+    p, q, wall = gaps[0]
+    assert np.allclose(sorted([p[1], q[1]]), [1.5, 2.4]) and np.allclose([p[0], q[0]], 4.0) and wall in (4, 5)
+    # ends in a T junction are corners, not jambs: the corridor has no gap at x = 4
+    axes = np.array(CORRIDOR, dtype=np.float64)
+    widths = sorted(float(np.hypot(*(q - p))) for p, q, _ in wall_gaps(axes, np.full(len(axes), T), params))
+    assert np.allclose(widths, [0.9, 0.9])
