@@ -10,6 +10,6 @@ stage package.
   :mod:`~floorscan.figures.wall_extraction`, :mod:`~floorscan.figures.stage_times`, in
   the style of :mod:`~floorscan.figures.style`);
 - :mod:`~floorscan.figures.report` (the front page), :mod:`~floorscan.figures.summary_page`
-  (the summary table as HTML), :mod:`~floorscan.figures.answer` (what a finished run
-  prints).
+  (the summary table as HTML), :mod:`~floorscan.figures.room_table` (the plan's rooms on it),
+  :mod:`~floorscan.figures.answer` (what a finished run prints).
 """

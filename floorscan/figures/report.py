@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Mapping, Sequence
 
 from floorscan.core.files import atomic_path
 from floorscan.figures.answer import format_bytes
+from floorscan.figures.room_table import read_plan_rooms, rooms_table_html
 from floorscan.figures.summary_page import summary_table_html
 from floorscan.score.curves import summary_cell
 
@@ -106,6 +107,7 @@ def front_page(
     description: str = "",
     answer: "pd.DataFrame | str | os.PathLike | None" = None,
     answer_curve: "pd.DataFrame | str | os.PathLike | None" = None,
+    rooms: "list[dict] | None" = None,
 ) -> str:
     """The front page of a dataset's result as one self-contained HTML document.
 
@@ -156,6 +158,10 @@ def front_page(
     answer_curve : pandas.DataFrame or path, optional
         The answer's quality curve (``evaluation/answer_curve.csv``,
         :func:`floorscan.score.answer_curve.answer_curve`): its k95 and k99 join that table.
+    rooms : list of dict, optional
+        The plan's rooms (:func:`floorscan.figures.room_table.read_plan_rooms`): a
+        table of name, kind and area, and the floor area
+        (:func:`~floorscan.figures.room_table.rooms_table_html`).
 
     Returns
     -------
@@ -186,6 +192,7 @@ def front_page(
     parts += _scans_html(k, n_kept, n_recorded, bytes_in, bytes_out, scan_list, k_reason)
     if answer is not None:
         parts += _answer_html(answer, answer_curve)
+    parts += rooms_table_html(rooms)
     if table is not None:
         parts += _quality_html(table, ordering, extractor)
     parts += _detected_html(detected, mode)
@@ -251,7 +258,7 @@ def write_front_page_of_files(
         ``results/<dataset>/front.html``.
     floorplan_svg, floorplan_geojson : path
         The recommended floor plan (``floorplan.svg``; ``floorplan.geojson`` for its
-        wall count).
+        wall count and rooms).
     selection : path
         ``selection/selection.json`` (:func:`floorscan.select.recommend.write_selection`):
         k and why, the counts, the scan list and the reduced recording's size.
@@ -290,7 +297,7 @@ def write_front_page_of_files(
         extractor=extractor,
         n_walls=len(read_geojson_geometries(floorplan_geojson)),
         description=description,
-        answer=answer, answer_curve=answer_curve,
+        answer=answer, answer_curve=answer_curve, rooms=read_plan_rooms(floorplan_geojson),
     )  # fmt: skip
 
 

@@ -31,8 +31,12 @@ if TYPE_CHECKING:
 
 
 
-#: Layers of the DXF export and their colours (AutoCAD Color Index: red, white, green).
-DXF_LAYERS = {"WALL_AXIS": 1, "WALL_OUTLINE": 7, "WALL_FACE": 3, "CLUTTER": 8}
+#: Layers of the DXF export and their colours (AutoCAD Color Index: red, white, green,
+#: grey, cyan, orange).
+DXF_LAYERS = {"WALL_AXIS": 1, "WALL_OUTLINE": 7, "WALL_FACE": 3, "CLUTTER": 8, "ROOM": 4, "DOOR": 30}
+
+#: Height of the room labels' text, metres.
+DXF_ROOM_TEXT_HEIGHT_M = 0.25
 
 
 @contextlib.contextmanager
@@ -63,14 +67,18 @@ def write_dxf(
     are coloured BYLAYER): ``WALL_AXIS`` (a LINE per wall centre line),
     ``WALL_OUTLINE`` (a closed polyline per wall polygon, counter-clockwise),
     ``WALL_FACE`` (a LINE per merged face), ``CLUTTER`` (a LINE per piece that is not
-    a wall: furniture, from the structure passes). The active viewport and ``$EXTMIN`` /
+    a wall: furniture, from the structure passes), ``ROOM`` (a closed polyline per
+    ring of each room, exterior counter-clockwise and holes clockwise, and a label
+    with the name and the area in m² inside it: :func:`_add_rooms`), ``DOOR`` (a LINE
+    per door opening, in its wall's line). The active viewport and ``$EXTMIN`` /
     ``$EXTMAX`` frame the plan, so a CAD tool opens on it.
 
     ``"R2010"`` (default): ``$INSUNITS`` = 6 (metres), ``$MEASUREMENT`` = 1
-    (metric), outlines as LWPOLYLINE; the metadata also as drawing properties
-    (``$CUSTOMPROPERTY``, which AutoCAD shows in DWGPROPS). ``"R12"``: outlines as
-    POLYLINE; R12 has no units header (``$INSUNITS`` came with R2000), so CAD tools
-    take the coordinates as unitless numbers (they are metres). In both, the plan's
+    (metric), outlines as LWPOLYLINE, room labels as MTEXT; the metadata also as
+    drawing properties (``$CUSTOMPROPERTY``, which AutoCAD shows in DWGPROPS).
+    ``"R12"``: outlines as POLYLINE, room labels as TEXT (R12 has no MTEXT); R12 has
+    no units header (``$INSUNITS`` came with R2000), so CAD tools take the
+    coordinates as unitless numbers (they are metres). In both, the plan's
     metadata (:func:`~floorscan.floorplan.metadata._metadata`: dataset, ordering, extractor, k, walls, frame,
     units, time stamp, georeference) is ezdxf metadata (``doc.ezdxf_metadata()``).
     The coordinates stay map metres with a georeference (DXF has no CRS; the
@@ -124,7 +132,11 @@ def _write_dxf(
         c = plan.clutter
         for x0, y0, x1, y1 in zip(c["x0"].tolist(), c["y0"].tolist(), c["x1"].tolist(), c["y1"].tolist()):
             msp.add_line((x0, y0), (x1, y1), dxfattribs={"layer": "CLUTTER"})
-        if len(w):
+        _add_rooms(msp, exports, version)
+        d = plan.doors
+        for x0, y0, x1, y1 in zip(d["x0"].tolist(), d["y0"].tolist(), d["x1"].tolist(), d["y1"].tolist()):
+            msp.add_line((x0, y0), (x1, y1), dxfattribs={"layer": "DOOR"})
+        if exports.has_extent:
             lo, hi = exports.extent
             msp.dxf.extmin, msp.dxf.extmax = (*lo.tolist(), 0.0), (*hi.tolist(), 0.0)
             zoom.window(msp, (lo - 0.5).tolist(), (hi + 0.5).tolist())
@@ -145,6 +157,36 @@ def _write_dxf(
     data = doc.encode(stream.getvalue())
     with atomic_path(path) as tmp:
         tmp.write_bytes(data)
+
+
+def _add_rooms(msp, exports: PlanExports, version: str) -> None:
+    """Layer ``ROOM``: a closed polyline per ring of each room (exterior
+    counter-clockwise, holes clockwise; LWPOLYLINE, in R12 POLYLINE) and its label at
+    its label point (:attr:`~floorscan.floorplan.footprints.PlanExports.room_labels`),
+    the name above the area in m² (MTEXT of two lines, middle centre; in R12, which
+    has no MTEXT, two TEXT lines), :data:`DXF_ROOM_TEXT_HEIGHT_M` high."""
+    from ezdxf.enums import MTextEntityAlignment, TextEntityAlignment
+
+    r = exports.plan.rooms
+    add_outline = msp.add_polyline2d if version == "R12" else msp.add_lwpolyline
+    h = DXF_ROOM_TEXT_HEIGHT_M
+    attribs = {"layer": "ROOM"}
+    for name, area, poly, (x, y) in zip(
+        r["name"].tolist(), r["area_m2"].tolist(), exports.room_polys.tolist(), exports.room_labels.tolist()
+    ):
+        if poly is None or poly.is_empty:
+            continue
+        for ring in (poly.exterior, *poly.interiors):
+            add_outline(list(ring.coords)[:-1], close=True, dxfattribs=attribs)
+        area_text = f"{float(area):.1f} m\u00b2"
+        if version == "R12":
+            for text, dy in ((str(name), 0.6 * h), (area_text, -0.6 * h)):
+                msp.add_text(text, height=h, dxfattribs=attribs).set_placement(
+                    (x, y + dy), align=TextEntityAlignment.MIDDLE_CENTER
+                )
+        else:
+            label = msp.add_mtext(f"{name}\\P{area_text}", dxfattribs={**attribs, "char_height": h})
+            label.set_location((x, y), attachment_point=MTextEntityAlignment.MIDDLE_CENTER)
 
 
 def _dxf_metadata(plan: FloorPlan, meta: PlanMetadata, georeference: Georeference | None) -> list[tuple[str, str]]:

@@ -1,7 +1,8 @@
 """What the exports of a floor plan share (:class:`PlanExports`): the wall footprints
 (each axis buffered by half its thickness) oriented as RFC 7946 wants them, their
-exterior rings in map metres (:func:`_exterior_rings`) and the plan's extent, each made
-once for all formats, and the IFC model, kept for a plan written again.
+exterior rings in map metres (:func:`_exterior_rings`), the plan's extent, the room
+polygons oriented the same way and a label point inside each room, each made once for
+all formats, and the IFC model, kept for a plan written again.
 """
 
 from __future__ import annotations
@@ -16,10 +17,15 @@ if TYPE_CHECKING:
     from floorscan.floorplan.plan import FloorPlan
 
 
+#: How near the pole of inaccessibility a room's label point is found, metres.
+ROOM_LABEL_TOLERANCE_M = 0.01
+
+
 @dataclass
 class PlanExports:
     """A plan and what its exports share, each made once, on first use: the oriented
-    footprints, their rings, the extent and the IFC model
+    footprints, their rings, the extent, the oriented room polygons and their label
+    points, and the IFC model
     (:func:`floorscan.floorplan.ifc._ifc_model`, kept by
     :class:`~floorscan.floorplan.writer.FloorplanWriter` for a plan it writes again).
     The writers of the export formats (:data:`floorscan.floorplan.EXPORT_FORMATS`)
@@ -44,14 +50,53 @@ class PlanExports:
         return _exterior_rings(self.polys)
 
     @functools.cached_property
+    def room_polys(self) -> np.ndarray:
+        """The room polygons (``plan.rooms["polygon"]``, map metres), (R,) object
+        ndarray of shapely Polygons oriented as RFC 7946 wants them
+        (``shapely.orient_polygons``): counter-clockwise exterior rings, clockwise
+        holes. A missing polygon stays None; every export skips it and an empty one."""
+        import shapely
+
+        polys = np.empty(len(self.plan.rooms), dtype=object)
+        polys[:] = self.plan.rooms["polygon"].tolist()
+        return shapely.orient_polygons(polys, exterior_cw=False) if len(polys) else polys
+
+    @functools.cached_property
+    def room_labels(self) -> np.ndarray:
+        """A point inside each room where its label goes, (R, 2) float64 ndarray, map
+        metres: the pole of inaccessibility (``shapely.ops.polylabel``, to
+        :data:`ROOM_LABEL_TOLERANCE_M`; Agafonkin's polylabel), the point farthest from
+        the room's boundary, so a ring corridor's label lies in the corridor, not in
+        its hole; NaN for a missing or empty polygon."""
+        from shapely.ops import polylabel
+
+        out = np.full((len(self.room_polys), 2), np.nan)
+        for k, poly in enumerate(self.room_polys.tolist()):
+            if poly is not None and not poly.is_empty:
+                p = polylabel(poly, tolerance=ROOM_LABEL_TOLERANCE_M)
+                out[k] = p.x, p.y
+        return out
+
+    @functools.cached_property
     def extent(self) -> tuple[np.ndarray, np.ndarray]:
-        """Least and greatest ``(x, y)`` of the wall axes and footprints, metres (a
-        plan with walls)."""
+        """Least and greatest ``(x, y)`` of the wall axes, footprints and rooms, metres
+        (a plan with walls or rooms, :attr:`has_extent`)."""
         import shapely
 
         xy = self.plan.walls[["x0", "y0", "x1", "y1"]].to_numpy(dtype=np.float64).reshape(-1, 2)
-        b = shapely.total_bounds(self.polys)  # NaN when every footprint is empty
-        return np.fmin(xy.min(axis=0), b[:2]), np.fmax(xy.max(axis=0), b[2:])
+        lo, hi = np.full(2, np.nan), np.full(2, np.nan)
+        if len(xy):
+            b = shapely.total_bounds(self.polys)  # NaN when every footprint is empty
+            lo, hi = np.fmin(xy.min(axis=0), b[:2]), np.fmax(xy.max(axis=0), b[2:])
+        if len(self.room_polys):
+            r = shapely.total_bounds(self.room_polys)
+            lo, hi = np.fmin(lo, r[:2]), np.fmax(hi, r[2:])
+        return lo, hi
+
+    @property
+    def has_extent(self) -> bool:
+        """Whether the plan has walls or rooms to frame (:attr:`extent` is finite)."""
+        return bool(len(self.plan.walls) or np.isfinite(self.extent[0]).all())
 
 
 def _exterior_rings(polys, transform: Callable[[np.ndarray], np.ndarray] | None = None) -> list:

@@ -1,6 +1,6 @@
 """The GeoJSON export of a floor plan (:func:`write_geojson`; people, GIS, the scorer): a
-``FeatureCollection`` of wall axes, wall footprints and merged faces
-(:func:`floorplan_geojson`).
+``FeatureCollection`` of wall axes, wall footprints and merged faces, clutter,
+junctions, rooms and doors (:func:`floorplan_geojson`).
 
 Polygons follow RFC 7946 section 3.1.6: counter-clockwise outer rings, clockwise holes.
 A collection-level foreign member ``floorscan`` holds the frame, units, plan metadata
@@ -65,14 +65,21 @@ def floorplan_geojson(
     face; ``face_id``, ``wall_id``, ``n_segments``, ``n_inliers``); after the
     structure passes also ``clutter`` (LineString of a piece that is not a wall:
     ``clutter_id``, ``length_m``, ``reason``) and ``junction`` (Point where two walls
-    meet: ``junction`` L, T or X, ``wall_a``, ``wall_b``). Thickness and length are
-    rounded to 4 decimals (metres), coordinates to :data:`GEOJSON_DECIMALS`.
+    meet: ``junction`` L, T or X, ``wall_a``, ``wall_b``); with rooms also ``room``
+    (Polygon of a room, holes allowed, exterior counter-clockwise and holes
+    clockwise: ``room_id``, ``name``, ``room_kind`` ``room``, ``corridor`` or
+    ``space``, ``area_m2``, ``perimeter_m``) and ``door`` (LineString of the opening
+    in its wall's line: ``door_id``, ``width_m``, ``wall_id``, -1 for none, and the
+    rooms it joins, ``room_a`` < ``room_b``). Thickness, length, width (metres) and
+    area (m2) are rounded to 4 decimals, coordinates to :data:`GEOJSON_DECIMALS`.
 
     Collection members: ``crs`` (only in the map frame: :data:`LOCAL_FRAME_WKT`, see
     the module docstring) and ``floorscan``: ``frame`` (``"map"``, or ``"WGS84"``
     with a georeference), ``units`` (of the coordinates: ``"metres"`` or
     ``"degrees"``), ``crs`` (in words), ``dataset``, ``ordering``, ``extractor``,
-    ``k``, ``n_walls``, ``n_walls_both_faces``, ``n_faces``, ``lengths``,
+    ``k``, ``n_walls``, ``n_walls_both_faces``, ``n_faces``, ``lengths``, (after the
+    structure passes) ``n_clutter``, ``n_junctions``, (with rooms or doors)
+    ``n_rooms``, ``n_doors``, ``floor_area_m2`` (the rooms' areas summed, m2),
     ``time_stamp`` (ISO 8601, :func:`~floorscan.floorplan.metadata.export_time`), ``generator``,
     ``georeference`` (None or :meth:`~floorscan.floorplan.georeference.Georeference.as_dict`).
 
@@ -155,12 +162,62 @@ def _floorplan_geojson(exports: PlanExports, meta: PlanMetadata, georeference: G
         for (x, y), kind, a, b in zip(xy.tolist(), col(j, "kind"), col(j, "wall_a"), col(j, "wall_b")):
             geom = {"type": "Point", "coordinates": [round(x, nd), round(y, nd)]}
             feats.append(_feature("junction", geom, {"junction": str(kind), "wall_a": int(a), "wall_b": int(b)}))
+    feats += _room_features(exports, transform, nd) + _door_features(plan.doors, ends, line)
     doc: dict = {"type": "FeatureCollection"}
     if georeference is None:
         doc["crs"] = {"type": "name", "properties": {"name": LOCAL_FRAME_WKT}}
     doc["floorscan"] = _metadata(plan, meta, georeference)
     doc["features"] = feats
     return doc
+
+
+def _room_features(exports: PlanExports, transform: Callable | None, nd: int) -> list[dict]:
+    """A ``room`` Polygon feature per room with a polygon
+    (:attr:`~floorscan.floorplan.footprints.PlanExports.room_polys`: counter-clockwise
+    exterior, clockwise holes), ``transform``-ed ((P, 2) -> (P, 2), e.g. to longitude
+    and latitude) and oriented again in those coordinates, rounded to ``nd``
+    decimals (what ``shapely.to_geojson`` writes, read back and rounded)."""
+    import shapely
+
+    r = exports.plan.rooms
+    polys = exports.room_polys
+    if not len(r):
+        return []
+    ok = ~(shapely.is_missing(polys) | shapely.is_empty(polys))
+    if transform is not None and ok.any():
+        polys = polys.copy()
+        polys[ok] = shapely.orient_polygons(shapely.transform(polys[ok], transform), exterior_cw=False)
+    feats = []
+    for room_id, name, kind, area, perimeter, poly, keep in zip(
+        r["room_id"].tolist(), r["name"].tolist(), r["kind"].tolist(), r["area_m2"].to_numpy(np.float64).tolist(),
+        r["perimeter_m"].to_numpy(np.float64).tolist(), polys.tolist(), ok.tolist(),
+    ):  # fmt: skip
+        if not keep:
+            continue
+        props = {
+            "room_id": int(room_id), "name": str(name), "room_kind": str(kind),
+            "area_m2": round(area, 4), "perimeter_m": round(perimeter, 4),
+        }  # fmt: skip
+        feats.append(_feature("room", _round_coords(json.loads(shapely.to_geojson(poly)), nd), props))
+    return feats
+
+
+def _door_features(doors, ends: Callable, line: Callable) -> list[dict]:
+    """A ``door`` LineString feature per door: the opening, ``ends`` transformed,
+    ``line`` rounded."""
+    if not len(doors):
+        return []
+    d = doors
+    return [
+        _feature("door", line(e), {
+            "door_id": int(door_id), "width_m": round(width, 4), "wall_id": int(wall_id),
+            "room_a": int(a), "room_b": int(b),
+        })  # fmt: skip
+        for door_id, e, width, wall_id, a, b in zip(
+            d["door_id"].tolist(), ends(d), d["width_m"].to_numpy(np.float64).tolist(), d["wall_id"].tolist(),
+            d["room_a"].tolist(), d["room_b"].tolist(),
+        )
+    ]
 
 
 def _feature(kind: str, geometry: dict, props: dict) -> dict:

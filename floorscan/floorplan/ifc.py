@@ -1,7 +1,9 @@
 """The IFC4 export of a floor plan (:func:`write_ifc`; BIM, with IfcOpenShell's API):
 IfcProject > IfcSite > IfcBuilding > IfcBuildingStorey, an ``IfcWall`` per wall placed
 relative to its storey, an ``IfcRelConnectsPathElements`` per junction of two walls, an
-``IfcFurniture`` per clutter piece, units metres, a STEP header naming the dataset and floorscan's
+``IfcFurniture`` per clutter piece, an ``IfcSpace`` per room (:func:`_add_spaces`), an
+``IfcDoor`` per door in an ``IfcOpeningElement`` that voids its wall
+(:func:`_add_doors`), units metres, a STEP header naming the dataset and floorscan's
 version, a time stamp from the plan's ``timestamp``, else ``SOURCE_DATE_EPOCH``, else 0
 (:func:`~floorscan.floorplan.metadata.export_time`: never the clock), GlobalIds from
 the plan's name (:func:`_name_ifc`), so the same plan gives the same bytes.
@@ -44,9 +46,11 @@ def _ifc_model(plan: FloorPlan, georeference: Georeference | None):
     try:
         import ifcopenshell.api.aggregate
         import ifcopenshell.api.context
+        import ifcopenshell.api.feature
         import ifcopenshell.api.georeference
         import ifcopenshell.api.geometry
         import ifcopenshell.api.project
+        import ifcopenshell.api.profile
         import ifcopenshell.api.pset
         import ifcopenshell.api.root
         import ifcopenshell.api.spatial
@@ -93,10 +97,7 @@ def _ifc_model(plan: FloorPlan, georeference: Georeference | None):
         ) if math.hypot(r[3] - r[1], r[4] - r[2]) > 0
     ]  # fmt: skip
     walls = [api.root.create_entity(model, ifc_class="IfcWall", name=f"Wall {r[0]}") for r in rows]
-    if walls:
-        api.spatial.assign_container(model, products=walls, relating_structure=storey)
-        # assign_container keeps the walls in a set: their order changed from run to run
-        storey.ContainsElements[0].RelatedElements = tuple(walls)
+    _contain(model, storey, walls)
     for wall, (wall_id, x0, y0, x1, y1, thickness, height, paired) in zip(walls, rows):
         length = math.hypot(x1 - x0, y1 - y0)
         dx, dy = (x1 - x0) / length, (y1 - y0) / length
@@ -115,7 +116,32 @@ def _ifc_model(plan: FloorPlan, georeference: Georeference | None):
         api.pset.edit_qto(model, qto=qto, properties={"Length": length, "Width": thickness, "Height": height})
     _connect_walls(model, plan, dict(zip([r[0] for r in rows], walls)), {r[0]: r[1:5] for r in rows})
     _add_clutter(model, plan, storey, body)
+    heights = w["height_m"].to_numpy(dtype=np.float64)
+    height = float(heights.max()) if len(heights) else _default_wall_height()
+    _add_spaces(model, plan, storey, body, height)
+    _add_doors(model, plan, storey, body, dict(zip([r[0] for r in rows], zip(walls, rows))))
     return model
+
+
+def _default_wall_height() -> float:
+    """The height of a plan without walls, metres (``floorplan.wall_height_m``'s default)."""
+    from floorscan.floorplan.params import FloorplanParams
+
+    return float(FloorplanParams().wall_height_m)
+
+
+def _contain(model, structure, products: list) -> None:
+    """``products`` contained in ``structure`` (``spatial.assign_container``), the
+    containment's elements in creation order: the API keeps them in a set, whose
+    order changed from run to run, and adds to the structure's one containment (so
+    setting it to ``products`` alone would drop the elements contained before)."""
+    import ifcopenshell.api.spatial
+
+    if not products:
+        return
+    ifcopenshell.api.spatial.assign_container(model, products=products, relating_structure=structure)
+    for rel in structure.ContainsElements:
+        rel.RelatedElements = tuple(sorted(rel.RelatedElements, key=lambda e: e.id()))
 
 
 def _connect_walls(model, plan: FloorPlan, wall_of_id: dict, axis_of_id: dict) -> None:
@@ -159,8 +185,7 @@ def _add_clutter(model, plan: FloorPlan, storey, body) -> None:
     items = [api.root.create_entity(model, ifc_class="IfcFurniture", name=f"Clutter {r[0]}") for r in rows]
     if not items:
         return
-    api.spatial.assign_container(model, products=items, relating_structure=storey)
-    storey.ContainsElements[-1].RelatedElements = tuple(items)  # a set in the API: fix the order
+    _contain(model, storey, items)
     for item, (_, x0, y0, x1, y1, reason) in zip(items, rows):
         length = math.hypot(x1 - x0, y1 - y0)
         dx, dy = (x1 - x0) / length, (y1 - y0) / length
@@ -174,6 +199,135 @@ def _add_clutter(model, plan: FloorPlan, storey, body) -> None:
         api.geometry.assign_representation(model, product=item, representation=rep)
 
 
+#: Doors in IFC: the height of an ``IfcDoor`` and its opening (a plan knows its doors'
+#: widths, not their heights; at most the wall's height), the door leaf's thickness,
+#: and how far the opening reaches past each face of its wall (so it cuts the wall
+#: cleanly), metres.
+DOOR_IFC_HEIGHT_M, DOOR_IFC_THICKNESS_M, OPENING_IFC_MARGIN_M = 2.1, 0.05, 0.05
+
+
+def _placement(x: float, y: float, dx: float = 1.0, dy: float = 0.0) -> np.ndarray:
+    """4 x 4 placement matrix: origin ``(x, y, 0)`` metres, local x along the unit
+    vector ``(dx, dy)``, z up."""
+    return np.array([[dx, -dy, 0.0, x], [dy, dx, 0.0, y], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+
+
+def _add_spaces(model, plan: FloorPlan, storey, body, height: float) -> None:
+    """An ``IfcSpace`` per room with a polygon, aggregated into the storey
+    (``aggregate.assign_object``): ``Name`` the room's name, ``LongName`` its kind
+    (room, corridor, space), placed at the least corner of its bounds relative to the
+    storey, a body extruded ``height`` metres up from its footprint
+    (``profile.add_arbitrary_profile``, an ``IfcArbitraryClosedProfileDef``, or with
+    holes ``add_arbitrary_profile_with_voids``, an ``IfcArbitraryProfileDefWithVoids``;
+    ``geometry.add_profile_representation``) and ``Qto_SpaceBaseQuantities``
+    ``NetFloorArea`` (``area_m2``), ``GrossPerimeter`` (``perimeter_m``) and ``Height``."""
+    import ifcopenshell.api
+    import shapely
+
+    api = ifcopenshell.api
+    r = plan.rooms
+    rows = [
+        row for row in zip(
+            r["name"].tolist(), r["kind"].tolist(), r["area_m2"].to_numpy(np.float64).tolist(),
+            r["perimeter_m"].to_numpy(np.float64).tolist(), r["polygon"].tolist(),
+        ) if row[4] is not None and not row[4].is_empty
+    ]  # fmt: skip
+    spaces = [api.root.create_entity(model, ifc_class="IfcSpace", name=str(row[0])) for row in rows]
+    if not spaces:
+        return
+    api.aggregate.assign_object(model, relating_object=storey, products=spaces)
+    for rel in storey.IsDecomposedBy:  # a set in the API: creation order
+        rel.RelatedObjects = tuple(sorted(rel.RelatedObjects, key=lambda e: e.id()))
+    for space, (_, kind, area, perimeter, poly) in zip(spaces, rows):
+        space.LongName = str(kind)
+        poly = shapely.orient_polygons(poly, exterior_cw=False)
+        x0, y0 = poly.bounds[:2]
+        api.geometry.edit_object_placement(model, product=space, matrix=_placement(x0, y0))
+        outer = (np.asarray(poly.exterior.coords) - (x0, y0)).tolist()
+        holes = [(np.asarray(ring.coords) - (x0, y0)).tolist() for ring in poly.interiors]
+        if holes:
+            profile = api.profile.add_arbitrary_profile_with_voids(model, outer_profile=outer, inner_profiles=holes)
+            _profile_curve_2d(model, profile)
+        else:
+            profile = api.profile.add_arbitrary_profile(model, profile=outer)
+        rep = api.geometry.add_profile_representation(
+            model, context=body, profile=profile, depth=height, cardinal_point=None
+        )
+        api.geometry.assign_representation(model, product=space, representation=rep)
+        qto = api.pset.add_qto(model, product=space, name="Qto_SpaceBaseQuantities")
+        api.pset.edit_qto(
+            model, qto=qto, properties={"NetFloorArea": area, "GrossPerimeter": perimeter, "Height": height}
+        )
+
+
+def _profile_curve_2d(model, profile) -> None:
+    """The outer curve of ``profile`` (an ``IfcArbitraryProfileDefWithVoids`` of
+    ``profile.add_arbitrary_profile_with_voids``) in 2D: IfcOpenShell 0.9.0 puts
+    its 2D points in an ``IfcCartesianPointList3D`` (IFC4 wants a profile's curves in
+    2D: WR ``IfcArbitraryClosedProfileDef.WR1``), its holes in a 2D list."""
+    points = profile.OuterCurve.Points
+    if points.is_a("IfcCartesianPointList3D") and all(len(p) == 2 for p in points.CoordList):
+        profile.OuterCurve.Points = model.createIfcCartesianPointList2D(points.CoordList)
+        model.remove(points)
+
+
+def _add_doors(model, plan: FloorPlan, storey, body, wall_of_id: dict) -> None:
+    """An ``IfcDoor`` per door (``OverallWidth`` its ``width_m``, ``OverallHeight``
+    :data:`DOOR_IFC_HEIGHT_M` or the wall's height if lower), contained in the storey,
+    placed at the opening's start with x along its wall's axis, a body
+    (``add_wall_representation``: width x :data:`DOOR_IFC_THICKNESS_M`, centred on the
+    axis). In a wall (``wall_of_id``: wall_id -> (IfcWall, its row)) the door sits
+    on the wall's axis, in an ``IfcOpeningElement`` as wide and high as the door
+    and :data:`OPENING_IFC_MARGIN_M` thicker than the wall on each side that voids
+    the wall (``feature.add_feature``: ``IfcRelVoidsElement``) and that the door
+    fills (``feature.add_filling``: ``IfcRelFillsElement``); a door of no plan wall
+    (``wall_id`` -1) has no opening and is placed along its own segment."""
+    import ifcopenshell.api
+
+    api = ifcopenshell.api
+    d = plan.doors
+    doors = []
+    for door_id, x0, y0, x1, y1, width, wall_id in zip(
+        *(d[c].tolist() for c in ("door_id", "x0", "y0", "x1", "y1", "width_m", "wall_id"))
+    ):
+        wall_id = int(wall_id)
+        wall, row = wall_of_id.get(wall_id, (None, None))
+        if wall is not None:
+            _, wx0, wy0, wx1, wy1, thickness, wall_height, _ = row
+            length = math.hypot(wx1 - wx0, wy1 - wy0)
+            ux, uy = (wx1 - wx0) / length, (wy1 - wy0) / length
+            along = min((x0 - wx0) * ux + (y0 - wy0) * uy, (x1 - wx0) * ux + (y1 - wy0) * uy)
+            sx, sy = wx0 + along * ux, wy0 + along * uy  # the opening's start on the axis
+            height = min(DOOR_IFC_HEIGHT_M, float(wall_height))
+        else:
+            length = math.hypot(x1 - x0, y1 - y0)
+            ux, uy = ((x1 - x0) / length, (y1 - y0) / length) if length > 0 else (1.0, 0.0)
+            sx, sy, height = x0, y0, DOOR_IFC_HEIGHT_M
+        matrix = _placement(sx, sy, ux, uy)
+        door = api.root.create_entity(model, ifc_class="IfcDoor", name=f"Door {int(door_id)}")
+        door.OverallWidth, door.OverallHeight = float(width), height
+        doors.append(door)
+        api.geometry.edit_object_placement(model, product=door, matrix=matrix)
+        rep = api.geometry.add_wall_representation(
+            model, context=body, length=float(width), height=height, thickness=DOOR_IFC_THICKNESS_M,
+            offset=-DOOR_IFC_THICKNESS_M / 2.0,
+        )
+        api.geometry.assign_representation(model, product=door, representation=rep)
+        if wall is None:
+            continue
+        opening = api.root.create_entity(model, ifc_class="IfcOpeningElement", name=f"Opening {int(door_id)}")
+        opening.PredefinedType = "OPENING"
+        depth = float(thickness) + 2 * OPENING_IFC_MARGIN_M
+        rep = api.geometry.add_wall_representation(
+            model, context=body, length=float(width), height=height, thickness=depth, offset=-depth / 2.0
+        )
+        api.geometry.assign_representation(model, product=opening, representation=rep)
+        api.geometry.edit_object_placement(model, product=opening, matrix=matrix)
+        api.feature.add_feature(model, feature=opening, element=wall)
+        api.feature.add_filling(model, opening=opening, element=door)
+    _contain(model, storey, doors)
+
+
 def _name_ifc(model, plan: FloorPlan, metadata: PlanMetadata) -> None:
     """Name the IFC project by the plan's metadata and derive every GlobalId from its
     title and the creation order (:func:`_ifc_guid_list`): the same plan and title
@@ -182,7 +336,10 @@ def _name_ifc(model, plan: FloorPlan, metadata: PlanMetadata) -> None:
     project = model.by_type("IfcProject")[0]
     project.Name = metadata.title
     about = ", ".join(f"{k} {v or '-'}" for k, v in metadata.fields)
-    project.Description = f"floorscan floor plan: {about}, {len(plan.walls)} walls; map frame of the recording, metres"
+    rooms = f", {len(plan.rooms)} rooms, {len(plan.doors)} doors" if len(plan.rooms) or len(plan.doors) else ""
+    project.Description = (
+        f"floorscan floor plan: {about}, {len(plan.walls)} walls{rooms}; map frame of the recording, metres"
+    )
     roots = sorted(model.by_type("IfcRoot"), key=lambda e: e.id())
     for entity, guid in zip(roots, _ifc_guid_list(metadata.title, len(roots))):
         entity.GlobalId = guid

@@ -17,6 +17,8 @@ from dataclasses import dataclass
 from datetime import datetime, timezone
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 if TYPE_CHECKING:
     from floorscan.floorplan.georeference import Georeference
     from floorscan.floorplan.plan import FloorPlan
@@ -113,7 +115,9 @@ class PlanMetadata:
 
 def _metadata(plan: FloorPlan, meta: PlanMetadata, georeference: Georeference | None = None) -> dict:
     """The plan's metadata as the GeoJSON member ``floorscan`` holds it (the DXF's
-    metadata are its entries as text, :func:`floorscan.floorplan.dxf._dxf_metadata`)."""
+    metadata are its entries as text, :func:`floorscan.floorplan.dxf._dxf_metadata`):
+    after the structure passes also ``n_clutter`` and ``n_junctions``; with rooms or
+    doors also ``n_rooms``, ``n_doors`` and ``floor_area_m2`` (:func:`floor_area_m2`)."""
     return {
         "frame": "map" if georeference is None else "WGS84",
         "units": "metres" if georeference is None else "degrees",
@@ -128,7 +132,16 @@ def _metadata(plan: FloorPlan, meta: PlanMetadata, georeference: Georeference | 
         # a plan through the structure passes names its clutter and junctions
         **({"n_clutter": len(plan.clutter), "n_junctions": len(plan.junctions)}
            if len(plan.clutter) or len(plan.junctions) else {}),
+        # a plan with rooms names them, its doors and its floor area (the rooms' areas, m2)
+        **({"n_rooms": len(plan.rooms), "n_doors": len(plan.doors), "floor_area_m2": floor_area_m2(plan)}
+           if len(plan.rooms) or len(plan.doors) else {}),
     }  # fmt: skip
+
+
+def floor_area_m2(plan: FloorPlan) -> float:
+    """The plan's floor area: the sum of its rooms' ``area_m2`` (corridors and open
+    spaces included), square metres, rounded to 4 decimals; 0 without rooms."""
+    return round(float(plan.rooms["area_m2"].to_numpy(dtype=np.float64).sum()), 4) if len(plan.rooms) else 0.0
 
 
 def recording_timestamp(index_path: str | os.PathLike) -> int:

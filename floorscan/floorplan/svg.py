@@ -1,11 +1,14 @@
 """The SVG export of a floor plan (:func:`write_svg`; a browser): a plain SVG (no
 scripts) that scales to any window (``viewBox``, width and height 100 %), with a title,
 the wall polygons (walls of which one face was seen drawn lighter and dashed), axes,
-the clutter (thin dashed lines under the walls, when the plan has some), a
-scale bar of a round length in metres, a legend and the map frame's x (right) and y
-(up) axes; the map's y is up, SVG's down: the drawing is flipped. With a georeference
-(:class:`~floorscan.floorplan.georeference.Georeference`), a north arrow. The file is
-written atomically and is byte-identical when written again from the same input.
+the clutter (thin dashed lines under the walls, when the plan has some), the rooms
+(a light fill per kind under everything, holes left empty, a label with the name and
+area inside each) and the doors (the opening cleared across its wall and drawn as a
+coloured line), a scale bar of a round length in metres, a legend and the map frame's
+x (right) and y (up) axes; the map's y is up, SVG's down: the drawing is flipped. With
+a georeference (:class:`~floorscan.floorplan.georeference.Georeference`), a north
+arrow. The file is written atomically and is byte-identical when written again from
+the same input.
 Source: SVG 1.1 (W3C).
 """
 
@@ -13,13 +16,13 @@ from __future__ import annotations
 
 import math
 import os
-from typing import TYPE_CHECKING, Mapping
+from typing import TYPE_CHECKING, Mapping, Sequence
 from xml.sax.saxutils import escape
 
 from floorscan.core.files import atomic_path
 from floorscan.floorplan.footprints import PlanExports
 from floorscan.floorplan.georeference import Georeference, as_georeference
-from floorscan.floorplan.metadata import PlanMetadata, floorscan_version
+from floorscan.floorplan.metadata import PlanMetadata, floor_area_m2, floorscan_version
 
 if TYPE_CHECKING:
     from floorscan.floorplan.params import FloorplanParams
@@ -29,6 +32,15 @@ if TYPE_CHECKING:
 #: SVG layout, pixels of the viewBox (the SVG scales to the window): the plan's longer
 #: side, the least canvas width (title, scale bar and legend fit), margins and bands.
 SVG_PLAN_PX, SVG_MIN_WIDTH_PX, SVG_MARGIN_PX, SVG_HEAD_PX, SVG_FOOT_PX = 1000.0, 720.0, 20.0, 56.0, 84.0
+#: A legend row of a kind of room or of doors, pixels: the foot band grows by one each.
+SVG_LEGEND_ROW_PX = 19.0
+#: Room fills by kind (light, under the walls), the fill of another kind, and how the
+#: legend names each kind.
+SVG_ROOM_FILLS = {"room": "#fbefc4", "corridor": "#d3e8f5", "space": "#dff0d8"}
+SVG_ROOM_FILL_OTHER = "#eeeeee"
+SVG_ROOM_LABELS = {"room": "room", "corridor": "corridor", "space": "open space (not closed by walls)"}
+#: Colour of a door's opening.
+SVG_DOOR_COLOUR = "#d9480f"
 
 
 def _scale_bar_length(max_m: float) -> float:
@@ -56,6 +68,11 @@ def write_svg(
     its window, aspect kept. The plan is drawn in map metres inside a group whose
     transform ``matrix(s 0 0 -s tx ty)`` flips y (the map's y is up, SVG's down);
     ``s`` is pixels per metre. Each axis line has a tooltip (length x thickness).
+    With rooms: a fill per room under the walls (:data:`SVG_ROOM_FILLS`; holes by
+    ``fill-rule="evenodd"``), its name and area (``"12.4 m²"``) at its label point
+    (:attr:`~floorscan.floorplan.footprints.PlanExports.room_labels`), the counts and
+    floor area right of the title; with doors: the opening as a coloured line over a
+    white gap across its wall; a legend row per kind of room and one for doors.
     """
     _write_svg(PlanExports(plan), path, metadata or PlanMetadata(), as_georeference(georeference))
 
@@ -64,9 +81,12 @@ def _write_svg(
     exports: PlanExports, path: str | os.PathLike, meta: PlanMetadata, georeference: Georeference | None
 ) -> None:
     """:func:`write_svg` of a plan's :class:`~floorscan.floorplan.footprints.PlanExports`."""
-    walls = exports.plan.walls
+    plan = exports.plan
+    walls = plan.walls
     n = len(walls)
-    if n:
+    kinds = _room_kinds(plan.rooms)
+    n_extra = len(kinds) + (1 if len(plan.doors) else 0)  # legend rows of rooms and doors
+    if exports.has_extent:
         lo, hi = exports.extent
         (xmin, ymin), (xmax, ymax) = (lo - 0.5).tolist(), (hi + 0.5).tolist()  # a margin, metres
     else:
@@ -75,7 +95,7 @@ def _write_svg(
     pw, ph = (xmax - xmin) * s, (ymax - ymin) * s
     m = SVG_MARGIN_PX
     width = max(pw + 2 * m, SVG_MIN_WIDTH_PX)
-    height = SVG_HEAD_PX + ph + SVG_FOOT_PX
+    height = SVG_HEAD_PX + ph + SVG_FOOT_PX + SVG_LEGEND_ROW_PX * n_extra
     tx, ty = (width - pw) / 2 - s * xmin, SVG_HEAD_PX + s * ymax
     paired = walls["paired"].to_numpy(dtype=bool)
     n_paired = int(paired.sum())
@@ -89,6 +109,8 @@ def _write_svg(
         f"floorscan {floorscan_version()} floor plan. {about}; walls: {n}. "
         "Coordinates: map frame of the recording (x right, y up), metres."
     )
+    if len(plan.rooms) or len(plan.doors):
+        desc += f" Rooms: {len(plan.rooms)} ({floor_area_m2(plan):.1f} m2 floor area); doors: {len(plan.doors)}."
     if georeference is not None:
         desc += (
             f" Georeference: origin lat {georeference.lat}, lon {georeference.lon} (WGS84), "
@@ -105,9 +127,15 @@ def _write_svg(
         f'<rect id="background" width="{width:.2f}" height="{height:.2f}" fill="#ffffff"/>',
         f'<text id="title" x="{m:.2f}" y="26" font-size="18" font-weight="bold">{_xml(title)}</text>',
         f'<text id="subtitle" x="{m:.2f}" y="45" font-size="12" fill="#444444">{_xml(sub)}</text>',
-        f'<g id="plan" transform="matrix({s:.10g} 0 0 {-s:.10g} {tx:.6f} {ty:.6f})">',
     ]
-    clutter = exports.plan.clutter
+    if len(plan.rooms) or len(plan.doors):
+        rooms, doors = _count(len(plan.rooms), "room"), _count(len(plan.doors), "door")
+        summary = f"{rooms}, {floor_area_m2(plan):.1f} m\u00b2 \u00b7 {doors}"
+        out.append(f'<text id="rooms-summary" x="{width - m:.2f}" y="26" font-size="12" text-anchor="end" '
+                   f'fill="#444444">{_xml(summary)}</text>')
+    out.append(f'<g id="plan" transform="matrix({s:.10g} 0 0 {-s:.10g} {tx:.6f} {ty:.6f})">')
+    out += _svg_rooms(exports)
+    clutter = plan.clutter
     if len(clutter):  # under the walls: thin, dashed, light
         out.append(f'<g id="clutter" stroke="#9aa5b1" stroke-width="{1.2 * px:.6g}" '
                    f'stroke-dasharray="{4 * px:.6g} {3 * px:.6g}" fill="none">')
@@ -135,10 +163,15 @@ def _write_svg(
             f'<line x1="{x0:.4f}" y1="{y0:.4f}" x2="{x1:.4f}" y2="{y1:.4f}">'
             f"<title>wall {wall_id}: {length:.2f} m x {thickness:.2f} m</title></line>"
         )
-    out += ["</g>", "</g>"]
+    out.append("</g>")
+    out += _svg_doors(plan, px)
+    out.append("</g>")
+    out += _svg_room_labels(exports, s, tx, ty)
     out += _svg_scale_bar(s, m, height - 30)
     out += _svg_frame_axes(m + 250, height - 30, georeference)
-    out += _svg_legend(width - m - 270, height - (80 if len(clutter) else 74), with_clutter=bool(len(clutter)))
+    legend_y = height - (80 if len(clutter) else 74) - SVG_LEGEND_ROW_PX * n_extra
+    out += _svg_legend(width - m - 270, legend_y, with_clutter=bool(len(clutter)), room_kinds=kinds,
+                       with_doors=bool(len(plan.doors)))
     out.append("</svg>")
     with atomic_path(path) as tmp:
         tmp.write_text("\n".join(out) + "\n", encoding="utf-8")
@@ -189,13 +222,105 @@ def _svg_frame_axes(x: float, y: float, georeference: Georeference | None) -> li
     return out
 
 
-def _svg_legend(x: float, y: float, with_clutter: bool = False) -> list[str]:
+def _room_kinds(rooms) -> list[str]:
+    """The kinds of room the plan has, in the order of :data:`SVG_ROOM_FILLS` (others
+    after, sorted)."""
+    present = {str(k) for k in rooms["kind"].tolist()}
+    return [k for k in SVG_ROOM_FILLS if k in present] + sorted(present - set(SVG_ROOM_FILLS))
+
+
+def _svg_path(poly) -> str:
+    """SVG path data of a polygon, map metres: ``M x,y L ... Z`` per ring (exterior,
+    then holes; drawn with ``fill-rule="evenodd"`` the holes stay empty)."""
+    rings = [poly.exterior, *poly.interiors]
+    return " ".join("M " + " L ".join(f"{x:.4f},{y:.4f}" for x, y in ring.coords[:-1]) + " Z" for ring in rings)
+
+
+def _svg_rooms(exports: PlanExports) -> list[str]:
+    """The rooms under everything else in the plan group (map metres): a light fill
+    per kind (:data:`SVG_ROOM_FILLS`), holes by ``fill-rule="evenodd"``, a tooltip
+    with the name, kind and area."""
+    r = exports.plan.rooms
+    if not len(r):
+        return []
+    out = ['<g id="rooms" stroke="none" fill-rule="evenodd">']
+    for room_id, name, kind, area, poly in zip(
+        r["room_id"].tolist(), r["name"].tolist(), r["kind"].tolist(), r["area_m2"].tolist(),
+        exports.room_polys.tolist(),
+    ):  # fmt: skip
+        if poly is None or poly.is_empty:
+            continue
+        fill = SVG_ROOM_FILLS.get(str(kind), SVG_ROOM_FILL_OTHER)
+        out.append(f'<path id="room-{int(room_id)}" d="{_svg_path(poly)}" fill="{fill}"><title>'
+                   f"{_xml(str(name))} ({_xml(str(kind))}): {float(area):.1f} m\u00b2</title></path>")
+    out.append("</g>")
+    return out
+
+
+def _svg_doors(plan: FloorPlan, px: float) -> list[str]:
+    """The doors above the walls (map metres, ``px`` metres a pixel): the opening
+    cleared to white across its wall's thickness (the gap a reader sees), then a
+    coloured line (:data:`SVG_DOOR_COLOUR`) with a tooltip (width, rooms joined)."""
+    d = plan.doors
+    if not len(d):
+        return []
+    thick = dict(zip(plan.walls["wall_id"].tolist(), plan.walls["thickness_m"].tolist()))
+    out = ['<g id="doors" fill="none" stroke-linecap="butt">']
+    for door_id, x0, y0, x1, y1, width, wall_id, a, b in zip(
+        *(d[c].tolist() for c in ("door_id", "x0", "y0", "x1", "y1", "width_m", "wall_id", "room_a", "room_b"))
+    ):
+        xy = f'x1="{x0:.4f}" y1="{y0:.4f}" x2="{x1:.4f}" y2="{y1:.4f}"'
+        if wall_id in thick:
+            out.append(f'<line {xy} stroke="#ffffff" stroke-width="{float(thick[wall_id]) + 2 * px:.6g}"/>')
+        out.append(
+            f'<line {xy} stroke="{SVG_DOOR_COLOUR}" stroke-width="{3 * px:.6g}"><title>door {int(door_id)}: '
+            f"{float(width):.2f} m, rooms {int(a)} and {int(b)}</title></line>"
+        )
+    out.append("</g>")
+    return out
+
+
+def _svg_room_labels(exports: PlanExports, s: float, tx: float, ty: float) -> list[str]:
+    """A label per room at its label point
+    (:attr:`~floorscan.floorplan.footprints.PlanExports.room_labels`), in pixels
+    (outside the flipped plan group, so the text stands upright): the name, and the
+    area in m\u00b2 below it."""
+    r = exports.plan.rooms
+    if not len(r):
+        return []
+    out = ['<g id="room-labels" font-size="12" text-anchor="middle" fill="#333333">']
+    for name, area, (x, y) in zip(r["name"].tolist(), r["area_m2"].tolist(), exports.room_labels.tolist()):
+        if x != x:  # NaN: no polygon
+            continue
+        lx, ly = tx + s * x, ty - s * y
+        out.append(
+            f'<text x="{lx:.2f}" y="{ly - 2:.2f}">{_xml(str(name))}<tspan x="{lx:.2f}" dy="13" font-size="10">'
+            f"{float(area):.1f} m\u00b2</tspan></text>"
+        )
+    out.append("</g>")
+    return out
+
+
+def _svg_legend(
+    x: float, y: float, with_clutter: bool = False, room_kinds: Sequence[str] = (), with_doors: bool = False
+) -> list[str]:
     """The legend at ``(x, y)`` px: the kinds of things the plan draws (clutter only
-    when the plan has some)."""
+    when the plan has some; a row per kind of room and one for doors only when the
+    plan has them, :data:`SVG_LEGEND_ROW_PX` apart)."""
     clutter = [
         '<line x1="0" y1="64" x2="22" y2="64" stroke="#9aa5b1" stroke-width="1.2" stroke-dasharray="4 3"/>',
         '<text x="30" y="69">clutter (furniture, not a wall)</text>',
     ] if with_clutter else []  # fmt: skip
+    rows, base = [], (69.0 if with_clutter else 50.0)
+    for kind in room_kinds:
+        base += SVG_LEGEND_ROW_PX
+        fill = SVG_ROOM_FILLS.get(kind, SVG_ROOM_FILL_OTHER)
+        rows += [f'<rect x="0" y="{base - 10:g}" width="22" height="10" fill="{fill}" stroke="#bbbbbb" '
+                 'stroke-width="0.6"/>', f'<text x="30" y="{base:g}">{_xml(SVG_ROOM_LABELS.get(kind, kind))}</text>']
+    if with_doors:
+        base += SVG_LEGEND_ROW_PX
+        rows += [f'<line x1="0" y1="{base - 5:g}" x2="22" y2="{base - 5:g}" stroke="{SVG_DOOR_COLOUR}" '
+                 'stroke-width="3"/>', f'<text x="30" y="{base:g}">door (opening in a wall)</text>']
     return [
         f'<g id="legend" transform="translate({x:.2f} {y:.2f})" font-size="12">',
         '<rect x="0" y="0" width="22" height="10" fill="#8c8c8c" stroke="#333333" stroke-width="0.6"/>',
@@ -206,8 +331,14 @@ def _svg_legend(x: float, y: float, with_clutter: bool = False) -> list[str]:
         '<line x1="0" y1="45" x2="22" y2="45" stroke="#cc0000" stroke-width="1"/>',
         '<text x="30" y="50">wall axis</text>',
         *clutter,
+        *rows,
         "</g>",
     ]
+
+
+def _count(n: int, noun: str) -> str:
+    """``"1 door"``, ``"3 doors"``."""
+    return f"{n} {noun}{'' if n == 1 else 's'}"
 
 
 def _xml(s: str) -> str:

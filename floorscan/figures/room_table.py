@@ -1,0 +1,70 @@
+"""The rooms of a floor plan on the front page (:mod:`floorscan.figures.report`): read
+from the plan's GeoJSON (:func:`read_plan_rooms`: its ``room`` features,
+:func:`floorscan.floorplan.geojson.floorplan_geojson`) and shown as a table of name,
+kind and area with the total floor area (:func:`rooms_table_html`).
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import os
+
+
+def read_plan_rooms(path: str | os.PathLike) -> list[dict]:
+    """The rooms of a floor plan's GeoJSON, in the file's order.
+
+    Parameters
+    ----------
+    path : path
+        A plan's ``.geojson`` (floorplan stage).
+
+    Returns
+    -------
+    list of dict
+        One per feature of ``kind`` ``room``: ``room_id`` (int), ``name`` (str),
+        ``kind`` (its ``room_kind``: ``room``, ``corridor`` or ``space``) and
+        ``area_m2`` (float, square metres). Empty for a plan without rooms.
+
+    Raises
+    ------
+    OSError, ValueError
+        When the file cannot be read or is not JSON.
+    """
+    with open(path, encoding="utf-8") as fh:
+        doc = json.load(fh)
+    rooms = []
+    for feat in doc.get("features", []):
+        p = feat.get("properties") or {}
+        if p.get("kind") == "room":
+            rooms.append({
+                "room_id": int(p.get("room_id", len(rooms))), "name": str(p.get("name", "")),
+                "kind": str(p.get("room_kind", "")), "area_m2": float(p.get("area_m2", 0.0)),
+            })  # fmt: skip
+    return rooms
+
+
+def rooms_table_html(rooms: list[dict] | None) -> list[str]:
+    """The front page's rooms: a heading and a table of name, kind and area (m², one
+    decimal), then the total floor area (the rooms' areas summed, m²); nothing for a
+    plan without rooms.
+
+    Parameters
+    ----------
+    rooms : list of dict or None
+        :func:`read_plan_rooms`: ``name``, ``kind``, ``area_m2``.
+    """
+    if not rooms:
+        return []
+    esc = html.escape
+    rows = "".join(
+        f'<tr><td>{esc(r["name"])}</td><td>{esc(r["kind"])}</td><td class="num">{r["area_m2"]:.1f}</td></tr>'
+        for r in rooms
+    )
+    total = sum(r["area_m2"] for r in rooms)
+    return [
+        f"<h3>Rooms ({len(rooms)})</h3>",
+        '<table class="rooms"><thead><tr><th>room</th><th>kind</th><th>area m²</th></tr></thead>'
+        f'<tbody>{rows}</tbody><tfoot><tr><th colspan="2">floor area</th><td class="num">{total:.1f}</td></tr>'
+        "</tfoot></table>",
+    ]
