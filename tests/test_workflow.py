@@ -176,6 +176,51 @@ def test_default_run_writes_the_answer(default_run):
     assert "<svg" in (out / "floorplan.svg").read_text()
 
 
+def test_default_run_rooms_and_doors(default_run):
+    """Issue 34 on the demo (a corridor and four rooms, five doors between them): the
+    recommended plan's rooms and doors against the simulator's (evaluation/
+    room_scores.csv; measured: 5 of 5 rooms matched, mean IoU 0.95, 5 of 5 doors within
+    3 cm of their centre), and in every export: GeoJSON rings valid and counter-
+    clockwise, an IfcSpace per room and an IfcDoor per door that validate, DXF layers
+    ROOM and DOOR that audit clean."""
+    import json
+
+    import ezdxf
+    import ifcopenshell
+    import ifcopenshell.validate
+    import pandas as pd
+    import shapely
+
+    out = default_run / "results" / "demo"
+    scores = pd.read_csv(out / "evaluation" / "room_scores.csv").set_index("plan")
+    rec = scores.loc["recommended"]
+    assert rec["n_plan_rooms"] == rec["n_true_rooms"] == 5
+    assert rec["room_precision"] == rec["room_recall"] == 1.0 and rec["room_mean_iou"] >= 0.9
+    assert rec["n_true_doors"] == 5 and rec["door_recall"] == rec["door_precision"] == 1.0
+    assert rec["door_centre_error_m"] <= 0.2
+    plan = json.loads((out / "floorplan.geojson").read_text())
+    rooms = [f for f in plan["features"] if f["properties"]["kind"] == "room"]
+    doors = [f for f in plan["features"] if f["properties"]["kind"] == "door"]
+    assert len(rooms) == plan["floorscan"]["n_rooms"] == 5 and len(doors) == plan["floorscan"]["n_doors"] == 5
+    kinds = sorted(f["properties"]["room_kind"] for f in rooms)
+    assert kinds == ["corridor", "room", "room", "room", "room"]
+    for f in rooms:
+        poly = shapely.geometry.shape(f["geometry"])
+        assert poly.is_valid and poly.exterior.is_ccw and all(not h.is_ccw for h in poly.interiors)
+        assert f["properties"]["area_m2"] == pytest.approx(poly.area, rel=1e-3)
+    assert all(0.6 <= f["properties"]["width_m"] <= 1.2 for f in doors)
+    model = ifcopenshell.open(str(out / "floorplan.ifc"))
+    assert len(model.by_type("IfcSpace")) == 5 and len(model.by_type("IfcDoor")) == 5
+    assert len(model.by_type("IfcOpeningElement")) == len(model.by_type("IfcRelVoidsElement")) == 5
+    logger = ifcopenshell.validate.json_logger()
+    ifcopenshell.validate.validate(str(out / "floorplan.ifc"), logger, express_rules=True)
+    assert logger.statements == []
+    doc = ezdxf.readfile(out / "floorplan.dxf")
+    assert not doc.audit().has_errors
+    msp = doc.modelspace()
+    assert len(msp.query('LWPOLYLINE[layer=="ROOM"]')) >= 5 and len(msp.query('LINE[layer=="DOOR"]')) == 5
+
+
 def test_a_bare_recording_path_runs_only_the_plan(default_run):
     """`--config path=...` (a user's own recording) builds the answer and nothing of the
     evaluation: no hulls, no grid of plans, no reference map, no scores."""

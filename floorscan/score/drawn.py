@@ -17,6 +17,9 @@ used to score a floor plan's walls (rule ``score_drawn``).
 - :func:`score_against_drawn`: completeness (the drawn faces the recording saw, within
   ``seen_m`` of its free space, that lie within tau of the plan's faces) and
   correctness (the plan's face length within tau of a drawn face) at 10 and 20 cm.
+- The rooms drawn by people (the dataset's ``reference: rooms``, a segmentation in the
+  drawing's pixel frame) are scored with the same transform in
+  :mod:`floorscan.score.drawn_rooms`.
 
 Only what the recording saw is scored: a drawing may hold rooms the robot never
 entered (intel's does).
@@ -320,7 +323,9 @@ def score_drawn_plans(plans: dict, image_path, grid, reference_cfg) -> tuple["pd
         :func:`align_drawn`'s info.
     overlay : dict
         What the overlay figure draws: ``drawn_xy`` (N, 2) and ``seen`` (N,), the
-        structure cells, each plan's faces.
+        structure cells, each plan's faces; and ``transform``, the
+        :class:`Similarity` (pixels -> map metres) the drawn rooms are scored with
+        (:func:`floorscan.score.drawn_rooms.score_drawn_rooms`: one alignment for both).
     """
     import pandas as pd
 
@@ -338,5 +343,5 @@ def score_drawn_plans(plans: dict, image_path, grid, reference_cfg) -> tuple["pd
         plan_faces[name] = plan_parts(path)["faces"]
         rows.append({"plan": name, **score_against_drawn(plan_faces[name], drawn_xy, seen, in_drawing=inside),
                      **{f"alignment_{k}": v for k, v in info.items() if k != "start"}})  # fmt: skip
-    overlay = {"drawn_xy": drawn_xy, "seen": seen, "structure": structure, "faces": plan_faces}
+    overlay = {"drawn_xy": drawn_xy, "seen": seen, "structure": structure, "faces": plan_faces, "transform": transform}
     return pd.DataFrame(rows), info, overlay

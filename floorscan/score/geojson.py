@@ -75,9 +75,13 @@ def _wall_faces(doc: dict, kind: str) -> np.ndarray:
     return as_segments(np.column_stack([xy[i], xy[i + 1]]))
 
 
+#: Kinds of the features that are parts of a wall (a door names the wall it is in).
+_WALL_KINDS = ("axis", "footprint", "face", "wall", None)
+
+
 def _wall_count(doc: dict) -> int:
     props = [feat.get("properties") or {} for feat in doc.get("features", [])]
-    ids = {p["wall_id"] for p in props if "wall_id" in p}
+    ids = {p["wall_id"] for p in props if "wall_id" in p and p.get("kind") in _WALL_KINDS}
     if ids:
         return len(ids)
     return sum(p.get("kind", "wall") in ("axis", "wall") for p in props)
@@ -88,7 +92,7 @@ def floorplan_wall_count(path) -> int:
 
     The floor plan has features of kind ``axis`` (centre line) and ``footprint``
     (polygon) per wall, sharing a ``wall_id``: the count is the number of distinct
-    ``wall_id``; without that property, the features of kind ``axis`` or ``wall`` (or
+    ``wall_id`` of those (a ``door`` names its wall too); without that property, the features of kind ``axis`` or ``wall`` (or
     without a kind).
     """
     return _wall_count(_feature_collection(path))

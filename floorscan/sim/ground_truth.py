@@ -6,8 +6,11 @@ one height (:func:`floorscan.sim.footprint.wall_footprint`): doors are gaps ther
 windows are gaps only where ``sill_m <= z < head_m``. The wall faces a scanner inside
 can see (:func:`wall_faces`) are the scoring reference; the parts of them the
 recording's returns lie on (:func:`observed_faces`) are the reference of recall. The
-``true_poses`` table (:func:`true_poses_frame`) holds the true scanner pose of every
-scan.
+true rooms (:func:`true_rooms`: the regions the walls enclose with every door closed)
+and doors (:func:`true_doors`: every opening of kind door and the rooms it joins) are
+what a floor plan's rooms and doors are scored against (:mod:`floorscan.score.rooms`;
+room segmentation as Bormann et al., ICRA 2016, score it). The ``true_poses`` table
+(:func:`true_poses_frame`) holds the true scanner pose of every scan.
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ from shapely.geometry import Point, Polygon
 from shapely.ops import unary_union
 
 from floorscan.sim.building import Building
-from floorscan.sim.footprint import wall_footprint, walls_union
+from floorscan.sim.footprint import building_outline, wall_footprint, walls_union
 
 if TYPE_CHECKING:
     from floorscan.sim.recording import Recording
@@ -166,6 +169,110 @@ def observed_faces(
     return out
 
 
+#: Pieces of the interior smaller than this are numerical crumbs, not rooms, m2.
+MIN_ROOM_AREA_M2 = 0.01
+#: A door's sides are probed this far beyond each face of its wall, metres.
+DOOR_PROBE_M = 0.05
+#: ``room_a`` / ``room_b`` of a door that leads outside.
+EXTERIOR = -1
+
+
+def true_rooms(building: Building) -> pd.DataFrame:
+    """The true rooms: the regions the walls enclose with every door closed.
+
+    A room is a connected piece of the building's interior (the filled outline of the
+    walls, :func:`floorscan.sim.footprint.building_outline`) minus the full-height wall
+    footprints without openings (:func:`floorscan.sim.footprint.walls_union`: doors
+    closed; windows do not matter in plan). Its outline runs along the wall faces.
+
+    Parameters
+    ----------
+    building : Building
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per room, ordered by the room's representative point (y, then x):
+        ``room_id`` (int64, 0..n-1), ``area_m2``, ``perimeter_m`` (float64) and
+        ``polygon`` (shapely Polygon, map frame, metres; holes where walls stand free
+        inside it, e.g. the core a ring corridor runs around). Pieces under
+        :data:`MIN_ROOM_AREA_M2` are dropped.
+    """
+    interior = building_outline(building).difference(walls_union(building))
+    polys = [
+        shapely.geometry.polygon.orient(p, 1.0)
+        for p in getattr(interior, "geoms", [interior])
+        if p.geom_type == "Polygon" and p.area >= MIN_ROOM_AREA_M2
+    ]
+    key = [(round(p.representative_point().y, 6), round(p.representative_point().x, 6)) for p in polys]
+    polys = [polys[i] for i in sorted(range(len(polys)), key=key.__getitem__)]
+    return pd.DataFrame({
+        "room_id": np.arange(len(polys), dtype=np.int64),
+        "area_m2": np.array([p.area for p in polys], dtype=np.float64),
+        "perimeter_m": np.array([p.length for p in polys], dtype=np.float64),
+        "polygon": pd.Series(polys, dtype=object),
+    })  # fmt: skip
+
+
+def true_doors(building: Building, rooms: pd.DataFrame | None = None) -> pd.DataFrame:
+    """The true doors: every opening of kind ``door`` and the true rooms it joins.
+
+    A door's side is the room a point :data:`DOOR_PROBE_M` beyond the wall's face, on
+    the normal through the door's centre, lies in; outside the building that side is
+    :data:`EXTERIOR` (-1); inside it but in no room (the probe in another wall), the
+    nearest room.
+
+    Parameters
+    ----------
+    building : Building
+    rooms : pandas.DataFrame, optional
+        :func:`true_rooms` of ``building`` (computed when not given).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per door, in the building file's order: ``door_id`` (the opening's id),
+        ``wall_id``; ``x0, y0, x1, y1`` the opening as a segment on the wall's axis
+        (the line of the wall), ``x, y`` its centre, ``width_m`` (float64, metres);
+        ``room_a`` <= ``room_b`` (int64, ``room_id`` of :func:`true_rooms`, -1
+        outside) and ``exterior`` (bool, the door leads outside).
+    """
+    if rooms is None:
+        rooms = true_rooms(building)
+    polys = list(rooms["polygon"])
+    ids = rooms["room_id"].to_numpy(np.int64)
+    outline = building_outline(building)
+    rows = []
+    for w in building.walls:
+        for op in w.openings:
+            if op.kind != "door":
+                continue
+            a, b = (np.asarray(p, dtype=np.float64) for p in w.segments()[op.segment])
+            u = (b - a) / np.hypot(*(b - a))
+            p0, p1 = a + u * op.offset_m, a + u * (op.offset_m + op.width_m)
+            centre = (p0 + p1) / 2
+            normal = np.array([-u[1], u[0]])
+            sides = []
+            for sign in (-1.0, 1.0):
+                probe = Point(*(centre + sign * normal * (w.thickness_m / 2 + DOOR_PROBE_M)))
+                inside = [i for i, p in enumerate(polys) if p.contains(probe)]
+                if inside:
+                    sides.append(int(ids[inside[0]]))
+                elif not outline.contains(probe) or not polys:
+                    sides.append(EXTERIOR)
+                else:
+                    sides.append(int(ids[int(np.argmin([p.distance(probe) for p in polys]))]))
+            ra, rb = sorted(sides)
+            rows.append({
+                "door_id": op.id, "wall_id": w.id, "x0": p0[0], "y0": p0[1], "x1": p1[0], "y1": p1[1],
+                "x": centre[0], "y": centre[1], "width_m": float(op.width_m),
+                "room_a": ra, "room_b": rb, "exterior": ra == EXTERIOR,
+            })  # fmt: skip
+    cols = ["door_id", "wall_id", "x0", "y0", "x1", "y1", "x", "y", "width_m", "room_a", "room_b", "exterior"]
+    out = pd.DataFrame(rows, columns=cols)
+    return out.astype({c: np.float64 for c in cols[2:9]} | {"room_a": np.int64, "room_b": np.int64, "exterior": bool})
+
+
 def ground_truth_walls(
     building: Building, slice_height_m: float, observed_xy: np.ndarray | None = None
 ) -> dict:
@@ -181,6 +288,12 @@ def ground_truth_walls(
     - ``observed_face``: LineString, the parts of the faces the recording's returns lie
       on (:func:`observed_faces`), when ``observed_xy`` is given; the reference of
       recall in scoring.
+    - ``room``: Polygon, a true room (:func:`true_rooms`; exterior ring
+      counter-clockwise, holes clockwise), with ``room_id``, ``area_m2``,
+      ``perimeter_m``.
+    - ``door``: LineString, a true door (:func:`true_doors`): the opening on its wall's
+      axis, with ``door_id``, ``wall_id``, ``width_m``, ``room_a``, ``room_b`` (-1:
+      outside) and ``exterior``.
 
     Parameters
     ----------
@@ -229,6 +342,15 @@ def ground_truth_walls(
         poly = shapely.geometry.polygon.orient(poly, 1.0)
         rings = [[_xy(p) for p in r.coords] for r in [poly.exterior, *poly.interiors]]
         feats.append(_feature("Polygon", rings, kind="footprint", id=f"footprint{j}"))
+    rooms = true_rooms(building)
+    for r in rooms.itertuples(index=False):
+        rings = [[_xy(p) for p in ring.coords] for ring in [r.polygon.exterior, *r.polygon.interiors]]
+        feats.append(_feature("Polygon", rings, kind="room", room_id=int(r.room_id),
+                              area_m2=round(float(r.area_m2), 9), perimeter_m=round(float(r.perimeter_m), 9)))
+    for d in true_doors(building, rooms).itertuples(index=False):
+        feats.append(_feature("LineString", [_xy((d.x0, d.y0)), _xy((d.x1, d.y1))], kind="door",
+                              door_id=d.door_id, wall_id=d.wall_id, width_m=float(d.width_m),
+                              room_a=int(d.room_a), room_b=int(d.room_b), exterior=bool(d.exterior)))
     return {
         "type": "FeatureCollection",
         "building": building.name,

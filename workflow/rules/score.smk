@@ -3,7 +3,7 @@
 # walls of the same extractor from all kept scans), and of every floor plan against the
 # reference map (rule reference: the occupancy grid of all kept scans), the
 # scan-reduction summary, and the Chapter 5 figures for the report.
-
+import re
 
 stage_schema_check("score")
 
@@ -465,6 +465,14 @@ rule answer_curve:
 EVALUATION_OUTPUTS.append("results/{dataset}/evaluation/answer_curve.csv")
 
 
+# The room scores and their overlay, of every dataset: score_drawn's for the datasets
+# that name a drawn plan, score_rooms' for the others.
+ROOM_OUTPUTS = ["results/{dataset}/evaluation/room_scores.csv", "results/{dataset}/figures/rooms_overlay.png"]
+# The datasets that name a plan drawn by people (config datasets.<name>.reference):
+# score_drawn scores them, rooms included; score_rooms the others.
+DRAWN_DATASETS = sorted(d for d in DATASETS if DATASETS[d].get("reference"))
+
+
 def drawn_reference(wildcards):
     """The dataset's plan drawn by people (config datasets.<name>.reference)."""
     return DATASETS[wildcards.dataset].get("reference") or {}
@@ -472,17 +480,23 @@ def drawn_reference(wildcards):
 
 def score_drawn_inputs(wildcards):
     ds = wildcards.dataset
-    return {
+    inputs = {
         "recommended": f"results/{ds}/floorplan.geojson",
         "all_scans_map": f"results/{ds}/evaluation/floorplan/all_scans_map.geojson",
         "reference": f"results/{ds}/reference/occupancy.parquet",
         "drawn": drawn_reference(wildcards)["plan"],
     }
+    if drawn_reference(wildcards).get("rooms"):  # the rooms drawn by people, same pixel frame
+        inputs["rooms"] = drawn_reference(wildcards)["rooms"]
+    return inputs
 
 
 # A plan drawn by people (floorscan.score.drawn), for the datasets that name one:
 # aligned to the map frame, the recommended and the all-scan map plans scored against
-# it at 10 and 20 cm, and the overlay figure.
+# it at 10 and 20 cm, and the overlay figure; with the same alignment the plans' rooms
+# against the rooms drawn by people (reference: rooms; floorscan.score.rooms), or their
+# room counts alone when the dataset names no drawn rooms. The other datasets' room
+# scores are score_rooms'.
 rule score_drawn:
     priority: PRIORITY["score_runs"]
     input:
@@ -496,6 +510,16 @@ rule score_drawn:
             subcategory="{dataset}",
             labels={"dataset": "{dataset}", "figure": "The plan drawn by people, aligned, with the floor plan"},
         ),
+        rooms="results/{dataset}/evaluation/room_scores.csv",
+        rooms_figure=report(
+            "results/{dataset}/figures/rooms_overlay.png",
+            caption="../report/rooms_overlay.rst",
+            category="Scoring",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "The floor plan's rooms over the true rooms"},
+        ),
+    wildcard_constraints:
+        dataset="|".join(re.escape(d) for d in DRAWN_DATASETS) or "NO_DRAWN_DATASET",
     params:
         reference=drawn_reference,
     log:
@@ -507,5 +531,53 @@ rule score_drawn:
 
 
 def drawn_outputs():
-    """score_drawn's files for the datasets that name a drawn plan (patterns keep {dataset})."""
-    return ["results/{dataset}/evaluation/drawn_scores.csv", "results/{dataset}/figures/drawn_overlay.png"]
+    """score_drawn's files for the datasets that name a drawn plan (patterns keep {dataset});
+    the room scores and overlay are also in EVALUATION_OUTPUTS (score_rooms makes them
+    for the other datasets)."""
+    return [
+        "results/{dataset}/evaluation/drawn_scores.csv",
+        "results/{dataset}/figures/drawn_overlay.png",
+        *ROOM_OUTPUTS,
+    ]
+
+
+def score_rooms_inputs(wildcards):
+    ds = wildcards.dataset
+    inputs = {
+        "recommended": f"results/{ds}/floorplan.geojson",
+        "all_scans_map": f"results/{ds}/evaluation/floorplan/all_scans_map.geojson",
+        "reference": f"results/{ds}/reference/occupancy.parquet",
+    }
+    if is_synthetic(ds):
+        inputs["ground_truth"] = f"results/{ds}/sim/walls.geojson"
+    return inputs
+
+
+# The rooms (floorscan.score.rooms): the recommended and the all-scan map plans' rooms
+# and doors against the simulator's true rooms and doors (rooms seen for at least half
+# their area count; matched one-to-one at IoU >= 0.5, doors within 0.2 m), or, on a real
+# recording without a drawn plan, their counts only; and the overlay figure.
+rule score_rooms:
+    priority: PRIORITY["score_runs"]
+    input:
+        unpack(score_rooms_inputs),
+    output:
+        table=ROOM_OUTPUTS[0],
+        figure=report(
+            ROOM_OUTPUTS[1],
+            caption="../report/rooms_overlay.rst",
+            category="Scoring",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "The floor plan's rooms over the true rooms"},
+        ),
+    wildcard_constraints:
+        dataset="|".join(re.escape(d) for d in sorted(DATASETS) if d not in DRAWN_DATASETS) or "NO_DATASET",
+    log:
+        log_path("score_rooms"),
+    benchmark:
+        benchmark_path("score_rooms")
+    script:
+        "../../scripts/score_rooms.py"
+
+
+EVALUATION_OUTPUTS.extend(ROOM_OUTPUTS)

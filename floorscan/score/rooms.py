@@ -1,0 +1,338 @@
+"""The rooms and doors of a floor plan scored against true ones, as room segmentation
+is scored (Bormann et al., "Room segmentation: survey, implementation, and analysis",
+ICRA 2016): plan rooms matched one-to-one to true rooms by their overlap.
+
+- :func:`read_rooms`: the ``room`` (Polygon) and ``door`` (LineString) features of a
+  floor plan's GeoJSON (floorplan stage) or of the simulator's ``walls.geojson``
+  (:func:`floorscan.sim.ground_truth.true_rooms`, :func:`~floorscan.sim.ground_truth.true_doors`).
+- :func:`room_seen_share`: the share of a true room the recording saw (within the free
+  space of the reference map, :func:`floorscan.score.drawn.seen_by_recording`); only
+  rooms seen for at least :data:`SEEN_SHARE` of their area count: no method finds a
+  room it never saw (a drawing may hold rooms the robot never entered).
+- :func:`match_rooms`: from the intersection areas of true and plan rooms, their IoU,
+  the one-to-one matching of the pairs whose IoU is at least :data:`ROOM_IOU` that
+  maximises the summed IoU (the Hungarian method, SciPy's ``linear_sum_assignment``):
+  room precision (matched / plan rooms), recall (matched / counted true rooms) and the
+  mean IoU of the matched pairs. A plan room lying for at least
+  :data:`LEFT_OUT_SHARE` of its area in true rooms that do not count is left out of
+  precision.
+- :func:`match_doors`: each counted true door (not leading outside, between two counted
+  rooms) matched one-to-one to a plan door centre within :data:`DOOR_TOLERANCE_M`
+  (least summed distance): door recall, precision and mean centre error.
+- :func:`score_room_plans`: every plan against the simulator's rooms and doors (IoU on
+  shapely polygons), one row per plan, :data:`ROOM_SCORE_COLUMNS`. Rooms drawn by
+  people are scored on the drawing's pixels by :mod:`floorscan.score.drawn_rooms`.
+
+A new room or door metric is a key of :func:`match_rooms` or :func:`match_doors` and a
+name in :data:`ROOM_SCORE_COLUMNS`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+#: A plan room and a true room match when their IoU is at least this (Bormann et al.).
+ROOM_IOU = 0.5
+#: A true room counts when the recording saw at least this share of its area.
+SEEN_SHARE = 0.5
+#: A plan room with at least this share of its area in true rooms that do not count is
+#: left out of precision.
+LEFT_OUT_SHARE = 0.5
+#: A plan door matches a true door when their centres are at most this far apart, m.
+DOOR_TOLERANCE_M = 0.2
+#: A point is seen when it lies this close to the reference map's free space, metres
+#: (at least one cell: the cells of a room along its walls are the walls' returns).
+SEEN_WITHIN_M = 0.05
+
+#: Columns of ``room_scores.csv``: ``truth`` is ``ground_truth`` (the simulator's),
+#: ``drawn`` (a segmentation drawn by people) or ``none``; scores without a truth, and
+#: door scores without true doors, are NaN.
+ROOM_SCORE_COLUMNS = [
+    "plan", "truth", "room_precision", "room_recall", "room_mean_iou", "n_true_rooms", "n_true_rooms_all",
+    "n_plan_rooms", "n_plan_rooms_scored", "n_matched_rooms", "door_recall", "door_precision",
+    "door_centre_error_m", "n_true_doors", "n_plan_doors", "n_plan_doors_scored", "n_matched_doors",
+]  # fmt: skip
+
+
+def read_rooms(path) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The rooms and doors of a floor plan's (or the ground truth's) GeoJSON.
+
+    Features are selected by their property ``kind``: ``room`` (Polygon or
+    MultiPolygon, map metres; ``room_id``, ``name``, ``room_kind``, ``area_m2``,
+    ``perimeter_m``) and ``door`` (LineString: the opening in its wall's line;
+    ``door_id``, ``width_m``, ``wall_id``, ``room_a``, ``room_b``, ``exterior``).
+
+    Returns
+    -------
+    rooms : pandas.DataFrame
+        ``room_id``, ``name``, ``kind``, ``area_m2``, ``perimeter_m`` (the polygon's
+        area and length when the feature has none) and ``polygon`` (shapely).
+    doors : pandas.DataFrame
+        ``door_id``, ``x0, y0, x1, y1`` (the segment's ends), ``x, y`` (its centre),
+        ``width_m`` (metres), ``wall_id``, ``room_a``, ``room_b``, ``exterior`` (bool,
+        False when absent).
+
+    Raises
+    ------
+    floorscan.core.io.InputError
+        When the file is not a GeoJSON FeatureCollection.
+    """
+    import shapely.geometry
+
+    from floorscan.score.geojson import _feature_collection
+
+    rooms, doors = [], []
+    for feat in _feature_collection(path).get("features", []):
+        props, geom = feat.get("properties") or {}, feat.get("geometry") or {}
+        if props.get("kind") == "room" and geom.get("type") in ("Polygon", "MultiPolygon"):
+            poly = shapely.geometry.shape(geom)
+            if not poly.is_valid:  # a ring drawn by another tool, or rounded: scored as made valid
+                poly = shapely.make_valid(poly)
+            rooms.append({
+                "room_id": props.get("room_id", len(rooms)), "name": str(props.get("name", "")),
+                "kind": str(props.get("room_kind", "room")), "area_m2": float(props.get("area_m2", poly.area)),
+                "perimeter_m": float(props.get("perimeter_m", poly.length)), "polygon": poly,
+            })  # fmt: skip
+        elif props.get("kind") == "door" and geom.get("type") == "LineString" and len(geom["coordinates"]) >= 2:
+            (x0, y0), (x1, y1) = (c[:2] for c in (geom["coordinates"][0], geom["coordinates"][-1]))
+            doors.append({
+                "door_id": props.get("door_id", len(doors)), "x0": x0, "y0": y0, "x1": x1, "y1": y1,
+                "x": (x0 + x1) / 2, "y": (y0 + y1) / 2, "width_m": float(props.get("width_m", math.hypot(x1 - x0, y1 - y0))),
+                "wall_id": props.get("wall_id"), "room_a": props.get("room_a"), "room_b": props.get("room_b"),
+                "exterior": bool(props.get("exterior", False)),
+            })  # fmt: skip
+    room_cols = ["room_id", "name", "kind", "area_m2", "perimeter_m", "polygon"]
+    door_cols = ["door_id", "x0", "y0", "x1", "y1", "x", "y", "width_m", "wall_id", "room_a", "room_b", "exterior"]
+    floats = {c: np.float64 for c in ("x0", "y0", "x1", "y1", "x", "y", "width_m")}
+    return (pd.DataFrame(rooms, columns=room_cols).astype({"area_m2": np.float64, "perimeter_m": np.float64}),
+            pd.DataFrame(doors, columns=door_cols).astype(floats | {"exterior": bool}))  # fmt: skip
+
+
+def room_seen_share(polygons, grid, within_m: float = SEEN_WITHIN_M) -> np.ndarray:
+    """The share of each room's area the recording saw.
+
+    Each polygon is sampled at the centres of the reference grid's cells inside it;
+    a sample is seen when it lies within ``within_m`` of the grid's free space
+    (:func:`floorscan.score.drawn.seen_by_recording`).
+
+    Parameters
+    ----------
+    polygons : sequence of shapely Polygon
+        Rooms, map metres.
+    grid : floorscan.core.occupancy.OccupancyGrid
+        The reference map.
+    within_m : float
+
+    Returns
+    -------
+    (N,) float64 ndarray
+        In [0, 1]; 0 for a room with no cell centre inside.
+    """
+    import shapely
+
+    from floorscan.score.drawn import seen_by_recording
+
+    r, (ox, oy) = grid.resolution_m, grid.origin_xy
+    out = np.zeros(len(polygons))
+    for i, poly in enumerate(polygons):
+        x0, y0, x1, y1 = poly.bounds
+        xs = ox + (np.arange(math.floor((x0 - ox) / r), math.ceil((x1 - ox) / r)) + 0.5) * r
+        ys = oy + (np.arange(math.floor((y0 - oy) / r), math.ceil((y1 - oy) / r)) + 0.5) * r
+        xx, yy = (a.ravel() for a in np.meshgrid(xs, ys))
+        inside = shapely.contains_xy(poly, xx, yy)
+        if inside.any():
+            out[i] = float(seen_by_recording(np.column_stack([xx[inside], yy[inside]]), grid, within_m).mean())
+    return out
+
+
+def match_rooms(
+    inter: np.ndarray, true_area: np.ndarray, plan_area: np.ndarray, counted: np.ndarray,
+    min_iou: float = ROOM_IOU, left_out_share: float = LEFT_OUT_SHARE,
+) -> tuple[dict, dict]:  # fmt: skip
+    """Room precision, recall and mean IoU of a one-to-one matching by IoU.
+
+    Parameters
+    ----------
+    inter : (T, P) float ndarray
+        Intersection area of true room ``t`` and plan room ``p`` (any unit: m2, pixels).
+    true_area : (T,) float ndarray
+    plan_area : (P,) float ndarray
+        Areas, the same unit.
+    counted : (T,) bool ndarray
+        The true rooms that count (:data:`SEEN_SHARE` of them seen).
+    min_iou, left_out_share : float
+
+    Returns
+    -------
+    scores : dict
+        ``room_precision`` (matched / plan rooms scored; NaN without any),
+        ``room_recall`` (matched / counted true rooms; NaN without any),
+        ``room_mean_iou`` (of the matched pairs; NaN without any), ``n_true_rooms``
+        (counted), ``n_true_rooms_all``, ``n_plan_rooms``, ``n_plan_rooms_scored``,
+        ``n_matched_rooms``.
+    detail : dict
+        ``iou`` (T, P), ``pairs`` (K, 2) int (true, plan index), ``pair_iou`` (K,),
+        ``left_out`` (P,) bool.
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    inter = np.asarray(inter, dtype=np.float64).reshape(len(true_area), len(plan_area))
+    ta, pa = np.asarray(true_area, np.float64), np.asarray(plan_area, np.float64)
+    counted = np.asarray(counted, dtype=bool)
+    union = ta[:, None] + pa[None, :] - inter
+    iou = np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)
+    outside = inter[~counted].sum(axis=0)
+    left_out = np.divide(outside, pa, out=np.zeros_like(pa), where=pa > 0) >= left_out_share
+    ti, pi = np.flatnonzero(counted), np.flatnonzero(~left_out)
+    sub = iou[np.ix_(ti, pi)]
+    # only pairs that count take part: the matching of the largest summed IoU among them
+    rows, cols = linear_sum_assignment(np.where(sub >= min_iou, sub, 0.0), maximize=True)
+    pairs = np.column_stack([ti[rows], pi[cols]]).astype(np.int64).reshape(-1, 2)
+    pair_iou = iou[pairs[:, 0], pairs[:, 1]]
+    keep = pair_iou >= min_iou
+    pairs, pair_iou = pairs[keep], pair_iou[keep]
+    k = len(pairs)
+    scores = {
+        "room_precision": k / len(pi) if len(pi) else math.nan,
+        "room_recall": k / len(ti) if len(ti) else math.nan,
+        "room_mean_iou": float(pair_iou.mean()) if k else math.nan,
+        "n_true_rooms": len(ti), "n_true_rooms_all": len(ta), "n_plan_rooms": len(pa),
+        "n_plan_rooms_scored": len(pi), "n_matched_rooms": k,
+    }  # fmt: skip
+    return scores, {"iou": iou, "pairs": pairs, "pair_iou": pair_iou, "left_out": left_out}
+
+
+def match_doors(
+    true_xy: np.ndarray, counted: np.ndarray, plan_xy: np.ndarray, tolerance_m: float = DOOR_TOLERANCE_M,
+) -> tuple[dict, dict]:  # fmt: skip
+    """Door recall, precision and centre error of a one-to-one matching of door centres.
+
+    Each counted true door is matched to at most one plan door whose centre lies within
+    ``tolerance_m``, the matching of least summed distance (``linear_sum_assignment``).
+    An unmatched plan door within ``tolerance_m`` of a true door that does not count
+    (leading outside, or into a room that does not count) is left out of precision.
+
+    Parameters
+    ----------
+    true_xy : (D, 2) float ndarray
+        True door centres, metres.
+    counted : (D,) bool ndarray
+    plan_xy : (Q, 2) float ndarray
+        Plan door centres, metres.
+    tolerance_m : float
+
+    Returns
+    -------
+    scores : dict
+        ``door_recall`` (matched / counted true doors), ``door_precision`` (matched /
+        plan doors scored), ``door_centre_error_m`` (mean over matched pairs), NaN when
+        undefined; ``n_true_doors`` (counted), ``n_plan_doors``,
+        ``n_plan_doors_scored``, ``n_matched_doors``.
+    detail : dict
+        ``pairs`` (K, 2) int (true, plan index), ``distance_m`` (K,), ``left_out`` (Q,) bool.
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    t = np.asarray(true_xy, dtype=np.float64).reshape(-1, 2)
+    p = np.asarray(plan_xy, dtype=np.float64).reshape(-1, 2)
+    counted = np.asarray(counted, dtype=bool)
+    d = np.hypot(*(t[:, None, :] - p[None, :, :]).transpose(2, 0, 1)).reshape(len(t), len(p))
+    ti = np.flatnonzero(counted)
+    sub = d[ti]
+    big = 1e6 * (1.0 + tolerance_m)
+    rows, cols = linear_sum_assignment(np.where(sub <= tolerance_m, sub, big))
+    keep = sub[rows, cols] <= tolerance_m
+    pairs = np.column_stack([ti[rows[keep]], cols[keep]]).astype(np.int64).reshape(-1, 2)
+    dist = d[pairs[:, 0], pairs[:, 1]]
+    left_out = np.zeros(len(p), dtype=bool)
+    if (~counted).any() and len(p):
+        left_out = (d[~counted] <= tolerance_m).any(axis=0)
+    left_out[pairs[:, 1]] = False
+    k, n_scored = len(pairs), int((~left_out).sum())
+    scores = {
+        "door_recall": k / len(ti) if len(ti) else math.nan,
+        "door_precision": k / n_scored if n_scored else math.nan,
+        "door_centre_error_m": float(dist.mean()) if k else math.nan,
+        "n_true_doors": len(ti), "n_plan_doors": len(p), "n_plan_doors_scored": n_scored, "n_matched_doors": k,
+    }  # fmt: skip
+    return scores, {"pairs": pairs, "distance_m": dist, "left_out": left_out}
+
+
+def score_row(name: str, truth: str, *parts: dict) -> dict:
+    """A row of ``room_scores.csv``: every :data:`ROOM_SCORE_COLUMNS` NaN but the plan's
+    ``name``, the ``truth`` and the keys of ``parts`` (score dicts)."""
+    row = {c: math.nan for c in ROOM_SCORE_COLUMNS}
+    row.update({"plan": name, "truth": truth})
+    for part in parts:
+        row.update(part)
+    return row
+
+
+def _plan_only(rooms: pd.DataFrame, doors: pd.DataFrame) -> dict:
+    return {"n_plan_rooms": len(rooms), "n_plan_doors": len(doors)}
+
+
+def score_room_plans(plans: dict, grid, truth_path=None) -> tuple[pd.DataFrame, dict]:
+    """Rule ``score_rooms``: every plan's rooms and doors against the simulator's.
+
+    Parameters
+    ----------
+    plans : dict
+        ``{name: path}`` of floor plan GeoJSONs (map frame).
+    grid : floorscan.core.occupancy.OccupancyGrid
+        The reference map (what the recording saw).
+    truth_path : path, optional
+        The simulator's ``walls.geojson`` with ``room`` and ``door`` features
+        (:func:`floorscan.sim.ground_truth.ground_truth_walls`); without it (a real
+        recording without a drawn segmentation) only the plan's counts are filled.
+
+    Returns
+    -------
+    table : pandas.DataFrame
+        One row per plan, :data:`ROOM_SCORE_COLUMNS`.
+    overlay : dict
+        What :func:`floorscan.figures.rooms.rooms_overlay_figure` draws.
+
+    Raises
+    ------
+    floorscan.core.io.InputError
+        When ``truth_path`` holds no room (written before the truth had rooms: rerun
+        the simulate stage).
+    """
+    import shapely
+
+    from floorscan.core.io import InputError
+
+    overlay = {"truth": "none", "true_rooms": [], "counted": np.zeros(0, bool), "true_doors_xy": np.empty((0, 2)),
+               "true_doors_counted": np.zeros(0, bool), "structure": grid.cell_centres(grid.structure()), "plans": {}}  # fmt: skip
+    if truth_path is not None:
+        true_rooms, true_doors = read_rooms(truth_path)
+        if not len(true_rooms):
+            raise InputError(f"{truth_path}: no feature of kind 'room'; rerun the simulate stage (-R simulate)")
+        polys = np.array(list(true_rooms["polygon"]), dtype=object)
+        counted = room_seen_share(polys, grid) >= SEEN_SHARE
+        ok_ids = set(true_rooms["room_id"].to_numpy()[counted].tolist())
+        door_counted = (~true_doors["exterior"].to_numpy(bool)
+                        & true_doors["room_a"].isin(ok_ids).to_numpy() & true_doors["room_b"].isin(ok_ids).to_numpy())  # fmt: skip
+        overlay.update(truth="ground_truth", true_rooms=list(polys), counted=counted,
+                       true_doors_xy=true_doors[["x", "y"]].to_numpy(np.float64), true_doors_counted=door_counted)  # fmt: skip
+    rows = []
+    for name, path in plans.items():
+        rooms, doors = read_rooms(path)
+        plan_polys = np.array(list(rooms["polygon"]), dtype=object)
+        entry = {"rooms": list(plan_polys), "doors_xy": doors[["x", "y"]].to_numpy(np.float64)}
+        if truth_path is None:
+            rows.append(score_row(name, "none", _plan_only(rooms, doors)))
+        else:
+            inter = shapely.area(shapely.intersection(polys[:, None], plan_polys[None, :])) if len(plan_polys) else np.zeros((len(polys), 0))
+            r_scores, r_detail = match_rooms(inter, shapely.area(polys), shapely.area(plan_polys) if len(plan_polys) else np.zeros(0), counted)
+            d_scores, d_detail = match_doors(overlay["true_doors_xy"], door_counted, entry["doors_xy"])
+            rows.append(score_row(name, "ground_truth", r_scores, d_scores))
+            entry.update(rooms_detail=r_detail, doors_detail=d_detail)
+        overlay["plans"][name] = entry
+    table = pd.DataFrame(rows, columns=ROOM_SCORE_COLUMNS)
+    overlay["scores"] = table
+    return table, overlay
