@@ -121,3 +121,14 @@ def test_wall_gaps_between_collinear_ends():
     axes = np.array(CORRIDOR, dtype=np.float64)
     widths = sorted(float(np.hypot(*(q - p))) for p, q, _ in wall_gaps(axes, np.full(len(axes), T), params))
     assert np.allclose(widths, [0.9, 0.9])
+
+
+def test_the_outside_seen_through_an_opening_is_not_a_room():
+    # a room 8 x 4 m with a 1.2 m opening in its south wall; the scans see out through
+    # it onto a wall 6 m away: that fan of rays is not walled, not a room, no door
+    walls = [(0, 0, 3.4, 0), (4.6, 0, 8, 0), (8, 0, 8, 4), (8, 4, 0, 4), (0, 4, 0, 0)]
+    grid = _grid(walls + [(-6, -6, 14, -6)], [(2, 2), (6, 2), (4, 1.0)])
+    axes = np.array(walls, dtype=np.float64)
+    rooms, doors = plan_rooms(axes, np.full(len(axes), T), grid)
+    assert list(rooms["kind"]) == ["space"] and len(doors) == 0
+    assert 29.5 < rooms["area_m2"].iloc[0] < 31.5 and rooms["polygon"].iloc[0].bounds[1] > -0.2

@@ -126,12 +126,22 @@ def test_svg_fills_rooms_labels_them_and_draws_the_door(tmp_path):
     for text, poly in zip(labels, (ROOM, CORRIDOR)):
         x, y = (float(text.get("x")) - tx) / s, (ty - (float(text.get("y")) + 2)) / s
         assert poly.contains(shapely.Point(x, y))
-    # the door: a coloured line on the opening (and a white gap under it)
-    lines = root.findall(".//s:g[@id='doors']/s:line", SVG_NS)
-    assert len(lines) == 2 and lines[1].get("stroke") not in ("#ffffff", None)
-    assert [float(lines[1].get(a)) for a in ("x1", "y1", "x2", "y2")] == [3.0, 1.9, 3.0, 1.0]
+    # the door: a white gap across the wall, a line on the opening, the leaf (as wide as
+    # the opening, at right angles to it from its first end) and its swing
+    doors = root.find(".//s:g[@id='doors']", SVG_NS)
+    assert doors.get("stroke") not in ("#ffffff", None)
+    gap = doors.find("s:line", SVG_NS)
+    assert gap.get("stroke") == "#ffffff"
+    opening, leaf = doors.findall("s:g/s:line", SVG_NS)
+    assert [float(opening.get(a)) for a in ("x1", "y1", "x2", "y2")] == [3.0, 1.9, 3.0, 1.0]
+    x1, y1, x2, y2 = (float(leaf.get(a)) for a in ("x1", "y1", "x2", "y2"))
+    assert (x1, y1) == (3.0, 1.9) and y2 == pytest.approx(1.9) and abs(x2 - 3.0) == pytest.approx(0.9)
+    # it opens into the room, not the corridor
+    assert ROOM.contains(shapely.Point((x1 + x2) / 2, y2 - 0.1))
+    swing = doors.find("s:g/s:path", SVG_NS).get("d")
+    assert swing.startswith(f"M {x2:.4f} 1.9000 A 0.9000 0.9000 0 0 ") and swing.endswith("3.0000 1.0000")
     legend = [t.text for t in root.findall(".//s:g[@id='legend']/s:text", SVG_NS)]
-    assert legend[3:] == ["room", "corridor", "door (opening in a wall)"]
+    assert legend[3:] == ["room", "corridor", "door (opening in a wall, its leaf)"]
     assert root.find(".//s:text[@id='rooms-summary']", SVG_NS).text == "2 rooms, 20.7 m\u00b2 \u00b7 1 door"
 
 

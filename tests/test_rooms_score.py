@@ -198,20 +198,26 @@ def test_drawn_rooms_floods_each_white_region_between_lines():
 def test_drawn_rooms_scored_on_pixels(tmp_path):
     """Pixel (col, row) -> (0.1 col, -0.1 row) m. Plan room 1 covers the top 4 of room
     1's 8 rows (IoU 40/80); plan room 2 covers room 2 (8 x 14 px) and 8 x 4 px beyond
-    the image (IoU 112/144); all seen."""
+    the image, outside the drawn building, which is not scored (IoU 1); a third plan
+    room lies wholly outside the drawing (scored as a room of no pixels: unmatched,
+    and left out of precision); all seen."""
     labels = np.zeros((20, 30), np.int32)
     labels[2:10, 2:12] = 1
     labels[2:10, 14:28] = 2
     t = Similarity(scale=0.1, angle=0.0, tx=0.0, ty=0.0)
     px = lambda c0, c1, r0, r1: box(0.1 * c0, -0.1 * r1, 0.1 * c1, -0.1 * r0)  # noqa: E731
-    plan = _geojson(tmp_path / "plan.geojson", [px(1.5, 11.5, 1.5, 5.5), px(13.5, 31.5, 1.5, 9.5)])
+    plan = _geojson(
+        tmp_path / "plan.geojson", [px(1.5, 11.5, 1.5, 5.5), px(13.5, 31.5, 1.5, 9.5), px(40.5, 45.5, 1.5, 9.5)]
+    )
     grid = _grid(np.ones((80, 120), bool), origin=(-1.0, -3.0), resolution_m=0.05)
     table, overlay = score_drawn_rooms({"recommended": plan}, labels, t, grid)
     row = table.iloc[0]
     assert overlay["counted"].tolist() == [True, True]
-    assert overlay["plans"]["recommended"]["rooms_detail"]["iou"][[0, 1], [0, 1]] == pytest.approx([0.5, 112 / 144])
+    assert overlay["plans"]["recommended"]["rooms_detail"]["iou"][[0, 1], [0, 1]] == pytest.approx([0.5, 1.0])
+    assert overlay["plans"]["recommended"]["rooms_detail"]["left_out"].tolist() == [False, False, True]
     assert (row["room_precision"], row["room_recall"]) == (1.0, 1.0)
-    assert row["room_mean_iou"] == pytest.approx((0.5 + 112 / 144) / 2)
+    assert (row["n_plan_rooms"], row["n_plan_rooms_scored"]) == (3, 2)
+    assert row["room_mean_iou"] == pytest.approx(0.75)
     assert row["truth"] == "drawn" and math.isnan(row["door_recall"])
 
 

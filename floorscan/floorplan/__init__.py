@@ -20,6 +20,9 @@ made and written:
   (furniture out), :mod:`~floorscan.floorplan.junctions` (L, T and X junctions, one
   wall per wall) and :mod:`~floorscan.floorplan.free_space` (their parameters and the
   grid probes).
+- :mod:`~floorscan.floorplan.rooms`: the rooms and doors, when the free space is known:
+  the space bounded by the walls (:mod:`~floorscan.floorplan.room_space`) cut into
+  rooms at its doors (:mod:`~floorscan.floorplan.doors`).
 - :mod:`~floorscan.floorplan.plan`: :class:`~floorscan.floorplan.plan.FloorPlan` and
   :func:`~floorscan.floorplan.plan.build_floorplan`, the steps above in one.
 - :mod:`~floorscan.floorplan.georeference`: where the map frame lies on the earth.

@@ -120,9 +120,15 @@ def barrier_cells(raster: RoomRaster, p: np.ndarray, q: np.ndarray) -> tuple[np.
     return rr[ok], cc[ok]
 
 
-def contacts(labels: np.ndarray) -> dict[tuple[int, int], np.ndarray]:
-    """Where regions touch: for each pair ``(a, b)``, ``a < b``, the (K, 2) row, column
-    midpoints of the 4-neighbour cell pairs of ``a`` and ``b`` (in cell units)."""
+def contacts(labels: np.ndarray) -> dict[tuple[int, int], list[np.ndarray]]:
+    """Where regions touch: for each pair ``(a, b)``, ``a < b``, the places they touch,
+    each a (K, 2) array of the row, column midpoints (cell units) of 4-neighbour cell
+    pairs of ``a`` and ``b`` that are next to each other (a door and, elsewhere, a
+    missing stretch of wall between the same two regions are two places)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
     out: dict[tuple[int, int], list] = {}
     for axis in (0, 1):
         a = labels[:-1, :] if axis == 0 else labels[:, :-1]
@@ -139,7 +145,14 @@ def contacts(labels: np.ndarray) -> dict[tuple[int, int], np.ndarray]:
         starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
         for s, e in zip(starts, np.r_[starts[1:], len(key)]):
             out.setdefault((int(lo[s]), int(hi[s])), []).append(mid[s:e])
-    return {k: np.concatenate(v) for k, v in out.items()}
+    pieces: dict[tuple[int, int], list[np.ndarray]] = {}
+    for pair, parts in sorted(out.items()):
+        pts = np.concatenate(parts)
+        ij = cKDTree(pts).query_pairs(1.01, output_type="ndarray")
+        graph = coo_matrix((np.ones(len(ij)), (ij[:, 0], ij[:, 1])), shape=(len(pts), len(pts)))
+        n, comp = connected_components(graph, directed=False)
+        pieces[pair] = [pts[comp == k] for k in range(n)]
+    return pieces
 
 
 def contact_segment(raster: RoomRaster, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -233,3 +246,4 @@ def contact_door(
             if best is None or abs(t_near) < best[0]:
                 best = (abs(t_near), (end.copy(), end + g * t_far, int(i)))  # to the far jamb, on the line
     return None if best is None else best[1]
+

@@ -34,8 +34,10 @@ class RoomParams:
     line_offset_m: float
     jamb_m: float
     door_narrowing_m: float
+    min_enclosure: float
     min_room_area_m2: float
     corridor_elongation: float
+    corridor_min_length_m: float
     corridor_max_width_m: float
 
 
@@ -53,12 +55,15 @@ class RoomRaster:
         Cells of the plan's wall footprints.
     space : (H, W) bool ndarray
         The space to segment (module docstring, step 1).
+    occupied : (H, W) bool ndarray
+        Cells the scans saw occupied (walls, the plan's or not, and furniture).
     """
 
     origin_xy: np.ndarray
     resolution_m: float
     walls: np.ndarray
     space: np.ndarray
+    occupied: np.ndarray
 
     def centres(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """(N, 2) map-frame centres of cells ``rows``, ``cols``, metres."""
@@ -143,7 +148,8 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
     # the plan lacks stays a boundary)
     padded[:] = False
     padded[: grid.shape[0], : grid.shape[1]] = grid.structure()
-    space &= ~padded.reshape(h, f, w, f).any(axis=(1, 3)) | opened
+    occupied = padded.reshape(h, f, w, f).any(axis=(1, 3))
+    space &= ~occupied | opened
     # holes without a wall in them: the floor under furniture, shadows of objects
     holes, n = ndimage.label(~space)
     if n:
@@ -154,7 +160,9 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
         fill[border] = False
         fill[with_wall] = False
         space |= fill[holes]
-    return RoomRaster(origin_xy=np.asarray(grid.origin_xy, dtype=np.float64), resolution_m=res, walls=walls, space=space)
+    return RoomRaster(
+        origin_xy=np.asarray(grid.origin_xy, dtype=np.float64), resolution_m=res, walls=walls, space=space, occupied=occupied
+    )
 
 
 def space_regions(raster: RoomRaster, params: RoomParams) -> tuple[np.ndarray, np.ndarray]:
@@ -175,7 +183,8 @@ def space_regions(raster: RoomRaster, params: RoomParams) -> tuple[np.ndarray, n
     distance = ndimage.distance_transform_edt(np.pad(space, 1))[1:-1, 1:-1] * raster.resolution_m
     if not space.any():
         return np.zeros(space.shape, dtype=np.int32), distance
-    peaks = h_maxima(distance, params.marker_depth_m)
+    # in whole centimetres: h-maxima of an integer image (the float one sorts every cell)
+    peaks = h_maxima(np.round(distance * 100).astype(np.uint16), max(1, int(round(params.marker_depth_m * 100))))
     markers, _ = ndimage.label(peaks & space, structure=np.ones((3, 3)))
     labels = watershed(-distance, markers, mask=space, connectivity=1)
     # space cells no marker reached (a component without a peak): a region each

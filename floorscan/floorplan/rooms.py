@@ -27,9 +27,9 @@ taken from the walls:
    over-segmented room) are merged.
 4. **Rooms**: each region of at least ``min_room_area_m2`` is a room; a smaller one
    joins its neighbour of the longest contact. A room is a ``corridor`` when it is
-   long for its width (area at least ``corridor_elongation`` times its width squared,
-   the width being the diameter of the largest circle inside its polygon, at most
-   ``corridor_max_width_m``). When no door separates the space (an open hall, one
+   long for its width (its length, area over width, at least ``corridor_elongation``
+   times its width and ``corridor_min_length_m``; the width, the diameter of the
+   largest circle inside its polygon, at most ``corridor_max_width_m``). When no door separates the space (an open hall, one
    corridor, a campus), it is one region of kind ``space``.
 5. **Polygons** (:func:`room_polygons`): each room's cells traced (contourpy), grown up
    to the wall faces and cut by the wall footprints (shapely), simplified by half a
@@ -116,7 +116,7 @@ def segment_rooms(
     for p, q, _ in gaps:
         rr, cc = D.barrier_cells(raster, p, q)
         barrier[rr, cc] = True
-    cut = RoomRaster(raster.origin_xy, raster.resolution_m, raster.walls | barrier, raster.space & ~barrier)
+    cut = RoomRaster(raster.origin_xy, raster.resolution_m, raster.walls | barrier, raster.space & ~barrier, raster.occupied)
     labels, distance = space_regions(cut, params)
     n = int(labels.max())
     res = raster.resolution_m
@@ -133,25 +133,40 @@ def segment_rooms(
     sets = _Union(n)
     found = []  # (p, q, wall, a, b)
     touching: dict[tuple[int, int], float] = {}  # contact length between regions, metres
-    for (a, b), cells in D.contacts(labels).items():
-        p, q = D.contact_segment(cut, cells)
-        touching[(a, b)] = len(cells) * raster.resolution_m
-        if np.hypot(*(q - p)) < params.door_min_m and D.near_walls(p, axes, thickness, params.jamb_m) and D.near_walls(
-            q, axes, thickness, params.jamb_m
-        ):
-            continue  # a slit between wall pieces, too narrow to pass: neither door nor one room
-        door = D.contact_door(p, q, axes, thickness, params, side_width)
-        if door is None:
-            sets.union(a, b)
-        else:
-            found.append((*door, a, b))
+    kinds: dict[tuple[int, int], str] = {}  # slit, door, narrow (merge), wide (merge)
+    rank = {"slit": 0, "door": 1, "narrow": 2, "wide": 3}  # a pair is its most open place
+    for (a, b), places in D.contacts(labels).items():
+        touching[(a, b)] = sum(len(cells) for cells in places) * raster.resolution_m
+        for cells in places:
+            p, q = D.contact_segment(cut, cells)
+            width = float(np.hypot(*(q - p)))
+            door = None
+            if width < params.door_min_m and D.near_walls(p, axes, thickness, params.jamb_m) and D.near_walls(
+                q, axes, thickness, params.jamb_m
+            ):
+                kind = "slit"  # between wall pieces, too narrow to pass: neither door nor one room
+            else:
+                door = D.contact_door(p, q, axes, thickness, params, side_width)
+                kind = "door" if door is not None else ("narrow" if width <= params.door_max_m else "wide")
+            if door is not None:
+                found.append((*door, a, b))
+            if rank[kind] >= rank.get(kinds.get((a, b), "slit"), 0):
+                kinds[(a, b)] = kind
     for p, q, wall in gaps:
         d = q - p
         nrm = np.array([-d[1], d[0]]) / max(float(np.hypot(*d)), 1e-12) * 2 * raster.resolution_m
         a, b = _label_at(labels, raster, (p + q) / 2 + nrm), _label_at(labels, raster, (p + q) / 2 - nrm)
         if a and b and a != b:
-            found.append((p, q, wall, min(a, b), max(a, b)))
-            touching[(min(a, b), max(a, b))] = touching.get((min(a, b), max(a, b)), 0.0) + float(np.hypot(*d))
+            pair = (min(a, b), max(a, b))
+            found.append((p, q, wall, *pair))
+            touching[pair] = touching.get(pair, 0.0) + float(np.hypot(*d))
+            kinds.setdefault(pair, "door")
+    outside = _outside_regions(cut, labels, kinds, params)
+    for (a, b), kind in kinds.items():
+        if kind in ("narrow", "wide") and not (outside[a] or outside[b]):
+            sets.union(a, b)
+    found = [d for d in found if not (outside[d[3]] or outside[d[4]])]
+    touching = {k: v for k, v in touching.items() if not (outside[k[0]] or outside[k[1]])}
     # regions below the room area join the neighbour they touch most (through a door too)
     area = np.bincount(labels.ravel(), minlength=n + 1) * raster.resolution_m**2
     for _ in range(n):
@@ -175,9 +190,19 @@ def segment_rooms(
         sets.union(*best)
     roots = sets.roots()
     merged = roots[labels]
-    # drop what is still below the room area (an isolated scrap of space)
+    merged[outside[labels]] = 0
+    # drop what is still below the room area (an isolated scrap of space), and the
+    # scraps of the outside that no door joins to a room and no wall encloses
     room_area = np.bincount(merged.ravel(), minlength=n + 1) * raster.resolution_m**2
     merged[room_area[merged] < params.min_room_area_m2] = 0
+    with_door = np.zeros(n + 1, dtype=bool)
+    for _, _, _, a, b in found:
+        if roots[a] != roots[b]:
+            with_door[[roots[a], roots[b]]] = True
+    loose = (_enclosure(cut, merged, n) < params.min_enclosure) & ~with_door
+    loose[0] = False
+    if loose.any() and (~loose[1:] & (room_area[1:] > 0)).any():  # never the whole space
+        merged[loose[merged]] = 0
     # number the rooms in reading order (first cell from the top row down)
     flat = merged[::-1].ravel()
     ids, first = np.unique(flat, return_index=True)
@@ -196,6 +221,50 @@ def segment_rooms(
         if ra and rb and ra != rb:
             doors.append((p, q, wall, int(min(ra, rb)), int(max(ra, rb))))
     return raster, final, _distinct_doors(doors)
+
+
+def _enclosure(raster: RoomRaster, labels: np.ndarray, n: int | None = None) -> np.ndarray:
+    """(n + 1,) float (n: the largest label by default): the share of each region's edge (its cells next to cells outside
+    the space) that lies within two cells of a wall or a seen obstacle; 1 for label 0
+    and for a region without edge."""
+    from scipy import ndimage
+
+    n = int(labels.max()) if n is None else int(n)
+    if n == 0:
+        return np.ones(1)
+    solid = ndimage.binary_dilation(raster.walls | raster.occupied, structure=np.ones((3, 3)), iterations=2)
+    edge = raster.space & ~ndimage.binary_erosion(raster.space, structure=np.ones((3, 3)))
+    ids = np.arange(1, n + 1)
+    total = ndimage.sum(edge, labels, ids)
+    return np.r_[1.0, np.where(total > 0, ndimage.sum(edge & solid, labels, ids) / np.maximum(total, 1), 1.0)]
+
+
+def _outside_regions(raster: RoomRaster, labels: np.ndarray, kinds: dict, params: RoomParams) -> np.ndarray:
+    """(R + 1,) bool: the regions that are not the building's space: groups of regions
+    whose edge lies along walls and seen obstacles for less than
+    ``rooms.min_enclosure`` of its length (a fan of rays seen through a window or an
+    open door into the outside) and that meet the other regions only through openings
+    no wider than a door. A room seen only through its door is walled on most of its
+    edge (the walls the plan found, the obstacles the scans saw), the outside is not."""
+    from scipy import ndimage
+
+    n = int(labels.max())
+    out = np.zeros(n + 1, dtype=bool)
+    if n < 2:
+        return out
+    low = _enclosure(raster, labels) < params.min_enclosure
+    groups = _Union(n)
+    for (a, b), kind in kinds.items():
+        if low[a] and low[b] and kind in ("narrow", "wide"):
+            groups.union(a, b)
+    roots = groups.roots()
+    for r in np.unique(roots[1:][low[1:]]):
+        members = roots == r
+        links = [kind for (a, b), kind in kinds.items() if members[a] != members[b]]
+        if links and all(kind in ("narrow", "door") for kind in links):
+            out |= members
+    out[0] = False
+    return out
 
 
 def _distinct_doors(doors: list) -> list:
@@ -335,6 +404,9 @@ def plan_rooms(
     """
     import shapely
 
+    import time
+
+    t0 = time.perf_counter()
     raster, labels, doors = segment_rooms(grid, axes, thickness, params)
     n = int(labels.max())
     polys = room_polygons(raster, labels, axes, thickness)
@@ -351,7 +423,8 @@ def plan_rooms(
     for poly in polys:
         # width: the largest circle inside the room (its radius: the circle's centre to the wall)
         width = 2.0 * float(shapely.maximum_inscribed_circle(poly, raster.resolution_m / 2).length)
-        long = width <= params.corridor_max_width_m and poly.area >= params.corridor_elongation * width * width
+        length = poly.area / max(width, 1e-9)
+        long = width <= params.corridor_max_width_m and length >= max(params.corridor_elongation * width, params.corridor_min_length_m)
         kinds.append("corridor" if long else "room")
     doors = [(p, q, w, new_id[a], new_id[b]) for p, q, w, a, b in doors if a in new_id and b in new_id]
     if len(polys) == 1 and not doors:
@@ -382,6 +455,6 @@ def plan_rooms(
             "room_b": np.array([d[4] for d in doors], dtype=np.int32),
         }  # fmt: skip
     )
-    log.info("rooms: %d rooms (%d corridors), %d doors, %.1f m2 in all", len(polys), kinds.count("corridor"),
-             len(doors_df), float(rooms["area_m2"].sum()))
+    log.info("rooms: %d rooms (%d corridors), %d doors, %.1f m2 in all (%.2f s)", len(polys), kinds.count("corridor"),
+             len(doors_df), float(rooms["area_m2"].sum()), time.perf_counter() - t0)
     return rooms, doors_df

@@ -19,6 +19,8 @@ import os
 from typing import TYPE_CHECKING, Mapping, Sequence
 from xml.sax.saxutils import escape
 
+import numpy as np
+
 from floorscan.core.files import atomic_path
 from floorscan.floorplan.footprints import PlanExports
 from floorscan.floorplan.georeference import Georeference, as_georeference
@@ -38,9 +40,11 @@ SVG_LEGEND_ROW_PX = 19.0
 #: legend names each kind.
 SVG_ROOM_FILLS = {"room": "#fbefc4", "corridor": "#d3e8f5", "space": "#dff0d8"}
 SVG_ROOM_FILL_OTHER = "#eeeeee"
+#: Colour of a room's outline.
+SVG_ROOM_OUTLINE = "#a8946a"
 SVG_ROOM_LABELS = {"room": "room", "corridor": "corridor", "space": "open space (not closed by walls)"}
-#: Colour of a door's opening.
-SVG_DOOR_COLOUR = "#d9480f"
+#: Colour of a door: its opening, leaf and swing (apart from the red wall axes).
+SVG_DOOR_COLOUR = "#2b8a3e"
 
 
 def _scale_bar_length(max_m: float) -> float:
@@ -134,7 +138,7 @@ def _write_svg(
         out.append(f'<text id="rooms-summary" x="{width - m:.2f}" y="26" font-size="12" text-anchor="end" '
                    f'fill="#444444">{_xml(summary)}</text>')
     out.append(f'<g id="plan" transform="matrix({s:.10g} 0 0 {-s:.10g} {tx:.6f} {ty:.6f})">')
-    out += _svg_rooms(exports)
+    out += _svg_rooms(exports, px)
     clutter = plan.clutter
     if len(clutter):  # under the walls: thin, dashed, light
         out.append(f'<g id="clutter" stroke="#9aa5b1" stroke-width="{1.2 * px:.6g}" '
@@ -236,14 +240,16 @@ def _svg_path(poly) -> str:
     return " ".join("M " + " L ".join(f"{x:.4f},{y:.4f}" for x, y in ring.coords[:-1]) + " Z" for ring in rings)
 
 
-def _svg_rooms(exports: PlanExports) -> list[str]:
-    """The rooms under everything else in the plan group (map metres): a light fill
-    per kind (:data:`SVG_ROOM_FILLS`), holes by ``fill-rule="evenodd"``, a tooltip
+def _svg_rooms(exports: PlanExports, px: float) -> list[str]:
+    """The rooms under everything else in the plan group (map metres, ``px`` metres a
+    pixel): a light fill per kind (:data:`SVG_ROOM_FILLS`) with a thin outline, so that
+    two rooms side by side read as two, holes by ``fill-rule="evenodd"``, a tooltip
     with the name, kind and area."""
     r = exports.plan.rooms
     if not len(r):
         return []
-    out = ['<g id="rooms" stroke="none" fill-rule="evenodd">']
+    out = [f'<g id="rooms" stroke="{SVG_ROOM_OUTLINE}" stroke-width="{1.0 * px:.6g}" stroke-linejoin="round" '
+           'fill-rule="evenodd">']
     for room_id, name, kind, area, poly in zip(
         r["room_id"].tolist(), r["name"].tolist(), r["kind"].tolist(), r["area_m2"].tolist(),
         exports.room_polys.tolist(),
@@ -258,23 +264,40 @@ def _svg_rooms(exports: PlanExports) -> list[str]:
 
 
 def _svg_doors(plan: FloorPlan, px: float) -> list[str]:
-    """The doors above the walls (map metres, ``px`` metres a pixel): the opening
-    cleared to white across its wall's thickness (the gap a reader sees), then a
-    coloured line (:data:`SVG_DOOR_COLOUR`) with a tooltip (width, rooms joined)."""
+    """The doors above the walls (map metres, ``px`` metres a pixel), drawn as a plan
+    drawn by people draws them: the opening cleared to white across its wall's
+    thickness, a thin line across it, and the leaf, as wide as the opening, swung a
+    quarter turn into the first of the two rooms that is not a corridor, with its arc (:data:`SVG_DOOR_COLOUR`;
+    a tooltip gives the width and the rooms joined)."""
+    import shapely
+
     d = plan.doors
     if not len(d):
         return []
     thick = dict(zip(plan.walls["wall_id"].tolist(), plan.walls["thickness_m"].tolist()))
-    out = ['<g id="doors" fill="none" stroke-linecap="butt">']
+    polys = dict(zip(plan.rooms["room_id"].tolist(), plan.rooms["polygon"].tolist())) if len(plan.rooms) else {}
+    corridor = set(plan.rooms.loc[plan.rooms["kind"] == "corridor", "room_id"].tolist()) if len(plan.rooms) else set()
+    out = [f'<g id="doors" fill="none" stroke="{SVG_DOOR_COLOUR}" stroke-linecap="butt">']
     for door_id, x0, y0, x1, y1, width, wall_id, a, b in zip(
         *(d[c].tolist() for c in ("door_id", "x0", "y0", "x1", "y1", "width_m", "wall_id", "room_a", "room_b"))
     ):
         xy = f'x1="{x0:.4f}" y1="{y0:.4f}" x2="{x1:.4f}" y2="{y1:.4f}"'
         if wall_id in thick:
             out.append(f'<line {xy} stroke="#ffffff" stroke-width="{float(thick[wall_id]) + 2 * px:.6g}"/>')
+        w = float(np.hypot(x1 - x0, y1 - y0))
+        n = np.array([-(y1 - y0), x1 - x0]) / max(w, 1e-12)
+        mid = np.array([(x0 + x1) / 2, (y0 + y1) / 2])
+        room = polys.get(b if a in corridor and b not in corridor else a)
+        if room is not None and not shapely.contains_xy(room, *(mid + 0.25 * w * n)) and shapely.contains_xy(room, *(mid - 0.25 * w * n)):
+            n = -n  # the leaf opens into that room
+        leaf = np.array([x0, y0]) + w * n
+        sweep = 1 if (leaf[0] - x0) * (y1 - y0) - (leaf[1] - y0) * (x1 - x0) > 0 else 0
         out.append(
-            f'<line {xy} stroke="{SVG_DOOR_COLOUR}" stroke-width="{3 * px:.6g}"><title>door {int(door_id)}: '
-            f"{float(width):.2f} m, rooms {int(a)} and {int(b)}</title></line>"
+            f'<g><title>door {int(door_id)}: {float(width):.2f} m, rooms {int(a)} and {int(b)}</title>'
+            f'<line {xy} stroke-width="{1.0 * px:.6g}"/>'
+            f'<line x1="{x0:.4f}" y1="{y0:.4f}" x2="{leaf[0]:.4f}" y2="{leaf[1]:.4f}" stroke-width="{2.0 * px:.6g}"/>'
+            f'<path d="M {leaf[0]:.4f} {leaf[1]:.4f} A {w:.4f} {w:.4f} 0 0 {sweep} {x1:.4f} {y1:.4f}" '
+            f'stroke-width="{0.8 * px:.6g}" stroke-dasharray="{3 * px:.6g} {2 * px:.6g}"/></g>'
         )
     out.append("</g>")
     return out
@@ -319,8 +342,8 @@ def _svg_legend(
                  'stroke-width="0.6"/>', f'<text x="30" y="{base:g}">{_xml(SVG_ROOM_LABELS.get(kind, kind))}</text>']
     if with_doors:
         base += SVG_LEGEND_ROW_PX
-        rows += [f'<line x1="0" y1="{base - 5:g}" x2="22" y2="{base - 5:g}" stroke="{SVG_DOOR_COLOUR}" '
-                 'stroke-width="3"/>', f'<text x="30" y="{base:g}">door (opening in a wall)</text>']
+        rows += [f'<path d="M 2 {base:g} L 2 {base - 12:g} A 12 12 0 0 1 14 {base:g} Z" fill="none" '
+                 f'stroke="{SVG_DOOR_COLOUR}" stroke-width="1.2"/>', f'<text x="30" y="{base:g}">door (opening in a wall, its leaf)</text>']
     return [
         f'<g id="legend" transform="translate({x:.2f} {y:.2f})" font-size="12">',
         '<rect x="0" y="0" width="22" height="10" fill="#8c8c8c" stroke="#333333" stroke-width="0.6"/>',

@@ -6,9 +6,11 @@ drawing's pixels (rule ``score_drawn``).
   lines is one room (flood-fill by ``scipy.ndimage.label``).
 - :func:`score_drawn_rooms`: the plan's rooms put on the drawing with the drawn plan's
   alignment (:func:`floorscan.score.drawn.align_drawn`, the same pixel frame), a pixel
-  belonging to a plan room when its centre lies inside it (pixel-exact IoU, the plan
-  room's pixels outside the image counted too), then matched as
-  :func:`floorscan.score.rooms.match_rooms` does.
+  belonging to a plan room when its centre lies inside it (pixel-exact IoU), then
+  matched as :func:`floorscan.score.rooms.match_rooms` does. Only the part of a plan
+  room inside the drawn building (:func:`drawn_building`) is scored: a drawing may
+  show part of the building the recording saw (freiburg101's ends at the hall's west
+  end), as the walls' correctness is scored inside the drawing only.
 """
 
 from __future__ import annotations
@@ -24,6 +26,9 @@ from floorscan.score.rooms import ROOM_SCORE_COLUMNS, SEEN_SHARE, SEEN_WITHIN_M,
 DRAWN_MIN_WIDTH_M = 0.5
 #: ... and its area is at least this, m2 (smaller: a sliver between two drawn lines).
 DRAWN_MIN_AREA_M2 = 1.0
+#: The drawn walls are at most this thick, metres: the drawn building is its rooms
+#: closed over them (:func:`drawn_building`).
+DRAWN_WALL_M = 0.4
 #: Grey level above which a pixel of a drawn segmentation is white (a room's).
 DRAWN_FREE_LEVEL = 0.98
 
@@ -92,9 +97,21 @@ def read_drawn_rooms(path, scale_m_per_px: float) -> np.ndarray:
                        min_area_px=DRAWN_MIN_AREA_M2 / scale_m_per_px**2)  # fmt: skip
 
 
-def _plan_room_pixels(poly, transform, shape) -> tuple[int, np.ndarray]:
-    """The pixels of the drawing whose centres lie inside a plan room (map metres):
-    their count (inside the image or not) and the flat indices of those inside it."""
+def drawn_building(labels: np.ndarray, wall_px: float) -> np.ndarray:
+    """(H, W) bool: the building a drawn segmentation shows: its rooms closed over the
+    drawn walls (``wall_px`` pixels thick) with the holes filled."""
+    from scipy import ndimage
+
+    r = max(1, int(math.ceil(wall_px)))
+    rooms = np.pad(labels > 0, r)
+    closed = ndimage.binary_closing(rooms, structure=np.ones((3, 3)), iterations=r)[r:-r, r:-r]
+    return ndimage.binary_fill_holes(closed)
+
+
+def _plan_room_pixels(poly, transform, shape, building: np.ndarray | None = None) -> tuple[int, np.ndarray]:
+    """The pixels of the drawing whose centres lie inside a plan room (map metres) and
+    inside the drawn ``building`` ((H, W) bool; None: anywhere, outside the image too):
+    their count and the flat indices of those inside the image."""
     import shapely
 
     px = shapely.transform(poly, transform.invert)
@@ -104,6 +121,9 @@ def _plan_room_pixels(poly, transform, shape) -> tuple[int, np.ndarray]:
     inside = shapely.contains_xy(px, cc.astype(np.float64), rr.astype(np.float64))
     cc, rr = cc[inside], rr[inside]
     ok = (rr >= 0) & (cc >= 0) & (rr < shape[0]) & (cc < shape[1])
+    if building is not None:
+        ok[ok] = building[rr[ok], cc[ok]]
+        return int(ok.sum()), rr[ok] * shape[1] + cc[ok]
     return int(inside.sum()), rr[ok] * shape[1] + cc[ok]
 
 
@@ -158,12 +178,13 @@ def score_drawn_rooms(plans: dict, labels: np.ndarray, transform, grid) -> tuple
                "true_doors_xy": np.empty((0, 2)), "true_doors_counted": np.zeros(0, bool),
                "structure": grid.cell_centres(grid.structure()), "plans": {}}  # fmt: skip
     rows = []
+    building = drawn_building(labels, DRAWN_WALL_M / transform.scale)
     for name, path in plans.items():
         rooms, doors = read_rooms(path)
         plan_area = np.zeros(len(rooms))
         inter = np.zeros((n, len(rooms)))
         for j, poly in enumerate(rooms["polygon"]):
-            plan_area[j], idx = _plan_room_pixels(poly, transform, labels.shape)
+            plan_area[j], idx = _plan_room_pixels(poly, transform, labels.shape, building)
             inter[:, j] = np.bincount(flat[idx], minlength=n + 1)[1:]
         scores, detail = match_rooms(inter, true_area, plan_area, counted)
         rows.append(score_row(name, "drawn", scores, {"n_plan_doors": len(doors)}))

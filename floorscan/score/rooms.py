@@ -185,7 +185,10 @@ def match_rooms(
     union = ta[:, None] + pa[None, :] - inter
     iou = np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)
     outside = inter[~counted].sum(axis=0)
-    left_out = np.divide(outside, pa, out=np.zeros_like(pa), where=pa > 0) >= left_out_share
+    # left out of precision: mostly in true rooms that do not count, or nothing of it
+    # where the truth is drawn (a plan room wholly outside a drawing that shows part of
+    # the building)
+    left_out = (np.divide(outside, pa, out=np.zeros_like(pa), where=pa > 0) >= left_out_share) | (pa <= 0)
     ti, pi = np.flatnonzero(counted), np.flatnonzero(~left_out)
     sub = iou[np.ix_(ti, pi)]
     # only pairs that count take part: the matching of the largest summed IoU among them
