@@ -81,6 +81,7 @@ def test_a_gap_narrower_than_a_door_joins_nothing():
     # a 0.4 m slit in the partition is not passable: two rooms, no door between them
     rooms, doors = _rooms(BOX + [(4, 0, 4, 1.8), (4, 2.2, 4, 4)], [(2, 2), (6, 2)])
     assert len(rooms) == 2 and len(doors) == 0
+    assert list(rooms["name"]) == ["Space 1", "Space 2"]  # no door divides them: two spaces apart
 
 
 # A corridor 1.4 m wide (y 0..1.4) under two rooms (y 1.4..4.4) split by a partition at

@@ -38,6 +38,7 @@ Usage::
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -124,6 +125,9 @@ class OccupancyGrid:
         Scans with a return in the cell / with a ray through it and no return in it;
         row ``i`` at ``y = origin_y + (i + 0.5) r``.
     params : OccupancyParams
+    scan_xy : (S, 2) float64 ndarray or None
+        Where the scans were taken from (their origins, map frame, metres, in the order
+        given): the space the scanner was in. None for a grid written without them.
     """
 
     origin_xy: np.ndarray
@@ -131,6 +135,7 @@ class OccupancyGrid:
     n_hit_scans: np.ndarray
     n_miss_scans: np.ndarray
     params: OccupancyParams
+    scan_xy: np.ndarray | None = None
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -241,6 +246,7 @@ def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: Occup
         n_hit_scans=hits.reshape(height, width),
         n_miss_scans=misses.reshape(height, width),
         params=params,
+        scan_xy=np.array([o for o, _ in scans], dtype=np.float64).reshape(-1, 2),
     )
 
 
@@ -323,7 +329,8 @@ def grid_table(grid: OccupancyGrid) -> pd.DataFrame:
 
 
 def grid_metadata(grid: OccupancyGrid) -> dict[str, str]:
-    """Schema metadata that, with :func:`grid_table`, restores the grid."""
+    """Schema metadata that, with :func:`grid_table`, restores the grid (the scans'
+    origins as JSON, to 0.1 mm, when the grid has them)."""
     p = grid.params
     return {
         "origin_x_m": repr(float(grid.origin_xy[0])),
@@ -332,6 +339,7 @@ def grid_metadata(grid: OccupancyGrid) -> dict[str, str]:
         "height": str(grid.shape[0]),
         "width": str(grid.shape[1]),
         **{f"param_{k}": repr(getattr(p, k)) for k in OccupancyParams.__dataclass_fields__},
+        **({} if grid.scan_xy is None else {"scan_xy_m": json.dumps(np.round(grid.scan_xy, 4).tolist())}),
     }
 
 
@@ -361,10 +369,12 @@ def grid_from_table(table: pd.DataFrame, metadata: dict[str, str]) -> OccupancyG
     rows, cols = table["row"].to_numpy(), table["col"].to_numpy()
     hits[rows, cols] = table["n_hit_scans"].to_numpy()
     misses[rows, cols] = table["n_miss_scans"].to_numpy()
+    scan_xy = metadata.get("scan_xy_m")
     return OccupancyGrid(
         origin_xy=np.array([float(metadata["origin_x_m"]), float(metadata["origin_y_m"])]),
         resolution_m=float(metadata["resolution_m"]),
         n_hit_scans=hits,
         n_miss_scans=misses,
         params=params,
+        scan_xy=None if scan_xy is None else np.array(json.loads(scan_xy), dtype=np.float64).reshape(-1, 2),
     )

@@ -16,25 +16,41 @@ taken from the walls:
    the scans saw occupied stay out, so a wall the plan lacks is not bridged) and its
    holes without walls filled (the floor under a table). Furniture and clutter are
    not obstacles: a room's area is its floor area.
-2. **Regions**: a watershed (scikit-image) of the negated distance to the nearest wall
-   or unseen cell, from the maxima of that distance that stand ``marker_depth_m`` above
-   the saddles around them (h-maxima): every narrowing of the space is a candidate
-   boundary between two rooms.
-3. **Doors** (:mod:`floorscan.floorplan.doors`): two regions stay apart only where they
-   meet through a door: an opening ``door_min_m`` to ``door_max_m`` wide in the line
-   of a plan wall, with a wall at both of its ends (the jambs). Regions that meet
-   anywhere else (a narrowing of a corridor, a passage wider than a door, an
-   over-segmented room) are merged.
-4. **Rooms**: each region of at least ``min_room_area_m2`` is a room; a smaller one
-   joins its neighbour of the longest contact. A room is a ``corridor`` when it is
-   long for its width (its length, area over width, at least ``corridor_elongation``
-   times its width and ``corridor_min_length_m``; the width, the diameter of the
-   largest circle inside its polygon, at most ``corridor_max_width_m``). When no door separates the space (an open hall, one
-   corridor, a campus), it is one region of kind ``space``.
-5. **Polygons** (:func:`room_polygons`): each room's cells traced (contourpy), grown up
+2. **Doors between walls** (:func:`~floorscan.floorplan.doors.wall_gaps`): the gap
+   between the facing ends of two walls in one line, ``door_min_m`` to ``door_max_m``
+   wide, that the scans saw through, is cut from the space first: a room seen only
+   through its door (a fan of rays) ends at the door.
+3. **Regions** (:func:`~floorscan.floorplan.room_space.space_regions`): a watershed
+   (scikit-image) of the negated distance to the nearest wall or unseen cell, from the
+   maxima of that distance that stand ``marker_depth_m`` above the saddles around them
+   (h-maxima): every narrowing of the space is a candidate boundary between two rooms.
+4. **Where regions meet** (:mod:`floorscan.floorplan.doors`), each place of contact
+   judged on its own: a door (:func:`~floorscan.floorplan.doors.contact_door`: an
+   opening ``door_min_m`` to ``door_max_m`` wide with a wall at both ends, in the line
+   of a wall that ends at one of them, narrower than the space on both sides by
+   ``door_narrowing_m``), a slit between wall pieces narrower than a door (nobody
+   passes: the regions stay apart), or anything else (a narrowing of a corridor, a
+   passage wider than a door, an over-segmented room): the two regions are one room.
+   Groups of regions whose edge runs along walls and seen obstacles for less than
+   ``min_enclosure`` of its length, that are reached only through openings no wider
+   than a door and where no scan was taken are the outside seen through a window or
+   an open door: not rooms.
+5. **Rooms**: a region below ``min_room_area_m2`` joins the neighbour it touches most;
+   a scrap no door joins to a room, no wall encloses and no scan was taken in is
+   dropped. A room is a
+   ``corridor`` when it is long for its width (its length, area over width, at least
+   ``corridor_elongation`` times its width and ``corridor_min_length_m``; the width,
+   the diameter of the largest circle inside its polygon, at most
+   ``corridor_max_width_m``). When no door divides the space (an open hall, one
+   corridor, a campus), it is one region of kind ``space`` (or a few, where the
+   seen space falls apart).
+6. **Polygons** (:func:`room_polygons`): each room's cells traced (contourpy), grown up
    to the wall faces and cut by the wall footprints (shapely), simplified by half a
-   cell: valid polygons, holes allowed, in map metres, numbered ``Room 1``,
-   ``Corridor 1``, ``Space 1`` in reading order (top to bottom, left to right).
+   cell; a room seen in part, convex between its walls, completed up to them (the
+   bounding box of its seen floor cut by each nearby wall's half-plane); the door
+   openings in the walls belong to no room. Valid polygons, holes allowed, in map
+   metres, numbered ``Room 1``, ``Corridor 1``, ``Space 1`` in reading order (top to
+   bottom, left to right).
 
 Parameters: :class:`RoomParams` (config ``floorplan.rooms``).
 """
@@ -85,7 +101,7 @@ def _label_at(labels: np.ndarray, raster: RoomRaster, xy: np.ndarray) -> int:
 def segment_rooms(
     grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, params: RoomParams = RoomParams()
 ) -> tuple[RoomRaster, np.ndarray, list[tuple[np.ndarray, np.ndarray, int, int, int]]]:
-    """The rooms and doors on the raster (module docstring, steps 1-4).
+    """The rooms and doors on the raster (module docstring, steps 1-5).
 
     Parameters
     ----------
@@ -161,7 +177,7 @@ def segment_rooms(
             found.append((p, q, wall, *pair))
             touching[pair] = touching.get(pair, 0.0) + float(np.hypot(*d))
             kinds.setdefault(pair, "door")
-    outside = _outside_regions(cut, labels, kinds, params)
+    outside = _outside_regions(cut, labels, kinds, params, grid.scan_xy)
     for (a, b), kind in kinds.items():
         if kind in ("narrow", "wide") and not (outside[a] or outside[b]):
             sets.union(a, b)
@@ -199,7 +215,7 @@ def segment_rooms(
     for _, _, _, a, b in found:
         if roots[a] != roots[b]:
             with_door[[roots[a], roots[b]]] = True
-    loose = (_enclosure(cut, merged, n) < params.min_enclosure) & ~with_door
+    loose = (_enclosure(cut, merged, n) < params.min_enclosure) & ~with_door & ~_visited(cut, merged, grid.scan_xy, n)
     loose[0] = False
     if loose.any() and (~loose[1:] & (room_area[1:] > 0)).any():  # never the whole space
         merged[loose[merged]] = 0
@@ -239,20 +255,25 @@ def _enclosure(raster: RoomRaster, labels: np.ndarray, n: int | None = None) -> 
     return np.r_[1.0, np.where(total > 0, ndimage.sum(edge & solid, labels, ids) / np.maximum(total, 1), 1.0)]
 
 
-def _outside_regions(raster: RoomRaster, labels: np.ndarray, kinds: dict, params: RoomParams) -> np.ndarray:
+def _outside_regions(
+    raster: RoomRaster, labels: np.ndarray, kinds: dict, params: RoomParams, scan_xy: np.ndarray | None = None
+) -> np.ndarray:
     """(R + 1,) bool: the regions that are not the building's space: groups of regions
     whose edge lies along walls and seen obstacles for less than
     ``rooms.min_enclosure`` of its length (a fan of rays seen through a window or an
     open door into the outside) and that meet the other regions only through openings
-    no wider than a door. A room seen only through its door is walled on most of its
-    edge (the walls the plan found, the obstacles the scans saw), the outside is not."""
+    no wider than a door, where no scan was taken from (``scan_xy``, (S, 2) metres). A
+    room seen only through its door is walled on most of its edge (the walls the plan
+    found, the obstacles the scans saw), the outside is not."""
     from scipy import ndimage
 
     n = int(labels.max())
     out = np.zeros(n + 1, dtype=bool)
     if n < 2:
         return out
-    low = _enclosure(raster, labels) < params.min_enclosure
+    # never where the scanner was: an open hall whose walls are out of range is walled
+    # on little of its edge, but the rover drove in it
+    low = (_enclosure(raster, labels) < params.min_enclosure) & ~_visited(raster, labels, scan_xy, n)
     groups = _Union(n)
     for (a, b), kind in kinds.items():
         if low[a] and low[b] and kind in ("narrow", "wide"):
@@ -263,6 +284,19 @@ def _outside_regions(raster: RoomRaster, labels: np.ndarray, kinds: dict, params
         links = [kind for (a, b), kind in kinds.items() if members[a] != members[b]]
         if links and all(kind in ("narrow", "door") for kind in links):
             out |= members
+    out[0] = False
+    return out
+
+
+def _visited(raster: RoomRaster, labels: np.ndarray, scan_xy: np.ndarray | None, n: int) -> np.ndarray:
+    """(n + 1,) bool: the labels of ``labels`` that hold the origin of a scan
+    (``scan_xy`` (S, 2) metres; None: none)."""
+    out = np.zeros(n + 1, dtype=bool)
+    if scan_xy is None or not len(scan_xy):
+        return out
+    c = np.floor((np.asarray(scan_xy) - raster.origin_xy) / raster.resolution_m).astype(np.int64)
+    ok = (c[:, 0] >= 0) & (c[:, 1] >= 0) & (c[:, 0] < labels.shape[1]) & (c[:, 1] < labels.shape[0])
+    out[labels[c[ok, 1], c[ok, 0]]] = True
     out[0] = False
     return out
 
@@ -304,7 +338,7 @@ def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thic
             xy = (pts + [c0 - 1 + 0.5, r0 - 1 + 0.5]) * res + raster.origin_xy
             rings = [xy[a:b] for a, b in zip(off[:-1], off[1:])]
             parts.append(shapely.Polygon(rings[0], rings[1:]))
-        traced.append(shapely.make_valid(shapely.union_all(parts)))
+        traced.append(shapely.simplify(shapely.make_valid(shapely.union_all(parts)), res / 4))
     out = []
     for k, poly in enumerate(traced):
         others = shapely.union_all([p for j, p in enumerate(traced) if j != k and shapely.distance(p, poly) < 2 * res])
@@ -427,9 +461,10 @@ def plan_rooms(
         long = width <= params.corridor_max_width_m and length >= max(params.corridor_elongation * width, params.corridor_min_length_m)
         kinds.append("corridor" if long else "room")
     doors = [(p, q, w, new_id[a], new_id[b]) for p, q, w, a, b in doors if a in new_id and b in new_id]
-    if len(polys) == 1 and not doors:
-        kinds = ["space"]
-        log.info("rooms: no door separates the free space (an open hall, one corridor): one space of %.1f m2", polys[0].area)
+    if polys and not doors:
+        kinds = ["space"] * len(polys)
+        log.info("rooms: no door divides the free space (an open hall, one corridor, a campus): %s of %.1f m2",
+                 "one space" if len(polys) == 1 else f"{len(polys)} spaces apart", sum(p.area for p in polys))
     names, counts = [], {}
     for kind in kinds:
         counts[kind] = counts.get(kind, 0) + 1
