@@ -256,8 +256,10 @@ def test_reduced_bag_from_the_scan_index_reingests_to_the_same_scans(ros1_bag, t
     rec = open_recording(ds, {}, 0.5)
     write_recording(rec, tmp_path / "scans.parquet", tmp_path / "scan_index.parquet", tmp_path / "pose_stream.parquet")
     det = read_detection(tmp_path / "scan_index.parquet")
-    assert {k: v for k, v in det.items() if k != "t_ns"} == {"format": "rosbag", "scan_topic": "/scan", "stamps": "recorded"}
+    assert {k: v for k, v in det.items() if k not in ("t_ns", "source_ordinal")} == {
+        "format": "rosbag", "scan_topic": "/scan", "stamps": "recorded", "n_frames_read": "20"}
     assert det["t_ns"].tolist() == (T0_NS + np.arange(20) * 100_000_000).tolist()
+    assert det["source_ordinal"].tolist() == list(range(20))  # nothing skipped: message i is scan i
     out = tmp_path / "reduced.bag"
     write_reduced_recording(ros1_bag, det["format"], [4, 9, 17], out, det)
     again = list(open_recording({"path": str(out)}, {}, 0.5).scans)

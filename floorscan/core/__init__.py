@@ -7,6 +7,8 @@
 - :mod:`~floorscan.core.config`: the config's validation against the stage schemas and
   the parameter dataclasses' defaults from them (written once, in the schemas);
 - :mod:`~floorscan.core.stage`: a stage script's logging and error reporting;
+- :mod:`~floorscan.core.messages`: what an error message says: the user's data quoted
+  short, a system error (no space, read-only, permission) named with what to do;
 - :mod:`~floorscan.core.runtime`: progress lines, worker processes
   (``concurrent.futures`` with spawn), thread limits;
 - :mod:`~floorscan.core.shards`: the per-scan stages split by scan range into jobs;

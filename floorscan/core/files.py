@@ -122,7 +122,8 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it to ``path`` on success.
 
     On an exception the temporary file is removed and ``path`` is left untouched,
-    so a failed stage leaves no half-written output. Temporaries of ``path`` that an
+    so a failed stage leaves no half-written output; an ``OSError`` that names no file
+    or the temporary is made to name ``path``. Temporaries of ``path`` that an
     earlier, killed writer left (``.<name>.<8 characters>.tmp``) are removed first,
     unless this process removed them already (:func:`remove_stale_temporaries`).
     """
@@ -136,10 +137,19 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         if tmp.is_file():  # mkstemp makes files private (0600); give them the usual umask mode
             tmp.chmod(0o666 & ~_UMASK)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         with contextlib.suppress(FileNotFoundError):
             tmp.unlink()
+        _name_output(e, tmp, path)
         raise
+
+
+def _name_output(exc: BaseException, tmp: Path, path: Path) -> None:
+    """Make an ``OSError`` of writing temporary ``tmp`` name output ``path`` instead (or
+    name it at all: pyarrow's errors of a full disk name no file), for the message
+    (:func:`floorscan.core.messages.system_error_message`)."""
+    if isinstance(exc, OSError) and (exc.filename is None or os.fspath(exc.filename) == str(tmp)):
+        exc.filename = str(path)
 
 
 @contextlib.contextmanager
@@ -171,6 +181,9 @@ def staged_path(path: str | os.PathLike) -> Iterator[Path]:
         if path.is_dir() and not path.is_symlink():
             os.replace(path, stage / (path.name + ".old"))
         os.replace(tmp, path)
+    except OSError as e:
+        _name_output(e, tmp, path)
+        raise
     finally:
         shutil.rmtree(stage, ignore_errors=True)
 
@@ -187,3 +200,96 @@ def _json_default(o: object) -> object:
     if isinstance(o, np.ndarray):
         return o.tolist()
     raise TypeError(f"not JSON serializable: {type(o).__name__}")
+
+
+def recording_fingerprint(path: str | os.PathLike) -> dict[str, int | str] | None:
+    """What a recording on disk is, cheaply: its files' sizes and modification times.
+
+    Passed through the ingest rule's ``params:``, it makes Snakemake rerun ingest when the
+    recording changes, whatever its modification time: a recording replaced by an older
+    copy (``cp -p``) is older than the tables made from it, so Snakemake's time stamps
+    alone would keep the old tables. Size and modification time in nanoseconds are what
+    ``rsync`` and ``make`` trust; reading every byte of a recording of gigabytes at each
+    start of the workflow to hash it would cost more than an ingest.
+
+    Parameters
+    ----------
+    path : path
+        A recording: a file (ROS1 bag, CARMEN log), or a folder (ROS2 bag, PCD folder),
+        whose every file below it counts (hidden ones and symbolic links followed too).
+
+    Returns
+    -------
+    dict or None
+        ``{"files": n, "bytes": total size in bytes, "stat_sha256": hex digest}``, the
+        digest of each file's path relative to ``path``, size and ``st_mtime_ns``, in
+        path order (a short value however many files a PCD folder has); None when
+        ``path`` does not exist (Snakemake then reports the missing input).
+    """
+    import hashlib
+
+    path = Path(path)
+    try:
+        top = path.stat()
+    except OSError:
+        return None
+    if path.is_dir():
+        files = []
+        for root, dirs, names in os.walk(path, followlinks=True):
+            dirs.sort()
+            for name in names:
+                p = Path(root) / name
+                try:
+                    st = p.stat()
+                except OSError:  # a dangling link: counted as it is
+                    st = p.lstat()
+                files.append((p.relative_to(path).as_posix(), st.st_size, st.st_mtime_ns))
+        files.sort()
+    else:
+        files = [("", top.st_size, top.st_mtime_ns)]
+    digest = hashlib.sha256()
+    for name, size, mtime_ns in files:
+        digest.update(f"{name}\0{size}\0{mtime_ns}\n".encode("utf-8", "surrogateescape"))
+    return {"files": len(files), "bytes": sum(f[1] for f in files), "stat_sha256": digest.hexdigest()[:16]}
+
+
+def writable_problem(folder: str | os.PathLike, probe_bytes: int = 4096) -> str | None:
+    """Why the workflow cannot write in ``folder``, or None when it can.
+
+    Checked at the start of a run (``workflow/rules/common.smk``), before Snakemake
+    makes its first folder: a read-only results folder otherwise ends in Snakemake's
+    own traceback, or in the traceback of the first stage. A file of ``probe_bytes``
+    bytes is written in ``folder`` (in the nearest folder above it that exists, when it
+    does not) and removed; it has no name (``O_TMPFILE``) where the system allows, so
+    even a killed run leaves nothing.
+
+    Parameters
+    ----------
+    folder : path
+        A folder the workflow writes in (``results``, ``.snakemake``).
+    probe_bytes : int
+        Bytes written, so that a full disk is found as well as a read-only one.
+
+    Returns
+    -------
+    str or None
+        One paragraph naming the folder, the error and what to do
+        (:func:`floorscan.core.messages.system_error_message`); None when it can be
+        written.
+    """
+    from floorscan.core.messages import system_error, system_error_message
+
+    folder = Path(folder)
+    probe = folder
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    try:
+        with tempfile.TemporaryFile(dir=probe) as f:
+            f.write(b"\0" * probe_bytes)
+            f.flush()
+    except OSError as e:
+        if system_error(e) is None:  # not the machine's (a vanished folder): Snakemake's to judge
+            return None
+        e.filename = os.path.abspath(folder)
+        return system_error_message(e)
+    return None

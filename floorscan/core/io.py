@@ -29,7 +29,17 @@ SCANS = pa.schema(
 )
 #: Points of the kept scans in the map frame (``registered.parquet``).
 REGISTERED = SCANS
-#: One row per scan of the recording (``scan_index.parquet``).
+#: Field metadata of a column that a table written before it existed lacks: a frame
+#: without it is written with the column null (:func:`table_from_frame`), and its
+#: readers fall back to what it replaced.
+OPTIONAL_FIELD = {b"optional": b"1"}
+#: One row per scan of the recording (``scan_index.parquet``). ``frame`` is the scanner
+#: frame of its points; ``source_ordinal`` (optional: null in an index written before it
+#: existed) the 0-based ordinal of the scan's frame in the recording ingest read, the
+#: numbering of ingest's ``skipped_frames``: a bag's message on the scan topic (in the
+#: order rosbags' ``AnyReader`` yields them), a CARMEN log's laser line (in file order),
+#: a PCD folder's row of the locations CSV. Ingest skips bad frames and sorts stamps a
+#: little out of order, so it is not ``scan_id`` in general.
 SCAN_INDEX = pa.schema(
     [
         ("scan_id", pa.int32()),
@@ -37,6 +47,7 @@ SCAN_INDEX = pa.schema(
         ("n_points", pa.int32()),
         ("n_dropped", pa.int32()),
         ("frame", pa.string()),
+        pa.field("source_ordinal", pa.int64(), metadata=OPTIONAL_FIELD),
     ]
 )
 #: The localizer's raw pose stream in the map frame (``pose_stream.parquet``).
@@ -72,14 +83,20 @@ class InputError(ValueError):
 def table_from_frame(df: pd.DataFrame, schema: pa.Schema) -> pa.Table:
     """Convert ``df`` to a table with exactly ``schema`` (column order and dtypes).
 
+    A column the schema marks optional (:data:`OPTIONAL_FIELD`) that ``df`` lacks is
+    written null; ``df`` is not changed.
+
     Raises
     ------
     KeyError
-        When a column of the schema is missing from ``df``.
+        When a column of the schema that is not optional is missing from ``df``.
     """
-    missing = [n for n in schema.names if n not in df.columns]
+    absent = [f for f in schema if f.name not in df.columns]
+    missing = [f.name for f in absent if (f.metadata or {}).get(b"optional") != OPTIONAL_FIELD[b"optional"]]
     if missing:
         raise KeyError(f"columns {missing} missing; expected {schema.names}")
+    if absent:
+        df = df.assign(**{f.name: None for f in absent})
     return pa.Table.from_pandas(df[schema.names], schema=schema, preserve_index=False)
 
 

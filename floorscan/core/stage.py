@@ -14,7 +14,14 @@ fails (``show-failed-logs`` of the default profile), so it is printed once:
   recording too poor to register) as one paragraph that names the user's recording,
   without a traceback; the script then exits with status 1 (``SystemExit``, which
   Python ends without a traceback);
+- an error of the machine (:func:`floorscan.core.messages.system_error`: no space left
+  on the device, a read-only file system, permission denied) as one paragraph that
+  names the path and what to do, without a traceback, and exit status 1 likewise; when
+  the log file cannot be written (the disk is full) the paragraph goes to stderr;
 - any other exception (a bug) with its traceback, and re-raised: Python prints it.
+
+A message quotes at most :data:`floorscan.core.messages.MAX_QUOTE` characters of a run
+of the user's data (:func:`floorscan.core.messages.shorten_message`).
 
 Either way the job fails and Snakemake removes its outputs. Before the stage runs,
 temporaries of its outputs that a killed run left are removed
@@ -77,7 +84,9 @@ def failure_message(rule: str, exc: BaseException, source: str | os.PathLike | N
     str
         ``"<rule> failed: <message>"`` or ``"<rule> failed on <recording>: <message>"``.
     """
-    message = str(exc).strip() or type(exc).__name__
+    from floorscan.core.messages import shorten_message
+
+    message = shorten_message(str(exc).strip()) or type(exc).__name__
     recording = None
     if source is not None:
         from floorscan.core.io import recording_source
@@ -88,11 +97,37 @@ def failure_message(rule: str, exc: BaseException, source: str | os.PathLike | N
     return f"{rule} failed: {message}"
 
 
-def _outputs(smk: Any) -> list[str]:
-    """The job's output paths (a Snakemake named list, or a mapping of names to paths)."""
-    output = getattr(smk, "output", None) or []
+def _outputs(smk: Any, what: str = "output") -> list[str]:
+    """The job's output (or ``what``: input) paths (a Snakemake named list, or a mapping
+    of names to paths)."""
+    output = getattr(smk, what, None) or []
     values = output.values() if isinstance(output, dict) else output
     return [str(v) for v in values if isinstance(v, (str, os.PathLike))]
+
+
+class _LogFile(logging.FileHandler):
+    """The rule's log file; a record it cannot write (no space left) sets ``failed``
+    instead of printing logging's own traceback, and the failure goes to stderr."""
+
+    failed = False
+
+    def handleError(self, record: logging.LogRecord) -> None:
+        self.failed = True
+
+    def close(self) -> None:
+        try:
+            super().close()
+        except OSError:  # flushing to a full disk
+            self.failed = True
+
+
+def _log_file(path: str) -> _LogFile | None:
+    """The handler of the rule's log file; None when it cannot be opened (a read-only
+    or full disk): the stage then logs to stderr alone and its error says why."""
+    try:
+        return _LogFile(path, mode="w")
+    except OSError:
+        return None
 
 
 @contextlib.contextmanager
@@ -120,7 +155,13 @@ def stage_log(smk: Any, name: str | None = None, source: str | os.PathLike | Non
     SystemExit
         Status 1, for an error of :data:`EXPECTED_ERRORS` inside the block, logged as
         one paragraph (:func:`failure_message`) to the log file only (to stderr when
-        there is none); the error is its ``__cause__``.
+        there is none); the error is its ``__cause__``. Likewise for a system error
+        (:func:`floorscan.core.messages.system_error`: no space left, a read-only file
+        system, permission denied; raised, or the cause or context of the error
+        raised), whose paragraph names the path (the ``OSError``'s
+        file, else the folder of ``smk.output``) and what to do
+        (:func:`floorscan.core.messages.system_error_message`), to stderr when the log
+        file cannot take it.
     Exception
         Any other exception inside the block, logged with its traceback to the log file
         only (likewise), and re-raised. Either way Snakemake marks the job failed and
@@ -133,11 +174,15 @@ def stage_log(smk: Any, name: str | None = None, source: str | os.PathLike | Non
     root = logging.getLogger()
     root.setLevel(logging.INFO)
     stderr = logging.StreamHandler(sys.stderr)
-    handlers: list[logging.Handler] = [stderr]
+    handlers: list[logging.Handler] = []
     if len(smk.log) > 0:
-        handlers.append(logging.FileHandler(smk.log[0], mode="w"))
-        # the failure goes to the log file alone, which Snakemake prints when the job fails
-        stderr.addFilter(lambda record: not getattr(record, "floorscan_failure", False))
+        log_file = _log_file(smk.log[0])
+        if log_file is not None:
+            handlers.append(log_file)
+            # the failure goes to the log file alone, which Snakemake prints when the job
+            # fails; to stderr when the file could not take it (handlers run in order)
+            stderr.addFilter(lambda record: not getattr(record, "floorscan_failure", False) or log_file.failed)
+    handlers.append(stderr)
     for h in handlers:
         h.setFormatter(logging.Formatter(LOG_FORMAT))
         root.addHandler(h)
@@ -158,6 +203,15 @@ def stage_log(smk: Any, name: str | None = None, source: str | os.PathLike | Non
         yield logger
         logger.info("done %s in %.2f s (%.2f s CPU)", rule, time.perf_counter() - t0, time.process_time() - c0)
     except Exception as e:
+        from floorscan.core.messages import system_error, system_error_message
+
+        # the machine's error, raised or wrapped (a reader's "cannot read the log" raised
+        # from a PermissionError): named as such, not as bad input
+        oserror = system_error(e)
+        if oserror is not None:
+            message = system_error_message(oserror, _outputs(smk, "input"), _outputs(smk))
+            logger.error("%s failed: %s", rule, message, extra=_FAILURE)
+            raise SystemExit(1) from e
         if not is_expected_error(e):
             logger.exception("stage %s failed", rule, extra=_FAILURE)
             raise

@@ -11,11 +11,19 @@ beyond the log's no-return range (:mod:`floorscan.ingest.carmen_ranges`: configu
 are dropped and counted. The stamps are recorded, spread or made up
 (:mod:`floorscan.ingest.carmen_stamps`); the few lines that step back in time are
 sorted by stamp (a stable sort; each line carries its own pose, so nothing is lost).
+
+A laser line whose ROBOTLASER1 geometry is broken
+(:func:`floorscan.ingest.carmen_lines.robotlaser_geometry_problem`) or without a valid
+return is skipped and counted (``lost_bad_frames``, ``lost_no_points``; its pose stays
+in the pose stream), the first named in a note; more than half of the lines broken, or
+none usable, is an ``InputError`` (:class:`~floorscan.ingest.points.ScanLosses`). Lines
+of a type CARMEN does not define (:data:`~floorscan.ingest.carmen_lines.CARMEN_TYPES`)
+are counted (``lost_unknown_lines``) and the first few named in a note.
 """
 
 from __future__ import annotations
 
-import gzip
+import logging
 import zlib
 from pathlib import Path
 from typing import Any, Iterator, Mapping
@@ -23,22 +31,35 @@ from typing import Any, Iterator, Mapping
 import numpy as np
 
 from floorscan.core.io import InputError
-from floorscan.ingest.carmen_lines import LASER_TYPES, LAYOUTS, MalformedLine, parse_laser_line
+from floorscan.ingest.carmen_lines import CARMEN_TYPES, LASER_TYPES, LAYOUTS, MalformedLine, parse_laser_line
 from floorscan.ingest.carmen_ranges import NoReturn, no_return_range
 from floorscan.ingest.carmen_stamps import classify_stamps, spread_stamps
 from floorscan.ingest.params import IngestParams
-from floorscan.ingest.points import laser_scan_points
+from floorscan.ingest.points import FrameError, ScanLosses, laser_scan_points, no_return_reason
 from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
+
+log = logging.getLogger(__name__)
 
 
 def _open_text(path: Path):
-    """The log as text; a UTF-8 byte-order mark before its first line is dropped (an
-    editor's: read as ASCII it made the first line's type unknown, and its scan was lost)."""
-    with open(path, "rb") as f:
-        magic = f.read(2)
-    if magic == b"\x1f\x8b":
-        return gzip.open(path, "rt", encoding="utf-8-sig", errors="replace")
-    return open(path, "rt", encoding="utf-8-sig", errors="replace")
+    """The log as text (:func:`floorscan.ingest.text.open_text`): plain or gzip, a UTF-8
+    byte-order mark before its first line dropped (an editor's: read as ASCII it made the
+    first line's type unknown, and its scan was lost), trailing garbage after the gzip
+    data left out with a warning, as ``gzip -d`` does."""
+    from floorscan.ingest.text import open_text
+
+    return open_text(path)
+
+
+def _found_types(counts: dict[str, int], most: int = 10) -> str:
+    """The line types of a log that holds no laser line, for its error: at most ``most``,
+    each cut to 20 characters; a file of binary data is said to be one."""
+    if any(not k.isprintable() or "\ufffd" in k for k in counts):
+        return "the file is not a text log: its bytes are binary (a ROS bag, a PCD file?); set format to what it is, or leave format unset for ingest to detect it"
+    top = sorted(counts.items(), key=lambda kv: (-kv[1], kv[0]))
+    shown = ", ".join(f"{k[:20]}{'...' if len(k) > 20 else ''} ({n})" for k, n in top[:most])
+    more = f" and {len(top) - most} more" if len(top) > most else ""
+    return f"message types found: {shown or 'none'}{more}"
 
 
 def parse_carmen(
@@ -63,7 +84,10 @@ def parse_carmen(
     scans : list of dict
         Per laser line, in file order: ``t_s`` (float, seconds, ipc timestamp),
         ``points`` ((N, 3) float32, scanner frame, metres), ``n_dropped``,
-        ``pose`` ((3,) x, y, theta of the laser in the map frame), ``line`` (1-based).
+        ``pose`` ((3,) x, y, theta of the laser in the map frame), ``line`` (1-based),
+        ``ordinal`` (0-based, among the laser lines in file order: the scan's
+        ``source_ordinal``), ``kind``, ``problem`` (None, or what is wrong with a
+        ROBOTLASER1 line's beam geometry: ingest skips its scan).
     counts : dict
         Lines seen per message type.
 
@@ -76,13 +100,18 @@ def parse_carmen(
         field and the layout); or no laser lines at all.
     """
     fov = IngestParams().carmen_fov_rad if fov_rad is None else fov_rad
-    scans, counts, _ = _parse(Path(path), max_range_m, fov)
+    scans, counts, _, _ = _parse(Path(path), max_range_m, fov)
     return scans, counts
 
 
-def _parse(path: Path, max_range_m: float | None, fov_rad: float) -> tuple[list[dict], dict[str, int], NoReturn]:
+def _parse(
+    path: Path, max_range_m: float | None, fov_rad: float
+) -> tuple[list[dict], dict[str, int], NoReturn, list[tuple[int, str]]]:
+    """The laser lines (as :func:`parse_carmen`), the count of each line type, the range
+    limit, and the first few lines of an unknown type (line number, type)."""
     lines: list[dict] = []
     counts: dict[str, int] = {}
+    unknown: list[tuple[int, str]] = []
     try:
         with _open_text(path) as f:
             for lineno, line in enumerate(f, 1):
@@ -92,6 +121,8 @@ def _parse(path: Path, max_range_m: float | None, fov_rad: float) -> tuple[list[
                 kind = tok[0]
                 counts[kind] = counts.get(kind, 0) + 1
                 if kind not in LASER_TYPES:
+                    if kind not in CARMEN_TYPES and len(unknown) < 5:
+                        unknown.append((lineno, kind[:40]))
                     continue
                 try:
                     lines.append(parse_laser_line(kind, tok, fov_rad, lineno))
@@ -100,19 +131,19 @@ def _parse(path: Path, max_range_m: float | None, fov_rad: float) -> tuple[list[
     except (EOFError, OSError, zlib.error) as e:
         raise InputError(f"{path}: cannot read the log, truncated or corrupt ({e})") from None
     if not lines:
-        raise InputError(
-            f"{path}: no laser lines; expected FLASER or ROBOTLASER1 lines "
-            f"(message types found: {dict(sorted(counts.items())) or 'none'})"
-        )
+        raise InputError(f"{path}: no laser lines; expected FLASER or ROBOTLASER1 lines ({_found_types(counts)})")
     limit = no_return_range([s["ranges"] for s in lines], max_range_m)
     scans = []
-    for s in lines:
+    for ordinal, s in enumerate(lines):
+        s["ordinal"] = ordinal
         ranges = s.pop("ranges")
         rmax = min(limit.max_range_m, s.pop("rmax"))
         # at or beyond the limit: no return (laser_scan_points keeps [min, max) only)
         s["points"], s["n_dropped"] = laser_scan_points(ranges, s.pop("start"), s.pop("inc"), 1e-9, rmax)
+        if not len(s["points"]):
+            s["no_return"] = no_return_reason(ranges, 1e-9, rmax)
         scans.append(s)
-    return scans, counts, limit
+    return scans, counts, limit, unknown
 
 
 def open_carmen(path: Path, dataset: Mapping[str, Any], cfg: "IngestParams | Mapping[str, Any] | None") -> Recording:
@@ -127,16 +158,28 @@ def open_carmen(path: Path, dataset: Mapping[str, Any], cfg: "IngestParams | Map
     Raises
     ------
     InputError
-        See :func:`parse_carmen`; also zero stamps among non-zero ones (a corrupt log).
+        See :func:`parse_carmen`; also zero stamps among non-zero ones (a corrupt log);
+        more than half of the laser lines with broken geometry, or no line with a valid
+        return (names the first line and field).
     """
     params = IngestParams.from_config(cfg)
     cfg_max = params.carmen_max_range_m
-    scans, counts, limit = _parse(
+    scans, counts, limit, unknown = _parse(
         path,
         max_range_m=None if cfg_max is None else float(cfg_max),
         fov_rad=float(params.carmen_fov_rad),
     )
     notes = [f"message types: {dict(sorted(counts.items()))}", limit.note()]
+    n_unknown = sum(k for kind, k in counts.items() if kind not in CARMEN_TYPES)
+    if n_unknown:
+        named = ", ".join(f"line {i} {kind!r}" for i, kind in unknown)
+        line = (
+            f"{path}: {n_unknown} lines of a message type CARMEN does not define were not read "
+            f"(lost_unknown_lines; {named}{', ...' if n_unknown > len(unknown) else ''}); expected "
+            "FLASER or ROBOTLASER1 for scans"
+        )
+        notes.append(line)
+        log.warning("%s", line)
     t = np.array([s["t_s"] for s in scans])
     try:
         stamps, n_rep = classify_stamps(t)
@@ -189,9 +232,38 @@ def open_carmen(path: Path, dataset: Mapping[str, Any], cfg: "IngestParams | Map
         "stamps": stamps,
         "max_range_m": f"{limit.max_range_m:.10g}",
     }
+    if n_unknown:
+        detected["lost_unknown_lines"] = str(n_unknown)
+    keep = _usable_lines(path, scans, detected, notes)
 
     def _scans() -> Iterator[Scan]:
-        for ti, s in zip(t_ns, scans):
-            yield Scan(int(ti), "laser", s["points"], s["n_dropped"])
+        for ti, s, ok in zip(t_ns, scans, keep):
+            if ok:
+                yield Scan(int(ti), "laser", s["points"], s["n_dropped"], s["ordinal"])
 
     return Recording(scans=_scans(), pose_stream=stream, source=str(path), notes=notes, detected=detected)
+
+
+def _usable_lines(path: Path, scans: list[dict], detected: dict, notes: list[str]) -> list[bool]:
+    """Which laser lines give a scan: not broken (ROBOTLASER1 geometry) and with a valid
+    return. The losses go into ``detected`` and ``notes``; their ordinals in
+    ``skipped_frames`` are the lines' in file order.
+
+    Raises
+    ------
+    InputError
+        More than half of the lines broken, or none usable (names the first).
+    """
+    losses = ScanLosses("laser lines")
+    losses.n_read = len(scans)
+    bad = {}
+    for s in sorted(scans, key=lambda s: s["line"]):  # the first in the file named first
+        where = f"{path}:{s['line']}"
+        if s["problem"]:
+            bad[s["line"]] = FrameError(where, f"{s['kind']} line {s['problem']}")
+        elif not len(s["points"]):
+            bad[s["line"]] = FrameError(where, f"{s['kind']} line has no valid return: {s['no_return']}", loss="no_points")
+        if s["line"] in bad:
+            losses.skip(s["ordinal"], bad[s["line"]])
+    losses.report(detected, notes, str(path))
+    return [s["line"] not in bad for s in scans]

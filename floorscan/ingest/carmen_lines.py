@@ -24,6 +24,12 @@ number; the corrected pose, ROBOTLASER1's ``start_angle``, ``angular_resolution`
 ``maximum_range`` must be finite; ``ipc_timestamp`` must be finite, 0 or more and below
 :data:`MAX_STAMP_S`. The error names the line and the field. Non-finite *ranges* are not
 errors: they are "no return", dropped and counted like the others.
+
+Broken geometry. A well-formed ROBOTLASER1 line whose ``angular_resolution`` is 0, whose
+``fov`` is not finite or wider than a full turn (degrees), or disagrees with
+``n x angular_resolution`` by more than one beam, would draw its beams at wrong angles:
+:func:`robotlaser_geometry_problem` says what, and the reader skips the line's scan and
+counts it (``lost_bad_frames``); its pose is kept.
 """
 
 from __future__ import annotations
@@ -33,10 +39,26 @@ import re
 
 import numpy as np
 
+from floorscan.ingest.points import angle_span_problem
 from floorscan.ingest.text import parse_number, parse_numbers
 
 
 LASER_TYPES = ("FLASER", "ROBOTLASER1")
+#: Message types a CARMEN log may hold: those the CARMEN logger's file header defines
+#: (``carmen/src/logger/writelog.c``: PARAM, SYNC, ODOM, TRUEPOS, RAWLASER1-4,
+#: POSITIONLASER, ROBOTLASER1-2, NMEAGGA, NMEARMC, SONAR, BUMPER, SCANMARK, IMU,
+#: VECTORMOVE, ROBOTVELOCITY, FOLLOWTRAJECTORY, BASEVELOCITY and the old FLASER, RLASER,
+#: LASER3, LASER4, REMISSION*), plus COMMENT and NEFF (the number of effective particles
+#: of the Radish corrected logs). A line of another type is counted as unknown
+#: (``lost_unknown_lines``): a misspelt or garbled line type loses its scan silently.
+CARMEN_TYPES = frozenset(
+    (
+        "PARAM", "COMMENT", "SYNC", "ODOM", "TRUEPOS", "RAWLASER1", "RAWLASER2", "RAWLASER3", "RAWLASER4",
+        "POSITIONLASER", "ROBOTLASER1", "ROBOTLASER2", "NMEAGGA", "NMEARMC", "SONAR", "BUMPER", "SCANMARK", "IMU",
+        "VECTORMOVE", "ROBOTVELOCITY", "FOLLOWTRAJECTORY", "BASEVELOCITY", "FLASER", "RLASER", "LASER3", "LASER4",
+        "REMISSIONFLASER", "REMISSIONRLASER", "REMISSIONLASER3", "REMISSIONLASER4", "NEFF",
+    )
+)
 #: The field layout of each laser line, for error messages.
 LAYOUTS = {
     "FLASER": "FLASER n r1..rn x y theta odom_x odom_y odom_theta ipc_timestamp ipc_hostname logger_timestamp",
@@ -103,6 +125,9 @@ def _stamp(tok: list[str], i: int) -> float:
 def parse_laser_line(kind: str, tok: list[str], fov_rad: float, lineno: int) -> dict:
     """One laser line's fields, read only when their count is exactly the layout's.
 
+    The returned dict's ``problem`` is None, or what is wrong with a ROBOTLASER1 line's
+    beam geometry (:func:`robotlaser_geometry_problem`): the reader skips its scan.
+
     Raises
     ------
     MalformedLine
@@ -125,6 +150,7 @@ def parse_laser_line(kind: str, tok: list[str], fov_rad: float, lineno: int) -> 
         start = -fov_rad / 2.0
         others = ("odom_x", "odom_y", "odom_theta")
         stamp_at = k + 6
+        problem = None
     else:
         if len(tok) < 9:
             raise MalformedLine(f"{len(tok)} fields; expected 24 + n + m (n at field 9)")
@@ -141,8 +167,9 @@ def parse_laser_line(kind: str, tok: list[str], fov_rad: float, lineno: int) -> 
             )
         _number(tok, 1, "laser_type")
         start = _finite(tok, 2, "start_angle")
-        _number(tok, 3, "fov")
+        fov = _number(tok, 3, "fov")
         inc = _finite(tok, 4, "angular_resolution")
+        problem = robotlaser_geometry_problem(fov, inc, n)
         line_rmax = _finite(tok, 5, "maximum_range")
         _number(tok, 6, "accuracy")
         _number(tok, 7, "remission_mode")
@@ -161,4 +188,42 @@ def parse_laser_line(kind: str, tok: list[str], fov_rad: float, lineno: int) -> 
     _number(tok, stamp_at + 2, "logger_timestamp")
     return {
         "t_s": t_s, "ranges": ranges, "start": start, "inc": inc, "rmax": rmax, "pose": pose, "line": lineno, "kind": kind,
+        "problem": problem,
     }
+
+
+def robotlaser_geometry_problem(fov: float, resolution: float, n: int) -> str | None:
+    """What is wrong with a ROBOTLASER1 line's beam geometry, or None.
+
+    Parameters
+    ----------
+    fov : float
+        ``fov`` field (field of view), radians.
+    resolution : float
+        ``angular_resolution`` field, radians between beams (finite: checked as the line
+        is read).
+    n : int
+        Beam count.
+
+    Returns
+    -------
+    str or None
+        The field and what was expected: ``angular_resolution`` 0; ``fov`` not finite, or
+        wider than a full turn (degrees?); ``|fov|`` and ``n x |angular_resolution|``
+        more than one beam (``|angular_resolution|``) apart (loggers write both ``n`` and
+        ``n - 1`` steps for the same scan).
+    """
+    if resolution == 0.0:
+        return "field 5 (angular_resolution) is 0; expected the non-zero angle between beams, radians"
+    if not math.isfinite(fov):
+        return f"field 4 (fov) is {fov}; expected a finite field of view, radians"
+    bad = angle_span_problem(fov, "field 4 (fov)")
+    if bad:
+        return bad
+    span = n * abs(resolution)
+    if abs(abs(fov) - span) > abs(resolution) * (1.0 + 1e-6):
+        return (
+            f"field 4 (fov) is {fov:g} rad, but n x angular_resolution = {n} x {resolution:g} = {span:g} rad; "
+            "expected them within one beam"
+        )
+    return None

@@ -7,9 +7,11 @@ below; a log clipped to a round limit), repeated in many scans, while the farthe
 genuine wall of a log is read a few times at most. Unless ``ingest.carmen_max_range_m``
 is set, the no-return value is detected (:func:`no_return_range`): the log's largest
 reading, when that exact value carries at least ``NO_RETURN_MIN_FRACTION`` of all
-readings (and at least ``NO_RETURN_MIN_COUNT``); readings within ``NO_RETURN_BAND_M``
-below it are the same code family and are dropped with it. Without such a value the
-SICK LMS limit ``FALLBACK_MAX_RANGE_M`` applies. Returns at or beyond the limit, or at
+readings (and at least ``NO_RETURN_MIN_COUNT``), and some reading is not that value;
+readings within ``NO_RETURN_BAND_M`` below it are the same code family and are dropped
+with it. Without such a value (a log whose every reading is one value is read as
+returns: dropping them all would leave nothing) the SICK LMS limit
+``FALLBACK_MAX_RANGE_M`` applies. Returns at or beyond the limit, or at
 or below zero, are dropped and counted.
 """
 
@@ -96,8 +98,8 @@ def no_return_range(ranges: Sequence[np.ndarray] | np.ndarray, max_range_m: floa
     NoReturn
         The limit: ``max_range_m`` when given; else the largest reading minus
         ``NO_RETURN_BAND_M`` when that exact value carries at least
-        ``NO_RETURN_MIN_FRACTION`` of the readings and ``NO_RETURN_MIN_COUNT`` of them;
-        else ``FALLBACK_MAX_RANGE_M``.
+        ``NO_RETURN_MIN_FRACTION`` of the readings and ``NO_RETURN_MIN_COUNT`` of them,
+        but not every finite one; else ``FALLBACK_MAX_RANGE_M``.
     """
     r = np.concatenate([np.asarray(a, dtype=np.float64).ravel() for a in ranges]) if len(ranges) else np.zeros(0)
     finite = r[np.isfinite(r)]
@@ -107,7 +109,7 @@ def no_return_range(ranges: Sequence[np.ndarray] | np.ndarray, max_range_m: floa
     fraction = count / total
     if max_range_m is not None:
         limit, how = float(max_range_m), "configured"
-    elif count >= NO_RETURN_MIN_COUNT and fraction >= NO_RETURN_MIN_FRACTION:
+    elif count >= NO_RETURN_MIN_COUNT and fraction >= NO_RETURN_MIN_FRACTION and count < finite.size:
         limit, how = round(value - NO_RETURN_BAND_M, 6), "detected"
     else:
         limit, how = FALLBACK_MAX_RANGE_M, "fallback"

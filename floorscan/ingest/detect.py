@@ -6,9 +6,14 @@ A dataset without ``format`` is read as what its path is:
   ``#ROSBAG V2.0``); a ROS2 bag folder (``metadata.yaml``, or ``.db3`` / ``.mcap``
   files in it); a ``.db3`` or ``.mcap`` file, whose folder is the bag;
 - ``carmen``: a ``.log``, ``.log.gz``, ``.clf`` or ``.gz`` file (plain or gzip text)
-  with a ``FLASER`` or ``ROBOTLASER1`` line among its first lines (the CARMEN logger's
-  laser messages, which follow the log's ``PARAM`` lines and some ``ODOM`` ones), so
-  an unrelated ``.log`` is not taken for one;
+  whose lines are CARMEN messages: a ``FLASER`` or ``ROBOTLASER1`` line among its first
+  lines (the CARMEN logger's laser messages, which follow the log's ``PARAM`` lines and
+  some ``ODOM`` ones), or else lines of which at least :data:`CARMEN_SHARE` start with
+  a CARMEN message type (:data:`floorscan.ingest.carmen_lines.CARMEN_TYPES`: a log may
+  hold many thousand ``ODOM`` lines before its first laser line, which its reader then
+  finds), so an unrelated ``.log`` is not taken for one. The text is read as
+  :func:`floorscan.ingest.text.open_text` reads it (a UTF-8 byte-order mark dropped,
+  trailing garbage after gzip data ignored);
 - ``pcd``: a folder holding ``.pcd`` files (with the locations CSV read by
   :mod:`floorscan.ingest.pcd`).
 
@@ -18,11 +23,13 @@ is expected. An explicit ``format`` in the dataset always wins over detection.
 
 from __future__ import annotations
 
-import gzip
 import zlib
 from pathlib import Path
 
 from floorscan.core.io import InputError
+from floorscan.core.messages import quoted, system_error
+from floorscan.ingest.carmen_lines import CARMEN_TYPES
+from floorscan.ingest.text import open_text
 
 #: File suffixes of a ROS2 bag's storage (sqlite3, MCAP).
 ROS2_STORAGE_SUFFIXES = (".db3", ".mcap")
@@ -30,7 +37,10 @@ ROS2_STORAGE_SUFFIXES = (".db3", ".mcap")
 CARMEN_SUFFIXES = (".log", ".clf", ".gz")
 #: CARMEN laser message types that make a file a recording floorscan reads.
 CARMEN_LASER_TYPES = ("FLASER", "ROBOTLASER1")
-#: How far into a CARMEN candidate the laser line is looked for.
+#: Without a laser line among the first lines, the share of them that must start with
+#: a CARMEN message type.
+CARMEN_SHARE = 0.9
+#: How far into a CARMEN candidate the laser line and the message types are looked for.
 PEEK_LINES = 20_000
 PEEK_BYTES = 8 << 20
 ROS1_MAGIC = b"#ROSBAG V2.0"
@@ -72,7 +82,8 @@ def detect_format(path: str | Path) -> str:
             return "rosbag"
         if any(n.lower().endswith(".pcd") for n in names):
             return "pcd"
-        shown = ", ".join(names[:10]) + (f" ... ({len(names)} entries)" if len(names) > 10 else "")
+        shown = ", ".join(n if len(n) <= 60 else quoted(n, 60) for n in names[:10])
+        shown += f" ... ({len(names)} entries)" if len(names) > 10 else ""
         raise InputError(
             f"{path}: a folder with neither a ROS2 bag nor .pcd files (it holds: {shown or 'nothing'}); {EXPECTED}"
         )
@@ -84,16 +95,13 @@ def detect_format(path: str | Path) -> str:
     if head == ROS1_MAGIC:
         return "rosbag"
     if suffix in CARMEN_SUFFIXES:
-        found = _carmen_laser_line(path)
-        if found:
+        why_not = _not_carmen(path)
+        if why_not is None:
             return "carmen"
-        raise InputError(
-            f"{path}: no {' or '.join(CARMEN_LASER_TYPES)} line in its first {PEEK_LINES} lines, "
-            f"so not a CARMEN log floorscan reads; {EXPECTED}"
-        )
+        raise InputError(f"{path}: {why_not}, so not a CARMEN log; {EXPECTED}")
     if suffix == ".pcd":
         raise InputError(f"{path}: a single .pcd file; give the folder of .pcd scans (with locations.csv) instead")
-    raise InputError(f"{path}: unknown recording format (suffix {suffix or 'none'!r}); {EXPECTED}")
+    raise InputError(f"{path}: unknown recording format (suffix {quoted(suffix or 'none', 40)}); {EXPECTED}")
 
 
 def bag_path(path: str | Path) -> Path:
@@ -104,23 +112,44 @@ def bag_path(path: str | Path) -> Path:
     return path
 
 
-def _carmen_laser_line(path: Path) -> bool:
-    """Whether a FLASER/ROBOTLASER1 line is among the first lines of a (gzip) text file."""
-    with open(path, "rb") as f:
-        gz = f.read(2) == b"\x1f\x8b"
+def _not_carmen(path: Path) -> str | None:
+    """None when ``path`` (plain or gzip text) reads as a CARMEN log: a laser line among
+    its first :data:`PEEK_LINES` lines (at most :data:`PEEK_BYTES`), or else at least
+    :data:`CARMEN_SHARE` of those lines (comments and blank ones aside) start with a
+    message type of :data:`~floorscan.ingest.carmen_lines.CARMEN_TYPES`. Otherwise why
+    not, quoting at most three of the first words of its lines, each cut to 40
+    characters."""
+    typed = known = 0
+    others: list[str] = []
     try:
-        with (gzip.open(path, "rb") if gz else open(path, "rb")) as f:
-            n_bytes = 0
+        with open_text(path, warn=False) as f:
+            n_chars = 0
             for _ in range(PEEK_LINES):
                 line = f.readline(1 << 16)  # bounded: a binary file may have no newline
                 if not line:
                     break
+                n_chars += len(line)
                 tok = line.split(maxsplit=1)
-                if tok and tok[0].decode("ascii", errors="replace") in CARMEN_LASER_TYPES:
-                    return True
-                n_bytes += len(line)
-                if n_bytes >= PEEK_BYTES:
+                if tok and not tok[0].startswith("#"):
+                    if tok[0] in CARMEN_LASER_TYPES:
+                        return None
+                    typed += 1
+                    if tok[0] in CARMEN_TYPES:
+                        known += 1
+                    elif len(others) < 3 and tok[0] not in others:
+                        others.append(tok[0])
+                if n_chars >= PEEK_BYTES:
                     break
     except (EOFError, OSError, zlib.error) as e:
+        if isinstance(e, OSError) and system_error(e) is not None:
+            raise  # the machine's (permission denied): named as such by the stage
         raise InputError(f"{path}: cannot read it to detect its format, truncated or corrupt ({e})") from None
-    return False
+    if typed == 0:
+        return "no lines (it is empty, or holds comments alone)"
+    if known >= CARMEN_SHARE * typed:
+        return None
+    words = ", ".join(quoted(w, 40) for w in others)
+    return (
+        f"no {' or '.join(CARMEN_LASER_TYPES)} line in its first {typed} lines, and {typed - known} of them "
+        f"start with other words than CARMEN message types (such as {words})"
+    )

@@ -31,6 +31,13 @@ column), never a wrong point or pose.
   they are: ingest drops and counts them.
 - Locations CSV: ``x, y, z, yaw`` finite numbers, ``t_ns`` a decimal integer in
   [0, 2^63), strictly increasing.
+
+Losses: a listed file without a valid point (all NaN, or none inside the dataset's range
+limits) is skipped and counted (``lost_no_points``), the first named in a note; none
+usable is an ``InputError`` (:class:`~floorscan.ingest.points.ScanLosses`). ``.pcd``
+files in the folder (or below it) that the CSV does not list are not read: counted
+(``lost_unlisted_files``) and the first few named in a note. A malformed file stays an
+error, as a malformed CARMEN line does: the reader would otherwise guess at its layout.
 """
 
 from __future__ import annotations
@@ -47,7 +54,7 @@ import pandas as pd
 
 from floorscan.core.io import InputError
 from floorscan.ingest.params import IngestParams
-from floorscan.ingest.points import filter_points
+from floorscan.ingest.points import FrameError, ScanLosses, filter_points
 from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
 from floorscan.ingest.text import parse_number, parse_numbers
 
@@ -426,12 +433,15 @@ def open_pcd_folder(path: Path, dataset: Mapping[str, Any], cfg: Mapping[str, An
     """Open a folder of map-frame ``.pcd`` scans as a :class:`~floorscan.ingest.recording.Recording`.
 
     ``Recording.detected``: scan topic ``pcd files``, pose source embedded (the
-    locations CSV), pose kind ``map``, stamps from :func:`read_locations`.
+    locations CSV), pose kind ``map``, stamps from :func:`read_locations`;
+    ``lost_unlisted_files`` at once, ``n_frames_read`` and ``lost_no_points`` once the
+    scans are read (see the module docstring).
 
     Raises
     ------
     InputError
-        See :func:`read_locations` and :func:`read_pcd_xyz`.
+        See :func:`read_locations` and :func:`read_pcd_xyz`; no listed file with a valid
+        point (as the scans are read).
     """
     if not path.is_dir():
         raise InputError(f"{path}: expected a folder of .pcd files")
@@ -439,16 +449,6 @@ def open_pcd_folder(path: Path, dataset: Mapping[str, Any], cfg: Mapping[str, An
     loc = read_locations(path, dataset.get("locations", "locations.csv"), float(period))
     stream = pose_stream_frame(loc["t_ns"].to_numpy(), loc["x"], loc["y"], loc["z"], loc["yaw"])
     rmin, rmax = dataset.get("range_min_m"), dataset.get("range_max_m")
-
-    def _scans() -> Iterator[Scan]:
-        for row in loc.itertuples(index=False):
-            pts = read_pcd_xyz(path / str(row.file))
-            c, s = np.cos(row.yaw), np.sin(row.yaw)
-            d = pts - np.array([row.x, row.y, row.z])
-            local = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1], d[:, 2]], axis=1)
-            kept, dropped = filter_points(local, rmin, rmax)
-            yield Scan(int(row.t_ns), "scanner", kept, dropped)
-
     name = dataset.get("locations", "locations.csv")
     detected = {
         "scan_topic": "pcd files",
@@ -457,4 +457,43 @@ def open_pcd_folder(path: Path, dataset: Mapping[str, Any], cfg: Mapping[str, An
         "stamps": loc.attrs.get("stamps", "recorded"),
     }
     notes = [f"{len(loc)} scans listed in {name}; stamps {detected['stamps']}"]
+    unlisted = unlisted_files(path, loc["file"])
+    if unlisted:
+        detected["lost_unlisted_files"] = str(len(unlisted))
+        line = (
+            f"{path}: {len(unlisted)} .pcd files are not listed in {name} and were not read "
+            f"(lost_unlisted_files; {', '.join(unlisted[:5])}{', ...' if len(unlisted) > 5 else ''}); "
+            f"expected a row of {name} for each scan"
+        )
+        notes.append(line)
+        log.warning("%s", line)
+
+    def _scans() -> Iterator[Scan]:
+        losses = ScanLosses("listed PCD files")
+        for i, row in enumerate(loc.itertuples(index=False)):
+            losses.n_read, file = losses.n_read + 1, path / str(row.file)
+            pts = read_pcd_xyz(file)
+            c, s = np.cos(row.yaw), np.sin(row.yaw)
+            d = pts - np.array([row.x, row.y, row.z])
+            local = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1], d[:, 2]], axis=1)
+            kept, dropped = filter_points(local, rmin, rmax)
+            if not len(kept):
+                n_finite = int(np.count_nonzero(np.isfinite(pts).all(axis=1)))
+                losses.skip(i, FrameError(
+                    f"{file} ({name} row {i + 1})",
+                    f"no valid point: of its {len(pts)} points, {len(pts) - n_finite} are not finite and {n_finite} "
+                    f"outside the dataset's range limits [{rmin}, {rmax}) m",
+                    loss="no_points",
+                ))
+                continue
+            yield Scan(int(row.t_ns), "scanner", kept, dropped, i)
+        losses.report(detected, notes, str(path))
+
     return Recording(scans=_scans(), pose_stream=stream, source=str(path), notes=notes, detected=detected)
+
+
+def unlisted_files(folder: Path, listed) -> list[str]:
+    """The ``.pcd`` files in and below ``folder`` that ``listed`` (paths relative to it) does not name, sorted."""
+    names = {(folder / str(f)).resolve() for f in listed}
+    found = (p for p in folder.rglob("*") if p.suffix.lower() == ".pcd" and p.is_file())
+    return sorted(str(p.relative_to(folder)) for p in found if p.resolve() not in names)

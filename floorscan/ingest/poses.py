@@ -124,3 +124,21 @@ def scan_poses(scan_index: pd.DataFrame, stream: pd.DataFrame, max_gap_s: float,
     poses = interpolate_poses(stream, scan_index["t_ns"].to_numpy(), max_gap_s=max_gap_s, source=source)
     poses.insert(0, "scan_id", scan_index["scan_id"].to_numpy(dtype=np.int32))
     return poses
+
+
+def missing_poses_line(poses: pd.DataFrame) -> str:
+    """One log line on the scans without a pose, ``""`` when every scan has one.
+
+    ``poses``: the table of :func:`scan_poses` (``valid``, ``reason``). E.g. ``201 of
+    300 scans have no pose (after_pose_stream 201); the register stage counts them as
+    lost (register.max_lost_fraction)``.
+    """
+    missing = ~poses["valid"].to_numpy(bool)
+    if not missing.any():
+        return ""
+    counts = poses.loc[missing, "reason"].value_counts()
+    reasons = ", ".join(f"{r} {n}" for r, n in counts.items())
+    return (
+        f"{int(missing.sum())} of {len(poses)} scans have no pose ({reasons}); the register stage counts them "
+        "as lost (register.max_lost_fraction)"
+    )

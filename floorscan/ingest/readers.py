@@ -20,7 +20,9 @@ def open_recording(dataset: Mapping[str, Any], cfg: Mapping[str, Any], max_gap_s
 
     The format is the dataset's ``format`` when given, else detected from ``path``
     (:func:`floorscan.ingest.detect.detect_format`); ``Recording.detected["format"]``
-    holds it either way.
+    holds it either way. What the reader skipped (scans without a valid return, broken
+    frames, unlisted files, unknown lines) is in ``Recording.detected`` and the notes
+    once ``Recording.scans`` is exhausted (:data:`floorscan.ingest.recording.LOSS_KEYS`).
 
     Parameters
     ----------
@@ -62,6 +64,9 @@ def open_recording(dataset: Mapping[str, Any], cfg: Mapping[str, Any], max_gap_s
         rec = open_pcd_folder(path, dataset, cfg)
     else:
         raise InputError(f"{path}: unsupported dataset format {fmt!r}; expected rosbag, carmen or pcd")
-    rec.detected = {"format": fmt, **{k: v for k, v in rec.detected.items() if k != "format"}}
+    # in place: a lazy reader adds its loss counts to this dict as the scans are read
+    others = {k: v for k, v in rec.detected.items() if k != "format"}
+    rec.detected.clear()
+    rec.detected.update({"format": fmt, **others})
     rec.notes.insert(0, f"format {fmt} ({how})")
     return rec

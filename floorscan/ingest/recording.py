@@ -31,16 +31,38 @@ class Scan:
         Valid returns in the scanner frame, metres.
     n_dropped : int
         Returns dropped as invalid (NaN, inf, or outside the range limits).
+    source_ordinal : int or None
+        0-based ordinal of the frame the scan was read from, as ``skipped_frames``
+        numbers them (:data:`DETECTED_KEYS`): a bag's message on the scan topic, a CARMEN
+        log's laser line in file order, the locations CSV's row. The scan index's
+        ``source_ordinal`` (:data:`floorscan.core.io.SCAN_INDEX`): the select stage finds
+        the scan in the recording by it. None: the reader does not number its frames.
     """
 
     t_ns: int
     frame: str
     points: np.ndarray
     n_dropped: int
+    source_ordinal: int | None = None
 
 
-#: Keys of :attr:`Recording.detected`, in the order they are logged.
-DETECTED_KEYS = ("format", "scan_topic", "pose_source", "stamps", "pose_kind", "max_range_m")
+#: What a reader lost on the way, in :attr:`Recording.detected` (decimal strings; each
+#: ``lost_*`` key only when non-zero): ``n_frames_read`` (scan frames the reader saw:
+#: a bag's messages on the scan topic, a CARMEN log's laser lines, the PCD files listed
+#: in the locations CSV), ``lost_bad_frames`` (skipped: broken scan geometry or a message
+#: that cannot be decoded), ``lost_no_points`` (skipped: no valid return),
+#: ``lost_unlisted_files`` (``.pcd`` files in the folder that the locations CSV does not
+#: list, not read) and ``lost_unknown_lines`` (CARMEN lines of a message type CARMEN
+#: does not define, not read). Complete once ``Recording.scans`` is exhausted.
+LOSS_KEYS = ("n_frames_read", "lost_bad_frames", "lost_no_points", "lost_unlisted_files", "lost_unknown_lines")
+#: Keys of :attr:`Recording.detected`, in the order they are logged. ``skipped_frames``:
+#: where the skipped frames were, as ranges of 0-based ordinals (``"3,17-19"``): a bag's
+#: message index on the scan topic (in reading order), a CARMEN log's laser line (in file
+#: order), the locations CSV's row; only when a frame was skipped. The scans' own frames
+#: are numbered the same way (:attr:`Scan.source_ordinal`).
+DETECTED_KEYS = ("format", "scan_topic", "pose_source", "stamps", "pose_kind", "max_range_m") + LOSS_KEYS + (
+    "skipped_frames",
+)
 #: Pose kinds: ``map`` poses (a localizer, the TF chain from ``map``, a log's corrected
 #: poses, a PCD folder's locations, or a pose source set in the dataset), or ``none``.
 POSE_KINDS = ("map", "none")
@@ -66,9 +88,13 @@ class Recording:
         (rosbag, carmen, pcd), ``scan_topic`` (a bag's topic, a CARMEN log's laser line
         type, ``pcd files``), ``pose_source`` (a readable phrase), ``pose_kind``
         (:data:`POSE_KINDS`), ``stamps`` (:data:`STAMP_CLASSES`) and, for CARMEN,
-        ``max_range_m`` (returns at or beyond it were dropped, metres).
+        ``max_range_m`` (returns at or beyond it were dropped, metres); what was lost
+        (:data:`LOSS_KEYS`, ``skipped_frames``). A lazy reader (bags, PCD folders) adds
+        the loss keys as ``scans`` is consumed, to this same dict.
     notes : list of str
-        What the reader noticed and did about it, one line each, for the stage log.
+        What the reader noticed and did about it, one line each, for the stage log; a
+        lazy reader appends what it skipped as ``scans`` is consumed (and logs it as a
+        warning).
     """
 
     scans: Iterator[Scan]

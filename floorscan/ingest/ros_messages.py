@@ -6,15 +6,21 @@ A message's time is its header stamp (the bag's receive time when the stamp is z
 their layout (:func:`pointcloud2_xyz`).
 
 Bad values are an ``InputError`` naming the file, the topic, the message
-(:func:`message_label`) and the field, never a wrong pose or point: a LaserScan's
-``angle_min``, ``angle_increment``, ``range_min`` or ``range_max`` not finite; a pose
-message's position or orientation not finite, or its quaternion not a unit one (``|q|^2``
-off 1 by more than :data:`QUATERNION_TOLERANCE`, the bound tf2 applies to the transforms
-it accepts: :func:`pose_problem`; a TF transform the same, when its link is in the chain
-the poses come from, :mod:`floorscan.ingest.tf_chains`); a PointCloud2 whose layout does
-not hold its points (a field beyond ``point_step``, ``row_step`` short of a row, data not
-``row_step x height`` bytes) or with no finite point at all. Non-finite *ranges* and
-single non-finite *points* are not errors: they are "no return", dropped and counted.
+(:func:`message_label`) and the field, never a wrong pose or point. A bad *scan* message
+raises a :class:`~floorscan.ingest.points.FrameError` (an ``InputError``), which the bag
+reader skips and counts when only a few are bad
+(:class:`~floorscan.ingest.points.ScanLosses`): a LaserScan whose geometry is broken
+(:func:`laser_scan_problem`: a field not finite, ``angle_increment`` zero or against
+``angle_max - angle_min``, a ranges count that does not match the angles, angles wider
+than a full turn (degrees), ``range_min`` not below ``range_max``); a PointCloud2 whose
+layout does not hold its points (a field beyond ``point_step``, ``row_step`` short of a
+row, data not ``row_step x height`` bytes) or with no finite point at all. A pose
+message's position or orientation not finite, or its quaternion not a unit one
+(``|q|^2`` off 1 by more than :data:`QUATERNION_TOLERANCE`, the bound tf2 applies to the
+transforms it accepts: :func:`pose_problem`; a TF transform the same, when its link is
+in the chain the poses come from, :mod:`floorscan.ingest.tf_chains`) is an error.
+Non-finite *ranges* and single non-finite *points* are not errors: they are "no return",
+dropped and counted.
 """
 
 from __future__ import annotations
@@ -24,8 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from floorscan.core.io import InputError
-from floorscan.ingest.points import laser_scan_points
+from floorscan.ingest.points import FrameError, angle_span_problem, laser_scan_points
 
 
 #: A quaternion whose squared norm is off 1 by more than this is not a rotation (tf2's
@@ -78,18 +83,66 @@ def laser_scan_xyz(
 
     Raises
     ------
-    InputError
+    FrameError
         ``angle_min``, ``angle_increment``, ``range_min`` or ``range_max`` is not finite
-        (names the file, topic, message and field).
+        (names the file, topic, message and field). The rest of the geometry is
+        :func:`laser_scan_problem`'s.
     """
     values = (float(msg.angle_min), float(msg.angle_increment), float(msg.range_min), float(msg.range_max))
     for name, v in zip(("angle_min", "angle_increment", "range_min", "range_max"), values):
         if not math.isfinite(v):
-            raise InputError(f"{message_label(path, topic, index, t_ns)}: LaserScan {name} is {v}; expected a finite number")
+            raise FrameError(message_label(path, topic, index, t_ns), f"LaserScan {name} is {v}; expected a finite number")
     angle_min, angle_increment, range_min, range_max = values
     rmin = max(range_min, range_min_m if range_min_m is not None else 0.0)
     rmax = min(range_max, range_max_m if range_max_m is not None else math.inf)
     return laser_scan_points(np.asarray(msg.ranges), angle_min, angle_increment, rmin, rmax)
+
+
+def laser_scan_problem(msg) -> str | None:
+    """What is wrong with a ``sensor_msgs/LaserScan``'s geometry, or None.
+
+    Checked in this order, each naming the field and what was expected:
+
+    - ``angle_min``, ``angle_max``, ``angle_increment``, ``range_min``, ``range_max``
+      finite (radians, metres);
+    - ``angle_max - angle_min`` at most a full turn (2 pi plus
+      :data:`~floorscan.ingest.points.ANGLE_SPAN_TOLERANCE_RAD`): wider is taken to be
+      degrees;
+    - ``angle_increment`` non-zero, with the sign of ``angle_max - angle_min`` (beam ``i``
+      points at ``angle_min + i * angle_increment``, and the last at ``angle_max``);
+    - the number of ``ranges`` within one of ``(angle_max - angle_min) / angle_increment + 1``
+      (drivers differ by one on whether the beam at ``angle_max`` is included);
+    - ``range_min < range_max``.
+
+    The ROS message definition (``sensor_msgs/LaserScan.msg``) states this geometry; a
+    scan that breaks it would draw its beams at wrong angles (e.g. twice the ranges wrap
+    round the full circle).
+    """
+    names = ("angle_min", "angle_max", "angle_increment", "range_min", "range_max")
+    values = [float(getattr(msg, n)) for n in names]
+    for name, v in zip(names, values):
+        if not math.isfinite(v):
+            return f"LaserScan {name} is {v}; expected a finite number"
+    angle_min, angle_max, inc, range_min, range_max = values
+    span = angle_max - angle_min
+    bad = angle_span_problem(span, f"LaserScan angle_max - angle_min = {angle_max:g} - {angle_min:g}")
+    if bad:
+        return bad
+    if inc == 0.0 or (span != 0.0 and (inc > 0) != (span > 0)):
+        return (
+            f"LaserScan angle_increment is {inc:g}; expected a non-zero step with the sign of "
+            f"angle_max - angle_min = {span:g} rad"
+        )
+    n = len(msg.ranges)
+    expected = span / inc + 1.0
+    if abs(n - expected) > 1.0 + 1e-6:
+        return (
+            f"LaserScan ranges has {n} values; expected (angle_max - angle_min) / angle_increment + 1 = "
+            f"{span:g} / {inc:g} + 1 = {expected:.6g}, within one"
+        )
+    if not range_min < range_max:
+        return f"LaserScan range_min is {range_min:g} m, range_max {range_max:g} m; expected range_min < range_max"
+    return None
 
 
 _PC2_DTYPES = {1: "i1", 2: "u1", 3: "i2", 4: "u2", 5: "i4", 6: "u4", 7: "f4", 8: "f8"}
@@ -112,17 +165,19 @@ def pointcloud2_xyz(msg, path: Path | str = "", topic: str = "", index: int | No
 
     Raises
     ------
-    InputError
+    FrameError
         The message has no x, y or z field, one of unknown datatype or ending beyond
         ``point_step``; ``row_step`` is short of ``width x point_step``; the data is not
-        ``row_step x height`` bytes; or no point is finite (the cloud holds nothing).
+        ``row_step x height`` bytes (loss ``bad_frame``); or no point is finite (the cloud
+        holds nothing: loss ``no_points``).
     """
-    what = f"{path}: PointCloud2 on {topic!r}" if index is None else f"{message_label(path, topic, index, t_ns)}: PointCloud2"
+    where = f"{path}" if index is None else message_label(path, topic, index, t_ns)
+    what = "PointCloud2" if index is not None else f"PointCloud2 on {topic!r}"
     fields = {f.name: f for f in msg.fields}
     missing = [n for n in "xyz" if n not in fields]
     if missing:
-        raise InputError(
-            f"{what} lacks fields {missing}; expected x, y, z "
+        raise FrameError(
+            where, f"{what} lacks fields {missing}; expected x, y, z "
             f"(fields: {sorted(fields)})"
         )
     order = ">" if msg.is_bigendian else "<"
@@ -131,24 +186,24 @@ def pointcloud2_xyz(msg, path: Path | str = "", topic: str = "", index: int | No
     for n in "xyz":
         f = fields[n]
         if f.datatype not in _PC2_DTYPES:
-            raise InputError(f"{what} field {n!r} has unknown datatype {f.datatype}")
+            raise FrameError(where, f"{what} field {n!r} has unknown datatype {f.datatype}")
         size = np.dtype(_PC2_DTYPES[f.datatype]).itemsize
         if not 0 <= int(f.offset) <= step - size:
-            raise InputError(
-                f"{what} field {n!r} (offset {int(f.offset)}, {size} bytes) ends beyond point_step {step}"
+            raise FrameError(
+                where, f"{what} field {n!r} (offset {int(f.offset)}, {size} bytes) ends beyond point_step {step}"
             )
         names.append(n)
         formats.append(order + _PC2_DTYPES[f.datatype])
         offsets.append(int(f.offset))
     if row_step and row_step < width * step:
-        raise InputError(
-            f"{what} row_step {row_step} is less than width x point_step = {width} x {step} = {width * step}"
+        raise FrameError(
+            where, f"{what} row_step {row_step} is less than width x point_step = {width} x {step} = {width * step}"
         )
     rs = row_step or width * step  # 0: a driver that left it unset, rows packed
     data = np.asarray(msg.data, dtype=np.uint8)
     if data.size != rs * height:
-        raise InputError(
-            f"{what} has {data.size} bytes of data; "
+        raise FrameError(
+            where, f"{what} has {data.size} bytes of data; "
             f"expected row_step x height = {rs} x {height} = {rs * height}"
         )
     n_points = width * height
@@ -163,8 +218,9 @@ def pointcloud2_xyz(msg, path: Path | str = "", topic: str = "", index: int | No
     for i, n in enumerate("xyz"):
         out[:, i] = arr[n]
     if not (np.isfinite(out[:, 0]) & np.isfinite(out[:, 1]) & np.isfinite(out[:, 2])).any():
-        raise InputError(
-            f"{what} has no finite point ({n_points} points); expected a cloud with at least one return"
+        raise FrameError(
+            where, f"{what} has no finite point ({n_points} points); expected a cloud with at least one return",
+            loss="no_points",
         )
     return out
 

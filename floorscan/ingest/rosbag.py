@@ -18,11 +18,22 @@ The scan topic and the pose source are detected when the dataset does not name t
 
 ROS2 bags that store no message definitions are read with the Humble typestore. A
 ``.db3`` / ``.mcap`` file is read as its folder's bag.
+
+A scan message with broken geometry, that cannot be decoded or without a valid return
+is skipped and counted (:class:`~floorscan.ingest.points.ScanLosses`: ``lost_bad_frames``,
+``lost_no_points`` in ``Recording.detected``, the first named in a note and a warning);
+more than half of them broken, or none usable, is an ``InputError`` naming the first.
+Header stamps a little out of order (a message earlier than the one before it, at most
+:data:`MAX_OUT_OF_ORDER_FRACTION` of the messages, each within
+:data:`REORDER_WINDOW` messages of its place) are sorted, as a CARMEN log's lines are,
+for the scans and for a pose topic, and noted; more is an ``InputError``.
 """
 
 from __future__ import annotations
 
+import heapq
 import logging
+import math
 from pathlib import Path
 from typing import Any, Iterator, Mapping
 
@@ -31,9 +42,16 @@ from scipy.spatial.transform import Rotation
 
 from floorscan.core.io import InputError
 from floorscan.ingest.params import PosesParams
-from floorscan.ingest.points import filter_points
+from floorscan.ingest.points import FrameError, ScanLosses, filter_points, no_return_reason
 from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
-from floorscan.ingest.ros_messages import laser_scan_xyz, message_label, pointcloud2_xyz, pose_problem, stamp_ns
+from floorscan.ingest.ros_messages import (
+    laser_scan_problem,
+    laser_scan_xyz,
+    message_label,
+    pointcloud2_xyz,
+    pose_problem,
+    stamp_ns,
+)
 from floorscan.ingest.rosbag_detect import (
     MAP_FRAME,
     POSE_TYPES,
@@ -45,6 +63,14 @@ from floorscan.ingest.rosbag_detect import (
 from floorscan.ingest.tf_chains import TfLink, planar_pose_stream, read_tf, static_transform, tf_pose_stream
 
 log = logging.getLogger(__name__)
+
+#: Scan or pose messages stamped earlier than the message before them are sorted by
+#: stamp when they are at most this fraction of the topic's messages (two swapped
+#: stamps, a publisher's jitter); more means the stamps are not the acquisition times.
+MAX_OUT_OF_ORDER_FRACTION = 0.1
+#: A scan may be this many messages away from its place in stamp order (the scans are
+#: streamed: this many are held back to sort them).
+REORDER_WINDOW = 16
 
 
 def _reader(path: Path):
@@ -121,11 +147,7 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
                 scan_topic, note = detect_scan_topic(topics, path)
                 notes.append(note)
             scan_conns = _connections(reader, path, scan_topic, SCAN_TYPES, "scans")
-            first = next(reader.messages(connections=scan_conns), None)
-            if first is None:
-                raise InputError(f"{path}: topic {scan_topic!r} has no messages")
-            c0, _, raw0 = first
-            scan_frame = reader.deserialize(raw0, c0.msgtype).header.frame_id.lstrip("/")
+            scan_frame = _scan_frame(reader, path, scan_topic, scan_conns)
             tf = _LazyTF(reader, path)
             pose_cfg = dataset.get("pose")
             if pose_cfg is None:
@@ -141,7 +163,7 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
                 if source == "topic":
                     if "topic" not in pose_cfg:
                         raise InputError(f"{path}: pose.source 'topic' needs pose.topic (e.g. /amcl_pose)")
-                    stream = _pose_topic_stream(reader, path, pose_cfg, scan_frame, tf)
+                    stream = _pose_topic_stream(reader, path, pose_cfg, scan_frame, tf, notes)
                     described = f"topic {pose_cfg['topic']} ({short_type(topics[pose_cfg['topic']][0])})"
                 elif source == "tf":
                     fixed = pose_cfg.get("fixed_frame", MAP_FRAME)
@@ -157,31 +179,58 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
     except Exception as e:  # rosbags raises several reader/deserialization errors
         raise InputError(f"{path}: cannot read the bag, truncated or corrupt ({type(e).__name__}: {e})") from None
 
+    n_total = int(topics[scan_topic][1] or 0)
+    detected = {"scan_topic": scan_topic, "pose_source": phrase, "pose_kind": pose_kind, "stamps": "recorded"}
+
     def _scans() -> Iterator[Scan]:
+        losses = ScanLosses(f"scans on {scan_topic!r}")
+        order = _StampOrder(path, scan_topic)
         try:
             with _reader(path) as reader:
                 conns = [c for c in reader.connections if c.topic == scan_topic]
                 for i, (c, bag_t, raw) in enumerate(reader.messages(connections=conns)):
-                    msg = reader.deserialize(raw, c.msgtype)
-                    t_ns = stamp_ns(msg.header, bag_t)
-                    frame = msg.header.frame_id.lstrip("/")
-                    if c.msgtype.endswith("LaserScan"):
-                        pts, dropped = laser_scan_xyz(msg, path, scan_topic, i, t_ns, rmin_cfg, rmax_cfg)
-                    else:
-                        xyz = pointcloud2_xyz(msg, path, scan_topic, index=i, t_ns=t_ns)
-                        pts, dropped = filter_points(xyz, rmin_cfg, rmax_cfg)
-                    yield Scan(t_ns, frame, pts, dropped)
+                    losses.n_read += 1
+                    try:
+                        scan = _scan(reader, c, bag_t, raw, path, scan_topic, i, rmin_cfg, rmax_cfg)
+                    except FrameError as e:
+                        losses.skip(i, e)
+                        if losses.too_many_bad(max(n_total, losses.n_read)):
+                            raise losses.refusal(max(n_total, losses.n_read)) from None
+                        continue
+                    yield from order.push(i, scan)
         except InputError:
             raise
         except Exception as e:
             raise InputError(
-                f"{path}: cannot read scans on {scan_topic!r}, truncated or corrupt bag ({type(e).__name__}: {e})"
+                f"{path}: cannot read scans on {scan_topic!r}, truncated or corrupt bag "
+                f"({type(e).__name__}: {str(e)[:200]})"
             ) from None
+        losses.report(detected, notes, str(path))
+        yield from order.flush(losses.n_read)
+        note = order.note()
+        if note:
+            notes.append(note)
+            log.warning("%s", note)
 
-    detected = {"scan_topic": scan_topic, "pose_source": phrase, "pose_kind": pose_kind, "stamps": "recorded"}
     return Recording(
         scans=_scans(), pose_stream=stream, source=f"{path} {scan_topic}", notes=notes, detected=detected
     )
+
+
+def _scan_frame(reader, path: Path, topic: str, conns) -> str:
+    """The frame of the first scan message that can be decoded (a broken one is skipped
+    later, as the scans are read)."""
+    error = None
+    for c, _, raw in reader.messages(connections=conns):
+        try:
+            return reader.deserialize(raw, c.msgtype).header.frame_id.lstrip("/")
+        except Exception as e:  # rosbags raises several deserialization errors
+            error = error or f"{type(e).__name__}: {str(e)[:200]}"
+    if error is None:
+        from floorscan.ingest.rosbag_detect import metadata_hint
+
+        raise InputError(f"{path}: topic {topic!r} has no messages{metadata_hint(path)}")
+    raise InputError(f"{path}: no message on {topic!r} can be decoded (the first: {error}); truncated or corrupt bag")
 
 
 class _LazyTF:
@@ -197,7 +246,9 @@ class _LazyTF:
         return self._edges
 
 
-def _pose_topic_stream(reader, path: Path, pose_cfg: Mapping[str, Any], scan_frame: str, tf: "_LazyTF"):
+def _pose_topic_stream(
+    reader, path: Path, pose_cfg: Mapping[str, Any], scan_frame: str, tf: "_LazyTF", notes: list[str]
+):
     topic = pose_cfg["topic"]
     conns = _connections(reader, path, topic, POSE_TYPES, "poses")
     t, xyz, quat = [], [], []
@@ -215,9 +266,15 @@ def _pose_topic_stream(reader, path: Path, pose_cfg: Mapping[str, Any], scan_fra
     if not t:
         raise InputError(f"{path}: pose topic {topic!r} has no messages")
     t = np.asarray(t, dtype=np.int64)
-    _check_sorted(t, f"{path}: pose topic {topic!r} header stamps")
-    rot = Rotation.from_quat(np.asarray(quat, dtype=np.float64))
-    trans = np.asarray(xyz, dtype=np.float64)
+    what = f"{path}: pose topic {topic!r} header stamps"
+    order, note = _sort_few(t, what)
+    if note:
+        notes.append(note)
+        log.warning("%s", note)
+    t = t[order]
+    _check_sorted(t, what)
+    rot = Rotation.from_quat(np.asarray(quat, dtype=np.float64)[order])
+    trans = np.asarray(xyz, dtype=np.float64)[order]
     # mount of the scanner on the base: a constant transform base_frame -> scan_frame
     base = pose_cfg.get("base_frame", "base_link")
     mount = static_transform(tf.edges, base, scan_frame)
@@ -238,3 +295,132 @@ def _check_sorted(t: np.ndarray, what: str) -> None:
     if np.any(d == 0):
         i = int(np.flatnonzero(d == 0)[0]) + 1
         raise InputError(f"{what} have a duplicate stamp {t[i]} ns (message {i}); expected strictly increasing stamps")
+
+
+def _sort_few(t: np.ndarray, what: str) -> tuple[np.ndarray, str | None]:
+    """The stable order that sorts stamps ``t`` when only a few step back, and a note.
+
+    Returns
+    -------
+    order : (N,) int ndarray
+        Indices sorting ``t`` (identity when it is sorted).
+    note : str or None
+        What was sorted, or None.
+
+    Raises
+    ------
+    InputError
+        More than :data:`MAX_OUT_OF_ORDER_FRACTION` of the stamps step back.
+    """
+    back = np.flatnonzero(np.diff(t) < 0) + 1
+    if back.size == 0:
+        return np.arange(t.size), None
+    if back.size > MAX_OUT_OF_ORDER_FRACTION * t.size:
+        i = int(back[0])
+        raise InputError(
+            f"{what} are not sorted: {back.size} of {t.size} messages are stamped earlier than the message before "
+            f"them (the first: message {i}, {t[i]} ns after {t[i - 1]} ns), more than "
+            f"{100 * MAX_OUT_OF_ORDER_FRACTION:g} %; expected increasing stamps"
+        )
+    note = (
+        f"{what}: {back.size} of {t.size} messages stamped earlier than the message before them "
+        f"(messages {back[:5].tolist()}{'...' if back.size > 5 else ''}): sorted by header stamp"
+    )
+    return np.argsort(t, kind="stable"), note
+
+
+class _StampOrder:
+    """Scans streamed in header-stamp order: a few messages out of order are held back
+    (at most :data:`REORDER_WINDOW`) and sorted, as a CARMEN log's lines are."""
+
+    def __init__(self, path: Path, topic: str):
+        self.path, self.topic = path, topic
+        self.heap: list[tuple[int, int, Scan]] = []
+        self.last_in: int | None = None
+        self.last_out: int | None = None
+        self.back: list[int] = []
+
+    def push(self, index: int, scan: Scan) -> Iterator[Scan]:
+        t = scan.t_ns
+        if self.last_in is not None and t < self.last_in:
+            self.back.append(index)
+            if self.last_out is not None and t < self.last_out:
+                raise InputError(
+                    f"{message_label(self.path, self.topic, index, t)}: header stamp is earlier than a scan "
+                    f"{REORDER_WINDOW} or more messages before it ({self.last_out} ns); expected stamps in "
+                    f"recording order, give or take {REORDER_WINDOW} messages"
+                )
+        self.last_in = t
+        heapq.heappush(self.heap, (t, index, scan))
+        while len(self.heap) > REORDER_WINDOW:
+            yield self._pop()
+
+    def _pop(self) -> Scan:
+        t, _, scan = heapq.heappop(self.heap)
+        self.last_out = t
+        return scan
+
+    def flush(self, n_read: int) -> Iterator[Scan]:
+        """The scans held back; refuses stamps that step back too often (``n_read`` read)."""
+        if len(self.back) > MAX_OUT_OF_ORDER_FRACTION * n_read:
+            i = self.back[0]
+            raise InputError(
+                f"{self.path}: header stamps on {self.topic!r} are not sorted: {len(self.back)} of {n_read} messages "
+                f"are stamped earlier than the message before them (the first: message {i}), more than "
+                f"{100 * MAX_OUT_OF_ORDER_FRACTION:g} %; expected increasing stamps"
+            )
+        while self.heap:
+            yield self._pop()
+
+    def note(self) -> str | None:
+        if not self.back:
+            return None
+        b = self.back
+        return (
+            f"{len(b)} scans on {self.topic!r} stamped earlier than the message before them "
+            f"(messages {b[:5]}{'...' if len(b) > 5 else ''}): scans sorted by header stamp"
+        )
+
+
+def _scan(reader, c, bag_t: int, raw, path: Path, topic: str, i: int, rmin_cfg, rmax_cfg) -> Scan:
+    """Scan message ``i`` (its ``source_ordinal``) read and checked.
+
+    Raises
+    ------
+    FrameError
+        It cannot be decoded, its geometry or layout is broken, or it has no valid return.
+    """
+    try:
+        msg = reader.deserialize(raw, c.msgtype)
+        t_ns = stamp_ns(msg.header, bag_t)
+        frame = msg.header.frame_id.lstrip("/")
+    except Exception as e:  # rosbags raises several deserialization errors
+        raise FrameError(
+            message_label(path, topic, i, bag_t),
+            f"{short_type(c.msgtype)} cannot be decoded ({type(e).__name__}: {str(e)[:200]}); expected a message "
+            "of its connection's type",
+        ) from None
+    where = message_label(path, topic, i, t_ns)
+    if c.msgtype.endswith("LaserScan"):
+        bad = laser_scan_problem(msg)
+        if bad:
+            raise FrameError(where, bad)
+        pts, dropped = laser_scan_xyz(msg, path, topic, i, t_ns, rmin_cfg, rmax_cfg)
+        if not len(pts):
+            rmin = max(float(msg.range_min), rmin_cfg if rmin_cfg is not None else 0.0)
+            rmax = min(float(msg.range_max), rmax_cfg if rmax_cfg is not None else math.inf)
+            raise FrameError(
+                where, f"LaserScan has no valid return: {no_return_reason(msg.ranges, rmin, rmax)}", loss="no_points"
+            )
+    else:
+        xyz = pointcloud2_xyz(msg, path, topic, index=i, t_ns=t_ns)
+        pts, dropped = filter_points(xyz, rmin_cfg, rmax_cfg)
+        if not len(pts):
+            n_finite = int(np.count_nonzero(np.isfinite(np.asarray(xyz, dtype=np.float64)).all(axis=1)))
+            raise FrameError(
+                where,
+                f"PointCloud2 has no valid return: of its {len(xyz)} points, {len(xyz) - n_finite} are not finite and "
+                f"{n_finite} outside the dataset's range limits [{rmin_cfg}, {rmax_cfg}) m",
+                loss="no_points",
+            )
+    return Scan(t_ns, frame, pts, dropped, i)

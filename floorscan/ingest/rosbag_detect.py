@@ -10,8 +10,13 @@ Detection:
   TF chain from ``map`` to the scan frame; (c) none. Wheel odometry (nav_msgs/Odometry
   topics, TF chains from ``odom``) drifts and is never taken for the map pose: without
   (a) or (b) the pose stream is empty, the pose kind ``none``, and the register stage
-  runs LIDAR odometry. A pose source set in the dataset is used as given (pose kind
-  ``map``: the user's choice).
+  runs LIDAR odometry (its verdict says why). A pose source set in the dataset is used
+  as given (pose kind ``map``: the user's choice).
+
+A bag whose TF has a ``map`` frame but no chain from it to the scan frame (the scan's
+frame_id misspelt, empty or missing from TF; a loop; a frame with two parents) is an
+error, not LIDAR odometry: the map frame says the recording has map poses, and placing
+the scans by LIDAR odometry would silently move the map (issue 35).
 """
 
 from __future__ import annotations
@@ -20,7 +25,7 @@ from pathlib import Path
 from typing import Mapping
 
 from floorscan.core.io import InputError
-from floorscan.ingest.tf_chains import TfLink, tf_chain_from_root, tf_chain_or_none
+from floorscan.ingest.tf_chains import TfChainError, TfLink, tf_chain, tf_chain_from_root, tf_frames, walk_up
 
 
 SCAN_TYPES = ("sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCloud2")
@@ -79,8 +84,20 @@ def detect_scan_topic(topics: Mapping[str, tuple[str, int]], path: Path | str = 
         )
     raise InputError(
         f"{path}: no topic with sensor_msgs/LaserScan or sensor_msgs/PointCloud2 messages; "
-        f"topics in the bag: {_listing(topics) or 'none'}"
+        f"topics in the bag: {_listing(topics) or 'none'}{metadata_hint(path)}"
     )
+
+
+def metadata_hint(path: Path | str) -> str:
+    """For a ROS2 bag, where its topics' types and message counts come from: its
+    ``metadata.yaml`` (rosbags reads them there), and what to do when it disagrees with
+    the storage file; empty for a ROS1 bag."""
+    p = Path(path)
+    meta = p / "metadata.yaml" if p.is_dir() else p.parent / "metadata.yaml"
+    if not meta.is_file():
+        return ""
+    return (f" (a ROS2 bag's topic types and message counts are those of its {meta}: when they disagree with "
+            f"the storage file, regenerate it with `ros2 bag reindex {meta.parent}`)")
 
 
 def detect_pose_source(
@@ -116,7 +133,9 @@ def detect_pose_source(
     ------
     InputError
         Several PoseWithCovarianceStamped / PoseStamped topics, none of them
-        ``/amcl_pose`` (they are listed; set the dataset's ``pose``).
+        ``/amcl_pose`` (they are listed; set the dataset's ``pose``); or no pose topic
+        and a ``map`` frame in TF without a chain to ``scan_frame`` (the message names
+        the scan frame, why there is no chain, the frames TF has and its chains).
     """
     poses = {t: (m, n) for t, (m, n) in topics.items() if m in MAP_POSE_TYPES and n > 0}
     if len(poses) > 1 and PREFERRED_POSE_TOPIC in poses:
@@ -134,8 +153,11 @@ def detect_pose_source(
         phrase = f"topic {topic} ({short_type(msgtype)})"
         note = f"pose source {phrase} (detected: {why}, {n} messages)"
         return {"source": "topic", "topic": topic, "base_frame": "base_link"}, phrase, note
-    chain = tf_chain_or_none(edges, MAP_FRAME, scan_frame)
-    if chain is not None:
+    if MAP_FRAME in tf_frames(edges) and scan_frame != MAP_FRAME:
+        try:
+            chain = tf_chain(edges, MAP_FRAME, scan_frame, path)
+        except TfChainError as e:
+            raise InputError(f"{e} {_no_fallback(e, edges, scan_frame)}") from None
         phrase = "TF " + " -> ".join([MAP_FRAME] + [e.child for e in chain])
         note = f"pose source {phrase} (detected: no pose topic, and the TF chain from {MAP_FRAME!r} to the scan frame)"
         return {"source": "tf", "fixed_frame": MAP_FRAME}, phrase, note
@@ -150,9 +172,29 @@ def detect_pose_source(
         phrase = f"none: wheel odometry only ({'; '.join(wheel)}); LIDAR odometry"
     else:
         phrase = "none: no pose topic and no TF; LIDAR odometry"
+    _, kind, problem = walk_up(edges, scan_frame)
+    broken = f"; the TF tree is broken: {problem}" if kind else ""
     note = (
-        f"pose source none (detected: no PoseWithCovarianceStamped or PoseStamped topic and no TF chain "
-        f"from {MAP_FRAME!r} to {scan_frame!r}; wheel odometry drifts and is never taken for the map pose): "
+        f"pose source none (detected: no PoseWithCovarianceStamped or PoseStamped topic and no {MAP_FRAME!r} "
+        f"frame in TF{broken}; wheel odometry drifts and is never taken for the map pose): "
         "the pose stream is empty (pose kind none) and the register stage runs LIDAR odometry"
     )
+    if kind:
+        phrase += f" ({problem})"
     return None, phrase, note
+
+
+def _no_fallback(error: TfChainError, edges, scan_frame: str) -> str:
+    """Why ingest stops on a bag with a map frame but no chain to the scan frame, and
+    what the user can do."""
+    how = "correct the frames in the bag (the scan's frame_id, or the TF links)"
+    if error.kind == "elsewhere":
+        root = tf_chain_from_root(edges, scan_frame)[0]
+        how += (
+            f", or name a pose source by hand in the dataset's 'pose': {{source: tf, fixed_frame: {root}}} "
+            f"takes the chain from {root!r} for the map pose"
+        )
+    return (
+        f"The bag has a {MAP_FRAME!r} frame, so it was recorded with map poses: ingest does not fall back "
+        f"to LIDAR odometry on its own. To go on, {how}."
+    )

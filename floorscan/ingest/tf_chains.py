@@ -6,7 +6,9 @@ last one wins, as in tf2. A chain's pose composes its links, each interpolated a
 union of the moving links' stamps, linearly in translation and by slerp in rotation, as
 tf2 does (:func:`tf_pose_stream`); samples inside a gap of a moving link are left out.
 The mount of the scanner on the base is the chain of static links between them
-(:func:`static_transform`). A link with a bad sample
+(:func:`static_transform`). A frame with several parents or a loop on the way up from
+the scanner is an error (:class:`TfChainError`, naming the frames and the tree's chains),
+never taken for a missing chain. A link with a bad sample
 (:func:`floorscan.ingest.ros_messages.pose_problem`) is refused only when a chain uses
 it. A pose stream whose scanner is tilted more than :data:`MAX_TILT_DEG` from level is
 refused (:func:`planar_pose_stream`).
@@ -59,6 +61,7 @@ class TfLink:
     def finish(self) -> None:
         if not self.t:  # every sample was bad
             self.t_arr, self.trans_arr, self.rot = np.zeros(0, np.int64), np.zeros((0, 3)), None
+            self.t_sent = self.t_arr
             return
         t = np.asarray(self.t, dtype=np.int64)
         order = np.argsort(t, kind="stable")
@@ -72,6 +75,9 @@ class TfLink:
                 (self.rot * self.rot[0].inv()).magnitude(), 0.0, atol=1e-9
             )
             self.static = bool(same)
+        #: every stamp the link was sent at (a static link keeps one sample, but a
+        #: stationary robot's links are sent as the recording goes)
+        self.t_sent = self.t_arr
         if self.static:
             self.t_arr, self.trans_arr, self.rot = self.t_arr[-1:], self.trans_arr[-1:], self.rot[-1:]
 
@@ -118,36 +124,182 @@ def read_tf(reader, path: Path) -> dict[tuple[str, str], TfLink]:
     return edges
 
 
-def _chain(edges: dict[tuple[str, str], TfLink], fixed: str, frame: str, path: Path) -> list[TfLink]:
+class TfChainError(InputError):
+    """No TF chain from a fixed frame to a frame (one paragraph naming both, the frames
+    TF has and its chains). ``kind``: ``several_parents`` (a frame on the way has two or
+    more parents), ``loop`` (the way up comes back to a frame), ``missing`` (the frame is
+    not on ``/tf`` or ``/tf_static``, or is empty) or ``elsewhere`` (the frame's chain
+    starts at another root)."""
+
+    def __init__(self, message: str, kind: str):
+        super().__init__(message)
+        self.kind = kind
+
+
+#: At most this many chains and frames are listed in a message.
+MAX_LISTED = 12
+#: A frame name is quoted up to this many characters.
+MAX_NAME = 60
+
+
+def _name(frame: str) -> str:
+    return repr(frame if len(frame) <= MAX_NAME else frame[:MAX_NAME] + "...")
+
+
+def tf_frames(edges) -> list[str]:
+    """Every frame named by a TF link (parent or child), sorted."""
+    return sorted({f for key in edges for f in key})
+
+
+def _parents(edges) -> dict[str, list[TfLink]]:
     parents: dict[str, list[TfLink]] = defaultdict(list)
     for e in edges.values():
         parents[e.child].append(e)
-    chain, cur, seen = [], frame, set()
-    while cur != fixed:
+    return parents
+
+
+def walk_up(edges, frame: str, stop: str | None = None) -> tuple[list[TfLink], str, str]:
+    """The links from ``frame`` up towards its root, nearest first, ending at ``stop``
+    (when given and met), at a frame without parent, or at a problem.
+
+    Returns
+    -------
+    links : list of TfLink
+        Parent -> child links, the one whose child is ``frame`` first.
+    kind : str
+        ``""`` (the walk ended at ``stop`` or a root), ``several_parents`` or ``loop``.
+    problem : str
+        The problem in words, naming the frames (``""`` without one).
+    """
+    parents = _parents(edges)
+    links: list[TfLink] = []
+    seen, cur = [frame], frame
+    while cur != stop:
         ps = parents.get(cur, [])
         if len(ps) > 1:
-            raise InputError(
-                f"{path}: TF frame {cur!r} has several parents {[p.parent for p in ps]}; expected a tree"
+            names = ", ".join(_name(p.parent) for p in sorted(ps, key=lambda e: e.parent))
+            return links, "several_parents", (
+                f"TF frame {_name(cur)} has several parents ({names}); a TF tree gives each frame one"
             )
-        if not ps or cur in seen:
-            frames = sorted({f for k in edges for f in k})
-            raise InputError(
-                f"{path}: no TF chain from {fixed!r} to the scan frame {frame!r} (stops at {cur!r}); "
-                f"frames on /tf and /tf_static: {frames}"
-            )
-        seen.add(cur)
-        chain.append(ps[0])
+        if not ps:
+            break
+        links.append(ps[0])
         cur = ps[0].parent
-    return chain[::-1]
+        if cur in seen:
+            loop = seen[seen.index(cur):] + [cur]
+            return links, "loop", "the TF tree has a loop: " + " -> ".join(_name(f) for f in loop[::-1])
+        seen.append(cur)
+    return links, "", ""
+
+
+def tf_chains_text(edges, first: tuple[str, ...] = ()) -> str:
+    """The chains of the TF tree for people: ``map -> odom -> base_link -> laser; ...``.
+
+    One chain per leaf, from its root (a frame with several parents appears in a chain
+    of each); frames on a loop without root are shown as the loop. Chains through a
+    frame of ``first`` come first; at most :data:`MAX_LISTED` are listed.
+    """
+    parents = _parents(edges)
+    children: dict[str, list[str]] = defaultdict(list)
+    for parent, child in sorted(edges):
+        children[parent].append(child)
+    frames = tf_frames(edges)
+    roots = [f for f in frames if f not in parents]
+    chains: list[list[str]] = []
+    reached: set[str] = set()
+
+    def down(path: list[str]) -> None:
+        reached.add(path[-1])
+        nxt = [c for c in children.get(path[-1], []) if c not in path]
+        if not nxt:
+            chains.append(path)
+        for c in nxt:
+            down(path + [c])
+
+    for r in roots:
+        down([r])
+    for f in frames:  # frames under a loop without root: the loop, then the chains from it
+        if f in reached:
+            continue
+        way, cur = [f], f
+        while parents.get(cur) and parents[cur][0].parent not in way:
+            cur = parents[cur][0].parent
+            way.append(cur)
+        top = parents[cur][0].parent if parents.get(cur) else cur
+        loop = way[way.index(top):] if top in way else [cur]
+        chains.append(loop[::-1] + [loop[-1] + " (a loop)"])
+        reached.update(loop)
+        for m in loop[::-1]:
+            for c in children.get(m, []):
+                if c not in loop:
+                    down([m, c])
+    chains.sort(key=lambda c: (not any(f in c for f in first), c))
+    out = [" -> ".join(c) for c in chains[:MAX_LISTED]]
+    more = f"; and {len(chains) - MAX_LISTED} more" if len(chains) > MAX_LISTED else ""
+    return "; ".join(out) + more if out else "none"
+
+
+def no_chain_error(edges, fixed: str, frame: str, path, kind: str = "", problem: str = "") -> TfChainError:
+    """The :class:`TfChainError` saying why there is no chain ``fixed`` -> ``frame``: the
+    problem on the way (``kind``, ``problem`` of :func:`walk_up`), else the frame is
+    missing or under another root; with the frames TF has and its chains."""
+    frames = tf_frames(edges)
+    stops = ""
+    if not kind:
+        if frame == "":
+            kind, problem = "missing", "the scan's frame_id is empty"
+        elif frame not in frames:
+            kind, problem = "missing", f"{_name(frame)} is not a frame on /tf or /tf_static"
+        else:
+            links, _, _ = walk_up(edges, frame)
+            root = links[-1].parent if links else frame
+            kind, problem = "elsewhere", f"its chain starts at {_name(root)}, not at {_name(fixed)}"
+            stops = f" (stops at {_name(root)})"
+    listed = ", ".join(_name(f) for f in frames[: 3 * MAX_LISTED]) or "none"
+    if len(frames) > 3 * MAX_LISTED:
+        listed += f" and {len(frames) - 3 * MAX_LISTED} more"
+    where = f"{path}: " if str(path) else ""
+    return TfChainError(
+        f"{where}no TF chain from {_name(fixed)} to the scan frame {_name(frame)}{stops}: {problem}. "
+        f"Frames on /tf and /tf_static: {listed}. Chains: {tf_chains_text(edges, (fixed, frame))}.",
+        kind,
+    )
+
+
+def tf_chain(edges, fixed: str, frame: str, path: Path | str = "") -> list[TfLink]:
+    """The links of the TF chain ``fixed`` -> ``frame``, from ``fixed`` down.
+
+    Raises
+    ------
+    TfChainError
+        No such chain: a frame on the way with several parents, a loop, ``frame``
+        missing (or empty) or under another root. One paragraph naming the frames, the
+        frames TF has and its chains.
+    """
+    links, kind, problem = walk_up(edges, frame, stop=fixed)
+    if kind or (frame != fixed and (not links or links[-1].parent != fixed)):
+        raise no_chain_error(edges, fixed, frame, path, kind, problem)
+    return links[::-1]
+
 
 
 def tf_chain_or_none(edges, fixed: str, frame: str) -> list[TfLink] | None:
-    """The chain of links from ``fixed`` to ``frame``, or None when there is none."""
+    """The chain of links from ``fixed`` to ``frame``, or None when ``frame`` is
+    ``fixed``, missing or under another root.
+
+    Raises
+    ------
+    TfChainError
+        A frame with several parents or a loop on the way up from ``frame``: a broken
+        tree is never taken for a missing chain.
+    """
     if fixed == frame:
         return None
     try:
-        return _chain(edges, fixed, frame, Path())
-    except InputError:
+        return tf_chain(edges, fixed, frame)
+    except TfChainError as e:
+        if e.kind in ("several_parents", "loop"):
+            raise
         return None
 
 
@@ -169,12 +321,26 @@ def _check_links(chain: list[TfLink]) -> None:
             raise InputError(e.bad)
 
 
-def static_transform(edges, base: str, frame: str):
+def static_transform(edges, base: str, frame: str, path: Path | str = ""):
+    """The mount of ``frame`` on ``base``: the composed (rotation, translation) of the
+    static chain ``base`` -> ``frame`` (identity when they are one frame), or None when
+    there is no such chain or a link of it moves.
+
+    Raises
+    ------
+    TfChainError
+        A frame on the way up from ``frame`` has several parents, or the way loops (a
+        broken tree is never taken for a missing mount).
+    InputError
+        A link of the chain had a bad sample.
+    """
     if base == frame:
         return Rotation.identity(), np.zeros(3)
     try:
-        chain = _chain(edges, base, frame, Path())
-    except InputError:
+        chain = tf_chain(edges, base, frame, path)
+    except TfChainError as e:
+        if e.kind in ("several_parents", "loop"):
+            raise
         return None
     _check_links(chain)
     if not all(e.static for e in chain):
@@ -187,14 +353,28 @@ def static_transform(edges, base: str, frame: str):
 
 
 def tf_pose_stream(edges, path: Path, fixed: str, frame: str, max_gap_s: float):
-    """Pose stream of the TF chain ``fixed`` -> ``frame`` and the chain's links."""
+    """Pose stream of the TF chain ``fixed`` -> ``frame`` and the chain's links; a chain
+    that never changes (a scanner that does not move, as a stationary CARMEN log is
+    read) gives its one pose at every stamp its links were sent."""
     if not edges:
         raise InputError(f"{path}: pose.source is 'tf' but the bag has no /tf or /tf_static messages")
-    chain = _chain(edges, fixed, frame, path)
+    chain = tf_chain(edges, fixed, frame, path)
     _check_links(chain)
     moving = [e for e in chain if not e.static]
-    if not moving:
-        raise InputError(f"{path}: the TF chain {fixed!r} -> {frame!r} never changes; the scanner does not move")
+    if not moving:  # the scanner does not move: the chain's one pose, at every stamp its links were sent
+        t = np.unique(np.concatenate([e.t_sent for e in chain]))
+        if t.size < 2:
+            raise InputError(
+                f"{path}: the TF chain {fixed!r} -> {frame!r} never changes and was sent once; expected it over the "
+                "recording's time (a stationary scanner's pose published on /tf as the recording goes)"
+            )
+        rot, trans = Rotation.identity(), np.zeros(3)
+        for e in chain:
+            trans = trans + rot.apply(e.trans_arr[0])
+            rot = rot * e.rot[0]
+        n = len(t)
+        rots = Rotation.from_quat(np.repeat(rot.as_quat()[None], n, axis=0))
+        return planar_pose_stream(t, rots, np.repeat(trans[None], n, axis=0), f"{path}: TF chain {fixed!r} -> {frame!r}"), chain
     lo = max(e.t_arr[0] for e in moving)
     hi = min(e.t_arr[-1] for e in moving)
     t = np.unique(np.concatenate([e.t_arr for e in moving]))

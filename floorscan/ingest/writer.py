@@ -43,11 +43,15 @@ def write_recording(
 ) -> pd.DataFrame:
     """Stream a recording's scans to Parquet and write its index and pose stream.
 
-    Scans get ``scan_id`` 0..N-1 in recording order. ``sensor_height_m`` is added to
+    Scans get ``scan_id`` 0..N-1 in recording order, and ``source_ordinal`` their
+    frame's ordinal in the recording (:attr:`floorscan.ingest.recording.Scan.source_ordinal`;
+    null when the reader does not number its frames): the select stage finds a scan in
+    the recording by it, whatever ingest skipped or sorted. ``sensor_height_m`` is added to
     the pose stream's z. All three files are written atomically: on any error none
-    of them is left behind. ``recording.detected`` (string values) and ``metadata`` are
-    stored in the schema metadata of the scan index and the pose stream; the register
-    stage reads ``pose_kind`` and ``stamps`` from the scan index's.
+    of them is left behind. ``recording.detected`` (string values, read once the scans
+    are exhausted: the loss counts are complete then) and ``metadata`` are stored in the
+    schema metadata of the scan index and the pose stream; the register stage reads
+    ``pose_kind`` and ``stamps`` from the scan index's.
 
     Returns
     -------
@@ -60,8 +64,7 @@ def write_recording(
         No scans, scan timestamps going backwards, or no poses while the pose kind is
         not ``none`` (a map pose source was found or set but has no poses).
     """
-    rows: list[tuple[int, int, int, int, str]] = []
-    table_meta = {**{k: str(v) for k, v in recording.detected.items()}, **(metadata or {})}
+    rows: list[tuple[int, int, int, int, str, int | None]] = []
     meta = {k.encode(): str(v).encode() for k, v in (metadata or {}).items()}
     with atomic_path(scans_path) as tmp:
         with pq.ParquetWriter(tmp, SCANS.with_metadata(meta), **parquet_options(SCANS, ["scan_id"])) as writer:
@@ -76,12 +79,19 @@ def write_recording(
                     last_t = scan.t_ns
                     pts = np.asarray(scan.points, dtype=np.float32).reshape(-1, 3)
                     n = len(pts)
-                    rows.append((scan_id, int(scan.t_ns), n, int(scan.n_dropped), scan.frame))
+                    ordinal = None if scan.source_ordinal is None else int(scan.source_ordinal)
+                    rows.append((scan_id, int(scan.t_ns), n, int(scan.n_dropped), scan.frame, ordinal))
                     if n:
                         batch.add(scan_id, pts)
         if not rows:
             raise InputError(f"{recording.source}: no scans found")
-        index = pd.DataFrame(rows, columns=["scan_id", "t_ns", "n_points", "n_dropped", "frame"])
+        index = pd.DataFrame(rows, columns=["scan_id", "t_ns", "n_points", "n_dropped", "frame", "source_ordinal"])
+        if index["source_ordinal"].isna().any():  # a reader that does not number its frames: all null
+            index["source_ordinal"] = None
+        else:
+            index["source_ordinal"] = index["source_ordinal"].astype(np.int64)
+        # after the scans: a lazy reader adds what it skipped to ``detected`` as it reads
+        table_meta = {**{k: str(v) for k, v in recording.detected.items()}, **(metadata or {})}
         stream = recording.pose_stream
         if stream is None or stream.empty:
             if recording.detected.get("pose_kind") != "none":

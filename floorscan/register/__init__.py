@@ -17,8 +17,10 @@ Modules, in the order the stage uses them:
   :mod:`~floorscan.register.scan_to_map` (``map``),
   :mod:`~floorscan.register.sequential` (``previous``, the thesis's) and
   :mod:`~floorscan.register.odometry` (``mode: odometry``, no map poses);
+- :mod:`~floorscan.register.losses`: the scans the recording lost before registration
+  (without a pose, or at ingest), counted against all its scans;
 - :mod:`~floorscan.register.consistency`: whether the registered map agrees with
-  itself where the rover passed twice, and the verdict;
+  itself where the rover passed twice, and the verdict (with the losses);
 - :mod:`~floorscan.register.result`: the per-scan table, its summary, the errors;
 - :mod:`~floorscan.register.pipeline`: the steps in order on a recording in memory
   (:func:`~floorscan.register.pipeline.register_scans`);

@@ -16,7 +16,10 @@ inlier fraction in SLAM back ends). A well-registered map scores high but below 
 (the figures of the shared recordings are in ``benchmarks/README.md``). When too few
 points are revisited (a one-way corridor) it is undefined (NaN) and judges nothing.
 
-:func:`verdict` joins it with the fraction of sampled scans kept.
+:func:`verdict` joins it with the fraction of sampled scans kept, the scans the
+recording lost before registration (:mod:`floorscan.register.losses`: scans without a
+pose, ingest's losses) counted against all its scans, and why the scans were placed by
+LIDAR odometry when the user did not ask for it.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from floorscan.core.grid import cell_means
+from floorscan.register.losses import Losses, percent
 
 #: Fewer revisited sample points than this: consistency undefined.
 MIN_REVISITED = 300
@@ -129,7 +133,11 @@ class Verdict:
     problems : list of str
         Why the result is poor (each names its numbers and the option); empty when good.
     warnings : list of str
-        What a reader should know although the stage goes on (few scans, no revisits).
+        What a reader should know although the stage goes on (few scans, no revisits,
+        each loss, a fall-back to LIDAR odometry).
+    losses : Losses or None
+        The scans lost before registration, against all the recording's scans; None:
+        not counted.
     """
 
     n_sampled: int
@@ -139,6 +147,7 @@ class Verdict:
     n_revisited: int
     problems: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    losses: Losses | None = None
 
     @property
     def ok(self) -> bool:
@@ -148,8 +157,12 @@ class Verdict:
         """One line for logs, the summary and the report."""
         head = "GOOD" if self.ok and not self.warnings else ("POOR" if not self.ok else "WARNING")
         cons = "undefined (no place passed twice)" if math.isnan(self.consistency) else f"{self.consistency:.2f}"
+        lost = ""
+        if self.losses is not None and self.losses.n_lost:
+            n, total = self.losses.n_lost, self.losses.n_recording
+            lost = f", {n} of the recording's {total} scans ({percent(n, total)}) lost before registration"
         text = (
-            f"{head}: kept {self.n_kept} of {self.n_sampled} sampled scans ({100 * self.kept_fraction:.0f} %); "
+            f"{head}: kept {self.n_kept} of {self.n_sampled} sampled scans ({100 * self.kept_fraction:.0f} %){lost}; "
             f"map consistency {cons} ({self.n_revisited} revisited points)"
         )
         return "; ".join([text, *self.problems, *self.warnings])
@@ -165,6 +178,7 @@ class Verdict:
             "n_revisited": self.n_revisited,
             "problems": list(self.problems),
             "warnings": list(self.warnings),
+            "losses": self.losses.as_dict() if self.losses is not None else None,
         }
 
 
@@ -177,8 +191,12 @@ def verdict(
     min_consistency: float,
     worst_reason: str = "",
     worst_option: str = "",
+    losses: Losses | None = None,
+    max_lost_fraction: float = 1.0,
+    fallback: str = "",
 ) -> Verdict:
-    """Judge a registration by its kept fraction and its map consistency.
+    """Judge a registration by its kept fraction, its map consistency and the scans the
+    recording lost before it.
 
     Parameters
     ----------
@@ -191,13 +209,29 @@ def verdict(
     worst_reason, worst_option : str
         The drop reason behind most lost scans and the option that sets it, for the
         message.
+    losses : Losses, optional
+        The scans lost before registration (:mod:`floorscan.register.losses`): each
+        cause is a warning with its count; more than ``max_lost_fraction`` of the
+        recording's scans lost is a problem naming them.
+    max_lost_fraction : float
+        ``register.max_lost_fraction`` (1: losses are only warned about).
+    fallback : str
+        Why the scans were placed by LIDAR odometry without the user asking (the
+        recording has no map poses); a warning, first. ``""``: no fall-back.
 
     Returns
     -------
     Verdict
     """
     frac = n_kept / n_sampled if n_sampled else 0.0
-    v = Verdict(n_sampled, n_kept, frac, consistency, n_revisited)
+    v = Verdict(n_sampled, n_kept, frac, consistency, n_revisited, losses=losses)
+    if fallback:
+        v.warnings.append(fallback)
+    if losses is not None:
+        problem = losses.problem(max_lost_fraction)
+        if problem:
+            v.problems.append(problem)
+        v.warnings.extend(losses.warnings())
     if frac < min_kept_fraction:
         why = f"; most were dropped as '{worst_reason}' ({worst_option})" if worst_reason else ""
         v.problems.append(

@@ -134,6 +134,7 @@ class RegistrationConfig:
     keep_range_fraction: float
     min_kept_fraction: float
     min_consistency: float
+    max_lost_fraction: float
     n_previous: int
     min_points: int
     fitness_max_correspondence_m: float
@@ -216,7 +217,7 @@ class RegistrationConfig:
                 raise InputError(f"config register.{key}: expected >= 0 or null (chosen from the recording), got {v}")
         if not 0.0 < self.keep_range_fraction <= 1.0:
             raise InputError(f"config register.keep_range_fraction: expected 0 < value <= 1, got {self.keep_range_fraction}")
-        for key in ("min_kept_fraction", "min_consistency"):
+        for key in ("min_kept_fraction", "min_consistency", "max_lost_fraction"):
             if not 0.0 <= getattr(self, key) <= 1.0:
                 raise InputError(f"config register.{key}: expected 0..1, got {getattr(self, key)}")
         if self.reference not in ("graph", "map", "previous"):

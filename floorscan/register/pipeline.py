@@ -41,6 +41,7 @@ import pandas as pd
 
 from floorscan.core.geometry import transform_points
 from floorscan.core.io import InputError, split_by_scan
+from floorscan.register.losses import Losses, ingest_losses, with_pose_losses
 from floorscan.register.odometry import register_odometry
 from floorscan.register.params import RegistrationConfig
 from floorscan.register.posegraph import register_graph
@@ -74,7 +75,8 @@ def register_scans(
     scans : pandas.DataFrame
         ``scan_id, x, y, z``: points in the scanner frame, metres (``scans.parquet``).
     scan_index : pandas.DataFrame
-        ``scan_id, t_ns``: one row per scan (``scan_index.parquet``).
+        ``scan_id, t_ns`` (and ``n_points``, when present: scans without points are
+        losses): one row per scan (``scan_index.parquet``).
     poses : pandas.DataFrame, optional
         ``scan_id, x, y, z, yaw, valid, reason`` (``poses.parquet``): scanner pose in the
         map frame per scan. Required in ``mode="pose"``, ignored in ``mode="odometry"``
@@ -83,7 +85,9 @@ def register_scans(
         The ``register`` config section; defaults from :class:`RegistrationConfig`.
     recording : mapping of str to str, optional
         What ingest found in the recording (``scan_index.parquet``'s schema metadata:
-        ``pose_kind``, ``stamps``), for :func:`resolve_config`.
+        ``pose_kind``, ``pose_source``, ``stamps``), for :func:`resolve_config`, and the
+        scans ingest lost (``n_frames_read``, ``lost_*``;
+        :func:`floorscan.register.losses.ingest_losses`), for the verdict.
 
     Returns
     -------
@@ -100,8 +104,10 @@ def register_scans(
     RegistrationError
         When no scan could be registered (the message gives the count per reason and the
         threshold that dropped most scans), or the result is poor: fewer than
-        ``min_kept_fraction`` of the sampled scans kept, or a map consistency below
-        ``min_consistency`` (:mod:`floorscan.register.consistency`).
+        ``min_kept_fraction`` of the sampled scans kept, a map consistency below
+        ``min_consistency`` (:mod:`floorscan.register.consistency`), or more than
+        ``max_lost_fraction`` of the recording's scans lost before registration (without
+        a pose, or lost at ingest: :mod:`floorscan.register.losses`).
 
     Notes
     -----
@@ -124,10 +130,13 @@ def register_scans(
             f"{int(scans['scan_id'].to_numpy()[bad][0])}); expected finite metres"
         )
     clouds = split_by_scan(scans)
+    losses, fallback = ingest_losses(scan_index, recording), fallback_reason(cfg, recording)
     cfg = resolve_config(cfg, recording, math.nan if cfg.every_n else _range_sample(clouds))
     aligned = aligned_poses(index, poses, cfg)
     reasons = screen_scans(index, clouds, aligned, cfg)
-    table, summary = register_screened(index, aligned, reasons, ScanStore(cfg, clouds), cfg)
+    table, summary = register_screened(
+        index, aligned, reasons, ScanStore(cfg, clouds), cfg, losses=losses, fallback=fallback
+    )
     sids = table["scan_id"].to_numpy()
     final = table[["x_m", "y_m", "z_m", "yaw_rad"]].to_numpy(np.float64)
     kept = table["kept"].to_numpy(bool)
@@ -212,6 +221,19 @@ def resolve_config(
     return cfg.replace(**changes)
 
 
+def fallback_reason(cfg: RegistrationConfig, recording: Mapping[str, str] | None) -> str:
+    """Why the scans will be placed by LIDAR odometry although the user did not ask for
+    it (``mode: auto`` on a recording without map poses), for the verdict; ``""`` when
+    they will not be, or the user set ``mode: odometry``."""
+    rec = dict(recording or {})
+    if cfg.mode != "auto" or rec.get("pose_kind", "map") == "map":
+        return ""
+    return (
+        f"no map poses in the recording (pose source: {rec.get('pose_source', rec.get('pose_kind'))}), so the "
+        "scans were placed by LIDAR odometry (register.mode auto) and the map frame is the first scan's"
+    )
+
+
 def _range_sample(clouds: Mapping[int, np.ndarray], n: int = 200) -> float:
     """Typical range of a recording from up to ``n`` of its scans, evenly spread."""
     ids = sorted(clouds)
@@ -220,14 +242,17 @@ def _range_sample(clouds: Mapping[int, np.ndarray], n: int = 200) -> float:
 
 
 def register_screened(index, aligned, reasons, clouds: ScanStore, cfg: RegistrationConfig, ahead=None,
-                      pool=None) -> tuple[pd.DataFrame, dict]:
+                      pool=None, losses: Losses | None = None, fallback: str = "") -> tuple[pd.DataFrame, dict]:
     """Algorithm 3 steps 2-6 after the per-scan checks: sampling, then the registration
     of the configured mode (``ahead``: pose-graph edges aligned ahead, a finished
     :class:`floorscan.register.edge_stream.EdgeStream`; ``pool``: the worker processes
-    of the pose graph's edge ICP). Returns the
+    of the pose graph's edge ICP). ``losses``: the scans ingest lost
+    (:func:`floorscan.register.losses.ingest_losses`; None: the index's scans, none
+    lost), to which the scans without a pose are added in pose mode; ``fallback``: why
+    the scans are placed by LIDAR odometry (:func:`fallback_reason`). Returns the
     :data:`~floorscan.register.result.REGISTRATION` table and the summary; raises
     :class:`~floorscan.register.result.RegistrationError` when nothing could be
-    registered or the verdict fails."""
+    registered or the verdict fails (its line names every loss)."""
     n = len(index)
     odometry = cfg.mode == "odometry"
     usable = np.flatnonzero(reasons == "")
@@ -288,8 +313,13 @@ def register_screened(index, aligned, reasons, clouds: ScanStore, cfg: Registrat
         }
     )
     summary = summarize(table, cfg)
+    if losses is None:
+        losses = ingest_losses(index, None)
+    if not odometry:  # LIDAR odometry does not use the poses: a scan without one is not lost
+        losses = with_pose_losses(losses, sids, t, table["reason"].to_numpy())
+    summary["losses"] = losses.as_dict()
     raise_if_nothing_registered(table, cfg, summary)
-    judged = judge(table, clouds, cfg, summary)
+    judged = judge(table, clouds, cfg, summary, losses, fallback)
     summary["verdict"] = judged.as_dict()
     log.info(
         "register (%s): %d scans, %d sampled, %d kept (%d anchors); drops %s",

@@ -38,6 +38,7 @@ import pyarrow as pa
 
 from floorscan.core.geometry import transform_points
 from floorscan.register.consistency import map_consistency, path_length_m, verdict
+from floorscan.register.losses import Losses
 from floorscan.register.params import RegistrationConfig
 
 #: One row per scan of ``scan_index`` (``registration.parquet``).
@@ -190,10 +191,13 @@ def _option(cfg: RegistrationConfig, key: str) -> str:
     return f"register.{key}={getattr(obj, name)}" if obj is not None and hasattr(obj, name) else key
 
 
-def judge(table: pd.DataFrame, clouds, cfg: RegistrationConfig, summary: dict):
+def judge(table: pd.DataFrame, clouds, cfg: RegistrationConfig, summary: dict, losses: Losses | None = None,
+          fallback: str = ""):
     """The verdict on the registration (:func:`floorscan.register.consistency.verdict`):
     the map's consistency measured on each kept scan's ``clouds.map_cloud`` (a
-    :class:`floorscan.register.prepare.ScanStore`) at its final pose."""
+    :class:`floorscan.register.prepare.ScanStore`) at its final pose; the scans lost
+    before registration (``losses``, judged by ``register.max_lost_fraction``); why the
+    scans were placed by LIDAR odometry (``fallback``)."""
     kept = table["kept"].to_numpy(bool)
     sids = table["scan_id"].to_numpy()[kept]
     final = table[["x_m", "y_m", "z_m", "yaw_rad"]].to_numpy(np.float64)[kept]
@@ -202,5 +206,5 @@ def judge(table: pd.DataFrame, clouds, cfg: RegistrationConfig, summary: dict):
     worst, option = worst_drop({k: v for k, v in summary["drops"].items() if k != "not_sampled"}, cfg)
     return verdict(
         summary["n_sampled"], summary["n_kept"], cons, n_rev, cfg.min_kept_fraction, cfg.min_consistency,
-        worst, option,
+        worst, option, losses=losses, max_lost_fraction=cfg.max_lost_fraction, fallback=fallback,
     )

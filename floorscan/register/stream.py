@@ -35,7 +35,8 @@ from floorscan.core.files import atomic_path
 from floorscan.core.runtime import process_pool, progress, start_workers
 from floorscan.register.edge_stream import EdgeStream
 from floorscan.register.params import RegistrationConfig
-from floorscan.register.pipeline import coerce_config, register_screened, resolve_config
+from floorscan.register.losses import ingest_losses
+from floorscan.register.pipeline import coerce_config, fallback_reason, register_screened, resolve_config
 from floorscan.register.prepare import ScanStore
 from floorscan.register.result import RegistrationResult
 from floorscan.register.sampling import typical_range_m
@@ -103,9 +104,11 @@ def register_recording(
         scans are not in ascending ``scan_id`` order or a point is not finite (naming
         the file and the scan).
     RegistrationError
-        When no scan could be registered.
+        When no scan could be registered, or the verdict fails (as
+        :func:`~floorscan.register.pipeline.register_scans`).
     """
     cfg = coerce_config(config)
+    losses, fallback = ingest_losses(scan_index, recording), fallback_reason(cfg, recording)
     cfg = resolve_config(cfg, recording, math.nan if cfg.every_n else _range_of_file(scans_path))
     n_workers = _edge_workers(cfg, len(scan_index))
     # the edge ICP's worker processes import Open3D while the scans are read, on the
@@ -172,7 +175,9 @@ def register_recording(
             if ahead is not None:  # the expected pairs are aligned: the workers end here
                 pool.shutdown()
                 pool = None
-            table, summary = register_screened(index, aligned, screen.reasons, store, cfg, ahead, pool)
+            table, summary = register_screened(
+                index, aligned, screen.reasons, store, cfg, ahead, pool, losses=losses, fallback=fallback
+            )
             store = None
             if pool is not None:  # odometry's loop closure ran in them
                 pool.shutdown()

@@ -1,11 +1,16 @@
 """The reduced recording: the user's recording with only the selected scans and the
 messages needed to use them, in the recording's own format.
 
-The selected scans are found exactly as ingest numbered them (``scan_id`` = the
-position of the scan in ingest's reading order, :mod:`floorscan.ingest`), never by a
-stamp lookup that rounded or spread stamps would break; the stamps are only checked
-(:mod:`floorscan.select.recording_checks`). What is kept depends on the format, one
-module each:
+The selected scans are found exactly where ingest read them: by the scan index's
+``source_ordinal``, the ordinal of each scan's frame in the recording (a bag's message
+on the scan topic, a CARMEN log's laser line, a PCD folder's locations row;
+:data:`floorscan.core.io.SCAN_INDEX`), never by a stamp lookup that rounded or spread
+stamps would break, nor by ``scan_id``, which skipped frames and re-sorted stamps move.
+An index written before that column existed is read as ingest numbered scans then: the
+frames in reading order without the ``skipped_frames``
+(:func:`floorscan.select.recording_checks.scan_frames`). The count of frames and the
+stamps are checked (:mod:`floorscan.select.recording_checks`). What is kept depends on
+the format, one module each:
 
 - ROS1 ``.bag`` and ROS2 bag folders: :mod:`floorscan.select.recording_bag` (the
   selected scan messages, static and latched topics, pose messages near a selected
@@ -55,35 +60,50 @@ def read_detection(index_path: str | os.PathLike, dataset: Mapping[str, Any] | N
     Parameters
     ----------
     index_path : path
-        The ingest stage's ``scan_index.parquet``: its ``t_ns`` column and the schema
-        metadata ingest stored (``format``, ``scan_topic``, ``stamps``, a CARMEN log's
-        ``max_range_m``; :attr:`floorscan.ingest.recording.Recording.detected`).
+        The ingest stage's ``scan_index.parquet``: its ``t_ns`` and ``source_ordinal``
+        columns and the schema metadata ingest stored (``format``, ``scan_topic``,
+        ``stamps``, a CARMEN log's ``max_range_m``, ``n_frames_read``,
+        ``skipped_frames``; :attr:`floorscan.ingest.recording.Recording.detected`).
     dataset : mapping, optional
         The dataset's config entry; its ``locations`` (PCD folders) is passed on.
 
     Returns
     -------
     dict
-        ``format``, ``scan_topic``, ``stamps`` (str, when stored), ``max_range_m``
-        (str, CARMEN), ``locations`` (str, PCD, when the dataset names it) and ``t_ns``
-        ((N,) int64 ndarray, the stamp of scan ``i`` at ``i``).
+        ``format``, ``scan_topic``, ``stamps``, ``n_frames_read``, ``skipped_frames``
+        (str, when stored), ``max_range_m`` (str, CARMEN), ``locations`` (str, PCD, when
+        the dataset names it), ``t_ns`` ((N,) int64 ndarray, the stamp of scan ``i`` at
+        ``i``) and ``source_ordinal`` ((N,) int64 ndarray, the frame of scan ``i`` at
+        ``i``; only when the index has the column, without nulls).
 
     Raises
     ------
     InputError
-        The index's ``scan_id`` is not ``0..N-1`` in order (not an ingest output).
+        The index's ``scan_id`` is not ``0..N-1`` in order (not an ingest output), or
+        its ``source_ordinal`` repeats a frame or is negative.
     """
     import pyarrow.parquet as pq
 
     meta = read_metadata(index_path)
-    table = pq.read_table(index_path, columns=["scan_id", "t_ns"])
+    has_ordinal = "source_ordinal" in pq.read_schema(index_path).names
+    table = pq.read_table(index_path, columns=["scan_id", "t_ns"] + (["source_ordinal"] if has_ordinal else []))
     ids = table.column("scan_id").to_numpy()
     if not np.array_equal(ids, np.arange(len(ids))):
         raise InputError(f"{index_path}: scan_id is not 0..{len(ids) - 1} in order; expected ingest's scan index")
-    det = {k: meta[k] for k in ("format", "scan_topic", "stamps", "max_range_m") if k in meta}
+    keys = ("format", "scan_topic", "stamps", "max_range_m", "n_frames_read", "skipped_frames")
+    det = {k: meta[k] for k in keys if k in meta}
     if dataset is not None and dataset.get("locations"):
         det["locations"] = str(dataset["locations"])
     det["t_ns"] = table.column("t_ns").to_numpy().astype(np.int64)
+    ordinal = table.column("source_ordinal") if has_ordinal else None
+    if ordinal is not None and ordinal.null_count == 0:  # else written before ingest numbered frames
+        ordinal = ordinal.to_numpy().astype(np.int64)
+        if len(ordinal) and (ordinal.min() < 0 or np.unique(ordinal).size != len(ordinal)):
+            raise InputError(
+                f"{index_path}: source_ordinal repeats a frame or is negative; expected each scan's own frame "
+                "in the recording (ingest's scan index)"
+            )
+        det["source_ordinal"] = ordinal
     return det
 
 
@@ -116,10 +136,18 @@ def write_reduced_recording(
 
         - ``scan_topic`` (str, bags: required): the topic ingest read the scans from;
         - ``t_ns`` ((N,) int array_like, recommended): ``scan_index``'s stamps in
-          ``scan_id`` order. The recording must still hold N scans, and each selected
+          ``scan_id`` order. The recording must still hold the frames ingest read
+          (``n_frames_read``, else N and the ``skipped_frames``), and each selected
           scan's stamp must be ``t_ns[scan_id]`` (bags: the header stamp, or the log
           time when it is 0; CARMEN with recorded or spread stamps; PCD with a ``t_ns``
           column); without it only the range of the ids is checked;
+        - ``source_ordinal`` ((N,) int array_like, recommended): ``scan_index``'s
+          column, the frame of each scan in the recording (a bag's message on the scan
+          topic, a CARMEN log's laser line in file order, the locations CSV's row).
+          Without it the scans are the frames in ingest's reading order without the
+          ``skipped_frames`` (str ``"0,5-6"`` as ingest stores it, or ordinals; none when
+          absent); a bag whose stamps ingest sorted then fails the stamp check;
+        - ``n_frames_read`` (str or int, optional): the frames ingest read;
         - ``stamps`` (str, CARMEN, optional): ingest's stamp class; the log must still
           have it (the scan numbering depends on it);
         - ``locations`` (str, PCD, optional): the locations CSV in the folder
@@ -166,6 +194,12 @@ def write_reduced_recording(
         raise InputError(
             f"{source}: selected scan_id {int(ids[-1])} is not in the recording's scan index "
             f"(0..{len(t_ns) - 1}); expected ids of this recording's ingest"
+        )
+    ordinals = detection.get("source_ordinal")
+    if ordinals is not None and t_ns is not None and len(ordinals) != len(t_ns):
+        raise InputError(
+            f"{source}: detection has {len(ordinals)} source_ordinal for {len(t_ns)} stamps; expected one of each "
+            "per scan of the scan index"
         )
     reduce = REDUCERS.get(fmt)
     if reduce is None:

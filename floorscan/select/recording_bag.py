@@ -5,8 +5,10 @@ compression); ROS2 bag folder (or its ``.db3`` / ``.mcap`` file) -> ROS2 bag fol
 (``rosbags.rosbag2.Writer``, the input's storage plugin). The synthetic datasets'
 recording (``results/<dataset>/sim/recording.bag``) is a ROS1 bag. Kept:
 
-- the selected messages of the scan topic: the ``n``-th message of the topic in the
-  order rosbags' ``AnyReader`` yields them, as ingest reads it, is scan ``n``;
+- the selected messages of the scan topic: scan ``i`` is the message of the topic the
+  scan index's ``source_ordinal[i]`` counts, in the order rosbags' ``AnyReader`` yields
+  them, as ingest reads it (:func:`floorscan.select.recording_checks.scan_frames`;
+  the messages ingest skipped or sorted by stamp are not counted by ``scan_id``);
 - every message of ``/tf_static`` (:data:`STATIC_TOPICS`) and of latched topics (ROS1
   ``latching=1``, ROS2 durability ``transient_local``);
 - the messages of pose topics (types :data:`POSE_MSGTYPES`: ``/tf``, ``/amcl_pose``,
@@ -28,7 +30,7 @@ import numpy as np
 
 from floorscan.core.io import InputError
 from floorscan.core.files import staged_path
-from floorscan.select.recording_checks import check_count, check_stamps, size_of
+from floorscan.select.recording_checks import check_count, check_stamps, scan_frames, size_of
 
 #: Message types of the pose topics kept within the window of a selected scan
 #: (rosbags' names; ``tf/msg/tfMessage`` is the old ROS1 TF type).
@@ -96,27 +98,30 @@ def reduce_bag(source: Path, ids, out_path: Path, detection, t_ns, window_s: flo
     if not topic:
         raise InputError(f"{path}: detection has no scan_topic; expected the topic ingest read the scans from")
     typestore = get_typestore(Stores.ROS2_HUMBLE)  # as ingest reads bags (floorscan.ingest.rosbag)
-    selected = set(ids.tolist())
+    frames = scan_frames(path, ids, detection)
+    selected = {int(f): j for j, f in enumerate(frames)}  # message ordinal -> position in ids
     try:
         with AnyReader([path], default_typestore=typestore) as reader:
             scan_conns = [c for c in reader.connections if c.topic == topic]
             if not scan_conns:
                 listing = ", ".join(sorted({f"{c.topic} ({c.msgtype})" for c in reader.connections}))
                 raise InputError(f"{path}: no topic {topic!r} (the scan topic ingest read); topics in the bag: {listing}")
-            # pass 1: ingest's numbering of the scans (floorscan.ingest.rosbag.open_bag)
+            # pass 1: the messages ingest numbered (floorscan.ingest.rosbag.open_bag)
             want: Counter = Counter()
-            times, stamps = [], []
+            times = []
+            stamps = np.zeros(len(ids), dtype=np.int64)  # in the order of ids
             n = 0
             for i, (c, t, raw) in enumerate(reader.messages(connections=scan_conns)):
                 n += 1
-                if i in selected:
+                j = selected.get(i)
+                if j is not None:
                     want[(c.id, t, _digest(raw))] += 1
                     times.append(t)
                     if t_ns is not None:
-                        stamps.append(_stamp_ns(reader.deserialize(raw, c.msgtype), t))
-            check_count(path, n, ids, t_ns, f"messages on {topic}")
+                        stamps[j] = _stamp_ns(reader.deserialize(raw, c.msgtype), t)
+            check_count(path, n, ids, t_ns, f"messages on {topic}", frames, detection)
             if t_ns is not None:
-                check_stamps(path, ids, np.asarray(stamps, dtype=np.int64), t_ns)
+                check_stamps(path, ids, stamps, t_ns)
             times = np.sort(np.asarray(times, dtype=np.int64))
             kind = {}
             for c in reader.connections:

@@ -4,9 +4,11 @@ Written with the input's compression (gzip with mtime 0, so the same selection g
 the same bytes). Kept:
 
 - comment (``#``) and ``PARAM`` lines (:data:`CARMEN_KEPT_LINES`);
-- the selected laser lines (``FLASER`` / ``ROBOTLASER1``, numbered as
-  :mod:`floorscan.ingest.carmen` numbers them: file order, stable-sorted by stamp when
-  some lines step back in time, unless the stamps are made up);
+- the selected laser lines (``FLASER`` / ``ROBOTLASER1``): scan ``i`` is the laser line
+  the scan index's ``source_ordinal[i]`` counts in file order; an index without it is
+  numbered as :mod:`floorscan.ingest.carmen` numbered scans: file order, stable-sorted
+  by stamp when some lines step back in time, unless the stamps are made up, without
+  the lines it skipped;
 - pose lines (:data:`CARMEN_POSE_LINES`) whose ``ipc_timestamp`` lies within
   ``window_s`` of a selected scan's, or, when their stamp is unusable (0, or the log's
   stamps are made up), that sit next to a selected laser line (no other laser line
@@ -29,7 +31,7 @@ import numpy as np
 
 from floorscan.core.io import InputError
 from floorscan.core.files import atomic_path
-from floorscan.select.recording_checks import check_count, check_stamps, size_of
+from floorscan.select.recording_checks import check_count, check_stamps, scan_frames, size_of
 
 #: CARMEN pose lines kept within the window. Their ``ipc_timestamp`` is the third field
 #: from the end (``ODOM x y theta tv rv accel ipc_timestamp host logger_timestamp``), as
@@ -73,7 +75,6 @@ def reduce_carmen(source: Path, ids, out_path: Path, detection, t_ns, window_s: 
                 raise InputError(f"{source}:{i + 1}: malformed {tok[0]} line ({e}); expected ingest's field layout") from None
             laser_line.append(i)
     n = len(laser_line)
-    check_count(source, n, ids, t_ns, "laser lines")
     t = np.asarray(t_s, dtype=np.float64)
     try:
         stamps, _ = classify_stamps(t)
@@ -84,7 +85,7 @@ def reduce_carmen(source: Path, ids, out_path: Path, detection, t_ns, window_s: 
             f"{source}: its laser stamps are now {stamps!r}, ingest found {detection['stamps']!r}; "
             "expected the log ingest read (it changed since ingest: rerun ingest)"
         )
-    # ingest's numbering (floorscan.ingest.carmen.open_carmen)
+    # ingest's order and stamps of the laser lines (floorscan.ingest.carmen.open_carmen)
     order = np.arange(n)
     if stamps != "made_up":
         stamp_ns = np.round(t * 1e9).astype(np.int64)
@@ -93,9 +94,14 @@ def reduce_carmen(source: Path, ids, out_path: Path, detection, t_ns, window_s: 
         stamp_ns = stamp_ns[order]
         if stamps == "spread":
             stamp_ns = spread_stamps(stamp_ns)
-        check_stamps(source, ids, stamp_ns[ids], t_ns)
+    frames = scan_frames(source, ids, detection, order)  # laser ordinals in file order
+    check_count(source, n, ids, t_ns, "laser lines", frames, detection)
+    if stamps != "made_up":
+        by_frame = np.empty(n, dtype=np.int64)
+        by_frame[order] = stamp_ns
+        check_stamps(source, ids, by_frame[frames], t_ns)
     chosen = np.zeros(n, dtype=bool)
-    chosen[order[ids]] = True
+    chosen[frames] = True
     sel_t = np.sort(t[chosen])
     # laser ordinal of the last laser line at or before each line (-1: none yet)
     is_laser = np.zeros(len(lines), dtype=bool)

@@ -1,5 +1,6 @@
 """The reduced recording of a PCD folder: a folder with the selected ``.pcd``
-files copied and the locations CSV reduced to their rows (field text as it was).
+files copied and the locations CSV reduced to their rows (field text as it was). Scan
+``i`` is the CSV's row ``source_ordinal[i]`` (0-based; a file ingest skipped has no scan).
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import pandas as pd
 
 from floorscan.core.io import InputError
 from floorscan.core.files import staged_path
-from floorscan.select.recording_checks import check_count, check_stamps, size_of
+from floorscan.select.recording_checks import check_count, check_stamps, scan_frames, size_of
 
 
 def reduce_pcd(source: Path, ids, out_path: Path, detection, t_ns, window_s: float = 0.0) -> dict:
@@ -31,8 +32,9 @@ def reduce_pcd(source: Path, ids, out_path: Path, detection, t_ns, window_s: flo
         raise InputError(f"{csv}: cannot read the CSV ({e})") from None
     if "file" not in loc.columns:
         raise InputError(f"{csv}: no 'file' column; expected file,t_ns,x,y,z,yaw")
-    check_count(csv, len(loc), ids, t_ns, "scan locations")
-    rows = loc.iloc[ids]
+    frames = scan_frames(csv, ids, detection)  # rows of the CSV (ingest reads them in order)
+    check_count(csv, len(loc), ids, t_ns, "scan locations", frames, detection)
+    rows = loc.iloc[frames]
     if "t_ns" in loc.columns:
         got = pd.to_numeric(rows["t_ns"], errors="coerce").to_numpy(dtype=np.float64)
         check_stamps(csv, ids, np.nan_to_num(got, nan=-1).astype(np.int64), t_ns)

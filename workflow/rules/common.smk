@@ -3,8 +3,17 @@ import copy
 from pathlib import Path
 
 from floorscan.core.config import ConfigError, config_errors_exit, validate_config
+from floorscan.core.files import writable_problem
 
 DATASETS = config["datasets"]
+
+# A folder the run must write in that it cannot (read-only, full, not the user's) stops
+# it here with one paragraph: Snakemake would end in its own traceback making
+# .snakemake/, or fail the first job making results/<dataset>/.
+for _folder in ("results", ".snakemake"):
+    _problem = writable_problem(_folder)
+    if _problem:
+        raise SystemExit(f"Cannot run: {_problem}")
 
 # Each stage file appends its per-dataset outputs, as patterns with a {dataset}
 # placeholder: PLAN_OUTPUTS are the answer (`rule plan`: the selected scans and the

@@ -29,6 +29,20 @@ def ingest_dataset(wildcards):
     return ds
 
 
+def recording_state(wildcards):
+    """The recording's files' sizes and modification times
+    (floorscan.core.files.recording_fingerprint): through `params:` they make ingest
+    rerun when the recording is replaced, even by an older copy (`cp -p`), which
+    Snakemake's time stamps miss. None for a synthetic dataset: its recording is the
+    simulate rule's output, which Snakemake's time stamps track (and which does not
+    exist yet when the jobs are planned)."""
+    if is_synthetic(wildcards.dataset):
+        return None
+    from floorscan.core.files import recording_fingerprint
+
+    return recording_fingerprint(recording_input(wildcards))
+
+
 def pose_gap_limit(wildcards):
     """The poses stage's gap limit for this dataset (TF chains keep their gaps visible)."""
     return stage_config("poses")(wildcards)["max_gap_s"]
@@ -45,6 +59,7 @@ rule ingest:
         dataset=ingest_dataset,
         cfg=stage_config("ingest"),
         max_gap_s=pose_gap_limit,
+        recording=recording_state,
     log:
         log_path("ingest"),
     benchmark:

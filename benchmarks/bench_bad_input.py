@@ -1,0 +1,783 @@
+"""Bad and unusual recordings, as a new user brings them (issue 35's Done-when): a corpus
+of tiny recordings in every format, each run through ingest, poses and register in
+process, each outcome judged against what the user should get, and the tally.
+
+Each case declares what a user should get: an error whose one-paragraph message names
+the file and the field, topic or frame at fault; or a run whose verdict or notes name
+what was lost, with its numbers; or a correct run with nothing to say. The stages run as
+their scripts run them (``scripts/ingest.py``, ``scripts/poses.py``,
+``scripts/register.py``): :func:`floorscan.ingest.readers.open_recording` and
+:func:`floorscan.ingest.writer.write_recording`, :func:`floorscan.ingest.poses.scan_poses`,
+:func:`floorscan.register.stream.register_recording` with the config's defaults; an
+expected error is shown as :func:`floorscan.core.stage.failure_message` prints it.
+
+Outcomes:
+
+- ``clear``: an error whose message contains the expected words, on one line, without
+  traceback text;
+- ``warning``: ran, and the verdict, the notes or a WARNING log line name what was lost
+  (the expected words, with the numbers);
+- ``correct``: ran, nothing lost, the result as expected;
+- ``unclear``: an error that does not name what it should, an unexpected exception type
+  (a bug, with its traceback), or a recording that should run refused;
+- ``silent``: ran with a wrong or partial result and nothing said.
+
+Usage: ``python -m benchmarks bad_input [--only SUBSTRING ...] [--keep DIR]`` (about 5 s).
+The recordings are written to a temporary folder (``--keep DIR``: there, kept). The
+room every recording sees is the 10 m x 6 m room with a notch and a pillar of
+``tests/test_registration.py``; the tiny-recording writers are ``tests/conftest.py``'s.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import gzip
+import logging
+import math
+import sys
+import tempfile
+import time
+import traceback
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+if str(REPO / "tests") not in sys.path:  # the tiny-recording writers of tests/conftest.py
+    sys.path.insert(0, str(REPO / "tests"))
+
+from conftest import (  # noqa: E402
+    MOUNT_X,
+    MOUNT_Z,
+    T0_NS,
+    _bag_writer,
+    _header,
+    _quat,
+    _scan_message,
+    base_pose,
+    cast_rays,
+    laser_pose,
+)
+
+OUTCOMES = ("clear", "warning", "correct", "unclear", "silent")
+
+# The room of tests/test_registration.py: 10 m x 6 m with a notch and a free-standing
+# pillar wall, so that no translation or rotation leaves it unchanged.
+ROOM = np.array([[0, 0], [10, 0], [10, 6], [4, 6], [4, 4.5], [2, 4.5], [2, 6], [0, 6], [0, 0]], float)
+PILLAR = np.array([[6.0, 2.0], [6.0, 3.5]])
+SEGMENTS = np.concatenate([np.stack([ROOM[:-1], ROOM[1:]], axis=1), PILLAR[None]], axis=0)
+
+N_SCANS = 30  # 3 s at 10 Hz along conftest.base_pose
+DT_S = 0.1
+N_BEAMS = 181  # LaserScan: 181 beams over 180 degrees
+NOISE_M = 0.003
+
+
+def room_ranges(i: int, t_s: float | None = None, n: int = N_BEAMS, fov: float = math.pi,
+                start: float = -math.pi / 2, still: bool = False) -> np.ndarray:
+    """Ranges (float32, metres) of the laser at ``laser_pose`` of scan ``i`` (t = i x 0.1 s,
+    or ``t_s``; t = 0 when ``still``) in the room, beams from ``start`` over ``fov``
+    radians with both ends included, with 3 mm of seeded noise (a robot standing still
+    still reads a little differently each scan)."""
+    t = 0.0 if still else (i * DT_S if t_s is None else t_s)
+    x, y, yaw = laser_pose(t)
+    ang = float(yaw) + start + np.arange(n) * (fov / (n - 1))
+    r = cast_rays(SEGMENTS, (float(x), float(y)), ang)
+    return (r + np.random.default_rng(i).normal(0.0, NOISE_M, n)).astype(np.float32)
+
+
+# --- recordings ---------------------------------------------------------------------------
+
+
+def room_bag(
+    path: Path,
+    n: int = N_SCANS,
+    ros2: bool = False,
+    cloud: bool = False,
+    change: Callable[[int, Any], None] | None = None,
+    raw: Callable[[int], bytes | None] | None = None,
+    stamps: list[int] | None = None,
+    scan_frame: str = "laser",
+    links: tuple[tuple[str, str], ...] = (("map", "odom"), ("odom", "base_link")),
+    static: tuple[tuple[str, str], ...] = (("base_link", "laser"),),
+    map_until_s: float | None = None,
+    pose_topic: bool = False,
+    still: bool = False,
+    ranges: Callable[[int], np.ndarray] | None = None,
+) -> Path:
+    """A bag (ROS1 file, or ROS2 folder with ``ros2``) of ``n`` scans of the room on
+    ``/scan`` at 10 Hz: LaserScans (181 beams over 180 degrees, range 0.05-30 m), or
+    the same beams as PointCloud2 (``cloud``), frame ``scan_frame``.
+
+    TF: the ``links`` on /tf at 10 Hz, half a period off the scans (``map -> odom`` a slow
+    drift correction ending after ``map_until_s`` seconds; any other link the base pose),
+    the ``static`` links (the laser's mount) on /tf_static. ``pose_topic``: the base pose
+    on /amcl_pose as well. ``still``: the robot never moves. ``change(i, msg)`` edits scan
+    ``i``'s message; ``raw(i)`` gives bytes stored instead of its serialization (or None);
+    ``stamps``: the scans' header stamps (the bag's own times stay in order).
+    """
+    ts, T, ser, writer = _bag_writer(path, ros2)
+    Vec, Q = T["geometry_msgs/msg/Vector3"], T["geometry_msgs/msg/Quaternion"]
+
+    def transform(parent, child, t, x, y, yaw, z=0.0):
+        return T["geometry_msgs/msg/TransformStamped"](
+            header=_header(ts, t, parent, not ros2), child_frame_id=child,
+            transform=T["geometry_msgs/msg/Transform"](
+                translation=Vec(x=float(x), y=float(y), z=float(z)), rotation=Q(*_quat(float(yaw)))))
+
+    msgs: list[tuple[int, str, Any, bytes | None]] = [(T0_NS - 1, "/tf_static", T["tf2_msgs/msg/TFMessage"](
+        transforms=[transform(p, c, T0_NS, MOUNT_X, 0.0, 0.0, MOUNT_Z) for p, c in static]), None)]
+    for i in range(n):
+        t = T0_NS + int(i * DT_S * 1e9)
+        r = ranges(i) if ranges is not None else room_ranges(i, still=still)
+        msg = _scan_message(ts, t if stamps is None else stamps[i], scan_frame, r, ros2, cloud, z=0.0)
+        if change is not None:
+            change(i, msg)
+        msgs.append((t, "/scan", msg, raw(i) if raw is not None else None))
+    for k in range(n + 2):
+        t_s = k * DT_S - DT_S / 2
+        t = T0_NS + int(t_s * 1e9)
+        x, y, yaw = base_pose(0.0 if still else t_s)
+        tf = []
+        for p, c in links:
+            if (p, c) == ("map", "odom"):
+                if map_until_s is None or t_s <= map_until_s:
+                    tf.append(transform(p, c, t, 0.0 if still else 1e-4 * k, 0.0, 0.0))
+            else:
+                tf.append(transform(p, c, t, x, y, yaw))
+        if tf:
+            msgs.append((t, "/tf", T["tf2_msgs/msg/TFMessage"](transforms=tf), None))
+        if pose_topic:
+            pose = T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=float(x), y=float(y), z=0.0),
+                                               orientation=Q(*_quat(float(yaw))))
+            msgs.append((t, "/amcl_pose", T["geometry_msgs/msg/PoseWithCovarianceStamped"](
+                header=_header(ts, t, "map", not ros2),
+                pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36))), None))
+    msgs.sort(key=lambda m: m[0])
+    with writer:
+        conns = {}
+        for t, topic, msg, data in msgs:
+            if topic not in conns:
+                conns[topic] = writer.add_connection(topic, msg.__msgtype__, typestore=ts)
+            writer.write(conns[topic], t, data if data is not None else ser(msg, msg.__msgtype__))
+    return path
+
+
+def flaser(ranges, pose, t_s: float) -> str:
+    r = " ".join(f"{v:.3f}" for v in ranges)
+    x, y, th = pose
+    return f"FLASER {len(ranges)} {r} {x:.4f} {y:.4f} {th:.5f} {x:.4f} {y:.4f} {th:.5f} {t_s:.3f} host {t_s:.3f}"
+
+
+def robotlaser1(ranges, pose, t_s: float, start=-math.pi / 2, fov=math.pi, res=None) -> str:
+    """A ROBOTLASER1 line (CARMEN layout, no remissions); ``res`` defaults to fov / (n - 1)."""
+    n = len(ranges)
+    res = fov / (n - 1) if res is None else res
+    r = " ".join(f"{v:.3f}" for v in ranges)
+    x, y, th = pose
+    return (f"ROBOTLASER1 0 {start} {fov} {res} 30.0 0.01 0 {n} {r} 0 {x:.4f} {y:.4f} {th:.5f} {x:.4f} {y:.4f} "
+            f"{th:.5f} 0 0 0.5 0.3 0 {t_s:.3f} host {t_s:.3f}")
+
+
+def carmen_lines(n: int = N_SCANS, kind: str = "FLASER", bad: Callable[[int], dict] | None = None,
+                 stamps: list[float] | None = None, still: bool = False) -> list[str]:
+    """Laser lines of the room along ``laser_pose`` (FLASER: 180 beams at pi/180 from
+    -pi/2; ROBOTLASER1: 181 beams over pi). ``bad(i)`` -> keyword changes of line ``i``
+    (ROBOTLASER1: ``start``/``fov``/``res``; either: ``ranges``)."""
+    lines = []
+    for i in range(n):
+        t_s = 10.0 + i * DT_S if stamps is None else stamps[i]
+        pose = tuple(float(v) for v in laser_pose(0.0 if still else i * DT_S))
+        kw = dict(bad(i) or {}) if bad else {}
+        if kind == "FLASER":
+            r = kw.pop("ranges", None)
+            if r is None:
+                r = room_ranges(i, n=180, fov=math.pi * 179 / 180, still=still)
+            lines.append(flaser(r, pose, t_s))
+        else:
+            r = kw.pop("ranges", None)
+            if r is None:
+                r = room_ranges(i, still=still)
+            lines.append(robotlaser1(r, pose, t_s, **kw))
+    return lines
+
+
+def write_log(path: Path, lines: list[str], prefix: bytes = b"", suffix: bytes = b"") -> Path:
+    data = prefix + ("\n".join(lines) + "\n").encode()
+    if path.name.endswith(".gz"):
+        data = gzip.compress(data, mtime=0)
+    path.write_bytes(data + suffix)
+    return path
+
+
+def pcd_folder(folder: Path, n: int = 40, listed: Callable[[int], bool] | None = None,
+               nan_at: tuple[int, ...] = ()) -> Path:
+    """A folder of ``n`` ascii PCD scans of the room (the laser's beams as points, z 0.4 m)
+    and its locations.csv (``listed(i)`` False: file i is left out of it)."""
+    folder.mkdir(parents=True)
+    rows = ["file,t_ns,x,y,z,yaw"]
+    ang = np.linspace(-math.pi / 2, math.pi / 2, N_BEAMS)
+    for i in range(n):
+        r = room_ranges(i)
+        pts = np.c_[r * np.cos(ang), r * np.sin(ang), np.full(N_BEAMS, 0.4)]
+        if i in nan_at:
+            pts[:] = np.nan
+        body = "\n".join(f"{a:.4f} {b:.4f} {c:.4f}" for a, b, c in pts)
+        (folder / f"{i:04d}.pcd").write_text(
+            f"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH {N_BEAMS}\nHEIGHT 1\n"
+            f"VIEWPOINT 0 0 0 1 0 0 0\nPOINTS {N_BEAMS}\nDATA ascii\n{body}\n")
+        if listed is None or listed(i):
+            x, y, yaw = laser_pose(i * DT_S)
+            rows.append(f"{i:04d}.pcd,{T0_NS + int(i * DT_S * 1e9)},{x:.5f},{y:.5f},0.0,{yaw:.6f}")
+    (folder / "locations.csv").write_text("\n".join(rows) + "\n")
+    return folder
+
+
+# --- the cases ------------------------------------------------------------------------------
+
+
+@dataclasses.dataclass
+class Case:
+    """A recording and what its user should get.
+
+    ``expect``: ``"error"`` (a message containing ``words``), ``"warning"`` (a run whose
+    verdict, notes or warnings contain ``words``; an error stopping at a threshold that
+    contains them is clear too), ``"correct"`` (a run, nothing lost), or
+    ``"correct|error"`` (either a correct run or an error containing ``words``).
+    ``n_index``: the scans the index should hold after a run; ``check(run)`` returns a
+    problem of the result (None: none). ``{path}`` and ``{name}`` in ``words`` are the
+    recording's path and file name. ``issue``: a class of issue 35 (else a control or an
+    older class)."""
+
+    name: str
+    build: Callable[[Path], dict]
+    expect: str
+    words: tuple[str, ...] = ()
+    n_index: int | None = None
+    check: Callable[["Run"], str | None] | None = None
+    issue: bool = True
+
+
+@dataclasses.dataclass
+class Run:
+    """What the three stages gave."""
+
+    dataset: dict
+    notes: list[str] = dataclasses.field(default_factory=list)
+    detected: dict = dataclasses.field(default_factory=dict)
+    index: Any = None
+    poses: Any = None
+    summary: dict | None = None
+    warnings: list[str] = dataclasses.field(default_factory=list)  # WARNING log records
+    stage: str = ""
+    error: BaseException | None = None
+    message: str = ""  # the paragraph the stage prints, or the traceback of a bug
+
+
+@dataclasses.dataclass
+class Outcome:
+    case: Case
+    outcome: str
+    stage: str
+    detail: str
+    seconds: float
+
+
+def _bag_ds(path: Path, **extra) -> dict:
+    return {"name": path.name, "path": str(path), **extra}
+
+
+def _set(**fields) -> Callable[[int, Any], None]:
+    def change(i, m):
+        for k, v in fields.items():
+            setattr(m, k, v(m) if callable(v) else v)
+    return change
+
+
+def _only(which, change):
+    def f(i, m):
+        if i in which:
+            change(i, m)
+    return f
+
+
+def _neg_inc(m):
+    return -m.angle_increment
+
+
+def _twice(m):
+    return np.r_[m.ranges, m.ranges]
+
+
+def _swap_span(m):
+    m.angle_min, m.angle_max = m.angle_max, m.angle_min
+
+
+def _degrees(m):
+    m.angle_min, m.angle_max, m.angle_increment = -90.0, 90.0, 1.0
+
+
+def _nan_cloud(m):
+    m.data = np.frombuffer(np.full(3 * m.width, np.nan, "<f4").tobytes(), np.uint8)
+
+
+def _first_pose_at(x: float, y: float, tol: float = 0.05):
+    def check(run: Run) -> str | None:
+        if run.poses is None or not len(run.poses) or not bool(run.poses["valid"].iloc[0]):
+            return "the first scan has no map pose"
+        px, py = float(run.poses["x"].iloc[0]), float(run.poses["y"].iloc[0])
+        if math.hypot(px - x, py - y) > tol:
+            return f"first pose ({px:.2f}, {py:.2f}), expected ({x:.2f}, {y:.2f})"
+        return None
+    return check
+
+
+LX0, LY0, _ = (float(v) for v in laser_pose(0.0))
+MAP_POSE = _first_pose_at(LX0, LY0)
+
+
+def _sorted_stamps(run: Run) -> str | None:
+    t = run.index["t_ns"].to_numpy()
+    return None if (np.diff(t) > 0).all() else "scan stamps not increasing in the index"
+
+
+def _all(*checks):
+    def check(run):
+        for c in checks:
+            problem = c(run)
+            if problem:
+                return problem
+        return None
+    return check
+
+
+def _swapped(n=N_SCANS, pairs=((5, 6),)) -> list[int]:
+    s = [T0_NS + int(i * DT_S * 1e9) for i in range(n)]
+    for a, b in pairs:
+        s[a], s[b] = s[b], s[a]
+    return s
+
+
+def _ros2_metadata_edit(folder: Path, edit: Callable[[str], str]) -> None:
+    meta = folder / "metadata.yaml"
+    meta.write_text(edit(meta.read_text()))
+
+
+def _lying_count(text: str) -> str:
+    """/scan's message_count set to 0 in a ROS2 metadata.yaml."""
+    import yaml
+
+    doc = yaml.safe_load(text)
+    for entry in doc["rosbag2_bagfile_information"]["topics_with_message_count"]:
+        if entry["topic_metadata"]["name"] == "/scan":
+            entry["message_count"] = 0
+    return yaml.safe_dump(doc, sort_keys=False)
+
+
+def _lying_type(text: str) -> str:
+    """/scan's type given as PointCloud2 (its messages are LaserScans)."""
+    import yaml
+
+    doc = yaml.safe_load(text)
+    for entry in doc["rosbag2_bagfile_information"]["topics_with_message_count"]:
+        if entry["topic_metadata"]["name"] == "/scan":
+            entry["topic_metadata"]["type"] = "sensor_msgs/msg/PointCloud2"
+    return yaml.safe_dump(doc, sort_keys=False)
+
+
+def _ros2_bag(root: Path, name: str, edit=None, **kw) -> dict:
+    folder = room_bag(root / name, ros2=True, **kw)
+    if edit is not None:
+        _ros2_metadata_edit(folder, edit)
+    return _bag_ds(folder)
+
+
+def _bag(name: str, **kw) -> Callable[[Path], dict]:
+    return lambda root: _bag_ds(room_bag(root / name, **kw))
+
+
+def _log(name: str, prefix: bytes = b"", suffix: bytes = b"", before: tuple[str, ...] = (), ds: dict | None = None,
+         **kw) -> Callable[[Path], dict]:
+    def build(root):
+        lines = [*before, *carmen_lines(**kw)]
+        return {"name": name, "path": str(write_log(root / name, lines, prefix, suffix)), **(ds or {})}
+    return build
+
+
+def _pcd(name: str, **kw) -> Callable[[Path], dict]:
+    return lambda root: {"name": name, "path": str(pcd_folder(root / name, **kw)), "format": "pcd"}
+
+
+def _truncated_bag(root: Path) -> dict:
+    good = room_bag(root / "whole_for_truncated.bag")
+    p = root / "truncated.bag"
+    p.write_bytes(good.read_bytes()[: good.stat().st_size // 2])
+    good.unlink()
+    return _bag_ds(p)
+
+
+def _empty_bag(root: Path) -> dict:
+    p = root / "empty.bag"
+    p.write_bytes(b"")
+    return _bag_ds(p)
+
+
+def _carmen_on_bag(root: Path) -> dict:
+    return _bag_ds(room_bag(root / "given_carmen.bag"), format="carmen")
+
+
+def _nan_at(which: int, n: int = 180):
+    return lambda i: {"ranges": np.full(n, np.nan)} if i == which else None
+
+
+UNKNOWN_LINES = ("FLASR 180 " + " ".join(["1.0"] * 180), "XYZZY 1 2 3")
+
+
+def _unknown_lines_log(root: Path) -> dict:
+    lines = carmen_lines()
+    lines = ["PARAM robot_front_laser_max 81.9 nohost 0", *lines[:3], UNKNOWN_LINES[0], *lines[3:9],
+             "ODOM 0 0 0 0 0 0 10.1 host 10.1", UNKNOWN_LINES[1], *lines[9:]]
+    p = write_log(root / "unknown_types.log", lines)
+    return {"name": p.name, "path": str(p)}
+
+
+def _late_laser_log(root: Path) -> dict:
+    odom = [f"ODOM {0.0001 * k:.4f} 0 0 0 0 0 {1.0 + 0.0003 * k:.4f} host {1.0 + 0.0003 * k:.4f}"
+            for k in range(25_000)]
+    p = write_log(root / "late_laser.log", ["PARAM robot_name pioneer 0 host 0", *odom, *carmen_lines()])
+    return {"name": p.name, "path": str(p)}
+
+
+def _short_line_log(root: Path) -> dict:
+    """Line 5 says 180 ranges and has 179 (a value lost when the log was cut and pasted)."""
+    lines = carmen_lines()
+    tok = lines[4].split()
+    lines[4] = " ".join(tok[:2] + tok[3:])
+    p = write_log(root / "short_line.log", lines)
+    return {"name": p.name, "path": str(p)}
+
+
+LOST_BAD = ("lost_bad_frames",)
+
+
+def cases() -> list[Case]:
+    """The corpus: issue 35's classes, a few older ones and good controls."""
+    n = N_SCANS
+    one = (7,)
+    lost1 = (f"1 of the recording's {n} scans",)
+    return [
+        # --- LaserScan geometry (issue 35 item 1)
+        Case("scan_increment_zero_every_scan", _bag("inc0.bag", change=_set(angle_increment=0.0)),
+             "error", ("{name}", "/scan", "angle_increment")),
+        Case("scan_increment_zero_one_scan", _bag("inc0_one.bag", change=_only(one, _set(angle_increment=0.0))),
+             "warning", (*lost1, *LOST_BAD), n_index=n - 1),
+        Case("scan_increment_negative_every_scan", _bag("inc_neg.bag", change=_set(angle_increment=_neg_inc)),
+             "error", ("{name}", "/scan", "angle_increment")),
+        Case("scan_increment_negative_one_scan",
+             _bag("inc_neg_one.bag", change=_only(one, _set(angle_increment=_neg_inc))),
+             "warning", (*lost1, *LOST_BAD), n_index=n - 1),
+        Case("scan_increment_against_the_span", _bag("span_swapped.bag", change=lambda i, m: _swap_span(m)),
+             "error", ("{name}", "/scan", "angle_increment")),
+        Case("scan_ranges_twice_the_angles", _bag("ranges_twice.bag", change=_set(ranges=_twice)),
+             "error", ("{name}", "/scan", "ranges has 362 values")),
+        Case("scan_ranges_twice_in_one_scan", _bag("ranges_twice_one.bag", change=_only(one, _set(ranges=_twice))),
+             "warning", (*lost1, *LOST_BAD), n_index=n - 1),
+        Case("scan_one_range_more_than_the_angles",
+             _bag("ranges_plus1.bag", change=_set(ranges=lambda m: np.r_[m.ranges, np.float32(2.0)])),
+             "correct", n_index=n, check=MAP_POSE),
+        Case("scan_range_min_not_below_range_max", _bag("range_limits.bag", change=_set(range_min=30.0, range_max=0.05)),
+             "error", ("{name}", "/scan", "range_min")),
+        Case("scan_range_min_not_below_range_max_in_three",
+             _bag("range_limits_three.bag", change=_only((0, 5, 6), _set(range_min=30.0, range_max=0.05))),
+             "warning", (f"3 of the recording's {n} scans", *LOST_BAD), n_index=n - 3),
+        Case("scan_angles_in_degrees", _bag("degrees.bag", change=lambda i, m: _degrees(m)),
+             "error", ("{name}", "/scan", "degrees")),
+        # --- no valid return, one bad frame (items 1, 3, 4)
+        Case("scan_every_range_at_range_max",
+             _bag("all_far.bag", ranges=lambda i: np.full(N_BEAMS, 30.0, np.float32)),
+             "error", ("{name}", "/scan", "no valid return", "range_max")),
+        Case("scan_every_range_nan", _bag("all_nan.bag", ranges=lambda i: np.full(N_BEAMS, np.nan, np.float32)),
+             "error", ("{name}", "/scan", "no valid return", "NaN")),
+        Case("scan_one_all_nan_laserscan",
+             _bag("one_nan.bag", change=_only(one, _set(ranges=lambda m: np.full(N_BEAMS, np.nan, np.float32)))),
+             "warning", (*lost1, "lost_no_points"), n_index=n - 1),
+        Case("cloud_one_all_nan_frame_ros1", _bag("cloud_nan.bag", cloud=True, change=_only(one, lambda i, m: _nan_cloud(m))),
+             "warning", (*lost1, "lost_no_points"), n_index=n - 1),
+        Case("cloud_one_all_nan_frame_ros2",
+             lambda root: _ros2_bag(root, "cloud_nan_ros2", cloud=True, change=_only(one, lambda i, m: _nan_cloud(m))),
+             "warning", (*lost1, "lost_no_points"), n_index=n - 1),
+        Case("scan_one_undecodable_frame_ros1",
+             _bag("garbled.bag", raw=lambda i: b"\x01\x02\x03" if i == 7 else None),
+             "warning", (*lost1, *LOST_BAD), n_index=n - 1),
+        Case("scan_one_undecodable_frame_ros2",
+             lambda root: _ros2_bag(root, "garbled_ros2", raw=lambda i: b"\x00\x01\x00\x00\x01" if i == 7 else None),
+             "warning", (*lost1, *LOST_BAD), n_index=n - 1),
+        # --- stamps and stationary recordings (item 4)
+        Case("bag_two_swapped_stamps", _bag("swapped.bag", stamps=_swapped()),
+             "correct", n_index=n, check=_all(_sorted_stamps, MAP_POSE)),
+        Case("bag_stamps_out_of_order_often", _bag("scrambled.bag", stamps=_swapped(pairs=((2, 3), (8, 9), (14, 15), (20, 21)))),
+             "error", ("{name}", "/scan", "not sorted")),
+        Case("bag_stationary_pose_topic", _bag("still_topic.bag", still=True, pose_topic=True),
+             "correct", n_index=n, check=MAP_POSE),
+        Case("bag_stationary_tf", _bag("still_tf.bag", still=True),
+             "correct", n_index=n, check=MAP_POSE),
+        Case("carmen_two_swapped_stamps",
+             _log("swapped.log", stamps=[10.0 + DT_S * j for j in (0, 1, 2, 3, 4, 6, 5, *range(7, N_SCANS))]),
+             "correct", n_index=n, check=_sorted_stamps),
+        Case("carmen_stationary", _log("still.log", still=True), "correct", n_index=n),
+        # --- CARMEN geometry and losses
+        Case("robotlaser1_resolution_zero", _log("res0.log", kind="ROBOTLASER1", bad=lambda i: {"res": 0.0}),
+             "error", ("{name}", "angular_resolution")),
+        Case("robotlaser1_resolution_zero_one_line",
+             _log("res0_one.log", kind="ROBOTLASER1", bad=lambda i: {"res": 0.0} if i == 7 else None),
+             "warning", (*lost1, *LOST_BAD), n_index=n - 1),
+        Case("robotlaser1_fov_disagrees", _log("fov.log", kind="ROBOTLASER1", bad=lambda i: {"fov": 2 * math.pi, "res": math.pi / 180}),
+             "error", ("{name}", "fov")),
+        Case("robotlaser1_fov_disagrees_one_line",
+             _log("fov_one.log", kind="ROBOTLASER1",
+                  bad=lambda i: {"fov": 2 * math.pi, "res": math.pi / 180} if i == 7 else None),
+             "warning", (*lost1, *LOST_BAD), n_index=n - 1),
+        Case("carmen_every_range_zero", _log("all_zero.log", bad=lambda i: {"ranges": np.zeros(180)}),
+             "error", ("{name}", "no valid return")),
+        Case("carmen_one_all_nan_line", _log("one_nan.log", bad=_nan_at(7)),
+             "warning", (*lost1, "lost_no_points"), n_index=n - 1),
+        Case("carmen_unknown_line_types", _unknown_lines_log,
+             "warning", ("lost_unknown_lines", "2 of the recording's", "FLASR", "XYZZY"), n_index=n),
+        # --- format detection (item 7)
+        Case("carmen_byte_order_mark", _log("bom.log", prefix=b"\xef\xbb\xbf"), "correct", n_index=n),
+        Case("carmen_25000_lines_before_the_first_laser_line", _late_laser_log, "correct", n_index=n),
+        Case("carmen_gzip_trailing_garbage", _log("garbage.log.gz", suffix=b"\x00\x00junk appended by a copy tool\n" * 4),
+             "warning", ("trailing garbage",), n_index=n),
+        Case("format_carmen_given_on_a_bag", _carmen_on_bag, "error", ("{name}", "FLASER")),
+        Case("ros2_metadata_count_zero", lambda root: _ros2_bag(root, "lying_count", edit=_lying_count),
+             "correct|error", ("{name}", "metadata.yaml"), n_index=n),
+        Case("ros2_metadata_wrong_type", lambda root: _ros2_bag(root, "lying_type", edit=_lying_type),
+             "error", ("{name}", "metadata.yaml", "/scan")),
+        # --- TF (item 2)
+        Case("tf_misspelt_scan_frame", _bag("misspelt.bag", scan_frame="lasr"), "error", ("{name}", "'lasr'", "map")),
+        Case("tf_empty_scan_frame", _bag("empty_frame.bag", scan_frame=""), "error", ("{name}", "frame_id is empty")),
+        Case("tf_loop", _bag("loop.bag", links=(("map", "odom"), ("laser", "base_link"))),
+             "error", ("{name}", "loop", "'laser'")),
+        Case("tf_two_parents", _bag("two_parents.bag", links=(("map", "odom"), ("odom", "base_link"), ("world", "base_link"))),
+             "error", ("{name}", "'base_link'", "several parents")),
+        Case("tf_map_chain_under_another_root", _bag("apart.bag", links=(("map", "odom"), ("odom2", "base_link"))),
+             "error", ("{name}", "'laser'", "odom2")),
+        Case("tf_map_to_odom_ends_at_a_third", _bag("map_stops.bag", map_until_s=1.0),
+             "warning", ("{name}", f"20 of the recording's {n} scans", "no pose", "max_lost_fraction"), n_index=n),
+        Case("tf_map_to_odom_ends_near_the_end", _bag("map_stops_late.bag", map_until_s=2.6),
+             "warning", (f"4 of the recording's {n} scans", "no pose"), n_index=n),
+        Case("tf_no_map_frame_odometry_only", _bag("odom_only.bag", links=(("odom", "base_link"),)),
+             "warning", ("LIDAR odometry", "no map poses"), n_index=n),
+        # --- PCD folders (item 3)
+        Case("pcd_half_the_files_not_listed", _pcd("pcd_half_unlisted", listed=lambda i: i % 2 == 0),
+             "warning", ("20 of the recording's 40 scans", "locations CSV"), n_index=20),
+        Case("pcd_two_files_not_listed", _pcd("pcd_two_unlisted", listed=lambda i: i not in (11, 23)),
+             "warning", ("2 of the recording's 40 scans", "locations CSV"), n_index=38),
+        Case("pcd_one_nan_file", _pcd("pcd_one_nan", nan_at=(7,)),
+             "warning", ("1 of the recording's 40 scans", "lost_no_points"), n_index=39),
+        # --- older classes (issue 24)
+        Case("older_truncated_bag", _truncated_bag, "error", ("{name}",), issue=False),
+        Case("older_empty_bag", _empty_bag, "error", ("{name}",), issue=False),
+        Case("older_carmen_short_line", _short_line_log, "error", ("{name}:5", "FLASER"), issue=False),
+        # --- good recordings (controls)
+        Case("good_ros1_tf", _bag("good_tf.bag"), "correct", n_index=n, check=MAP_POSE, issue=False),
+        Case("good_ros1_pose_topic", _bag("good_topic.bag", pose_topic=True, links=(("odom", "base_link"),)),
+             "correct", n_index=n, check=MAP_POSE, issue=False),
+        Case("good_ros2_tf", lambda root: _ros2_bag(root, "good_ros2"), "correct", n_index=n, check=MAP_POSE,
+             issue=False),
+        Case("good_ros1_pointcloud2", _bag("good_cloud.bag", cloud=True), "correct", n_index=n, check=MAP_POSE,
+             issue=False),
+        Case("good_carmen_flaser", _log("good.log"), "correct", n_index=n, issue=False),
+        Case("good_carmen_robotlaser1_gz", _log("good_rl.log.gz", kind="ROBOTLASER1"), "correct", n_index=n,
+             issue=False),
+        Case("good_pcd_folder", _pcd("pcd_good"), "correct", n_index=40, issue=False),
+    ]
+
+
+# --- running a case ---------------------------------------------------------------------
+
+
+class _Collect(logging.Handler):
+    def __init__(self):
+        super().__init__(logging.WARNING)
+        self.lines: list[str] = []
+
+    def emit(self, record):
+        self.lines.append(record.getMessage())
+
+
+def run_stages(dataset: dict, out: Path) -> Run:
+    """Ingest, poses and register on ``dataset`` in ``out``, as the stage scripts run
+    them; an error is caught and kept with the paragraph the stage would print."""
+    from floorscan.core.config import dataclass_from_mapping
+    from floorscan.core.io import POSES, read_metadata, read_table, write_table
+    from floorscan.core.stage import failure_message, is_expected_error
+    from floorscan.ingest.params import PosesParams
+    from floorscan.ingest.poses import missing_poses_line, scan_poses
+    from floorscan.ingest.readers import open_recording
+    from floorscan.ingest.writer import write_recording
+    from floorscan.register.stream import register_recording
+
+    out.mkdir(parents=True, exist_ok=True)
+    run = Run(dataset)
+    collect = _Collect()
+    root = logging.getLogger()
+    root.addHandler(collect)
+    index_path = out / "scan_index.parquet"
+    try:
+        run.stage = "ingest"
+        rec = open_recording(dataset, {}, max_gap_s=0.5)
+        index = write_recording(rec, out / "scans.parquet", index_path, out / "pose_stream.parquet",
+                                sensor_height_m=dataset.get("sensor_height_m", 0.0),
+                                metadata={"dataset": dataset["name"], "source": rec.source})
+        run.notes, run.detected, run.index = list(rec.notes), dict(rec.detected), index
+        run.stage = "poses"
+        stream = read_table(out / "pose_stream.parquet")
+        detected = read_metadata(out / "pose_stream.parquet")
+        source = f"{detected.get('source', out / 'pose_stream.parquet')} (poses: {detected.get('pose_source', 'none')})"
+        params = dataclass_from_mapping(PosesParams, {"max_gap_s": 0.5}, "poses")
+        index = read_table(index_path)
+        poses = scan_poses(index, stream, params.max_gap_s, source)
+        write_table(poses, out / "poses.parquet", schema=POSES)
+        run.poses = poses
+        if not stream.empty and missing_poses_line(poses):
+            run.warnings.append(missing_poses_line(poses))
+        run.stage = "register"
+        result = register_recording(out / "scans.parquet", index, read_table(out / "poses.parquet"), {},
+                                    out / "registered.parquet", metadata={"dataset": dataset["name"]},
+                                    recording=read_metadata(index_path))
+        run.summary = result.summary
+        run.stage = "done"
+    except Exception as e:  # noqa: BLE001 - judged below
+        run.error = e
+        if is_expected_error(e):
+            run.message = failure_message(run.stage, e, index_path if run.stage != "ingest" else None)
+        else:
+            run.message = "".join(traceback.format_exception(e))
+    finally:
+        root.removeHandler(collect)
+    run.warnings += collect.lines
+    return run
+
+
+def _said(run: Run) -> list[tuple[str, str]]:
+    """(where, text) of what the run told the user."""
+    said = [("notes", n) for n in run.notes] + [("log WARNING", w) for w in run.warnings]
+    if run.summary:
+        v = run.summary.get("verdict") or {}
+        said += [("verdict", w) for w in v.get("warnings", [])] + [("verdict", v.get("line", ""))]
+        said += [("verdict", p) for p in v.get("problems", [])]
+    return said
+
+
+def _found(words: tuple[str, ...], text: str) -> list[str]:
+    """The words missing from ``text`` (case-insensitive)."""
+    low = text.lower()
+    return [w for w in words if w.lower() not in low]
+
+
+def judge(case: Case, run: Run) -> tuple[str, str]:
+    """(outcome, detail) of ``case``'s run."""
+    path = run.dataset["path"]
+    words = tuple(w.replace("{name}", Path(path).name).replace("{path}", path) for w in case.words)
+    if run.error is not None:
+        from floorscan.core.stage import is_expected_error
+
+        if not is_expected_error(run.error):
+            last = run.message.strip().splitlines()[-1]
+            return "unclear", f"{run.stage}: unexpected {type(run.error).__name__} (a traceback): {last[:300]}"
+        msg = run.message
+        form = []
+        if "\n" in msg:
+            form.append("more than one line")
+        if "Traceback" in msg:
+            form.append("traceback text")
+        if len(msg) > 2000:
+            form.append(f"{len(msg)} characters")
+        if case.expect == "correct":
+            return "unclear", f"{run.stage}: refused a recording that should run: {msg[:400]}"
+        missing = _found(words, msg)
+        if not missing and not form:
+            return "clear", msg[:400]
+        return "unclear", f"{run.stage}: missing {missing or ''} {', '.join(form)}: {msg[:400]}"
+    # it ran
+    problems = []
+    if case.n_index is not None and len(run.index) != case.n_index:
+        problems.append(f"{len(run.index)} scans in the index, expected {case.n_index}")
+    if case.check is not None:
+        problem = case.check(run)
+        if problem:
+            problems.append(problem)
+    verdict = (run.summary or {}).get("verdict") or {}
+    n_lost = ((verdict.get("losses") or {}).get("counts") or {})
+    said = _said(run)
+    text = "\n".join(t for _, t in said)
+    if case.expect in ("warning", "error"):
+        missing = _found(words, text)
+        if not missing:
+            where = sorted({w for w, t in said if any(x.lower() in t.lower() for x in words)})
+            # what to show: the verdict's warning (else the note) naming most of the words
+            best = max(said, key=lambda s: (sum(x.lower() in s[1].lower() for x in words), s[0] == "verdict"))
+            extra = f" (wrong: {'; '.join(problems)})" if problems else ""
+            return "warning", f"named in {', '.join(where)}{extra}: {best[1][:300]}"
+        return "silent", (f"ran{' (expected an error)' if case.expect == 'error' else ''}; "
+                          f"{'; '.join(problems) + '; ' if problems else ''}"
+                          f"missing {missing}; verdict: {verdict.get('line', '')[:250]}")
+    # expected a correct run
+    if problems:
+        return "silent", f"{'; '.join(problems)}; verdict: {verdict.get('line', '')[:250]}"
+    if n_lost:
+        return "warning", f"lost {n_lost} (expected none): {verdict.get('line', '')[:250]}"
+    return "correct", f"{len(run.index)} scans; {verdict.get('line', '').split(';')[0]}"
+
+
+def run_corpus(root: Path, selected: list[Case], echo: Callable[[str], None] | None = print) -> list[Outcome]:
+    """Build and run each case in ``root``; one line per case through ``echo``."""
+    outcomes = []
+    (root / "in").mkdir(parents=True, exist_ok=True)
+    width = max(len(c.name) for c in selected)
+    for case in selected:
+        t0 = time.perf_counter()
+        folder = root / "in" / case.name
+        folder.mkdir()
+        try:
+            dataset = case.build(folder)
+        except Exception:  # noqa: BLE001 - a broken builder is the benchmark's bug
+            raise RuntimeError(f"building case {case.name} failed") from None
+        run = run_stages(dataset, root / "out" / case.name)
+        outcome, detail = judge(case, run)
+        o = Outcome(case, outcome, run.stage, detail, time.perf_counter() - t0)
+        outcomes.append(o)
+        if echo:
+            echo(f"{outcome:8s} {case.name:{width}s} [{o.seconds:4.1f} s, {case.expect}] {detail}")
+    return outcomes
+
+
+def tally(outcomes: list[Outcome]) -> dict[str, int]:
+    return {k: sum(o.outcome == k for o in outcomes) for k in OUTCOMES}
+
+
+def tally_line(outcomes: list[Outcome]) -> str:
+    t = tally(outcomes)
+    n_issue = sum(o.case.issue for o in outcomes)
+    return (f"{len(outcomes)} recordings ({n_issue} of issue 35's classes): "
+            + " / ".join(f"{k} {t[k]}" for k in OUTCOMES))
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(prog="python -m benchmarks bad_input", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--only", nargs="*", default=[], help="run the cases whose name contains one of these")
+    ap.add_argument("--keep", type=Path, help="write the recordings and outputs here and keep them")
+    args = ap.parse_args(argv or [])
+    selected = [c for c in cases() if not args.only or any(s in c.name for s in args.only)]
+    if args.keep and args.keep.exists() and any(args.keep.iterdir()):
+        raise SystemExit(f"--keep {args.keep}: the folder is not empty; name a new or empty one")
+    with tempfile.TemporaryDirectory() as tmp:
+        outcomes = run_corpus(args.keep or Path(tmp), selected)
+    print(tally_line(outcomes))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

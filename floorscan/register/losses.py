@@ -1,0 +1,230 @@
+"""Scans of a recording that never reach registration, counted for the verdict (issue 35).
+
+A registration judged only on the scans it sampled reads "kept 14 of 14 sampled scans
+(100 %)" when the localizer stopped after a third of the recording and two thirds of
+the scans had no pose. So the verdict (:func:`floorscan.register.consistency.verdict`)
+counts the scans lost before registration against all the recording's scans, by cause
+(:data:`CAUSES`, in the order the verdict names them):
+
+- ``no_pose``: the poses stage gave the scan no pose (before the first pose, after the
+  last, in a gap; pose mode only: LIDAR odometry does not use the poses);
+- ``lost_bad_frames``: frames ingest could not read and skipped;
+- ``lost_no_points``: scans without a valid return: those ingest skipped, and the scan
+  index's scans with ``n_points`` 0 (such a scan is not counted again as without a
+  pose);
+- ``lost_unlisted_files``: PCD files not in the locations CSV;
+- ``lost_unknown_lines``: CARMEN lines of an unknown type.
+
+Ingest's counts are in the scan index's schema metadata (``Recording.detected``, read by
+:func:`floorscan.core.io.read_metadata`); a missing key counts 0. The recording's scans
+(the denominator) are ``n_frames_read`` (every frame ingest read, lost or not; at least
+the scan index's scans and the frames ingest skipped, its only count when the key is
+missing), plus the unlisted files and the unknown lines, which were never read as
+frames.
+Each loss is a warning of the verdict; more than ``register.max_lost_fraction`` of the
+recording's scans lost stops the stage (:meth:`Losses.problem`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections import Counter
+from dataclasses import dataclass
+from typing import Mapping
+
+import numpy as np
+import pandas as pd
+
+from floorscan.core.io import InputError
+
+#: Scans without a pose (poses stage), a cause of :data:`CAUSES`.
+NO_POSE = "no_pose"
+#: Ingest's loss counts: key in the scan index's metadata -> what the verdict says of those scans.
+INGEST_LOSSES = {
+    "lost_bad_frames": "were bad frames, skipped at ingest",
+    "lost_no_points": "have no valid point (every return invalid or out of range)",
+    "lost_unlisted_files": "are files not in the locations CSV, never read",
+    "lost_unknown_lines": "are lines of an unknown type, never read",
+}
+#: Every frame ingest read, lost or not (scan index metadata).
+N_FRAMES_READ = "n_frames_read"
+#: The causes, in the order the verdict names them.
+CAUSES = (NO_POSE, *INGEST_LOSSES)
+#: Short names of the causes, for the one-line total.
+SHORT = {
+    NO_POSE: "without a pose",
+    "lost_bad_frames": "bad frames",
+    "lost_no_points": "without a valid point",
+    "lost_unlisted_files": "files not in the locations CSV",
+    "lost_unknown_lines": "lines of an unknown type",
+}
+#: The poses stage's reasons (:mod:`floorscan.ingest.poses`) in words.
+POSE_REASONS = {
+    "before_pose_stream": "before the first pose",
+    "after_pose_stream": "after the last pose",
+    "pose_gap": "in a gap between poses longer than poses.max_gap_s",
+    "no_pose_source": "no pose source",
+}
+
+
+def percent(n: int, total: int) -> str:
+    """``n / total`` as a percentage for people: ``67 %``, ``<1 %`` (never 0 % for a loss)."""
+    if total <= 0:
+        return "0 %"
+    p = 100.0 * n / total
+    return "<1 %" if 0 < p < 0.5 else f"{p:.0f} %"
+
+
+@dataclass(frozen=True)
+class Losses:
+    """The scans of a recording lost before registration.
+
+    Attributes
+    ----------
+    n_recording : int
+        The recording's scans (see the module docstring), the denominator.
+    counts : dict of str to int
+        Cause (:data:`CAUSES`) -> scans lost, the non-zero ones in that order.
+    no_pose_detail : str
+        Why the scans without a pose have none (reasons, counts and when the poses
+        start and end), for the warning.
+    empty_ids : (E,) int ndarray
+        ``scan_id`` of the scan index's scans without points (counted under
+        ``lost_no_points``, not again under ``no_pose``).
+    """
+
+    n_recording: int
+    counts: dict[str, int] = dataclasses.field(default_factory=dict)
+    no_pose_detail: str = ""
+    empty_ids: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, np.int64))
+
+    @property
+    def n_lost(self) -> int:
+        """Scans lost, all causes."""
+        return int(sum(self.counts.values()))
+
+    @property
+    def fraction(self) -> float:
+        """``n_lost / n_recording`` (0 for an empty recording)."""
+        return self.n_lost / self.n_recording if self.n_recording else 0.0
+
+    def warnings(self) -> list[str]:
+        """One line per cause with its count, e.g. ``201 of the recording's 300 scans
+        (67 %) have no pose (after_pose_stream 201: after the last pose; ...)``."""
+        out = []
+        for cause, n in self.counts.items():
+            head = f"{n} of the recording's {self.n_recording} scans ({percent(n, self.n_recording)})"
+            if cause == NO_POSE:
+                out.append(f"{head} have no pose ({self.no_pose_detail})" if self.no_pose_detail else f"{head} have no pose")
+            else:
+                out.append(f"{head} {INGEST_LOSSES[cause]} ({cause})")
+        return out
+
+    def problem(self, max_lost_fraction: float) -> str:
+        """``""`` when at most ``max_lost_fraction`` of the recording's scans are lost,
+        else why the stage stops: the total, each cause and the option."""
+        if self.fraction <= max_lost_fraction:
+            return ""
+        parts = ", ".join(f"{n} {SHORT[c]}" for c, n in self.counts.items())
+        return (
+            f"{self.n_lost} of the recording's {self.n_recording} scans ({percent(self.n_lost, self.n_recording)}) "
+            f"never reached registration ({parts}), more than register.max_lost_fraction {max_lost_fraction}: "
+            "the plan would show only part of what was recorded (register.max_lost_fraction 1 accepts it)"
+        )
+
+    def as_dict(self) -> dict:
+        return {"n_recording": self.n_recording, "counts": dict(self.counts), "fraction": self.fraction}
+
+
+def _count(detected: Mapping[str, str], key: str) -> int:
+    value = detected.get(key)
+    if value is None or str(value).strip() == "":
+        return 0
+    try:
+        number = float(value)
+    except ValueError:
+        number = -1.0
+    if not (number >= 0 and number.is_integer()):
+        raise InputError(
+            f"scan_index.parquet: metadata {key}={str(value)[:40]!r} is not a count of scans; expected a whole "
+            "number >= 0, as ingest writes it (rerun ingest)"
+        )
+    return int(number)
+
+
+def ingest_losses(scan_index: pd.DataFrame, detected: Mapping[str, str] | None) -> Losses:
+    """The scans ingest lost, from the scan index and its metadata.
+
+    Parameters
+    ----------
+    scan_index : DataFrame
+        ``scan_id`` and, when present, ``n_points`` (scans without points are losses).
+    detected : mapping of str to str, or None
+        The scan index's schema metadata: ``n_frames_read`` and the keys of
+        :data:`INGEST_LOSSES` (string counts); missing keys count 0.
+
+    Returns
+    -------
+    Losses
+        Without ``no_pose`` (:func:`with_pose_losses` adds it).
+
+    Raises
+    ------
+    InputError
+        A count in the metadata that is not a whole number >= 0.
+    """
+    det = dict(detected or {})
+    counts = {k: _count(det, k) for k in INGEST_LOSSES}
+    if "n_points" in scan_index.columns:
+        empty = scan_index["n_points"].to_numpy() == 0
+        empty_ids = scan_index["scan_id"].to_numpy(np.int64)[empty]
+    else:
+        empty_ids = np.zeros(0, np.int64)
+    skipped = counts["lost_bad_frames"] + counts["lost_no_points"]  # not in the index
+    counts["lost_no_points"] += len(empty_ids)
+    read = len(scan_index) + skipped
+    n_read = max(read, _count(det, N_FRAMES_READ))
+    n_recording = n_read + counts["lost_unlisted_files"] + counts["lost_unknown_lines"]
+    return Losses(n_recording, {k: v for k, v in counts.items() if v}, empty_ids=empty_ids)
+
+
+def with_pose_losses(losses: Losses, scan_ids: np.ndarray, t_ns: np.ndarray, reasons: np.ndarray) -> Losses:
+    """``losses`` with the scans the poses stage gave no pose (``no_pose``).
+
+    Parameters
+    ----------
+    scan_ids : (S,) int ndarray
+    t_ns : (S,) int64 ndarray
+        Scan stamps, nanoseconds, in scan order.
+    reasons : (S,) str ndarray
+        The register table's reasons: ``no_pose:<reason>`` for a scan without a pose.
+
+    Returns
+    -------
+    Losses
+        ``counts["no_pose"]`` first, and ``no_pose_detail``: the reasons with their
+        counts and, when the poses start late or end early, when, e.g.
+        ``after_pose_stream 201: after the last pose; the poses end 10.0 s into the
+        29.9 s of scans``.
+    """
+    reasons = np.asarray(reasons).astype(str)
+    t = np.asarray(t_ns, dtype=np.int64)
+    no_pose = np.char.startswith(reasons, "no_pose:")
+    lost = no_pose & ~np.isin(np.asarray(scan_ids, dtype=np.int64), losses.empty_ids)
+    n = int(lost.sum())
+    if n == 0:
+        return losses
+    by = Counter(r.split(":", 1)[1] for r in reasons[lost])
+    detail = ", ".join(f"{r} {c}: {POSE_REASONS.get(r, r)}" for r, c in by.most_common())
+    if (~no_pose).any() and len(t):
+        t0, span = t.min(), (t.max() - t.min()) * 1e-9
+        first, last = (t[~no_pose].min() - t0) * 1e-9, (t[~no_pose].max() - t0) * 1e-9
+        when = []
+        if "before_pose_stream" in by:
+            when.append(f"the poses start {first:.1f} s")
+        if "after_pose_stream" in by:
+            when.append(f"end {last:.1f} s" if when else f"the poses end {last:.1f} s")
+        if when:
+            detail += f"; {' and '.join(when)} into the {span:.1f} s of scans"
+    counts = {NO_POSE: n, **{k: v for k, v in losses.counts.items() if k != NO_POSE}}
+    return dataclasses.replace(losses, counts=counts, no_pose_detail=detail)
