@@ -147,7 +147,8 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
     Returns
     -------
     RoomRaster
-        At ``resolution_m`` rounded to a whole number of the grid's cells.
+        At ``resolution_m`` rounded to a whole number of the grid's cells, over the part
+        of the grid that holds space or walls.
     """
     from scipy import ndimage
 
@@ -159,16 +160,27 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
     padded[: free.shape[0], : free.shape[1]] = free
     free = padded.reshape(h, f, w, f).any(axis=(1, 3))
     walls = wall_mask(axes, thickness, grid.origin_xy, res, (h, w))
+    opened = _opening(free, params.free_open_m / res)
+    padded[:] = False
+    padded[: grid.shape[0], : grid.shape[1]] = grid.structure()
+    occupied = padded.reshape(h, f, w, f).any(axis=(1, 3))
+    # the rest on the part of the raster that holds space or walls (and a margin the
+    # closings reach across): the same cells, fewer of them
+    origin = np.asarray(grid.origin_xy, dtype=np.float64)
+    used = opened | walls
+    if used.any():
+        m = int(np.ceil(max(params.close_m, params.door_min_m / 2) / res)) + 2
+        rows, cols = np.flatnonzero(used.any(axis=1)), np.flatnonzero(used.any(axis=0))
+        r0, r1 = max(int(rows[0]) - m, 0), min(int(rows[-1]) + m + 1, h)
+        c0, c1 = max(int(cols[0]) - m, 0), min(int(cols[-1]) + m + 1, w)
+        walls, opened, occupied = walls[r0:r1, c0:c1], opened[r0:r1, c0:c1], occupied[r0:r1, c0:c1]
+        origin = origin + np.array([c0, r0]) * res
     # gaps between walls narrower than a door are wall: nobody passes them
     walls = _closing(walls, params.door_min_m / 2 / res) | walls
-    opened = _opening(free, params.free_open_m / res)
     space = opened & ~walls
     space = _closing(space | walls, params.close_m / res) & ~walls
     # the closing fills unseen cells, never the cells the scans saw occupied (a wall
     # the plan lacks stays a boundary)
-    padded[:] = False
-    padded[: grid.shape[0], : grid.shape[1]] = grid.structure()
-    occupied = padded.reshape(h, f, w, f).any(axis=(1, 3))
     space &= ~occupied | opened
     # holes without a wall in them: the floor under furniture, shadows of objects
     holes, n = ndimage.label(~space)
@@ -180,9 +192,7 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
         fill[border] = False
         fill[with_wall] = False
         space |= fill[holes]
-    return RoomRaster(
-        origin_xy=np.asarray(grid.origin_xy, dtype=np.float64), resolution_m=res, walls=walls, space=space, occupied=occupied
-    )
+    return RoomRaster(origin_xy=origin, resolution_m=res, walls=walls, space=space, occupied=occupied)
 
 
 def space_regions(raster: RoomRaster, params: RoomParams) -> tuple[np.ndarray, np.ndarray]:
@@ -203,8 +213,18 @@ def space_regions(raster: RoomRaster, params: RoomParams) -> tuple[np.ndarray, n
     distance = ndimage.distance_transform_edt(np.pad(space, 1))[1:-1, 1:-1] * raster.resolution_m
     if not space.any():
         return np.zeros(space.shape, dtype=np.int32), distance
-    # in whole centimetres: h-maxima of an integer image (the float one sorts every cell)
-    peaks = h_maxima(np.round(distance * 100).astype(np.uint16), max(1, int(round(params.marker_depth_m * 100))))
+    # the seeds: h-maxima (in whole centimetres, an integer image) of the distance's
+    # 2 x 2 block maxima, a quarter of the cells to sort; each seed back on the cells of
+    # its block where the distance is within a cell of the block's maximum
+    h, w = space.shape
+    cm = np.round(distance * 100).astype(np.uint16)
+    blocks = np.zeros((-(-h // 2) * 2, -(-w // 2) * 2), dtype=np.uint16)
+    blocks[:h, :w] = cm
+    coarse = blocks.reshape(blocks.shape[0] // 2, 2, blocks.shape[1] // 2, 2).max(axis=(1, 3))
+    seeds = h_maxima(coarse, max(1, int(round(params.marker_depth_m * 100))))
+    up = np.repeat(np.repeat(seeds, 2, axis=0), 2, axis=1)[:h, :w].astype(bool)
+    top = np.repeat(np.repeat(coarse, 2, axis=0), 2, axis=1)[:h, :w].astype(np.int32)
+    peaks = up & (cm.astype(np.int32) >= top - int(round(raster.resolution_m * 100)))
     markers, _ = ndimage.label(peaks & space, structure=np.ones((3, 3)))
     labels = watershed(-distance, markers, mask=space, connectivity=1)
     # space cells no marker reached (a component without a peak): a region each
