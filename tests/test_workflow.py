@@ -174,6 +174,17 @@ def test_default_run_writes_the_answer(default_run):
     assert logger.statements == []
     assert len(ifcopenshell.open(str(out / "floorplan.ifc")).by_type("IfcWall")) >= 8
     assert "<svg" in (out / "floorplan.svg").read_text()
+    # the selected scans' occupancy grid as a Nav2 map: the PGM's size is the grid's
+    import yaml
+
+    from floorscan.core.occupancy import read_grid
+
+    nav = yaml.safe_load((out / "map.yaml").read_text())
+    grid = read_grid(out / "walls" / "map" / "selected_grid.parquet")
+    assert nav["image"] == "map.pgm" and nav["resolution"] == 0.05 and nav["mode"] == "trinary"
+    assert nav["origin"][:2] == pytest.approx(grid.origin_xy.tolist())
+    head = (out / "map.pgm").read_bytes()[:120].split(b"\n")
+    assert head[0] == b"P5" and head[2] == f"{grid.shape[1]} {grid.shape[0]}".encode()
 
 
 def test_default_run_rooms_and_doors(default_run):

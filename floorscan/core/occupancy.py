@@ -286,18 +286,21 @@ def map_image(grid: OccupancyGrid) -> np.ndarray:
     return img[::-1]
 
 
-def write_map_server(grid: OccupancyGrid, pgm_path: str | Path, yaml_path: str | Path) -> None:
+def write_map_server(
+    grid: OccupancyGrid, pgm_path: str | Path, yaml_path: str | Path, title: str = "reference map"
+) -> None:
     """Write the grid as a ROS map_server map: a binary PGM (P5) and its YAML.
 
     The YAML names the image by its file name (map_server resolves it beside the
     YAML), the resolution (m/cell), the origin (x, y, yaw of the lower-left pixel) and
-    the thresholds, ``negate: 0``, ``mode: trinary``.
+    the thresholds, ``negate: 0``, ``mode: trinary``; ``title`` goes into the PGM's
+    comment line.
     """
     img = map_image(grid)
     h, w = img.shape
     with atomic_path(pgm_path) as tmp:
         with open(tmp, "wb") as f:
-            f.write(f"P5\n# floorscan reference map, {grid.resolution_m} m/cell\n{w} {h}\n255\n".encode("ascii"))
+            f.write(f"P5\n# floorscan {title}, {grid.resolution_m} m/cell\n{w} {h}\n255\n".encode("ascii"))
             f.write(img.tobytes())
     p = grid.params
     text = (

@@ -24,6 +24,8 @@ def answer_lines(datasets, results: str | os.PathLike = "results") -> list[str]:
         plan = root / ds / "floorplan.svg"
         if plan.is_file():
             lines.append(f"  floor plan:         {root / ds}/floorplan.{{geojson,svg,dxf,ifc}}{plan_counts(root / ds / 'floorplan.geojson')}")
+        if (root / ds / "map.yaml").is_file():
+            lines.append(f"  occupancy map:      {root / ds}/map.yaml (ROS map_server, Nav2)")
         lines.append(f"  scan list:          {s['scans']}")
         lines.append(
             f"  reduced recording:  {rec['path']} ({format_bytes(rec['bytes_out'])} of {format_bytes(rec['bytes_in'])}, "

@@ -153,6 +153,7 @@ def write_recommended_floorplan(
     ordering: str,
     extractor: str,
     grid_path: str | os.PathLike | None = None,
+    map_paths: tuple[str | os.PathLike, str | os.PathLike] | None = None,
 ) -> dict:
     """Write the recommended floor plan: the walls of the selected scans.
 
@@ -177,6 +178,9 @@ def write_recommended_floorplan(
     grid_path : path, optional
         ``walls/map/selected_grid.parquet``: the free space of the selected scans; with
         it the plan goes through the structure passes (clutter, joins, junctions).
+    map_paths : (path, path), optional
+        ``map.pgm``, ``map.yaml``: that grid as a ROS map_server / Nav2 map
+        (:func:`floorscan.core.occupancy.write_map_server`); needs ``grid_path``.
 
     Returns
     -------
@@ -191,10 +195,17 @@ def write_recommended_floorplan(
     ids = selected["scan_id"].astype(np.int64).to_numpy()
     walls = read_table(walls_path)
     segments = walls if extractor == "map" else walls[walls["scan_id"].isin(ids)]
+    grid = None if grid_path is None else read_grid(grid_path)
     plan, _ = FloorplanWriter(cfg).write(
         segments, outputs, dataset=dataset, ordering=ordering, extractor=extractor, k=len(ids),
-        timestamp=recording_timestamp(index_path), grid=None if grid_path is None else read_grid(grid_path),
+        timestamp=recording_timestamp(index_path), grid=grid,
     )
+    if map_paths is not None:
+        from floorscan.core.occupancy import write_map_server
+
+        if grid is None:
+            raise ValueError("an occupancy map needs the grid of the selected scans (grid_path)")
+        write_map_server(grid, *map_paths, title=f"occupancy map of the {len(ids)} selected scans")
     return {
         "n_scans": len(ids), "n_segments": len(segments), "n_walls": len(plan.walls), "n_faces": len(plan.faces),
         "n_clutter": len(plan.clutter), "n_junctions": len(plan.junctions),

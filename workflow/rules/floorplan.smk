@@ -4,7 +4,7 @@
 #
 #   recommended_floorplan: the answer, results/<dataset>/floorplan.*: the walls of the
 #               scans of selection/scans.csv (select.default_ordering, select.k) by
-#               floorplan.extractor
+#               floorplan.extractor; map.pgm + map.yaml: their occupancy grid for Nav2
 #   floorplan:  the evaluation grid, evaluation/floorplan/<ordering>_<extractor>_k<k>.*:
 #               every ordering x k of walls.k, one job per extractor, in the formats of
 #               floorplan.evaluation_formats (GeoJSON, which is scored, and SVG)
@@ -66,6 +66,8 @@ rule recommended_floorplan:
         unpack(recommended_floorplan_inputs),
     output:
         **floorplan_outputs("results/{dataset}/floorplan", FLOORPLAN_FORMATS),
+        map_pgm="results/{dataset}/map.pgm",
+        map_yaml="results/{dataset}/map.yaml",
     params:
         cfg=stage_config("floorplan"),
         extractor=plan_extractor,
@@ -123,6 +125,7 @@ rule all_scans_floorplan:
 
 
 PLAN_OUTPUTS.extend(floorplan_outputs("results/{dataset}/floorplan", FLOORPLAN_FORMATS).values())
+PLAN_OUTPUTS.extend(["results/{dataset}/map.pgm", "results/{dataset}/map.yaml"])
 EVALUATION_OUTPUTS.extend(floorplan_outputs("results/{dataset}/evaluation/floorplan/all_scans_map", ["geojson", "svg"]).values())
 EVALUATION_OUTPUTS.extend(
     expand(
