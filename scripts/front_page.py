@@ -10,6 +10,6 @@ with stage_log(snakemake) as log:  # noqa: F821
         selection=smk.input.selection, registration=smk.input.registration, index=smk.input.index,
         summary=smk.input.get("summary"), quality_png=smk.input.get("quality_png"),
         extractor=smk.params.extractor, description=smk.params.description, answer=smk.input.get("answer"),
-        answer_curve=smk.input.get("answer_curve"),
+        answer_curve=smk.input.get("answer_curve"), room_scores=smk.input.get("rooms"),
     )
     log.info("front page %s", smk.output.front)

@@ -230,6 +230,11 @@ def test_default_run_rooms_and_doors(default_run):
     assert not doc.audit().has_errors
     msp = doc.modelspace()
     assert len(msp.query('LWPOLYLINE[layer=="ROOM"]')) >= 5 and len(msp.query('LINE[layer=="DOOR"]')) == 5
+    # the front page: the rooms with their areas, and how they compare with the true ones
+    front = (out / "front.html").read_text()
+    assert "<h3>Rooms (5)</h3>" in front and "Corridor 1" in front and "floor area" in front
+    for label in ("true rooms matched (IoU 0.5)", "true doors found (0.2 m)"):
+        assert f'<tr><th>{label}</th><td class="num">100 %</td><td class="num">100 %</td></tr>' in front
 
 
 def test_a_bare_recording_path_runs_only_the_plan(default_run):

@@ -11,5 +11,6 @@ stage package.
   the style of :mod:`~floorscan.figures.style`);
 - :mod:`~floorscan.figures.report` (the front page), :mod:`~floorscan.figures.summary_page`
   (the summary table as HTML), :mod:`~floorscan.figures.room_table` (the plan's rooms on it),
+  :mod:`~floorscan.figures.plan_scores` (how good the plan is, on it),
   :mod:`~floorscan.figures.answer` (what a finished run prints).
 """

@@ -29,7 +29,8 @@ from typing import TYPE_CHECKING, Mapping, Sequence
 
 from floorscan.core.files import atomic_path
 from floorscan.figures.answer import format_bytes
-from floorscan.figures.room_table import read_plan_rooms, rooms_table_html
+from floorscan.figures.plan_scores import answer_html
+from floorscan.figures.room_table import read_plan_rooms, rooms_table_html, with_room_scores
 from floorscan.figures.summary_page import summary_table_html
 from floorscan.score.curves import summary_cell
 
@@ -191,7 +192,7 @@ def front_page(
     parts += _verdict_html(verdict)
     parts += _scans_html(k, n_kept, n_recorded, bytes_in, bytes_out, scan_list, k_reason)
     if answer is not None:
-        parts += _answer_html(answer, answer_curve)
+        parts += answer_html(answer, answer_curve)
     parts += rooms_table_html(rooms)
     if table is not None:
         parts += _quality_html(table, ordering, extractor)
@@ -249,6 +250,7 @@ def write_front_page_of_files(
     description: str = "",
     answer: "str | os.PathLike | None" = None,
     answer_curve: "str | os.PathLike | None" = None,
+    room_scores: "str | os.PathLike | None" = None,
 ) -> str:
     """:func:`write_front_page` of a dataset's stage outputs (rule ``front_page``).
 
@@ -273,6 +275,9 @@ def write_front_page_of_files(
     answer, answer_curve : path, optional
         ``evaluation/answer_scores.csv`` and ``evaluation/answer_curve.csv`` (None: not
         evaluated).
+    room_scores : path, optional
+        ``evaluation/room_scores.csv`` (:mod:`floorscan.score.rooms`): its rooms and
+        doors against the truth join the answer's table, by plan.
     """
     from floorscan.figures.floorplans import read_geojson_geometries
     from floorscan.core.io import read_metadata
@@ -297,8 +302,10 @@ def write_front_page_of_files(
         extractor=extractor,
         n_walls=len(read_geojson_geometries(floorplan_geojson)),
         description=description,
-        answer=answer, answer_curve=answer_curve, rooms=read_plan_rooms(floorplan_geojson),
+        answer=with_room_scores(answer, room_scores), answer_curve=answer_curve,
+        rooms=read_plan_rooms(floorplan_geojson),
     )  # fmt: skip
+
 
 
 # ------------------------------------------------------------------------ parts
@@ -347,56 +354,6 @@ def plan_caption(k=None, ordering: str = "", extractor: str = "", n_walls=None) 
 QUALITY_ROWS = ("oracle", THESIS_ORDERING, "random")
 #: Its columns: summary column and header.
 QUALITY_COLUMNS = (("ordering", "ordering"), ("k_95", "k95"), ("k_99", "k99"), ("auc", "AUC 20 %"))
-
-
-#: Rows of the answer's table: the column of ``answer_scores.csv`` and its label.
-ANSWER_ROWS = (
-    ("n_walls", "walls"), ("n_junctions", "junctions"), ("n_clutter", "clutter pieces (furniture)"),
-    ("short_wall_share", "walls under 0.5 m"), ("n_crossings", "walls crossing away from a junction"),
-    ("map_completeness_5cm", "completeness at 5 cm (reference map)"),
-    ("map_completeness_all_5cm", "... with the clutter"), ("map_correctness_5cm", "correctness at 5 cm (reference map)"),
-    ("gt_precision_5cm", "precision at 5 cm (true walls)"), ("gt_recall_5cm", "recall at 5 cm (observed true walls)"),
-    ("gt_corners_as_junctions", "true corners that are junctions"),
-)  # fmt: skip
-
-
-def _answer_html(answer, curve=None) -> list[str]:
-    """"How good the plan is": the recommended plan beside the plan of all kept scans
-    (``answer_scores.csv``), and how many scans of the default ordering its plan needs
-    (``answer_curve.csv``: k95 and k99)."""
-    import pandas as pd
-
-    from floorscan.score.answer_curve import k_reaching
-
-    table = answer if isinstance(answer, pd.DataFrame) else pd.read_csv(answer)
-    by_plan = {row["plan"]: row for row in table.to_dict("records")}
-    plans = [p for p in ("recommended", "all_scans_map") if p in by_plan]
-    if not plans:
-        return []
-    head = "".join(f"<th>{html.escape(h)}</th>" for h in ("", "this plan", "all kept scans")[: len(plans) + 1])
-    rows = []
-    for col, label in ANSWER_ROWS:
-        values = [by_plan[p].get(col) for p in plans]
-        if all(v is None or (isinstance(v, float) and v != v) for v in values):
-            continue
-        cells = "".join(f'<td class="num">{_answer_cell(col, v)}</td>' for v in values)
-        rows.append(f"<tr><th>{html.escape(label)}</th>{cells}</tr>")
-    if curve is not None:
-        c = curve if isinstance(curve, pd.DataFrame) else pd.read_csv(curve)
-        for level in (0.95, 0.99):
-            k = k_reaching(c, level)
-            if k is not None:
-                label = f"scans for {round(level * 100)} % of the all-scan plan's F1 (k{round(level * 100)})"
-                rows.append(f'<tr><th>{html.escape(label)}</th><td class="num">{k}</td></tr>')
-    return ["<h4>How good the plan is</h4>", f'<table class="facts-table"><tr>{head}</tr>{"".join(rows)}</table>']
-
-
-def _answer_cell(col: str, value) -> str:
-    if value is None or (isinstance(value, float) and value != value):
-        return "&ndash;"
-    if col.startswith("n_"):
-        return f"{int(value)}"
-    return f"{100 * float(value):.0f} %"
 
 
 def _quality_html(summary: "pd.DataFrame", ordering: str, extractor: str) -> list[str]:

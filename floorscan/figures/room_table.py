@@ -1,7 +1,8 @@
 """The rooms of a floor plan on the front page (:mod:`floorscan.figures.report`): read
 from the plan's GeoJSON (:func:`read_plan_rooms`: its ``room`` features,
 :func:`floorscan.floorplan.geojson.floorplan_geojson`) and shown as a table of name,
-kind and area with the total floor area (:func:`rooms_table_html`).
+kind and area with the total floor area (:func:`rooms_table_html`); the room scores
+joined to the answer's table (:func:`with_room_scores`).
 """
 
 from __future__ import annotations
@@ -68,3 +69,23 @@ def rooms_table_html(rooms: list[dict] | None) -> list[str]:
         f'<tbody>{rows}</tbody><tfoot><tr><th colspan="2">floor area</th><td class="num">{total:.1f}</td></tr>'
         "</tfoot></table>",
     ]
+
+
+def with_room_scores(answer, room_scores):
+    """The answer's table (``evaluation/answer_scores.csv``; a path or None) with the
+    columns of the room scores (``evaluation/room_scores.csv``,
+    :mod:`floorscan.score.rooms`) joined by plan, so that "How good the plan is" shows
+    the rooms and doors against the truth; the answer as it was when either is None.
+
+    Returns
+    -------
+    pandas.DataFrame, path or None
+    """
+    if answer is None or room_scores is None:
+        return answer
+    import pandas as pd
+
+    table = pd.read_csv(answer)
+    rooms = pd.read_csv(room_scores)
+    cols = ["plan"] + [c for c in rooms.columns if c not in table.columns]
+    return table.merge(rooms[cols], on="plan", how="left")

@@ -19,6 +19,7 @@ def front_page_inputs(wildcards):
         inputs["quality_png"] = f"results/{ds}/figures/floorplan_f1_vs_k.png"
         inputs["answer"] = f"results/{ds}/evaluation/answer_scores.csv"
         inputs["answer_curve"] = f"results/{ds}/evaluation/answer_curve.csv"
+        inputs["rooms"] = f"results/{ds}/evaluation/room_scores.csv"
     return inputs
 
 
