@@ -96,12 +96,7 @@ def passes_through(raster: RoomRaster, p: np.ndarray, q: np.ndarray, side_m: flo
     mid = (p + q) / 2
     d = q - p
     n = np.array([-d[1], d[0]]) / max(float(np.hypot(*d)), 1e-12)
-    pts = np.array([mid, mid + side_m * n, mid - side_m * n])
-    c = np.floor((pts - raster.origin_xy) / raster.resolution_m).astype(np.int64)
-    h, w = raster.space.shape
-    if ((c < 0) | (c[:, ::-1] >= (h, w))).any():
-        return False
-    return bool(raster.space[c[:, 1], c[:, 0]].all())
+    return bool(raster.at(raster.space, np.array([mid, mid + side_m * n, mid - side_m * n]), outside=False).all())
 
 
 def barrier_cells(raster: RoomRaster, p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -81,16 +81,11 @@ class FloorplanParams:
     georeference: Georeference | None = None
 
     def __post_init__(self):
-        if not isinstance(self.structure, StructureParams):  # the config's mapping
-            from floorscan.core.config import dataclass_from_mapping
+        for name, cls in (("structure", StructureParams), ("rooms", RoomParams)):
+            if not isinstance(getattr(self, name), cls):  # the config's mapping
+                from floorscan.core.config import dataclass_from_mapping
 
-            object.__setattr__(
-                self, "structure", dataclass_from_mapping(StructureParams, self.structure, "floorplan.structure")
-            )
-        if not isinstance(self.rooms, RoomParams):  # the config's mapping
-            from floorscan.core.config import dataclass_from_mapping
-
-            object.__setattr__(self, "rooms", dataclass_from_mapping(RoomParams, self.rooms, "floorplan.rooms"))
+                object.__setattr__(self, name, dataclass_from_mapping(cls, getattr(self, name), f"floorplan.{name}"))
         if self.georeference is not None:  # a config mapping -> Georeference (checked)
             object.__setattr__(self, "georeference", as_georeference(self.georeference))
         if self.dxf_version not in DXF_VERSIONS:

@@ -91,13 +91,11 @@ class FloorPlan:
     doors: pd.DataFrame = field(default_factory=lambda: _empty(DOOR_COLUMNS))
 
     def footprints(self):
-        """Wall polygons (shapely), the axis buffered by half the thickness, flat ends."""
-        import shapely
+        """Wall polygons (shapely), the axis buffered by half the thickness, flat ends
+        (:func:`floorscan.floorplan.room_space.wall_footprints`)."""
+        from floorscan.floorplan.room_space import wall_footprints
 
-        lines = shapely.linestrings(
-            np.stack([self.walls[["x0", "y0"]].to_numpy(), self.walls[["x1", "y1"]].to_numpy()], axis=1)
-        ) if len(self.walls) else np.array([], dtype=object)
-        return shapely.buffer(lines, self.walls["thickness_m"].to_numpy() / 2.0, cap_style="flat")
+        return wall_footprints(self.walls[["x0", "y0", "x1", "y1"]].to_numpy(np.float64), self.walls["thickness_m"].to_numpy())
 
 
 def segment_arrays(segments: pd.DataFrame) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:

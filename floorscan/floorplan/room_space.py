@@ -69,6 +69,22 @@ class RoomRaster:
         """(N, 2) map-frame centres of cells ``rows``, ``cols``, metres."""
         return (np.column_stack([cols, rows]) + 0.5) * self.resolution_m + self.origin_xy
 
+    def cells_of(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Row, column of each map-frame point ((N, 2) metres) and whether it lies on
+        the raster (as :meth:`floorscan.core.occupancy.OccupancyGrid.cells_of`)."""
+        c = np.floor((np.asarray(xy, dtype=np.float64).reshape(-1, 2) - self.origin_xy) / self.resolution_m).astype(np.int64)
+        h, w = self.space.shape
+        inside = (c[:, 0] >= 0) & (c[:, 1] >= 0) & (c[:, 0] < w) & (c[:, 1] < h)
+        return c[:, 1], c[:, 0], inside
+
+    def at(self, image: np.ndarray, xy: np.ndarray, outside=0) -> np.ndarray:
+        """(N,) values of ``image`` ((H, W), the raster's cells) at points ``xy`` ((N, 2)
+        metres); ``outside`` for a point off the raster."""
+        rows, cols, inside = self.cells_of(xy)
+        out = np.full(len(rows), outside, dtype=image.dtype)
+        out[inside] = image[rows[inside], cols[inside]]
+        return out
+
 
 def _dilate(mask: np.ndarray, radius_cells: float) -> np.ndarray:
     """``mask`` dilated by a disc of ``radius_cells``: the cells within that Euclidean
@@ -105,6 +121,18 @@ def _opening(mask: np.ndarray, radius_cells: float) -> np.ndarray:
     if radius_cells <= 0:
         return mask.copy()
     return _dilate(_erode(mask, radius_cells), radius_cells) & mask
+
+
+def wall_footprints(axes: np.ndarray, thickness: np.ndarray) -> np.ndarray:
+    """(N,) shapely Polygons: each wall axis ``x0, y0, x1, y1`` ((N, 4) metres) buffered
+    by half its ``thickness`` ((N,) metres), flat ends."""
+    import shapely
+
+    axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
+    if not len(axes):
+        return np.array([], dtype=object)
+    return shapely.buffer(shapely.linestrings(axes.reshape(-1, 2, 2)), np.asarray(thickness, dtype=np.float64) / 2.0,
+                          cap_style="flat")
 
 
 def wall_mask(axes: np.ndarray, thickness: np.ndarray, origin_xy: np.ndarray, res: float, shape) -> np.ndarray:
@@ -228,6 +256,6 @@ def space_regions(raster: RoomRaster, params: RoomParams) -> tuple[np.ndarray, n
     markers, _ = ndimage.label(peaks & space, structure=np.ones((3, 3)))
     labels = watershed(-distance, markers, mask=space, connectivity=1)
     # space cells no marker reached (a component without a peak): a region each
-    rest, n_rest = ndimage.label(space & (labels == 0))
+    rest, _ = ndimage.label(space & (labels == 0))
     labels = np.where(rest > 0, rest + labels.max(), labels)
     return labels.astype(np.int32), distance

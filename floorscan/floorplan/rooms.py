@@ -58,44 +58,28 @@ Parameters: :class:`RoomParams` (config ``floorplan.rooms``).
 from __future__ import annotations
 
 import logging
+import time
 
 import numpy as np
 import pandas as pd
 
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan import doors as D
-from floorscan.floorplan.room_space import RoomParams, RoomRaster, room_space, space_regions
+from floorscan.floorplan.room_space import RoomParams, RoomRaster, room_space, space_regions, wall_footprints
 
 log = logging.getLogger(__name__)
 
 
-class _Union:
-    """Union-find over region labels 0..n (0: no region)."""
+def _sets(n: int):
+    """Disjoint sets of region labels 0..n (SciPy's :class:`~scipy.cluster.hierarchy.DisjointSet`)."""
+    from scipy.cluster.hierarchy import DisjointSet
 
-    def __init__(self, n: int):
-        self.parent = np.arange(n + 1)
-
-    def find(self, a: int) -> int:
-        while self.parent[a] != a:
-            self.parent[a] = self.parent[self.parent[a]]
-            a = self.parent[a]
-        return int(a)
-
-    def union(self, a: int, b: int) -> None:
-        a, b = self.find(a), self.find(b)
-        if a != b:
-            self.parent[max(a, b)] = min(a, b)
-
-    def roots(self) -> np.ndarray:
-        return np.array([self.find(a) for a in range(len(self.parent))])
+    return DisjointSet(range(n + 1))
 
 
-def _label_at(labels: np.ndarray, raster: RoomRaster, xy: np.ndarray) -> int:
-    c = np.floor((xy - raster.origin_xy) / raster.resolution_m).astype(np.int64)
-    h, w = labels.shape
-    if not (0 <= c[1] < h and 0 <= c[0] < w):
-        return 0
-    return int(labels[c[1], c[0]])
+def _roots(sets, n: int) -> np.ndarray:
+    """(n + 1,) int: each label's set representative."""
+    return np.array([sets[a] for a in range(n + 1)], dtype=np.int64)
 
 
 def segment_rooms(
@@ -139,14 +123,10 @@ def segment_rooms(
     steps = np.arange(0.2, 1.2 + 1e-9, res)
 
     def side_width(centre: np.ndarray, normal: np.ndarray) -> tuple[float, float]:
-        out = []
-        for sign in (1.0, -1.0):
-            c = np.floor((centre + sign * steps[:, None] * normal - raster.origin_xy) / res).astype(np.int64)
-            ok = (c[:, 0] >= 0) & (c[:, 1] >= 0) & (c[:, 0] < labels.shape[1]) & (c[:, 1] < labels.shape[0])
-            out.append(2.0 * float(distance[c[ok, 1], c[ok, 0]].max()) if ok.any() else 0.0)
-        return out[0], out[1]
+        wa, wb = (2.0 * float(raster.at(distance, centre + sign * steps[:, None] * normal).max()) for sign in (1.0, -1.0))
+        return wa, wb
 
-    sets = _Union(n)
+    sets = _sets(n)
     found = []  # (p, q, wall, a, b)
     touching: dict[tuple[int, int], float] = {}  # contact length between regions, metres
     kinds: dict[tuple[int, int], str] = {}  # slit, door, narrow (merge), wide (merge)
@@ -171,7 +151,7 @@ def segment_rooms(
     for p, q, wall in gaps:
         d = q - p
         nrm = np.array([-d[1], d[0]]) / max(float(np.hypot(*d)), 1e-12) * 2 * raster.resolution_m
-        a, b = _label_at(labels, raster, (p + q) / 2 + nrm), _label_at(labels, raster, (p + q) / 2 - nrm)
+        a, b = (int(v) for v in raster.at(labels, np.array([(p + q) / 2 + nrm, (p + q) / 2 - nrm])))
         if a and b and a != b:
             pair = (min(a, b), max(a, b))
             found.append((p, q, wall, *pair))
@@ -180,13 +160,13 @@ def segment_rooms(
     outside = _outside_regions(cut, labels, kinds, params, grid.scan_xy)
     for (a, b), kind in kinds.items():
         if kind in ("narrow", "wide") and not (outside[a] or outside[b]):
-            sets.union(a, b)
+            sets.merge(a, b)
     found = [d for d in found if not (outside[d[3]] or outside[d[4]])]
     touching = {k: v for k, v in touching.items() if not (outside[k[0]] or outside[k[1]])}
     # regions below the room area join the neighbour they touch most (through a door too)
     area = np.bincount(labels.ravel(), minlength=n + 1) * raster.resolution_m**2
     for _ in range(n):
-        roots = sets.roots()
+        roots = _roots(sets, n)
         room_area = np.bincount(roots, weights=area, minlength=n + 1)
         small = [r for r in np.flatnonzero(room_area > 0) if r and room_area[r] < params.min_room_area_m2]
         best = None
@@ -203,8 +183,8 @@ def segment_rooms(
                 break
         if best is None:
             break
-        sets.union(*best)
-    roots = sets.roots()
+        sets.merge(*best)
+    roots = _roots(sets, n)
     merged = roots[labels]
     merged[outside[labels]] = 0
     # drop what is still below the room area (an isolated scrap of space), and the
@@ -274,11 +254,11 @@ def _outside_regions(
     # never where the scanner was: an open hall whose walls are out of range is walled
     # on little of its edge, but the rover drove in it
     low = (_enclosure(raster, labels) < params.min_enclosure) & ~_visited(raster, labels, scan_xy, n)
-    groups = _Union(n)
+    groups = _sets(n)
     for (a, b), kind in kinds.items():
         if low[a] and low[b] and kind in ("narrow", "wide"):
-            groups.union(a, b)
-    roots = groups.roots()
+            groups.merge(a, b)
+    roots = _roots(groups, n)
     for r in np.unique(roots[1:][low[1:]]):
         members = roots == r
         links = [kind for (a, b), kind in kinds.items() if members[a] != members[b]]
@@ -292,11 +272,8 @@ def _visited(raster: RoomRaster, labels: np.ndarray, scan_xy: np.ndarray | None,
     """(n + 1,) bool: the labels of ``labels`` that hold the origin of a scan
     (``scan_xy`` (S, 2) metres; None: none)."""
     out = np.zeros(n + 1, dtype=bool)
-    if scan_xy is None or not len(scan_xy):
-        return out
-    c = np.floor((np.asarray(scan_xy) - raster.origin_xy) / raster.resolution_m).astype(np.int64)
-    ok = (c[:, 0] >= 0) & (c[:, 1] >= 0) & (c[:, 0] < labels.shape[1]) & (c[:, 1] < labels.shape[0])
-    out[labels[c[ok, 1], c[ok, 0]]] = True
+    if scan_xy is not None and len(scan_xy):
+        out[raster.at(labels, scan_xy)] = True
     out[0] = False
     return out
 
@@ -324,7 +301,8 @@ def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thic
     from scipy import ndimage
 
     res = raster.resolution_m
-    walls = shapely.union_all(_footprints(axes, thickness)) if len(axes) else shapely.Polygon()
+    foot = wall_footprints(axes, thickness)
+    walls = shapely.union_all(foot) if len(axes) else shapely.Polygon()
     traced = []
     for k, box in enumerate(ndimage.find_objects(labels), start=1):
         if box is None:
@@ -346,7 +324,7 @@ def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thic
         out.append(_largest(shapely.simplify(grown, res / 2)))
     for k, poly in enumerate(out):
         others = shapely.union_all([p for j, p in enumerate(out) if j != k])
-        out[k] = _bounded_by_walls(poly, axes, thickness, walls, others, res)
+        out[k] = _bounded_by_walls(poly, axes, thickness, foot, walls, others, res)
     return out
 
 
@@ -365,18 +343,19 @@ def _largest(geom):
     return max(pieces, key=lambda g: g.area) if pieces else shapely.Polygon()
 
 
-def _bounded_by_walls(poly, axes: np.ndarray, thickness: np.ndarray, walls, others, res: float, near_m: float = 0.3):
+def _bounded_by_walls(
+    poly, axes: np.ndarray, thickness: np.ndarray, foot, walls, others, res: float, near_m: float = 0.3
+):
     """A room seen only in part (through its door) completed up to its walls: the
     bounding box of its seen floor cut by the half-plane of the room's side of each
     wall within ``near_m`` of it (on the wall's face), without the wall footprints and
     the other rooms; taken when it keeps all but 5 % of the seen floor (the room is
     convex between its walls: an L-shaped room or a ring corridor keeps its traced
-    outline). Metres."""
+    outline). ``foot``: the walls' footprints, ``walls`` their union. Metres."""
     import shapely
 
     if poly.is_empty or not len(axes):
         return poly
-    foot = _footprints(axes, thickness)
     near = np.flatnonzero(shapely.distance(foot, poly) <= near_m)
     if not len(near):
         return poly
@@ -401,13 +380,6 @@ def _bounded_by_walls(poly, axes: np.ndarray, thickness: np.ndarray, walls, othe
     if region.is_empty or poly.difference(region).area > 0.05 * poly.area or region.area < poly.area:
         return poly
     return _largest(shapely.simplify(region, res / 2))
-
-
-def _footprints(axes: np.ndarray, thickness: np.ndarray):
-    import shapely
-
-    lines = shapely.linestrings(np.asarray(axes, dtype=np.float64).reshape(-1, 2, 2))
-    return shapely.buffer(lines, np.asarray(thickness, dtype=np.float64) / 2, cap_style="flat")
 
 
 def plan_rooms(
@@ -437,8 +409,6 @@ def plan_rooms(
         ``room_b`` (room ids).
     """
     import shapely
-
-    import time
 
     t0 = time.perf_counter()
     raster, labels, doors = segment_rooms(grid, axes, thickness, params)
