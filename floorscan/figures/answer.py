@@ -45,19 +45,16 @@ def plan_counts(geojson: str | os.PathLike) -> str:
     """`` (172 walls, 109 junctions, 105 clutter pieces)`` from a plan's GeoJSON
     metadata (``floorscan`` member), with ``, 12 rooms, 11 doors`` when the plan has
     rooms (``n_rooms``, ``n_doors``); empty when it cannot be read."""
+    from floorscan.floorplan.metadata import count_text
+
     try:
         meta = json.loads(Path(geojson).read_text()).get("floorscan") or {}
     except (OSError, ValueError):
         return ""
     parts = [f"{meta['n_walls']} walls"] if "n_walls" in meta else []
     parts += [f"{meta[k]} {label}" for k, label in (("n_junctions", "junctions"), ("n_clutter", "clutter pieces")) if k in meta]
-    parts += [_count(meta[k], noun) for k, noun in (("n_rooms", "room"), ("n_doors", "door")) if k in meta]
+    parts += [count_text(meta[k], noun) for k, noun in (("n_rooms", "room"), ("n_doors", "door")) if k in meta]
     return f" ({', '.join(parts)})" if parts else ""
-
-
-def _count(n: int, noun: str) -> str:
-    """``"1 room"``, ``"12 rooms"``."""
-    return f"{n} {noun}{'' if n == 1 else 's'}"
 
 
 def format_bytes(n: int) -> str:

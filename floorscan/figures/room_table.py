@@ -8,12 +8,12 @@ joined to the answer's table (:func:`with_room_scores`).
 from __future__ import annotations
 
 import html
-import json
 import os
 
 
 def read_plan_rooms(path: str | os.PathLike) -> list[dict]:
-    """The rooms of a floor plan's GeoJSON, in the file's order.
+    """The rooms of a floor plan's GeoJSON, in the file's order, as the scorer reads
+    them (:func:`floorscan.score.rooms.read_rooms`).
 
     Parameters
     ----------
@@ -30,19 +30,13 @@ def read_plan_rooms(path: str | os.PathLike) -> list[dict]:
     Raises
     ------
     OSError, ValueError
-        When the file cannot be read or is not JSON.
+        When the file cannot be read or is not JSON; floorscan.core.io.InputError
+        when it is not a GeoJSON FeatureCollection.
     """
-    with open(path, encoding="utf-8") as fh:
-        doc = json.load(fh)
-    rooms = []
-    for feat in doc.get("features", []):
-        p = feat.get("properties") or {}
-        if p.get("kind") == "room":
-            rooms.append({
-                "room_id": int(p.get("room_id", len(rooms))), "name": str(p.get("name", "")),
-                "kind": str(p.get("room_kind", "")), "area_m2": float(p.get("area_m2", 0.0)),
-            })  # fmt: skip
-    return rooms
+    from floorscan.score.rooms import read_rooms
+
+    rooms, _ = read_rooms(path)
+    return rooms[["room_id", "name", "kind", "area_m2"]].to_dict("records")
 
 
 def rooms_table_html(rooms: list[dict] | None) -> list[str]:

@@ -96,7 +96,7 @@ class PlanExports:
     @property
     def has_extent(self) -> bool:
         """Whether the plan has walls or rooms to frame (:attr:`extent` is finite)."""
-        return bool(len(self.plan.walls) or np.isfinite(self.extent[0]).all())
+        return bool(np.isfinite(self.extent[0]).all())
 
 
 def _exterior_rings(polys, transform: Callable[[np.ndarray], np.ndarray] | None = None) -> list:

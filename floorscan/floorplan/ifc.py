@@ -34,9 +34,10 @@ if TYPE_CHECKING:
     from floorscan.floorplan.plan import FloorPlan
 
 
-def _ifc_model(plan: FloorPlan, georeference: Georeference | None):
-    """The IFC4 model of ``plan`` (see :func:`write_ifc`), not yet named: :func:`_save_ifc`
-    names it (:func:`_name_ifc`) by the metadata of each file it is saved as.
+def _ifc_model(exports: PlanExports, georeference: Georeference | None):
+    """The IFC4 model of a plan's exports (see :func:`write_ifc`), not yet named:
+    :func:`_save_ifc` names it (:func:`_name_ifc`) by the metadata of each file it is
+    saved as.
 
     Raises
     ------
@@ -88,6 +89,7 @@ def _ifc_model(plan: FloorPlan, georeference: Georeference | None):
         h = math.radians(georeference.heading_deg)
         api.georeference.edit_true_north(model, true_north=(math.cos(h), math.sin(h)))
 
+    plan = exports.plan
     w = plan.walls
     rows = [
         r for r in zip(
@@ -103,8 +105,7 @@ def _ifc_model(plan: FloorPlan, georeference: Georeference | None):
         dx, dy = (x1 - x0) / length, (y1 - y0) / length
         wall.Description = "both faces seen" if paired else "one face seen, thickness assumed"
         # Placement: at the axis start, x along the axis, relative to the storey's.
-        matrix = np.array([[dx, -dy, 0.0, x0], [dy, dx, 0.0, y0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
-        api.geometry.edit_object_placement(model, product=wall, matrix=matrix)
+        api.geometry.edit_object_placement(model, product=wall, matrix=_placement(x0, y0, dx, dy))
         # Body: the rectangle length x thickness centred on the axis, extruded up.
         body_rep = api.geometry.add_wall_representation(
             model, context=body, length=length, height=height, thickness=thickness, offset=-thickness / 2.0
@@ -118,7 +119,7 @@ def _ifc_model(plan: FloorPlan, georeference: Georeference | None):
     _add_clutter(model, plan, storey, body)
     heights = w["height_m"].to_numpy(dtype=np.float64)
     height = float(heights.max()) if len(heights) else _default_wall_height()
-    _add_spaces(model, plan, storey, body, height)
+    _add_spaces(model, exports, storey, body, height)
     _add_doors(model, plan, storey, body, dict(zip([r[0] for r in rows], zip(walls, rows))))
     return model
 
@@ -190,8 +191,7 @@ def _add_clutter(model, plan: FloorPlan, storey, body) -> None:
         length = math.hypot(x1 - x0, y1 - y0)
         dx, dy = (x1 - x0) / length, (y1 - y0) / length
         item.ObjectType, item.Description = "clutter", str(reason)
-        matrix = np.array([[dx, -dy, 0.0, x0], [dy, dx, 0.0, y0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
-        api.geometry.edit_object_placement(model, product=item, matrix=matrix)
+        api.geometry.edit_object_placement(model, product=item, matrix=_placement(x0, y0, dx, dy))
         rep = api.geometry.add_wall_representation(
             model, context=body, length=length, height=CLUTTER_IFC_HEIGHT_M, thickness=CLUTTER_IFC_THICKNESS_M,
             offset=-CLUTTER_IFC_THICKNESS_M / 2.0,
@@ -212,24 +212,24 @@ def _placement(x: float, y: float, dx: float = 1.0, dy: float = 0.0) -> np.ndarr
     return np.array([[dx, -dy, 0.0, x], [dy, dx, 0.0, y], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
 
 
-def _add_spaces(model, plan: FloorPlan, storey, body, height: float) -> None:
+def _add_spaces(model, exports: PlanExports, storey, body, height: float) -> None:
     """An ``IfcSpace`` per room with a polygon, aggregated into the storey
     (``aggregate.assign_object``): ``Name`` the room's name, ``LongName`` its kind
     (room, corridor, space), placed at the least corner of its bounds relative to the
-    storey, a body extruded ``height`` metres up from its footprint
+    storey, a body extruded ``height`` metres up from its footprint (oriented:
+    :attr:`~floorscan.floorplan.footprints.PlanExports.room_polys`)
     (``profile.add_arbitrary_profile``, an ``IfcArbitraryClosedProfileDef``, or with
     holes ``add_arbitrary_profile_with_voids``, an ``IfcArbitraryProfileDefWithVoids``;
     ``geometry.add_profile_representation``) and ``Qto_SpaceBaseQuantities``
     ``NetFloorArea`` (``area_m2``), ``GrossPerimeter`` (``perimeter_m``) and ``Height``."""
     import ifcopenshell.api
-    import shapely
 
     api = ifcopenshell.api
-    r = plan.rooms
+    r = exports.plan.rooms
     rows = [
         row for row in zip(
             r["name"].tolist(), r["kind"].tolist(), r["area_m2"].to_numpy(np.float64).tolist(),
-            r["perimeter_m"].to_numpy(np.float64).tolist(), r["polygon"].tolist(),
+            r["perimeter_m"].to_numpy(np.float64).tolist(), exports.room_polys.tolist(),
         ) if row[4] is not None and not row[4].is_empty
     ]  # fmt: skip
     spaces = [api.root.create_entity(model, ifc_class="IfcSpace", name=str(row[0])) for row in rows]
@@ -240,7 +240,6 @@ def _add_spaces(model, plan: FloorPlan, storey, body, height: float) -> None:
         rel.RelatedObjects = tuple(sorted(rel.RelatedObjects, key=lambda e: e.id()))
     for space, (_, kind, area, perimeter, poly) in zip(spaces, rows):
         space.LongName = str(kind)
-        poly = shapely.orient_polygons(poly, exterior_cw=False)
         x0, y0 = poly.bounds[:2]
         api.geometry.edit_object_placement(model, product=space, matrix=_placement(x0, y0))
         outer = (np.asarray(poly.exterior.coords) - (x0, y0)).tolist()
@@ -435,7 +434,7 @@ def write_ifc(
     meta = metadata or PlanMetadata()
     if name:
         meta = replace(meta, name=name)
-    _save_ifc(_ifc_model(plan, as_georeference(georeference)), plan, path, meta)
+    _save_ifc(_ifc_model(PlanExports(plan), as_georeference(georeference)), plan, path, meta)
 
 
 def export(exports: PlanExports, path: str | os.PathLike, meta: PlanMetadata, params: FloorplanParams) -> None:
@@ -443,5 +442,5 @@ def export(exports: PlanExports, path: str | os.PathLike, meta: PlanMetadata, pa
     a plan's exports, georeferenced by ``params.georeference``. The model is built
     once per plan (kept in ``exports.model``) and renamed and saved for each file."""
     if exports.model is None:
-        exports.model = _ifc_model(exports.plan, params.georeference)
+        exports.model = _ifc_model(exports, params.georeference)
     _save_ifc(exports.model, exports.plan, path, meta)

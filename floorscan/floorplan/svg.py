@@ -24,7 +24,7 @@ import numpy as np
 from floorscan.core.files import atomic_path
 from floorscan.floorplan.footprints import PlanExports
 from floorscan.floorplan.georeference import Georeference, as_georeference
-from floorscan.floorplan.metadata import PlanMetadata, floor_area_m2, floorscan_version
+from floorscan.floorplan.metadata import PlanMetadata, count_text, floor_area_m2, floorscan_version
 
 if TYPE_CHECKING:
     from floorscan.floorplan.params import FloorplanParams
@@ -133,7 +133,7 @@ def _write_svg(
         f'<text id="subtitle" x="{m:.2f}" y="45" font-size="12" fill="#444444">{_xml(sub)}</text>',
     ]
     if len(plan.rooms) or len(plan.doors):
-        rooms, doors = _count(len(plan.rooms), "room"), _count(len(plan.doors), "door")
+        rooms, doors = count_text(len(plan.rooms), "room"), count_text(len(plan.doors), "door")
         summary = f"{rooms}, {floor_area_m2(plan):.1f} m\u00b2 \u00b7 {doors}"
         out.append(f'<text id="rooms-summary" x="{width - m:.2f}" y="26" font-size="12" text-anchor="end" '
                    f'fill="#444444">{_xml(summary)}</text>')
@@ -357,11 +357,6 @@ def _svg_legend(
         *rows,
         "</g>",
     ]
-
-
-def _count(n: int, noun: str) -> str:
-    """``"1 door"``, ``"3 doors"``."""
-    return f"{n} {noun}{'' if n == 1 else 's'}"
 
 
 def _xml(s: str) -> str:

@@ -56,8 +56,10 @@ class Similarity:
         return self.scale * (p @ np.array([[c, s], [-s, c]])) + np.array([self.tx, self.ty])
 
 
-def read_plan_image(path) -> np.ndarray:
-    """(H, W) float32 grey levels in [0, 1] of a plan image (PNG, grey or colour).
+def read_plan_image(path, grey: bool = True) -> np.ndarray:
+    """(H, W) float32 grey levels in [0, 1] of a plan image (PNG, grey or colour): the
+    mean of its colour channels; with ``grey`` False the image as read, (H, W) or
+    (H, W, C) (an alpha channel kept), in [0, 1].
 
     Raises
     ------
@@ -73,7 +75,7 @@ def read_plan_image(path) -> np.ndarray:
     except (OSError, ValueError, SyntaxError) as e:
         raise InputError(f"{path}: not an image of a drawn plan ({e})") from None
     img = np.asarray(img, dtype=np.float32)
-    if img.ndim == 3:
+    if grey and img.ndim == 3:
         img = img[..., :3].mean(axis=2)
     if img.max() > 1.0:
         img = img / 255.0

@@ -75,25 +75,18 @@ def drawn_rooms(image: np.ndarray, free_level: float = DRAWN_FREE_LEVEL, min_wid
 
 
 def read_drawn_rooms(path, scale_m_per_px: float) -> np.ndarray:
-    """:func:`drawn_rooms` of the image at ``path`` (PNG) at ``scale_m_per_px`` metres
-    per pixel (the width and area limits in metres converted to pixels).
+    """:func:`drawn_rooms` of the image at ``path`` (PNG, read in colour by
+    :func:`floorscan.score.drawn.read_plan_image`) at ``scale_m_per_px`` metres per
+    pixel (the width and area limits in metres converted to pixels).
 
     Raises
     ------
     floorscan.core.io.InputError
         When the file is not an image matplotlib reads.
     """
-    import matplotlib.image as mpimg
+    from floorscan.score.drawn import read_plan_image
 
-    from floorscan.core.io import InputError
-
-    try:
-        img = np.asarray(mpimg.imread(str(path)), dtype=np.float64)
-    except (OSError, ValueError, SyntaxError) as e:
-        raise InputError(f"{path}: not an image of a drawn room segmentation ({e})") from None
-    if img.max() > 1.0:
-        img = img / 255.0
-    return drawn_rooms(img, min_width_px=DRAWN_MIN_WIDTH_M / scale_m_per_px,
+    return drawn_rooms(read_plan_image(path, grey=False), min_width_px=DRAWN_MIN_WIDTH_M / scale_m_per_px,
                        min_area_px=DRAWN_MIN_AREA_M2 / scale_m_per_px**2)  # fmt: skip
 
 
@@ -108,10 +101,10 @@ def drawn_building(labels: np.ndarray, wall_px: float) -> np.ndarray:
     return ndimage.binary_fill_holes(closed)
 
 
-def _plan_room_pixels(poly, transform, shape, building: np.ndarray | None = None) -> tuple[int, np.ndarray]:
+def _plan_room_pixels(poly, transform, building: np.ndarray) -> tuple[int, np.ndarray]:
     """The pixels of the drawing whose centres lie inside a plan room (map metres) and
-    inside the drawn ``building`` ((H, W) bool; None: anywhere, outside the image too):
-    their count and the flat indices of those inside the image."""
+    inside the drawn ``building`` ((H, W) bool, the drawing's shape): their count and
+    their flat indices."""
     import shapely
 
     px = shapely.transform(poly, transform.invert)
@@ -120,11 +113,10 @@ def _plan_room_pixels(poly, transform, shape, building: np.ndarray | None = None
     cc, rr = (a.ravel() for a in np.meshgrid(cols, rows))
     inside = shapely.contains_xy(px, cc.astype(np.float64), rr.astype(np.float64))
     cc, rr = cc[inside], rr[inside]
-    ok = (rr >= 0) & (cc >= 0) & (rr < shape[0]) & (cc < shape[1])
-    if building is not None:
-        ok[ok] = building[rr[ok], cc[ok]]
-        return int(ok.sum()), rr[ok] * shape[1] + cc[ok]
-    return int(inside.sum()), rr[ok] * shape[1] + cc[ok]
+    h, w = building.shape
+    ok = (rr >= 0) & (cc >= 0) & (rr < h) & (cc < w)
+    ok[ok] = building[rr[ok], cc[ok]]
+    return int(ok.sum()), rr[ok] * w + cc[ok]
 
 
 def _label_outlines(labels: np.ndarray, transform) -> list:
@@ -184,7 +176,7 @@ def score_drawn_rooms(plans: dict, labels: np.ndarray, transform, grid) -> tuple
         plan_area = np.zeros(len(rooms))
         inter = np.zeros((n, len(rooms)))
         for j, poly in enumerate(rooms["polygon"]):
-            plan_area[j], idx = _plan_room_pixels(poly, transform, labels.shape, building)
+            plan_area[j], idx = _plan_room_pixels(poly, transform, building)
             inter[:, j] = np.bincount(flat[idx], minlength=n + 1)[1:]
         scores, detail = match_rooms(inter, true_area, plan_area, counted)
         rows.append(score_row(name, "drawn", scores, {"n_plan_doors": len(doors)}))

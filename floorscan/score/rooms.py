@@ -116,7 +116,8 @@ def room_seen_share(polygons, grid, within_m: float = SEEN_WITHIN_M) -> np.ndarr
 
     Each polygon is sampled at the centres of the reference grid's cells inside it;
     a sample is seen when it lies within ``within_m`` of the grid's free space
-    (:func:`floorscan.score.drawn.seen_by_recording`).
+    (:func:`floorscan.score.drawn.seen_by_recording`, once for the samples of all
+    the polygons).
 
     Parameters
     ----------
@@ -136,16 +137,21 @@ def room_seen_share(polygons, grid, within_m: float = SEEN_WITHIN_M) -> np.ndarr
     from floorscan.score.drawn import seen_by_recording
 
     r, (ox, oy) = grid.resolution_m, grid.origin_xy
-    out = np.zeros(len(polygons))
+    samples, owner = [np.empty((0, 2))], [np.empty(0, np.int64)]
     for i, poly in enumerate(polygons):
         x0, y0, x1, y1 = poly.bounds
         xs = ox + (np.arange(math.floor((x0 - ox) / r), math.ceil((x1 - ox) / r)) + 0.5) * r
         ys = oy + (np.arange(math.floor((y0 - oy) / r), math.ceil((y1 - oy) / r)) + 0.5) * r
         xx, yy = (a.ravel() for a in np.meshgrid(xs, ys))
         inside = shapely.contains_xy(poly, xx, yy)
-        if inside.any():
-            out[i] = float(seen_by_recording(np.column_stack([xx[inside], yy[inside]]), grid, within_m).mean())
-    return out
+        samples.append(np.column_stack([xx[inside], yy[inside]]))
+        owner.append(np.full(int(inside.sum()), i, dtype=np.int64))
+    xy, owner = np.concatenate(samples), np.concatenate(owner)
+    if not len(xy):
+        return np.zeros(len(polygons))
+    n = np.bincount(owner, minlength=len(polygons)).astype(np.float64)
+    seen = np.bincount(owner, weights=seen_by_recording(xy, grid, within_m), minlength=len(polygons))
+    return np.divide(seen, n, out=np.zeros(len(polygons)), where=n > 0)
 
 
 def match_rooms(
@@ -274,10 +280,6 @@ def score_row(name: str, truth: str, *parts: dict) -> dict:
     return row
 
 
-def _plan_only(rooms: pd.DataFrame, doors: pd.DataFrame) -> dict:
-    return {"n_plan_rooms": len(rooms), "n_plan_doors": len(doors)}
-
-
 def score_room_plans(plans: dict, grid, truth_path=None) -> tuple[pd.DataFrame, dict]:
     """Rule ``score_rooms``: every plan's rooms and doors against the simulator's.
 
@@ -328,10 +330,10 @@ def score_room_plans(plans: dict, grid, truth_path=None) -> tuple[pd.DataFrame, 
         plan_polys = np.array(list(rooms["polygon"]), dtype=object)
         entry = {"rooms": list(plan_polys), "doors_xy": doors[["x", "y"]].to_numpy(np.float64)}
         if truth_path is None:
-            rows.append(score_row(name, "none", _plan_only(rooms, doors)))
+            rows.append(score_row(name, "none", {"n_plan_rooms": len(rooms), "n_plan_doors": len(doors)}))
         else:
-            inter = shapely.area(shapely.intersection(polys[:, None], plan_polys[None, :])) if len(plan_polys) else np.zeros((len(polys), 0))
-            r_scores, r_detail = match_rooms(inter, shapely.area(polys), shapely.area(plan_polys) if len(plan_polys) else np.zeros(0), counted)
+            inter = shapely.area(shapely.intersection(polys[:, None], plan_polys[None, :]))  # (T, P), P may be 0
+            r_scores, r_detail = match_rooms(inter, shapely.area(polys), shapely.area(plan_polys), counted)
             d_scores, d_detail = match_doors(overlay["true_doors_xy"], door_counted, entry["doors_xy"])
             rows.append(score_row(name, "ground_truth", r_scores, d_scores))
             entry.update(rooms_detail=r_detail, doors_detail=d_detail)

@@ -204,7 +204,7 @@ def true_rooms(building: Building) -> pd.DataFrame:
         for p in getattr(interior, "geoms", [interior])
         if p.geom_type == "Polygon" and p.area >= MIN_ROOM_AREA_M2
     ]
-    key = [(round(p.representative_point().y, 6), round(p.representative_point().x, 6)) for p in polys]
+    key = [(round(q.y, 6), round(q.x, 6)) for q in (p.representative_point() for p in polys)]
     polys = [polys[i] for i in sorted(range(len(polys)), key=key.__getitem__)]
     return pd.DataFrame({
         "room_id": np.arange(len(polys), dtype=np.int64),

@@ -479,15 +479,15 @@ def drawn_reference(wildcards):
 
 
 def score_drawn_inputs(wildcards):
-    ds = wildcards.dataset
+    ds, reference = wildcards.dataset, drawn_reference(wildcards)
     inputs = {
         "recommended": f"results/{ds}/floorplan.geojson",
         "all_scans_map": f"results/{ds}/evaluation/floorplan/all_scans_map.geojson",
         "reference": f"results/{ds}/reference/occupancy.parquet",
-        "drawn": drawn_reference(wildcards)["plan"],
+        "drawn": reference["plan"],
     }
-    if drawn_reference(wildcards).get("rooms"):  # the rooms drawn by people, same pixel frame
-        inputs["rooms"] = drawn_reference(wildcards)["rooms"]
+    if reference.get("rooms"):  # the rooms drawn by people, same pixel frame
+        inputs["rooms"] = reference["rooms"]
     return inputs
 
 
@@ -532,13 +532,9 @@ rule score_drawn:
 
 def drawn_outputs():
     """score_drawn's files for the datasets that name a drawn plan (patterns keep {dataset});
-    the room scores and overlay are also in EVALUATION_OUTPUTS (score_rooms makes them
-    for the other datasets)."""
-    return [
-        "results/{dataset}/evaluation/drawn_scores.csv",
-        "results/{dataset}/figures/drawn_overlay.png",
-        *ROOM_OUTPUTS,
-    ]
+    its room scores and overlay are in EVALUATION_OUTPUTS, as every dataset's (score_rooms
+    makes them for the other datasets)."""
+    return ["results/{dataset}/evaluation/drawn_scores.csv", "results/{dataset}/figures/drawn_overlay.png"]
 
 
 def score_rooms_inputs(wildcards):
