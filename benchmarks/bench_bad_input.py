@@ -48,26 +48,12 @@ REPO = Path(__file__).resolve().parents[1]
 if str(REPO / "tests") not in sys.path:  # the tiny-recording writers of tests/conftest.py
     sys.path.insert(0, str(REPO / "tests"))
 
-from conftest import (  # noqa: E402
-    MOUNT_X,
-    MOUNT_Z,
-    T0_NS,
-    _bag_writer,
-    _header,
-    _quat,
-    _scan_message,
-    base_pose,
-    cast_rays,
-    laser_pose,
-)
-
-OUTCOMES = ("clear", "warning", "correct", "unclear", "silent")
-
+from conftest import T0_NS, cast_rays, flaser_line, laser_pose, robotlaser_line, write_room_bag  # noqa: E402
 # The room of tests/test_registration.py: 10 m x 6 m with a notch and a free-standing
 # pillar wall, so that no translation or rotation leaves it unchanged.
-ROOM = np.array([[0, 0], [10, 0], [10, 6], [4, 6], [4, 4.5], [2, 4.5], [2, 6], [0, 6], [0, 0]], float)
-PILLAR = np.array([[6.0, 2.0], [6.0, 3.5]])
-SEGMENTS = np.concatenate([np.stack([ROOM[:-1], ROOM[1:]], axis=1), PILLAR[None]], axis=0)
+from test_registration import SEGMENTS  # noqa: E402
+
+OUTCOMES = ("clear", "warning", "correct", "unclear", "silent")
 
 N_SCANS = 30  # 3 s at 10 Hz along conftest.base_pose
 DT_S = 0.1
@@ -91,100 +77,20 @@ def room_ranges(i: int, t_s: float | None = None, n: int = N_BEAMS, fov: float =
 # --- recordings ---------------------------------------------------------------------------
 
 
-def room_bag(
-    path: Path,
-    n: int = N_SCANS,
-    ros2: bool = False,
-    cloud: bool = False,
-    change: Callable[[int, Any], None] | None = None,
-    raw: Callable[[int], bytes | None] | None = None,
-    stamps: list[int] | None = None,
-    scan_frame: str = "laser",
-    links: tuple[tuple[str, str], ...] = (("map", "odom"), ("odom", "base_link")),
-    static: tuple[tuple[str, str], ...] = (("base_link", "laser"),),
-    map_until_s: float | None = None,
-    pose_topic: bool = False,
-    still: bool = False,
-    ranges: Callable[[int], np.ndarray] | None = None,
-) -> Path:
-    """A bag (ROS1 file, or ROS2 folder with ``ros2``) of ``n`` scans of the room on
-    ``/scan`` at 10 Hz: LaserScans (181 beams over 180 degrees, range 0.05-30 m), or
-    the same beams as PointCloud2 (``cloud``), frame ``scan_frame``.
-
-    TF: the ``links`` on /tf at 10 Hz, half a period off the scans (``map -> odom`` a slow
-    drift correction ending after ``map_until_s`` seconds; any other link the base pose),
-    the ``static`` links (the laser's mount) on /tf_static. ``pose_topic``: the base pose
-    on /amcl_pose as well. ``still``: the robot never moves. ``change(i, msg)`` edits scan
-    ``i``'s message; ``raw(i)`` gives bytes stored instead of its serialization (or None);
-    ``stamps``: the scans' header stamps (the bag's own times stay in order).
-    """
-    ts, T, ser, writer = _bag_writer(path, ros2)
-    Vec, Q = T["geometry_msgs/msg/Vector3"], T["geometry_msgs/msg/Quaternion"]
-
-    def transform(parent, child, t, x, y, yaw, z=0.0):
-        return T["geometry_msgs/msg/TransformStamped"](
-            header=_header(ts, t, parent, not ros2), child_frame_id=child,
-            transform=T["geometry_msgs/msg/Transform"](
-                translation=Vec(x=float(x), y=float(y), z=float(z)), rotation=Q(*_quat(float(yaw)))))
-
-    msgs: list[tuple[int, str, Any, bytes | None]] = [(T0_NS - 1, "/tf_static", T["tf2_msgs/msg/TFMessage"](
-        transforms=[transform(p, c, T0_NS, MOUNT_X, 0.0, 0.0, MOUNT_Z) for p, c in static]), None)]
-    for i in range(n):
-        t = T0_NS + int(i * DT_S * 1e9)
-        r = ranges(i) if ranges is not None else room_ranges(i, still=still)
-        msg = _scan_message(ts, t if stamps is None else stamps[i], scan_frame, r, ros2, cloud, z=0.0)
-        if change is not None:
-            change(i, msg)
-        msgs.append((t, "/scan", msg, raw(i) if raw is not None else None))
-    for k in range(n + 2):
-        t_s = k * DT_S - DT_S / 2
-        t = T0_NS + int(t_s * 1e9)
-        x, y, yaw = base_pose(0.0 if still else t_s)
-        tf = []
-        for p, c in links:
-            if (p, c) == ("map", "odom"):
-                if map_until_s is None or t_s <= map_until_s:
-                    tf.append(transform(p, c, t, 0.0 if still else 1e-4 * k, 0.0, 0.0))
-            else:
-                tf.append(transform(p, c, t, x, y, yaw))
-        if tf:
-            msgs.append((t, "/tf", T["tf2_msgs/msg/TFMessage"](transforms=tf), None))
-        if pose_topic:
-            pose = T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=float(x), y=float(y), z=0.0),
-                                               orientation=Q(*_quat(float(yaw))))
-            msgs.append((t, "/amcl_pose", T["geometry_msgs/msg/PoseWithCovarianceStamped"](
-                header=_header(ts, t, "map", not ros2),
-                pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36))), None))
-    msgs.sort(key=lambda m: m[0])
-    with writer:
-        conns = {}
-        for t, topic, msg, data in msgs:
-            if topic not in conns:
-                conns[topic] = writer.add_connection(topic, msg.__msgtype__, typestore=ts)
-            writer.write(conns[topic], t, data if data is not None else ser(msg, msg.__msgtype__))
-    return path
-
-
-def flaser(ranges, pose, t_s: float) -> str:
-    r = " ".join(f"{v:.3f}" for v in ranges)
-    x, y, th = pose
-    return f"FLASER {len(ranges)} {r} {x:.4f} {y:.4f} {th:.5f} {x:.4f} {y:.4f} {th:.5f} {t_s:.3f} host {t_s:.3f}"
-
-
-def robotlaser1(ranges, pose, t_s: float, start=-math.pi / 2, fov=math.pi, res=None) -> str:
-    """A ROBOTLASER1 line (CARMEN layout, no remissions); ``res`` defaults to fov / (n - 1)."""
-    n = len(ranges)
-    res = fov / (n - 1) if res is None else res
-    r = " ".join(f"{v:.3f}" for v in ranges)
-    x, y, th = pose
-    return (f"ROBOTLASER1 0 {start} {fov} {res} 30.0 0.01 0 {n} {r} 0 {x:.4f} {y:.4f} {th:.5f} {x:.4f} {y:.4f} "
-            f"{th:.5f} 0 0 0.5 0.3 0 {t_s:.3f} host {t_s:.3f}")
+def room_bag(path: Path, n: int = N_SCANS, still: bool = False, ranges: Callable[[int], np.ndarray] | None = None,
+             **kw) -> Path:
+    """A bag of ``n`` scans of the room (:func:`conftest.write_room_bag`, whose keywords
+    ``kw`` are: ``ros2``, ``cloud``, ``change``, ``raw``, ``stamps``, ``scan_frame``,
+    ``links``, ``static``, ``map_until_s``, ``pose_topic``); the ranges are
+    :func:`room_ranges` unless ``ranges(i)`` gives them."""
+    return write_room_bag(path, ranges or (lambda i: room_ranges(i, still=still)), n=n, still=still, **kw)
 
 
 def carmen_lines(n: int = N_SCANS, kind: str = "FLASER", bad: Callable[[int], dict] | None = None,
                  stamps: list[float] | None = None, still: bool = False) -> list[str]:
     """Laser lines of the room along ``laser_pose`` (FLASER: 180 beams at pi/180 from
-    -pi/2; ROBOTLASER1: 181 beams over pi). ``bad(i)`` -> keyword changes of line ``i``
+    -pi/2; ROBOTLASER1: 181 beams over pi; :func:`conftest.flaser_line`,
+    :func:`conftest.robotlaser_line`). ``bad(i)`` -> keyword changes of line ``i``
     (ROBOTLASER1: ``start``/``fov``/``res``; either: ``ranges``)."""
     lines = []
     for i in range(n):
@@ -195,12 +101,12 @@ def carmen_lines(n: int = N_SCANS, kind: str = "FLASER", bad: Callable[[int], di
             r = kw.pop("ranges", None)
             if r is None:
                 r = room_ranges(i, n=180, fov=math.pi * 179 / 180, still=still)
-            lines.append(flaser(r, pose, t_s))
+            lines.append(flaser_line(r, pose, t_s))
         else:
             r = kw.pop("ranges", None)
             if r is None:
                 r = room_ranges(i, still=still)
-            lines.append(robotlaser1(r, pose, t_s, **kw))
+            lines.append(robotlaser_line(r, pose, t_s, **kw))
     return lines
 
 
@@ -642,8 +548,9 @@ def run_stages(dataset: dict, out: Path) -> Run:
         poses = scan_poses(index, stream, params.max_gap_s, source)
         write_table(poses, out / "poses.parquet", schema=POSES)
         run.poses = poses
-        if not stream.empty and missing_poses_line(poses):
-            run.warnings.append(missing_poses_line(poses))
+        missing = "" if stream.empty else missing_poses_line(poses)
+        if missing:
+            run.warnings.append(missing)
         run.stage = "register"
         result = register_recording(out / "scans.parquet", index, read_table(out / "poses.parquet"), {},
                                     out / "registered.parquet", metadata={"dataset": dataset["name"]},

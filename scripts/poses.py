@@ -20,7 +20,7 @@ with stage_log(snakemake) as log:
             "no map pose source in the recording (%s): none of the %d scans has a pose (no_pose_source); "
             "the register stage places them by LIDAR odometry", found, len(poses),
         )
-    elif missing_poses_line(poses):  # a localizer that starts late or stops part-way
-        log.warning("%s", missing_poses_line(poses))
+    elif missing := missing_poses_line(poses):  # a localizer that starts late or stops part-way
+        log.warning("%s", missing)
     else:
         log.info("all %d scans have a pose", len(poses))

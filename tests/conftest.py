@@ -111,14 +111,17 @@ def _scan_message(ts, t_ns: int, frame: str, r: np.ndarray, ros2: bool, cloud: b
 
 
 def _write_messages(writer, ts, ser, msgs) -> None:
-    """Write (t_ns, topic, message) tuples in time order, a connection per topic."""
+    """Write (t_ns, topic, message) tuples in time order, a connection per topic; a
+    tuple (t_ns, topic, message, data) writes the bytes ``data`` instead of the
+    message's serialization, unless ``data`` is None (an undecodable message)."""
     msgs.sort(key=lambda m: m[0])
     with writer:
         conns = {}
-        for t, topic, msg in msgs:
+        for t, topic, msg, *data in msgs:
             if topic not in conns:
                 conns[topic] = writer.add_connection(topic, msg.__msgtype__, typestore=ts)
-            writer.write(conns[topic], t, ser(msg, msg.__msgtype__))
+            raw = data[0] if data and data[0] is not None else ser(msg, msg.__msgtype__)
+            writer.write(conns[topic], t, raw)
 
 
 def write_bag(
@@ -204,6 +207,76 @@ def cast_rays(segments: np.ndarray, origin, angles: np.ndarray) -> np.ndarray:
     return t.min(axis=1) if len(seg) else np.full(len(d), np.inf)
 
 
+def write_room_bag(
+    path: Path,
+    ranges,
+    n: int = 30,
+    ros2: bool = False,
+    cloud: bool = False,
+    change=None,
+    raw=None,
+    stamps: list[int] | None = None,
+    scan_frame: str = "laser",
+    links: tuple[tuple[str, str], ...] = (("map", "odom"), ("odom", "base_link")),
+    static: tuple[tuple[str, str], ...] = (("base_link", "laser"),),
+    map_until_s: float | None = None,
+    pose_topic: bool = False,
+    still: bool = False,
+) -> Path:
+    """A bag (ROS1 file, or ROS2 folder with ``ros2``) of ``n`` scans on ``/scan`` at
+    10 Hz along :func:`base_pose`: LaserScans of ``ranges(i)`` (181 beams over 180
+    degrees, range 0.05-30 m), or the same beams as PointCloud2 (``cloud``), frame
+    ``scan_frame``.
+
+    TF: the ``links`` on /tf at 10 Hz, half a period off the scans (``map -> odom`` a slow
+    drift correction, so it is no static link, ending after ``map_until_s`` seconds (the
+    localizer stopped); any other link the base pose), the ``static`` links (the laser's
+    mount) on /tf_static. ``pose_topic``: the base pose on /amcl_pose as well. ``still``:
+    the robot never moves (every link sends one pose over and over). ``change(i, msg)``
+    edits scan ``i``'s message; ``raw(i)`` gives bytes stored instead of its
+    serialization (or None); ``stamps``: the scans' header stamps (the bag's own times
+    stay in order).
+    """
+    ts, T, ser, writer = _bag_writer(path, ros2)
+    Vec, Q = T["geometry_msgs/msg/Vector3"], T["geometry_msgs/msg/Quaternion"]
+
+    def transform(parent, child, t, x, y, yaw, z=0.0):
+        return T["geometry_msgs/msg/TransformStamped"](
+            header=_header(ts, t, parent, not ros2), child_frame_id=child,
+            transform=T["geometry_msgs/msg/Transform"](
+                translation=Vec(x=float(x), y=float(y), z=float(z)), rotation=Q(*_quat(float(yaw)))))
+
+    msgs = [(T0_NS - 1, "/tf_static", T["tf2_msgs/msg/TFMessage"](
+        transforms=[transform(p, c, T0_NS, MOUNT_X, 0.0, 0.0, MOUNT_Z) for p, c in static]))]
+    for i in range(n):
+        t = T0_NS + int(i * 0.1e9)
+        msg = _scan_message(ts, t if stamps is None else stamps[i], scan_frame, ranges(i), ros2, cloud)
+        if change is not None:
+            change(i, msg)
+        msgs.append((t, "/scan", msg, raw(i) if raw is not None else None))
+    for k in range(n + 2):
+        t_s = k * 0.1 - 0.05
+        t = T0_NS + int(t_s * 1e9)
+        x, y, yaw = base_pose(0.0 if still else t_s)
+        tf = []
+        for p, c in links:
+            if (p, c) == ("map", "odom"):
+                if map_until_s is None or t_s <= map_until_s:
+                    tf.append(transform(p, c, t, 0.0 if still else 1e-4 * k, 0.0, 0.0))
+            else:
+                tf.append(transform(p, c, t, x, y, yaw))
+        if tf:
+            msgs.append((t, "/tf", T["tf2_msgs/msg/TFMessage"](transforms=tf)))
+        if pose_topic:
+            pose = T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=float(x), y=float(y), z=0.0),
+                                               orientation=Q(*_quat(float(yaw))))
+            msgs.append((t, "/amcl_pose", T["geometry_msgs/msg/PoseWithCovarianceStamped"](
+                header=_header(ts, t, "map", not ros2),
+                pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)))))
+    _write_messages(writer, ts, ser, msgs)
+    return path
+
+
 def write_carmen(path: Path, lines: list[str]) -> Path:
     data = "\n".join(lines) + "\n"
     if path.suffix == ".gz":
@@ -218,6 +291,16 @@ def flaser_line(ranges, pose, t_s) -> str:
     r = " ".join(f"{v:.3f}" for v in ranges)
     x, y, th = pose
     return f"FLASER {len(ranges)} {r} {x} {y} {th} {x} {y} {th} {t_s} pippo {t_s}"
+
+
+def robotlaser_line(ranges, pose, t_s, start=-math.pi / 2, fov=math.pi, res=None) -> str:
+    """A ROBOTLASER1 line (CARMEN layout, no remissions); ``res`` defaults to fov / (n - 1)."""
+    n = len(ranges)
+    res = fov / (n - 1) if res is None else res
+    r = " ".join(f"{v:.3f}" for v in ranges)
+    x, y, th = pose
+    return (f"ROBOTLASER1 0 {start} {fov} {res} 30.0 0.01 0 {n} {r} 0 {x} {y} {th} {x} {y} {th} "
+            f"0 0 0.5 0.3 0 {t_s} host {t_s}")
 
 
 def write_detection_bag(

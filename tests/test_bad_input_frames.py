@@ -25,6 +25,7 @@ from conftest import (
     _scan_message,
     _write_messages,
     flaser_line,
+    robotlaser_line,
     scan_ranges,
     write_carmen,
 )
@@ -63,15 +64,13 @@ def _bag(path: Path, n=20, change=None, raw=None, stamps=None, cloud=False, ros2
         header=_header(ts, T0_NS, "base_link", not ros2), child_frame_id="laser",
         transform=T["geometry_msgs/msg/Transform"](translation=Vec(x=0.1, y=0.0, z=0.0), rotation=Q(0.0, 0.0, 0.0, 1.0)))
     msgs = [(T0_NS - 1, "/tf_static", T["tf2_msgs/msg/TFMessage"](transforms=[mount]))]
-    scans = {}
     for i in range(n):
         t = T0_NS + int(i * 0.1e9)
         stamp = t if stamps is None else stamps[i]
         msg = _scan_message(ts, stamp, "laser", scan_ranges(i), ros2, cloud)
         if change is not None:
             change(i, msg)
-        scans[t] = raw(i) if raw is not None else None
-        msgs.append((t, "/scan", msg))
+        msgs.append((t, "/scan", msg, raw(i) if raw is not None else None))
         x = 1.0 + (0.05 * i if moving else 0.0)
         pose = T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=x, y=2.0, z=0.0),
                                            orientation=Q(*_quat(0.3)))
@@ -80,17 +79,7 @@ def _bag(path: Path, n=20, change=None, raw=None, stamps=None, cloud=False, ros2
             pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)))))
     msgs.append((T0_NS + int(n * 0.1e9), "/amcl_pose", dataclasses.replace(msgs[-1][2], header=_header(
         ts, T0_NS + int(n * 0.1e9), "map", not ros2))))
-    if any(v is not None for v in scans.values()):  # raw bytes for some scans
-        msgs.sort(key=lambda m: m[0])
-        with writer:
-            conns = {}
-            for t, topic, msg in msgs:
-                if topic not in conns:
-                    conns[topic] = writer.add_connection(topic, msg.__msgtype__, typestore=ts)
-                data = scans.get(t) if topic == "/scan" else None
-                writer.write(conns[topic], t, data if data is not None else ser(msg, msg.__msgtype__))
-    else:
-        _write_messages(writer, ts, ser, msgs)
+    _write_messages(writer, ts, ser, msgs)
     return path
 
 
@@ -279,16 +268,6 @@ def test_a_robot_that_never_moves_runs_in_a_bag_as_in_a_carmen_log(tmp_path):
 
 
 # --- CARMEN ----------------------------------------------------------------------------------
-
-
-def robotlaser_line(ranges, pose, t_s, start=-math.pi / 2, fov=math.pi, res=None) -> str:
-    """A ROBOTLASER1 line (CARMEN layout, no remissions); ``res`` defaults to fov / (n - 1)."""
-    n = len(ranges)
-    res = fov / (n - 1) if res is None else res
-    r = " ".join(f"{v:.3f}" for v in ranges)
-    x, y, th = pose
-    return (f"ROBOTLASER1 0 {start} {fov} {res} 30.0 0.01 0 {n} {r} 0 {x} {y} {th} {x} {y} {th} "
-            f"0 0 0.5 0.3 0 {t_s} host {t_s}")
 
 
 def _robotlaser_log(path, n=10, bad=None):

@@ -18,19 +18,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import (
-    MOUNT_X,
-    MOUNT_Z,
-    T0_NS,
-    _bag_writer,
-    _header,
-    _quat,
-    _scan_message,
-    _write_messages,
-    base_pose,
-    cast_rays,
-    laser_pose,
-)
+from conftest import MOUNT_X, base_pose, cast_rays, laser_pose, write_room_bag
 from floorscan.core.io import POSES, SCAN_INDEX, SCANS, InputError, read_metadata, read_table, write_table
 from floorscan.ingest.poses import missing_poses_line, scan_poses
 from floorscan.ingest.readers import open_recording
@@ -63,50 +51,11 @@ def write_tf_bag(
     pose_topic: bool = False,
     still: bool = False,
 ) -> Path:
-    """A ROS1 bag: ``n_scans`` LaserScans of the room on ``/scan`` (frame ``scan_frame``)
-    and TF.
-
-    ``moving`` links are on /tf at 10 Hz (half a period off the scans): ``map -> odom`` a
-    slow drift correction (it changes, so it is no static link), any other link the base
-    pose; ``map -> odom`` stops after ``map_until_s`` seconds (the localizer stopped).
-    ``static`` links are the laser's mount, on /tf_static. ``pose_topic``: the base pose
-    on ``/amcl_pose`` as well. ``still``: the robot does not move (every link sends one
-    pose over and over).
-    """
-    ts, T, ser, writer = _bag_writer(path, False)
-    Vec, Q = T["geometry_msgs/msg/Vector3"], T["geometry_msgs/msg/Quaternion"]
-
-    def transform(parent, child, t, x, y, yaw, z=0.0):
-        return T["geometry_msgs/msg/TransformStamped"](
-            header=_header(ts, t, parent, True), child_frame_id=child,
-            transform=T["geometry_msgs/msg/Transform"](
-                translation=Vec(x=float(x), y=float(y), z=float(z)), rotation=Q(*_quat(float(yaw)))))
-
-    msgs = [(T0_NS - 1, "/tf_static", T["tf2_msgs/msg/TFMessage"](
-        transforms=[transform(p, c, T0_NS, MOUNT_X, 0.0, 0.0, MOUNT_Z) for p, c in static]))]
-    for i in range(n_scans):
-        t = T0_NS + int(i * 0.1e9)
-        msgs.append((t, "/scan", _scan_message(ts, t, scan_frame, room_ranges(i * 0.1), False, False)))
-    for k in range(n_scans + 2):
-        t_s = k * 0.1 - 0.05
-        t = T0_NS + int(t_s * 1e9)
-        x, y, yaw = base_pose(0.0 if still else t_s)
-        links = []
-        for p, c in moving:
-            if (p, c) == ("map", "odom"):
-                if map_until_s is None or t_s <= map_until_s:
-                    links.append(transform(p, c, t, 0.0 if still else 1e-4 * k, 0.0, 0.0))
-            else:
-                links.append(transform(p, c, t, x, y, yaw))
-        msgs.append((t, "/tf", T["tf2_msgs/msg/TFMessage"](transforms=links)))
-        if pose_topic:
-            Pose, Point = T["geometry_msgs/msg/Pose"], T["geometry_msgs/msg/Point"]
-            pose = Pose(position=Point(x=float(x), y=float(y), z=0.0), orientation=Q(*_quat(float(yaw))))
-            msgs.append((t, "/amcl_pose", T["geometry_msgs/msg/PoseWithCovarianceStamped"](
-                header=_header(ts, t, "map", True),
-                pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)))))
-    _write_messages(writer, ts, ser, msgs)
-    return path
+    """A ROS1 bag (:func:`conftest.write_room_bag`): ``n_scans`` LaserScans of the room
+    on ``/scan`` (frame ``scan_frame``), the ``moving`` links on /tf, the ``static`` ones
+    on /tf_static."""
+    return write_room_bag(path, lambda i: room_ranges(i * 0.1), n=n_scans, scan_frame=scan_frame, links=moving,
+                          static=static, map_until_s=map_until_s, pose_topic=pose_topic, still=still)
 
 
 def ingest_bag(bag: Path, out: Path, dataset: dict | None = None):

@@ -17,11 +17,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import T0_NS, flaser_line, write_carmen
+from conftest import T0_NS, flaser_line, robotlaser_line, write_carmen
 from floorscan.core.io import SCAN_INDEX, InputError, read_metadata, read_table, write_table
 from floorscan.ingest.readers import open_recording
 from floorscan.select.recording import read_detection, write_reduced_recording
-from test_bad_input_frames import _bag, _ds, _ingest, robotlaser_line
+from test_bad_input_frames import _bag, _ds, _ingest
 
 
 def _reduce(src: Path, out_dir: Path, ids, ds: dict | None = None, name: str = "reduced"):
@@ -263,6 +263,30 @@ def test_reduced_pcd_folder_after_an_empty_file_holds_the_selected_scans(tmp_pat
     old = read_detection(tmp_path / "ingest" / "scan_index.parquet")
     write_reduced_recording(src, "pcd", ids, tmp_path / "old", old)
     assert (tmp_path / "old" / "locations.csv").read_text() == (out / "locations.csv").read_text()
+
+
+def test_reduced_carmen_gzip_with_trailing_garbage_is_read_as_ingest_reads_it(tmp_path):
+    """Ingest reads a gzip log with trailing garbage (with a warning, as ``gzip -d``);
+    the reduced recording reads it the same way (before: "cannot read the log,
+    truncated or corrupt (Not a gzipped file)")."""
+    lines = [flaser_line(np.linspace(1.0, 3.0, 180), (0.1 * i, 0.0, 0.0), f"{10.0 + 0.1 * i:.1f}") for i in range(10)]
+    src = write_carmen(tmp_path / "lab.log.gz", lines)
+    src.write_bytes(src.read_bytes() + b"\x00\x00junk appended by a copy tool\n")
+    index, det, out, info = _reduce(src, tmp_path, np.array([1, 4, 7]))
+    assert len(index) == 10 and info["scan_messages_out"] == 3
+    assert gzip.decompress(out.read_bytes()).decode().splitlines() == [lines[1], lines[4], lines[7]]
+
+
+def test_reduced_carmen_with_a_byte_order_mark_keeps_the_first_scan(tmp_path):
+    """A log that starts with a UTF-8 byte-order mark: ingest drops the mark and reads
+    its first laser line; the reduced recording counts that line too (before: one laser
+    line fewer than ingest, and the reduction stopped on the count)."""
+    lines = [flaser_line(np.linspace(1.0, 3.0, 180), (0.1 * i, 0.0, 0.0), f"{10.0 + 0.1 * i:.1f}") for i in range(10)]
+    src = tmp_path / "bom.log"
+    src.write_bytes(b"\xef\xbb\xbf" + ("\n".join(lines) + "\n").encode())
+    index, det, out, info = _reduce(src, tmp_path, np.array([0, 4, 9]))
+    assert len(index) == 10 and info["scan_messages_out"] == 3
+    assert out.read_bytes().decode("utf-8-sig").splitlines() == [lines[0], lines[4], lines[9]]
 
 
 # --- the scan index -----------------------------------------------------------------------

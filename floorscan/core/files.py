@@ -12,6 +12,7 @@ removed by the next run of the stage (:func:`remove_stale_temporaries`, called b
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import os
 import re
@@ -226,8 +227,6 @@ def recording_fingerprint(path: str | os.PathLike) -> dict[str, int | str] | Non
         path order (a short value however many files a PCD folder has); None when
         ``path`` does not exist (Snakemake then reports the missing input).
     """
-    import hashlib
-
     path = Path(path)
     try:
         top = path.stat()

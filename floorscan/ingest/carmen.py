@@ -31,24 +31,16 @@ from typing import Any, Iterator, Mapping
 import numpy as np
 
 from floorscan.core.io import InputError
+from floorscan.core.messages import quoted
 from floorscan.ingest.carmen_lines import CARMEN_TYPES, LASER_TYPES, LAYOUTS, MalformedLine, parse_laser_line
 from floorscan.ingest.carmen_ranges import NoReturn, no_return_range
 from floorscan.ingest.carmen_stamps import classify_stamps, spread_stamps
 from floorscan.ingest.params import IngestParams
 from floorscan.ingest.points import FrameError, ScanLosses, laser_scan_points, no_return_reason
 from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
+from floorscan.ingest.text import open_text
 
 log = logging.getLogger(__name__)
-
-
-def _open_text(path: Path):
-    """The log as text (:func:`floorscan.ingest.text.open_text`): plain or gzip, a UTF-8
-    byte-order mark before its first line dropped (an editor's: read as ASCII it made the
-    first line's type unknown, and its scan was lost), trailing garbage after the gzip
-    data left out with a warning, as ``gzip -d`` does."""
-    from floorscan.ingest.text import open_text
-
-    return open_text(path)
 
 
 def _found_types(counts: dict[str, int], most: int = 10) -> str:
@@ -113,7 +105,9 @@ def _parse(
     counts: dict[str, int] = {}
     unknown: list[tuple[int, str]] = []
     try:
-        with _open_text(path) as f:
+        # plain or gzip, a byte-order mark dropped, trailing garbage after the gzip data
+        # left out with a warning, as ``gzip -d`` does
+        with open_text(path) as f:
             for lineno, line in enumerate(f, 1):
                 tok = line.split()
                 if not tok or tok[0].startswith("#"):
@@ -122,7 +116,7 @@ def _parse(
                 counts[kind] = counts.get(kind, 0) + 1
                 if kind not in LASER_TYPES:
                     if kind not in CARMEN_TYPES and len(unknown) < 5:
-                        unknown.append((lineno, kind[:40]))
+                        unknown.append((lineno, kind))
                     continue
                 try:
                     lines.append(parse_laser_line(kind, tok, fov_rad, lineno))
@@ -172,7 +166,7 @@ def open_carmen(path: Path, dataset: Mapping[str, Any], cfg: "IngestParams | Map
     notes = [f"message types: {dict(sorted(counts.items()))}", limit.note()]
     n_unknown = sum(k for kind, k in counts.items() if kind not in CARMEN_TYPES)
     if n_unknown:
-        named = ", ".join(f"line {i} {kind!r}" for i, kind in unknown)
+        named = ", ".join(f"line {i} {quoted(kind, 40)}" for i, kind in unknown)
         line = (
             f"{path}: {n_unknown} lines of a message type CARMEN does not define were not read "
             f"(lost_unknown_lines; {named}{', ...' if n_unknown > len(unknown) else ''}); expected "
@@ -254,16 +248,14 @@ def _usable_lines(path: Path, scans: list[dict], detected: dict, notes: list[str
     InputError
         More than half of the lines broken, or none usable (names the first).
     """
-    losses = ScanLosses("laser lines")
-    losses.n_read = len(scans)
-    bad = {}
-    for s in sorted(scans, key=lambda s: s["line"]):  # the first in the file named first
+    losses = ScanLosses("laser lines", n_read=len(scans))
+    for s in sorted(scans, key=lambda s: s["ordinal"]):  # the first in the file named first
         where = f"{path}:{s['line']}"
         if s["problem"]:
-            bad[s["line"]] = FrameError(where, f"{s['kind']} line {s['problem']}")
+            losses.skip(s["ordinal"], FrameError(where, f"{s['kind']} line {s['problem']}"))
         elif not len(s["points"]):
-            bad[s["line"]] = FrameError(where, f"{s['kind']} line has no valid return: {s['no_return']}", loss="no_points")
-        if s["line"] in bad:
-            losses.skip(s["ordinal"], bad[s["line"]])
+            what = f"{s['kind']} line has no valid return: {s['no_return']}"
+            losses.skip(s["ordinal"], FrameError(where, what, loss="no_points"))
     losses.report(detected, notes, str(path))
-    return [s["line"] not in bad for s in scans]
+    skipped = set(losses.skipped)
+    return [s["ordinal"] not in skipped for s in scans]

@@ -54,7 +54,7 @@ import pandas as pd
 
 from floorscan.core.io import InputError
 from floorscan.ingest.params import IngestParams
-from floorscan.ingest.points import FrameError, ScanLosses, filter_points
+from floorscan.ingest.points import FrameError, ScanLosses, filter_points, no_point_reason
 from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
 from floorscan.ingest.text import parse_number, parse_numbers
 
@@ -478,12 +478,8 @@ def open_pcd_folder(path: Path, dataset: Mapping[str, Any], cfg: Mapping[str, An
             local = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1], d[:, 2]], axis=1)
             kept, dropped = filter_points(local, rmin, rmax)
             if not len(kept):
-                n_finite = int(np.count_nonzero(np.isfinite(pts).all(axis=1)))
                 losses.skip(i, FrameError(
-                    f"{file} ({name} row {i + 1})",
-                    f"no valid point: of its {len(pts)} points, {len(pts) - n_finite} are not finite and {n_finite} "
-                    f"outside the dataset's range limits [{rmin}, {rmax}) m",
-                    loss="no_points",
+                    f"{file} ({name} row {i + 1})", f"no valid point: {no_point_reason(pts, rmin, rmax)}", loss="no_points"
                 ))
                 continue
             yield Scan(int(row.t_ns), "scanner", kept, dropped, i)

@@ -4,7 +4,7 @@ A return at the maximum range is the scanner's "no return" (the Stage simulator,
 one, reports every beam that hits nothing at exactly ``range_max``) and would draw an arc
 of fake wall, so the interval is open at the top. :func:`laser_scan_points` turns a
 planar range scan into points; :func:`filter_points` applies the same rule to points;
-:func:`no_return_reason` says why a scan kept none.
+:func:`no_return_reason` and :func:`no_point_reason` say why a scan kept none.
 
 A scan frame that cannot be used is skipped and counted, the same way in every reader
 (:class:`ScanLosses`): a frame with broken geometry or that cannot be decoded
@@ -125,6 +125,25 @@ def no_return_reason(ranges: np.ndarray, range_min: float, range_max: float) -> 
     return (
         f"of its {r.size} ranges, {counts or 'none'} are invalid; expected finite ranges in "
         f"[range_min {range_min:g}, range_max {range_max:g}) m"
+    )
+
+
+def no_point_reason(points: np.ndarray, range_min: float | None, range_max: float | None) -> str:
+    """Why :func:`filter_points` kept none of ``points``, for messages: ``of its 181
+    points, 181 are not finite and 0 outside the dataset's range limits [None, None) m``.
+
+    Parameters
+    ----------
+    points : (N, 3) float ndarray
+        The points of one scan, metres.
+    range_min, range_max : float or None
+        The dataset's range limits given to :func:`filter_points` (None: none).
+    """
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    n_finite = int(np.count_nonzero(np.isfinite(p).all(axis=1)))
+    return (
+        f"of its {len(p)} points, {len(p) - n_finite} are not finite and {n_finite} outside the dataset's "
+        f"range limits [{range_min}, {range_max}) m"
     )
 
 

@@ -92,10 +92,17 @@ def laser_scan_xyz(
     for name, v in zip(("angle_min", "angle_increment", "range_min", "range_max"), values):
         if not math.isfinite(v):
             raise FrameError(message_label(path, topic, index, t_ns), f"LaserScan {name} is {v}; expected a finite number")
-    angle_min, angle_increment, range_min, range_max = values
-    rmin = max(range_min, range_min_m if range_min_m is not None else 0.0)
-    rmax = min(range_max, range_max_m if range_max_m is not None else math.inf)
-    return laser_scan_points(np.asarray(msg.ranges), angle_min, angle_increment, rmin, rmax)
+    rmin, rmax = laser_scan_limits(msg, range_min_m, range_max_m)
+    return laser_scan_points(np.asarray(msg.ranges), values[0], values[1], rmin, rmax)
+
+
+def laser_scan_limits(msg, range_min_m: float | None = None, range_max_m: float | None = None) -> tuple[float, float]:
+    """The valid interval ``[rmin, rmax)`` of a ``sensor_msgs/LaserScan``'s returns,
+    metres: the message's ``range_min``, ``range_max`` tightened by the dataset's
+    ``range_min_m``, ``range_max_m`` (None: not set)."""
+    rmin = max(float(msg.range_min), range_min_m if range_min_m is not None else 0.0)
+    rmax = min(float(msg.range_max), range_max_m if range_max_m is not None else math.inf)
+    return rmin, rmax
 
 
 def laser_scan_problem(msg) -> str | None:

@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import heapq
 import logging
-import math
 from pathlib import Path
 from typing import Any, Iterator, Mapping
 
@@ -41,10 +40,12 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from floorscan.core.io import InputError
+from floorscan.core.messages import MAX_QUOTE
 from floorscan.ingest.params import PosesParams
-from floorscan.ingest.points import FrameError, ScanLosses, filter_points, no_return_reason
+from floorscan.ingest.points import FrameError, ScanLosses, filter_points, no_point_reason, no_return_reason
 from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
 from floorscan.ingest.ros_messages import (
+    laser_scan_limits,
     laser_scan_problem,
     laser_scan_xyz,
     message_label,
@@ -203,7 +204,7 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
         except Exception as e:
             raise InputError(
                 f"{path}: cannot read scans on {scan_topic!r}, truncated or corrupt bag "
-                f"({type(e).__name__}: {str(e)[:200]})"
+                f"({type(e).__name__}: {str(e)[:MAX_QUOTE]})"
             ) from None
         losses.report(detected, notes, str(path))
         yield from order.flush(losses.n_read)
@@ -225,7 +226,7 @@ def _scan_frame(reader, path: Path, topic: str, conns) -> str:
         try:
             return reader.deserialize(raw, c.msgtype).header.frame_id.lstrip("/")
         except Exception as e:  # rosbags raises several deserialization errors
-            error = error or f"{type(e).__name__}: {str(e)[:200]}"
+            error = error or f"{type(e).__name__}: {str(e)[:MAX_QUOTE]}"
     if error is None:
         from floorscan.ingest.rosbag_detect import metadata_hint
 
@@ -397,7 +398,7 @@ def _scan(reader, c, bag_t: int, raw, path: Path, topic: str, i: int, rmin_cfg, 
     except Exception as e:  # rosbags raises several deserialization errors
         raise FrameError(
             message_label(path, topic, i, bag_t),
-            f"{short_type(c.msgtype)} cannot be decoded ({type(e).__name__}: {str(e)[:200]}); expected a message "
+            f"{short_type(c.msgtype)} cannot be decoded ({type(e).__name__}: {str(e)[:MAX_QUOTE]}); expected a message "
             "of its connection's type",
         ) from None
     where = message_label(path, topic, i, t_ns)
@@ -407,8 +408,7 @@ def _scan(reader, c, bag_t: int, raw, path: Path, topic: str, i: int, rmin_cfg, 
             raise FrameError(where, bad)
         pts, dropped = laser_scan_xyz(msg, path, topic, i, t_ns, rmin_cfg, rmax_cfg)
         if not len(pts):
-            rmin = max(float(msg.range_min), rmin_cfg if rmin_cfg is not None else 0.0)
-            rmax = min(float(msg.range_max), rmax_cfg if rmax_cfg is not None else math.inf)
+            rmin, rmax = laser_scan_limits(msg, rmin_cfg, rmax_cfg)
             raise FrameError(
                 where, f"LaserScan has no valid return: {no_return_reason(msg.ranges, rmin, rmax)}", loss="no_points"
             )
@@ -416,11 +416,6 @@ def _scan(reader, c, bag_t: int, raw, path: Path, topic: str, i: int, rmin_cfg, 
         xyz = pointcloud2_xyz(msg, path, topic, index=i, t_ns=t_ns)
         pts, dropped = filter_points(xyz, rmin_cfg, rmax_cfg)
         if not len(pts):
-            n_finite = int(np.count_nonzero(np.isfinite(np.asarray(xyz, dtype=np.float64)).all(axis=1)))
-            raise FrameError(
-                where,
-                f"PointCloud2 has no valid return: of its {len(xyz)} points, {len(xyz) - n_finite} are not finite and "
-                f"{n_finite} outside the dataset's range limits [{rmin_cfg}, {rmax_cfg}) m",
-                loss="no_points",
-            )
+            what = f"PointCloud2 has no valid return: {no_point_reason(xyz, rmin_cfg, rmax_cfg)}"
+            raise FrameError(where, what, loss="no_points")
     return Scan(t_ns, frame, pts, dropped, i)

@@ -1,16 +1,16 @@
 """The text formats, a CARMEN log, an ascii PCD, the locations CSV: their files and
 their number fields.
 
-A text recording is opened by :func:`open_text`, plain or gzip: a UTF-8 byte-order mark
-is dropped, and bytes after the gzip data that are not another gzip member are left
+A text recording is opened by :func:`open_text` (its bytes by :func:`open_binary`), plain
+or gzip: a UTF-8 byte-order mark is dropped, and bytes after the gzip data that are not another gzip member are left
 out with a warning, as ``gzip -d`` does ("trailing garbage ignored").
 
 Every text reader reads a number the same way: :func:`parse_number` one field,
 :func:`parse_numbers` many in one numpy call. Both read what Python's ``float`` reads
 (``nan`` and ``inf`` included, for the caller to judge) except ``1_0``, and return None
 for a field that is not a number, so the caller can name it in its message, quoted by
-:func:`field_text` (at most 200 characters of it: a binary file read as text has lines
-of megabytes).
+:func:`floorscan.core.messages.quoted` (at most 200 characters of it: a binary file read
+as text has lines of megabytes).
 """
 
 from __future__ import annotations
@@ -20,11 +20,9 @@ import logging
 import os
 import zlib
 from pathlib import Path
-from typing import Sequence, TextIO
+from typing import BinaryIO, Sequence, TextIO
 
 import numpy as np
-
-from floorscan.core.messages import MAX_QUOTE, quoted
 
 GZIP_MAGIC = b"\x1f\x8b"
 #: Compressed bytes read at a time.
@@ -33,24 +31,15 @@ _CHUNK = 1 << 18
 log = logging.getLogger(__name__)
 
 
-def field_text(text: str, limit: int = MAX_QUOTE) -> str:
-    """A field or line of a text recording as a message quotes it: ``repr``, at most
-    ``limit`` characters (:func:`floorscan.core.messages.quoted`)."""
-    return quoted(text, limit)
-
-
 def is_gzip(path: str | os.PathLike) -> bool:
     """Whether the file at ``path`` starts with the gzip magic bytes."""
     with open(path, "rb") as f:
         return f.read(2) == GZIP_MAGIC
 
 
-def open_text(path: str | os.PathLike, notes: list[str] | None = None, warn: bool = True) -> TextIO:
-    """A text recording, plain or gzip (by its first bytes, whatever its suffix), as text.
-
-    UTF-8; a byte-order mark before the first line is dropped (an editor's: read as
-    ASCII it made the first line's type unknown); bytes that are not UTF-8 are read as
-    U+FFFD. A gzip file is read member after member (``cat a.gz b.gz`` is one file, as
+def open_binary(path: str | os.PathLike, notes: list[str] | None = None, warn: bool = True) -> BinaryIO:
+    """The bytes of a text recording, plain or gzip (by its first bytes, whatever its
+    suffix): a gzip file is read member after member (``cat a.gz b.gz`` is one file, as
     for ``gzip -d``); bytes after the last member that do not start another one are
     trailing garbage: left out, with a warning when the reader reaches them.
 
@@ -61,13 +50,13 @@ def open_text(path: str | os.PathLike, notes: list[str] | None = None, warn: boo
         Gets the warning about trailing garbage appended, for the recording's notes.
     warn : bool
         Log the warning (logger ``floorscan.ingest.text``, level WARNING); False for a
-        reader that only peeks (format detection) and leaves the warning to the reader
-        of the whole file.
+        reader that only peeks (format detection) or reads the file again (the reduced
+        recording) and leaves the warning to ingest's reader of the whole file.
 
     Returns
     -------
-    text file
-        Iterate it for lines; close it (or use ``with``).
+    binary file
+        Close it (or use ``with``).
 
     Raises
     ------
@@ -81,9 +70,23 @@ def open_text(path: str | os.PathLike, notes: list[str] | None = None, warn: boo
     """
     path = Path(path)
     if not is_gzip(path):
-        return open(path, "rt", encoding="utf-8-sig", errors="replace")
-    raw = _GzipMembers(path, notes, warn)
-    return io.TextIOWrapper(io.BufferedReader(raw, buffer_size=1 << 16), encoding="utf-8-sig", errors="replace")
+        return open(path, "rb")
+    return io.BufferedReader(_GzipMembers(path, notes, warn), buffer_size=1 << 16)
+
+
+def open_text(path: str | os.PathLike, notes: list[str] | None = None, warn: bool = True) -> TextIO:
+    """A text recording, plain or gzip (:func:`open_binary`), as text.
+
+    UTF-8; a byte-order mark before the first line is dropped (an editor's: read as
+    ASCII it made the first line's type unknown); bytes that are not UTF-8 are read as
+    U+FFFD. ``notes`` and ``warn``, and what is raised: :func:`open_binary`'s.
+
+    Returns
+    -------
+    text file
+        Iterate it for lines; close it (or use ``with``).
+    """
+    return io.TextIOWrapper(open_binary(path, notes, warn), encoding="utf-8-sig", errors="replace")
 
 
 class _GzipMembers(io.RawIOBase):

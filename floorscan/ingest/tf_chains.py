@@ -23,6 +23,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
 from floorscan.core.io import InputError
+from floorscan.core.messages import quoted
 from floorscan.ingest.recording import pose_stream_frame
 from floorscan.ingest.ros_messages import message_label, pose_problem, stamp_ns
 
@@ -143,7 +144,7 @@ MAX_NAME = 60
 
 
 def _name(frame: str) -> str:
-    return repr(frame if len(frame) <= MAX_NAME else frame[:MAX_NAME] + "...")
+    return quoted(frame, MAX_NAME)
 
 
 def tf_frames(edges) -> list[str]:
@@ -282,27 +283,6 @@ def tf_chain(edges, fixed: str, frame: str, path: Path | str = "") -> list[TfLin
     return links[::-1]
 
 
-
-def tf_chain_or_none(edges, fixed: str, frame: str) -> list[TfLink] | None:
-    """The chain of links from ``fixed`` to ``frame``, or None when ``frame`` is
-    ``fixed``, missing or under another root.
-
-    Raises
-    ------
-    TfChainError
-        A frame with several parents or a loop on the way up from ``frame``: a broken
-        tree is never taken for a missing chain.
-    """
-    if fixed == frame:
-        return None
-    try:
-        return tf_chain(edges, fixed, frame)
-    except TfChainError as e:
-        if e.kind in ("several_parents", "loop"):
-            raise
-        return None
-
-
 def tf_chain_from_root(edges, frame: str) -> list[str]:
     """Frames from the root of ``frame``'s TF tree down to ``frame`` (first parent each)."""
     parents: dict[str, str] = {}
@@ -345,6 +325,12 @@ def static_transform(edges, base: str, frame: str, path: Path | str = ""):
     _check_links(chain)
     if not all(e.static for e in chain):
         return None
+    return _compose_static(chain)
+
+
+def _compose_static(chain: list[TfLink]):
+    """The (rotation, translation) of a chain of links that do not move, each at its one
+    sample, composed from the chain's fixed frame down."""
     rot, trans = Rotation.identity(), np.zeros(3)
     for e in chain:
         trans = trans + rot.apply(e.trans_arr[0])
@@ -368,10 +354,7 @@ def tf_pose_stream(edges, path: Path, fixed: str, frame: str, max_gap_s: float):
                 f"{path}: the TF chain {fixed!r} -> {frame!r} never changes and was sent once; expected it over the "
                 "recording's time (a stationary scanner's pose published on /tf as the recording goes)"
             )
-        rot, trans = Rotation.identity(), np.zeros(3)
-        for e in chain:
-            trans = trans + rot.apply(e.trans_arr[0])
-            rot = rot * e.rot[0]
+        rot, trans = _compose_static(chain)
         n = len(t)
         rots = Rotation.from_quat(np.repeat(rot.as_quat()[None], n, axis=0))
         return planar_pose_stream(t, rots, np.repeat(trans[None], n, axis=0), f"{path}: TF chain {fixed!r} -> {frame!r}"), chain

@@ -36,6 +36,8 @@ import numpy as np
 import pandas as pd
 
 from floorscan.core.io import InputError
+from floorscan.core.messages import quoted
+from floorscan.ingest.poses import AFTER, BEFORE, GAP, NO_POSE_SOURCE
 
 #: Scans without a pose (poses stage), a cause of :data:`CAUSES`.
 NO_POSE = "no_pose"
@@ -60,10 +62,10 @@ SHORT = {
 }
 #: The poses stage's reasons (:mod:`floorscan.ingest.poses`) in words.
 POSE_REASONS = {
-    "before_pose_stream": "before the first pose",
-    "after_pose_stream": "after the last pose",
-    "pose_gap": "in a gap between poses longer than poses.max_gap_s",
-    "no_pose_source": "no pose source",
+    BEFORE: "before the first pose",
+    AFTER: "after the last pose",
+    GAP: "in a gap between poses longer than poses.max_gap_s",
+    NO_POSE_SOURCE: "no pose source",
 }
 
 
@@ -146,7 +148,7 @@ def _count(detected: Mapping[str, str], key: str) -> int:
         number = -1.0
     if not (number >= 0 and number.is_integer()):
         raise InputError(
-            f"scan_index.parquet: metadata {key}={str(value)[:40]!r} is not a count of scans; expected a whole "
+            f"scan_index.parquet: metadata {key}={quoted(value, 40)} is not a count of scans; expected a whole "
             "number >= 0, as ingest writes it (rerun ingest)"
         )
     return int(number)
@@ -220,9 +222,9 @@ def with_pose_losses(losses: Losses, scan_ids: np.ndarray, t_ns: np.ndarray, rea
         t0, span = t.min(), (t.max() - t.min()) * 1e-9
         first, last = (t[~no_pose].min() - t0) * 1e-9, (t[~no_pose].max() - t0) * 1e-9
         when = []
-        if "before_pose_stream" in by:
+        if BEFORE in by:
             when.append(f"the poses start {first:.1f} s")
-        if "after_pose_stream" in by:
+        if AFTER in by:
             when.append(f"end {last:.1f} s" if when else f"the poses end {last:.1f} s")
         if when:
             detail += f"; {' and '.join(when)} into the {span:.1f} s of scans"

@@ -43,14 +43,16 @@ CARMEN_KEPT_LINES = ("PARAM",)
 
 def _read_lines(path: Path) -> tuple[list[str], bool]:
     """The log's lines with their line ends, as latin-1 text (byte for byte), split as
-    ingest splits them (universal newlines); and whether it is gzip."""
-    with open(path, "rb") as f:
-        gz = f.read(2) == b"\x1f\x8b"
+    ingest splits them (universal newlines), read as ingest reads the file
+    (:func:`floorscan.ingest.text.open_binary`: gzip members, trailing garbage left out);
+    and whether it is gzip."""
     import zlib
 
+    from floorscan.ingest.text import is_gzip, open_binary
+
+    gz = is_gzip(path)
     try:
-        raw = gzip.open(path, "rb") if gz else open(path, "rb")
-        with io.TextIOWrapper(raw, encoding="latin-1", newline="") as f:
+        with io.TextIOWrapper(open_binary(path, warn=False), encoding="latin-1", newline="") as f:
             return f.readlines(), gz
     except (EOFError, OSError, zlib.error) as e:
         raise InputError(f"{path}: cannot read the log, truncated or corrupt ({e})") from None
@@ -63,7 +65,10 @@ def reduce_carmen(source: Path, ids, out_path: Path, detection, t_ns, window_s: 
     from floorscan.ingest.carmen_stamps import classify_stamps, spread_stamps
 
     lines, gz = _read_lines(source)
-    tokens = [ln.encode("latin-1").decode("ascii", errors="replace").split() for ln in lines]
+    # split as ingest reads the log: a UTF-8 byte-order mark before the first line is not
+    # part of its type (floorscan.ingest.text.open_text drops it); the copy keeps the bytes
+    tokens = [ln.encode("latin-1").decode("ascii", errors="replace").split()
+              for ln in ([lines[0].removeprefix("\xef\xbb\xbf")] + lines[1:] if lines else [])]
     laser_line, t_s = [], []  # laser ordinal -> line index, ipc stamp
     for i, tok in enumerate(tokens):
         if tok and tok[0] in LASER_TYPES:

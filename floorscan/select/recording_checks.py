@@ -15,6 +15,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from floorscan.core.io import InputError
+from floorscan.core.messages import quoted
 
 
 def size_of(path: Path) -> int:
@@ -139,7 +140,7 @@ def check_count(
             n_read = int(n_read)
         except (TypeError, ValueError):
             raise InputError(
-                f"{source}: scan index metadata n_frames_read is {str(n_read)[:40]!r}; expected a count of frames"
+                f"{source}: scan index metadata n_frames_read is {quoted(n_read, 40)}; expected a count of frames"
             ) from None
     elif t_ns is not None:
         n_read = len(t_ns) + n_skipped
