@@ -16,6 +16,7 @@ from floorscan.score.drawn import (
     drawn_area,
     drawn_faces,
     score_against_drawn,
+    score_points_against_drawn,
     umeyama,
 )
 
@@ -72,6 +73,24 @@ def test_alignment_and_scores_on_a_known_transform():
     outside = np.r_[lines, [[100.0, 100.0, 110.0, 100.0]]]
     assert score_against_drawn(outside, xy, seen, in_drawing=drawn_area(free, got))["correctness_10cm"] == pytest.approx(
         full["correctness_10cm"])
+
+
+def test_points_against_the_drawing_bound_the_plans():
+    """The reference map's structure scored as points: the drawn faces' own points, half
+    of them moved 0.15 m, reach completeness 1 at 20 cm and 0.5 (+- sampling) at 10 cm;
+    a point outside the drawing does not count against correctness."""
+    faces_px, free = drawn_faces(_drawing())
+    t = Similarity(scale=0.05, angle=0.0, tx=0.0, ty=0.0)
+    xy = t.apply(faces_px)
+    seen = np.ones(len(xy), dtype=bool)
+    moved = xy.copy()
+    moved[::2] += [0.15, 0.15]  # 0.15 m off a face, or 0.21 m at a corner
+    got = score_points_against_drawn(moved, xy, seen, in_drawing=drawn_area(free, t))
+    assert got["completeness_20cm"] == pytest.approx(1.0)
+    assert got["correctness_20cm"] > 0.99  # a few moved corner points are 0.21 m from any face
+    assert 0.45 < got["correctness_10cm"] < 0.75
+    far = score_points_against_drawn(np.r_[xy, [[100.0, 100.0]]], xy, seen, in_drawing=drawn_area(free, t))
+    assert far["correctness_10cm"] == pytest.approx(1.0) and far["n_seen"] == len(xy)
 
 
 @needs_shared

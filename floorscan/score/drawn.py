@@ -281,12 +281,50 @@ def score_against_drawn(
     from floorscan.score.nearest import nearest_distances
 
     faces = np.asarray(faces, dtype=np.float64).reshape(-1, 4)
-    out = {"n_seen": int(seen.sum())}
     samples = sample_segments(faces, sample_m) if len(faces) else np.empty((0, 2))
     if in_drawing is not None and len(samples):
         samples = samples[in_drawing(samples)]
     d_plan = cKDTree(drawn_xy).query(samples)[0] if len(samples) else np.empty(0)
     d_drawn = nearest_distances(drawn_xy[seen], faces) if len(faces) and seen.any() else np.full(int(seen.sum()), np.inf)
+    return _completeness_correctness(d_drawn, d_plan, taus_m)
+
+
+def score_points_against_drawn(
+    points: np.ndarray, drawn_xy: np.ndarray, seen: np.ndarray, taus_m=(0.10, 0.20), in_drawing=None
+) -> dict:
+    """Points (the reference map's structure cells) against the aligned drawn faces, as
+    :func:`score_against_drawn` scores a plan's face samples: how close the recording's
+    own map comes to the drawing, the bound of any plan built from it under this
+    alignment.
+
+    Parameters
+    ----------
+    points : (P, 2) float ndarray
+        Map metres.
+    drawn_xy, seen, taus_m, in_drawing
+        As :func:`score_against_drawn`.
+
+    Returns
+    -------
+    dict
+        As :func:`score_against_drawn`.
+    """
+    from scipy.spatial import cKDTree
+
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    if in_drawing is not None and len(points):
+        points = points[in_drawing(points)]
+    if not len(points):
+        return _completeness_correctness(np.full(int(seen.sum()), np.inf), np.empty(0), taus_m)
+    d_plan = cKDTree(drawn_xy).query(points)[0]
+    d_drawn = cKDTree(points).query(drawn_xy[seen])[0]
+    return _completeness_correctness(d_drawn, d_plan, taus_m)
+
+
+def _completeness_correctness(d_drawn: np.ndarray, d_plan: np.ndarray, taus_m) -> dict:
+    """Completeness (drawn points within tau of the plan), correctness (plan samples
+    within tau of the drawing) and F1 at each tau, from the two distance arrays."""
+    out = {"n_seen": len(d_drawn)}
     for tau in taus_m:
         cm = f"{round(tau * 100):d}cm"
         comp = float((d_drawn <= tau).mean()) if len(d_drawn) else math.nan
@@ -320,7 +358,8 @@ def score_drawn_plans(plans: dict, image_path, grid, reference_cfg) -> tuple["pd
     Returns
     -------
     table : pandas.DataFrame
-        One row per plan: ``plan`` and the scores.
+        One row per plan: ``plan`` and the scores; a last row ``reference_map``, the
+        reference map's structure cells (:func:`score_points_against_drawn`), the bound.
     alignment : dict
         :func:`align_drawn`'s info.
     overlay : dict
@@ -341,9 +380,12 @@ def score_drawn_plans(plans: dict, image_path, grid, reference_cfg) -> tuple["pd
     seen = seen_by_recording(drawn_xy, grid)
     inside = drawn_area(free, transform)
     rows, plan_faces = [], {}
+    aligned = {f"alignment_{k}": v for k, v in info.items() if k != "start"}
     for name, path in plans.items():
         plan_faces[name] = plan_parts(path)["faces"]
-        rows.append({"plan": name, **score_against_drawn(plan_faces[name], drawn_xy, seen, in_drawing=inside),
-                     **{f"alignment_{k}": v for k, v in info.items() if k != "start"}})  # fmt: skip
+        rows.append({"plan": name, **score_against_drawn(plan_faces[name], drawn_xy, seen, in_drawing=inside), **aligned})
+    # the bound: the recording's own map (every kept scan's structure) under this alignment
+    rows.append({"plan": "reference_map", **score_points_against_drawn(structure, drawn_xy, seen, in_drawing=inside),
+                 **aligned})  # fmt: skip
     overlay = {"drawn_xy": drawn_xy, "seen": seen, "structure": structure, "faces": plan_faces, "transform": transform}
     return pd.DataFrame(rows), info, overlay
