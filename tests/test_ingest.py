@@ -644,9 +644,12 @@ def test_real_bags_detected(name):
 )
 def test_real_carmen_logs_detected(name, stamps, max_range_m):
     rec = open_recording({"path": str(SHARED_DATA / "radish" / f"{name}-corrected.log.gz")}, {}, 0.5)
+    why = {"belgioioso": {"stamps_reason": "394 of 395 laser lines repeat an earlier timestamp (1 distinct values), "
+                                           "more than half"},
+           "orebro": {"stamps_reason": "every laser timestamp is 0"}}.get(name, {})
     assert rec.detected == {"format": "carmen", "scan_topic": "FLASER",
                             "pose_source": "embedded (corrected pose on each FLASER line)", "pose_kind": "map",
-                            "stamps": stamps, "max_range_m": max_range_m,
+                            "stamps": stamps, **why, "max_range_m": max_range_m,
                             "n_frames_read": {"belgioioso": "395", "orebro": "237", "intel": "910", "aces": "440",
                                               "freiburg-101": "292"}[name]}
 

@@ -11,6 +11,11 @@ beyond the log's no-return range (:mod:`floorscan.ingest.carmen_ranges`: configu
 are dropped and counted. The stamps are recorded, spread or made up
 (:mod:`floorscan.ingest.carmen_stamps`); the few lines that step back in time are
 sorted by stamp (a stable sort; each line carries its own pose, so nothing is lost).
+A log whose stamps are junk (more than half out of range or out of time order) keeps
+its line order with made-up stamps, said in a warning (``stamps made up: ...``) and in
+``detected["stamps_reason"]``; a few stamps out of range in a good log are an error
+naming the first line. Made-up stamps are the pose stream's too (each line's own pose),
+so the poses match the scans one to one.
 
 A laser line whose ROBOTLASER1 geometry is broken
 (:func:`floorscan.ingest.carmen_lines.robotlaser_geometry_problem`) or without a valid
@@ -32,9 +37,13 @@ import numpy as np
 
 from floorscan.core.io import InputError
 from floorscan.core.messages import quoted
-from floorscan.ingest.carmen_lines import CARMEN_TYPES, LASER_TYPES, LAYOUTS, MalformedLine, parse_laser_line
+from floorscan.ingest.carmen_lines import (
+    CARMEN_TYPES, LASER_TYPES, LAYOUTS, MalformedLine, parse_laser_line, stamp_problem,
+)
 from floorscan.ingest.carmen_ranges import NoReturn, no_return_range
-from floorscan.ingest.carmen_stamps import classify_stamps, spread_stamps
+from floorscan.ingest.carmen_stamps import (
+    StampClass, StampsOutOfRange, made_up_stamps_ns, spread_stamps, stamp_class,
+)
 from floorscan.ingest.params import IngestParams
 from floorscan.ingest.points import FrameError, ScanLosses, laser_scan_points, no_return_reason
 from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
@@ -74,12 +83,14 @@ def parse_carmen(
     Returns
     -------
     scans : list of dict
-        Per laser line, in file order: ``t_s`` (float, seconds, ipc timestamp),
-        ``points`` ((N, 3) float32, scanner frame, metres), ``n_dropped``,
-        ``pose`` ((3,) x, y, theta of the laser in the map frame), ``line`` (1-based),
-        ``ordinal`` (0-based, among the laser lines in file order: the scan's
-        ``source_ordinal``), ``kind``, ``problem`` (None, or what is wrong with a
-        ROBOTLASER1 line's beam geometry: ingest skips its scan).
+        Per laser line, in file order: ``t_s`` (float, seconds, ipc timestamp as
+        written: out of range when the log's stamps are made up; ``stamp_field`` and
+        ``stamp_text`` its field, 1-based, and text), ``points`` ((N, 3) float32,
+        scanner frame, metres), ``n_dropped``, ``pose`` ((3,) x, y, theta of the laser
+        in the map frame), ``line`` (1-based), ``ordinal`` (0-based, among the laser
+        lines in file order: the scan's ``source_ordinal``), ``kind``, ``problem``
+        (None, or what is wrong with a ROBOTLASER1 line's beam geometry: ingest skips
+        its scan).
     counts : dict
         Lines seen per message type.
 
@@ -88,19 +99,21 @@ def parse_carmen(
     InputError
         Unreadable or truncated file; a malformed laser line: a field count other than
         its layout's, a field that is not a number, a non-finite pose, angle or maximum
-        range, a stamp not finite and in [0, ``MAX_STAMP_S``) (names ``file:line``, the
-        field and the layout); or no laser lines at all.
+        range (names ``file:line``, the field and the layout); a stamp out of range in a
+        log whose stamps are not junk (:mod:`floorscan.ingest.carmen_stamps`: names the
+        first such line); zero stamps among non-zero ones; or no laser lines at all.
     """
     fov = IngestParams().carmen_fov_rad if fov_rad is None else fov_rad
-    scans, counts, _, _ = _parse(Path(path), max_range_m, fov)
+    scans, counts, _, _, _ = _parse(Path(path), max_range_m, fov)
     return scans, counts
 
 
 def _parse(
     path: Path, max_range_m: float | None, fov_rad: float
-) -> tuple[list[dict], dict[str, int], NoReturn, list[tuple[int, str]]]:
+) -> tuple[list[dict], dict[str, int], NoReturn, list[tuple[int, str]], StampClass]:
     """The laser lines (as :func:`parse_carmen`), the count of each line type, the range
-    limit, and the first few lines of an unknown type (line number, type)."""
+    limit, the first few lines of an unknown type (line number, type), and the class of
+    the stamps (:func:`_stamp_class`)."""
     lines: list[dict] = []
     counts: dict[str, int] = {}
     unknown: list[tuple[int, str]] = []
@@ -126,6 +139,7 @@ def _parse(
         raise InputError(f"{path}: cannot read the log, truncated or corrupt ({e})") from None
     if not lines:
         raise InputError(f"{path}: no laser lines; expected FLASER or ROBOTLASER1 lines ({_found_types(counts)})")
+    stamps = _stamp_class(path, lines)
     limit = no_return_range([s["ranges"] for s in lines], max_range_m)
     scans = []
     for ordinal, s in enumerate(lines):
@@ -137,7 +151,33 @@ def _parse(
         if not len(s["points"]):
             s["no_return"] = no_return_reason(ranges, 1e-9, rmax)
         scans.append(s)
-    return scans, counts, limit, unknown
+    return scans, counts, limit, unknown, stamps
+
+
+def _stamp_class(path: Path, lines: list[dict]) -> StampClass:
+    """The class of the laser lines' stamps (:func:`~floorscan.ingest.carmen_stamps.stamp_class`).
+
+    Raises
+    ------
+    InputError
+        A few stamps out of range (names the first line, its field and the layout, and
+        how many), or zero stamps among non-zero ones (names the lines).
+    """
+    t = np.array([s["t_s"] for s in lines], dtype=np.float64)
+    try:
+        return stamp_class(t)
+    except StampsOutOfRange as e:
+        s = lines[e.index]
+        raise InputError(
+            f"{path}:{s['line']}: malformed {s['kind']} line: {stamp_problem(s['stamp_field'], s['stamp_text'])} "
+            f"('{LAYOUTS[s['kind']]}'); {e.n_bad} of the {e.n} laser stamps are out of range, so the line is "
+            "broken (made-up stamps only when more than half of them are unusable)"
+        ) from None
+    except ValueError:
+        bad = [s["line"] for s in lines if s["t_s"] == 0][:5]
+        raise InputError(
+            f"{path}: laser lines with timestamp 0 among stamped ones (lines {bad}); expected all stamped or all 0"
+        ) from None
 
 
 def open_carmen(path: Path, dataset: Mapping[str, Any], cfg: "IngestParams | Mapping[str, Any] | None") -> Recording:
@@ -152,13 +192,12 @@ def open_carmen(path: Path, dataset: Mapping[str, Any], cfg: "IngestParams | Map
     Raises
     ------
     InputError
-        See :func:`parse_carmen`; also zero stamps among non-zero ones (a corrupt log);
-        more than half of the laser lines with broken geometry, or no line with a valid
-        return (names the first line and field).
+        See :func:`parse_carmen`; also more than half of the laser lines with broken
+        geometry, or no line with a valid return (names the first line and field).
     """
     params = IngestParams.from_config(cfg)
     cfg_max = params.carmen_max_range_m
-    scans, counts, limit, unknown = _parse(
+    scans, counts, limit, unknown, cls = _parse(
         path,
         max_range_m=None if cfg_max is None else float(cfg_max),
         fov_rad=float(params.carmen_fov_rad),
@@ -174,27 +213,18 @@ def open_carmen(path: Path, dataset: Mapping[str, Any], cfg: "IngestParams | Map
         )
         notes.append(line)
         log.warning("%s", line)
-    t = np.array([s["t_s"] for s in scans])
-    try:
-        stamps, n_rep = classify_stamps(t)
-    except ValueError:
-        bad = [s["line"] for s in scans if s["t_s"] == 0][:5]
-        raise InputError(
-            f"{path}: laser lines with timestamp 0 among stamped ones (lines {bad}); expected all stamped or all 0"
-        ) from None
+    t = np.array([s["t_s"] for s in scans], dtype=np.float64)
+    stamps, n_rep = cls.kind, cls.n_repeated
     n = len(scans)
     if stamps == "made_up":
         period = float(params.missing_time_period_s)
-        why = "every laser timestamp is 0" if np.all(t == 0) else (
-            f"{n_rep} of {n} laser lines repeat an earlier timestamp ({len(np.unique(t))} distinct values), "
-            "more than half"
+        t_ns = made_up_stamps_ns(t, period)
+        line = (
+            f"{path}: stamps made up: {cls.why}; scans in line order stamped at index x {period} s "
+            f"(ingest.missing_time_period_s) from {'the first stamp' if t_ns[0] else '0 s'}"
         )
-        t0_ns = int(round(float(t[0]) * 1e9))
-        t_ns = t0_ns + np.round(np.arange(n) * period * 1e9).astype(np.int64)
-        notes.append(
-            f"stamps made up: {why}; scans in line order stamped at index x {period} s "
-            "(ingest.missing_time_period_s)"
-        )
+        notes.append(line)
+        log.warning("%s", line)
     else:
         t_ns = np.round(t * 1e9).astype(np.int64)
         back = np.flatnonzero(np.diff(t_ns) < 0)
@@ -224,6 +254,7 @@ def open_carmen(path: Path, dataset: Mapping[str, Any], cfg: "IngestParams | Map
         "pose_source": f"embedded (corrected pose on each {'/'.join(kinds)} line)",
         "pose_kind": "map",
         "stamps": stamps,
+        **({"stamps_reason": cls.why} if cls.why else {}),
         "max_range_m": f"{limit.max_range_m:.10g}",
     }
     if n_unknown:

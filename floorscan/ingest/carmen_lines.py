@@ -21,9 +21,12 @@ remissions); a field too many or too few would shift every later field (a range 
 the pose, the pose as the stamp), so it is an ``InputError`` naming ``file:line``, the
 counts and the layout, never parsed from shifted positions. Every numeric field must be a
 number; the corrected pose, ROBOTLASER1's ``start_angle``, ``angular_resolution`` and
-``maximum_range`` must be finite; ``ipc_timestamp`` must be finite, 0 or more and below
-:data:`MAX_STAMP_S`. The error names the line and the field. Non-finite *ranges* are not
-errors: they are "no return", dropped and counted like the others.
+``maximum_range`` must be finite. The error names the line and the field. Non-finite
+*ranges* are not errors: they are "no return", dropped and counted like the others.
+``ipc_timestamp`` is read as written (NaN, inf, negative included): whether a stamp out
+of range is a malformed line or the whole log's stamps are junk and made up is decided
+over all the laser lines (:mod:`floorscan.ingest.carmen_stamps`; the message is
+:func:`stamp_problem`).
 
 Broken geometry. A well-formed ROBOTLASER1 line whose ``angular_resolution`` is 0, whose
 ``fov`` is not finite or wider than a full turn (degrees), or disagrees with
@@ -39,6 +42,7 @@ import re
 
 import numpy as np
 
+from floorscan.ingest.carmen_stamps import WRAP_S
 from floorscan.ingest.points import angle_span_problem
 from floorscan.ingest.text import parse_number, parse_numbers
 
@@ -72,9 +76,6 @@ LAYOUTS = {
 FLASER_FIXED_FIELDS = 11
 #: Fields of a ROBOTLASER1 line besides its n ranges and m remissions.
 ROBOTLASER1_FIXED_FIELDS = 24
-#: Largest ``ipc_timestamp`` read, seconds: its nanoseconds still fit in int64 (2261).
-MAX_STAMP_S = 9.2e9
-
 
 _INTEGER = re.compile(r"\+?[0-9]+")
 
@@ -112,14 +113,13 @@ def _numbers(tok: list[str], a: int, b: int, what: str) -> np.ndarray:
     return values
 
 
-def _stamp(tok: list[str], i: int) -> float:
-    t = _number(tok, i, "ipc_timestamp")
-    if not 0.0 <= t < MAX_STAMP_S:  # NaN fails too
-        raise MalformedLine(
-            f"field {i + 1} (ipc_timestamp) is {tok[i]}; expected a finite time in seconds, "
-            f"0 or more and below {MAX_STAMP_S:g}"
-        )
-    return t
+def stamp_problem(field: int, text: str) -> str:
+    """What is wrong with an ``ipc_timestamp`` out of range, for the malformed line's
+    message: ``field`` (1-based) and its ``text`` as written."""
+    return (
+        f"field {field} (ipc_timestamp) is {text}; expected a finite time in seconds, 0 or more and "
+        f"below {WRAP_S:.0f} (2^31 s, the 32-bit wrap)"
+    )
 
 
 def parse_laser_line(kind: str, tok: list[str], fov_rad: float, lineno: int) -> dict:
@@ -127,13 +127,16 @@ def parse_laser_line(kind: str, tok: list[str], fov_rad: float, lineno: int) -> 
 
     The returned dict's ``problem`` is None, or what is wrong with a ROBOTLASER1 line's
     beam geometry (:func:`robotlaser_geometry_problem`): the reader skips its scan.
+    ``t_s`` is the ``ipc_timestamp`` as written (seconds; NaN, inf or negative too:
+    :mod:`floorscan.ingest.carmen_stamps` judges the log's stamps together), with its
+    field (``stamp_field``, 1-based) and text (``stamp_text``) for an error.
 
     Raises
     ------
     MalformedLine
         A field count other than the layout's (FLASER ``2 + n + 9``, ROBOTLASER1
-        ``24 + n + m``), a non-numeric field, a non-finite pose, angle or maximum
-        range, a stamp that is not finite and >= 0.
+        ``24 + n + m``), a non-numeric field (the stamp too), a non-finite pose, angle
+        or maximum range.
     """
     rmax = math.inf
     if kind == "FLASER":
@@ -184,11 +187,11 @@ def parse_laser_line(kind: str, tok: list[str], fov_rad: float, lineno: int) -> 
     pose = np.array([_finite(tok, k + j, name) for j, name in enumerate(names)])
     for j, name in enumerate(others):
         _number(tok, k + 3 + j, name)
-    t_s = _stamp(tok, stamp_at)
+    t_s = _number(tok, stamp_at, "ipc_timestamp")
     _number(tok, stamp_at + 2, "logger_timestamp")
     return {
         "t_s": t_s, "ranges": ranges, "start": start, "inc": inc, "rmax": rmax, "pose": pose, "line": lineno, "kind": kind,
-        "problem": problem,
+        "problem": problem, "stamp_field": stamp_at + 1, "stamp_text": tok[stamp_at],
     }
 
 

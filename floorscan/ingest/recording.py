@@ -59,16 +59,17 @@ LOSS_KEYS = ("n_frames_read", "lost_bad_frames", "lost_no_points", "lost_unliste
 #: where the skipped frames were, as ranges of 0-based ordinals (``"3,17-19"``): a bag's
 #: message index on the scan topic (in reading order), a CARMEN log's laser line (in file
 #: order), the locations CSV's row; only when a frame was skipped. The scans' own frames
-#: are numbered the same way (:attr:`Scan.source_ordinal`).
-DETECTED_KEYS = ("format", "scan_topic", "pose_source", "stamps", "pose_kind", "max_range_m") + LOSS_KEYS + (
-    "skipped_frames",
-)
+#: are numbered the same way (:attr:`Scan.source_ordinal`). ``stamps_reason``: why the
+#: stamps are made up, with the counts (a CARMEN log's; only when they are).
+DETECTED_KEYS = (
+    "format", "scan_topic", "pose_source", "stamps", "stamps_reason", "pose_kind", "max_range_m",
+) + LOSS_KEYS + ("skipped_frames",)
 #: Pose kinds: ``map`` poses (a localizer, the TF chain from ``map``, a log's corrected
 #: poses, a PCD folder's locations, or a pose source set in the dataset), or ``none``.
 POSE_KINDS = ("map", "none")
 #: Stamp classes: ``recorded`` (strictly increasing, after sorting the few lines out of
-#: order), ``spread`` (some repeated stamps spread in line order), ``made_up`` (all zero
-#: or mostly repeated: index x period).
+#: order), ``spread`` (some repeated stamps spread in line order), ``made_up`` (all zero,
+#: mostly repeated, or mostly out of range or out of time order: index x period).
 STAMP_CLASSES = ("recorded", "spread", "made_up")
 
 
@@ -88,7 +89,7 @@ class Recording:
         (rosbag, carmen, pcd), ``scan_topic`` (a bag's topic, a CARMEN log's laser line
         type, ``pcd files``), ``pose_source`` (a readable phrase), ``pose_kind``
         (:data:`POSE_KINDS`), ``stamps`` (:data:`STAMP_CLASSES`) and, for CARMEN,
-        ``max_range_m`` (returns at or beyond it were dropped, metres); what was lost
+        ``stamps_reason`` (why they are made up, when they are) and ``max_range_m`` (returns at or beyond it were dropped, metres); what was lost
         (:data:`LOSS_KEYS`, ``skipped_frames``). A lazy reader (bags, PCD folders) adds
         the loss keys as ``scans`` is consumed, to this same dict.
     notes : list of str

@@ -18,14 +18,16 @@ points are revisited (a one-way corridor) it is undefined (NaN) and judges nothi
 
 :func:`verdict` joins it with the fraction of sampled scans kept, the scans the
 recording lost before registration (:mod:`floorscan.register.losses`: scans without a
-pose, ingest's losses) counted against all its scans, and why the scans were placed by
-LIDAR odometry when the user did not ask for it.
+pose, ingest's losses) counted against all its scans, why the scans were placed by
+LIDAR odometry when the user did not ask for it, and whether the recording's stamps
+were made up (:func:`stamps_warning`).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Mapping
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -182,6 +184,32 @@ class Verdict:
         }
 
 
+def stamps_warning(recording: Mapping[str, str] | None) -> str:
+    """The verdict's warning for a recording whose stamps ingest made up; ``""`` otherwise.
+
+    Parameters
+    ----------
+    recording : mapping of str to str, or None
+        The scan index's schema metadata (:func:`floorscan.core.io.read_metadata`): keys
+        ``stamps`` (``made_up``: made up) and ``stamps_reason`` (why, with the counts).
+
+    Returns
+    -------
+    str
+        E.g. ``stamps made up: 958 of 958 laser stamps out of range (negative or past the
+        32-bit wrap); the scans keep the recording's order, ingest.missing_time_period_s
+        apart, so the checks on speed and turn rate are off``.
+    """
+    rec = dict(recording or {})
+    if rec.get("stamps") != "made_up":
+        return ""
+    why = str(rec.get("stamps_reason") or "").strip()
+    return (
+        f"stamps made up{': ' + why if why else ''}; the scans keep the recording's order, "
+        "ingest.missing_time_period_s apart, so the checks on speed and turn rate are off"
+    )
+
+
 def verdict(
     n_sampled: int,
     n_kept: int,
@@ -194,6 +222,7 @@ def verdict(
     losses: Losses | None = None,
     max_lost_fraction: float = 1.0,
     fallback: str = "",
+    stamps: str = "",
 ) -> Verdict:
     """Judge a registration by its kept fraction, its map consistency and the scans the
     recording lost before it.
@@ -218,6 +247,9 @@ def verdict(
     fallback : str
         Why the scans were placed by LIDAR odometry without the user asking (the
         recording has no map poses); a warning, first. ``""``: no fall-back.
+    stamps : str
+        :func:`stamps_warning` of the recording: a warning, after the fall-back. ``""``:
+        the stamps are the recording's own.
 
     Returns
     -------
@@ -227,6 +259,8 @@ def verdict(
     v = Verdict(n_sampled, n_kept, frac, consistency, n_revisited, losses=losses)
     if fallback:
         v.warnings.append(fallback)
+    if stamps:
+        v.warnings.append(stamps)
     if losses is not None:
         problem = losses.problem(max_lost_fraction)
         if problem:

@@ -41,6 +41,7 @@ import pandas as pd
 
 from floorscan.core.geometry import transform_points
 from floorscan.core.io import InputError, split_by_scan
+from floorscan.register.consistency import stamps_warning
 from floorscan.register.losses import Losses, ingest_losses, with_pose_losses
 from floorscan.register.odometry import register_odometry
 from floorscan.register.params import RegistrationConfig
@@ -135,7 +136,8 @@ def register_scans(
     aligned = aligned_poses(index, poses, cfg)
     reasons = screen_scans(index, clouds, aligned, cfg)
     table, summary = register_screened(
-        index, aligned, reasons, ScanStore(cfg, clouds), cfg, losses=losses, fallback=fallback
+        index, aligned, reasons, ScanStore(cfg, clouds), cfg, losses=losses, fallback=fallback,
+        stamps=stamps_warning(recording),
     )
     sids = table["scan_id"].to_numpy()
     final = table[["x_m", "y_m", "z_m", "yaw_rad"]].to_numpy(np.float64)
@@ -242,14 +244,17 @@ def _range_sample(clouds: Mapping[int, np.ndarray], n: int = 200) -> float:
 
 
 def register_screened(index, aligned, reasons, clouds: ScanStore, cfg: RegistrationConfig, ahead=None,
-                      pool=None, losses: Losses | None = None, fallback: str = "") -> tuple[pd.DataFrame, dict]:
+                      pool=None, losses: Losses | None = None, fallback: str = "",
+                      stamps: str = "") -> tuple[pd.DataFrame, dict]:
     """Algorithm 3 steps 2-6 after the per-scan checks: sampling, then the registration
     of the configured mode (``ahead``: pose-graph edges aligned ahead, a finished
     :class:`floorscan.register.edge_stream.EdgeStream`; ``pool``: the worker processes
     of the pose graph's edge ICP). ``losses``: the scans ingest lost
     (:func:`floorscan.register.losses.ingest_losses`; None: the index's scans, none
     lost), to which the scans without a pose are added in pose mode; ``fallback``: why
-    the scans are placed by LIDAR odometry (:func:`fallback_reason`). Returns the
+    the scans are placed by LIDAR odometry (:func:`fallback_reason`); ``stamps``: that
+    ingest made the stamps up
+    (:func:`floorscan.register.consistency.stamps_warning`). Returns the
     :data:`~floorscan.register.result.REGISTRATION` table and the summary; raises
     :class:`~floorscan.register.result.RegistrationError` when nothing could be
     registered or the verdict fails (its line names every loss)."""
@@ -319,7 +324,7 @@ def register_screened(index, aligned, reasons, clouds: ScanStore, cfg: Registrat
         losses = with_pose_losses(losses, sids, t, table["reason"].to_numpy())
     summary["losses"] = losses.as_dict()
     raise_if_nothing_registered(table, cfg, summary)
-    judged = judge(table, clouds, cfg, summary, losses, fallback)
+    judged = judge(table, clouds, cfg, summary, losses, fallback, stamps)
     summary["verdict"] = judged.as_dict()
     log.info(
         "register (%s): %d scans, %d sampled, %d kept (%d anchors); drops %s",

@@ -192,12 +192,13 @@ def _option(cfg: RegistrationConfig, key: str) -> str:
 
 
 def judge(table: pd.DataFrame, clouds, cfg: RegistrationConfig, summary: dict, losses: Losses | None = None,
-          fallback: str = ""):
+          fallback: str = "", stamps: str = ""):
     """The verdict on the registration (:func:`floorscan.register.consistency.verdict`):
     the map's consistency measured on each kept scan's ``clouds.map_cloud`` (a
     :class:`floorscan.register.prepare.ScanStore`) at its final pose; the scans lost
     before registration (``losses``, judged by ``register.max_lost_fraction``); why the
-    scans were placed by LIDAR odometry (``fallback``)."""
+    scans were placed by LIDAR odometry (``fallback``); that ingest made the stamps up
+    (``stamps``: :func:`floorscan.register.consistency.stamps_warning`)."""
     kept = table["kept"].to_numpy(bool)
     sids = table["scan_id"].to_numpy()[kept]
     final = table[["x_m", "y_m", "z_m", "yaw_rad"]].to_numpy(np.float64)[kept]
@@ -206,5 +207,5 @@ def judge(table: pd.DataFrame, clouds, cfg: RegistrationConfig, summary: dict, l
     worst, option = worst_drop({k: v for k, v in summary["drops"].items() if k != "not_sampled"}, cfg)
     return verdict(
         summary["n_sampled"], summary["n_kept"], cons, n_rev, cfg.min_kept_fraction, cfg.min_consistency,
-        worst, option, losses=losses, max_lost_fraction=cfg.max_lost_fraction, fallback=fallback,
+        worst, option, losses=losses, max_lost_fraction=cfg.max_lost_fraction, fallback=fallback, stamps=stamps,
     )

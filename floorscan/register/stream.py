@@ -35,6 +35,7 @@ from floorscan.core.files import atomic_path
 from floorscan.core.runtime import process_pool, progress, start_workers
 from floorscan.register.edge_stream import EdgeStream
 from floorscan.register.params import RegistrationConfig
+from floorscan.register.consistency import stamps_warning
 from floorscan.register.losses import ingest_losses
 from floorscan.register.pipeline import coerce_config, fallback_reason, register_screened, resolve_config
 from floorscan.register.prepare import ScanStore
@@ -176,7 +177,8 @@ def register_recording(
                 pool.shutdown()
                 pool = None
             table, summary = register_screened(
-                index, aligned, screen.reasons, store, cfg, ahead, pool, losses=losses, fallback=fallback
+                index, aligned, screen.reasons, store, cfg, ahead, pool, losses=losses, fallback=fallback,
+                stamps=stamps_warning(recording),
             )
             store = None
             if pool is not None:  # odometry's loop closure ran in them
