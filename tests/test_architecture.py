@@ -154,7 +154,7 @@ def test_every_rule_runs_the_script_of_its_name():
     pairs = {}
     for smk in sorted(rules_dir.glob("*.smk")):
         text = smk.read_text()
-        for m in re.finditer(r"^(?:rule|checkpoint) (\w+):\n(.*?)(?=^(?:rule|checkpoint) |\Z)", text, re.S | re.M):
+        for m in re.finditer(r"^[ \t]*(?:rule|checkpoint) (\w+):\n(.*?)(?=^[ \t]*(?:rule|checkpoint) |\Z)", text, re.S | re.M):
             script = re.search(r'script:\s*\n\s*"\.\./\.\./scripts/(\w+)\.py"', m.group(2))
             if script:
                 pairs[m.group(1)] = script.group(1)

@@ -30,9 +30,12 @@ made and written:
 - :mod:`~floorscan.floorplan.footprints`: what all exports of a plan share.
 - one module per export format: :mod:`~floorscan.floorplan.geojson` (people, GIS, the
   scorer), :mod:`~floorscan.floorplan.svg` (a browser), :mod:`~floorscan.floorplan.dxf`
-  (CAD), :mod:`~floorscan.floorplan.ifc` (BIM), registered in :data:`EXPORT_FORMATS`.
+  (CAD), :mod:`~floorscan.floorplan.ifc` (BIM; a storey's contents:
+  :mod:`~floorscan.floorplan.ifc_storey`), registered in :data:`EXPORT_FORMATS`.
 - :mod:`~floorscan.floorplan.writer`: :class:`~floorscan.floorplan.writer.FloorplanWriter`
   builds plans and writes them in the formats asked for; the stage's scripts call it.
+- :mod:`~floorscan.floorplan.building`: the floors of one building: one IFC with a
+  storey per floor, a GeoJSON per floor and the building's page.
 
 Exports (the thesis's purpose, Chapter 1: a plan people and their tools open). Every
 file is written atomically (:func:`floorscan.core.files.atomic_path`), carries what it is

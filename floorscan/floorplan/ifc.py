@@ -1,16 +1,19 @@
 """The IFC4 export of a floor plan (:func:`write_ifc`; BIM, with IfcOpenShell's API):
 IfcProject > IfcSite > IfcBuilding > IfcBuildingStorey, an ``IfcWall`` per wall placed
 relative to its storey, an ``IfcRelConnectsPathElements`` per junction of two walls, an
-``IfcFurniture`` per clutter piece, an ``IfcSpace`` per room (:func:`_add_spaces`), an
+``IfcFurniture`` per clutter piece, an ``IfcSpace`` per room (:func:`~floorscan.floorplan.ifc_storey.add_storey`), an
 ``IfcDoor`` per door in an ``IfcOpeningElement`` that voids its wall
-(:func:`_add_doors`), units metres, a STEP header naming the dataset and floorscan's
+(:func:`~floorscan.floorplan.ifc_storey.add_storey`), units metres, a STEP header naming the dataset and floorscan's
 version, a time stamp from the plan's ``timestamp``, else ``SOURCE_DATE_EPOCH``, else 0
 (:func:`~floorscan.floorplan.metadata.export_time`: never the clock), GlobalIds from
 the plan's name (:func:`_name_ifc`), so the same plan gives the same bytes.
+:func:`write_building_ifc` writes the plans of a building's floors as one model, a
+storey per floor at its elevation, each filled as the single storey is.
 
-The model is made with ``ifcopenshell.api`` (:func:`_ifc_model`) and named per file
-(:func:`_save_ifc`): a plan written under several names (every ordering's ``k = all``)
-builds its model once. Source: IFC4 (ISO 16739-1) and IfcOpenShell's API documentation.
+The model is made with ``ifcopenshell.api`` (:func:`_ifc_model`: the spatial structure,
+then each storey's contents, :func:`~floorscan.floorplan.ifc_storey.add_storey`) and named per file (:func:`_save_ifc`):
+a plan written under several names (every ordering's ``k = all``) builds its model once.
+Source: IFC4 (ISO 16739-1) and IfcOpenShell's API documentation.
 """
 
 from __future__ import annotations
@@ -20,24 +23,31 @@ import os
 import uuid
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Mapping
-
-import numpy as np
+from typing import TYPE_CHECKING, Mapping, Sequence
 
 from floorscan.core.files import atomic_path
 from floorscan.floorplan.footprints import PlanExports
 from floorscan.floorplan.georeference import Georeference, as_georeference
+from floorscan.floorplan.ifc_storey import add_storey, contain, placement
 from floorscan.floorplan.metadata import PlanMetadata, floorscan_version
 
 if TYPE_CHECKING:
     from floorscan.floorplan.params import FloorplanParams
     from floorscan.floorplan.plan import FloorPlan
 
+#: The name of the one storey of a floor plan's IFC (:func:`write_ifc`).
+STOREY_NAME = "Storey 0"
 
-def _ifc_model(exports: PlanExports, georeference: Georeference | None):
-    """The IFC4 model of a plan's exports (see :func:`write_ifc`), not yet named:
-    :func:`_save_ifc` names it (:func:`_name_ifc`) by the metadata of each file it is
-    saved as.
+
+def _ifc_model(storeys: Sequence[tuple[str, float, PlanExports]], georeference: Georeference | None):
+    """The IFC4 model of a building (see :func:`write_ifc`), not yet named: :func:`_save_ifc`
+    names it (:func:`_name_ifc`) for each file it is saved as.
+
+    The spatial structure first, IfcProject > IfcSite > IfcBuilding > an
+    IfcBuildingStorey per ``(name, elevation_m, exports)`` of ``storeys`` (in that
+    order; ``Elevation`` and placement z ``elevation_m`` metres), then each storey's
+    contents (:func:`~floorscan.floorplan.ifc_storey.add_storey`): ids follow creation order, so one storey gives the
+    model of a single floor plan.
 
     Raises
     ------
@@ -77,271 +87,54 @@ def _ifc_model(exports: PlanExports, georeference: Georeference | None):
     )
     site = api.root.create_entity(model, ifc_class="IfcSite", name="Site")
     building = api.root.create_entity(model, ifc_class="IfcBuilding", name="Building")
-    storey = api.root.create_entity(model, ifc_class="IfcBuildingStorey", name="Storey 0")
-    for whole, part in ((project, site), (site, building), (building, storey)):
-        api.aggregate.assign_object(model, relating_object=whole, products=[part])
-        api.geometry.edit_object_placement(model, product=part)  # identity, relative to its whole's
-    storey.Elevation = 0.0
+    floors = [api.root.create_entity(model, ifc_class="IfcBuildingStorey", name=name) for name, _, _ in storeys]
+    elevations = [float(elevation) for _, elevation, _ in storeys]
+    for whole, parts, heights in ((project, [site], [0.0]), (site, [building], [0.0]), (building, floors, elevations)):
+        api.aggregate.assign_object(model, relating_object=whole, products=parts)
+        for rel in whole.IsDecomposedBy:  # a set in the API: creation order
+            rel.RelatedObjects = tuple(sorted(rel.RelatedObjects, key=lambda e: e.id()))
+        for part, z in zip(parts, heights):  # at its whole's origin, a storey raised to its elevation
+            api.geometry.edit_object_placement(model, product=part, matrix=placement(0.0, 0.0, z=z))
+    for storey, elevation in zip(floors, elevations):
+        storey.Elevation = elevation
     if georeference is not None:
         dms = ifcopenshell.util.geolocation.dd2dms
         site.RefLatitude = dms(georeference.lat, use_us=True)
         site.RefLongitude = dms(georeference.lon, use_us=True)
         h = math.radians(georeference.heading_deg)
         api.georeference.edit_true_north(model, true_north=(math.cos(h), math.sin(h)))
-
-    plan = exports.plan
-    w = plan.walls
-    rows = [
-        r for r in zip(
-            w["wall_id"].tolist(), w["x0"].tolist(), w["y0"].tolist(), w["x1"].tolist(), w["y1"].tolist(),
-            w["thickness_m"].to_numpy(dtype=np.float64).tolist(), w["height_m"].to_numpy(dtype=np.float64).tolist(),
-            w["paired"].tolist(),
-        ) if math.hypot(r[3] - r[1], r[4] - r[2]) > 0
-    ]  # fmt: skip
-    walls = [api.root.create_entity(model, ifc_class="IfcWall", name=f"Wall {r[0]}") for r in rows]
-    _contain(model, storey, walls)
-    for wall, (wall_id, x0, y0, x1, y1, thickness, height, paired) in zip(walls, rows):
-        length = math.hypot(x1 - x0, y1 - y0)
-        dx, dy = (x1 - x0) / length, (y1 - y0) / length
-        wall.Description = "both faces seen" if paired else "one face seen, thickness assumed"
-        # Placement: at the axis start, x along the axis, relative to the storey's.
-        api.geometry.edit_object_placement(model, product=wall, matrix=_placement(x0, y0, dx, dy))
-        # Body: the rectangle length x thickness centred on the axis, extruded up.
-        body_rep = api.geometry.add_wall_representation(
-            model, context=body, length=length, height=height, thickness=thickness, offset=-thickness / 2.0
-        )
-        axis_rep = api.geometry.add_axis_representation(model, context=axis_ctx, axis=[(0.0, 0.0), (length, 0.0)])
-        api.geometry.assign_representation(model, product=wall, representation=body_rep)
-        api.geometry.assign_representation(model, product=wall, representation=axis_rep)
-        qto = api.pset.add_qto(model, product=wall, name="Qto_WallBaseQuantities")
-        api.pset.edit_qto(model, qto=qto, properties={"Length": length, "Width": thickness, "Height": height})
-    _connect_walls(model, plan, dict(zip([r[0] for r in rows], walls)), {r[0]: r[1:5] for r in rows})
-    _add_clutter(model, plan, storey, body)
-    heights = w["height_m"].to_numpy(dtype=np.float64)
-    height = float(heights.max()) if len(heights) else _default_wall_height()
-    _add_spaces(model, exports, storey, body, height)
-    _add_doors(model, plan, storey, body, dict(zip([r[0] for r in rows], zip(walls, rows))))
+    for storey, (_, _, exports) in zip(floors, storeys):
+        add_storey(model, storey, exports, body, axis_ctx)
     return model
 
 
-def _default_wall_height() -> float:
-    """The height of a plan without walls, metres (``floorplan.wall_height_m``'s default)."""
-    from floorscan.floorplan.params import FloorplanParams
-
-    return float(FloorplanParams().wall_height_m)
-
-
-def _contain(model, structure, products: list) -> None:
-    """``products`` contained in ``structure`` (``spatial.assign_container``), the
-    containment's elements in creation order: the API keeps them in a set, whose
-    order changed from run to run, and adds to the structure's one containment (so
-    setting it to ``products`` alone would drop the elements contained before)."""
-    import ifcopenshell.api.spatial
-
-    if not products:
-        return
-    ifcopenshell.api.spatial.assign_container(model, products=products, relating_structure=structure)
-    for rel in structure.ContainsElements:
-        rel.RelatedElements = tuple(sorted(rel.RelatedElements, key=lambda e: e.id()))
-
-
-def _connect_walls(model, plan: FloorPlan, wall_of_id: dict, axis_of_id: dict) -> None:
-    """An ``IfcRelConnectsPathElements`` per junction of the plan (ifcopenshell's
-    ``geometry.connect_path``): ``ATSTART`` / ``ATEND`` where the junction is an end of
-    a wall's axis (within 2 cm), ``ATPATH`` where it lies along it."""
-    import ifcopenshell.api.geometry
-
-    def where(wall_id, x, y):
-        x0, y0, x1, y1 = axis_of_id[wall_id]
-        if math.hypot(x - x0, y - y0) <= 0.02:
-            return "ATSTART"
-        return "ATEND" if math.hypot(x - x1, y - y1) <= 0.02 else "ATPATH"
-
-    j = plan.junctions
-    for x, y, a, b in zip(j["x"].tolist(), j["y"].tolist(), j["wall_a"].tolist(), j["wall_b"].tolist()):
-        if a in wall_of_id and b in wall_of_id and a != b:
-            ifcopenshell.api.geometry.connect_path(
-                model, relating_element=wall_of_id[a], related_element=wall_of_id[b],
-                relating_connection=where(a, x, y), related_connection=where(b, x, y),
-            )
-
-
-#: Clutter in IFC: an ``IfcFurniture`` per piece, a box this thick and high along it, metres.
-CLUTTER_IFC_THICKNESS_M, CLUTTER_IFC_HEIGHT_M = 0.05, 0.75
-
-
-def _add_clutter(model, plan: FloorPlan, storey, body) -> None:
-    """An ``IfcFurniture`` (``ObjectType`` "clutter", ``Description`` the reason) per
-    clutter piece of the plan, in the storey: a box :data:`CLUTTER_IFC_THICKNESS_M`
-    thick and :data:`CLUTTER_IFC_HEIGHT_M` high along the piece."""
-    import ifcopenshell.api
-
-    api = ifcopenshell.api
-    c = plan.clutter
-    rows = [
-        r for r in zip(c["clutter_id"].tolist(), c["x0"].tolist(), c["y0"].tolist(), c["x1"].tolist(),
-                       c["y1"].tolist(), c["reason"].tolist())
-        if math.hypot(r[3] - r[1], r[4] - r[2]) > 0
-    ]  # fmt: skip
-    items = [api.root.create_entity(model, ifc_class="IfcFurniture", name=f"Clutter {r[0]}") for r in rows]
-    if not items:
-        return
-    _contain(model, storey, items)
-    for item, (_, x0, y0, x1, y1, reason) in zip(items, rows):
-        length = math.hypot(x1 - x0, y1 - y0)
-        dx, dy = (x1 - x0) / length, (y1 - y0) / length
-        item.ObjectType, item.Description = "clutter", str(reason)
-        api.geometry.edit_object_placement(model, product=item, matrix=_placement(x0, y0, dx, dy))
-        rep = api.geometry.add_wall_representation(
-            model, context=body, length=length, height=CLUTTER_IFC_HEIGHT_M, thickness=CLUTTER_IFC_THICKNESS_M,
-            offset=-CLUTTER_IFC_THICKNESS_M / 2.0,
-        )
-        api.geometry.assign_representation(model, product=item, representation=rep)
-
-
-#: Doors in IFC: the height of an ``IfcDoor`` and its opening (a plan knows its doors'
-#: widths, not their heights; at most the wall's height), the door leaf's thickness,
-#: and how far the opening reaches past each face of its wall (so it cuts the wall
-#: cleanly), metres.
-DOOR_IFC_HEIGHT_M, DOOR_IFC_THICKNESS_M, OPENING_IFC_MARGIN_M = 2.1, 0.05, 0.05
-
-
-def _placement(x: float, y: float, dx: float = 1.0, dy: float = 0.0) -> np.ndarray:
-    """4 x 4 placement matrix: origin ``(x, y, 0)`` metres, local x along the unit
-    vector ``(dx, dy)``, z up."""
-    return np.array([[dx, -dy, 0.0, x], [dy, dx, 0.0, y], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
-
-
-def _add_spaces(model, exports: PlanExports, storey, body, height: float) -> None:
-    """An ``IfcSpace`` per room with a polygon, aggregated into the storey
-    (``aggregate.assign_object``): ``Name`` the room's name, ``LongName`` its kind
-    (room, corridor, space), placed at the least corner of its bounds relative to the
-    storey, a body extruded ``height`` metres up from its footprint (oriented:
-    :attr:`~floorscan.floorplan.footprints.PlanExports.room_polys`)
-    (``profile.add_arbitrary_profile``, an ``IfcArbitraryClosedProfileDef``, or with
-    holes ``add_arbitrary_profile_with_voids``, an ``IfcArbitraryProfileDefWithVoids``;
-    ``geometry.add_profile_representation``) and ``Qto_SpaceBaseQuantities``
-    ``NetFloorArea`` (``area_m2``), ``GrossPerimeter`` (``perimeter_m``) and ``Height``."""
-    import ifcopenshell.api
-
-    api = ifcopenshell.api
-    r = exports.plan.rooms
-    rows = [
-        row for row in zip(
-            r["name"].tolist(), r["kind"].tolist(), r["area_m2"].to_numpy(np.float64).tolist(),
-            r["perimeter_m"].to_numpy(np.float64).tolist(), exports.room_polys.tolist(),
-        ) if row[4] is not None and not row[4].is_empty
-    ]  # fmt: skip
-    spaces = [api.root.create_entity(model, ifc_class="IfcSpace", name=str(row[0])) for row in rows]
-    if not spaces:
-        return
-    api.aggregate.assign_object(model, relating_object=storey, products=spaces)
-    for rel in storey.IsDecomposedBy:  # a set in the API: creation order
-        rel.RelatedObjects = tuple(sorted(rel.RelatedObjects, key=lambda e: e.id()))
-    for space, (_, kind, area, perimeter, poly) in zip(spaces, rows):
-        space.LongName = str(kind)
-        x0, y0 = poly.bounds[:2]
-        api.geometry.edit_object_placement(model, product=space, matrix=_placement(x0, y0))
-        outer = (np.asarray(poly.exterior.coords) - (x0, y0)).tolist()
-        holes = [(np.asarray(ring.coords) - (x0, y0)).tolist() for ring in poly.interiors]
-        if holes:
-            profile = api.profile.add_arbitrary_profile_with_voids(model, outer_profile=outer, inner_profiles=holes)
-            _profile_curve_2d(model, profile)
-        else:
-            profile = api.profile.add_arbitrary_profile(model, profile=outer)
-        rep = api.geometry.add_profile_representation(
-            model, context=body, profile=profile, depth=height, cardinal_point=None
-        )
-        api.geometry.assign_representation(model, product=space, representation=rep)
-        qto = api.pset.add_qto(model, product=space, name="Qto_SpaceBaseQuantities")
-        api.pset.edit_qto(
-            model, qto=qto, properties={"NetFloorArea": area, "GrossPerimeter": perimeter, "Height": height}
-        )
-
-
-def _profile_curve_2d(model, profile) -> None:
-    """The outer curve of ``profile`` (an ``IfcArbitraryProfileDefWithVoids`` of
-    ``profile.add_arbitrary_profile_with_voids``) in 2D: IfcOpenShell 0.9.0 puts
-    its 2D points in an ``IfcCartesianPointList3D`` (IFC4 wants a profile's curves in
-    2D: WR ``IfcArbitraryClosedProfileDef.WR1``), its holes in a 2D list."""
-    points = profile.OuterCurve.Points
-    if points.is_a("IfcCartesianPointList3D") and all(len(p) == 2 for p in points.CoordList):
-        profile.OuterCurve.Points = model.createIfcCartesianPointList2D(points.CoordList)
-        model.remove(points)
-
-
-def _add_doors(model, plan: FloorPlan, storey, body, wall_of_id: dict) -> None:
-    """An ``IfcDoor`` per door (``OverallWidth`` its ``width_m``, ``OverallHeight``
-    :data:`DOOR_IFC_HEIGHT_M` or the wall's height if lower), contained in the storey,
-    placed at the opening's start with x along its wall's axis, a body
-    (``add_wall_representation``: width x :data:`DOOR_IFC_THICKNESS_M`, centred on the
-    axis). In a wall (``wall_of_id``: wall_id -> (IfcWall, its row)) the door sits
-    on the wall's axis, in an ``IfcOpeningElement`` as wide and high as the door
-    and :data:`OPENING_IFC_MARGIN_M` thicker than the wall on each side that voids
-    the wall (``feature.add_feature``: ``IfcRelVoidsElement``) and that the door
-    fills (``feature.add_filling``: ``IfcRelFillsElement``); a door of no plan wall
-    (``wall_id`` -1) has no opening and is placed along its own segment."""
-    import ifcopenshell.api
-
-    api = ifcopenshell.api
-    d = plan.doors
-    doors = []
-    for door_id, x0, y0, x1, y1, width, wall_id in zip(
-        *(d[c].tolist() for c in ("door_id", "x0", "y0", "x1", "y1", "width_m", "wall_id"))
-    ):
-        wall_id = int(wall_id)
-        wall, row = wall_of_id.get(wall_id, (None, None))
-        if wall is not None:
-            _, wx0, wy0, wx1, wy1, thickness, wall_height, _ = row
-            length = math.hypot(wx1 - wx0, wy1 - wy0)
-            ux, uy = (wx1 - wx0) / length, (wy1 - wy0) / length
-            along = min((x0 - wx0) * ux + (y0 - wy0) * uy, (x1 - wx0) * ux + (y1 - wy0) * uy)
-            sx, sy = wx0 + along * ux, wy0 + along * uy  # the opening's start on the axis
-            height = min(DOOR_IFC_HEIGHT_M, float(wall_height))
-        else:
-            length = math.hypot(x1 - x0, y1 - y0)
-            ux, uy = ((x1 - x0) / length, (y1 - y0) / length) if length > 0 else (1.0, 0.0)
-            sx, sy, height = x0, y0, DOOR_IFC_HEIGHT_M
-        matrix = _placement(sx, sy, ux, uy)
-        door = api.root.create_entity(model, ifc_class="IfcDoor", name=f"Door {int(door_id)}")
-        door.OverallWidth, door.OverallHeight = float(width), height
-        doors.append(door)
-        api.geometry.edit_object_placement(model, product=door, matrix=matrix)
-        rep = api.geometry.add_wall_representation(
-            model, context=body, length=float(width), height=height, thickness=DOOR_IFC_THICKNESS_M,
-            offset=-DOOR_IFC_THICKNESS_M / 2.0,
-        )
-        api.geometry.assign_representation(model, product=door, representation=rep)
-        if wall is None:
-            continue
-        opening = api.root.create_entity(model, ifc_class="IfcOpeningElement", name=f"Opening {int(door_id)}")
-        opening.PredefinedType = "OPENING"
-        depth = float(thickness) + 2 * OPENING_IFC_MARGIN_M
-        rep = api.geometry.add_wall_representation(
-            model, context=body, length=float(width), height=height, thickness=depth, offset=-depth / 2.0
-        )
-        api.geometry.assign_representation(model, product=opening, representation=rep)
-        api.geometry.edit_object_placement(model, product=opening, matrix=matrix)
-        api.feature.add_feature(model, feature=opening, element=wall)
-        api.feature.add_filling(model, opening=opening, element=door)
-    _contain(model, storey, doors)
-
-
-def _name_ifc(model, plan: FloorPlan, metadata: PlanMetadata) -> None:
-    """Name the IFC project by the plan's metadata and derive every GlobalId from its
-    title and the creation order (:func:`_ifc_guid_list`): the same plan and title
-    give the same ids (BIM tools see the same walls, not new ones), and renaming a
-    model gives the ids a fresh model of that title would have."""
+def _name_ifc(model, title: str, description: str) -> None:
+    """Name the IFC project ``title``, describe it, and derive every GlobalId from the
+    title and the creation order (:func:`_ifc_guid_list`): the same model and title
+    give the same ids (BIM tools see the same walls, not new ones), ids are unique
+    across a building's storeys, and renaming a model gives the ids a fresh model of
+    that title would have."""
     project = model.by_type("IfcProject")[0]
-    project.Name = metadata.title
-    about = ", ".join(f"{k} {v or '-'}" for k, v in metadata.fields)
-    rooms = f", {len(plan.rooms)} rooms, {len(plan.doors)} doors" if len(plan.rooms) or len(plan.doors) else ""
-    project.Description = (
-        f"floorscan floor plan: {about}, {len(plan.walls)} walls{rooms}; map frame of the recording, metres"
-    )
+    project.Name = title
+    project.Description = description
     roots = sorted(model.by_type("IfcRoot"), key=lambda e: e.id())
-    for entity, guid in zip(roots, _ifc_guid_list(metadata.title, len(roots))):
+    for entity, guid in zip(roots, _ifc_guid_list(title, len(roots))):
         entity.GlobalId = guid
+
+
+def _plan_counts(plan: FloorPlan) -> str:
+    """``"14 walls, 5 rooms, 5 doors"``: the walls, and the rooms and doors when there are any."""
+    rooms = f", {len(plan.rooms)} rooms, {len(plan.doors)} doors" if len(plan.rooms) or len(plan.doors) else ""
+    return f"{len(plan.walls)} walls{rooms}"
+
+
+def _plan_texts(plan: FloorPlan, meta: PlanMetadata) -> tuple[str, str]:
+    """The project description and the header comment of a floor plan's IFC
+    (:func:`_save_ifc`): what it is of (``meta.fields``) and its counts."""
+    about = ", ".join(f"{k} {v or '-'}" for k, v in meta.fields)
+    description = f"floorscan floor plan: {about}, {_plan_counts(plan)}; map frame of the recording, metres"
+    fields = " ".join(f"{k} {_mvd_text(v)}" for k, v in meta.fields if v)
+    return description, f"floorscan floor plan{' of ' + fields if fields else ''}"
 
 
 def _ifc_guid_list(name: str, n: int) -> list[str]:
@@ -362,21 +155,23 @@ def _mvd_text(s: str) -> str:
     return "".join(c if (c.isascii() and c.isalnum()) or c in " _.-" else "_" for c in s)
 
 
-def _save_ifc(model, plan: FloorPlan, path: str | os.PathLike, meta: PlanMetadata) -> None:
-    """Name ``model`` (the IFC model of ``plan``) by the plan's metadata
-    (:func:`_name_ifc`), give it the STEP header of ``path`` and write it
-    atomically as IFC-SPF text: ``model.to_string()`` (the text ``model.write``
-    writes) in one write, faster than ``model.write``.
+def _save_ifc(model, path: str | os.PathLike, meta: PlanMetadata, description: str, comment: str) -> None:
+    """Name ``model`` ``meta.title`` with the project ``description`` (:func:`_name_ifc`),
+    give it the STEP header of ``path`` and write it atomically as IFC-SPF text:
+    ``model.to_string()`` (the text ``model.write`` writes) in one write, faster than
+    ``model.write``.
 
     Header: ``file_name.name`` the file's name, ``time_stamp`` :func:`~floorscan.floorplan.metadata.export_time`
-    of the plan (ISO 8601, UTC), author and organization ``floorscan``,
+    of ``meta`` (ISO 8601, UTC), author and organization ``floorscan``,
     ``originating_system`` ``floorscan <version>``, ``preprocessor_version``
     IfcOpenShell's; ``file_description`` the view definition
-    (DesignTransferView) and a comment naming the dataset, ordering, extractor, k.
+    (DesignTransferView) and ``Comment[<comment>]`` (``comment`` already in MVD
+    characters, :func:`_mvd_text`: e.g. :func:`_plan_texts`'s, naming the dataset,
+    ordering, extractor, k).
     """
     import ifcopenshell
 
-    _name_ifc(model, plan, meta)
+    _name_ifc(model, meta.title, description)
     header = model.header
     header.file_name.name = Path(path).name
     header.file_name.time_stamp = meta.time_stamp
@@ -385,11 +180,7 @@ def _save_ifc(model, plan: FloorPlan, path: str | os.PathLike, meta: PlanMetadat
     header.file_name.preprocessor_version = f"IfcOpenShell {ifcopenshell.version}"
     header.file_name.originating_system = f"floorscan {floorscan_version()}"
     header.file_name.authorization = ""
-    about = " ".join(f"{k} {_mvd_text(v)}" for k, v in meta.fields if v)
-    header.file_description.description = (
-        "ViewDefinition[DesignTransferView]",
-        f"Comment[floorscan floor plan{' of ' + about if about else ''}]",
-    )
+    header.file_description.description = ("ViewDefinition[DesignTransferView]", f"Comment[{comment}]")
     text = model.to_string()
     with atomic_path(path) as tmp:
         tmp.write_bytes(text.encode("utf-8"))
@@ -434,7 +225,57 @@ def write_ifc(
     meta = metadata or PlanMetadata()
     if name:
         meta = replace(meta, name=name)
-    _save_ifc(_ifc_model(PlanExports(plan), as_georeference(georeference)), plan, path, meta)
+    model = _ifc_model([(STOREY_NAME, 0.0, PlanExports(plan))], as_georeference(georeference))
+    _save_ifc(model, path, meta, *_plan_texts(plan, meta))
+
+
+def write_building_ifc(
+    floors: Sequence[tuple[str, float, FloorPlan]], path: str | os.PathLike, name: str = "",
+    metadata: PlanMetadata | None = None,
+) -> None:  # fmt: skip
+    """Write the floor plans of one building as one IFC4 model, a storey per floor.
+
+    IfcProject > IfcSite > IfcBuilding > an IfcBuildingStorey per floor, in the order
+    given, named by the floor, with ``Elevation`` its elevation and placed that high
+    above the building's origin; each storey holds its plan's walls, junction
+    connections, clutter, rooms (IfcSpace) and doors as the one storey of
+    :func:`write_ifc` does, at its elevation. The floors are not registered to each
+    other: each storey is in the map frame of its recording, x and y in metres. No
+    georeference. GlobalIds: :func:`_name_ifc` of the building's title (unique across
+    storeys); the STEP header: :func:`_save_ifc`. ``ifcopenshell.validate`` finds no
+    issue.
+
+    Parameters
+    ----------
+    floors : sequence of (str, float, FloorPlan)
+        Per storey: its name, its elevation (metres, z up) and its plan.
+    path : path
+    name : str
+        The project's name (overrides ``metadata.name``).
+    metadata : PlanMetadata, optional
+        The building's title (``name``) and time stamp (``timestamp``).
+
+    Raises
+    ------
+    ValueError
+        For no floors, or an elevation that is not finite.
+    ImportError
+        When ifcopenshell is not installed (``pip install ifcopenshell``).
+    """
+    if not floors:
+        raise ValueError("a building needs at least one floor")
+    bad = [storey for storey, elevation, _ in floors if not math.isfinite(float(elevation))]
+    if bad:
+        raise ValueError(f"storeys {bad}: the elevation must be a finite number of metres")
+    meta = metadata or PlanMetadata()
+    if name:
+        meta = replace(meta, name=name)
+    model = _ifc_model([(str(storey), float(e), PlanExports(plan)) for storey, e, plan in floors], None)
+    storeys = "; ".join(f"{storey} at {float(e):g} m: {_plan_counts(plan)}" for storey, e, plan in floors)
+    description = (
+        f"floorscan building of {len(floors)} storeys: {storeys}; each storey in the map frame of its recording, metres"
+    )
+    _save_ifc(model, path, meta, description, f"floorscan building {_mvd_text(meta.title)}")
 
 
 def export(exports: PlanExports, path: str | os.PathLike, meta: PlanMetadata, params: FloorplanParams) -> None:
@@ -442,5 +283,5 @@ def export(exports: PlanExports, path: str | os.PathLike, meta: PlanMetadata, pa
     a plan's exports, georeferenced by ``params.georeference``. The model is built
     once per plan (kept in ``exports.model``) and renamed and saved for each file."""
     if exports.model is None:
-        exports.model = _ifc_model(exports, params.georeference)
-    _save_ifc(exports.model, exports.plan, path, meta)
+        exports.model = _ifc_model([(STOREY_NAME, 0.0, exports)], params.georeference)
+    _save_ifc(exports.model, path, meta, *_plan_texts(exports.plan, meta))

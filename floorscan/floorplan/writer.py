@@ -5,13 +5,16 @@ and writes it in the formats asked for, each by its writer in
 (:class:`~floorscan.floorplan.metadata.PlanMetadata`); a plan of the same segments as
 one it built before is reused. :func:`write_floorplan` does one plan;
 :func:`write_recommended_floorplan` the plan of the selected scans
-(``results/<dataset>/floorplan.*``). The stage's scripts call these.
+(``results/<dataset>/floorplan.*``), which :func:`recommended_plan` builds without
+writing it (a building's floors, :mod:`floorscan.floorplan.building`). The stage's
+scripts call these.
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
@@ -97,9 +100,7 @@ class FloorplanWriter:
         KeyError
             For an unknown output format, or a missing coordinate column.
         """
-        unknown = sorted(set(outputs) - set(FLOORPLAN_FORMATS))
-        if unknown:
-            raise KeyError(f"unknown floor plan formats {unknown}; expected {list(FLOORPLAN_FORMATS)}")
+        _check_formats(outputs)
         meta = PlanMetadata(dataset, ordering, extractor, k, timestamp, name)
         export_time(timestamp)  # a bad SOURCE_DATE_EPOCH fails before anything is built
         segments = _in_scan_order(segments)  # as build_floorplan takes them (sorted once)
@@ -108,9 +109,29 @@ class FloorplanWriter:
         reused = built is not None
         if built is None:
             built = self._built[key] = PlanExports(build_floorplan(segments, self.params, grid))
-        for fmt, path in outputs.items():
-            EXPORT_FORMATS[fmt].write(built, path, meta, self.params)
+        self.export(built, outputs, meta)
         return built.plan, reused
+
+    def export(self, exports: PlanExports, outputs: Mapping[str, str | os.PathLike], meta: PlanMetadata) -> None:
+        """Write a built plan (``exports.plan``) to ``outputs`` (paths by format, any of
+        :data:`FLOORPLAN_FORMATS`), named by ``meta``, each format by its writer in
+        :data:`floorscan.floorplan.EXPORT_FORMATS` with this writer's params.
+
+        Raises
+        ------
+        KeyError
+            For an unknown output format.
+        """
+        _check_formats(outputs)
+        for fmt, path in outputs.items():
+            EXPORT_FORMATS[fmt].write(exports, path, meta, self.params)
+
+
+def _check_formats(outputs: Mapping[str, Any]) -> None:
+    """Raise ``KeyError`` for a format of ``outputs`` not in :data:`FLOORPLAN_FORMATS`."""
+    unknown = sorted(set(outputs) - set(FLOORPLAN_FORMATS))
+    if unknown:
+        raise KeyError(f"unknown floor plan formats {unknown}; expected {list(FLOORPLAN_FORMATS)}")
 
 
 def _segments_key(segments: pd.DataFrame) -> bytes:
@@ -143,6 +164,86 @@ def write_floorplan(
     )[0]
 
 
+@dataclass(frozen=True)
+class RecommendedPlan:
+    """The recommended floor plan of a recording (:func:`recommended_plan`).
+
+    Attributes
+    ----------
+    plan : FloorPlan
+    metadata : PlanMetadata
+        Dataset, ordering, extractor, k (the number of selected scans) and the time
+        stamp (the recording's first scan), as its exports name them.
+    grid : OccupancyGrid or None
+        The free space of the selected scans, when given.
+    n_scans, n_segments : int
+        The selected scans and their wall segments the plan was built of.
+    """
+
+    plan: FloorPlan
+    metadata: PlanMetadata
+    grid: OccupancyGrid | None
+    n_scans: int
+    n_segments: int
+
+
+def recommended_plan(
+    scans_path: str | os.PathLike,
+    walls_path: str | os.PathLike,
+    index_path: str | os.PathLike,
+    cfg: Mapping[str, Any] | None,
+    dataset: str,
+    ordering: str,
+    extractor: str,
+    grid_path: str | os.PathLike | None = None,
+) -> RecommendedPlan:
+    """Build the recommended floor plan, the walls of the selected scans, without
+    writing it (:func:`write_recommended_floorplan` writes it; a building takes the
+    plans of its floors from here).
+
+    Parameters
+    ----------
+    scans_path : path
+        ``selection/scans.csv`` (:func:`floorscan.select.deliverables.write_scan_list`):
+        its ``scan_id`` column names the selected scans.
+    walls_path : path
+        ``walls/<extractor>/per_scan.parquet`` (every kept scan's wall segments, the
+        selected scans' are taken) or, for the map extractor,
+        ``walls/map/selected.parquet`` (the map of the selected scans, taken whole).
+    index_path : path
+        ``scan_index.parquet``: the first scan's stamp is the plan's time stamp
+        (:func:`~floorscan.floorplan.metadata.recording_timestamp`).
+    cfg : mapping
+        The ``floorplan`` config section.
+    dataset, ordering, extractor : str
+        What the plan is of (its metadata).
+    grid_path : path, optional
+        ``walls/map/selected_grid.parquet``: the free space of the selected scans; with
+        it the plan goes through the structure passes (clutter, joins, junctions) and
+        gets its rooms and doors.
+
+    Returns
+    -------
+    RecommendedPlan
+
+    Raises
+    ------
+    KeyError
+        For an unknown config key, or a missing column.
+    """
+    from floorscan.core.io import read_table
+    from floorscan.core.occupancy import read_grid
+
+    selected = pd.read_csv(scans_path, usecols=["rank", "scan_id"])
+    ids = selected["scan_id"].astype(np.int64).to_numpy()
+    walls = read_table(walls_path)
+    segments = walls if extractor == "map" else walls[walls["scan_id"].isin(ids)]
+    grid = None if grid_path is None else read_grid(grid_path)
+    meta = PlanMetadata(dataset, ordering, extractor, len(ids), recording_timestamp(index_path))
+    plan = build_floorplan(segments, params_from_config(cfg), grid)
+    return RecommendedPlan(plan, meta, grid, len(ids), len(segments))
+
+
 def write_recommended_floorplan(
     scans_path: str | os.PathLike,
     walls_path: str | os.PathLike,
@@ -155,7 +256,8 @@ def write_recommended_floorplan(
     grid_path: str | os.PathLike | None = None,
     map_paths: tuple[str | os.PathLike, str | os.PathLike] | None = None,
 ) -> dict:
-    """Write the recommended floor plan: the walls of the selected scans.
+    """Write the recommended floor plan (:func:`recommended_plan`): the walls of the
+    selected scans.
 
     Parameters
     ----------
@@ -187,26 +289,26 @@ def write_recommended_floorplan(
     dict
         ``n_scans``, ``n_segments``, ``n_walls``, ``n_faces``, ``n_clutter``,
         ``n_junctions``.
-    """
-    from floorscan.core.io import read_table
-    from floorscan.core.occupancy import read_grid
 
-    selected = pd.read_csv(scans_path, usecols=["rank", "scan_id"])
-    ids = selected["scan_id"].astype(np.int64).to_numpy()
-    walls = read_table(walls_path)
-    segments = walls if extractor == "map" else walls[walls["scan_id"].isin(ids)]
-    grid = None if grid_path is None else read_grid(grid_path)
-    plan, _ = FloorplanWriter(cfg).write(
-        segments, outputs, dataset=dataset, ordering=ordering, extractor=extractor, k=len(ids),
-        timestamp=recording_timestamp(index_path), grid=grid,
-    )
+    Raises
+    ------
+    KeyError
+        For an unknown output format or config key.
+    ValueError
+        For ``map_paths`` without ``grid_path``.
+    """
+    writer = FloorplanWriter(cfg)
+    _check_formats(outputs)
+    if map_paths is not None and grid_path is None:
+        raise ValueError("an occupancy map needs the grid of the selected scans (grid_path)")
+    rec = recommended_plan(scans_path, walls_path, index_path, cfg, dataset, ordering, extractor, grid_path)
+    writer.export(PlanExports(rec.plan), outputs, rec.metadata)
     if map_paths is not None:
         from floorscan.core.occupancy import write_map_server
 
-        if grid is None:
-            raise ValueError("an occupancy map needs the grid of the selected scans (grid_path)")
-        write_map_server(grid, *map_paths, title=f"occupancy map of the {len(ids)} selected scans")
+        write_map_server(rec.grid, *map_paths, title=f"occupancy map of the {rec.n_scans} selected scans")
+    plan = rec.plan
     return {
-        "n_scans": len(ids), "n_segments": len(segments), "n_walls": len(plan.walls), "n_faces": len(plan.faces),
+        "n_scans": rec.n_scans, "n_segments": rec.n_segments, "n_walls": len(plan.walls), "n_faces": len(plan.faces),
         "n_clutter": len(plan.clutter), "n_junctions": len(plan.junctions),
     }  # fmt: skip
