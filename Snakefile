@@ -2,9 +2,24 @@
 # Run: snakemake --cores 2            (default target: the datasets in config `target`)
 #      snakemake --cores 2 --config target='[intel]'
 #      snakemake --cores 2 --config path=/data/run.bag   (a recording of your own)
+#      snakemake --cores 2 --config path=/data/survey/   (a folder of recordings: one answer each)
+import atexit
+import sys
+from pathlib import Path
+
+from snakemake_interface_executor_plugins.settings import ExecMode
 from snakemake.utils import min_version
 
-from floorscan.core.config import add_path_dataset, check_datasets, config_errors_exit, validate_config
+from floorscan.core.config import (
+    ConfigError,
+    add_path_datasets,
+    check_datasets,
+    config_errors_exit,
+    resolve_building,
+    validate_config,
+)
+from floorscan.core.io import InputError
+from floorscan.ingest.detect import recordings_in
 
 min_version("9.14.8")
 
@@ -19,8 +34,19 @@ report: "workflow/report/workflow.rst"
 with config_errors_exit():
     validate_config(config, workflow.basedir + "/workflow/schemas/config.schema.yaml")
     check_datasets(config)  # empty paths, unknown buildings
-    # `--config path=/data/run.bag`: that recording, detected, is the dataset to build
-    add_path_dataset(config)
+    # `--config path=/data/run.bag`: that recording, detected, is the dataset to build;
+    # a folder of recordings: each one is (floorscan.ingest.detect.recordings_in)
+    if config.get("path"):
+        try:
+            _recordings, _skipped = recordings_in(config["path"])
+        except InputError as e:
+            raise ConfigError(f"path: {e}") from None
+        add_path_datasets(config, _recordings)
+        if len(_recordings) > 1:
+            print(f"{config['path']}: {len(_recordings)} recordings, one dataset each: {', '.join(config['target'])}"
+                  + (f" (not recordings, left out: {', '.join(_skipped)})" if _skipped else ""), file=sys.stderr)
+    else:
+        resolve_building(config)
 
 
 include: "workflow/rules/common.smk"
@@ -30,6 +56,7 @@ include: "workflow/rules/register.smk"
 include: "workflow/rules/select.smk"
 include: "workflow/rules/walls.smk"
 include: "workflow/rules/floorplan.smk"
+include: "workflow/rules/building.smk"
 include: "workflow/rules/score.smk"
 include: "workflow/rules/report.smk"
 
@@ -37,24 +64,69 @@ include: "workflow/rules/report.smk"
 rule all:
     default_target: True
     input:
-        all_outputs(),
+        all_outputs() + building_outputs(),
 
 
 # The answer alone: the selected scans and the recommended floor plan.
 rule plan:
     input:
-        plan_outputs(),
+        plan_outputs() + building_outputs(),
 
 
-# The evaluation grid, the reference map, the scores, curves and figures.
+# The evaluation grid, the reference map, the scores, curves and figures, with the
+# answer they score.
 rule evaluation:
     input:
-        evaluation_outputs(),
+        plan_outputs() + evaluation_outputs(),
 
 
-# The answer: where the floor plan, the scan list and the reduced recording are.
+# The answer, wherever the run starts (floorscan.figures.answer): the datasets of the
+# run's targets, when it ends, when it fails (each failed recording's error; the others
+# go on: `keep-going` in the profile) and when there was nothing to be done (Snakemake
+# runs no hook then, so an exit handler of the main process prints it). A run of
+# several recordings also writes results/index.html.
+_ANSWER = {"printed": False}
+
+
+def print_answer(failed_jobs=()):
+    from floorscan.figures.answer import answer_lines, run_datasets
+    from floorscan.figures.index_page import dataset_status, failure_text, write_index
+
+    if _ANSWER["printed"]:
+        return
+    _ANSWER["printed"] = True
+    datasets = run_datasets(workflow.dag_settings.targets, DATASETS, target_datasets())
+    failed = {}  # several recordings: each error again at the end; one: where it is
+    for job in failed_jobs:
+        ds = dict(job.wildcards_dict).get("dataset")
+        if ds in datasets and ds not in failed:
+            where = f"rule {job.rule.name} failed; its log: {', '.join(map(str, job.log))}"
+            failed[ds] = (failure_text(ds) or where) if len(datasets) > 1 else f"{where} (the error is above)"
+    if len(datasets) > 1:
+        statuses = [{**dataset_status(ds), "failed": failed[ds]} if ds in failed else dataset_status(ds) for ds in datasets]
+        write_index(statuses, "results/index.html")
+    command = f"{sys.argv[0]} --cores 2 --config path={config['path']}" if config.get("path") else ""
+    for line in answer_lines(datasets, failed=failed, command=command):
+        print(line)
+    if building_outputs() and Path(building_outputs()[1]).is_file():
+        print(f"building: {building_outputs()[1]}, {building_outputs()[0]} ({len(building_floors())} storeys)")
+    if failed:
+        print(f"{len(failed)} of {len(datasets)} recordings failed: {', '.join(failed)}")
+
+
+def _answer_if_nothing_was_done():
+    ran = getattr(workflow, "scheduler", None) is not None and workflow.dag is not None
+    if ran and len(workflow.dag) == 0 and not workflow.dryrun:
+        print_answer()
+
+
+if workflow.exec_mode == ExecMode.DEFAULT:
+    atexit.register(_answer_if_nothing_was_done)
+
+
 onsuccess:
-    from floorscan.figures.answer import answer_lines
+    print_answer()
 
-    for _line in answer_lines(target_datasets()):
-        print(_line)
+
+onerror:
+    print_answer(workflow.scheduler.failed)

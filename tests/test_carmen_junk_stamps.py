@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import flaser_line, robotlaser_line, write_carmen
+from conftest import flaser_line, needs_shared, robotlaser_line, write_carmen
 
 from floorscan.core.io import InputError, read_metadata
 from floorscan.ingest.carmen_stamps import (
@@ -150,3 +150,35 @@ def test_reduced_junk_log_keeps_the_odometry_beside_the_selected_scans(tmp_path)
     # no usable stamp to window by: the ODOM lines next to laser line 5 (after 4, after 5)
     assert out.read_text().splitlines() == [lines[0], lines[10], lines[11], lines[12]]
     assert info["topics"] == {"#": 1, "FLASER": 1, "ODOM": 2}
+
+
+@needs_shared
+@pytest.mark.realdata
+@pytest.mark.workflow
+def test_a_shared_log_with_junk_stamps_runs_to_its_plan(tmp_path):
+    """orebro's log with the public log's junk stamps on every laser line (-0.45 s, then
+    the 32-bit wrap): a bare path runs to its plan, and the verdict says the stamps are
+    made up."""
+    import gzip
+    import json
+
+    from conftest import SHARED_DATA, copy_workflow, snakemake
+
+    wd = copy_workflow(tmp_path / "floorscan")
+    out, n = [], 0
+    with gzip.open(SHARED_DATA / "radish" / "orebro-corrected.log.gz", "rt") as f:
+        for line in f:
+            tok = line.split()
+            if tok and tok[0] == "FLASER":
+                tok[-3] = tok[-1] = "-0.45" if n == 0 else f"4294967295.{n:03d}"
+                n += 1
+                line = " ".join(tok) + "\n"
+            out.append(line)
+    (tmp_path / "junk.log").write_text("".join(out))
+    res = snakemake(wd, "--config", f"path={tmp_path / 'junk.log'}")
+    assert res.returncode == 0, res.stderr[-3000:]
+    assert (wd / "results" / "junk" / "floorplan.svg").is_file()
+    verdict = json.loads(read_metadata(wd / "results" / "junk" / "registration.parquet")["verdict"])
+    assert verdict["line"].startswith("WARNING")
+    assert f"stamps made up: {n} of {n} laser stamps out of range (negative or past the 32-bit wrap)" in verdict["line"]
+    assert n == 237 and "stamps made up" in res.stdout

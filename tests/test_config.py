@@ -74,7 +74,11 @@ def test_validate_config_names_the_field_and_copies_defaults():
 def test_a_path_alone_is_a_dataset():
     """`--config path=...`: the recording becomes a dataset named after the file, with
     nothing but its path, and the only target; the schema accepts it."""
-    from floorscan.core.config import add_path_dataset, validate_config
+    from floorscan.core.config import add_path_datasets, validate_config
+
+    def add_path_dataset(cfg):
+        names = add_path_datasets(cfg, [cfg["path"]] if cfg.get("path") else [])
+        return names[0] if names else None
 
     schema = REPO / "workflow" / "schemas" / "config.schema.yaml"
     cfg = {"datasets": {"demo": {"format": "synthetic", "building": "demo", "scanner": "2d", "seed": 1}},
@@ -96,7 +100,10 @@ def test_a_path_alone_is_a_dataset():
 def test_a_path_to_a_shipped_recording_reuses_its_dataset(tmp_path, monkeypatch):
     """The shipped config names recordings by relative paths; the same file given by
     its absolute path (or through a symbolic link) is that dataset, not simpath2_2."""
-    from floorscan.core.config import add_path_dataset
+    from floorscan.core.config import add_path_datasets
+
+    def add_path_dataset(cfg):
+        return add_path_datasets(cfg, [cfg["path"]])[0]
 
     (tmp_path / "data").mkdir()
     bag = tmp_path / "data" / "simpath2.bag"
@@ -110,6 +117,47 @@ def test_a_path_to_a_shipped_recording_reuses_its_dataset(tmp_path, monkeypatch)
     other = tmp_path / "simpath2.bag"
     other.write_bytes(b"")
     assert add_path_dataset({"datasets": {"simpath2": {"path": "data/simpath2.bag"}}, "path": str(other)}) == "simpath2_2"
+
+
+def test_a_folder_of_recordings_is_a_dataset_each(tmp_path):
+    """A folder that is not itself a recording: each recording in it is a dataset (files
+    by suffix, ROS2 bag and PCD folders), named after its file, all of them the targets;
+    other entries are skipped; the building's floors resolve by file name."""
+    from floorscan.core.config import ConfigError, add_path_datasets
+    from floorscan.core.io import InputError
+    from floorscan.ingest.detect import recordings_in
+
+    folder = tmp_path / "survey"
+    folder.mkdir()
+    for name in ("floor0.bag", "floor1.log.gz", "notes.txt", ".hidden.bag"):
+        (folder / name).write_bytes(b"x")
+    (folder / "ros2").mkdir()
+    (folder / "ros2" / "metadata.yaml").write_text("x")
+    (folder / "pcd").mkdir()
+    (folder / "pcd" / "000.pcd").write_text("x")
+    (folder / "empty").mkdir()
+    recordings, skipped = recordings_in(folder)
+    assert [p.name for p in recordings] == ["floor0.bag", "floor1.log.gz", "pcd", "ros2"]
+    assert skipped == ["empty", "notes.txt"]
+    assert recordings_in(folder / "ros2") == ([folder / "ros2"], [])  # a ROS2 bag folder is one recording
+    cfg = {"datasets": {"floor0": {"path": "/elsewhere/floor0.bag"}},
+           "building": {"name": "HQ", "floors": [{"recording": "floor1.log.gz", "elevation_m": 3.5},
+                                                 {"recording": "floor0.bag", "storey": "Ground"}]}}
+    names = add_path_datasets(cfg, recordings)
+    assert names == ["floor0_2", "floor1", "pcd", "ros2"] and cfg["target"] == names
+    assert cfg["building"]["floors"] == [
+        {"recording": "floor1.log.gz", "elevation_m": 3.5, "dataset": "floor1", "storey": "Floor 0"},
+        {"recording": "floor0.bag", "storey": "Ground", "dataset": "floor0_2", "elevation_m": 0.0},
+    ]
+    bad = {"building": {"floors": [{"recording": "floor9.bag"}]}}
+    with pytest.raises(ConfigError, match=r"building.floors\[0\].recording: 'floor9.bag' is neither"):
+        add_path_datasets(bad, recordings)
+    with pytest.raises(InputError, match="a folder with no recording in it .it holds: 'x.txt'"):
+        (tmp_path / "none").mkdir()
+        (tmp_path / "none" / "x.txt").write_text("")
+        recordings_in(tmp_path / "none")
+    with pytest.raises(InputError, match="no such file or folder"):
+        recordings_in(tmp_path / "missing.bag")
 
 
 def test_a_dataset_needs_a_path_unless_synthetic():

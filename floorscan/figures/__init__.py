@@ -12,5 +12,6 @@ stage package.
 - :mod:`~floorscan.figures.report` (the front page), :mod:`~floorscan.figures.summary_page`
   (the summary table as HTML), :mod:`~floorscan.figures.room_table` (the plan's rooms on it),
   :mod:`~floorscan.figures.plan_scores` (how good the plan is, on it),
-  :mod:`~floorscan.figures.answer` (what a finished run prints).
+  :mod:`~floorscan.figures.answer` (what a finished run prints, and ``summary.md``),
+  :mod:`~floorscan.figures.index_page` (the index of a run of several recordings).
 """

@@ -8,35 +8,119 @@ import os
 from pathlib import Path
 
 
-def answer_lines(datasets, results: str | os.PathLike = "results") -> list[str]:
-    """What a finished run prints: per dataset, where the floor plan, the scan list,
-    the reduced recording and the report are, and k with its size reduction. Datasets
-    whose selection was not made are skipped."""
-    lines = []
+def run_datasets(targets, datasets, default: list[str]) -> list[str]:
+    """The datasets a run is about, for its last lines.
+
+    Parameters
+    ----------
+    targets : iterable of str
+        The run's targets (Snakemake's ``workflow.dag_settings.targets``): rule names or
+        files.
+    datasets : iterable of str
+        Every configured dataset.
+    default : list of str
+        The targeted datasets (config ``target``): what a rule target (``all``,
+        ``plan``, ``evaluation``) or no target builds.
+
+    Returns
+    -------
+    list of str
+        ``default`` for a rule target, the dataset of each ``results/<dataset>/...``
+        file target; each once, ``default`` first, then in the order of ``datasets``.
+    """
+    import re
+
+    found = set()
+    for target in targets or ["all"]:
+        m = re.match(r"^(?:\./)?results/([^/]+)/", str(target))
+        if m:
+            found.add(m.group(1))
+        elif "/" not in str(target) and "." not in str(target):
+            found.update(default)
+    return [d for d in dict.fromkeys([*default, *datasets]) if d in found]
+
+
+def dataset_verdict(results: Path, dataset: str) -> dict | None:
+    """The registration's verdict of a dataset (``registration.parquet`` metadata:
+    ``line``, ``ok``, ``warnings``), or None when there is none."""
+    from floorscan.core.io import read_metadata
+
+    try:
+        meta = read_metadata(results / dataset / "registration.parquet")
+    except (OSError, ValueError):
+        return None
+    return json.loads(meta["verdict"]) if "verdict" in meta else None
+
+
+def answer_lines(
+    datasets, results: str | os.PathLike = "results", failed: dict | None = None, command: str = ""
+) -> list[str]:
+    """What a finished run prints: the answer of each of its datasets.
+
+    One dataset: at most 10 lines: k of the kept and recorded scans, the verdict, and
+    where the floor plan, the occupancy map (``map.pgm``, ``map.yaml``), the scan list,
+    the reduced recording, the points, ``summary.md`` and the front page are. Several:
+    one line each and the index page (``results/index.html``). A dataset in
+    ``failed`` gets its error instead of an answer, even when an older answer is on
+    disk; a dataset whose selection was not made is skipped.
+
+    Parameters
+    ----------
+    datasets : list of str
+    results : path
+        The results folder.
+    failed : dict, optional
+        ``{dataset: error paragraph}`` of the datasets whose run failed.
+    command : str
+        The command that makes the report of these datasets (a run of ``--config
+        path=...``: the default report has the config's targets only); without it,
+        ``results/report.html`` is named when it exists.
+
+    Returns
+    -------
+    list of str
+    """
+    failed = dict(failed or {})
     root = Path(results)
+    lines = []
+    many = len(datasets) > 1
     for ds in datasets:
+        if ds in failed:
+            lines.append(f"{ds}: FAILED: {failed[ds]}")
+            continue
         summary_path = root / ds / "selection" / "selection.json"
         if not summary_path.is_file():
             continue
         s = json.loads(summary_path.read_text())
+        v = dataset_verdict(root, ds)
+        verdict = v["line"] if v else "no verdict"
+        head = f"{ds}: {s['k']} of {s['n_kept']} kept scans ({s['n_recorded']} recorded), {s['ordering']}"
+        front = root / ds / "front.html"
+        if many:
+            lines.append(f"{head}; {verdict.split(':')[0]}" + (f"; {front}" if front.is_file() else ""))
+            continue
         rec = s["recording"]
-        lines.append(f"{ds}: {s['k']} of {s['n_kept']} kept scans ({s['n_recorded']} recorded), {s['ordering']}")
+        lines += [head, f"  verdict:            {verdict}"]
         plan = root / ds / "floorplan.svg"
         if plan.is_file():
             lines.append(f"  floor plan:         {root / ds}/floorplan.{{geojson,svg,dxf,ifc}}{plan_counts(root / ds / 'floorplan.geojson')}")
-        if (root / ds / "map.yaml").is_file():
-            lines.append(f"  occupancy map:      {root / ds}/map.yaml (ROS map_server, Nav2)")
+        if (root / ds / "map.pgm").is_file():
+            lines.append(f"  occupancy map:      {root / ds}/map.pgm, map.yaml (ROS map_server, Nav2)")
         lines.append(f"  scan list:          {s['scans']}")
         lines.append(
             f"  reduced recording:  {rec['path']} ({format_bytes(rec['bytes_out'])} of {format_bytes(rec['bytes_in'])}, "
             f"{rec['scan_messages_out']} scans)"
         )
         lines.append(f"  points (PLY, PCD):  {s['points'][0]}, {s['points'][1]}")
-        front = root / ds / "front.html"
-        if front.is_file():
-            lines.append(f"  front page:         {front}")
+        for label, path in (("summary:", root / ds / "summary.md"), ("front page:", front)):
+            if path.is_file():
+                lines.append(f"  {label:<20}{path}")
+    if many and (root / "index.html").is_file():
+        lines.append(f"index: {root / 'index.html'}")
     report = root / "report.html"
-    if lines and report.is_file():
+    if lines and command:
+        lines.append(f"report: {command} --report {report}")
+    elif lines and report.is_file():
         lines.append(f"report: {report}")
     return lines
 
@@ -52,7 +136,7 @@ def plan_counts(geojson: str | os.PathLike) -> str:
     except (OSError, ValueError):
         return ""
     parts = [f"{meta['n_walls']} walls"] if "n_walls" in meta else []
-    parts += [f"{meta[k]} {label}" for k, label in (("n_junctions", "junctions"), ("n_clutter", "clutter pieces")) if k in meta]
+    parts += [count_text(meta[k], noun) for k, noun in (("n_junctions", "junction"), ("n_clutter", "clutter piece")) if k in meta]
     parts += [count_text(meta[k], noun) for k, noun in (("n_rooms", "room"), ("n_doors", "door")) if k in meta]
     return f" ({', '.join(parts)})" if parts else ""
 
@@ -65,3 +149,61 @@ def format_bytes(n: int) -> str:
             v = n / size
             return f"{v:.3g} {unit}" if v < 100 else f"{v:.0f} {unit}"
     return f"{n} B"
+
+
+def write_summary_markdown(
+    path: str | os.PathLike,
+    dataset: str,
+    selection: str | os.PathLike,
+    registration: str | os.PathLike,
+    index: str | os.PathLike,
+    evaluation: str | os.PathLike | None = None,
+) -> str:
+    """Write ``summary.md``, the answer in Markdown: the registration's verdict, what
+    ingest detected (:func:`floorscan.score.summary.summary_header`), k and why, where
+    the answer's files are; then the evaluation's part (``evaluation/summary.md`` of
+    the score stage) when the dataset was evaluated.
+
+    Parameters
+    ----------
+    path : path
+        ``results/<dataset>/summary.md``.
+    dataset : str
+    selection, registration, index : path
+        ``selection/selection.json``, ``registration.parquet`` (verdict and mode in its
+        metadata), ``scan_index.parquet`` (what ingest detected, in its metadata).
+    evaluation : path, optional
+        ``evaluation/summary.md``.
+
+    Returns
+    -------
+    str
+        The Markdown written.
+    """
+    from floorscan.core.files import atomic_path
+    from floorscan.core.io import read_metadata
+    from floorscan.score.summary import summary_header
+
+    s = json.loads(Path(selection).read_text())
+    reg = read_metadata(registration)
+    verdict = json.loads(reg["verdict"]) if "verdict" in reg else None
+    root = Path(path).parent
+    rec = s["recording"]
+    lines = summary_header(dataset, verdict, read_metadata(index), reg.get("mode", ""))
+    lines += [
+        "## The answer", "",
+        f"{s['reason']} (ordering {s['ordering']}; {s['n_recorded']} scans recorded).", "",
+        f"- floor plan: `{root}/floorplan.{{geojson,svg,dxf,ifc}}`{plan_counts(root / 'floorplan.geojson')}",
+        f"- occupancy map of the selected scans: `{root}/map.pgm`, `map.yaml` (ROS map_server, Nav2)",
+        f"- scan list: `{s['scans']}`",
+        f"- reduced recording: `{rec['path']}` ({format_bytes(rec['bytes_out'])} of "
+        f"{format_bytes(rec['bytes_in'])}, {rec['scan_messages_out']} scans)",
+        f"- points of the selected scans: `{s['points'][0]}`, `{s['points'][1]}`",
+        f"- front page: `{root}/front.html`", "",
+    ]  # fmt: skip
+    text = "\n".join(lines)
+    if evaluation is not None:
+        text += "\n" + Path(evaluation).read_text(encoding="utf-8")
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return text

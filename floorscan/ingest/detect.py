@@ -153,3 +153,62 @@ def _not_carmen(path: Path) -> str | None:
         f"no {' or '.join(CARMEN_LASER_TYPES)} line in its first {typed} lines, and {typed - known} of them "
         f"start with other words than CARMEN message types (such as {words})"
     )
+
+
+#: File suffixes that make a file in a folder of recordings a candidate recording
+#: (:func:`recordings_in`): ROS1 bags, ROS2 storage files, CARMEN logs.
+RECORDING_SUFFIXES = (".bag", *ROS2_STORAGE_SUFFIXES, *CARMEN_SUFFIXES)
+
+
+def is_one_recording(folder: Path) -> bool:
+    """Whether a folder is itself one recording: a ROS2 bag (``metadata.yaml``, or
+    ``.db3`` / ``.mcap`` files) or a PCD folder (``.pcd`` files)."""
+    names = [p.name.lower() for p in folder.iterdir()]
+    return "metadata.yaml" in names or any(n.endswith((*ROS2_STORAGE_SUFFIXES, ".pcd")) for n in names)
+
+
+def recordings_in(path: str | Path) -> tuple[list[Path], list[str]]:
+    """The recordings a path names: the path itself, or each recording in a folder of
+    recordings.
+
+    A file, a ROS2 bag folder and a PCD folder are one recording. Any other folder is a
+    folder of recordings: each file with a suffix of :data:`RECORDING_SUFFIXES` and
+    each sub-folder that :func:`is_one_recording` is one (by name only: ingest reads
+    and detects each, so a file that is not what its suffix says fails on its own,
+    naming itself, without stopping the others). Hidden entries are left out.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``--config path=...``.
+
+    Returns
+    -------
+    recordings : list of Path
+        Sorted by name.
+    skipped : list of str
+        Names of the folder's entries that are not recordings (empty for one recording).
+
+    Raises
+    ------
+    InputError
+        ``path`` does not exist, or is a folder holding no recording (naming what it
+        holds and what is expected).
+    """
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"{path}: no such file or folder; {EXPECTED}")
+    if not path.is_dir() or is_one_recording(path):
+        return [path], []
+    recordings, skipped = [], []
+    for entry in sorted(path.iterdir(), key=lambda p: p.name):
+        if entry.name.startswith("."):
+            continue
+        if entry.is_dir() and is_one_recording(entry) or entry.is_file() and entry.suffix.lower() in RECORDING_SUFFIXES:
+            recordings.append(entry)
+        else:
+            skipped.append(entry.name)
+    if not recordings:
+        shown = ", ".join(quoted(n, 60) for n in skipped[:10]) + (f" ... ({len(skipped)} entries)" if len(skipped) > 10 else "")
+        raise InputError(f"{path}: a folder with no recording in it (it holds: {shown or 'nothing'}); {EXPECTED}")
+    return recordings, skipped

@@ -21,7 +21,7 @@ from floorscan.core.io import read_metadata, read_table, write_table
 from floorscan.score import curves as C
 from floorscan.score.params import ScoreParams
 from floorscan.score.runs import sort_scores
-from floorscan.score.summary import grid_summary_markdown, summarize, summary_header
+from floorscan.score.summary import grid_summary_markdown, summarize
 
 log = logging.getLogger(__name__)
 
@@ -62,7 +62,8 @@ def write_scores(
     default_ordering: str,
     reference: Mapping[str, str],
 ) -> Scores:
-    """Write ``metrics.parquet``, ``summary.parquet`` and ``summary.md`` of a dataset.
+    """Write ``metrics.parquet``, ``summary.parquet`` and ``evaluation/summary.md`` (the
+    evaluation's part of ``summary.md``) of a dataset.
 
     Parameters
     ----------
@@ -112,9 +113,8 @@ def write_scores(
     verdict = json.loads(reg["verdict"]) if "verdict" in reg else None
     if verdict:
         (log.info if verdict["ok"] and not verdict["warnings"] else log.warning)("verdict: %s", verdict["line"])
-    head = summary_header(dataset, verdict, read_metadata(index), reg.get("mode", ""))
-    with atomic_path(outputs["summary_md"]) as tmp:
-        tmp.write_text("\n".join(head) + "\n## Floor plans against the reference map\n\n"
+    with atomic_path(outputs["summary_md"]) as tmp:  # the evaluation's part of summary.md (rule front_page)
+        tmp.write_text("## Floor plans against the reference map\n\n"
                        + C.summary_markdown(summary, tau, n_kept, n_recorded, line)
                        + "\n## Walls of k scans on the configured k grid\n\n"
                        + grid_summary_markdown(grid_summary, tau, cfg.summary_levels))

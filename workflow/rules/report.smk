@@ -20,6 +20,7 @@ def front_page_inputs(wildcards):
         inputs["answer"] = f"results/{ds}/evaluation/answer_scores.csv"
         inputs["answer_curve"] = f"results/{ds}/evaluation/answer_curve.csv"
         inputs["rooms"] = f"results/{ds}/evaluation/room_scores.csv"
+        inputs["evaluation_md"] = f"results/{ds}/evaluation/summary.md"
     return inputs
 
 
@@ -39,6 +40,7 @@ rule front_page:
             subcategory="{dataset}",
             labels={"dataset": "{dataset}", "figure": "The result on one page"},
         ),
+        summary_md="results/{dataset}/summary.md",
     params:
         extractor=plan_extractor,
         description=dataset_description,
@@ -50,4 +52,4 @@ rule front_page:
         "../../scripts/front_page.py"
 
 
-REPORT_OUTPUTS.append("results/{dataset}/front.html")
+REPORT_OUTPUTS += ["results/{dataset}/front.html", "results/{dataset}/summary.md"]

@@ -252,7 +252,7 @@ rule score:
             subcategory="{dataset}",
             labels={"dataset": "{dataset}", "figure": "Floor-plan F1 against the number of scans, every ordering and the oracle"},
         ),
-        summary_md="results/{dataset}/summary.md",
+        summary_md="results/{dataset}/evaluation/summary.md",  # the evaluation's part of summary.md
     params:
         cfg=score_check,
         reference_kind=score_reference_kind,
@@ -381,7 +381,7 @@ EVALUATION_OUTPUTS.extend(
     [
         "results/{dataset}/metrics.parquet",
         "results/{dataset}/summary.parquet",
-        "results/{dataset}/summary.md",
+        "results/{dataset}/evaluation/summary.md",
     ]
     + [
         f"results/{{dataset}}/figures/{name}"

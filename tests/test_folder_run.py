@@ -1,0 +1,101 @@
+"""Issue 36: a folder of recordings in one run (one answer each, one index page, a bad
+recording's error without stopping the others), and the answer printed wherever the
+run starts (a no-op rerun, a one-file build)."""
+
+from __future__ import annotations
+
+import shutil
+
+import pytest
+
+from conftest import snakemake
+
+
+@pytest.fixture(scope="module")
+def folder_run(demo_run):
+    """The demo's recording twice (two floors) and a truncated copy of it in one folder,
+    and a text file that is no recording, run with `--config path=<folder>`."""
+    folder = demo_run / "survey"
+    folder.mkdir()
+    bag = demo_run / "results" / "demo" / "sim" / "recording.bag"
+    for name in ("floor0.bag", "floor1.bag"):
+        shutil.copy2(bag, folder / name)
+    (folder / "broken.bag").write_bytes(bag.read_bytes()[:300_000])
+    (folder / "notes.txt").write_text("taken on Tuesday")
+    (demo_run / "house.yaml").write_text(
+        "building:\n  name: Demo house\n  floors:\n"
+        "    - {recording: floor0.bag, storey: Ground floor, elevation_m: 0.0}\n"
+        "    - {recording: floor1.bag, storey: First floor, elevation_m: 3.2}\n"
+    )
+    # the repository's default profile, as a user runs (keep-going)
+    res = snakemake(demo_run, "--workflow-profile", "workflow/profiles/default", "--config", "path=survey",
+                    "--configfile", "house.yaml")
+    return demo_run, res
+
+
+def test_a_folder_gives_one_answer_per_recording_and_names_the_bad_one(folder_run):
+    wd, res = folder_run
+    assert res.returncode != 0  # one recording failed
+    assert "survey: 3 recordings, one dataset each: broken, floor0, floor1 (not recordings, left out: notes.txt)" in res.stderr
+    lines = res.stdout.strip().splitlines()
+    assert lines[0].startswith("broken: FAILED: ingest failed: survey/broken.bag: cannot read the bag, truncated or corrupt")
+    for i, ds in ((1, "floor0"), (2, "floor1")):
+        assert lines[i] == f"{ds}: 10 of 76 kept scans (321 recorded), wall_coverage; GOOD; results/{ds}/front.html"
+        for name in ("floorplan.ifc", "map.pgm", "summary.md", "front.html", "selection/scans.csv"):
+            assert (wd / "results" / ds / name).is_file(), (ds, name)
+    assert lines[-1] == "1 of 3 recordings failed: broken"
+    assert "index: results/index.html" in lines
+    # nothing half-written for the bad one: its log alone
+    assert sorted(p.relative_to(wd / "results" / "broken").as_posix() for p in (wd / "results" / "broken").rglob("*")) == [
+        "logs", "logs/ingest.log"]
+    index = (wd / "results" / "index.html").read_text()
+    assert "3 recordings: 2 with a plan, 1 failed" in index
+    assert 'src="floor0/floorplan.svg"' in index and 'href="floor1/front.html"' in index
+    assert "truncated or corrupt" in index
+
+
+def test_floors_of_one_building_give_one_ifc_with_a_storey_each(folder_run):
+    import ifcopenshell
+    import ifcopenshell.validate
+    from ifcopenshell.util.element import get_decomposition
+
+    wd, res = folder_run
+    assert "building: results/building/index.html, results/building/building.ifc (2 storeys)" in res.stdout
+    model = ifcopenshell.open(str(wd / "results" / "building" / "building.ifc"))
+    storeys = {s.Name: s for s in model.by_type("IfcBuildingStorey")}
+    assert sorted(storeys) == ["First floor", "Ground floor"] and storeys["First floor"].Elevation == pytest.approx(3.2)
+    for name, storey in storeys.items():  # each holds its own floor's walls and rooms (the demo's: 14 and 5)
+        parts = get_decomposition(storey)
+        assert sum(e.is_a("IfcWall") for e in parts) == 14 and sum(e.is_a("IfcSpace") for e in parts) == 5, name
+    logger = ifcopenshell.validate.json_logger()
+    ifcopenshell.validate.validate(model, logger, express_rules=True)
+    assert logger.statements == []
+    for ds in ("floor0", "floor1"):
+        assert (wd / "results" / "building" / f"{ds}.geojson").is_file()
+    page = (wd / "results" / "building" / "index.html").read_text()
+    assert "Demo house" in page and "../floor1/front.html" in page
+
+
+def test_the_answer_is_printed_wherever_the_run_starts(demo_run):
+    """A no-op rerun and a one-file build each end with their own dataset's answer, in
+    at most 10 lines, naming map.pgm, summary.md and the front page."""
+    for args in ((), ("results/demo/floorplan.svg",)):
+        res = snakemake(demo_run, *args)
+        assert res.returncode == 0, res.stderr[-2000:]
+        assert "Nothing to be done" in res.stderr
+        lines = res.stdout.strip().splitlines()
+        assert lines[0].startswith("demo: 10 of 76 kept scans (321 recorded)") and len(lines) <= 10
+        text = "\n".join(lines)
+        for name in ("results/demo/map.pgm", "results/demo/summary.md", "results/demo/front.html"):
+            assert name in text
+    md = (demo_run / "results" / "demo" / "summary.md").read_text()
+    assert md.startswith("# Scan reduction summary: demo") and "## The answer" in md
+    assert "## Floor plans against the reference map" in md  # the evaluation's part
+
+
+def test_a_wrong_path_is_one_line(demo_run):
+    res = snakemake(demo_run, "--config", "path=no/such/run.bag")
+    assert res.returncode != 0
+    assert "path: no/such/run.bag: no such file or folder; expected a ROS1 .bag file" in res.stderr
+    assert "Traceback" not in res.stderr and "MissingInputException" not in res.stderr
+    assert not (demo_run / "results" / "run").exists()
