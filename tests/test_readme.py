@@ -1,0 +1,114 @@
+"""Issue 36: every command of the README works as written.
+
+Each command of the README's ``bash`` blocks is checked here (a test fails on a command
+it does not know):
+
+- ``make <target>``: ``make -n <target>`` (the recipe exists; ``make test`` is what CI
+  runs);
+- ``.venv/bin/python -m benchmarks <name> [options]``: ``<name> [options] --help``
+  parses (a run takes minutes to hours: ``benchmarks/README.md``);
+- ``.venv/bin/snakemake ...``: in a copy of the workflow with the demo built, as
+  written, dry-run (``-n``) unless it is cheap (``--unlock``); the README's example
+  paths (``/data/lab_run.bag``, ``/data/survey/``) stand for the demo's recording and a
+  folder of two copies of it, and its example config files (``my.yaml``,
+  ``house.yaml``) are its own YAML blocks.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+from conftest import REPO, SNAKEMAKE
+
+README = REPO / "README.md"
+
+
+def readme_blocks(lang: str) -> list[str]:
+    return re.findall(rf"```{lang}\n(.*?)```", README.read_text(), re.S)
+
+
+def readme_commands() -> list[str]:
+    """The commands of the README's bash blocks (comments and blank lines left out)."""
+    out = []
+    for block in readme_blocks("bash"):
+        for line in block.splitlines():
+            line = re.sub(r"\s+#.*$", "", line).strip()
+            if line and not line.startswith("#"):
+                out.append(line)
+    return out
+
+
+def test_the_readme_has_the_commands_this_test_knows():
+    cmds = readme_commands()
+    assert len(cmds) >= 15 and "make test" in cmds
+    assert all(c.startswith(("make ", ".venv/bin/snakemake ", ".venv/bin/python -m benchmarks ", "FLOORSCAN_PROFILE="))
+               for c in cmds), cmds  # fmt: skip
+    assert not [c for c in cmds if c.startswith("snakemake")]  # without .venv/bin: "command not found"
+
+
+@pytest.mark.parametrize("cmd", [c for c in readme_commands() if c.startswith("make ")])
+def test_make_targets_exist(cmd):
+    res = subprocess.run(["make", "-n", *shlex.split(cmd)[1:]], cwd=REPO, capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+
+
+@pytest.mark.parametrize("cmd", [c for c in readme_commands() if c.startswith(".venv/bin/python -m benchmarks")])
+def test_benchmark_commands_parse(cmd):
+    args = shlex.split(cmd)[3:]
+    res = subprocess.run([sys.executable, "-m", "benchmarks", *args, "--help"], cwd=REPO, capture_output=True,
+                         text=True, timeout=120)  # fmt: skip
+    assert res.returncode == 0 and "usage:" in res.stdout, res.stdout + res.stderr
+
+
+@pytest.fixture(scope="module")
+def readme_workdir(demo_run):
+    """The demo's workflow copy with the README's example files: my.yaml, house.yaml
+    (its YAML blocks, their paths the demo's), a folder of two recordings."""
+    wd = demo_run
+    bag = wd / "results" / "demo" / "sim" / "recording.bag"
+    survey = wd / "readme_survey"
+    if not survey.exists():
+        survey.mkdir()
+        for name in ("ground.bag", "first.bag"):
+            shutil.copy2(bag, survey / name)
+    for block in readme_blocks("yaml"):
+        m = re.match(r"# (\S+\.yaml)\n", block)
+        if m:
+            (wd / m.group(1)).write_text(block.replace("/data/lab_run.bag", str(bag)))
+    return wd, {"/data/lab_run.bag": str(bag), "/data/survey/": str(survey) + "/"}
+
+
+@pytest.mark.workflow
+@pytest.mark.parametrize(
+    "cmd", [c for c in readme_commands() if ".venv/bin/snakemake" in c and "profiles/slurm" not in c]
+)
+def test_snakemake_commands_work_as_written(readme_workdir, cmd):
+    wd, paths = readme_workdir
+    for example, real in paths.items():
+        cmd = cmd.replace(example, real)
+    env = dict(os.environ)
+    words = shlex.split(cmd)
+    while "=" in words[0]:  # FLOORSCAN_PROFILE=/tmp/prof
+        key, value = words.pop(0).split("=", 1)
+        env[key] = value
+    assert words[0] == ".venv/bin/snakemake"
+    args = words[1:] if "--unlock" in words else [*words[1:], "-n"]
+    res = subprocess.run([str(SNAKEMAKE), *args], cwd=wd, capture_output=True, text=True, env=env, timeout=300)
+    assert res.returncode == 0, res.stderr[-3000:]
+    assert "Error" not in res.stderr, res.stderr[-3000:]
+
+
+def test_the_slurm_profile_names_an_installed_executor():
+    """``--profile workflow/profiles/slurm`` needs a SLURM cluster; its executor plugin
+    is installed and its profile names it."""
+    import importlib.util
+
+    assert "executor: slurm" in (REPO / "workflow" / "profiles" / "slurm" / "config.yaml").read_text()
+    assert importlib.util.find_spec("snakemake_executor_plugin_slurm") is not None
