@@ -99,3 +99,26 @@ def test_a_wrong_path_is_one_line(demo_run):
     assert "path: no/such/run.bag: no such file or folder; expected a ROS1 .bag file" in res.stderr
     assert "Traceback" not in res.stderr and "MissingInputException" not in res.stderr
     assert not (demo_run / "results" / "run").exists()
+
+
+def test_the_recordings_of_a_folder_are_independent_jobs(folder_run):
+    """Issue 36, item 6: the job graph of a folder run, without the `all` target that
+    gathers them, falls apart into one part per recording, so any executor (the
+    cluster profile: tests/test_cluster.py) runs the recordings side by side."""
+    import re
+
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    wd, _ = folder_run
+    res = snakemake(wd, "-n", "--forceall", "--dag", "--config", "path=survey")
+    assert res.returncode == 0, res.stderr[-2000:]
+    nodes = dict(re.findall(r"^\s*(\d+)\[label = \"([^\"]*)\"", res.stdout, re.M))
+    edges = [(a, b) for a, b in re.findall(r"^\s*(\d+) -> (\d+)$", res.stdout, re.M)
+             if "all" not in (nodes[a], nodes[b])]  # fmt: skip
+    ids = {n: i for i, n in enumerate(n for n in nodes if nodes[n] != "all")}
+    graph = coo_matrix(([1] * len(edges), ([ids[a] for a, _ in edges], [ids[b] for _, b in edges])), (len(ids),) * 2)
+    n_parts, part = connected_components(graph, directed=False)
+    ingests = [ids[n] for n, label in nodes.items() if label.startswith("ingest")]
+    assert n_parts == 3 and len(ingests) == 3  # broken, floor0, floor1
+    assert len({part[i] for i in ingests}) == 3
