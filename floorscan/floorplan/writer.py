@@ -261,25 +261,12 @@ def write_recommended_floorplan(
 
     Parameters
     ----------
-    scans_path : path
-        ``selection/scans.csv`` (:func:`floorscan.select.deliverables.write_scan_list`):
-        its ``scan_id`` column names the selected scans.
-    walls_path : path
-        ``walls/<extractor>/per_scan.parquet`` (every kept scan's wall segments, the
-        selected scans' are taken) or, for the map extractor,
-        ``walls/map/selected.parquet`` (the map of the selected scans, taken whole).
-    index_path : path
-        ``scan_index.parquet``: the first scan's stamp is the exports' time stamp
-        (seconds since the epoch; the same recording gives the same files).
+    scans_path, walls_path, index_path, cfg, dataset, ordering, extractor, grid_path
+        As :func:`recommended_plan` (the first scan's stamp is the exports' time stamp:
+        the same recording gives the same files).
     outputs : mapping
-        Paths by format (any of :data:`FLOORPLAN_FORMATS`).
-    cfg : mapping
-        The ``floorplan`` config section (``georeference`` applies here).
-    dataset, ordering, extractor : str
-        Named in every export.
-    grid_path : path, optional
-        ``walls/map/selected_grid.parquet``: the free space of the selected scans; with
-        it the plan goes through the structure passes (clutter, joins, junctions).
+        Paths by format (any of :data:`FLOORPLAN_FORMATS`); ``cfg``'s ``georeference``
+        applies to them.
     map_paths : (path, path), optional
         ``map.pgm``, ``map.yaml``: that grid as a ROS map_server / Nav2 map
         (:func:`floorscan.core.occupancy.write_map_server`); needs ``grid_path``.
