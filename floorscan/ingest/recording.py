@@ -124,7 +124,10 @@ def describe_recording(detected: Mapping[str, str], mode: str = "") -> str:
 
 
 def yaw_from_quaternion(qx, qy, qz, qw):
-    """Yaw (rotation about +z, radians in (-pi, pi]) of quaternions (x, y, z, w)."""
+    """Yaw (rotation about +z) of quaternions (x, y, z, w): arrays or scalars of the
+    same shape; radians in [-pi, pi] (``numpy.arctan2``: +pi and -pi both occur, as
+    the sign of zero gives them; :func:`floorscan.core.geometry.wrap_angle` maps to
+    [-pi, pi))."""
     qx, qy, qz, qw = (np.asarray(v, dtype=np.float64) for v in (qx, qy, qz, qw))
     return np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
 

@@ -184,9 +184,35 @@ def target_normals(target: np.ndarray, tree: cKDTree, cfg: RegistrationConfig) -
 def icp_to_map(src: np.ndarray, target: np.ndarray, init, cfg: RegistrationConfig,
                 tree: cKDTree | None = None, normals: np.ndarray | None = None,
                 distances: tuple[float, ...] | None = None):
-    """Coarse-to-fine planar ICP of ``src`` (scanner frame) against ``target`` (map frame),
-    at the correspondence ``distances`` (default ``cfg.icp_max_correspondence_m``);
-    ``tree`` and ``normals`` of the target are computed unless given."""
+    """Coarse-to-fine planar ICP of a scan against a map (:func:`icp_planar` at each
+    correspondence distance in turn, thesis 3.2.2).
+
+    Parameters
+    ----------
+    src : (N, 3) float64 ndarray
+        The scan's points in the scanner frame, metres.
+    target : (M, 3) float64 ndarray
+        The map's points in the map frame, metres.
+    init : sequence of 4 float
+        The starting pose (x, y, z, yaw): metres, radians.
+    cfg : RegistrationConfig
+        ``icp_max_correspondence_m`` (the distances, coarse to fine, metres),
+        ``icp_method``, ``icp_max_iterations``, ``icp_tolerance_m``.
+    tree : scipy.spatial.cKDTree, optional
+        ``target``'s KD-tree (built when not given).
+    normals : (M, 3) float64 ndarray, optional
+        ``target``'s normals for point-to-plane (:func:`target_normals` when not given).
+    distances : tuple of float, optional
+        The correspondence distances instead of ``cfg``'s, metres.
+
+    Returns
+    -------
+    pose : tuple of 4 float
+        The refined (x, y, z, yaw), metres and radians; ``init`` when no point found a
+        partner at the first distance.
+    n_corr : int
+        Correspondences at the last distance reached (0: ICP stopped for want of them).
+    """
     ttree = cKDTree(target) if tree is None else tree
     nrm = normals if normals is not None else target_normals(target, ttree, cfg)
     pose, n_corr = tuple(float(v) for v in init), 0

@@ -42,7 +42,32 @@ def prepare_index(scan_index: pd.DataFrame) -> pd.DataFrame:
     return index
 
 
-def aligned_poses(index: pd.DataFrame, poses: pd.DataFrame | None, cfg: RegistrationConfig):
+def aligned_poses(index: pd.DataFrame, poses: pd.DataFrame | None, cfg: RegistrationConfig) -> pd.DataFrame | None:
+    """The localizer's pose of every scan of the index, in index order (thesis
+    Algorithm 3, step 1's result as the register stage reads it).
+
+    Parameters
+    ----------
+    index : pandas.DataFrame
+        ``scan_index.parquet``: one row per scan, ``scan_id``.
+    poses : pandas.DataFrame or None
+        ``poses.parquet``: ``scan_id``, ``x``, ``y``, ``z`` (metres), ``yaw`` (radians),
+        ``valid``, ``reason``; one row per scan.
+    cfg : RegistrationConfig
+        ``mode``: ``odometry`` needs no poses.
+
+    Returns
+    -------
+    pandas.DataFrame or None
+        One row per scan of ``index`` (S rows), the columns of ``poses``; ``valid`` is
+        false where the pose is missing or not finite. None in odometry mode.
+
+    Raises
+    ------
+    InputError
+        Pose mode without poses; ``poses.parquet`` without those columns, with a
+        repeated ``scan_id``, or without a row for a scan of the index.
+    """
     if cfg.mode == "odometry":
         return None
     if poses is None:

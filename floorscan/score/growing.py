@@ -35,13 +35,32 @@ def score_walls(
     gt_bitmap: np.ndarray | None = None,
     samples: np.ndarray | None = None,
 ) -> dict[str, float]:
-    """All metrics of one inferred wall set:
-    :func:`floorscan.score.bitmap.bitmap_metrics` on ``grid`` and
-    :func:`floorscan.score.tolerance.tolerance_metrics`.
+    """All metrics of one inferred wall set (thesis 5.1): the bitmap metrics
+    (:func:`floorscan.score.bitmap.bitmap_metrics`) on ``grid`` and precision, recall
+    and F1 within each tolerance (:func:`floorscan.score.tolerance.tolerance_metrics`).
 
-    ``gt_bitmap`` (the rasterized ground truth on ``grid``) and ``samples``
-    (:func:`floorscan.score.segments.gt_samples`) may be passed to avoid recomputing
-    them for every ordering and k.
+    Parameters
+    ----------
+    inferred, ground_truth : (N, 4) and (M, 4) float ndarray
+        Wall segments ``x0, y0, x1, y1``, metres, map frame.
+    grid : Grid
+        The raster of the bitmap metrics.
+    wall_width_m : float
+        Width a segment is drawn with on ``grid``, metres.
+    taus : tuple of float
+        Tolerances, metres.
+    sample_step_m : float
+        Spacing of the segments' samples, metres.
+    gt_bitmap : (H, W) bool ndarray, optional
+        The rasterized ground truth on ``grid``, to reuse across orderings and k.
+    samples : (S, 2) float ndarray, optional
+        :func:`floorscan.score.segments.gt_samples` of ``ground_truth``, likewise.
+
+    Returns
+    -------
+    dict of str to float
+        The bitmap metrics' keys and ``precision_<t>cm``, ``recall_<t>cm``,
+        ``f1_<t>cm`` for each tolerance.
     """
     if gt_bitmap is None:
         gt_bitmap = rasterize_segments(ground_truth, grid, wall_width_m)
