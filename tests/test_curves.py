@@ -124,21 +124,21 @@ def test_curve_summary_averages_random_seeds_and_compares_with_the_oracle():
     assert "random does not beat random" in worse
 
 
-def test_summary_markdown_gives_a_row_per_ordering_with_the_seeds_spread():
+def test_curve_summary_markdown_gives_a_row_per_ordering_with_the_seeds_spread():
     curves = pd.concat([_curves("cluster_hull", -1, [0.5, 0.96, 0.97, 1.0]),
                         _curves("oracle", -1, [0.96, 0.98, 0.99, 1.0]),
                         _curves("random", 0, [0.3, 0.6, 0.96, 1.0]),
                         _curves("random", 1, [0.4, 0.96, 0.97, 1.0])], ignore_index=True)
     s = C.curve_summary(curves, n_kept=100, n_recorded=400)
-    md = C.summary_markdown(s, 0.05, 100, 400, "LINE")
+    md = C.curve_summary_markdown(s, 0.05, 100, 400, "LINE")
     rows = [r for r in md.splitlines() if r.startswith("| ransac")]
     assert len(rows) == 3 and "LINE" in md and "100 kept of 400 recorded" in md
     assert rows[2].split(" | ")[3] == "35 +- 15" and rows[0].split(" | ")[-1] == "2.00 |"
 
 
-def test_summary_markdown_warns_of_an_f1_from_few_scans():
+def test_curve_summary_markdown_warns_of_an_f1_from_few_scans():
     curves = pd.concat([_curves("cluster_hull", -1, [0.5, 0.96, 0.97, 1.0], n_kept=8),
                         _curves("oracle", -1, [0.96, 0.98, 0.99, 1.0], n_kept=8)], ignore_index=True)
     curves["k"] = curves["k"].map({10: 1, 20: 2, 50: 4, 100: 8})  # 8 kept scans
-    md = C.summary_markdown(C.curve_summary(curves, n_kept=8, n_recorded=20), 0.05, 8, 20, "LINE")
+    md = C.curve_summary_markdown(C.curve_summary(curves, n_kept=8, n_recorded=20), 0.05, 8, 20, "LINE")
     assert md.count("1.000 (warning: from 8 scans)") == 2

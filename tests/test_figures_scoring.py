@@ -18,7 +18,6 @@ from floorscan.figures.floorplans import plot_floorplans, read_geojson_geometrie
 from floorscan.figures.maps import plot_walls_over_points, subsample_points
 from floorscan.figures.scoring import make_score_figures, make_walls_figures
 from floorscan.figures.stage_times import plot_stage_times, stage_of, stage_times
-from floorscan.figures.style import DPI
 from floorscan.score.ground_truth import GROUND_TRUTH
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -188,14 +187,14 @@ def test_subsample_points_from_file_equals_the_frame(tmp_path):
 def _capture_figures(monkeypatch, module):
     """Keep the figures the plot functions of ``module`` save (the PNG is written as well)."""
     figures = []
-    save = module._save
+    save = module.save_figure
 
-    def keep(fig, path, dpi=DPI):
+    def keep(fig, path):
         figures.append(fig)
         fig.canvas.draw()  # lay out before the figure is closed
-        save(fig, path, dpi)
+        save(fig, path)
 
-    monkeypatch.setattr(module, "_save", keep)
+    monkeypatch.setattr(module, "save_figure", keep)
     return figures
 
 
@@ -290,3 +289,27 @@ def test_reference_map_shows_one_cell_walls_of_a_large_building(tmp_path):
     assert dark.max() > 400  # the wall: a dark line across most of the 600-pixel axes
     red = ((img[..., 0] > 0.6) & (img[..., 1] < 0.35)).sum(axis=0)
     assert red.max() > 300
+
+
+def test_an_ordering_has_one_colour_in_every_figure(tmp_path, monkeypatch):
+    """Every ordering of the registry has a colour of its own, and the walls' metrics
+    (Fig. 5.4) and the covered area (Fig. 5.6) draw each ordering in it."""
+    from matplotlib.colors import to_hex
+
+    from floorscan.figures import curves as figures_curves
+    from floorscan.figures import selection as figures_selection
+    from floorscan.figures.style import ORDERING_COLOURS
+    from floorscan.select.registry import COVERAGE_ORDERINGS, ORDERINGS
+
+    assert list(ORDERING_COLOURS) == list(ORDERINGS + COVERAGE_ORDERINGS)
+    assert len(set(ORDERING_COLOURS.values())) == len(ORDERING_COLOURS)
+    figures = _capture_figures(monkeypatch, figures_curves)
+    plot_metrics_vs_k(_metrics(), tmp_path / "metrics.png")
+    figures += _capture_figures(monkeypatch, figures_selection)
+    area = pd.DataFrame({"rank": [1, 2, 3], "covered_area_m2": [5.0, 9.0, 10.0]})
+    figures_selection.plot_coverage_vs_scans({"sequential": area, "cluster_hull": area}, tmp_path / "area.png")
+    for fig in figures:
+        lines = [ln for ax in fig.axes for ln in ax.get_lines() if not ln.get_label().startswith("_")]
+        assert {ln.get_label().split(" ")[0] for ln in lines} == {"sequential", "cluster_hull"}
+        for ln in lines:
+            assert to_hex(ln.get_color()) == to_hex(ORDERING_COLOURS[ln.get_label().split(" ")[0]])

@@ -33,7 +33,7 @@ from floorscan.score.segments import (
     sample_segments,
     segment_lengths,
 )
-from floorscan.score.summary import summarize, summary_markdown
+from floorscan.score.summary import grid_summary_markdown, summarize
 from floorscan.score.tolerance import tolerance_metrics
 
 WALL = [[0.0, 0.0, 10.0, 0.0]]
@@ -343,7 +343,7 @@ def test_score_dataset_and_summary(tmp_path):
     assert r["k_80"] == "10" and r["n_scans_80"] == 10
     assert r["fraction_80"] == pytest.approx(0.25) and r["reduction_80"] == pytest.approx(4.0)
     assert r["k_95"] == "all" and r["fraction_95"] == pytest.approx(1.0)
-    md = summary_markdown(s, 0.05, (0.8, 0.95))
+    md = grid_summary_markdown(s, 0.05, (0.8, 0.95))
     assert "ground-truth" in md and "| sequential | ransac | 40 |" in md
 
 
@@ -379,7 +379,7 @@ def test_score_dataset_labels_a_reference():
     assert df["n_scans"].iloc[0] == 3 and df["n_floorplan_walls"].iloc[0] == -1
     with pytest.raises(ValueError, match="empty"):
         score_dataset(runs, {"ransac": np.zeros((0, 4))}, REFERENCE, cfg)
-    assert "not ground truth" in summary_markdown(summarize(df, 0.05, (0.95,)), 0.05, (0.95,))
+    assert "not ground truth" in grid_summary_markdown(summarize(df, 0.05, (0.95,)), 0.05, (0.95,))
 
 
 def test_overlapping_reference_walls_count_once_in_recall():

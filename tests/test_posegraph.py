@@ -1,7 +1,6 @@
 """Pose-graph registration (floorscan.register.posegraph, edges, solver): ICP edges and the
-sparse planar optimiser (against Open3D's)."""
+sparse planar optimiser."""
 
-import dataclasses
 import math
 
 import numpy as np
@@ -133,6 +132,7 @@ def test_same_input_same_output(recording):
     np.testing.assert_array_equal(pa, pb)
 
 
+@pytest.mark.slow
 def test_edge_icp_in_worker_processes_gives_the_same_edges(recording, edges, monkeypatch):
     """``workers`` splits the pairs over processes (the register rule's threads); every
     edge is the single-process one, in the same order."""
@@ -173,26 +173,30 @@ def _diff(a, b):
 
 
 @pytest.mark.parametrize("with_priors", [True, False])
-def test_sparse_solver_matches_open3d(recording, edges, with_priors):
-    """The planar sparse Gauss-Newton finds Open3D's optimum (hallways: 0.07 mm)."""
+def test_solver_reaches_the_optimum(recording, edges, with_priors):
+    """From the priors (or, in odometry mode, a wrong start for all but the held first
+    scan) the solver ends nearer the truth, at a stationary point: started again from its
+    answer it does not move. (Open3D's 6-DoF optimiser found the same poses: hallways
+    0.07 mm, benchmarks/README.md.)"""
     truth, clouds, t, priors = recording
     start = priors.copy()
-    if not with_priors:  # odometry mode: a wrong start for all but the held first scan
+    if not with_priors:
         start = truth.copy()
         start[1:] += [0.03, -0.02, 0.0, 0.01]
     pr = priors if with_priors else None
-    a, ia = optimize_pose_graph(start, edges, pr, GraphParams(solver="sparse"))
-    b, ib = optimize_pose_graph(start, edges, pr, GraphParams(solver="open3d"))
+    a, ia = optimize_pose_graph(start, edges, pr)
+    b, ib = optimize_pose_graph(a, edges, pr)
     d_xy, d_yaw = _diff(a, b)
-    assert d_xy < 1e-4 and d_yaw < 1e-5
+    assert d_xy < 1e-7 and d_yaw < 1e-8
     assert ia == ib and ia["n_pruned"] == 0
+    assert _rms(a, truth) < 0.5 * _rms(start, truth)
     np.testing.assert_array_equal(a[:, 2], start[:, 2])  # z passes through
     assert np.all(np.abs(a[:, 3]) <= math.pi)
 
 
 def test_a_wrong_loop_edge_is_pruned(recording, edges):
-    """A loop edge 2 m off is switched off by the line process (Open3D's, which here
-    keeps it: RMS 4.3 cm) and the poses are those of the graph without that edge."""
+    """A loop edge 2 m off is switched off by the line process and the poses are those
+    of the graph without that edge."""
     truth, clouds, t, priors = recording
     bad = edges.copy()
     k = bad.index[(bad["kind"] == "loop") & (bad["fitness"] >= 0.6)][0]
@@ -239,13 +243,6 @@ def test_long_path_is_sparse():
     keep = np.arange(n) != 3000
     assert _rms(priors[keep], truth[keep]) > 0.06
     assert _rms(out[keep], truth[keep]) < 0.02
-
-
-def test_unknown_solver():
-    with pytest.raises(ValueError, match="solver"):
-        optimize_pose_graph(np.zeros((2, 4)), pd.DataFrame(columns=EDGE_COLUMNS), params=GraphParams(solver="dense"))
-    assert GraphParams.from_mapping({"solver": "open3d"}).solver == "open3d"
-    assert dataclasses.replace(GraphParams(), solver="sparse") == GraphParams()
 
 
 def test_candidate_pairs_out_and_back():

@@ -14,7 +14,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from floorscan.figures.style import _save, _square, reference_name  # noqa: E402
+from floorscan.figures.style import DPI, _square, reference_name, save_figure  # noqa: E402
 from floorscan.score.bitmap import Grid, bitmap_metrics, rasterize_segments  # noqa: E402
 
 
@@ -68,7 +68,7 @@ def plot_bitmap_overlay(
     # About 900 pixels across a panel: larger grids are shown block-reduced (any).
     factor = max(1, int(np.ceil(max(grid.nx, grid.ny) / 900)))
     n = max(1, len(panels))
-    fig, axes = plt.subplots(1, n, figsize=(7 * n, 6), squeeze=False, dpi=150)
+    fig, axes = plt.subplots(1, n, figsize=(1050 * n / DPI, 900 / DPI), squeeze=False)
     ref = reference_name(reference_kind)
     for ax, (name, seg) in zip(axes[0], panels):
         bi = rasterize_segments(seg, grid, wall_width_m)
@@ -94,4 +94,4 @@ def plot_bitmap_overlay(
         title += f" (shown in blocks of {factor} x {factor} cells)"
     fig.suptitle(title)
     fig.tight_layout()
-    _save(fig, out, dpi=150)
+    save_figure(fig, out)

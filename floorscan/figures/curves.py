@@ -17,7 +17,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from floorscan.figures.style import ORDERING_COLOURS, _save, reference_name  # noqa: E402
+from floorscan.figures.style import ORDERING_COLOURS, reference_name, save_figure  # noqa: E402
 from floorscan.score.ground_truth import GROUND_TRUTH  # noqa: E402
 from floorscan.score.tolerance import tau_label  # noqa: E402
 
@@ -75,7 +75,7 @@ def plot_metrics_vs_k(metrics: pd.DataFrame, out, tau: float = 0.05) -> None:
     ds = metrics["dataset"].iloc[0] if len(metrics) else ""
     fig.suptitle(f"{ds}: walls of the first k scans against the {reference_name(kind)}")
     fig.tight_layout()
-    _save(fig, out)
+    save_figure(fig, out)
 
 
 def plot_quality_vs_k(curves: pd.DataFrame, out, tau: float = 0.05, up_to: float = 0.2, title: str = "") -> None:
@@ -109,4 +109,4 @@ def plot_quality_vs_k(curves: pd.DataFrame, out, tau: float = 0.05, up_to: float
         ax.set_title(f"{extractor}", fontsize=10)
         ax.legend(fontsize=8, loc="lower right")
     fig.suptitle(title or "Floor-plan F1 against the number of scans", fontsize=11)
-    _save(fig, out)
+    save_figure(fig, out)

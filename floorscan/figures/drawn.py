@@ -16,7 +16,7 @@ def drawn_overlay_figure(overlay: dict, info: dict, dataset: str, path: str | os
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
 
-    from floorscan.core.files import atomic_path
+    from floorscan.figures.style import save_figure
 
     xy, seen, st = overlay["drawn_xy"], overlay["seen"], overlay["structure"]
     fig, ax = plt.subplots(figsize=(10, 8))
@@ -36,6 +36,4 @@ def drawn_overlay_figure(overlay: dict, info: dict, dataset: str, path: str | os
         f"90 % {info['residual_p90_m']:.3f} m ({info['start']})", fontsize=10,
     )
     ax.legend(loc="upper right", fontsize=7, markerscale=8)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    plt.close(fig)
+    save_figure(fig, path)

@@ -14,7 +14,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from floorscan.figures.style import _save, _segments_collection, _square, reference_name  # noqa: E402
+from floorscan.figures.style import _segments_collection, _square, reference_name, save_figure  # noqa: E402
 
 
 def read_geojson_geometries(path) -> list:
@@ -94,4 +94,4 @@ def plot_floorplans(panels, reference, reference_kind: str, out, title: str = ""
         ax.legend(fontsize=7, loc="upper right")
     fig.suptitle(title)
     fig.tight_layout()
-    _save(fig, out)
+    save_figure(fig, out)

@@ -18,7 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from floorscan.figures.style import DPI, _save, _segments_collection, _square  # noqa: E402
+from floorscan.figures.style import DPI, _segments_collection, _square, save_figure  # noqa: E402
 from floorscan.score.segments import as_segments  # noqa: E402
 
 
@@ -51,7 +51,7 @@ def plot_reference_map(grid, out, title: str = "", faces=None) -> None:
         f"{counts['unknown']} unknown (grey); {r * 100:.0f} cm cells",
         fontsize=9,
     )
-    _save(fig, out)
+    save_figure(fig, out)
 
 
 def plot_walls_over_points(points, panels, out, title: str = "", max_points: int = 200_000) -> None:
@@ -87,7 +87,7 @@ def plot_walls_over_points(points, panels, out, title: str = "", max_points: int
         ax.legend(fontsize=7, loc="upper right", markerscale=4)
     fig.suptitle(title)
     fig.tight_layout()
-    _save(fig, out)
+    save_figure(fig, out)
 
 
 def subsample_points(

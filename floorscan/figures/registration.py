@@ -181,14 +181,14 @@ def plot_registered_map(
     from matplotlib.colors import LogNorm
     from scipy.spatial import cKDTree
 
-    from floorscan.core.files import atomic_path
+    from floorscan.figures.style import save_figure
 
     raster = (registered if isinstance(registered, DensityRaster)
               else DensityRaster.of_points(registered[["x", "y"]].to_numpy(np.float64), cell_m))
     cell_m = raster.cell_m
     kept = registration[registration["kept"].to_numpy(bool)]
     loc = kept[["x_m", "y_m"]].to_numpy(np.float64)
-    fig, ax = plt.subplots(figsize=(8, 8), dpi=120)
+    fig, ax = plt.subplots(figsize=(8, 8))
     ex, ey, h = raster.grid()
     # a map wider than the figure's pixels would lose its thin walls when drawn, one
     # cell per pixel picked: cells are summed into blocks, at most FIGURE_CELLS across
@@ -211,6 +211,4 @@ def plot_registered_map(
     lines = [f"{title}: {what}" if title else what[:1].upper() + what[1:], *subtitle]
     ax.set_title("\n".join(textwrap.fill(line, 72) for line in lines), fontsize=9 if subtitle else None)
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png")
-    plt.close(fig)
+    save_figure(fig, path)

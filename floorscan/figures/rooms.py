@@ -31,7 +31,7 @@ def rooms_overlay_figure(overlay: dict, dataset: str, path: str | os.PathLike, p
     import numpy as np
     from matplotlib.patches import Patch
 
-    from floorscan.core.files import atomic_path
+    from floorscan.figures.style import save_figure
 
     entry = overlay["plans"].get(plan, {"rooms": [], "doors_xy": np.empty((0, 2))})
     detail = entry.get("rooms_detail")
@@ -88,9 +88,7 @@ def rooms_overlay_figure(overlay: dict, dataset: str, path: str | os.PathLike, p
     ax.set_xlabel("x (m, map frame)")
     ax.set_ylabel("y (m, map frame)")
     ax.set_title(_title(overlay, dataset, plan), fontsize=10)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def _title(overlay: dict, dataset: str, plan: str) -> str:

@@ -26,9 +26,9 @@ import pandas as pd  # noqa: E402
 import pyarrow as pa  # noqa: E402
 import pyarrow.parquet as pq  # noqa: E402
 
+from floorscan.figures.style import ORDERING_COLOURS, save_figure  # noqa: E402
 from floorscan.select.hulls import kept_scan_ids, scan_coverage, scan_hulls  # noqa: E402
 from floorscan.core.io import split_by_scan  # noqa: E402
-from floorscan.core.files import atomic_path
 from floorscan.core.io import iter_scans  # noqa: E402
 from floorscan.select.greedy import greedy_coverage, greedy_reference  # noqa: E402
 from floorscan.select.params import HullParams, SelectParams  # noqa: E402
@@ -36,15 +36,8 @@ from floorscan.select.registry import ORDERINGS  # noqa: E402
 from floorscan.select.summary import k_for_fraction  # noqa: E402
 from floorscan.core.config import schema_defaults
 
-_STYLE = {
-    "cluster_hull": dict(color="C0", lw=2.0),
-    "convex_hull": dict(color="C1", lw=1.5),
-    "random": dict(color="C2", lw=1.2),
-    "sequential": dict(color="C3", lw=1.2),
-    "motion_filter": dict(color="C4", lw=1.2),
-    "wall_coverage": dict(color="C5", lw=2.0),
-    "surface_coverage": dict(color="C6", lw=1.5),
-}
+#: Line width of the greedy orderings in Fig. 5.6 (the baselines: 1.2).
+_LINE_WIDTHS = {"cluster_hull": 2.0, "convex_hull": 1.5, "wall_coverage": 2.0, "surface_coverage": 1.5}
 
 
 @dataclass(frozen=True)
@@ -76,15 +69,14 @@ class FigureParams:
         return cls(**kw)
 
 
-def _save(fig, path: str | os.PathLike) -> None:
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=120, bbox_inches="tight")
-    plt.close(fig)
-
-
-def _titled(dataset: str, what: str) -> str:
-    """A figure title: ``"<dataset>: <what it shows>"`` (what, capitalised, alone)."""
-    return f"{dataset}: {what}" if dataset else what[:1].upper() + what[1:]
+def _finish(fig, ax, dataset: str, what: str, path: str | os.PathLike) -> None:
+    """Title (``"<dataset>: <what it shows>"``; what, capitalised, alone), grid and legend
+    of a selection figure, then save it."""
+    ax.set_title(f"{dataset}: {what}" if dataset else what[:1].upper() + what[1:], fontsize=10)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    save_figure(fig, path)
 
 
 def plot_coverage_vs_scans(orderings: Mapping[str, pd.DataFrame], path: str | os.PathLike, title: str = "") -> None:
@@ -99,16 +91,14 @@ def plot_coverage_vs_scans(orderings: Mapping[str, pd.DataFrame], path: str | os
         cov = o["covered_area_m2"].to_numpy()
         n = np.arange(1, len(cov) + 1)
         k99 = k_for_fraction(o, 0.99)
-        ax.plot(n, cov, label=f"{name} (99 % at {k99})", **_STYLE.get(name, {}))
+        colour = ORDERING_COLOURS.get(name)
+        ax.plot(n, cov, label=f"{name} (99 % at {k99})", color=colour, lw=_LINE_WIDTHS.get(name, 1.2))
         if k99:
-            ax.plot([k99], [cov[k99 - 1]], "o", color=_STYLE.get(name, {}).get("color"), ms=5)
+            ax.plot([k99], [cov[k99 - 1]], "o", color=colour, ms=5)
     ax.set_xscale("log")
     ax.set_xlabel("number of scans")
     ax.set_ylabel("covered area (cluster hulls), m²")
-    ax.set_title(_titled(title, "covered area against the number of scans, per ordering"), fontsize=10)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    _save(fig, path)
+    _finish(fig, ax, title, "covered area against the number of scans, per ordering", path)
 
 
 def _spaced(ids: np.ndarray, max_scans: int) -> np.ndarray:
@@ -201,10 +191,7 @@ def plot_coverage_vs_clusters(curves: Mapping[int, pd.DataFrame], path: str | os
     ax.set_xscale("log")
     ax.set_xlabel("number of scans (greedy cluster_hull ordering)")
     ax.set_ylabel("covered area, m²")
-    ax.set_title(_titled(title, "covered area against the number of scans, per number of KMeans clusters"), fontsize=10)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    _save(fig, path)
+    _finish(fig, ax, title, "covered area against the number of scans, per number of KMeans clusters", path)
 
 
 def selection_timing(
@@ -250,10 +237,7 @@ def plot_selection_time(timing: pd.DataFrame, path: str | os.PathLike, title: st
     ax.set_yscale("log")
     ax.set_xlabel("number of scans")
     ax.set_ylabel("selection time, s")
-    ax.set_title(_titled(title, "time to order the scans, lazy against plain greedy"), fontsize=10)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    _save(fig, path)
+    _finish(fig, ax, title, "time to order the scans, lazy against plain greedy", path)
 
 
 def selection_figures(

@@ -18,7 +18,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from floorscan.figures.style import _save  # noqa: E402
+from floorscan.figures.style import save_figure  # noqa: E402
 
 #: Stage names recognised in benchmark file names (first token otherwise).
 STAGES = (
@@ -105,4 +105,4 @@ def plot_stage_times(table: pd.DataFrame, out, title: str = "") -> None:
     axes[1].set_title("memory per stage", fontsize=10)
     fig.suptitle(title)
     fig.tight_layout()
-    _save(fig, out)
+    save_figure(fig, out)

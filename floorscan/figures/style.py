@@ -1,15 +1,18 @@
-"""What the scoring figures share: resolution, the colour of each ordering and
-extractor, the name of what walls are scored against, and the atomic save.
+"""What every figure shares: resolution and the atomic save, the colour of each ordering
+and extractor, the name of what walls are scored against.
 
-Matplotlib with the Agg backend; every figure is written atomically
-(:func:`floorscan.core.files.atomic_path`) by :func:`_save`. On real recordings the walls
-scored against are a *reference* (walls from all kept scans), never called ground truth
-(:func:`reference_name`). A new ordering or extractor gets its colour in
-:data:`ORDERING_COLOURS` or :data:`EXTRACTOR_COLOURS`.
+Matplotlib with the Agg backend; every figure module writes its figures by
+:func:`save_figure` (at :data:`DPI`, atomically: :func:`floorscan.core.files.atomic_path`).
+On real recordings the walls scored against are a *reference* (walls from all kept
+scans), never called ground truth (:func:`reference_name`). An ordering's colour follows
+its place in the ordering registry (:mod:`floorscan.select.registry`), so a new ordering
+needs no edit here; a new extractor gets its colour in :data:`EXTRACTOR_COLOURS`.
 """
 
 from __future__ import annotations
 
+import itertools
+import os
 from pathlib import Path
 
 import matplotlib
@@ -21,17 +24,16 @@ from matplotlib.collections import LineCollection  # noqa: E402
 from floorscan.core.files import atomic_path  # noqa: E402
 from floorscan.score.ground_truth import GROUND_TRUTH  # noqa: E402
 from floorscan.score.segments import as_segments  # noqa: E402
+from floorscan.select.registry import COVERAGE_ORDERINGS, ORDERINGS  # noqa: E402
 
+#: Resolution of every figure, dots per inch.
 DPI = 110
-ORDERING_COLOURS = {
-    "cluster_hull": "tab:red",
-    "convex_hull": "tab:orange",
-    "random": "tab:green",
-    "sequential": "tab:blue",
-    "motion_filter": "tab:purple",
-    "wall_coverage": "tab:brown",
-    "surface_coverage": "tab:pink",
-}
+#: Tableau 10, matplotlib's default colours, in its order.
+_TABLEAU = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple",
+            "tab:brown", "tab:pink", "tab:gray", "tab:olive", "tab:cyan")
+#: One colour per ordering, by its place in the registry (the select job's, then the
+#: select_coverage job's); a line that is not a registry ordering (``oracle``) has none.
+ORDERING_COLOURS = dict(zip(ORDERINGS + COVERAGE_ORDERINGS, itertools.cycle(_TABLEAU)))
 EXTRACTOR_COLOURS = {"ransac": "tab:blue", "cluster_ransac": "tab:red"}
 
 
@@ -40,10 +42,12 @@ def reference_name(reference_kind: str) -> str:
     return "ground truth" if reference_kind == GROUND_TRUTH else "reference (all scans)"
 
 
-def _save(fig, path, dpi=DPI) -> None:
+def save_figure(fig, path: str | os.PathLike) -> None:
+    """Write ``fig`` to ``path`` at :data:`DPI` (format by the suffix, PNG without one),
+    atomically, and close it."""
     path = Path(path)
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".") or "png")
+        fig.savefig(tmp, dpi=DPI, format=path.suffix.lstrip(".") or "png")
     plt.close(fig)
 
 

@@ -11,7 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from floorscan.figures.style import EXTRACTOR_COLOURS, _save  # noqa: E402
+from floorscan.figures.style import EXTRACTOR_COLOURS, save_figure  # noqa: E402
 
 
 def plot_wall_extraction(status: dict, times: dict, out, title: str = "") -> None:
@@ -50,4 +50,4 @@ def plot_wall_extraction(status: dict, times: dict, out, title: str = "") -> Non
         ax.legend(fontsize=7)
     fig.suptitle(title)
     fig.tight_layout()
-    _save(fig, out)
+    save_figure(fig, out)

@@ -79,9 +79,6 @@ class GraphParams:
     workers : int
         Processes for the edge ICP (the ``register`` rule passes its Snakemake
         ``threads``). The edges do not depend on it: each pair is aligned alone.
-    solver : str
-        ``"sparse"`` (planar Gauss-Newton on sparse normal equations) or ``"open3d"``
-        (Open3D's dense 6-DoF Gauss-Newton); see :func:`optimize_pose_graph`.
     """
 
     sequential_neighbours: int
@@ -105,7 +102,6 @@ class GraphParams:
     prior_sigma_m: float
     prior_sigma_rad: float
     workers: int = 1
-    solver: str
 
     @classmethod
     def from_mapping(cls, cfg) -> "GraphParams":

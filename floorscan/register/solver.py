@@ -6,31 +6,20 @@ frame, a prior where a scan lies in the map; the optimum minimises the sum of sq
 normalised residuals. :func:`optimize_pose_graph` solves it in SE(2) by Gauss-Newton on
 the sparse 3N x 3N normal equations (SciPy's SuperLU), so memory and time grow with the
 number of edges, not with N squared. Loop edges are robust, with the line process of
-Open3D's global optimisation (Choi et al. 2015), which the ``solver: open3d`` option
-still runs: there the graph is 6-DoF; z, roll and pitch get an information of
-:data:`FIXED_INFORMATION` so the solution stays planar, and the localizer priors are
-edges from a fixed anchor node (the map origin) to each scan node. Usage::
+Open3D's global optimisation (Choi et al. 2015). Usage::
 
     poses, info = optimize_pose_graph(initial, edges, priors, params)
 
-A new solver is a branch of :func:`optimize_pose_graph` and a value of
-``register.graph.solver`` in the schema.
+One solver, not Open3D's: the same poses, 15-45x slower, memory quadratic in N (benchmarks/README.md).
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pandas as pd
 
-from floorscan.core.geometry import se2_matrix, wrap_angle
-from floorscan.core.runtime import one_openmp_thread
+from floorscan.core.geometry import wrap_angle
 from floorscan.register.params import GraphParams
-
-#: Information (1 / variance) of the degrees of freedom a planar rover does not have
-#: (z, roll, pitch) in the 6-DoF graph.
-FIXED_INFORMATION = 1e8
 
 #: Line process of robust loop edges (Open3D's ``GlobalOptimizationOption`` defaults,
 #: Choi et al. 2015): a loop edge's confidence is ``(mu / (mu + r2)) ** 2`` with ``r2``
@@ -67,11 +56,8 @@ def optimize_pose_graph(
     :data:`EDGE_PRUNE_THRESHOLD` are removed and the graph is solved again from the
     result (as Open3D's ``global_optimization`` does).
 
-    ``solver: sparse`` (default) runs Gauss-Newton on the sparse 3N x 3N normal equations
-    (SciPy's SuperLU with a symmetric minimum-degree ordering): memory and time grow
-    with the edges. ``solver: open3d`` runs Open3D's 6-DoF Gauss-Newton, which builds a
-    dense 6N x 6N normal matrix per iteration (memory quadratic in the scans); the two
-    agree to a fraction of a millimetre.
+    Gauss-Newton runs on the sparse 3N x 3N normal equations (SciPy's SuperLU with a
+    symmetric minimum-degree ordering): memory and time grow with the edges.
 
     Parameters
     ----------
@@ -97,8 +83,7 @@ def optimize_pose_graph(
     Raises
     ------
     ValueError
-        When the shapes disagree, an edge names a scan out of range or ``solver`` is
-        unknown.
+        When the shapes disagree or an edge names a scan out of range.
     """
     poses = np.asarray(poses, dtype=np.float64)
     n = len(poses)
@@ -108,8 +93,6 @@ def optimize_pose_graph(
         raise ValueError(f"priors: expected shape {poses.shape}, got {np.shape(priors)}")
     if len(edges) and (edges["i"].min() < 0 or edges["j"].max() >= n):
         raise ValueError(f"edges name scans outside 0..{n - 1}")
-    if params.solver not in ("sparse", "open3d"):
-        raise ValueError(f"register.graph.solver: expected 'sparse' or 'open3d', got {params.solver!r}")
     edges = edges[edges["fitness"] >= params.min_edge_fitness]
     info = {
         "n_edges": int(len(edges)),
@@ -120,9 +103,6 @@ def optimize_pose_graph(
     }
     if n == 0:
         return poses.copy(), info
-    if params.solver == "open3d":
-        out, info["n_pruned"] = _optimize_open3d(poses, edges, priors, params)
-        return out, info
     ii = edges["i"].to_numpy(np.int64)
     jj = edges["j"].to_numpy(np.int64)
     z = edges[["dx_m", "dy_m", "dyaw_rad"]].to_numpy(np.float64)
@@ -212,66 +192,3 @@ def _gauss_newton(x0, ii, jj, z, loop, w_edge, prior, w_prior, mu) -> tuple[np.n
         if not np.all(np.isfinite(step)) or np.max(np.abs(step), initial=0.0) < _GN_TOLERANCE:
             break
     return x, conf
-
-
-def _optimize_open3d(poses: np.ndarray, edges: pd.DataFrame, priors, params: GraphParams) -> tuple[np.ndarray, int]:
-    """``solver: open3d``: Open3D's 6-DoF Gauss-Newton ``global_optimization`` with its
-    line process on the loop edges (edge_prune_threshold 0.25, preference_loop_closure 1;
-    with the information of an edge's 6 DoF set as here it prunes only far-off loop edges:
-    in the L-room test a loop edge 5 m off, not one 2 m off, which ``sparse`` prunes).
-    Gauss-Newton converges in a few iterations from the
-    localizer's poses; its Levenberg-Marquardt needs many more to the same poses.
-    Returns the poses and the number of loop edges pruned."""
-    import open3d as o3d
-
-    reg = o3d.pipelines.registration
-    n = len(poses)
-    graph = reg.PoseGraph()
-    anchor = priors is not None
-    offset = 1 if anchor else 0
-    if anchor:
-        graph.nodes.append(reg.PoseGraphNode(np.eye(4)))
-    for p in poses:
-        graph.nodes.append(reg.PoseGraphNode(se2_matrix(p[0], p[1], p[3])))
-    if anchor:
-        prior_info = _information(params.prior_sigma_m, params.prior_sigma_rad)
-        for k, p in enumerate(np.asarray(priors, dtype=np.float64)):
-            graph.edges.append(reg.PoseGraphEdge(k + 1, 0, se2_matrix(p[0], p[1], p[3]), prior_info, uncertain=False))
-    edge_info = _information(params.edge_sigma_m, params.edge_sigma_rad)
-    for e in edges.itertuples(index=False):
-        # Open3D: the transformation takes the source node's frame (j) into the target's (i)
-        graph.edges.append(
-            reg.PoseGraphEdge(
-                int(e.j) + offset, int(e.i) + offset, se2_matrix(e.dx_m, e.dy_m, e.dyaw_rad),
-                edge_info, uncertain=e.kind == "loop",
-            )
-        )
-    n_before = len(graph.edges)
-    option = reg.GlobalOptimizationOption(
-        max_correspondence_distance=params.inlier_m,
-        edge_prune_threshold=EDGE_PRUNE_THRESHOLD,
-        preference_loop_closure=1.0,
-        reference_node=0,
-    )
-    level = o3d.utility.get_verbosity_level()
-    o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
-    try:
-        with one_openmp_thread():
-            reg.global_optimization(
-                graph, reg.GlobalOptimizationGaussNewton(),
-                reg.GlobalOptimizationConvergenceCriteria(), option,
-            )
-    finally:
-        o3d.utility.set_verbosity_level(level)
-    out = poses.copy()
-    for k in range(n):
-        m = np.asarray(graph.nodes[k + offset].pose)
-        out[k, 0], out[k, 1] = m[0, 3], m[1, 3]
-        out[k, 3] = math.atan2(m[1, 0], m[0, 0])
-    return out, int(n_before - len(graph.edges))
-
-
-def _information(sigma_m: float, sigma_rad: float) -> np.ndarray:
-    # Open3D orders a pose increment as (rx, ry, rz, tx, ty, tz).
-    f = FIXED_INFORMATION
-    return np.diag([f, f, 1.0 / sigma_rad**2, 1.0 / sigma_m**2, 1.0 / sigma_m**2, f])

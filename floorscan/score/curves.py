@@ -472,7 +472,7 @@ def summary_cell(row, col: str, n_kept: int | None = None, pm: str = "±") -> st
     return text
 
 
-def summary_markdown(summary: pd.DataFrame, tau_m: float, n_kept: int, n_recorded: int, line: str) -> str:
+def curve_summary_markdown(summary: pd.DataFrame, tau_m: float, n_kept: int, n_recorded: int, line: str) -> str:
     """The curve summary (:func:`curve_summary`) as a Markdown table for ``summary.md``,
     headed by ``line`` (:func:`beats_random_line`)."""
     lines = [

@@ -115,7 +115,7 @@ def write_scores(
         (log.info if verdict["ok"] and not verdict["warnings"] else log.warning)("verdict: %s", verdict["line"])
     with atomic_path(outputs["summary_md"]) as tmp:  # the evaluation's part of summary.md (rule front_page)
         tmp.write_text("## Floor plans against the reference map\n\n"
-                       + C.summary_markdown(summary, tau, n_kept, n_recorded, line)
+                       + C.curve_summary_markdown(summary, tau, n_kept, n_recorded, line)
                        + "\n## Walls of k scans on the configured k grid\n\n"
                        + grid_summary_markdown(grid_summary, tau, cfg.summary_levels))
     return Scores(curve_table, summary, n_kept, line, verdict)

@@ -1,10 +1,10 @@
 """The scan-reduction summary of the walls on the configured k grid: the smallest k whose
 F1 reaches a fraction of the all-scan F1 (:func:`summarize`; the thesis claims a
-tenfold reduction), and its Markdown for ``summary.md`` (:func:`summary_markdown`,
-:func:`grid_summary_markdown`, headed by :func:`summary_header`).
+tenfold reduction), and its Markdown (:func:`grid_summary_markdown`, in the evaluation's
+``summary.md``); :func:`summary_header` heads the dataset's ``summary.md``.
 
-The floor plans' curves against the reference map have their own summary
-(:func:`floorscan.score.curves.curve_summary`).
+The floor plans' curves against the reference map have their own summary and Markdown
+(:func:`floorscan.score.curves.curve_summary`, :func:`~floorscan.score.curves.curve_summary_markdown`).
 """
 
 from __future__ import annotations
@@ -101,22 +101,11 @@ def summary_header(dataset: str, verdict=None, recording=None, mode: str = "") -
     return lines
 
 
-def summary_markdown(
-    summary, tau: float = 0.05, levels=(0.95, 0.99), verdict=None, recording=None, mode: str = ""
-) -> str:
-    """The summary table as Markdown, headed by :func:`summary_header`, then what F1 is
-    measured against. An F1 from fewer than
-    :data:`floorscan.register.consistency.FEW_SCANS` kept scans is marked."""
-    ds = "" if summary.empty else summary["dataset"].iloc[0]
-    head = "\n".join(summary_header(ds, verdict, recording, mode))
-    if summary.empty:
-        return head + "No scored runs.\n"
-    return head + grid_summary_markdown(summary, tau, levels)
-
-
 def grid_summary_markdown(summary, tau: float = 0.05, levels=(0.95, 0.99)) -> str:
-    """The body of :func:`summary_markdown`: the table of :func:`summarize` (the k of
-    the configured grid) and the all-scan plans against the reference map."""
+    """The table of :func:`summarize` (the k of the configured grid) as Markdown, after
+    what F1 is measured against, and the all-scan plans against the reference map. An
+    F1 from fewer than :data:`floorscan.register.consistency.FEW_SCANS` kept scans is
+    marked."""
     from floorscan.register.consistency import FEW_SCANS
 
     kind = summary["reference_kind"].iloc[0]
