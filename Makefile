@@ -1,5 +1,6 @@
-# floorscan: `make run` runs the workflow on the default target, `make test` runs the tests.
-# Both create .venv from the pinned, hashed environment.lock when it is missing or stale.
+# floorscan: `make run` runs the workflow on the default target, `make test` runs the tests,
+# `make test-fast` the unit tests alone. Each creates .venv from the pinned, hashed
+# environment.lock when it is missing or stale.
 SHELL := /bin/bash
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV := .venv
@@ -7,7 +8,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.floorscan-installed
 CORES ?= 2
 
-.PHONY: run test report bench lock sysdeps clean-results
+.PHONY: run test test-fast report bench lock sysdeps clean-results
 
 run: $(STAMP)
 	$(BIN)/snakemake --cores $(CORES)
@@ -19,6 +20,12 @@ report: $(STAMP)
 
 test: $(STAMP)
 	$(BIN)/python -m pytest
+
+# The unit tests alone, about a minute on 2 cores, for working: no Snakemake run, no
+# recording of ../shared, nothing measured slow (markers set in tests/conftest.py).
+# `make test` runs these and the rest.
+test-fast: $(STAMP)
+	$(BIN)/python -m pytest -m "not workflow and not realdata and not slow"
 
 bench: $(STAMP)
 	$(BIN)/python -m benchmarks

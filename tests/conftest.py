@@ -8,8 +8,11 @@ The reference trajectory: the base drives along +x at ``SPEED`` m/s while turnin
 
 from __future__ import annotations
 
+import functools
 import gzip
+import inspect
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -419,3 +422,40 @@ def demo_run(tmp_path_factory):
     res = snakemake(wd)
     assert res.returncode == 0, res.stderr[-4000:]
     return wd
+
+
+# Test tiers: the markers of pyproject.toml, set here from what a test uses, so that a new
+# test lands in its tier by itself (`make test-fast` runs -m "not workflow and not
+# realdata and not slow"; `make test` runs everything).
+#   workflow: a fixture of the session's demo run (WORKFLOW_FIXTURES), or a call of
+#             snakemake() or copy_workflow(), or SNAKEMAKE, in the test's own body;
+#   realdata: the needs_shared skip marker (any skipif naming ../shared/data), or
+#             SHARED_DATA in the test's own body.
+# A test that runs Snakemake or reads ../shared through a helper of its module carries the
+# marker in its file, as does a slow test (measured by pytest --durations: 2.5 s or more
+# on 2 idle cores, which is 4 s or more while the machine is shared).
+WORKFLOW_FIXTURES = {"demo_run", "default_run"}
+_RUNS_WORKFLOW = re.compile(r"\b(?:snakemake|copy_workflow)\(|\bSNAKEMAKE\b")
+_READS_SHARED = re.compile(r"\bSHARED_DATA\b")
+
+
+@functools.cache
+def _source(function) -> str:
+    try:
+        return inspect.getsource(function)
+    except (OSError, TypeError):
+        return ""
+
+
+def _needs_shared(item) -> bool:
+    return any("../shared/data" in str(m.kwargs.get("reason", "")) for m in item.iter_markers("skipif"))
+
+
+@pytest.hookimpl(tryfirst=True)  # before -m deselects by these markers
+def pytest_collection_modifyitems(items):
+    for item in items:
+        body = _source(getattr(item, "function", None))
+        if WORKFLOW_FIXTURES & set(item.fixturenames) or _RUNS_WORKFLOW.search(body):
+            item.add_marker(pytest.mark.workflow)
+        if _needs_shared(item) or _READS_SHARED.search(body):
+            item.add_marker(pytest.mark.realdata)

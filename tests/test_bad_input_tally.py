@@ -4,9 +4,12 @@ each run through ingest, poses and register: none ends silent (a wrong or partia
 result and nothing said), at most two are unclear (an error that does not name the
 file and the field, topic or frame, or a bug's traceback)."""
 
+import pytest
+
 from benchmarks.bench_bad_input import cases, run_corpus, tally, tally_line
 
 
+@pytest.mark.slow
 def test_bad_recordings_end_in_a_clear_error_or_a_run_that_says_what_was_lost(tmp_path):
     corpus = cases()
     assert len(corpus) >= 40 and sum(c.issue for c in corpus) >= 30

@@ -98,6 +98,7 @@ def test_each_storey_holds_its_own_plan_at_its_elevation(building, plans):
         assert a == b
 
 
+@pytest.mark.slow
 def test_the_building_ifc_is_valid_with_unique_deterministic_ids(building, plans, tmp_path):
     from ifcopenshell import validate
 

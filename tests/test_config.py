@@ -17,6 +17,7 @@ def dry_run(*config):
     )
 
 
+@pytest.mark.workflow
 @pytest.mark.parametrize(
     "override, field",
     [
@@ -32,6 +33,7 @@ def test_bad_config_value_is_rejected(override, field):
     assert field in (res.stdout + res.stderr)
 
 
+@pytest.mark.workflow
 def test_default_config_dry_run_plans_every_stage():
     res = dry_run()
     assert res.returncode == 0, res.stderr[-2000:]

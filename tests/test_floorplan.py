@@ -700,6 +700,7 @@ def test_footprint_geojson_equals_shapely_to_geojson_oriented_and_rounded():
         assert len(f["geometry"]["coordinates"][0]) == 5 and signed_area(f["geometry"]["coordinates"][0]) > 0
 
 
+@pytest.mark.slow
 def test_dxf_bytes_do_not_depend_on_the_hash_seed(tmp_path):
     """ezdxf orders its CLASSES section by a set of entity types; the writer sorts it, so
     the same plan gives the same DXF in any process (seed 4 differed before)."""

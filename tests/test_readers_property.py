@@ -209,6 +209,7 @@ def carmen_fuzz(workdir, n_lines: int, seed: int) -> dict[str, int]:
     return out
 
 
+@pytest.mark.slow
 def test_carmen_fuzzed_lines_never_misread(workdir):
     # before issue 24: 2450 of these 4000 lines were accepted, every one of them breaking
     # its layout (fields read from shifted positions)

@@ -475,6 +475,7 @@ def test_registered_map_figure_sums_cells_into_blocks(tmp_path):
     assert (tmp_path / "map.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_edges_aligned_while_reading_are_the_edges(tmp_path, caplog):
     """With edge workers the pose graph's pairs are aligned while the scans are read,
     for the scans the index and poses say will be sampled; a scan the points drop

@@ -210,6 +210,7 @@ def _footprint(space) -> shapely.Polygon:
     return shapely.Polygon(ring(profile.OuterCurve), holes)
 
 
+@pytest.mark.slow
 def test_ifc_spaces_and_a_door_in_an_opening_of_its_wall(tmp_path):
     import ifcopenshell
     import ifcopenshell.util.element as ue
@@ -252,6 +253,7 @@ def test_ifc_spaces_and_a_door_in_an_opening_of_its_wall(tmp_path):
     assert all(ue.get_container(w) == storey for w in model.by_type("IfcWall"))
 
 
+@pytest.mark.slow
 def test_ifc_door_of_no_wall_has_no_opening_and_clutter_keeps_walls_contained(tmp_path):
     import ifcopenshell
     import ifcopenshell.util.element as ue
