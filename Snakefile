@@ -58,7 +58,7 @@ include: "workflow/rules/walls.smk"
 include: "workflow/rules/floorplan.smk"
 include: "workflow/rules/building.smk"
 include: "workflow/rules/score.smk"
-include: "workflow/rules/report.smk"
+include: "workflow/rules/figures.smk"
 
 
 rule all:

@@ -41,7 +41,10 @@ if TYPE_CHECKING:
 
 from floorscan.core.io import InputError
 
-_LABEL = re.compile(r"^scans_(\d+)-(\d+)$")
+#: A shard label (:func:`shard_label`) as a regular expression, without anchors: the
+#: constraint of the ``{shard}`` wildcard of the workflow's shard rules
+#: (``workflow/rules/common.smk``) and what :func:`parse_shard_label` accepts.
+SHARD_LABEL = r"scans_\d+-\d+"
 
 
 def shard_ranges(
@@ -102,10 +105,11 @@ def shard_label(start: int, stop: int) -> str:
 
 def parse_shard_label(label: str) -> tuple[int, int]:
     """``"scans_000120-000239"`` -> ``(120, 239)``; ``ValueError`` for anything else."""
-    m = _LABEL.match(str(label))
-    if not m or int(m.group(1)) > int(m.group(2)):
-        raise ValueError(f"not a shard label scans_<start>-<stop> with start <= stop: {label!r}")
-    return int(m.group(1)), int(m.group(2))
+    if re.fullmatch(SHARD_LABEL, str(label)):
+        start, stop = (int(n) for n in str(label).removeprefix("scans_").split("-"))
+        if start <= stop:
+            return start, stop
+    raise ValueError(f"not a shard label scans_<start>-<stop> with start <= stop: {label!r}")
 
 
 def plan_shards(

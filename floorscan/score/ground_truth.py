@@ -6,7 +6,7 @@ kept scans, as the thesis does in section 5.4; never called ground truth).
 against, :func:`load_recall_references` those recall is measured against (on synthetic
 datasets the observed parts of the faces, thesis 5.2: walls never visible from the
 LIDAR cannot be recovered). :data:`GROUND_TRUTH` and :data:`REFERENCE` are the values
-of the ``reference_kind`` column.
+of the ``reference_kind`` column, :func:`reference_label` their wording in captions.
 """
 
 from __future__ import annotations
@@ -19,6 +19,18 @@ GROUND_TRUTH = "ground_truth"
 REFERENCE = "reference"
 #: Ground-truth feature kind of the observed parts of the faces (recall's reference).
 OBSERVED_FACE = "observed_face"
+
+
+def reference_label(kind: str) -> str:
+    """What the walls are scored against, in words for captions and the summary: the
+    simulator's walls for ``kind`` :data:`GROUND_TRUTH`, otherwise the reference, never
+    called ground truth (a real recording's building has no architectural plan)."""
+    if kind == GROUND_TRUTH:
+        return "the simulator's ground-truth walls (faces of sim/walls.geojson)"
+    return (
+        "the reference, the walls extracted by the same extractor from all kept scans "
+        "(a reference, not ground truth: the building has no architectural plan)"
+    )
 
 
 def load_recall_references(kind: str, extractors, ground_truth=None, recall_kind: str = OBSERVED_FACE):

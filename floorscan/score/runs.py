@@ -10,6 +10,11 @@ extractors are split over processes by :func:`floorscan.core.runtime.map_in_proc
 (the only process pool of the score package); the table does not depend on their
 number. :func:`sort_scores` orders the rows (and the concatenated tables of the
 per-extractor jobs) as one call over all runs would.
+
+The runs themselves: :func:`run_grid` lists the wall files scored (every ordering x
+extractor x k of the walls stage), :func:`figure_runs` and :func:`figure_floorplans`
+those the figures draw (the ``score.figure_*`` keys); the workflow passes them to the
+jobs through ``params:`` (``workflow/rules/score.smk``, ``figures.smk``).
 """
 
 from __future__ import annotations
@@ -27,6 +32,28 @@ from floorscan.score.growing import PAIR_REACH_M, _GrowingWalls, _SamplePairs
 from floorscan.score.params import ScoreParams
 from floorscan.score.segments import as_segments, gt_samples
 from floorscan.score.tolerance import _recall_precision, tau_label
+
+
+def run_grid(orderings, extractors, ks) -> list[list[str]]:
+    """``[ordering, extractor, k label]`` of every wall file scored: orderings outermost,
+    then extractors, then k in the order given (``walls.orderings``,
+    ``walls.extractors``, ``walls.k``; k labels as strings, "5" or "all")."""
+    return [[o, e, str(k)] for o in orderings for e in extractors for k in ks]
+
+
+def figure_runs(cfg: Mapping, extractors) -> list[list]:
+    """``[ordering, extractor, k label]`` of the wall files the figures draw: every
+    extractor at ``cfg["figure_k"]`` and "all", for ``cfg["figure_orderings"]`` and then
+    ``cfg["figure_ordering"]`` (each ordering once, in that order)."""
+    k = str(cfg["figure_k"])
+    orderings = list(dict.fromkeys(list(cfg["figure_orderings"]) + [cfg["figure_ordering"]]))
+    return [[o, e, kk] for o in orderings for e in extractors for kk in (k, "all")]
+
+
+def figure_floorplans(cfg: Mapping) -> list[list]:
+    """``[ordering, extractor]`` of the floor plans at ``figure_k`` that the figures
+    draw (Fig. 5.5): ``cfg["figure_orderings"]`` with ``cfg["figure_extractor"]``."""
+    return [[o, cfg["figure_extractor"]] for o in cfg["figure_orderings"]]
 
 
 def k_scans(k_label: str, n_kept: int) -> int:

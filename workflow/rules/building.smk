@@ -10,25 +10,6 @@
 #               registered to each other.
 from types import SimpleNamespace
 
-from floorscan.floorplan.building import building_files
-
-BUILDING_DIR = "results/building"
-
-
-def building_floors():
-    """The building's floors, {dataset, storey, elevation_m} each; [] without a building."""
-    floors = (config.get("building") or {}).get("floors") or []
-    return [{"dataset": f["dataset"], "storey": f["storey"], "elevation_m": float(f["elevation_m"])} for f in floors]
-
-
-def building_outputs():
-    """The building's files (floorscan.floorplan.building.building_files); [] without a building."""
-    floors = building_floors()
-    if not floors:
-        return []
-    files = building_files(BUILDING_DIR, [f["dataset"] for f in floors])
-    return [files["ifc"], files["page"], *files["geojson"]]
-
 
 def building_inputs(wildcards):
     """Per floor (lists in floor order): its recommended_floorplan inputs and its

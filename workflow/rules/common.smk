@@ -1,9 +1,17 @@
-# Helper functions shared by the rules. No lambdas inside rules: rules call these.
-import copy
+# Helper functions shared by the rules, and the config checks that run once, when the
+# config is loaded. No lambdas inside rules: rules call these. What needs no Snakemake
+# global (config, wildcards, checkpoints) lives in the package.
+import re
 from pathlib import Path
 
 from floorscan.core.config import ConfigError, config_errors_exit, validate_config
 from floorscan.core.files import writable_problem
+from floorscan.core.sections import check_sections, dataset_section, evaluation_grid_errors, merge_override
+from floorscan.core.shards import SHARD_LABEL
+from floorscan.floorplan.building import building_files
+from floorscan.score.ground_truth import GROUND_TRUTH, REFERENCE
+from floorscan.walls.extractors import EXTRACT_KEYS as WALLS_EXTRACT_KEYS
+from floorscan.walls.extractors import REGISTRY as WALLS_REGISTRY
 
 DATASETS = config["datasets"]
 
@@ -21,49 +29,15 @@ for _folder in ("results", ".snakemake"):
 # (`rule evaluation`). `rule all` builds both, or the plan alone (see all_outputs).
 PLAN_OUTPUTS = []
 EVALUATION_OUTPUTS = []
-# The report's front pages (report.smk): they read the evaluation when there is one.
+# The report's front pages (figures.smk): they read the evaluation when there is one.
 REPORT_OUTPUTS = []
 
-# Scheduling (issue 8): of the jobs ready at once, Snakemake starts those of higher
-# priority first (the greedy scheduler of workflow/profiles/default; ties go to larger
-# inputs). On few cores that order decides when the last job ends, so each rule's
-# priority is its "upward rank", the standard list-scheduling heuristic: the seconds of
-# the longest chain of jobs from its start to the end of the workflow, measured on
-# hallways3d (2 cores, a job's start-up of ~0.6 s included):
-#
-#   cluster_ransac shard 13 -> walls 1.2 -> floorplan 11.5
-#     -> score_runs 5 -> score 0.8 -> score_figures 3                        = 34
-#   hulls_shard 8.7 -> select 3.2 -> walls ...                                = 33
-#   ransac shard 7.5 -> walls ...                                             = 29
-#   selection_figures 10.5 -> score_figures 3                                 = 14
-#   register_figure 2.7 (nothing waits for it)                                = 3
-#
-# The reference map and the curves came later (measured 8 s and ~20 s a job):
-#
-#   reference 8 -> score_curves 20 -> score 1 -> score_figures 3              = 32
-#   walls ... -> score_curves 20 -> score ...                                 = 24 from walls
-#
-# so score_curves (24) runs beside floorplan (20) and score_runs, and the reference
-# (36: it needs only the registration) starts with the shards and is ready by then.
-# Every chain through the walls grew by the curves alike, so the order of the others
-# stands.
-#
-# Walls need the orderings of select, so the hulls chain is as urgent as the walls
-# shards; the cluster_ransac shards (about twice ransac's time a scan) go before
-# ransac's; the figures fill the cores between the chains instead of delaying them.
-# select is raised above its rank (24) to 31, over the ransac shards: both walls jobs
-# wait for its orderings, and when ransac's shard went first the cluster_ransac walls
-# waited 2.5 s for select after their shard ended. With the hulls chain first and the
-# figures next (the order before), the cluster_ransac shard started 12 s after
-# registration and the chain of floor plans and scores behind it ended the run.
-# Ingest, poses and register run alone (0).
-#
-# A walls shard's priority is by its extractor: the chain after the shard (walls 1.2
-# -> floorplan 11.5 -> score_runs 5 -> score 0.8 -> score_figures 3 = 21.5 s) plus the
-# shard, ransac's 7.5 s times the extractor's relative cost (the registry of
-# floorscan.walls.extractors): ransac 29, cluster_ransac 35.
-from floorscan.walls.extractors import REGISTRY as WALLS_REGISTRY
-
+# Rule priorities: of the jobs ready at once, Snakemake starts those of higher priority
+# first. Each rule's priority is its upward rank (list scheduling): the seconds of the
+# longest chain of jobs from its start to the end of the workflow; a walls shard's is
+# the 21.5 s of the chain after it plus ransac's 7.5 s times its extractor's relative
+# cost (floorscan.walls.extractors). The measured chains and why select is raised above
+# its rank: benchmarks/README.md, "Rule priorities".
 PRIORITY = {
     "scan_walls_shard": {name: round(21.5 + 7.5 * e.cost) for name, e in WALLS_REGISTRY.items()},
     "hulls_shard": 33,
@@ -94,8 +68,29 @@ def shard_priority(wildcards):
     return by_extractor[wildcards.extractor]
 
 
+# The shard jobs (hulls_shard, scan_walls_shard) are named by floorscan.core.shards.shard_label.
 wildcard_constraints:
     dataset="|".join(sorted(DATASETS)) or "NO_DATASET",
+    shard=SHARD_LABEL,
+
+
+# ---------------------------------------------------------------------------------------
+# Config checks, once, when the config is loaded (before any job is planned): the
+# schemas (stage_schema_check) and one key against another (check_sections)
+
+# The stage schemas, beside the main one (workflow/schemas/).
+SCHEMA_DIR = Path(workflow.basedir) / "workflow" / "schemas"
+
+
+# Keys that decide which files the workflow makes (the evaluation grid's file names):
+# the same for every dataset, so a dataset's `params:` cannot override them and the
+# rules read them from the global section. Every other key goes through
+# stage_config(stage), with the dataset's overrides, in every rule.
+FILE_GRID_KEYS = {
+    "walls": ("k", "orderings", "extractors"),
+    "floorplan": ("evaluation_formats",),
+    "score": ("figure_k",),
+}
 
 
 def config_error(message):
@@ -105,6 +100,52 @@ def config_error(message):
     with config_errors_exit():
         raise ConfigError(message)
 
+
+def stage_schema_check(stage):
+    """Validate the `stage` section of the config against its schema,
+    workflow/schemas/<stage>.schema.yaml (filling defaults), and each dataset's
+    `params: {stage: ...}` overrides merged over it.
+
+    floorscan.core.config.validate_config: snakemake.utils.validate's checks and defaults,
+    each schema parsed once (16 validations took Snakemake ~0.5 s at every start)."""
+    schema = SCHEMA_DIR / f"{stage}.schema.yaml"
+    config.setdefault(stage, {})
+    with config_errors_exit():  # a bad value: one paragraph, no traceback
+        validate_config(config[stage], schema, stage)
+        for name, ds in DATASETS.items():
+            override = (ds.get("params") or {}).get(stage)
+            if override:
+                fixed = sorted(set(override) & set(FILE_GRID_KEYS.get(stage, ())))
+                if fixed:
+                    raise ConfigError(
+                        f"datasets.{name}.params.{stage}: {fixed} name the workflow's files "
+                        f"(every dataset has the same grid of outputs), so they are set once, under `{stage}:`"
+                    )
+                validate_config(merge_override(config[stage], override), schema, f"datasets.{name}.params.{stage}")
+
+
+for _stage in ("simulate", "ingest", "poses", "register", "hulls", "select", "walls", "floorplan", "score"):
+    stage_schema_check(_stage)
+# One key against another (a registered extractor, select.default_ordering in
+# walls.orderings, ...), for every dataset, once: so the rules' params are the plain
+# sections (floorscan.core.sections).
+with config_errors_exit():
+    check_sections(config, WALLS_REGISTRY)
+# What the evaluation needs of walls.k (score.figure_k and all; global keys): found now,
+# reported by the evaluation's input functions (evaluation_grid_check), as a run that
+# narrows walls.k to build some plans needs neither.
+EVALUATION_GRID_ERRORS = evaluation_grid_errors(config["score"], config["walls"]["k"])
+
+
+def evaluation_grid_check():
+    """Stop the run when an evaluation job is planned and walls.k lacks score.figure_k
+    or all (EVALUATION_GRID_ERRORS)."""
+    if EVALUATION_GRID_ERRORS:
+        config_error(EVALUATION_GRID_ERRORS[0])
+
+
+# ---------------------------------------------------------------------------------------
+# What the run builds
 
 def target_datasets():
     """Datasets built by `rule all`: config `target`, checked against `datasets`."""
@@ -117,6 +158,13 @@ def target_datasets():
 def plan_outputs():
     """Inputs of `rule plan`: the answer of every target dataset."""
     return [p.format(dataset=d) for d in target_datasets() for p in PLAN_OUTPUTS]
+
+
+def drawn_outputs():
+    """score_drawn's files for the datasets that name a drawn plan (patterns keep {dataset});
+    its room scores and overlay are in EVALUATION_OUTPUTS, as every dataset's (score_rooms
+    makes them for the other datasets)."""
+    return ["results/{dataset}/evaluation/drawn_scores.csv", "results/{dataset}/figures/drawn_overlay.png"]
 
 
 def evaluation_outputs():
@@ -141,69 +189,38 @@ def all_outputs():
     return outputs + [p.format(dataset=d) for d in target_datasets() for p in REPORT_OUTPUTS]
 
 
-# The stage schemas, beside the main one (workflow/schemas/).
-SCHEMA_DIR = Path(workflow.basedir) / "workflow" / "schemas"
+# The floors of one building (building.smk; floorscan.core.config.resolve_building).
+BUILDING_DIR = "results/building"
 
 
-# Keys that decide which files the workflow makes (the evaluation grid's file names):
-# the same for every dataset, so a dataset's `params:` cannot override them and the
-# rules read them from the global section. Every other key goes through
-# stage_config(stage), with the dataset's overrides, in every rule.
-FILE_GRID_KEYS = {
-    "walls": ("k", "orderings", "extractors"),
-    "floorplan": ("evaluation_formats",),
-    "score": ("figure_k",),
-}
+def building_floors():
+    """The building's floors, {dataset, storey, elevation_m} each; [] without a building."""
+    floors = (config.get("building") or {}).get("floors") or []
+    return [{"dataset": f["dataset"], "storey": f["storey"], "elevation_m": float(f["elevation_m"])} for f in floors]
 
 
-def stage_schema_check(stage):
-    """Validate the `stage` section of the config against its schema,
-    workflow/schemas/<stage>.schema.yaml (filling defaults), and each dataset's
-    `params: {stage: ...}` overrides merged over it.
-
-    floorscan.core.config.validate_config: snakemake.utils.validate's checks and defaults,
-    each schema parsed once (16 validations took Snakemake ~0.5 s at every start)."""
-    schema = SCHEMA_DIR / f"{stage}.schema.yaml"
-    config.setdefault(stage, {})
-    with config_errors_exit():  # a bad value: one paragraph, no traceback
-        validate_config(config[stage], schema, stage)
-        for name, ds in DATASETS.items():
-            override = (ds.get("params") or {}).get(stage)
-            if override:
-                fixed = sorted(set(override) & set(FILE_GRID_KEYS.get(stage, ())))
-                if fixed:
-                    raise ConfigError(
-                        f"datasets.{name}.params.{stage}: {fixed} name the workflow's files "
-                        f"(every dataset has the same grid of outputs), so they are set once, under `{stage}:`"
-                    )
-                validate_config(_deep_merge(config[stage], override), schema, f"datasets.{name}.params.{stage}")
+def building_outputs():
+    """The building's files (floorscan.floorplan.building.building_files); [] without a building."""
+    floors = building_floors()
+    if not floors:
+        return []
+    files = building_files(BUILDING_DIR, [f["dataset"] for f in floors])
+    return [files["ifc"], files["page"], *files["geojson"]]
 
 
-def _deep_merge(base, override):
-    out = copy.deepcopy(base)
-    for k, v in (override or {}).items():
-        if isinstance(v, dict) and isinstance(out.get(k), dict):
-            out[k] = _deep_merge(out[k], v)
-        else:
-            out[k] = copy.deepcopy(v)
-    return out
-
+# ---------------------------------------------------------------------------------------
+# A job's config: params functions (a changed value reruns the job)
 
 def stage_config(stage):
     """A params function: the config section of `stage` for the job's dataset, with the
-    dataset's `params: {stage: ...}` overrides applied. Passing it through `params:`
-    makes Snakemake rerun the stage when a value changes."""
+    dataset's `params: {stage: ...}` overrides applied
+    (floorscan.core.sections.dataset_section). Passing it through `params:` makes
+    Snakemake rerun the stage when a value changes."""
 
     def _stage_config(wildcards):
-        ds = DATASETS[wildcards.dataset]
-        return _deep_merge(config.get(stage, {}), (ds.get("params") or {}).get(stage))
+        return dataset_section(config, wildcards.dataset, stage)
 
     return _stage_config
-
-
-# The `walls` keys that change the per-scan walls (scan_walls_shard, select_coverage):
-# the scan points, the seed and the config sections of the registered extractors.
-from floorscan.walls.extractors import EXTRACT_KEYS as WALLS_EXTRACT_KEYS
 
 
 def walls_extract_config(wildcards):
@@ -213,6 +230,56 @@ def walls_extract_config(wildcards):
     return {key: cfg[key] for key in WALLS_EXTRACT_KEYS if key in cfg}
 
 
+def walls_map_config(wildcards):
+    """The `walls` keys the map extractor reads: the scan points, the seed, `map`."""
+    cfg = stage_config("walls")(wildcards)
+    return {key: cfg[key] for key in ("seed", "height_band_m", "planar_tolerance_m", "grid_m", "map") if key in cfg}
+
+
+def hulls_config(wildcards):
+    """The hulls section without shard_scans: how the scans are split into jobs changes
+    no hull, so it must not rerun the shards (and HullParams does not know it)."""
+    return {k: v for k, v in stage_config("hulls")(wildcards).items() if k != "shard_scans"}
+
+
+def floorplan_grid_config(wildcards):
+    """The floorplan section for the evaluation grid: never georeferenced (its plans
+    are scored in the map frame)."""
+    return {**stage_config("floorplan")(wildcards), "georeference": None}
+
+
+def select_default_ordering(wildcards):
+    """select.default_ordering (one of walls.orderings, checked at start: its plans are made)."""
+    return stage_config("select")(wildcards)["default_ordering"]
+
+
+def plan_extractor(wildcards):
+    """floorplan.extractor: map (the map extractor, floorscan.walls.map_lines) or one of
+    walls.extractors (checked at start)."""
+    return stage_config("floorplan")(wildcards)["extractor"]
+
+
+def score_orderings(wildcards):
+    """The orderings the walls stage extracts (walls.orderings)."""
+    return list(stage_config("walls")(wildcards)["orderings"])
+
+
+def score_extractors(wildcards):
+    """The extractors the walls stage runs (walls.extractors)."""
+    return list(stage_config("walls")(wildcards)["extractors"])
+
+
+def score_ks(wildcards):
+    """The k labels of walls.k, as strings ("5", "all")."""
+    return [str(k) for k in stage_config("walls")(wildcards)["k"]]
+
+
+def score_reference_kind(wildcards):
+    """What the walls are scored against (floorscan.score.ground_truth): the simulator's
+    ground truth on a synthetic dataset, the reference on a real recording."""
+    return GROUND_TRUTH if is_synthetic(wildcards.dataset) else REFERENCE
+
+
 def dataset_config(wildcards):
     """The dataset's own entry (format, path, options), without `params` and the drawn
     `reference` (evaluation data, read by score_drawn)."""
@@ -220,6 +287,25 @@ def dataset_config(wildcards):
     ds["name"] = wildcards.dataset
     return ds
 
+
+def ingest_dataset(wildcards):
+    """The dataset entry as ingest reads it; synthetic datasets read their simulation."""
+    ds = dataset_config(wildcards)
+    if ds.get("format") == "synthetic":
+        if ds.get("recording", "bag") == "pcd":
+            ds.update(format="pcd", path=recording_input(wildcards), locations="locations.csv")
+        else:
+            ds.update(
+                format="rosbag",
+                path=recording_input(wildcards),
+                scan_topic="/scan",
+                pose={"source": "topic", "topic": "/amcl_pose", "base_frame": "base_link"},
+            )
+    return ds
+
+
+# ---------------------------------------------------------------------------------------
+# Files: input functions of several rule files, logs and benchmarks
 
 def is_synthetic(dataset):
     return DATASETS[dataset].get("format") == "synthetic"
@@ -231,6 +317,63 @@ def log_path(stage):
 
 def benchmark_path(stage):
     return f"results/{{dataset}}/benchmarks/{stage}.tsv"
+
+
+def recording_input(wildcards):
+    """The recording a dataset reads: its path, or the simulated one for synthetic data."""
+    ds = DATASETS[wildcards.dataset]
+    if ds.get("format") == "synthetic":
+        if ds.get("recording", "bag") == "pcd":
+            return f"results/{wildcards.dataset}/sim/pcd"
+        return f"results/{wildcards.dataset}/sim/recording.bag"
+    return ds["path"]
+
+
+def recommended_floorplan_inputs(wildcards):
+    """Inputs of `recommended_floorplan` (and of each floor of `building`)."""
+    ds = wildcards.dataset
+    extractor = plan_extractor(wildcards)
+    walls = f"results/{ds}/walls/map/selected.parquet" if extractor == "map" else f"results/{ds}/walls/{extractor}/per_scan.parquet"
+    return {
+        "scans": f"results/{ds}/selection/scans.csv",
+        "walls": walls,
+        "grid": f"results/{ds}/walls/map/selected_grid.parquet",
+        "index": f"results/{ds}/scan_index.parquet",
+    }
+
+
+def score_reference_inputs(wildcards):
+    """What the walls are scored against (score_runs, score_walls_figures): the
+    simulator's walls, or the walls of every extractor from all kept scans
+    (score.reference_source: the kall table of score.figure_ordering, or the per-scan
+    table)."""
+    ds = wildcards.dataset
+    if is_synthetic(ds):
+        return {"ground_truth": f"results/{ds}/sim/walls.geojson"}
+    cfg = stage_config("score")(wildcards)
+    if cfg["reference_source"] == "kall":
+        o = cfg["figure_ordering"]
+        refs = [f"results/{ds}/walls/{o}/{e}/kall.parquet" for e in score_extractors(wildcards)]
+    else:
+        refs = [f"results/{ds}/walls/{e}/per_scan.parquet" for e in score_extractors(wildcards)]
+    return {"reference": refs}
+
+
+# The file grid of the walls stage (walls.k, walls.orderings, walls.extractors: global,
+# FILE_GRID_KEYS): the k wildcard values and the wildcards' constraints.
+def _alternatives(values):
+    return "|".join(re.escape(str(v)) for v in values)
+
+
+def walls_k_names():
+    """k wildcard values of config walls.k: 5 -> "5", "all" -> "all" (files k5 ... kall)."""
+    return [str(k) for k in config["walls"]["k"]]
+
+
+WALLS_CONSTRAINTS = dict(
+    ordering=_alternatives(config["walls"]["orderings"]),
+    extractor=_alternatives(config["walls"]["extractors"]),
+)
 
 
 # Shard plans (issue 8; floorscan.core.shards): `register` is a checkpoint, and once it has

@@ -10,29 +10,8 @@
 #               floorplan.evaluation_formats (GeoJSON, which is scored, and SVG)
 from floorscan.floorplan import EXPORT_FORMATS, FLOORPLAN_FORMATS, floorplan_outputs
 
-stage_schema_check("floorplan")
-
-
-def plan_extractor(wildcards):
-    """floorplan.extractor: map (the map extractor, floorscan.walls.map_lines) or one of
-    walls.extractors."""
-    extractor = stage_config("floorplan")(wildcards)["extractor"]
-    extractors = list(stage_config("walls")(wildcards)["extractors"])
-    if extractor != "map" and extractor not in extractors:
-        config_error(f"floorplan.extractor {extractor!r} is neither map nor one of walls.extractors {extractors}")
-    return extractor
-
-
-def recommended_floorplan_inputs(wildcards):
-    ds = wildcards.dataset
-    extractor = plan_extractor(wildcards)
-    walls = f"results/{ds}/walls/map/selected.parquet" if extractor == "map" else f"results/{ds}/walls/{extractor}/per_scan.parquet"
-    return {
-        "scans": f"results/{ds}/selection/scans.csv",
-        "walls": walls,
-        "grid": f"results/{ds}/walls/map/selected_grid.parquet",
-        "index": f"results/{ds}/scan_index.parquet",
-    }
+# The file suffixes of the evaluation grid's formats (floorplan.evaluation_formats).
+EVALUATION_SUFFIXES = [EXPORT_FORMATS[fmt].suffix for fmt in config["floorplan"]["evaluation_formats"]]
 
 
 def floorplan_grid_inputs(wildcards):
@@ -45,19 +24,8 @@ def floorplan_grid_inputs(wildcards):
     }
 
 
-def floorplan_grid_config(wildcards):
-    """The floorplan section for the evaluation grid: never georeferenced (its plans
-    are scored in the map frame)."""
-    return {**stage_config("floorplan")(wildcards), "georeference": None}
-
-
 def floorplan_grid_runs(wildcards):
     return [[o, k] for o in config["walls"]["orderings"] for k in walls_k_names()]
-
-
-def floorplan_suffixes(formats):
-    """The file suffixes of floor plan formats (floorscan.floorplan.EXPORT_FORMATS)."""
-    return [EXPORT_FORMATS[fmt].suffix for fmt in formats]
 
 
 rule recommended_floorplan:
@@ -88,7 +56,7 @@ rule floorplan:
         expand(
             "results/{{dataset}}/evaluation/floorplan/{ordering}_{{extractor}}_k{k}{suffix}",
             ordering=config["walls"]["orderings"], k=walls_k_names(),
-            suffix=floorplan_suffixes(config["floorplan"]["evaluation_formats"]),
+            suffix=EVALUATION_SUFFIXES,
         ),
     wildcard_constraints:
         extractor=WALLS_CONSTRAINTS["extractor"],
@@ -131,6 +99,6 @@ EVALUATION_OUTPUTS.extend(
     expand(
         "results/{{dataset}}/evaluation/floorplan/{ordering}_{extractor}_k{k}{suffix}",
         ordering=config["walls"]["orderings"], extractor=config["walls"]["extractors"],
-        k=walls_k_names(), suffix=floorplan_suffixes(config["floorplan"]["evaluation_formats"]),
+        k=walls_k_names(), suffix=EVALUATION_SUFFIXES,
     )
 )

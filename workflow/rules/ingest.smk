@@ -1,32 +1,4 @@
 # Stages 1-2: read the recording (ingest) and interpolate a pose per scan (poses).
-stage_schema_check("ingest")
-stage_schema_check("poses")
-
-
-def recording_input(wildcards):
-    """The recording a dataset reads: its path, or the simulated one for synthetic data."""
-    ds = DATASETS[wildcards.dataset]
-    if ds.get("format") == "synthetic":
-        if ds.get("recording", "bag") == "pcd":
-            return f"results/{wildcards.dataset}/sim/pcd"
-        return f"results/{wildcards.dataset}/sim/recording.bag"
-    return ds["path"]
-
-
-def ingest_dataset(wildcards):
-    """The dataset entry as ingest reads it; synthetic datasets read their simulation."""
-    ds = dataset_config(wildcards)
-    if ds.get("format") == "synthetic":
-        if ds.get("recording", "bag") == "pcd":
-            ds.update(format="pcd", path=recording_input(wildcards), locations="locations.csv")
-        else:
-            ds.update(
-                format="rosbag",
-                path=recording_input(wildcards),
-                scan_topic="/scan",
-                pose={"source": "topic", "topic": "/amcl_pose", "base_frame": "base_link"},
-            )
-    return ds
 
 
 def recording_state(wildcards):

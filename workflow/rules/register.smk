@@ -1,6 +1,5 @@
 # Registration (issue 4; thesis sections 3.2.2, 3.5, Algorithm 3 steps 2-6): every kept
 # scan in the map frame, from the localizer's pose refined by planar ICP.
-stage_schema_check("register")
 
 
 def register_inputs(wildcards):
@@ -33,29 +32,4 @@ checkpoint register:
         "../../scripts/register.py"
 
 
-# The figure in its own job: the per-scan stages start without waiting for it.
-rule register_figure:
-    priority: PRIORITY["register_figure"]
-    input:
-        registered="results/{dataset}/registered.parquet",
-        registration="results/{dataset}/registration.parquet",
-        index="results/{dataset}/scan_index.parquet",  # what ingest detected
-    output:
-        figure=report(
-            "results/{dataset}/figures/registered_map.png",
-            caption="../report/registered_map.rst",
-            category="Registration",
-            subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Registered map and scan locations"},
-        ),
-    log:
-        log_path("register_figure"),
-    benchmark:
-        benchmark_path("register_figure")
-    script:
-        "../../scripts/register_figure.py"
-
-
-PLAN_OUTPUTS.extend(
-    ["results/{dataset}/registration.parquet", "results/{dataset}/figures/registered_map.png"]
-)
+PLAN_OUTPUTS.append("results/{dataset}/registration.parquet")

@@ -1,32 +1,17 @@
 # Scoring (thesis Chapter 5): metrics of the walls of every ordering x extractor x k
 # against the ground truth (synthetic datasets) or the reference (real recordings: the
 # walls of the same extractor from all kept scans), and of every floor plan against the
-# reference map (rule reference: the occupancy grid of all kept scans), the
-# scan-reduction summary, and the Chapter 5 figures for the report.
+# reference map (rule reference: the occupancy grid of all kept scans), and the
+# scan-reduction summary. The Chapter 5 figures of the report: figures.smk.
 import re
 
-stage_schema_check("score")
-
-# The figure k is in the figure file names (floorplans_first_k15.png), so it is global
-# (FILE_GRID_KEYS: a per-dataset override is refused).
-SCORE_FIGURE_K = config["score"]["figure_k"]
-
-
-def _walls_section(wildcards):
-    return stage_config("walls")(wildcards)
-
-
-def score_orderings(wildcards):
-    """The orderings the walls stage extracts (walls.orderings)."""
-    return list(_walls_section(wildcards)["orderings"])
-
-
-def score_extractors(wildcards):
-    return list(_walls_section(wildcards)["extractors"])
+from floorscan.score.ground_truth import reference_label
+from floorscan.score.runs import run_grid
 
 
 def score_run_tables(wildcards):
     """The scores table of every extractor (rule score_runs)."""
+    evaluation_grid_check()  # the summary reads the all-scan k
     return [f"results/{wildcards.dataset}/score/{e}.parquet" for e in score_extractors(wildcards)]
 
 
@@ -35,66 +20,20 @@ def score_curve_tables(wildcards):
     return [f"results/{wildcards.dataset}/score/curves_{e}.parquet" for e in score_extractors(wildcards)]
 
 
-def score_ks(wildcards):
-    return [str(k) for k in _walls_section(wildcards)["k"]]
-
-
-def score_runs(wildcards):
-    """[ordering, extractor, k label] of every wall file scored, in input order."""
-    return [
-        [o, e, k]
-        for o in score_orderings(wildcards)
-        for e in score_extractors(wildcards)
-        for k in score_ks(wildcards)
-    ]
-
-
-def score_reference_kind(wildcards):
-    return "ground_truth" if is_synthetic(wildcards.dataset) else "reference"
+def score_extractor_runs(wildcards):
+    """[ordering, extractor, k label] of the wall files of one extractor, in input order
+    (floorscan.score.runs.run_grid)."""
+    runs = run_grid(score_orderings(wildcards), score_extractors(wildcards), score_ks(wildcards))
+    return [r for r in runs if r[1] == wildcards.extractor]
 
 
 def score_reference_label(wildcards):
-    """Wording for captions: never call a real recording's reference ground truth."""
-    if is_synthetic(wildcards.dataset):
-        return "the simulator's ground-truth walls (faces of sim/walls.geojson)"
-    return (
-        "the reference, the walls extracted by the same extractor from all kept scans "
-        "(a reference, not ground truth: the building has no architectural plan)"
-    )
-
-
-def _score_reference_inputs(wildcards):
-    ds = wildcards.dataset
-    if is_synthetic(ds):
-        return {"ground_truth": f"results/{ds}/sim/walls.geojson"}
-    cfg = stage_config("score")(wildcards)
-    if cfg["reference_source"] == "kall":
-        o = cfg["figure_ordering"]
-        refs = [f"results/{ds}/walls/{o}/{e}/kall.parquet" for e in score_extractors(wildcards)]
-    else:
-        refs = [f"results/{ds}/walls/{e}/per_scan.parquet" for e in score_extractors(wildcards)]
-    return {"reference": refs}
-
-
-def score_check(wildcards):
-    """Fail before running when the score config disagrees with the walls config."""
-    cfg = stage_config("score")(wildcards)
-    taus = [float(t) for t in cfg["taus_m"]]
-    if not any(abs(float(cfg["summary_tau_m"]) - t) < 1e-12 for t in taus):
-        config_error(f"score.summary_tau_m {cfg['summary_tau_m']} is not in score.taus_m {taus}")
-    if str(cfg["figure_k"]) not in score_ks(wildcards):
-        config_error(f"score.figure_k {cfg['figure_k']} is not in walls.k {score_ks(wildcards)}")
-    if "all" not in score_ks(wildcards):
-        config_error("walls.k must contain 'all': the summary compares with the all-scan F1")
-    return cfg
-
-
-def score_extractor_runs(wildcards):
-    """[ordering, extractor, k label] of the wall files of one extractor, in input order."""
-    return [r for r in score_runs(wildcards) if r[1] == wildcards.extractor]
+    """Wording for captions (floorscan.score.ground_truth.reference_label)."""
+    return reference_label(score_reference_kind(wildcards))
 
 
 def score_runs_inputs(wildcards):
+    evaluation_grid_check()
     ds = wildcards.dataset
     runs = score_extractor_runs(wildcards)
     return {
@@ -102,31 +41,8 @@ def score_runs_inputs(wildcards):
         "floorplans": [f"results/{ds}/evaluation/floorplan/{o}_{e}_k{k}.geojson" for o, e, k in runs],
         "orderings": [f"results/{ds}/orderings/{o}.parquet" for o in score_orderings(wildcards)],
         "reference_map": f"results/{ds}/reference/occupancy.parquet",
-        **_score_reference_inputs(wildcards),
+        **score_reference_inputs(wildcards),
     }
-
-
-def score_figure_runs(wildcards):
-    """[ordering, extractor, k label] of the raw wall files the figures draw."""
-    cfg = score_check(wildcards)
-    k = str(cfg["figure_k"])
-    orderings = list(dict.fromkeys(list(cfg["figure_orderings"]) + [cfg["figure_ordering"]]))
-    runs = []
-    for o in orderings:
-        for e in score_extractors(wildcards):
-            for kk in (k, "all"):
-                runs.append([o, e, kk])
-    return runs
-
-
-def score_figure_floorplans(wildcards):
-    """[ordering, extractor] of the merged floor plans at figure_k (Fig. 5.5)."""
-    cfg = stage_config("score")(wildcards)
-    return [[o, cfg["figure_extractor"]] for o in cfg["figure_orderings"]]
-
-
-def score_bench_dir(wildcards):
-    return f"results/{wildcards.dataset}/benchmarks"
 
 
 def reference_config(wildcards):
@@ -185,7 +101,7 @@ rule score_runs:
     wildcard_constraints:
         extractor=WALLS_CONSTRAINTS["extractor"],
     params:
-        cfg=score_check,
+        cfg=stage_config("score"),
         runs=score_extractor_runs,
         orderings=score_orderings,
         extractors=score_extractors,
@@ -202,6 +118,7 @@ rule score_runs:
 
 
 def score_curves_inputs(wildcards):
+    evaluation_grid_check()
     ds = wildcards.dataset
     return {
         "walls": f"results/{ds}/walls/{wildcards.extractor}/per_scan.parquet",
@@ -223,7 +140,7 @@ rule score_curves:
     wildcard_constraints:
         extractor=WALLS_CONSTRAINTS["extractor"],
     params:
-        cfg=score_check,
+        cfg=stage_config("score"),
         orderings=score_orderings,
         floorplan=stage_config("floorplan"),
     log:
@@ -254,7 +171,7 @@ rule score:
         ),
         summary_md="results/{dataset}/evaluation/summary.md",  # the evaluation's part of summary.md
     params:
-        cfg=score_check,
+        cfg=stage_config("score"),
         reference_kind=score_reference_kind,
         reference_label=score_reference_label,
         default_ordering=select_default_ordering,
@@ -266,135 +183,11 @@ rule score:
         "../../scripts/score.py"
 
 
-def score_walls_figure_inputs(wildcards):
-    ds = wildcards.dataset
-    k = str(stage_config("score")(wildcards)["figure_k"])
-    return {
-        "walls": [f"results/{ds}/walls/{o}/{e}/k{kk}.parquet" for o, e, kk in score_figure_runs(wildcards)],
-        "floorplans": [
-            f"results/{ds}/evaluation/floorplan/{o}_{e}_k{k}.geojson" for o, e in score_figure_floorplans(wildcards)
-        ],
-        "registered": f"results/{ds}/registered.parquet",
-        "scan_status": [f"results/{ds}/walls/{e}/scan_status.parquet" for e in score_extractors(wildcards)],
-        "scan_times": [f"results/{ds}/benchmarks/scan_walls_{e}_times.parquet" for e in score_extractors(wildcards)],
-        **_score_reference_inputs(wildcards),
-    }
-
-
-# The figures of walls and floor plans need no metrics: drawn while the runs are scored.
-rule score_walls_figures:
-    priority: PRIORITY["score_walls_figures"]
-    input:
-        unpack(score_walls_figure_inputs),
-    output:
-        floorplan=report(
-            f"results/{{dataset}}/figures/floorplans_first_k{SCORE_FIGURE_K}.png",
-            caption="../report/floorplan.rst",
-            category="Scoring",
-            subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": f"Floor plans from the first {SCORE_FIGURE_K} scans of each ordering"},
-        ),
-        bitmap_overlay=report(
-            f"results/{{dataset}}/figures/bitmap_overlay_first_k{SCORE_FIGURE_K}.png",
-            caption="../report/bitmap_overlay.rst",
-            category="Scoring",
-            subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": f"Walls of the first {SCORE_FIGURE_K} scans as a bitmap over the reference"},
-        ),
-        walls_over_points_k=report(
-            f"results/{{dataset}}/figures/walls_over_points_first_k{SCORE_FIGURE_K}.png",
-            caption="../report/walls_over_points_k.rst",
-            category="Scoring",
-            subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": f"Walls from the first {SCORE_FIGURE_K} scans over the registered points"},
-        ),
-        walls_over_points_all=report(
-            "results/{dataset}/figures/walls_over_points_all.png",
-            caption="../report/walls_over_points_all.rst",
-            category="Scoring",
-            subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Walls from all kept scans over the registered points"},
-        ),
-        wall_extraction=report(
-            "results/{dataset}/figures/wall_extraction_per_scan.png",
-            caption="../report/wall_extraction.rst",
-            category="Timing",
-            subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Wall extraction per scan, ransac against cluster_ransac"},
-        ),
-    params:
-        cfg=score_check,
-        walls_runs=score_figure_runs,
-        floorplan_runs=score_figure_floorplans,
-        extractors=score_extractors,
-        reference_kind=score_reference_kind,
-    log:
-        "results/{dataset}/logs/score_walls_figures.log",
-    benchmark:
-        "results/{dataset}/benchmarks/score_walls_figures.tsv"
-    script:
-        "../../scripts/score_walls_figures.py"
-
-
-# Last: the time per stage counts every other job's benchmark file, so the other
-# figure jobs are inputs too.
-rule score_figures:
-    priority: PRIORITY["score_figures"]
-    input:
-        metrics="results/{dataset}/metrics.parquet",
-        walls_figures=f"results/{{dataset}}/figures/floorplans_first_k{SCORE_FIGURE_K}.png",
-        selection_figures="results/{dataset}/figures/coverage_vs_scans.png",
-    output:
-        metrics_vs_k=report(
-            "results/{dataset}/figures/wall_metrics_vs_k.png",
-            caption="../report/metrics_vs_k.rst",
-            category="Scoring",
-            subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Wall metrics against the number of scans, per ordering"},
-        ),
-        stage_times_png=report(
-            "results/{dataset}/figures/stage_times.png",
-            caption="../report/stage_times.rst",
-            category="Timing",
-            subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Time and memory per stage"},
-        ),
-        stage_times_tsv=report(
-            "results/{dataset}/figures/stage_times.tsv",
-            caption="../report/stage_times.rst",
-            category="Timing",
-            subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Time and memory per stage (table)"},
-        ),
-    params:
-        cfg=score_check,
-        bench_dir=score_bench_dir,
-    log:
-        "results/{dataset}/logs/score_figures.log",
-    benchmark:
-        "results/{dataset}/benchmarks/score_figures.tsv"
-    script:
-        "../../scripts/score_figures.py"
-
-
 EVALUATION_OUTPUTS.extend(
     [
         "results/{dataset}/metrics.parquet",
         "results/{dataset}/summary.parquet",
         "results/{dataset}/evaluation/summary.md",
-    ]
-    + [
-        f"results/{{dataset}}/figures/{name}"
-        for name in (
-            "wall_metrics_vs_k.png",
-            f"floorplans_first_k{SCORE_FIGURE_K}.png",
-            f"bitmap_overlay_first_k{SCORE_FIGURE_K}.png",
-            f"walls_over_points_first_k{SCORE_FIGURE_K}.png",
-            "walls_over_points_all.png",
-            "stage_times.png",
-            "stage_times.tsv",
-            "wall_extraction_per_scan.png",
-        )
     ]
 )
 
@@ -528,13 +321,6 @@ rule score_drawn:
         benchmark_path("score_drawn")
     script:
         "../../scripts/score_drawn.py"
-
-
-def drawn_outputs():
-    """score_drawn's files for the datasets that name a drawn plan (patterns keep {dataset});
-    its room scores and overlay are in EVALUATION_OUTPUTS, as every dataset's (score_rooms
-    makes them for the other datasets)."""
-    return ["results/{dataset}/evaluation/drawn_scores.csv", "results/{dataset}/figures/drawn_overlay.png"]
 
 
 def score_rooms_inputs(wildcards):

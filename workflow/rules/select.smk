@@ -2,34 +2,17 @@
 from floorscan.select.registry import COVERAGE_ORDERINGS
 from floorscan.select.registry import ORDERINGS as SELECT_ORDERINGS
 
-stage_schema_check("hulls")
-stage_schema_check("select")
-
-# Shard labels of floorscan.core.shards.shard_label: scans_<first scan id>-<last scan id>.
-SHARD_LABEL = r"scans_\d+-\d+"
-
 
 def select_coverage_inputs(wildcards):
     """Inputs of `select_coverage`: the per-scan walls of select.coverage.wall_extractor
-    (one of walls.extractors) and the registered points."""
+    (one of walls.extractors, checked at start) and the registered points."""
     ds = wildcards.dataset
     extractor = stage_config("select")(wildcards)["coverage"]["wall_extractor"]
-    extractors = stage_config("walls")(wildcards)["extractors"]
-    if extractor not in extractors:
-        config_error(
-            f"select.coverage.wall_extractor {extractor!r} is not one of walls.extractors {list(extractors)}"
-        )
     return {
         "walls": f"results/{ds}/walls/{extractor}/per_scan.parquet",
         "registered": f"results/{ds}/registered.parquet",
         "registration": f"results/{ds}/registration.parquet",
     }
-
-
-def hulls_config(wildcards):
-    """The hulls section without shard_scans: how the scans are split into jobs changes
-    no hull, so it must not rerun the shards (and HullParams does not know it)."""
-    return {k: v for k, v in stage_config("hulls")(wildcards).items() if k != "shard_scans"}
 
 
 def hulls_shard_scans(wildcards):
@@ -61,8 +44,6 @@ rule hulls_shard:
     output:
         hulls="results/{dataset}/shards/hulls/{shard}/hulls.parquet",
         convex="results/{dataset}/shards/hulls/{shard}/convex_hulls.parquet",
-    wildcard_constraints:
-        shard=SHARD_LABEL,
     params:
         cfg=hulls_config,
     log:
@@ -99,15 +80,6 @@ rule select:
 
 # The orderings by what the scans add to the walls (floorscan.select.coverage): after the
 # walls stage's per-scan segments, before the k tables of every ordering are cut.
-def select_default_ordering(wildcards):
-    """select.default_ordering, which must be one of walls.orderings (its plans are made)."""
-    default = stage_config("select")(wildcards)["default_ordering"]
-    orderings = list(stage_config("walls")(wildcards)["orderings"])
-    if default not in orderings:
-        config_error(f"select.default_ordering {default!r} is not one of walls.orderings {orderings}")
-    return default
-
-
 rule select_coverage:
     priority: PRIORITY["select_coverage"]
     input:
@@ -163,59 +135,12 @@ rule selection:
         "../../scripts/selection.py"
 
 
-rule selection_figures:
-    priority: PRIORITY["selection_figures"]
-    input:
-        registered="results/{dataset}/registered.parquet",
-        registration="results/{dataset}/registration.parquet",
-        hulls="results/{dataset}/hulls.parquet",
-        convex="results/{dataset}/convex_hulls.parquet",
-        orderings=expand(
-            "results/{{dataset}}/orderings/{ordering}.parquet", ordering=[*SELECT_ORDERINGS, *COVERAGE_ORDERINGS]
-        ),
-        summary="results/{dataset}/orderings/summary.parquet",
-    output:
-        coverage=report(
-            "results/{dataset}/figures/coverage_vs_scans.png",
-            caption="../report/coverage_vs_scans.rst",
-            category="Selection",
-            subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Covered area against the number of scans, per ordering"},
-        ),
-        clusters=report(
-            "results/{dataset}/figures/coverage_vs_clusters.png",
-            caption="../report/coverage_vs_clusters.rst",
-            category="Selection",
-            subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Covered area against the number of scans, per number of KMeans clusters"},
-        ),
-        timing=report(
-            "results/{dataset}/figures/selection_time.png",
-            caption="../report/selection_time.rst",
-            category="Selection",
-            subcategory="{dataset}",
-            labels={"dataset": "{dataset}", "figure": "Time to order the scans, lazy against plain greedy"},
-        ),
-    params:
-        cfg=stage_config("select"),
-        hulls_cfg=hulls_config,
-    log:
-        log_path("selection_figures"),
-    benchmark:
-        benchmark_path("selection_figures")
-    script:
-        "../../scripts/selection_figures.py"
-
-
 EVALUATION_OUTPUTS.extend(
     [
         "results/{dataset}/hulls.parquet",
         "results/{dataset}/convex_hulls.parquet",
         "results/{dataset}/orderings/summary.parquet",
         *[f"results/{{dataset}}/orderings/{o}.parquet" for o in SELECT_ORDERINGS],
-        "results/{dataset}/figures/coverage_vs_scans.png",
-        "results/{dataset}/figures/coverage_vs_clusters.png",
-        "results/{dataset}/figures/selection_time.png",
     ]
 )
 

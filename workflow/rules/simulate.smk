@@ -5,8 +5,6 @@ import re
 
 from floorscan.core.config import BUILDINGS_DIR
 
-stage_schema_check("simulate")
-
 SYNTHETIC_DATASETS = sorted(d for d in DATASETS if is_synthetic(d))
 
 

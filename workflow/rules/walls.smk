@@ -6,58 +6,13 @@
 #   walls:      the shards merged in scan order (the per-scan tables), and the wall
 #               segments of the first k scans of each ordering (a filter)
 # The floor plans made of them: floorplan.smk.
-import re
 
-stage_schema_check("walls")
-
-
-def check_walls_extractors():
-    """Stop the run when walls.extractors (or a dataset's override of it) names an
-    extractor that floorscan.walls.extractors.REGISTRY does not hold."""
-    named = {"walls.extractors": config["walls"]["extractors"]}
-    for name, ds in DATASETS.items():
-        override = ((ds.get("params") or {}).get("walls") or {}).get("extractors")
-        if override:
-            named[f"datasets.{name}.params.walls.extractors"] = override
-    for where, extractors in named.items():
-        unknown = [e for e in extractors if e not in WALLS_REGISTRY]
-        if unknown:
-            config_error(
-                f"{where} names {unknown}, which are not registered in floorscan.walls.extractors; "
-                f"registered: {list(WALLS_REGISTRY)}"
-            )
-
-
-check_walls_extractors()
-
-# Shard labels of floorscan.core.shards.shard_label: scans_<first scan id>-<last scan id>.
-WALLS_SHARD_LABEL = r"scans_\d+-\d+"
-
-
-def _alternatives(values):
-    return "|".join(re.escape(str(v)) for v in values)
-
-
-def walls_k_names():
-    """k wildcard values of config walls.k: 5 -> "5", "all" -> "all" (files k5 ... kall)."""
-    return [str(k) for k in config["walls"]["k"]]
-
-
-def walls_outputs():
-    """Per-dataset evaluation outputs: the k-walls tables of every configured ordering x
-    extractor x k (patterns keep {dataset})."""
-    w = config["walls"]
-    return expand(
+# The evaluation's walls: the k tables of every ordering x extractor x k of the config.
+EVALUATION_OUTPUTS.extend(
+    expand(
         "results/{{dataset}}/walls/{ordering}/{extractor}/k{k}.parquet",
-        ordering=w["orderings"], extractor=w["extractors"], k=walls_k_names(),
+        ordering=config["walls"]["orderings"], extractor=config["walls"]["extractors"], k=walls_k_names(),
     )
-
-
-EVALUATION_OUTPUTS.extend(walls_outputs())
-
-WALLS_CONSTRAINTS = dict(
-    ordering=_alternatives(config["walls"]["orderings"]),
-    extractor=_alternatives(config["walls"]["extractors"]),
 )
 
 
@@ -106,7 +61,6 @@ rule scan_walls_shard:
         times="results/{dataset}/benchmarks/shards/walls/{extractor}/{shard}/times.parquet",
     wildcard_constraints:
         extractor=WALLS_CONSTRAINTS["extractor"],
-        shard=WALLS_SHARD_LABEL,
     params:
         cfg=walls_extract_config,
     log:
@@ -178,12 +132,6 @@ def map_walls_inputs(wildcards):
     if wildcards.scans == "selected":
         inputs["scans"] = f"results/{ds}/selection/scans.csv"
     return inputs
-
-
-def walls_map_config(wildcards):
-    """The `walls` keys the map extractor reads: the scan points, the seed, `map`."""
-    cfg = stage_config("walls")(wildcards)
-    return {key: cfg[key] for key in ("seed", "height_band_m", "planar_tolerance_m", "grid_m", "map") if key in cfg}
 
 
 # The map extractor (floorscan.walls.map_lines): walls fitted on the map of the selected
