@@ -4,6 +4,8 @@
 - Imports point down only: a stage package imports ``floorscan.core`` and the packages
   of earlier stages (:data:`LAYER`), never a later one; ``core`` imports no stage.
 - No import cycle between modules, counting imports inside functions.
+- Names used across modules are public: no module of the package or script imports
+  another module's ``_private`` name (issue 37).
 """
 
 import ast
@@ -161,3 +163,38 @@ def test_every_rule_runs_the_script_of_its_name():
     assert {rule: script for rule, script in pairs.items() if rule != script} == {}
     scripts = {p.stem for p in (PACKAGE.parent / "scripts").glob("*.py")}
     assert scripts == set(pairs.values())
+
+
+def private_imports(paths) -> list[str]:
+    """``file: from module import _name`` for every import of a floorscan module's
+    private name (one leading underscore) in ``paths``: a name used across modules is
+    public."""
+    found = []
+    for path in paths:
+        tree = ast.parse(Path(path).read_text(), filename=str(path))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("floorscan"):
+                for alias in node.names:
+                    if alias.name.startswith("_") and not alias.name.startswith("__"):
+                        found.append(f"{Path(path).name}: from {node.module} import {alias.name}")
+    return found
+
+
+def test_no_module_imports_another_modules_private_name():
+    """Issue 37: the package and its scripts import only public names of each other."""
+    paths = [*modules().values(), *sorted((PACKAGE.parent / "scripts").glob("*.py"))]
+    assert private_imports(paths) == []
+
+
+def test_the_private_name_check_finds_a_planted_import(tmp_path):
+    """The check above cannot pass vacuously: a stage module importing another stage's
+    private name, at the top or inside a function, is found."""
+    planted = tmp_path / "planted.py"
+    planted.write_text(
+        "from floorscan.walls.ransac import fit_wall, _best_line\n"
+        "def f():\n    from floorscan.score.nearest import _densify_pairs as d\n"
+    )
+    assert private_imports([planted]) == [
+        "planted.py: from floorscan.walls.ransac import _best_line",
+        "planted.py: from floorscan.score.nearest import _densify_pairs",
+    ]

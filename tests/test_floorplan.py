@@ -167,7 +167,7 @@ def test_export_registry_names_the_formats_of_the_schema():
 def test_candidate_pairs_equal_shapely_dwithin():
     import shapely
 
-    from floorscan.floorplan.candidates import _candidate_pairs
+    from floorscan.floorplan.candidates import candidate_pairs
 
     rng = np.random.default_rng(7)
     p0 = rng.uniform(0, 6, (300, 2))
@@ -178,9 +178,9 @@ def test_candidate_pairs_equal_shapely_dwithin():
     for dist in (0.05, 0.3):
         i, j = shapely.STRtree(lines).query(lines, predicate="dwithin", distance=dist)
         want = sorted(zip(*(a[i < j] for a in (i, j))))
-        got = list(zip(*_candidate_pairs(seg, dist)))
+        got = list(zip(*candidate_pairs(seg, dist)))
         assert got == want and len(want) > 50
-    i, j = _candidate_pairs(seg, 0.3, np.radians(3.0))
+    i, j = candidate_pairs(seg, 0.3, np.radians(3.0))
     d = np.abs(np.arctan2(*(seg[i, 2:] - seg[i, :2]).T[::-1]) - np.arctan2(*(seg[j, 2:] - seg[j, :2]).T[::-1])) % np.pi
     assert (np.minimum(d, np.pi - d) <= np.radians(3.0) + 1e-12).all() and len(i) > 10
 
@@ -203,7 +203,7 @@ def test_candidate_pairs_by_direction_bins_equal_dwithin_and_angle():
     exactly the dwithin pairs within the angle."""
     import shapely
 
-    from floorscan.floorplan.candidates import _angle_diff, _axial_angle, _candidate_pairs
+    from floorscan.floorplan.candidates import angle_diff, axial_angle, candidate_pairs
 
     rng = np.random.default_rng(11)
     p0 = rng.uniform(0, 5, (400, 2))
@@ -212,10 +212,10 @@ def test_candidate_pairs_by_direction_bins_equal_dwithin_and_angle():
     lines = shapely.linestrings(seg.reshape(-1, 2, 2))
     for dist, max_deg in ((0.3, 3.0), (0.05, 1.0), (0.3, 20.0), (0.3, 80.0)):
         i, j = shapely.STRtree(lines).query(lines, predicate="dwithin", distance=dist)
-        a = _axial_angle(seg)
-        keep = (i < j) & (_angle_diff(a[i], a[j]) <= np.radians(max_deg))
+        a = axial_angle(seg)
+        keep = (i < j) & (angle_diff(a[i], a[j]) <= np.radians(max_deg))
         want = sorted(zip(i[keep].tolist(), j[keep].tolist()))
-        got = list(zip(*(x.tolist() for x in _candidate_pairs(seg, dist, np.radians(max_deg)))))
+        got = list(zip(*(x.tolist() for x in candidate_pairs(seg, dist, np.radians(max_deg)))))
         assert got == want and len(want) > 20
         if max_deg == 3.0:  # 59 direction bins: pairs across the 0/180 degree wrap are found
             across = [(p, q) for p, q in want if abs(a[p] - a[q]) > np.pi / 2]
@@ -301,7 +301,7 @@ def test_candidate_pairs_by_direction_bins_far_from_the_origin():
     at the distance and across the 0/180 degree wrap."""
     import shapely
 
-    from floorscan.floorplan.candidates import _angle_diff, _axial_angle, _candidate_pairs
+    from floorscan.floorplan.candidates import angle_diff, axial_angle, candidate_pairs
 
     rng = np.random.default_rng(12)
     p0 = rng.uniform(0, 40, (500, 2))
@@ -310,12 +310,12 @@ def test_candidate_pairs_by_direction_bins_far_from_the_origin():
     seg[:30] = seg[30:60] + [0.0, 0.25, 0.0, 0.25]  # exactly 0.25 m from a neighbour (same x)
     seg += [500_000.0, 4_000_000.0, 500_000.0, 4_000_000.0]
     lines = shapely.linestrings(seg.reshape(-1, 2, 2))
-    a = _axial_angle(seg)
+    a = axial_angle(seg)
     for exact in (True, False):
         i, j = shapely.STRtree(lines).query(lines, predicate="dwithin", distance=0.25)
-        keep = (i < j) & (_angle_diff(a[i], a[j]) <= np.radians(3.0))
+        keep = (i < j) & (angle_diff(a[i], a[j]) <= np.radians(3.0))
         want = set(zip(i[keep].tolist(), j[keep].tolist()))
-        got_i, got_j = _candidate_pairs(seg, 0.25, np.radians(3.0), exact=exact)
+        got_i, got_j = candidate_pairs(seg, 0.25, np.radians(3.0), exact=exact)
         got = set(zip(got_i.tolist(), got_j.tolist()))
         assert (got == want) if exact else (got >= want), exact
         assert (got_i < got_j).all() and len(got) == len(got_i)

@@ -13,20 +13,20 @@ from floorscan.core.io import InputError
 from floorscan.floorplan.candidates import point_segment_dist2
 from floorscan.score.bitmap import (
     Grid,
-    _raster_cells,
+    raster_cells,
     bitmap_metrics,
     error_map,
     grid_for,
     rasterize_segments,
 )
 from floorscan.score.capsule import length_within
-from floorscan.score.geojson import _wall_faces, floorplan_faces, floorplan_wall_count, read_wall_faces
+from floorscan.score.geojson import wall_faces, floorplan_faces, floorplan_wall_count, read_wall_faces
 from floorscan.score.ground_truth import GROUND_TRUTH, REFERENCE, load_recall_references
-from floorscan.score.growing import _SamplePairs, score_walls
-from floorscan.score.nearest import _SegmentIndex, _nearest_below, nearest_distances
+from floorscan.score.growing import SamplePairs, score_walls
+from floorscan.score.nearest import SegmentIndex, nearest_below, nearest_distances
 from floorscan.score.runs import score_dataset
 from floorscan.score.segments import (
-    _row_keys,
+    row_keys,
     as_segments,
     dedupe_samples,
     gt_samples,
@@ -291,9 +291,9 @@ def test_wall_faces_splits_lines_and_multilines_into_pieces():
         {"properties": {"kind": "face"}, "geometry": {"type": "Point", "coordinates": [9, 9]}},
         {"properties": {"kind": "face"}, "geometry": line([[9, 9], [8, 8.5], [7, 7]])},
     ]}  # fmt: skip
-    seg = _wall_faces(doc, "face")
+    seg = wall_faces(doc, "face")
     assert seg.tolist() == [[0, 0, 1, 0], [1, 0, 1, 2], [2, 2, 3, 3], [9, 9, 8, 8.5], [8, 8.5, 7, 7]]
-    assert _wall_faces(doc, "footprint").shape == (0, 4)
+    assert wall_faces(doc, "footprint").shape == (0, 4)
 
 
 def test_floorplan_wall_count(tmp_path):
@@ -515,12 +515,12 @@ def _brute_d(pts, seg):
 
 
 def test_sample_pairs_are_every_wall_sample_pair_within_reach():
-    """The pairs a wall set gets from _SamplePairs (measured in batches, cached by row)
+    """The pairs a wall set gets from SamplePairs (measured in batches, cached by row)
     are exactly the (wall, sample) pairs within the reach, with the same distances."""
     seg = np.vstack([_stacked_walls(25, seed=7), [[2.0, 2.0, 2.0, 2.0], [5.0, 1.0, 5.3, 1.7]]])
     samples = gt_samples(np.array([[0, 0, 10, 0], [10, 0, 10, 6], [3, 1, 7, 3]], float), 0.02)
-    pairs = _SamplePairs(samples, 0.1)
-    keys = _row_keys(seg)
+    pairs = SamplePairs(samples, 0.1)
+    keys = row_keys(seg)
     pairs.of(seg[5:40], keys[5:40])  # an earlier batch, cached
     brute = _brute_d(samples, seg)
     for i in (0, 7, 39, len(seg) - 2, len(seg) - 1):
@@ -534,21 +534,21 @@ def test_sample_pairs_are_every_wall_sample_pair_within_reach():
 
 
 def test_segment_index_exact_and_nearest_below_match_brute_force():
-    """Every radius level of _SegmentIndex.exact (reach trees, segment boxes) and the
-    direct, box-bounded and KD-tree paths of _nearest_below give the brute-force
+    """Every radius level of SegmentIndex.exact (reach trees, segment boxes) and the
+    direct, box-bounded and KD-tree paths of nearest_below give the brute-force
     minimum bit for bit."""
     seg = _stacked_walls(30, seed=11)
     rng = np.random.default_rng(12)
     pts = np.vstack([rng.uniform([-3, -3], [13, 9], (400, 2)), rng.uniform([0, -0.05], [10, 0.05], (400, 2))])
     brute = _brute_d(pts, seg)
-    index = _SegmentIndex(seg)
+    index = SegmentIndex(seg)
     radius = rng.choice([0.005, 0.02, 0.05, 0.1, 0.4, 3.0], len(pts))
     ids = np.arange(len(pts))
     got = index.exact(pts, ids, radius)
     want = np.where(brute <= radius[:, None] * (1 + 1e-9) + 1e-9, brute, np.inf).min(axis=1)
     assert np.array_equal(got, want)
     bound = rng.choice([np.inf, 0.01, 0.08, 0.6, 2.0, 50.0], len(pts))
-    got = _nearest_below(pts, _SegmentIndex(seg[:20]), bound)
+    got = nearest_below(pts, SegmentIndex(seg[:20]), bound)
     assert np.array_equal(got, np.minimum(bound, brute[:, :20].min(axis=1)))
 
 
@@ -560,7 +560,7 @@ def test_wall_cells_of_batches_union_to_the_bitmap():
     whole = rasterize_segments(seg, grid, 0.1)
     parts = np.zeros(grid.shape, bool)
     for i in range(len(seg)):
-        owner, flat = _raster_cells(seg[i:i + 1], grid, 0.1)
+        owner, flat = raster_cells(seg[i:i + 1], grid, 0.1)
         assert (owner == 0).all()
         parts.reshape(-1)[flat] = True
     assert np.array_equal(parts, whole) and whole.sum() > 1000

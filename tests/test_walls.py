@@ -412,7 +412,7 @@ def test_issue8_shortcuts_equal_the_plain_forms_bit_for_bit():
     plain forms give; a line's segments do not depend on the order of its points."""
     from floorscan.core.grid import cell_groups
     from floorscan.walls.ransac import _inlier_counts
-    from floorscan.walls.segments import _claimed_segments
+    from floorscan.walls.segments import claimed_segments
 
     rng = np.random.default_rng(11)
     one = np.r_[rng.normal(0, 0.01, 120), rng.normal(0.2, 0.01, 80), rng.normal(1.0, 0.02, 40), rng.uniform(-1, 2, 20)]
@@ -440,8 +440,8 @@ def test_issue8_shortcuts_equal_the_plain_forms_bit_for_bit():
     direction = np.array([1.0, 0.0])
     shuffled = wall[rng.permutation(len(wall))]
     claimed = np.ones(len(wall), dtype=bool)
-    got = _claimed_segments(wall, np.array([2.0, 1.0]), direction, claimed, RansacParams())
-    assert got == _claimed_segments(shuffled, np.array([2.0, 1.0]), direction, claimed, RansacParams())
+    got = claimed_segments(wall, np.array([2.0, 1.0]), direction, claimed, RansacParams())
+    assert got == claimed_segments(shuffled, np.array([2.0, 1.0]), direction, claimed, RansacParams())
     assert len(got) == 2 and [r[4] for r in got] == [80, 50]
     np.testing.assert_allclose([got[0][0], got[0][2], got[1][0], got[1][2]], [0, 2, 2.8, 4], atol=0.02)
 

@@ -14,7 +14,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from floorscan.figures.style import DPI, _square, reference_name, save_figure  # noqa: E402
+from floorscan.figures.style import DPI, square_axes, reference_name, save_figure  # noqa: E402
 from floorscan.score.bitmap import Grid, bitmap_metrics, rasterize_segments  # noqa: E402
 
 
@@ -83,7 +83,7 @@ def plot_bitmap_overlay(
             f"FN {m['false_negative']:.4f}  wall-cell CM {m['wall_correct_match']:.3f}",
             fontsize=9,
         )
-        _square(ax)
+        square_axes(ax)
     handles = [
         plt.Rectangle((0, 0), 1, 1, color=(0.1, 0.2, 1.0), label=f"{ref} only (FN)"),
         plt.Rectangle((0, 0), 1, 1, color=(1.0, 0.1, 0.1), label="inferred only (FP)"),

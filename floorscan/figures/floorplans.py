@@ -14,7 +14,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from floorscan.figures.style import _segments_collection, _square, reference_name, save_figure  # noqa: E402
+from floorscan.figures.style import segments_collection, square_axes, reference_name, save_figure  # noqa: E402
 
 
 def read_geojson_geometries(path) -> list:
@@ -82,7 +82,7 @@ def plot_floorplans(panels, reference, reference_kind: str, out, title: str = ""
     fig, axes = plt.subplots(1, n, figsize=(6 * n, 5), squeeze=False)
     for ax, (name, geoms) in zip(axes[0], panels):
         ax.add_collection(
-            _segments_collection(reference, colors="0.75", linewidths=3,
+            segments_collection(reference, colors="0.75", linewidths=3,
                                  label=reference_name(reference_kind))
         )
         for g in geoms:
@@ -90,7 +90,7 @@ def plot_floorplans(panels, reference, reference_kind: str, out, title: str = ""
         ax.plot([], [], color="black", label="floor plan walls")
         ax.set_title(f"{name} ({len(geoms)} walls)", fontsize=10)
         ax.autoscale()
-        _square(ax)
+        square_axes(ax)
         ax.legend(fontsize=7, loc="upper right")
     fig.suptitle(title)
     fig.tight_layout()

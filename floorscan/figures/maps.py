@@ -18,7 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from floorscan.figures.style import DPI, _segments_collection, _square, save_figure  # noqa: E402
+from floorscan.figures.style import DPI, segments_collection, square_axes, save_figure  # noqa: E402
 from floorscan.score.segments import as_segments  # noqa: E402
 
 
@@ -42,7 +42,7 @@ def plot_reference_map(grid, out, title: str = "", faces=None) -> None:
         xy = grid.cell_centres(mask)
         ax.scatter(xy[:, 0], xy[:, 1], s=size, c=[colour], marker="s", linewidths=0)
     if faces is not None and len(faces):
-        ax.add_collection(_segments_collection(faces, colors="tab:blue", linewidths=0.8))
+        ax.add_collection(segments_collection(faces, colors="tab:blue", linewidths=0.8))
     ax.set_xlabel("x (m, map frame)")
     ax.set_ylabel("y (m, map frame)")
     ax.set_title(
@@ -79,11 +79,11 @@ def plot_walls_over_points(points, panels, out, title: str = "", max_points: int
     for ax, (name, seg) in zip(axes[0], panels):
         ax.scatter(pts[:, 0], pts[:, 1], s=1.5, c="0.45", alpha=0.5, linewidths=0, rasterized=True,
                    zorder=1, label=f"registered points ({len(pts)} drawn)")
-        ax.add_collection(_segments_collection(seg, colors="tab:red", linewidths=0.8, zorder=2,
+        ax.add_collection(segments_collection(seg, colors="tab:red", linewidths=0.8, zorder=2,
                                                label="wall segments"))
         ax.set_title(f"{name} ({len(as_segments(seg))} segments)", fontsize=10)
         ax.autoscale()
-        _square(ax)
+        square_axes(ax)
         ax.legend(fontsize=7, loc="upper right", markerscale=4)
     fig.suptitle(title)
     fig.tight_layout()

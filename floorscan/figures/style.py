@@ -51,12 +51,12 @@ def save_figure(fig, path: str | os.PathLike) -> None:
     plt.close(fig)
 
 
-def _segments_collection(segments, **kw) -> LineCollection:
+def segments_collection(segments, **kw) -> LineCollection:
     seg = as_segments(segments)
     return LineCollection(seg.reshape(-1, 2, 2), **kw)
 
 
-def _square(ax) -> None:
+def square_axes(ax) -> None:
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")

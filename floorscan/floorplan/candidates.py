@@ -3,7 +3,7 @@ other (and within an angle in direction), which the merge
 (:mod:`floorscan.floorplan.merge`) and the pairing of faces
 (:mod:`floorscan.floorplan.pairing`) test further.
 
-:func:`_candidate_pairs` finds the pairs of Shapely's
+:func:`candidate_pairs` finds the pairs of Shapely's
 ``STRtree.query(predicate="dwithin")``: the bounding boxes grown by the distance from
 an STRtree query, the exact segment-to-segment distance in numpy
 (:func:`_segment_distance`, :func:`point_segment_dist2`) rather than a GEOS distance
@@ -18,16 +18,16 @@ from __future__ import annotations
 import numpy as np
 
 
-def _axial_angle(seg: np.ndarray) -> np.ndarray:
+def axial_angle(seg: np.ndarray) -> np.ndarray:
     return np.mod(np.arctan2(seg[:, 3] - seg[:, 1], seg[:, 2] - seg[:, 0]), np.pi)
 
 
-def _angle_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def angle_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     d = np.abs(a - b) % np.pi
     return np.minimum(d, np.pi - d)
 
 
-def _candidate_pairs(
+def candidate_pairs(
     seg: np.ndarray, distance: float, max_angle: float | None = None, exact: bool = True
 ) -> tuple[np.ndarray, np.ndarray]:
     """Index pairs (i < j) of segments within ``distance`` of each other, metres.
@@ -43,7 +43,7 @@ def _candidate_pairs(
     pair within it lies in one bin or two neighbours) and only the pairs within a
     bin or two neighbouring bins are queried (:func:`_binned_box_pairs`, one
     query): the box pairs of crossing walls are not made at all. With ``exact``
-    False the distance test is left to the caller (:func:`_within_distance`,
+    False the distance test is left to the caller (:func:`within_distance`,
     :func:`floorscan.floorplan.merge._merge_groups`), who may run its own cheaper
     tests first; the pairs are then in no particular order.
     """
@@ -53,7 +53,7 @@ def _candidate_pairs(
         return np.empty(0, np.int64), np.empty(0, np.int64)
     lo = np.minimum(seg[:, :2], seg[:, 2:]) - distance
     hi = np.maximum(seg[:, :2], seg[:, 2:]) + distance
-    ang = _axial_angle(seg) if max_angle is not None else None
+    ang = axial_angle(seg) if max_angle is not None else None
     # Direction bins, 1 % wider than max_angle against rounding; fewer than 3 bins: one query.
     n_bins = 1 if max_angle is None else int(min(64, np.floor(np.pi / (1.01 * max(max_angle, 1e-9)))))
     if n_bins < 3:
@@ -65,11 +65,11 @@ def _candidate_pairs(
     else:
         i, j = _binned_box_pairs(seg, lo, hi, ang, n_bins)
     if max_angle is not None and len(i):
-        keep = _angle_diff(ang[i], ang[j]) <= max_angle
+        keep = angle_diff(ang[i], ang[j]) <= max_angle
         i, j = i[keep], j[keep]
     if not exact:
         return i, j
-    i, j = _within_distance(seg, i, j, distance)
+    i, j = within_distance(seg, i, j, distance)
     order = np.lexsort((j, i))
     return i[order], j[order]
 
@@ -114,7 +114,7 @@ def _binned_box_pairs(seg: np.ndarray, lo: np.ndarray, hi: np.ndarray, ang: np.n
     return np.minimum(i, j), np.maximum(i, j)
 
 
-def _within_distance(seg: np.ndarray, i: np.ndarray, j: np.ndarray, distance: float):
+def within_distance(seg: np.ndarray, i: np.ndarray, j: np.ndarray, distance: float):
     """The pairs (i, j) of segments at most ``distance`` apart (the dwithin test)."""
     if len(i) == 0:
         return i, j
@@ -152,7 +152,7 @@ def _segment_distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.where(cross, 0.0, np.sqrt(d2))
 
 
-def _line_geometry(seg: np.ndarray, i: np.ndarray, j: np.ndarray):
+def line_geometry(seg: np.ndarray, i: np.ndarray, j: np.ndarray):
     """For pairs (i, j): the longer one's unit direction/normal/midpoint, and the
     shorter one's endpoints, as arrays."""
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])

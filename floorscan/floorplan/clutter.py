@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from floorscan.core.occupancy import OccupancyGrid
-from floorscan.floorplan.candidates import _candidate_pairs
+from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
 
 
@@ -107,7 +107,7 @@ def in_front_of_walls(seg: np.ndarray, side: np.ndarray, wall: np.ndarray, param
     """
     seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
     out = np.zeros(len(seg), dtype=bool)
-    i, j = _candidate_pairs(seg, params.front_max_m, np.radians(params.join_angle_deg))
+    i, j = candidate_pairs(seg, params.front_max_m, np.radians(params.join_angle_deg))
     if len(i) == 0:
         return out
     i, j = np.r_[i, j], np.r_[j, i]  # face i in front of wall j

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Mapping
 from floorscan.core.files import atomic_path
 from floorscan.floorplan.footprints import PlanExports
 from floorscan.floorplan.georeference import Georeference, as_georeference
-from floorscan.floorplan.metadata import PlanMetadata, _metadata
+from floorscan.floorplan.metadata import PlanMetadata, metadata_member
 from floorscan.floorplan.params import DXF_VERSIONS
 
 if TYPE_CHECKING:
@@ -79,7 +79,7 @@ def write_dxf(
     ``"R12"``: outlines as POLYLINE, room labels as TEXT (R12 has no MTEXT); R12 has
     no units header (``$INSUNITS`` came with R2000), so CAD tools take the
     coordinates as unitless numbers (they are metres). In both, the plan's
-    metadata (:func:`~floorscan.floorplan.metadata._metadata`: dataset, ordering, extractor, k, walls, frame,
+    metadata (:func:`~floorscan.floorplan.metadata.metadata_member`: dataset, ordering, extractor, k, walls, frame,
     units, time stamp, georeference) is ezdxf metadata (``doc.ezdxf_metadata()``).
     The coordinates stay map metres with a georeference (DXF has no CRS; the
     metadata says where the frame lies). ``ezdxf.recover`` and ``doc.audit()`` find
@@ -190,9 +190,9 @@ def _add_rooms(msp, exports: PlanExports, version: str) -> None:
 
 
 def _dxf_metadata(plan: FloorPlan, meta: PlanMetadata, georeference: Georeference | None) -> list[tuple[str, str]]:
-    """The DXF's metadata: :func:`~floorscan.floorplan.metadata._metadata` of the map frame (DXF coordinates are map
+    """The DXF's metadata: :func:`~floorscan.floorplan.metadata.metadata_member` of the map frame (DXF coordinates are map
     metres), the georeference in words, all as text."""
-    md = _metadata(plan, meta, None)
+    md = metadata_member(plan, meta, None)
     md["georeference"] = "none" if georeference is None else (
         f"origin lat {georeference.lat}, lon {georeference.lon} (WGS84); map +x axis "
         f"{georeference.heading_deg} degrees clockwise from true north"

@@ -1,6 +1,6 @@
 """What the exports of a floor plan share (:class:`PlanExports`): the wall footprints
 (each axis buffered by half its thickness) oriented as RFC 7946 wants them, their
-exterior rings in map metres (:func:`_exterior_rings`), the plan's extent, the room
+exterior rings in map metres (:func:`exterior_rings`), the plan's extent, the room
 polygons oriented the same way and a label point inside each room, each made once for
 all formats, and the IFC model, kept for a plan written again.
 """
@@ -46,8 +46,8 @@ class PlanExports:
 
     @functools.cached_property
     def rings(self) -> list:
-        """:func:`_exterior_rings` of :attr:`polys`, map metres."""
-        return _exterior_rings(self.polys)
+        """:func:`exterior_rings` of :attr:`polys`, map metres."""
+        return exterior_rings(self.polys)
 
     @functools.cached_property
     def room_polys(self) -> np.ndarray:
@@ -99,7 +99,7 @@ class PlanExports:
         return bool(np.isfinite(self.extent[0]).all())
 
 
-def _exterior_rings(polys, transform: Callable[[np.ndarray], np.ndarray] | None = None) -> list:
+def exterior_rings(polys, transform: Callable[[np.ndarray], np.ndarray] | None = None) -> list:
     """Exterior ring of each footprint as a list of ``[x, y]`` (closed: the first
     point repeated last), or None for a missing or empty footprint.
 

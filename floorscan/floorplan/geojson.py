@@ -30,9 +30,9 @@ from typing import TYPE_CHECKING, Callable, Mapping
 import numpy as np
 
 from floorscan.core.files import atomic_path
-from floorscan.floorplan.footprints import PlanExports, _exterior_rings
+from floorscan.floorplan.footprints import PlanExports, exterior_rings
 from floorscan.floorplan.georeference import Georeference, as_georeference, map_to_lonlat
-from floorscan.floorplan.metadata import PlanMetadata, _metadata
+from floorscan.floorplan.metadata import PlanMetadata, metadata_member
 
 if TYPE_CHECKING:
     from floorscan.floorplan.params import FloorplanParams
@@ -96,7 +96,7 @@ def floorplan_geojson(
 def _floorplan_geojson(exports: PlanExports, meta: PlanMetadata, georeference: Georeference | None) -> dict:
     """:func:`floorplan_geojson` of a plan's :class:`~floorscan.floorplan.footprints.PlanExports`.
 
-    A footprint's coordinates are its exterior ring's (:func:`~floorscan.floorplan.footprints._exterior_rings`),
+    A footprint's coordinates are its exterior ring's (:func:`~floorscan.floorplan.footprints.exterior_rings`),
     rounded: what ``shapely.to_geojson`` writes (shortest round-trip digits) read
     back and rounded, without the JSON text in between. A footprint that is not a
     Polygon without holes (a buffered axis always is) goes through
@@ -109,7 +109,7 @@ def _floorplan_geojson(exports: PlanExports, meta: PlanMetadata, georeference: G
         transform, nd, rings = None, GEOJSON_DECIMALS["map"], exports.rings
     else:
         transform = _lonlat_transform(georeference)
-        nd, rings = GEOJSON_DECIMALS["WGS84"], _exterior_rings(polys, transform)
+        nd, rings = GEOJSON_DECIMALS["WGS84"], exterior_rings(polys, transform)
     floats = ("thickness_m", "height_m", "length_m")
 
     def col(df, c):  # floats as float64 (not DataFrame.astype, slower)
@@ -166,7 +166,7 @@ def _floorplan_geojson(exports: PlanExports, meta: PlanMetadata, georeference: G
     doc: dict = {"type": "FeatureCollection"}
     if georeference is None:
         doc["crs"] = {"type": "name", "properties": {"name": LOCAL_FRAME_WKT}}
-    doc["floorscan"] = _metadata(plan, meta, georeference)
+    doc["floorscan"] = metadata_member(plan, meta, georeference)
     doc["features"] = feats
     return doc
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from floorscan.floorplan.candidates import _angle_diff, _axial_angle, _candidate_pairs
+from floorscan.floorplan.candidates import angle_diff, axial_angle, candidate_pairs
 from floorscan.floorplan.free_space import StructureParams
 
 
@@ -45,9 +45,9 @@ def snap_junctions(seg: np.ndarray, params: StructureParams = StructureParams(),
     out = seg.copy()
     if len(seg) < 2:
         return out, np.empty((0, 5))
-    i, j = _candidate_pairs(seg, params.snap_m)
-    ang = _axial_angle(seg)
-    ok = _angle_diff(ang[i], ang[j]) >= np.radians(params.junction_min_angle_deg)
+    i, j = candidate_pairs(seg, params.snap_m)
+    ang = axial_angle(seg)
+    ok = angle_diff(ang[i], ang[j]) >= np.radians(params.junction_min_angle_deg)
     i, j = np.r_[i[ok], j[ok]], np.r_[j[ok], i[ok]]  # both directions: the end of i on j
     if len(i) == 0:
         if trim_shallow:
@@ -92,8 +92,8 @@ def _trim_shallow_crossings(seg: np.ndarray, params: StructureParams) -> None:
     i, j = shapely.STRtree(lines).query(lines, predicate="crosses")
     keep = i < j
     i, j = i[keep], j[keep]
-    ang = _axial_angle(seg)
-    shallow = _angle_diff(ang[i], ang[j]) < np.radians(params.junction_min_angle_deg)
+    ang = axial_angle(seg)
+    shallow = angle_diff(ang[i], ang[j]) < np.radians(params.junction_min_angle_deg)
     for a, b in zip(i[shallow].tolist(), j[shallow].tolist()):
         x = _line_crossings(seg[[a]], seg[[b]])[0]
         if not np.isfinite(x).all():
@@ -121,9 +121,9 @@ def _line_crossings(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def _junctions(seg: np.ndarray, params: StructureParams) -> np.ndarray:
     """The junctions of snapped segments (see :func:`snap_junctions`)."""
     tol = 1e-6 + 0.01
-    i, j = _candidate_pairs(seg, tol)
-    ang = _axial_angle(seg)
-    ok = _angle_diff(ang[i], ang[j]) >= np.radians(params.junction_min_angle_deg) * 0.5
+    i, j = candidate_pairs(seg, tol)
+    ang = axial_angle(seg)
+    ok = angle_diff(ang[i], ang[j]) >= np.radians(params.junction_min_angle_deg) * 0.5
     i, j = i[ok], j[ok]
     if len(i) == 0:
         return np.empty((0, 5))
@@ -201,7 +201,7 @@ def merge_parallel_duplicates(axes: np.ndarray, thickness: np.ndarray, params: S
     n = len(axes)
     if n < 2:
         return axes.copy(), thickness.copy(), np.arange(n)
-    i, j = _candidate_pairs(axes, max_distance_m, np.radians(params.duplicate_angle_deg))
+    i, j = candidate_pairs(axes, max_distance_m, np.radians(params.duplicate_angle_deg))
     length, a, b, t, off = shorter_on_longer(axes, i, j)
     ok = (
         (np.abs(off) <= max_distance_m).all(axis=1) & (t >= -max_distance_m).all(axis=1)

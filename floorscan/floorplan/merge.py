@@ -6,7 +6,7 @@ appears as many overlapping segments (the duplicate problem of thesis section 5.
 Two segments belong to one face when they are near parallel, close to each other's
 line and overlap or nearly meet along it; a face is a connected group of such pairs
 (SciPy's ``connected_components``), fitted by :func:`~floorscan.floorplan.fit.fit_groups`.
-The candidates come from :func:`~floorscan.floorplan.candidates._candidate_pairs`.
+The candidates come from :func:`~floorscan.floorplan.candidates.candidate_pairs`.
 Source: thesis section 5.1 (the problem); the rule is ours.
 """
 
@@ -16,7 +16,7 @@ import numpy as np
 from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 
-from floorscan.floorplan.candidates import _candidate_pairs, _line_geometry, _within_distance
+from floorscan.floorplan.candidates import candidate_pairs, line_geometry, within_distance
 from floorscan.floorplan.fit import fit_groups
 from floorscan.floorplan.params import FloorplanParams
 
@@ -63,7 +63,7 @@ def _passing(cur: np.ndarray, ci: np.ndarray, cj: np.ndarray, params: FloorplanP
     if len(ci) == 0:
         return ci, cj
     reach = max(params.merge_gap_m, params.merge_distance_m)
-    a, b, d, n, length = _line_geometry(cur, ci, cj)
+    a, b, d, n, length = line_geometry(cur, ci, cj)
     dist = np.maximum(
         np.abs(np.einsum("ij,ij->i", cur[b, :2] - cur[a, :2], n)),
         np.abs(np.einsum("ij,ij->i", cur[b, 2:] - cur[a, :2], n)),
@@ -76,7 +76,7 @@ def _passing(cur: np.ndarray, ci: np.ndarray, cj: np.ndarray, params: FloorplanP
     # Overlapping along the line (gap <= 0), a point of the shorter projects
     # onto the longer and lies within dist of it: within reach for sure.
     sure = ok & (gap <= 0) & (dist < reach * (1 - 1e-9))
-    wi, wj = _within_distance(cur, ci[ok & ~sure], cj[ok & ~sure], reach)
+    wi, wj = within_distance(cur, ci[ok & ~sure], cj[ok & ~sure], reach)
     return np.r_[ci[sure], wi], np.r_[cj[sure], wj]
 
 
@@ -103,7 +103,7 @@ class FirstMergePass:
     def __init__(self, segments: np.ndarray, params: FloorplanParams = FloorplanParams(), max_pairs: int = 20_000_000):
         seg = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
         reach = max(params.merge_gap_m, params.merge_distance_m)
-        i, j = _candidate_pairs(seg, reach, np.radians(params.merge_angle_deg), exact=False)
+        i, j = candidate_pairs(seg, reach, np.radians(params.merge_angle_deg), exact=False)
         self.i = self.j = None
         if len(i) <= max_pairs:
             parts = [_passing(seg, i[s : s + _MERGE_CHUNK], j[s : s + _MERGE_CHUNK], params)
@@ -167,7 +167,7 @@ def merge_segments(
             group = first_groups if len(first_groups) and first_groups.max() + 1 < len(cur) else None
         else:
             reach = max(params.merge_gap_m, params.merge_distance_m)
-            i, j = _candidate_pairs(cur, reach, np.radians(params.merge_angle_deg), exact=False)
+            i, j = candidate_pairs(cur, reach, np.radians(params.merge_angle_deg), exact=False)
             group = _merge_groups(cur, i, j, params)
         if group is None:
             break

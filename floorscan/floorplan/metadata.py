@@ -113,7 +113,7 @@ class PlanMetadata:
         return datetime.fromtimestamp(export_time(self.timestamp), tz=timezone.utc).isoformat()
 
 
-def _metadata(plan: FloorPlan, meta: PlanMetadata, georeference: Georeference | None = None) -> dict:
+def metadata_member(plan: FloorPlan, meta: PlanMetadata, georeference: Georeference | None = None) -> dict:
     """The plan's metadata as the GeoJSON member ``floorscan`` holds it (the DXF's
     metadata are its entries as text, :func:`floorscan.floorplan.dxf._dxf_metadata`):
     after the structure passes also ``n_clutter`` and ``n_junctions``; with rooms or

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from floorscan.floorplan.candidates import _candidate_pairs, _line_geometry
+from floorscan.floorplan.candidates import candidate_pairs, line_geometry
 from floorscan.floorplan.params import FloorplanParams
 
 
@@ -52,9 +52,9 @@ def pair_faces(
     nf = len(faces)
     wall_of_face = np.full(nf, -1, dtype=np.int64)
     axes, thick = [], []
-    i, j = _candidate_pairs(faces, params.pair_max_m, np.radians(params.pair_angle_deg))
-    if len(i):  # within pair_angle_deg already (_candidate_pairs)
-        a, b, d, n, length = _line_geometry(faces, i, j)
+    i, j = candidate_pairs(faces, params.pair_max_m, np.radians(params.pair_angle_deg))
+    if len(i):  # within pair_angle_deg already (candidate_pairs)
+        a, b, d, n, length = line_geometry(faces, i, j)
         midb = 0.5 * (faces[b, :2] + faces[b, 2:])
         dist = np.abs(np.einsum("ij,ij->i", midb - faces[a, :2], n))
         tb0 = np.einsum("ij,ij->i", faces[b, :2] - faces[a, :2], d)

@@ -120,7 +120,7 @@ def segment_arrays(segments: pd.DataFrame) -> tuple[np.ndarray, np.ndarray | Non
     missing = [c for c in ("x0", "y0", "x1", "y1") if c not in segments.columns]
     if missing:
         raise KeyError(f"wall segments lack columns {missing}; expected x0, y0, x1, y1")
-    segments = _in_scan_order(segments)
+    segments = in_scan_order(segments)
     seg = segments[["x0", "y0", "x1", "y1"]].to_numpy(dtype=np.float64)
     finite = np.isfinite(seg).all(axis=1)
     if not finite.all():
@@ -132,7 +132,7 @@ def segment_arrays(segments: pd.DataFrame) -> tuple[np.ndarray, np.ndarray | Non
     return seg[finite], column("n_inliers", np.float64), column("scan_id", np.int64)
 
 
-def _in_scan_order(segments: pd.DataFrame) -> pd.DataFrame:
+def in_scan_order(segments: pd.DataFrame) -> pd.DataFrame:
     """``segments`` stably sorted by ``scan_id`` (unchanged without that column)."""
     if "scan_id" not in segments.columns or segments["scan_id"].is_monotonic_increasing:
         return segments

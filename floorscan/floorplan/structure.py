@@ -45,7 +45,7 @@ from __future__ import annotations
 import numpy as np
 
 from floorscan.core.occupancy import OccupancyGrid
-from floorscan.floorplan.candidates import _candidate_pairs
+from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.clutter import free_standing_objects, in_front_of_walls, on_objects
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
 from floorscan.floorplan.junctions import short_loose, shorter_on_longer, snap_junctions
@@ -133,7 +133,7 @@ def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, pa
     nf = len(seg)
     if nf < 2:
         return seg.copy(), w.copy(), np.arange(nf)
-    i, j = _candidate_pairs(seg, params.join_max_gap_m, np.radians(params.join_angle_deg))
+    i, j = candidate_pairs(seg, params.join_max_gap_m, np.radians(params.join_angle_deg))
     length, a, b, tb, off = shorter_on_longer(seg, i, j)  # along and across the longer face's line
     keep = np.zeros(len(i), dtype=bool)
     if len(i):

@@ -24,7 +24,7 @@ from floorscan.floorplan import EXPORT_FORMATS, FLOORPLAN_FORMATS
 from floorscan.floorplan.footprints import PlanExports
 from floorscan.floorplan.metadata import PlanMetadata, export_time, recording_timestamp
 from floorscan.floorplan.params import params_from_config
-from floorscan.floorplan.plan import FloorPlan, _in_scan_order, build_floorplan
+from floorscan.floorplan.plan import FloorPlan, in_scan_order, build_floorplan
 
 if TYPE_CHECKING:
     from floorscan.core.occupancy import OccupancyGrid
@@ -103,7 +103,7 @@ class FloorplanWriter:
         _check_formats(outputs)
         meta = PlanMetadata(dataset, ordering, extractor, k, timestamp, name)
         export_time(timestamp)  # a bad SOURCE_DATE_EPOCH fails before anything is built
-        segments = _in_scan_order(segments)  # as build_floorplan takes them (sorted once)
+        segments = in_scan_order(segments)  # as build_floorplan takes them (sorted once)
         key = _segments_key(segments) + (b"" if grid is None else _grid_key(grid))
         built = self._built.get(key)
         reused = built is not None

@@ -27,7 +27,7 @@ import json
 import numpy as np
 import pandas as pd
 
-from floorscan.score.geojson import _feature_collection, _wall_faces
+from floorscan.score.geojson import feature_collection, wall_faces
 
 #: Plans a person should not see: walls shorter than this, metres.
 SHORT_WALL_M = 0.5
@@ -36,15 +36,15 @@ SHORT_WALL_M = 0.5
 def plan_parts(path) -> dict[str, np.ndarray]:
     """The faces, wall axes, clutter lines ((N, 4) metres) and junction points ((J, 2)
     metres) of a floor plan ``.geojson``."""
-    doc = _feature_collection(path)
+    doc = feature_collection(path)
     junctions = [
         f["geometry"]["coordinates"][:2] for f in doc.get("features", [])
         if (f.get("properties") or {}).get("kind") == "junction" and (f.get("geometry") or {}).get("type") == "Point"
     ]  # fmt: skip
     return {
-        "faces": _wall_faces(doc, "face"),
-        "axes": _wall_faces(doc, "axis"),
-        "clutter": _wall_faces(doc, "clutter"),
+        "faces": wall_faces(doc, "face"),
+        "axes": wall_faces(doc, "axis"),
+        "clutter": wall_faces(doc, "clutter"),
         "junctions": np.array(junctions, dtype=np.float64).reshape(-1, 2),
     }
 
@@ -136,7 +136,7 @@ def read_truth(path) -> dict:
     metres) and ``thickness`` (axis row tuple -> metres)."""
     with open(path, encoding="utf-8") as fh:
         doc = json.load(fh)
-    out = {kind: _wall_faces(doc, kind) for kind in ("face", "observed_face", "axis")}
+    out = {kind: wall_faces(doc, kind) for kind in ("face", "observed_face", "axis")}
     out["thickness"] = {}
     for f in doc.get("features", []):
         p = f.get("properties") or {}

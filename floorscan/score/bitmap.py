@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from floorscan.floorplan.candidates import point_segment_dist2
-from floorscan.score.segments import _split_long, as_segments
+from floorscan.score.segments import split_long, as_segments
 
 #: Largest grid a bitmap metric may allocate (cells), a guard against a bad cell size.
 MAX_CELLS = 200_000_000
@@ -147,18 +147,18 @@ def rasterize_segments(segments, grid: Grid, width_m: float = 0.10) -> np.ndarra
     out = np.zeros(grid.shape, dtype=bool)
     seg = as_segments(segments)
     if len(seg):
-        out.reshape(-1)[_raster_cells(seg, grid, width_m)[1]] = True
+        out.reshape(-1)[raster_cells(seg, grid, width_m)[1]] = True
     return out
 
 
-def _raster_cells(seg: np.ndarray, grid: Grid, width_m: float) -> tuple[np.ndarray, np.ndarray]:
+def raster_cells(seg: np.ndarray, grid: Grid, width_m: float) -> tuple[np.ndarray, np.ndarray]:
     """The wall cells of :func:`rasterize_segments` per segment: ``(owner, flat)``, the
     row of the finite ``(M, 4)`` ``seg`` and the flat index (``iy * nx + ix``) of each
     hit, grouped by piece, pieces in row order (``owner`` ascending; a cell may
     repeat). Whether a cell is a segment's depends on
     that segment only, so the cells of a union of segment sets are the union of theirs."""
     half = width_m / 2.0
-    seg, owner = _split_long(seg, 0.5, return_owner=True)
+    seg, owner = split_long(seg, 0.5, return_owner=True)
     c = grid.cell_m
     # Cell index ranges of each piece's buffered bounds (cells whose centre may be in).
     lo_x = np.floor((np.minimum(seg[:, 0], seg[:, 2]) - half - grid.x0) / c - 0.5)

@@ -116,10 +116,10 @@ def length_within(segments, others, tau: float) -> np.ndarray:
     """
     if tau < 0:
         raise ValueError(f"tau must be >= 0; got {tau}")
-    return _lengths_within(as_segments(segments), as_segments(others), [tau])[0]
+    return lengths_within(as_segments(segments), as_segments(others), [tau])[0]
 
 
-def _lengths_within(seg: np.ndarray, oth: np.ndarray, taus) -> list[np.ndarray]:
+def lengths_within(seg: np.ndarray, oth: np.ndarray, taus) -> list[np.ndarray]:
     """:func:`length_within` of finite ``seg`` and ``oth`` for each tau of ``taus``
     (>= 0), sharing the geometries and the STRtree between the taus."""
     lengths = segment_lengths(seg)

@@ -32,13 +32,13 @@ def read_wall_faces(path, kind: str = "face") -> np.ndarray:
     """
     from floorscan.core.io import InputError
 
-    seg = _wall_faces(_feature_collection(path), kind)
+    seg = wall_faces(feature_collection(path), kind)
     if not len(seg):
         raise InputError(f"{path}: no LineString feature with property kind={kind!r}")
     return seg
 
 
-def _feature_collection(path) -> dict:
+def feature_collection(path) -> dict:
     import json
 
     from floorscan.core.io import InputError
@@ -50,7 +50,7 @@ def _feature_collection(path) -> dict:
     return doc
 
 
-def _wall_faces(doc: dict, kind: str) -> np.ndarray:
+def wall_faces(doc: dict, kind: str) -> np.ndarray:
     """The straight pieces of the (Multi)LineString features of ``kind``, ``(M, 4)``."""
     lines: list = []
     for feat in doc.get("features", []):
@@ -95,17 +95,17 @@ def floorplan_wall_count(path) -> int:
     ``wall_id`` of those (a ``door`` names its wall too); without that property, the features of kind ``axis`` or ``wall`` (or
     without a kind).
     """
-    return _wall_count(_feature_collection(path))
+    return _wall_count(feature_collection(path))
 
 
 def floorplan_faces(path) -> np.ndarray:
     """The merged faces (``kind`` "face") of a floor plan ``.geojson``, ``(F, 4)``
     metres; empty when the plan has none (a plan without walls is valid)."""
-    return _wall_faces(_feature_collection(path), "face")
+    return wall_faces(feature_collection(path), "face")
 
 
 def read_floorplan(path) -> tuple[np.ndarray, int]:
     """:func:`floorplan_faces` and :func:`floorplan_wall_count` of a floor plan
     ``.geojson``, from one read of the file."""
-    doc = _feature_collection(path)
-    return _wall_faces(doc, "face"), _wall_count(doc)
+    doc = feature_collection(path)
+    return wall_faces(doc, "face"), _wall_count(doc)

@@ -1,6 +1,6 @@
 """All metrics of a wall set: from scratch (:func:`score_walls`), or for a growing set,
 the walls of the first k scans of an ordering for increasing k, from the previous set's
-state and the new walls only (:class:`_GrowingWalls`, same result).
+state and the new walls only (:class:`GrowingWalls`, same result).
 
 Every metric is either a minimum over the walls (the samples' nearest distances), a
 union of them (the bitmap, the samples within tau) or a sum over them (the length within
@@ -8,7 +8,7 @@ tau), so a larger set is scored from the smaller one's state: the bitmap metrics
 thesis section 5.1 (:mod:`floorscan.score.bitmap`) and the ISPRS-benchmark tolerance
 metrics (:mod:`floorscan.score.tolerance`). The runs of every ordering of one extractor
 are subsets of the same walls, so the ground-truth samples near each wall
-(:class:`_SamplePairs`) and each wall's bitmap cells are measured once and shared.
+(:class:`SamplePairs`) and each wall's bitmap cells are measured once and shared.
 """
 
 from __future__ import annotations
@@ -18,11 +18,11 @@ import math
 import numpy as np
 import shapely
 
-from floorscan.score.bitmap import Grid, _raster_cells, bitmap_metrics, rasterize_segments
-from floorscan.score.capsule import _lengths_within
-from floorscan.score.nearest import _grown_boxes, _nearest_below, _SegmentIndex
-from floorscan.score.segments import MIN_SEGMENT_M, _row_keys, _split_long, segment_lengths
-from floorscan.score.tolerance import _tolerance_from, tau_label, tolerance_metrics
+from floorscan.score.bitmap import Grid, raster_cells, bitmap_metrics, rasterize_segments
+from floorscan.score.capsule import lengths_within
+from floorscan.score.nearest import grown_boxes, nearest_below, SegmentIndex
+from floorscan.score.segments import MIN_SEGMENT_M, row_keys, split_long, segment_lengths
+from floorscan.score.tolerance import tolerance_from, tau_label, tolerance_metrics
 
 
 def score_walls(
@@ -71,15 +71,15 @@ def score_walls(
 
 
 #: Reach (metres) of the wall-to-sample pairs that give the samples' nearest distances
-#: (:class:`_SamplePairs`); samples farther from every wall are measured by
-#: :func:`floorscan.score.nearest._nearest_below`.
+#: (:class:`SamplePairs`); samples farther from every wall are measured by
+#: :func:`floorscan.score.nearest.nearest_below`.
 PAIR_REACH_M = 0.1
 #: Longest piece (metres) of the walls whose grown boxes find their samples in
-#: :class:`_SamplePairs`.
+#: :class:`SamplePairs`.
 PAIR_PIECE_M = 2.0
 
 
-class _SamplePairs:
+class SamplePairs:
     """The ground-truth samples within ``reach`` of each wall, for walls met again and
     again: the runs of every ordering of one extractor are subsets of the same walls.
 
@@ -114,8 +114,8 @@ class _SamplePairs:
     def _measure(self, seg: np.ndarray, keys: list[bytes]) -> None:
         if self._tree is None:
             self._tree = shapely.STRtree(self.geoms)
-        pc, owner = _split_long(seg, PAIR_PIECE_M, return_owner=True)
-        qi, si = self._tree.query(_grown_boxes(pc, self.reach))
+        pc, owner = split_long(seg, PAIR_PIECE_M, return_owner=True)
+        qi, si = self._tree.query(grown_boxes(pc, self.reach))
         if len(qi) > 1 and not (qi[1:] >= qi[:-1]).all():
             order = np.argsort(qi, kind="stable")
             qi, si = qi[order], si[order]
@@ -144,7 +144,7 @@ class _SamplePairs:
             self.cache[k] = (si[bounds[j]:bounds[j + 1]], d[bounds[j]:bounds[j + 1]])
 
 
-class _GrowingWalls:
+class GrowingWalls:
     """Metrics of a growing wall set: the walls of the first k scans of one ordering
     and extractor, for increasing k.
 
@@ -157,12 +157,12 @@ class _GrowingWalls:
     previous one is scored from scratch.
 
     The samples within :data:`PAIR_REACH_M` of a new wall take their distance from
-    the wall's :class:`_SamplePairs` (the nearest wall of a sample within the reach
+    the wall's :class:`SamplePairs` (the nearest wall of a sample within the reach
     of a wall is within it too); the samples no wall has come within reach of yet
-    are measured by :func:`floorscan.score.nearest._nearest_below`.
+    are measured by :func:`floorscan.score.nearest.nearest_below`.
     ``recall_all_<tau>`` takes the pairs within the largest tau of ``all_pairs``. The
     pairs and ``raster_cache`` (``{row key: flat wall cells}``, see
-    :func:`floorscan.score.bitmap._raster_cells`) may be shared by the growing sets of
+    :func:`floorscan.score.bitmap.raster_cells`) may be shared by the growing sets of
     one extractor (same samples, grid and wall width), so that a wall is measured and
     rasterized once for all orderings.
 
@@ -198,7 +198,7 @@ class _GrowingWalls:
         cache = self.raster_cache
         todo = [i for i, k in enumerate(add_keys) if k not in cache]
         if todo:
-            owner, flat = _raster_cells(add[todo], self.grid, self.width)  # owner ascending
+            owner, flat = raster_cells(add[todo], self.grid, self.width)  # owner ascending
             bounds = np.searchsorted(owner, np.arange(len(todo) + 1))
             flat = flat.astype(np.int32 if self.grid.nx * self.grid.ny < 2**31 else np.int64)
             for j, i in enumerate(todo):
@@ -208,7 +208,7 @@ class _GrowingWalls:
     def score(self, walls: np.ndarray) -> dict[str, float]:
         """:func:`score_walls` of ``(M, 4)`` finite ``walls`` (and ``recall_all_<tau>``
         against ``all_samples`` when given)."""
-        keys = _row_keys(walls)
+        keys = row_keys(walls)
         cur = set(keys)
         if self.keys is None or not self.keys <= cur:
             self._reset()
@@ -220,8 +220,8 @@ class _GrowingWalls:
             np.minimum.at(self.d_near, si, d)
             far = np.flatnonzero(np.isinf(self.d_near))
             if len(far):
-                self.d_far[far] = _nearest_below(
-                    self.samples[far], _SegmentIndex(add), self.d_far[far], self.pairs.geoms[far]
+                self.d_far[far] = nearest_below(
+                    self.samples[far], SegmentIndex(add), self.d_far[far], self.pairs.geoms[far]
                 )
             self.d = np.where(np.isinf(self.d_near), self.d_far, self.d_near)
             if self.all_samples is not None:
@@ -234,7 +234,7 @@ class _GrowingWalls:
             # depends, in its last bits, on its row in the batch (the sweep's offset).
             todo = [i for i, k in enumerate(add_keys) if any(k not in self.covered[tau] for tau in self.taus)]
             if todo:
-                covs = _lengths_within(add[todo], self.gt, self.taus)
+                covs = lengths_within(add[todo], self.gt, self.taus)
                 for tau, cov in zip(self.taus, covs):
                     self.covered[tau].update(zip((add_keys[i] for i in todo), cov.tolist()))
         self.keys = cur
@@ -247,7 +247,7 @@ class _GrowingWalls:
             if has_i and has_g else 0.0
             for tau in self.taus
         }  # fmt: skip
-        out.update(_tolerance_from(len_i, self.len_g, len(self.samples), d, covered, self.taus))
+        out.update(tolerance_from(len_i, self.len_g, len(self.samples), d, covered, self.taus))
         if self.all_samples is not None:
             n = len(self.all_samples)
             for t, tau in enumerate(self.taus):

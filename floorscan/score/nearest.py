@@ -5,10 +5,10 @@ read from the distances of the ground-truth samples to the inferred walls.
 :func:`nearest_distances` gives each point an upper bound of its distance from a
 KD-tree (scipy ``cKDTree``) over points along the segments, then measures exactly, in
 numpy (:func:`floorscan.floorplan.candidates.point_segment_dist2`), the segments within that
-bound only, found by Shapely STRtree box queries (:class:`_SegmentIndex`): the nearest
-wall's overlapping duplicates, not every segment nearby. :func:`_nearest_below` lowers
+bound only, found by Shapely STRtree box queries (:class:`SegmentIndex`): the nearest
+wall's overlapping duplicates, not every segment nearby. :func:`nearest_below` lowers
 given bounds (a growing wall set keeps its samples' distances and measures
-only its new walls), :func:`_within` tests the tolerances directly.
+only its new walls), :func:`pairs_within` tests the tolerances directly.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 import shapely
 
 from floorscan.floorplan.candidates import point_segment_dist2
-from floorscan.score.segments import _densify, _split_long, as_segments
+from floorscan.score.segments import densify, split_long, as_segments
 
 #: Spacing (metres) of the points along segments whose KD-tree gives each query point an
 #: upper bound of its distance to the nearest segment (:func:`nearest_distances`).
@@ -28,17 +28,17 @@ NEAR_QUERY_M = 0.25
 #: Query points per chunk of :func:`nearest_distances` (bounds its memory: the pairs of
 #: a chunk are about this times the number of overlapping duplicates of a wall).
 NEAREST_CHUNK = 4096
-#: Longest piece (metres) of the segments in the STRtrees of :class:`_SegmentIndex`:
+#: Longest piece (metres) of the segments in the STRtrees of :class:`SegmentIndex`:
 #: short pieces have tight bounding boxes (a long, slightly tilted wall's box is wide).
 TREE_PIECE_M = 0.25
-#: Reaches (metres) of the STRtrees of :class:`_SegmentIndex` over the pieces' boxes
+#: Reaches (metres) of the STRtrees of :class:`SegmentIndex` over the pieces' boxes
 #: grown by the reach: a point whose search radius is at most a reach finds its
 #: candidates by a point query (no box to make per point). Wider radii use the
 #: segments' own boxes and a box per point.
 REACHES_M = (0.02, 0.1)
 
 
-def _grown_boxes(pieces: np.ndarray, reach: float) -> np.ndarray:
+def grown_boxes(pieces: np.ndarray, reach: float) -> np.ndarray:
     """The boxes of ``(P, 4)`` segment pieces grown by ``reach`` (and a relative 1e-6
     and 1e-9 m), as :func:`_box_diagonals`: a point within ``reach`` of a piece is in
     its box."""
@@ -56,12 +56,12 @@ def _box_diagonals(xmin, ymin, xmax, ymax) -> np.ndarray:
     return shapely.linestrings(np.stack([xmin, ymin, xmax, ymax], axis=-1).reshape(-1, 2, 2))
 
 
-#: Largest bound (metres) up to which :func:`_nearest_below` measures a point against
+#: Largest bound (metres) up to which :func:`nearest_below` measures a point against
 #: the segments within its bound directly, without the KD-tree's upper bound.
 DIRECT_M = 1.0
 
 
-class _SegmentIndex:
+class SegmentIndex:
     """Search structures over a fixed set of ``(M, 4)`` segments, each built when first
     needed: a KD-tree (scipy ``cKDTree``) over points at most :data:`BOUND_STEP_M`
     apart along them, both ends included; Shapely STRtrees over the boxes of their
@@ -85,7 +85,7 @@ class _SegmentIndex:
         if self._kd is None and len(self.seg):
             from scipy.spatial import cKDTree
 
-            self._kd = cKDTree(_densify(self.seg, BOUND_STEP_M))
+            self._kd = cKDTree(densify(self.seg, BOUND_STEP_M))
         return self._kd
 
     @property
@@ -101,8 +101,8 @@ class _SegmentIndex:
         ``self._owner``: the segment of each piece."""
         if reach not in self._reach_trees:
             if self._pieces is None:
-                self._pieces, self._owner = _split_long(self.seg, TREE_PIECE_M, return_owner=True)
-            self._reach_trees[reach] = shapely.STRtree(_grown_boxes(self._pieces, reach))
+                self._pieces, self._owner = split_long(self.seg, TREE_PIECE_M, return_owner=True)
+            self._reach_trees[reach] = shapely.STRtree(grown_boxes(self._pieces, reach))
         return self._reach_trees[reach]
 
     def upper(self, pts: np.ndarray, limit: float = np.inf) -> np.ndarray:
@@ -157,7 +157,7 @@ class _SegmentIndex:
         return out
 
 
-def _nearest_below(pts, index: _SegmentIndex, bound: np.ndarray, geoms=None) -> np.ndarray:
+def nearest_below(pts, index: SegmentIndex, bound: np.ndarray, geoms=None) -> np.ndarray:
     """``min(bound, exact distance from each point to the nearest segment of index)``.
 
     Points farther than ``bound`` from the segments' bounding box keep ``bound``.
@@ -199,7 +199,7 @@ def _nearest_below(pts, index: _SegmentIndex, bound: np.ndarray, geoms=None) -> 
     return out
 
 
-def _within(pts, index: _SegmentIndex, taus, hit: np.ndarray) -> np.ndarray:
+def pairs_within(pts, index: SegmentIndex, taus, hit: np.ndarray) -> np.ndarray:
     """Whether each point is within each tau of a segment of ``index``, or already was.
 
     ``hit`` is a ``(T, S)`` bool array (one row per tau), returned updated (a copy):
@@ -223,7 +223,7 @@ def nearest_distances(points: np.ndarray, segments) -> np.ndarray:
 
     Each point gets an upper bound ``u`` of its distance from a KD-tree over points
     along the segments; the segments within ``u`` (candidates from Shapely STRtree
-    box queries, :meth:`_SegmentIndex.exact`: the nearest wall's overlapping
+    box queries, :meth:`SegmentIndex.exact`: the nearest wall's overlapping
     duplicates, not every segment nearby) are then measured exactly in numpy, in
     chunks of points.
     Walls from many scans overlap a hundredfold, and querying a fixed search square
@@ -242,4 +242,4 @@ def nearest_distances(points: np.ndarray, segments) -> np.ndarray:
         Distances in metres, all ``inf`` when ``segments`` is empty.
     """
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-    return _nearest_below(pts, _SegmentIndex(as_segments(segments)), np.full(len(pts), np.inf))
+    return nearest_below(pts, SegmentIndex(as_segments(segments)), np.full(len(pts), np.inf))

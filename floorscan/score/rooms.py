@@ -82,10 +82,10 @@ def read_rooms(path) -> tuple[pd.DataFrame, pd.DataFrame]:
     """
     import shapely.geometry
 
-    from floorscan.score.geojson import _feature_collection
+    from floorscan.score.geojson import feature_collection
 
     rooms, doors = [], []
-    for feat in _feature_collection(path).get("features", []):
+    for feat in feature_collection(path).get("features", []):
         props, geom = feat.get("properties") or {}, feat.get("geometry") or {}
         if props.get("kind") == "room" and geom.get("type") in ("Polygon", "MultiPolygon"):
             poly = shapely.geometry.shape(geom)

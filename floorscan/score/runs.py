@@ -5,7 +5,7 @@
 5.1, :mod:`floorscan.score.bitmap`) and the tolerance metrics (ISPRS benchmark,
 :mod:`floorscan.score.tolerance`), and its floor plan's faces with the latter
 (``plan_*`` columns); the runs of one ordering and extractor in increasing k are scored
-incrementally (:class:`floorscan.score.growing._GrowingWalls`). The orderings x
+incrementally (:class:`floorscan.score.growing.GrowingWalls`). The orderings x
 extractors are split over processes by :func:`floorscan.core.runtime.map_in_processes`
 (the only process pool of the score package); the table does not depend on their
 number. :func:`sort_scores` orders the rows (and the concatenated tables of the
@@ -28,10 +28,10 @@ import numpy as np
 from floorscan.score.bitmap import grid_for, rasterize_segments
 from floorscan.score.geojson import read_floorplan
 from floorscan.score.ground_truth import GROUND_TRUTH, REFERENCE
-from floorscan.score.growing import PAIR_REACH_M, _GrowingWalls, _SamplePairs
+from floorscan.score.growing import PAIR_REACH_M, GrowingWalls, SamplePairs
 from floorscan.score.params import ScoreParams
 from floorscan.score.segments import as_segments, gt_samples
-from floorscan.score.tolerance import _recall_precision, tau_label
+from floorscan.score.tolerance import recall_precision, tau_label
 
 
 def run_grid(orderings, extractors, ks) -> list[list[str]]:
@@ -191,9 +191,9 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
     ref_bitmaps: dict[str, np.ndarray] = {}
     ref_samples: dict[str, np.ndarray] = {}
     all_samples: dict[str, np.ndarray] = {}
-    growing: dict[tuple[str, str], _GrowingWalls] = {}
-    sample_pairs: dict[str, _SamplePairs] = {}
-    all_pairs: dict[str, _SamplePairs | None] = {}
+    growing: dict[tuple[str, str], GrowingWalls] = {}
+    sample_pairs: dict[str, SamplePairs] = {}
+    all_pairs: dict[str, SamplePairs | None] = {}
     raster_caches: dict[str, dict] = {}
     # A run with the same walls and floor plan as an earlier one of its extractor (every
     # ordering's k = all: the same scans) has its metrics; when no larger k of its
@@ -215,9 +215,9 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
                 else gt_samples(as_segments(recall_references[ext]), cfg.sample_step_m)
             )
             # Shared by the orderings of an extractor: its samples' pairs and wall cells.
-            sample_pairs[ext] = _SamplePairs(ref_samples[ext], PAIR_REACH_M)
+            sample_pairs[ext] = SamplePairs(ref_samples[ext], PAIR_REACH_M)
             all_pairs[ext] = (
-                None if recall_references is None else _SamplePairs(all_samples[ext], max(cfg.taus_m))
+                None if recall_references is None else SamplePairs(all_samples[ext], max(cfg.taus_m))
             )
             raster_caches[ext] = {}
         t0 = time.perf_counter()
@@ -240,7 +240,7 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
             continue
         if key not in growing:
             # One state per ordering and extractor: its k grow in the order of runs.
-            growing[key] = _GrowingWalls(
+            growing[key] = GrowingWalls(
                 refs[ext], ref_bitmaps[ext], grid, cfg.wall_width_m, cfg.taus_m,
                 ref_samples[ext],
                 None if recall_references is None else all_samples[ext],
@@ -248,7 +248,7 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
             )  # fmt: skip
         m = growing[key].score(walls)
         if plan is not None:
-            pm = _recall_precision(plan, refs[ext], cfg.taus_m, ref_samples[ext], pairs=sample_pairs[ext])
+            pm = recall_precision(plan, refs[ext], cfg.taus_m, ref_samples[ext], pairs=sample_pairs[ext])
             for tau in cfg.taus_m:
                 for what in ("precision", "recall", "f1"):
                     m[f"plan_{what}_{tau_label(tau)}"] = pm[f"{what}_{tau_label(tau)}"]

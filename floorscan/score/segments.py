@@ -58,7 +58,7 @@ def segment_lengths(segments: np.ndarray) -> np.ndarray:
     return np.hypot(s[:, 2] - s[:, 0], s[:, 3] - s[:, 1])
 
 
-def _split_long(seg: np.ndarray, max_len: float, return_owner: bool = False):
+def split_long(seg: np.ndarray, max_len: float, return_owner: bool = False):
     """Cut segments into collinear pieces no longer than ``max_len`` (same union); with
     ``return_owner``, also the row of ``seg`` each piece comes from."""
     lengths = segment_lengths(seg)
@@ -130,7 +130,7 @@ def gt_samples(ground_truth, sample_step_m: float = 0.01) -> np.ndarray:
     return dedupe_samples(sample_segments(ground_truth, sample_step_m)[0], sample_step_m)
 
 
-def _densify(seg: np.ndarray, step: float) -> np.ndarray:
+def densify(seg: np.ndarray, step: float) -> np.ndarray:
     """Points along each segment, both ends included, at most ``step`` apart, ``(Q, 2)``."""
     n = np.maximum(1, np.ceil(segment_lengths(seg) / step).astype(np.int64))
     idx = np.repeat(np.arange(len(seg)), n + 1)
@@ -139,6 +139,6 @@ def _densify(seg: np.ndarray, step: float) -> np.ndarray:
     return seg[idx, :2] + t[:, None] * (seg[idx, 2:] - seg[idx, :2])
 
 
-def _row_keys(seg: np.ndarray) -> list[bytes]:
+def row_keys(seg: np.ndarray) -> list[bytes]:
     """The bytes of each ``(M, 4)`` float64 row: equal rows, equal keys."""
     return np.ascontiguousarray(seg, dtype=np.float64).view(np.dtype((np.void, 32))).ravel().tolist()

@@ -33,9 +33,9 @@ import math
 
 import numpy as np
 
-from floorscan.score.capsule import _lengths_within, length_within
-from floorscan.score.nearest import _SegmentIndex, _within, nearest_distances
-from floorscan.score.segments import MIN_SEGMENT_M, _row_keys, as_segments, gt_samples, segment_lengths
+from floorscan.score.capsule import lengths_within, length_within
+from floorscan.score.nearest import SegmentIndex, pairs_within, nearest_distances
+from floorscan.score.segments import MIN_SEGMENT_M, row_keys, as_segments, gt_samples, segment_lengths
 
 
 def _f1(p: float, r: float, has_inferred: bool, has_gt: bool) -> float:
@@ -104,10 +104,10 @@ def tolerance_metrics(
     pts = gt_samples(gt, sample_step_m) if samples is None else samples
     d = nearest_distances(pts, inf) if has_i else np.full(len(pts), np.inf)
     covered = {tau: float(length_within(inf, gt, tau).sum()) if has_i and has_g else 0.0 for tau in taus}
-    return _tolerance_from(len_i, len_g, len(pts), d, covered, taus)
+    return tolerance_from(len_i, len_g, len(pts), d, covered, taus)
 
 
-def _tolerance_from(len_i: float, len_g: float, n_pts: int, d: np.ndarray, covered: dict, taus) -> dict:
+def tolerance_from(len_i: float, len_g: float, n_pts: int, d: np.ndarray, covered: dict, taus) -> dict:
     """:func:`tolerance_metrics` from its parts: the inferred and ground-truth lengths,
     the samples' distances ``d`` to the inferred walls and the inferred length within
     each tau of the ground truth (``covered[tau]``, metres)."""
@@ -140,7 +140,7 @@ def _set_prf(out: dict, tau: float, covered_m: float, len_i: float, recall: floa
     out[f"f1_{lab}"] = _f1(p, recall, has_i, has_g)
 
 
-def _recall_precision(inferred, gt, taus, samples, pairs=None) -> dict[str, float]:
+def recall_precision(inferred, gt, taus, samples, pairs=None) -> dict[str, float]:
     """``precision_<tau>``, ``recall_<tau>`` and ``f1_<tau>`` of :func:`tolerance_metrics`
     (same values), without the distances of the samples that tau does not need."""
     inf = as_segments(inferred)
@@ -150,15 +150,15 @@ def _recall_precision(inferred, gt, taus, samples, pairs=None) -> dict[str, floa
     hit = np.zeros((len(taus), len(samples)), dtype=bool)
     if has_i:
         if pairs is not None and pairs.samples is samples and max(taus) <= pairs.reach:
-            # The samples near each face (floorscan.score.growing._SamplePairs; faces of
-            # plans of several k recur): the same test as _within.
-            si, d = pairs.of(inf, _row_keys(inf))
+            # The samples near each face (floorscan.score.growing.SamplePairs; faces of
+            # plans of several k recur): the same test as pairs_within.
+            si, d = pairs.of(inf, row_keys(inf))
             for t, tau in enumerate(taus):
                 hit[t, si[d <= tau]] = True
         else:
-            hit = _within(samples, _SegmentIndex(inf), taus, hit)
+            hit = pairs_within(samples, SegmentIndex(inf), taus, hit)
     out: dict[str, float] = {}
-    covs = _lengths_within(inf, as_segments(gt), taus) if has_i and has_g else None
+    covs = lengths_within(inf, as_segments(gt), taus) if has_i and has_g else None
     for t, tau in enumerate(taus):
         covered = float(covs[t].sum()) if has_i and has_g else 0.0
         r = float(np.mean(hit[t])) if has_g and len(samples) else math.nan

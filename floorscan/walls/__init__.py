@@ -30,7 +30,7 @@ How to add an extractor (say ``hough``):
    one scan's (N, 2) wall points as ``(x0, y0, x1, y1, n_inliers, rmse_m)`` tuples
    (see :class:`floorscan.walls.extractors.Extractor` for the contract). ``params``
    is :class:`~floorscan.walls.params.RansacParams`, the segment rules every extractor
-   shares; :func:`floorscan.walls.segments._claimed_segments` turns a line into
+   shares; :func:`floorscan.walls.segments.claimed_segments` turns a line into
    segments by them. Its own parameters, if any, are a frozen dataclass
    (``HoughParams``) beside the others in :mod:`floorscan.walls.params`. Add a public
    ``hough(points, params, hough, seed) -> DataFrame`` for people and tests

@@ -7,7 +7,7 @@
 3. within each direction cluster, the points projected along the cluster's normal
    (:func:`wall_signature`) and clustered by a 1D MeanShift: one cluster per wall
    line, parallel walls apart;
-4. one RANSAC line per cluster (:func:`floorscan.walls.ransac._fit_wall`), turned into
+4. one RANSAC line per cluster (:func:`floorscan.walls.ransac.fit_wall`), turned into
    wall segments by the rules of :mod:`floorscan.walls.segments`.
 
 The MeanShift is scikit-learn's algorithm vectorised over the seeds
@@ -23,10 +23,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from floorscan.walls.meanshift import _mean_shift
+from floorscan.walls.meanshift import mean_shift_labels
 from floorscan.walls.normals import point_normals
 from floorscan.walls.params import ClusterParams, RansacParams
-from floorscan.walls.ransac import _fit_wall
+from floorscan.walls.ransac import fit_wall
 from floorscan.walls.tables import segments_frame
 
 
@@ -52,7 +52,7 @@ def cluster_ransac(
     4. One RANSAC (:func:`floorscan.walls.ransac._best_line` with the ``params`` of
        :func:`~floorscan.walls.ransac.ransac`) per cluster with at least
        ``min_cluster_points`` points, turned into segments by
-       :func:`floorscan.walls.segments._claimed_segments` as in ``ransac`` (ends from
+       :func:`floorscan.walls.segments.claimed_segments` as in ``ransac`` (ends from
        all points of the scan near the line, so corner points with mixed normals still
        end the wall).
 
@@ -71,10 +71,10 @@ def cluster_ransac(
         As :func:`~floorscan.walls.ransac.ransac`, ordered by cluster (direction, then
         offset).
     """
-    return segments_frame(_cluster_ransac_rows(points, params, cluster, seed))
+    return segments_frame(cluster_ransac_rows(points, params, cluster, seed))
 
 
-def _cluster_ransac_rows(points: np.ndarray, params: RansacParams, cluster: ClusterParams, seed) -> list[tuple]:
+def cluster_ransac_rows(points: np.ndarray, params: RansacParams, cluster: ClusterParams, seed) -> list[tuple]:
     """:func:`cluster_ransac` as a list of (x0, y0, x1, y1, n_inliers, rmse_m) tuples."""
     rng = np.random.default_rng(seed)
     pts = np.asarray(points, dtype=np.float64)
@@ -86,7 +86,7 @@ def _cluster_ransac_rows(points: np.ndarray, params: RansacParams, cluster: Clus
     if has_normal.sum() >= cluster.min_cluster_points:
         theta2 = 2.0 * np.arctan2(normals[has_normal, 1], normals[has_normal, 0])
         emb = 0.5 * np.stack([np.cos(theta2), np.sin(theta2)], axis=1)
-        labels[has_normal] = _mean_shift(
+        labels[has_normal] = mean_shift_labels(
             emb, cluster.angle_bandwidth_rad, cluster.bin_seeding,
             max(1, cluster.min_cluster_points // 3), cluster.meanshift,
         )
@@ -96,7 +96,7 @@ def _cluster_ransac_rows(points: np.ndarray, params: RansacParams, cluster: Clus
         members = np.flatnonzero(labels == lab)
         if len(members) < cluster.min_cluster_points:
             continue
-        sub = _mean_shift(
+        sub = mean_shift_labels(
             rho[members, None], cluster.offset_bandwidth_m, cluster.bin_seeding,
             max(1, cluster.min_cluster_points // 3), cluster.meanshift,
         )
@@ -104,13 +104,13 @@ def _cluster_ransac_rows(points: np.ndarray, params: RansacParams, cluster: Clus
             idx = members[sub == s]
             if len(idx) < cluster.min_cluster_points:
                 continue
-            fit = _fit_wall(pts, idx, rng, params)
+            fit = fit_wall(pts, idx, rng, params)
             if fit is not None:
                 rows += fit[1]
     return rows
 
 
-def _import_cluster_modules(params: RansacParams, cluster: ClusterParams) -> None:
+def import_cluster_modules(params: RansacParams, cluster: ClusterParams) -> None:
     """Import what :func:`cluster_ransac` will import, before the first scan is timed:
     SciPy's k-d tree, and scikit-learn when ``cluster`` asks for it."""
     import scipy.spatial  # noqa: F401

@@ -16,9 +16,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping
 
-from floorscan.walls.cluster import _cluster_ransac_rows, _import_cluster_modules
+from floorscan.walls.cluster import cluster_ransac_rows, import_cluster_modules
 from floorscan.walls.params import ClusterParams, RansacParams
-from floorscan.walls.ransac import _ransac_rows
+from floorscan.walls.ransac import ransac_rows
 
 
 @dataclass(frozen=True)
@@ -58,14 +58,14 @@ class Extractor:
 #: The wall extractors by name, in the order of the config's default.
 REGISTRY: dict[str, Extractor] = {
     # iterative RANSAC, thesis section 5.3, Algorithm 4 (floorscan.walls.ransac)
-    "ransac": Extractor(rows=_ransac_rows, config={"ransac": RansacParams}, cost=1.0),
+    "ransac": Extractor(rows=ransac_rows, config={"ransac": RansacParams}, cost=1.0),
     # clustering RANSAC, thesis section 3.4 (floorscan.walls.cluster): about twice
     # ransac's time a scan
     "cluster_ransac": Extractor(
-        rows=_cluster_ransac_rows,
+        rows=cluster_ransac_rows,
         config={"ransac": RansacParams, "cluster_ransac": ClusterParams},
         cost=1.8,
-        prepare=_import_cluster_modules,
+        prepare=import_cluster_modules,
     ),
 }
 

@@ -22,7 +22,7 @@ is. The per-scan extractors (:mod:`~floorscan.walls.ransac`,
    (:func:`floorscan.core.grid.cell_means`), so a wall seen by many scans weighs as
    much as one seen by few, and the cost follows the map's size, not the scan count.
 3. **Iterative RANSAC** (thesis section 5.3, Algorithm 4; Fischler and Bolles 1981),
-   :func:`floorscan.walls.ransac._ransac_rows` with the map's settings: the line with
+   :func:`floorscan.walls.ransac.ransac_rows` with the map's settings: the line with
    most inliers, refit by total least squares, cut into pieces at gaps wider than
    ``max_gap_m``; a piece with ``min_inliers`` points and ``min_length_m`` of length is
    a wall segment. No coverage test: a wall seen sparsely at range is sampled every
@@ -44,7 +44,7 @@ from floorscan.core.config import schema_defaults
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.core.grid import cell_means
 from floorscan.walls.params import RansacParams
-from floorscan.walls.ransac import _ransac_rows
+from floorscan.walls.ransac import ransac_rows
 from floorscan.walls.tables import segments_frame
 
 
@@ -158,4 +158,4 @@ def map_segments(points: np.ndarray, grid: OccupancyGrid | None, params: MapPara
     q = map_points(pts, grid, params)
     if len(q) < params.min_inliers:
         return segments_frame([])
-    return segments_frame(_ransac_rows(q, params.ransac(), seed))
+    return segments_frame(ransac_rows(q, params.ransac(), seed))

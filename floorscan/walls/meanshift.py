@@ -3,7 +3,7 @@
 Steps 2 and 3 of :func:`floorscan.walls.cluster.cluster_ransac` (thesis section 3.4):
 flat-kernel MeanShift with bin seeding (Comaniciu and Meer 2002), by default
 :func:`mean_shift`, scikit-learn's algorithm step for step, vectorised over the seeds;
-:func:`_mean_shift` picks it or :class:`sklearn.cluster.MeanShift` (config
+:func:`mean_shift_labels` picks it or :class:`sklearn.cluster.MeanShift` (config
 ``walls.cluster_ransac.meanshift``) and estimates a missing bandwidth.
 
 MeanShift stays custom because scikit-learn's moves one seed and queries one
@@ -168,7 +168,7 @@ def _pair_squares(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
-def _mean_shift(
+def mean_shift_labels(
     x: np.ndarray, bandwidth: float | None, bin_seeding: bool, min_bin_freq: int, backend: str = "numpy"
 ) -> np.ndarray:
     """MeanShift labels of ``x`` (N, d) (flat kernel, every point labelled).

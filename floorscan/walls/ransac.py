@@ -3,12 +3,12 @@
 :func:`ransac` repeats: the best of ``iterations`` lines through two random points
 (most points closer than ``threshold_m``, :func:`_best_line`), refit by total least
 squares on its inliers (:func:`_refine_line`), turned into wall segments
-(:func:`floorscan.walls.segments._claimed_segments`), its inliers removed; until fewer
+(:func:`floorscan.walls.segments.claimed_segments`), its inliers removed; until fewer
 than ``min_points`` points remain, the best line has fewer than ``min_inliers``
 inliers, or ``max_lines`` lines were found. It tends to find several candidates for
 one wall (section 5.3). Fischler and Bolles (1981), Random sample consensus.
 
-:func:`_fit_wall` (one RANSAC line and its segments) is also the last step of
+:func:`fit_wall` (one RANSAC line and its segments) is also the last step of
 :func:`floorscan.walls.cluster.cluster_ransac`, once per cluster.
 
 The inlier counts of all hypotheses are one BLAS product per cache-sized block
@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from floorscan.walls.params import RansacParams
-from floorscan.walls.segments import _claimed_segments, fit_line
+from floorscan.walls.segments import claimed_segments, fit_line
 from floorscan.walls.tables import segments_frame
 
 
@@ -33,9 +33,9 @@ def ransac(points: np.ndarray, params: RansacParams = RansacParams(), seed=0) ->
 
     Repeat: the best of ``iterations`` lines through two random points (most points
     closer than ``threshold_m``), refit by total least squares on its inliers
-    (``refine_iterations`` times), split into segments (:func:`_claimed_segments`),
+    (``refine_iterations`` times), split into segments (:func:`claimed_segments`),
     remove its inliers. The segment ends come from all points of the scan near the
-    line (:func:`_claimed_segments`), so a corner point claimed by the first of two
+    line (:func:`claimed_segments`), so a corner point claimed by the first of two
     walls still ends the second one. Stop when fewer than ``min_points`` points
     remain, the best line has fewer than ``min_inliers`` inliers, or ``max_lines``
     lines were found.
@@ -55,10 +55,10 @@ def ransac(points: np.ndarray, params: RansacParams = RansacParams(), seed=0) ->
         One row per wall segment: ``x0, y0, x1, y1`` (metres), ``n_inliers`` (int32),
         ``rmse_m`` (RMS distance of its inliers to it, metres); in order of discovery.
     """
-    return segments_frame(_ransac_rows(points, params, seed))
+    return segments_frame(ransac_rows(points, params, seed))
 
 
-def _ransac_rows(points: np.ndarray, params: RansacParams, seed) -> list[tuple]:
+def ransac_rows(points: np.ndarray, params: RansacParams, seed) -> list[tuple]:
     """:func:`ransac` as a list of (x0, y0, x1, y1, n_inliers, rmse_m) tuples."""
     rng = np.random.default_rng(seed)
     all_pts = np.asarray(points, dtype=np.float64)
@@ -66,7 +66,7 @@ def _ransac_rows(points: np.ndarray, params: RansacParams, seed) -> list[tuple]:
     rows: list[tuple] = []
     n_lines = 0
     while len(alive) >= params.min_points and n_lines < params.max_lines:
-        fit = _fit_wall(all_pts, alive, rng, params)
+        fit = fit_wall(all_pts, alive, rng, params)
         if fit is None:
             break
         mask, segments = fit
@@ -76,12 +76,12 @@ def _ransac_rows(points: np.ndarray, params: RansacParams, seed) -> list[tuple]:
     return rows
 
 
-def _fit_wall(pts: np.ndarray, idx: np.ndarray, rng: np.random.Generator, params: RansacParams):
+def fit_wall(pts: np.ndarray, idx: np.ndarray, rng: np.random.Generator, params: RansacParams):
     """One RANSAC line on ``pts[idx]``: its inlier mask over ``idx`` and its wall segments.
 
     Returns None when no line has at least ``params.min_inliers`` inliers. The
     segments' ends and gaps come from all of ``pts`` near the line (see
-    :func:`_claimed_segments`).
+    :func:`claimed_segments`).
     """
     found = _best_line(pts[idx], rng, params)
     if found is None:
@@ -91,7 +91,7 @@ def _fit_wall(pts: np.ndarray, idx: np.ndarray, rng: np.random.Generator, params
         return None
     claimed = np.zeros(len(pts), dtype=bool)
     claimed[idx[mask]] = True
-    return mask, _claimed_segments(pts, c, direction, claimed, params)
+    return mask, claimed_segments(pts, c, direction, claimed, params)
 
 
 def _best_line(points: np.ndarray, rng: np.random.Generator, params: RansacParams):

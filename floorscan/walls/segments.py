@@ -2,7 +2,7 @@
 
 The two extractors (:mod:`floorscan.walls.ransac`, :mod:`floorscan.walls.cluster`)
 turn a line found by RANSAC into wall segments with the same rules
-(:func:`_claimed_segments`): the points of the whole scan within ``threshold_m`` of
+(:func:`claimed_segments`): the points of the whole scan within ``threshold_m`` of
 the line are sorted along it and split where they leave a gap wider than
 ``max_gap_m`` (a wall with a door is two segments); a piece is the line's when at
 least ``min_inliers`` of its points are the line's RANSAC inliers; each such piece is
@@ -49,7 +49,7 @@ def fit_line(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return c, np.array([np.cos(phi), np.sin(phi)])
 
 
-def _claimed_segments(pts, c, direction, claimed, params) -> list[tuple]:
+def claimed_segments(pts, c, direction, claimed, params) -> list[tuple]:
     """Segments of a line found by RANSAC, with ends from all points of the scan.
 
     The points of the whole scan within ``threshold_m`` of the line (centroid ``c``,
@@ -98,7 +98,7 @@ def _uncovered_length(t: np.ndarray, min_gap: float) -> float:
 
 def _piece_segment(points: np.ndarray, direction: np.ndarray, params: RansacParams) -> tuple | None:
     """The wall segment of one piece of a line's inliers (no gap wider than
-    ``max_gap_m``, :func:`_claimed_segments`), or None.
+    ``max_gap_m``, :func:`claimed_segments`), or None.
 
     A piece with at least ``min_inliers`` points is refit by total least squares;
     its ends are the extent of its points along the refit line; it is kept when at
