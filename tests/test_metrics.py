@@ -10,7 +10,7 @@ import pytest
 import shapely
 
 from floorscan.core.io import InputError
-from floorscan.floorplan.candidates import point_segment_dist2
+from floorscan.core.geometry import point_segment_dist2
 from floorscan.score.bitmap import (
     Grid,
     raster_cells,

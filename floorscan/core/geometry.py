@@ -125,3 +125,17 @@ def transform_points(points: np.ndarray, x: float, y: float, z: float, yaw: floa
     out[:, 1] = s * p[:, 0] + c * p[:, 1] + y
     out[:, 2] = p[:, 2] + z
     return out
+
+def point_segment_dist2(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> np.ndarray:
+    """Squared distance (square metres) from points ``(px, py)`` (P,) to the matching
+    rows of segments ``seg`` (P, 4) ``x0, y0, x1, y1`` (a zero-length segment is its
+    point): the floor plan's candidate pairs and the scores' nearest distances."""
+    ax, ay, bx, by = seg[:, 0], seg[:, 1], seg[:, 2], seg[:, 3]
+    dx, dy = bx - ax, by - ay
+    l2 = dx * dx + dy * dy
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = ((px - ax) * dx + (py - ay) * dy) / l2
+    t = np.where(l2 > 0, np.clip(t, 0.0, 1.0), 0.0)
+    ex = ax + t * dx - px
+    ey = ay + t * dy - py
+    return ex * ex + ey * ey

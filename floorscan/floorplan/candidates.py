@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from floorscan.core.geometry import point_segment_dist2
+
 
 def axial_angle(seg: np.ndarray) -> np.ndarray:
     return np.mod(np.arctan2(seg[:, 3] - seg[:, 1], seg[:, 2] - seg[:, 0]), np.pi)
@@ -122,19 +124,6 @@ def within_distance(seg: np.ndarray, i: np.ndarray, j: np.ndarray, distance: flo
     return i[keep], j[keep]
 
 
-def point_segment_dist2(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> np.ndarray:
-    """Squared distance (square metres) from points ``(px, py)`` (P,) to the matching
-    rows of segments ``seg`` (P, 4) ``x0, y0, x1, y1`` (a zero-length segment is its
-    point). Used here and by :mod:`floorscan.score.metrics`."""
-    ax, ay, bx, by = seg[:, 0], seg[:, 1], seg[:, 2], seg[:, 3]
-    dx, dy = bx - ax, by - ay
-    l2 = dx * dx + dy * dy
-    with np.errstate(invalid="ignore", divide="ignore"):
-        t = ((px - ax) * dx + (py - ay) * dy) / l2
-    t = np.where(l2 > 0, np.clip(t, 0.0, 1.0), 0.0)
-    ex = ax + t * dx - px
-    ey = ay + t * dy - py
-    return ex * ex + ey * ey
 
 
 def _segment_distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:

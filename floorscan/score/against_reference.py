@@ -170,7 +170,7 @@ def _cells_near_samples(ref: Structure, seg: np.ndarray, samples: np.ndarray, st
     distance : (P,) float64 ndarray
         Metres.
     """
-    from floorscan.floorplan.candidates import point_segment_dist2
+    from floorscan.core.geometry import point_segment_dist2
 
     reach = bound * (1 + 1e-6) + 1e-9
     a, b = seg[:, :2], seg[:, 2:]

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from floorscan.floorplan.candidates import point_segment_dist2
+from floorscan.core.geometry import point_segment_dist2
 from floorscan.score.segments import split_long, as_segments
 
 #: Largest grid a bitmap metric may allocate (cells), a guard against a bad cell size.

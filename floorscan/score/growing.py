@@ -85,7 +85,7 @@ class SamplePairs:
 
     A fixed ``(S, 2)`` sample set, an STRtree of its points and a cache ``{row key of
     a wall: (sample indices, distances)}``: every sample whose exact distance
-    (numpy, :func:`floorscan.floorplan.candidates.point_segment_dist2`) to the wall is at most
+    (numpy, :func:`floorscan.core.geometry.point_segment_dist2`) to the wall is at most
     ``reach``. Candidates are the samples in the boxes of the wall's pieces (no longer
     than :data:`PAIR_PIECE_M`) grown by ``reach``; a sample within ``reach`` of a wall
     is within ``reach`` of one of its pieces, hence in that piece's grown box.

@@ -4,7 +4,7 @@ read from the distances of the ground-truth samples to the inferred walls.
 
 :func:`nearest_distances` gives each point an upper bound of its distance from a
 KD-tree (scipy ``cKDTree``) over points along the segments, then measures exactly, in
-numpy (:func:`floorscan.floorplan.candidates.point_segment_dist2`), the segments within that
+numpy (:func:`floorscan.core.geometry.point_segment_dist2`), the segments within that
 bound only, found by Shapely STRtree box queries (:class:`SegmentIndex`): the nearest
 wall's overlapping duplicates, not every segment nearby. :func:`nearest_below` lowers
 given bounds (a growing wall set keeps its samples' distances and measures
@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
-from floorscan.floorplan.candidates import point_segment_dist2
+from floorscan.core.geometry import point_segment_dist2
 from floorscan.score.segments import densify, split_long, as_segments
 
 #: Spacing (metres) of the points along segments whose KD-tree gives each query point an
@@ -122,7 +122,7 @@ class SegmentIndex:
         point whose radius is at most a reach of :data:`REACHES_M` in the grown boxes
         of the pieces (:meth:`reach_tree`), the others by their square of half-side
         the radius in the segments' boxes. The candidates' distances are measured in
-        numpy (:func:`floorscan.floorplan.candidates.point_segment_dist2`, to the whole segment)
+        numpy (:func:`floorscan.core.geometry.point_segment_dist2`, to the whole segment)
         and those beyond the radius dropped: the same minimum as measuring every
         segment within the radius.
         """
