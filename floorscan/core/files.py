@@ -93,6 +93,15 @@ def remove_stale_temporaries(
     Call it before a stage writes ``paths``: a run killed with SIGKILL (or a machine
     that went down) cannot remove its temporaries, and Snakemake does not know them.
 
+    Parameters
+    ----------
+    paths : iterable of path
+        The outputs whose temporaries to remove; a path with an empty name is skipped.
+    only_atomic : bool
+        Only the temporaries of :func:`atomic_path` (``.<name>.<8 characters>.tmp``);
+        otherwise every hidden ``.<name>.<anything>`` entry (:func:`staged_path`'s folders
+        too).
+
     Returns
     -------
     list of (Path, Path)
@@ -127,6 +136,22 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     or the temporary is made to name ``path``. Temporaries of ``path`` that an
     earlier, killed writer left (``.<name>.<8 characters>.tmp``) are removed first,
     unless this process removed them already (:func:`remove_stale_temporaries`).
+
+    Parameters
+    ----------
+    path : path
+        The output; its folder is created when missing.
+
+    Yields
+    ------
+    Path
+        The temporary path (``.<name>.<8 characters>.tmp`` in the same folder) to write.
+
+    Raises
+    ------
+    BaseException
+        Whatever the writer raised, re-raised after the temporary is removed (an
+        ``OSError`` then names ``path``).
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -166,10 +191,22 @@ def staged_path(path: str | os.PathLike) -> Iterator[Path]:
     inside the private temporary folder keeps the mode it was created with (the
     umask's), and only it is moved out.
 
+    Parameters
+    ----------
+    path : path
+        The output file or folder; its parent folder is created when missing.
+
+    Yields
+    ------
+    Path
+        ``<temporary folder>/<name of path>``, to write.
+
     Raises
     ------
     FileNotFoundError
         The writer wrote nothing at the yielded path.
+    OSError
+        From the writer or the renames, re-raised naming ``path``.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -190,7 +227,14 @@ def staged_path(path: str | os.PathLike) -> Iterator[Path]:
 
 
 def write_json(obj: object, path: str | os.PathLike) -> None:
-    """Write JSON atomically, sorted keys, 2-space indent."""
+    """Write JSON atomically (:func:`atomic_path`), sorted keys, 2-space indent.
+
+    Parameters
+    ----------
+    obj : object
+        JSON-serialisable, numpy scalars and arrays too (``_json_default``).
+    path : path
+    """
     with atomic_path(path) as tmp:
         tmp.write_text(json.dumps(obj, indent=2, sort_keys=True, default=_json_default) + "\n")
 

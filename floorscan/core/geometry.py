@@ -21,8 +21,20 @@ import numpy as np
 
 
 def samples_per_segment(segments: np.ndarray, sample_m: float) -> np.ndarray:
-    """(F,) int64: how many samples :func:`sample_segments` puts on each segment
-    (``ceil(length / sample_m) + 1``, at least 2: its ends)."""
+    """How many samples :func:`sample_segments` puts on each segment:
+    ``ceil(length / sample_m) + 1``, at least 2 (its ends).
+
+    Parameters
+    ----------
+    segments : (F, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    sample_m : float
+        Sample spacing, metres.
+
+    Returns
+    -------
+    (F,) int64 ndarray
+    """
     seg = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
     return np.maximum(np.ceil(length / sample_m).astype(np.int64), 1) + 1
@@ -56,7 +68,21 @@ def sample_segments(segments: np.ndarray, sample_m: float) -> np.ndarray:
 
 
 def segment_weights(segments: np.ndarray, sample_m: float) -> np.ndarray:
-    """Length in metres each sample of :func:`sample_segments` stands for."""
+    """Length each sample of :func:`sample_segments` stands for.
+
+    Parameters
+    ----------
+    segments : (F, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    sample_m : float
+        Sample spacing, metres.
+
+    Returns
+    -------
+    (N,) float64 ndarray
+        Metres per sample, segment after segment: a segment's length divided by its
+        :func:`samples_per_segment`; N is their sum.
+    """
     seg = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
     if len(seg) == 0:
         return np.empty(0)
@@ -70,14 +96,37 @@ def segment_weights(segments: np.ndarray, sample_m: float) -> np.ndarray:
 
 
 def wrap_angle(a: np.ndarray | float) -> np.ndarray | float:
-    """Wrap angles (radians) to [-pi, pi)."""
+    """Wrap angles to [-pi, pi).
+
+    Parameters
+    ----------
+    a : float or ndarray
+        Angles, radians.
+
+    Returns
+    -------
+    float64 ndarray
+        Same shape as ``a`` (0-d for a scalar), radians.
+    """
     return (np.asarray(a, dtype=np.float64) + np.pi) % (2.0 * np.pi) - np.pi
 
 
 def se2_between(a, b) -> tuple[float, float, float]:
-    """Planar motion (dx, dy, dyaw) from pose ``a`` to pose ``b``, in ``a``'s frame.
+    """Planar motion from pose ``a`` to pose ``b``, in ``a``'s frame (Lynch and Park
+    2017, ch. 3).
 
-    Poses are ``(x, y, z, yaw)`` or ``(x, y, yaw)`` sequences; metres, radians.
+    Parameters
+    ----------
+    a, b : sequence of float
+        Poses ``(x, y, z, yaw)`` or ``(x, y, yaw)``: metres, the last item the yaw in
+        radians.
+
+    Returns
+    -------
+    dx, dy : float
+        Metres, in ``a``'s frame.
+    dyaw : float
+        Radians, wrapped to [-pi, pi).
     """
     ya, yb = a[-1], b[-1]
     c, s = math.cos(ya), math.sin(ya)
@@ -86,14 +135,39 @@ def se2_between(a, b) -> tuple[float, float, float]:
 
 
 def se2_compose(a, d) -> tuple[float, float, float, float]:
-    """Pose ``a`` (x, y, z, yaw) followed by the planar motion ``d`` (dx, dy, dyaw) in its
-    frame: the inverse of :func:`se2_between`."""
+    """Pose ``a`` followed by the planar motion ``d`` in its frame: the inverse of
+    :func:`se2_between`.
+
+    Parameters
+    ----------
+    a : sequence of float
+        ``(x, y, z, yaw)``, metres and radians.
+    d : sequence of float
+        ``(dx, dy, dyaw)`` in ``a``'s frame, metres and radians.
+
+    Returns
+    -------
+    tuple of float
+        ``(x, y, z, yaw)``: ``z`` is ``a``'s, yaw wrapped to [-pi, pi).
+    """
     c, s = math.cos(a[3]), math.sin(a[3])
     return (a[0] + c * d[0] - s * d[1], a[1] + s * d[0] + c * d[1], a[2], float(wrap_angle(a[3] + d[2])))
 
 
 def se2_matrix(x: float, y: float, yaw: float) -> np.ndarray:
-    """(4, 4) float64 homogeneous transform of a planar pose (z 0), as Open3D takes it."""
+    """Homogeneous transform of a planar pose (z 0), as Open3D takes it.
+
+    Parameters
+    ----------
+    x, y : float
+        Translation, metres.
+    yaw : float
+        Rotation about +z, radians counter-clockwise.
+
+    Returns
+    -------
+    (4, 4) float64 ndarray
+    """
     c, s = math.cos(yaw), math.sin(yaw)
     m = np.eye(4)
     m[:2, :2] = [[c, -s], [s, c]]
@@ -127,9 +201,22 @@ def transform_points(points: np.ndarray, x: float, y: float, z: float, yaw: floa
     return out
 
 def point_segment_dist2(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> np.ndarray:
-    """Squared distance (square metres) from points ``(px, py)`` (P,) to the matching
-    rows of segments ``seg`` (P, 4) ``x0, y0, x1, y1`` (a zero-length segment is its
-    point): the floor plan's candidate pairs and the scores' nearest distances."""
+    """Squared distance from each point to the matching row of ``seg`` (a zero-length
+    segment is its point): the floor plan's candidate pairs and the scores' nearest
+    distances.
+
+    Parameters
+    ----------
+    px, py : (P,) float ndarray
+        Point coordinates, metres.
+    seg : (P, 4) float ndarray
+        ``x0, y0, x1, y1`` per point, metres.
+
+    Returns
+    -------
+    (P,) float64 ndarray
+        Square metres.
+    """
     ax, ay, bx, by = seg[:, 0], seg[:, 1], seg[:, 2], seg[:, 3]
     dx, dy = bx - ax, by - ay
     l2 = dx * dx + dy * dy

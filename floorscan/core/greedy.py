@@ -120,8 +120,26 @@ def plain_greedy(
     value: np.ndarray | None = None,
 ) -> pd.DataFrame:
     """The greedy of :func:`lazy_greedy` with every gain recomputed at every step
-    (O(steps x scans) gains; the gains summed as there, so equal to the last bit).
-    Same parameters and result; no input checks."""
+    (O(steps x scans) gains; the gains summed as there, so equal to the last bit); no
+    input checks.
+
+    Parameters
+    ----------
+    cover : mapping of int to (K,) int ndarray
+        Cell indices each scan covers.
+    scan_ids : sequence of int
+        The candidate scans.
+    quality : mapping of int to (K,) float ndarray, optional
+        Per covered cell, how well the scan sees it (default 1).
+    value : (C,) float ndarray, optional
+        Weight per cell (default 1).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``rank``, ``scan_id``, ``gain``, ``covered`` (cumulative gain) in greedy order;
+        the scans with no gain last, smallest id first, gain 0.
+    """
     ids = sorted(int(s) for s in scan_ids)
     sets = {s: np.asarray(cover.get(s, np.empty(0, np.int64)), dtype=np.int64) for s in ids}
     n_cells = 1 + max((int(c.max()) for c in sets.values() if len(c)), default=-1)

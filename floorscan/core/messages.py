@@ -115,8 +115,18 @@ def shorten_message(message: str, token_limit: int = MAX_QUOTE, total_limit: int
 
 
 def system_error(exc: BaseException) -> OSError | None:
-    """The ``OSError`` of :data:`SYSTEM_ERRORS` that ``exc`` is or was raised from
-    (its ``__cause__`` / ``__context__``, a few deep); None for any other error."""
+    """The ``OSError`` of :data:`SYSTEM_ERRORS` that ``exc`` is or was raised from.
+
+    Parameters
+    ----------
+    exc : BaseException
+
+    Returns
+    -------
+    OSError or None
+        ``exc`` or one of its ``__cause__`` / ``__context__`` chain (five deep at most)
+        with an errno of :data:`SYSTEM_ERRORS`; None for any other error.
+    """
     seen = 0
     while exc is not None and seen < 5:
         if isinstance(exc, OSError) and _errno(exc) is not None:

@@ -55,7 +55,17 @@ PGM_OCCUPIED, PGM_FREE, PGM_UNKNOWN = 0, 254, 205
 
 
 def logit(p: float) -> float:
-    """Log-odds of a probability in (0, 1)."""
+    """Log-odds ``log(p / (1 - p))`` of a probability.
+
+    Parameters
+    ----------
+    p : float
+        In (0, 1).
+
+    Returns
+    -------
+    float
+    """
     return math.log(p / (1.0 - p))
 
 
@@ -90,7 +100,13 @@ class OccupancyParams:
     margin_m: float
 
     def check(self) -> None:
-        """Raise ValueError naming the key when a value is out of range."""
+        """Check every value's range.
+
+        Raises
+        ------
+        ValueError
+            Naming the key (``score.reference.<key>``) when a value is out of range.
+        """
         if not self.resolution_m > 0:
             raise ValueError(f"score.reference.resolution_m: expected > 0, got {self.resolution_m}")
         if not 0.5 < self.prob_hit < 1.0:
@@ -147,7 +163,7 @@ class OccupancyGrid:
         return self.n_hit_scans * logit(self.params.prob_hit) + self.n_miss_scans * logit(self.params.prob_miss)
 
     def probability(self) -> np.ndarray:
-        """(H, W) probability of occupancy."""
+        """(H, W) float64 probability of occupancy."""
         return 1.0 / (1.0 + np.exp(-self.log_odds))
 
     def occupied(self) -> np.ndarray:
@@ -167,18 +183,47 @@ class OccupancyGrid:
         return self.occupied() & (self.n_hit_scans < self.params.min_scans)
 
     def cell_centres(self, mask: np.ndarray) -> np.ndarray:
-        """(N, 2) float64 map-frame centres of the cells where ``mask`` is True, metres."""
+        """Map-frame centres of the cells where ``mask`` is True.
+
+        Parameters
+        ----------
+        mask : (H, W) bool ndarray
+
+        Returns
+        -------
+        (N, 2) float64 ndarray
+            ``x, y``, metres, in row-major order of the cells.
+        """
         iy, ix = np.nonzero(mask)
         return np.column_stack([ix + 0.5, iy + 0.5]) * self.resolution_m + self.origin_xy
 
     def cells_of(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Row, column of each map-frame point (N, 2) and whether it is inside the grid."""
+        """The cell of each map-frame point.
+
+        Parameters
+        ----------
+        xy : (N, 2) float ndarray
+            Metres.
+
+        Returns
+        -------
+        row, col : (N,) int64 ndarray
+            Cell indices (may be outside the grid).
+        inside : (N,) bool ndarray
+            Whether the cell is inside the grid.
+        """
         c = np.floor((np.asarray(xy, dtype=np.float64) - self.origin_xy) / self.resolution_m).astype(np.int64)
         inside = (c[:, 0] >= 0) & (c[:, 1] >= 0) & (c[:, 0] < self.shape[1]) & (c[:, 1] < self.shape[0])
         return c[:, 1], c[:, 0], inside
 
     def counts(self) -> dict[str, int]:
-        """Cells per class: occupied, structure, single_scan, free, unknown."""
+        """Cells per class.
+
+        Returns
+        -------
+        dict of str to int
+            ``occupied``, ``structure``, ``single_scan``, ``free``, ``unknown``.
+        """
         occ, free = self.occupied(), self.free()
         return {
             "occupied": int(occ.sum()),
@@ -278,8 +323,17 @@ def _distinct(cells: np.ndarray, last: np.ndarray) -> np.ndarray:
 
 
 def map_image(grid: OccupancyGrid) -> np.ndarray:
-    """(H, W) uint8 map_server image, row 0 at the top (largest y): occupied 0,
-    free 254, unknown 205."""
+    """The grid as a map_server image, row 0 at the top (largest y).
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+
+    Returns
+    -------
+    (H, W) uint8 ndarray
+        Occupied 0, free 254, unknown 205.
+    """
     img = np.full(grid.shape, PGM_UNKNOWN, dtype=np.uint8)
     img[grid.free()] = PGM_FREE
     img[grid.occupied()] = PGM_OCCUPIED
@@ -295,6 +349,13 @@ def write_map_server(
     YAML), the resolution (m/cell), the origin (x, y, yaw of the lower-left pixel) and
     the thresholds, ``negate: 0``, ``mode: trinary``; ``title`` goes into the PGM's
     comment line.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+    pgm_path, yaml_path : path
+        Outputs, each written atomically.
+    title : str
     """
     img = map_image(grid)
     h, w = img.shape
@@ -317,8 +378,17 @@ def write_map_server(
 
 
 def grid_table(grid: OccupancyGrid) -> pd.DataFrame:
-    """The known cells (hit or crossed by a scan) as a table: ``row``, ``col``,
-    ``n_hit_scans``, ``n_miss_scans`` (int32)."""
+    """The known cells (hit or crossed by a scan) as a table.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``row``, ``col``, ``n_hit_scans``, ``n_miss_scans``, all int32.
+    """
     known = (grid.n_hit_scans > 0) | (grid.n_miss_scans > 0)
     iy, ix = np.nonzero(known)
     return pd.DataFrame(
@@ -332,8 +402,19 @@ def grid_table(grid: OccupancyGrid) -> pd.DataFrame:
 
 
 def grid_metadata(grid: OccupancyGrid) -> dict[str, str]:
-    """Schema metadata that, with :func:`grid_table`, restores the grid (the scans'
-    origins as JSON, to 0.1 mm, when the grid has them)."""
+    """Schema metadata that, with :func:`grid_table`, restores the grid.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+
+    Returns
+    -------
+    dict of str to str
+        Origin (metres), resolution (m/cell), height and width (cells), every
+        :class:`OccupancyParams` field as ``param_<name>``, and the scans' origins as JSON
+        (``scan_xy_m``, metres to 0.1 mm) when the grid has them.
+    """
     p = grid.params
     return {
         "origin_x_m": repr(float(grid.origin_xy[0])),
@@ -348,7 +429,16 @@ def grid_metadata(grid: OccupancyGrid) -> dict[str, str]:
 
 def write_grid(grid: OccupancyGrid, path: str | Path, metadata: dict[str, str] | None = None) -> None:
     """Write the grid as a cell table (:func:`grid_table`) whose schema metadata
-    (:func:`grid_metadata`, the cell counts per class and ``metadata``) restores it."""
+    (:func:`grid_metadata`, the cell counts per class and ``metadata``) restores it.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+    path : path
+        Parquet output, written atomically.
+    metadata : dict of str to str, optional
+        More key/value strings (they override the grid's on a clash).
+    """
     from floorscan.core.io import write_table
 
     counts = {f"n_{k}_cells": str(v) for k, v in grid.counts().items()}
@@ -356,14 +446,40 @@ def write_grid(grid: OccupancyGrid, path: str | Path, metadata: dict[str, str] |
 
 
 def read_grid(path: str | Path) -> OccupancyGrid:
-    """The grid :func:`write_grid` wrote (``reference/occupancy.parquet``)."""
+    """The grid :func:`write_grid` wrote (``reference/occupancy.parquet``).
+
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    OccupancyGrid
+    """
     from floorscan.core.io import read_metadata, read_table
 
     return grid_from_table(read_table(path), read_metadata(path))
 
 
 def grid_from_table(table: pd.DataFrame, metadata: dict[str, str]) -> OccupancyGrid:
-    """The grid of :func:`grid_table` and :func:`grid_metadata`, exactly."""
+    """The grid of :func:`grid_table` and :func:`grid_metadata`, exactly.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        ``row``, ``col``, ``n_hit_scans``, ``n_miss_scans``.
+    metadata : dict of str to str
+        :func:`grid_metadata`'s keys.
+
+    Returns
+    -------
+    OccupancyGrid
+
+    Raises
+    ------
+    KeyError
+        When a key of :func:`grid_metadata` is missing.
+    """
     fields = OccupancyParams.__dataclass_fields__
     params = OccupancyParams(**{k: type(fields[k].default)(float(metadata[f"param_{k}"])) for k in fields})
     h, w = int(metadata["height"]), int(metadata["width"])

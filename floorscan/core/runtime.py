@@ -135,7 +135,14 @@ def _nothing() -> None:
 def start_workers(pool: ProcessPoolExecutor, n: int) -> None:
     """Start ``n`` workers of ``pool`` now, so that their start-up (interpreter, main
     module, ``preload``) overlaps the caller's work instead of delaying the first
-    results: ``n`` empty calls, each finding no idle worker, start one each."""
+    results: ``n`` empty calls, each finding no idle worker, start one each.
+
+    Parameters
+    ----------
+    pool : concurrent.futures.ProcessPoolExecutor
+    n : int
+        Workers to start; 0 or less starts none.
+    """
     for _ in range(max(0, int(n))):
         pool.submit(_nothing)
 
@@ -198,7 +205,13 @@ def one_openmp_thread():
     pose graph) would differ from run to run in the last bits (same input, same output
     is a house rule); and on the 2-core target one thread costs less CPU. The
     controller is made once: ``threadpool_limits`` scans the loaded libraries on every
-    call."""
+    call.
+
+    Returns
+    -------
+    context manager
+        threadpoolctl's limit; leaving it restores the thread count.
+    """
     return _openmp_controller().limit(limits=1, user_api="openmp")
 
 

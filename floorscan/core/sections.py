@@ -26,7 +26,17 @@ from floorscan.core.config import ConfigError
 
 def merge_override(base: Mapping | None, override: Mapping | None) -> dict:
     """A deep copy of ``base`` with ``override`` merged over it: mappings key by key,
-    any other value (a list too) replaced. Neither argument is changed."""
+    any other value (a list too) replaced. Neither argument is changed.
+
+    Parameters
+    ----------
+    base, override : mapping or None
+        None is an empty mapping.
+
+    Returns
+    -------
+    dict
+    """
     out = copy.deepcopy(dict(base or {}))
     for key, value in (override or {}).items():
         if isinstance(value, dict) and isinstance(out.get(key), dict):
@@ -40,6 +50,19 @@ def dataset_section(config: Mapping, dataset: str, stage: str) -> dict:
     """The ``stage`` section of ``config`` for ``dataset``: its
     ``datasets.<dataset>.params.<stage>`` overrides merged over the global section
     (:func:`merge_override`).
+
+    Parameters
+    ----------
+    config : mapping
+        The workflow config.
+    dataset : str
+    stage : str
+        A section name, e.g. ``"walls"``.
+
+    Returns
+    -------
+    dict
+        A new dict; ``config`` is not changed.
 
     Raises
     ------
@@ -102,6 +125,13 @@ def evaluation_grid_errors(score: Mapping[str, Any], walls_k: Iterable) -> list[
     sections. The workflow reports it only when it plans an evaluation job: a run that
     narrows ``walls.k`` to build some plans needs neither.
 
+    Parameters
+    ----------
+    score : mapping
+        The ``score`` section (``figure_k``).
+    walls_k : iterable
+        ``walls.k``: ints and/or ``"all"``.
+
     Returns
     -------
     list of str
@@ -119,6 +149,14 @@ def evaluation_grid_errors(score: Mapping[str, Any], walls_k: Iterable) -> list[
 def check_sections(config: Mapping, extractors: Iterable[str]) -> None:
     """Check the global sections and every dataset's (:func:`dataset_section`) with
     :func:`section_errors`.
+
+    Parameters
+    ----------
+    config : mapping
+        The workflow config (``walls``, ``select``, ``floorplan``, ``score``,
+        ``datasets``).
+    extractors : iterable of str
+        The known wall extractors.
 
     Raises
     ------

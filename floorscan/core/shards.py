@@ -97,14 +97,44 @@ def shard_ranges(
 
 
 def shard_label(start: int, stop: int) -> str:
-    """Name of the shard of scans ``start..stop`` (inclusive): ``scans_000120-000239``."""
+    """Name of the shard of scans ``start..stop`` (inclusive).
+
+    Parameters
+    ----------
+    start, stop : int
+        First and last scan id.
+
+    Returns
+    -------
+    str
+        ``scans_<start>-<stop>``, six digits each, e.g. ``scans_000120-000239``.
+
+    Raises
+    ------
+    ValueError
+        Unless 0 <= start <= stop.
+    """
     if not 0 <= int(start) <= int(stop):
         raise ValueError(f"a shard needs 0 <= start <= stop, got {start}, {stop}")
     return f"scans_{int(start):06d}-{int(stop):06d}"
 
 
 def parse_shard_label(label: str) -> tuple[int, int]:
-    """``"scans_000120-000239"`` -> ``(120, 239)``; ``ValueError`` for anything else."""
+    """``"scans_000120-000239"`` -> ``(120, 239)``: the inverse of :func:`shard_label`.
+
+    Parameters
+    ----------
+    label : str
+
+    Returns
+    -------
+    start, stop : int
+
+    Raises
+    ------
+    ValueError
+        When ``label`` does not match :data:`SHARD_LABEL` or start > stop.
+    """
     if re.fullmatch(SHARD_LABEL, str(label)):
         start, stop = (int(n) for n in str(label).removeprefix("scans_").split("-"))
         if start <= stop:
@@ -176,8 +206,19 @@ def scan_id_bounds(path: str | os.PathLike) -> tuple[int, int] | None:
     """Smallest and largest ``scan_id`` of a Parquet table, from its row groups'
     statistics (the column itself is read only when a row group has none).
 
-    Returns None for a table without rows. Raises ``InputError`` naming ``path`` when
-    it has no ``scan_id`` column.
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    (int, int) or None
+        None for a table without rows.
+
+    Raises
+    ------
+    InputError
+        Naming ``path``, when it has no ``scan_id`` column.
     """
     pf = pq.ParquetFile(path)
     names = pf.schema_arrow.names
@@ -209,10 +250,24 @@ def plan_from_files(
     recorded scan) and the ``scan_id`` bounds of ``registered`` (row-group
     statistics, :func:`scan_id_bounds`), with pyarrow only.
 
+    Parameters
+    ----------
+    registration : path
+        ``registration.parquet``.
+    registered : path
+        ``registered.parquet``.
+    shard_scans : int
+        Kept scans per shard at most; 0 = one shard.
+
+    Returns
+    -------
+    dict
+        As :func:`plan_shards`.
+
     Raises
     ------
     InputError
-        As :func:`plan_shards`, naming the file.
+        As :func:`plan_shards`, naming the file; or ``registered`` has no ``scan_id``.
     """
     # ParquetFile.read: pq.read_table imports pyarrow.dataset (0.3 s of CPU)
     pf = pq.ParquetFile(registration)
@@ -230,7 +285,23 @@ def read_scan_range(
     """The rows of a Parquet table with ``start <= scan_id <= stop``, in file order.
 
     Reads with a pyarrow filter, so row groups outside the range are skipped.
-    Raises ``InputError`` naming ``path`` when it has no ``scan_id`` column.
+
+    Parameters
+    ----------
+    path : path
+    start, stop : int
+        Inclusive scan id range.
+    columns : sequence of str, optional
+        The columns to read (default: all).
+
+    Returns
+    -------
+    pandas.DataFrame
+
+    Raises
+    ------
+    InputError
+        Naming ``path``, when it has no ``scan_id`` column.
     """
     names = pq.read_schema(path).names
     if "scan_id" not in names:

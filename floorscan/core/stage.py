@@ -60,7 +60,17 @@ _FAILURE = {"floorscan_failure": True}
 
 
 def is_expected_error(exc: BaseException) -> bool:
-    """Whether ``exc`` is one of :data:`EXPECTED_ERRORS` (or a subclass)."""
+    """Whether ``exc`` is one of :data:`EXPECTED_ERRORS` (or a subclass): an error of
+    the input or config, reported without a traceback.
+
+    Parameters
+    ----------
+    exc : BaseException
+
+    Returns
+    -------
+    bool
+    """
     classes = [getattr(sys.modules.get(module), cls, None) for module, cls in EXPECTED_ERRORS]
     return isinstance(exc, tuple(c for c in classes if isinstance(c, type)))
 

@@ -41,8 +41,20 @@ def run_datasets(targets, datasets, default: list[str]) -> list[str]:
 
 
 def dataset_verdict(results: Path, dataset: str) -> dict | None:
-    """The registration's verdict of a dataset (``registration.parquet`` metadata:
-    ``line``, ``ok``, ``warnings``), or None when there is none."""
+    """The registration's verdict of a dataset.
+
+    Parameters
+    ----------
+    results : Path
+        The results folder.
+    dataset : str
+
+    Returns
+    -------
+    dict or None
+        ``line``, ``ok``, ``warnings`` (``registration.parquet`` metadata); None when
+        the file is unreadable or has no verdict.
+    """
     from floorscan.core.io import read_metadata
 
     try:
@@ -128,7 +140,17 @@ def answer_lines(
 def plan_counts(geojson: str | os.PathLike) -> str:
     """`` (172 walls, 109 junctions, 105 clutter pieces)`` from a plan's GeoJSON
     metadata (``floorscan`` member), with ``, 12 rooms, 11 doors`` when the plan has
-    rooms (``n_rooms``, ``n_doors``); empty when it cannot be read."""
+    rooms (``n_rooms``, ``n_doors``).
+
+    Parameters
+    ----------
+    geojson : path
+
+    Returns
+    -------
+    str
+        Empty when the file cannot be read or names no count.
+    """
     from floorscan.floorplan.metadata import count_text
 
     try:
@@ -142,7 +164,16 @@ def plan_counts(geojson: str | os.PathLike) -> str:
 
 
 def format_bytes(n: int) -> str:
-    """``n`` bytes for people, SI units: ``812 B``, ``12.3 kB``, ``4.56 MB``, ``120 MB``."""
+    """``n`` bytes for people, SI units: ``812 B``, ``12.3 kB``, ``4.56 MB``, ``120 MB``.
+
+    Parameters
+    ----------
+    n : int
+
+    Returns
+    -------
+    str
+    """
     n = int(n)
     for unit, size in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
         if n >= size:

@@ -22,6 +22,10 @@ def overlay_image(inferred: np.ndarray, ground_truth: np.ndarray) -> np.ndarray:
     """RGB image of two bitmaps (Fig. 5.1): ground truth only blue (false negative),
     inferred only red (false positive), both purple (correct match), neither white.
 
+    Parameters
+    ----------
+    inferred, ground_truth : (ny, nx) bool ndarray
+
     Returns
     -------
     (ny, nx, 3) float ndarray
@@ -37,7 +41,18 @@ def overlay_image(inferred: np.ndarray, ground_truth: np.ndarray) -> np.ndarray:
 
 def block_any(bitmap: np.ndarray, factor: int) -> np.ndarray:
     """Downsample a bool bitmap by ``factor`` (a cell is set if any of its block is), so
-    that walls one cell wide stay visible in a figure; ``factor`` 1 returns a copy."""
+    that walls one cell wide stay visible in a figure.
+
+    Parameters
+    ----------
+    bitmap : (ny, nx) bool ndarray
+    factor : int
+        1 or less returns a copy.
+
+    Returns
+    -------
+    (ceil(ny / factor), ceil(nx / factor)) bool ndarray
+    """
     b = np.asarray(bitmap, bool)
     if factor <= 1:
         return b.copy()

@@ -79,9 +79,21 @@ def plot_metrics_vs_k(metrics: pd.DataFrame, out, tau: float = 0.05) -> None:
 
 
 def plot_quality_vs_k(curves: pd.DataFrame, out, tau: float = 0.05, up_to: float = 0.2, title: str = "") -> None:
-    """F1 of the plan of the first k scans against the reference map, per extractor
-    (:func:`floorscan.score.curves.score_curves`' table with an ``extractor`` column):
-    every ordering, random's mean with a one-sd band over its seeds, the oracle dashed."""
+    """F1 of the plan of the first k scans against the reference map, per extractor:
+    every ordering, random's mean with a one-sd band over its seeds, the oracle dashed.
+
+    Parameters
+    ----------
+    curves : pandas.DataFrame
+        :func:`floorscan.score.curves.score_curves`' table with an ``extractor`` column.
+    out : path
+        PNG output.
+    tau : float
+        The F1's tolerance, metres.
+    up_to : float
+        The AUC's range, a fraction of the kept scans (shaded).
+    title : str
+    """
     col = f"f1_{round(tau * 100):d}cm"
     extractors = sorted(curves["extractor"].unique())
     fig, axes = plt.subplots(1, len(extractors), figsize=(6.5 * len(extractors), 5), squeeze=False)

@@ -9,7 +9,20 @@ import os
 
 def drawn_overlay_figure(overlay: dict, info: dict, dataset: str, path: str | os.PathLike, plan: str = "recommended") -> None:
     """Write the overlay figure (PNG) of :func:`floorscan.score.drawn.score_drawn_plans`'s
-    ``overlay`` and alignment ``info`` to ``path``."""
+    ``overlay`` and alignment ``info``.
+
+    Parameters
+    ----------
+    overlay : dict
+        ``drawn_xy``, ``seen``, ``structure``, ``faces`` (map metres).
+    info : dict
+        :func:`floorscan.score.drawn.align_drawn`'s info.
+    dataset : str
+    path : path
+        PNG output, written atomically (:func:`~floorscan.figures.style.save_figure`).
+    plan : str
+        Which plan's faces are drawn.
+    """
     import matplotlib
 
     matplotlib.use("Agg")

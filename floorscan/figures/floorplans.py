@@ -26,6 +26,15 @@ def read_geojson_geometries(path) -> list:
     geometry per wall (``len`` is the plan's wall count, one row of
     :attr:`floorscan.floorplan.plan.FloorPlan.walls` each). Features without ``kind`` (any
     other GeoJSON) are all returned.
+
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    list of shapely geometry
+        Map metres (or the file's coordinates).
     """
     import shapely.geometry
 

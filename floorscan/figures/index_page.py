@@ -117,10 +117,19 @@ def dataset_status(dataset: str, results: str | os.PathLike = "results") -> dict
 
 
 def verdict_class(verdict: dict) -> str | None:
-    """``GOOD``, ``WARNING`` or ``POOR`` of a verdict
-    (:meth:`floorscan.register.consistency.Verdict.as_dict`): from ``ok`` and
-    ``warnings`` when it has them, else the first word of its ``line``; None when
-    neither tells."""
+    """``GOOD``, ``WARNING`` or ``POOR`` of a verdict: from ``ok`` and ``warnings`` when
+    it has them, else the first word of its ``line``.
+
+    Parameters
+    ----------
+    verdict : dict
+        :meth:`floorscan.register.consistency.Verdict.as_dict`.
+
+    Returns
+    -------
+    str or None
+        None when neither tells.
+    """
     if "ok" in verdict:
         if not verdict["ok"]:
             return "POOR"
@@ -162,8 +171,17 @@ def failure_text(dataset: str, results: str | os.PathLike = "results") -> str | 
 
 
 def log_error(path: str | os.PathLike) -> str | None:
-    """The last error paragraph of one stage log (as :func:`failure_text` reads it);
-    None when the log holds none or cannot be read."""
+    """The last error paragraph of one stage log (as :func:`failure_text` reads it).
+
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    str or None
+        None when the log holds none or cannot be read.
+    """
     try:
         lines = Path(path).read_text(encoding="utf-8", errors="replace").splitlines()
     except OSError:
@@ -210,7 +228,18 @@ def write_index(statuses: list[dict], path: str | os.PathLike = "results/index.h
 
 
 def index_html(statuses: list[dict], title: str = "floorscan results") -> str:
-    """The page :func:`write_index` writes, as text."""
+    """The page :func:`write_index` writes, as text.
+
+    Parameters
+    ----------
+    statuses : list of dict
+        One per dataset, in page order.
+    title : str
+
+    Returns
+    -------
+    str
+    """
     esc = html.escape
     parts = [
         "<!DOCTYPE html>",
@@ -232,7 +261,16 @@ def index_html(statuses: list[dict], title: str = "floorscan results") -> str:
 
 def counts_line(statuses: list[dict]) -> str:
     """``"3 recordings: 2 with a plan, 1 failed"``: a dataset has a plan when it has a
-    ``floorplan`` and did not fail."""
+    ``floorplan`` and did not fail.
+
+    Parameters
+    ----------
+    statuses : list of dict
+
+    Returns
+    -------
+    str
+    """
     failed = sum(1 for s in statuses if s.get("failed"))
     planned = sum(1 for s in statuses if s.get("floorplan") and not s.get("failed"))
     return f"{count_text(len(statuses), 'recording')}: {planned} with a plan, {failed} failed"

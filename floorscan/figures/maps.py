@@ -25,7 +25,17 @@ from floorscan.score.segments import as_segments  # noqa: E402
 def plot_reference_map(grid, out, title: str = "", faces=None) -> None:
     """The reference map (:class:`floorscan.core.occupancy.OccupancyGrid`): free
     cells white, unknown grey, structure black, occupied cells hit by a single scan
-    red; optionally a floor plan's faces ((F, 4) segments, metres) in blue over it."""
+    red; optionally a floor plan's faces ((F, 4) segments, metres) in blue over it.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+    out : path
+        PNG output.
+    title : str
+    faces : (F, 4) float ndarray, optional
+        ``x0, y0, x1, y1``, metres.
+    """
     rgb = np.full(grid.shape + (3,), 0.80)
     rgb[grid.free()] = 1.0
     h, w = grid.shape
@@ -106,6 +116,28 @@ def subsample_points(
     read in batches of ``batch_rows`` (with ``z_band``, first z to count, then x, y of
     the drawn rows):
     the same points as from the whole frame, in memory one batch at a time.
+
+    Parameters
+    ----------
+    points : pandas.DataFrame or path
+    max_points : int
+    seed : int
+        Seeds ``numpy.random.default_rng``.
+    z_band : (float, float), optional
+        Lowest and highest z kept, metres.
+    batch_rows : int
+    planar_tolerance_m : float, optional
+        Metres.
+
+    Returns
+    -------
+    (N, 2) float64 ndarray
+        ``x, y``, metres, in table order.
+
+    Raises
+    ------
+    KeyError
+        A points file without ``x``, ``y`` or ``z``.
     """
     if planar_tolerance_m is None:
         from floorscan.walls.params import ScanParams

@@ -25,8 +25,20 @@ ANSWER_ROWS = (
 
 def answer_html(answer, curve=None) -> list[str]:
     """"How good the plan is": the recommended plan beside the plan of all kept scans
-    (``answer_scores.csv``), and how many scans of the default ordering its plan needs
-    (``answer_curve.csv``: k95 and k99)."""
+    and how many scans of the default ordering its plan needs (k95 and k99).
+
+    Parameters
+    ----------
+    answer : pandas.DataFrame or path
+        ``answer_scores.csv``.
+    curve : pandas.DataFrame or path, optional
+        ``answer_curve.csv``.
+
+    Returns
+    -------
+    list of str
+        HTML pieces; empty when neither plan was scored.
+    """
     import pandas as pd
 
     from floorscan.score.answer_curve import k_reaching

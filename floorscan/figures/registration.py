@@ -40,7 +40,14 @@ class DensityRaster:
         self._n = 0
 
     def add(self, xy: np.ndarray) -> None:
-        """Count points (N, 2+) in metres (x, y first); the array is not modified."""
+        """Count points (in place).
+
+        Parameters
+        ----------
+        xy : (N, 2+) float ndarray
+            Metres, x and y first; not modified. Points outside the extent count in the
+            border cells.
+        """
         xy = np.asarray(xy, dtype=np.float64)
         ix = np.clip(((xy[:, 0] - self.lo[0]) / self.cell_m).astype(np.int64), 0, self.nx - 1)
         iy = np.clip(((xy[:, 1] - self.lo[1]) / self.cell_m).astype(np.int64), 0, self.ny - 1)
@@ -55,8 +62,17 @@ class DensityRaster:
             self._buf, self._n = [], 0
 
     def grid(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Cell edges in x (nx+1,), in y (ny+1,), metres, and counts (ny, nx), cropped
-        to the occupied cells."""
+        """The counts, cropped to the occupied cells.
+
+        Returns
+        -------
+        ex : (nx+1,) float64 ndarray
+            Cell edges in x, metres.
+        ey : (ny+1,) float64 ndarray
+            Cell edges in y, metres.
+        counts : (ny, nx) ndarray
+            Points per cell; (0, 0) when none.
+        """
         self._flush()
         h = self.counts.reshape(self.ny, self.nx)
         ex = self.lo[0] + np.arange(self.nx + 1) * self.cell_m
@@ -69,7 +85,19 @@ class DensityRaster:
 
     @classmethod
     def of_points(cls, xy: np.ndarray, cell_m: float = 0.05) -> "DensityRaster":
-        """The raster of all points ``xy`` (N, 2+), metres, over their extent."""
+        """The raster of all points over their extent.
+
+        Parameters
+        ----------
+        xy : (N, 2+) float ndarray
+            Metres, x and y first.
+        cell_m : float
+            Metres.
+
+        Returns
+        -------
+        DensityRaster
+        """
         xy = np.asarray(xy, dtype=np.float64)
         lo = xy[:, :2].min(axis=0) if len(xy) else np.zeros(2)
         hi = xy[:, :2].max(axis=0) if len(xy) else np.zeros(2)
@@ -84,6 +112,16 @@ def density_of_file(path: str | os.PathLike, cell_m: float = 0.05) -> DensityRas
     x, y, z``, map frame, metres), streamed scan by scan (memory: one row group and
     the raster). The extent is the points' own, from the file's column statistics
     (a first pass over x, y when a row group has none).
+
+    Parameters
+    ----------
+    path : path
+    cell_m : float
+        Metres.
+
+    Returns
+    -------
+    DensityRaster
 
     Raises
     ------
@@ -122,9 +160,27 @@ FIGURE_CELLS = 500
 
 
 def coarsen_counts(ex: np.ndarray, ey: np.ndarray, h: np.ndarray, max_cells: int):
-    """Counts ``h`` (ny, nx) on cell edges ``ex`` (nx+1,), ``ey`` (ny+1,) summed over
-    square blocks of ``factor`` cells so that neither side exceeds ``max_cells``:
-    ``(ex, ey, h, factor)``; the blocks at the far edges may be partial."""
+    """Counts summed over square blocks of ``factor`` cells so that neither side
+    exceeds ``max_cells``; the blocks at the far edges may be partial.
+
+    Parameters
+    ----------
+    ex : (nx+1,) float ndarray
+        Cell edges in x, metres.
+    ey : (ny+1,) float ndarray
+        Cell edges in y, metres.
+    h : (ny, nx) ndarray
+        Counts.
+    max_cells : int
+
+    Returns
+    -------
+    ex, ey : float ndarray
+        The blocks' edges, metres.
+    h : ndarray
+        The summed counts.
+    factor : int
+    """
     ny, nx = h.shape
     factor = max(1, math.ceil(max(nx, ny) / max_cells))
     if factor == 1:

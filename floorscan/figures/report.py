@@ -228,7 +228,20 @@ def front_page(
 
 
 def write_front_page(path: "str | os.PathLike", dataset: str, **kwargs) -> str:
-    """Write :func:`front_page` (same arguments) to ``path`` atomically; return the page."""
+    """Write :func:`front_page` to ``path`` atomically.
+
+    Parameters
+    ----------
+    path : path
+    dataset : str
+    **kwargs
+        As :func:`front_page`.
+
+    Returns
+    -------
+    str
+        The page.
+    """
     text = front_page(dataset, **kwargs)
     with atomic_path(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
@@ -278,6 +291,11 @@ def write_front_page_of_files(
     room_scores : path, optional
         ``evaluation/room_scores.csv`` (:mod:`floorscan.score.rooms`): its rooms and
         doors against the truth join the answer's table, by plan.
+
+    Returns
+    -------
+    str
+        The page.
     """
     from floorscan.figures.floorplans import read_geojson_geometries
     from floorscan.core.io import read_metadata
@@ -315,6 +333,14 @@ def inline_svg(svg: str) -> str:
     and no fixed ``width`` / ``height`` on the root element (its ``viewBox`` scales it
     to the page).
 
+    Parameters
+    ----------
+    svg : str
+
+    Returns
+    -------
+    str
+
     Raises
     ------
     ValueError
@@ -332,13 +358,34 @@ def inline_svg(svg: str) -> str:
 
 
 def png_data_uri(path: "str | os.PathLike") -> str:
-    """``data:image/png;base64,...`` of a PNG file."""
+    """``data:image/png;base64,...`` of a PNG file.
+
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    str
+    """
     return "data:image/png;base64," + base64.b64encode(Path(path).read_bytes()).decode("ascii")
 
 
 def plan_caption(k=None, ordering: str = "", extractor: str = "", n_walls=None) -> str:
     """The caption of the recommended plan: what it is made of and where its files are
-    (the drawing carries its own title, legend and scale bar)."""
+    (the drawing carries its own title, legend and scale bar).
+
+    Parameters
+    ----------
+    k : int, optional
+        Scans of the plan.
+    ordering, extractor : str
+    n_walls : int, optional
+
+    Returns
+    -------
+    str
+    """
     text = "The recommended floor plan"
     if n_walls is not None:
         text += f", {n_walls} walls"

@@ -48,6 +48,11 @@ def rooms_table_html(rooms: list[dict] | None) -> list[str]:
     ----------
     rooms : list of dict or None
         :func:`read_plan_rooms`: ``name``, ``kind``, ``area_m2``.
+
+    Returns
+    -------
+    list of str
+        HTML pieces; empty for a plan without rooms.
     """
     if not rooms:
         return []
@@ -70,6 +75,11 @@ def with_room_scores(answer, room_scores):
     columns of the room scores (``evaluation/room_scores.csv``,
     :mod:`floorscan.score.rooms`) joined by plan, so that "How good the plan is" shows
     the rooms and doors against the truth; the answer as it was when either is None.
+
+    Parameters
+    ----------
+    answer : path or None
+    room_scores : path or None
 
     Returns
     -------

@@ -22,8 +22,20 @@ def _polygons(geom):
 
 def rooms_overlay_figure(overlay: dict, dataset: str, path: str | os.PathLike, plan: str = "recommended") -> None:
     """Write the rooms overlay (PNG) of :func:`floorscan.score.rooms.score_room_plans`'s
-    or :func:`floorscan.score.drawn_rooms.score_drawn_rooms`'s ``overlay`` for ``plan`` to
-    ``path`` (map frame, metres)."""
+    or :func:`floorscan.score.drawn_rooms.score_drawn_rooms`'s ``overlay`` for ``plan``
+    (map frame, metres).
+
+    Parameters
+    ----------
+    overlay : dict
+        ``structure``, ``plans`` (per plan its ``rooms``, ``doors_xy``,
+        ``rooms_detail``), ``true_rooms``, ``counted``, ``true_doors_xy``,
+        ``true_doors_counted`` and ``truth``; map metres.
+    dataset : str
+    path : path
+        PNG output, written atomically (:func:`~floorscan.figures.style.save_figure`).
+    plan : str
+    """
     import matplotlib
 
     matplotlib.use("Agg")

@@ -28,14 +28,33 @@ STAGES = (
 
 
 def read_benchmark(path) -> pd.DataFrame:
-    """A Snakemake benchmark TSV (columns ``s``, ``h:m:s``, ``max_rss``, ...; one row
-    per repeat), with "NA"/"-" as missing."""
+    """A Snakemake benchmark TSV, with "NA"/"-" as missing.
+
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``s``, ``h:m:s``, ``max_rss``, ...; one row per repeat.
+    """
     return pd.read_csv(path, sep="\t", na_values=["NA", "-", ""])
 
 
 def stage_of(name: str) -> str:
     """Stage of a benchmark file's name relative to the benchmarks folder, e.g.
-    ``walls/sequential/ransac/k5`` or ``walls_sequential_ransac_k5`` -> ``walls``."""
+    ``walls/sequential/ransac/k5`` or ``walls_sequential_ransac_k5`` -> ``walls``.
+
+    Parameters
+    ----------
+    name : str
+
+    Returns
+    -------
+    str
+        A name of :data:`STAGES`, else the name's first part.
+    """
     for st in STAGES:
         if name == st or re.match(rf"^{st}[/_.\-]", name):
             return st
@@ -44,6 +63,10 @@ def stage_of(name: str) -> str:
 
 def stage_times(bench_dir) -> pd.DataFrame:
     """Table 5.1 from the benchmark files present under ``bench_dir`` (recursive).
+
+    Parameters
+    ----------
+    bench_dir : path
 
     Returns
     -------
@@ -86,7 +109,16 @@ def stage_times(bench_dir) -> pd.DataFrame:
 
 
 def plot_stage_times(table: pd.DataFrame, out, title: str = "") -> None:
-    """Bar charts of total time and peak memory per stage (Table 5.1)."""
+    """Bar charts of total time and peak memory per stage (thesis Table 5.1).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        :func:`stage_times`.
+    out : path
+        PNG output.
+    title : str
+    """
     fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
     if len(table):
         y = np.arange(len(table))

@@ -18,7 +18,22 @@ if TYPE_CHECKING:
 def write_summary_page(path: str | os.PathLike, dataset: str, summary: "pd.DataFrame", n_kept: int,
                        beats_random: str, verdict: dict | None, ordering: str) -> None:
     """``summary.html``: the verdict, the beats-random line and :func:`summary_table_html`
-    of one dataset, a page of its own (the front page includes the same table)."""
+    of one dataset, a page of its own (the front page includes the same table).
+
+    Parameters
+    ----------
+    path : path
+        Output, written atomically.
+    dataset : str
+    summary : pandas.DataFrame
+        :func:`floorscan.score.curves.curve_summary`.
+    n_kept : int
+    beats_random : str
+        :func:`floorscan.score.curves.beats_random_line`.
+    verdict : dict or None
+    ordering : str
+        Highlighted.
+    """
     with atomic_path(path) as tmp:
         tmp.write_text(
             f"<html><head><meta charset='utf-8'><title>{dataset} summary</title></head><body>"
@@ -33,11 +48,22 @@ def write_summary_page(path: str | os.PathLike, dataset: str, summary: "pd.DataF
 def summary_table_html(
     summary: "pd.DataFrame", n_kept: int | None = None, ordering: str = "", extractor: str = ""
 ) -> str:
-    """The summary (:func:`floorscan.score.curves.curve_summary`) as an HTML table, the
-    cells as in ``summary.md`` (random's k and AUC with their seeds' spread); the rows of
-    ``ordering`` (with ``extractor``, when given: the recommended plan) highlighted, the
-    oracle's in grey. An F1 from fewer than
-    :data:`floorscan.register.consistency.FEW_SCANS` kept scans is marked."""
+    """The summary as an HTML table, the cells as in ``summary.md`` (random's k and AUC
+    with their seeds' spread); the rows of ``ordering`` (with ``extractor``, when given:
+    the recommended plan) highlighted, the oracle's in grey. An F1 from fewer than
+    :data:`floorscan.register.consistency.FEW_SCANS` kept scans is marked.
+
+    Parameters
+    ----------
+    summary : pandas.DataFrame
+        :func:`floorscan.score.curves.curve_summary`.
+    n_kept : int, optional
+    ordering, extractor : str
+
+    Returns
+    -------
+    str
+    """
     esc = html.escape
     out = [
         "<table>",

@@ -120,6 +120,17 @@ FLOORPLAN_FORMATS = tuple(EXPORT_FORMATS)
 def floorplan_outputs(stem: str, formats: Iterable[str]) -> dict[str, str]:
     """The files of a plan in ``formats``: format -> ``stem`` + the format's suffix.
 
+    Parameters
+    ----------
+    stem : str
+        Path without suffix, e.g. ``results/demo/floorplan``.
+    formats : iterable of str
+        Keys of :data:`EXPORT_FORMATS`.
+
+    Returns
+    -------
+    dict of str to str
+
     Raises
     ------
     KeyError

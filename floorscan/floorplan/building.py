@@ -51,9 +51,21 @@ class Floor:
 
 
 def building_files(out_dir: str | os.PathLike, datasets: Sequence[str]) -> dict:
-    """The files of a building written to ``out_dir``: ``ifc`` (``building.ifc``),
-    ``page`` (``index.html``) and ``geojson``, a list of ``<dataset>.geojson`` in the
-    order of ``datasets``; paths as strings joined with ``/``."""
+    """The files of a building written to ``out_dir``.
+
+    Parameters
+    ----------
+    out_dir : path
+    datasets : sequence of str
+        The building's floors' datasets.
+
+    Returns
+    -------
+    dict
+        ``ifc`` (``building.ifc``), ``page`` (``index.html``) and ``geojson``, a list of
+        ``<dataset>.geojson`` in the order of ``datasets``; paths as strings joined with
+        ``/``.
+    """
     out = os.fspath(out_dir).rstrip("/")
     return {
         "ifc": f"{out}/building.ifc",
@@ -137,7 +149,27 @@ def building_page(floors: Sequence[Floor], plans: Mapping[str, FloorPlan], name:
     (:func:`~floorscan.floorplan.metadata.floor_area_m2`), doors), each with its
     plan's SVG as a thumbnail (``../<dataset>/floorplan.svg``) linking its front page
     (``../<dataset>/front.html``) and its GeoJSON (``<dataset>.geojson``). Text is
-    escaped."""
+    escaped.
+
+    Parameters
+    ----------
+    floors : sequence of Floor
+        In table order.
+    plans : mapping of str to FloorPlan
+        Each floor's plan by its dataset.
+    name : str
+        The building's name (the title).
+
+    Returns
+    -------
+    str
+        The HTML document.
+
+    Raises
+    ------
+    KeyError
+        A floor whose dataset has no plan in ``plans``.
+    """
     e = html.escape
     rows = []
     for f in floors:

@@ -28,6 +28,14 @@ def free_standing_objects(
     component (its area over its length below ``side_offset_m`` * 2 plus two cells, at
     least ``min_wall_length_m`` long: a wall between two doors) is not an object.
 
+    Parameters
+    ----------
+    grid : OccupancyGrid
+        The selected scans' grid.
+    params : StructureParams
+    walls : (A, 4) float ndarray, optional
+        Long wall faces, metres, cut out of the returns first.
+
     Returns
     -------
     (H, W) bool ndarray
@@ -76,7 +84,21 @@ def free_standing_objects(
 
 
 def on_objects(seg: np.ndarray, grid: OccupancyGrid, objects: np.ndarray) -> np.ndarray:
-    """Whether most of each face (F, 4) lies on object cells (:func:`free_standing_objects`)."""
+    """Whether most of each face lies on object cells (:func:`free_standing_objects`):
+    at least half its samples, every half cell.
+
+    Parameters
+    ----------
+    seg : (F, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    grid : OccupancyGrid
+    objects : (H, W) bool ndarray
+        On ``grid``'s cells.
+
+    Returns
+    -------
+    (F,) bool ndarray
+    """
     seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
     if len(seg) == 0:
         return np.zeros(0, dtype=bool)

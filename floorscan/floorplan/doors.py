@@ -91,8 +91,22 @@ def wall_gaps(axes: np.ndarray, thickness: np.ndarray, params: RoomParams) -> li
 
 
 def passes_through(raster: RoomRaster, p: np.ndarray, q: np.ndarray, side_m: float = 0.3) -> bool:
-    """Whether the space holds the middle of the opening ``p``-``q`` ((2,) metres) and
-    points ``side_m`` to each side of it."""
+    """Whether the space holds the middle of the opening ``p``-``q`` and points
+    ``side_m`` to each side of it.
+
+    Parameters
+    ----------
+    raster : RoomRaster
+    p, q : (2,) float ndarray
+        The opening's ends, metres.
+    side_m : float
+        Metres.
+
+    Returns
+    -------
+    bool
+        False when a point is off the raster.
+    """
     mid = (p + q) / 2
     d = q - p
     n = np.array([-d[1], d[0]]) / max(float(np.hypot(*d)), 1e-12)
@@ -100,9 +114,21 @@ def passes_through(raster: RoomRaster, p: np.ndarray, q: np.ndarray, side_m: flo
 
 
 def barrier_cells(raster: RoomRaster, p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rows and columns of an 8-connected line of cells from ``p`` to ``q`` ((2,)
-    metres), one cell longer at each end (it closes the opening to the 4-connected
-    space)."""
+    """Rows and columns of an 8-connected line of cells from ``p`` to ``q``, one cell
+    longer at each end (it closes the opening to the 4-connected space); scikit-image's
+    ``draw.line``.
+
+    Parameters
+    ----------
+    raster : RoomRaster
+    p, q : (2,) float ndarray
+        Metres.
+
+    Returns
+    -------
+    rows, cols : (K,) int ndarray
+        Cells on the raster only.
+    """
     from skimage.draw import line
 
     d = q - p
@@ -116,10 +142,21 @@ def barrier_cells(raster: RoomRaster, p: np.ndarray, q: np.ndarray) -> tuple[np.
 
 
 def contacts(labels: np.ndarray) -> dict[tuple[int, int], list[np.ndarray]]:
-    """Where regions touch: for each pair ``(a, b)``, ``a < b``, the places they touch,
-    each a (K, 2) array of the row, column midpoints (cell units) of 4-neighbour cell
-    pairs of ``a`` and ``b`` that are next to each other (a door and, elsewhere, a
-    missing stretch of wall between the same two regions are two places)."""
+    """Where regions touch: for each pair ``(a, b)``, ``a < b``, the places they touch
+    (a door and, elsewhere, a missing stretch of wall between the same two regions are
+    two places).
+
+    Parameters
+    ----------
+    labels : (H, W) int ndarray
+        Regions 1..R, 0 for none.
+
+    Returns
+    -------
+    dict of (int, int) to list of (K, 2) float64 ndarray
+        Per place, the row, column midpoints (cell units) of the 4-neighbour cell pairs
+        of ``a`` and ``b`` that are next to each other; pairs in ascending order.
+    """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
     from scipy.spatial import cKDTree
@@ -151,9 +188,20 @@ def contacts(labels: np.ndarray) -> dict[tuple[int, int], list[np.ndarray]]:
 
 
 def contact_segment(raster: RoomRaster, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The contact of two regions as a segment ``p``, ``q`` ((2,) metres): the extent of
-    its cell midpoints ((K, 2) row, column) along their principal direction, half a
-    cell longer at each end."""
+    """The contact of two regions as a segment: the extent of its cell midpoints
+    along their principal direction (SVD), half a cell longer at each end.
+
+    Parameters
+    ----------
+    raster : RoomRaster
+    cells : (K, 2) float ndarray
+        Row, column midpoints (cell units), from :func:`contacts`.
+
+    Returns
+    -------
+    p, q : (2,) float64 ndarray
+        Map metres.
+    """
     xy = (cells[:, ::-1] + 0.5) * raster.resolution_m + raster.origin_xy
     c = xy.mean(axis=0)
     if len(xy) > 1:
@@ -167,9 +215,27 @@ def contact_segment(raster: RoomRaster, cells: np.ndarray) -> tuple[np.ndarray, 
 
 
 def junction_end(axes: np.ndarray, thickness: np.ndarray, i: int, k: int, tol_m: float = 0.05) -> bool:
-    """Whether end ``k`` (0, 1) of wall ``i`` of ``axes`` ((N, 4) metres, ``thickness``
-    (N,) metres) meets another wall: lies within the two half thicknesses and ``tol_m``
-    of its axis (an L or T junction)."""
+    """Whether end ``k`` of wall ``i`` meets another wall: lies within the two half
+    thicknesses and ``tol_m`` of its axis (an L or T junction).
+
+    Parameters
+    ----------
+    axes : (N, 4) float ndarray
+        Wall axes ``x0, y0, x1, y1``, metres.
+    thickness : (N,) float ndarray
+        Metres.
+    i : int
+        The wall.
+    k : {0, 1}
+        Its start or end.
+    tol_m : float
+        Metres.
+
+    Returns
+    -------
+    bool
+        False when there is no other wall.
+    """
     others = np.delete(np.asarray(axes, dtype=np.float64).reshape(-1, 4), i, axis=0)
     if not len(others):
         return False
@@ -179,8 +245,24 @@ def junction_end(axes: np.ndarray, thickness: np.ndarray, i: int, k: int, tol_m:
 
 
 def near_walls(p: np.ndarray, axes: np.ndarray, thickness: np.ndarray, within_m: float) -> bool:
-    """Whether the point ``p`` ((2,) metres) lies within ``within_m`` of a wall's
-    footprint (axes (N, 4), thickness (N,), metres)."""
+    """Whether the point ``p`` lies within ``within_m`` of a wall's footprint.
+
+    Parameters
+    ----------
+    p : (2,) float ndarray
+        Metres.
+    axes : (N, 4) float ndarray
+        Wall axes, metres.
+    thickness : (N,) float ndarray
+        Metres.
+    within_m : float
+        Metres.
+
+    Returns
+    -------
+    bool
+        False without walls.
+    """
     if not len(axes):
         return False
     return bool((_point_segment_distance(p, axes) - thickness / 2).min() <= within_m)
@@ -202,6 +284,22 @@ def contact_door(
     ``side_width(centre, normal)`` gives the width of the space on either side of the
     contact (metres); a door is narrower than both by ``door_narrowing_m`` (a corridor
     cut where a wall meets it is as wide as the corridor).
+
+    Parameters
+    ----------
+    p, q : (2,) float ndarray
+        The contact's ends, metres.
+    axes : (N, 4) float ndarray
+        Wall axes, metres.
+    thickness : (N,) float ndarray
+        Metres.
+    params : RoomParams
+        ``door_min_m``, ``door_max_m``, ``jamb_m``, ``door_narrowing_m``,
+        ``door_angle_deg``.
+    side_width : callable, optional
+        ``side_width(centre, normal)`` -> the width of the space on either side of the
+        contact, metres; a door is narrower than both by ``door_narrowing_m`` (a corridor
+        cut where a wall meets it is as wide as the corridor). None skips this test.
 
     Returns
     -------

@@ -86,6 +86,16 @@ def write_dxf(
     no error. Creation and update dates are ezdxf's fixed ones
     (:func:`_reproducible_ezdxf`).
 
+    Parameters
+    ----------
+    plan : FloorPlan
+    path : path
+        Output, written atomically.
+    version : {"R2010", "R12"}
+    metadata : PlanMetadata, optional
+    georeference : Georeference or mapping, optional
+        Named in the metadata; coordinates stay map metres.
+
     Raises
     ------
     ValueError
@@ -202,5 +212,15 @@ def _dxf_metadata(plan: FloorPlan, meta: PlanMetadata, georeference: Georeferenc
 
 def export(exports: PlanExports, path: str | os.PathLike, meta: PlanMetadata, params: FloorplanParams) -> None:
     """The DXF writer of :data:`floorscan.floorplan.EXPORT_FORMATS`: :func:`write_dxf` of
-    a plan's exports in ``params.dxf_version``, naming ``params.georeference``."""
+    a plan's exports in ``params.dxf_version``, naming ``params.georeference``.
+
+    Parameters as every writer of :data:`~floorscan.floorplan.EXPORT_FORMATS` (the
+    package docstring's "add an export format": ``exports``, ``path``, ``meta``,
+    ``params``).
+
+    Raises
+    ------
+    ValueError
+        For a ``dxf_version`` other than R2010 and R12.
+    """
     _write_dxf(exports, path, params.dxf_version, meta, params.georeference)

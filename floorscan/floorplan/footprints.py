@@ -107,6 +107,18 @@ def exterior_rings(polys, transform: Callable[[np.ndarray], np.ndarray] | None =
     (the same doubles as ``poly.exterior.coords``), not a coordinate sequence per wall;
     ``transform`` ((P, 2) -> (P, 2) array, e.g. to longitude and latitude) is applied
     to all of them at once.
+
+    Parameters
+    ----------
+    polys : (N,) object ndarray of shapely Polygon
+        Missing (None) or empty allowed.
+    transform : callable, optional
+        (P, 2) float64 -> (P, 2), applied to the map metres.
+
+    Returns
+    -------
+    list
+        Per polygon a list of ``[x, y]`` lists, or None.
     """
     import shapely
 

@@ -39,15 +39,37 @@ class StructureParams:
 
 
 def passable(grid: OccupancyGrid) -> np.ndarray:
-    """(H, W) bool: cells the scans' rays crossed more often than they hit them (the
-    free space the rover saw; one ray through a doorway makes it passable, where the
-    map_server threshold needs four)."""
+    """Cells the scans' rays crossed more often than they hit them (the free space the
+    rover saw; one ray through a doorway makes it passable, where the map_server
+    threshold needs four).
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+
+    Returns
+    -------
+    (H, W) bool ndarray
+    """
     return (grid.n_miss_scans > grid.n_hit_scans) & (grid.n_miss_scans > 0)
 
 
 def mask_at(grid: OccupancyGrid, mask: np.ndarray, xy: np.ndarray) -> np.ndarray:
-    """``mask`` ((H, W) bool, the grid's cells) at the cells of points ``xy`` ((N, 2)
-    metres): (N,) bool, False outside the grid."""
+    """``mask`` at the cells of points ``xy``.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+    mask : (H, W) bool ndarray
+        On the grid's cells.
+    xy : (N, 2) float ndarray
+        Map metres.
+
+    Returns
+    -------
+    (N,) bool ndarray
+        False outside the grid.
+    """
     rows, cols, inside = grid.cells_of(xy)
     out = np.zeros(len(xy), dtype=bool)
     out[inside] = mask[rows[inside], cols[inside]]
@@ -55,8 +77,18 @@ def mask_at(grid: OccupancyGrid, mask: np.ndarray, xy: np.ndarray) -> np.ndarray
 
 
 def segment_samples(seg: np.ndarray, step: float, trim: float = 0.0):
-    """Points every ``step`` metres along each segment of ``seg`` ((F, 4) metres; the
-    ends trimmed by ``trim`` metres when the segment is longer than four times that).
+    """Points along each segment, at most ``step`` apart: the middles of its
+    ``ceil(length / step)`` (at least one) equal pieces, after its ends are trimmed by
+    ``trim`` when it is longer than four times that.
+
+    Parameters
+    ----------
+    seg : (F, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    step : float
+        Metres.
+    trim : float
+        Metres.
 
     Returns
     -------
@@ -65,7 +97,8 @@ def segment_samples(seg: np.ndarray, step: float, trim: float = 0.0):
     owner : (S,) int64 ndarray
         The segment of each point.
     normals : (F, 2) float64 ndarray
-        Each segment's unit normal (its direction turned a quarter left)."""
+        Each segment's unit normal (its direction turned a quarter left).
+    """
     d = seg[:, 2:] - seg[:, :2]
     length = np.hypot(d[:, 0], d[:, 1])
     u = d / np.maximum(length, 1e-12)[:, None]

@@ -89,6 +89,11 @@ def floorplan_geojson(
     metadata : PlanMetadata, optional
     georeference : Georeference or mapping, optional
         With one, coordinates are WGS84 longitude, latitude (:func:`~floorscan.floorplan.georeference.map_to_lonlat`).
+
+    Returns
+    -------
+    dict
+        The FeatureCollection, ready for ``json.dumps``.
     """
     return _floorplan_geojson(PlanExports(plan), metadata or PlanMetadata(), as_georeference(georeference))
 
@@ -241,6 +246,14 @@ def write_geojson(
     The layout (a feature per line, ``json.dumps`` defaults within it) lets the C
     encoder of :mod:`json` write it: ``indent`` makes ``json`` use its slower
     pure-Python encoder.
+
+    Parameters
+    ----------
+    plan : FloorPlan
+    path : path
+    metadata : PlanMetadata, optional
+    georeference : Georeference or mapping, optional
+        With one, coordinates are WGS84 longitude, latitude.
     """
     _write_geojson(PlanExports(plan), path, metadata or PlanMetadata(), as_georeference(georeference))
 
@@ -263,5 +276,10 @@ def _lonlat_transform(georeference: Georeference) -> Callable[[np.ndarray], np.n
 
 def export(exports: PlanExports, path: str | os.PathLike, meta: PlanMetadata, params: FloorplanParams) -> None:
     """The GeoJSON writer of :data:`floorscan.floorplan.EXPORT_FORMATS`:
-    :func:`write_geojson` of a plan's exports, georeferenced by ``params.georeference``."""
+    :func:`write_geojson` of a plan's exports, georeferenced by ``params.georeference``.
+
+    Parameters as every writer of :data:`~floorscan.floorplan.EXPORT_FORMATS` (the
+    package docstring's "add an export format": ``exports``, ``path``, ``meta``,
+    ``params``).
+    """
     _write_geojson(exports, path, meta, params.georeference)

@@ -281,7 +281,12 @@ def write_building_ifc(
 def export(exports: PlanExports, path: str | os.PathLike, meta: PlanMetadata, params: FloorplanParams) -> None:
     """The IFC writer of :data:`floorscan.floorplan.EXPORT_FORMATS`: :func:`write_ifc` of
     a plan's exports, georeferenced by ``params.georeference``. The model is built
-    once per plan (kept in ``exports.model``) and renamed and saved for each file."""
+    once per plan (kept in ``exports.model``) and renamed and saved for each file.
+
+    Parameters as every writer of :data:`~floorscan.floorplan.EXPORT_FORMATS` (the
+    package docstring's "add an export format": ``exports``, ``path``, ``meta``,
+    ``params``).
+    """
     if exports.model is None:
         exports.model = _ifc_model([(STOREY_NAME, 0.0, exports)], params.georeference)
     _save_ifc(exports.model, path, meta, *_plan_texts(exports.plan, meta))

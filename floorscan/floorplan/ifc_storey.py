@@ -24,7 +24,19 @@ def add_storey(model, storey, exports: PlanExports, body, axis_ctx) -> None:
     the axis, with a body, an axis (``axis_ctx``) and ``Qto_WallBaseQuantities``; an
     ``IfcRelConnectsPathElements`` per junction (:func:`_connect_walls`); the clutter
     (:func:`_add_clutter`), rooms (:func:`_add_spaces`) and doors (:func:`_add_doors`).
-    ``body`` is the Model/Body context."""
+    IFC4 (ISO 16739-1), with IfcOpenShell's API.
+
+    Parameters
+    ----------
+    model : ifcopenshell.file
+        Changed in place.
+    storey : IfcBuildingStorey
+    exports : PlanExports
+    body : IfcGeometricRepresentationSubContext
+        The Model/Body context.
+    axis_ctx : IfcGeometricRepresentationSubContext
+        The Plan/Axis context.
+    """
     import ifcopenshell.api
 
     api = ifcopenshell.api
@@ -74,7 +86,16 @@ def contain(model, structure, products: list) -> None:
     """``products`` contained in ``structure`` (``spatial.assign_container``), the
     containment's elements in creation order: the API keeps them in a set, whose
     order changed from run to run, and adds to the structure's one containment (so
-    setting it to ``products`` alone would drop the elements contained before)."""
+    setting it to ``products`` alone would drop the elements contained before).
+
+    Parameters
+    ----------
+    model : ifcopenshell.file
+        Changed in place.
+    structure : IfcSpatialStructureElement
+    products : list of IfcProduct
+        Nothing is done when empty.
+    """
     import ifcopenshell.api.spatial
 
     if not products:
@@ -147,10 +168,21 @@ DOOR_IFC_HEIGHT_M, DOOR_IFC_THICKNESS_M, OPENING_IFC_MARGIN_M = 2.1, 0.05, 0.05
 
 
 def placement(x: float, y: float, dx: float = 1.0, dy: float = 0.0, z: float = 0.0) -> np.ndarray:
-    """4 x 4 placement matrix in the model's frame (``edit_object_placement`` makes it
-    relative to the product's container): origin ``(x, y, z)`` metres, local x along
-    the unit vector ``(dx, dy)``, z up. The contents of a storey are placed at its
-    elevation ``z``."""
+    """Placement matrix in the model's frame (``edit_object_placement`` makes it
+    relative to the product's container); the contents of a storey are placed at its
+    elevation ``z``.
+
+    Parameters
+    ----------
+    x, y, z : float
+        Origin, metres.
+    dx, dy : float
+        Unit vector of the local x axis; z is up.
+
+    Returns
+    -------
+    (4, 4) float64 ndarray
+    """
     return np.array([[dx, -dy, 0.0, x], [dy, dx, 0.0, y], [0.0, 0.0, 1.0, z], [0.0, 0.0, 0.0, 1.0]])
 
 

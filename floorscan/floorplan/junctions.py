@@ -142,6 +142,13 @@ def shorter_on_longer(seg: np.ndarray, i: np.ndarray, j: np.ndarray):
     """The ends of the shorter of each pair of segments ``(i, j)`` in the frame of the
     longer one's line.
 
+    Parameters
+    ----------
+    seg : (F, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    i, j : (P,) int ndarray
+        Pairs of segments.
+
     Returns
     -------
     length : (F,) float64 ndarray
@@ -223,7 +230,22 @@ def merge_parallel_duplicates(axes: np.ndarray, thickness: np.ndarray, params: S
 
 def short_loose(seg: np.ndarray, junctions: np.ndarray, min_length: float) -> np.ndarray:
     """Faces shorter than ``min_length`` without a junction at both ends (a short face
-    that connects two walls is a wall)."""
+    that connects two walls is a wall).
+
+    Parameters
+    ----------
+    seg : (F, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    junctions : (J, 5) float ndarray
+        ``x, y, i, j, kind`` (:func:`snap_junctions`); an end of face ``i`` or ``j``
+        within 0.02 m of its junction's ``x, y`` (metres) has one.
+    min_length : float
+        Metres.
+
+    Returns
+    -------
+    (F,) bool ndarray
+    """
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
     ends = np.zeros((len(seg), 2), dtype=bool)
     for col in (2, 3):

@@ -112,9 +112,19 @@ class FirstMergePass:
             self.j = np.concatenate([p[1] for p in parts]) if parts else np.empty(0, np.int64)
 
     def groups(self, rows: np.ndarray) -> np.ndarray | None:
-        """The first pass's group of each segment of the subset ``rows`` ((M,) bool
-        mask of the whole set), numbered as :func:`_merge_groups` numbers them (each
-        segment its own group when no pair passes); None when not prepared."""
+        """The first pass's group of each segment of a subset, numbered as
+        :func:`_merge_groups` numbers them (each segment its own group when no pair passes).
+
+        Parameters
+        ----------
+        rows : (M,) bool ndarray
+            The subset, a mask of the whole prepared set.
+
+        Returns
+        -------
+        (K,) int64 ndarray or None
+            For each of the K selected segments; None when not prepared.
+        """
         if self.i is None:
             return None
         inside = np.asarray(rows, dtype=bool)
@@ -155,6 +165,11 @@ def merge_segments(
         Sum of the member weights.
     labels : (M,) int64 ndarray
         Face of each input segment.
+
+    Raises
+    ------
+    ValueError
+        When ``segments`` and ``weights`` differ in length.
     """
     seg = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
     w = np.asarray(weights, dtype=np.float64).reshape(-1)

@@ -31,6 +31,16 @@ def export_time(timestamp: float | None = None) -> int:
     else the environment variable ``SOURCE_DATE_EPOCH`` (reproducible-builds.org),
     else 0. Never the clock: the same input gives the same files.
 
+    Parameters
+    ----------
+    timestamp : float, optional
+        Seconds since the epoch.
+
+    Returns
+    -------
+    int
+        Seconds since the epoch.
+
     Raises
     ------
     ValueError
@@ -53,7 +63,12 @@ def export_time(timestamp: float | None = None) -> int:
 
 @functools.lru_cache(maxsize=None)
 def floorscan_version() -> str:
-    """The installed floorscan's version (``"unknown"`` when not installed)."""
+    """The installed floorscan's version (``"unknown"`` when not installed), cached.
+
+    Returns
+    -------
+    str
+    """
     from importlib.metadata import PackageNotFoundError, version
 
     try:
@@ -115,9 +130,24 @@ class PlanMetadata:
 
 def metadata_member(plan: FloorPlan, meta: PlanMetadata, georeference: Georeference | None = None) -> dict:
     """The plan's metadata as the GeoJSON member ``floorscan`` holds it (the DXF's
-    metadata are its entries as text, :func:`floorscan.floorplan.dxf._dxf_metadata`):
-    after the structure passes also ``n_clutter`` and ``n_junctions``; with rooms or
-    doors also ``n_rooms``, ``n_doors`` and ``floor_area_m2`` (:func:`floor_area_m2`)."""
+    metadata are its entries as text, :func:`floorscan.floorplan.dxf._dxf_metadata`).
+
+    Parameters
+    ----------
+    plan : FloorPlan
+    meta : PlanMetadata
+    georeference : Georeference, optional
+        With one the frame is WGS84 and the units degrees.
+
+    Returns
+    -------
+    dict
+        ``frame``, ``units``, ``crs``, the fields of ``meta``, ``n_walls``,
+        ``n_walls_both_faces``, ``n_faces``, ``lengths``, ``time_stamp``, ``generator``,
+        ``georeference``; after the structure passes also ``n_clutter`` and
+        ``n_junctions``; with rooms or doors also ``n_rooms``, ``n_doors`` and
+        ``floor_area_m2`` (:func:`floor_area_m2`).
+    """
     return {
         "frame": "map" if georeference is None else "WGS84",
         "units": "metres" if georeference is None else "degrees",
@@ -140,20 +170,51 @@ def metadata_member(plan: FloorPlan, meta: PlanMetadata, georeference: Georefere
 
 def floor_area_m2(plan: FloorPlan) -> float:
     """The plan's floor area: the sum of its rooms' ``area_m2`` (corridors and open
-    spaces included), square metres, rounded to 4 decimals; 0 without rooms."""
+    spaces included).
+
+    Parameters
+    ----------
+    plan : FloorPlan
+
+    Returns
+    -------
+    float
+        Square metres, rounded to 4 decimals; 0 without rooms.
+    """
     return round(float(plan.rooms["area_m2"].to_numpy(dtype=np.float64).sum()), 4) if len(plan.rooms) else 0.0
 
 
 def count_text(n: int, noun: str) -> str:
     """``"1 room"``, ``"12 rooms"``: a count of the plan's things as the SVG's summary
-    and the run's last lines give it."""
+    and the run's last lines give it.
+
+    Parameters
+    ----------
+    n : int
+    noun : str
+        Singular; the plural adds ``s``.
+
+    Returns
+    -------
+    str
+    """
     return f"{n} {noun}{'' if n == 1 else 's'}"
 
 
 def recording_timestamp(index_path: str | os.PathLike) -> int:
-    """The exports' time stamp: the recording's first scan stamp (``scan_index.parquet``'s
-    least ``t_ns``) in whole seconds since the epoch, 0 for an empty index; the same
-    recording gives the same files."""
+    """The exports' time stamp: the recording's first scan stamp; the same recording
+    gives the same files.
+
+    Parameters
+    ----------
+    index_path : path
+        ``scan_index.parquet`` (its ``t_ns``, nanoseconds).
+
+    Returns
+    -------
+    int
+        The least ``t_ns`` in whole seconds since the epoch; 0 for an empty index.
+    """
     import pyarrow.parquet as pq
 
     t_ns = pq.read_table(index_path, columns=["t_ns"]).column("t_ns").to_numpy()

@@ -91,8 +91,14 @@ class FloorPlan:
     doors: pd.DataFrame = field(default_factory=lambda: _empty(DOOR_COLUMNS))
 
     def footprints(self):
-        """Wall polygons (shapely), the axis buffered by half the thickness, flat ends
-        (:func:`floorscan.floorplan.room_space.wall_footprints`)."""
+        """Wall polygons, the axis buffered by half the thickness, flat ends
+        (:func:`floorscan.floorplan.room_space.wall_footprints`).
+
+        Returns
+        -------
+        (N,) object ndarray of shapely Polygon
+            One per row of ``walls``, map metres.
+        """
         from floorscan.floorplan.room_space import wall_footprints
 
         return wall_footprints(self.walls[["x0", "y0", "x1", "y1"]].to_numpy(np.float64), self.walls["thickness_m"].to_numpy())
@@ -102,6 +108,11 @@ def segment_arrays(segments: pd.DataFrame) -> tuple[np.ndarray, np.ndarray | Non
     """The segments as :func:`build_floorplan` merges them: in scan order (a stable
     sort by ``scan_id``, when there is one), those with a non-finite coordinate dropped
     (with a warning).
+
+    Parameters
+    ----------
+    segments : pandas.DataFrame
+        ``x0, y0, x1, y1`` (metres), optional ``n_inliers`` and ``scan_id``.
 
     Returns
     -------
@@ -133,7 +144,18 @@ def segment_arrays(segments: pd.DataFrame) -> tuple[np.ndarray, np.ndarray | Non
 
 
 def in_scan_order(segments: pd.DataFrame) -> pd.DataFrame:
-    """``segments`` stably sorted by ``scan_id`` (unchanged without that column)."""
+    """``segments`` stably sorted by ``scan_id``.
+
+    Parameters
+    ----------
+    segments : pandas.DataFrame
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``segments`` itself without a ``scan_id`` column or when already sorted; else a
+        reordered copy (index kept).
+    """
     if "scan_id" not in segments.columns or segments["scan_id"].is_monotonic_increasing:
         return segments
     return segments.iloc[np.argsort(segments["scan_id"].to_numpy(), kind="stable")]

@@ -66,20 +66,56 @@ class RoomRaster:
     occupied: np.ndarray
 
     def centres(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
-        """(N, 2) map-frame centres of cells ``rows``, ``cols``, metres."""
+        """Map-frame centres of cells.
+
+        Parameters
+        ----------
+        rows, cols : (N,) int ndarray
+
+        Returns
+        -------
+        (N, 2) float64 ndarray
+            Metres.
+        """
         return (np.column_stack([cols, rows]) + 0.5) * self.resolution_m + self.origin_xy
 
     def cells_of(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Row, column of each map-frame point ((N, 2) metres) and whether it lies on
-        the raster (as :meth:`floorscan.core.occupancy.OccupancyGrid.cells_of`)."""
+        """The cell of each map-frame point (as
+        :meth:`floorscan.core.occupancy.OccupancyGrid.cells_of`).
+
+        Parameters
+        ----------
+        xy : (N, 2) float ndarray
+            Metres.
+
+        Returns
+        -------
+        rows, cols : (N,) int64 ndarray
+        inside : (N,) bool ndarray
+            Whether the cell lies on the raster.
+        """
         c = np.floor((np.asarray(xy, dtype=np.float64).reshape(-1, 2) - self.origin_xy) / self.resolution_m).astype(np.int64)
         h, w = self.space.shape
         inside = (c[:, 0] >= 0) & (c[:, 1] >= 0) & (c[:, 0] < w) & (c[:, 1] < h)
         return c[:, 1], c[:, 0], inside
 
     def at(self, image: np.ndarray, xy: np.ndarray, outside=0) -> np.ndarray:
-        """(N,) values of ``image`` ((H, W), the raster's cells) at points ``xy`` ((N, 2)
-        metres); ``outside`` for a point off the raster."""
+        """Values of a raster image at points.
+
+        Parameters
+        ----------
+        image : (H, W) ndarray
+            On the raster's cells.
+        xy : (N, 2) float ndarray
+            Map metres.
+        outside : scalar
+            The value for a point off the raster.
+
+        Returns
+        -------
+        (N,) ndarray
+            ``image``'s dtype.
+        """
         rows, cols, inside = self.cells_of(xy)
         out = np.full(len(rows), outside, dtype=image.dtype)
         out[inside] = image[rows[inside], cols[inside]]
@@ -124,8 +160,19 @@ def _opening(mask: np.ndarray, radius_cells: float) -> np.ndarray:
 
 
 def wall_footprints(axes: np.ndarray, thickness: np.ndarray) -> np.ndarray:
-    """(N,) shapely Polygons: each wall axis ``x0, y0, x1, y1`` ((N, 4) metres) buffered
-    by half its ``thickness`` ((N,) metres), flat ends."""
+    """Each wall axis buffered by half its thickness, flat ends (shapely).
+
+    Parameters
+    ----------
+    axes : (N, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    thickness : (N,) float ndarray
+        Metres.
+
+    Returns
+    -------
+    (N,) object ndarray of shapely Polygon
+    """
     import shapely
 
     axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
@@ -136,9 +183,27 @@ def wall_footprints(axes: np.ndarray, thickness: np.ndarray) -> np.ndarray:
 
 
 def wall_mask(axes: np.ndarray, thickness: np.ndarray, origin_xy: np.ndarray, res: float, shape) -> np.ndarray:
-    """(H, W) bool: the cells of the walls' footprints (axis ``x0, y0, x1, y1`` (N, 4)
-    buffered by half of ``thickness`` (N,), metres, at least 0.75 cell), each axis also
-    drawn as an 8-connected line, so a wall blocks the 4-connected space."""
+    """The cells of the walls' footprints, each axis also drawn as an 8-connected line,
+    so a wall blocks the 4-connected space (scikit-image ``draw.polygon`` and
+    ``draw.line``).
+
+    Parameters
+    ----------
+    axes : (N, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    thickness : (N,) float ndarray
+        Metres; the footprint is at least 0.75 cell to each side.
+    origin_xy : (2,) float ndarray
+        Map-frame corner of cell (0, 0), metres.
+    res : float
+        Cell size, metres.
+    shape : (int, int)
+        (H, W).
+
+    Returns
+    -------
+    (H, W) bool ndarray
+    """
     from skimage.draw import line, polygon
 
     mask = np.zeros(shape, dtype=bool)
@@ -225,6 +290,12 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
 
 def space_regions(raster: RoomRaster, params: RoomParams) -> tuple[np.ndarray, np.ndarray]:
     """The watershed regions of the space (module docstring, step 2).
+
+    Parameters
+    ----------
+    raster : RoomRaster
+    params : RoomParams
+        ``marker_depth_m`` and the seeds' settings.
 
     Returns
     -------

@@ -292,10 +292,26 @@ def _distinct_doors(doors: list) -> list:
 
 
 def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thickness: np.ndarray) -> list:
-    """A valid shapely Polygon per room of ``labels`` (1..R; module docstring, step 5):
-    its cells traced, grown by a cell up to the wall faces and cut by the walls'
+    """A valid shapely Polygon per room of ``labels`` (module docstring, step 5): its
+    cells traced (contourpy), grown by a cell up to the wall faces and cut by the walls'
     footprints and the other rooms, simplified by half a cell; the largest part when
-    the cut leaves several. Map metres."""
+    the cut leaves several.
+
+    Parameters
+    ----------
+    raster : RoomRaster
+    labels : (H, W) int ndarray
+        Rooms 1..R, 0 for none.
+    axes : (N, 4) float ndarray
+        Wall axes, metres.
+    thickness : (N,) float ndarray
+        Metres.
+
+    Returns
+    -------
+    list of shapely Polygon
+        R polygons in map metres, room k at index k - 1 (possibly empty).
+    """
     import contourpy
     import shapely
     from scipy import ndimage

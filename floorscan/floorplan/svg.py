@@ -77,6 +77,15 @@ def write_svg(
     (:attr:`~floorscan.floorplan.footprints.PlanExports.room_labels`), the counts and
     floor area right of the title; with doors: the opening as a coloured line over a
     white gap across its wall; a legend row per kind of room and one for doors.
+
+    Parameters
+    ----------
+    plan : FloorPlan
+    path : path
+        Output, written atomically.
+    metadata : PlanMetadata, optional
+    georeference : Georeference or mapping, optional
+        Only draws north; coordinates stay map metres.
     """
     _write_svg(PlanExports(plan), path, metadata or PlanMetadata(), as_georeference(georeference))
 
@@ -367,5 +376,10 @@ def _xml(s: str) -> str:
 
 def export(exports: PlanExports, path: str | os.PathLike, meta: PlanMetadata, params: FloorplanParams) -> None:
     """The SVG writer of :data:`floorscan.floorplan.EXPORT_FORMATS`: :func:`write_svg`
-    of a plan's exports, with north when ``params.georeference`` is set."""
+    of a plan's exports, with north when ``params.georeference`` is set.
+
+    Parameters as every writer of :data:`~floorscan.floorplan.EXPORT_FORMATS` (the
+    package docstring's "add an export format": ``exports``, ``path``, ``meta``,
+    ``params``).
+    """
     _write_svg(exports, path, meta, params.georeference)

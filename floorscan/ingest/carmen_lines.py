@@ -115,7 +115,19 @@ def _numbers(tok: list[str], a: int, b: int, what: str) -> np.ndarray:
 
 def stamp_problem(field: int, text: str) -> str:
     """What is wrong with an ``ipc_timestamp`` out of range, for the malformed line's
-    message: ``field`` (1-based) and its ``text`` as written."""
+    message.
+
+    Parameters
+    ----------
+    field : int
+        The field's position, 1-based.
+    text : str
+        The field as written.
+
+    Returns
+    -------
+    str
+    """
     return (
         f"field {field} (ipc_timestamp) is {text}; expected a finite time in seconds, 0 or more and "
         f"below {WRAP_S:.0f} (2^31 s, the 32-bit wrap)"
@@ -123,13 +135,31 @@ def stamp_problem(field: int, text: str) -> str:
 
 
 def parse_laser_line(kind: str, tok: list[str], fov_rad: float, lineno: int) -> dict:
-    """One laser line's fields, read only when their count is exactly the layout's.
+    """One laser line's fields, read only when their count is exactly the layout's
+    (CARMEN's FLASER and ROBOTLASER1 message layouts).
 
-    The returned dict's ``problem`` is None, or what is wrong with a ROBOTLASER1 line's
-    beam geometry (:func:`robotlaser_geometry_problem`): the reader skips its scan.
-    ``t_s`` is the ``ipc_timestamp`` as written (seconds; NaN, inf or negative too:
-    :mod:`floorscan.ingest.carmen_stamps` judges the log's stamps together), with its
-    field (``stamp_field``, 1-based) and text (``stamp_text``) for an error.
+    Parameters
+    ----------
+    kind : str
+        ``"FLASER"`` or ``"ROBOTLASER1"``.
+    tok : list of str
+        The line split on white space, the type first.
+    fov_rad : float
+        FLASER's field of view, radians (the line does not give it).
+    lineno : int
+        The line's number, 1-based, stored as ``line``.
+
+    Returns
+    -------
+    dict
+        ``t_s`` (the ``ipc_timestamp`` as written, seconds; NaN, inf or negative too:
+        :mod:`floorscan.ingest.carmen_stamps` judges the log's stamps together), ``ranges``
+        ((n,) float64, metres), ``start`` and ``inc`` (first beam angle and increment,
+        radians), ``rmax`` (the line's maximum range, metres; inf for FLASER), ``pose``
+        ((3,) float64: x, y metres, theta radians, the laser's), ``line``, ``kind``,
+        ``problem`` (None, or what is wrong with a ROBOTLASER1 line's beam geometry,
+        :func:`robotlaser_geometry_problem`: the reader skips its scan), ``stamp_field``
+        (1-based) and ``stamp_text``.
 
     Raises
     ------

@@ -65,7 +65,12 @@ class NoReturn:
     n_dropped: int
 
     def note(self) -> str:
-        """One line for the stage log: the limit and why."""
+        """One line for the stage log: the limit and why.
+
+        Returns
+        -------
+        str
+        """
         head = f"largest reading {self.value_m:g} m carries {self.count} of the readings ({100 * self.fraction:.2f} %)"
         if self.how == "configured":
             why = f"ingest.carmen_max_range_m {self.max_range_m:g} m (configured; {head})"

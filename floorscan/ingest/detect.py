@@ -105,7 +105,18 @@ def detect_format(path: str | Path) -> str:
 
 
 def bag_path(path: str | Path) -> Path:
-    """The path rosbags opens for a bag: a ``.db3`` / ``.mcap`` file's folder, else ``path``."""
+    """The path rosbags opens for a bag.
+
+    Parameters
+    ----------
+    path : path
+        A ROS1 ``.bag``, a ROS2 bag folder or its ``.db3`` / ``.mcap`` file.
+
+    Returns
+    -------
+    Path
+        A ``.db3`` / ``.mcap`` file's folder, else ``path``.
+    """
     path = Path(path)
     if path.is_file() and path.suffix.lower() in ROS2_STORAGE_SUFFIXES:
         return path.parent
@@ -162,7 +173,17 @@ RECORDING_SUFFIXES = (".bag", *ROS2_STORAGE_SUFFIXES, *CARMEN_SUFFIXES)
 
 def is_one_recording(folder: Path) -> bool:
     """Whether a folder is itself one recording: a ROS2 bag (``metadata.yaml``, or
-    ``.db3`` / ``.mcap`` files) or a PCD folder (``.pcd`` files)."""
+    ``.db3`` / ``.mcap`` files) or a PCD folder (``.pcd`` files).
+
+    Parameters
+    ----------
+    folder : Path
+        An existing folder; only its own entries are looked at.
+
+    Returns
+    -------
+    bool
+    """
     names = [p.name.lower() for p in folder.iterdir()]
     return "metadata.yaml" in names or any(n.endswith((*ROS2_STORAGE_SUFFIXES, ".pcd")) for n in names)
 

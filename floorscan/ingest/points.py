@@ -112,6 +112,10 @@ def no_return_reason(ranges: np.ndarray, range_min: float, range_max: float) -> 
         Ranges of one scan, metres.
     range_min, range_max : float
         The valid interval ``[range_min, range_max)``, metres.
+
+    Returns
+    -------
+    str
     """
     r = np.asarray(ranges, dtype=np.float64).ravel()
     with np.errstate(invalid="ignore"):
@@ -138,6 +142,10 @@ def no_point_reason(points: np.ndarray, range_min: float | None, range_max: floa
         The points of one scan, metres.
     range_min, range_max : float or None
         The dataset's range limits given to :func:`filter_points` (None: none).
+
+    Returns
+    -------
+    str
     """
     p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     n_finite = int(np.count_nonzero(np.isfinite(p).all(axis=1)))
@@ -168,7 +176,18 @@ class FrameError(InputError):
 
 
 def ordinal_ranges(ordinals: list[int]) -> str:
-    """Sorted ordinals as ranges: ``[3, 17, 18, 19]`` -> ``"3,17-19"``."""
+    """Sorted ordinals as ranges: ``[3, 17, 18, 19]`` -> ``"3,17-19"``.
+
+    Parameters
+    ----------
+    ordinals : list of int
+        Any order; duplicates count once.
+
+    Returns
+    -------
+    str
+        ``""`` for none.
+    """
     out: list[str] = []
     xs = sorted(set(int(v) for v in ordinals))
     i = 0
@@ -183,6 +202,15 @@ def ordinal_ranges(ordinals: list[int]) -> str:
 
 def parse_ordinal_ranges(text: str) -> list[int]:
     """The ordinals of :func:`ordinal_ranges`' text, sorted: ``"3,17-19"`` -> ``[3, 17, 18, 19]``; ``""`` -> ``[]``.
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    list of int
+        Sorted, unique.
 
     Raises
     ------
@@ -236,7 +264,15 @@ class ScanLosses:
     MAX_BAD_FRACTION = 0.5
 
     def skip(self, ordinal: int, error: FrameError) -> None:
-        """Count frame ``ordinal`` as skipped for ``error``."""
+        """Count frame ``ordinal`` as skipped for ``error``.
+
+        Parameters
+        ----------
+        ordinal : int
+            The frame's ordinal, 0-based, in reading order.
+        error : FrameError
+            Why; its ``loss`` ``"no_points"`` counts as no valid return, any other as broken.
+        """
         self.skipped.append(int(ordinal))
         if error.loss == "no_points":
             self.n_no_points += 1
@@ -246,11 +282,31 @@ class ScanLosses:
             self.first_bad = self.first_bad or error
 
     def too_many_bad(self, n_total: int) -> bool:
-        """Whether the broken frames are already more than half of ``n_total`` frames."""
+        """Whether the broken frames are already more than :data:`MAX_BAD_FRACTION` of
+        ``n_total`` frames.
+
+        Parameters
+        ----------
+        n_total : int
+
+        Returns
+        -------
+        bool
+        """
         return self.n_bad > self.MAX_BAD_FRACTION * n_total
 
     def refusal(self, n_total: int) -> InputError:
-        """The error for more than half of ``n_total`` frames broken (names the first)."""
+        """The error for more than half of ``n_total`` frames broken (names the first).
+
+        Parameters
+        ----------
+        n_total : int
+
+        Returns
+        -------
+        InputError
+            Returned, not raised.
+        """
         e = self.first_bad
         return InputError(
             f"{e.where}: {e.what}. At least {self.n_bad} of the {n_total} {self.what} have broken geometry or "
@@ -259,6 +315,11 @@ class ScanLosses:
 
     def check(self, source: str) -> None:
         """Raise when the frames seen leave nothing to use.
+
+        Parameters
+        ----------
+        source : str
+            The recording, for messages.
 
         Raises
         ------
@@ -283,7 +344,14 @@ class ScanLosses:
             )
 
     def detected(self) -> dict[str, str]:
-        """``n_frames_read`` and the non-zero ``lost_*`` counts, ``skipped_frames``, as strings."""
+        """The losses for ``Recording.detected``.
+
+        Returns
+        -------
+        dict of str to str
+            ``n_frames_read``, the non-zero ``lost_bad_frames`` / ``lost_no_points`` and
+            ``skipped_frames`` (:func:`ordinal_ranges`).
+        """
         out = {"n_frames_read": str(self.n_read)}
         if self.n_bad:
             out["lost_bad_frames"] = str(self.n_bad)
@@ -294,7 +362,13 @@ class ScanLosses:
         return out
 
     def notes(self) -> list[str]:
-        """One line per kind of loss, naming the first frame skipped."""
+        """One line per kind of loss, naming the first frame skipped.
+
+        Returns
+        -------
+        list of str
+            Empty when nothing was skipped.
+        """
         out = []
         if self.n_bad:
             e = self.first_bad
@@ -312,7 +386,22 @@ class ScanLosses:
 
     def report(self, detected: dict, notes: list[str], source: str) -> None:
         """Check (:meth:`check`), then put the counts into ``detected`` and the notes into
-        ``notes`` (both in place) and log each note as a warning."""
+        ``notes`` (both in place) and log each note as a warning.
+
+        Parameters
+        ----------
+        detected : dict
+            ``Recording.detected``; gets :meth:`detected`.
+        notes : list of str
+            The recording's notes; gets :meth:`notes`.
+        source : str
+            The recording, for messages.
+
+        Raises
+        ------
+        InputError
+            As :meth:`check`.
+        """
         self.check(source)
         detected.update(self.detected())
         for line in self.notes():
@@ -326,7 +415,21 @@ ANGLE_SPAN_TOLERANCE_RAD = 0.01
 
 
 def angle_span_problem(span: float, what: str) -> str | None:
-    """A field of view ``span`` (radians) wider than a full turn: angles in degrees?"""
+    """A field of view wider than a full turn (plus
+    :data:`ANGLE_SPAN_TOLERANCE_RAD`): angles in degrees?
+
+    Parameters
+    ----------
+    span : float
+        Field of view, radians.
+    what : str
+        The field, for the message.
+
+    Returns
+    -------
+    str or None
+        The message, or None when the span is plausible.
+    """
     if abs(span) > 2.0 * math.pi + ANGLE_SPAN_TOLERANCE_RAD:
         return (
             f"{what} is {span:g}; expected at most 2 pi = {2 * math.pi:.4f} rad "

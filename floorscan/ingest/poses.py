@@ -117,9 +117,29 @@ def interpolate_poses(
 
 
 def scan_poses(scan_index: pd.DataFrame, stream: pd.DataFrame, max_gap_s: float, source: str) -> pd.DataFrame:
-    """The pose of every scan of ``scan_index`` (columns of :data:`floorscan.core.io.POSES`).
+    """The pose of every scan of ``scan_index`` (see :func:`interpolate_poses` for the
+    rules).
 
-    See :func:`interpolate_poses` for the rules and errors.
+    Parameters
+    ----------
+    scan_index : pandas.DataFrame
+        ``scan_id``, ``t_ns`` (nanoseconds).
+    stream : pandas.DataFrame
+        A pose stream (:data:`floorscan.core.io.POSE_STREAM`).
+    max_gap_s : float
+        Longest gap between pose samples to interpolate across, seconds.
+    source : str
+        The recording, for messages.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns of :data:`floorscan.core.io.POSES`, ``scan_id`` int32 first.
+
+    Raises
+    ------
+    InputError
+        As :func:`interpolate_poses`.
     """
     poses = interpolate_poses(stream, scan_index["t_ns"].to_numpy(), max_gap_s=max_gap_s, source=source)
     poses.insert(0, "scan_id", scan_index["scan_id"].to_numpy(dtype=np.int32))
@@ -127,11 +147,19 @@ def scan_poses(scan_index: pd.DataFrame, stream: pd.DataFrame, max_gap_s: float,
 
 
 def missing_poses_line(poses: pd.DataFrame) -> str:
-    """One log line on the scans without a pose, ``""`` when every scan has one.
+    """One log line on the scans without a pose, e.g. ``201 of 300 scans have no pose
+    (after_pose_stream 201); the register stage counts them as lost
+    (register.max_lost_fraction)``.
 
-    ``poses``: the table of :func:`scan_poses` (``valid``, ``reason``). E.g. ``201 of
-    300 scans have no pose (after_pose_stream 201); the register stage counts them as
-    lost (register.max_lost_fraction)``.
+    Parameters
+    ----------
+    poses : pandas.DataFrame
+        The table of :func:`scan_poses` (``valid``, ``reason``).
+
+    Returns
+    -------
+    str
+        ``""`` when every scan has a pose.
     """
     missing = ~poses["valid"].to_numpy(bool)
     if not missing.any():

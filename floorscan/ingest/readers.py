@@ -35,6 +35,11 @@ def open_recording(dataset: Mapping[str, Any], cfg: Mapping[str, Any], max_gap_s
         The pose stage's gap limit; a TF chain leaves out samples inside a longer gap
         of any of its links, so the gap stays visible in the pose stream.
 
+    Returns
+    -------
+    Recording
+        Its scans are read lazily, as ``Recording.scans`` is iterated.
+
     Raises
     ------
     InputError

@@ -106,7 +106,18 @@ class Recording:
 
 
 def detected_line(detected: Mapping[str, str]) -> str:
-    """One log line of what ingest detected: ``format=..., scan_topic=..., ...``."""
+    """One log line of what ingest detected: ``format=..., scan_topic=..., ...``.
+
+    Parameters
+    ----------
+    detected : mapping of str to str
+        ``Recording.detected``.
+
+    Returns
+    -------
+    str
+        The keys of :data:`DETECTED_KEYS` first, in their order, then the others sorted.
+    """
     keys = [k for k in DETECTED_KEYS if k in detected] + sorted(k for k in detected if k not in DETECTED_KEYS)
     return ", ".join(f"{k}={detected[k]}" for k in keys)
 
@@ -116,24 +127,58 @@ def describe_recording(detected: Mapping[str, str], mode: str = "") -> str:
     report's figure title, ``summary.md``): ``format rosbag, scan_topic /scan,
     pose_source ..., stamps recorded; registered in odometry mode``.
 
-    ``detected``: the scan index's schema metadata (:func:`floorscan.core.io.read_metadata`);
-    ``mode``: the register mode used (``pose`` when not given).
+    Parameters
+    ----------
+    detected : mapping of str to str
+        The scan index's schema metadata (:func:`floorscan.core.io.read_metadata`).
+    mode : str
+        The register mode used; ``""``: ``pose``.
+
+    Returns
+    -------
+    str
     """
     found = ", ".join(f"{k} {detected[k]}" for k in ("format", "scan_topic", "pose_source", "stamps") if k in detected)
     return f"{found or 'as configured'}; registered in {mode or 'pose'} mode"
 
 
 def yaw_from_quaternion(qx, qy, qz, qw):
-    """Yaw (rotation about +z) of quaternions (x, y, z, w): arrays or scalars of the
-    same shape; radians in [-pi, pi] (``numpy.arctan2``: +pi and -pi both occur, as
-    the sign of zero gives them; :func:`floorscan.core.geometry.wrap_angle` maps to
-    [-pi, pi))."""
+    """Yaw (rotation about +z) of quaternions.
+
+    Parameters
+    ----------
+    qx, qy, qz, qw : float or ndarray
+        Quaternion components (x, y, z, w), of one shape.
+
+    Returns
+    -------
+    float64 ndarray
+        That shape (0-d for scalars), radians in [-pi, pi] (``numpy.arctan2``: +pi and
+        -pi both occur, as the sign of zero gives them;
+        :func:`floorscan.core.geometry.wrap_angle` maps to [-pi, pi)).
+    """
     qx, qy, qz, qw = (np.asarray(v, dtype=np.float64) for v in (qx, qy, qz, qw))
     return np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
 
 
 def pose_stream_frame(t_ns: Iterable[int], x, y, z, yaw) -> pd.DataFrame:
-    """Build a pose stream table (columns of :data:`floorscan.core.io.POSE_STREAM`)."""
+    """Build a pose stream table.
+
+    Parameters
+    ----------
+    t_ns : (N,) iterable of int
+        Stamps, nanoseconds.
+    x, y, z : (N,) array_like
+        Position, metres.
+    yaw : (N,) array_like
+        Heading, radians.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The columns of :data:`floorscan.core.io.POSE_STREAM`: ``t_ns`` int64, the others
+        float64.
+    """
     return pd.DataFrame(
         {
             "t_ns": np.asarray(list(t_ns) if not isinstance(t_ns, np.ndarray) else t_ns, dtype=np.int64),

@@ -39,13 +39,40 @@ QUATERNION_TOLERANCE = 0.01
 
 
 def stamp_ns(header, bag_t: int) -> int:
-    """A header's stamp in ns; the bag's receive time ``bag_t`` when the stamp is zero."""
+    """A header's stamp; the bag's receive time when the stamp is zero.
+
+    Parameters
+    ----------
+    header : std_msgs/Header
+        Its ``stamp.sec`` and ``stamp.nanosec``.
+    bag_t : int
+        The message's receive time in the bag, nanoseconds.
+
+    Returns
+    -------
+    int
+        Nanoseconds.
+    """
     t = int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
     return t if t > 0 else int(bag_t)
 
 
 def message_label(path: Path | str, topic: str, index: int, t_ns: int) -> str:
-    """How an error names one message: ``file: 'topic' message i (t ... ns)``."""
+    """How an error names one message: ``file: 'topic' message i (t ... ns)``.
+
+    Parameters
+    ----------
+    path : path
+    topic : str
+    index : int
+        The message's index on the topic.
+    t_ns : int
+        Its stamp, nanoseconds.
+
+    Returns
+    -------
+    str
+    """
     return f"{path}: {topic!r} message {index} (t {t_ns} ns)"
 
 
@@ -97,9 +124,20 @@ def laser_scan_xyz(
 
 
 def laser_scan_limits(msg, range_min_m: float | None = None, range_max_m: float | None = None) -> tuple[float, float]:
-    """The valid interval ``[rmin, rmax)`` of a ``sensor_msgs/LaserScan``'s returns,
-    metres: the message's ``range_min``, ``range_max`` tightened by the dataset's
-    ``range_min_m``, ``range_max_m`` (None: not set)."""
+    """The valid interval ``[rmin, rmax)`` of a ``sensor_msgs/LaserScan``'s returns: the
+    message's ``range_min``, ``range_max`` tightened by the dataset's.
+
+    Parameters
+    ----------
+    msg : sensor_msgs/LaserScan
+    range_min_m, range_max_m : float or None
+        The dataset's limits, metres; None: not set.
+
+    Returns
+    -------
+    rmin, rmax : float
+        Metres.
+    """
     rmin = max(float(msg.range_min), range_min_m if range_min_m is not None else 0.0)
     rmax = min(float(msg.range_max), range_max_m if range_max_m is not None else math.inf)
     return rmin, rmax
@@ -124,6 +162,15 @@ def laser_scan_problem(msg) -> str | None:
     The ROS message definition (``sensor_msgs/LaserScan.msg``) states this geometry; a
     scan that breaks it would draw its beams at wrong angles (e.g. twice the ranges wrap
     round the full circle).
+
+    Parameters
+    ----------
+    msg : sensor_msgs/LaserScan
+
+    Returns
+    -------
+    str or None
+        The first problem found, or None for a sound geometry.
     """
     names = ("angle_min", "angle_max", "angle_increment", "range_min", "range_max")
     values = [float(getattr(msg, n)) for n in names]
@@ -156,19 +203,29 @@ _PC2_DTYPES = {1: "i1", 2: "u1", 3: "i2", 4: "u2", 5: "i4", 6: "u4", 7: "f4", 8:
 
 
 def pointcloud2_xyz(msg, path: Path | str = "", topic: str = "", index: int | None = None, t_ns: int = 0) -> np.ndarray:
-    """The ``x, y, z`` fields of a ``sensor_msgs/PointCloud2`` as an (N, 3) array.
+    """The ``x, y, z`` fields of a ``sensor_msgs/PointCloud2``.
 
-    float32 when the three fields are little-endian float32 (the usual LIDAR driver
-    layout: the values as they are, without a float64 copy that the float32 scan table
-    would round back), else float64. Handles any point step, field offsets, endianness,
-    row padding (``row_step`` beyond ``width x point_step``; 0 is taken as unpadded) and
-    organised clouds (height > 1). Non-finite points are returned as they are (the
-    caller drops and counts them).
+    Handles any point step, field offsets, endianness, row padding (``row_step`` beyond
+    ``width x point_step``; 0 is taken as unpadded) and organised clouds (height > 1).
 
     Parameters
     ----------
+    msg : sensor_msgs/PointCloud2
+    path : path
+        The recording, named in error messages.
+    topic : str
+        The message's topic, named in error messages.
     index, t_ns : int, optional
-        The message's index on the topic and stamp, named in error messages.
+        The message's index on the topic and stamp (nanoseconds), named in error
+        messages.
+
+    Returns
+    -------
+    (N, 3) float32 or float64 ndarray
+        Metres in the message's frame. float32 when the three fields are little-endian
+        float32 (the usual LIDAR driver layout: the values as they are, without a float64
+        copy that the float32 scan table would round back), else float64. Non-finite
+        points are returned as they are (the caller drops and counts them).
 
     Raises
     ------
@@ -240,10 +297,26 @@ def pose_problem(
 ) -> str | None:
     """What is wrong with a pose's values (``prefix.position.x is nan; ...``), or None:
     a non-finite component of ``position`` (x, y, z) or ``quat`` (x, y, z, w), or a
-    quaternion off unit length by more than :data:`QUATERNION_TOLERANCE` (in ``|q|^2``).
+    quaternion off unit length by more than :data:`QUATERNION_TOLERANCE` (in ``|q|^2``,
+    as tf2 requires).
 
     Called for every pose and TF message: a good pose costs one test (a NaN or inf
     component fails it); the loops below only explain a bad one.
+
+    Parameters
+    ----------
+    position : (3,) tuple of float
+        Metres.
+    quat : (4,) tuple of float
+        Quaternion (x, y, z, w).
+    prefix : str
+        The message field, for the message.
+    parts : (str, str)
+        The names of the position and orientation fields.
+
+    Returns
+    -------
+    str or None
     """
     n2 = quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2] + quat[3] * quat[3]
     if abs(n2 - 1.0) <= QUATERNION_TOLERANCE and math.isfinite(position[0] + position[1] + position[2]):

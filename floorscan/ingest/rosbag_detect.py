@@ -44,7 +44,16 @@ MAP_FRAME = "map"
 
 
 def short_type(msgtype: str) -> str:
-    """A message type's last part: ``sensor_msgs/msg/LaserScan`` -> ``LaserScan``."""
+    """A message type's last part: ``sensor_msgs/msg/LaserScan`` -> ``LaserScan``.
+
+    Parameters
+    ----------
+    msgtype : str
+
+    Returns
+    -------
+    str
+    """
     return msgtype.rsplit("/", 1)[-1]
 
 
@@ -91,7 +100,19 @@ def detect_scan_topic(topics: Mapping[str, tuple[str, int]], path: Path | str = 
 def metadata_hint(path: Path | str) -> str:
     """For a ROS2 bag, where its topics' types and message counts come from: its
     ``metadata.yaml`` (rosbags reads them there), and what to do when it disagrees with
-    the storage file; empty for a ROS1 bag."""
+    the storage file.
+
+    Parameters
+    ----------
+    path : path
+        The bag folder or its storage file.
+
+    Returns
+    -------
+    str
+        A parenthesis to append to a message (leading space); empty when there is no
+        ``metadata.yaml`` (a ROS1 bag).
+    """
     p = Path(path)
     meta = p / "metadata.yaml" if p.is_dir() else p.parent / "metadata.yaml"
     if not meta.is_file():

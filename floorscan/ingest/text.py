@@ -32,7 +32,21 @@ log = logging.getLogger(__name__)
 
 
 def is_gzip(path: str | os.PathLike) -> bool:
-    """Whether the file at ``path`` starts with the gzip magic bytes."""
+    """Whether the file at ``path`` starts with the gzip magic bytes.
+
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    bool
+
+    Raises
+    ------
+    OSError
+        The file cannot be opened.
+    """
     with open(path, "rb") as f:
         return f.read(2) == GZIP_MAGIC
 
@@ -79,12 +93,24 @@ def open_text(path: str | os.PathLike, notes: list[str] | None = None, warn: boo
 
     UTF-8; a byte-order mark before the first line is dropped (an editor's: read as
     ASCII it made the first line's type unknown); bytes that are not UTF-8 are read as
-    U+FFFD. ``notes`` and ``warn``, and what is raised: :func:`open_binary`'s.
+    U+FFFD.
+
+    Parameters
+    ----------
+    path : path
+    notes : list of str, optional
+    warn : bool
+        As :func:`open_binary`.
 
     Returns
     -------
     text file
         Iterate it for lines; close it (or use ``with``).
+
+    Raises
+    ------
+    OSError, EOFError
+        As :func:`open_binary`.
     """
     return io.TextIOWrapper(open_binary(path, notes, warn), encoding="utf-8-sig", errors="replace")
 
@@ -158,6 +184,14 @@ def parse_number(text: str) -> float | None:
 
     Python's ``float`` (``nan`` and ``inf`` included, for the caller to judge), except
     for ``1_0``: Python reads 10, the C readers of these formats (``strtod``) read 1.
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    float or None
     """
     if "_" in text:
         return None
@@ -168,9 +202,19 @@ def parse_number(text: str) -> float | None:
 
 
 def parse_numbers(texts: Sequence[str]) -> np.ndarray | None:
-    """:func:`parse_number` of every text as a (N,) float64 ndarray, parsed by numpy in
-    one call (it reads what ``float`` reads); None when one of them is not a number
-    (the caller finds which, one by one, for its message)."""
+    """:func:`parse_number` of every text, parsed by numpy in one call (it reads what
+    ``float`` reads).
+
+    Parameters
+    ----------
+    texts : (N,) sequence of str
+
+    Returns
+    -------
+    (N,) float64 ndarray or None
+        None when one of them is not a number (the caller finds which, one by one, for
+        its message).
+    """
     if "_" in "".join(texts):
         return None
     try:

@@ -53,6 +53,17 @@ def write_recording(
     schema metadata of the scan index and the pose stream; the register stage reads
     ``pose_kind`` and ``stamps`` from the scan index's.
 
+    Parameters
+    ----------
+    recording : Recording
+        Consumed: its scans are iterated once.
+    scans_path, index_path, pose_stream_path : path
+        Outputs: ``scans.parquet``, ``scan_index.parquet``, ``pose_stream.parquet``.
+    sensor_height_m : float
+        Added to the pose stream's z, metres.
+    metadata : mapping of str to str, optional
+        More schema metadata (e.g. ``dataset``, ``source``).
+
     Returns
     -------
     pandas.DataFrame

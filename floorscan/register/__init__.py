@@ -21,14 +21,16 @@ Modules, in the order the stage uses them:
   (without a pose, or at ingest), counted against all its scans;
 - :mod:`~floorscan.register.consistency`: whether the registered map agrees with
   itself where the rover passed twice, and the verdict (with the losses);
-- :mod:`~floorscan.register.result`: the per-scan table, its summary, the errors;
+- :mod:`~floorscan.register.result`: a strategy's per-scan result, the per-scan table,
+  its summary, the errors;
 - :mod:`~floorscan.register.pipeline`: the steps in order on a recording in memory
   (:func:`~floorscan.register.pipeline.register_scans`);
 - :mod:`~floorscan.register.stream`: the stage's entry point, the same on a points file
   streamed scan by scan (:func:`~floorscan.register.stream.register_recording`).
 
 To add a strategy: a module beside the others with a function
-``(sampled, clouds, sids, t, cfg, out) -> n_anchors``, a branch in
-:func:`floorscan.register.pipeline.register_screened` and a value of ``reference`` in
-``workflow/schemas/register.schema.yaml``.
+``(sampled, clouds, sids, t, cfg, initial) -> ScanRegistration``
+(:class:`~floorscan.register.result.ScanRegistration`: a new per-scan result, nothing
+filled in place), a branch in :func:`floorscan.register.pipeline.register_screened` and
+a value of ``reference`` in ``workflow/schemas/register.schema.yaml``.
 """

@@ -81,8 +81,23 @@ class Structure:
         self._cached_samples = 0
 
     def face_scores(self, seg: np.ndarray, taus_m: tuple[float, ...], sample_m: float) -> list[_FaceScore]:
-        """The :class:`_FaceScore` of each row of ``seg`` ((F, 4) float64, metres), in
-        order; those not seen before are computed together."""
+        """The score of each face against the structure cells; faces not seen before are
+        computed together and cached.
+
+        Parameters
+        ----------
+        seg : (F, 4) float64 ndarray
+            Faces ``x0, y0, x1, y1``, metres.
+        taus_m : tuple of float
+            Tolerances, metres.
+        sample_m : float
+            Spacing of the face samples, metres.
+
+        Returns
+        -------
+        list of _FaceScore
+            One per row of ``seg``, in order.
+        """
         if self._cached_samples > self.CACHE_SAMPLES:
             self._faces.clear()
             self._cached_samples = 0
@@ -198,9 +213,21 @@ def _cells_near_samples(ref: Structure, seg: np.ndarray, samples: np.ndarray, st
 
 def within_bound(tau_m: float, sample_m: float) -> float:
     """Distance to the nearest sample of a segment sampled every ``sample_m`` below
-    which a point is within ``tau_m`` of the segment, up to ``sample_m**2 / (8 tau)``:
-    ``sqrt(tau**2 + (sample_m / 2)**2)`` (a point at ``tau`` from the segment has a
-    sample within half a spacing along it)."""
+    which a point is within ``tau_m`` of the segment, up to ``sample_m**2 / (8 tau)``
+    (a point at ``tau`` from the segment has a sample within half a spacing along it).
+
+    Parameters
+    ----------
+    tau_m : float
+        Metres.
+    sample_m : float
+        Metres.
+
+    Returns
+    -------
+    float
+        ``sqrt(tau**2 + (sample_m / 2)**2)``, metres.
+    """
     return math.hypot(tau_m, 0.5 * sample_m)
 
 

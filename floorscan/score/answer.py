@@ -34,8 +34,23 @@ SHORT_WALL_M = 0.5
 
 
 def plan_parts(path) -> dict[str, np.ndarray]:
-    """The faces, wall axes, clutter lines ((N, 4) metres) and junction points ((J, 2)
-    metres) of a floor plan ``.geojson``."""
+    """The parts of a floor plan ``.geojson`` the answer's scores use.
+
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    dict of str to ndarray
+        ``faces``, ``axes``, ``clutter``: (N, 4) float64, metres; ``junctions``: (J, 2)
+        float64, metres.
+
+    Raises
+    ------
+    floorscan.core.io.InputError
+        When the file is not a GeoJSON FeatureCollection.
+    """
     doc = feature_collection(path)
     junctions = [
         f["geometry"]["coordinates"][:2] for f in doc.get("features", [])
@@ -50,8 +65,22 @@ def plan_parts(path) -> dict[str, np.ndarray]:
 
 
 def crossings(axes: np.ndarray, junctions: np.ndarray, tolerance_m: float = 0.05) -> int:
-    """Pairs of wall axes (N, 4) that cross at a point farther than ``tolerance_m`` from
-    every junction (J, 2) and from both walls' ends: walls drawn through each other."""
+    """Pairs of wall axes that cross at a point farther than ``tolerance_m`` from every
+    junction and from both walls' ends: walls drawn through each other.
+
+    Parameters
+    ----------
+    axes : (N, 4) float ndarray
+        Wall axes, metres.
+    junctions : (J, 2) float ndarray
+        Metres.
+    tolerance_m : float
+        Metres.
+
+    Returns
+    -------
+    int
+    """
     import shapely
 
     axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
@@ -79,7 +108,20 @@ def crossings(axes: np.ndarray, junctions: np.ndarray, tolerance_m: float = 0.05
 def true_wall_pieces(truth: dict, gap_m: float = 0.3) -> np.ndarray:
     """The observed wall pieces of a synthetic building: each true axis cut where
     neither of its faces was observed over more than ``gap_m`` (an opening or an unseen
-    stretch); (P, 4) metres along the axes."""
+    stretch).
+
+    Parameters
+    ----------
+    truth : dict
+        :func:`read_truth`.
+    gap_m : float
+        Metres.
+
+    Returns
+    -------
+    (P, 4) float64 ndarray
+        Pieces along the axes, metres.
+    """
     axes, observed = truth["axis"], truth["observed_face"]
     pieces = []
     for a in axes:
@@ -110,9 +152,22 @@ def true_wall_pieces(truth: dict, gap_m: float = 0.3) -> np.ndarray:
 
 
 def true_corners(truth: dict, near_observed_m: float = 0.4) -> np.ndarray:
-    """The observed corners of a synthetic building, (C, 2) metres: the ends of the true
-    axes that lie on another axis (L and T junctions), kept when an observed face passes
-    within ``near_observed_m``."""
+    """The observed corners of a synthetic building: the ends of the true axes that lie
+    on another axis (L and T junctions, within 0.02 m), kept when an observed face passes
+    within ``near_observed_m``.
+
+    Parameters
+    ----------
+    truth : dict
+        :func:`read_truth`.
+    near_observed_m : float
+        Metres.
+
+    Returns
+    -------
+    (C, 2) float64 ndarray
+        Metres, unique to the millimetre.
+    """
     from floorscan.score.nearest import nearest_distances
 
     axes = truth["axis"]
@@ -132,8 +187,18 @@ def true_corners(truth: dict, near_observed_m: float = 0.4) -> np.ndarray:
 
 
 def read_truth(path) -> dict:
-    """The simulator's ``walls.geojson``: ``face``, ``observed_face``, ``axis`` ((N, 4)
-    metres) and ``thickness`` (axis row tuple -> metres)."""
+    """The simulator's ``walls.geojson``.
+
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    dict
+        ``face``, ``observed_face``, ``axis``: (N, 4) float64, metres; ``thickness``:
+        axis row tuple -> metres (0.3 when the feature has none).
+    """
     with open(path, encoding="utf-8") as fh:
         doc = json.load(fh)
     out = {kind: wall_faces(doc, kind) for kind in ("face", "observed_face", "axis")}
@@ -211,8 +276,22 @@ def score_answer_plan(path, reference=None, truth: dict | None = None, taus_m=(0
 
 
 def score_answer(plans: dict, reference_path=None, truth_path=None) -> pd.DataFrame:
-    """:func:`score_answer_plan` of every plan: ``{name: geojson path}`` -> one row per
-    plan, ``plan`` its name (``recommended``, ``all_scans_map``)."""
+    """:func:`score_answer_plan` of every plan.
+
+    Parameters
+    ----------
+    plans : dict of str to path
+        Name (``recommended``, ``all_scans_map``) -> the plan's ``.geojson``.
+    reference_path : path, optional
+        ``reference/occupancy.parquet`` (:func:`floorscan.core.occupancy.read_grid`).
+    truth_path : path, optional
+        The simulator's ``walls.geojson``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per plan, ``plan`` its name, then :func:`score_answer_plan`'s keys.
+    """
     from floorscan.core.occupancy import read_grid
     from floorscan.score.against_reference import Structure
 

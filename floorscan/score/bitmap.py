@@ -93,6 +93,10 @@ def grid_for(segments, cell_m: float = 0.05, margin_m: float = 1.0) -> Grid:
     margin_m : float
         Margin around the bounds in metres.
 
+    Returns
+    -------
+    Grid
+
     Raises
     ------
     ValueError
@@ -141,6 +145,11 @@ def rasterize_segments(segments, grid: Grid, width_m: float = 0.10) -> np.ndarra
     -------
     (ny, nx) bool ndarray
         True on wall cells.
+
+    Raises
+    ------
+    ValueError
+        When ``width_m`` is not positive.
     """
     if not width_m > 0:
         raise ValueError(f"width_m must be > 0; got {width_m}")
@@ -152,11 +161,25 @@ def rasterize_segments(segments, grid: Grid, width_m: float = 0.10) -> np.ndarra
 
 
 def raster_cells(seg: np.ndarray, grid: Grid, width_m: float) -> tuple[np.ndarray, np.ndarray]:
-    """The wall cells of :func:`rasterize_segments` per segment: ``(owner, flat)``, the
-    row of the finite ``(M, 4)`` ``seg`` and the flat index (``iy * nx + ix``) of each
-    hit, grouped by piece, pieces in row order (``owner`` ascending; a cell may
-    repeat). Whether a cell is a segment's depends on
-    that segment only, so the cells of a union of segment sets are the union of theirs."""
+    """The wall cells of :func:`rasterize_segments` per segment. Whether a cell is a
+    segment's depends on that segment only, so the cells of a union of segment sets are
+    the union of theirs.
+
+    Parameters
+    ----------
+    seg : (M, 4) float64 ndarray
+        Finite segments ``x0, y0, x1, y1``, metres.
+    grid : Grid
+    width_m : float
+        Drawn wall width, metres.
+
+    Returns
+    -------
+    owner : (H,) int64 ndarray
+        The row of ``seg`` of each hit, ascending (pieces in row order).
+    flat : (H,) int64 ndarray
+        Flat cell index ``iy * nx + ix`` of each hit; a cell may repeat.
+    """
     half = width_m / 2.0
     seg, owner = split_long(seg, 0.5, return_owner=True)
     c = grid.cell_m
@@ -200,7 +223,17 @@ def raster_cells(seg: np.ndarray, grid: Grid, width_m: float) -> tuple[np.ndarra
 
 
 def error_map(inferred: np.ndarray, ground_truth: np.ndarray) -> np.ndarray:
-    """The thesis's error map ``B_E = B_I - B_GT`` (section 5.1), int8 in {-1, 0, 1}.
+    """The thesis's error map ``B_E = B_I - B_GT`` (section 5.1).
+
+    Parameters
+    ----------
+    inferred, ground_truth : (ny, nx) bool ndarray
+        Wall bitmaps (:func:`rasterize_segments`).
+
+    Returns
+    -------
+    (ny, nx) int8 ndarray
+        In {-1, 0, 1}.
 
     Raises
     ------

@@ -113,6 +113,11 @@ def length_within(segments, others, tau: float) -> np.ndarray:
     (M,) float64 ndarray
         Covered length per segment in metres (0 where nothing is near), for the rows of
         ``as_segments(segments)`` (non-finite rows dropped).
+
+    Raises
+    ------
+    ValueError
+        When ``tau`` < 0.
     """
     if tau < 0:
         raise ValueError(f"tau must be >= 0; got {tau}")
@@ -120,8 +125,23 @@ def length_within(segments, others, tau: float) -> np.ndarray:
 
 
 def lengths_within(seg: np.ndarray, oth: np.ndarray, taus) -> list[np.ndarray]:
-    """:func:`length_within` of finite ``seg`` and ``oth`` for each tau of ``taus``
-    (>= 0), sharing the geometries and the STRtree between the taus."""
+    """:func:`length_within` for several tolerances, sharing the geometries and the
+    STRtree between them.
+
+    Parameters
+    ----------
+    seg : (M, 4) float ndarray
+        ``x0, y0, x1, y1``, metres. Finite.
+    oth : (K, 4) float ndarray
+        Finite segments to measure against, metres.
+    taus : sequence of float
+        Tolerances >= 0, metres (not checked).
+
+    Returns
+    -------
+    list of (M,) float64 ndarray
+        Covered length per segment, metres, one array per tau.
+    """
     lengths = segment_lengths(seg)
     if len(seg) == 0 or len(oth) == 0:
         return [np.zeros(len(seg)) for _ in taus]

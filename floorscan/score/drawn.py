@@ -44,22 +44,54 @@ class Similarity:
     ty: float
 
     def invert(self, xy: np.ndarray) -> np.ndarray:
-        """(N, 2) map metres -> (N, 2) pixels (col, row)."""
+        """Map points to image pixels: the inverse of :meth:`apply`.
+
+        Parameters
+        ----------
+        xy : (N, 2) float ndarray
+            Map metres.
+
+        Returns
+        -------
+        (N, 2) float64 ndarray
+            Pixels (col, row).
+        """
         c, s = math.cos(self.angle), math.sin(self.angle)
         p = ((np.asarray(xy, dtype=np.float64) - np.array([self.tx, self.ty])) / self.scale) @ np.array([[c, -s], [s, c]])
         return np.column_stack([p[:, 0], -p[:, 1]])
 
     def apply(self, px: np.ndarray) -> np.ndarray:
-        """(N, 2) pixels (col, row) -> (N, 2) map metres."""
+        """Image pixels to map points.
+
+        Parameters
+        ----------
+        px : (N, 2) float ndarray
+            Pixels (col, row).
+
+        Returns
+        -------
+        (N, 2) float64 ndarray
+            Map metres.
+        """
         p = np.column_stack([px[:, 0], -px[:, 1]]).astype(np.float64)
         c, s = math.cos(self.angle), math.sin(self.angle)
         return self.scale * (p @ np.array([[c, s], [-s, c]])) + np.array([self.tx, self.ty])
 
 
 def read_plan_image(path, grey: bool = True) -> np.ndarray:
-    """(H, W) float32 grey levels in [0, 1] of a plan image (PNG, grey or colour): the
-    mean of its colour channels; with ``grey`` False the image as read, (H, W) or
-    (H, W, C) (an alpha channel kept), in [0, 1].
+    """The grey levels of a plan image (PNG, grey or colour): the mean of its colour
+    channels.
+
+    Parameters
+    ----------
+    path : path
+    grey : bool
+        False: the image as read, an alpha channel kept.
+
+    Returns
+    -------
+    (H, W) or (H, W, C) float32 ndarray
+        In [0, 1]; (H, W) with ``grey``.
 
     Raises
     ------
@@ -86,6 +118,12 @@ def drawn_faces(image: np.ndarray, free_level: float = 0.98) -> tuple[np.ndarray
     """The drawn wall faces: white pixels (grey level above ``free_level``) with a
     non-white 4-neighbour.
 
+    Parameters
+    ----------
+    image : (H, W) float ndarray
+        Grey levels in [0, 1] (:func:`read_plan_image`).
+    free_level : float
+
     Returns
     -------
     faces : (N, 2) float64 ndarray
@@ -102,8 +140,21 @@ def drawn_faces(image: np.ndarray, free_level: float = 0.98) -> tuple[np.ndarray
 
 
 def umeyama(src: np.ndarray, dst: np.ndarray) -> tuple[float, float, np.ndarray]:
-    """Least-squares similarity ``dst ~ s R src + t`` of 2D point pairs (Umeyama 1991):
-    scale, rotation angle (radians), translation (2,)."""
+    """Least-squares similarity ``dst ~ s R src + t`` of 2D point pairs (Umeyama 1991).
+
+    Parameters
+    ----------
+    src, dst : (N, 2) float ndarray
+        Matching points.
+
+    Returns
+    -------
+    scale : float
+        1 when ``src`` has no spread.
+    angle : float
+        Radians.
+    translation : (2,) float64 ndarray
+    """
     mu_s, mu_d = src.mean(axis=0), dst.mean(axis=0)
     a, b = src - mu_s, dst - mu_d
     cov = b.T @ a / len(src)
@@ -231,8 +282,23 @@ def _coarse_search(src, dst, resolution_m, scale_range, angle_step_deg, cell_m: 
 
 
 def drawn_area(free: np.ndarray, transform: Similarity, margin_m: float = 0.5):
-    """A function of map points (N, 2) -> (N,) bool: inside the drawn building (its free
-    space grown by ``margin_m``, so its walls count)."""
+    """A test of map points: inside the drawn building (its free space grown by
+    ``margin_m``, so its walls count).
+
+    Parameters
+    ----------
+    free : (H, W) bool ndarray
+        The drawn free space (:func:`drawn_faces`).
+    transform : Similarity
+        Pixels -> map metres.
+    margin_m : float
+        Metres.
+
+    Returns
+    -------
+    callable
+        ``(N, 2)`` map metres -> ``(N,)`` bool; False off the image.
+    """
     from scipy import ndimage
 
     r = max(1, int(round(margin_m / transform.scale)))
@@ -335,8 +401,23 @@ def _completeness_correctness(d_drawn: np.ndarray, d_plan: np.ndarray, taus_m) -
 
 
 def seen_by_recording(points: np.ndarray, grid, within_m: float = 0.5) -> np.ndarray:
-    """Which map points (N, 2) lie within ``within_m`` of a cell the recording's rays
-    crossed more often than they hit it (its free space, ``grid`` the reference map)."""
+    """Which map points lie within ``within_m`` of a cell the recording's rays crossed
+    more often than they hit it (its free space).
+
+    Parameters
+    ----------
+    points : (N, 2) float ndarray
+        Map metres.
+    grid : OccupancyGrid
+        The reference map.
+    within_m : float
+        Metres.
+
+    Returns
+    -------
+    (N,) bool ndarray
+        False outside the grid.
+    """
     from scipy import ndimage
 
     r = max(1, int(round(within_m / grid.resolution_m)))
@@ -355,6 +436,17 @@ def score_drawn_plans(plans: dict, image_path, grid, reference_cfg) -> tuple["pd
     ``resolution_m``, ``control_points``) and every plan of ``plans`` (``{name:
     geojson path}``) scored against it (:func:`score_against_drawn`).
 
+    Parameters
+    ----------
+    plans : dict of str to path
+        Name -> the plan's ``.geojson``.
+    image_path : path
+        The drawn plan (PNG).
+    grid : OccupancyGrid
+        The reference map.
+    reference_cfg : mapping or None
+        The dataset's ``reference`` section.
+
     Returns
     -------
     table : pandas.DataFrame
@@ -367,6 +459,11 @@ def score_drawn_plans(plans: dict, image_path, grid, reference_cfg) -> tuple["pd
         structure cells, each plan's faces; and ``transform``, the
         :class:`Similarity` (pixels -> map metres) the drawn rooms are scored with
         (:func:`floorscan.score.drawn_rooms.score_drawn_rooms`: one alignment for both).
+
+    Raises
+    ------
+    floorscan.core.io.InputError
+        When the image or a plan cannot be read.
     """
     import pandas as pd
 

@@ -76,8 +76,19 @@ def drawn_rooms(image: np.ndarray, free_level: float = DRAWN_FREE_LEVEL, min_wid
 
 def read_drawn_rooms(path, scale_m_per_px: float) -> np.ndarray:
     """:func:`drawn_rooms` of the image at ``path`` (PNG, read in colour by
-    :func:`floorscan.score.drawn.read_plan_image`) at ``scale_m_per_px`` metres per
-    pixel (the width and area limits in metres converted to pixels).
+    :func:`floorscan.score.drawn.read_plan_image`), the width and area limits in metres
+    converted to pixels.
+
+    Parameters
+    ----------
+    path : path
+    scale_m_per_px : float
+        Metres per pixel.
+
+    Returns
+    -------
+    (H, W) int32 ndarray
+        As :func:`drawn_rooms`: 0 outside every room, rooms 1..n.
 
     Raises
     ------
@@ -91,8 +102,20 @@ def read_drawn_rooms(path, scale_m_per_px: float) -> np.ndarray:
 
 
 def drawn_building(labels: np.ndarray, wall_px: float) -> np.ndarray:
-    """(H, W) bool: the building a drawn segmentation shows: its rooms closed over the
-    drawn walls (``wall_px`` pixels thick) with the holes filled."""
+    """The building a drawn segmentation shows: its rooms closed over the drawn walls
+    with the holes filled.
+
+    Parameters
+    ----------
+    labels : (H, W) int ndarray
+        Rooms > 0.
+    wall_px : float
+        Drawn wall thickness, pixels.
+
+    Returns
+    -------
+    (H, W) bool ndarray
+    """
     from scipy import ndimage
 
     r = max(1, int(math.ceil(wall_px)))

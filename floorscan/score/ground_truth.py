@@ -24,7 +24,17 @@ OBSERVED_FACE = "observed_face"
 def reference_label(kind: str) -> str:
     """What the walls are scored against, in words for captions and the summary: the
     simulator's walls for ``kind`` :data:`GROUND_TRUTH`, otherwise the reference, never
-    called ground truth (a real recording's building has no architectural plan)."""
+    called ground truth (a real recording's building has no architectural plan).
+
+    Parameters
+    ----------
+    kind : str
+        The dataset's reference kind.
+
+    Returns
+    -------
+    str
+    """
     if kind == GROUND_TRUTH:
         return "the simulator's ground-truth walls (faces of sim/walls.geojson)"
     return (
@@ -34,13 +44,31 @@ def reference_label(kind: str) -> str:
 
 
 def load_recall_references(kind: str, extractors, ground_truth=None, recall_kind: str = OBSERVED_FACE):
-    """What recall is measured against, ``{extractor: (M, 4) segments}``, or None.
+    """What recall is measured against.
 
     Synthetic datasets (``kind`` ground_truth): the ``recall_kind`` features of
     ``walls.geojson`` (``observed_face``: the parts of the faces the recording saw,
     :func:`floorscan.sim.ground_truth.observed_faces`); ``face`` gives None (recall against
     all faces, like precision). Real recordings: None (the reference is already made
     of what the scans saw).
+
+    Parameters
+    ----------
+    kind : str
+    extractors : iterable of str
+    ground_truth : path, optional
+        The simulator's ``walls.geojson``.
+    recall_kind : str
+
+    Returns
+    -------
+    dict of str to (M, 4) float64 ndarray, or None
+        The same segments (metres) for every extractor.
+
+    Raises
+    ------
+    floorscan.core.io.InputError
+        As :func:`~floorscan.score.geojson.read_wall_faces`.
     """
     if kind != GROUND_TRUTH or recall_kind == "face":
         return None
@@ -49,12 +77,24 @@ def load_recall_references(kind: str, extractors, ground_truth=None, recall_kind
 
 
 def load_references(kind: str, extractors, ground_truth=None, reference_paths=()) -> dict:
-    """The walls each extractor is scored against, as ``{extractor: (M, 4) segments}``.
+    """The walls each extractor is scored against.
 
     ``kind`` ground_truth: the ``face`` features of the simulator's ``walls.geojson``
     (``ground_truth``), the same for every extractor. Otherwise the reference: the
     walls of each extractor from all kept scans (``reference_paths``, one Parquet
     table per extractor, in the order of ``extractors``).
+
+    Parameters
+    ----------
+    kind : str
+    extractors : iterable of str
+    ground_truth : path, optional
+    reference_paths : sequence of path
+
+    Returns
+    -------
+    dict of str to (M, 4) float64 ndarray
+        Segments, metres.
     """
     extractors = list(extractors)
     if kind == GROUND_TRUTH:

@@ -100,8 +100,23 @@ class SamplePairs:
         self.cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
 
     def of(self, walls: np.ndarray, keys: list[bytes]) -> tuple[np.ndarray, np.ndarray]:
-        """``(sample indices, distances)`` of the pairs of the finite ``(M, 4)``
-        ``walls`` (row keys ``keys``), concatenated; a sample may repeat."""
+        """The pairs (sample, wall) within ``reach`` of the given walls, measured once per
+        wall and cached.
+
+        Parameters
+        ----------
+        walls : (M, 4) float64 ndarray
+            Finite walls, metres.
+        keys : list of bytes
+            Their row keys (:func:`floorscan.score.segments.row_keys`).
+
+        Returns
+        -------
+        samples : (P,) int64 ndarray
+            Sample indices, concatenated over the walls; a sample may repeat.
+        distances : (P,) float64 ndarray
+            Metres.
+        """
         cache = self.cache
         todo = [i for i, k in enumerate(keys) if k not in cache]
         if todo:
@@ -206,8 +221,20 @@ class GrowingWalls:
         return np.concatenate([cache[k] for k in add_keys])
 
     def score(self, walls: np.ndarray) -> dict[str, float]:
-        """:func:`score_walls` of ``(M, 4)`` finite ``walls`` (and ``recall_all_<tau>``
-        against ``all_samples`` when given)."""
+        """:func:`score_walls` of a wall set, from the previous set's state when it is a
+        superset of it.
+
+        Parameters
+        ----------
+        walls : (M, 4) float64 ndarray
+            Finite walls, metres.
+
+        Returns
+        -------
+        dict of str to float
+            :func:`score_walls`' keys, and ``recall_all_<tau>`` when ``all_samples`` is
+            given.
+        """
         keys = row_keys(walls)
         cur = set(keys)
         if self.keys is None or not self.keys <= cur:

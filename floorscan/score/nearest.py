@@ -39,9 +39,21 @@ REACHES_M = (0.02, 0.1)
 
 
 def grown_boxes(pieces: np.ndarray, reach: float) -> np.ndarray:
-    """The boxes of ``(P, 4)`` segment pieces grown by ``reach`` (and a relative 1e-6
-    and 1e-9 m), as :func:`_box_diagonals`: a point within ``reach`` of a piece is in
-    its box."""
+    """The boxes of segment pieces grown by ``reach`` (and a relative 1e-6 and 1e-9 m),
+    as :func:`_box_diagonals`: a point within ``reach`` of a piece is in its box.
+
+    Parameters
+    ----------
+    pieces : (P, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    reach : float
+        Metres.
+
+    Returns
+    -------
+    (P,) object ndarray of shapely LineString
+        Each box's diagonal (its envelope is the box).
+    """
     g = reach * (1 + 1e-6) + 1e-9
     return _box_diagonals(
         np.minimum(pieces[:, 0], pieces[:, 2]) - g, np.minimum(pieces[:, 1], pieces[:, 3]) - g,
@@ -96,9 +108,19 @@ class SegmentIndex:
         return self._tree
 
     def reach_tree(self, reach: float):
-        """STRtree of the pieces' boxes grown by ``reach`` (and a relative 1e-6): a
-        point within ``reach`` of a segment lies in the grown box of one of its pieces.
-        ``self._owner``: the segment of each piece."""
+        """STRtree of the pieces' boxes grown by ``reach`` (and a relative 1e-6): a point
+        within ``reach`` of a segment lies in the grown box of one of its pieces
+        (``self._owner``: the segment of each piece). Cached per ``reach``.
+
+        Parameters
+        ----------
+        reach : float
+            Metres.
+
+        Returns
+        -------
+        shapely.STRtree
+        """
         if reach not in self._reach_trees:
             if self._pieces is None:
                 self._pieces, self._owner = split_long(self.seg, TREE_PIECE_M, return_owner=True)
@@ -106,17 +128,29 @@ class SegmentIndex:
         return self._reach_trees[reach]
 
     def upper(self, pts: np.ndarray, limit: float = np.inf) -> np.ndarray:
-        """The upper bound ``u`` of each point's distance, metres; ``inf`` without
-        segments and where ``u > limit`` (a faster query)."""
+        """An upper bound of each point's distance to the segments (KD-tree of their
+        samples).
+
+        Parameters
+        ----------
+        pts : (N, 2) float ndarray
+            Metres.
+        limit : float
+            Metres; beyond it the query stops.
+
+        Returns
+        -------
+        (N,) float64 ndarray
+            Metres; ``inf`` without segments and where the bound exceeds ``limit``.
+        """
         if self.kd is None:
             return np.full(len(pts), np.inf)
         return self.kd.query(pts, k=1, distance_upper_bound=limit)[0]
 
     def exact(self, pts, ids, radius, geoms=None):
         """Exact distance (numpy) from ``pts[ids]`` to the nearest segment within
-        ``radius`` (per point, with a relative margin of 1e-9 and 1e-9 m), ``inf``
-        where none is; in chunks of :data:`NEAREST_CHUNK` points (``geoms``:
-        ``shapely.points(pts)``, if made).
+        ``radius`` (per point, with a relative margin of 1e-9 and 1e-9 m); in chunks of
+        :data:`NEAREST_CHUNK` points.
 
         The candidates are found by STRtree queries without predicate (boxes only): a
         point whose radius is at most a reach of :data:`REACHES_M` in the grown boxes
@@ -125,6 +159,22 @@ class SegmentIndex:
         numpy (:func:`floorscan.core.geometry.point_segment_dist2`, to the whole segment)
         and those beyond the radius dropped: the same minimum as measuring every
         segment within the radius.
+
+        Parameters
+        ----------
+        pts : (N, 2) float ndarray
+            Metres.
+        ids : (K,) int ndarray
+            The points to measure.
+        radius : (K,) float ndarray
+            Metres.
+        geoms : (N,) object ndarray, optional
+            ``shapely.points(pts)``, if made.
+
+        Returns
+        -------
+        (K,) float64 ndarray
+            Metres; ``inf`` where no segment is within the radius.
         """
         radius = np.asarray(radius, dtype=np.float64)
         out = np.full(len(ids), np.inf)
@@ -165,7 +215,22 @@ def nearest_below(pts, index: SegmentIndex, bound: np.ndarray, geoms=None) -> np
     within ``bound``. For the others (measured with the KD-tree), points whose lower bound
     ``u - BOUND_STEP_M / 2`` exceeds ``bound`` keep ``bound``; the rest are measured
     against the segments within ``min(u, bound)`` only (the nearest wall's stack of
-    duplicates, not every segment nearby). ``geoms``: ``shapely.points(pts)``, if made.
+    duplicates, not every segment nearby).
+
+    Parameters
+    ----------
+    pts : (N, 2) float ndarray
+        Metres.
+    index : SegmentIndex
+    bound : (N,) float ndarray
+        Metres (``inf`` allowed).
+    geoms : (N,) object ndarray, optional
+        ``shapely.points(pts)``, if made.
+
+    Returns
+    -------
+    (N,) float64 ndarray
+        Metres; a new array.
     """
     out = np.array(bound, dtype=np.float64, copy=True)
     if len(pts) == 0 or len(index.seg) == 0:
@@ -200,12 +265,25 @@ def nearest_below(pts, index: SegmentIndex, bound: np.ndarray, geoms=None) -> np
 
 
 def pairs_within(pts, index: SegmentIndex, taus, hit: np.ndarray) -> np.ndarray:
-    """Whether each point is within each tau of a segment of ``index``, or already was.
+    """Whether each point is within each tau of a segment of ``index``, or already was:
+    the same as ``hit | (nearest_distances(pts, segments) <= tau)``; the points hit at
+    every tau are not measured, the others against the segments within the largest tau
+    only.
 
-    ``hit`` is a ``(T, S)`` bool array (one row per tau), returned updated (a copy):
-    the same as ``hit | (nearest_distances(pts, segments) <= tau)``; the points hit
-    at every tau are not measured, the others against the segments within the largest
-    tau only.
+    Parameters
+    ----------
+    pts : (S, 2) float ndarray
+        Metres.
+    index : SegmentIndex
+    taus : sequence of float
+        Metres.
+    hit : (T, S) bool ndarray
+        One row per tau; not changed.
+
+    Returns
+    -------
+    (T, S) bool ndarray
+        ``hit`` updated, a copy.
     """
     hit = np.array(hit, dtype=bool, copy=True)
     if len(pts) == 0 or len(index.seg) == 0 or len(taus) == 0:

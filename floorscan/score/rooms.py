@@ -65,6 +65,10 @@ def read_rooms(path) -> tuple[pd.DataFrame, pd.DataFrame]:
     ``perimeter_m``) and ``door`` (LineString: the opening in its wall's line;
     ``door_id``, ``width_m``, ``wall_id``, ``room_a``, ``room_b``, ``exterior``).
 
+    Parameters
+    ----------
+    path : path
+
     Returns
     -------
     rooms : pandas.DataFrame
@@ -272,7 +276,19 @@ def match_doors(
 
 def score_row(name: str, truth: str, *parts: dict) -> dict:
     """A row of ``room_scores.csv``: every :data:`ROOM_SCORE_COLUMNS` NaN but the plan's
-    ``name``, the ``truth`` and the keys of ``parts`` (score dicts)."""
+    ``name``, the ``truth`` and the keys of ``parts``.
+
+    Parameters
+    ----------
+    name : str
+    truth : str
+    *parts : dict
+        Score dicts, applied in order.
+
+    Returns
+    -------
+    dict
+    """
     row = {c: math.nan for c in ROOM_SCORE_COLUMNS}
     row.update({"plan": name, "truth": truth})
     for part in parts:

@@ -53,14 +53,40 @@ def as_segments(segments) -> np.ndarray:
 
 
 def segment_lengths(segments: np.ndarray) -> np.ndarray:
-    """Lengths in metres of ``(M, 4)`` segments, shape ``(M,)``."""
+    """Lengths of segments.
+
+    Parameters
+    ----------
+    segments : (M, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+
+    Returns
+    -------
+    (M,) float64 ndarray
+        Metres.
+    """
     s = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
     return np.hypot(s[:, 2] - s[:, 0], s[:, 3] - s[:, 1])
 
 
 def split_long(seg: np.ndarray, max_len: float, return_owner: bool = False):
-    """Cut segments into collinear pieces no longer than ``max_len`` (same union); with
-    ``return_owner``, also the row of ``seg`` each piece comes from."""
+    """Cut segments into equal collinear pieces no longer than ``max_len`` (same union).
+
+    Parameters
+    ----------
+    seg : (M, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    max_len : float
+        Metres.
+    return_owner : bool
+
+    Returns
+    -------
+    pieces : (P, 4) float64 ndarray
+        Metres, segment after segment.
+    owner : (P,) int64 ndarray
+        With ``return_owner`` only: the row of ``seg`` of each piece.
+    """
     lengths = segment_lengths(seg)
     n = np.maximum(1, np.ceil(lengths / max_len).astype(np.int64))
     idx = np.repeat(np.arange(len(seg)), n)
@@ -79,12 +105,25 @@ def sample_segments(segments, step_m: float = 0.01) -> tuple[np.ndarray, np.ndar
     Each segment of length L is cut into ``n = ceil(L / step_m)`` equal pieces and
     sampled at the pieces' centres, so the weights ``L / n`` sum to L exactly.
 
+    Parameters
+    ----------
+    segments : (M, 4) array_like
+        ``x0, y0, x1, y1``, metres; non-finite rows and segments of at most
+        :data:`MIN_SEGMENT_M` are left out.
+    step_m : float
+        Metres.
+
     Returns
     -------
     points : (S, 2) float64 ndarray
         Sample positions, metres.
     weights : (S,) float64 ndarray
         Length in metres represented by each sample.
+
+    Raises
+    ------
+    ValueError
+        When ``step_m`` is not positive.
     """
     if not step_m > 0:
         raise ValueError(f"step_m must be > 0; got {step_m}")
@@ -109,6 +148,13 @@ def dedupe_samples(points: np.ndarray, cell_m: float) -> np.ndarray:
     segments. Deduplicating the samples on a grid makes each place of the wall count
     once (up to the width of the stack of duplicates, a few cells).
 
+    Parameters
+    ----------
+    points : (S, 2) float ndarray
+        Metres.
+    cell_m : float
+        Metres.
+
     Returns
     -------
     (S', 2) float64 ndarray
@@ -126,12 +172,39 @@ def dedupe_samples(points: np.ndarray, cell_m: float) -> np.ndarray:
 
 def gt_samples(ground_truth, sample_step_m: float = 0.01) -> np.ndarray:
     """The deduplicated ground-truth samples of
-    :func:`floorscan.score.tolerance.tolerance_metrics`, ``(S, 2)``."""
+    :func:`floorscan.score.tolerance.tolerance_metrics`: :func:`sample_segments` then
+    :func:`dedupe_samples`, both at ``sample_step_m``.
+
+    Parameters
+    ----------
+    ground_truth : (M, 4) array_like
+        Segments, metres.
+    sample_step_m : float
+        Metres.
+
+    Returns
+    -------
+    (S, 2) float64 ndarray
+        Metres.
+    """
     return dedupe_samples(sample_segments(ground_truth, sample_step_m)[0], sample_step_m)
 
 
 def densify(seg: np.ndarray, step: float) -> np.ndarray:
-    """Points along each segment, both ends included, at most ``step`` apart, ``(Q, 2)``."""
+    """Points along each segment, both ends included, at most ``step`` apart.
+
+    Parameters
+    ----------
+    seg : (M, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    step : float
+        Metres.
+
+    Returns
+    -------
+    (Q, 2) float64 ndarray
+        Metres, segment after segment.
+    """
     n = np.maximum(1, np.ceil(segment_lengths(seg) / step).astype(np.int64))
     idx = np.repeat(np.arange(len(seg)), n + 1)
     k = np.arange(len(idx)) - np.repeat(np.cumsum(n + 1) - (n + 1), n + 1)
@@ -140,5 +213,15 @@ def densify(seg: np.ndarray, step: float) -> np.ndarray:
 
 
 def row_keys(seg: np.ndarray) -> list[bytes]:
-    """The bytes of each ``(M, 4)`` float64 row: equal rows, equal keys."""
+    """The bytes of each row: equal rows, equal keys.
+
+    Parameters
+    ----------
+    seg : (M, 4) float ndarray
+
+    Returns
+    -------
+    list of bytes
+        32 bytes per row (float64).
+    """
     return np.ascontiguousarray(seg, dtype=np.float64).view(np.dtype((np.void, 32))).ravel().tolist()

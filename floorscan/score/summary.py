@@ -43,6 +43,11 @@ def summarize(metrics, tau: float = 0.05, levels=(0.95, 0.99)):
         with the ``map_*`` columns of the reference map in ``metrics``, also
         ``map_completeness_all``, ``map_correctness_all``, ``map_f1_all``: the all-scan
         floor plan against the reference map at ``tau``.
+
+    Raises
+    ------
+    ValueError
+        When ``metrics`` has no ``f1_<tau>`` column.
     """
     import pandas as pd
 
@@ -87,10 +92,23 @@ def summarize(metrics, tau: float = 0.05, levels=(0.95, 0.99)):
 
 
 def summary_header(dataset: str, verdict=None, recording=None, mode: str = "") -> list[str]:
-    """The lines that head ``summary.md``: the title, the registration's verdict
-    (``verdict``: :meth:`floorscan.register.consistency.Verdict.as_dict`) and what the
-    recording was found to be (``recording``: ingest's detection; ``mode``: the register
-    mode used; :func:`floorscan.ingest.recording.describe_recording`)."""
+    """The lines that head ``summary.md``: the title, the registration's verdict and
+    what the recording was found to be.
+
+    Parameters
+    ----------
+    dataset : str
+    verdict : dict, optional
+        :meth:`floorscan.register.consistency.Verdict.as_dict`.
+    recording : mapping, optional
+        Ingest's detection (:func:`floorscan.ingest.recording.describe_recording`).
+    mode : str
+        The register mode used.
+
+    Returns
+    -------
+    list of str
+    """
     from floorscan.ingest.recording import describe_recording
 
     lines = [f"# Scan reduction summary: {dataset}" if dataset else "# Scan reduction summary", ""]
@@ -105,7 +123,20 @@ def grid_summary_markdown(summary, tau: float = 0.05, levels=(0.95, 0.99)) -> st
     """The table of :func:`summarize` (the k of the configured grid) as Markdown, after
     what F1 is measured against, and the all-scan plans against the reference map. An
     F1 from fewer than :data:`floorscan.register.consistency.FEW_SCANS` kept scans is
-    marked."""
+    marked.
+
+    Parameters
+    ----------
+    summary : pandas.DataFrame
+        :func:`summarize`, non-empty.
+    tau : float
+        Metres.
+    levels : sequence of float
+
+    Returns
+    -------
+    str
+    """
     from floorscan.register.consistency import FEW_SCANS
 
     kind = summary["reference_kind"].iloc[0]

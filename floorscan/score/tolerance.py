@@ -47,7 +47,17 @@ def _f1(p: float, r: float, has_inferred: bool, has_gt: bool) -> float:
 
 
 def tau_label(tau: float) -> str:
-    """Column suffix for a tolerance: 0.05 -> ``"5cm"``, 0.025 -> ``"2.5cm"``."""
+    """Column suffix for a tolerance: 0.05 -> ``"5cm"``, 0.025 -> ``"2.5cm"``.
+
+    Parameters
+    ----------
+    tau : float
+        Metres.
+
+    Returns
+    -------
+    str
+    """
     return f"{round(tau * 100, 6):g}cm"
 
 
@@ -108,9 +118,26 @@ def tolerance_metrics(
 
 
 def tolerance_from(len_i: float, len_g: float, n_pts: int, d: np.ndarray, covered: dict, taus) -> dict:
-    """:func:`tolerance_metrics` from its parts: the inferred and ground-truth lengths,
-    the samples' distances ``d`` to the inferred walls and the inferred length within
-    each tau of the ground truth (``covered[tau]``, metres)."""
+    """:func:`tolerance_metrics` from its parts.
+
+    Parameters
+    ----------
+    len_i, len_g : float
+        Inferred and ground-truth lengths, metres.
+    n_pts : int
+        Ground-truth samples.
+    d : (n_pts,) float ndarray
+        The samples' distances to the inferred walls, metres.
+    covered : dict of float to float
+        Inferred length within each tau of the ground truth, metres.
+    taus : iterable of float
+        Metres.
+
+    Returns
+    -------
+    dict of str to float
+        As :func:`tolerance_metrics`.
+    """
     has_i, has_g = len_i > MIN_SEGMENT_M, len_g > MIN_SEGMENT_M
     out: dict[str, float] = {
         "inferred_length_m": len_i,
@@ -142,7 +169,25 @@ def _set_prf(out: dict, tau: float, covered_m: float, len_i: float, recall: floa
 
 def recall_precision(inferred, gt, taus, samples, pairs=None) -> dict[str, float]:
     """``precision_<tau>``, ``recall_<tau>`` and ``f1_<tau>`` of :func:`tolerance_metrics`
-    (same values), without the distances of the samples that tau does not need."""
+    (same values), without the distances of the samples that tau does not need.
+
+    Parameters
+    ----------
+    inferred : (M, 4) array_like
+        Inferred walls, metres.
+    gt : (K, 4) float ndarray
+        Ground-truth walls, metres.
+    taus : sequence of float
+        Metres.
+    samples : (S, 2) float ndarray
+        Ground-truth samples (:func:`floorscan.score.segments.gt_samples`).
+    pairs : SamplePairs, optional
+        Cached sample pairs of ``samples``, used when its reach covers every tau.
+
+    Returns
+    -------
+    dict of str to float
+    """
     inf = as_segments(inferred)
     len_i = float(segment_lengths(inf).sum())
     len_g = float(segment_lengths(gt).sum())

@@ -26,13 +26,37 @@ import pandas as pd
 
 def random_order(scan_ids: Sequence[int], seed: int) -> np.ndarray:
     """A seeded random permutation of ``scan_ids`` (sorted first, so the result
-    depends only on the set and the seed). (S,) int64."""
+    depends only on the set and the seed): the random baseline ordering.
+
+    Parameters
+    ----------
+    scan_ids : sequence of int
+    seed : int
+        Seeds ``numpy.random.default_rng``.
+
+    Returns
+    -------
+    (S,) int64 ndarray
+    """
     ids = np.sort(np.asarray(scan_ids, dtype=np.int64))
     return np.random.default_rng(seed).permutation(ids)
 
 
 def sequential_order(scan_ids: Sequence[int], t_ns: Sequence[int] | None = None) -> np.ndarray:
-    """Recording order: ascending ``t_ns`` (ties: scan_id), or scan_id when no times."""
+    """Recording order: the sequential baseline ordering.
+
+    Parameters
+    ----------
+    scan_ids : (S,) sequence of int
+    t_ns : (S,) sequence of int, optional
+        Each scan's stamp, nanoseconds.
+
+    Returns
+    -------
+    (S,) int64 ndarray
+        ``scan_ids`` by ascending ``t_ns`` (ties: scan_id), or ascending scan_id without
+        ``t_ns``.
+    """
     ids = np.asarray(scan_ids, dtype=np.int64)
     if t_ns is None:
         return np.sort(ids)

@@ -72,6 +72,15 @@ def kmeans_context(clustering: bool = True) -> Iterator[None]:
     imported before the limit. One fit per scan on <= ``sample_size`` points gains
     nothing from threads, which would oversubscribe a shared machine, and on one
     thread the fits do not depend on the number of cores.
+
+    Parameters
+    ----------
+    clustering : bool
+        False: a context that does nothing (no scikit-learn import).
+
+    Yields
+    ------
+    None
     """
     if not clustering:
         yield
@@ -85,7 +94,8 @@ def kmeans_context(clustering: bool = True) -> Iterator[None]:
 
 
 def cluster_labels(points_xy: np.ndarray, params: HullParams = HullParams(), scan_id: int = 0) -> np.ndarray:
-    """Cluster of every point of one scan, -1 for points dropped as outliers.
+    """Cluster of every point of one scan, -1 for points dropped as outliers (thesis
+    section 3.3.2, Algorithm 2; the radius rule is in the module docstring).
 
     Parameters
     ----------
@@ -102,10 +112,10 @@ def cluster_labels(points_xy: np.ndarray, params: HullParams = HullParams(), sca
         In ``0 .. k-1`` with ``k = min(k_clusters, distinct points)``, or -1 for a
         point outside its cluster's radius. All -1 for an empty scan.
 
-    Notes
-    -----
-    Thesis section 3.3.2 / Algorithm 2; the radius rule is documented in the module
-    docstring. Raises ``ValueError`` when ``points_xy`` is not (N, 2) or not finite.
+    Raises
+    ------
+    ValueError
+        When ``points_xy`` is not (N, 2), or holds NaN or inf.
     """
     xy = np.asarray(points_xy, dtype=np.float64)
     if xy.ndim != 2 or xy.shape[1] != 2:
@@ -154,7 +164,23 @@ def kmeans_sample(xy: np.ndarray, params: HullParams, scan_id: int) -> tuple[np.
 
 def labels_from_sample(xy: np.ndarray, params: HullParams, drawn: tuple[np.ndarray, int, int | None]) -> np.ndarray:
     """:func:`cluster_labels` of a non-empty, finite scan from its :func:`kmeans_sample`
-    (run inside :func:`kmeans_context`)."""
+    (run inside :func:`kmeans_context`; thesis Algorithm 2).
+
+    Parameters
+    ----------
+    xy : (N, 2) float64 ndarray
+        Scan points, metres, N > 0, finite.
+    params : HullParams
+    drawn : tuple
+        :func:`kmeans_sample`'s ``(sample, distinct, random_state)``: the (M, 2) points
+        KMeans fits, the number of distinct points, KMeans' seed.
+
+    Returns
+    -------
+    (N,) int64 ndarray
+        Cluster in ``0 .. k-1``, or -1 outside its cluster's radius; all 0 when
+        ``k <= 1``.
+    """
     sample, distinct, state = drawn
     n = len(xy)
     k = min(params.k_clusters, distinct)

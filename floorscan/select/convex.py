@@ -63,8 +63,18 @@ class HullBuilder:
         self.convex_geoms: list[np.ndarray] = []
 
     def add(self, xy: np.ndarray, labels: np.ndarray, k: int) -> None:
-        """Add the ``k`` groups of one scan: points ``xy`` with ``labels`` in 0..k-1,
-        or -1 (ignored, but inside the scan's convex hull)."""
+        """Add the ``k`` groups of one scan.
+
+        Parameters
+        ----------
+        xy : (n, 2) float ndarray
+            The scan's points, metres.
+        labels : (n,) int ndarray
+            Group of each point in 0..k-1, or -1 (in no group, but inside the scan's convex
+            hull).
+        k : int
+            Number of groups; a group may be empty.
+        """
         ok = labels >= 0
         if ok.all():
             keep = None
@@ -130,15 +140,29 @@ class HullBuilder:
         return geoms, np.where(poly, areas, 0.0).astype(np.float64)
 
     def finish(self) -> tuple[np.ndarray, np.ndarray]:
-        """(geometries, areas) of every group added, in order; a hull without area
-        (fewer than 3 points, collinear) is an empty Polygon with area 0."""
+        """The hulls of every group added, in order.
+
+        Returns
+        -------
+        geometries : (G,) object ndarray of shapely Polygon
+            A hull without area (fewer than 3 points, collinear) is an empty Polygon.
+        areas : (G,) float64 ndarray
+            Square metres; 0 for an empty Polygon.
+        """
         self._flush()
         out = self._polygons(self.geoms)
         self.geoms = []
         return out
 
     def finish_convex(self) -> tuple[np.ndarray, np.ndarray]:
-        """As :meth:`finish`, for the convex hull of every scan added (``convex=True``)."""
+        """As :meth:`finish`, for the convex hull of every scan added (``convex=True``).
+
+        Returns
+        -------
+        geometries : (S,) object ndarray of shapely Polygon
+        areas : (S,) float64 ndarray
+            Square metres.
+        """
         self._flush()
         out = self._polygons(self.convex_geoms)
         self.convex_geoms = []

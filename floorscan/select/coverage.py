@@ -95,6 +95,11 @@ def segment_quality(n_inliers: np.ndarray, rmse_m: np.ndarray, min_inliers: int,
     threshold_m : float
         RANSAC's inlier distance, metres (``walls.ransac.threshold_m``).
     min_quality : float
+
+    Returns
+    -------
+    (F,) float64 ndarray
+        In [``min_quality``, 1]; a NaN ``rmse_m`` counts as ``threshold_m`` (fit 0).
     """
     n = np.asarray(n_inliers, dtype=np.float64)
     fit = 1.0 - np.nan_to_num(np.asarray(rmse_m, dtype=np.float64), nan=threshold_m) / threshold_m

@@ -266,6 +266,13 @@ def write_scan_list(df: pd.DataFrame, path: str | os.PathLike) -> None:
 
     Floats are written with :data:`CSV_FLOAT_FORMAT` and lines end in ``\\n``, so the
     same table gives the same bytes; a missing value is an empty field.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        A :func:`scan_list` table.
+    path : path
+        CSV output.
     """
     with atomic_path(path) as tmp:
         df.to_csv(tmp, index=False, float_format=CSV_FLOAT_FORMAT, lineterminator="\n")

@@ -122,12 +122,28 @@ def greedy_coverage(
     raster: RasterCoverage | None = None,
 ) -> pd.DataFrame:
     """Greedy maximum coverage with lazy evaluation: the ordering of
-    :func:`greedy_reference`, far faster (production greedy of the ``select`` stage).
+    :func:`greedy_reference` (thesis Algorithm 1), far faster (production greedy of the
+    ``select`` stage).
 
-    Parameters and returns as :func:`greedy_reference`; ``stats``, when given, is
-    filled with ``evaluations`` (candidate gains computed) and ``rounds``;
-    ``raster``, when given, is the :class:`RasterCoverage` of ``geometries`` at
-    ``raster_m``, reused instead of rasterising again (its union is emptied first).
+    Parameters
+    ----------
+    scan_ids : (S,) sequence of int
+        Unique scan ids.
+    geometries : (S,) sequence of shapely Polygon / MultiPolygon
+        Coverage of each scan (map frame, metres).
+    raster_m : float
+        Coverage raster cell side, metres.
+    stats : dict, optional
+        Filled with ``evaluations`` (candidate gains computed) and ``rounds``.
+    raster : RasterCoverage, optional
+        The raster of ``geometries`` at ``raster_m``, reused instead of rasterising
+        again (its union is emptied first).
+
+    Returns
+    -------
+    pandas.DataFrame
+        As :func:`greedy_reference`: ``rank`` int32, ``scan_id`` int32,
+        ``covered_area_m2`` (cumulative) and ``gain_m2`` float64, all S scans.
 
     Notes
     -----

@@ -204,10 +204,21 @@ def cluster_hulls(
 
 
 def convex_hulls(registered: pd.DataFrame, scan_ids: Iterable[int] | None = None) -> pd.DataFrame:
-    """One convex hull per scan (the naive coverage of thesis Fig. 3.2a).
+    """One convex hull per scan (the naive coverage of thesis Fig. 3.2a); no outlier
+    removal.
 
-    Same columns as :func:`cluster_hulls`, ``cluster = -1`` (:data:`CONVEX_CLUSTER`),
-    one row per scan; no outlier removal.
+    Parameters
+    ----------
+    registered : pandas.DataFrame
+        Points table ``scan_id``, ``x``, ``y`` (map frame, metres).
+    scan_ids : iterable of int, optional
+        The scans to hull (default: every scan of ``registered``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The columns of :func:`cluster_hulls`, ``cluster = -1`` (:data:`CONVEX_CLUSTER`),
+        one row per scan.
     """
     _, conv, _ = scan_hulls(split_by_scan(registered, ("x", "y")).items(), [], scan_ids, convex=True)
     return conv
@@ -255,7 +266,19 @@ def scan_coverage(hulls: pd.DataFrame, scan_ids: Iterable[int] | None = None) ->
 
 
 def to_table(hulls: pd.DataFrame) -> pa.Table:
-    """The hulls frame as a :data:`HULLS` table (WKB little endian, 2D)."""
+    """The hulls frame as a :data:`HULLS` table.
+
+    Parameters
+    ----------
+    hulls : pandas.DataFrame
+        ``scan_id``, ``cluster``, ``geometry`` (shapely), ``area_m2``.
+
+    Returns
+    -------
+    pyarrow.Table
+        ``scan_id``, ``cluster`` int32, ``geometry`` WKB (little endian, 2D),
+        ``area_m2`` float64.
+    """
     wkb = shapely.to_wkb(hulls["geometry"].to_numpy(), output_dimension=2, byte_order=1)
     return pa.table(
         {
@@ -271,7 +294,22 @@ def to_table(hulls: pd.DataFrame) -> pa.Table:
 def from_table(df: pd.DataFrame, path: str = "hulls") -> pd.DataFrame:
     """Parse a hulls table read from Parquet: geometry WKB -> Shapely.
 
-    Raises ``KeyError`` naming ``path`` when a column is missing.
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The :data:`HULLS` columns.
+    path : str
+        The file's name in error messages.
+
+    Returns
+    -------
+    pandas.DataFrame
+        A copy with the :data:`HULLS` columns, ``geometry`` as shapely geometries.
+
+    Raises
+    ------
+    KeyError
+        Naming ``path``, when a column is missing.
     """
     missing = [c for c in HULLS.names if c not in df.columns]
     if missing:
@@ -282,9 +320,24 @@ def from_table(df: pd.DataFrame, path: str = "hulls") -> pd.DataFrame:
 
 
 def kept_scan_ids(registration: pd.DataFrame, path: str = "registration.parquet") -> np.ndarray:
-    """Scan ids with ``kept`` true in a registration table, ascending (int64).
+    """Scan ids with ``kept`` true in a registration table.
 
-    Raises ``KeyError`` naming ``path`` when ``scan_id`` or ``kept`` is missing.
+    Parameters
+    ----------
+    registration : pandas.DataFrame
+        ``scan_id`` and ``kept``.
+    path : str
+        The file's name in error messages.
+
+    Returns
+    -------
+    (K,) int64 ndarray
+        Unique, ascending.
+
+    Raises
+    ------
+    KeyError
+        Naming ``path``, when ``scan_id`` or ``kept`` is missing.
     """
     missing = [c for c in ("scan_id", "kept") if c not in registration.columns]
     if missing:

@@ -134,11 +134,32 @@ class RasterCoverage:
         return cells, counts
 
     def cells_of(self, j: int) -> np.ndarray:
-        """Flat cell indices (row * nx + col) covered by scan ``j``."""
+        """Cells covered by scan ``j``.
+
+        Parameters
+        ----------
+        j : int
+            Position of the scan in the raster (not its scan id).
+
+        Returns
+        -------
+        (C,) int ndarray
+            Flat cell indices ``row * nx + col`` (a view).
+        """
         return self.cells[self.start[j] : self.stop[j]]
 
     def gains(self, scans: Sequence[int] | np.ndarray) -> np.ndarray:
-        """Cells each scan would add to the current union; (len(scans),) int64."""
+        """Cells each scan would add to the current union.
+
+        Parameters
+        ----------
+        scans : (M,) sequence of int
+            Positions of the scans in the raster.
+
+        Returns
+        -------
+        (M,) int64 ndarray
+        """
         scans = np.asarray(scans, dtype=np.int64)
         counts = self.counts[scans]
         out = np.zeros(len(scans), dtype=np.int64)
@@ -156,12 +177,28 @@ class RasterCoverage:
 
     def gain(self, j: int) -> int:
         """Cells scan ``j`` would add to the current union (``gains([j])[0]``, without
-        the array bookkeeping: the lazy greedy evaluates one scan at a time)."""
+        the array bookkeeping: the lazy greedy evaluates one scan at a time).
+
+        Parameters
+        ----------
+        j : int
+            Position of the scan in the raster.
+
+        Returns
+        -------
+        int
+        """
         a, b = self.start[j], self.stop[j]
         return int(b - a) - int(np.count_nonzero(self.covered[self.cells[a:b]]))
 
     def add(self, j: int) -> None:
-        """Add scan ``j``'s cells to the union."""
+        """Add scan ``j``'s cells to the union (in place).
+
+        Parameters
+        ----------
+        j : int
+            Position of the scan in the raster.
+        """
         self.covered[self.cells_of(j)] = True
 
     def reset(self) -> None:
@@ -190,8 +227,21 @@ def _order_crossings(key: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 def runs(seg: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Start of each run of equal values of the non-decreasing ``seg``, its value
-    and its length."""
+    """The runs of equal values of a non-decreasing array.
+
+    Parameters
+    ----------
+    seg : (n,) int ndarray
+        Non-decreasing.
+
+    Returns
+    -------
+    starts : (R,) int64 ndarray
+        Index of each run's first element.
+    values : (R,) ndarray
+        Each run's value (``seg``'s dtype).
+    lengths : (R,) int ndarray
+    """
     starts = np.flatnonzero(np.r_[True, seg[1:] != seg[:-1]]) if len(seg) else np.zeros(0, np.int64)
     return starts, seg[starts], np.diff(np.r_[starts, len(seg)])
 

@@ -41,10 +41,16 @@ def objective_of(ordering):
     the coverage orderings' own objective (:data:`OBJECTIVE_COLUMN`, weighted cells),
     else the covered hull area (m2).
 
+    Parameters
+    ----------
+    ordering : pandas.DataFrame
+        An ordering table: ``rank`` and ``covered_objective`` or ``covered_area_m2``.
+
     Returns
     -------
     covered : (n,) float64 ndarray
     unit : str
+        ``"cells"`` or ``"m2"``.
     """
     table = ordering.sort_values("rank", kind="stable")
     if OBJECTIVE_COLUMN in table.columns:
@@ -134,5 +140,14 @@ def write_selection(
 
 
 def read_selection(path: str | os.PathLike) -> dict:
-    """``selection.json`` as written by :func:`write_selection`."""
+    """``selection.json`` as written by :func:`write_selection`.
+
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    dict
+    """
     return json.loads(Path(path).read_text())

@@ -85,8 +85,36 @@ def _ros1_compression(reader):
 
 
 def reduce_bag(source: Path, ids, out_path: Path, detection, t_ns, window_s: float) -> dict:
-    """The reduced copy of a ROS1 or ROS2 bag (module docstring); the dict of
-    :func:`floorscan.select.recording.write_reduced_recording`."""
+    """The reduced copy of a ROS1 or ROS2 bag (module docstring).
+
+    Parameters
+    ----------
+    source : Path
+        The recording ingest read.
+    ids : (S,) int ndarray
+        The selected scans, ingest's ``scan_id``, unique and ascending.
+    out_path : Path
+        Output, replaced when it exists.
+    detection : mapping
+        What ingest found (``write_reduced_recording``'s ``detection``).
+    t_ns : (N,) int64 ndarray or None
+        ``scan_index``'s stamps in ``scan_id`` order, nanoseconds; None skips the stamp
+        check.
+    window_s : float
+        Pose messages within this many seconds of a selected scan are kept.
+
+    Returns
+    -------
+    dict
+        As :func:`floorscan.select.recording.write_reduced_recording`, ``format``
+        ``rosbag1`` or ``rosbag2``.
+
+    Raises
+    ------
+    InputError
+        No ``scan_topic`` in ``detection``, or no such topic in the bag; the message
+        count or a stamp differs from ingest's; rosbags fails to read or write.
+    """
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
 

@@ -59,8 +59,27 @@ def _read_lines(path: Path) -> tuple[list[str], bool]:
 
 
 def reduce_carmen(source: Path, ids, out_path: Path, detection, t_ns, window_s: float) -> dict:
-    """The reduced copy of a CARMEN log (module docstring); the dict of
-    :func:`floorscan.select.recording.write_reduced_recording`."""
+    """The reduced copy of a CARMEN log (module docstring).
+
+    Parameters
+    ----------
+    source, ids, out_path, detection, t_ns
+        As :func:`floorscan.select.recording_bag.reduce_bag`.
+    window_s : float
+        Pose lines within this many seconds of a selected scan are kept.
+
+    Returns
+    -------
+    dict
+        As :func:`floorscan.select.recording.write_reduced_recording`, ``format``
+        ``carmen``.
+
+    Raises
+    ------
+    InputError
+        The log is unreadable, a laser line malformed, its stamp class changed since
+        ingest, or the laser count or a stamp differs from ingest's.
+    """
     from floorscan.ingest.carmen_lines import LASER_TYPES
     from floorscan.ingest.carmen_stamps import classify_stamps, spread_stamps
 

@@ -19,7 +19,16 @@ from floorscan.core.messages import quoted
 
 
 def size_of(path: Path) -> int:
-    """Bytes of a file, or of every file under a folder."""
+    """Bytes of a file, or of every file under a folder.
+
+    Parameters
+    ----------
+    path : Path
+
+    Returns
+    -------
+    int
+    """
     if path.is_dir():
         return sum(p.stat().st_size for p in path.rglob("*") if p.is_file())
     return path.stat().st_size
@@ -27,7 +36,18 @@ def size_of(path: Path) -> int:
 
 def skipped_frames(source: Path, detection: Mapping[str, Any]) -> np.ndarray:
     """The frames ingest skipped, ``detection["skipped_frames"]`` (text as ingest stores
-    it, ``"0,5-6"``, or ordinals): a sorted (K,) int64 ndarray, empty when none.
+    it, ``"0,5-6"``, or ordinals).
+
+    Parameters
+    ----------
+    source : Path
+        The recording, for messages.
+    detection : mapping
+
+    Returns
+    -------
+    (K,) int64 ndarray
+        Sorted, unique; empty when none.
 
     Raises
     ------
@@ -168,6 +188,17 @@ def check_count(
 def check_stamps(source: Path, ids: np.ndarray, got: np.ndarray, t_ns: np.ndarray | None) -> None:
     """Check that the selected scans' stamps ``got`` (in the order of ``ids``) are the
     scan index's ``t_ns[ids]``.
+
+    Parameters
+    ----------
+    source : Path
+        The recording, for messages.
+    ids : (S,) int ndarray
+        The selected scan ids.
+    got : (S,) int64 ndarray
+        Their stamps in the recording, nanoseconds.
+    t_ns : (N,) int64 ndarray or None
+        The scan index's stamps in ``scan_id`` order, nanoseconds; None: nothing checked.
 
     Raises
     ------

@@ -17,9 +17,29 @@ from floorscan.select.recording_checks import check_count, check_stamps, scan_fr
 
 
 def reduce_pcd(source: Path, ids, out_path: Path, detection, t_ns, window_s: float = 0.0) -> dict:
-    """The reduced copy of a PCD folder (module docstring); the dict of
-    :func:`floorscan.select.recording.write_reduced_recording`. ``window_s`` is not
-    used (a PCD folder has no pose messages)."""
+    """The reduced copy of a PCD folder (module docstring): the selected scans' files
+    and their rows of the locations CSV.
+
+    Parameters
+    ----------
+    source, ids, out_path, detection, t_ns
+        As :func:`floorscan.select.recording_bag.reduce_bag`.
+    window_s : float
+        Not used (a PCD folder has no pose messages).
+
+    Returns
+    -------
+    dict
+        As :func:`floorscan.select.recording.write_reduced_recording`, ``format``
+        ``pcd``.
+
+    Raises
+    ------
+    InputError
+        ``source`` is not a folder; the locations CSV is missing, unreadable or has no
+        ``file`` column; it names a file outside ``source`` or missing; the row count or a
+        stamp differs from ingest's.
+    """
     if not source.is_dir():
         raise InputError(f"{source}: expected a folder of .pcd files")
     name = str(detection.get("locations") or "locations.csv")

@@ -35,11 +35,25 @@ SUMMARY = pa.schema(
 
 
 def k_for_fraction(ordering: pd.DataFrame, fraction: float) -> int:
-    """Smallest number of scans whose cumulative covered area reaches
-    ``fraction`` of the ordering's final covered area (0 for an empty ordering or
-    zero final area).
+    """Smallest number of scans whose cumulative covered area reaches ``fraction`` of
+    the ordering's final covered area (thesis Fig. 5.6).
 
-    Raises ``ValueError`` unless ``0 < fraction <= 1``.
+    Parameters
+    ----------
+    ordering : pandas.DataFrame
+        ``covered_area_m2`` (cumulative, square metres) in rank order.
+    fraction : float
+        In (0, 1].
+
+    Returns
+    -------
+    int
+        0 for an empty ordering or zero final area.
+
+    Raises
+    ------
+    ValueError
+        Unless ``0 < fraction <= 1``.
     """
     if not 0 < fraction <= 1:
         raise ValueError(f"fraction must be in (0, 1], got {fraction}")
@@ -86,11 +100,23 @@ def first_k(ordering: pd.DataFrame, count: int | None = None, fraction: float | 
 
 def summarize(orderings: Mapping[str, pd.DataFrame], seconds: Mapping[str, float] | None = None,
               zero_area: int = 0) -> pd.DataFrame:
-    """Per ordering the k reaching 90/95/99 % of its final covered area (Fig. 5.6).
+    """Per ordering the k reaching 90/95/99 % of its final covered area (thesis
+    Fig. 5.6).
 
-    Returns a frame of the :data:`SUMMARY` columns and ``seconds``, the time to compute
-    each ordering (``seconds``; NaN when not given), for the log: ``write_table(summary,
-    path, schema=SUMMARY)`` leaves it out of the file.
+    Parameters
+    ----------
+    orderings : mapping of str to pandas.DataFrame
+        Ordering name -> its table (``covered_area_m2`` in rank order).
+    seconds : mapping of str to float, optional
+        Time to compute each ordering, seconds.
+    zero_area : int
+        Scans without covered area, the same for every row.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The :data:`SUMMARY` columns and ``seconds`` (NaN when not given), for the log:
+        ``write_table(summary, path, schema=SUMMARY)`` leaves it out of the file.
     """
     rows = []
     for name, o in orderings.items():

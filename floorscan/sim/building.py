@@ -76,7 +76,13 @@ class Wall:
     openings: tuple[Opening, ...] = ()
 
     def segments(self) -> list[tuple[np.ndarray, np.ndarray]]:
-        """The straight segments of the axis as (start, end) (2,) arrays."""
+        """The straight segments of the axis (closing segment included for a closed wall).
+
+        Returns
+        -------
+        list of ((2,) float64 ndarray, (2,) float64 ndarray)
+            (start, end) of each segment, metres, in polyline order.
+        """
         pts = self.points
         n = len(pts) if self.closed else len(pts) - 1
         return [(pts[i], pts[(i + 1) % len(pts)]) for i in range(n)]
@@ -107,8 +113,19 @@ class Furniture:
         )
 
     def section(self, z: float):
-        """The plan outline of the furniture cut at height ``z`` (metres): the box, a
-        table's legs or top, or an empty polygon outside its height."""
+        """The plan outline of the furniture cut at height ``z``: the box, a table's legs
+        or top, or an empty polygon outside its height.
+
+        Parameters
+        ----------
+        z : float
+            Height above the floor, metres.
+
+        Returns
+        -------
+        shapely Polygon or MultiPolygon
+            Map metres.
+        """
         z0, z1 = self.z_min_m, self.z_min_m + self.size[2]
         if not z0 <= z <= z1:
             return Polygon()
@@ -117,7 +134,14 @@ class Furniture:
         return self.footprint()
 
     def legs(self) -> list[Polygon]:
-        """Outlines of the four legs of a table (empty without ``legs_m``)."""
+        """Outlines of the four legs of a table.
+
+        Returns
+        -------
+        list of shapely Polygon
+            Four squares of side ``legs_m`` in the box's corners, metres; empty without
+            ``legs_m``.
+        """
         if self.legs_m <= 0:
             return []
         h = self.legs_m / 2
@@ -125,7 +149,13 @@ class Furniture:
         return [self._outline(sx * ox, sy * oy, h, h) for sx in (-1, 1) for sy in (-1, 1)]
 
     def footprint(self) -> Polygon:
-        """The box's outline on the floor plan (a table's: its top)."""
+        """The box's outline on the floor plan (a table's: its top).
+
+        Returns
+        -------
+        shapely Polygon
+            The rotated rectangle, metres.
+        """
         return self._outline(0.0, 0.0, self.size[0] / 2, self.size[1] / 2)
 
 

@@ -41,6 +41,17 @@ def opening_polygon(wall: Wall, op: Opening) -> Polygon:
     """The 2D cutter of an opening: a rectangle along its segment, across the wall.
 
     It reaches ``CUT_MARGIN_M`` beyond each face of the wall.
+
+    Parameters
+    ----------
+    wall : Wall
+    op : Opening
+        On segment ``op.segment`` of ``wall``, from ``offset_m`` for ``width_m``.
+
+    Returns
+    -------
+    shapely Polygon
+        Metres.
     """
     a, b = wall.segments()[op.segment]
     u = (b - a) / np.hypot(*(b - a))
@@ -52,7 +63,17 @@ def opening_polygon(wall: Wall, op: Opening) -> Polygon:
 
 
 def walls_union(building: Building) -> Polygon:
-    """Union of all wall footprints without openings (metres)."""
+    """Union of all wall footprints without openings.
+
+    Parameters
+    ----------
+    building : Building
+
+    Returns
+    -------
+    shapely Polygon or MultiPolygon
+        Metres.
+    """
     return unary_union([wall_polygon(w) for w in building.walls])
 
 
@@ -84,6 +105,16 @@ def wall_footprint(building: Building, z: float):
 
 
 def building_outline(building: Building):
-    """The filled outline of the walls (their union with the enclosed rooms)."""
+    """The filled outline of the walls (their union with the enclosed rooms).
+
+    Parameters
+    ----------
+    building : Building
+
+    Returns
+    -------
+    shapely Polygon or MultiPolygon
+        The exteriors of :func:`walls_union`'s parts, holes filled, metres.
+    """
     parts = getattr(walls_union(building), "geoms", [walls_union(building)])
     return unary_union([Polygon(p.exterior) for p in parts])

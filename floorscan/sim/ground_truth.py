@@ -368,7 +368,17 @@ def _feature(gtype: str, coords: list, **props) -> dict:
 
 
 def true_poses_frame(rec: Recording) -> pd.DataFrame:
-    """The ``true_poses`` table: ``t_ns`` and the true scanner pose of every scan."""
+    """The ``true_poses`` table: the true scanner pose of every scan.
+
+    Parameters
+    ----------
+    rec : Recording
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``t_ns`` (int64, nanoseconds), ``x``, ``y``, ``z`` (metres), ``yaw`` (radians).
+    """
     return pd.DataFrame(
         {
             "t_ns": rec.scan_t_ns.astype(np.int64),

@@ -54,6 +54,10 @@ def wall_mesh(building: Building) -> trimesh.Trimesh:
     cutter from :func:`opening_polygon`, from ``sill_m`` to ``head_m``; doors start
     below the floor) from the extruded wall footprints.
 
+    Parameters
+    ----------
+    building : Building
+
     Returns
     -------
     trimesh.Trimesh
@@ -103,6 +107,10 @@ def building_mesh(building: Building) -> trimesh.Trimesh:
     All solids are united with manifold3d, so a horizontal section gives clean
     polygons (thesis 5.2: a slice of the model is the floor plan).
 
+    Parameters
+    ----------
+    building : Building
+
     Returns
     -------
     trimesh.Trimesh
@@ -146,7 +154,14 @@ def mesh_section(mesh: trimesh.Trimesh, z: float):
 
 
 def write_stl(mesh, path: str | os.PathLike) -> None:
-    """Binary STL of ``mesh``, written atomically (no time stamp in the header)."""
+    """Binary STL of ``mesh``, written atomically (no time stamp in the header).
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        Metres.
+    path : path
+    """
     data = trimesh.exchange.stl.export_stl(mesh)
     with atomic_path(path) as tmp:
         tmp.write_bytes(data)

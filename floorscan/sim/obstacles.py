@@ -22,7 +22,17 @@ from floorscan.sim.trajectory import Trajectory
 
 def obstacles_at_floor(building: Building):
     """What the rover cannot drive through: walls at floor level (doors open) and
-    furniture standing on the floor (``z_min_m`` below 0.05 m)."""
+    furniture standing on the floor (``z_min_m`` below 0.05 m).
+
+    Parameters
+    ----------
+    building : Building
+
+    Returns
+    -------
+    shapely geometry
+        Their union, metres.
+    """
     parts = [wall_footprint(building, 0.0)]
     parts += [f.footprint() for f in building.furniture if f.z_min_m < 0.05]
     return unary_union(parts)
@@ -68,6 +78,12 @@ def check_path(building: Building, points: np.ndarray, what: str = "waypoints") 
 def check_trajectory(building: Building, traj: Trajectory) -> None:
     """Raise when the rover's simulated path (not only its waypoints and the straight
     legs between them) enters a wall or furniture standing on the floor.
+
+    Parameters
+    ----------
+    building : Building
+    traj : Trajectory
+        The simulated path, sampled in time.
 
     Raises
     ------

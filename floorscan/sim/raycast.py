@@ -49,7 +49,17 @@ class RayCaster:
 
     @classmethod
     def from_mesh(cls, mesh) -> "RayCaster":
-        """From a ``trimesh.Trimesh``."""
+        """A caster of a mesh's triangles.
+
+        Parameters
+        ----------
+        mesh : trimesh.Trimesh
+            Metres.
+
+        Returns
+        -------
+        RayCaster
+        """
         return cls(np.asarray(mesh.vertices), np.asarray(mesh.faces))
 
     def cast(self, rays: np.ndarray) -> np.ndarray:
@@ -190,7 +200,21 @@ def to_map(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
 
 
 def iter_scan_batches(n_scans: int, n_rays: int, max_rays: int = 2_000_000) -> Iterator[slice]:
-    """Slices of scan indices so that one batch casts at most ``max_rays`` rays."""
+    """Slices of scan indices so that one batch casts at most ``max_rays`` rays (at
+    least one scan per batch).
+
+    Parameters
+    ----------
+    n_scans : int
+    n_rays : int
+        Rays per scan.
+    max_rays : int
+
+    Yields
+    ------
+    slice
+        Consecutive, covering ``0..n_scans``.
+    """
     step = max(1, max_rays // max(1, n_rays))
     for s in range(0, n_scans, step):
         yield slice(s, min(n_scans, s + step))

@@ -73,10 +73,22 @@ class Recording:
     odom: np.ndarray
 
     def iter_scans(self, max_rays: int = 2_000_000) -> Iterator[tuple[int, np.ndarray]]:
-        """Yield ``(scan index, ranges (R,) float32)`` in time order.
+        """Cast the scans, in time order.
 
         Rays of many scans go to Embree in one call (at most ``max_rays``); the noise
         stream is drawn in scan order, so the result does not depend on ``max_rays``.
+
+        Parameters
+        ----------
+        max_rays : int
+            Rays per call to the ray caster.
+
+        Yields
+        ------
+        k : int
+            The scan's index.
+        ranges : (R,) float32 ndarray
+            Its ranges, metres.
         """
         caster = RayCaster.from_mesh(self.mesh)
         rng = np.random.default_rng(np.random.SeedSequence([self.seed, 1]))

@@ -37,8 +37,19 @@ class Trajectory:
         return float(self.t[-1])
 
     def at(self, t: np.ndarray) -> np.ndarray:
-        """(len(t), 3) ``x, y, yaw`` at times ``t`` (s), linear interpolation; the rover
-        stands still before the start and after the end. ``yaw`` stays unwrapped."""
+        """Pose at times ``t``, linear interpolation; the rover stands still before the
+        start and after the end.
+
+        Parameters
+        ----------
+        t : (N,) float ndarray
+            Seconds.
+
+        Returns
+        -------
+        (N, 3) float64 ndarray
+            ``x, y`` metres, ``yaw`` radians (unwrapped).
+        """
         t = np.asarray(t, dtype=np.float64)
         return np.stack(
             [np.interp(t, self.t, self.xy[:, 0]), np.interp(t, self.t, self.xy[:, 1]),

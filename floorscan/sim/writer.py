@@ -63,7 +63,17 @@ def pcd_bytes(points: np.ndarray, viewpoint: np.ndarray | None = None) -> bytes:
 
 
 def scan_file_name(k: int) -> str:
-    """File name of scan ``k`` in the pcd folder (zero-padded: sorts in time order)."""
+    """File name of scan ``k`` in the pcd folder (zero-padded: sorts in time order).
+
+    Parameters
+    ----------
+    k : int
+
+    Returns
+    -------
+    str
+        ``scan_<k, 5 digits>.pcd``.
+    """
     return f"scan_{k:05d}.pcd"
 
 

@@ -75,7 +75,26 @@ def cluster_ransac(
 
 
 def cluster_ransac_rows(points: np.ndarray, params: RansacParams, cluster: ClusterParams, seed) -> list[tuple]:
-    """:func:`cluster_ransac` as a list of (x0, y0, x1, y1, n_inliers, rmse_m) tuples."""
+    """:func:`cluster_ransac` as a list of rows, before they become a frame (thesis
+    section 3.4).
+
+    Parameters
+    ----------
+    points : (N, 2) float ndarray
+        Wall points of one scan (map frame), metres. Not modified.
+    params : RansacParams
+        RANSAC and segment settings.
+    cluster : ClusterParams
+        Normal and MeanShift settings.
+    seed : int, sequence of int or numpy.random.Generator
+        Seeds ``numpy.random.default_rng``; same seed, same rows.
+
+    Returns
+    -------
+    list of tuple
+        ``(x0, y0, x1, y1, n_inliers, rmse_m)`` per wall segment, metres; empty when the
+        scan has fewer than ``max(params.min_points, 3)`` points.
+    """
     rng = np.random.default_rng(seed)
     pts = np.asarray(points, dtype=np.float64)
     if len(pts) < max(params.min_points, 3):
@@ -112,7 +131,15 @@ def cluster_ransac_rows(points: np.ndarray, params: RansacParams, cluster: Clust
 
 def import_cluster_modules(params: RansacParams, cluster: ClusterParams) -> None:
     """Import what :func:`cluster_ransac` will import, before the first scan is timed:
-    SciPy's k-d tree, and scikit-learn when ``cluster`` asks for it."""
+    SciPy's k-d tree, and scikit-learn when ``cluster`` asks for it.
+
+    Parameters
+    ----------
+    params : RansacParams
+        Unused: the signature of an :class:`~floorscan.walls.extractors.Extractor`'s ``prepare``.
+    cluster : ClusterParams
+        ``meanshift == "sklearn"`` or ``offset_bandwidth_m`` None imports scikit-learn.
+    """
     import scipy.spatial  # noqa: F401
 
     if cluster.meanshift == "sklearn" or cluster.offset_bandwidth_m is None:

@@ -18,7 +18,17 @@ from floorscan.walls.tables import WALLS
 
 
 def parse_k(k: str | int) -> int | None:
-    """``"all"`` -> None, ``"15"`` or 15 -> 15.
+    """The ``k`` of the first-k extractor: ``"all"`` -> None, ``"15"`` or 15 -> 15.
+
+    Parameters
+    ----------
+    k : str or int
+        ``"all"`` or a positive integer (as text or int).
+
+    Returns
+    -------
+    int or None
+        None for ``"all"``.
 
     Raises
     ------

@@ -84,7 +84,14 @@ class MapParams:
 
     def ransac(self) -> RansacParams:
         """The :class:`~floorscan.walls.params.RansacParams` of the map's RANSAC (two
-        refits, no coverage test)."""
+        refits, no coverage test).
+
+        Returns
+        -------
+        RansacParams
+            ``threshold_m``, ``iterations``, ``min_inliers``, ``max_lines``, ``min_length_m``
+            and ``max_gap_m`` from this; ``refine_iterations`` 2, ``min_coverage`` 0.
+        """
         return RansacParams(
             threshold_m=self.threshold_m, iterations=self.iterations, refine_iterations=2,
             min_points=self.min_inliers, max_lines=self.max_lines, min_inliers=self.min_inliers,
@@ -116,8 +123,21 @@ def supported_points(points: np.ndarray, grid: OccupancyGrid) -> np.ndarray:
 
 def map_points(points: np.ndarray, grid: OccupancyGrid | None, params: MapParams = MapParams()) -> np.ndarray:
     """Steps 1 and 2 of :func:`map_segments`: the supported points (all of them without
-    a grid) thinned to one mean point per ``grid_m`` cell, (M, 2) float64, metres (cells
-    in lexicographic order)."""
+    a grid) thinned to one mean point per ``grid_m`` cell.
+
+    Parameters
+    ----------
+    points : (N, 2) float ndarray
+        Wall points of the scans in the map frame, metres. Not modified.
+    grid : OccupancyGrid or None
+        Occupancy grid of the same scans (:func:`supported_points`); None keeps every point.
+    params : MapParams
+
+    Returns
+    -------
+    (M, 2) float64 ndarray
+        Cell means, metres, cells in lexicographic order; (0, 2) when no point is left.
+    """
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     if grid is not None:
         pts = pts[supported_points(pts, grid)]

@@ -171,13 +171,31 @@ def _pair_squares(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def mean_shift_labels(
     x: np.ndarray, bandwidth: float | None, bin_seeding: bool, min_bin_freq: int, backend: str = "numpy"
 ) -> np.ndarray:
-    """MeanShift labels of ``x`` (N, d) (flat kernel, every point labelled).
+    """MeanShift labels of the rows of ``x`` (flat kernel, every point labelled;
+    Comaniciu and Meer 2002).
 
     ``backend`` "numpy" is :func:`mean_shift` (needs ``bin_seeding``), "sklearn" is
-    :class:`sklearn.cluster.MeanShift`. ``bandwidth`` None estimates it with
-    ``sklearn.cluster.estimate_bandwidth(quantile=0.1)``. With ``bin_seeding`` the
-    seeds are the grid cells (size ``bandwidth``) holding at least ``min_bin_freq``
-    points; when there is none, every label is -1.
+    :class:`sklearn.cluster.MeanShift`.
+
+    Parameters
+    ----------
+    x : (N, d) float ndarray
+        Points to cluster (radians for the normal embedding, metres for offsets).
+    bandwidth : float or None
+        Flat-kernel radius, units of ``x``; None estimates it with
+        ``sklearn.cluster.estimate_bandwidth(quantile=0.1)``.
+    bin_seeding : bool
+        Seeds are the grid cells (size ``bandwidth``) holding at least ``min_bin_freq``
+        points; otherwise every point is a seed.
+    min_bin_freq : int
+    backend : {"numpy", "sklearn"}
+        "numpy" is used only with ``bin_seeding``; otherwise scikit-learn.
+
+    Returns
+    -------
+    (N,) int ndarray
+        Cluster label per row; all -1 when no bin holds ``min_bin_freq`` points; all 0
+        when the estimated bandwidth is not positive.
     """
     # scikit-learn only when used: its import is slow
     if bandwidth is None:

@@ -39,6 +39,11 @@ def scan_points_2d(xyz: np.ndarray, params: ScanParams = ScanParams()) -> tuple[
     reason : str
         "" or one of :data:`~floorscan.walls.tables.REASONS` (``non_finite_coordinates``,
         ``no_points_in_height_band``).
+
+    Raises
+    ------
+    ValueError
+        When ``xyz`` is not two-dimensional with at least two columns.
     """
     xyz = np.asarray(xyz, dtype=np.float64)
     if xyz.ndim != 2 or xyz.shape[1] < 2:

@@ -59,7 +59,23 @@ def ransac(points: np.ndarray, params: RansacParams = RansacParams(), seed=0) ->
 
 
 def ransac_rows(points: np.ndarray, params: RansacParams, seed) -> list[tuple]:
-    """:func:`ransac` as a list of (x0, y0, x1, y1, n_inliers, rmse_m) tuples."""
+    """:func:`ransac` as a list of rows, before they become a frame (thesis section 5.3,
+    Algorithm 4).
+
+    Parameters
+    ----------
+    points : (N, 2) float ndarray
+        Wall points (map frame), metres. Not modified.
+    params : RansacParams
+    seed : int, sequence of int or numpy.random.Generator
+        Seeds ``numpy.random.default_rng``; same seed, same rows.
+
+    Returns
+    -------
+    list of tuple
+        ``(x0, y0, x1, y1, n_inliers, rmse_m)`` per wall segment, metres, in order of
+        discovery.
+    """
     rng = np.random.default_rng(seed)
     all_pts = np.asarray(points, dtype=np.float64)
     alive = np.arange(len(all_pts))  # indices of the points not yet claimed by a line
@@ -77,11 +93,28 @@ def ransac_rows(points: np.ndarray, params: RansacParams, seed) -> list[tuple]:
 
 
 def fit_wall(pts: np.ndarray, idx: np.ndarray, rng: np.random.Generator, params: RansacParams):
-    """One RANSAC line on ``pts[idx]``: its inlier mask over ``idx`` and its wall segments.
+    """One RANSAC line on ``pts[idx]``: its inlier mask over ``idx`` and its wall segments
+    (Fischler and Bolles 1981; thesis section 5.3).
 
-    Returns None when no line has at least ``params.min_inliers`` inliers. The
-    segments' ends and gaps come from all of ``pts`` near the line (see
+    The segments' ends and gaps come from all of ``pts`` near the line (see
     :func:`claimed_segments`).
+
+    Parameters
+    ----------
+    pts : (N, 2) float64 ndarray
+        All points of the scan, metres.
+    idx : (K,) int ndarray
+        The indices into ``pts`` the line is fitted on.
+    rng : numpy.random.Generator
+        Draws the two-point hypotheses.
+    params : RansacParams
+
+    Returns
+    -------
+    tuple or None
+        ``(mask, segments)``: ``mask`` (K,) bool, the line's inliers among ``idx``;
+        ``segments`` a list of ``(x0, y0, x1, y1, n_inliers, rmse_m)`` tuples, metres.
+        None when no line has at least ``params.min_inliers`` inliers.
     """
     found = _best_line(pts[idx], rng, params)
     if found is None:

@@ -50,13 +50,33 @@ def fit_line(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def claimed_segments(pts, c, direction, claimed, params) -> list[tuple]:
-    """Segments of a line found by RANSAC, with ends from all points of the scan.
+    """Segments of a line found by RANSAC, with ends from all points of the scan
+    (thesis section 5.3).
 
-    The points of the whole scan within ``threshold_m`` of the line (centroid ``c``,
-    unit ``direction``) are split at gaps wider than ``max_gap_m``; a piece is this
-    line's when at least ``min_inliers`` of its points were ``claimed`` by it (its
-    RANSAC inliers). Points near a corner, claimed by the other wall or left out of a
-    cluster for their mixed normal, so still extend the segment to the corner.
+    The points of the whole scan within ``threshold_m`` of the line are split at gaps
+    wider than ``max_gap_m``; a piece is this line's when at least ``min_inliers`` of its
+    points were ``claimed`` by it (its RANSAC inliers). Points near a corner, claimed by
+    the other wall or left out of a cluster for their mixed normal, so still extend the
+    segment to the corner.
+
+    Parameters
+    ----------
+    pts : (N, 2) float64 ndarray
+        All points of the scan, metres.
+    c : (2,) float ndarray
+        A point on the line (its inliers' centroid), metres.
+    direction : (2,) float ndarray
+        Unit direction of the line.
+    claimed : (N,) bool ndarray
+        The line's RANSAC inliers.
+    params : RansacParams
+        ``threshold_m``, ``max_gap_m``, ``min_inliers``, length and coverage tests.
+
+    Returns
+    -------
+    list of tuple
+        ``(x0, y0, x1, y1, n_inliers, rmse_m)`` per kept piece, metres, in order along
+        ``direction``.
     """
     normal = np.array([-direction[1], direction[0]])
     cand = np.flatnonzero(np.abs((pts - c) @ normal) < params.threshold_m)

@@ -55,7 +55,17 @@ _SEGMENT_COLUMNS = ["x0", "y0", "x1", "y1", "n_inliers", "rmse_m"]
 
 
 def segments_frame(rows: list[tuple]) -> pd.DataFrame:
-    """Wall segments ``(x0, y0, x1, y1, n_inliers, rmse_m)`` as a frame: ``n_inliers``
-    int32, the others float64 (metres)."""
+    """Wall segments as a frame.
+
+    Parameters
+    ----------
+    rows : list of tuple
+        ``(x0, y0, x1, y1, n_inliers, rmse_m)`` per segment, metres.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Those columns: ``n_inliers`` int32, the others float64 (metres).
+    """
     df = pd.DataFrame(rows, columns=_SEGMENT_COLUMNS)
     return df.astype({c: "float64" for c in _SEGMENT_COLUMNS if c != "n_inliers"} | {"n_inliers": "int32"})
