@@ -16,4 +16,7 @@ def test_a_failed_dataset_gets_its_error_not_an_older_answer(tmp_path):
     (tmp_path / "a" / "selection").mkdir(parents=True)
     (tmp_path / "a" / "selection" / "selection.json").write_text("{}")  # an older answer: not read
     lines = answer_lines(["a", "b"], tmp_path, failed={"a": "ingest failed: x.bag: truncated"})
-    assert lines == ["a: FAILED: ingest failed: x.bag: truncated"]
+    assert lines == [
+        "a: FAILED: ingest failed: x.bag: truncated",
+        f"b: no answer yet ({tmp_path}/b/selection/selection.json is not made; the plan target makes it)",
+    ]

@@ -74,7 +74,7 @@ def answer_lines(
     the reduced recording, the points, ``summary.md`` and the front page are. Several:
     one line each and the index page (``results/index.html``). A dataset in
     ``failed`` gets its error instead of an answer, even when an older answer is on
-    disk; a dataset whose selection was not made is skipped.
+    disk; a dataset whose selection was not made yet gets one line saying so.
 
     Parameters
     ----------
@@ -102,6 +102,7 @@ def answer_lines(
             continue
         summary_path = root / ds / "selection" / "selection.json"
         if not summary_path.is_file():
+            lines.append(f"{ds}: no answer yet ({summary_path} is not made; the plan target makes it)")
             continue
         s = json.loads(summary_path.read_text())
         v = dataset_verdict(root, ds)
