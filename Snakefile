@@ -10,14 +10,8 @@ from pathlib import Path
 from snakemake_interface_executor_plugins.settings import ExecMode
 from snakemake.utils import min_version
 
-from floorscan.core.config import (
-    ConfigError,
-    add_path_datasets,
-    check_datasets,
-    config_errors_exit,
-    resolve_building,
-    validate_config,
-)
+from floorscan.core.config import ConfigError, config_errors_exit, validate_config
+from floorscan.core.datasets import add_path_datasets, check_datasets, resolve_building
 from floorscan.core.io import InputError
 from floorscan.ingest.detect import recordings_in
 

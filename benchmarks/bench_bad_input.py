@@ -517,7 +517,7 @@ class _Collect(logging.Handler):
 def run_stages(dataset: dict, out: Path) -> Run:
     """Ingest, poses and register on ``dataset`` in ``out``, as the stage scripts run
     them; an error is caught and kept with the paragraph the stage would print."""
-    from floorscan.core.config import dataclass_from_mapping
+    from floorscan.core.config import stage_params
     from floorscan.core.io import POSES, read_metadata, read_table, write_table
     from floorscan.core.stage import failure_message, is_expected_error
     from floorscan.ingest.params import PosesParams
@@ -543,7 +543,7 @@ def run_stages(dataset: dict, out: Path) -> Run:
         stream = read_table(out / "pose_stream.parquet")
         detected = read_metadata(out / "pose_stream.parquet")
         source = f"{detected.get('source', out / 'pose_stream.parquet')} (poses: {detected.get('pose_source', 'none')})"
-        params = dataclass_from_mapping(PosesParams, {"max_gap_s": 0.5}, "poses")
+        params = stage_params(PosesParams, {"max_gap_s": 0.5})
         index = read_table(index_path)
         poses = scan_poses(index, stream, params.max_gap_s, source)
         write_table(poses, out / "poses.parquet", schema=POSES)

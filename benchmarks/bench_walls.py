@@ -40,8 +40,9 @@ import yaml
 from floorscan.floorplan.plan import build_floorplan
 from floorscan.core.io import iter_scans, read_table, split_by_scan
 from floorscan.walls.extract import extract_scan, extract_walls
-from floorscan.walls.extractors import EXTRACTORS, config_params
-from floorscan.walls.params import params_from_config
+from floorscan.core.config import stage_params
+from floorscan.walls.extractors import EXTRACTORS, REGISTRY
+from floorscan.walls.params import ClusterParams, RansacParams, ScanParams
 from floorscan.walls.points import scan_points_2d
 
 REPO = Path(__file__).resolve().parents[1]
@@ -123,7 +124,8 @@ def main(argv: list[str] | None = None) -> None:
         time_shard(args.shard[0], int(args.shard[1]), int(args.shard[2]), args.repeats)
         return
     cfg = schema_defaults(REPO / "workflow/schemas/walls.schema.yaml")
-    scan_p, rp, cp = params_from_config(cfg)
+    scan_p = stage_params(ScanParams, cfg)
+    rp, cp = stage_params(RansacParams, cfg.get("ransac")), stage_params(ClusterParams, cfg.get("cluster_ransac"))
     from floorscan.walls.cluster import cluster_ransac  # noqa: F401  (warm imports)
     import open3d  # noqa: F401
     import sklearn.cluster  # noqa: F401
@@ -142,7 +144,7 @@ def main(argv: list[str] | None = None) -> None:
         npts = np.mean([len(scans[s]) for s in ids])
         print(f"\n{ds}: {len(ids)} of {len(scans)} scans from {source}, {npts:.0f} points/scan")
         res = {}
-        params = config_params(cfg)
+        params = {key: stage_params(c, cfg.get(key)) for e in REGISTRY.values() for key, c in e.config.items()}
         params_sk = {**params, "cluster_ransac": dataclasses.replace(cp, meanshift="sklearn")}
         runs = (("ransac", "ransac", params), ("cluster_ransac", "cluster_ransac", params),
                 ("cluster_sklearn", "cluster_ransac", params_sk))

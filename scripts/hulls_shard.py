@@ -3,6 +3,7 @@ range (thesis Algorithm 2), streamed scan by scan (memory holds one scan, issue 
 scripts/select.py concatenates the shards (floorscan.select.hulls.merge_hull_shards)."""
 import json
 
+from floorscan.core.config import stage_params
 from floorscan.select.hulls import compute_hulls, to_table
 from floorscan.select.params import HullParams
 from floorscan.core.runtime import progress
@@ -11,7 +12,7 @@ from floorscan.core.shards import parse_shard_label, read_scan_range
 from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:
-    params = HullParams.from_config(snakemake.params.cfg)
+    params = stage_params(HullParams, snakemake.params.cfg)
     shard = snakemake.wildcards.shard
     start, stop = parse_shard_label(shard)
     cluster, convex, counts = compute_hulls(

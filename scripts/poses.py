@@ -1,6 +1,6 @@
 """Stage poses: the pose of each scan at its timestamp (thesis Algorithm 3 step 1)."""
 from floorscan.core.io import POSES, read_metadata, read_table, write_table
-from floorscan.core.config import dataclass_from_mapping
+from floorscan.core.config import stage_params
 from floorscan.ingest.params import PosesParams
 from floorscan.ingest.poses import missing_poses_line, scan_poses
 from floorscan.core.stage import stage_log
@@ -11,7 +11,7 @@ with stage_log(snakemake) as log:
     # messages name the recording and its pose source, not the intermediate table
     detected = read_metadata(snakemake.input.pose_stream)
     source = f"{detected.get('source', snakemake.input.pose_stream)} (poses: {detected.get('pose_source', 'none')})"
-    params = dataclass_from_mapping(PosesParams, snakemake.params.cfg, "poses")
+    params = stage_params(PosesParams, snakemake.params.cfg)
     poses = scan_poses(index, stream, params.max_gap_s, source)
     write_table(poses, snakemake.output.poses, schema=POSES)
     if stream.empty:

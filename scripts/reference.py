@@ -1,5 +1,6 @@
 """Stage reference: the occupancy grid of all kept scans (the reference map), written
 as a ROS map_server map, a cell table and a figure."""
+from floorscan.core.config import stage_params
 from floorscan.core.io import read_table
 from floorscan.core.stage import stage_log
 from floorscan.figures.maps import plot_reference_map
@@ -8,7 +9,7 @@ from floorscan.score.reference import reference_of_recording
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
-    params = OccupancyParams(**smk.params.cfg)
+    params = stage_params(OccupancyParams, smk.params.cfg)
     grid = reference_of_recording(smk.input.registered, read_table(smk.input.registration),
                                   smk.params.walls, params)
     counts = grid.counts()

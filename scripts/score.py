@@ -2,6 +2,7 @@
 of scripts/score_runs.py, in one table), the quality-vs-k summary of the curves
 (scripts/score_curves.py) and its figure, and summary.md / summary.html."""
 
+from floorscan.core.config import stage_params
 from floorscan.core.stage import stage_log
 from floorscan.score.params import ScoreParams
 from floorscan.figures.curves import plot_quality_vs_k
@@ -10,7 +11,7 @@ from floorscan.score.stage import write_scores
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
-    cfg, dataset = ScoreParams.from_config(smk.params.cfg), smk.wildcards.dataset
+    cfg, dataset = stage_params(ScoreParams, smk.params.cfg), smk.wildcards.dataset
     scores = write_scores(
         smk.input.runs, smk.input.curves, smk.input.index, smk.input.registration, smk.output, cfg, dataset,
         smk.params.default_ordering, {"kind": smk.params.reference_kind, "label": smk.params.reference_label},

@@ -2,6 +2,7 @@
 every ordering (the workflow's, seeded random ones, and the completeness oracle)
 against the reference map, on a k grid of 2 % of the kept scans (every k up to 20 %,
 beyond it where the levels of the all-scan F1 are crossed: floorscan.score.curves)."""
+from floorscan.core.config import stage_params
 from floorscan.core.io import read_table, write_table
 from floorscan.core.stage import stage_log
 from floorscan.score.params import ScoreParams
@@ -9,7 +10,7 @@ from floorscan.score import curves as C
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
-    cfg = ScoreParams.from_config(smk.params.cfg)
+    cfg = stage_params(ScoreParams, smk.params.cfg)
     curves, oracle = C.score_curves(
         per_scan=read_table(smk.input.walls),
         orderings={o: read_table(p) for o, p in zip(smk.params.orderings, smk.input.orderings)},

@@ -5,6 +5,7 @@ job, not a merge job and a select job: a job costs ~0.6 s to start, on the path 
 walls' k tables."""
 from pathlib import Path
 
+from floorscan.core.config import stage_params
 from floorscan.core.io import read_table, write_table
 from floorscan.core.stage import stage_log
 from floorscan.select.hulls import merge_hull_shards
@@ -18,7 +19,7 @@ with stage_log(snakemake) as log:  # noqa: F821
         smk.input.shard_hulls, smk.input.shard_convex, smk.input.registration, smk.input.registered,
         smk.params.shard_scans, smk.output.hulls, smk.output.convex, smk.wildcards.dataset, log=log,
     )
-    params = SelectParams.from_config(smk.params.cfg)
+    params = stage_params(SelectParams, smk.params.cfg)
     orderings, summary = select_stage(cluster, convex, read_table(smk.input.registration), params)
     # the seconds of each ordering go to this log, not into the summary file
     log.info("orderings summary:\n%s", summary.to_string(index=False))

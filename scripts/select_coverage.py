@@ -10,14 +10,16 @@ from floorscan.core.io import iter_scans, read_table, write_table
 from floorscan.select.coverage import COVERAGE_ORDERING, OBJECTIVE_COLUMN
 from floorscan.select.orderings import coverage_orderings
 from floorscan.select.params import CoverageParams
-from floorscan.walls.params import params_from_config
+from floorscan.walls.params import RansacParams, ScanParams
 from floorscan.walls.points import scan_points_2d
+from floorscan.core.config import stage_params
 from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
-    params = CoverageParams.from_config(smk.params.cfg["coverage"])
-    scan_params, ransac_params, _ = params_from_config(smk.params.walls)
+    params = stage_params(CoverageParams, smk.params.cfg["coverage"])
+    scan_params = stage_params(ScanParams, smk.params.walls)
+    ransac_params = stage_params(RansacParams, smk.params.walls.get("ransac"))
     ids = kept_scan_ids(read_table(smk.input.registration), smk.input.registration)
     kept = set(ids.tolist())  # the band cut only for the kept scans
     scans = ((s, scan_points_2d(xyz, scan_params)[0]) for s, xyz in iter_scans(smk.input.registered) if s in kept)

@@ -1,6 +1,7 @@
 """Figures of the select stage: thesis Figs 5.6, 5.7 and 5.8."""
 from pathlib import Path
 
+from floorscan.core.config import stage_params
 from floorscan.figures.selection import FigureParams, selection_figures
 from floorscan.select.hulls import kept_scan_ids
 from floorscan.core.io import read_table
@@ -10,8 +11,8 @@ from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:
     cfg = dict(snakemake.params.cfg)
-    fig_params = FigureParams.from_config(cfg)
-    select_params = SelectParams.from_config(cfg)
+    fig_params = stage_params(FigureParams, cfg)
+    select_params = stage_params(SelectParams, cfg)
     registration = read_table(snakemake.input.registration)
     hulls = read_table(snakemake.input.hulls)
     # the coverage orderings rank by their own objective: the hull area along them here
@@ -25,7 +26,7 @@ with stage_log(snakemake) as log:
         hulls=hulls,
         convex_hulls=read_table(snakemake.input.convex),  # the k = 1 curve
         orderings=orderings,
-        hull_params=HullParams.from_config(snakemake.params.hulls_cfg),
+        hull_params=stage_params(HullParams, snakemake.params.hulls_cfg),
         select_params=select_params,
         params=fig_params,
         out_coverage=snakemake.output.coverage,

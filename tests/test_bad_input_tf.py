@@ -345,5 +345,7 @@ def test_verdict_judges_losses_by_the_option():
     # exactly at the threshold is not above it
     assert verdict(14, 14, math.nan, 0, 0.2, 0.3, losses=Losses(10, {"no_pose": 2}), max_lost_fraction=0.2).ok
     assert RegistrationConfig().max_lost_fraction == 0.2  # the schema's default
-    with pytest.raises(InputError, match=r"config register.max_lost_fraction: expected 0..1, got 1.5"):
-        RegistrationConfig.from_mapping({"max_lost_fraction": 1.5})
+    from floorscan.core.config import ConfigError, stage_params
+
+    with pytest.raises(ConfigError, match=r"register.max_lost_fraction: 1.5 is greater than the maximum of 1"):
+        stage_params(RegistrationConfig, {"max_lost_fraction": 1.5})

@@ -76,7 +76,8 @@ def test_validate_config_names_the_field_and_copies_defaults():
 def test_a_path_alone_is_a_dataset():
     """`--config path=...`: the recording becomes a dataset named after the file, with
     nothing but its path, and the only target; the schema accepts it."""
-    from floorscan.core.config import add_path_datasets, validate_config
+    from floorscan.core.config import validate_config
+    from floorscan.core.datasets import add_path_datasets
 
     def add_path_dataset(cfg):
         names = add_path_datasets(cfg, [cfg["path"]] if cfg.get("path") else [])
@@ -102,7 +103,7 @@ def test_a_path_alone_is_a_dataset():
 def test_a_path_to_a_shipped_recording_reuses_its_dataset(tmp_path, monkeypatch):
     """The shipped config names recordings by relative paths; the same file given by
     its absolute path (or through a symbolic link) is that dataset, not simpath2_2."""
-    from floorscan.core.config import add_path_datasets
+    from floorscan.core.datasets import add_path_datasets
 
     def add_path_dataset(cfg):
         return add_path_datasets(cfg, [cfg["path"]])[0]
@@ -125,7 +126,8 @@ def test_a_folder_of_recordings_is_a_dataset_each(tmp_path):
     """A folder that is not itself a recording: each recording in it is a dataset (files
     by suffix, ROS2 bag and PCD folders), named after its file, all of them the targets;
     other entries are skipped; the building's floors resolve by file name."""
-    from floorscan.core.config import ConfigError, add_path_datasets
+    from floorscan.core.config import ConfigError
+    from floorscan.core.datasets import add_path_datasets
     from floorscan.core.io import InputError
     from floorscan.ingest.detect import recordings_in
 
@@ -207,7 +209,8 @@ def test_a_misspelt_stage_under_params_lists_the_stages():
 
 
 def test_an_empty_path_and_an_unknown_building_say_what_is_expected(tmp_path):
-    from floorscan.core.config import ConfigError, check_datasets
+    from floorscan.core.config import ConfigError
+    from floorscan.core.datasets import check_datasets
 
     (tmp_path / "demo.yaml").write_text("")
     (tmp_path / "office.yaml").write_text("")
@@ -326,3 +329,81 @@ def test_command_line_strings_reach_the_schema_with_their_types():
     assert poses["max_gap_s"] == 0.7
     with pytest.raises(ConfigError, match="max_gap_s"):
         validate_config({"max_gap_s": "soon"}, schemas / "poses.schema.yaml", "poses")
+
+
+# ------------------------------------------ issue 37, item 1: one way to read a section
+
+
+@pytest.mark.parametrize(
+    "module, cls, section, message",
+    [
+        ("floorscan.walls.params", "RansacParams", {"max_iterations": 50},
+         r"walls\.ransac\.max_iterations: unknown key; expected one of \['coverage_gap_m', 'iterations', "),
+        ("floorscan.register.params", "RegistrationConfig", {"graph": {"loop_radius": 3.0}},
+         r"register\.graph\.loop_radius: unknown key; expected one of \['agreement_fitness_ratio', "),
+        ("floorscan.floorplan.params", "FloorplanParams", {"structure": {"snap": 0.1}},
+         r"floorplan\.structure\.snap: unknown key; expected one of \['clutter_max_length_m', "),
+        ("floorscan.score.params", "ScoreParams", {"tau_m": 0.1},
+         r"score\.tau_m: unknown key; expected one of \['cell_m', "),
+        ("floorscan.ingest.params", "IngestParams", {"carmen_fov": 3.14},
+         r"ingest\.carmen_fov: unknown key; expected one of \['carmen_fov_rad', "),
+        ("floorscan.figures.selection", "FigureParams", {"figure_k": [1, 5]},
+         r"select\.figure_k: unknown key; expected one of \['coverage', "),
+    ],
+    ids=["walls.ransac", "register.graph", "floorplan.structure", "score", "ingest", "select(figures)"],
+)
+def test_an_unknown_key_is_one_config_error_naming_it_in_every_stage(module, cls, section, message):
+    """Every stage builds its parameters with stage_params: an unknown key, top-level or
+    in a subsection, is the same ConfigError, naming the key and the known ones."""
+    import importlib
+
+    from floorscan.core.config import ConfigError, stage_params
+
+    with pytest.raises(ConfigError, match="^" + message):
+        stage_params(getattr(importlib.import_module(module), cls), section)
+
+
+def test_stage_params_checks_values_against_the_schema_and_builds_subsections():
+    """A wrong type, a value out of bounds or of no enum, NaN: a ConfigError naming the
+    key, in the schema's words; the allowed values are the schema's (register's enums
+    are written there alone); subsections become their classes; the section's keys of
+    other classes are left to them; derived fields follow the section."""
+    from floorscan.core.config import ConfigError, stage_params
+    from floorscan.floorplan.free_space import StructureParams
+    from floorscan.floorplan.params import FloorplanParams
+    from floorscan.register.params import RegistrationConfig
+    from floorscan.select.params import SelectParams
+    from floorscan.walls.params import RansacParams, ScanParams
+
+    with pytest.raises(ConfigError, match=r"^walls\.ransac\.iterations: 'many' is not of type 'integer'"):
+        stage_params(RansacParams, {"iterations": "many"})
+    enum = yaml.safe_load((REPO / "workflow/schemas/register.schema.yaml").read_text())["properties"]["mode"]["enum"]
+    with pytest.raises(ConfigError, match=rf"^register\.mode: 'bogus' is not one of {enum!r}".replace("[", r"\[")):
+        stage_params(RegistrationConfig, {"mode": "bogus"})
+    with pytest.raises(ConfigError, match=r"^register\.max_lost_fraction: 1\.5 is greater than the maximum of 1"):
+        stage_params(RegistrationConfig, {"max_lost_fraction": 1.5})
+    with pytest.raises(ConfigError, match=r"^walls\.ransac\.threshold_m: nan: expected a finite number"):
+        stage_params(RansacParams, {"threshold_m": float("nan")})
+    with pytest.raises(ConfigError, match=r"^floorplan\.georeference\.lon: missing"):
+        stage_params(FloorplanParams, {"georeference": {"lat": 50.0}})
+    plan = stage_params(FloorplanParams, {"extractor": "map", "structure": {"snap_m": 0.2}, "georeference": {"lat": 50, "lon": 8}})
+    assert isinstance(plan.structure, StructureParams) and plan.structure.snap_m == 0.2
+    assert (plan.georeference.lat, plan.georeference.heading_deg) == (50.0, 0.0)
+    assert stage_params(SelectParams, {"raster_m": 0.2, "k": "auto", "figure_max_scans": 9}) == SelectParams(raster_m=0.2)
+    scan = stage_params(ScanParams, {"height_band_m": [0.5, 1.5], "grid_m": 0})
+    assert (scan.min_height_m, scan.max_height_m, scan.grid_m) == (0.5, 1.5, 0.0)
+    reg = stage_params(RegistrationConfig, {"graph": {"icp_distances_m": [1, 0.5], "workers": 3}})
+    assert reg.graph_params.icp_distances_m == (1.0, 0.5) and reg.graph_params.workers == 3
+    assert stage_params(RegistrationConfig, reg) is reg and stage_params(RansacParams, None) == RansacParams()
+
+
+def test_a_null_subsection_the_schema_allows_is_none():
+    """The evaluation grid's floorplan section sets georeference to None (its plans stay
+    in the map frame): allowed by the schema, so stage_params keeps None; a subsection
+    the schema does not allow to be null is named."""
+    from floorscan.core.config import ConfigError, stage_params
+    from floorscan.floorplan.params import FloorplanParams
+
+    assert stage_params(FloorplanParams, {"georeference": None}).georeference is None
+    with pytest.raises(ConfigError, match=r"floorplan\.structure: None is not of type 'object'"):
+        stage_params(FloorplanParams, {"structure": None})

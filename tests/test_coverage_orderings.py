@@ -92,5 +92,7 @@ def test_coverage_orderings_rank_every_kept_scan_and_skip_the_others():
 def test_bad_coverage_settings_name_the_key():
     with pytest.raises(ValueError, match="select.coverage.cell_m"):
         wall_cells(_per_scan([(1, A)]), CoverageParams(cell_m=0))
-    with pytest.raises(ValueError, match="unknown select.coverage config keys"):
-        CoverageParams.from_config({"cell": 0.1})
+    from floorscan.core.config import ConfigError, stage_params
+
+    with pytest.raises(ConfigError, match=r"select\.coverage\.cell: unknown key"):
+        stage_params(CoverageParams, {"cell": 0.1})

@@ -18,7 +18,8 @@ from floorscan.floorplan.georeference import Georeference, lonlat_to_map, map_to
 from floorscan.floorplan.merge import merge_segments
 from floorscan.floorplan.metadata import PlanMetadata
 from floorscan.floorplan.pairing import pair_faces
-from floorscan.floorplan.params import WORKFLOW_KEYS, FloorplanParams, params_from_config
+from floorscan.core.config import stage_params
+from floorscan.floorplan.params import WORKFLOW_KEYS, FloorplanParams
 from floorscan.floorplan.plan import FloorPlan, build_floorplan
 from floorscan.floorplan.writer import FloorplanWriter, write_floorplan
 from floorscan.walls.cluster import cluster_ransac
@@ -118,7 +119,9 @@ def test_pairing_range_and_overlap():
 
 
 def test_bad_config_and_columns_are_named():
-    with pytest.raises(KeyError, match="merge_angle"):
+    from floorscan.core.config import ConfigError
+
+    with pytest.raises(ConfigError, match=r"floorplan\.merge_angel_deg: unknown key"):
         write_floorplan(pd.DataFrame(), {"merge_angel_deg": 3}, {})
     with pytest.raises(KeyError, match="x0"):
         build_floorplan(pd.DataFrame({"a": [1]}))
@@ -130,9 +133,9 @@ def test_bad_config_and_columns_are_named():
         FloorplanParams(georeference={"lat": 90.0, "lon": 8.0})
     with pytest.raises(ValueError, match="georeference.lon"):
         FloorplanParams(georeference={"lat": 50.0, "lon": 181.0})
-    with pytest.raises(KeyError, match="lat"):
+    with pytest.raises(ConfigError, match=r"georeference\.lat: missing"):
         FloorplanParams(georeference={"lon": 8.0})
-    with pytest.raises(KeyError, match="heading"):
+    with pytest.raises(ConfigError, match=r"georeference\.heading: unknown key"):
         FloorplanParams(georeference={"lat": 50.0, "lon": 8.0, "heading": 3.0})
 
 
@@ -148,7 +151,7 @@ def test_schema_defaults_agree_with_floorplan_params():
         assert {k: v["default"] for k, v in properties.items()} == vars(getattr(FloorplanParams(), section))
     fields = [f for f in FloorplanParams.__dataclass_fields__ if f not in ("structure", "rooms")]
     assert defaults == {f: getattr(FloorplanParams(), f) for f in fields}
-    assert params_from_config({"extractor": "cluster_ransac", "evaluation_formats": ["geojson"]}) == FloorplanParams()
+    assert stage_params(FloorplanParams, {"extractor": "cluster_ransac", "evaluation_formats": ["geojson"]}) == FloorplanParams()
 
 
 def test_export_registry_names_the_formats_of_the_schema():

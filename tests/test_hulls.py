@@ -144,8 +144,10 @@ def test_bad_input_errors():
         cl.cluster_labels(np.zeros((5, 3)))
     with pytest.raises(ValueError, match="NaN"):
         cl.cluster_labels(np.array([[0.0, np.nan], [1, 1], [2, 2]]), scan_id=4)
-    with pytest.raises(ValueError, match="unknown hulls config keys"):
-        HullParams.from_config({"k": 3})
+    from floorscan.core.config import ConfigError, stage_params
+
+    with pytest.raises(ConfigError, match=r"hulls\.k: unknown key"):
+        stage_params(HullParams, {"k": 3})
     with pytest.raises(ValueError, match="k_clusters"):
         HullParams(k_clusters=0)
 

@@ -151,8 +151,10 @@ def test_bad_input():
         optimize_pose_graph(poses, edges)
     with pytest.raises(ValueError, match="priors"):
         optimize_pose_graph(poses, edges.iloc[:0], priors=np.zeros((2, 4)))
-    with pytest.raises(KeyError, match="unknown register.graph config keys"):
-        GraphParams.from_mapping({"loop_radius": 3})
+    from floorscan.core.config import ConfigError, stage_params
+
+    with pytest.raises(ConfigError, match=r"register\.graph\.loop_radius: unknown key"):
+        stage_params(GraphParams, {"loop_radius": 3})
 
 
 def test_refine_poses_reports_fitness_per_scan(recording):

@@ -56,7 +56,7 @@ def test_keep_test_confirms_contradicts_and_falls_back_to_fitness():
     assert n_agree.tolist() == [2, 1, 1, 0, 0, 0, 0]
     assert n_supported.tolist() == [2, 1, 2, 2, 2, 1, 0]
     assert n_pairs.tolist() == [2, 4, 3, 3, 3, 3, 0]
-    cfg = RegistrationConfig.from_mapping({})
+    cfg = RegistrationConfig()
     fitness_prior = np.array([0.05, 0.5, 0.5, 0.9, 0.5, 0.05, np.nan])
     fitness = np.array([0.10, 0.5, 0.5, 0.9, 0.2, 0.10, np.nan])
     reasons, confirmed = keep_test(fitness_prior, fitness, n_agree, n_supported, n_pairs, cfg)

@@ -119,16 +119,19 @@ def test_the_graph_section_is_parsed_once_per_run(monkeypatch, tmp_path):
     from floorscan.register.params import GraphParams
     from floorscan.register.stream import register_recording
 
+    import floorscan.register.params as P
+    from floorscan.core.config import ConfigError, stage_params
+
     calls = []
-    parse = GraphParams.from_mapping.__func__
-    monkeypatch.setattr(GraphParams, "from_mapping", classmethod(lambda cls, m: calls.append(m) or parse(cls, m)))
+    monkeypatch.setattr(P, "stage_params", lambda cls, m, *a: (calls.append(m) if cls is GraphParams else None)
+                        or stage_params(cls, m, *a))
     true, t = trajectory(12)
     scans, index, poses = recording(true, t)
     write_table(scans, tmp_path / "scans.parquet", schema=SCANS)
-    cfg = RegistrationConfig.from_mapping({"every_n": 2, "graph": {"loop_radius_m": 2.5}})
+    cfg = stage_params(RegistrationConfig, {"every_n": 2, "graph": {"loop_radius_m": 2.5}})
     register_recording(tmp_path / "scans.parquet", index, poses, cfg, tmp_path / "reg.parquet")
     assert calls == [{"loop_radius_m": 2.5}]
     resolved = resolve_config(cfg, None, 4.0)
     assert resolved.graph_params is cfg.graph_params and len(calls) == 1
-    with pytest.raises(InputError, match="config register.graph"):
-        RegistrationConfig.from_mapping({"graph": {"loop_radius": 3}})
+    with pytest.raises(ConfigError, match=r"register\.graph\.loop_radius: unknown key"):
+        stage_params(RegistrationConfig, {"graph": {"loop_radius": 3}})

@@ -515,7 +515,9 @@ def test_bad_input_errors():
         register_scans(scans.drop(columns="z"), index, poses, {})
     with pytest.raises(InputError, match="mode 'pose' needs poses"):
         register_scans(scans, index, None, {})
-    with pytest.raises(InputError, match="register.icp_method"):
+    from floorscan.core.config import ConfigError
+
+    with pytest.raises(ConfigError, match=r"register\.icp_method: 'gicp' is not one of"):
         register_scans(scans, index, poses, {"icp_method": "gicp"})
 
 

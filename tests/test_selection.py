@@ -263,8 +263,10 @@ def test_schema_defaults_match_dataclasses():
     # the recommended selection's k (floorscan.select.recommend reads them from the config)
     assert (defaults.pop("k"), defaults.pop("k_coverage")) == ("auto", 0.99)
     assert defaults == {**SelectParams().as_dict(), **fig}
-    with pytest.raises(ValueError, match="unknown select config keys"):
-        SelectParams.from_config({"tile": 3})
+    from floorscan.core.config import ConfigError, stage_params
+
+    with pytest.raises(ConfigError, match=r"select\.tile: unknown key"):
+        stage_params(SelectParams, {"tile": 3})
 
 
 def test_figures(synthetic, tmp_path):

@@ -269,7 +269,9 @@ def test_unknown_scanner_and_bad_seed(tmp_path):
 
 
 def test_negative_noise_is_rejected(tmp_path):
-    with pytest.raises(InputError, match=r"simulate\.pose_position_std_m.*>= 0"):
+    from floorscan.core.config import ConfigError
+
+    with pytest.raises(ConfigError, match=r"simulate\.pose_position_std_m: -0\.1 is less than the minimum of 0"):
         run(tmp_path, cfg=dict(CFG, pose_position_std_m=-0.1))
     with pytest.raises(InputError, match=r"scanners\.2d\.range_noise_std_m"):
         run(tmp_path, cfg={"scanners": {"2d": {"range_noise_std_m": -0.01}}})

@@ -293,7 +293,9 @@ def test_scan_points_2d_height_band_and_2d_rule():
 def test_bad_walls_config_is_named():
     with pytest.raises(ValueError, match="height_band_m"):
         extract_walls(scans_frame({0: with_z(np.zeros((30, 2)))}), "ransac", {"height_band_m": [2.0, 0.5]})
-    with pytest.raises(KeyError, match="treshold_m"):
+    from floorscan.core.config import ConfigError
+
+    with pytest.raises(ConfigError, match=r"walls\.ransac\.treshold_m: unknown key"):
         extract_walls(scans_frame({0: with_z(np.zeros((30, 2)))}), "ransac", {"ransac": {"treshold_m": 0.1}})
     with pytest.raises(ValueError, match="unknown extractor"):
         extract_walls(scans_frame({0: with_z(np.zeros((30, 2)))}), "hough", {})

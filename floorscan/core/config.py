@@ -3,12 +3,15 @@ make, and config sections to parameter dataclasses (one rule for every stage).
 
 Defaults are written once, in the stage schemas (``workflow/schemas/<stage>.schema.yaml``,
 the config a user reads and writes). The Snakefile validates the config before any job
-starts (:func:`validate_config`, which fills the defaults, and :func:`check_datasets`)
-inside :func:`config_errors_exit`, so that a bad value stops the run with one paragraph
-naming the key, not a traceback. The package reads a section through its stage's typed
-parameter dataclass: :func:`schema_defaults` gives the dataclass's fields the schema's
-defaults, :func:`dataclass_from_mapping` builds it from a section and is the one place
-that rejects unknown keys.
+starts (:func:`validate_config`, Snakemake's ``validate`` filling the defaults, and
+:func:`floorscan.core.datasets.check_datasets`) inside :func:`config_errors_exit`, so that a bad value stops the
+run with one paragraph naming the key, not a traceback. The package reads a section
+through its stage's typed parameter dataclass, one way for every stage and subsection:
+:func:`schema_defaults` gives the dataclass's fields the schema's defaults and names its
+section, :func:`stage_params` builds it from a section, checking each key and value
+against that section of the schema (:class:`ConfigError` naming the key)::
+
+    ransac = stage_params(RansacParams, config["walls"]["ransac"])   # "walls.ransac"
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ import dataclasses
 import functools
 import math
 import os
+import typing
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping, TypeVar
 
@@ -26,35 +30,6 @@ T = TypeVar("T")
 
 #: The stage schemas: ``<SCHEMA_DIR>/<stage>.schema.yaml``.
 SCHEMA_DIR = Path(__file__).resolve().parents[2] / "workflow" / "schemas"
-
-
-def dataclass_from_mapping(cls: type[T], values: Mapping[str, Any] | None, section: str, error=KeyError) -> T:
-    """``cls(**values)`` after checking that every key is a field of ``cls``.
-
-    Parameters
-    ----------
-    cls : dataclass type
-    values : mapping, None or cls
-        The config section (None: all defaults); an instance of ``cls`` is returned as
-        it is.
-    section : str
-        The section's name for the message, e.g. ``"floorplan"`` or ``"register.graph"``.
-    error : exception type
-        Raised for unknown keys (default ``KeyError``).
-
-    Raises
-    ------
-    error
-        Naming the unknown keys and the known ones.
-    """
-    if isinstance(values, cls):
-        return values
-    values = dict(values or {})
-    names = {f.name for f in dataclasses.fields(cls)}
-    unknown = sorted(set(values) - names)
-    if unknown:
-        raise error(f"unknown {section} config keys {unknown}; expected {sorted(names)}")
-    return cls(**values)
 
 
 @functools.lru_cache(maxsize=None)
@@ -112,6 +87,11 @@ def schema_section_defaults(section: str) -> dict[str, Any]:
     return {name: copy.deepcopy(p["default"]) for name, p in props.items() if isinstance(p, dict) and "default" in p}
 
 
+#: The parameter dataclasses (:func:`schema_defaults`): class -> (its schema section,
+#: its ``derived`` fields).
+PARAMS_SECTIONS: dict[type, tuple[str, dict[str, Callable[[dict], Any]]]] = {}
+
+
 def schema_defaults(section: str, **derived: Callable[[dict], Any]) -> Callable[[type[T]], type[T]]:
     """Class decorator (under ``@dataclass``): each field without a default in the class
     gets the schema's default of the property of that name in ``section``.
@@ -131,7 +111,9 @@ def schema_defaults(section: str, **derived: Callable[[dict], Any]) -> Callable[
     ``derived`` gives a field's default as a function of the section's defaults: for a
     field that is not a key of the section (``min_height_m=lambda d:
     d["height_band_m"][0]``), or a key whose default the class holds in another type
-    (``icp_distances_m=lambda d: tuple(d["icp_distances_m"])``).
+    (``icp_distances_m=lambda d: tuple(d["icp_distances_m"])``); :func:`stage_params`
+    applies the same function to a config's section. The class is the one
+    :func:`stage_params` builds from ``section``.
 
     Raises
     ------
@@ -160,6 +142,7 @@ def schema_defaults(section: str, **derived: Callable[[dict], Any]) -> Callable[
                     setattr(cls, name, value)
             elif not in_class and name not in properties:
                 raise TypeError(f"{cls.__name__}.{name}: no default in schema {section}")
+        PARAMS_SECTIONS[cls] = (section, dict(derived))
         return cls
 
     return wrap
@@ -169,16 +152,124 @@ class ConfigError(ValueError):
     """A config value the schema rejects; the message names the field and the schema."""
 
 
+def stage_params(cls: type[T], values: "T | Mapping[str, Any] | None", name: str | None = None) -> T:
+    """A stage's typed parameters from its config section: the one way the package and
+    the scripts read config.
+
+    Parameters
+    ----------
+    cls : dataclass type
+        A parameter class of :func:`schema_defaults` (its section, e.g. ``"walls.ransac"``).
+    values : mapping, None or cls
+        The config section (None: the defaults); an instance of ``cls`` is returned as
+        it is.
+    name : str, optional
+        Where the section sits in the config, for messages; default ``cls``'s section.
+
+    Returns
+    -------
+    cls
+        Built from the keys of ``values`` that are its fields (the section's other keys
+        belong to other classes or to the workflow), each checked against its property
+        of the schema (type, bounds, enum: jsonschema) and for NaN and infinity; a field
+        whose type is a parameter class (a subsection such as ``floorplan.structure``)
+        built by this function; a ``derived`` field (:func:`schema_defaults`) computed
+        from the section.
+
+    Raises
+    ------
+    ConfigError
+        ``<name>.<key>: unknown key; expected one of [...]`` for a key that is neither a
+        property of the section nor a field of ``cls``; ``<name>.<key>: <what the
+        schema says>`` for a wrong type or value; a field without a default missing.
+    """
+    if isinstance(values, cls):
+        return values
+    section, derived = PARAMS_SECTIONS[cls]
+    name = name or section
+    values = dict(values or {})
+    props = _section_properties(section)
+    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
+    known = sorted(set(props) | {f for f in fields if f not in derived})
+    for key in values:
+        if key not in props and key not in fields:
+            raise ConfigError(f"{name}.{key}: unknown key; expected one of {known}")
+    hints = _field_types(cls)
+    kwargs = {}
+    for key, value in values.items():
+        sub = props.get(key)
+        nested = _params_class(hints.get(key))
+        if nested is not None and isinstance(value, Mapping):
+            value = stage_params(nested, value, f"{name}.{key}")
+        elif isinstance(sub, dict) and "properties" in sub:  # a subsection: checked by its own class
+            nullable = value is None and "null" in (sub["type"] if isinstance(sub.get("type"), list) else [sub.get("type")])
+            if not nullable and not isinstance(value, Mapping) and not dataclasses.is_dataclass(value):
+                raise ConfigError(f"{name}.{key}: {value!r} is not of type 'object'")
+        elif isinstance(sub, dict):
+            _check_value(value, sub, section, f"{name}.{key}")
+        if key in fields:
+            kwargs[key] = value
+    if derived:
+        merged = {**schema_section_defaults(section), **values}
+        kwargs.update({key: fn(merged) for key, fn in derived.items() if key in props or key not in values})
+    for f in fields.values():
+        if f.name not in kwargs and f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            raise ConfigError(f"{name}.{f.name}: missing; it has no default")
+    return cls(**kwargs)
+
+
+@functools.lru_cache(maxsize=None)
+def _field_types(cls: type) -> dict[str, Any]:
+    """The resolved annotations of a parameter class's fields ({} if they do not resolve)."""
+    try:
+        return typing.get_type_hints(cls)
+    except (NameError, TypeError):
+        return {}
+
+
+def _params_class(hint: Any) -> type | None:
+    """The parameter class (:data:`PARAMS_SECTIONS`) a field's type names, ``X | None``
+    included; None for any other type."""
+    for t in (hint, *typing.get_args(hint)):
+        if isinstance(t, type) and t in PARAMS_SECTIONS:
+            return t
+    return None
+
+
+@functools.lru_cache(maxsize=None)
+def _stage_validator(stage: str):
+    """A jsonschema (draft 2020-12) validator of the schema of ``stage``, without defaults."""
+    from jsonschema import Draft202012Validator
+
+    return Draft202012Validator(_schema(stage))
+
+
+def _check_value(value: Any, schema: dict, section: str, field: str) -> None:
+    """Raise :class:`ConfigError` naming ``field`` when ``value`` breaks ``schema`` (a
+    property of the schema of ``section``) or holds a NaN or infinity."""
+    from jsonschema.exceptions import best_match
+
+    plain = _plain(value)
+    error = best_match(_stage_validator(section.split(".")[0]).evolve(schema=schema).iter_errors(plain))
+    if error is not None:
+        raise ConfigError(_message(error, field))
+    found = _non_finite(plain)
+    if found is not None:
+        raise ConfigError(f"{_field(field, found[0])}: {found[1]!r}: expected a finite number, not NaN or infinity")
+
+
+def _plain(value: Any) -> Any:
+    """``value`` with its tuples as lists (JSON arrays, for jsonschema)."""
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, Mapping):
+        return {k: _plain(v) for k, v in value.items()}
+    return value
+
+
 #: Where the synthetic buildings live, relative to the working directory (the
 #: repository root): ``<BUILDINGS_DIR>/<name>.yaml`` is the building ``name``.
 BUILDINGS_DIR = "config/buildings"
-
-#: What a dataset's ``path`` names, for messages.
-RECORDING_PATH = (
-    "the path of a recording: a ROS1 .bag file, a ROS2 bag folder (or its .db3 / .mcap), "
-    "a CARMEN .log or .log.gz, or a folder of .pcd scans with locations.csv"
-)
-
 
 @contextlib.contextmanager
 def config_errors_exit() -> Iterator[None]:
@@ -236,35 +327,11 @@ def _message(error, section: str) -> str:
     return f"{field}: {error.message}"
 
 
-@functools.lru_cache(maxsize=None)
-def _schema_validator(path: str):
-    """The default-filling JSON Schema (draft 2020-12) validator of the YAML schema at
-    ``path`` (:func:`_load_schema`)."""
-    from jsonschema import Draft202012Validator, validators
-
-    schema = _load_schema(os.path.realpath(path))
-    Draft202012Validator.check_schema(schema)
-    properties = Draft202012Validator.VALIDATORS["properties"]
-
-    def fill_defaults(validator, props, instance, subschema):
-        # the jsonschema FAQ's recipe, as snakemake.utils.validate(set_default=True);
-        # each default copied, so that no two configs share a mutable default
-        if isinstance(instance, dict):
-            for name, prop in props.items():
-                if isinstance(prop, dict) and "default" in prop:
-                    instance.setdefault(name, copy.deepcopy(prop["default"]))
-        yield from properties(validator, props, instance, subschema)
-
-    return validators.extend(Draft202012Validator, {"properties": fill_defaults})(schema)
-
-
 def validate_config(data: dict, schema_path: str | os.PathLike, section: str = "config") -> dict:
-    """Validate a config mapping against a JSON schema in YAML and fill its defaults.
-
-    The checks and defaults of ``snakemake.utils.validate(data, schema_path)`` (a
-    ``jsonschema`` Draft 2020-12 validator that sets each missing property with a
-    ``default``), each schema parsed once per process with libyaml (the workflow
-    validates every stage's section at every start).
+    """Validate a config mapping against a JSON schema in YAML and fill its defaults:
+    ``snakemake.utils.validate(data, schema_path, set_default=True)``, with what it does
+    not do (strings of ``--config`` read as YAML, a message naming the key, NaN and
+    infinity refused).
 
     Parameters
     ----------
@@ -295,15 +362,18 @@ def validate_config(data: dict, schema_path: str | os.PathLike, section: str = "
     read as YAML first and taken when the result has a type the schema allows
     (:func:`_typed_strings`); a string the schema allows stays a string.
     """
-    import jsonschema
+    from jsonschema import ValidationError
+    from snakemake.exceptions import WorkflowError
+    from snakemake.utils import validate
 
-    validator = _schema_validator(os.fspath(schema_path))
     schema = _load_schema(os.path.realpath(os.fspath(schema_path)))
     _typed_strings(data, schema, schema)
     try:
-        validator.validate(data)
-    except jsonschema.ValidationError as e:
-        raise ConfigError(f"{_message(e, section)} (schema {os.fspath(schema_path)})") from None
+        validate(data, os.fspath(schema_path), set_default=True)
+    except WorkflowError as e:  # raised while handling the jsonschema error, its context
+        if not isinstance(e.__context__, ValidationError):
+            raise
+        raise ConfigError(f"{_message(e.__context__, section)} (schema {os.fspath(schema_path)})") from None
     found = _non_finite(data)
     if found is not None:
         raise ConfigError(f"{_field(section, found[0])}: {found[1]!r}: expected a finite number, not NaN or infinity")
@@ -351,145 +421,3 @@ def _typed_strings(data: Any, schema: dict, root: dict) -> Any:
         for i, item in enumerate(data):
             data[i] = _typed_strings(item, schema["items"], root)
     return data
-
-
-def known_buildings(buildings_dir: str | os.PathLike = BUILDINGS_DIR) -> list[str]:
-    """Names of the synthetic buildings: the ``<name>.yaml`` files of ``buildings_dir``
-    (:func:`floorscan.sim.building_file.load_building` reads one), sorted."""
-    folder = Path(buildings_dir)
-    return sorted(p.stem for p in folder.glob("*.yaml")) if folder.is_dir() else []
-
-
-def check_datasets(config: Mapping, buildings_dir: str | os.PathLike = BUILDINGS_DIR) -> None:
-    """What the schema cannot check of a validated config's recordings.
-
-    Parameters
-    ----------
-    config : mapping
-        The workflow config after :func:`validate_config`.
-    buildings_dir : path
-        The folder of the synthetic buildings (``<name>.yaml``).
-
-    Raises
-    ------
-    ConfigError
-        A ``path`` (top-level or of a dataset) that is empty, saying what a path names;
-        a synthetic dataset's ``building`` without a file in ``buildings_dir``, listing
-        the known buildings.
-    """
-    if "path" in config and not str(config["path"] or "").strip():
-        raise ConfigError(f"path (--config path=...) is empty; expected {RECORDING_PATH}")
-    for name, ds in (config.get("datasets") or {}).items():
-        if ds.get("format") == "synthetic":
-            building = str(ds.get("building"))
-            if not (Path(buildings_dir) / f"{building}.yaml").is_file():
-                raise ConfigError(
-                    f"datasets.{name}.building: no building {building!r}; expected one of "
-                    f"{known_buildings(buildings_dir)} (the files {os.fspath(buildings_dir)}/<name>.yaml)"
-                )
-        elif "path" in ds and not str(ds["path"] or "").strip():
-            raise ConfigError(f"datasets.{name}.path is empty; expected {RECORDING_PATH}")
-
-
-def _same_file(a: str | None, b: str) -> bool:
-    """Whether two paths name the same file or folder (resolved against the working
-    directory, symbolic links followed)."""
-    return a is not None and os.path.realpath(a) == os.path.realpath(b)
-
-
-def dataset_name(path: str | os.PathLike) -> str:
-    """The dataset name of a recording: its file or folder name without the recording
-    suffixes (``.gz``, ``.log``, ``.clf``, ``.bag``, ``.db3``, ``.mcap``), other
-    characters than letters, digits and ``_`` replaced by ``_``, ``r_`` before a
-    leading digit."""
-    import re
-    from pathlib import PurePath
-
-    name = PurePath(os.fspath(path).rstrip("/")).name
-    for suffix in (".gz", ".log", ".clf", ".bag", ".db3", ".mcap"):
-        if name.lower().endswith(suffix) and len(name) > len(suffix):
-            name = name[: -len(suffix)]
-    name = re.sub(r"[^A-Za-z0-9_]", "_", name) or "recording"
-    return f"r_{name}" if name[0].isdigit() else name
-
-
-def add_path_datasets(config: dict, recordings: list) -> list[str]:
-    """Make the recordings of the top-level ``path`` (``--config path=/data/run.bag``, or
-    a folder of recordings) datasets, the run's targets.
-
-    Each dataset is named by :func:`dataset_name`, holds only ``path`` (ingest detects
-    the rest). A dataset of that name with the same recording (the same path, relative
-    to the working directory or absolute) is reused; with another recording the name
-    gets a numeric suffix. The ``building`` section's floors name their recording by
-    dataset name or file name; they are resolved to dataset names
-    (``building.floors[i].dataset``).
-
-    Parameters
-    ----------
-    config : dict
-        The validated workflow config; changed in place (``datasets``, ``target``,
-        ``building``).
-    recordings : list of path
-        The recordings ``path`` names (:func:`floorscan.ingest.detect.recordings_in`).
-
-    Returns
-    -------
-    list of str
-        The dataset names, in the order of ``recordings``.
-
-    Raises
-    ------
-    ConfigError
-        A floor of ``building`` names no recording of the run or a dataset not
-        configured, or two floors name the same recording.
-    """
-    datasets = config.setdefault("datasets", {})
-    names, by_file = [], {}
-    for path in recordings:
-        base = name = dataset_name(path)
-        n = 1
-        while (name in datasets and not _same_file(datasets[name].get("path"), os.fspath(path))) or name in names:
-            n += 1
-            name = f"{base}_{n}"
-        datasets.setdefault(name, {"description": f"{os.fspath(path)} (--config path)", "path": os.fspath(path)})
-        names.append(name)
-        by_file[Path(path).name] = name
-    if names:
-        config["target"] = names
-    resolve_building(config, by_file)
-    return names
-
-
-def resolve_building(config: dict, by_file: Mapping[str, str] | None = None) -> None:
-    """Resolve the ``building`` section's floors to datasets, in place: each floor's
-    ``recording`` (a dataset name, or the file name of a recording of ``path``) becomes
-    ``dataset``; ``storey`` defaults to ``Floor <i>`` and ``elevation_m`` to 0.
-
-    Raises
-    ------
-    ConfigError
-        A floor names no known dataset or recording, or two floors name one.
-    """
-    building = config.get("building")
-    if not building:
-        return
-    by_file = dict(by_file or {})
-    known = set(config.get("datasets") or {})
-    seen = {}
-    for i, floor in enumerate(building.get("floors") or []):
-        ref = str(floor.get("recording", floor.get("dataset", "")))
-        name = ref if ref in known else by_file.get(ref)
-        if name is None:
-            raise ConfigError(
-                f"building.floors[{i}].recording: {ref!r} is neither a dataset nor a recording of path; "
-                f"expected one of {sorted(known | set(by_file))}"
-            )
-        if name in seen:
-            raise ConfigError(f"building.floors[{i}].recording: {ref!r} is already floor {seen[name]}")
-        if name == "building":
-            raise ConfigError(f"building.floors[{i}].recording: a dataset named 'building' would write in "
-                              "results/building/, the building's folder; rename the recording")
-        seen[name] = i
-        floor["dataset"] = name
-        floor.setdefault("storey", f"Floor {i}")
-        floor["elevation_m"] = float(floor.get("elevation_m", 0.0))

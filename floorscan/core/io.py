@@ -86,6 +86,16 @@ def table_from_frame(df: pd.DataFrame, schema: pa.Schema) -> pa.Table:
     A column the schema marks optional (:data:`OPTIONAL_FIELD`) that ``df`` lacks is
     written null; ``df`` is not changed.
 
+    Parameters
+    ----------
+    df : pandas.DataFrame
+    schema : pyarrow.Schema
+
+    Returns
+    -------
+    pyarrow.Table
+        The schema's columns in its order, no index.
+
     Raises
     ------
     KeyError
@@ -106,10 +116,23 @@ def write_table(
     schema: pa.Schema | None = None,
     metadata: Mapping[str, str] | None = None,
 ) -> None:
-    """Write a Parquet file atomically (LZ4, :func:`parquet_options`), optionally casting to ``schema``.
+    """Write a Parquet file atomically (LZ4, :func:`parquet_options`), optionally cast
+    to ``schema``.
 
-    ``metadata`` is stored as key/value strings in the file's schema metadata
-    (used for units and provenance, e.g. the dataset name).
+    Parameters
+    ----------
+    table : pyarrow.Table or pandas.DataFrame
+    path : path
+    schema : pyarrow.Schema, optional
+        Columns selected and cast to it (a frame through :func:`table_from_frame`).
+    metadata : mapping of str to str, optional
+        Stored as key/value strings in the file's schema metadata (units, provenance,
+        e.g. the dataset name); values are passed through ``str``.
+
+    Raises
+    ------
+    KeyError
+        A frame lacks a column of ``schema`` that is not optional.
     """
     if not isinstance(table, pa.Table):  # a pandas DataFrame
         table = (
@@ -132,13 +155,22 @@ def parquet_options(schema: pa.Schema, statistics: list[str] | None = None) -> d
     (pyarrow's ``"lz4"`` is the interoperable LZ4_RAW codec of the Parquet format);
     floating-point columns BYTE_STREAM_SPLIT-encoded without a dictionary (coordinates
     rarely repeat: a dictionary is built and dropped), the other columns
-    dictionary-encoded. LZ4 rather than zstd: as small on points tables, and faster to
-    write and read (benchmarks/README.md).
+    dictionary-encoded. LZ4 rather than zstd (benchmarks/README.md).
 
-    ``statistics`` names the columns whose row-group min/max are written (default:
-    all). The points tables keep them for ``scan_id`` (row groups of a scan range,
-    :func:`iter_scans`) and, where a reader uses them, ``x`` and ``y`` (the min/max of
-    every float column is a large share of writing a points table).
+    Parameters
+    ----------
+    schema : pyarrow.Schema
+        The table's schema.
+    statistics : list of str, optional
+        The columns whose row-group min/max are written (default: all). The points
+        tables keep them for ``scan_id`` (row groups of a scan range, :func:`iter_scans`)
+        and, where a reader uses them, ``x`` and ``y``.
+
+    Returns
+    -------
+    dict
+        ``compression``, ``use_dictionary``, ``column_encoding`` and, with
+        ``statistics``, ``write_statistics``.
     """
     floats = [f.name for f in schema if pa.types.is_floating(f.type)]
     options = {
@@ -152,7 +184,18 @@ def parquet_options(schema: pa.Schema, statistics: list[str] | None = None) -> d
 
 
 def read_table(path: str | os.PathLike, columns: list[str] | None = None) -> pd.DataFrame:
-    """Read a Parquet file into a DataFrame (no index)."""
+    """Read a Parquet file into a DataFrame (no index).
+
+    Parameters
+    ----------
+    path : path
+    columns : list of str, optional
+        The columns to read (default: all).
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
     return pq.read_table(path, columns=columns).to_pandas()
 
 
@@ -162,15 +205,34 @@ _LIBRARY_METADATA = (b"pandas", b"ARROW:schema")
 
 def read_metadata(path: str | os.PathLike) -> dict[str, str]:
     """The key/value strings :func:`write_table` stored in a Parquet file's schema
-    metadata (pyarrow's and pandas' own keys left out); the data is not read."""
+    metadata (pyarrow's and pandas' own keys left out); the data is not read.
+
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    dict of str to str
+    """
     meta = pq.read_schema(path).metadata or {}
     return {k.decode(): v.decode() for k, v in meta.items() if k not in _LIBRARY_METADATA}
 
 
 def recording_source(path: str | os.PathLike) -> str | None:
-    """The user's recording an ingest table (``scans``, ``scan_index``, ``pose_stream``)
-    was read from, for messages: ingest's ``source`` metadata, the file and the scan
-    topic (e.g. ``/data/run.bag /scan``); None when the table has none or is unreadable."""
+    """The user's recording an ingest table was read from, for messages.
+
+    Parameters
+    ----------
+    path : path
+        An ingest table (``scans``, ``scan_index``, ``pose_stream``).
+
+    Returns
+    -------
+    str or None
+        Ingest's ``source`` metadata, the file and the scan topic (e.g.
+        ``/data/run.bag /scan``); None when the table has none or is unreadable.
+    """
     try:
         return read_metadata(path).get("source")
     except (OSError, pa.ArrowException):
@@ -178,10 +240,21 @@ def recording_source(path: str | os.PathLike) -> str | None:
 
 
 def split_by_scan(df: pd.DataFrame, columns: tuple[str, ...] = ("x", "y", "z")) -> dict[int, np.ndarray]:
-    """Group a points table (``scan_id`` and ``columns``) into
-    ``{scan_id: (N, len(columns)) float64}``, in ascending ``scan_id``.
+    """Group a points table by ``scan_id``.
 
     Arrays are new (the frame is not mutated); a scan's points keep their row order.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        ``scan_id`` and ``columns``.
+    columns : tuple of str
+        The coordinate columns to take, metres.
+
+    Returns
+    -------
+    dict of int to (N, len(columns)) float64 ndarray
+        In ascending ``scan_id``; empty for an empty frame.
 
     Raises
     ------
@@ -243,6 +316,14 @@ class ScanRowGroups:
             self._pool.shutdown(wait=True)
 
     def add(self, scan_id: int, points: np.ndarray) -> None:
+        """Buffer one scan; a full row group goes to the writer thread.
+
+        Parameters
+        ----------
+        scan_id : int
+        points : (n, 3) float ndarray
+            The scan's points, metres; cast to float32.
+        """
         pts = np.asarray(points, dtype=np.float32).reshape(-1, 3)
         self.ids.append(np.full(len(pts), scan_id, np.int32))
         self.pts.append(pts)

@@ -29,6 +29,7 @@ from floorscan.figures.stage_times import plot_stage_times, stage_times
 from floorscan.figures.style import reference_name
 from floorscan.figures.wall_extraction import plot_wall_extraction
 from floorscan.score.bitmap import grid_for
+from floorscan.core.config import stage_params
 from floorscan.score.params import ScoreParams
 from floorscan.score.segments import as_segments
 
@@ -79,7 +80,7 @@ def make_walls_figures(
     cfg : ScoreParams or mapping
         The ``score`` config section.
     """
-    cfg = ScoreParams.from_config(cfg)
+    cfg = stage_params(ScoreParams, cfg)
     k = str(cfg.figure_k)
     ext_fig = cfg.figure_extractor
     ordering_fig = cfg.figure_ordering
@@ -139,8 +140,13 @@ def make_score_figures(*, dataset: str, metrics: pd.DataFrame, bench_dir, output
         Paths: ``metrics_vs_k``, ``stage_times_png``, ``stage_times_tsv``.
     cfg : ScoreParams or mapping
         The ``score`` config section.
+
+    Returns
+    -------
+    pandas.DataFrame
+        :func:`floorscan.figures.stage_times.stage_times`.
     """
-    cfg = ScoreParams.from_config(cfg)
+    cfg = stage_params(ScoreParams, cfg)
     plot_metrics_vs_k(metrics, outputs["metrics_vs_k"], cfg.summary_tau_m)
     table = stage_times(bench_dir)
     with atomic_path(outputs["stage_times_tsv"]) as tmp:

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Iterable, Mapping, Sequence
 
 import matplotlib
@@ -41,9 +41,11 @@ _LINE_WIDTHS = {"cluster_hull": 2.0, "convex_hull": 1.5, "wall_coverage": 2.0, "
 
 
 @dataclass(frozen=True)
-@schema_defaults("select", figure_k_clusters=lambda d: tuple(d["figure_k_clusters"]))
+@schema_defaults("select", figure_k_clusters=lambda d: tuple(int(k) for k in d["figure_k_clusters"]))
 class FigureParams:
-    """The ``figure_*`` keys of the ``select`` config section.
+    """The ``figure_*`` keys of the ``select`` config section
+    (``stage_params(FigureParams, config["select"])``: the section's other keys are
+    other classes', an unknown key a :class:`~floorscan.core.config.ConfigError`).
 
     Attributes
     ----------
@@ -59,15 +61,6 @@ class FigureParams:
     figure_max_scans: int
     figure_reference_max_scans: int
 
-    @classmethod
-    def from_config(cls, cfg: Mapping | None) -> "FigureParams":
-        """Take the ``figure_*`` keys of the select config (others ignored)."""
-        names = {f.name for f in fields(cls)}
-        kw = {k: v for k, v in dict(cfg or {}).items() if k in names}
-        if "figure_k_clusters" in kw:
-            kw["figure_k_clusters"] = tuple(int(k) for k in kw["figure_k_clusters"])
-        return cls(**kw)
-
 
 def _finish(fig, ax, dataset: str, what: str, path: str | os.PathLike) -> None:
     """Title (``"<dataset>: <what it shows>"``; what, capitalised, alone), grid and legend
@@ -80,10 +73,16 @@ def _finish(fig, ax, dataset: str, what: str, path: str | os.PathLike) -> None:
 
 
 def plot_coverage_vs_scans(orderings: Mapping[str, pd.DataFrame], path: str | os.PathLike, title: str = "") -> None:
-    """Fig. 5.6: cumulative covered area (m^2) against number of scans per ordering.
+    """Thesis Fig. 5.6: cumulative covered area against number of scans per ordering;
+    the point where each ordering reaches 99 % of its final area is marked.
 
-    ``orderings`` maps ordering name -> frame with ``rank, covered_area_m2``.
-    The point where each ordering reaches 99 % of its final area is marked.
+    Parameters
+    ----------
+    orderings : mapping of str to pandas.DataFrame
+        Ordering name -> ``rank``, ``covered_area_m2`` (square metres).
+    path : path
+        PNG output, written atomically (:func:`~floorscan.figures.style.save_figure`).
+    title : str
     """
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for name in [o for o in ORDERINGS if o in orderings] + [o for o in orderings if o not in ORDERINGS]:
@@ -181,7 +180,17 @@ def _coverage_curves(registered, scan_ids, k_values, hull_params, raster_m, hull
 
 
 def plot_coverage_vs_clusters(curves: Mapping[int, pd.DataFrame], path: str | os.PathLike, title: str = "") -> None:
-    """Fig. 5.7: covered area against number of scans, one curve per cluster count."""
+    """Thesis Fig. 5.7: covered area against number of scans, one curve per cluster
+    count.
+
+    Parameters
+    ----------
+    curves : mapping of int to pandas.DataFrame
+        Cluster count -> ``covered_area_m2`` (square metres) in rank order.
+    path : path
+        PNG output, written atomically (:func:`~floorscan.figures.style.save_figure`).
+    title : str
+    """
     fig, ax = plt.subplots(figsize=(7, 4.5))
     cmap = plt.get_cmap("viridis")
     for i, (k, o) in enumerate(sorted(curves.items())):
@@ -202,6 +211,17 @@ def selection_timing(
     raster_m: float = 0.05,
 ) -> pd.DataFrame:
     """Time the lazy and the reference greedy on the first n scans (Fig. 5.8).
+
+    Parameters
+    ----------
+    scan_ids : (S,) sequence of int
+    geometries : (S,) sequence of shapely geometry
+        Coverage of each scan, metres.
+    sizes : sequence of int
+        The n to time (capped at S).
+    reference_max_scans : int
+    raster_m : float
+        Metres.
 
     Returns
     -------
@@ -228,7 +248,17 @@ def selection_timing(
 
 
 def plot_selection_time(timing: pd.DataFrame, path: str | os.PathLike, title: str = "") -> None:
-    """Fig. 5.8: selection time against number of scans, lazy vs reference greedy."""
+    """Thesis Fig. 5.8: selection time against number of scans, lazy vs reference
+    greedy.
+
+    Parameters
+    ----------
+    timing : pandas.DataFrame
+        :func:`selection_timing`.
+    path : path
+        PNG output, written atomically (:func:`~floorscan.figures.style.save_figure`).
+    title : str
+    """
     fig, ax = plt.subplots(figsize=(7, 4.5))
     ax.plot(timing["n_scans"], timing["fast_s"], "o-", label="lazy greedy (production)")
     ref = timing.dropna(subset=["reference_s"])
@@ -254,13 +284,33 @@ def selection_figures(
     title: str = "",
     convex_hulls: pd.DataFrame | None = None,
 ) -> pd.DataFrame:
-    """Write the three selection figures; returns the Fig. 5.8 timing table.
+    """Write the three selection figures (thesis Figs. 5.6 to 5.8).
 
-    ``registered`` is the points frame or the path of ``registered.parquet``
-    (streamed scan by scan: memory follows the largest scan). ``hulls`` (the hulls
-    stage's table, made with ``hull_params``) gives the Fig. 5.7 curve of
-    ``hull_params.k_clusters`` without clustering again, and ``convex_hulls`` (the
-    stage's ``convex_hulls.parquet``) the curve of k = 1.
+    Parameters
+    ----------
+    registered : pandas.DataFrame or path
+        The points frame or ``registered.parquet`` (streamed scan by scan: memory
+        follows the largest scan).
+    registration : pandas.DataFrame
+        ``registration.parquet``.
+    hulls : pandas.DataFrame
+        The hulls stage's table, made with ``hull_params``: the Fig. 5.7 curve of
+        ``hull_params.k_clusters`` without clustering again.
+    orderings : mapping of str to pandas.DataFrame
+        Fig. 5.6.
+    hull_params : HullParams
+    select_params : SelectParams
+    params : FigureParams
+    out_coverage, out_clusters, out_timing : path
+        PNG outputs of Figs. 5.6, 5.7, 5.8.
+    title : str
+    convex_hulls : pandas.DataFrame, optional
+        The stage's ``convex_hulls.parquet``: the curve of k = 1.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The Fig. 5.8 timing table (:func:`selection_timing`).
     """
     plot_coverage_vs_scans(orderings, out_coverage, title)
     ids = _spaced(kept_scan_ids(registration), params.figure_max_scans)

@@ -38,13 +38,28 @@ EXTRACTOR_COLOURS = {"ransac": "tab:blue", "cluster_ransac": "tab:red"}
 
 
 def reference_name(reference_kind: str) -> str:
-    """``"ground truth"`` or ``"reference (all scans)"`` for titles and legends."""
+    """``"ground truth"`` or ``"reference (all scans)"`` for titles and legends.
+
+    Parameters
+    ----------
+    reference_kind : str
+
+    Returns
+    -------
+    str
+    """
     return "ground truth" if reference_kind == GROUND_TRUTH else "reference (all scans)"
 
 
 def save_figure(fig, path: str | os.PathLike) -> None:
-    """Write ``fig`` to ``path`` at :data:`DPI` (format by the suffix, PNG without one),
-    atomically, and close it."""
+    """Write ``fig`` at :data:`DPI` (format by the suffix, PNG without one),
+    atomically, and close it.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    path : path
+    """
     path = Path(path)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=DPI, format=path.suffix.lstrip(".") or "png")
@@ -52,11 +67,31 @@ def save_figure(fig, path: str | os.PathLike) -> None:
 
 
 def segments_collection(segments, **kw) -> LineCollection:
+    """Segments as a matplotlib collection (non-finite rows dropped).
+
+    Parameters
+    ----------
+    segments : (M, 4) array_like
+        ``x0, y0, x1, y1``, metres.
+    **kw
+        Passed to ``LineCollection``.
+
+    Returns
+    -------
+    matplotlib.collections.LineCollection
+    """
     seg = as_segments(segments)
     return LineCollection(seg.reshape(-1, 2, 2), **kw)
 
 
 def square_axes(ax) -> None:
+    """Equal aspect (by the data limits) and x, y labels in metres.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Changed in place.
+    """
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")

@@ -21,10 +21,34 @@ from floorscan.core.geometry import point_segment_dist2
 
 
 def axial_angle(seg: np.ndarray) -> np.ndarray:
+    """Direction of each segment as an axial angle (a line, not a vector).
+
+    Parameters
+    ----------
+    seg : (N, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+
+    Returns
+    -------
+    (N,) float64 ndarray
+        Radians in [0, pi).
+    """
     return np.mod(np.arctan2(seg[:, 3] - seg[:, 1], seg[:, 2] - seg[:, 0]), np.pi)
 
 
 def angle_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Difference of axial angles, modulo pi.
+
+    Parameters
+    ----------
+    a, b : float ndarray
+        Axial angles, radians, broadcastable.
+
+    Returns
+    -------
+    float64 ndarray
+        Radians in [0, pi/2].
+    """
     d = np.abs(a - b) % np.pi
     return np.minimum(d, np.pi - d)
 
@@ -48,6 +72,22 @@ def candidate_pairs(
     False the distance test is left to the caller (:func:`within_distance`,
     :func:`floorscan.floorplan.merge._merge_groups`), who may run its own cheaper
     tests first; the pairs are then in no particular order.
+
+    Parameters
+    ----------
+    seg : (N, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    distance : float
+        Metres.
+    max_angle : float, optional
+        Radians.
+    exact : bool
+        Apply the distance test (and sort the pairs by ``(i, j)``).
+
+    Returns
+    -------
+    i, j : (P,) int64 ndarray
+        The pairs, ``i < j``.
     """
     import shapely
 
@@ -117,7 +157,23 @@ def _binned_box_pairs(seg: np.ndarray, lo: np.ndarray, hi: np.ndarray, ang: np.n
 
 
 def within_distance(seg: np.ndarray, i: np.ndarray, j: np.ndarray, distance: float):
-    """The pairs (i, j) of segments at most ``distance`` apart (the dwithin test)."""
+    """The pairs (i, j) of segments at most ``distance`` apart (the dwithin test; 0
+    where they cross).
+
+    Parameters
+    ----------
+    seg : (N, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    i, j : (P,) int ndarray
+        Candidate pairs.
+    distance : float
+        Metres.
+
+    Returns
+    -------
+    i, j : (Q,) int ndarray
+        The pairs kept, in their order.
+    """
     if len(i) == 0:
         return i, j
     keep = _segment_distance(seg[i], seg[j]) <= distance
@@ -142,8 +198,25 @@ def _segment_distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def line_geometry(seg: np.ndarray, i: np.ndarray, j: np.ndarray):
-    """For pairs (i, j): the longer one's unit direction/normal/midpoint, and the
-    shorter one's endpoints, as arrays."""
+    """For pairs (i, j): the longer one's unit direction and normal, with the
+    indices of the longer and the shorter.
+
+    Parameters
+    ----------
+    seg : (N, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    i, j : (P,) int ndarray
+        Pairs of segments.
+
+    Returns
+    -------
+    a, b : (P,) int ndarray
+        The longer and the shorter of each pair.
+    d, n : (P, 2) float64 ndarray
+        The longer's unit direction and normal (direction turned a quarter left).
+    length : (N,) float64 ndarray
+        Every segment's length, metres.
+    """
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
     swap = length[i] < length[j]
     a = np.where(swap, j, i)  # longer

@@ -74,14 +74,26 @@ class Georeference:
             raise ValueError(f"floorplan.georeference.lon must be in [-180, 180] degrees, got {self.lon}")
 
     def radii(self) -> tuple[float, float]:
-        """WGS84 radii of curvature at :attr:`lat`, metres: meridian ``M = a (1 - e^2)
-        / (1 - e^2 sin^2 lat)^1.5`` and prime vertical ``N = a / (1 - e^2 sin^2 lat)^0.5``."""
+        """WGS84 radii of curvature at :attr:`lat`: meridian ``M = a (1 - e^2) /
+        (1 - e^2 sin^2 lat)^1.5`` and prime vertical ``N = a / (1 - e^2 sin^2 lat)^0.5``.
+
+        Returns
+        -------
+        m, n : float
+            Metres.
+        """
         e2 = WGS84_F * (2.0 - WGS84_F)
         w2 = 1.0 - e2 * math.sin(math.radians(self.lat)) ** 2
         return WGS84_A * (1.0 - e2) / w2**1.5, WGS84_A / math.sqrt(w2)
 
     def as_dict(self) -> dict:
-        """``lat``, ``lon``, ``heading_deg`` and the conventions, for metadata."""
+        """``lat``, ``lon``, ``heading_deg`` and the conventions, for metadata.
+
+        Returns
+        -------
+        dict
+            Also ``heading`` and ``model``: the conventions in words.
+        """
         return {
             "lat": self.lat, "lon": self.lon, "heading_deg": self.heading_deg,
             "heading": "direction of the map frame's +x axis, degrees clockwise from true north",
@@ -93,21 +105,28 @@ def as_georeference(value: Georeference | Mapping[str, Any] | None) -> Georefere
     """:class:`Georeference` of a config mapping (``lat``, ``lon``, optional
     ``heading_deg``), or the value itself when a Georeference or None.
 
+    Parameters
+    ----------
+    value : Georeference, mapping or None
+        ``lat``, ``lon`` degrees; ``heading_deg`` degrees clockwise from north.
+
+    Returns
+    -------
+    Georeference or None
+
     Raises
     ------
-    KeyError
-        For an unknown or missing key.
+    floorscan.core.config.ConfigError
+        For an unknown or missing key, or a value the schema refuses
+        (:func:`floorscan.core.config.stage_params`).
     ValueError
         For a value out of range (see :class:`Georeference`).
     """
-    if value is None or isinstance(value, Georeference):
-        return value
-    from floorscan.core.config import dataclass_from_mapping
+    if value is None:
+        return None
+    from floorscan.core.config import stage_params
 
-    missing = sorted({"lat", "lon"} - set(value))
-    if missing:
-        raise KeyError(f"floorplan.georeference lacks {missing}; expected lat, lon and optionally heading_deg")
-    return dataclass_from_mapping(Georeference, value, "floorplan.georeference")
+    return stage_params(Georeference, value, "floorplan.georeference")
 
 
 def map_to_lonlat(x, y, georeference: Georeference) -> tuple[np.ndarray, np.ndarray]:
@@ -143,9 +162,21 @@ def map_to_lonlat(x, y, georeference: Georeference) -> tuple[np.ndarray, np.ndar
 
 
 def lonlat_to_map(lon, lat, georeference: Georeference) -> tuple[np.ndarray, np.ndarray]:
-    """Map coordinates (metres) of WGS84 longitudes and latitudes (degrees): the
-    inverse of :func:`map_to_lonlat`, e.g. to score a georeferenced GeoJSON plan in
-    the map frame. Shapes as there."""
+    """Map coordinates of WGS84 longitudes and latitudes: the inverse of
+    :func:`map_to_lonlat` (local tangent plane), e.g. to score a georeferenced GeoJSON
+    plan in the map frame.
+
+    Parameters
+    ----------
+    lon, lat : float or ndarray
+        Degrees, one shape.
+    georeference : Georeference
+
+    Returns
+    -------
+    x, y : float64 ndarray
+        Map metres, that shape.
+    """
     lon, lat = np.asarray(lon, dtype=np.float64), np.asarray(lat, dtype=np.float64)
     m, n = georeference.radii()
     north = np.radians(lat - georeference.lat) * m

@@ -1,6 +1,7 @@
 """Parameters of the floor plan, config section ``floorplan``: :class:`FloorplanParams`
-(merge, pairing, wall height, DXF version, georeference) and :func:`params_from_config`,
-which reads the section.
+(merge, pairing, wall height, DXF version, georeference, and the subsections
+``structure`` and ``rooms``), built from the section by
+:func:`floorscan.core.config.stage_params` (``stage_params(FloorplanParams, cfg)``).
 
 The defaults are written once, in workflow/schemas/floorplan.schema.yaml
 (:func:`floorscan.core.config.schema_defaults`). The section's keys that the workflow reads, not the plan, are
@@ -10,9 +11,8 @@ The defaults are written once, in workflow/schemas/floorplan.schema.yaml
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Mapping
 
-from floorscan.core.config import schema_defaults
+from floorscan.core.config import schema_defaults, stage_params
 from floorscan.floorplan.georeference import Georeference, as_georeference
 from floorscan.floorplan.free_space import StructureParams
 from floorscan.floorplan.room_space import RoomParams
@@ -82,10 +82,8 @@ class FloorplanParams:
 
     def __post_init__(self):
         for name, cls in (("structure", StructureParams), ("rooms", RoomParams)):
-            if not isinstance(getattr(self, name), cls):  # the config's mapping
-                from floorscan.core.config import dataclass_from_mapping
-
-                object.__setattr__(self, name, dataclass_from_mapping(cls, getattr(self, name), f"floorplan.{name}"))
+            if not isinstance(getattr(self, name), cls):  # a mapping given to the constructor
+                object.__setattr__(self, name, stage_params(cls, getattr(self, name), f"floorplan.{name}"))
         if self.georeference is not None:  # a config mapping -> Georeference (checked)
             object.__setattr__(self, "georeference", as_georeference(self.georeference))
         if self.dxf_version not in DXF_VERSIONS:
@@ -99,18 +97,3 @@ class FloorplanParams:
 #: Keys of the ``floorplan`` config section that the workflow reads, not the plan:
 #: the recommended plan's extractor and the formats of the evaluation grid's plans.
 WORKFLOW_KEYS = ("extractor", "evaluation_formats")
-
-
-def params_from_config(cfg: Mapping[str, Any] | None) -> FloorplanParams:
-    """:class:`FloorplanParams` of the ``floorplan`` config section (without
-    :data:`WORKFLOW_KEYS`).
-
-    Raises
-    ------
-    KeyError
-        For a key the class does not know.
-    """
-    from floorscan.core.config import dataclass_from_mapping
-
-    plan_cfg = {k: v for k, v in (cfg or {}).items() if k not in WORKFLOW_KEYS}
-    return dataclass_from_mapping(FloorplanParams, plan_cfg, "floorplan")

@@ -23,7 +23,8 @@ import pandas as pd
 from floorscan.floorplan import EXPORT_FORMATS, FLOORPLAN_FORMATS
 from floorscan.floorplan.footprints import PlanExports
 from floorscan.floorplan.metadata import PlanMetadata, export_time, recording_timestamp
-from floorscan.floorplan.params import params_from_config
+from floorscan.core.config import stage_params
+from floorscan.floorplan.params import FloorplanParams
 from floorscan.floorplan.plan import FloorPlan, in_scan_order, build_floorplan
 
 if TYPE_CHECKING:
@@ -52,12 +53,14 @@ class FloorplanWriter:
 
     Raises
     ------
+    floorscan.core.config.ConfigError
+        For an unknown config key or a wrong value (on construction).
     KeyError
-        For an unknown config key (on construction) or output format (:meth:`write`).
+        For an unknown output format (:meth:`write`).
     """
 
     def __init__(self, cfg: Mapping[str, Any] | None):
-        self.params = params_from_config(cfg)
+        self.params = stage_params(FloorplanParams, cfg)
         self._built: dict[bytes, PlanExports] = {}
 
     def write(
@@ -117,6 +120,13 @@ class FloorplanWriter:
         :data:`FLOORPLAN_FORMATS`), named by ``meta``, each format by its writer in
         :data:`floorscan.floorplan.EXPORT_FORMATS` with this writer's params.
 
+        Parameters
+        ----------
+        exports : PlanExports
+        outputs : mapping of str to path
+            Format -> output path.
+        meta : PlanMetadata
+
         Raises
         ------
         KeyError
@@ -156,9 +166,35 @@ def write_floorplan(
 ) -> FloorPlan:  # fmt: skip
     """Build the floor plan of ``segments`` and write it: ``FloorplanWriter(cfg).write(
     segments, outputs, name, dataset=..., ordering=..., extractor=..., k=...,
-    timestamp=...)`` (see there; ``cfg`` is the ``floorplan`` config section),
-    returning the :class:`FloorPlan`. Raises ``KeyError`` for an unknown output
-    format or config key."""
+    timestamp=...)``.
+
+    Parameters
+    ----------
+    segments : pandas.DataFrame
+        Wall segments ``x0, y0, x1, y1`` (metres), optional ``n_inliers``, ``scan_id``.
+    cfg : mapping or None
+        The ``floorplan`` config section.
+    outputs : mapping of str to path
+        Format -> output path.
+    name : str
+        The plan's title.
+    dataset, ordering, extractor : str
+    k : str or int
+        What the plan is of (its metadata).
+    timestamp : float, optional
+        The exports' time stamp, seconds since the epoch (:func:`export_time`).
+
+    Returns
+    -------
+    FloorPlan
+
+    Raises
+    ------
+    KeyError
+        For an unknown output format, or a missing coordinate column.
+    floorscan.core.config.ConfigError
+        For a config key or value the schema refuses.
+    """
     return FloorplanWriter(cfg).write(
         segments, outputs, name, dataset=dataset, ordering=ordering, extractor=extractor, k=k, timestamp=timestamp
     )[0]
@@ -240,7 +276,7 @@ def recommended_plan(
     segments = walls if extractor == "map" else walls[walls["scan_id"].isin(ids)]
     grid = None if grid_path is None else read_grid(grid_path)
     meta = PlanMetadata(dataset, ordering, extractor, len(ids), recording_timestamp(index_path))
-    plan = build_floorplan(segments, params_from_config(cfg), grid)
+    plan = build_floorplan(segments, stage_params(FloorplanParams, cfg), grid)
     return RecommendedPlan(plan, meta, grid, len(ids), len(segments))
 
 

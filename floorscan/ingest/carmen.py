@@ -35,6 +35,7 @@ from typing import Any, Iterator, Mapping
 
 import numpy as np
 
+from floorscan.core.config import stage_params
 from floorscan.core.io import InputError
 from floorscan.core.messages import quoted
 from floorscan.ingest.carmen_lines import (
@@ -189,13 +190,27 @@ def open_carmen(path: Path, dataset: Mapping[str, Any], cfg: "IngestParams | Map
     chosen as :mod:`floorscan.ingest.carmen_ranges` and
     :mod:`floorscan.ingest.carmen_stamps` say, noted and stored in ``Recording.detected``.
 
+    Parameters
+    ----------
+    path : Path
+        The ``.log`` or ``.log.gz`` file.
+    dataset : mapping
+        The dataset's config entry (``range_min_m``, ``range_max_m``, ...).
+    cfg : IngestParams, mapping or None
+        The ``ingest`` config section (``carmen_max_range_m``, ``carmen_fov_rad``).
+
+    Returns
+    -------
+    Recording
+        Its scans are read lazily, as ``Recording.scans`` is iterated.
+
     Raises
     ------
     InputError
         See :func:`parse_carmen`; also more than half of the laser lines with broken
         geometry, or no line with a valid return (names the first line and field).
     """
-    params = IngestParams.from_config(cfg)
+    params = stage_params(IngestParams, cfg)
     cfg_max = params.carmen_max_range_m
     scans, counts, limit, unknown, cls = _parse(
         path,

@@ -1,14 +1,14 @@
 """Parameters of the ingest and poses stages (config sections ``ingest`` and ``poses``);
 their defaults are those of ``workflow/schemas/ingest.schema.yaml`` and
-``poses.schema.yaml`` (:func:`floorscan.core.config.schema_defaults`)."""
+``poses.schema.yaml`` (:func:`floorscan.core.config.schema_defaults`). Built from a
+section by :func:`floorscan.core.config.stage_params`:
+``stage_params(IngestParams, config["ingest"])``."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Mapping
 
-from floorscan.core.config import dataclass_from_mapping, schema_defaults
-from floorscan.core.io import InputError
+from floorscan.core.config import schema_defaults
 
 
 @dataclass(frozen=True)
@@ -30,17 +30,6 @@ class IngestParams:
     carmen_max_range_m: float | None
     carmen_fov_rad: float
     missing_time_period_s: float
-
-    @classmethod
-    def from_config(cls, cfg: "IngestParams | Mapping[str, Any] | None") -> "IngestParams":
-        """From the ``ingest`` section (None: the defaults).
-
-        Raises
-        ------
-        InputError
-            An unknown key.
-        """
-        return dataclass_from_mapping(cls, cfg, "ingest", InputError)
 
 
 @dataclass(frozen=True)

@@ -52,6 +52,7 @@ from typing import Any, Iterator, Mapping
 import numpy as np
 import pandas as pd
 
+from floorscan.core.config import stage_params
 from floorscan.core.io import InputError
 from floorscan.ingest.params import IngestParams
 from floorscan.ingest.points import FrameError, ScanLosses, filter_points, no_point_reason
@@ -267,6 +268,10 @@ def _compressed_xyz(path: Path, h: PcdHeader, raw: bytes) -> np.ndarray:
 def read_pcd_header(path: str | Path) -> PcdHeader:
     """Read and check the header of a ``.pcd`` file (rules in the module docstring).
 
+    Returns
+    -------
+    PcdHeader
+
     Raises
     ------
     InputError
@@ -445,7 +450,7 @@ def open_pcd_folder(path: Path, dataset: Mapping[str, Any], cfg: Mapping[str, An
     """
     if not path.is_dir():
         raise InputError(f"{path}: expected a folder of .pcd files")
-    period = IngestParams.from_config(cfg).missing_time_period_s
+    period = stage_params(IngestParams, cfg).missing_time_period_s
     loc = read_locations(path, dataset.get("locations", "locations.csv"), float(period))
     stream = pose_stream_frame(loc["t_ns"].to_numpy(), loc["x"], loc["y"], loc["z"], loc["yaw"])
     rmin, rmax = dataset.get("range_min_m"), dataset.get("range_max_m")

@@ -34,7 +34,27 @@ MAX_TILT_DEG = 10.0
 
 
 def planar_pose_stream(t, rot: Rotation, trans, what: str):
-    """Pose stream of a chain of 3D poses, refusing a tilted scanner."""
+    """Pose stream of a chain of 3D poses, refusing a tilted scanner.
+
+    Parameters
+    ----------
+    t : (N,) int ndarray
+        Stamps, nanoseconds.
+    rot, trans : scipy.spatial.transform.Rotation, (N, 3) float ndarray
+        N rotations and translations (metres).
+    what : str
+        The chain, for the message.
+
+    Returns
+    -------
+    pandas.DataFrame
+        :func:`~floorscan.ingest.recording.pose_stream_frame` (yaw of the rotated x axis).
+
+    Raises
+    ------
+    InputError
+        A pose's z axis tilts more than :data:`MAX_TILT_DEG` degrees from vertical.
+    """
     mat = rot.as_matrix()
     tilt = np.degrees(np.arccos(np.clip(mat[:, 2, 2], -1.0, 1.0)))
     if np.max(tilt) > MAX_TILT_DEG:
@@ -83,6 +103,20 @@ class TfLink:
             self.t_arr, self.trans_arr, self.rot = self.t_arr[-1:], self.trans_arr[-1:], self.rot[-1:]
 
     def at(self, t: np.ndarray) -> tuple[Rotation, np.ndarray]:
+        """The link's transform at stamps ``t`` (after :meth:`finish`): a static link's one
+        sample, else translations interpolated linearly and rotations by Slerp, held at the
+        first and last sample outside them.
+
+        Parameters
+        ----------
+        t : (N,) int ndarray
+            Stamps, nanoseconds.
+
+        Returns
+        -------
+        rot, trans : scipy.spatial.transform.Rotation, (N, 3) float64 ndarray
+            N rotations and translations (metres).
+        """
         if self.static:
             return Rotation.from_quat(np.repeat(self.rot.as_quat(), len(t), axis=0)), np.repeat(
                 self.trans_arr, len(t), axis=0
@@ -95,7 +129,19 @@ class TfLink:
 
 
 def read_tf(reader, path: Path) -> dict[tuple[str, str], TfLink]:
-    """The bag's TF links on ``/tf`` and ``/tf_static``, (parent, child) -> link."""
+    """The bag's TF links on ``/tf`` and ``/tf_static``; samples with a bad pose are
+    left out, the first noted in ``TfLink.bad``.
+
+    Parameters
+    ----------
+    reader : rosbags.highlevel.AnyReader
+    path : Path
+
+    Returns
+    -------
+    dict of (str, str) to TfLink
+        (parent, child) -> its link, finished; frame names without a leading ``/``.
+    """
     conns = [c for c in reader.connections if c.topic in TF_TOPICS]
     edges: dict[tuple[str, str], TfLink] = {}
     seen: dict[str, int] = defaultdict(int)
@@ -163,6 +209,13 @@ def walk_up(edges, frame: str, stop: str | None = None) -> tuple[list[TfLink], s
     """The links from ``frame`` up towards its root, nearest first, ending at ``stop``
     (when given and met), at a frame without parent, or at a problem.
 
+    Parameters
+    ----------
+    edges : mapping of (str, str) to TfLink
+        :func:`read_tf`'s links.
+    frame, stop : str
+        ``stop`` optional.
+
     Returns
     -------
     links : list of TfLink
@@ -199,6 +252,15 @@ def tf_chains_text(edges, first: tuple[str, ...] = ()) -> str:
     One chain per leaf, from its root (a frame with several parents appears in a chain
     of each); frames on a loop without root are shown as the loop. Chains through a
     frame of ``first`` come first; at most :data:`MAX_LISTED` are listed.
+
+    Parameters
+    ----------
+    edges : mapping of (str, str) to TfLink
+    first : tuple of str
+
+    Returns
+    -------
+    str
     """
     parents = _parents(edges)
     children: dict[str, list[str]] = defaultdict(list)
@@ -243,7 +305,20 @@ def tf_chains_text(edges, first: tuple[str, ...] = ()) -> str:
 def no_chain_error(edges, fixed: str, frame: str, path, kind: str = "", problem: str = "") -> TfChainError:
     """The :class:`TfChainError` saying why there is no chain ``fixed`` -> ``frame``: the
     problem on the way (``kind``, ``problem`` of :func:`walk_up`), else the frame is
-    missing or under another root; with the frames TF has and its chains."""
+    missing or under another root; with the frames TF has and its chains.
+
+    Parameters
+    ----------
+    edges : mapping of (str, str) to TfLink
+    fixed, frame, kind, problem : str
+    path : path
+        The bag, for the message (``""``: none).
+
+    Returns
+    -------
+    TfChainError
+        Not raised; its ``kind`` is ``kind``, ``missing`` or ``elsewhere``.
+    """
     frames = tf_frames(edges)
     stops = ""
     if not kind:
@@ -269,6 +344,17 @@ def no_chain_error(edges, fixed: str, frame: str, path, kind: str = "", problem:
 
 def tf_chain(edges, fixed: str, frame: str, path: Path | str = "") -> list[TfLink]:
     """The links of the TF chain ``fixed`` -> ``frame``, from ``fixed`` down.
+
+    Parameters
+    ----------
+    edges : mapping of (str, str) to TfLink
+    fixed, frame : str
+    path : path
+
+    Returns
+    -------
+    list of TfLink
+        Empty when ``fixed == frame``.
 
     Raises
     ------
@@ -306,6 +392,17 @@ def static_transform(edges, base: str, frame: str, path: Path | str = ""):
     static chain ``base`` -> ``frame`` (identity when they are one frame), or None when
     there is no such chain or a link of it moves.
 
+    Parameters
+    ----------
+    edges : mapping of (str, str) to TfLink
+    base, frame : str
+    path : path
+
+    Returns
+    -------
+    (scipy.spatial.transform.Rotation, (3,) float64 ndarray) or None
+        Translation in metres.
+
     Raises
     ------
     TfChainError
@@ -339,9 +436,33 @@ def _compose_static(chain: list[TfLink]):
 
 
 def tf_pose_stream(edges, path: Path, fixed: str, frame: str, max_gap_s: float):
-    """Pose stream of the TF chain ``fixed`` -> ``frame`` and the chain's links; a chain
-    that never changes (a scanner that does not move, as a stationary CARMEN log is
-    read) gives its one pose at every stamp its links were sent."""
+    """Pose stream of the TF chain ``fixed`` -> ``frame`` and the chain's links: the
+    moving links interpolated (:meth:`TfLink.at`) at their stamps where all overlap,
+    but inside a gap longer than ``max_gap_s`` of any; a chain that never changes (a
+    scanner that does not move) gives its one pose at every stamp its links were sent.
+
+    Parameters
+    ----------
+    edges : mapping of (str, str) to TfLink
+    path : Path
+    fixed, frame : str
+    max_gap_s : float
+        Seconds.
+
+    Returns
+    -------
+    stream : pandas.DataFrame
+        :func:`planar_pose_stream`'s table.
+    chain : list of TfLink
+
+    Raises
+    ------
+    InputError
+        No TF messages; a static chain sent once; moving links that do not overlap in
+        time; a bad sample on a link; a tilted scanner.
+    TfChainError
+        As :func:`tf_chain`.
+    """
     if not edges:
         raise InputError(f"{path}: pose.source is 'tf' but the bag has no /tf or /tf_static messages")
     chain = tf_chain(edges, fixed, frame, path)

@@ -35,6 +35,7 @@ from scipy.spatial import cKDTree
 from floorscan.core.geometry import se2_between, se2_compose, transform_points, wrap_angle
 from floorscan.register.icp import fitness_against, icp_to_map, target_normals
 from floorscan.register.prepare import voxel_downsample
+from floorscan.register.result import ScanRegistration
 from floorscan.register.sampling import MotionFilter
 
 
@@ -64,17 +65,18 @@ def predict_constant_velocity(p1, t1: int, p2, t2: int, t3: int) -> tuple[float,
     return se2_compose(p2, (k * d[0], k * d[1], k * d[2]))
 
 
-def register_odometry(usable, sampled, clouds, sids, t, cfg, out) -> tuple[int, np.ndarray]:
+def register_odometry(usable, sampled, clouds, sids, t, cfg, initial: ScanRegistration) -> ScanRegistration:
     """Pose-free registration: LIDAR odometry from the first usable scan (``mode: odometry``).
 
-    ``sampled``: index positions of the sampled scans (``every_n``), or None to sample
-    with the motion filter on the odometry's own poses as they are estimated. Fills the
-    per-scan output arrays ``out`` in place (as
-    :func:`floorscan.register.sequential.register_sequential`); returns the number of
-    anchors (1, the first scan) and the sampled positions. See the module docstring for
-    the method.
+    ``usable``: index positions of the scans that passed the screening; ``sampled``:
+    those of the sampled scans (``every_n``), or None to sample with the motion filter on
+    the odometry's own poses as they are estimated; ``initial``: the screening's
+    reasons (its poses are not used) and not changed; the other arguments as
+    :func:`floorscan.register.sequential.register_sequential`. Returns ``initial`` with
+    the scans registered: ``sampled`` the sampled positions, ``n_anchors`` 1 (the first
+    scan; 0 without a usable scan). See the module docstring for the method.
     """
-    kept, reasons, fit_prior, fit_icp, rmse, corr, final = out
+    res = initial.copy()  # filled here; ``initial`` stays as it was
     is_sampled = np.zeros(len(sids), dtype=bool)
     sampler = None
     if sampled is None:  # the motion filter on the odometry's poses, as they come
@@ -83,7 +85,8 @@ def register_odometry(usable, sampled, clouds, sids, t, cfg, out) -> tuple[int, 
         is_sampled[sampled] = True
     seq = usable if cfg.odometry_scans == "all" else sampled
     if len(seq) == 0:
-        return 0, np.zeros(0, dtype=np.int64)
+        res.sampled, res.n_anchors = np.zeros(0, dtype=np.int64), 0
+        return res
     icp_cfg = cfg.replace(icp_method=cfg.odometry_icp_method)
     local: deque[np.ndarray] = deque(maxlen=cfg.odometry_window)  # keyframes' ICP points, map frame
     target = None  # (points, KD-tree, normals) of the local map, rebuilt after a new keyframe
@@ -96,12 +99,12 @@ def register_odometry(usable, sampled, clouds, sids, t, cfg, out) -> tuple[int, 
         low = False
         if not chain:  # the first usable scan defines the map frame
             pose = (0.0, 0.0, 0.0, 0.0)
-            reasons[i] = "anchor"
-            corr[i] = 0.0
+            res.reason[i] = "anchor"
+            res.pose_correction[i] = 0.0
             if sampler is not None:
                 is_sampled[i] = sampler.step(0.0, 0.0, 0.0)
         else:
-            if i > 0 and reasons[i - 1] == "duplicate":
+            if i > 0 and res.reason[i - 1] == "duplicate":
                 # the scan before repeats its predecessor: the sensor stood still until
                 # then, so the motion model restarts from rest instead of carrying the
                 # last velocity across the stop
@@ -129,24 +132,24 @@ def register_odometry(usable, sampled, clouds, sids, t, cfg, out) -> tuple[int, 
             if n_corr:
                 fi, rm, _ = fitness_against(transform_points(src, *pose), target[1], cfg.fitness_max_correspondence_m)
             if is_sampled[i]:
-                fit_prior[i], fit_icp[i], rmse[i] = fp, fi, rm
-                corr[i] = (pose[0] - pred[0], pose[1] - pred[1], float(wrap_angle(pose[3] - pred[3])))
+                res.fitness_prior[i], res.fitness_icp[i], res.inlier_rmse_m[i] = fp, fi, rm
+                res.pose_correction[i] = (pose[0] - pred[0], pose[1] - pred[1], float(wrap_angle(pose[3] - pred[3])))
             if n_corr == 0:  # dropped; the chain goes on from the prediction
                 if is_sampled[i]:
-                    reasons[i] = "icp_failed"
+                    res.reason[i] = "icp_failed"
                 chain.append((pred, int(t[i])))
                 continue
             low = fi < cfg.min_icp_fitness
             if low and is_sampled[i]:
-                reasons[i] = "low_icp_fitness"
+                res.reason[i] = "low_icp_fitness"
             d = se2_between(pred, pose)
             r_max = float(np.max(np.hypot(src[:, 0], src[:, 1])))
             dev_sq += (math.hypot(d[0], d[1]) + 2.0 * r_max * math.sin(abs(d[2]) / 2.0)) ** 2
             n_dev += 1
         chain.append((pose, int(t[i])))
         if not low:
-            final[i] = pose
-            kept[i] = bool(is_sampled[i])
+            res.pose[i] = pose
+            res.kept[i] = bool(is_sampled[i])
         if last_key is None or (
             math.hypot(pose[0] - last_key[0], pose[1] - last_key[1]) >= cfg.odometry_keyframe_m
             or abs(float(wrap_angle(pose[3] - last_key[3]))) >= cfg.odometry_keyframe_rad
@@ -154,4 +157,5 @@ def register_odometry(usable, sampled, clouds, sids, t, cfg, out) -> tuple[int, 
             local.append(transform_points(src, *pose))
             last_key = pose
             target = None
-    return 1, np.flatnonzero(is_sampled)
+    res.sampled, res.n_anchors = np.flatnonzero(is_sampled), 1
+    return res

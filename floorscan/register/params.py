@@ -1,29 +1,30 @@
 """The parameters of the register stage: :class:`RegistrationConfig` (config section
 ``register``) and :class:`GraphParams` (its ``graph`` subsection, the pose graph).
 
-Keys and defaults match ``workflow/schemas/register.schema.yaml`` (a test checks they
-agree); the schema documents each key, its bounds and the reasons for the defaults. A
-new key goes into the schema and the dataclass with the same default, and into
-:meth:`RegistrationConfig.check` when it has bounds. The stage parses its section once::
+Keys and defaults are those of ``workflow/schemas/register.schema.yaml``
+(:func:`floorscan.core.config.schema_defaults`); the schema documents each key, its
+bounds, its allowed values (``enum``) and the reasons for the defaults, and is the one
+place they are written: :func:`floorscan.core.config.stage_params` checks a section
+against it. A new key goes into the schema and the dataclass (a field without a
+default). The stage parses its section once::
 
-    cfg = RegistrationConfig.from_mapping(config["register"])   # InputError on a bad key
+    cfg = stage_params(RegistrationConfig, config["register"])  # ConfigError naming a bad key
     cfg.graph_params.loop_radius_m                               # the graph section, parsed once
 """
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import functools
-import math
 from dataclasses import dataclass
 from typing import Any, Mapping
 
-from floorscan.core.config import dataclass_from_mapping, schema_defaults
-from floorscan.core.io import InputError
+from floorscan.core.config import schema_defaults, stage_params
 
 
 @dataclass(frozen=True)
-@schema_defaults("register.graph", icp_distances_m=lambda d: tuple(d["icp_distances_m"]))
+@schema_defaults("register.graph", icp_distances_m=lambda d: tuple(float(v) for v in d["icp_distances_m"]))
 class GraphParams:
     """Parameters of the pose graph (config ``register.graph``).
 
@@ -103,23 +104,21 @@ class GraphParams:
     prior_sigma_rad: float
     workers: int = 1
 
-    @classmethod
-    def from_mapping(cls, cfg) -> "GraphParams":
-        """From a config mapping (unknown keys raise ``KeyError``)."""
-        values = dict(cfg or {})
-        if "icp_distances_m" in values:
-            values["icp_distances_m"] = tuple(float(v) for v in values["icp_distances_m"])
-        return dataclass_from_mapping(cls, values, "register.graph")
-
 
 @dataclass(frozen=True)
-@schema_defaults("register", icp_max_correspondence_m=lambda d: tuple(d["icp_max_correspondence_m"]))
+@schema_defaults("register", icp_max_correspondence_m=lambda d: tuple(float(v) for v in d["icp_max_correspondence_m"]))
 class RegistrationConfig:
     """Parameters of the ``register`` stage; keys and defaults are those of
     ``workflow/schemas/register.schema.yaml`` (:func:`floorscan.core.config.schema_defaults`).
 
     See the schema for each key's description, bounds and the reasons for the defaults.
-    The ``graph`` section is parsed once per config into :attr:`graph_params`.
+    The ``graph`` section is parsed on construction, once, into :attr:`graph_params`.
+
+    Raises
+    ------
+    floorscan.core.config.ConfigError
+        On construction, for a bad key or value of ``graph`` (naming
+        ``register.graph.<key>``).
     """
 
     mode: str
@@ -163,21 +162,8 @@ class RegistrationConfig:
     graph: Mapping[str, Any]
     loop_closure: bool
 
-    @classmethod
-    def from_mapping(cls, cfg: Mapping[str, Any] | None) -> "RegistrationConfig":
-        """Build from a config dict (the ``register`` section), rejecting unknown keys.
-
-        Raises
-        ------
-        InputError
-            On an unknown key or a value outside its range.
-        """
-        cfg = dict(cfg or {})
-        if "icp_max_correspondence_m" in cfg and not isinstance(cfg["icp_max_correspondence_m"], (int, float)):
-            cfg["icp_max_correspondence_m"] = tuple(float(v) for v in cfg["icp_max_correspondence_m"])
-        out = dataclass_from_mapping(cls, cfg, "register", InputError)
-        out.check()
-        return out
+    def __post_init__(self):
+        self.graph_params  # parsed once, here: an error names the key
 
     @functools.cached_property
     def graph_params(self) -> GraphParams:
@@ -185,91 +171,27 @@ class RegistrationConfig:
 
         Raises
         ------
-        InputError
-            On an unknown key or a value of the wrong type in ``graph``.
+        floorscan.core.config.ConfigError
+            For a bad key or value of ``graph``.
         """
-        try:
-            return GraphParams.from_mapping(self.graph)
-        except (KeyError, TypeError) as exc:
-            raise InputError(f"config register.graph: {exc}") from None
+        return stage_params(GraphParams, self.graph, "register.graph")
 
     def replace(self, **changes: Any) -> "RegistrationConfig":
-        """:func:`dataclasses.replace` that keeps the parsed :attr:`graph_params` when
-        ``graph`` is not among the ``changes``."""
-        out = dataclasses.replace(self, **changes)
-        if "graph" not in changes and "graph_params" in self.__dict__:
-            out.__dict__["graph_params"] = self.__dict__["graph_params"]
-        return out
+        """A copy with ``changes`` (as :func:`dataclasses.replace`) that keeps the parsed
+        :attr:`graph_params` when ``graph`` is not among the ``changes``.
 
-    def check(self) -> None:
-        """Raise :class:`InputError` naming the key when a value is out of range."""
-        if self.mode not in ("auto", "pose", "odometry"):
-            raise InputError(f"config register.mode: expected 'auto', 'pose' or 'odometry', got {self.mode!r}")
-        if self.every_n is not None and int(self.every_n) < 1:
-            raise InputError(f"config register.every_n: expected >= 1 or null, got {self.every_n}")
-        for key in ("keep_distance_m", "keep_angle_rad"):
-            v = getattr(self, key)
-            if v is not None and not (math.isfinite(v) and v >= 0):
-                raise InputError(f"config register.{key}: expected >= 0 or null (chosen from the recording), got {v}")
-        if not 0.0 < self.keep_range_fraction <= 1.0:
-            raise InputError(f"config register.keep_range_fraction: expected 0 < value <= 1, got {self.keep_range_fraction}")
-        for key in ("min_kept_fraction", "min_consistency", "max_lost_fraction"):
-            if not 0.0 <= getattr(self, key) <= 1.0:
-                raise InputError(f"config register.{key}: expected 0..1, got {getattr(self, key)}")
-        if self.reference not in ("graph", "map", "previous"):
-            raise InputError(
-                f"config register.reference: expected 'graph', 'map' or 'previous', got {self.reference!r}"
-            )
-        self.graph_params  # parsed once, here: an error names the key
-        if not 0.0 < self.relaxation <= 1.0:
-            raise InputError(f"config register.relaxation: expected 0 < value <= 1, got {self.relaxation}")
-        if self.reference_pose not in ("localizer", "registered"):
-            raise InputError(
-                "config register.reference_pose: expected 'localizer' or 'registered', "
-                f"got {self.reference_pose!r}"
-            )
-        if self.icp_method not in ("point_to_point", "point_to_plane"):
-            raise InputError(
-                "config register.icp_method: expected 'point_to_point' or 'point_to_plane', "
-                f"got {self.icp_method!r}"
-            )
-        if self.odometry_scans not in ("all", "sampled"):
-            raise InputError(
-                f"config register.odometry_scans: expected 'all' or 'sampled', got {self.odometry_scans!r}"
-            )
-        if self.odometry_icp_method not in ("point_to_point", "point_to_plane"):
-            raise InputError(
-                "config register.odometry_icp_method: expected 'point_to_point' or 'point_to_plane', "
-                f"got {self.odometry_icp_method!r}"
-            )
-        for key in ("n_previous", "n_references", "passes", "icp_max_iterations", "odometry_window"):
-            if int(getattr(self, key)) < 1:
-                raise InputError(f"config register.{key}: expected >= 1, got {getattr(self, key)}")
-        if self.normal_neighbours < 3:
-            raise InputError(f"config register.normal_neighbours: expected >= 3, got {self.normal_neighbours}")
-        for key in ("min_prior_fitness", "min_icp_fitness"):
-            v = getattr(self, key)
-            if not 0.0 <= v <= 1.0:
-                raise InputError(f"config register.{key}: expected 0..1, got {v}")
-        for key in (
-            "fitness_max_correspondence_m",
-            "icp_tolerance_m",
-            "max_reference_distance_m",
-            "max_speed_m_s",
-            "max_turn_rate_rad_s",
-            "odometry_max_correspondence_m",
-            "icp_voxel_size_3d_m",
-        ):
-            if not getattr(self, key) > 0:
-                raise InputError(f"config register.{key}: expected > 0, got {getattr(self, key)}")
-        d = self.icp_max_correspondence_m
-        if isinstance(d, (int, float)) or len(d) == 0 or any(not v > 0 for v in d):
-            raise InputError(
-                f"config register.icp_max_correspondence_m: expected a non-empty list of "
-                f"distances > 0 (metres, coarse to fine), got {d!r}"
-            )
-        for key in ("voxel_size_m", "pose_jump_slack_m", "pose_jump_slack_rad", "min_points",
-                    "exclude_window_s", "reference_spacing_s",
-                    "odometry_keyframe_m", "odometry_keyframe_rad"):
-            if getattr(self, key) < 0:
-                raise InputError(f"config register.{key}: expected >= 0, got {getattr(self, key)}")
+        Raises
+        ------
+        TypeError
+            A change that names no field.
+        """
+        unknown = sorted(set(changes) - {f.name for f in dataclasses.fields(self)})
+        if unknown:
+            raise TypeError(f"RegistrationConfig has no fields {unknown}")
+        out = copy.copy(self)  # no __post_init__: graph_params copied with the rest
+        for name, value in changes.items():
+            object.__setattr__(out, name, value)
+        if "graph" in changes:
+            del out.__dict__["graph_params"]
+            out.graph_params  # parsed anew
+        return out

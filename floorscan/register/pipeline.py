@@ -16,10 +16,14 @@ Step 5 departs from the thesis: the strategy is ``register.reference`` (``graph`
 default: :mod:`floorscan.register.posegraph`; ``map``:
 :mod:`floorscan.register.scan_to_map`; ``previous``, the thesis's:
 :mod:`floorscan.register.sequential`), or without map poses ``mode: odometry``
-(:mod:`floorscan.register.odometry`). A strategy is a function
-``(sampled, clouds, sids, t, cfg, out) -> n_anchors`` that fills the per-scan arrays
-``out``; a new one is a module beside them, a branch of :func:`register_screened` and a
-value of ``reference`` in the schema.
+(:mod:`floorscan.register.odometry`). A new strategy is a function
+``(sampled, clouds, sids, t, cfg, initial) -> ScanRegistration`` in a module beside the
+others: ``initial`` holds the screening's reasons and the localizer's poses of every
+scan (:meth:`~floorscan.register.result.ScanRegistration.before_registration`), and the
+strategy returns a new :class:`~floorscan.register.result.ScanRegistration` (kept, drop
+reason, fitness, inlier RMSE, pose of every scan), changing no array it was given;
+:func:`register_screened` calls it in a new branch and makes the table of its result,
+and the schema gets a value of ``reference``.
 
 Usage::
 
@@ -39,6 +43,7 @@ from typing import Any, Mapping
 import numpy as np
 import pandas as pd
 
+from floorscan.core.config import stage_params
 from floorscan.core.geometry import transform_points
 from floorscan.core.io import InputError, split_by_scan
 from floorscan.register.consistency import stamps_warning
@@ -50,6 +55,7 @@ from floorscan.register.prepare import ScanStore
 from floorscan.register.result import (
     RegistrationError,
     RegistrationResult,
+    ScanRegistration,
     judge,
     raise_if_nothing_registered,
     summarize,
@@ -121,7 +127,7 @@ def register_scans(
     :func:`~floorscan.register.prepare.graph_cloud`. There is no randomness: the same
     input gives the same output.
     """
-    cfg = coerce_config(config)
+    cfg = stage_params(RegistrationConfig, config)
     check_columns(scans, "scans.parquet", ["scan_id", "x", "y", "z"])
     index = prepare_index(scan_index)
     bad = ~np.isfinite(scans[["x", "y", "z"]].to_numpy(np.float64)).all(axis=1)
@@ -154,13 +160,6 @@ def register_scans(
         }
     )
     return RegistrationResult(registered=registered, table=table, summary=summary)
-
-
-def coerce_config(config) -> RegistrationConfig:
-    """``config`` as a checked :class:`RegistrationConfig` (a mapping is parsed)."""
-    cfg = config if isinstance(config, RegistrationConfig) else RegistrationConfig.from_mapping(config)
-    cfg.check()
-    return cfg
 
 
 def resolve_config(
@@ -266,32 +265,29 @@ def register_screened(index, aligned, reasons, clouds: ScanStore, cfg: Registrat
     else:
         sampled = sample_scans(usable, aligned, cfg)
 
-    kept = np.zeros(n, dtype=bool)
-    fit_prior = np.full(n, np.nan)
-    fit_icp = np.full(n, np.nan)
-    rmse = np.full(n, np.nan)
-    corr = np.full((n, 3), np.nan)
-    final = np.full((n, 4), np.nan)
+    pose = np.full((n, 4), np.nan)  # the localizer's, where valid
     if aligned is not None:
         ok = aligned["valid"].to_numpy(bool)
-        final[ok] = aligned.loc[ok, ["x", "y", "z", "yaw"]].to_numpy(np.float64)
+        pose[ok] = aligned.loc[ok, ["x", "y", "z", "yaw"]].to_numpy(np.float64)
+    initial = ScanRegistration.before_registration(reasons, pose)
 
     t = index["t_ns"].to_numpy(np.int64)
     sids = index["scan_id"].to_numpy()
-    out = (kept, reasons, fit_prior, fit_icp, rmse, corr, final)
     if odometry:
-        n_anchor, sampled = register_odometry(usable, sampled, clouds, sids, t, cfg, out)
+        reg = register_odometry(usable, sampled, clouds, sids, t, cfg, initial)
         if cfg.loop_closure:
-            register_graph(np.flatnonzero(kept), clouds, sids, t, cfg, out, priors=False, pool=pool)
+            reg = register_graph(np.flatnonzero(reg.kept), clouds, sids, t, cfg, reg, priors=False, pool=pool)
     elif cfg.reference == "graph":
-        n_anchor = register_graph(sampled, clouds, sids, t, cfg, out, priors=True, ahead=ahead, pool=pool)
+        reg = register_graph(sampled, clouds, sids, t, cfg, initial, priors=True, ahead=ahead, pool=pool)
     elif cfg.reference == "previous":
-        n_anchor = register_sequential(sampled, clouds, sids, t, cfg, out)
+        reg = register_sequential(sampled, clouds, sids, t, cfg, initial)
     else:
-        n_anchor = register_map(sampled, clouds, sids, t, cfg, out)
-    reasons[np.setdiff1d(usable, sampled)] = "not_sampled"
+        reg = register_map(sampled, clouds, sids, t, cfg, initial)
+    sampled = reg.sampled
+    reason = reg.reason.copy()
+    reason[np.setdiff1d(usable, sampled)] = "not_sampled"
     if not cfg.every_n and len(usable) > 1:
-        at = final[usable] if odometry else aligned[["x", "y"]].to_numpy(np.float64)[usable]
+        at = reg.pose[usable] if odometry else aligned[["x", "y"]].to_numpy(np.float64)[usable]
         at = at[np.isfinite(at[:, 0])]
         log.info(
             "sampling: %d of %d usable scans (the recording's median step between scans %.3f m; "
@@ -303,18 +299,18 @@ def register_screened(index, aligned, reasons, clouds: ScanStore, cfg: Registrat
         {
             "scan_id": sids.astype(np.int32),
             "t_ns": t,
-            "kept": kept,
-            "reason": reasons.astype(str),
-            "fitness_prior": fit_prior,
-            "fitness_icp": fit_icp,
-            "inlier_rmse_m": rmse,
-            "dx_m": corr[:, 0],
-            "dy_m": corr[:, 1],
-            "dyaw_rad": corr[:, 2],
-            "x_m": final[:, 0],
-            "y_m": final[:, 1],
-            "z_m": final[:, 2],
-            "yaw_rad": final[:, 3],
+            "kept": reg.kept,
+            "reason": reason.astype(str),
+            "fitness_prior": reg.fitness_prior,
+            "fitness_icp": reg.fitness_icp,
+            "inlier_rmse_m": reg.inlier_rmse_m,
+            "dx_m": reg.pose_correction[:, 0],
+            "dy_m": reg.pose_correction[:, 1],
+            "dyaw_rad": reg.pose_correction[:, 2],
+            "x_m": reg.pose[:, 0],
+            "y_m": reg.pose[:, 1],
+            "z_m": reg.pose[:, 2],
+            "yaw_rad": reg.pose[:, 3],
         }
     )
     summary = summarize(table, cfg)
@@ -328,7 +324,7 @@ def register_screened(index, aligned, reasons, clouds: ScanStore, cfg: Registrat
     summary["verdict"] = judged.as_dict()
     log.info(
         "register (%s): %d scans, %d sampled, %d kept (%d anchors); drops %s",
-        cfg.mode, n, len(sampled), int(kept.sum()), n_anchor, summary["drops"],
+        cfg.mode, n, len(sampled), int(reg.kept.sum()), reg.n_anchors, summary["drops"],
     )
     (log.info if judged.ok and not judged.warnings else log.warning)("verdict: %s", judged.line())
     if not judged.ok:

@@ -39,6 +39,7 @@ from floorscan.core.geometry import wrap_angle
 from floorscan.register.agreement import agreement_counts, keep_test, support_floor
 from floorscan.register.edges import scan_pair_edges
 from floorscan.register.params import GraphParams, RegistrationConfig
+from floorscan.register.result import ScanRegistration
 from floorscan.register.solver import optimize_pose_graph
 
 log = logging.getLogger(__name__)
@@ -141,10 +142,12 @@ def _pair_mean(edges: pd.DataFrame, col: str, n: int, use: np.ndarray | None = N
         return np.bincount(both[ok], weights=v[ok], minlength=n) / np.bincount(both[ok], minlength=n)
 
 
-def register_graph(scans, clouds, sids, t, cfg: RegistrationConfig, out, priors: bool, ahead=None, pool=None) -> int:
+def register_graph(
+    scans, clouds, sids, t, cfg: RegistrationConfig, initial: ScanRegistration, priors: bool, ahead=None, pool=None
+) -> ScanRegistration:
     """Pose-graph registration (``reference: graph``, and odometry's loop closure).
 
-    ``scans`` (indices into the scan index, time order) start at ``final`` (the
+    ``scans`` (indices into the scan index, time order) start at ``initial.pose`` (the
     localizer's poses, or the odometry chain). Planar ICP between each scan and its
     next sampled scans and its revisits gives relative constraints; with ``priors``
     the localizer's poses are absolute constraints, otherwise the first scan is held
@@ -160,18 +163,27 @@ def register_graph(scans, clouds, sids, t, cfg: RegistrationConfig, out, priors:
     so a scan that fits nothing does not pull the others.
 
     ``clouds`` is a :class:`floorscan.register.prepare.ScanStore`, ``sids`` and ``t``
-    the scan ids and times (ns) of the scan index, ``out`` the per-scan output arrays
-    (as :func:`floorscan.register.sequential.register_sequential`), filled in place;
-    ``ahead`` and ``pool`` as :func:`refine_poses`. Returns the number of scans
-    without any edge (held by their prior only).
+    the scan ids and times (ns) of the scan index, ``initial`` the screening's reasons
+    and the initial poses (:func:`floorscan.register.sequential.register_sequential`;
+    not changed); ``ahead`` and ``pool`` as :func:`refine_poses`.
+
+    Returns
+    -------
+    ScanRegistration
+        With ``priors``: ``initial`` with ``scans`` registered (``sampled``) and kept or
+        dropped by the keep test, ``n_anchors`` the scans without any edge (held by
+        their prior only). Without (the loop closure): ``initial`` with the optimised
+        poses of ``scans``, all else as it was.
     """
-    kept, reasons, fit_prior, fit_icp, rmse, corr, final = out
+    res = initial.copy()  # filled here; ``initial`` stays as it was
     scans = np.asarray(scans, dtype=np.int64)
+    if priors:
+        res.sampled, res.n_anchors = scans.copy(), 0
     n = len(scans)
     if n == 0:
-        return 0
+        return res
     params = cfg.graph_params
-    init = final[scans].copy()
+    init = initial.pose[scans]  # a copy
     t_s = (t[scans] - t[scans[0]]) * 1e-9
     cl = [clouds.graph(int(sids[i])) for i in scans]
     kinds = ("sequential", "loop") if priors else ("loop",)
@@ -179,21 +191,22 @@ def register_graph(scans, clouds, sids, t, cfg: RegistrationConfig, out, priors:
         cl, init, t_s, init if priors else None, params, icp_kinds=kinds, ahead=ahead, scan_ids=sids[scans],
         pool=pool,
     )
-    final[scans] = poses
+    res.pose[scans] = poses
     log.info("pose graph: %d scans, %s", n, info)
     if not priors:
-        return int(info["n_isolated"])
+        return res
+    res.n_anchors = int(info["n_isolated"])
     fp, fi, rm = scan_fitness(edges, n, params)
-    fit_prior[scans] = fp
-    fit_icp[scans] = fi
-    rmse[scans] = rm
-    corr[scans, 0] = poses[:, 0] - init[:, 0]
-    corr[scans, 1] = poses[:, 1] - init[:, 1]
-    corr[scans, 2] = wrap_angle(poses[:, 3] - init[:, 3])
+    res.fitness_prior[scans] = fp
+    res.fitness_icp[scans] = fi
+    res.inlier_rmse_m[scans] = rm
+    res.pose_correction[scans, 0] = poses[:, 0] - init[:, 0]
+    res.pose_correction[scans, 1] = poses[:, 1] - init[:, 1]
+    res.pose_correction[scans, 2] = wrap_angle(poses[:, 3] - init[:, 3])
     n_agree, n_supported, n_pairs = agreement_counts(edges, poses, n, params)
     why, confirmed = keep_test(fp, fi, n_agree, n_supported, n_pairs, cfg)
-    reasons[scans] = why
-    kept[scans] = why == ""
+    res.reason[scans] = why
+    res.kept[scans] = why == ""
     with np.errstate(invalid="ignore"):
         by_fitness = (fp >= cfg.min_prior_fitness) & (fi >= cfg.min_icp_fitness)
     log.info(
@@ -202,4 +215,4 @@ def register_graph(scans, clouds, sids, t, cfg: RegistrationConfig, out, priors:
         int(confirmed.sum()), n, int((confirmed & ~by_fitness).sum()), int((why == "icp_disagrees").sum()),
         int((~confirmed & (why != "icp_disagrees")).sum()), support_floor(edges, params),
     )
-    return int(info["n_isolated"])
+    return res

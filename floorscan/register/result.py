@@ -1,6 +1,7 @@
-"""What the register stage gives: the per-scan table (:data:`REGISTRATION`, the drop
-reason of each scan), its summary, the verdict, and :class:`RegistrationError` when
-nothing or too little registers.
+"""What the register stage gives: what a strategy gives for every scan
+(:class:`ScanRegistration`), the per-scan table (:data:`REGISTRATION`, the drop reason
+of each scan), its summary, the verdict, and :class:`RegistrationError` when nothing or
+too little registers.
 
 Drop reasons (``reason`` column; kept scans have ``""``, or ``"anchor"`` for a scan kept
 without a reference, and the first scan in odometry mode):
@@ -103,6 +104,89 @@ class RegistrationResult:
     registered: pd.DataFrame | None
     table: pd.DataFrame
     summary: dict
+
+
+@dataclass
+class ScanRegistration:
+    """What a registration strategy gives (thesis Algorithm 3 steps 4-6): one entry per
+    scan of the scan index, ``S`` scans, in index order.
+
+    A strategy (``(sampled, clouds, sids, t, cfg, initial) -> ScanRegistration``,
+    :mod:`floorscan.register.pipeline`) starts from ``initial``
+    (:meth:`before_registration`: the screening's reasons and the initial poses) and
+    returns a new one; it changes no array of ``initial``.
+    :func:`floorscan.register.pipeline.register_screened` makes the
+    :data:`REGISTRATION` table of it.
+
+    Attributes
+    ----------
+    kept : (S,) bool ndarray
+        The scan is in the map.
+    reason : (S,) object ndarray of str
+        Drop reason (module docstring): ``""`` kept, ``"anchor"`` kept without a
+        reference, else why the scan is not kept; the screening's reason for a scan the
+        strategy did not register (``not_sampled`` is set by the caller).
+    fitness_prior : (S,) float64 ndarray
+        Fitness under the initial pose (step 4): the fraction of the scan's points with
+        a reference point within the correspondence distance, 0 to 1, the mean over its
+        references (``fitness_max_correspondence_m``,
+        :func:`floorscan.register.icp.mean_fitness`; the pose graph: over its pairs,
+        :func:`floorscan.register.posegraph.scan_fitness`); NaN: not measured.
+    fitness_icp : (S,) float64 ndarray
+        The same after ICP (step 6).
+    inlier_rmse_m : (S,) float64 ndarray
+        Root mean square distance of the inlier correspondences after ICP, metres;
+        NaN: not measured.
+    pose_correction : (S, 3) float64 ndarray
+        ``dx, dy`` (metres, map frame) and ``dyaw`` (radians, in [-pi, pi)): the
+        registered pose minus the initial one (the localizer's; odometry: the
+        constant-velocity prediction), also for a scan then dropped by its fitness after
+        ICP; 0 for an anchor, NaN: not registered.
+    pose : (S, 4) float64 ndarray
+        Final pose ``x, y, z, yaw`` (metres, radians; ``map_point = Rz(yaw) @ p + (x, y,
+        z)``): the registered pose of a kept scan (the pose graph and odometry give one
+        to the scans they drop, too), else the initial pose; NaN: none.
+    sampled : (K,) int64 ndarray
+        Index positions of the scans the strategy registered (the sampled scans),
+        ascending.
+    n_anchors : int
+        Scans held by no reference: kept as ``anchor`` (``reference: previous`` and
+        ``map``; odometry: the first scan), or without any edge in the pose graph (held
+        by their prior only).
+    """
+
+    kept: np.ndarray
+    reason: np.ndarray
+    fitness_prior: np.ndarray
+    fitness_icp: np.ndarray
+    inlier_rmse_m: np.ndarray
+    pose_correction: np.ndarray
+    pose: np.ndarray
+    sampled: np.ndarray
+    n_anchors: int = 0
+
+    @classmethod
+    def before_registration(cls, reason: np.ndarray, pose: np.ndarray) -> "ScanRegistration":
+        """Every scan before a strategy ran: not kept, nothing measured, the screening's
+        ``reason`` ((S,) str) and the initial ``pose`` ((S, 4) float, NaN: none), both
+        copied; nothing sampled."""
+        n = len(reason)
+        return cls(
+            kept=np.zeros(n, dtype=bool),
+            reason=np.array(reason, dtype=object),
+            fitness_prior=np.full(n, np.nan),
+            fitness_icp=np.full(n, np.nan),
+            inlier_rmse_m=np.full(n, np.nan),
+            pose_correction=np.full((n, 3), np.nan),
+            pose=np.array(pose, dtype=np.float64).reshape(n, 4),
+            sampled=np.zeros(0, dtype=np.int64),
+        )
+
+    def copy(self) -> "ScanRegistration":
+        """A copy whose arrays are new (a strategy fills its copy of ``initial``)."""
+        return dataclasses.replace(
+            self, **{f.name: getattr(self, f.name).copy() for f in dataclasses.fields(self) if f.name != "n_anchors"}
+        )
 
 
 def summarize(table: pd.DataFrame, cfg: RegistrationConfig | None = None) -> dict:

@@ -37,6 +37,7 @@ from floorscan.core.geometry import transform_points, wrap_angle
 from floorscan.register.icp import fitness_against, icp_to_map, mean_fitness
 from floorscan.register.params import RegistrationConfig
 from floorscan.register.prepare import voxel_downsample
+from floorscan.register.result import ScanRegistration
 
 log = logging.getLogger(__name__)
 
@@ -128,22 +129,24 @@ def _fix_gauge(pose: np.ndarray, localizer: np.ndarray, mask: np.ndarray) -> np.
     return out
 
 
-def register_map(sampled, clouds, sids, t, cfg, out) -> int:
+def register_map(sampled, clouds, sids, t, cfg, initial: ScanRegistration) -> ScanRegistration:
     """Iterative scan-to-map registration against the whole recording (``reference: map``).
 
-    Arguments as :func:`floorscan.register.sequential.register_sequential`; fills the
-    per-scan output arrays ``out`` in place and returns the number of anchors. See the
-    module docstring for the method.
+    Arguments and result as :func:`floorscan.register.sequential.register_sequential`
+    (``initial`` holds the localizer's poses and is not changed; ``n_anchors``: the
+    scans kept without a reference). See the module docstring for the method.
     """
-    kept, reasons, fit_prior, fit_icp, rmse, corr, final = out
+    res = initial.copy()  # filled here; ``initial`` stays as it was
+    res.sampled = sampled = np.array(sampled, dtype=np.int64)
+    res.n_anchors = 0
     n = len(sampled)
     if n == 0:
-        return 0
+        return res
     cls = [clouds.clouds(int(sids[i])) for i in sampled]
     pts = [c.fit_source for c in cls]
     ref = [c.fit_target for c in cls]
     src = [c.icp for c in cls]
-    loc = final[sampled].copy()  # localizer poses
+    loc = initial.pose[sampled]  # localizer poses (a copy)
     t_s = (t[sampled] - t[sampled[0]]) * 1e-9
     status = np.full(n, "", dtype=object)
     active = np.ones(n, dtype=bool)
@@ -206,18 +209,19 @@ def register_map(sampled, clouds, sids, t, cfg, out) -> int:
     ok = active & ~lowi
     pose[anchor] = loc[anchor]
 
-    fit_prior[sampled] = fp
-    fit_icp[sampled] = fi
-    rmse[sampled] = rm
-    reasons[sampled] = status
-    kept[sampled] = ok
-    final[sampled[ok]] = pose[ok]
+    res.fitness_prior[sampled] = fp
+    res.fitness_icp[sampled] = fi
+    res.inlier_rmse_m[sampled] = rm
+    res.reason[sampled] = status
+    res.kept[sampled] = ok
+    res.pose[sampled[ok]] = pose[ok]
     d = pose - loc
     d[:, 3] = wrap_angle(d[:, 3])
     reg = ok | (status == "low_icp_fitness")
-    corr[sampled[reg]] = d[reg][:, [0, 1, 3]]
-    corr[sampled[anchor]] = 0.0
+    res.pose_correction[sampled[reg]] = d[reg][:, [0, 1, 3]]
+    res.pose_correction[sampled[anchor]] = 0.0
+    res.n_anchors = int(anchor.sum())
     if n_fallback:
         log.info("register: %d of %d scans had no reference outside exclude_window_s=%.1f s",
                  n_fallback, n, cfg.exclude_window_s)
-    return int(anchor.sum())
+    return res

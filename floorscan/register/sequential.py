@@ -26,6 +26,7 @@ from scipy.spatial import cKDTree
 from floorscan.core.geometry import transform_points, wrap_angle
 from floorscan.register.icp import icp_to_map, mean_fitness
 from floorscan.register.prepare import voxel_downsample
+from floorscan.register.result import ScanRegistration
 
 
 @dataclass
@@ -38,23 +39,40 @@ class _Kept:
 
 
 
-def register_sequential(sampled, clouds, sids, t, cfg, out) -> int:
+def register_sequential(sampled, clouds, sids, t, cfg, initial: ScanRegistration) -> ScanRegistration:
     """Sequential registration (thesis 3.5 step 5, ``reference: previous``): each sampled
     scan against the previous ``n_previous`` kept scans.
 
-    ``sampled``: index positions of the sampled scans; ``clouds``: a
-    :class:`floorscan.register.prepare.ScanStore`; ``sids``, ``t``: scan ids and times
-    (ns) of the scan index; ``out``: the per-scan output arrays ``(kept, reasons,
-    fit_prior, fit_icp, rmse, corr, final)``, filled in place (``final`` holds the
-    localizer's poses on entry). Returns the number of anchors."""
-    kept, reasons, fit_prior, fit_icp, rmse, corr, final = out
+    Parameters
+    ----------
+    sampled : (K,) int ndarray
+        Index positions of the sampled scans, ascending.
+    clouds : floorscan.register.prepare.ScanStore
+        The sampled scans' clouds.
+    sids : (S,) int ndarray
+        Scan ids of the scan index.
+    t : (S,) int64 ndarray
+        Scan times, ns.
+    cfg : RegistrationConfig
+    initial : ScanRegistration
+        The screening's reasons and the localizer's poses
+        (:meth:`~floorscan.register.result.ScanRegistration.before_registration`); not
+        changed.
+
+    Returns
+    -------
+    ScanRegistration
+        ``initial`` with the sampled scans registered; ``n_anchors``: the scans kept
+        without a reference.
+    """
+    res = initial.copy()  # filled here; ``initial`` stays as it was
+    res.n_anchors = 0
     window: deque[_Kept] = deque(maxlen=cfg.n_previous)
-    n_anchor = 0
     for i in sampled:
         sid = int(sids[i])
         cl = clouds.clouds(sid)
         pts, src = cl.fit_source, cl.icp
-        prior = tuple(float(v) for v in final[i])
+        prior = tuple(float(v) for v in res.pose[i])  # the localizer's
         refs = [
             r
             for r in window
@@ -62,31 +80,32 @@ def register_sequential(sampled, clouds, sids, t, cfg, out) -> int:
         ]
         pose = prior
         if refs:
-            pts_prior = transform_points(pts, *prior)
-            fit_prior[i], _ = mean_fitness(pts_prior, [r.tree for r in refs], cfg.fitness_max_correspondence_m)
-            if fit_prior[i] < cfg.min_prior_fitness:
-                reasons[i] = "low_prior_fitness"
+            trees = [r.tree for r in refs]
+            fp, _ = mean_fitness(transform_points(pts, *prior), trees, cfg.fitness_max_correspondence_m)
+            res.fitness_prior[i] = fp
+            if fp < cfg.min_prior_fitness:
+                res.reason[i] = "low_prior_fitness"
                 continue
             target = voxel_downsample(np.concatenate([r.icp_points for r in refs]), cfg.voxel_size_m)
             pose, n_corr = icp_to_map(src, target, pose, cfg)
             if n_corr == 0:
-                reasons[i] = "icp_failed"
+                res.reason[i] = "icp_failed"
                 continue
-            pts_map = transform_points(pts, *pose)
-            fit_icp[i], rmse[i] = mean_fitness(pts_map, [r.tree for r in refs], cfg.fitness_max_correspondence_m)
-            corr[i] = (pose[0] - prior[0], pose[1] - prior[1], float(wrap_angle(pose[3] - prior[3])))
-            if fit_icp[i] < cfg.min_icp_fitness:
-                reasons[i] = "low_icp_fitness"
+            fi, rm = mean_fitness(transform_points(pts, *pose), trees, cfg.fitness_max_correspondence_m)
+            res.fitness_icp[i], res.inlier_rmse_m[i] = fi, rm
+            res.pose_correction[i] = (pose[0] - prior[0], pose[1] - prior[1], float(wrap_angle(pose[3] - prior[3])))
+            if fi < cfg.min_icp_fitness:
+                res.reason[i] = "low_icp_fitness"
                 continue
+            res.reason[i] = ""
         else:
-            corr[i] = 0.0
-            reasons[i] = "anchor"
-            n_anchor += 1
-        kept[i] = True
-        if reasons[i] != "anchor":
-            reasons[i] = ""
-        final[i] = pose
+            res.pose_correction[i] = 0.0
+            res.reason[i] = "anchor"
+            res.n_anchors += 1
+        res.kept[i] = True
+        res.pose[i] = pose
         ref_pose = prior if cfg.reference_pose == "localizer" else pose
         ref_pts = transform_points(cl.fit_target, *ref_pose)
         window.append(_Kept(sid, ref_pose, ref_pts, cKDTree(ref_pts), transform_points(cl.icp, *ref_pose)))
-    return n_anchor
+    res.sampled = np.array(sampled, dtype=np.int64)
+    return res

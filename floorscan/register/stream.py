@@ -29,6 +29,7 @@ import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 
+from floorscan.core.config import stage_params
 from floorscan.core.geometry import transform_points
 from floorscan.core.io import REGISTERED, SCANS, InputError, ScanRowGroups, iter_scans, parquet_options
 from floorscan.core.files import atomic_path
@@ -37,7 +38,7 @@ from floorscan.register.edge_stream import EdgeStream
 from floorscan.register.params import RegistrationConfig
 from floorscan.register.consistency import stamps_warning
 from floorscan.register.losses import ingest_losses
-from floorscan.register.pipeline import coerce_config, fallback_reason, register_screened, resolve_config
+from floorscan.register.pipeline import fallback_reason, register_screened, resolve_config
 from floorscan.register.prepare import ScanStore
 from floorscan.register.result import RegistrationResult
 from floorscan.register.sampling import typical_range_m
@@ -108,7 +109,7 @@ def register_recording(
         When no scan could be registered, or the verdict fails (as
         :func:`~floorscan.register.pipeline.register_scans`).
     """
-    cfg = coerce_config(config)
+    cfg = stage_params(RegistrationConfig, config)
     losses, fallback = ingest_losses(scan_index, recording), fallback_reason(cfg, recording)
     cfg = resolve_config(cfg, recording, math.nan if cfg.every_n else _range_of_file(scans_path))
     n_workers = _edge_workers(cfg, len(scan_index))

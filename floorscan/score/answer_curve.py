@@ -20,8 +20,19 @@ import pandas as pd
 
 
 def curve_ks(n_kept: int, n_points: int = 24) -> list[int]:
-    """About ``n_points`` values of k from 1 to ``n_kept``, geometrically spaced
-    (distinct, increasing, ``n_kept`` last)."""
+    """About ``n_points`` values of k from 1 to ``n_kept``, geometrically spaced.
+
+    Parameters
+    ----------
+    n_kept : int
+        Kept scans.
+    n_points : int
+
+    Returns
+    -------
+    list of int
+        Distinct, increasing, ``n_kept`` last; empty when ``n_kept`` < 1.
+    """
     if n_kept < 1:
         return []
     ks = np.unique(np.round(np.geomspace(1, n_kept, max(2, n_points))).astype(np.int64))
@@ -63,17 +74,18 @@ def answer_curve(
     """
     from floorscan.core.io import iter_scans
     from floorscan.core.occupancy import OccupancyParams, occupancy_grid
-    from floorscan.floorplan.params import params_from_config as floorplan_params
+    from floorscan.core.config import stage_params
+    from floorscan.floorplan.params import FloorplanParams
     from floorscan.floorplan.plan import build_floorplan
     from floorscan.score.against_reference import Structure, plan_against_reference
     from floorscan.walls.map_lines import map_segments
-    from floorscan.walls.map_stage import map_params
-    from floorscan.walls.params import scan_params
+    from floorscan.walls.map_lines import MapParams
+    from floorscan.walls.params import ScanParams
     from floorscan.walls.points import scan_points_2d
 
     walls_cfg = walls_cfg or {}
-    mp, sp = map_params(walls_cfg), scan_params(walls_cfg)
-    fp = floorplan_params(floorplan_cfg)
+    mp, sp = stage_params(MapParams, walls_cfg.get("map")), stage_params(ScanParams, walls_cfg)
+    fp = stage_params(FloorplanParams, floorplan_cfg)
     grid_params = replace(OccupancyParams(), resolution_m=mp.support_cell_m)
     structure = reference if isinstance(reference, Structure) else Structure(reference)
     reg = registration[registration["kept"]].set_index("scan_id")
@@ -101,7 +113,20 @@ def answer_curve(
 
 def k_reaching(curve: pd.DataFrame, level: float) -> int | None:
     """The first k of ``curve`` whose ``f1_5cm`` reaches ``level`` times the F1 of its
-    last row (all kept scans); None for an empty curve."""
+    last row (all kept scans).
+
+    Parameters
+    ----------
+    curve : pandas.DataFrame
+        ``k`` and ``f1_5cm`` in increasing k.
+    level : float
+        Fraction, e.g. 0.99.
+
+    Returns
+    -------
+    int or None
+        None for an empty curve; the last k when none reaches it (a NaN target).
+    """
     if curve.empty:
         return None
     target = level * float(curve["f1_5cm"].iloc[-1])

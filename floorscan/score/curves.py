@@ -44,6 +44,10 @@ def k_grid(n_kept: int, step_fraction: float = 0.02) -> list[int]:
     """The k at which curves are scored: every ``step`` scans, ``step`` =
     ``max(1, floor(step_fraction * n_kept))``, and ``n_kept`` itself.
 
+    Returns
+    -------
+    list of int
+
     Raises
     ------
     ValueError
@@ -375,12 +379,13 @@ def score_curves(
         The oracle ordering (:func:`oracle_ordering`).
     """
     from floorscan.floorplan.merge import FirstMergePass
-    from floorscan.floorplan.params import params_from_config
+    from floorscan.core.config import stage_params
+    from floorscan.floorplan.params import FloorplanParams
     from floorscan.floorplan.plan import plan_faces, segment_arrays
     from floorscan.core.occupancy import read_grid
 
     structure = Structure(read_grid(reference_path))
-    fp_params = params_from_config(floorplan_cfg or {})
+    fp_params = stage_params(FloorplanParams, floorplan_cfg)
     # as build_floorplan takes them: the plan of a set of scans is plan_faces of its rows
     seg, weights, seg_scan = segment_arrays(per_scan)
     first_pass = FirstMergePass(seg, fp_params)  # the merge's first pass of every subset, from one test

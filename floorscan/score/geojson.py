@@ -20,6 +20,11 @@ def read_wall_faces(path, kind: str = "face") -> np.ndarray:
     LineString and MultiLineString features whose property ``kind`` equals ``kind`` are
     split into their straight pieces.
 
+    Parameters
+    ----------
+    path : path
+    kind : str
+
     Returns
     -------
     (M, 4) float64 ndarray
@@ -39,6 +44,22 @@ def read_wall_faces(path, kind: str = "face") -> np.ndarray:
 
 
 def feature_collection(path) -> dict:
+    """A GeoJSON file's FeatureCollection.
+
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    dict
+        The parsed document.
+
+    Raises
+    ------
+    floorscan.core.io.InputError
+        When the document's ``type`` is not ``FeatureCollection``.
+    """
     import json
 
     from floorscan.core.io import InputError
@@ -51,7 +72,21 @@ def feature_collection(path) -> dict:
 
 
 def wall_faces(doc: dict, kind: str) -> np.ndarray:
-    """The straight pieces of the (Multi)LineString features of ``kind``, ``(M, 4)``."""
+    """The straight pieces of the (Multi)LineString features of ``kind`` (a z is
+    dropped; non-finite rows too, :func:`floorscan.score.segments.as_segments`).
+
+    Parameters
+    ----------
+    doc : dict
+        A FeatureCollection.
+    kind : str
+        The features' ``kind`` property.
+
+    Returns
+    -------
+    (M, 4) float64 ndarray
+        ``x0, y0, x1, y1``, metres; (0, 4) when none.
+    """
     lines: list = []
     for feat in doc.get("features", []):
         if (feat.get("properties") or {}).get("kind") != kind:
@@ -92,20 +127,63 @@ def floorplan_wall_count(path) -> int:
 
     The floor plan has features of kind ``axis`` (centre line) and ``footprint``
     (polygon) per wall, sharing a ``wall_id``: the count is the number of distinct
-    ``wall_id`` of those (a ``door`` names its wall too); without that property, the features of kind ``axis`` or ``wall`` (or
-    without a kind).
+    ``wall_id`` of those (a ``door`` names its wall too); without that property, the
+    features of kind ``axis`` or ``wall`` (or without a kind).
+
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    floorscan.core.io.InputError
+        When the file is not a GeoJSON FeatureCollection.
     """
     return _wall_count(feature_collection(path))
 
 
 def floorplan_faces(path) -> np.ndarray:
-    """The merged faces (``kind`` "face") of a floor plan ``.geojson``, ``(F, 4)``
-    metres; empty when the plan has none (a plan without walls is valid)."""
+    """The merged faces (``kind`` "face") of a floor plan ``.geojson``.
+
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    (F, 4) float64 ndarray
+        Metres; empty when the plan has none (a plan without walls is valid).
+
+    Raises
+    ------
+    floorscan.core.io.InputError
+        When the file is not a GeoJSON FeatureCollection.
+    """
     return wall_faces(feature_collection(path), "face")
 
 
 def read_floorplan(path) -> tuple[np.ndarray, int]:
     """:func:`floorplan_faces` and :func:`floorplan_wall_count` of a floor plan
-    ``.geojson``, from one read of the file."""
+    ``.geojson``, from one read of the file.
+
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    faces : (F, 4) float64 ndarray
+        Metres.
+    n_walls : int
+
+    Raises
+    ------
+    floorscan.core.io.InputError
+        When the file is not a GeoJSON FeatureCollection.
+    """
     doc = feature_collection(path)
     return wall_faces(doc, "face"), _wall_count(doc)

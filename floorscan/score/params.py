@@ -1,13 +1,14 @@
 """Parameters of the score stage (config section ``score``): :class:`ScoreParams`, with
 the defaults of ``workflow/schemas/score.schema.yaml``
-(:func:`floorscan.core.config.schema_defaults`); the schema describes each key."""
+(:func:`floorscan.core.config.schema_defaults`); the schema describes each key. Built by
+:func:`floorscan.core.config.stage_params`: ``stage_params(ScoreParams, config["score"])``."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from typing import Any, Mapping
 
-from floorscan.core.config import dataclass_from_mapping, schema_defaults
+from floorscan.core.config import schema_defaults
 
 
 @dataclass(frozen=True)
@@ -65,14 +66,3 @@ class ScoreParams:
     curve_step_fraction: float
     random_seeds: int
     curve_auc_fraction: float
-
-    @classmethod
-    def from_config(cls, cfg: "ScoreParams | Mapping[str, Any] | None") -> "ScoreParams":
-        """From the ``score`` section (a mapping; None: the defaults), or ``cfg`` itself.
-
-        Raises
-        ------
-        ValueError
-            An unknown key.
-        """
-        return dataclass_from_mapping(cls, cfg, "score", ValueError)

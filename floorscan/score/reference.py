@@ -51,10 +51,11 @@ def reference_of_recording(
         return in the height band.
     """
     from floorscan.core.io import iter_scans
-    from floorscan.walls.params import params_from_config
+    from floorscan.core.config import stage_params
+    from floorscan.walls.params import ScanParams
     from floorscan.walls.points import scan_points_2d
 
-    scan_params = params_from_config(walls_config or {})[0]
+    scan_params = stage_params(ScanParams, walls_config)
     reg = registration[registration["kept"]].set_index("scan_id")
     origin = reg[["x_m", "y_m"]]
 

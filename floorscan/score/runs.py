@@ -29,6 +29,7 @@ from floorscan.score.bitmap import grid_for, rasterize_segments
 from floorscan.score.geojson import read_floorplan
 from floorscan.score.ground_truth import GROUND_TRUTH, REFERENCE
 from floorscan.score.growing import PAIR_REACH_M, GrowingWalls, SamplePairs
+from floorscan.core.config import stage_params
 from floorscan.score.params import ScoreParams
 from floorscan.score.segments import as_segments, gt_samples
 from floorscan.score.tolerance import recall_precision, tau_label
@@ -36,15 +37,43 @@ from floorscan.score.tolerance import recall_precision, tau_label
 
 def run_grid(orderings, extractors, ks) -> list[list[str]]:
     """``[ordering, extractor, k label]`` of every wall file scored: orderings outermost,
-    then extractors, then k in the order given (``walls.orderings``,
-    ``walls.extractors``, ``walls.k``; k labels as strings, "5" or "all")."""
+    then extractors, then k in the order given.
+
+    Parameters
+    ----------
+    orderings, extractors : iterable of str
+        ``walls.orderings``, ``walls.extractors``.
+    ks : iterable of int or str
+        ``walls.k``.
+
+    Returns
+    -------
+    list of list of str
+        k labels as strings, "5" or "all".
+    """
     return [[o, e, str(k)] for o in orderings for e in extractors for k in ks]
 
 
 def figure_runs(cfg: Mapping, extractors) -> list[list]:
     """``[ordering, extractor, k label]`` of the wall files the figures draw: every
     extractor at ``cfg["figure_k"]`` and "all", for ``cfg["figure_orderings"]`` and then
-    ``cfg["figure_ordering"]`` (each ordering once, in that order)."""
+    ``cfg["figure_ordering"]`` (each ordering once, in that order).
+
+    Parameters
+    ----------
+    cfg : mapping
+        The ``score`` config section.
+    extractors : iterable of str
+
+    Returns
+    -------
+    list of list of str
+
+    Raises
+    ------
+    KeyError
+        When ``cfg`` lacks one of those keys.
+    """
     k = str(cfg["figure_k"])
     orderings = list(dict.fromkeys(list(cfg["figure_orderings"]) + [cfg["figure_ordering"]]))
     return [[o, e, kk] for o in orderings for e in extractors for kk in (k, "all")]
@@ -52,12 +81,38 @@ def figure_runs(cfg: Mapping, extractors) -> list[list]:
 
 def figure_floorplans(cfg: Mapping) -> list[list]:
     """``[ordering, extractor]`` of the floor plans at ``figure_k`` that the figures
-    draw (Fig. 5.5): ``cfg["figure_orderings"]`` with ``cfg["figure_extractor"]``."""
+    draw (thesis Fig. 5.5): ``cfg["figure_orderings"]`` with ``cfg["figure_extractor"]``.
+
+    Parameters
+    ----------
+    cfg : mapping
+        The ``score`` config section.
+
+    Returns
+    -------
+    list of list of str
+    """
     return [[o, cfg["figure_extractor"]] for o in cfg["figure_orderings"]]
 
 
 def k_scans(k_label: str, n_kept: int) -> int:
-    """Number of scans behind ``k{k_label}``: ``min(k, n_kept)``, ``n_kept`` for "all"."""
+    """Number of scans behind ``k{k_label}``: ``min(k, n_kept)``, ``n_kept`` for "all".
+
+    Parameters
+    ----------
+    k_label : str
+        ``"all"`` or an integer.
+    n_kept : int
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    ValueError
+        When ``k_label`` is neither.
+    """
     if str(k_label) == "all":
         return int(n_kept)
     return min(int(k_label), int(n_kept))
@@ -131,7 +186,7 @@ def score_dataset(
         When ``reference_kind`` is unknown, a run's extractor has no reference, or the
         references are all empty (no grid can be built).
     """
-    cfg = ScoreParams.from_config(cfg)
+    cfg = stage_params(ScoreParams, cfg)
     import pandas as pd
 
     if reference_kind not in (GROUND_TRUTH, REFERENCE):

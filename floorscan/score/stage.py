@@ -19,6 +19,7 @@ import pandas as pd
 from floorscan.core.files import atomic_path
 from floorscan.core.io import read_metadata, read_table, write_table
 from floorscan.score import curves as C
+from floorscan.core.config import stage_params
 from floorscan.score.params import ScoreParams
 from floorscan.score.runs import sort_scores
 from floorscan.score.summary import grid_summary_markdown, summarize
@@ -89,7 +90,7 @@ def write_scores(
     -------
     Scores
     """
-    cfg = ScoreParams.from_config(cfg)
+    cfg = stage_params(ScoreParams, cfg)
     tau = float(cfg.summary_tau_m)
     table = sort_scores(pd.concat([read_table(p) for p in runs], ignore_index=True))
     grid_summary = summarize(table, tau, cfg.summary_levels)
@@ -164,7 +165,7 @@ def write_run_scores(
     DataFrame
         The table written (one row per run).
     """
-    cfg = ScoreParams.from_config(cfg)
+    cfg = stage_params(ScoreParams, cfg)
     from floorscan.score.against_reference import score_plans
     from floorscan.score.geojson import read_floorplan
     from floorscan.score.ground_truth import load_recall_references, load_references

@@ -7,17 +7,18 @@
 - :class:`CoverageParams`: its ``select.coverage`` subsection, the coverage orderings
   (:mod:`floorscan.select.coverage`).
 
-Each is built from its config section with ``from_config`` (an unknown key raises
-``ValueError``) and checks its values; the schema documents the same defaults.
+Each is built from its config section with :func:`floorscan.core.config.stage_params`
+(``stage_params(HullParams, config["hulls"])``; a bad key or value raises
+:class:`~floorscan.core.config.ConfigError`) and checks its values; the defaults are the
+schemas'.
 """
 
 from __future__ import annotations
 
 import numbers
 from dataclasses import asdict, dataclass
-from typing import Mapping
 
-from floorscan.core.config import dataclass_from_mapping, schema_defaults
+from floorscan.core.config import schema_defaults
 
 #: ``hulls.radius_rule`` values (:class:`HullParams`).
 RADIUS_RULES = ("nearest_centre", "global_min")
@@ -73,11 +74,6 @@ class HullParams:
         if self.n_init < 1 or self.max_iter < 1:
             raise ValueError("hulls.n_init and hulls.max_iter must be >= 1")
 
-    @classmethod
-    def from_config(cls, cfg: Mapping | None) -> "HullParams":
-        """Build from the stage's config dict; unknown keys raise ``ValueError``."""
-        return dataclass_from_mapping(cls, cfg, "hulls", ValueError)
-
     def as_dict(self) -> dict:
         return asdict(self)
 
@@ -86,6 +82,11 @@ class HullParams:
 @schema_defaults("select")
 class SelectParams:
     """Parameters of the ``select`` stage (``workflow/schemas/select.schema.yaml``).
+
+    The section's other keys are read by other classes: ``figure_*`` by
+    :class:`floorscan.figures.selection.FigureParams`, ``coverage`` by
+    :class:`CoverageParams`, ``default_ordering``, ``k`` and ``k_coverage`` by the
+    recommended selection (:mod:`floorscan.select.recommend`).
 
     Attributes
     ----------
@@ -113,21 +114,6 @@ class SelectParams:
         for name in ("motion_max_distance_m", "motion_max_angle_deg", "motion_max_time_s"):
             if not getattr(self, name) >= 0:
                 raise ValueError(f"select.{name} must be >= 0, got {getattr(self, name)}")
-
-    @classmethod
-    def from_config(cls, cfg: Mapping | None) -> "SelectParams":
-        """Build from the stage's config dict; unknown keys raise ``ValueError``.
-
-        ``figure_*`` keys belong to :class:`floorscan.figures.selection.FigureParams`,
-        ``coverage`` to :class:`CoverageParams`, and ``default_ordering``, ``k`` and
-        ``k_coverage`` to the recommended selection (:mod:`floorscan.select.recommend`);
-        they are skipped here.
-        """
-        cfg = {
-            k: v for k, v in dict(cfg or {}).items()
-            if not k.startswith("figure_") and k not in ("coverage", "default_ordering", "k", "k_coverage")
-        }  # fmt: skip
-        return dataclass_from_mapping(cls, cfg, "select", ValueError)
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -160,11 +146,6 @@ class CoverageParams:
     full_spacing_m: float
     wall_extractor: str
     wall_quality: bool
-
-    @classmethod
-    def from_config(cls, cfg) -> "CoverageParams":
-        """From the ``select.coverage`` section; an unknown key raises ValueError."""
-        return dataclass_from_mapping(cls, cfg, "select.coverage", ValueError)
 
     def check(self) -> None:
         """Raise ValueError naming the key of a value out of range."""

@@ -27,7 +27,12 @@ if TYPE_CHECKING:
 
 
 def ros1_typestore():
-    """rosbags' ROS1 Noetic typestore, with ``tf2_msgs/msg/TFMessage`` registered."""
+    """rosbags' ROS1 Noetic typestore, with ``tf2_msgs/msg/TFMessage`` registered.
+
+    Returns
+    -------
+    rosbags.typesys.store.Typestore
+    """
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     ts = get_typestore(Stores.ROS1_NOETIC)
@@ -48,6 +53,20 @@ class Ros1Messages:
         self.seq: dict[str, int] = {}
 
     def header(self, topic: str, t_ns: int, frame: str):
+        """A ``std_msgs/Header``, with the next ``seq`` of ``topic``.
+
+        Parameters
+        ----------
+        topic : str
+        t_ns : int
+            Stamp, nanoseconds since the epoch.
+        frame : str
+            ``frame_id``.
+
+        Returns
+        -------
+        std_msgs/msg/Header
+        """
         seq = self.seq.get(topic, 0)
         self.seq[topic] = seq + 1
         sec, nsec = divmod(int(t_ns), 1_000_000_000)
@@ -55,10 +74,36 @@ class Ros1Messages:
         return self.T["std_msgs/msg/Header"](seq=seq, stamp=stamp, frame_id=frame)
 
     def quat(self, yaw: float):
+        """The quaternion of a rotation about +z.
+
+        Parameters
+        ----------
+        yaw : float
+            Radians.
+
+        Returns
+        -------
+        geometry_msgs/msg/Quaternion
+        """
         q = self.T["geometry_msgs/msg/Quaternion"]
         return q(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2))
 
     def pose(self, x: float, y: float, z: float, yaw: float, cov: np.ndarray):
+        """A ``geometry_msgs/PoseWithCovariance``.
+
+        Parameters
+        ----------
+        x, y, z : float
+            Metres.
+        yaw : float
+            Radians.
+        cov : (36,) float ndarray
+            Row-major 6 x 6 covariance (x, y, z, roll, pitch, yaw).
+
+        Returns
+        -------
+        geometry_msgs/msg/PoseWithCovariance
+        """
         T = self.T
         return T["geometry_msgs/msg/PoseWithCovariance"](
             pose=T["geometry_msgs/msg/Pose"](
@@ -68,9 +113,33 @@ class Ros1Messages:
         )
 
     def ser(self, msg, msgtype: str) -> bytes:
+        """Serialize a message as ROS1 bytes.
+
+        Parameters
+        ----------
+        msg : rosbags message
+        msgtype : str
+            E.g. ``"sensor_msgs/msg/LaserScan"``.
+
+        Returns
+        -------
+        bytes
+        """
         return self.ts.serialize_ros1(msg, msgtype)
 
     def tf_static(self, t_ns: int) -> bytes:
+        """The ``/tf_static`` message: ``base_link`` -> ``laser``, the sensor height up.
+
+        Parameters
+        ----------
+        t_ns : int
+            Stamp, nanoseconds since the epoch.
+
+        Returns
+        -------
+        bytes
+            Serialized ``tf2_msgs/TFMessage``.
+        """
         T = self.T
         tr = T["geometry_msgs/msg/TransformStamped"](
             header=self.header("/tf_static", t_ns, "base_link"),
@@ -85,6 +154,19 @@ class Ros1Messages:
         return self.ser(T["tf2_msgs/msg/TFMessage"](transforms=[tr]), "tf2_msgs/msg/TFMessage")
 
     def amcl(self, i: int) -> bytes:
+        """The ``/amcl_pose`` message of AMCL pose ``i`` (map frame; variances from the
+        simulation's ``pose_position_std_m`` and ``pose_yaw_std_rad``).
+
+        Parameters
+        ----------
+        i : int
+            Index into ``rec.amcl`` / ``rec.pose_t_ns``.
+
+        Returns
+        -------
+        bytes
+            Serialized ``geometry_msgs/PoseWithCovarianceStamped``.
+        """
         r, p = self.rec, self.rec.params
         cov = np.zeros(36)
         cov[0] = cov[7] = p.pose_position_std_m**2
@@ -97,6 +179,18 @@ class Ros1Messages:
         return self.ser(msg, "geometry_msgs/msg/PoseWithCovarianceStamped")
 
     def odom(self, i: int) -> bytes:
+        """The ``/odom`` message of odometry sample ``i`` (``odom`` -> ``base_link``).
+
+        Parameters
+        ----------
+        i : int
+            Index into ``rec.odom`` / ``rec.odom_t_ns``.
+
+        Returns
+        -------
+        bytes
+            Serialized ``nav_msgs/Odometry``.
+        """
         T, r = self.T, self.rec
         x, y, yaw, v, w = (float(a) for a in r.odom[i])
         cov = np.zeros(36)
@@ -117,6 +211,23 @@ class Ros1Messages:
         return self.ser(msg, "nav_msgs/msg/Odometry")
 
     def scan(self, k: int, ranges: np.ndarray, points: np.ndarray) -> bytes:
+        """The ``/scan`` message of scan ``k``, frame ``laser``: a ``LaserScan`` for a 2D
+        scanner, else a ``PointCloud2`` of little-endian float32 ``x, y, z``.
+
+        Parameters
+        ----------
+        k : int
+            Index into ``rec.scan_t_ns``.
+        ranges : (R,) float ndarray
+            The 2D scanner's ranges, metres.
+        points : (N, 3) float ndarray
+            The 3D scanner's points in the scanner frame, metres.
+
+        Returns
+        -------
+        bytes
+            Serialized message.
+        """
         T, r, sc = self.T, self.rec, self.rec.scanner
         header = self.header("/scan", int(r.scan_t_ns[k]), "laser")
         if isinstance(sc, Scanner2D):

@@ -19,6 +19,7 @@ import logging
 import os
 from typing import Any, Mapping
 
+from floorscan.core.config import stage_params
 from floorscan.core.io import InputError, write_table
 from floorscan.core.files import write_json
 from floorscan.sim.building_file import load_building
@@ -60,7 +61,9 @@ def run_simulation(
     Raises
     ------
     InputError
-        Bad building, unknown or invalid scanner, invalid parameters.
+        Bad building, unknown or invalid scanner.
+    floorscan.core.config.ConfigError
+        Invalid parameters (:func:`floorscan.core.config.stage_params`).
     """
     name = dataset.get("name", "?")
     scanners = cfg.get("scanners") or {}
@@ -71,7 +74,7 @@ def run_simulation(
             f"simulate.scanners {sorted(scanners)}"
         )
     scanner = scanner_from_config(sname, scanners[sname])
-    params = SimParams.from_config(cfg)
+    params = stage_params(SimParams, cfg)
     seed = dataset.get("seed")
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise InputError(f"config datasets.{name}.seed: expected an integer >= 0, got {seed!r}")

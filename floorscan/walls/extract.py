@@ -29,9 +29,9 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 import pandas as pd
 
-from floorscan.core.config import schema_section_defaults
-from floorscan.walls.extractors import Extractor, config_params, get_extractor
-from floorscan.walls.params import RansacParams, ScanParams, scan_params
+from floorscan.core.config import schema_section_defaults, stage_params
+from floorscan.walls.extractors import REGISTRY, Extractor, get_extractor
+from floorscan.walls.params import RansacParams, ScanParams
 from floorscan.walls.points import scan_points_2d
 from floorscan.walls.tables import SCAN_STATUS, WALLS, segments_frame
 
@@ -56,7 +56,7 @@ def extract_scan(
     scan : ScanParams
     params : mapping of str to parameter object
         The extractor's config sections by key, e.g. ``{"ransac": RansacParams(),
-        "cluster_ransac": ClusterParams()}`` (:func:`floorscan.walls.extractors.config_params`).
+        "cluster_ransac": ClusterParams()}`` (each built by :func:`floorscan.core.config.stage_params`).
     seed : int, sequence of int or numpy.random.Generator
 
     Returns
@@ -141,8 +141,9 @@ def extract_walls(
     else:
         scans = points
     entry = get_extractor(extractor)
-    scan_p = scan_params(cfg)
-    params = config_params(cfg)  # every extractor's section, checked
+    scan_p = stage_params(ScanParams, cfg)
+    # every extractor's section (walls.ransac, walls.cluster_ransac, ...), checked
+    params = {key: stage_params(cls, cfg.get(key)) for e in REGISTRY.values() for key, cls in e.config.items()}
     ransac_p, own = params["ransac"], [params[key] for key in entry.config]
     seed = int(cfg.get("seed", schema_section_defaults("walls")["seed"]))
     if entry.prepare is not None:  # imports before timing the first scan

@@ -14,7 +14,7 @@ How to add an extractor: see the package docstring (:mod:`floorscan.walls`).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable, Mapping
+from typing import Callable, Mapping
 
 from floorscan.walls.cluster import cluster_ransac_rows, import_cluster_modules
 from floorscan.walls.params import ClusterParams, RansacParams
@@ -85,6 +85,15 @@ EXTRACT_KEYS = ("seed", "height_band_m", "planar_tolerance_m", "grid_m") + tuple
 def get_extractor(name: str) -> Extractor:
     """The registered extractor ``name``.
 
+    Parameters
+    ----------
+    name : str
+        A key of :data:`REGISTRY` (config ``walls.extractors``).
+
+    Returns
+    -------
+    Extractor
+
     Raises
     ------
     ValueError
@@ -94,28 +103,3 @@ def get_extractor(name: str) -> Extractor:
         return REGISTRY[name]
     except (KeyError, TypeError):
         raise ValueError(f"unknown extractor {name!r}; expected one of {EXTRACTORS}") from None
-
-
-def config_params(cfg: Mapping[str, Any]) -> dict[str, Any]:
-    """The parameter objects of every config section the registered extractors read.
-
-    Parameters
-    ----------
-    cfg : mapping
-        The ``walls`` config section; a missing section takes its class's defaults.
-
-    Returns
-    -------
-    dict
-        ``{key: params}`` for every key of the extractors' ``config`` (``ransac``,
-        ``cluster_ransac``, ...).
-
-    Raises
-    ------
-    KeyError
-        When a section has a key its parameter class does not know.
-    """
-    from floorscan.core.config import dataclass_from_mapping
-
-    classes = {key: cls for e in REGISTRY.values() for key, cls in e.config.items()}
-    return {key: dataclass_from_mapping(cls, cfg.get(key), cls.__name__) for key, cls in classes.items()}

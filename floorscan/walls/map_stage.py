@@ -21,20 +21,6 @@ from floorscan.walls.map_lines import MapParams, map_segments
 log = logging.getLogger(__name__)
 
 
-def map_params(cfg: Mapping[str, Any] | None) -> MapParams:
-    """:class:`~floorscan.walls.map_lines.MapParams` of the ``walls`` config section's
-    ``map`` (defaults filled in).
-
-    Raises
-    ------
-    KeyError
-        For a key :class:`MapParams` does not know.
-    """
-    from floorscan.core.config import dataclass_from_mapping
-
-    return dataclass_from_mapping(MapParams, (cfg or {}).get("map"), "walls.map")
-
-
 def map_of_scans(
     registered_path: str | os.PathLike,
     registration: pd.DataFrame,
@@ -70,12 +56,13 @@ def map_of_scans(
         When a scan to use has no kept row, or none of them has a wall point.
     """
     from floorscan.core.io import iter_scans
-    from floorscan.walls.params import scan_params
+    from floorscan.core.config import stage_params
+    from floorscan.walls.params import ScanParams
     from floorscan.walls.points import scan_points_2d
 
     cfg = cfg or {}
-    params = map_params(cfg)
-    sp = scan_params(cfg)
+    params = stage_params(MapParams, cfg.get("map"))
+    sp = stage_params(ScanParams, cfg)
     reg = registration[registration["kept"]].set_index("scan_id")
     wanted = set(reg.index.tolist() if scan_ids is None else np.asarray(scan_ids).tolist())
     missing = sorted(wanted - set(reg.index.tolist()))
@@ -102,10 +89,31 @@ def map_of_scans(
 def write_map_walls(
     registered_path, registration_path, scans_path, cfg, walls_path, grid_path
 ) -> dict:
-    """Rule ``map_walls``: :func:`map_of_scans` of the scans of ``scans_path``
-    (``selection/scans.csv``; None: all kept scans), the segments written to
-    ``walls_path`` (:data:`floorscan.walls.tables.WALLS`) and the grid to ``grid_path``
-    (:func:`floorscan.core.occupancy.write_grid`). Returns the counts."""
+    """Rule ``map_walls``: :func:`map_of_scans` of a set of scans, the segments and the
+    grid written.
+
+    Parameters
+    ----------
+    registered_path : path
+        ``registered.parquet``: the kept scans' points in the map frame, metres.
+    registration_path : path
+        ``registration.parquet`` (``scan_id``, ``kept``, ``x_m``, ``y_m``).
+    scans_path : path or None
+        ``selection/scans.csv``, whose ``scan_id`` column names the scans; None: all kept
+        scans.
+    cfg : mapping
+        The ``walls`` config section.
+    walls_path : path
+        Output: the segments (:data:`floorscan.walls.tables.WALLS`, metadata
+        ``extractor``, ``n_scans``).
+    grid_path : path
+        Output: the occupancy grid (:func:`floorscan.core.occupancy.write_grid`).
+
+    Returns
+    -------
+    dict
+        ``n_scans`` and ``n_segments`` (int).
+    """
     from floorscan.core.io import read_table, write_table
     from floorscan.core.occupancy import write_grid
     from floorscan.walls.tables import WALLS

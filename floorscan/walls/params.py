@@ -7,17 +7,17 @@
 * :class:`ClusterParams` (``walls.cluster_ransac``): the clustering of
   :func:`floorscan.walls.cluster.cluster_ransac` (thesis section 3.4).
 
-:func:`params_from_config` reads them from the ``walls`` config section; the defaults are written
-once, in ``workflow/schemas/walls.schema.yaml``
+Each is built from its section with :func:`floorscan.core.config.stage_params`
+(``stage_params(RansacParams, cfg["ransac"])``, ``stage_params(ScanParams, cfg)``); the
+defaults are written once, in ``workflow/schemas/walls.schema.yaml``
 (:func:`floorscan.core.config.schema_defaults`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Mapping
 
-from floorscan.core.config import dataclass_from_mapping, schema_defaults
+from floorscan.core.config import ConfigError, schema_defaults
 
 
 @dataclass(frozen=True)
@@ -111,7 +111,13 @@ class ClusterParams:
 
 
 @dataclass(frozen=True)
-@schema_defaults("walls", min_height_m=lambda d: d["height_band_m"][0], max_height_m=lambda d: d["height_band_m"][1])
+@schema_defaults(
+    "walls",
+    min_height_m=lambda d: float(d["height_band_m"][0]),
+    max_height_m=lambda d: float(d["height_band_m"][1]),
+    planar_tolerance_m=lambda d: float(d["planar_tolerance_m"]),
+    grid_m=lambda d: float(d["grid_m"]),
+)
 class ScanParams:
     """How a scan becomes 2D wall points (config ``walls``: height band and grid).
 
@@ -132,38 +138,8 @@ class ScanParams:
     planar_tolerance_m: float
     grid_m: float
 
-
-def scan_params(cfg: Mapping[str, Any]) -> ScanParams:
-    """The :class:`ScanParams` of the ``walls`` config section (defaults filled in).
-
-    Raises
-    ------
-    ValueError
-        For a height band that is not [min, max] with min < max.
-    """
-    band = cfg.get("height_band_m", [ScanParams.min_height_m, ScanParams.max_height_m])
-    if len(band) != 2 or not float(band[0]) < float(band[1]):
-        raise ValueError(f"walls.height_band_m must be [min, max] with min < max, got {band!r}")
-    return ScanParams(
-        min_height_m=float(band[0]),
-        max_height_m=float(band[1]),
-        planar_tolerance_m=float(cfg.get("planar_tolerance_m", ScanParams.planar_tolerance_m)),
-        grid_m=float(cfg.get("grid_m", ScanParams.grid_m)),
-    )
-
-
-def params_from_config(cfg: Mapping[str, Any]) -> tuple[ScanParams, RansacParams, ClusterParams]:
-    """The parameter objects of the ``walls`` config section (defaults filled in).
-
-    Raises
-    ------
-    KeyError
-        When the section has a key the parameter classes do not know.
-    ValueError
-        For a height band that is not [min, max] with min < max.
-    """
-    return (
-        scan_params(cfg),
-        dataclass_from_mapping(RansacParams, cfg.get("ransac"), "RansacParams"),
-        dataclass_from_mapping(ClusterParams, cfg.get("cluster_ransac"), "ClusterParams"),
-    )
+    def __post_init__(self):
+        if not self.min_height_m < self.max_height_m:
+            raise ConfigError(
+                f"walls.height_band_m must be [min, max] with min < max, got {[self.min_height_m, self.max_height_m]}"
+            )

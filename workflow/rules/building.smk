@@ -1,6 +1,6 @@
 # The floors of one building (floorscan.floorplan.building): config `building` names the
 # building and its floors, each a dataset of the run (resolved by
-# floorscan.core.config.resolve_building to building.floors[i].{dataset, storey, elevation_m}).
+# floorscan.core.datasets.resolve_building to building.floors[i].{dataset, storey, elevation_m}).
 #
 #   building:   results/building/building.ifc (an IfcBuildingStorey per floor, at its
 #               elevation), results/building/<dataset>.geojson per floor, and the page

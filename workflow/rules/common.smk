@@ -106,8 +106,8 @@ def stage_schema_check(stage):
     workflow/schemas/<stage>.schema.yaml (filling defaults), and each dataset's
     `params: {stage: ...}` overrides merged over it.
 
-    floorscan.core.config.validate_config: snakemake.utils.validate's checks and defaults,
-    each schema parsed once (16 validations took Snakemake ~0.5 s at every start)."""
+    floorscan.core.config.validate_config: snakemake.utils.validate (checks, defaults),
+    with the --config strings typed and a message naming the key."""
     schema = SCHEMA_DIR / f"{stage}.schema.yaml"
     config.setdefault(stage, {})
     with config_errors_exit():  # a bad value: one paragraph, no traceback
@@ -189,7 +189,7 @@ def all_outputs():
     return outputs + [p.format(dataset=d) for d in target_datasets() for p in REPORT_OUTPUTS]
 
 
-# The floors of one building (building.smk; floorscan.core.config.resolve_building).
+# The floors of one building (building.smk; floorscan.core.datasets.resolve_building).
 BUILDING_DIR = "results/building"
 
 

@@ -10,7 +10,7 @@ SYNTHETIC_DATASETS = sorted(d for d in DATASETS if is_synthetic(d))
 
 def simulate_building_yaml(wildcards):
     """The building file a synthetic dataset names: config/buildings/<building>.yaml
-    (its existence is checked at start, floorscan.core.config.check_datasets)."""
+    (its existence is checked at start, floorscan.core.datasets.check_datasets)."""
     return f"{BUILDINGS_DIR}/{DATASETS[wildcards.dataset]['building']}.yaml"
 
 
