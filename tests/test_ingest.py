@@ -825,7 +825,7 @@ def _pcd_header(fields="x y z", size="4 4 4", type_="F F F", count="1 1 1", widt
          "fewer_rows", "more_rows", "short_row", "long_row", "word", "f4_overflow"],
 )
 def test_pcd_header_checked_against_the_data(tmp_path, header, body, match):
-    from floorscan.ingest.pcd import read_pcd_xyz
+    from floorscan.ingest.pcd_file import read_pcd_xyz
 
     p = tmp_path / "p.pcd"
     p.write_text(_pcd_header(**header) + body)
@@ -835,7 +835,7 @@ def test_pcd_header_checked_against_the_data(tmp_path, header, body, match):
 
 @pytest.mark.parametrize("extra", [-4, 4, 1])
 def test_pcd_binary_size_must_match_points(tmp_path, extra):
-    from floorscan.ingest.pcd import read_pcd_xyz
+    from floorscan.ingest.pcd_file import read_pcd_xyz
 
     pts = np.array([[1.5, 2.0, 3.0], [4.0, 5.0, 6.0]], "<f4")
     data = pts.tobytes()
@@ -851,7 +851,7 @@ def test_pcd_binary_size_must_match_points(tmp_path, extra):
 def test_pcd_f8_and_padding_fields_and_compressed_read_exactly(tmp_path):
     import open3d as o3d
 
-    from floorscan.ingest.pcd import read_pcd_xyz
+    from floorscan.ingest.pcd_file import read_pcd_xyz
 
     rng = np.random.default_rng(5)
     pts = rng.uniform(-10, 10, (7, 3))

@@ -465,7 +465,7 @@ def pcd_files(draw):
 @settings(max_examples=300)
 @given(case=pcd_files())
 def test_pcd_read_exactly_or_rejected(workdir, case):
-    from floorscan.ingest.pcd import read_pcd_xyz
+    from floorscan.ingest.pcd_file import read_pcd_xyz
 
     raw, expected = case
     path = workdir / "p.pcd"

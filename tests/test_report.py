@@ -15,7 +15,7 @@ import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 
 from floorscan.figures import report as R  # noqa: E402
-from floorscan.score.curves import SUMMARY_COLUMNS  # noqa: E402
+from floorscan.score.curve_summary import SUMMARY_COLUMNS  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -32,7 +32,7 @@ from floorscan.figures.answer import format_bytes
 from floorscan.figures.plan_scores import answer_html
 from floorscan.figures.room_table import read_plan_rooms, rooms_table_html, with_room_scores
 from floorscan.figures.summary_page import summary_table_html
-from floorscan.score.curves import summary_cell
+from floorscan.score.curve_summary import summary_cell
 
 if TYPE_CHECKING:  # pandas is imported by the functions that use it
     import pandas as pd
@@ -120,7 +120,7 @@ def front_page(
         The recommended floor plan as SVG text (``results/<dataset>/floorplan.svg``,
         :func:`floorscan.floorplan.svg.write_svg`), inlined by :func:`inline_svg`.
     summary : pandas.DataFrame or path, optional
-        The scan-reduction summary (:func:`floorscan.score.curves.curve_summary`), or
+        The scan-reduction summary (:func:`floorscan.score.curve_summary.curve_summary`), or
         the path of ``summary.parquet``. None: the run did not evaluate (config
         ``evaluate``); the page says so.
     verdict : mapping, str or sequence of str, optional
@@ -147,7 +147,7 @@ def front_page(
         The ordering and the wall extractor of the recommended plan: named in its
         caption, highlighted in the summary table; the ordering and the thesis's
         (:data:`THESIS_ORDERING`) are compared with random
-        (:func:`floorscan.score.curves.beats_random_line`).
+        (:func:`floorscan.score.curve_summary.beats_random_line`).
     n_walls : int, optional
         Walls of the recommended plan.
     description : str
@@ -441,7 +441,8 @@ def _read_summary(summary) -> "pd.DataFrame | None":
 
 def _beats_random(table: "pd.DataFrame", ordering: str) -> list[str]:
     """Does the recommended ordering, and the thesis's, beat random, per extractor."""
-    from floorscan.score.curves import RANDOM, beats_random_line
+    from floorscan.score.curve_summary import beats_random_line
+    from floorscan.score.curves import RANDOM
 
     present = set(table["ordering"])
     if RANDOM not in present:

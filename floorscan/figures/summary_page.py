@@ -1,6 +1,6 @@
 """The scan-reduction summary of a dataset as HTML: the table the front page shows and
 ``summary.html``, a page of its own (the same cells as ``summary.md``,
-:func:`floorscan.score.curves.summary_cell`)."""
+:func:`floorscan.score.curve_summary.summary_cell`)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import os
 from typing import TYPE_CHECKING
 
 from floorscan.core.files import atomic_path
-from floorscan.score.curves import SUMMARY_COLUMNS, summary_cell
+from floorscan.score.curve_summary import SUMMARY_COLUMNS, summary_cell
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -26,10 +26,10 @@ def write_summary_page(path: str | os.PathLike, dataset: str, summary: "pd.DataF
         Output, written atomically.
     dataset : str
     summary : pandas.DataFrame
-        :func:`floorscan.score.curves.curve_summary`.
+        :func:`floorscan.score.curve_summary.curve_summary`.
     n_kept : int
     beats_random : str
-        :func:`floorscan.score.curves.beats_random_line`.
+        :func:`floorscan.score.curve_summary.beats_random_line`.
     verdict : dict or None
     ordering : str
         Highlighted.
@@ -56,7 +56,7 @@ def summary_table_html(
     Parameters
     ----------
     summary : pandas.DataFrame
-        :func:`floorscan.score.curves.curve_summary`.
+        :func:`floorscan.score.curve_summary.curve_summary`.
     n_kept : int, optional
     ordering, extractor : str
 

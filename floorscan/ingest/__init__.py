@@ -5,12 +5,14 @@ Three formats are read, each by its own reader:
 - ``rosbag`` (:mod:`floorscan.ingest.rosbag`): ROS1 ``.bag`` files and ROS2 bag folders
   through rosbags' ``AnyReader``; scans from ``sensor_msgs/LaserScan`` or
   ``sensor_msgs/PointCloud2`` (:mod:`floorscan.ingest.ros_messages`); poses from a pose
-  topic or the TF tree (:mod:`floorscan.ingest.tf_chains`).
+  topic or the TF tree (its links and chains :mod:`floorscan.ingest.tf_chains`, the
+  poses of a chain :mod:`floorscan.ingest.tf_poses`).
 - ``carmen`` (:mod:`floorscan.ingest.carmen`): ``FLASER`` and ``ROBOTLASER1`` lines of a
   CARMEN log (plain or gzip), with the corrected pose on each line
   (:mod:`floorscan.ingest.carmen_lines`).
 - ``pcd`` (:mod:`floorscan.ingest.pcd`): a folder of ``.pcd`` scans in the map frame plus
-  a CSV of scan locations (the thesis's synthetic layout, section 4.1).
+  a CSV of scan locations (the thesis's synthetic layout, section 4.1); each ``.pcd``
+  file's header and points are read by :mod:`floorscan.ingest.pcd_file`.
 
 A dataset may name only its ``path``: the format is then detected from it
 (:func:`floorscan.ingest.detect.detect_format`), a bag's scan topic and pose source from

@@ -14,7 +14,8 @@ when the stamp is zero). Poses come from one of (dataset option ``pose.source``)
 
 The scan topic and the pose source are detected when the dataset does not name them
 (:mod:`floorscan.ingest.rosbag_detect`); the messages are decoded and checked by
-:mod:`floorscan.ingest.ros_messages`, the TF chains by :mod:`floorscan.ingest.tf_chains`.
+:mod:`floorscan.ingest.ros_messages`, the TF chains by :mod:`floorscan.ingest.tf_chains` and
+:mod:`floorscan.ingest.tf_poses`.
 
 ROS2 bags that store no message definitions are read with the Humble typestore. A
 ``.db3`` / ``.mcap`` file is read as its folder's bag.
@@ -61,7 +62,8 @@ from floorscan.ingest.rosbag_detect import (
     detect_scan_topic,
     short_type,
 )
-from floorscan.ingest.tf_chains import TfLink, planar_pose_stream, read_tf, static_transform, tf_pose_stream
+from floorscan.ingest.tf_chains import TfLink, read_tf
+from floorscan.ingest.tf_poses import planar_pose_stream, static_transform, tf_pose_stream
 
 log = logging.getLogger(__name__)
 

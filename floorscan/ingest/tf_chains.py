@@ -1,17 +1,13 @@
-"""The TF tree of a bag: its links, the chain from a fixed frame to the scanner, pose streams.
+"""The TF tree of a bag: its links and the chain from a fixed frame to the scanner.
 
 Links come from ``/tf`` and ``/tf_static`` (several publishers, :func:`read_tf`). A link
 that never changes is static, whichever topic carried it; of samples with one stamp the
-last one wins, as in tf2. A chain's pose composes its links, each interpolated at the
-union of the moving links' stamps, linearly in translation and by slerp in rotation, as
-tf2 does (:func:`tf_pose_stream`); samples inside a gap of a moving link are left out.
-The mount of the scanner on the base is the chain of static links between them
-(:func:`static_transform`). A frame with several parents or a loop on the way up from
-the scanner is an error (:class:`TfChainError`, naming the frames and the tree's chains),
-never taken for a missing chain. A link with a bad sample
-(:func:`floorscan.ingest.ros_messages.pose_problem`) is refused only when a chain uses
-it. A pose stream whose scanner is tilted more than :data:`MAX_TILT_DEG` from level is
-refused (:func:`planar_pose_stream`).
+last one wins, as in tf2. A link's transform at any stamp is interpolated linearly in
+translation and by slerp in rotation, as tf2 does (:meth:`TfLink.at`). A frame with
+several parents or a loop on the way up from the scanner is an error
+(:class:`TfChainError`, naming the frames and the tree's chains), never taken for a
+missing chain (:func:`tf_chain`, :func:`walk_up`). The pose streams and the scanner's
+mount composed from a chain are :mod:`floorscan.ingest.tf_poses`.
 """
 
 from __future__ import annotations
@@ -24,46 +20,10 @@ from scipy.spatial.transform import Rotation, Slerp
 
 from floorscan.core.io import InputError
 from floorscan.core.messages import quoted
-from floorscan.ingest.recording import pose_stream_frame
 from floorscan.ingest.ros_messages import message_label, pose_problem, stamp_ns
 
 
 TF_TOPICS = ("/tf", "/tf_static")
-#: A scanner tilted more than this (degrees) cannot be treated as planar.
-MAX_TILT_DEG = 10.0
-
-
-def planar_pose_stream(t, rot: Rotation, trans, what: str):
-    """Pose stream of a chain of 3D poses, refusing a tilted scanner.
-
-    Parameters
-    ----------
-    t : (N,) int ndarray
-        Stamps, nanoseconds.
-    rot, trans : scipy.spatial.transform.Rotation, (N, 3) float ndarray
-        N rotations and translations (metres).
-    what : str
-        The chain, for the message.
-
-    Returns
-    -------
-    pandas.DataFrame
-        :func:`~floorscan.ingest.recording.pose_stream_frame` (yaw of the rotated x axis).
-
-    Raises
-    ------
-    InputError
-        A pose's z axis tilts more than :data:`MAX_TILT_DEG` degrees from vertical.
-    """
-    mat = rot.as_matrix()
-    tilt = np.degrees(np.arccos(np.clip(mat[:, 2, 2], -1.0, 1.0)))
-    if np.max(tilt) > MAX_TILT_DEG:
-        raise InputError(
-            f"{what}: the scanner is tilted {np.max(tilt):.1f} deg from level; floorscan expects a level "
-            f"scanner (tilt under {MAX_TILT_DEG} deg)"
-        )
-    yaw = np.arctan2(mat[:, 1, 0], mat[:, 0, 0])
-    return pose_stream_frame(t, trans[:, 0], trans[:, 1], trans[:, 2], yaw)
 
 
 class TfLink:
@@ -76,7 +36,7 @@ class TfLink:
         self.quat: list[tuple[float, float, float, float]] = []
         self.static = False
         #: The first bad sample (file, topic, message, field), left out; the link is
-        #: refused when a chain uses it (:func:`_check_links`).
+        #: refused when a chain uses it (:mod:`floorscan.ingest.tf_poses`).
         self.bad: str | None = None
 
     def finish(self) -> None:
@@ -194,7 +154,18 @@ def _name(frame: str) -> str:
 
 
 def tf_frames(edges) -> list[str]:
-    """Every frame named by a TF link (parent or child), sorted."""
+    """Every frame named by a TF link (parent or child), sorted.
+
+    Parameters
+    ----------
+    edges : mapping of (str, str) to TfLink
+        :func:`read_tf`'s links; only the (parent, child) keys are read.
+
+    Returns
+    -------
+    list of str
+        The distinct frame names, sorted.
+    """
     return sorted({f for key in edges for f in key})
 
 
@@ -370,7 +341,24 @@ def tf_chain(edges, fixed: str, frame: str, path: Path | str = "") -> list[TfLin
 
 
 def tf_chain_from_root(edges, frame: str) -> list[str]:
-    """Frames from the root of ``frame``'s TF tree down to ``frame`` (first parent each)."""
+    """Frames from the root of ``frame``'s TF tree down to ``frame`` (first parent each).
+
+    Unlike :func:`tf_chain` it never fails: a frame with several parents goes up
+    through the first in ``edges``' order, and the way stops before a frame it has
+    already passed (a loop).
+
+    Parameters
+    ----------
+    edges : mapping of (str, str) to TfLink
+        :func:`read_tf`'s links; only the (parent, child) keys are read.
+    frame : str
+
+    Returns
+    -------
+    list of str
+        The root first, ``frame`` last; ``[frame]`` when ``frame`` has no parent (or
+        is not in the tree).
+    """
     parents: dict[str, str] = {}
     for parent, child in edges:
         parents.setdefault(child, parent)
@@ -378,122 +366,3 @@ def tf_chain_from_root(edges, frame: str) -> list[str]:
     while out[-1] in parents and parents[out[-1]] not in out:
         out.append(parents[out[-1]])
     return out[::-1]
-
-
-def _check_links(chain: list[TfLink]) -> None:
-    """Refuse a chain with a link that had a bad sample (its message names it)."""
-    for e in chain:
-        if e.bad is not None:
-            raise InputError(e.bad)
-
-
-def static_transform(edges, base: str, frame: str, path: Path | str = ""):
-    """The mount of ``frame`` on ``base``: the composed (rotation, translation) of the
-    static chain ``base`` -> ``frame`` (identity when they are one frame), or None when
-    there is no such chain or a link of it moves.
-
-    Parameters
-    ----------
-    edges : mapping of (str, str) to TfLink
-    base, frame : str
-    path : path
-
-    Returns
-    -------
-    (scipy.spatial.transform.Rotation, (3,) float64 ndarray) or None
-        Translation in metres.
-
-    Raises
-    ------
-    TfChainError
-        A frame on the way up from ``frame`` has several parents, or the way loops (a
-        broken tree is never taken for a missing mount).
-    InputError
-        A link of the chain had a bad sample.
-    """
-    if base == frame:
-        return Rotation.identity(), np.zeros(3)
-    try:
-        chain = tf_chain(edges, base, frame, path)
-    except TfChainError as e:
-        if e.kind in ("several_parents", "loop"):
-            raise
-        return None
-    _check_links(chain)
-    if not all(e.static for e in chain):
-        return None
-    return _compose_static(chain)
-
-
-def _compose_static(chain: list[TfLink]):
-    """The (rotation, translation) of a chain of links that do not move, each at its one
-    sample, composed from the chain's fixed frame down."""
-    rot, trans = Rotation.identity(), np.zeros(3)
-    for e in chain:
-        trans = trans + rot.apply(e.trans_arr[0])
-        rot = rot * e.rot[0]
-    return rot, trans
-
-
-def tf_pose_stream(edges, path: Path, fixed: str, frame: str, max_gap_s: float):
-    """Pose stream of the TF chain ``fixed`` -> ``frame`` and the chain's links: the
-    moving links interpolated (:meth:`TfLink.at`) at their stamps where all overlap,
-    but inside a gap longer than ``max_gap_s`` of any; a chain that never changes (a
-    scanner that does not move) gives its one pose at every stamp its links were sent.
-
-    Parameters
-    ----------
-    edges : mapping of (str, str) to TfLink
-    path : Path
-    fixed, frame : str
-    max_gap_s : float
-        Seconds.
-
-    Returns
-    -------
-    stream : pandas.DataFrame
-        :func:`planar_pose_stream`'s table.
-    chain : list of TfLink
-
-    Raises
-    ------
-    InputError
-        No TF messages; a static chain sent once; moving links that do not overlap in
-        time; a bad sample on a link; a tilted scanner.
-    TfChainError
-        As :func:`tf_chain`.
-    """
-    if not edges:
-        raise InputError(f"{path}: pose.source is 'tf' but the bag has no /tf or /tf_static messages")
-    chain = tf_chain(edges, fixed, frame, path)
-    _check_links(chain)
-    moving = [e for e in chain if not e.static]
-    if not moving:  # the scanner does not move: the chain's one pose, at every stamp its links were sent
-        t = np.unique(np.concatenate([e.t_sent for e in chain]))
-        if t.size < 2:
-            raise InputError(
-                f"{path}: the TF chain {fixed!r} -> {frame!r} never changes and was sent once; expected it over the "
-                "recording's time (a stationary scanner's pose published on /tf as the recording goes)"
-            )
-        rot, trans = _compose_static(chain)
-        n = len(t)
-        rots = Rotation.from_quat(np.repeat(rot.as_quat()[None], n, axis=0))
-        return planar_pose_stream(t, rots, np.repeat(trans[None], n, axis=0), f"{path}: TF chain {fixed!r} -> {frame!r}"), chain
-    lo = max(e.t_arr[0] for e in moving)
-    hi = min(e.t_arr[-1] for e in moving)
-    t = np.unique(np.concatenate([e.t_arr for e in moving]))
-    keep = (t >= lo) & (t <= hi)
-    gap_ns = int(max_gap_s * 1e9)
-    for e in moving:
-        d = np.diff(e.t_arr)
-        for i in np.flatnonzero(d > gap_ns):
-            keep &= ~((t > e.t_arr[i]) & (t < e.t_arr[i + 1]))
-    t = t[keep]
-    if t.size == 0:
-        raise InputError(f"{path}: the moving TF links {[(e.parent, e.child) for e in moving]} do not overlap in time")
-    rot, trans = Rotation.identity(len(t)), np.zeros((len(t), 3))
-    for e in chain:
-        r_e, t_e = e.at(t)
-        trans = trans + rot.apply(t_e)
-        rot = rot * r_e
-    return planar_pose_stream(t, rot, trans, f"{path}: TF chain {fixed!r} -> {frame!r}"), chain

@@ -25,7 +25,8 @@ Modules, from the segments up:
 - :mod:`floorscan.score.against_reference`: completeness, correctness, F1 and median
   distance of a floor plan against that map;
 - :mod:`floorscan.score.curves`: floor-plan quality against k for every ordering,
-  random's seeds and the oracle, and their summary (k95, k99, area under the curve);
+  random's seeds and the oracle; :mod:`floorscan.score.curve_summary`: their summary
+  (k95, k99, area under the curve) and its tables;
 - :mod:`floorscan.score.rooms`: a plan's rooms and doors against the true ones
   (one-to-one matching by IoU, Bormann et al., ICRA 2016; rule ``score_rooms``), and
   :mod:`floorscan.score.drawn_rooms` against rooms drawn by people (rule

@@ -15,9 +15,8 @@ level is read to within 2 %). Orderings scored:
   It knows the reference, so no user can run it: it is the limit a reference-free
   ordering is measured against.
 
-:func:`curve_summary` reads, per ordering, the k reaching 95 % and 99 % of the
-all-scan plan's F1, the area under the F1-vs-k curve up to 20 % of the kept scans, and
-the ratio of k95 to the oracle's.
+The summary of the curves (k95, k99, area under the curve, the ratio to the oracle's
+k95) and its tables are :mod:`floorscan.score.curve_summary`.
 """
 
 from __future__ import annotations
@@ -31,7 +30,6 @@ from scipy.spatial import cKDTree
 
 from floorscan.core.geometry import sample_segments, samples_per_segment
 from floorscan.core.greedy import lazy_greedy
-from floorscan.register.consistency import FEW_SCANS
 from floorscan.score.against_reference import Structure, plan_against_reference, within_bound
 
 #: Ordering name of the completeness-maximising bound.
@@ -44,9 +42,18 @@ def k_grid(n_kept: int, step_fraction: float = 0.02) -> list[int]:
     """The k at which curves are scored: every ``step`` scans, ``step`` =
     ``max(1, floor(step_fraction * n_kept))``, and ``n_kept`` itself.
 
+    Parameters
+    ----------
+    n_kept : int
+        Kept scans of the recording.
+    step_fraction : float
+        The step as a fraction of ``n_kept`` (config ``score.curve_step_fraction``).
+
     Returns
     -------
     list of int
+        ``step, 2 step, ...`` below ``n_kept``, then ``n_kept``: increasing, the last
+        gap at most ``step``.
 
     Raises
     ------
@@ -101,7 +108,32 @@ def scan_cover(
     per_scan: pd.DataFrame, scan_ids: list[int], structure: Structure, tau_m: float, sample_m: float = 0.05
 ) -> dict[int, np.ndarray]:
     """Per scan, the indices of the structure cells within ``tau_m`` of its wall
-    segments (sorted int64; empty for a scan without walls)."""
+    segments (sorted int64; empty for a scan without walls).
+
+    The segments are sampled every ``sample_m``
+    (:func:`floorscan.core.geometry.sample_segments`); a cell counts when it lies
+    within :func:`floorscan.score.against_reference.within_bound` of a sample.
+
+    Parameters
+    ----------
+    per_scan : pandas.DataFrame
+        Per-scan wall segments: ``scan_id, x0, y0, x1, y1`` (metres, map frame). Rows of
+        scans not in ``scan_ids`` are ignored.
+    scan_ids : list of int
+        The scans to cover.
+    structure : Structure
+        The reference map's structure cells (``structure.xy``, ``structure.tree``).
+    tau_m : float
+        Tolerance, metres.
+    sample_m : float
+        Spacing of the segment samples, metres.
+
+    Returns
+    -------
+    dict of int to (C,) int64 ndarray
+        One entry per scan of ``scan_ids``: the indices into ``structure.xy`` of the
+        cells it covers, distinct and sorted.
+    """
     cover = {int(s): np.empty(0, dtype=np.int64) for s in scan_ids}
     if len(per_scan) == 0:
         return cover
@@ -134,7 +166,20 @@ _MARK_CELLS = 1 << 28
 
 def random_orderings(scan_ids: list[int], seeds: list[int]) -> dict[int, pd.DataFrame]:
     """Seeded random permutations of the kept scans, ``{seed: (rank, scan_id)}``
-    (``numpy.random.default_rng(seed).permutation`` of the sorted scan ids)."""
+    (``numpy.random.default_rng(seed).permutation`` of the sorted scan ids).
+
+    Parameters
+    ----------
+    scan_ids : list of int
+        The kept scans, in any order.
+    seeds : list of int
+        One permutation per seed; the same seed gives the same permutation.
+
+    Returns
+    -------
+    dict of int to pandas.DataFrame
+        Seed -> ``rank`` (0, 1, ...) and ``scan_id`` (int64), a row per scan.
+    """
     ids = np.sort(np.asarray(scan_ids, dtype=np.int64))
     return {
         int(seed): pd.DataFrame({"rank": np.arange(len(ids)), "scan_id": np.random.default_rng(seed).permutation(ids)})
@@ -232,100 +277,6 @@ def adaptive_curve(
             else:
                 lo = mid
     return pd.DataFrame([{"k": k, **rows[k]} for k in sorted(rows)])
-
-
-def first_k_reaching(k: np.ndarray, f1: np.ndarray, target: float) -> float:
-    """The first k of the curve whose F1 reaches ``target`` (NaN when none does)."""
-    hit = np.flatnonzero(np.asarray(f1) >= target - 1e-12)
-    return float(np.asarray(k)[hit[0]]) if len(hit) else math.nan
-
-
-def area_under_curve(k: np.ndarray, f1: np.ndarray, n_kept: int, up_to: float = 0.2) -> float:
-    """Mean F1 over k from 0 to ``up_to`` of the kept scans (trapezoids on k /
-    n_kept, F1 0 at k 0, the curve linearly interpolated at the end): 1 for a curve at
-    F1 1 from the first scan."""
-    x = np.concatenate([[0.0], np.asarray(k, dtype=np.float64) / n_kept])
-    y = np.concatenate([[0.0], np.nan_to_num(np.asarray(f1, dtype=np.float64))])
-    end = min(up_to, float(x[-1]))
-    keep = x < end
-    xs = np.concatenate([x[keep], [end]])
-    ys = np.concatenate([y[keep], [np.interp(end, x, y)]])
-    return float(np.trapezoid(ys, xs) / up_to)
-
-
-def curve_summary(
-    curves: pd.DataFrame, n_kept: int, n_recorded: int, tau_m: float = 0.05, levels=(0.95, 0.99), up_to: float = 0.2
-) -> pd.DataFrame:
-    """Per ordering and extractor: k reaching each level of the all-scan F1, the area
-    under the curve up to ``up_to`` of the kept scans, and k95 against the oracle's.
-
-    Parameters
-    ----------
-    curves : pandas.DataFrame
-        ``extractor, ordering, seed, k`` and ``f1_<tau>`` (``seed`` -1 for a
-        deterministic ordering). With several seeds (random) each figure is the mean of
-        the seeds' own (each seed's curve read on its own k), with their spread.
-    n_kept, n_recorded : int
-        Kept and recorded scans of the recording.
-    tau_m : float
-    levels : sequence of float
-    up_to : float
-
-    Returns
-    -------
-    pandas.DataFrame
-        ``extractor, ordering, n_seeds, f1_all`` and per level p: ``k_p``,
-        ``fraction_kept_p``, ``fraction_recorded_p``; ``k_p_seed_sd`` (random: the
-        seeds' spread); ``auc``, ``auc_seed_sd``; ``k95_over_oracle``.
-    """
-    col = f"f1_{round(tau_m * 100):d}cm"
-    rows = []
-    for (extractor, ordering), g in curves.groupby(["extractor", "ordering"], sort=True):
-        at_all = g.loc[g["k"] == n_kept, col]
-        f1_all = float(at_all.iloc[0]) if len(at_all) else math.nan
-        seeds = [s.sort_values("k") for _, s in g.groupby("seed", sort=True)]
-        row = {"extractor": extractor, "ordering": ordering, "n_seeds": len(seeds), "f1_all": f1_all}
-        for level in levels:
-            p = f"{round(level * 100):d}"
-            per_seed = [first_k_reaching(s["k"].to_numpy(), s[col].to_numpy(), level * f1_all) for s in seeds]
-            kk = float(np.mean(per_seed))
-            row[f"k_{p}"] = kk
-            row[f"fraction_kept_{p}"] = kk / n_kept
-            row[f"fraction_recorded_{p}"] = kk / n_recorded if n_recorded else math.nan
-            row[f"k_{p}_seed_sd"] = float(np.std(per_seed)) if len(seeds) > 1 else math.nan
-        aucs = [area_under_curve(s["k"].to_numpy(), s[col].to_numpy(), n_kept, up_to) for s in seeds]
-        row["auc"] = float(np.mean(aucs))
-        row["auc_seed_sd"] = float(np.std(aucs)) if len(seeds) > 1 else math.nan
-        rows.append(row)
-    out = pd.DataFrame(rows)
-    if out.empty:
-        return out
-    oracle = out[out["ordering"] == ORACLE].set_index("extractor")["k_95"]
-    out["k95_over_oracle"] = [
-        r["k_95"] / oracle[r["extractor"]] if r["extractor"] in oracle.index and oracle[r["extractor"]] > 0 else math.nan
-        for _, r in out.iterrows()
-    ]
-    return out
-
-
-def beats_random_line(summary: pd.DataFrame, ordering: str, extractor: str) -> str:
-    """One sentence: does ``ordering`` beat random (area under the curve and k95)."""
-    s = summary[summary["extractor"] == extractor].set_index("ordering")
-    if ordering not in s.index or RANDOM not in s.index:
-        return f"{ordering} or {RANDOM} was not scored for {extractor}."
-    a, r = s.loc[ordering], s.loc[RANDOM]
-    d_auc = a["auc"] - r["auc"]
-    verb = "beats" if d_auc > 0 else "does not beat"
-    spread = f" +- {r['auc_seed_sd']:.3f}" if np.isfinite(r["auc_seed_sd"]) else ""
-    k_text = (
-        f"k95 {a['k_95']:.0f} against {r['k_95']:.0f} (random's seeds +- {r['k_95_seed_sd']:.0f})"
-        if np.isfinite(a["k_95"]) and np.isfinite(r["k_95"])
-        else "k95 not reached by one of them"
-    )
-    return (
-        f"{ordering} {verb} random with {extractor}: area under the F1 curve up to 20 % of the kept scans "
-        f"{a['auc']:.3f} against {r['auc']:.3f}{spread} ({d_auc:+.3f}); {k_text}."
-    )
 
 
 def score_curves(
@@ -437,59 +388,3 @@ def _curve_of(name, seed, ordering, n_kept, score_scans, step_fraction, dense_fr
     c.insert(1, "seed", seed)
     c.insert(2, "n_kept", n_kept)
     return c
-
-
-#: Columns of the summary tables (``summary.md``, ``summary.html``, the report's front
-#: page): ``summary.parquet`` column and header.
-SUMMARY_COLUMNS = (
-    ("extractor", "extractor"),
-    ("ordering", "ordering"),
-    ("f1_all", "F1 all"),
-    ("k_95", "k95"),
-    ("fraction_kept_95", "k95 / kept"),
-    ("fraction_recorded_95", "k95 / recorded"),
-    ("k_99", "k99"),
-    ("fraction_kept_99", "k99 / kept"),
-    ("fraction_recorded_99", "k99 / recorded"),
-    ("auc", "AUC 20 %"),
-    ("k95_over_oracle", "k95 / oracle's"),
-)
-
-
-def summary_cell(row, col: str, n_kept: int | None = None, pm: str = "±") -> str:
-    """One cell of a summary table: k as a count with random's seed spread (``pm``),
-    the AUC likewise, fractions and F1 to 3 decimals, k95 / oracle's to 2; ``-`` for a
-    missing value; an F1 from fewer than ``FEW_SCANS`` kept scans (``n_kept``) marked."""
-    v = row.get(col)
-    if col in ("extractor", "ordering"):
-        return str(v)
-    if v is None or not np.isfinite(float(v)):
-        return "-"
-    if col in ("k_95", "k_99", "auc"):
-        sd = row.get(f"{col}_seed_sd" if col != "auc" else "auc_seed_sd")
-        digits = 3 if col == "auc" else 0
-        return f"{v:.{digits}f}" + (f" {pm} {sd:.{digits}f}" if sd is not None and np.isfinite(sd) else "")
-    if col == "k95_over_oracle":
-        return f"{v:.2f}"
-    text = f"{v:.3f}"
-    if col == "f1_all" and n_kept is not None and n_kept < FEW_SCANS:
-        text += f" (warning: from {n_kept} scans)"
-    return text
-
-
-def curve_summary_markdown(summary: pd.DataFrame, tau_m: float, n_kept: int, n_recorded: int, line: str) -> str:
-    """The curve summary (:func:`curve_summary`) as a Markdown table for ``summary.md``,
-    headed by ``line`` (:func:`beats_random_line`)."""
-    lines = [
-        f"Floor plans against the reference map at tau = {tau_m * 100:.0f} cm; {n_kept} kept of {n_recorded} "
-        "recorded scans. k95 / k99: the first k whose plan reaches 95 / 99 % of the all-scan plan's F1; "
-        "AUC 20 %: mean F1 up to 20 % of the kept scans; random: mean of its seeds (+- their spread).",
-        "",
-        line,
-        "",
-        "| " + " | ".join(h for _, h in SUMMARY_COLUMNS) + " |",
-        "|" + "---|" * len(SUMMARY_COLUMNS),
-    ]
-    for r in summary.to_dict("records"):
-        lines.append("| " + " | ".join(summary_cell(r, c, n_kept, pm="+-") for c, _ in SUMMARY_COLUMNS) + " |")
-    return "\n".join(lines) + "\n"

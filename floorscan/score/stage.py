@@ -18,7 +18,7 @@ import pandas as pd
 
 from floorscan.core.files import atomic_path
 from floorscan.core.io import read_metadata, read_table, write_table
-from floorscan.score import curves as C
+from floorscan.score.curve_summary import beats_random_line, curve_summary, curve_summary_markdown
 from floorscan.core.config import stage_params
 from floorscan.score.params import ScoreParams
 from floorscan.score.runs import sort_scores
@@ -100,12 +100,12 @@ def write_scores(
     frames = [read_table(p).assign(extractor=read_metadata(p)["extractor"]) for p in curves]
     curve_table = pd.concat(frames, ignore_index=True)
     n_kept, n_recorded = int(curve_table["n_kept"].iloc[0]), len(read_table(index, columns=["scan_id"]))
-    summary = C.curve_summary(curve_table, n_kept, n_recorded, tau, tuple(cfg.summary_levels),
-                              float(cfg.curve_auc_fraction))
+    summary = curve_summary(curve_table, n_kept, n_recorded, tau, tuple(cfg.summary_levels),
+                            float(cfg.curve_auc_fraction))
     summary.insert(0, "dataset", dataset)
     # the recommended ordering first, then the thesis's (Algorithm 1)
     shown = list(dict.fromkeys([default_ordering, "cluster_hull"]))
-    line = " ".join(C.beats_random_line(summary, o, e) for o in shown for e in sorted(set(curve_table["extractor"])))
+    line = " ".join(beats_random_line(summary, o, e) for o in shown for e in sorted(set(curve_table["extractor"])))
     log.info("%s\n%s", line, summary.to_string(index=False))
     write_table(summary, outputs["summary"], metadata={**meta, "reference": "the reference map (occupancy grid)",
                                                         "beats_random": line})
@@ -116,7 +116,7 @@ def write_scores(
         (log.info if verdict["ok"] and not verdict["warnings"] else log.warning)("verdict: %s", verdict["line"])
     with atomic_path(outputs["summary_md"]) as tmp:  # the evaluation's part of summary.md (rule front_page)
         tmp.write_text("## Floor plans against the reference map\n\n"
-                       + C.curve_summary_markdown(summary, tau, n_kept, n_recorded, line)
+                       + curve_summary_markdown(summary, tau, n_kept, n_recorded, line)
                        + "\n## Walls of k scans on the configured k grid\n\n"
                        + grid_summary_markdown(grid_summary, tau, cfg.summary_levels))
     return Scores(curve_table, summary, n_kept, line, verdict)

@@ -4,7 +4,7 @@ tenfold reduction), and its Markdown (:func:`grid_summary_markdown`, in the eval
 ``summary.md``); :func:`summary_header` heads the dataset's ``summary.md``.
 
 The floor plans' curves against the reference map have their own summary and Markdown
-(:func:`floorscan.score.curves.curve_summary`, :func:`~floorscan.score.curves.curve_summary_markdown`).
+(:func:`floorscan.score.curve_summary.curve_summary`, :func:`~floorscan.score.curve_summary.curve_summary_markdown`).
 """
 
 from __future__ import annotations
