@@ -12,11 +12,11 @@ CORES ?= 2
 
 run: $(STAMP)
 	$(BIN)/snakemake --cores $(CORES)
-	$(BIN)/snakemake --cores $(CORES) --report results/report.html
+	$(BIN)/snakemake --cores $(CORES) --report results/report.html --quiet all
 	@echo "Outputs: results/<dataset>/   Report: results/report.html"
 
 report: $(STAMP)
-	$(BIN)/snakemake --cores $(CORES) --report results/report.html
+	$(BIN)/snakemake --cores $(CORES) --report results/report.html --quiet all
 
 test: $(STAMP)
 	$(BIN)/python -m pytest
