@@ -102,8 +102,9 @@ def print_answer(failed_jobs=()):
     command = f"{sys.argv[0]} --cores 2 --config path={config['path']}" if config.get("path") else ""
     for line in answer_lines(datasets, failed=failed, command=command):
         print(line)
-    if building_outputs() and Path(building_outputs()[1]).is_file():
-        print(f"building: {building_outputs()[1]}, {building_outputs()[0]} ({len(building_floors())} storeys)")
+    building = building_outputs()  # building.ifc, its page, the floors' GeoJSON
+    if building and Path(building[1]).is_file():
+        print(f"building: {building[1]}, {building[0]} ({len(building_floors())} storeys)")
     if failed:
         print(f"{len(failed)} of {len(datasets)} recordings failed: {', '.join(failed)}")
 

@@ -112,3 +112,30 @@ def cell_means(points: np.ndarray, cell_m: float) -> tuple[np.ndarray, np.ndarra
         means[:, i] = np.bincount(inverse, weights=c, minlength=len(counts))
     means /= counts[:, None]
     return means, inverse
+
+
+def raster_cells(xy: np.ndarray, origin_xy: np.ndarray, resolution_m: float, shape: tuple[int, int]):
+    """The cell of each map-frame point on a raster whose cell (row 0, column 0) has its
+    corner at ``origin_xy``.
+
+    Parameters
+    ----------
+    xy : (N, 2) float ndarray
+        Metres.
+    origin_xy : (2,) float ndarray
+        Metres.
+    resolution_m : float
+        Cell size, metres.
+    shape : (int, int)
+        Rows, columns.
+
+    Returns
+    -------
+    rows, cols : (N,) int64 ndarray
+        Cell indices (may be off the raster).
+    inside : (N,) bool ndarray
+        Whether the cell lies on the raster.
+    """
+    c = np.floor((np.asarray(xy, dtype=np.float64).reshape(-1, 2) - origin_xy) / resolution_m).astype(np.int64)
+    inside = (c[:, 0] >= 0) & (c[:, 1] >= 0) & (c[:, 0] < shape[1]) & (c[:, 1] < shape[0])
+    return c[:, 1], c[:, 0], inside

@@ -49,6 +49,7 @@ import pandas as pd
 
 from floorscan.core.files import atomic_path
 from floorscan.core.config import schema_defaults
+from floorscan.core.grid import raster_cells
 
 #: map_server's PGM values (trinary mode): occupied, free, unknown.
 PGM_OCCUPIED, PGM_FREE, PGM_UNKNOWN = 0, 254, 205
@@ -212,9 +213,7 @@ class OccupancyGrid:
         inside : (N,) bool ndarray
             Whether the cell is inside the grid.
         """
-        c = np.floor((np.asarray(xy, dtype=np.float64) - self.origin_xy) / self.resolution_m).astype(np.int64)
-        inside = (c[:, 0] >= 0) & (c[:, 1] >= 0) & (c[:, 0] < self.shape[1]) & (c[:, 1] < self.shape[0])
-        return c[:, 1], c[:, 0], inside
+        return raster_cells(xy, self.origin_xy, self.resolution_m, self.shape)
 
     def counts(self) -> dict[str, int]:
         """Cells per class.

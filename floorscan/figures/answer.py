@@ -40,30 +40,6 @@ def run_datasets(targets, datasets, default: list[str]) -> list[str]:
     return [d for d in dict.fromkeys([*default, *datasets]) if d in found]
 
 
-def dataset_verdict(results: Path, dataset: str) -> dict | None:
-    """The registration's verdict of a dataset.
-
-    Parameters
-    ----------
-    results : Path
-        The results folder.
-    dataset : str
-
-    Returns
-    -------
-    dict or None
-        ``line``, ``ok``, ``warnings`` (``registration.parquet`` metadata); None when
-        the file is unreadable or has no verdict.
-    """
-    from floorscan.core.io import read_metadata
-
-    try:
-        meta = read_metadata(results / dataset / "registration.parquet")
-    except (OSError, ValueError):
-        return None
-    return json.loads(meta["verdict"]) if "verdict" in meta else None
-
-
 def answer_lines(
     datasets, results: str | os.PathLike = "results", failed: dict | None = None, command: str = ""
 ) -> list[str]:
@@ -92,6 +68,9 @@ def answer_lines(
     -------
     list of str
     """
+    from floorscan.figures.index_page import registration_verdict, verdict_class
+    from floorscan.select.recommend import read_selection
+
     failed = dict(failed or {})
     root = Path(results)
     lines = []
@@ -104,14 +83,14 @@ def answer_lines(
         if not summary_path.is_file():
             lines.append(f"{ds}: no answer yet ({summary_path} is not made; the plan target makes it)")
             continue
-        s = json.loads(summary_path.read_text())
-        v = dataset_verdict(root, ds)
-        verdict = v["line"] if v else "no verdict"
+        s = read_selection(summary_path)
+        v = registration_verdict(root / ds)
         head = f"{ds}: {s['k']} of {s['n_kept']} kept scans ({s['n_recorded']} recorded), {s['ordering']}"
         front = root / ds / "front.html"
         if many:
-            lines.append(f"{head}; {verdict.split(':')[0]}" + (f"; {front}" if front.is_file() else ""))
+            lines.append(f"{head}; {verdict_class(v) or 'no verdict'}" + (f"; {front}" if front.is_file() else ""))
             continue
+        verdict = v.get("line") or "no verdict"
         rec = s["recording"]
         lines += [head, f"  verdict:            {verdict}"]
         plan = root / ds / "floorplan.svg"
@@ -215,8 +194,9 @@ def write_summary_markdown(
     from floorscan.core.files import atomic_path
     from floorscan.core.io import read_metadata
     from floorscan.score.summary import summary_header
+    from floorscan.select.recommend import read_selection
 
-    s = json.loads(Path(selection).read_text())
+    s = read_selection(selection)
     reg = read_metadata(registration)
     verdict = json.loads(reg["verdict"]) if "verdict" in reg else None
     root = Path(path).parent

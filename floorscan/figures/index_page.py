@@ -98,7 +98,7 @@ def dataset_status(dataset: str, results: str | os.PathLike = "results") -> dict
     folder = root / dataset
     sel = _read_json(folder / "selection" / "selection.json")
     meta = _read_json(folder / "floorplan.geojson").get("floorscan") or {}
-    verdict = _registration_verdict(folder)
+    verdict = registration_verdict(folder)
     plan, front = folder / "floorplan.svg", folder / "front.html"
     return {
         "name": dataset,
@@ -366,9 +366,22 @@ def _failure(dataset: str, root: Path, plan: Path) -> str | None:
     return failure_text(dataset, root) or f"no floor plan and no log in {folder}"
 
 
-def _registration_verdict(folder: Path) -> dict:
-    """The verdict of ``registration.parquet``'s metadata; else the ``verdict:`` line
-    of ``logs/register.log`` as ``{"line": ...}``; else ``{}``."""
+def registration_verdict(folder: Path) -> dict:
+    """A dataset's registration verdict.
+
+    Parameters
+    ----------
+    folder : Path
+        ``results/<dataset>``.
+
+    Returns
+    -------
+    dict
+        The verdict of ``registration.parquet``'s metadata (``line``, ``ok``,
+        ``warnings``, ...); else the ``verdict:`` line of ``logs/register.log`` as
+        ``{"line": ...}`` (a register stage that stopped on a poor verdict leaves it);
+        else ``{}``.
+    """
     import pyarrow as pa
 
     from floorscan.core.io import read_metadata

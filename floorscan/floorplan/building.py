@@ -16,14 +16,13 @@ recording, and a storey is placed only by its elevation. The files of a building
 from __future__ import annotations
 
 import html
-import json
 import os
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Mapping, Sequence
 from urllib.parse import quote
 
 from floorscan.core.files import atomic_path
-from floorscan.floorplan.geojson import floorplan_geojson
+from floorscan.floorplan.geojson import floorplan_geojson, write_geojson_document
 from floorscan.floorplan.ifc import write_building_ifc
 from floorscan.floorplan.metadata import PlanMetadata, count_text, floor_area_m2
 
@@ -126,21 +125,10 @@ def write_building(
     for floor, path in zip(floors, files["geojson"]):
         doc = floorplan_geojson(plans[floor.dataset], metas[floor.dataset])
         doc["floorscan"].update(building=name, storey=floor.storey, elevation_m=float(floor.elevation_m))
-        _write_geojson_doc(doc, path)
+        write_geojson_document(doc, path)
     with atomic_path(files["page"]) as tmp:
         tmp.write_text(building_page(floors, plans, name), encoding="utf-8")
     return files
-
-
-def _write_geojson_doc(doc: dict, path: str | os.PathLike) -> None:
-    """Write a GeoJSON document atomically in the layout of
-    :func:`floorscan.floorplan.geojson.write_geojson`: the collection's members on the
-    first line, then one feature per line."""
-    head = json.dumps({k: v for k, v in doc.items() if k != "features"})[:-1]
-    feats = ",\n".join(map(json.dumps, doc["features"]))
-    text = f'{head}, "features": [\n{feats}\n]}}\n' if feats else f'{head}, "features": []}}\n'
-    with atomic_path(path) as tmp:
-        tmp.write_text(text, encoding="utf-8")
 
 
 def building_page(floors: Sequence[Floor], plans: Mapping[str, FloorPlan], name: str) -> str:

@@ -261,7 +261,20 @@ def write_geojson(
 def _write_geojson(
     exports: PlanExports, path: str | os.PathLike, meta: PlanMetadata, georeference: Georeference | None
 ) -> None:
-    doc = _floorplan_geojson(exports, meta, georeference)
+    write_geojson_document(_floorplan_geojson(exports, meta, georeference), path)
+
+
+def write_geojson_document(doc: dict, path: str | os.PathLike) -> None:
+    """Write a GeoJSON FeatureCollection atomically in the layout of
+    :func:`write_geojson`: the collection's members on the first line, then one
+    feature per line.
+
+    Parameters
+    ----------
+    doc : dict
+        The FeatureCollection (``features`` and its other members).
+    path : path
+    """
     head = json.dumps({k: v for k, v in doc.items() if k != "features"})[:-1]
     feats = ",\n".join(map(json.dumps, doc["features"]))
     text = f'{head}, "features": [\n{feats}\n]}}\n' if feats else f'{head}, "features": []}}\n'

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from floorscan.core.config import schema_defaults
+from floorscan.core.grid import raster_cells
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.free_space import passable
 
@@ -94,10 +95,7 @@ class RoomRaster:
         inside : (N,) bool ndarray
             Whether the cell lies on the raster.
         """
-        c = np.floor((np.asarray(xy, dtype=np.float64).reshape(-1, 2) - self.origin_xy) / self.resolution_m).astype(np.int64)
-        h, w = self.space.shape
-        inside = (c[:, 0] >= 0) & (c[:, 1] >= 0) & (c[:, 0] < w) & (c[:, 1] < h)
-        return c[:, 1], c[:, 0], inside
+        return raster_cells(xy, self.origin_xy, self.resolution_m, self.space.shape)
 
     def at(self, image: np.ndarray, xy: np.ndarray, outside=0) -> np.ndarray:
         """Values of a raster image at points.
