@@ -26,6 +26,7 @@ def plot_reference_map(grid, out, title: str = "", faces=None) -> None:
     """The reference map (:class:`floorscan.core.occupancy.OccupancyGrid`): free
     cells white, unknown grey, structure black, occupied cells hit by a single scan
     red; optionally a floor plan's faces ((F, 4) segments, metres) in blue over it.
+    The view is the free and structure cells, 1 m around them.
 
     Parameters
     ----------
@@ -53,6 +54,13 @@ def plot_reference_map(grid, out, title: str = "", faces=None) -> None:
         ax.scatter(xy[:, 0], xy[:, 1], s=size, c=[colour], marker="s", linewidths=0)
     if faces is not None and len(faces):
         ax.add_collection(segments_collection(faces, colors="tab:blue", linewidths=0.8))
+    # the view: what the scans saw free and the structure, 1 m around; a stray
+    # single-scan return tens of metres out would shrink the building to a strip
+    seen = grid.cell_centres(grid.free() | grid.structure())
+    if len(seen):
+        (ax_lo, ay_lo), (ax_hi, ay_hi) = seen.min(axis=0) - 1.0, seen.max(axis=0) + 1.0
+        ax.set_xlim(ax_lo, ax_hi)
+        ax.set_ylim(ay_lo, ay_hi)
     ax.set_xlabel("x (m, map frame)")
     ax.set_ylabel("y (m, map frame)")
     ax.set_title(
