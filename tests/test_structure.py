@@ -90,7 +90,7 @@ def test_structure_passes_on_the_room(room):
     wall_lines = shapely.linestrings(walls.reshape(-1, 2, 2))
     assert not shapely.intersects(wall_lines, table).any()
     assert shapely.intersects(shapely.linestrings(clutter.reshape(-1, 2, 2)), table).sum() >= 2
-    assert set(reason) <= {"not_a_boundary", "free_standing_object", "in_front_of_wall", "short"}
+    assert set(reason) <= {"not_a_boundary", "free_standing_object", "in_front_of_wall", "short", "loose_in_free_space"}
     # the cabinet's front (y = 4.3, x 3..4) stands in front of the north wall: clutter
     front = clutter[(np.abs(clutter[:, 1] - 4.3) < 0.05) & (np.abs(clutter[:, 3] - 4.3) < 0.05)]
     assert len(front) == 1 and reason[np.flatnonzero((np.abs(clutter[:, 1] - 4.3) < 0.05))[0]] == "in_front_of_wall"
@@ -110,6 +110,38 @@ def test_structure_passes_on_the_room(room):
         assert np.hypot(*(ends - corner).T).min() < 0.03, corner
     # the free space is inside the room for the room's walls
     assert (side != 0).mean() > 0.5
+
+
+# A hall 10 x 6 m with two doors 1 m wide in its north wall (x 3..4 and 6..7: the wall
+# between them is a piece 2 m long, ends free, its wall in line) onto a corridor, and a
+# rack 3.2 m long, longer than clutter_max_length_m, 0.6 m deep, 0.45 m in front of the
+# south wall: its front is loose in the free space.
+HALL = [((0, 0), (10, 0)), ((10, 0), (10, 6)), ((10, 6), (7, 6)), ((6, 6), (4, 6)), ((3, 6), (0, 6)),
+        ((0, 6), (0, 0)), ((0, 7.5), (10, 7.5))]  # fmt: skip
+RACK = shapely.box(3.4, 0.45, 6.6, 1.05).exterior
+HALL_POSES = [(1.5, 3.0), (5.0, 3.0), (8.5, 3.0), (2.0, 1.0), (8.0, 1.0), (5.0, 5.0), (3.5, 6.8), (6.5, 6.8)]
+
+
+def test_a_rack_in_front_of_a_wall_is_clutter_the_wall_between_two_doors_is_not():
+    rng = np.random.default_rng(5)
+    r = np.asarray(RACK.coords)
+    segments = np.array([[*a, *b] for a, b in HALL] + [[*r[k], *r[k + 1]] for k in range(len(r) - 1)])
+    scans = [(np.array(p, dtype=np.float64), _scan(p, rng, segments)) for p in HALL_POSES]
+    grid = occupancy_grid(scans, OccupancyParams())
+    seg = map_segments(np.concatenate([s for _, s in scans]), grid, MapParams(), seed=0)
+    faces, w, _ = plan_faces(seg[["x0", "y0", "x1", "y1"]].to_numpy(), seg["n_inliers"].to_numpy(float))
+    walls, _, _, clutter, reason = structure_passes(faces, w, grid, StructureParams())
+    rack = shapely.box(3.35, 0.4, 6.65, 1.1)
+    assert not shapely.intersects(shapely.linestrings(walls.reshape(-1, 2, 2)), rack).any()
+    front = (np.abs(clutter[:, 1] - 1.05) < 0.05) & (np.abs(clutter[:, 3] - 1.05) < 0.05)
+    assert front.sum() == 1 and reason[front][0] == "loose_in_free_space"
+    assert _length(clutter[front])[0] > 3.0
+    # the 2 m wall between the doors stays a wall; the rack's front without the wall
+    # behind it and with one side seen stays one too (a wall whose ends were seen free)
+    between = walls[(np.abs(walls[:, 1] - 6) < 0.05) & (np.abs(walls[:, 3] - 6) < 0.05)]
+    assert any(min(s[0], s[2]) > 3.9 and max(s[0], s[2]) < 6.1 and _length(s[None])[0] > 1.8 for s in between)
+    south = walls[(np.abs(walls[:, 1]) < 0.05) & (np.abs(walls[:, 3]) < 0.05)]
+    assert len(south) == 1 and _length(south)[0] > 9.5
 
 
 def test_join_keeps_a_gap_free_space_passes_and_joins_an_unseen_one():

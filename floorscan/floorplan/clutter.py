@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from floorscan.core.geometry import point_segment_dist2
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
@@ -146,5 +147,187 @@ def in_front_of_walls(seg: np.ndarray, side: np.ndarray, wall: np.ndarray, param
     hit = (side[j] != 0) & (dist >= params.front_min_m) & (dist <= params.front_max_m) & (
         overlap >= params.front_overlap * length[i]
     )
+    out[i[hit]] = True
+    return out
+
+
+def loose_in_free_space(
+    seg: np.ndarray, ends: np.ndarray, side: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams(),
+    max_thickness_m: float = 0.4,
+) -> np.ndarray:  # fmt: skip
+    """Step 6: chains of faces that hold nothing but each other and stand in the free
+    space, with a wall behind them or free space on both sides: the fronts (and seen
+    ends) of racks, shelves and rows of chairs, however long.
+
+    Faces hold each other at an end: a junction there, another face's end within
+    ``snap_m``, or a face at least ``junction_min_angle_deg`` across within ``snap_m``
+    (a curved wall's next piece, a rack's end face). A group of faces held together
+    (a face alone, an L, a U; not a closed loop) is loose when
+
+    - no face of it lies in the line of a face outside it (within ``2 *
+      side_offset_m`` of it) within ``loose_reach_m``: a wall between two doors has its
+      wall's other pieces in line across the doors;
+    - the cells ``side_offset_m`` to twice that beyond each of its free ends, along
+      the face, are free space (:func:`~floorscan.floorplan.free_space.passable`): the
+      rover saw past them, so no free end is an occluded continuation;
+    - its longest face has free space on both sides, or another face parallel behind
+      it (:func:`walls_behind`, walls up to ``max_thickness_m`` thick).
+
+    A building's walls hold each other up: the wall graph is connected, and a wall
+    that ends in free space ends at an opening, with the rest of its wall in line. A
+    chain loose at its ends in front of a wall stands against it (the clutter of
+    thesis sections 1.3 and 2.3); one with free space on both sides stands in the
+    room. The second and third conditions keep a wall whose ends were not seen, and a
+    wall with windows whose rays pass its ends.
+
+    Parameters
+    ----------
+    seg : (F, 4) float ndarray
+        Faces, metres, after the junction snap.
+    ends : (F, 2) bool ndarray
+        Whether each end (``x0, y0`` and ``x1, y1``) is at a junction
+        (:func:`~floorscan.floorplan.junctions.junction_ends`); a junction holds faces
+        through the ends near it.
+    side : (F,) int ndarray
+        Their free sides (:func:`~floorscan.floorplan.structure.border_and_support`).
+    grid : OccupancyGrid
+    params : StructureParams
+    max_thickness_m : float
+        The thickest wall, metres (the plan's ``pair_max_m``).
+
+    Returns
+    -------
+    (F,) bool ndarray
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
+    side = np.asarray(side)
+    nf = len(seg)
+    out = np.zeros(nf, dtype=bool)
+    if nf == 0:
+        return out
+    f, g, end = _holds(seg, params)
+    n_groups, group = connected_components(coo_matrix((np.ones(len(f)), (f, g)), shape=(nf, nf)), directed=False)
+    held = np.zeros((nf, 2), dtype=bool)
+    held[f, end] = True
+    held |= np.asarray(ends, dtype=bool).reshape(-1, 2) & ~held  # a junction with no face near: held all the same
+    i, j = _in_line_pairs(seg, params.loose_reach_m, 2 * params.side_offset_m, params.join_angle_deg)
+    anchored = np.zeros(n_groups, dtype=bool)
+    outside = group[i] != group[j]
+    anchored[group[i[outside]]] = True
+    anchored[group[j[outside]]] = True
+    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    backed = (side == 0) | walls_behind(seg, side, length >= params.min_wall_length_m, params, max_thickness_m)
+    free = passable(grid)
+    r = grid.resolution_m
+    steps = np.arange(params.side_offset_m, 2 * params.side_offset_m + r / 2, r / 2)
+    for k in np.flatnonzero(~anchored).tolist():
+        members = np.flatnonzero(group == k)
+        free_ends = [(m, e) for m in members.tolist() for e in (0, 1) if not held[m, e]]
+        if len(free_ends) < 2 or not backed[members[np.argmax(length[members])]]:
+            continue  # a closed loop, or nothing behind its longest face and one side seen
+        beyond = []
+        for m, e in free_ends:
+            p, q = (seg[m, :2], seg[m, 2:]) if e == 0 else (seg[m, 2:], seg[m, :2])
+            d = (p - q) / max(float(length[m]), 1e-12)  # outwards from the end
+            beyond.append(p + d * steps[:, None])
+        out[members] = bool(mask_at(grid, free, np.concatenate(beyond)).all())
+    return out
+
+
+def _holds(seg: np.ndarray, params: StructureParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Which face holds which at which end: ``(f, g, end)``, face ``g`` within
+    ``snap_m`` of end ``end`` (0: ``x0, y0``; 1: ``x1, y1``) of face ``f``, by its end, or
+    by its body when it lies at least ``junction_min_angle_deg`` across."""
+    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    i, j = candidate_pairs(seg, params.snap_m)
+    f, g = np.r_[i, j], np.r_[j, i]
+    if len(f) == 0:
+        return f, g, f.copy()
+    angle = np.arctan2(seg[:, 3] - seg[:, 1], seg[:, 2] - seg[:, 0])
+    across = np.abs(np.sin(angle[g] - angle[f])) >= np.sin(np.radians(params.junction_min_angle_deg))
+    rows = []
+    for e in (0, 1):
+        pt = seg[f, 2 * e : 2 * e + 2]
+        to_ends = np.minimum(np.hypot(*(pt - seg[g, :2]).T), np.hypot(*(pt - seg[g, 2:]).T))
+        to_body = np.sqrt(point_segment_dist2(pt[:, 0], pt[:, 1], seg[g]))
+        hit = (to_ends <= params.snap_m) | (across & (to_body <= params.snap_m))
+        hit &= length[f] > 0
+        rows.append((f[hit], g[hit], np.full(int(hit.sum()), e)))
+    return tuple(np.concatenate(c) for c in zip(*rows))
+
+
+def _in_line_pairs(seg: np.ndarray, reach_m: float, offset_m: float, angle_deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs ``(i, j)`` of faces in one line: within ``reach_m``, ``angle_deg`` in
+    direction, both ends of the shorter within ``offset_m`` of the longer's line."""
+    i, j = candidate_pairs(seg, reach_m, np.radians(angle_deg))
+    if len(i) == 0:
+        return i, j
+    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    a, b = np.where(length[i] >= length[j], i, j), np.where(length[i] >= length[j], j, i)
+    u = (seg[a, 2:] - seg[a, :2]) / np.maximum(length[a], 1e-12)[:, None]
+    n = np.column_stack([-u[:, 1], u[:, 0]])
+    off = np.maximum(np.abs(np.einsum("ij,ij->i", seg[b, :2] - seg[a, :2], n)),
+                     np.abs(np.einsum("ij,ij->i", seg[b, 2:] - seg[a, :2], n)))  # fmt: skip
+    keep = off <= offset_m
+    return i[keep], j[keep]
+
+
+def walls_behind(
+    seg: np.ndarray, side: np.ndarray, wall: np.ndarray, params: StructureParams = StructureParams(),
+    max_thickness_m: float = 0.4,
+) -> np.ndarray:  # fmt: skip
+    """Faces with a wall face parallel behind them, on the side away from their free
+    space: ``front_min_m`` to ``front_max_m + 2 * side_offset_m`` away, along at least
+    half of their length. The wall may have been seen on its far face only (its free
+    space away from the face): then the face stands a wall's thickness farther,
+    ``front_min_m + max_thickness_m`` at least, and a face nearer is that wall's
+    other face. Unlike :func:`in_front_of_walls`, whichever sides of the wall were
+    seen.
+
+    Parameters
+    ----------
+    seg : (F, 4) float ndarray
+        Faces, metres.
+    side : (F,) int ndarray
+        Their free sides (:func:`~floorscan.floorplan.structure.border_and_support`);
+        a face with 0 has none behind.
+    wall : (F,) bool ndarray
+        Which faces can stand behind.
+    params : StructureParams
+    max_thickness_m : float
+        The thickest wall, metres (the plan's ``pair_max_m``).
+
+    Returns
+    -------
+    (F,) bool ndarray
+    """
+    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
+    side = np.asarray(side)
+    out = np.zeros(len(seg), dtype=bool)
+    far = params.front_max_m + 2 * params.side_offset_m
+    i, j = candidate_pairs(seg, far, np.radians(params.join_angle_deg))
+    if len(i) == 0:
+        return out
+    i, j = np.r_[i, j], np.r_[j, i]  # face j behind face i
+    ok = wall[j] & (side[i] != 0)
+    i, j = i[ok], j[ok]
+    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    u = (seg[i, 2:] - seg[i, :2]) / np.maximum(length[i], 1e-12)[:, None]
+    n = np.column_stack([-u[:, 1], u[:, 0]]) * side[i][:, None]  # towards face i's free side
+    back = -np.column_stack([np.einsum("ij,ij->i", seg[j, :2] - seg[i, :2], n),
+                             np.einsum("ij,ij->i", seg[j, 2:] - seg[i, :2], n)])  # fmt: skip
+    t = np.column_stack([np.einsum("ij,ij->i", seg[j, :2] - seg[i, :2], u),
+                         np.einsum("ij,ij->i", seg[j, 2:] - seg[i, :2], u)])  # fmt: skip
+    overlap = np.minimum(t.max(axis=1), length[i]) - np.maximum(t.min(axis=1), 0.0)
+    # a face behind whose free space lies away from face i is a wall's far face: face
+    # i stands a wall's thickness farther from it, else it is that wall's near face
+    uj = seg[j, 2:] - seg[j, :2]
+    away = side[j] * np.sign(np.einsum("ij,ij->i", seg[i, :2] + seg[i, 2:] - seg[j, :2] - seg[j, 2:],
+                                       np.column_stack([-uj[:, 1], uj[:, 0]]))) < 0  # fmt: skip
+    near = np.where(away, params.front_min_m + max_thickness_m, params.front_min_m)
+    hit = (back.min(axis=1) >= near) & (back.max(axis=1) <= far) & (overlap >= 0.5 * length[i])
     out[i[hit]] = True
     return out

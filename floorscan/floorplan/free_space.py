@@ -36,6 +36,7 @@ class StructureParams:
     duplicate_angle_deg: float
     clutter_max_length_m: float
     min_wall_length_m: float
+    loose_reach_m: float
 
 
 def passable(grid: OccupancyGrid) -> np.ndarray:

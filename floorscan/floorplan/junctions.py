@@ -247,10 +247,30 @@ def short_loose(seg: np.ndarray, junctions: np.ndarray, min_length: float) -> np
     (F,) bool ndarray
     """
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    return (length < min_length) & ~junction_ends(seg, junctions).all(axis=1)
+
+
+def junction_ends(seg: np.ndarray, junctions: np.ndarray) -> np.ndarray:
+    """Which ends of each face are at a junction: an end of face ``i`` or ``j`` within
+    0.02 m of its junction's ``x, y``.
+
+    Parameters
+    ----------
+    seg : (F, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    junctions : (J, 5) float ndarray
+        ``x, y, i, j, kind`` (:func:`snap_junctions`), metres.
+
+    Returns
+    -------
+    (F, 2) bool ndarray
+        The ``x0, y0`` end, the ``x1, y1`` end.
+    """
+    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
     ends = np.zeros((len(seg), 2), dtype=bool)
     for col in (2, 3):
         ids = junctions[:, col].astype(np.int64)
         for end in (0, 1):
             at = np.hypot(*(junctions[:, :2] - seg[ids, 2 * end : 2 * end + 2]).T) <= 0.02
             ends[ids[at], end] = True
-    return (length < min_length) & ~ends.all(axis=1)
+    return ends

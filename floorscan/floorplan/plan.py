@@ -238,7 +238,7 @@ def build_floorplan(
         from floorscan.floorplan.structure import structure_passes
 
         n_before = len(faces)
-        faces, face_w, side, cl, reason = structure_passes(faces, face_w, grid, params.structure)
+        faces, face_w, side, cl, reason = structure_passes(faces, face_w, grid, params.structure, params.pair_max_m)
         n_seg = np.ones(len(faces), dtype=np.int64)
         clutter = pd.DataFrame(
             {

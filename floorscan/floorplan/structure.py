@@ -31,6 +31,12 @@ order (:func:`structure_passes`):
    ``clutter_max_length_m`` parallel to a long wall face, ``front_min_m`` to
    ``front_max_m`` in front of it on its free side, is the front of a desk, a cabinet
    or a shelf standing against the wall: clutter.
+6. **Loose in the free space** (:func:`loose_in_free_space`). A face that meets no
+   other face at either end, has no face in its line within ``loose_reach_m``, whose
+   ends both stand in free space, and that has free space on both sides or a face
+   parallel behind it, is furniture, however long (a 3 m rack in front of a wall, a
+   row of chairs): clutter. Walls hold each other up; one that ends in free space ends
+   at an opening, with the rest of its wall in line.
 
 The rule of step 1 and 4 is the issue's (walls are the boundaries of the free space,
 long enough and seen from more than one position; short pieces standing inside free
@@ -46,9 +52,9 @@ import numpy as np
 
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
-from floorscan.floorplan.clutter import free_standing_objects, in_front_of_walls, on_objects
+from floorscan.floorplan.clutter import free_standing_objects, in_front_of_walls, loose_in_free_space, on_objects
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
-from floorscan.floorplan.junctions import short_loose, shorter_on_longer, snap_junctions
+from floorscan.floorplan.junctions import junction_ends, short_loose, shorter_on_longer, snap_junctions
 
 
 def border_and_support(seg: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams()):
@@ -182,8 +188,11 @@ def _fit_group(seg: np.ndarray, length: np.ndarray) -> np.ndarray:
     return np.r_[off * n + t.min() * u, off * n + t.max() * u]
 
 
-def structure_passes(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams()):
-    """Steps 1 to 4 on the merged faces of a plan (see the module docstring).
+def structure_passes(
+    seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams(),
+    max_thickness_m: float = 0.4,
+):  # fmt: skip
+    """Steps 1 to 6 on the merged faces of a plan (see the module docstring).
 
     Parameters
     ----------
@@ -194,6 +203,8 @@ def structure_passes(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, 
     grid : OccupancyGrid
         The free space of the plan's scans.
     params : StructureParams
+    max_thickness_m : float
+        The thickest wall, metres (the plan's ``pair_max_m``; step 6).
 
     Returns
     -------
@@ -207,7 +218,7 @@ def structure_passes(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, 
         The faces that are not structure (furniture, single-scan returns), metres.
     reason : (C,) object ndarray
         Why each clutter face is clutter: ``not_a_boundary`` (no free space beside it, or returns on both sides, or on cells that are not occupied),
-        ``free_standing_object``, ``in_front_of_wall`` or ``short``.
+        ``free_standing_object``, ``in_front_of_wall``, ``short`` or ``loose_in_free_space``.
     """
     seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
     w = np.asarray(weights, dtype=np.float64).ravel()
@@ -222,11 +233,14 @@ def structure_passes(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, 
     _, side = border_and_support(snapped, grid, params)
     front = in_front_of_walls(snapped, side, anchor, params) & ~standing
     short = short_loose(snapped, junctions, params.min_wall_length_m) & ~standing & ~front
-    keep = ~standing & ~front & ~short
-    clutter += [snapped[standing], snapped[front], snapped[short]]
+    loose = loose_in_free_space(snapped, junction_ends(snapped, junctions), side, grid, params, max_thickness_m)
+    loose &= ~standing & ~front & ~short
+    keep = ~standing & ~front & ~short & ~loose
+    clutter += [snapped[standing], snapped[front], snapped[short], snapped[loose]]
     reason += [np.full(int(standing.sum()), "free_standing_object", dtype=object),
                np.full(int(front.sum()), "in_front_of_wall", dtype=object),
-               np.full(int(short.sum()), "short", dtype=object)]  # fmt: skip
+               np.full(int(short.sum()), "short", dtype=object),
+               np.full(int(loose.sum()), "loose_in_free_space", dtype=object)]  # fmt: skip
     # the walls meet again without the clutter; a face the new ends left short goes
     walls, junctions = snap_junctions(joined[keep], params)
     still = ~short_loose(walls, junctions, params.min_wall_length_m)
