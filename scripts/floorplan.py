@@ -1,20 +1,19 @@
-"""Stage floorplan, the evaluation grid: merged walls of one extractor for every ordering
-and k, in the formats of floorplan.evaluation_formats, in the map frame."""
-from floorscan.floorplan import floorplan_outputs
-from floorscan.floorplan.metadata import recording_timestamp
-from floorscan.floorplan.writer import FloorplanWriter
+"""Stage floorplan, the evaluation grid: the plan of the first k scans of every ordering
+and k of one extractor (floorscan.floorplan.grid), as Parquet tables for the score stage
+and in the formats of floorplan.evaluation_formats for people, in the map frame."""
 from floorscan.core.io import read_table
 from floorscan.core.stage import stage_log
+from floorscan.floorplan import floorplan_outputs
+from floorscan.floorplan.grid import write_plan_grid
+from floorscan.floorplan.metadata import recording_timestamp
 
-with stage_log(snakemake) as log:  # noqa: F821
+with stage_log(snakemake):  # noqa: F821
     smk = snakemake  # noqa: F821
     wc = smk.wildcards
-    writer = FloorplanWriter(smk.params.cfg)  # a plan of the same scans as an earlier one is reused
-    timestamp = recording_timestamp(smk.input.index)
-    for (ordering, k), table in zip(smk.params.runs, smk.input.tables, strict=True):
-        assert table.endswith(f"/{ordering}/{wc.extractor}/k{k}.parquet"), (ordering, k, table)
-        stem = f"results/{wc.dataset}/evaluation/floorplan/{ordering}_{wc.extractor}_k{k}"
-        outputs = floorplan_outputs(stem, smk.params.formats)
-        _, reused = writer.write(read_table(table), outputs, dataset=wc.dataset, ordering=ordering,
-                                 extractor=wc.extractor, k=k, timestamp=timestamp)
-        log.info("%s k=%s: floor plan %s (%s)", ordering, k, stem, "reused: same scans as an earlier plan" if reused else "built")
+    runs = [tuple(r) for r in smk.params.runs]
+    stems = [f"results/{wc.dataset}/evaluation/floorplan/{o}_{wc.extractor}_k{k}" for o, k in runs]
+    write_plan_grid(
+        read_table(smk.input.walls), {o: read_table(p) for o, p in zip(smk.params.orderings, smk.input.orderings)},
+        runs, list(smk.output.plans), [floorplan_outputs(stem, smk.params.formats) for stem in stems],
+        smk.params.cfg, wc.dataset, wc.extractor, recording_timestamp(smk.input.index),
+    )

@@ -1,5 +1,5 @@
 """Stage floorplan, the recommended plan: the merged walls of the selected scans
-(selection/scans.csv) as results/<dataset>/floorplan.* in every export format
+(selection/scans.parquet) as results/<dataset>/floorplan.* in every export format
 (floorscan.floorplan.EXPORT_FORMATS: GeoJSON, SVG, DXF, IFC), and their occupancy grid as
 a ROS map_server / Nav2 map (map.pgm, map.yaml)."""
 from floorscan.floorplan.writer import write_recommended_floorplan

@@ -4,7 +4,7 @@ scored."""
 
 from floorscan.core.io import read_table
 from floorscan.core.stage import stage_log
-from floorscan.figures.floorplans import read_geojson_geometries
+from floorscan.figures.floorplans import plan_geometries
 from floorscan.figures.scoring import make_walls_figures
 from floorscan.score.ground_truth import load_references
 
@@ -17,7 +17,7 @@ with stage_log(snakemake) as log:  # noqa: F821
     )
     walls = {tuple(r): read_table(p) for r, p in zip(smk.params.walls_runs, smk.input.walls)}
     floorplans = {
-        tuple(r): read_geojson_geometries(p)
+        tuple(r): plan_geometries(p)
         for r, p in zip(smk.params.floorplan_runs, smk.input.floorplans)
     }
     make_walls_figures(

@@ -9,5 +9,5 @@ with stage_log(snakemake) as log:  # noqa: F821
     write_selection(
         smk.input.ordering, smk.params.ordering, smk.input.index, smk.input.registration, smk.input.registered,
         smk.input.recording, smk.params.dataset, smk.params.cfg,
-        {name: smk.output[name] for name in ("scans", "ply", "pcd", "recording", "summary")},
+        {name: smk.output[name] for name in ("scans", "table", "ply", "pcd", "recording", "summary")},
     )

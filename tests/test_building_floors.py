@@ -170,11 +170,12 @@ def test_a_building_needs_distinct_floors_with_plans(plans, tmp_path):
 
 def test_recommended_plan_is_the_plan_the_recommended_floorplan_writes(tmp_path):
     segments = scans_segments(BOX + THICK, [(2, 1.2), (2, -1.0), (1, 1.5), (3, -1.5)], "ransac")
-    pd.DataFrame({"rank": [1, 2, 3], "scan_id": [0, 2, 3]}).to_csv(tmp_path / "scans.csv", index=False)
+    # the selection stage's table (selection/scans.parquet), ranks out of scan order
+    pd.DataFrame({"rank": [1, 2, 3], "scan_id": [3, 0, 2]}).to_parquet(tmp_path / "scans.parquet")
     segments.to_parquet(tmp_path / "walls.parquet")
     pd.DataFrame({"t_ns": np.array([1_650_000_000_500_000_000, 1_650_000_009_000_000_000], np.int64)}).to_parquet(
         tmp_path / "index.parquet")  # fmt: skip
-    args = (tmp_path / "scans.csv", tmp_path / "walls.parquet", tmp_path / "index.parquet")
+    args = (tmp_path / "scans.parquet", tmp_path / "walls.parquet", tmp_path / "index.parquet")
     counts = write_recommended_floorplan(
         *args, {"geojson": tmp_path / "floorplan.geojson"}, {}, dataset="box", ordering="random", extractor="ransac"
     )

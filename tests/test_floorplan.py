@@ -143,7 +143,7 @@ def test_schema_defaults_agree_with_floorplan_params():
     schema = yaml.safe_load((REPO / "workflow/schemas/floorplan.schema.yaml").read_text())["properties"]
     defaults = {k: v.get("default") for k, v in schema.items()}  # georeference: none, unset
     # the workflow's keys: the recommended plan's extractor, the evaluation grid's formats
-    assert {k: defaults.pop(k) for k in WORKFLOW_KEYS} == {"extractor": "map", "evaluation_formats": ["geojson", "svg"]}
+    assert {k: defaults.pop(k) for k in WORKFLOW_KEYS} == {"extractor": "map", "evaluation_formats": ["svg"]}
     # the structure passes' and the rooms' sections: their own dataclasses, filled from the schema's defaults
     for section in ("structure", "rooms"):
         assert defaults.pop(section) == {}

@@ -15,10 +15,10 @@ import json
 
 import numpy as np
 import pytest
-from shapely.geometry import shape
 
 from conftest import SHARED_DATA, needs_shared
 from floorscan.core.io import read_metadata, read_table
+from floorscan.core.plan_tables import read_plan_tables
 from conftest import copy_workflow, snakemake
 
 pytestmark = [needs_shared, pytest.mark.realdata, pytest.mark.workflow, pytest.mark.slow]
@@ -59,7 +59,7 @@ def real_run(tmp_path_factory):
     root = tmp_path_factory.mktemp("real")
     wd = copy_workflow(root / "floorscan")
     targets = [
-        f"results/{d}/evaluation/floorplan/{ORDERING}_{EXTRACTOR}_k{k}.geojson" for d in MEASURED for k in ("all", "50")
+        f"results/{d}/evaluation/plans/{ORDERING}_{EXTRACTOR}_k{k}" for d in MEASURED for k in ("all", "50")
     ] + [f"results/{d}/reference/occupancy.parquet" for d in MEASURED] + [
         f"results/{d}/floorplan.geojson" for d in MEASURED  # the answer: map walls, structure passes
     ] + ["results/acapulco/registration.parquet"]
@@ -70,10 +70,9 @@ def real_run(tmp_path_factory):
     return wd / "results"
 
 
-def _plan_length_m(path) -> float:
-    """Total length of the floor plan's wall centre lines, metres."""
-    data = json.loads(path.read_text())
-    return sum(shape(f["geometry"]).length for f in data["features"] if f["properties"].get("kind") == "axis")
+def _plan_length_m(folder) -> float:
+    """Total length of the floor plan's wall centre lines (its Parquet tables), metres."""
+    return float(read_plan_tables(folder, ["walls"])["walls"]["length_m"].sum())
 
 
 @pytest.mark.parametrize("name", list(MEASURED))
@@ -90,8 +89,8 @@ def test_recording_runs_on_defaults_to_a_recognisable_plan(real_run, name):
     assert abs(verdict["n_sampled"] - n_sampled) <= max(2, 0.02 * n_sampled)
     assert abs(int(reg["kept"].sum()) - n_kept) <= max(2, 0.02 * n_kept)
     assert verdict["kept_fraction"] >= 0.9
-    all_m = _plan_length_m(out / "evaluation" / "floorplan" / f"{ORDERING}_{EXTRACTOR}_kall.geojson")
-    part_m = _plan_length_m(out / "evaluation" / "floorplan" / f"{ORDERING}_{EXTRACTOR}_k50.geojson")
+    all_m = _plan_length_m(out / "evaluation" / "plans" / f"{ORDERING}_{EXTRACTOR}_kall")
+    part_m = _plan_length_m(out / "evaluation" / "plans" / f"{ORDERING}_{EXTRACTOR}_k50")
     assert all_m == pytest.approx(length_all, rel=0.1)
     assert part_m / all_m >= fraction - 0.1
 
@@ -102,13 +101,13 @@ def test_the_plan_against_the_reference_map_sees_a_wall_through_free_space(real_
     correctness is below 1 on every recording), and walls drawn along the rover's own
     path, through space every scan saw free, lower correctness by their share of the
     plan's length while completeness stays."""
-    from floorscan.score.geojson import floorplan_faces
+    from floorscan.core.plan_tables import plan_faces_and_walls
     from floorscan.score.against_reference import plan_against_reference
     from floorscan.core.occupancy import read_grid
 
     out = real_run / name
     grid = read_grid(out / "reference" / "occupancy.parquet")
-    faces = floorplan_faces(out / "evaluation" / "floorplan" / f"{ORDERING}_{EXTRACTOR}_kall.geojson")
+    faces = plan_faces_and_walls(out / "evaluation" / "plans" / f"{ORDERING}_{EXTRACTOR}_kall")[0]
     got = plan_against_reference(faces, grid)
     completeness, correctness = MEASURED_MAP[name]
     assert got["completeness_5cm"] == pytest.approx(completeness, abs=0.03)

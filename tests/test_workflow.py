@@ -11,6 +11,7 @@ import pytest
 
 from conftest import snakemake
 from floorscan.core.io import read_table
+from floorscan.core.plan_tables import read_plan_tables
 
 pytestmark = [pytest.mark.workflow, pytest.mark.slow]
 
@@ -79,9 +80,14 @@ def test_default_run_selection_walls_and_scores(default_run):
         assert mi.loc[("cluster_hull", ext, "all"), "plan_f1_5cm"] >= 0.88
         # recall against every face is lower: rooms C and D are only seen through doors
         assert 0.6 < mi.loc[("cluster_hull", ext, "all"), "recall_all_5cm"] < 0.85
-    for fmt in ("geojson", "svg"):  # floorplan.evaluation_formats; the recommended plan has all four
-        assert (out / "evaluation" / "floorplan" / f"cluster_hull_cluster_ransac_k15.{fmt}").stat().st_size > 500
-    assert not (out / "evaluation" / "floorplan" / "cluster_hull_cluster_ransac_k15.ifc").exists()
+    # floorplan.evaluation_formats (svg); the recommended plan has all four
+    assert (out / "evaluation" / "floorplan" / "cluster_hull_cluster_ransac_k15.svg").stat().st_size > 500
+    for fmt in ("geojson", "ifc"):
+        assert not (out / "evaluation" / "floorplan" / f"cluster_hull_cluster_ransac_k15.{fmt}").exists()
+    # what the score stage read: the plan's Parquet tables, the walls of the plan it scored
+    plan = read_plan_tables(out / "evaluation" / "plans" / "cluster_hull_cluster_ransac_k15")
+    assert mi.loc[("cluster_hull", "cluster_ransac", "15"), "n_floorplan_walls"] == len(plan["walls"]) > 10
+    assert set(plan) == {"walls", "faces", "clutter", "junctions", "rooms", "doors"} and plan["rooms"].empty
 
 
 def test_default_run_reference_map_curves_and_summary(default_run):
@@ -148,6 +154,10 @@ def test_default_run_writes_the_answer(default_run):
     assert scans["rank"].tolist() == list(range(1, 11)) and scans["time_iso"].str.endswith("Z").all()
     order = read_table(out / "orderings" / "wall_coverage.parquet").sort_values("rank")
     assert scans["scan_id"].tolist() == order["scan_id"].head(10).tolist()
+    # the same table for the later stages (the recommended plan reads it), units kept
+    table = read_table(out / "selection" / "scans.parquet")
+    assert table["scan_id"].tolist() == scans["scan_id"].tolist() and str(table["t_ns"].dtype) == "int64"
+    assert np.allclose(table["x_m"], scans["x_m"], atol=1e-6)
 
     bag = Path(sel["recording"]["path"])
     assert bag.parent == Path("results/demo/selection/recording") and bag.suffix == ".bag"

@@ -232,7 +232,36 @@ def build_floorplan(
         When a coordinate column is missing.
     """
     seg, w, _ = segment_arrays(segments)
-    faces, face_w, n_seg = plan_faces(seg, w, params)
+    return plan_of_segments(seg, w, params, grid)
+
+
+def plan_of_segments(
+    seg: np.ndarray, weights: np.ndarray | None = None, params: FloorplanParams = FloorplanParams(),
+    grid: OccupancyGrid | None = None, first_groups: np.ndarray | None = None,
+) -> FloorPlan:
+    """:func:`build_floorplan` of segment arrays (:func:`segment_arrays`' output): the
+    faces of :func:`plan_faces`, paired into walls, with the structure passes when a
+    grid is given.
+
+    Parameters
+    ----------
+    seg : (M, 4) float ndarray
+        Finite segments ``x0, y0, x1, y1``, metres, in scan order.
+    weights : (M,) float ndarray, optional
+        Merge weights (inlier counts), as :func:`plan_faces`.
+    params : FloorplanParams
+    grid : OccupancyGrid, optional
+        The free space of the segments' scans (:func:`build_floorplan`).
+    first_groups : (M,) int64 ndarray, optional
+        The merge's first pass, prepared (:class:`~floorscan.floorplan.merge.FirstMergePass`):
+        the same plan, sooner.
+
+    Returns
+    -------
+    FloorPlan
+    """
+    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
+    faces, face_w, n_seg = plan_faces(seg, weights, params, first_groups)
     clutter = _empty(CLUTTER_COLUMNS)
     if grid is not None:
         from floorscan.floorplan.structure import structure_passes

@@ -1,5 +1,5 @@
 """Build and write floor plans (stage ``floorplan``): :class:`FloorplanWriter` builds the
-plan of a table of wall segments (:func:`~floorscan.floorplan.plan.build_floorplan`)
+plan of a table of wall segments (the one plan builder, :mod:`floorscan.floorplan.scans`)
 and writes it in the formats asked for, each by its writer in
 :data:`floorscan.floorplan.EXPORT_FORMATS`, with the plan's metadata
 (:class:`~floorscan.floorplan.metadata.PlanMetadata`); a plan of the same segments as
@@ -25,7 +25,8 @@ from floorscan.floorplan.footprints import PlanExports
 from floorscan.floorplan.metadata import PlanMetadata, export_time, recording_timestamp
 from floorscan.core.config import stage_params
 from floorscan.floorplan.params import FloorplanParams
-from floorscan.floorplan.plan import FloorPlan, in_scan_order, build_floorplan
+from floorscan.floorplan.plan import FloorPlan, in_scan_order
+from floorscan.floorplan.scans import plan_of_scans
 
 if TYPE_CHECKING:
     from floorscan.core.occupancy import OccupancyGrid
@@ -111,7 +112,7 @@ class FloorplanWriter:
         built = self._built.get(key)
         reused = built is not None
         if built is None:
-            built = self._built[key] = PlanExports(build_floorplan(segments, self.params, grid))
+            built = self._built[key] = PlanExports(plan_of_scans(segments, None, self.params, grid))
         self.export(built, outputs, meta)
         return built.plan, reused
 
@@ -240,8 +241,9 @@ def recommended_plan(
     Parameters
     ----------
     scans_path : path
-        ``selection/scans.csv`` (:func:`floorscan.select.deliverables.write_scan_list`):
-        its ``scan_id`` column names the selected scans.
+        ``selection/scans.parquet``, the selection stage's table
+        (:func:`floorscan.select.deliverables.write_scan_table`): its ``scan_id``
+        column names the selected scans.
     walls_path : path
         ``walls/<extractor>/per_scan.parquet`` (every kept scan's wall segments, the
         selected scans' are taken) or, for the map extractor,
@@ -269,15 +271,17 @@ def recommended_plan(
     """
     from floorscan.core.io import read_table
     from floorscan.core.occupancy import read_grid
+    from floorscan.floorplan.scans import ScanPlans
+    from floorscan.select.deliverables import selected_scan_ids
 
-    selected = pd.read_csv(scans_path, usecols=["rank", "scan_id"])
-    ids = selected["scan_id"].astype(np.int64).to_numpy()
-    walls = read_table(walls_path)
-    segments = walls if extractor == "map" else walls[walls["scan_id"].isin(ids)]
+    ids = selected_scan_ids(scans_path)
     grid = None if grid_path is None else read_grid(grid_path)
     meta = PlanMetadata(dataset, ordering, extractor, len(ids), recording_timestamp(index_path))
-    plan = build_floorplan(segments, stage_params(FloorplanParams, cfg), grid)
-    return RecommendedPlan(plan, meta, grid, len(ids), len(segments))
+    plans = ScanPlans(read_table(walls_path), stage_params(FloorplanParams, cfg))
+    scans = None if extractor == "map" else ids  # the map extractor's table is the selected scans' map whole
+    plan = plans.plan(scans, grid)
+    rows = plans.rows(scans)
+    return RecommendedPlan(plan, meta, grid, len(ids), int(rows.sum()))
 
 
 def write_recommended_floorplan(

@@ -304,11 +304,11 @@ def score_plans(runs: list[dict], grid: OccupancyGrid, taus_m: tuple[float, ...]
     Parameters
     ----------
     runs : list of dict
-        ``ordering``, ``extractor``, ``k`` (label) and ``floorplan`` (a GeoJSON path).
+        ``ordering``, ``extractor``, ``k`` (label) and ``floorplan`` (a plan folder, :mod:`floorscan.core.plan_tables`).
     grid : OccupancyGrid
     taus_m : tuple of float
     faces_of : callable
-        Path -> (F, 4) faces of the plan (:func:`floorscan.score.geojson.floorplan_faces`).
+        Path -> (F, 4) faces of the plan (:func:`floorscan.core.plan_tables.plan_faces_and_walls`).
 
     Returns
     -------

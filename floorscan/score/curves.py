@@ -1,8 +1,8 @@
 """Floor-plan quality against the number of scans, and the bound of any selection.
 
 For an ordering of the kept scans, the floor plan of its first k scans (the walls
-stage's per-scan segments of those scans, merged by :func:`floorscan.floorplan.plan.build_floorplan`
-as the floorplan stage merges them) is scored against the reference map
+stage's per-scan segments of those scans, merged by the one plan builder,
+:class:`floorscan.floorplan.scans.ScanPlans`, as the evaluation grid and the answer are) is scored against the reference map
 (:func:`floorscan.score.against_reference.plan_against_reference`) at every k of a
 grid (:func:`k_grid`: a step of at most 2 % of the kept scans, so that the k reaching a
 level is read to within 2 %). Orderings scored:
@@ -329,17 +329,14 @@ def score_curves(
     oracle : pandas.DataFrame
         The oracle ordering (:func:`oracle_ordering`).
     """
-    from floorscan.floorplan.merge import FirstMergePass
     from floorscan.core.config import stage_params
-    from floorscan.floorplan.params import FloorplanParams
-    from floorscan.floorplan.plan import plan_faces, segment_arrays
     from floorscan.core.occupancy import read_grid
+    from floorscan.floorplan.params import FloorplanParams
+    from floorscan.floorplan.scans import ScanPlans
 
     structure = Structure(read_grid(reference_path))
-    fp_params = stage_params(FloorplanParams, floorplan_cfg)
-    # as build_floorplan takes them: the plan of a set of scans is plan_faces of its rows
-    seg, weights, seg_scan = segment_arrays(per_scan)
-    first_pass = FirstMergePass(seg, fp_params)  # the merge's first pass of every subset, from one test
+    # the one plan builder, its merge's first pass tested once for every subset
+    plans = ScanPlans(per_scan, stage_params(FloorplanParams, floorplan_cfg), prepared=True)
     cache: dict[tuple, dict] = {}
 
     def score_scans(scan_ids) -> dict:
@@ -347,10 +344,7 @@ def score_curves(
         scans (the same scans give the same plan: k = all of every ordering)."""
         key = tuple(sorted(int(s) for s in scan_ids))
         if key not in cache:
-            rows = np.isin(seg_scan, key)
-            faces = plan_faces(seg[rows], None if weights is None else weights[rows], fp_params,
-                               first_pass.groups(rows))[0]
-            cache[key] = plan_against_reference(faces, structure, taus_m)
+            cache[key] = plan_against_reference(plans.faces(key), structure, taus_m)
         return cache[key]
 
     any_ordering = next(iter(orderings.values()))

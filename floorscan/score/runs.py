@@ -26,7 +26,7 @@ from typing import Mapping
 import numpy as np
 
 from floorscan.score.bitmap import grid_for, rasterize_segments
-from floorscan.score.geojson import read_floorplan
+from floorscan.core.plan_tables import plan_faces_and_walls
 from floorscan.score.ground_truth import GROUND_TRUTH, REFERENCE
 from floorscan.score.growing import PAIR_REACH_M, GrowingWalls, SamplePairs
 from floorscan.core.config import stage_params
@@ -141,7 +141,7 @@ def score_dataset(
         faces of the run's floor plan (``(F, 4)`` segments), scored with the same
         tolerance metrics into the ``plan_precision_<tau>``, ``plan_recall_<tau>`` and
         ``plan_f1_<tau>`` columns (one wall per wall: the product a user opens, not the
-        per-scan segments); or ``floorplan``, the path of the plan's ``.geojson``, from
+        per-scan segments); or ``floorplan``, the plan's Parquet folder (:mod:`floorscan.core.plan_tables`), from
         which both are read when the run is scored (unless ``floorplan_faces`` is
         given too). Runs of one ordering and extractor
         in increasing k (each wall set containing the previous one) are scored
@@ -284,7 +284,7 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
         walls = as_segments(walls)
         plan_path = run.get("floorplan")
         if plan_path is not None and run.get("floorplan_faces") is None:
-            plan, nfp = read_floorplan(plan_path)
+            plan, nfp = plan_faces_and_walls(plan_path)
         else:
             plan, nfp = run.get("floorplan_faces"), run.get("n_floorplan_walls")
         same = (ext, _set_digest(walls), None if plan is None else _set_digest(as_segments(plan)))

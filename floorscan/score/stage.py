@@ -167,7 +167,7 @@ def write_run_scores(
     """
     cfg = stage_params(ScoreParams, cfg)
     from floorscan.score.against_reference import score_plans
-    from floorscan.score.geojson import read_floorplan
+    from floorscan.core.plan_tables import plan_faces_and_walls
     from floorscan.score.ground_truth import load_recall_references, load_references
     from floorscan.core.occupancy import read_grid
     from floorscan.score.runs import SCORE_TIME, score_dataset
@@ -182,7 +182,7 @@ def write_run_scores(
     n_kept = {o: len(read_table(p, columns=["scan_id"])) for o, p in zip(orderings, inputs["orderings"])}
     # the walls as paths, not tables: score_dataset reads one run's walls at a time; the
     # plans (a few hundred faces each) are read once for both scorings
-    plans = {fp: read_floorplan(fp) for fp in dict.fromkeys(inputs["floorplans"])}
+    plans = {fp: plan_faces_and_walls(fp) for fp in dict.fromkeys(inputs["floorplans"])}
     run_files = [
         {"ordering": o, "extractor": e, "k": k, "walls": wp, "n_kept": n_kept[o], "floorplan": fp,
          "floorplan_faces": plans[fp][0], "n_floorplan_walls": plans[fp][1]}

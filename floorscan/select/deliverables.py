@@ -38,12 +38,21 @@ from typing import Iterable
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
 
 from floorscan.core.files import atomic_path, staged_path
 from floorscan.core.io import iter_scans
 
 #: Columns of :func:`scan_list`, in order.
 SCAN_LIST_COLUMNS = ("rank", "scan_id", "t_ns", "time_iso", "x_m", "y_m", "yaw_rad", "gain")
+#: The scan list as the stages read it (``selection/scans.parquet``): the columns of
+#: :data:`SCAN_LIST_COLUMNS` with their units; ``rank`` 1-based.
+SCAN_TABLE = pa.schema(
+    [
+        ("rank", pa.int64()), ("scan_id", pa.int64()), ("t_ns", pa.int64()), ("time_iso", pa.string()),
+        ("x_m", pa.float64()), ("y_m", pa.float64()), ("yaw_rad", pa.float64()), ("gain", pa.float64()),
+    ]  # fmt: skip
+)
 #: Gain columns an ordering may carry, in the order they are looked for.
 GAIN_COLUMNS = ("gain", "gain_m2")
 #: ``printf`` format of every float column of the scan list CSV: micrometres and
@@ -337,3 +346,50 @@ def write_selected_points(
             if not o3d.t.io.write_point_cloud(str(tmp), cloud, write_ascii=False, compressed=False):
                 raise OSError(f"{path}: Open3D could not write the point cloud")
     return len(xyz)
+
+
+def write_scan_table(df: pd.DataFrame, path: str | os.PathLike, metadata: dict | None = None) -> None:
+    """Write a :func:`scan_list` table as Parquet (schema :data:`SCAN_TABLE`), atomically:
+    the selection as the later stages read it (``selection/scans.csv`` is the same
+    table for people).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        A :func:`scan_list` table.
+    path : path
+        Parquet output.
+    metadata : dict, optional
+        Key/value strings for the file (ordering, k).
+
+    Raises
+    ------
+    KeyError
+        When ``df`` lacks a column of :data:`SCAN_TABLE`.
+    """
+    from floorscan.core.io import write_table
+
+    write_table(df, path, SCAN_TABLE, metadata=metadata)
+
+
+def selected_scan_ids(path: str | os.PathLike) -> np.ndarray:
+    """The selected scans of a ``selection/scans.parquet`` (:func:`write_scan_table`).
+
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    (k,) int64 ndarray
+        Scan ids in rank order.
+
+    Raises
+    ------
+    KeyError
+        When the table has no ``rank`` or ``scan_id`` column.
+    """
+    from floorscan.core.io import read_table
+
+    table = read_table(path, columns=["rank", "scan_id"])
+    return table.sort_values("rank", kind="stable")["scan_id"].to_numpy(np.int64)

@@ -5,6 +5,8 @@ From the default ordering (``select.default_ordering``) it takes the first k sca
 and writes, under ``results/<dataset>/selection/``:
 
 - ``scans.csv``: rank, scan id, stamp (ns and ISO 8601), registered pose, gain;
+- ``scans.parquet``: the same table for the later stages (the recommended plan,
+  the map extractor's walls of the selected scans);
 - ``points.ply``, ``points.pcd``: the selected scans' points in the map frame;
 - ``recording/``: the recording cut to the selected scans, in its own format
   (:mod:`floorscan.select.recording`);
@@ -30,7 +32,7 @@ from floorscan.ingest.detect import bag_path
 from floorscan.core.io import read_table
 from floorscan.core.files import write_json
 from floorscan.select.coverage import OBJECTIVE_COLUMN
-from floorscan.select.deliverables import recommended_k, scan_list, write_scan_list, write_selected_points
+from floorscan.select.deliverables import recommended_k, scan_list, write_scan_list, write_scan_table, write_selected_points
 from floorscan.select.recording import read_detection, write_reduced_recording
 
 log = logging.getLogger(__name__)
@@ -86,7 +88,7 @@ def write_selection(
     select_cfg : mapping
         The ``select`` config section as the schema fills it (``k``, ``k_coverage``).
     outputs : mapping
-        Paths ``scans`` (CSV), ``ply``, ``pcd``, ``recording`` (a folder, made here) and
+        Paths ``scans`` (CSV), ``table`` (the same, Parquet), ``ply``, ``pcd``, ``recording`` (a folder, made here) and
         ``summary`` (JSON).
 
     Returns
@@ -111,6 +113,7 @@ def write_selection(
     index = pd.DataFrame({"scan_id": np.arange(len(t_ns), dtype=np.int64), "t_ns": t_ns})
     table = scan_list(ordering, k, index, read_table(registration_path))
     write_scan_list(table, outputs["scans"])
+    write_scan_table(table, outputs["table"], {"ordering": ordering_name, "k": str(int(k))})
     ids = table["scan_id"].astype(int).tolist()
     n_points = write_selected_points(registered_path, ids, outputs["ply"], outputs["pcd"])
     log.info("scan list %s; %d points of the %d scans in %s and %s", outputs["scans"], n_points, k,

@@ -46,6 +46,37 @@ def parse_k(k: str | int) -> int | None:
     return v
 
 
+def first_k_scans(ordering: pd.DataFrame, k: str | int) -> list[int]:
+    """The first ``k`` scans of an ordering, in rank order.
+
+    Parameters
+    ----------
+    ordering : pandas.DataFrame
+        ``orderings/{ordering}.parquet``: ``rank`` (0-based), ``scan_id``.
+    k : int, str
+        Number of scans; ``"all"`` or a k larger than the number of ranked scans
+        takes all of them.
+
+    Returns
+    -------
+    list of int
+        Scan ids.
+
+    Raises
+    ------
+    KeyError
+        When ``ordering`` lacks ``rank`` or ``scan_id``.
+    ValueError
+        For a k that is neither ``"all"`` nor a positive integer (:func:`parse_k`).
+    """
+    for c in ("rank", "scan_id"):
+        if c not in ordering.columns:
+            raise KeyError(f"ordering lacks column {c!r}; expected rank, scan_id")
+    kk = parse_k(k)
+    ids = ordering.sort_values("rank", kind="stable")["scan_id"].astype(int).tolist()
+    return ids if kk is None else ids[:kk]
+
+
 def first_k_walls(walls: pd.DataFrame, ordering: pd.DataFrame, k: str | int) -> tuple[pd.DataFrame, list[int]]:
     """The wall segments of the first ``k`` scans of an ordering (stage ``walls``).
 
@@ -72,12 +103,7 @@ def first_k_walls(walls: pd.DataFrame, ordering: pd.DataFrame, k: str | int) -> 
     KeyError
         When ``ordering`` lacks ``rank`` or ``scan_id``.
     """
-    for c in ("rank", "scan_id"):
-        if c not in ordering.columns:
-            raise KeyError(f"ordering lacks column {c!r}; expected rank, scan_id")
-    kk = parse_k(k)
-    ids = ordering.sort_values("rank", kind="stable")["scan_id"].astype(int).tolist()
-    ids = ids if kk is None else ids[:kk]
+    ids = first_k_scans(ordering, k)
     pos = {s: i for i, s in enumerate(ids)}
     sel = walls[walls["scan_id"].isin(pos)].copy()
     sel["_pos"] = sel["scan_id"].map(pos)

@@ -99,8 +99,8 @@ def write_map_walls(
     registration_path : path
         ``registration.parquet`` (``scan_id``, ``kept``, ``x_m``, ``y_m``).
     scans_path : path or None
-        ``selection/scans.csv``, whose ``scan_id`` column names the scans; None: all kept
-        scans.
+        ``selection/scans.parquet`` (:func:`floorscan.select.deliverables.write_scan_table`),
+        whose ``scan_id`` column names the scans; None: all kept scans.
     cfg : mapping
         The ``walls`` config section.
     walls_path : path
@@ -116,10 +116,11 @@ def write_map_walls(
     """
     from floorscan.core.io import read_table, write_table
     from floorscan.core.occupancy import write_grid
+    from floorscan.select.deliverables import selected_scan_ids
     from floorscan.walls.tables import WALLS
 
     registration = read_table(registration_path)
-    ids = None if scans_path is None else pd.read_csv(scans_path, usecols=["scan_id"])["scan_id"].to_numpy(np.int64)
+    ids = None if scans_path is None else selected_scan_ids(scans_path)
     segments, grid = map_of_scans(registered_path, registration, ids, cfg)
     n_scans = int(registration["kept"].sum()) if ids is None else len(ids)
     write_table(segments, walls_path, WALLS, metadata={"extractor": "map", "n_scans": str(n_scans)})

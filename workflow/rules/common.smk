@@ -335,7 +335,7 @@ def recommended_floorplan_inputs(wildcards):
     extractor = plan_extractor(wildcards)
     walls = f"results/{ds}/walls/map/selected.parquet" if extractor == "map" else f"results/{ds}/walls/{extractor}/per_scan.parquet"
     return {
-        "scans": f"results/{ds}/selection/scans.csv",
+        "scans": f"results/{ds}/selection/scans.parquet",
         "walls": walls,
         "grid": f"results/{ds}/walls/map/selected_grid.parquet",
         "index": f"results/{ds}/scan_index.parquet",

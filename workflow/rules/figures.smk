@@ -126,7 +126,7 @@ def score_walls_figure_inputs(wildcards):
     return {
         "walls": [f"results/{ds}/walls/{o}/{e}/k{kk}.parquet" for o, e, kk in score_figure_runs(wildcards)],
         "floorplans": [
-            f"results/{ds}/evaluation/floorplan/{o}_{e}_k{k}.geojson" for o, e in score_figure_floorplans(wildcards)
+            f"results/{ds}/evaluation/plans/{o}_{e}_k{k}" for o, e in score_figure_floorplans(wildcards)
         ],
         "registered": f"results/{ds}/registered.parquet",
         "scan_status": [f"results/{ds}/walls/{e}/scan_status.parquet" for e in score_extractors(wildcards)],

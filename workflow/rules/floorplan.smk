@@ -3,11 +3,13 @@
 # (GeoJSON, SVG, DXF, IFC; a file's suffix is its format's).
 #
 #   recommended_floorplan: the answer, results/<dataset>/floorplan.*: the walls of the
-#               scans of selection/scans.csv (select.default_ordering, select.k) by
+#               scans of selection/scans.parquet (select.default_ordering, select.k) by
 #               floorplan.extractor; map.pgm + map.yaml: their occupancy grid for Nav2
-#   floorplan:  the evaluation grid, evaluation/floorplan/<ordering>_<extractor>_k<k>.*:
-#               every ordering x k of walls.k, one job per extractor, in the formats of
-#               floorplan.evaluation_formats (GeoJSON, which is scored, and SVG)
+#   floorplan:  the evaluation grid: the plan of the first k scans of every ordering x k
+#               of walls.k, one job per extractor (floorscan.floorplan.grid), as Parquet
+#               tables, evaluation/plans/<ordering>_<extractor>_k<k>/ (what the score
+#               stage reads), and in the formats of floorplan.evaluation_formats for
+#               people, evaluation/floorplan/<ordering>_<extractor>_k<k>.*
 from floorscan.floorplan import EXPORT_FORMATS, FLOORPLAN_FORMATS, floorplan_outputs
 
 # The file suffixes of the evaluation grid's formats (floorplan.evaluation_formats).
@@ -15,12 +17,11 @@ EVALUATION_SUFFIXES = [EXPORT_FORMATS[fmt].suffix for fmt in config["floorplan"]
 
 
 def floorplan_grid_inputs(wildcards):
+    ds = wildcards.dataset
     return {
-        "tables": [
-            f"results/{wildcards.dataset}/walls/{o}/{wildcards.extractor}/k{k}.parquet"
-            for o in config["walls"]["orderings"] for k in walls_k_names()
-        ],
-        "index": f"results/{wildcards.dataset}/scan_index.parquet",
+        "walls": f"results/{ds}/walls/{wildcards.extractor}/per_scan.parquet",
+        "orderings": [f"results/{ds}/orderings/{o}.parquet" for o in config["walls"]["orderings"]],
+        "index": f"results/{ds}/scan_index.parquet",
     }
 
 
@@ -53,7 +54,13 @@ rule floorplan:
     input:
         unpack(floorplan_grid_inputs),
     output:
-        expand(
+        plans=[
+            directory(p) for p in expand(
+                "results/{{dataset}}/evaluation/plans/{ordering}_{{extractor}}_k{k}",
+                ordering=config["walls"]["orderings"], k=walls_k_names(),
+            )
+        ],
+        exports=expand(
             "results/{{dataset}}/evaluation/floorplan/{ordering}_{{extractor}}_k{k}{suffix}",
             ordering=config["walls"]["orderings"], k=walls_k_names(),
             suffix=EVALUATION_SUFFIXES,
@@ -63,6 +70,7 @@ rule floorplan:
     params:
         cfg=floorplan_grid_config,
         runs=floorplan_grid_runs,
+        orderings=config["walls"]["orderings"],
         formats=config["floorplan"]["evaluation_formats"],
     log:
         "results/{dataset}/logs/floorplan_{extractor}.log",
@@ -95,6 +103,12 @@ rule all_scans_floorplan:
 PLAN_OUTPUTS.extend(floorplan_outputs("results/{dataset}/floorplan", FLOORPLAN_FORMATS).values())
 PLAN_OUTPUTS.extend(["results/{dataset}/map.pgm", "results/{dataset}/map.yaml"])
 EVALUATION_OUTPUTS.extend(floorplan_outputs("results/{dataset}/evaluation/floorplan/all_scans_map", ["geojson", "svg"]).values())
+EVALUATION_OUTPUTS.extend(
+    expand(
+        "results/{{dataset}}/evaluation/plans/{ordering}_{extractor}_k{k}",
+        ordering=config["walls"]["orderings"], extractor=config["walls"]["extractors"], k=walls_k_names(),
+    )
+)
 EVALUATION_OUTPUTS.extend(
     expand(
         "results/{{dataset}}/evaluation/floorplan/{ordering}_{extractor}_k{k}{suffix}",

@@ -38,7 +38,7 @@ def score_runs_inputs(wildcards):
     runs = score_extractor_runs(wildcards)
     return {
         "walls": [f"results/{ds}/walls/{o}/{e}/k{k}.parquet" for o, e, k in runs],
-        "floorplans": [f"results/{ds}/evaluation/floorplan/{o}_{e}_k{k}.geojson" for o, e, k in runs],
+        "floorplans": [f"results/{ds}/evaluation/plans/{o}_{e}_k{k}" for o, e, k in runs],
         "orderings": [f"results/{ds}/orderings/{o}.parquet" for o in score_orderings(wildcards)],
         "reference_map": f"results/{ds}/reference/occupancy.parquet",
         **score_reference_inputs(wildcards),

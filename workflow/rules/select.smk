@@ -119,6 +119,7 @@ rule selection:
         unpack(selection_inputs),
     output:
         scans="results/{dataset}/selection/scans.csv",
+        table="results/{dataset}/selection/scans.parquet",  # the same, for the later stages
         ply="results/{dataset}/selection/points.ply",
         pcd="results/{dataset}/selection/points.pcd",
         recording=directory("results/{dataset}/selection/recording"),
@@ -146,5 +147,5 @@ EVALUATION_OUTPUTS.extend(
 
 PLAN_OUTPUTS.extend(
     f"results/{{dataset}}/selection/{name}"
-    for name in ("scans.csv", "points.ply", "points.pcd", "recording", "selection.json")
+    for name in ("scans.csv", "scans.parquet", "points.ply", "points.pcd", "recording", "selection.json")
 )

@@ -130,7 +130,7 @@ def map_walls_inputs(wildcards):
     ds = wildcards.dataset
     inputs = {"registered": f"results/{ds}/registered.parquet", "registration": f"results/{ds}/registration.parquet"}
     if wildcards.scans == "selected":
-        inputs["scans"] = f"results/{ds}/selection/scans.csv"
+        inputs["scans"] = f"results/{ds}/selection/scans.parquet"
     return inputs
 
 
