@@ -1,17 +1,20 @@
 """Stage floorplan, the evaluation's plan of all kept scans: the map extractor's walls of
-every kept scan through the structure passes (floorscan.floorplan.writer), GeoJSON and SVG."""
+every kept scan through the structure passes (floorscan.floorplan.writer), GeoJSON and SVG, and
+its Parquet tables (rooms as WKB; floorscan.floorplan.scans.write_plan)."""
 from floorscan.core.io import read_table
 from floorscan.core.occupancy import read_grid
 from floorscan.core.stage import stage_log
 from floorscan.floorplan.metadata import recording_timestamp
+from floorscan.floorplan.scans import write_plan
 from floorscan.floorplan.writer import FloorplanWriter
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
     walls = read_table(smk.input.walls)
     plan, _ = FloorplanWriter(smk.params.cfg).write(
-        walls, dict(smk.output.items()), dataset=smk.wildcards.dataset, ordering="all", extractor="map", k="all",
+        walls, {k: v for k, v in smk.output.items() if k != "plan"}, dataset=smk.wildcards.dataset, ordering="all", extractor="map", k="all",
         timestamp=recording_timestamp(smk.input.index), grid=read_grid(smk.input.grid),
     )
+    write_plan(plan, smk.output.plan, {"dataset": smk.wildcards.dataset, "ordering": "all", "extractor": "map", "k": "all"})
     log.info("plan of all kept scans (map extractor): %d walls, %d clutter, %d junctions",
              len(plan.walls), len(plan.clutter), len(plan.junctions))

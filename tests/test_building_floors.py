@@ -18,6 +18,7 @@ from floorscan.floorplan.geojson import floorplan_geojson, write_geojson
 from floorscan.floorplan.ifc import STOREY_NAME, write_building_ifc, write_ifc
 from floorscan.floorplan.metadata import PlanMetadata
 from floorscan.floorplan.plan import ROOM_COLUMNS
+from floorscan.floorplan.scans import read_plan
 from floorscan.floorplan.writer import recommended_plan, write_recommended_floorplan
 from test_floorplan import BOX, THICK, plan_of, scans_segments
 from test_rooms_export import WALLS, rooms_plan
@@ -177,11 +178,15 @@ def test_recommended_plan_is_the_plan_the_recommended_floorplan_writes(tmp_path)
         tmp_path / "index.parquet")  # fmt: skip
     args = (tmp_path / "scans.parquet", tmp_path / "walls.parquet", tmp_path / "index.parquet")
     counts = write_recommended_floorplan(
-        *args, {"geojson": tmp_path / "floorplan.geojson"}, {}, dataset="box", ordering="random", extractor="ransac"
+        *args, {"geojson": tmp_path / "floorplan.geojson"}, {}, dataset="box", ordering="random", extractor="ransac",
+        plan_folder=tmp_path / "plan_tables",
     )
     rec = recommended_plan(*args, {}, "box", "random", "ransac")
     assert rec.metadata == PlanMetadata("box", "random", "ransac", 3, 1_650_000_000)
     assert (rec.n_scans, rec.n_segments) == (3, int(segments["scan_id"].isin([0, 2, 3]).sum()))
     assert counts["n_walls"] == len(rec.plan.walls) > 0
+    tables = read_plan(tmp_path / "plan_tables")  # the same plan for programs, to 10 um
+    assert tables.walls["wall_id"].tolist() == rec.plan.walls["wall_id"].tolist()
+    np.testing.assert_allclose(tables.faces[["x0", "y0", "x1", "y1"]], rec.plan.faces[["x0", "y0", "x1", "y1"]], atol=5e-6)
     write_geojson(rec.plan, tmp_path / "again.geojson", rec.metadata)
     assert (tmp_path / "again.geojson").read_bytes() == (tmp_path / "floorplan.geojson").read_bytes()

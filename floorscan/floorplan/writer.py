@@ -295,6 +295,7 @@ def write_recommended_floorplan(
     extractor: str,
     grid_path: str | os.PathLike | None = None,
     map_paths: tuple[str | os.PathLike, str | os.PathLike] | None = None,
+    plan_folder: str | os.PathLike | None = None,
 ) -> dict:
     """Write the recommended floor plan (:func:`recommended_plan`): the walls of the
     selected scans.
@@ -310,6 +311,9 @@ def write_recommended_floorplan(
     map_paths : (path, path), optional
         ``map.pgm``, ``map.yaml``: that grid as a ROS map_server / Nav2 map
         (:func:`floorscan.core.occupancy.write_map_server`); needs ``grid_path``.
+    plan_folder : path, optional
+        The plan as Parquet tables (:func:`floorscan.floorplan.scans.write_plan`: map
+        frame, rooms as WKB), for programs.
 
     Returns
     -------
@@ -330,6 +334,12 @@ def write_recommended_floorplan(
         raise ValueError("an occupancy map needs the grid of the selected scans (grid_path)")
     rec = recommended_plan(scans_path, walls_path, index_path, cfg, dataset, ordering, extractor, grid_path)
     writer.export(PlanExports(rec.plan), outputs, rec.metadata)
+    if plan_folder is not None:
+        from floorscan.floorplan.scans import write_plan
+
+        m = rec.metadata
+        write_plan(rec.plan, plan_folder, {"dataset": m.dataset, "ordering": m.ordering, "extractor": m.extractor,
+                                           "k": str(m.k), "n_scans": str(rec.n_scans)})
     if map_paths is not None:
         from floorscan.core.occupancy import write_map_server
 

@@ -2,7 +2,8 @@
 # per wall with its thickness, in every export format of floorscan.floorplan.EXPORT_FORMATS
 # (GeoJSON, SVG, DXF, IFC; a file's suffix is its format's).
 #
-#   recommended_floorplan: the answer, results/<dataset>/floorplan.*: the walls of the
+#   recommended_floorplan: the answer, results/<dataset>/floorplan.* (and plan_tables/, the
+#               same plan as Parquet tables for programs, floorscan.core.plan_tables): the walls of the
 #               scans of selection/scans.parquet (select.default_ordering, select.k) by
 #               floorplan.extractor; map.pgm + map.yaml: their occupancy grid for Nav2
 #   floorplan:  the evaluation grid: the plan of the first k scans of every ordering x k
@@ -35,6 +36,7 @@ rule recommended_floorplan:
         unpack(recommended_floorplan_inputs),
     output:
         **floorplan_outputs("results/{dataset}/floorplan", FLOORPLAN_FORMATS),
+        plan=directory("results/{dataset}/plan_tables"),  # the same plan as Parquet tables, map frame
         map_pgm="results/{dataset}/map.pgm",
         map_yaml="results/{dataset}/map.yaml",
     params:
@@ -90,6 +92,7 @@ rule all_scans_floorplan:
         index="results/{dataset}/scan_index.parquet",
     output:
         **floorplan_outputs("results/{dataset}/evaluation/floorplan/all_scans_map", ["geojson", "svg"]),
+        plan=directory("results/{dataset}/evaluation/plans/all_scans_map"),
     params:
         cfg=floorplan_grid_config,
     log:
@@ -101,8 +104,9 @@ rule all_scans_floorplan:
 
 
 PLAN_OUTPUTS.extend(floorplan_outputs("results/{dataset}/floorplan", FLOORPLAN_FORMATS).values())
-PLAN_OUTPUTS.extend(["results/{dataset}/map.pgm", "results/{dataset}/map.yaml"])
+PLAN_OUTPUTS.extend(["results/{dataset}/plan_tables", "results/{dataset}/map.pgm", "results/{dataset}/map.yaml"])
 EVALUATION_OUTPUTS.extend(floorplan_outputs("results/{dataset}/evaluation/floorplan/all_scans_map", ["geojson", "svg"]).values())
+EVALUATION_OUTPUTS.append("results/{dataset}/evaluation/plans/all_scans_map")
 EVALUATION_OUTPUTS.extend(
     expand(
         "results/{{dataset}}/evaluation/plans/{ordering}_{extractor}_k{k}",
