@@ -25,11 +25,16 @@ made and written:
   rooms at its doors (:mod:`~floorscan.floorplan.doors`).
 - :mod:`~floorscan.floorplan.plan`: :class:`~floorscan.floorplan.plan.FloorPlan` and
   :func:`~floorscan.floorplan.plan.build_floorplan`, the steps above in one.
+- :mod:`~floorscan.floorplan.scans`: the one plan builder, the plan of any set of scans
+  of a wall table (:class:`~floorscan.floorplan.scans.ScanPlans`; the evaluation grid,
+  the score stage's curves and the answer build their plans there), and the plan as
+  Parquet tables between stages (:mod:`floorscan.core.plan_tables`).
+- :mod:`~floorscan.floorplan.grid`: the evaluation grid, the plan of the first k scans
+  of every ordering and k.
 - :mod:`~floorscan.floorplan.georeference`: where the map frame lies on the earth.
 - :mod:`~floorscan.floorplan.metadata`: what a plan is of, its time stamp.
 - :mod:`~floorscan.floorplan.footprints`: what all exports of a plan share.
-- one module per export format: :mod:`~floorscan.floorplan.geojson` (people, GIS, the
-  scorer), :mod:`~floorscan.floorplan.svg` (a browser), :mod:`~floorscan.floorplan.dxf`
+- one module per export format: :mod:`~floorscan.floorplan.geojson` (people, GIS), :mod:`~floorscan.floorplan.svg` (a browser), :mod:`~floorscan.floorplan.dxf`
   (CAD), :mod:`~floorscan.floorplan.ifc` (BIM; a storey's contents:
   :mod:`~floorscan.floorplan.ifc_storey`), registered in :data:`EXPORT_FORMATS`.
 - :mod:`~floorscan.floorplan.writer`: :class:`~floorscan.floorplan.writer.FloorplanWriter`

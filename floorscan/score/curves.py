@@ -2,7 +2,8 @@
 
 For an ordering of the kept scans, the floor plan of its first k scans (the walls
 stage's per-scan segments of those scans, merged by the one plan builder,
-:class:`floorscan.floorplan.scans.ScanPlans`, as the evaluation grid and the answer are) is scored against the reference map
+:class:`floorscan.floorplan.scans.ScanPlans`, as the evaluation grid's and the answer's
+plans are) is scored against the reference map
 (:func:`floorscan.score.against_reference.plan_against_reference`) at every k of a
 grid (:func:`k_grid`: a step of at most 2 % of the kept scans, so that the k reaching a
 level is read to within 2 %). Orderings scored:
