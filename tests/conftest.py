@@ -424,6 +424,40 @@ def demo_run(tmp_path_factory):
     return wd
 
 
+@pytest.fixture(scope="session")
+def survey_run(demo_run):
+    """A folder of recordings run once for the session in the demo's workflow copy, as
+    the README's folder commands run it: ``survey/`` holds the demo's recording twice
+    (``ground.bag``, ``first.bag``), a truncated copy (``broken.bag``) and a text file,
+    run with ``--config path=<survey>/ --configfile house.yaml`` (the README's
+    house.yaml block: the two good recordings are the floors of one building) and the
+    repository's default profile (keep-going). Then ``broken.bag`` is moved out, so the
+    README's commands on the folder (tests/test_readme.py) find its two recordings
+    built (the same paths: the same datasets) and succeed.
+
+    Returns (workflow folder, the run's CompletedProcess, the dry-run job graph of the
+    folder with broken.bag in it as ``snakemake --dag`` prints it, the folder)."""
+    import re
+    import shutil
+
+    wd = demo_run
+    folder = wd / "survey"
+    folder.mkdir()
+    bag = wd / "results" / "demo" / "sim" / "recording.bag"
+    for name in ("ground.bag", "first.bag"):
+        shutil.copy2(bag, folder / name)
+    (folder / "broken.bag").write_bytes(bag.read_bytes()[:300_000])
+    (folder / "notes.txt").write_text("taken on Tuesday")
+    house = next(b for b in re.findall(r"```yaml\n(.*?)```", (REPO / "README.md").read_text(), re.S)
+                 if b.startswith("# house.yaml\n"))
+    (wd / "house.yaml").write_text(house)
+    path = f"path={folder}/"
+    res = snakemake(wd, "--workflow-profile", "workflow/profiles/default", "--config", path, "--configfile", "house.yaml")
+    dag = snakemake(wd, "-n", "--forceall", "--dag", "--config", path)
+    (folder / "broken.bag").rename(wd / "broken.bag")
+    return wd, res, dag, folder
+
+
 # Test tiers: the markers of pyproject.toml, set here from what a test uses, so that a new
 # test lands in its tier by itself (`make test-fast` runs -m "not workflow and not
 # realdata and not slow"; `make test` runs everything).
@@ -434,7 +468,7 @@ def demo_run(tmp_path_factory):
 # A test that runs Snakemake or reads ../shared through a helper of its module carries the
 # marker in its file, as does a slow test (measured by pytest --durations: 2.5 s or more
 # on 2 idle cores, which is 4 s or more while the machine is shared).
-WORKFLOW_FIXTURES = {"demo_run", "default_run"}
+WORKFLOW_FIXTURES = {"demo_run", "default_run", "survey_run"}
 _RUNS_WORKFLOW = re.compile(r"\b(?:snakemake|copy_workflow)\(|\bSNAKEMAKE\b")
 _READS_SHARED = re.compile(r"\bSHARED_DATA\b")
 

@@ -4,7 +4,6 @@ run starts (a no-op rerun, a one-file build)."""
 
 from __future__ import annotations
 
-import shutil
 
 import pytest
 
@@ -12,34 +11,22 @@ from conftest import snakemake
 
 
 @pytest.fixture(scope="module")
-def folder_run(demo_run):
-    """The demo's recording twice (two floors) and a truncated copy of it in one folder,
-    and a text file that is no recording, run with `--config path=<folder>`."""
-    folder = demo_run / "survey"
-    folder.mkdir()
-    bag = demo_run / "results" / "demo" / "sim" / "recording.bag"
-    for name in ("floor0.bag", "floor1.bag"):
-        shutil.copy2(bag, folder / name)
-    (folder / "broken.bag").write_bytes(bag.read_bytes()[:300_000])
-    (folder / "notes.txt").write_text("taken on Tuesday")
-    (demo_run / "house.yaml").write_text(
-        "building:\n  name: Demo house\n  floors:\n"
-        "    - {recording: floor0.bag, storey: Ground floor, elevation_m: 0.0}\n"
-        "    - {recording: floor1.bag, storey: First floor, elevation_m: 3.2}\n"
-    )
-    # the repository's default profile, as a user runs (keep-going)
-    res = snakemake(demo_run, "--workflow-profile", "workflow/profiles/default", "--config", "path=survey",
-                    "--configfile", "house.yaml")
-    return demo_run, res
+def folder_run(survey_run):
+    """The demo's recording twice (the README's two floors, ground.bag and first.bag)
+    and a truncated copy of it in one folder, and a text file that is no recording, run
+    with `--config path=<folder>/ --configfile house.yaml` (conftest.survey_run)."""
+    wd, res, _, _ = survey_run
+    return wd, res
 
 
 def test_a_folder_gives_one_answer_per_recording_and_names_the_bad_one(folder_run):
     wd, res = folder_run
     assert res.returncode != 0  # one recording failed
-    assert "survey: 3 recordings, one dataset each: broken, floor0, floor1 (not recordings, left out: notes.txt)" in res.stderr
+    assert "survey/: 3 recordings, one dataset each: broken, first, ground (not recordings, left out: notes.txt)" in res.stderr
     lines = res.stdout.strip().splitlines()
-    assert lines[0].startswith("broken: FAILED: ingest failed: survey/broken.bag: cannot read the bag, truncated or corrupt")
-    for i, ds in ((1, "floor0"), (2, "floor1")):
+    assert lines[0].startswith("broken: FAILED: ingest failed: ")
+    assert "survey/broken.bag: cannot read the bag, truncated or corrupt" in lines[0]
+    for i, ds in ((1, "first"), (2, "ground")):
         assert lines[i] == f"{ds}: 10 of 76 kept scans (321 recorded), wall_coverage; GOOD; results/{ds}/front.html"
         for name in ("floorplan.ifc", "map.pgm", "summary.md", "front.html", "selection/scans.csv"):
             assert (wd / "results" / ds / name).is_file(), (ds, name)
@@ -50,7 +37,7 @@ def test_a_folder_gives_one_answer_per_recording_and_names_the_bad_one(folder_ru
         "logs", "logs/ingest.log"]
     index = (wd / "results" / "index.html").read_text()
     assert "3 recordings: 2 with a plan, 1 failed" in index
-    assert 'src="floor0/floorplan.svg"' in index and 'href="floor1/front.html"' in index
+    assert 'src="ground/floorplan.svg"' in index and 'href="first/front.html"' in index
     assert "truncated or corrupt" in index
 
 
@@ -70,10 +57,10 @@ def test_floors_of_one_building_give_one_ifc_with_a_storey_each(folder_run):
     logger = ifcopenshell.validate.json_logger()
     ifcopenshell.validate.validate(model, logger, express_rules=True)
     assert logger.statements == []
-    for ds in ("floor0", "floor1"):
+    for ds in ("ground", "first"):
         assert (wd / "results" / "building" / f"{ds}.geojson").is_file()
     page = (wd / "results" / "building" / "index.html").read_text()
-    assert "Demo house" in page and "../floor1/front.html" in page
+    assert "Main building" in page and "../first/front.html" in page
 
 
 def test_the_answer_is_printed_wherever_the_run_starts(demo_run):
@@ -101,7 +88,7 @@ def test_a_wrong_path_is_one_line(demo_run):
     assert not (demo_run / "results" / "run").exists()
 
 
-def test_the_recordings_of_a_folder_are_independent_jobs(folder_run):
+def test_the_recordings_of_a_folder_are_independent_jobs(survey_run):
     """Issue 36, item 6: the job graph of a folder run, without the `all` target that
     gathers them, falls apart into one part per recording, so any executor (the
     cluster profile: tests/test_cluster.py) runs the recordings side by side."""
@@ -110,8 +97,7 @@ def test_the_recordings_of_a_folder_are_independent_jobs(folder_run):
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    wd, _ = folder_run
-    res = snakemake(wd, "-n", "--forceall", "--dag", "--config", "path=survey")
+    _, _, res, _ = survey_run  # the dry run's job graph of the folder with its three recordings
     assert res.returncode == 0, res.stderr[-2000:]
     nodes = dict(re.findall(r"^\s*(\d+)\[label = \"([^\"]*)\"", res.stdout, re.M))
     edges = [(a, b) for a, b in re.findall(r"^\s*(\d+) -> (\d+)$", res.stdout, re.M)
@@ -120,5 +106,5 @@ def test_the_recordings_of_a_folder_are_independent_jobs(folder_run):
     graph = coo_matrix(([1] * len(edges), ([ids[a] for a, _ in edges], [ids[b] for _, b in edges])), (len(ids),) * 2)
     n_parts, part = connected_components(graph, directed=False)
     ingests = [ids[n] for n, label in nodes.items() if label.startswith("ingest")]
-    assert n_parts == 3 and len(ingests) == 3  # broken, floor0, floor1
+    assert n_parts == 3 and len(ingests) == 3  # broken, first, ground
     assert len({part[i] for i in ingests}) == 3

@@ -20,7 +20,6 @@ from __future__ import annotations
 import os
 import re
 import shlex
-import shutil
 import subprocess
 import sys
 
@@ -96,16 +95,13 @@ def test_a_misspelt_benchmark_option_fails_the_check():
 
 
 @pytest.fixture(scope="module")
-def readme_workdir(demo_run):
+def readme_workdir(survey_run):
     """The demo's workflow copy with the README's example files: my.yaml, house.yaml
-    (its YAML blocks, their paths the demo's), a folder of two recordings."""
-    wd = demo_run
+    (its YAML blocks, their paths the demo's) and the folder of two recordings that
+    conftest.survey_run built with that house.yaml (so the README's folder commands
+    find their datasets built: the same paths)."""
+    wd, _, _, survey = survey_run
     bag = wd / "results" / "demo" / "sim" / "recording.bag"
-    survey = wd / "readme_survey"
-    if not survey.exists():
-        survey.mkdir()
-        for name in ("ground.bag", "first.bag"):
-            shutil.copy2(bag, survey / name)
     for block in readme_blocks("yaml"):
         m = re.match(r"# (\S+\.yaml)\n", block)
         if m:

@@ -1,6 +1,7 @@
 """Wall segments from GeoJSON: the simulator's ground truth (``sim/walls.geojson``,
-:func:`read_wall_faces`) and the faces and wall count of a floor plan (floorplan stage,
-:func:`read_floorplan`).
+:func:`read_wall_faces`) and the faces and wall count of a floor plan's GeoJSON export
+(:func:`read_floorplan`: a plan a person or another tool wrote; between stages a plan
+passes as Parquet tables, :mod:`floorscan.core.plan_tables`, which give the same numbers).
 
 (Multi)LineString features are selected by their property ``kind`` (``face``,
 ``observed_face``, ``axis``, ...) and cut into their straight pieces, ``(M, 4)``
