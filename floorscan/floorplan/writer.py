@@ -36,9 +36,9 @@ class FloorplanWriter:
     """Builds and writes floor plans (stage ``floorplan``); a plan of the same segments
     as one it built before is not built again.
 
-    A sweep writes one plan per ordering and k, and every ordering's ``k = all`` (and
-    any k past the number of scans) holds the same scans: :func:`build_floorplan`
-    takes segments in scan order, so those plans are the same plan. The writer keeps
+    Many plans of the same segments are the same plan (the plan builder,
+    :mod:`floorscan.floorplan.scans`, takes segments in scan order; the evaluation grid,
+    :mod:`floorscan.floorplan.grid`, reuses its plans by their scans). The writer keeps
     each plan it built with its footprints and IFC model; for the same segments it
     reuses them and writes the exports with the new plan's metadata (each export
     names its ordering and k): the GeoJSON, SVG and DXF anew (cheap), the IFC model
