@@ -64,6 +64,37 @@ def _section_properties(section: str) -> dict[str, Any]:
     return node.get("properties") or {}
 
 
+def schema_enum(section: str, key: str) -> tuple:
+    """The values the schema allows a config key (its ``enum``, or its items' for a
+    list): the one place an enum is written.
+
+    Parameters
+    ----------
+    section : str
+        A stage schema's section, ``"hulls"``, ``"walls.cluster_ransac"``.
+    key : str
+        The property.
+
+    Returns
+    -------
+    tuple
+
+    Raises
+    ------
+    KeyError
+        When the section has no such property, or it no enum.
+    """
+    stage, *keys = section.split(".")
+    props = _section_properties(section) if keys else (_schema(stage).get("properties") or {})
+    node = props.get(key)
+    if node is None:
+        raise KeyError(f"{section}: no property {key!r}")
+    values = node.get("enum", (node.get("items") or {}).get("enum"))
+    if values is None:
+        raise KeyError(f"{section}.{key}: no enum in the schema")
+    return tuple(values)
+
+
 def schema_section_defaults(section: str) -> dict[str, Any]:
     """The defaults the schema gives the properties of a config section.
 

@@ -12,14 +12,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from floorscan.core.config import schema_defaults, stage_params
+from floorscan.core.config import schema_defaults, schema_enum, stage_params
 from floorscan.floorplan.georeference import Georeference, as_georeference
 from floorscan.floorplan.free_space import StructureParams
 from floorscan.floorplan.room_space import RoomParams
 
 
 #: DXF versions :func:`write_dxf` writes (R2010 the default: R12 has no units header).
-DXF_VERSIONS = ("R2010", "R12")
+DXF_VERSIONS = schema_enum("floorplan", "dxf_version")
 
 
 @dataclass(frozen=True)

@@ -18,10 +18,10 @@ from __future__ import annotations
 import numbers
 from dataclasses import asdict, dataclass
 
-from floorscan.core.config import schema_defaults
+from floorscan.core.config import schema_defaults, schema_enum
 
 #: ``hulls.radius_rule`` values (:class:`HullParams`).
-RADIUS_RULES = ("nearest_centre", "global_min")
+RADIUS_RULES = schema_enum("hulls", "radius_rule")
 
 
 @dataclass(frozen=True)

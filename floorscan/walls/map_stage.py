@@ -15,6 +15,7 @@ from typing import Any, Mapping
 import numpy as np
 import pandas as pd
 
+from floorscan.core.config import schema_section_defaults
 from floorscan.core.occupancy import OccupancyGrid, OccupancyParams, occupancy_grid
 from floorscan.walls.map_lines import MapParams, map_segments
 
@@ -79,7 +80,7 @@ def map_of_scans(
     if len(pts) == 0:
         raise ValueError(f"none of the {len(wanted)} scans has a wall point")
     grid = occupancy_grid(zip(origins, points), replace(OccupancyParams(), resolution_m=params.support_cell_m))
-    segments = map_segments(pts, grid, params, seed=int(cfg.get("seed", 0)))
+    segments = map_segments(pts, grid, params, seed=int(cfg.get("seed", schema_section_defaults("walls")["seed"])))
     segments.insert(0, "scan_id", np.full(len(segments), -1, dtype=np.int32))
     log.info("map of %d scans (%d wall points): %d wall segments; grid %d x %d cells of %.3f m",
              len(origins), len(pts), len(segments), grid.shape[1], grid.shape[0], grid.resolution_m)

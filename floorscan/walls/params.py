@@ -17,7 +17,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from floorscan.core.config import ConfigError, schema_defaults
+from floorscan.core.config import ConfigError, schema_defaults, schema_enum
+
+#: The MeanShift implementations (config ``walls.cluster_ransac.meanshift``; the schema's enum).
+MEANSHIFT_METHODS = schema_enum("walls.cluster_ransac", "meanshift")
 
 
 @dataclass(frozen=True)
@@ -104,8 +107,8 @@ class ClusterParams:
     meanshift: str
 
     def __post_init__(self):
-        if self.meanshift not in ("numpy", "sklearn"):
-            raise ValueError(f"cluster_ransac.meanshift must be 'numpy' or 'sklearn', got {self.meanshift!r}")
+        if self.meanshift not in MEANSHIFT_METHODS:
+            raise ValueError(f"cluster_ransac.meanshift must be one of {list(MEANSHIFT_METHODS)}, got {self.meanshift!r}")
         if self.meanshift == "numpy" and not self.bin_seeding:
             raise ValueError("cluster_ransac.meanshift 'numpy' needs bin_seeding true")
 
