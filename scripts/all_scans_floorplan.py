@@ -1,6 +1,6 @@
 """Stage floorplan, the evaluation's plan of all kept scans: the map extractor's walls of
-every kept scan through the structure passes (floorscan.floorplan.writer), GeoJSON and SVG, and
-its Parquet tables (rooms as WKB; floorscan.floorplan.scans.write_plan)."""
+every kept scan through the structure passes (floorscan.floorplan.writer), SVG for people, and
+its Parquet tables, what the score stage reads (rooms as WKB; floorscan.floorplan.scans.write_plan)."""
 from floorscan.core.io import read_table
 from floorscan.core.occupancy import read_grid
 from floorscan.core.stage import stage_log

@@ -134,7 +134,7 @@ def test_the_recommended_plan_is_a_plan(real_run, name):
     most 6.1 %, lgfloor2), and the pieces that are not walls are in the clutter layer."""
     from floorscan.score.answer import SHORT_WALL_M, crossings, plan_parts
 
-    parts = plan_parts(real_run / name / "floorplan.geojson")
+    parts = plan_parts(real_run / name / "plan_tables")
     axes, junctions = parts["axes"], parts["junctions"]
     length = np.hypot(axes[:, 2] - axes[:, 0], axes[:, 3] - axes[:, 1])
     assert len(axes) >= 15 and len(junctions) >= 8 and len(parts["clutter"]) >= 5

@@ -93,16 +93,18 @@ def test_georeferenced_room_rings_keep_their_orientation(tmp_path):
 
 
 def test_plan_readers_ignore_rooms_and_doors(tmp_path):
-    """The scorer's and the figures' readers of a plan's GeoJSON count walls, faces,
-    axes and junctions as before: rooms and doors are not walls."""
+    """The readers of a plan's GeoJSON and the scorer's of its Parquet tables count
+    walls, faces, axes and junctions as before: rooms and doors are not walls."""
     from floorscan.figures.floorplans import read_geojson_geometries
+    from floorscan.floorplan.scans import write_plan
     from floorscan.score.answer import plan_parts
     from floorscan.score.geojson import read_floorplan
 
     path = write(rooms_plan(), tmp_path, "geojson")
     faces, n_walls = read_floorplan(path)
     assert (len(faces), n_walls) == (0, len(WALLS))
-    parts = plan_parts(path)
+    write_plan(rooms_plan(), tmp_path / "plan")
+    parts = plan_parts(tmp_path / "plan")
     assert len(parts["axes"]) == len(WALLS) and len(parts["clutter"]) == 0 and len(parts["junctions"]) == 0
     assert len(read_geojson_geometries(path)) == len(WALLS)
 

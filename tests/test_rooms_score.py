@@ -66,6 +66,31 @@ def _geojson(path, rooms=(), doors=()):
     return path
 
 
+def _plan(folder, rooms=(), doors=()):
+    """A plan folder as the floorplan stage passes it (floorscan.core.plan_tables):
+    ``rooms`` polygons, ``doors`` ((x0, y0), (x1, y1)) segments, and a wall the
+    readers must skip."""
+    import pandas as pd
+
+    from floorscan.core.plan_tables import PLAN_SCHEMAS, write_plan_tables
+
+    def table(part, rows):
+        return pd.DataFrame(rows, columns=PLAN_SCHEMAS[part].names)
+
+    wall = {"wall_id": 0, "x0": 0.0, "y0": 0.0, "x1": 1.0, "y1": 0.0, "length_m": 1.0, "thickness_m": 0.1,
+            "height_m": 2.5, "paired": False, "n_faces": 1, "n_segments": 1, "n_inliers": 10}  # fmt: skip
+    write_plan_tables({
+        "walls": table("walls", [wall]), "faces": table("faces", []), "clutter": table("clutter", []),
+        "junctions": table("junctions", []),
+        "rooms": table("rooms", [{"room_id": i, "name": f"Room {i + 1}", "kind": "room", "area_m2": poly.area,
+                                  "perimeter_m": poly.length, "polygon": poly} for i, poly in enumerate(rooms)]),
+        "doors": table("doors", [{"door_id": i, "x0": a[0], "y0": a[1], "x1": b[0], "y1": b[1],
+                                  "width_m": math.dist(a, b), "wall_id": -1, "room_a": 0, "room_b": 1}
+                                 for i, (a, b) in enumerate(doors)]),
+    }, folder)  # fmt: skip
+    return folder
+
+
 # ------------------------------------------------------------------ matching by IoU
 
 
@@ -132,7 +157,7 @@ def test_a_room_half_seen_counts_a_room_a_third_seen_does_not(tmp_path):
     share = room_seen_share(rooms, grid)
     assert share == pytest.approx([21 / 40, 11 / 30])
     truth = _geojson(tmp_path / "truth.geojson", rooms, doors=[((4.0, 0.5), (4.0, 1.4))])
-    plan = _geojson(tmp_path / "plan.geojson", [box(0, 0, 4, 2), box(5, 0, 8, 3)], doors=[((4.0, 0.6), (4.0, 1.5))])
+    plan = _plan(tmp_path / "plan", [box(0, 0, 4, 2), box(5, 0, 8, 3)], doors=[((4.0, 0.6), (4.0, 1.5))])
     table, overlay = score_room_plans({"recommended": plan}, grid, truth)
     assert overlay["counted"].tolist() == [True, False]
     row = table.iloc[0]
@@ -206,9 +231,7 @@ def test_drawn_rooms_scored_on_pixels(tmp_path):
     labels[2:10, 14:28] = 2
     t = Similarity(scale=0.1, angle=0.0, tx=0.0, ty=0.0)
     px = lambda c0, c1, r0, r1: box(0.1 * c0, -0.1 * r1, 0.1 * c1, -0.1 * r0)  # noqa: E731
-    plan = _geojson(
-        tmp_path / "plan.geojson", [px(1.5, 11.5, 1.5, 5.5), px(13.5, 31.5, 1.5, 9.5), px(40.5, 45.5, 1.5, 9.5)]
-    )
+    plan = _plan(tmp_path / "plan", [px(1.5, 11.5, 1.5, 5.5), px(13.5, 31.5, 1.5, 9.5), px(40.5, 45.5, 1.5, 9.5)])
     grid = _grid(np.ones((80, 120), bool), origin=(-1.0, -3.0), resolution_m=0.05)
     table, overlay = score_drawn_rooms({"recommended": plan}, labels, t, grid)
     row = table.iloc[0]
@@ -313,7 +336,7 @@ def test_plan_equal_to_the_truth_scores_one(tmp_path):
     shift = lambda d: np.array([d.x1 - d.x0, d.y1 - d.y0]) / d.width_m * 0.15  # noqa: E731
     plan_doors = [((d.x0 + shift(d)[0], d.y0 + shift(d)[1]), (d.x1 + shift(d)[0], d.y1 + shift(d)[1]))
                   for d in doors.itertuples()]  # fmt: skip
-    plan = _geojson(tmp_path / "plan.geojson", list(rooms["polygon"]), plan_doors)
+    plan = _plan(tmp_path / "plan", list(rooms["polygon"]), plan_doors)
     grid = _grid(np.ones((70, 75), bool), origin=(0.0, 0.0))
     table, _ = score_room_plans({"recommended": plan, "all_scans_map": plan}, grid, truth)
     assert table["plan"].tolist() == ["recommended", "all_scans_map"]
@@ -329,7 +352,7 @@ def test_truth_without_rooms_is_refused(tmp_path):
 
     old = _geojson(tmp_path / "old.geojson")  # walls only: written before rooms existed
     with pytest.raises(InputError, match="rerun the simulate stage"):
-        score_room_plans({"recommended": old}, _grid(np.ones((5, 5), bool)), old)
+        score_room_plans({"recommended": _plan(tmp_path / "plan")}, _grid(np.ones((5, 5), bool)), old)
 
 
 def test_rooms_overlay_figure_is_written(tmp_path):
@@ -341,8 +364,41 @@ def test_rooms_overlay_figure_is_written(tmp_path):
     free[:, :20] = True
     grid = _grid(free)
     truth = _geojson(tmp_path / "truth.geojson", [box(0, 0, 4, 2), box(5, 0, 8, 3)], [((4.0, 0.5), (4.0, 1.4))])
-    plan = _geojson(tmp_path / "plan.geojson", [box(0, 0, 3.5, 2), Polygon([(9, 0), (10, 0), (10, 1)])])
+    plan = _plan(tmp_path / "plan", [box(0, 0, 3.5, 2), Polygon([(9, 0), (10, 0), (10, 1)])])
     table, overlay = score_room_plans({"recommended": plan}, grid, truth)
     rooms_overlay_figure(overlay, "tiny", tmp_path / "rooms.png")
     assert mpimg.imread(tmp_path / "rooms.png").shape[:2] == (880, 1100)
     assert table.iloc[0]["room_precision"] == 0.5  # the triangle outside is a false room
+
+
+def test_a_plans_tables_give_the_rooms_and_doors_of_its_geojson_export(tmp_path):
+    """What the score stage reads (the plan folder) equals what it read before (the
+    plan's GeoJSON): a clockwise room with a hole at coordinates off the 10 um grid, a
+    room without a polygon (skipped by both) and a door, the same rows and doubles."""
+    import pandas as pd
+
+    from floorscan.floorplan.geojson import write_geojson
+    from floorscan.floorplan.plan import FloorPlan
+    from floorscan.floorplan.scans import write_plan
+    from floorscan.score.rooms import read_plan_folder_rooms
+
+    cw = Polygon([(0.1234567, 0.0), (0.0, 3.3333333), (4.0000049, 3.1), (4.2, 0.1)],
+                 [[(1.0, 1.0), (2.0000051, 1.0), (2.0, 2.0), (1.0, 2.0)]])  # fmt: skip
+    assert not cw.exterior.is_ccw
+    plan = FloorPlan(walls=pd.DataFrame(columns=["wall_id", "x0", "y0", "x1", "y1", "length_m", "thickness_m",
+                                                 "height_m", "paired", "n_faces", "n_segments", "n_inliers"]),
+                     faces=pd.DataFrame(columns=["face_id", "wall_id", "x0", "y0", "x1", "y1", "length_m",
+                                                 "n_segments", "n_inliers"]))  # fmt: skip
+    plan.rooms = pd.DataFrame({"room_id": [0, 1, 2], "name": ["A", "B", "C"], "kind": ["room", "corridor", "room"],
+                               "area_m2": [cw.area, 0.0, 1.0], "perimeter_m": [cw.length, 0.0, 4.0],
+                               "polygon": [cw, None, box(5.0000001, 0, 6, 1)]})  # fmt: skip
+    plan.doors = pd.DataFrame({"door_id": [0], "x0": [4.1000004], "y0": [1.0], "x1": [4.1], "y1": [1.9000006],
+                               "width_m": [0.90000061], "wall_id": [-1], "room_a": [0], "room_b": [2]})  # fmt: skip
+    write_geojson(plan, tmp_path / "plan.geojson")
+    write_plan(plan, tmp_path / "plan")
+    gj_rooms, gj_doors = read_rooms(tmp_path / "plan.geojson")
+    rooms, doors = read_plan_folder_rooms(tmp_path / "plan")
+    assert rooms["room_id"].tolist() == gj_rooms["room_id"].tolist() == [0, 2]
+    assert all(a.equals_exact(b, 0.0) for a, b in zip(rooms["polygon"], gj_rooms["polygon"]))
+    pd.testing.assert_frame_equal(rooms.drop(columns="polygon"), gj_rooms.drop(columns="polygon"))
+    pd.testing.assert_frame_equal(doors, gj_doors)

@@ -9,7 +9,9 @@ tables): ``walls.parquet``, ``faces.parquet``, ``clutter.parquet`` and
 ``junctions.parquet`` always; ``rooms.parquet`` (the polygon as WKB, little-endian,
 2D) and ``doors.parquet`` when the plan has rooms. Coordinates and lengths are map
 metres rounded to :data:`PLAN_DECIMALS` decimals, as the plan's GeoJSON export
-rounds them, so the tables and the export of one plan give the same numbers.
+rounds them, and room polygons are oriented as it orients them (RFC 7946:
+counter-clockwise exterior, clockwise holes), so the tables and the export of one plan
+give the same numbers, vertex for vertex.
 
 :func:`write_plan_tables` writes the folder (into a temporary folder, then renamed:
 a crash leaves no half plan); :func:`read_plan_tables` reads it back, any parts.
@@ -83,8 +85,9 @@ def write_plan_tables(
     tables : mapping of str to pandas.DataFrame
         Part name (:data:`PLAN_SCHEMAS`) -> its table. Every part of :data:`ALWAYS` is
         needed; ``rooms`` and ``doors`` are written when given and ``rooms`` is not
-        empty. The ``polygon`` column of ``rooms`` holds shapely Polygons (map metres)
-        or their WKB bytes.
+        empty. The ``polygon`` column of ``rooms`` holds shapely Polygons (map metres;
+        oriented and rounded as the GeoJSON export does), None for a room without one,
+        or WKB bytes (written as given).
     folder : path
         The plan folder, e.g. ``evaluation/plans/<ordering>_<extractor>_k<k>``.
     metadata : mapping of str to str, optional
@@ -130,11 +133,23 @@ def _arrow_table(df: pd.DataFrame, schema: pa.Schema) -> pa.Table:
         elif field.name in _MEASURES:
             values = _rounded(values, 4)
         elif field.name == "polygon":
-            import shapely
-
-            values = [v if isinstance(v, bytes) else shapely.to_wkb(v, output_dimension=2, byte_order=1) for v in values]
+            values = [v if isinstance(v, bytes) else _polygon_wkb(v) for v in values]
         columns[field.name] = pa.array(values, type=field.type) if len(values) else pa.array([], type=field.type)
     return pa.table(columns, schema=schema)
+
+
+def _polygon_wkb(poly) -> bytes | None:
+    """A room polygon as the GeoJSON export writes it, as WKB: oriented (counter-clockwise
+    exterior, clockwise holes) and its coordinates rounded to :data:`PLAN_DECIMALS` (Python's
+    ``round``); None stays None (the export skips a missing or empty room)."""
+    import shapely
+
+    if poly is None:
+        return None
+    if not poly.is_empty:
+        poly = shapely.orient_polygons(poly, exterior_cw=False)
+        poly = shapely.transform(poly, lambda xy: _rounded(xy.ravel(), PLAN_DECIMALS).reshape(-1, 2))
+    return shapely.to_wkb(poly, output_dimension=2, byte_order=1)
 
 
 def read_plan_tables(

@@ -1,6 +1,8 @@
-"""How good the answer is: the recommended floor plan (``floorplan.geojson``) and the
-plan of all kept scans by the map extractor (``evaluation/floorplan/all_scans_map``),
-scored as plans a person opens (rule ``score_answer``).
+"""How good the answer is: the recommended floor plan (``plan_tables/``, the Parquet
+tables of ``floorplan.geojson``) and the plan of all kept scans by the map extractor
+(``evaluation/plans/all_scans_map/``), scored as plans a person opens (rule
+``score_answer``). Plans are read as the floorplan stage passes them, Parquet tables
+(:mod:`floorscan.core.plan_tables`: the numbers of the GeoJSON export).
 
 Per plan (:func:`score_answer_plan`):
 
@@ -27,41 +29,43 @@ import json
 import numpy as np
 import pandas as pd
 
-from floorscan.score.geojson import feature_collection, wall_faces
+from floorscan.core.plan_tables import read_plan_tables
+from floorscan.score.geojson import wall_faces
+from floorscan.score.segments import as_segments
 
 #: Plans a person should not see: walls shorter than this, metres.
 SHORT_WALL_M = 0.5
 
 
-def plan_parts(path) -> dict[str, np.ndarray]:
-    """The parts of a floor plan ``.geojson`` the answer's scores use.
+def plan_parts(folder) -> dict[str, np.ndarray]:
+    """The parts of a plan folder (:func:`floorscan.core.plan_tables.read_plan_tables`)
+    the answer's scores use, in the tables' order (the GeoJSON export's).
 
     Parameters
     ----------
-    path : path
+    folder : path
+        A plan folder, e.g. ``results/<dataset>/plan_tables``.
 
     Returns
     -------
     dict of str to ndarray
-        ``faces``, ``axes``, ``clutter``: (N, 4) float64, metres; ``junctions``: (J, 2)
-        float64, metres.
+        ``faces`` (merged faces), ``axes`` (wall axes), ``clutter``: (N, 4) float64
+        ``x0, y0, x1, y1``, map metres, rows with a non-finite coordinate dropped
+        (:func:`floorscan.score.segments.as_segments`, as the GeoJSON reader does);
+        ``junctions``: (J, 2) float64, map metres.
 
     Raises
     ------
-    floorscan.core.io.InputError
-        When the file is not a GeoJSON FeatureCollection.
+    FileNotFoundError
+        When the folder is not a plan folder.
     """
-    doc = feature_collection(path)
-    junctions = [
-        f["geometry"]["coordinates"][:2] for f in doc.get("features", [])
-        if (f.get("properties") or {}).get("kind") == "junction" and (f.get("geometry") or {}).get("type") == "Point"
-    ]  # fmt: skip
+    xy = ["x0", "y0", "x1", "y1"]
+    t = read_plan_tables(folder, ("walls", "faces", "clutter", "junctions"),
+                         {"walls": xy, "faces": xy, "clutter": xy, "junctions": ["x", "y"]})  # fmt: skip
     return {
-        "faces": wall_faces(doc, "face"),
-        "axes": wall_faces(doc, "axis"),
-        "clutter": wall_faces(doc, "clutter"),
-        "junctions": np.array(junctions, dtype=np.float64).reshape(-1, 2),
-    }
+        "faces": as_segments(t["faces"]), "axes": as_segments(t["walls"]), "clutter": as_segments(t["clutter"]),
+        "junctions": t["junctions"][["x", "y"]].to_numpy(np.float64).reshape(-1, 2),
+    }  # fmt: skip
 
 
 def crossings(axes: np.ndarray, junctions: np.ndarray, tolerance_m: float = 0.05) -> int:
@@ -211,14 +215,14 @@ def read_truth(path) -> dict:
     return out
 
 
-def score_answer_plan(path, reference=None, truth: dict | None = None, taus_m=(0.05, 0.10),
+def score_answer_plan(folder, reference=None, truth: dict | None = None, taus_m=(0.05, 0.10),
                       corner_tolerance_m: float = 0.3) -> dict:  # fmt: skip
     """The scores of one plan (see the module docstring).
 
     Parameters
     ----------
-    path : path
-        The plan's ``.geojson`` (floorplan stage).
+    folder : path
+        The plan folder (:func:`plan_parts`).
     reference : OccupancyGrid or Structure, optional
         The reference map.
     truth : dict, optional
@@ -234,11 +238,16 @@ def score_answer_plan(path, reference=None, truth: dict | None = None, taus_m=(0
         Counts (``n_walls``, ``n_clutter``, ``n_junctions``, ``short_wall_share``,
         ``n_crossings``), ``map_*`` against the reference map, ``gt_*`` against the
         truth.
+
+    Raises
+    ------
+    FileNotFoundError
+        When ``folder`` is not a plan folder.
     """
     from floorscan.score.against_reference import plan_against_reference
     from floorscan.score.tolerance import tolerance_metrics
 
-    parts = plan_parts(path)
+    parts = plan_parts(folder)
     faces, axes, clutter, junctions = parts["faces"], parts["axes"], parts["clutter"], parts["junctions"]
     length = np.hypot(axes[:, 2] - axes[:, 0], axes[:, 3] - axes[:, 1])
     out = {
@@ -281,7 +290,7 @@ def score_answer(plans: dict, reference_path=None, truth_path=None) -> pd.DataFr
     Parameters
     ----------
     plans : dict of str to path
-        Name (``recommended``, ``all_scans_map``) -> the plan's ``.geojson``.
+        Name (``recommended``, ``all_scans_map``) -> the plan's folder (:func:`plan_parts`).
     reference_path : path, optional
         ``reference/occupancy.parquet`` (:func:`floorscan.core.occupancy.read_grid`).
     truth_path : path, optional
@@ -291,11 +300,16 @@ def score_answer(plans: dict, reference_path=None, truth_path=None) -> pd.DataFr
     -------
     pandas.DataFrame
         One row per plan, ``plan`` its name, then :func:`score_answer_plan`'s keys.
+
+    Raises
+    ------
+    FileNotFoundError
+        When a plan's folder is not a plan folder.
     """
     from floorscan.core.occupancy import read_grid
     from floorscan.score.against_reference import Structure
 
     reference = None if reference_path is None else Structure(read_grid(reference_path))
     truth = None if truth_path is None else read_truth(truth_path)
-    rows = [{"plan": name, **score_answer_plan(path, reference, truth)} for name, path in plans.items()]
+    rows = [{"plan": name, **score_answer_plan(folder, reference, truth)} for name, folder in plans.items()]
     return pd.DataFrame(rows)

@@ -434,12 +434,13 @@ def score_drawn_plans(plans: dict, image_path, grid, reference_cfg) -> tuple["pd
     """Rule ``score_drawn``: the drawn plan ``image_path`` aligned to the reference map
     ``grid`` (:func:`align_drawn`; ``reference_cfg`` the dataset's ``reference``:
     ``resolution_m``, ``control_points``) and every plan of ``plans`` (``{name:
-    geojson path}``) scored against it (:func:`score_against_drawn`).
+    plan folder}``) scored against it (:func:`score_against_drawn`).
 
     Parameters
     ----------
     plans : dict of str to path
-        Name -> the plan's ``.geojson``.
+        Name -> the plan's folder (:func:`floorscan.score.answer.plan_parts`: its
+        merged faces are scored).
     image_path : path
         The drawn plan (PNG).
     grid : OccupancyGrid
@@ -463,7 +464,9 @@ def score_drawn_plans(plans: dict, image_path, grid, reference_cfg) -> tuple["pd
     Raises
     ------
     floorscan.core.io.InputError
-        When the image or a plan cannot be read.
+        When the image cannot be read.
+    FileNotFoundError
+        When a plan's folder is not a plan folder.
     """
     import pandas as pd
 
@@ -478,8 +481,8 @@ def score_drawn_plans(plans: dict, image_path, grid, reference_cfg) -> tuple["pd
     inside = drawn_area(free, transform)
     rows, plan_faces = [], {}
     aligned = {f"alignment_{k}": v for k, v in info.items() if k != "start"}
-    for name, path in plans.items():
-        plan_faces[name] = plan_parts(path)["faces"]
+    for name, folder in plans.items():
+        plan_faces[name] = plan_parts(folder)["faces"]
         rows.append({"plan": name, **score_against_drawn(plan_faces[name], drawn_xy, seen, in_drawing=inside), **aligned})
     # the bound: the recording's own map (every kept scan's structure) under this alignment
     rows.append({"plan": "reference_map", **score_points_against_drawn(structure, drawn_xy, seen, in_drawing=inside),

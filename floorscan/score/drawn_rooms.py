@@ -20,7 +20,14 @@ import math
 import numpy as np
 import pandas as pd
 
-from floorscan.score.rooms import ROOM_SCORE_COLUMNS, SEEN_SHARE, SEEN_WITHIN_M, match_rooms, read_rooms, score_row
+from floorscan.score.rooms import (
+    ROOM_SCORE_COLUMNS,
+    SEEN_SHARE,
+    SEEN_WITHIN_M,
+    match_rooms,
+    read_plan_folder_rooms,
+    score_row,
+)
 
 #: A region of a drawn segmentation is a room when a disc this wide fits in it ...
 DRAWN_MIN_WIDTH_M = 0.5
@@ -162,7 +169,7 @@ def score_drawn_rooms(plans: dict, labels: np.ndarray, transform, grid) -> tuple
     Parameters
     ----------
     plans : dict
-        ``{name: path}`` of floor plan GeoJSONs (map frame).
+        ``{name: folder}`` of plan folders (:func:`floorscan.score.rooms.read_plan_folder_rooms`).
     labels : (H, W) int ndarray
         :func:`drawn_rooms` (0 no room, rooms 1..T).
     transform : floorscan.score.drawn.Similarity
@@ -194,8 +201,8 @@ def score_drawn_rooms(plans: dict, labels: np.ndarray, transform, grid) -> tuple
                "structure": grid.cell_centres(grid.structure()), "plans": {}}  # fmt: skip
     rows = []
     building = drawn_building(labels, DRAWN_WALL_M / transform.scale)
-    for name, path in plans.items():
-        rooms, doors = read_rooms(path)
+    for name, folder in plans.items():
+        rooms, doors = read_plan_folder_rooms(folder)
         plan_area = np.zeros(len(rooms))
         inter = np.zeros((n, len(rooms)))
         for j, poly in enumerate(rooms["polygon"]):

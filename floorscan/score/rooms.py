@@ -2,9 +2,13 @@
 is scored (Bormann et al., "Room segmentation: survey, implementation, and analysis",
 ICRA 2016): plan rooms matched one-to-one to true rooms by their overlap.
 
-- :func:`read_rooms`: the ``room`` (Polygon) and ``door`` (LineString) features of a
-  floor plan's GeoJSON (floorplan stage) or of the simulator's ``walls.geojson``
-  (:func:`floorscan.sim.ground_truth.true_rooms`, :func:`~floorscan.sim.ground_truth.true_doors`).
+- :func:`read_plan_folder_rooms`: the rooms and doors of a plan folder, the Parquet
+  tables a plan passes between stages in (:mod:`floorscan.core.plan_tables`; the
+  floorplan stage's ``plan_tables/`` and ``evaluation/plans/all_scans_map/``).
+- :func:`read_rooms`: the same of a GeoJSON: the ``room`` (Polygon) and ``door``
+  (LineString) features of the simulator's ``walls.geojson``
+  (:func:`floorscan.sim.ground_truth.true_rooms`, :func:`~floorscan.sim.ground_truth.true_doors`)
+  or of a floor plan's GeoJSON export.
 - :func:`room_seen_share`: the share of a true room the recording saw (within the free
   space of the reference map, :func:`floorscan.score.drawn.seen_by_recording`); only
   rooms seen for at least :data:`SEEN_SHARE` of their area count: no method finds a
@@ -57,6 +61,79 @@ ROOM_SCORE_COLUMNS = [
 ]  # fmt: skip
 
 
+#: Columns of the rooms and doors of :func:`read_rooms` and :func:`read_plan_folder_rooms`.
+ROOM_COLUMNS = ["room_id", "name", "kind", "area_m2", "perimeter_m", "polygon"]
+DOOR_COLUMNS = ["door_id", "x0", "y0", "x1", "y1", "x", "y", "width_m", "wall_id", "room_a", "room_b", "exterior"]
+
+
+def _rooms_frames(rooms: list[dict], doors: list[dict]) -> tuple[pd.DataFrame, pd.DataFrame]:
+    floats = {c: np.float64 for c in ("x0", "y0", "x1", "y1", "x", "y", "width_m")}
+    return (pd.DataFrame(rooms, columns=ROOM_COLUMNS).astype({"area_m2": np.float64, "perimeter_m": np.float64}),
+            pd.DataFrame(doors, columns=DOOR_COLUMNS).astype(floats | {"exterior": bool}))  # fmt: skip
+
+
+def _scored_polygon(poly):
+    """A room polygon as scored: a ring drawn by another tool, or rounded, made valid."""
+    import shapely
+
+    return poly if poly.is_valid else shapely.make_valid(poly)
+
+
+def read_plan_folder_rooms(folder) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The rooms and doors of a plan folder (:func:`floorscan.core.plan_tables.read_plan_tables`),
+    as :func:`read_rooms` reads them from the plan's GeoJSON export: the same rows, in
+    the same order, with the same numbers.
+
+    A room without a polygon (missing or empty), which the export skips, is skipped; a
+    polygon that is not valid (rounded to 10 micrometres) is made valid. The tables hold
+    no ``exterior`` flag, nor does the export: False.
+
+    Parameters
+    ----------
+    folder : path
+        A plan folder, e.g. ``results/<dataset>/plan_tables``.
+
+    Returns
+    -------
+    rooms : pandas.DataFrame
+        ``room_id``, ``name``, ``kind``, ``area_m2`` (m2), ``perimeter_m`` (metres),
+        ``polygon`` (shapely, map metres).
+    doors : pandas.DataFrame
+        ``door_id``, ``x0, y0, x1, y1`` (the opening's ends, map metres), ``x, y`` (its
+        centre), ``width_m``, ``wall_id``, ``room_a``, ``room_b``, ``exterior`` (False).
+
+    Raises
+    ------
+    FileNotFoundError
+        When the folder is not a plan folder.
+    """
+    import shapely
+
+    from floorscan.core.plan_tables import read_plan_tables
+
+    # walls: a folder that is not a plan raises (rooms and doors may be absent)
+    t = read_plan_tables(folder, ("walls", "rooms", "doors"), {"walls": ["wall_id"]})
+    r, d = t["rooms"], t["doors"]
+    rooms = []
+    polys = shapely.from_wkb(r["polygon"].to_numpy()) if len(r) else []
+    for room_id, name, kind, area, perimeter, poly in zip(
+        r["room_id"].tolist(), r["name"].tolist(), r["kind"].tolist(), r["area_m2"].tolist(),
+        r["perimeter_m"].tolist(), polys,
+    ):  # fmt: skip
+        if poly is None or poly.is_empty:
+            continue
+        rooms.append({"room_id": int(room_id), "name": str(name), "kind": str(kind), "area_m2": float(area),
+                      "perimeter_m": float(perimeter), "polygon": _scored_polygon(poly)})  # fmt: skip
+    doors = [
+        {"door_id": int(door_id), "x0": x0, "y0": y0, "x1": x1, "y1": y1, "x": (x0 + x1) / 2, "y": (y0 + y1) / 2,
+         "width_m": float(width), "wall_id": int(wall_id), "room_a": int(a), "room_b": int(b), "exterior": False}
+        for door_id, x0, y0, x1, y1, width, wall_id, a, b in zip(
+            *(d[c].tolist() for c in ("door_id", "x0", "y0", "x1", "y1", "width_m", "wall_id", "room_a", "room_b"))
+        )
+    ]  # fmt: skip
+    return _rooms_frames(rooms, doors)
+
+
 def read_rooms(path) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The rooms and doors of a floor plan's (or the ground truth's) GeoJSON.
 
@@ -92,9 +169,7 @@ def read_rooms(path) -> tuple[pd.DataFrame, pd.DataFrame]:
     for feat in feature_collection(path).get("features", []):
         props, geom = feat.get("properties") or {}, feat.get("geometry") or {}
         if props.get("kind") == "room" and geom.get("type") in ("Polygon", "MultiPolygon"):
-            poly = shapely.geometry.shape(geom)
-            if not poly.is_valid:  # a ring drawn by another tool, or rounded: scored as made valid
-                poly = shapely.make_valid(poly)
+            poly = _scored_polygon(shapely.geometry.shape(geom))
             rooms.append({
                 "room_id": props.get("room_id", len(rooms)), "name": str(props.get("name", "")),
                 "kind": str(props.get("room_kind", "room")), "area_m2": float(props.get("area_m2", poly.area)),
@@ -108,11 +183,7 @@ def read_rooms(path) -> tuple[pd.DataFrame, pd.DataFrame]:
                 "wall_id": props.get("wall_id"), "room_a": props.get("room_a"), "room_b": props.get("room_b"),
                 "exterior": bool(props.get("exterior", False)),
             })  # fmt: skip
-    room_cols = ["room_id", "name", "kind", "area_m2", "perimeter_m", "polygon"]
-    door_cols = ["door_id", "x0", "y0", "x1", "y1", "x", "y", "width_m", "wall_id", "room_a", "room_b", "exterior"]
-    floats = {c: np.float64 for c in ("x0", "y0", "x1", "y1", "x", "y", "width_m")}
-    return (pd.DataFrame(rooms, columns=room_cols).astype({"area_m2": np.float64, "perimeter_m": np.float64}),
-            pd.DataFrame(doors, columns=door_cols).astype(floats | {"exterior": bool}))  # fmt: skip
+    return _rooms_frames(rooms, doors)
 
 
 def room_seen_share(polygons, grid, within_m: float = SEEN_WITHIN_M) -> np.ndarray:
@@ -302,7 +373,7 @@ def score_room_plans(plans: dict, grid, truth_path=None) -> tuple[pd.DataFrame, 
     Parameters
     ----------
     plans : dict
-        ``{name: path}`` of floor plan GeoJSONs (map frame).
+        ``{name: folder}`` of plan folders (:func:`read_plan_folder_rooms`).
     grid : floorscan.core.occupancy.OccupancyGrid
         The reference map (what the recording saw).
     truth_path : path, optional
@@ -322,6 +393,8 @@ def score_room_plans(plans: dict, grid, truth_path=None) -> tuple[pd.DataFrame, 
     floorscan.core.io.InputError
         When ``truth_path`` holds no room (written before the truth had rooms: rerun
         the simulate stage).
+    FileNotFoundError
+        When a plan's folder is not a plan folder.
     """
     import shapely
 
@@ -341,8 +414,8 @@ def score_room_plans(plans: dict, grid, truth_path=None) -> tuple[pd.DataFrame, 
         overlay.update(truth="ground_truth", true_rooms=list(polys), counted=counted,
                        true_doors_xy=true_doors[["x", "y"]].to_numpy(np.float64), true_doors_counted=door_counted)  # fmt: skip
     rows = []
-    for name, path in plans.items():
-        rooms, doors = read_rooms(path)
+    for name, folder in plans.items():
+        rooms, doors = read_plan_folder_rooms(folder)
         plan_polys = np.array(list(rooms["polygon"]), dtype=object)
         entry = {"rooms": list(plan_polys), "doors_xy": doors[["x", "y"]].to_numpy(np.float64)}
         if truth_path is None:

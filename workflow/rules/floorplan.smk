@@ -83,7 +83,8 @@ rule floorplan:
 
 
 # The plan of the map of all kept scans, with the structure passes: what the recording
-# can give at most (scored by score_answer beside the recommended plan).
+# can give at most (scored by score_answer, score_rooms and score_drawn beside the
+# recommended plan, from its Parquet tables); SVG for people, as the grid's plans.
 rule all_scans_floorplan:
     priority: PRIORITY["floorplan"]
     input:
@@ -91,7 +92,7 @@ rule all_scans_floorplan:
         grid="results/{dataset}/walls/map/all_grid.parquet",
         index="results/{dataset}/scan_index.parquet",
     output:
-        **floorplan_outputs("results/{dataset}/evaluation/floorplan/all_scans_map", ["geojson", "svg"]),
+        **floorplan_outputs("results/{dataset}/evaluation/floorplan/all_scans_map", ["svg"]),
         plan=directory("results/{dataset}/evaluation/plans/all_scans_map"),
     params:
         cfg=floorplan_grid_config,
@@ -105,7 +106,7 @@ rule all_scans_floorplan:
 
 PLAN_OUTPUTS.extend(floorplan_outputs("results/{dataset}/floorplan", FLOORPLAN_FORMATS).values())
 PLAN_OUTPUTS.extend(["results/{dataset}/plan_tables", "results/{dataset}/map.pgm", "results/{dataset}/map.yaml"])
-EVALUATION_OUTPUTS.extend(floorplan_outputs("results/{dataset}/evaluation/floorplan/all_scans_map", ["geojson", "svg"]).values())
+EVALUATION_OUTPUTS.extend(floorplan_outputs("results/{dataset}/evaluation/floorplan/all_scans_map", ["svg"]).values())
 EVALUATION_OUTPUTS.append("results/{dataset}/evaluation/plans/all_scans_map")
 EVALUATION_OUTPUTS.extend(
     expand(

@@ -195,8 +195,8 @@ EVALUATION_OUTPUTS.extend(
 def score_answer_inputs(wildcards):
     ds = wildcards.dataset
     inputs = {
-        "recommended": f"results/{ds}/floorplan.geojson",
-        "all_scans_map": f"results/{ds}/evaluation/floorplan/all_scans_map.geojson",
+        "recommended": f"results/{ds}/plan_tables",  # the plans as Parquet tables (floorscan.core.plan_tables)
+        "all_scans_map": f"results/{ds}/evaluation/plans/all_scans_map",
         "reference": f"results/{ds}/reference/occupancy.parquet",
     }
     if is_synthetic(ds):
@@ -274,8 +274,8 @@ def drawn_reference(wildcards):
 def score_drawn_inputs(wildcards):
     ds, reference = wildcards.dataset, drawn_reference(wildcards)
     inputs = {
-        "recommended": f"results/{ds}/floorplan.geojson",
-        "all_scans_map": f"results/{ds}/evaluation/floorplan/all_scans_map.geojson",
+        "recommended": f"results/{ds}/plan_tables",  # the plans as Parquet tables (floorscan.core.plan_tables)
+        "all_scans_map": f"results/{ds}/evaluation/plans/all_scans_map",
         "reference": f"results/{ds}/reference/occupancy.parquet",
         "drawn": reference["plan"],
     }
@@ -326,8 +326,8 @@ rule score_drawn:
 def score_rooms_inputs(wildcards):
     ds = wildcards.dataset
     inputs = {
-        "recommended": f"results/{ds}/floorplan.geojson",
-        "all_scans_map": f"results/{ds}/evaluation/floorplan/all_scans_map.geojson",
+        "recommended": f"results/{ds}/plan_tables",  # the plans as Parquet tables (floorscan.core.plan_tables)
+        "all_scans_map": f"results/{ds}/evaluation/plans/all_scans_map",
         "reference": f"results/{ds}/reference/occupancy.parquet",
     }
     if is_synthetic(ds):
