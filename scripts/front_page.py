@@ -8,7 +8,7 @@ with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
     write_front_page_of_files(
         smk.output.front, smk.wildcards.dataset,
-        floorplan_svg=smk.input.floorplan_svg, floorplan_geojson=smk.input.floorplan_geojson,
+        floorplan_svg=smk.input.floorplan_svg, plan=smk.input.plan,
         selection=smk.input.selection, registration=smk.input.registration, index=smk.input.index,
         summary=smk.input.get("summary"), quality_png=smk.input.get("quality_png"),
         extractor=smk.params.extractor, description=smk.params.description, answer=smk.input.get("answer"),

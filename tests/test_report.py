@@ -168,8 +168,8 @@ def test_write_front_page_writes_the_page_and_no_temporary_file(tmp_path):
 
 
 def test_front_page_of_the_stage_outputs(tmp_path):
-    from floorscan.floorplan.geojson import write_geojson
     from floorscan.floorplan.plan import build_floorplan
+    from floorscan.floorplan.scans import write_plan
     from floorscan.floorplan.svg import write_svg
     from floorscan.core.io import SCAN_INDEX, write_table
 
@@ -178,7 +178,7 @@ def test_front_page_of_the_stage_outputs(tmp_path):
     ).assign(n_inliers=100)
     plan = build_floorplan(segments)
     write_svg(plan, tmp_path / "floorplan.svg")
-    write_geojson(plan, tmp_path / "floorplan.geojson")
+    write_plan(plan, tmp_path / "plan_tables")
     selection = {
         "dataset": "toy", "ordering": "wall_coverage", "k": 3, "reason": "k = 3 by the rule", "n_kept": 30,
         "n_recorded": 40, "scans": "results/toy/selection/scans.csv",
@@ -193,7 +193,7 @@ def test_front_page_of_the_stage_outputs(tmp_path):
     write_table(summary, tmp_path / "summary.parquet")
     out = tmp_path / "front.html"
     page = R.write_front_page_of_files(
-        out, "toy", floorplan_svg=tmp_path / "floorplan.svg", floorplan_geojson=tmp_path / "floorplan.geojson",
+        out, "toy", floorplan_svg=tmp_path / "floorplan.svg", plan=tmp_path / "plan_tables",
         selection=tmp_path / "selection.json", registration=tmp_path / "registration.parquet",
         index=tmp_path / "scan_index.parquet", summary=tmp_path / "summary.parquet",
         quality_png=_tiny_png(tmp_path / "q.png"), extractor="cluster_ransac",

@@ -253,7 +253,7 @@ def write_front_page_of_files(
     dataset: str,
     *,
     floorplan_svg: "str | os.PathLike",
-    floorplan_geojson: "str | os.PathLike",
+    plan: "str | os.PathLike",
     selection: "str | os.PathLike",
     registration: "str | os.PathLike",
     index: "str | os.PathLike",
@@ -271,9 +271,9 @@ def write_front_page_of_files(
     ----------
     path : path
         ``results/<dataset>/front.html``.
-    floorplan_svg, floorplan_geojson : path
-        The recommended floor plan (``floorplan.svg``; ``floorplan.geojson`` for its
-        wall count and rooms).
+    floorplan_svg, plan : path
+        The recommended floor plan: ``floorplan.svg``, and its Parquet tables
+        ``plan_tables/`` (:mod:`floorscan.core.plan_tables`) for its wall count and rooms.
     selection : path
         ``selection/selection.json`` (:func:`floorscan.select.recommend.write_selection`):
         k and why, the counts, the scan list and the reduced recording's size.
@@ -297,7 +297,7 @@ def write_front_page_of_files(
     str
         The page.
     """
-    from floorscan.figures.floorplans import read_geojson_geometries
+    from floorscan.core.plan_tables import plan_faces_and_walls
     from floorscan.core.io import read_metadata
     from floorscan.select.recommend import read_selection
 
@@ -318,10 +318,10 @@ def write_front_page_of_files(
         k_reason=sel.get("reason", ""),
         ordering=sel.get("ordering", ""),
         extractor=extractor,
-        n_walls=len(read_geojson_geometries(floorplan_geojson)),
+        n_walls=plan_faces_and_walls(plan)[1],
         description=description,
         answer=with_room_scores(answer, room_scores), answer_curve=answer_curve,
-        rooms=read_plan_rooms(floorplan_geojson),
+        rooms=read_plan_rooms(plan),
     )  # fmt: skip
 
 

@@ -1,6 +1,6 @@
 """The rooms of a floor plan on the front page (:mod:`floorscan.figures.report`): read
-from the plan's GeoJSON (:func:`read_plan_rooms`: its ``room`` features,
-:func:`floorscan.floorplan.geojson.floorplan_geojson`) and shown as a table of name,
+from the plan's Parquet tables (:func:`read_plan_rooms`: the plan folder the score
+stage reads too, :mod:`floorscan.core.plan_tables`) and shown as a table of name,
 kind and area with the total floor area (:func:`rooms_table_html`); the room scores
 joined to the answer's table (:func:`with_room_scores`).
 """
@@ -11,31 +11,31 @@ import html
 import os
 
 
-def read_plan_rooms(path: str | os.PathLike) -> list[dict]:
-    """The rooms of a floor plan's GeoJSON, in the file's order, as the scorer reads
-    them (:func:`floorscan.score.rooms.read_rooms`).
+def read_plan_rooms(folder: str | os.PathLike) -> list[dict]:
+    """The rooms of a plan folder, in the tables' order (the GeoJSON export's), as the
+    scorer reads them (:func:`floorscan.score.rooms.read_plan_folder_rooms`: a room
+    without a polygon, which the export skips, is skipped).
 
     Parameters
     ----------
-    path : path
-        A plan's ``.geojson`` (floorplan stage).
+    folder : path
+        A plan folder, e.g. ``results/<dataset>/plan_tables``.
 
     Returns
     -------
     list of dict
-        One per feature of ``kind`` ``room``: ``room_id`` (int), ``name`` (str),
-        ``kind`` (its ``room_kind``: ``room``, ``corridor`` or ``space``) and
-        ``area_m2`` (float, square metres). Empty for a plan without rooms.
+        One per room: ``room_id`` (int), ``name`` (str), ``kind`` (``room``,
+        ``corridor`` or ``space``) and ``area_m2`` (float, square metres). Empty for a
+        plan without rooms.
 
     Raises
     ------
-    OSError, ValueError
-        When the file cannot be read or is not JSON; floorscan.core.io.InputError
-        when it is not a GeoJSON FeatureCollection.
+    FileNotFoundError
+        When the folder is not a plan folder.
     """
-    from floorscan.score.rooms import read_rooms
+    from floorscan.score.rooms import read_plan_folder_rooms
 
-    rooms, _ = read_rooms(path)
+    rooms, _ = read_plan_folder_rooms(folder)
     return rooms[["room_id", "name", "kind", "area_m2"]].to_dict("records")
 
 

@@ -250,6 +250,8 @@ def front_page_inputs(wildcards):
     ds = wildcards.dataset
     inputs = {
         "floorplan_svg": f"results/{ds}/floorplan.svg",
+        "plan": f"results/{ds}/plan_tables",  # its wall count and rooms (floorscan.core.plan_tables)
+        # summary.md names the export with the counts of its metadata (figures.answer.plan_counts)
         "floorplan_geojson": f"results/{ds}/floorplan.geojson",
         "selection": f"results/{ds}/selection/selection.json",
         "registration": f"results/{ds}/registration.parquet",
