@@ -407,3 +407,18 @@ def test_a_null_subsection_the_schema_allows_is_none():
     assert stage_params(FloorplanParams, {"georeference": None}).georeference is None
     with pytest.raises(ConfigError, match=r"floorplan\.structure: None is not of type 'object'"):
         stage_params(FloorplanParams, {"structure": None})
+
+
+def test_schema_enum_is_the_schemas_own_list():
+    from floorscan.core.config import schema_enum
+    from floorscan.floorplan.params import DXF_VERSIONS
+    from floorscan.select.params import RADIUS_RULES
+    from floorscan.walls.params import MEANSHIFT_METHODS
+
+    assert schema_enum("floorplan", "evaluation_formats") == ("geojson", "svg", "dxf", "ifc")  # an array's items
+    assert (DXF_VERSIONS, RADIUS_RULES, MEANSHIFT_METHODS) == (
+        ("R2010", "R12"), ("nearest_centre", "global_min"), ("numpy", "sklearn"))
+    with pytest.raises(KeyError, match="no enum"):
+        schema_enum("walls", "seed")
+    with pytest.raises(KeyError, match="no property 'nope'"):
+        schema_enum("hulls", "nope")

@@ -84,9 +84,7 @@ def schema_enum(section: str, key: str) -> tuple:
     KeyError
         When the section has no such property, or it no enum.
     """
-    stage, *keys = section.split(".")
-    props = _section_properties(section) if keys else (_schema(stage).get("properties") or {})
-    node = props.get(key)
+    node = _section_properties(section).get(key)
     if node is None:
         raise KeyError(f"{section}: no property {key!r}")
     values = node.get("enum", (node.get("items") or {}).get("enum"))

@@ -59,8 +59,8 @@ PLAN_SCHEMAS: dict[str, pa.Schema] = {
 }
 #: The parts every plan folder holds; rooms and doors only when the plan has rooms.
 ALWAYS = ("walls", "faces", "clutter", "junctions")
-#: Decimals of the coordinates and lengths (metres): the GeoJSON export's
-#: (``floorscan.floorplan.geojson.GEOJSON_DECIMALS["map"]``), 10 micrometres.
+#: Decimals of the coordinates (metres), 10 micrometres: the plan's GeoJSON export
+#: takes its map-frame precision from here (``floorscan.floorplan.geojson.GEOJSON_DECIMALS``).
 PLAN_DECIMALS = 5
 #: Columns rounded to :data:`PLAN_DECIMALS` (coordinates); lengths, widths and areas
 #: are rounded to 4 decimals, as the export writes them.

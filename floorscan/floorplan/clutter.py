@@ -13,6 +13,7 @@ from floorscan.core.geometry import point_segment_dist2
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
+from floorscan.floorplan.junctions import ends_on_line, shorter_on_longer
 
 
 def free_standing_objects(
@@ -212,8 +213,10 @@ def loose_in_free_space(
     n_groups, group = connected_components(coo_matrix((np.ones(len(f)), (f, g)), shape=(nf, nf)), directed=False)
     held = np.zeros((nf, 2), dtype=bool)
     held[f, end] = True
-    held |= np.asarray(ends, dtype=bool).reshape(-1, 2) & ~held  # a junction with no face near: held all the same
-    i, j = _in_line_pairs(seg, params.loose_reach_m, 2 * params.side_offset_m, params.join_angle_deg)
+    held |= np.asarray(ends, dtype=bool).reshape(-1, 2)
+    i, j = candidate_pairs(seg, params.loose_reach_m, np.radians(params.join_angle_deg))
+    in_line = np.abs(shorter_on_longer(seg, i, j)[4]).max(axis=1) <= 2 * params.side_offset_m
+    i, j = i[in_line], j[in_line]
     anchored = np.zeros(n_groups, dtype=bool)
     outside = group[i] != group[j]
     anchored[group[i[outside]]] = True
@@ -259,22 +262,6 @@ def _holds(seg: np.ndarray, params: StructureParams) -> tuple[np.ndarray, np.nda
     return tuple(np.concatenate(c) for c in zip(*rows))
 
 
-def _in_line_pairs(seg: np.ndarray, reach_m: float, offset_m: float, angle_deg: float) -> tuple[np.ndarray, np.ndarray]:
-    """Pairs ``(i, j)`` of faces in one line: within ``reach_m``, ``angle_deg`` in
-    direction, both ends of the shorter within ``offset_m`` of the longer's line."""
-    i, j = candidate_pairs(seg, reach_m, np.radians(angle_deg))
-    if len(i) == 0:
-        return i, j
-    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
-    a, b = np.where(length[i] >= length[j], i, j), np.where(length[i] >= length[j], j, i)
-    u = (seg[a, 2:] - seg[a, :2]) / np.maximum(length[a], 1e-12)[:, None]
-    n = np.column_stack([-u[:, 1], u[:, 0]])
-    off = np.maximum(np.abs(np.einsum("ij,ij->i", seg[b, :2] - seg[a, :2], n)),
-                     np.abs(np.einsum("ij,ij->i", seg[b, 2:] - seg[a, :2], n)))  # fmt: skip
-    keep = off <= offset_m
-    return i[keep], j[keep]
-
-
 def walls_behind(
     seg: np.ndarray, side: np.ndarray, wall: np.ndarray, params: StructureParams = StructureParams(),
     max_thickness_m: float = 0.4,
@@ -315,18 +302,12 @@ def walls_behind(
     ok = wall[j] & (side[i] != 0)
     i, j = i[ok], j[ok]
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
-    u = (seg[i, 2:] - seg[i, :2]) / np.maximum(length[i], 1e-12)[:, None]
-    n = np.column_stack([-u[:, 1], u[:, 0]]) * side[i][:, None]  # towards face i's free side
-    back = -np.column_stack([np.einsum("ij,ij->i", seg[j, :2] - seg[i, :2], n),
-                             np.einsum("ij,ij->i", seg[j, 2:] - seg[i, :2], n)])  # fmt: skip
-    t = np.column_stack([np.einsum("ij,ij->i", seg[j, :2] - seg[i, :2], u),
-                         np.einsum("ij,ij->i", seg[j, 2:] - seg[i, :2], u)])  # fmt: skip
+    t, off = ends_on_line(seg, i, j)
+    back = -off * side[i][:, None]  # face j's ends behind face i (away from its free side)
     overlap = np.minimum(t.max(axis=1), length[i]) - np.maximum(t.min(axis=1), 0.0)
     # a face behind whose free space lies away from face i is a wall's far face: face
     # i stands a wall's thickness farther from it, else it is that wall's near face
-    uj = seg[j, 2:] - seg[j, :2]
-    away = side[j] * np.sign(np.einsum("ij,ij->i", seg[i, :2] + seg[i, 2:] - seg[j, :2] - seg[j, 2:],
-                                       np.column_stack([-uj[:, 1], uj[:, 0]]))) < 0  # fmt: skip
+    away = side[j] * np.sign(ends_on_line(seg, j, i)[1].sum(axis=1)) < 0
     near = np.where(away, params.front_min_m + max_thickness_m, params.front_min_m)
     hit = (back.min(axis=1) >= near) & (back.max(axis=1) <= far) & (overlap >= 0.5 * length[i])
     out[i[hit]] = True

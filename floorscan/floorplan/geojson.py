@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Callable, Mapping
 
 import numpy as np
 
+from floorscan.core.plan_tables import PLAN_DECIMALS
 from floorscan.core.files import atomic_path
 from floorscan.floorplan.footprints import PlanExports, exterior_rings
 from floorscan.floorplan.georeference import Georeference, as_georeference, map_to_lonlat
@@ -50,7 +51,7 @@ LOCAL_FRAME_WKT = (
 
 #: Decimals of GeoJSON coordinates: map metres (10 um) and WGS84 degrees (1e-10
 #: degree: 11 um of latitude, the same resolution).
-GEOJSON_DECIMALS = {"map": 5, "WGS84": 10}
+GEOJSON_DECIMALS = {"map": PLAN_DECIMALS, "WGS84": 10}
 
 
 def floorplan_geojson(

@@ -163,12 +163,34 @@ def shorter_on_longer(seg: np.ndarray, i: np.ndarray, j: np.ndarray):
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
     a = np.where(length[i] >= length[j], i, j)
     b = np.where(length[i] >= length[j], j, i)
-    u = (seg[a, 2:] - seg[a, :2]) / np.maximum(length[a], 1e-12)[:, None]
+    t, off = ends_on_line(seg, a, b)
+    return length, a, b, t, off
+
+
+def ends_on_line(seg: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The ends of segments ``b`` in the frame of the lines of segments ``a``.
+
+    Parameters
+    ----------
+    seg : (F, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    a, b : (P,) int ndarray
+        Pairs of segments.
+
+    Returns
+    -------
+    t, off : (P, 2) float64 ndarray
+        ``b``'s two ends along ``a``'s line from its start, and across it (signed, left
+        of ``x0, y0 -> x1, y1`` positive), metres.
+    """
+    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
+    d = seg[a, 2:] - seg[a, :2]
+    u = d / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-12)[:, None]
     nrm = np.column_stack([-u[:, 1], u[:, 0]])
     rel = [seg[b, k : k + 2] - seg[a, :2] for k in (0, 2)]
     t = np.column_stack([np.einsum("ij,ij->i", r, u) for r in rel])
     off = np.column_stack([np.einsum("ij,ij->i", r, nrm) for r in rel])
-    return length, a, b, t, off
+    return t, off
 
 
 def merge_parallel_duplicates(axes: np.ndarray, thickness: np.ndarray, params: StructureParams = StructureParams(),

@@ -24,13 +24,11 @@ Per plan (:func:`score_answer_plan`):
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pandas as pd
 
 from floorscan.core.plan_tables import read_plan_tables
-from floorscan.score.geojson import wall_faces
+from floorscan.score.geojson import feature_collection, wall_faces
 from floorscan.score.segments import as_segments
 
 #: Plans a person should not see: walls shorter than this, metres.
@@ -202,9 +200,13 @@ def read_truth(path) -> dict:
     dict
         ``face``, ``observed_face``, ``axis``: (N, 4) float64, metres; ``thickness``:
         axis row tuple -> metres (0.3 when the feature has none).
+
+    Raises
+    ------
+    floorscan.core.io.InputError
+        When the file is not a GeoJSON FeatureCollection.
     """
-    with open(path, encoding="utf-8") as fh:
-        doc = json.load(fh)
+    doc = feature_collection(path)
     out = {kind: wall_faces(doc, kind) for kind in ("face", "observed_face", "axis")}
     out["thickness"] = {}
     for f in doc.get("features", []):
