@@ -2,7 +2,8 @@
 set of scans (:func:`floorscan.walls.map_lines.map_segments`) and the occupancy grid of
 the same scans (:func:`floorscan.core.occupancy.occupancy_grid`, the free space the
 floor plan's structure passes read), for the selected scans (the answer) or all kept
-scans (the evaluation).
+scans (the evaluation); or of an occupancy map given as the recording
+(:func:`map_of_grid`, rule ``occupancy_map_walls``), whose grid is all there is.
 """
 
 from __future__ import annotations
@@ -85,6 +86,70 @@ def map_of_scans(
     log.info("map of %d scans (%d wall points): %d wall segments; grid %d x %d cells of %.3f m",
              len(origins), len(pts), len(segments), grid.shape[1], grid.shape[0], grid.resolution_m)
     return segments, grid
+
+
+#: How far a map's wall may lie from its free space, metres: a map drawn or saved with
+#: anti-aliasing has a seam of grey (unknown) pixels between the white floor and the
+#: black wall, 2-4 pixels of 5 cm on the benchmark maps of ``room-maps/``; a seam
+#: wider than this is unseen space, not a wall's edge.
+MAP_SEAM_M = 0.25
+
+
+def wall_cells(grid: OccupancyGrid, seam_m: float = MAP_SEAM_M) -> np.ndarray:
+    """The occupied cells of a map that face its free space: those 8-adjacent to the free
+    space grown through non-occupied cells by up to ``seam_m``.
+
+    A map, unlike the grid of scans, may hold occupied cells no ray ever reached: the
+    inside of a wall drawn thick, the outside of the building painted black. Only the
+    layer of occupied cells the free space looks at are wall points: one face per side
+    of a wall, as a scan sees it.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+    seam_m : float
+        Metres (:data:`MAP_SEAM_M`).
+
+    Returns
+    -------
+    (H, W) bool ndarray
+    """
+    from scipy import ndimage
+
+    occupied, free = grid.occupied(), grid.free()
+    steps = int(round(seam_m / grid.resolution_m))
+    eight = np.ones((3, 3), dtype=bool)
+    reach = ndimage.binary_dilation(free, eight, iterations=steps, mask=~occupied) if steps > 0 else free
+    return occupied & ndimage.binary_dilation(reach | free, eight)
+
+
+def map_of_grid(grid: OccupancyGrid, cfg: Mapping[str, Any] | None) -> pd.DataFrame:
+    """The map extractor's wall segments of an occupancy map (no scans): RANSAC
+    (:func:`floorscan.walls.map_lines.map_segments`) on the centres of its
+    :func:`wall_cells`.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+        The map (:func:`floorscan.ingest.occupancy_map.read_occupancy_map`).
+    cfg : mapping or None
+        The ``walls`` config section (``map``, ``seed``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        :data:`floorscan.walls.tables.WALLS` columns, ``scan_id`` -1.
+    """
+    from floorscan.core.config import stage_params
+
+    cfg = cfg or {}
+    params = stage_params(MapParams, cfg.get("map"))
+    pts = grid.cell_centres(wall_cells(grid))
+    segments = map_segments(pts, grid, params, seed=int(cfg.get("seed", schema_section_defaults("walls")["seed"])))
+    segments.insert(0, "scan_id", np.full(len(segments), -1, dtype=np.int32))
+    log.info("map of %d x %d cells of %.3f m: %d wall cells, %d wall segments",
+             grid.shape[1], grid.shape[0], grid.resolution_m, len(pts), len(segments))
+    return segments
 
 
 def write_map_walls(
