@@ -65,14 +65,15 @@ def _same_file(a: str | None, b: str) -> bool:
 
 def dataset_name(path: str | os.PathLike) -> str:
     """The dataset name of a recording: its file or folder name without the recording
-    suffixes (``.gz``, ``.log``, ``.clf``, ``.bag``, ``.db3``, ``.mcap``), other
+    suffixes (``.gz``, ``.log``, ``.clf``, ``.bag``, ``.db3``, ``.mcap``; a map's ``.yaml``,
+    ``.yml``, ``.pgm``, ``.png``), other
     characters than letters, digits and ``_`` replaced by ``_``, ``r_`` before a
     leading digit."""
     import re
     from pathlib import PurePath
 
     name = PurePath(os.fspath(path).rstrip("/")).name
-    for suffix in (".gz", ".log", ".clf", ".bag", ".db3", ".mcap"):
+    for suffix in (".gz", ".log", ".clf", ".bag", ".db3", ".mcap", ".yaml", ".yml", ".pgm", ".png"):
         if name.lower().endswith(suffix) and len(name) > len(suffix):
             name = name[: -len(suffix)]
     name = re.sub(r"[^A-Za-z0-9_]", "_", name) or "recording"
@@ -84,7 +85,7 @@ def add_path_datasets(config: dict, recordings: list) -> list[str]:
     a folder of recordings) datasets, the run's targets.
 
     Each dataset is named by :func:`dataset_name`, holds only ``path`` (ingest detects
-    the rest). A dataset of that name with the same recording (the same path, relative
+    the rest) and, for a map image, the top-level ``resolution_m``. A dataset of that name with the same recording (the same path, relative
     to the working directory or absolute) is reused; with another recording the name
     gets a numeric suffix. The ``building`` section's floors name their recording by
     dataset name or file name; they are resolved to dataset names
@@ -117,7 +118,10 @@ def add_path_datasets(config: dict, recordings: list) -> list[str]:
         while (name in datasets and not _same_file(datasets[name].get("path"), os.fspath(path))) or name in names:
             n += 1
             name = f"{base}_{n}"
-        datasets.setdefault(name, {"description": f"{os.fspath(path)} (--config path)", "path": os.fspath(path)})
+        entry = {"description": f"{os.fspath(path)} (--config path)", "path": os.fspath(path)}
+        if config.get("resolution_m") is not None and Path(path).suffix.lower() in (".pgm", ".png"):
+            entry["resolution_m"] = config["resolution_m"]  # a map image's metres a pixel
+        datasets.setdefault(name, entry)
         names.append(name)
         by_file[Path(path).name] = name
     if names:

@@ -48,7 +48,9 @@ def answer_lines(
     One dataset: at most 10 lines: k of the kept and recorded scans, the verdict, and
     where the floor plan, the occupancy map (``map.pgm``, ``map.yaml``), the scan list,
     the reduced recording, the points, ``summary.md`` and the front page are. Several:
-    one line each and the index page (``results/index.html``). A dataset in
+    one line each and the index page (``results/index.html``). An occupancy map's
+    answer is its plan and the map as read
+    (:func:`map_answer_lines`). A dataset in
     ``failed`` gets its error instead of an answer, even when an older answer is on
     disk; a dataset whose selection was not made yet gets one line saying so.
 
@@ -78,6 +80,9 @@ def answer_lines(
     for ds in datasets:
         if ds in failed:
             lines.append(f"{ds}: FAILED: {failed[ds]}")
+            continue
+        if (root / ds / "map" / "map.json").is_file():  # an occupancy map: its plan, no scans
+            lines += map_answer_lines(ds, root, many)
             continue
         summary_path = root / ds / "selection" / "selection.json"
         if not summary_path.is_file():
@@ -114,6 +119,73 @@ def answer_lines(
         lines.append(f"report: {command} --report {report}")
     elif lines and report.is_file():
         lines.append(f"report: {report}")
+    return lines
+
+
+#: What the answer of a recording has and a map's has not.
+NOT_FROM_A_MAP = (
+    "a map holds no scans: no registration or verdict, no scan selection, scan list, reduced recording "
+    "or points, no evaluation against the scans"
+)
+
+
+def read_map_info(path: str | os.PathLike) -> dict:
+    """``map/map.json`` of a map dataset (:meth:`floorscan.ingest.occupancy_map.MapInfo.as_dict`).
+
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    OSError, ValueError
+        When the file cannot be read as JSON.
+    """
+    return json.loads(Path(path).read_text(encoding="utf-8"))
+
+
+def map_answer_lines(dataset: str, root: str | os.PathLike, many: bool = False) -> list[str]:
+    """The answer of a map dataset as the run prints it (one line when the run has
+    several datasets).
+
+    Parameters
+    ----------
+    dataset : str
+    root : path
+        The results folder.
+    many : bool
+        One line (a run of several datasets).
+
+    Returns
+    -------
+    list of str
+        Empty when ``<root>/<dataset>/map/map.json`` is not made yet.
+    """
+    from floorscan.ingest.occupancy_map import map_line
+
+    folder = Path(root) / dataset
+    info_path = folder / "map" / "map.json"
+    if not info_path.is_file():
+        return []
+    info = read_map_info(info_path)
+    front = folder / "front.html"
+    counts = plan_counts(folder / "floorplan.geojson")
+    head = f"{dataset}: floor plan of an occupancy map, {info['width']} x {info['height']} cells of {info['resolution_m']:g} m"
+    if many:
+        return [f"{head}{counts}" + (f"; {front}" if front.is_file() else "")]
+    lines = [head, f"  read:               {map_line(info)}"]
+    if (folder / "floorplan.svg").is_file():
+        lines.append(f"  floor plan:         {folder}/floorplan.{{geojson,svg,dxf,ifc}}{counts}")
+    if (folder / "map.pgm").is_file():
+        lines.append(f"  occupancy map:      {folder}/map.pgm, map.yaml (the map as read: occupied, free, unknown)")
+    lines.append(f"  not from a map:     {NOT_FROM_A_MAP}")
+    for label, path in (("summary:", folder / "summary.md"), ("front page:", front)):
+        if path.is_file():
+            lines.append(f"  {label:<20}{path}")
     return lines
 
 

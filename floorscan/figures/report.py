@@ -52,7 +52,7 @@ DETECTED_FIELDS = (
 #: The thesis's ordering (Algorithm 1), compared with random beside the recommended one.
 THESIS_ORDERING = "cluster_hull"
 
-_STYLE = """
+FRONT_STYLE = """
 .floorscan-front { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; color: #1e293b;
   font-size: 14px; line-height: 1.45; max-width: 70rem; }
 .floorscan-front h2 { font-size: 1.35em; margin: 0.2em 0 0.4em; }
@@ -223,7 +223,7 @@ def front_page(
     body = "\n".join(parts)
     return (
         '<!DOCTYPE html>\n<html lang="en">\n<head>\n<meta charset="utf-8">\n'
-        f"<title>{esc(head)}</title>\n<style>{_STYLE}</style>\n</head>\n<body>\n{body}\n</body>\n</html>\n"
+        f"<title>{esc(head)}</title>\n<style>{FRONT_STYLE}</style>\n</head>\n<body>\n{body}\n</body>\n</html>\n"
     )
 
 
@@ -467,7 +467,7 @@ def _verdict_html(verdict) -> list[str]:
     ]
 
 
-def _facts_table(rows: list[tuple[str, str]]) -> str:
+def facts_table(rows: list[tuple[str, str]]) -> str:
     body = "".join(f"<tr><th>{html.escape(a)}</th><td>{b}</td></tr>" for a, b in rows)
     return f'<table class="facts-table">{body}</table>'
 
@@ -487,7 +487,7 @@ def _scans_html(k, n_kept, n_recorded, bytes_in, bytes_out, scan_list, k_reason:
         rows.append(("recording", esc(f"{format_bytes(bytes_in)} → {format_bytes(bytes_out)}{frac}")))
     if scan_list is not None:
         rows.append(("scan list", f"<code>{esc(Path(scan_list).as_posix())}</code>"))
-    out = ["<h3>Scans</h3>", _facts_table(rows)] if rows else []
+    out = ["<h3>Scans</h3>", facts_table(rows)] if rows else []
     if k_reason:
         out.append(f'<p class="note">{esc(k_reason)}</p>')
     return out
@@ -497,4 +497,4 @@ def _detected_html(detected, mode: str) -> list[str]:
     detected = dict(detected or {})
     rows = [(label, html.escape(str(detected[key]))) for key, label in DETECTED_FIELDS if detected.get(key)]
     rows.append(("registered in", html.escape(f"{mode or 'pose'} mode")))
-    return ["<h3>What ingest detected</h3>", _facts_table(rows)]
+    return ["<h3>What ingest detected</h3>", facts_table(rows)]

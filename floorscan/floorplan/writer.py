@@ -349,3 +349,56 @@ def write_recommended_floorplan(
         "n_scans": rec.n_scans, "n_segments": rec.n_segments, "n_walls": len(plan.walls), "n_faces": len(plan.faces),
         "n_clutter": len(plan.clutter), "n_junctions": len(plan.junctions),
     }  # fmt: skip
+
+
+def write_map_floorplan(
+    walls_path: str | os.PathLike,
+    grid_path: str | os.PathLike,
+    outputs: Mapping[str, str | os.PathLike],
+    cfg: Mapping[str, Any] | None,
+    dataset: str,
+    plan_folder: str | os.PathLike | None = None,
+) -> FloorPlan:
+    """Write the floor plan of an occupancy map given as the recording (rule
+    ``map_floorplan``): the map extractor's walls of the map through the structure
+    passes and the room step, on the map's grid, as the plan of the selected scans is
+    built on theirs (:class:`FloorplanWriter`). A map has no scans: no ordering, no k,
+    and no time stamp (the exports take ``SOURCE_DATE_EPOCH``, else 0).
+
+    Parameters
+    ----------
+    walls_path : path
+        ``walls/map/map.parquet`` (:func:`floorscan.walls.map_stage.write_occupancy_map_walls`).
+    grid_path : path
+        The map's grid (rule ``map_ingest``).
+    outputs : mapping
+        Paths by format (any of :data:`FLOORPLAN_FORMATS`); ``cfg``'s ``georeference``
+        applies to them.
+    cfg : mapping
+        The ``floorplan`` config section.
+    dataset : str
+    plan_folder : path, optional
+        The plan as Parquet tables (:func:`floorscan.floorplan.scans.write_plan`).
+
+    Returns
+    -------
+    FloorPlan
+
+    Raises
+    ------
+    KeyError
+        For an unknown output format or config key.
+    """
+    from floorscan.core.io import read_table
+    from floorscan.core.occupancy import read_grid
+
+    plan, _ = FloorplanWriter(cfg).write(
+        read_table(walls_path), outputs, f"{dataset} occupancy map", dataset=dataset, extractor="map",
+        grid=read_grid(grid_path),
+    )  # fmt: skip
+    if plan_folder is not None:
+        from floorscan.floorplan.scans import write_plan
+
+        write_plan(plan, plan_folder, {"dataset": dataset, "ordering": "", "extractor": "map", "k": "", "n_scans": "0",
+                                       "source": "map"})  # fmt: skip
+    return plan

@@ -15,7 +15,10 @@ A dataset without ``format`` is read as what its path is:
   :func:`floorscan.ingest.text.open_text` reads it (a UTF-8 byte-order mark dropped,
   trailing garbage after gzip data ignored);
 - ``pcd``: a folder holding ``.pcd`` files (with the locations CSV read by
-  :mod:`floorscan.ingest.pcd`).
+  :mod:`floorscan.ingest.pcd`);
+- ``map``: an occupancy map, not a recording of scans: a ROS map_server ``.yaml`` (with
+  an ``image`` key) or a ``.pgm`` / ``.png`` image on its own
+  (:mod:`floorscan.ingest.occupancy_map`).
 
 Anything else is an :class:`~floorscan.core.io.InputError` naming the path and listing what
 is expected. An explicit ``format`` in the dataset always wins over detection.
@@ -29,6 +32,7 @@ from pathlib import Path
 from floorscan.core.io import InputError
 from floorscan.core.messages import quoted, system_error
 from floorscan.ingest.carmen_lines import CARMEN_TYPES
+from floorscan.ingest.occupancy_map import MAP_IMAGE_SUFFIXES, MAP_YAML_SUFFIXES, is_map_path, map_images
 from floorscan.ingest.text import open_text
 
 #: File suffixes of a ROS2 bag's storage (sqlite3, MCAP).
@@ -48,12 +52,14 @@ ROS1_MAGIC = b"#ROSBAG V2.0"
 EXPECTED = (
     "expected a ROS1 .bag file, a ROS2 bag folder (metadata.yaml, .db3 or .mcap files) or its "
     ".db3/.mcap file, a CARMEN log (.log, .log.gz, .clf or .gz text with FLASER or ROBOTLASER1 "
-    "lines), or a folder of .pcd files with their locations CSV; or set the dataset's 'format'"
+    "lines), a folder of .pcd files with their locations CSV, or an occupancy map (a ROS map_server "
+    ".yaml, or a .pgm/.png image); or set the dataset's 'format'"
 )
 
 
 def detect_format(path: str | Path) -> str:
-    """The format of the recording at ``path``: ``'rosbag'``, ``'carmen'`` or ``'pcd'``.
+    """The format of the recording at ``path``: ``'rosbag'``, ``'carmen'``, ``'pcd'`` or
+    ``'map'``.
 
     Parameters
     ----------
@@ -63,8 +69,8 @@ def detect_format(path: str | Path) -> str:
     Returns
     -------
     str
-        ``'rosbag'``, ``'carmen'`` or ``'pcd'``. For ``'rosbag'`` the bag to open is
-        :func:`bag_path` of ``path``.
+        ``'rosbag'``, ``'carmen'``, ``'pcd'`` or ``'map'``. For ``'rosbag'`` the bag to
+        open is :func:`bag_path` of ``path``.
 
     Raises
     ------
@@ -99,6 +105,12 @@ def detect_format(path: str | Path) -> str:
         if why_not is None:
             return "carmen"
         raise InputError(f"{path}: {why_not}, so not a CARMEN log; {EXPECTED}")
+    if suffix in MAP_IMAGE_SUFFIXES:
+        return "map"
+    if suffix in MAP_YAML_SUFFIXES:
+        if is_map_path(path):
+            return "map"
+        raise InputError(f"{path}: a yaml without an 'image' key, so not a ROS map_server map; {EXPECTED}")
     if suffix == ".pcd":
         raise InputError(f"{path}: a single .pcd file; give the folder of .pcd scans (with locations.csv) instead")
     raise InputError(f"{path}: unknown recording format (suffix {quoted(suffix or 'none', 40)}); {EXPECTED}")
@@ -167,8 +179,10 @@ def _not_carmen(path: Path) -> str | None:
 
 
 #: File suffixes that make a file in a folder of recordings a candidate recording
-#: (:func:`recordings_in`): ROS1 bags, ROS2 storage files, CARMEN logs.
-RECORDING_SUFFIXES = (".bag", *ROS2_STORAGE_SUFFIXES, *CARMEN_SUFFIXES)
+#: (:func:`recordings_in`): ROS1 bags, ROS2 storage files, CARMEN logs, map images (a
+#: map_server yaml is one when it has an ``image`` key; the image it names is not one
+#: of its own).
+RECORDING_SUFFIXES = (".bag", *ROS2_STORAGE_SUFFIXES, *CARMEN_SUFFIXES, *MAP_IMAGE_SUFFIXES)
 
 
 def is_one_recording(folder: Path) -> bool:
@@ -193,10 +207,12 @@ def recordings_in(path: str | Path) -> tuple[list[Path], list[str]]:
     recordings.
 
     A file, a ROS2 bag folder and a PCD folder are one recording. Any other folder is a
-    folder of recordings: each file with a suffix of :data:`RECORDING_SUFFIXES` and
-    each sub-folder that :func:`is_one_recording` is one (by name only: ingest reads
-    and detects each, so a file that is not what its suffix says fails on its own,
-    naming itself, without stopping the others). Hidden entries are left out.
+    folder of recordings: each file with a suffix of :data:`RECORDING_SUFFIXES`, each
+    map_server yaml (a ``.yaml`` with an ``image`` key) and each sub-folder that
+    :func:`is_one_recording` is one (by name only: ingest reads and detects each, so a
+    file that is not what its suffix says fails on its own, naming itself, without
+    stopping the others); an image that a map yaml of the folder names is that map's,
+    not a recording of its own. Hidden entries are left out.
 
     Parameters
     ----------
@@ -222,10 +238,17 @@ def recordings_in(path: str | Path) -> tuple[list[Path], list[str]]:
     if not path.is_dir() or is_one_recording(path):
         return [path], []
     recordings, skipped = [], []
-    for entry in sorted(path.iterdir(), key=lambda p: p.name):
-        if entry.name.startswith("."):
+    entries = [e for e in sorted(path.iterdir(), key=lambda p: p.name) if not e.name.startswith(".")]
+    map_yamls = [e for e in entries if e.suffix.lower() in MAP_YAML_SUFFIXES and is_map_path(e)]
+    images_of_maps = {img.resolve() for y in map_yamls for img in map_images(y)}
+    for entry in entries:
+        if entry.resolve() in images_of_maps:
             continue
-        if entry.is_dir() and is_one_recording(entry) or entry.is_file() and entry.suffix.lower() in RECORDING_SUFFIXES:
+        if (
+            entry.is_dir() and is_one_recording(entry)
+            or entry.is_file() and entry.suffix.lower() in RECORDING_SUFFIXES
+            or entry in map_yamls
+        ):
             recordings.append(entry)
         else:
             skipped.append(entry.name)

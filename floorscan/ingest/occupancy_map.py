@@ -146,10 +146,35 @@ def is_map_path(path: str | Path) -> bool:
         return True
     if suffix in MAP_YAML_SUFFIXES:
         try:
-            return isinstance(_load_yaml(path), dict) and "image" in _load_yaml(path)
+            doc = _load_yaml(path)
         except InputError:
             return False
+        return isinstance(doc, dict) and "image" in doc
     return False
+
+
+def map_images(path: str | Path) -> list[Path]:
+    """The image a map_server yaml names (resolved beside it), when it names one.
+
+    Parameters
+    ----------
+    path : str or Path
+        A map_server yaml.
+
+    Returns
+    -------
+    list of Path
+        One path, or none for a yaml that cannot be read or names no image.
+    """
+    path = Path(path)
+    try:
+        doc = _load_yaml(path)
+    except InputError:
+        return []
+    image = doc.get("image") if isinstance(doc, dict) else None
+    if not isinstance(image, str) or not image.strip():
+        return []
+    return [Path(image) if Path(image).is_absolute() else path.parent / image]
 
 
 def grid_of_classes(
@@ -322,9 +347,14 @@ def _is_number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
+def _shown(value) -> str:
+    """A number as written, anything else quoted (:func:`~floorscan.core.messages.quoted`)."""
+    return f"{value:g}" if _is_number(value) else quoted(value, 40)
+
+
 def _resolution(value, where: str) -> float:
     if not _is_number(value) or not math.isfinite(float(value)) or float(value) <= 0:
-        raise InputError(f"{where}: expected a positive number of metres a pixel, got {quoted(value, 40)}")
+        raise InputError(f"{where}: expected a positive number of metres a pixel, got {_shown(value)}")
     return float(value)
 
 
@@ -394,3 +424,76 @@ def _check_classes(path: Path, image: Path, occ, known, occupied, free) -> None:
             f"{named}: no occupied pixel (occupancy above occupied_thresh), so no wall; {EXPECTED}; check negate and "
             "the thresholds"
         )
+
+
+def write_map_ingest(
+    path: str | Path, resolution_m: float | None, grid_path: str | Path, pgm_path: str | Path,
+    yaml_path: str | Path, info_path: str | Path,
+) -> MapInfo:  # fmt: skip
+    """Rule ``map_ingest``: read a map (:func:`read_occupancy_map`) and write its grid,
+    the map as read (a map_server map, ``mode: trinary``: the classes the plan is built
+    on, at the map's origin and resolution, so the plan lies on it in RViz) and what
+    was read.
+
+    Parameters
+    ----------
+    path : str or Path
+        The map_server yaml or the image.
+    resolution_m : float or None
+        Metres a pixel of an image on its own (None: :data:`DEFAULT_RESOLUTION_M`).
+    grid_path : path
+        Output: the grid (:func:`floorscan.core.occupancy.write_grid`, metadata
+        ``source`` ``map``).
+    pgm_path, yaml_path : path
+        Output: ``map.pgm`` and ``map.yaml``.
+    info_path : path
+        Output: :meth:`MapInfo.as_dict` as JSON.
+
+    Returns
+    -------
+    MapInfo
+
+    Raises
+    ------
+    InputError
+        For a bad map (:func:`read_occupancy_map`); nothing is written then.
+    """
+    import json
+
+    from floorscan.core.files import atomic_path
+    from floorscan.core.occupancy import write_grid, write_map_server
+
+    grid, info = read_occupancy_map(path, resolution_m)
+    write_grid(grid, grid_path, metadata={"source": "map", "map": json.dumps(info.as_dict())})
+    write_map_server(grid, pgm_path, yaml_path, title=f"occupancy map {Path(path).name}")
+    with atomic_path(info_path) as tmp:
+        Path(tmp).write_text(json.dumps(info.as_dict(), indent=1) + "\n", encoding="utf-8")
+    return info
+
+
+def map_line(info: MapInfo | dict) -> str:
+    """What was read of a map, in one line (the ingest log, the answer, ``summary.md``).
+
+    Parameters
+    ----------
+    info : MapInfo or dict
+        :class:`MapInfo` or its :meth:`~MapInfo.as_dict`.
+
+    Returns
+    -------
+    str
+        E.g. ``occupancy map map.yaml (image map.pgm, mode trinary): 1202 x 786 cells of
+        0.05 m, origin (-12.2, -10.0) m; 16505 occupied, 161555 free, 766712 unknown``.
+    """
+    d = info.as_dict() if isinstance(info, MapInfo) else dict(info)
+    image = Path(d["image"]).name
+    source = Path(d["path"]).name
+    where = f"{source} (image {image}, mode {d['mode']})" if image != source else f"{source} (an image on its own)"
+    text = (
+        f"occupancy map {where}: {d['width']} x {d['height']} cells of {d['resolution_m']:g} m, origin "
+        f"({d['origin_x_m']:g}, {d['origin_y_m']:g}) m; {d['n_occupied']} occupied, {d['n_free']} free, "
+        f"{d['n_unknown']} unknown"
+    )
+    if d.get("defaults"):
+        text += f"; map_server's defaults for {', '.join(d['defaults'])}"
+    return text

@@ -192,3 +192,31 @@ def write_map_walls(
     write_table(segments, walls_path, WALLS, metadata={"extractor": "map", "n_scans": str(n_scans)})
     write_grid(grid, grid_path, metadata={"n_scans": str(n_scans)})
     return {"n_scans": n_scans, "n_segments": len(segments)}
+
+
+def write_occupancy_map_walls(grid_path, cfg, walls_path) -> dict:
+    """Rule ``occupancy_map_walls``: :func:`map_of_grid` of a map given as the recording,
+    the segments written.
+
+    Parameters
+    ----------
+    grid_path : path
+        The map's grid (rule ``map_ingest``, :func:`floorscan.core.occupancy.write_grid`).
+    cfg : mapping
+        The ``walls`` config section.
+    walls_path : path
+        Output: the segments (:data:`floorscan.walls.tables.WALLS`, metadata
+        ``extractor`` ``map``, ``n_scans`` 0).
+
+    Returns
+    -------
+    dict
+        ``n_segments`` (int).
+    """
+    from floorscan.core.io import write_table
+    from floorscan.core.occupancy import read_grid
+    from floorscan.walls.tables import WALLS
+
+    segments = map_of_grid(read_grid(grid_path), cfg)
+    write_table(segments, walls_path, WALLS, metadata={"extractor": "map", "n_scans": "0", "source": "map"})
+    return {"n_segments": len(segments)}

@@ -15,6 +15,31 @@ from floorscan.walls.extractors import REGISTRY as WALLS_REGISTRY
 
 DATASETS = config["datasets"]
 
+
+def is_map_dataset(dataset):
+    """Whether a dataset is an occupancy map (floorscan.ingest.occupancy_map), not a
+    recording of scans: `format: map`, a synthetic building rasterised (`recording:
+    map`), or, without a format, a path to a map_server yaml or a .pgm/.png image."""
+    from floorscan.ingest.occupancy_map import is_map_path
+
+    ds = DATASETS[dataset]
+    if ds.get("format") == "synthetic":
+        return ds.get("recording") == "map"
+    if ds.get("format"):
+        return ds["format"] == "map"
+    return bool(ds.get("path")) and is_map_path(ds["path"])
+
+
+def _names_regex(names):
+    return "|".join(re.escape(n) for n in sorted(names))
+
+
+# Maps and recordings take different rules to the same outputs (floorplan.*, map.pgm,
+# front.html): each such rule is constrained to its kind of dataset.
+MAP_DATASETS = [d for d in DATASETS if is_map_dataset(d)]
+MAP_DATASET = _names_regex(MAP_DATASETS) or "NO_MAP_DATASET"
+SCAN_DATASET = _names_regex(set(DATASETS) - set(MAP_DATASETS)) or "NO_SCAN_DATASET"
+
 # A folder the run must write in that it cannot (read-only, full, not the user's) stops
 # it here with one paragraph: Snakemake would end in its own traceback making
 # .snakemake/, or fail the first job making results/<dataset>/.
@@ -29,6 +54,8 @@ for _folder in ("results", ".snakemake"):
 # (`rule evaluation`). `rule all` builds both, or the plan alone (see all_outputs).
 PLAN_OUTPUTS = []
 EVALUATION_OUTPUTS = []
+# The answer of an occupancy map: its plan and the map as read (nothing needs scans).
+MAP_PLAN_OUTPUTS = []
 # The report's front pages (figures.smk): they read the evaluation when there is one.
 REPORT_OUTPUTS = []
 
@@ -156,8 +183,8 @@ def target_datasets():
 
 
 def plan_outputs():
-    """Inputs of `rule plan`: the answer of every target dataset."""
-    return [p.format(dataset=d) for d in target_datasets() for p in PLAN_OUTPUTS]
+    """Inputs of `rule plan`: the answer of every target dataset (of a map: its plan)."""
+    return [p.format(dataset=d) for d in target_datasets() for p in (MAP_PLAN_OUTPUTS if d in MAP_DATASETS else PLAN_OUTPUTS)]
 
 
 def drawn_outputs():
@@ -169,10 +196,11 @@ def drawn_outputs():
 
 def evaluation_outputs():
     """Inputs of `rule evaluation`: the evaluation grid, scores and figures of every
-    target dataset."""
-    outputs = [p.format(dataset=d) for d in target_datasets() for p in EVALUATION_OUTPUTS]
+    target dataset that is a recording (a map has no scans to order and select)."""
+    scanned = [d for d in target_datasets() if d not in MAP_DATASETS]
+    outputs = [p.format(dataset=d) for d in scanned for p in EVALUATION_OUTPUTS]
     # a plan drawn by people, for the datasets that name one (score_drawn, score.smk)
-    outputs += [p.format(dataset=d) for d in target_datasets() if DATASETS[d].get("reference") for p in drawn_outputs()]
+    outputs += [p.format(dataset=d) for d in scanned if DATASETS[d].get("reference") for p in drawn_outputs()]
     return outputs
 
 

@@ -273,6 +273,8 @@ def dataset_description(wildcards):
 
 rule front_page:
     priority: PRIORITY["front_page"]
+    wildcard_constraints:
+        dataset=SCAN_DATASET,
     input:
         unpack(front_page_inputs),
     output:
@@ -293,6 +295,35 @@ rule front_page:
         benchmark_path("front_page")
     script:
         "../../scripts/front_page.py"
+
+
+# The front page of an occupancy map's plan: the plan, its rooms, what was read of the map.
+rule map_front_page:
+    priority: PRIORITY["front_page"]
+    wildcard_constraints:
+        dataset=MAP_DATASET,
+    input:
+        floorplan_svg="results/{dataset}/floorplan.svg",
+        floorplan_geojson="results/{dataset}/floorplan.geojson",
+        plan="results/{dataset}/plan_tables",
+        info="results/{dataset}/map/map.json",
+    output:
+        front=report(
+            "results/{dataset}/front.html",
+            caption="../report/front.rst",
+            category="Floor plan",
+            subcategory="{dataset}",
+            labels={"dataset": "{dataset}", "figure": "The result on one page"},
+        ),
+        summary_md="results/{dataset}/summary.md",
+    params:
+        description=dataset_description,
+    log:
+        log_path("front_page"),
+    benchmark:
+        benchmark_path("front_page")
+    script:
+        "../../scripts/map_front_page.py"
 
 
 REPORT_OUTPUTS += ["results/{dataset}/front.html", "results/{dataset}/summary.md"]

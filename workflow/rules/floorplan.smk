@@ -32,6 +32,8 @@ def floorplan_grid_runs(wildcards):
 
 rule recommended_floorplan:
     priority: PRIORITY["floorplan"]
+    wildcard_constraints:
+        dataset=SCAN_DATASET,
     input:
         unpack(recommended_floorplan_inputs),
     output:
@@ -104,6 +106,30 @@ rule all_scans_floorplan:
         "../../scripts/all_scans_floorplan.py"
 
 
+# The plan of an occupancy map given as the recording: its walls on its grid, every
+# export and the Parquet tables, as the recommended plan's (floorscan.floorplan.writer.write_map_floorplan).
+rule map_floorplan:
+    priority: PRIORITY["floorplan"]
+    wildcard_constraints:
+        dataset=MAP_DATASET,
+    input:
+        walls="results/{dataset}/walls/map/map.parquet",
+        grid="results/{dataset}/map/grid.parquet",
+    output:
+        **floorplan_outputs("results/{dataset}/floorplan", FLOORPLAN_FORMATS),
+        plan=directory("results/{dataset}/plan_tables"),
+    params:
+        cfg=stage_config("floorplan"),
+    log:
+        log_path("recommended_floorplan"),
+    benchmark:
+        benchmark_path("recommended_floorplan")
+    script:
+        "../../scripts/map_floorplan.py"
+
+
+MAP_PLAN_OUTPUTS.extend(floorplan_outputs("results/{dataset}/floorplan", FLOORPLAN_FORMATS).values())
+MAP_PLAN_OUTPUTS.append("results/{dataset}/plan_tables")
 PLAN_OUTPUTS.extend(floorplan_outputs("results/{dataset}/floorplan", FLOORPLAN_FORMATS).values())
 PLAN_OUTPUTS.extend(["results/{dataset}/plan_tables", "results/{dataset}/map.pgm", "results/{dataset}/map.yaml"])
 EVALUATION_OUTPUTS.extend(floorplan_outputs("results/{dataset}/evaluation/floorplan/all_scans_map", ["svg"]).values())

@@ -21,6 +21,8 @@ def pose_gap_limit(wildcards):
 
 
 rule ingest:
+    wildcard_constraints:
+        dataset=SCAN_DATASET,
     input:
         recording_input,
     output:
@@ -57,3 +59,52 @@ rule poses:
 
 
 PLAN_OUTPUTS.append("results/{dataset}/poses.parquet")
+
+
+def map_input(wildcards):
+    """The files of an occupancy map: its yaml and the image it names, or the image
+    (a synthetic building's: the simulator's rasterised map)."""
+    from floorscan.ingest.occupancy_map import map_images
+
+    path = recording_input(wildcards)
+    if is_synthetic(wildcards.dataset):
+        return [path]
+    return [path, *[str(p) for p in map_images(path) if p.is_file()]]
+
+
+def map_resolution(wildcards):
+    """A map image's metres a pixel (the dataset's `resolution_m`; None: 5 cm); a
+    map_server yaml has its own."""
+    return DATASETS[wildcards.dataset].get("resolution_m")
+
+
+def map_path(wildcards):
+    """The map file ingest reads (a param: the image a yaml names is an input too)."""
+    return recording_input(wildcards)
+
+
+# An occupancy map as the recording (floorscan.ingest.occupancy_map): its grid, the map as
+# read (map.pgm, map.yaml: the classes the plan is built on) and what was read.
+rule map_ingest:
+    wildcard_constraints:
+        dataset=MAP_DATASET,
+    input:
+        map_input,
+    output:
+        grid="results/{dataset}/map/grid.parquet",
+        info="results/{dataset}/map/map.json",
+        map_pgm="results/{dataset}/map.pgm",
+        map_yaml="results/{dataset}/map.yaml",
+    params:
+        path=map_path,
+        resolution_m=map_resolution,
+        recording=recording_state,
+    log:
+        log_path("ingest"),
+    benchmark:
+        benchmark_path("ingest")
+    script:
+        "../../scripts/map_ingest.py"
+
+
+MAP_PLAN_OUTPUTS.extend(["results/{dataset}/map.pgm", "results/{dataset}/map.yaml"])

@@ -154,3 +154,21 @@ rule map_walls:
         "results/{dataset}/benchmarks/map_walls_{scans}.tsv"
     script:
         "../../scripts/map_walls.py"
+
+
+# The walls of an occupancy map given as the recording (floorscan.walls.map_stage.map_of_grid).
+rule occupancy_map_walls:
+    wildcard_constraints:
+        dataset=MAP_DATASET,
+    input:
+        grid="results/{dataset}/map/grid.parquet",
+    output:
+        walls="results/{dataset}/walls/map/map.parquet",
+    params:
+        cfg=walls_map_config,
+    log:
+        log_path("walls"),
+    benchmark:
+        benchmark_path("walls")
+    script:
+        "../../scripts/occupancy_map_walls.py"

@@ -1,0 +1,257 @@
+"""An occupancy map as the recording (issue 43): floorscan.ingest.occupancy_map reads a
+map_server map or an image as map_server does, refuses bad maps with one message naming
+the file, is detected and found in folders; the map's walls are the occupied cells facing
+its free space; and the workflow's plan target makes the plan of a map with nothing that
+needs scans."""
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from floorscan.core.datasets import dataset_name
+from floorscan.core.io import InputError
+from floorscan.ingest.detect import detect_format, recordings_in
+from floorscan.ingest.occupancy_map import grid_of_classes, is_map_path, map_line, read_occupancy_map
+from floorscan.walls.map_stage import map_of_grid, wall_cells
+
+from conftest import snakemake
+
+RES = 0.05
+MAP_YAML = "image: {image}\nresolution: {res}\norigin: [{x}, {y}, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n"
+
+
+def two_rooms_image(res=RES, w=10.0, h=5.0, t=0.2, door=0.9, margin=0.5) -> np.ndarray:
+    """A map_server image (row 0 at the top) of two rooms side by side, w x h metres
+    outside, walls t thick, a door of ``door`` metres in the middle wall; unknown around."""
+    width, height = int(round((w + 2 * margin) / res)), int(round((h + 2 * margin) / res))
+    x = (np.arange(width) + 0.5) * res - margin
+    y = (np.arange(height) + 0.5) * res - margin
+    X, Y = np.meshgrid(x, y[::-1])
+    inside = (X > 0) & (X < w) & (Y > 0) & (Y < h)
+    wall = inside & ((X < t) | (X > w - t) | (Y < t) | (Y > h - t) | (np.abs(X - w / 2) < t / 2))
+    wall &= ~((np.abs(X - w / 2) < t / 2 + 1e-9) & (np.abs(Y - h / 2) < door / 2))
+    img = np.full((height, width), 205, np.uint8)
+    img[inside] = 254
+    img[wall] = 0
+    return img
+
+
+def write_map(folder: Path, img: np.ndarray, name="floor", origin=(-0.5, -0.5), extra="") -> Path:
+    Image.fromarray(img).save(folder / f"{name}.pgm")
+    yaml = folder / f"{name}.yaml"
+    yaml.write_text(MAP_YAML.format(image=f"{name}.pgm", res=RES, x=origin[0], y=origin[1]) + extra)
+    return yaml
+
+
+# ------------------------------------------------------------------ reading
+
+
+def test_yaml_map_reads_as_map_server(tmp_path):
+    img = np.full((4, 6), 254, np.uint8)
+    img[0, :] = 0  # the top row: the largest y
+    img[3, 5] = 205
+    yaml = write_map(tmp_path, img, origin=(1.0, -2.0))
+    grid, info = read_occupancy_map(yaml)
+    assert grid.shape == (4, 6) and grid.resolution_m == RES
+    np.testing.assert_allclose(grid.origin_xy, [1.0, -2.0])
+    assert grid.occupied()[3].all() and not grid.occupied()[:3].any()  # row 3 of the grid is the image's top
+    assert not grid.free()[0, 5] and not grid.occupied()[0, 5]  # the bottom-right pixel is unknown
+    assert (info.n_occupied, info.n_free, info.n_unknown) == (6, 17, 1)
+    assert info.mode == "trinary" and info.defaults == ("mode",)
+    # a cell's centre: origin + (col + 0.5, row + 0.5) * resolution
+    np.testing.assert_allclose(grid.cell_centres(grid.occupied())[0], [1.0 + 0.025, -2.0 + 3.5 * RES])
+    assert grid.structure().sum() == 6 and grid.scan_xy is None
+    assert "6 x 4 cells of 0.05 m" in map_line(info)
+
+
+def test_modes_negate_alpha_and_bare_image(tmp_path):
+    img = np.array([[0, 128, 254], [60, 200, 255]], np.uint8)
+    Image.fromarray(img).save(tmp_path / "m.pgm")
+    base = "image: m.pgm\nresolution: 0.1\norigin: [0, 0, 0]\n"
+    cases = {
+        # occ = (255 - v) / 255: 0 -> 1, 128 -> 0.50, 254 -> 0.004, 60 -> 0.76, 200 -> 0.22, 255 -> 0
+        "mode: trinary\n": ([[1, 0, 0], [1, 0, 0]], [[0, 0, 1], [0, 0, 1]]),
+        "mode: scale\n": ([[1, 0, 0], [1, 0, 0]], [[0, 0, 1], [0, 0, 1]]),
+        "mode: trinary\nnegate: 1\n": ([[0, 0, 1], [0, 1, 1]], [[1, 0, 0], [0, 0, 0]]),
+    }
+    for extra, (occ, free) in cases.items():
+        (tmp_path / "m.yaml").write_text(base + extra)
+        grid, info = read_occupancy_map(tmp_path / "m.yaml")
+        np.testing.assert_array_equal(grid.occupied()[::-1], np.array(occ, bool), err_msg=extra)
+        np.testing.assert_array_equal(grid.free()[::-1], np.array(free, bool), err_msg=extra)
+    # raw: the shade is percent occupancy (80: occupied, 0 and 10: free), above 100 unknown
+    (tmp_path / "m.yaml").write_text(base + "mode: raw\n")
+    Image.fromarray(np.array([[0, 80, 255], [60, 10, 255]], np.uint8)).save(tmp_path / "m.pgm")
+    grid, _ = read_occupancy_map(tmp_path / "m.yaml")
+    np.testing.assert_array_equal(grid.occupied()[::-1], [[0, 1, 0], [0, 0, 0]])
+    np.testing.assert_array_equal(grid.free()[::-1], [[1, 0, 0], [0, 1, 0]])
+    # grey and alpha: the colours give the shade (map_server would average alpha in); transparent unknown
+    la = np.stack([np.array([[0, 254], [0, 254]], np.uint8), np.array([[255, 255], [0, 255]], np.uint8)], -1)
+    Image.fromarray(la, "LA").save(tmp_path / "la.png")
+    grid, info = read_occupancy_map(tmp_path / "la.png", resolution_m=0.2)
+    assert info.resolution_m == 0.2 and tuple(grid.origin_xy) == (0.0, 0.0)
+    np.testing.assert_array_equal(grid.occupied()[::-1], [[1, 0], [0, 0]])
+    np.testing.assert_array_equal(grid.free()[::-1], [[0, 1], [0, 1]])
+
+
+def test_grid_of_classes_keeps_the_classes():
+    rng = np.random.default_rng(3)
+    labels = rng.integers(0, 3, size=(7, 9))
+    grid = grid_of_classes(labels == 1, labels == 2, (0.5, 0.25), 0.1)
+    np.testing.assert_array_equal(grid.occupied(), labels == 1)
+    np.testing.assert_array_equal(grid.free(), labels == 2)
+    np.testing.assert_array_equal(grid.structure(), labels == 1)
+    with pytest.raises(ValueError, match="both occupied and free"):
+        grid_of_classes(labels == 1, labels >= 1, (0, 0), 0.1)
+
+
+@pytest.mark.parametrize(
+    "case, expected",
+    [
+        ("missing image", r"bad\.yaml: its image 'nothere\.pgm' does not exist"),
+        ("zero resolution", r"bad\.yaml: resolution: expected a positive number of metres a pixel, got 0"),
+        ("negative resolution", r"bad\.yaml: resolution: expected a positive number of metres a pixel, got -0\.05"),
+        ("unknown mode", r"bad\.yaml: mode 'fancy': expected one of trinary, scale, raw"),
+        ("one value", r"one\.png: every pixel has one value, so there is no free space and no wall"),
+        ("colour photograph", r"photo\.png: 9\d% of its pixels are coloured, so it is a colour picture, not an occupancy map"),
+        ("no free pixel", r"dark\.png: no free pixel"),
+        ("thresholds", r"bad\.yaml: expected 0 <= free_thresh < occupied_thresh <= 1"),
+        ("not a map yaml", r"bad\.yaml: a yaml without an 'image' key"),
+        ("rotated", r"bad\.yaml: origin yaw 0\.3 rad: a rotated map is not supported"),
+        ("not an image", r"bad\.pgm: not an image that can be read"),
+    ],
+)
+def test_bad_maps_one_clear_message(tmp_path, case, expected):
+    Image.fromarray(two_rooms_image()).save(tmp_path / "ok.pgm")
+    bad = tmp_path / "bad.yaml"
+    yaml = {
+        "missing image": "image: nothere.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n",
+        "zero resolution": "image: ok.pgm\nresolution: 0\norigin: [0, 0, 0]\n",
+        "negative resolution": "image: ok.pgm\nresolution: -0.05\norigin: [0, 0, 0]\n",
+        "unknown mode": "image: ok.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nmode: fancy\n",
+        "thresholds": "image: ok.pgm\nresolution: 0.05\norigin: [0, 0, 0]\noccupied_thresh: 0.1\nfree_thresh: 0.5\n",
+        "not a map yaml": "name: a config\n",
+        "rotated": "image: ok.pgm\nresolution: 0.05\norigin: [0, 0, 0.3]\n",
+    }
+    path = bad
+    if case in yaml:
+        bad.write_text(yaml[case])
+    elif case == "one value":
+        path = tmp_path / "one.png"
+        Image.fromarray(np.full((30, 40), 254, np.uint8)).save(path)
+    elif case == "colour photograph":
+        path = tmp_path / "photo.png"
+        Image.fromarray(np.random.default_rng(0).integers(0, 256, (30, 40, 3), dtype=np.uint8)).save(path)
+    elif case == "no free pixel":
+        path = tmp_path / "dark.png"
+        Image.fromarray(np.tile(np.array([0, 128], np.uint8), (30, 20))).save(path)
+    elif case == "not an image":
+        path = tmp_path / "bad.pgm"
+        path.write_bytes(b"P5\n12 x\n")
+    with pytest.raises(InputError, match=expected) as info:
+        read_occupancy_map(path)
+    assert "\n" not in str(info.value)
+
+
+def test_resolution_only_for_a_bare_image(tmp_path):
+    yaml = write_map(tmp_path, two_rooms_image())
+    with pytest.raises(InputError, match="resolution_m is for a map image on its own"):
+        read_occupancy_map(yaml, resolution_m=0.1)
+    with pytest.raises(InputError, match="resolution_m: expected a positive number"):
+        read_occupancy_map(tmp_path / "floor.pgm", resolution_m=-1)
+
+
+# ------------------------------------------------------------------ detection
+
+
+def test_detection_folders_and_names(tmp_path):
+    write_map(tmp_path, two_rooms_image(), "ground")
+    Image.fromarray(two_rooms_image()).save(tmp_path / "loose.png")
+    (tmp_path / "house.yaml").write_text("building: {name: B}\n")
+    (tmp_path / "notes.txt").write_text("hello\n")
+    assert detect_format(tmp_path / "ground.yaml") == "map" and detect_format(tmp_path / "loose.png") == "map"
+    with pytest.raises(InputError, match="house.yaml: a yaml without an 'image' key"):
+        detect_format(tmp_path / "house.yaml")
+    assert is_map_path(tmp_path / "ground.yaml") and not is_map_path(tmp_path / "house.yaml")
+    recordings, skipped = recordings_in(tmp_path)
+    # the image a map yaml names is that map's, not a recording of its own
+    assert [p.name for p in recordings] == ["ground.yaml", "loose.png"]
+    assert skipped == ["house.yaml", "notes.txt"]
+    assert [dataset_name(p) for p in recordings] == ["ground", "loose"]
+
+
+# ------------------------------------------------------------------ walls
+
+
+def test_wall_cells_are_the_faces_the_free_space_sees():
+    # a room of free cells, walls 3 cells thick, the outside painted occupied (as some
+    # maps are drawn), and a grey (unknown) seam of 2 cells between floor and wall
+    occ = np.ones((40, 60), bool)
+    free = np.zeros_like(occ)
+    free[10:30, 10:50] = True
+    occ[8:32, 8:52] = False  # the seam
+    grid = grid_of_classes(occ, free, (0.0, 0.0), RES)
+    cells = wall_cells(grid)
+    # the one ring of occupied cells around the seam, nothing of the painted outside
+    ring = np.zeros_like(occ)
+    ring[7:33, 7:53] = True
+    ring[8:32, 8:52] = False
+    np.testing.assert_array_equal(cells, ring)
+    segments = map_of_grid(grid, None)
+    assert len(segments) == 4 and (segments["scan_id"] == -1).all()
+    lengths = np.hypot(segments["x1"] - segments["x0"], segments["y1"] - segments["y0"])
+    np.testing.assert_allclose(np.sort(lengths), [1.25, 1.25, 2.25, 2.25], atol=0.06)
+
+
+# ------------------------------------------------------------------ the workflow
+
+
+@pytest.mark.workflow
+def test_map_plan_target(demo_run, tmp_path):
+    """The README's map command on a map_server map: the plan with its rooms and door in
+    every export, the map as read, the front page and summary.md; nothing that needs
+    scans; a bad map fails alone with one clear line and leaves no output."""
+    import ezdxf
+    import ifcopenshell
+    from shapely.geometry import shape
+
+    yaml = write_map(tmp_path, two_rooms_image(), "two_rooms", origin=(-0.5, -0.5))
+    res = snakemake(demo_run, "--config", f"path={yaml}")
+    assert res.returncode == 0, res.stderr[-3000:]
+    out = demo_run / "results" / "two_rooms"
+    answer = res.stdout[res.stdout.index("two_rooms: floor plan of an occupancy map"):]
+    assert "220 x 120 cells of 0.05 m" in answer.splitlines()[0]
+    assert "2 rooms, 1 door" in answer and "not from a map:     a map holds no scans" in answer
+    for missing in ("selection", "registration.parquet", "poses.parquet", "scans.parquet", "evaluation"):
+        assert not (out / missing).exists(), missing
+    gj = json.loads((out / "floorplan.geojson").read_text())
+    assert gj["floorscan"]["n_rooms"] == 2 and gj["floorscan"]["n_doors"] == 1
+    rooms = [shape(f["geometry"]) for f in gj["features"] if f["properties"].get("kind") == "room"]
+    assert len(rooms) == 2 and all(r.is_valid for r in rooms)
+    # the map frame is map_server's: the rooms lie at the map's metres (inside 0..10 x 0..5)
+    assert all(-0.05 < r.bounds[0] and r.bounds[2] < 10.05 and -0.05 < r.bounds[1] and r.bounds[3] < 5.05 for r in rooms)
+    np.testing.assert_allclose(sorted(r.centroid.x for r in rooms), [2.5, 7.5], atol=0.1)
+    np.testing.assert_allclose([r.centroid.y for r in rooms], [2.5, 2.5], atol=0.1)
+    door = next(f for f in gj["features"] if f["properties"].get("kind") == "door")
+    assert abs(door["properties"]["width_m"] - 0.9) <= 0.1
+    model = ifcopenshell.open(str(out / "floorplan.ifc"))
+    assert len(model.by_type("IfcSpace")) == 2 and len(model.by_type("IfcDoor")) == 1
+    doc = ezdxf.readfile(out / "floorplan.dxf")
+    auditor = doc.audit()
+    assert not auditor.has_errors
+    assert "origin: [-0.5, -0.5, 0.0]" in (out / "map.yaml").read_text()
+    assert "Floor plan of an occupancy map: two_rooms" in (out / "summary.md").read_text()
+    assert "What was read" in (out / "front.html").read_text()
+
+    photo = tmp_path / "photo.png"
+    Image.fromarray(np.random.default_rng(1).integers(0, 256, (60, 80, 3), dtype=np.uint8)).save(photo)
+    res = snakemake(demo_run, "--workflow-profile", "workflow/profiles/default", "--config", f"path={photo}")
+    assert res.returncode == 1
+    assert "photo: FAILED: rule map_ingest failed; its log: results/photo/logs/ingest.log" in res.stdout
+    shown = res.stdout + res.stderr  # the job's log, shown by the profile's show-failed-logs
+    assert f"map_ingest failed: {photo}: 99% of its pixels are coloured, so it is a colour picture, not an occupancy map" in shown
+    assert not (demo_run / "results" / "photo" / "map").exists() and not (demo_run / "results" / "photo" / "floorplan.svg").exists()
