@@ -15,7 +15,8 @@ from PIL import Image
 from floorscan.core.datasets import dataset_name
 from floorscan.core.io import InputError
 from floorscan.ingest.detect import detect_format, recordings_in
-from floorscan.ingest.occupancy_map import grid_of_classes, is_map_path, map_line, read_occupancy_map
+from floorscan.core.occupancy_classes import grid_of_classes
+from floorscan.ingest.occupancy_map import is_map_path, map_line, read_occupancy_map
 from floorscan.walls.map_stage import map_of_grid, wall_cells
 
 from conftest import snakemake

@@ -12,6 +12,8 @@
 - :mod:`~floorscan.core.runtime`: progress lines, worker processes
   (``concurrent.futures`` with spawn), thread limits;
 - :mod:`~floorscan.core.shards`: the per-scan stages split by scan range into jobs;
+- :mod:`~floorscan.core.occupancy` (the occupancy grid of scans, map_server maps),
+  :mod:`~floorscan.core.occupancy_classes` (a grid of given classes: a map);
 - :mod:`~floorscan.core.geometry` (SE(2), points along wall segments),
   :mod:`~floorscan.core.grid` (integer grid cells), :mod:`~floorscan.core.greedy` (lazy
   greedy maximum coverage, for the coverage orderings and the score stage's oracle).

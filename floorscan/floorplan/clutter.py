@@ -162,8 +162,11 @@ def loose_in_free_space(
 
     Faces hold each other at an end: a junction there, another face's end within
     ``snap_m``, or a face at least ``junction_min_angle_deg`` across within ``snap_m``
-    (a curved wall's next piece, a rack's end face). A group of faces held together
-    (a face alone, an L, a U; not a closed loop) is loose when
+    (a curved wall's next piece, a rack's end face). Two faces of one group in one
+    line hold each other's facing ends across a gap of at most ``join_max_gap_m`` (an
+    opening in their wall, which step 2 kept open): a closed loop of walls with doors in
+    it (a core of rooms standing free of the outer walls) has no free end. A group of
+    faces held together (a face alone, an L, a U; not a closed loop) is loose when
 
     - no face of it lies in the line of a face outside it (within ``2 *
       side_offset_m`` of it) within ``loose_reach_m``: a wall between two doors has its
@@ -221,6 +224,7 @@ def loose_in_free_space(
     outside = group[i] != group[j]
     anchored[group[i[outside]]] = True
     anchored[group[j[outside]]] = True
+    held |= _held_across_openings(seg, i[~outside], j[~outside], params.join_max_gap_m)
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
     backed = (side == 0) | walls_behind(seg, side, length >= params.min_wall_length_m, params, max_thickness_m)
     free = passable(grid)
@@ -237,6 +241,31 @@ def loose_in_free_space(
             d = (p - q) / max(float(length[m]), 1e-12)  # outwards from the end
             beyond.append(p + d * steps[:, None])
         out[members] = bool(mask_at(grid, free, np.concatenate(beyond)).all())
+    return out
+
+
+def _held_across_openings(seg: np.ndarray, i: np.ndarray, j: np.ndarray, max_gap_m: float) -> np.ndarray:
+    """The ends of faces in line (pairs ``(i, j)``) that face each other across a gap of
+    at most ``max_gap_m``: a wall's pieces on the two sides of an opening (step 2 keeps
+    such a gap open when free space passes through it) hold each other's ends.
+
+    Returns
+    -------
+    (F, 2) bool ndarray
+        Whether end 0 (``x0, y0``) or 1 (``x1, y1``) of each face is so held.
+    """
+    out = np.zeros((len(seg), 2), dtype=bool)
+    if len(i) == 0:
+        return out
+    length, a, b, t, _ = shorter_on_longer(seg, i, j)
+    after = t.min(axis=1) >= length[a]  # b beyond a's end 1; else before its end 0
+    before = t.max(axis=1) <= 0.0
+    gap = np.where(after, t.min(axis=1) - length[a], -t.max(axis=1))
+    ok = (after | before) & (gap <= max_gap_m)
+    out[a[ok & after], 1] = True
+    out[a[ok & before], 0] = True
+    b_end = np.where(after, np.argmin(t, axis=1), np.argmax(t, axis=1))
+    out[b[ok], b_end[ok]] = True
     return out
 
 

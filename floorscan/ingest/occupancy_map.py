@@ -27,9 +27,10 @@ channel in with its colours (kept there "to preserve existing behavior"), which 
 opaque black pixel of a grey-and-alpha PNG as unknown. Here the colours alone give the
 shade, and a transparent pixel (alpha 0) is unknown, as in map_server's scale mode.
 
-The grid holds each class as scan counts (:func:`grid_of_classes`): an occupied cell as
-hit by ``min_scans`` scans, a free cell as crossed by the fewest scans that make it
-free, so every consumer of the grid reads the map's classes unchanged.
+The grid holds each class as scan counts
+(:func:`floorscan.core.occupancy_classes.grid_of_classes`): an occupied cell as hit by
+``min_scans`` scans, a free cell as crossed by the fewest scans that make it free, so
+every consumer of the grid reads the map's classes unchanged.
 
 Bad maps raise :class:`~floorscan.core.io.InputError` naming the file and what was
 expected: a yaml that is not a map_server yaml, its image missing, a resolution that is
@@ -45,14 +46,15 @@ Usage::
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 
 from floorscan.core.io import InputError
 from floorscan.core.messages import quoted
-from floorscan.core.occupancy import OccupancyGrid, OccupancyParams, logit
+from floorscan.core.occupancy import OccupancyGrid
+from floorscan.core.occupancy_classes import grid_of_classes
 
 #: File suffixes of a map_server yaml and of a map image read on its own.
 MAP_YAML_SUFFIXES = (".yaml", ".yml")
@@ -177,50 +179,6 @@ def map_images(path: str | Path) -> list[Path]:
     return [Path(image) if Path(image).is_absolute() else path.parent / image]
 
 
-def grid_of_classes(
-    occupied: np.ndarray, free: np.ndarray, origin_xy, resolution_m: float, params: OccupancyParams = OccupancyParams()
-) -> OccupancyGrid:  # fmt: skip
-    """An occupancy grid whose classes are given: each occupied cell hit by
-    ``params.min_scans`` scans (and at least enough to pass ``occupied_thresh``), each
-    free cell crossed by the fewest scans that put it under ``free_thresh``.
-
-    Parameters
-    ----------
-    occupied, free : (H, W) bool ndarray
-        Row 0 at the bottom (the grid's ``y = origin_y + (i + 0.5) r``); disjoint.
-    origin_xy : (2,) float
-        The corner of cell (0, 0), metres.
-    resolution_m : float
-        Cell size, metres.
-    params : OccupancyParams
-        Its ``resolution_m`` is replaced by ``resolution_m``.
-
-    Returns
-    -------
-    OccupancyGrid
-        ``occupied()`` and ``free()`` equal ``occupied`` and ``free``; ``structure()``
-        equals ``occupied``; ``scan_xy`` None.
-
-    Raises
-    ------
-    ValueError
-        When the masks differ in shape or overlap.
-    """
-    occupied, free = np.asarray(occupied, bool), np.asarray(free, bool)
-    if occupied.shape != free.shape or occupied.ndim != 2:
-        raise ValueError(f"occupied and free must be (H, W) of one shape, got {occupied.shape} and {free.shape}")
-    if (occupied & free).any():
-        raise ValueError("a cell cannot be both occupied and free")
-    p = replace(params, resolution_m=float(resolution_m))
-    n_hit = max(int(p.min_scans), math.floor(logit(p.occupied_thresh) / logit(p.prob_hit)) + 1)
-    n_miss = math.floor(logit(p.free_thresh) / logit(p.prob_miss)) + 1
-    return OccupancyGrid(
-        origin_xy=np.asarray(origin_xy, dtype=np.float64).reshape(2), resolution_m=float(resolution_m),
-        n_hit_scans=np.where(occupied, n_hit, 0).astype(np.int32), n_miss_scans=np.where(free, n_miss, 0).astype(np.int32),
-        params=p,
-    )  # fmt: skip
-
-
 def read_occupancy_map(path: str | Path, resolution_m: float | None = None) -> tuple[OccupancyGrid, MapInfo]:
     """Read a map_server map or a map image into an occupancy grid (see the module
     docstring).
@@ -239,7 +197,7 @@ def read_occupancy_map(path: str | Path, resolution_m: float | None = None) -> t
     -------
     grid : OccupancyGrid
         Cells of the map's resolution, row 0 at the bottom of the image; classes as
-        :func:`grid_of_classes`.
+        :func:`~floorscan.core.occupancy_classes.grid_of_classes`.
     info : MapInfo
 
     Raises

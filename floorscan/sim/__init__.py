@@ -14,8 +14,10 @@ The thesis validates its method on a simulated building whose walls are known ex
   (the rover's path), :mod:`~floorscan.sim.recording` (the scan, AMCL and odometry
   streams);
 - :mod:`~floorscan.sim.ros1` (the bag's messages), :mod:`~floorscan.sim.writer` (the ROS1
-  bag and the PCD folder), :mod:`~floorscan.sim.ground_truth` (the ground-truth walls and
-  the true poses).
+  bag and the PCD folder), :mod:`~floorscan.sim.ground_truth` (the ground-truth walls,
+  rooms, doors and the true poses);
+- :mod:`~floorscan.sim.occupancy_map` (the building's plan view as a map_server map: the
+  map input with its rooms and doors known).
 
 The package imports only :mod:`floorscan.core`. To add a scanner kind, see
 :mod:`floorscan.sim.scanners`; a building element, :mod:`floorscan.sim.building`.
