@@ -1,11 +1,13 @@
 """The one room scorer (floorscan.score.segmentation) on hand-made label images with
-known answers."""
+known answers, and the room benchmark (benchmarks/bench_rooms.py) on two real maps of
+../shared/data/room-maps."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from conftest import SHARED_DATA
 from floorscan.score.segmentation import (
     bormann_scores,
     label_colours,
@@ -14,6 +16,9 @@ from floorscan.score.segmentation import (
     score_label_images,
     segmentation_scores,
 )
+
+ROOM_MAPS = SHARED_DATA / "room-maps"
+
 
 def _two_rooms(rows: int = 20) -> np.ndarray:
     """True rooms of a 20-column image: 1 on rows 0..9 (200 px), 2 on rows 10.. ."""
@@ -102,3 +107,28 @@ def test_colour_labels_one_room_per_colour_black_and_transparent_none():
     img[3, 5, 3] = 0  # transparent
     lab = label_colours(img)
     assert lab.max() == 2 and (lab[:, :2] == lab[0, 4]).all() and lab[3, 5] == 0 and (lab[2:, 2:4] == 0).all()
+
+
+@pytest.mark.skipif(not ROOM_MAPS.is_dir(), reason=f"room-maps benchmark data not found at {ROOM_MAPS} (../shared/data/room-maps)")
+def test_benchmark_on_a_bormann_and_a_rose2_map():
+    from benchmarks.bench_rooms import plan_labels, run_task
+
+    rows = run_task(("bormann", "lab_ipa"), ROOM_MAPS) + run_task(("rose2", "map15"), ROOM_MAPS)
+    assert [r["group"] for r in rows] == ["bormann", "bormann_furniture", "rose2"]
+    for r in rows:
+        for k in ("seg_precision_mean", "seg_precision_pooled", "seg_recall_mean", "seg_recall_pooled",
+                  "room_precision", "room_recall", "room_mean_iou"):  # fmt: skip
+            assert 0.3 < r[k] <= 1.0, (r["map"], k, r[k])
+        assert r["n_true_rooms"] >= 10 and r["n_plan_rooms_scored"] >= 3
+    # ROSE^2's own segmentation of map15, scored here as the data's README measured it
+    assert rows[2]["rose2_seg_precision_mean"] == pytest.approx(0.977, abs=5e-4)
+    assert rows[2]["rose2_seg_recall_pooled"] == pytest.approx(0.974, abs=5e-4)
+    assert rows[2]["rose2_room_precision"] == pytest.approx(0.95, abs=5e-3)
+    # the walls of the furniture plan against the clean map's wall cells
+    assert 0.5 < rows[1]["walls_completeness_10cm"] < 1.0 and 0.5 < rows[1]["walls_correctness_10cm"] <= 1.0
+    # the rooms land on the map's free pixels (the grid is the image upside down)
+    from PIL import Image
+
+    labels = plan_labels(ROOM_MAPS / "bormann" / "lab_ipa.png")[0]
+    grey = np.asarray(Image.open(ROOM_MAPS / "bormann" / "lab_ipa.png").convert("L"))
+    assert (grey[labels > 0] > 200).mean() > 0.97
