@@ -30,7 +30,9 @@ Modules, from the segments up:
 - :mod:`floorscan.score.rooms`: a plan's rooms and doors against the true ones
   (one-to-one matching by IoU, Bormann et al., ICRA 2016; rule ``score_rooms``), and
   :mod:`floorscan.score.drawn_rooms` against rooms drawn by people (rule
-  ``score_drawn``).
+  ``score_drawn``); both, and the room benchmark (``benchmarks/bench_rooms.py``), score
+  through :mod:`floorscan.score.segmentation` (Bormann's per-room mean and pooled
+  precision and recall, and the IoU-0.5 matching, from one intersection matrix).
 
 A new metric of a wall set is computed in :func:`floorscan.score.growing.score_walls`
 (and its incremental twin ``_GrowingWalls.score``, tested equal) and becomes a column

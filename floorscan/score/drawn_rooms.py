@@ -7,7 +7,8 @@ drawing's pixels (rule ``score_drawn``).
 - :func:`score_drawn_rooms`: the plan's rooms put on the drawing with the drawn plan's
   alignment (:func:`floorscan.score.drawn.align_drawn`, the same pixel frame), a pixel
   belonging to a plan room when its centre lies inside it (pixel-exact IoU), then
-  matched as :func:`floorscan.score.rooms.match_rooms` does. Only the part of a plan
+  scored by :func:`floorscan.score.segmentation.segmentation_scores` (the IoU-0.5
+  matching, and Bormann's figures without regions of 100 pixels or fewer). Only the part of a plan
   room inside the drawn building (:func:`drawn_building`) is scored: a drawing may
   show part of the building the recording saw (freiburg101's ends at the hall's west
   end), as the walls' correctness is scored inside the drawing only.
@@ -24,10 +25,10 @@ from floorscan.score.rooms import (
     ROOM_SCORE_COLUMNS,
     SEEN_SHARE,
     SEEN_WITHIN_M,
-    match_rooms,
     read_plan_folder_rooms,
     score_row,
 )
+from floorscan.score.segmentation import MIN_REGION_PX, segmentation_scores
 
 #: A region of a drawn segmentation is a room when a disc this wide fits in it ...
 DRAWN_MIN_WIDTH_M = 0.5
@@ -208,7 +209,7 @@ def score_drawn_rooms(plans: dict, labels: np.ndarray, transform, grid) -> tuple
         for j, poly in enumerate(rooms["polygon"]):
             plan_area[j], idx = _plan_room_pixels(poly, transform, building)
             inter[:, j] = np.bincount(flat[idx], minlength=n + 1)[1:]
-        scores, detail = match_rooms(inter, true_area, plan_area, counted)
+        scores, detail = segmentation_scores(inter, true_area, plan_area, counted, MIN_REGION_PX)
         rows.append(score_row(name, "drawn", scores, {"n_plan_doors": len(doors)}))
         overlay["plans"][name] = {"rooms": list(rooms["polygon"]), "doors_xy": doors[["x", "y"]].to_numpy(np.float64),
                                   "rooms_detail": detail}  # fmt: skip

@@ -13,13 +13,15 @@ ICRA 2016): plan rooms matched one-to-one to true rooms by their overlap.
   space of the reference map, :func:`floorscan.score.drawn.seen_by_recording`); only
   rooms seen for at least :data:`SEEN_SHARE` of their area count: no method finds a
   room it never saw (a drawing may hold rooms the robot never entered).
-- :func:`match_rooms`: from the intersection areas of true and plan rooms, their IoU,
-  the one-to-one matching of the pairs whose IoU is at least :data:`ROOM_IOU` that
-  maximises the summed IoU (the Hungarian method, SciPy's ``linear_sum_assignment``):
-  room precision (matched / plan rooms), recall (matched / counted true rooms) and the
-  mean IoU of the matched pairs. A plan room lying for at least
-  :data:`LEFT_OUT_SHARE` of its area in true rooms that do not count is left out of
-  precision.
+- :func:`~floorscan.score.segmentation.segmentation_scores` (the one room scorer, in
+  :mod:`floorscan.score.segmentation`): from the intersection areas of true and plan
+  rooms, the one-to-one matching of the pairs whose IoU is at least
+  :data:`~floorscan.score.segmentation.ROOM_IOU` (:func:`match_rooms`): room precision
+  (matched / plan rooms), recall (matched / counted true rooms) and the mean IoU of the
+  matched pairs, a plan room lying for at least
+  :data:`~floorscan.score.segmentation.LEFT_OUT_SHARE` of its area in true rooms that
+  do not count left out of precision; and Bormann's per-room mean and pooled
+  precision and recall on the same rooms.
 - :func:`match_doors`: each counted true door (not leading outside, between two counted
   rooms) matched one-to-one to a plan door centre within :data:`DOOR_TOLERANCE_M`
   (least summed distance): door recall, precision and mean centre error.
@@ -27,8 +29,8 @@ ICRA 2016): plan rooms matched one-to-one to true rooms by their overlap.
   shapely polygons), one row per plan, :data:`ROOM_SCORE_COLUMNS`. Rooms drawn by
   people are scored on the drawing's pixels by :mod:`floorscan.score.drawn_rooms`.
 
-A new room or door metric is a key of :func:`match_rooms` or :func:`match_doors` and a
-name in :data:`ROOM_SCORE_COLUMNS`.
+A new room metric is a key of :func:`~floorscan.score.segmentation.segmentation_scores`,
+a new door metric one of :func:`match_doors`, and a name in :data:`ROOM_SCORE_COLUMNS`.
 """
 
 from __future__ import annotations
@@ -38,13 +40,11 @@ import math
 import numpy as np
 import pandas as pd
 
-#: A plan room and a true room match when their IoU is at least this (Bormann et al.).
-ROOM_IOU = 0.5
+# match_rooms and its constants are read from here too
+from floorscan.score.segmentation import LEFT_OUT_SHARE, MIN_REGION_PX, ROOM_IOU, match_rooms, segmentation_scores  # noqa: F401
+
 #: A true room counts when the recording saw at least this share of its area.
 SEEN_SHARE = 0.5
-#: A plan room with at least this share of its area in true rooms that do not count is
-#: left out of precision.
-LEFT_OUT_SHARE = 0.5
 #: A plan door matches a true door when their centres are at most this far apart, m.
 DOOR_TOLERANCE_M = 0.2
 #: A point is seen when it lies this close to the reference map's free space, metres
@@ -53,11 +53,13 @@ SEEN_WITHIN_M = 0.05
 
 #: Columns of ``room_scores.csv``: ``truth`` is ``ground_truth`` (the simulator's),
 #: ``drawn`` (a segmentation drawn by people) or ``none``; scores without a truth, and
-#: door scores without true doors, are NaN.
+#: door scores without true doors, are NaN. ``seg_*`` are Bormann's per-room mean and
+#: pooled precision and recall (:func:`floorscan.score.segmentation.bormann_scores`).
 ROOM_SCORE_COLUMNS = [
     "plan", "truth", "room_precision", "room_recall", "room_mean_iou", "n_true_rooms", "n_true_rooms_all",
     "n_plan_rooms", "n_plan_rooms_scored", "n_matched_rooms", "door_recall", "door_precision",
     "door_centre_error_m", "n_true_doors", "n_plan_doors", "n_plan_doors_scored", "n_matched_doors",
+    "seg_precision_mean", "seg_precision_pooled", "seg_recall_mean", "seg_recall_pooled",
 ]  # fmt: skip
 
 
@@ -229,66 +231,6 @@ def room_seen_share(polygons, grid, within_m: float = SEEN_WITHIN_M) -> np.ndarr
     return np.divide(seen, n, out=np.zeros(len(polygons)), where=n > 0)
 
 
-def match_rooms(
-    inter: np.ndarray, true_area: np.ndarray, plan_area: np.ndarray, counted: np.ndarray,
-    min_iou: float = ROOM_IOU, left_out_share: float = LEFT_OUT_SHARE,
-) -> tuple[dict, dict]:  # fmt: skip
-    """Room precision, recall and mean IoU of a one-to-one matching by IoU.
-
-    Parameters
-    ----------
-    inter : (T, P) float ndarray
-        Intersection area of true room ``t`` and plan room ``p`` (any unit: m2, pixels).
-    true_area : (T,) float ndarray
-    plan_area : (P,) float ndarray
-        Areas, the same unit.
-    counted : (T,) bool ndarray
-        The true rooms that count (:data:`SEEN_SHARE` of them seen).
-    min_iou, left_out_share : float
-
-    Returns
-    -------
-    scores : dict
-        ``room_precision`` (matched / plan rooms scored; NaN without any),
-        ``room_recall`` (matched / counted true rooms; NaN without any),
-        ``room_mean_iou`` (of the matched pairs; NaN without any), ``n_true_rooms``
-        (counted), ``n_true_rooms_all``, ``n_plan_rooms``, ``n_plan_rooms_scored``,
-        ``n_matched_rooms``.
-    detail : dict
-        ``iou`` (T, P), ``pairs`` (K, 2) int (true, plan index), ``pair_iou`` (K,),
-        ``left_out`` (P,) bool.
-    """
-    from scipy.optimize import linear_sum_assignment
-
-    inter = np.asarray(inter, dtype=np.float64).reshape(len(true_area), len(plan_area))
-    ta, pa = np.asarray(true_area, np.float64), np.asarray(plan_area, np.float64)
-    counted = np.asarray(counted, dtype=bool)
-    union = ta[:, None] + pa[None, :] - inter
-    iou = np.divide(inter, union, out=np.zeros_like(inter), where=union > 0)
-    outside = inter[~counted].sum(axis=0)
-    # left out of precision: mostly in true rooms that do not count, or nothing of it
-    # where the truth is drawn (a plan room wholly outside a drawing that shows part of
-    # the building)
-    left_out = (np.divide(outside, pa, out=np.zeros_like(pa), where=pa > 0) >= left_out_share) | (pa <= 0)
-    ti, pi = np.flatnonzero(counted), np.flatnonzero(~left_out)
-    sub = iou[np.ix_(ti, pi)]
-    # only pairs that count take part: the matching of the largest summed IoU among them
-    rows, cols = linear_sum_assignment(np.where(sub >= min_iou, sub, 0.0), maximize=True)
-    pairs = np.column_stack([ti[rows], pi[cols]]).astype(np.int64).reshape(-1, 2)
-    pair_iou = iou[pairs[:, 0], pairs[:, 1]]
-    keep = pair_iou >= min_iou
-    pairs, pair_iou = pairs[keep], pair_iou[keep]
-    k = len(pairs)
-    scores = {
-        "room_precision": k / len(pi) if len(pi) else math.nan,
-        "room_recall": k / len(ti) if len(ti) else math.nan,
-        "room_mean_iou": float(pair_iou.mean()) if k else math.nan,
-        "n_true_rooms": len(ti), "n_true_rooms_all": len(ta), "n_plan_rooms": len(pa),
-        "n_plan_rooms_scored": len(pi), "n_matched_rooms": k,
-    }  # fmt: skip
-    return scores, {"iou": iou, "pairs": pairs, "pair_iou": pair_iou, "left_out": left_out}
-
-
 def match_doors(
     true_xy: np.ndarray, counted: np.ndarray, plan_xy: np.ndarray, tolerance_m: float = DOOR_TOLERANCE_M,
 ) -> tuple[dict, dict]:  # fmt: skip
@@ -422,7 +364,8 @@ def score_room_plans(plans: dict, grid, truth_path=None) -> tuple[pd.DataFrame, 
             rows.append(score_row(name, "none", {"n_plan_rooms": len(rooms), "n_plan_doors": len(doors)}))
         else:
             inter = shapely.area(shapely.intersection(polys[:, None], plan_polys[None, :]))  # (T, P), P may be 0
-            r_scores, r_detail = match_rooms(inter, shapely.area(polys), shapely.area(plan_polys), counted)
+            r_scores, r_detail = segmentation_scores(inter, shapely.area(polys), shapely.area(plan_polys), counted,
+                                                     MIN_REGION_PX * grid.resolution_m**2)  # fmt: skip
             d_scores, d_detail = match_doors(overlay["true_doors_xy"], door_counted, entry["doors_xy"])
             rows.append(score_row(name, "ground_truth", r_scores, d_scores))
             entry.update(rooms_detail=r_detail, doors_detail=d_detail)

@@ -1,0 +1,134 @@
+"""The one room scorer (floorscan.score.segmentation) on hand-made label images with
+known answers, and the room benchmark (benchmarks/bench_rooms.py) on two real maps of
+../shared/data/room-maps."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from conftest import SHARED_DATA
+from floorscan.score.segmentation import (
+    bormann_scores,
+    label_colours,
+    label_drawn_regions,
+    match_rooms,
+    score_label_images,
+    segmentation_scores,
+)
+
+ROOM_MAPS = SHARED_DATA / "room-maps"
+
+
+def _two_rooms(rows: int = 20) -> np.ndarray:
+    """True rooms of a 20-column image: 1 on rows 0..9 (200 px), 2 on rows 10.. ."""
+    t = np.zeros((rows, 20), dtype=np.int32)
+    t[:10], t[10:] = 1, 2
+    return t
+
+
+def _found() -> np.ndarray:
+    """Found rooms: 7 on rows 0..14 (300 px), 9 on rows 15..19 (100 px)."""
+    f = np.zeros((20, 20), dtype=np.int32)
+    f[:15], f[15:] = 7, 9
+    return f
+
+
+def test_bormann_and_iou_figures_of_a_hand_made_segmentation():
+    # 9 has 100 px: dropped. 7 overlaps 1 by 200, 2 by 100.
+    got = score_label_images(_two_rooms(), _found())
+    assert got["seg_precision_mean"] == pytest.approx(200 / 300)
+    assert got["seg_precision_pooled"] == pytest.approx(200 / 300)
+    assert got["seg_recall_mean"] == pytest.approx((1.0 + 0.5) / 2)
+    assert got["seg_recall_pooled"] == pytest.approx(300 / 400)
+    # IoU(7, 1) = 200 / 300 matches; IoU(7, 2) = 100 / 400 does not
+    assert (got["room_precision"], got["room_recall"]) == (1.0, 0.5)
+    assert got["room_mean_iou"] == pytest.approx(200 / 300)
+    assert (got["n_true_rooms"], got["n_plan_rooms_scored"], got["n_matched_rooms"]) == (2, 1, 1)
+
+
+def test_regions_of_100_pixels_or_fewer_are_dropped_101_kept():
+    # with the limit at 99 px the 100-px room 9 counts: IoU(9, 2) = 100 / 200 = 0.5 matches
+    got = score_label_images(_two_rooms(), _found(), min_px=99)
+    assert got["seg_precision_mean"] == pytest.approx((200 / 300 + 1.0) / 2)
+    assert got["seg_precision_pooled"] == pytest.approx(300 / 400)
+    assert got["seg_recall_mean"] == pytest.approx(0.75)
+    assert (got["room_precision"], got["room_recall"]) == (1.0, 1.0)
+    assert got["room_mean_iou"] == pytest.approx((200 / 300 + 0.5) / 2)
+    # a true room of 100 px is dropped too: nothing left to recall
+    t = np.zeros((20, 20), dtype=np.int32)
+    t[:5] = 3
+    got = score_label_images(t, _found())
+    assert got["n_true_rooms"] == 0 and np.isnan(got["seg_recall_mean"]) and np.isnan(got["room_recall"])
+    assert got["seg_precision_mean"] == 0.0 and got["room_precision"] == 0.0
+
+
+def test_a_truth_one_pixel_smaller_is_compared_on_the_common_top_left_part():
+    t = _two_rooms(rows=19)  # room 2 is 180 px
+    got = score_label_images(t, _found())
+    # found 9 is cut to 80 px (dropped); 7 overlaps 1 by 200 and 2 by 100
+    assert got["seg_precision_mean"] == pytest.approx(200 / 300)
+    assert got["seg_recall_mean"] == pytest.approx((1.0 + 100 / 180) / 2)
+    assert got["seg_recall_pooled"] == pytest.approx(300 / 380)
+    assert got == score_label_images(t, _found()[:19])
+
+
+def test_the_matrix_scorer_agrees_with_match_rooms_and_leaves_out_what_it_leaves_out():
+    inter = np.array([[90.0, 0.0, 5.0], [10.0, 60.0, 0.0], [0.0, 0.0, 40.0]])
+    ta, fa = np.array([100.0, 80.0, 50.0]), np.array([100.0, 60.0, 50.0])
+    counted = np.array([True, True, False])
+    scores, detail = segmentation_scores(inter, ta, fa, counted)
+    ref, _ = match_rooms(inter, ta, fa, counted)
+    assert {k: scores[k] for k in ref} == ref
+    # found room 2 lies mostly in true room 2, which does not count: out of both scores
+    assert detail["left_out"].tolist() == [False, False, True]
+    assert scores["seg_precision_mean"] == pytest.approx((0.9 + 1.0) / 2)
+    assert scores["seg_recall_mean"] == pytest.approx((0.9 + 60 / 80) / 2)
+    assert bormann_scores(inter, ta, fa, min_area=55.0)["seg_recall_pooled"] == pytest.approx((90 + 60) / 180)
+
+
+def test_drawn_regions_are_8_connected_white_above_250():
+    g = np.full((10, 10), 255.0)
+    g[0, :], g[-1, :], g[:, 0], g[:, -1] = 0, 0, 0, 0
+    for i in range(1, 9):  # a one-pixel diagonal line: 8-connected white crosses it
+        g[i, 9 - i] = 0
+    assert label_drawn_regions(g).max() == 1
+    g[2:4, 2:4] = 250  # not white
+    lab = label_drawn_regions(g)
+    assert lab.max() == 1 and (lab[2:4, 2:4] == 0).all()
+
+
+def test_colour_labels_one_room_per_colour_black_and_transparent_none():
+    img = np.zeros((4, 6, 4), dtype=np.uint8)
+    img[..., 3] = 255
+    img[:, :2, :3] = (10, 20, 30)
+    img[:, 4:, :3] = (10, 20, 30)  # the same room, apart
+    img[:2, 2:4, :3] = (200, 0, 0)
+    img[3, 5, 3] = 0  # transparent
+    lab = label_colours(img)
+    assert lab.max() == 2 and (lab[:, :2] == lab[0, 4]).all() and lab[3, 5] == 0 and (lab[2:, 2:4] == 0).all()
+
+
+@pytest.mark.skipif(not ROOM_MAPS.is_dir(), reason=f"room-maps benchmark data not found at {ROOM_MAPS} (../shared/data/room-maps)")
+def test_benchmark_on_a_bormann_and_a_rose2_map():
+    from benchmarks.bench_rooms import plan_labels, run_task
+
+    rows = run_task(("bormann", "lab_ipa"), ROOM_MAPS) + run_task(("rose2", "map15"), ROOM_MAPS)
+    assert [r["group"] for r in rows] == ["bormann", "bormann_furniture", "rose2"]
+    for r in rows:
+        for k in ("seg_precision_mean", "seg_precision_pooled", "seg_recall_mean", "seg_recall_pooled",
+                  "room_precision", "room_recall", "room_mean_iou"):  # fmt: skip
+            assert 0.3 < r[k] <= 1.0, (r["map"], k, r[k])
+        assert r["n_true_rooms"] >= 10 and r["n_plan_rooms_scored"] >= 3
+    # ROSE^2's own segmentation of map15, scored here as the data's README measured it
+    assert rows[2]["rose2_seg_precision_mean"] == pytest.approx(0.977, abs=5e-4)
+    assert rows[2]["rose2_seg_recall_pooled"] == pytest.approx(0.974, abs=5e-4)
+    assert rows[2]["rose2_room_precision"] == pytest.approx(0.95, abs=5e-3)
+    # the walls of the furniture plan against the clean map's wall cells
+    assert 0.5 < rows[1]["walls_completeness_10cm"] < 1.0 and 0.5 < rows[1]["walls_correctness_10cm"] <= 1.0
+    # the rooms land on the map's free pixels (the grid is the image upside down)
+    from PIL import Image
+
+    labels = plan_labels(ROOM_MAPS / "bormann" / "lab_ipa.png")[0]
+    grey = np.asarray(Image.open(ROOM_MAPS / "bormann" / "lab_ipa.png").convert("L"))
+    assert (grey[labels > 0] > 200).mean() > 0.97
