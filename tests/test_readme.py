@@ -10,8 +10,10 @@ it does not know):
 - ``.venv/bin/snakemake ...``: in a copy of the workflow with the demo built, as
   written and run for real, except the three that redo the demo's stages or need a
   cluster (``-R``, ``--forcerun``, ``--profile``), which are dry runs (``-n``); the
-  README's example paths (``/data/lab_run.bag``, ``/data/survey/``) stand for the
-  demo's recording and a folder of two copies of it, and its example config files
+  README's example paths (``/data/lab_run.bag``, ``/data/survey/``,
+  ``/data/floor/map.yaml``, ``/data/floor.png``) stand for the demo's recording, a
+  folder of two copies of it and the demo building rasterised as a map (the map_server
+  yaml, and its image alone), and its example config files
   (``my.yaml``, ``house.yaml``) are its own YAML blocks.
 """
 
@@ -106,7 +108,17 @@ def readme_workdir(survey_run):
         m = re.match(r"# (\S+\.yaml)\n", block)
         if m:
             (wd / m.group(1)).write_text(block.replace("/data/lab_run.bag", str(bag)))
-    return wd, {"/data/lab_run.bag": str(bag), "/data/survey/": str(survey) + "/"}
+    # the README's map examples: the demo building rasterised as a map_server map, and its image alone
+    from floorscan.sim.building_file import load_building
+    from floorscan.sim.occupancy_map import write_building_map
+
+    (wd / "maps" / "floor").mkdir(parents=True, exist_ok=True)
+    write_building_map(load_building(wd / "config" / "buildings" / "demo.yaml"), wd / "maps" / "floor" / "map.yaml")
+    from PIL import Image
+
+    Image.open(wd / "maps" / "floor" / "map.pgm").save(wd / "maps" / "floor.png")
+    return wd, {"/data/lab_run.bag": str(bag), "/data/survey/": str(survey) + "/",
+                "/data/floor/map.yaml": str(wd / "maps" / "floor" / "map.yaml"), "/data/floor.png": str(wd / "maps" / "floor.png")}
 
 
 @pytest.mark.workflow
@@ -129,7 +141,8 @@ def test_snakemake_commands_work_as_written(readme_workdir, cmd):
     assert res.returncode == 0, res.stderr[-3000:]
     assert "Error" not in res.stderr, res.stderr[-3000:]
     if not heavy and "--unlock" not in words:  # every run ends with the answer of its datasets
-        assert " kept scans (" in res.stdout or ": no answer yet (" in res.stdout, res.stdout[-2000:]
+        answers = (" kept scans (", ": no answer yet (", ": floor plan of an occupancy map, ")
+        assert any(a in res.stdout for a in answers), res.stdout[-2000:]
 
 
 def test_the_slurm_profile_names_an_installed_executor():

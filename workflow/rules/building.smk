@@ -37,6 +37,13 @@ def building_plans(wildcards):
     return plans
 
 
+_MAP_FLOORS = [f["dataset"] for f in building_floors() if f["dataset"] in MAP_DATASETS]
+if _MAP_FLOORS:
+    config_error(
+        f"building.floors: {', '.join(_MAP_FLOORS)} is an occupancy map; a building's floors are rebuilt from "
+        "their recordings' selected scans, which a map does not have: run the maps without `building`"
+    )
+
 if building_floors():
 
     rule building:

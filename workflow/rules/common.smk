@@ -18,13 +18,11 @@ DATASETS = config["datasets"]
 
 def is_map_dataset(dataset):
     """Whether a dataset is an occupancy map (floorscan.ingest.occupancy_map), not a
-    recording of scans: `format: map`, a synthetic building rasterised (`recording:
-    map`), or, without a format, a path to a map_server yaml or a .pgm/.png image."""
+    recording of scans: `format: map`, or, without a format, a path to a map_server
+    yaml or a .pgm/.png image."""
     from floorscan.ingest.occupancy_map import is_map_path
 
     ds = DATASETS[dataset]
-    if ds.get("format") == "synthetic":
-        return ds.get("recording") == "map"
     if ds.get("format"):
         return ds["format"] == "map"
     return bool(ds.get("path")) and is_map_path(ds["path"])

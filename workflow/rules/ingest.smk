@@ -62,14 +62,19 @@ PLAN_OUTPUTS.append("results/{dataset}/poses.parquet")
 
 
 def map_input(wildcards):
-    """The files of an occupancy map: its yaml and the image it names, or the image
-    (a synthetic building's: the simulator's rasterised map)."""
+    """The files of an occupancy map: its yaml and the image it names, or the image."""
     from floorscan.ingest.occupancy_map import map_images
 
     path = recording_input(wildcards)
-    if is_synthetic(wildcards.dataset):
-        return [path]
     return [path, *[str(p) for p in map_images(path) if p.is_file()]]
+
+
+def map_state(wildcards):
+    """The map's files' sizes and modification times (as recording_state): a replaced
+    image reruns the map's stages even when the yaml is the same."""
+    from floorscan.core.files import recording_fingerprint
+
+    return [recording_fingerprint(p) for p in map_input(wildcards)]
 
 
 def map_resolution(wildcards):
@@ -98,7 +103,7 @@ rule map_ingest:
     params:
         path=map_path,
         resolution_m=map_resolution,
-        recording=recording_state,
+        recording=map_state,
     log:
         log_path("ingest"),
     benchmark:
