@@ -33,7 +33,7 @@ what the map extractor fits the plan's faces on. Completeness is the share of th
 cells within tau of a plan face, correctness the share of the plan's face length
 within tau of one (:func:`floorscan.score.drawn.score_against_drawn`), at 5 and 10 cm.
 
-``python -m benchmarks rooms [--maps NAME ...] [--out DIR] [--workers 2] [--no-figures]``:
+``python -m benchmarks rooms [--maps NAME ...] [--out DIR] [--workers 2] [--no-figures] [--rooms plan|layout]``:
 a table per map, the averages per group, the published figures beside them, and one
 figure per map (``--out``, default ``results/bench_rooms/``: the map, the rooms people
 drew, floorscan's rooms, ROSE^2's rooms where there are any).
@@ -83,8 +83,14 @@ def read_image(path: Path) -> np.ndarray:
     return np.asarray(Image.open(path))
 
 
-def plan_labels(path: Path):
+def plan_labels(path: Path, rooms: str = "plan"):
     """The plan of a map image and its rooms on the image's pixels.
+
+    ``rooms``: ``plan``, the plan's own rooms (the pipeline's room step,
+    :mod:`floorscan.floorplan.rooms`); ``layout``, the rooms of the candidate global
+    layout of issue 44 (:func:`floorscan.floorplan.layout.layout_plan_rooms` on the
+    plan's walls, its clutter faces as hypotheses without evidence of their own, and
+    the map's grid), in the plan's place.
 
     Returns
     -------
@@ -104,8 +110,18 @@ def plan_labels(path: Path):
     from floorscan.walls.map_stage import map_of_grid
 
     t0 = time.perf_counter()
-    grid, _ = read_occupancy_map(path)
-    plan = plan_of_scans(map_of_grid(grid, None), None, FloorplanParams(), grid)
+    grid = read_occupancy_map(path)[0]
+    params = FloorplanParams()
+    plan = plan_of_scans(map_of_grid(grid, None), None, params, grid)
+    if rooms == "layout":
+        from dataclasses import replace
+
+        from floorscan.floorplan.layout import layout_plan_rooms
+
+        table, doors = layout_plan_rooms(plan.walls[["x0", "y0", "x1", "y1"]].to_numpy(np.float64),
+                                         plan.walls["thickness_m"].to_numpy(np.float64), grid, params.rooms,
+                                         plan.clutter[["x0", "y0", "x1", "y1"]].to_numpy(np.float64))  # fmt: skip
+        plan = replace(plan, rooms=table, doors=doors)
     seconds = time.perf_counter() - t0
     h, w = grid.shape
     r, (ox, oy) = grid.resolution_m, grid.origin_xy
@@ -131,18 +147,18 @@ def wall_scores(plan, reference_grid) -> dict:
     return out | {"n_faces": len(faces), "n_clutter": len(plan.clutter)}
 
 
-def score_one(group: str, name: str, image: Path, truth: np.ndarray):
+def score_one(group: str, name: str, image: Path, truth: np.ndarray, rooms: str = "plan"):
     """The plan of one map image scored against ``truth`` (image rows): its row of
     figures, its room labels, its grid and the plan."""
     from floorscan.score.segmentation import score_label_images
 
-    labels, plan, grid, seconds = plan_labels(image)
+    labels, plan, grid, seconds = plan_labels(image, rooms)
     row = {"group": group, "map": name, "seconds": seconds, "n_plan_rooms_all": len(plan.rooms)}
     row |= score_label_images(truth, labels)
     return row, labels, grid, plan
 
 
-def run_task(task: tuple[str, str], data: Path = DATA, out: Path | None = None) -> list[dict]:
+def run_task(task: tuple[str, str], data: Path = DATA, out: Path | None = None, rooms: str = "plan") -> list[dict]:
     """Every figure of one map (a Bormann map: both its images), and its figure in ``out``.
 
     Returns
@@ -159,8 +175,8 @@ def run_task(task: tuple[str, str], data: Path = DATA, out: Path | None = None) 
     if group == "bormann":
         folder = data / "bormann"
         truth = label_drawn_regions(grey_of_image(read_image(folder / f"{name}_gt_segmentation.png")))
-        clean, clean_labels, clean_grid, clean_plan = score_one("bormann", name, folder / f"{name}.png", truth)
-        furn, furn_labels, _, furn_plan = score_one("bormann_furniture", name, folder / f"{name}_furnitures.png", truth)
+        clean, clean_labels, clean_grid, clean_plan = score_one("bormann", name, folder / f"{name}.png", truth, rooms)
+        furn, furn_labels, _, furn_plan = score_one("bormann_furniture", name, folder / f"{name}_furnitures.png", truth, rooms)
         clean |= {f"walls_{k}": v for k, v in wall_scores(clean_plan, clean_grid).items()}
         furn |= {f"walls_{k}": v for k, v in wall_scores(furn_plan, clean_grid).items()}
         rows += [clean, furn]
@@ -170,7 +186,7 @@ def run_task(task: tuple[str, str], data: Path = DATA, out: Path | None = None) 
     else:
         folder = data / "rose2"
         truth = label_colours(read_image(folder / f"{name}_gt.png"))
-        row, labels, _, _ = score_one("rose2", name, folder / f"{name}.png", truth)
+        row, labels, _, _ = score_one("rose2", name, folder / f"{name}.png", truth, rooms)
         rose = label_colours(read_image(folder / f"{name}_rose2.png"))
         row |= {f"rose2_{k}": v for k, v in score_label_images(truth, rose).items()}
         rows.append(row)
@@ -285,6 +301,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
     ap.add_argument("--out", type=Path, default=REPO / "results" / "bench_rooms", help="folder of the figures")
     ap.add_argument("--workers", type=int, default=2, help="processes (default 2)")
     ap.add_argument("--no-figures", action="store_true")
+    ap.add_argument("--rooms", choices=["plan", "layout"], default="plan",
+                    help="plan: the pipeline's room step (default); layout: the candidate global layout of issue 44")
     ap.add_argument("--data", type=Path, default=DATA, help="the room-maps folder")
     args = ap.parse_args(argv or [])
     if not args.data.is_dir():
@@ -296,7 +314,7 @@ def main(argv: list[str] | None = None) -> list[dict]:
     out = None if args.no_figures else args.out
     t0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=max(1, args.workers)) as pool:
-        done = list(pool.map(run_task, todo, [args.data] * len(todo), [out] * len(todo)))
+        done = list(pool.map(run_task, todo, [args.data] * len(todo), [out] * len(todo), [args.rooms] * len(todo)))
     wall = time.perf_counter() - t0
     order = {g: i for i, g in enumerate(GROUPS)}
     rows = sorted((r for rs in done for r in rs), key=lambda r: order[r["group"]])

@@ -66,6 +66,7 @@ import pandas as pd
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan import doors as D
 from floorscan.floorplan.room_space import RoomParams, RoomRaster, room_space, space_regions, wall_footprints
+from floorscan.floorplan.room_tables import room_tables
 
 log = logging.getLogger(__name__)
 
@@ -439,43 +440,10 @@ def plan_rooms(
     keep = [k for k in range(n) if not polys[k].is_empty and polys[k].area >= params.min_room_area_m2]
     new_id = {k + 1: i for i, k in enumerate(keep)}
     polys = [polys[k] for k in keep]
-    kinds = []
-    for poly in polys:
-        # width: the largest circle inside the room (its radius: the circle's centre to the wall)
-        width = 2.0 * float(shapely.maximum_inscribed_circle(poly, raster.resolution_m / 2).length)
-        length = poly.area / max(width, 1e-9)
-        long = width <= params.corridor_max_width_m and length >= max(params.corridor_elongation * width, params.corridor_min_length_m)
-        kinds.append("corridor" if long else "room")
     doors = [(p, q, w, new_id[a], new_id[b]) for p, q, w, a, b in doors if a in new_id and b in new_id]
-    if polys and not doors:
-        kinds = ["space"] * len(polys)
-        log.info("rooms: no door divides the free space (an open hall, one corridor, a campus): %s of %.1f m2",
-                 "one space" if len(polys) == 1 else f"{len(polys)} spaces apart", sum(p.area for p in polys))
-    names, counts = [], {}
-    for kind in kinds:
-        counts[kind] = counts.get(kind, 0) + 1
-        names.append(f"{kind.capitalize()} {counts[kind]}")
-    rooms = pd.DataFrame(
-        {
-            "room_id": np.arange(len(polys), dtype=np.int32),
-            "name": pd.Series(names, dtype=object),
-            "kind": pd.Series(kinds, dtype=object),
-            "area_m2": np.array([p.area for p in polys], dtype=np.float64),
-            "perimeter_m": np.array([p.length for p in polys], dtype=np.float64),
-            "polygon": pd.Series(polys, dtype=object),
-        }
-    )
-    ends = np.array([np.r_[p, q] for p, q, *_ in doors], dtype=np.float64).reshape(-1, 4)
-    doors_df = pd.DataFrame(
-        {
-            "door_id": np.arange(len(doors), dtype=np.int32),
-            "x0": ends[:, 0], "y0": ends[:, 1], "x1": ends[:, 2], "y1": ends[:, 3],
-            "width_m": np.hypot(ends[:, 2] - ends[:, 0], ends[:, 3] - ends[:, 1]),
-            "wall_id": np.array([d[2] for d in doors], dtype=np.int32),
-            "room_a": np.array([d[3] for d in doors], dtype=np.int32),
-            "room_b": np.array([d[4] for d in doors], dtype=np.int32),
-        }  # fmt: skip
-    )
+    rooms, doors_df = room_tables(polys, doors, raster.resolution_m, params)
+    kinds = list(rooms["kind"])
     log.info("rooms: %d rooms (%d corridors), %d doors, %.1f m2 in all (%.2f s)", len(polys), kinds.count("corridor"),
              len(doors_df), float(rooms["area_m2"].sum()), time.perf_counter() - t0)
     return rooms, doors_df
+

@@ -1,0 +1,105 @@
+"""The candidate global layout of issue 44 (floorscan.floorplan.layout): the cell complex
+of the plan's walls, labelled inside and grouped into rooms by the evidence of a wall on
+the boundaries between cells. Measured beside today's room step by ``python -m
+benchmarks rooms --rooms layout`` (benchmarks/README.md); here its steps on known
+geometry."""
+
+import numpy as np
+import pytest
+from shapely.geometry import box
+
+from floorscan.core.occupancy_classes import grid_of_classes
+from floorscan.floorplan.arrangement import layout_cells
+from floorscan.floorplan.hypotheses import CLOSED, OPEN, WALL, dominant_axes, layout_lines, snapped_axes
+from floorscan.floorplan.labelling import group_cells
+from floorscan.floorplan.layout import layout_rooms
+from floorscan.floorplan.room_space import RoomParams
+
+RES = 0.05
+T = 0.2
+
+
+def two_rooms(shift=(0.0, 0.0), door=0.9):
+    """Two 5 x 5 m rooms side by side (outer walls 10 x 5 m, axes on the faces' middle),
+    a door of ``door`` metres in the middle wall; the map of their free space and walls
+    on 5 cm cells; everything moved by ``shift`` metres."""
+    sx, sy = shift
+    h = T / 2
+    axes = np.array([
+        [0, 0, 10, 0], [10, 0, 10, 5], [10, 5, 0, 5], [0, 5, 0, 0],   # the outline
+        [5, 0, 5, 2.5 - door / 2], [5, 2.5 + door / 2, 5, 5],         # the middle wall, its door
+    ], dtype=float) + [sx, sy, sx, sy]  # fmt: skip
+    thickness = np.full(len(axes), T)
+    ox, oy = -1.0 + sx, -1.0 + sy
+    x = ox + (np.arange(240) + 0.5) * RES
+    y = oy + (np.arange(140) + 0.5) * RES
+    X, Y = np.meshgrid(x - sx, y - sy)
+    inside = (X > -h) & (X < 10 + h) & (Y > -h) & (Y < 5 + h)
+    wall = inside & ((X < h) | (X > 10 - h) | (Y < h) | (Y > 5 - h) | ((np.abs(X - 5) < h) & (np.abs(Y - 2.5) > door / 2)))
+    grid = grid_of_classes(wall, inside & ~wall, (ox, oy), RES)
+    return axes, thickness, grid
+
+
+def test_two_rooms_and_their_door():
+    axes, thickness, grid = two_rooms()
+    polys, doors = layout_rooms(axes, thickness, grid, RoomParams())
+    assert len(polys) == 2 and len(doors) == 1
+    np.testing.assert_allclose(sorted(p.area for p in polys), [4.8 * 4.8] * 2, rtol=0.01)  # to the wall faces
+    p, q, wall, a, b = doors[0]
+    assert (wall, a, b) == (4, 0, 1)
+    np.testing.assert_allclose(np.hypot(*(q - p)), 0.9, atol=1e-6)
+    assert not polys[0].intersects(polys[1].buffer(-1e-6))  # a coverage: no overlap
+
+
+def test_a_passage_wider_than_a_door_joins_the_rooms():
+    axes, thickness, grid = two_rooms(door=3.5)  # the middle wall is 2 x 0.75 m: more opening than wall
+    polys, doors = layout_rooms(axes, thickness, grid, RoomParams())
+    assert len(polys) == 1 and doors == []
+
+
+@pytest.mark.parametrize("shift", [(0.0, 0.0), (0.013, 0.0371), (-0.0249, 0.0117), (1234.567, -89.0123)])
+def test_the_same_layout_under_a_shift(shift):
+    """A sub-cell (or a large) shift of walls and map gives the same rooms and door, moved:
+    the complex is noded on a fixed precision grid."""
+    axes, thickness, grid = two_rooms(shift)
+    polys, doors = layout_rooms(axes, thickness, grid, RoomParams())
+    assert len(polys) == 2 and len(doors) == 1
+    c = sorted((p.centroid.x - shift[0], p.centroid.y - shift[1]) for p in polys)
+    np.testing.assert_allclose(c, [(2.5, 2.5), (7.5, 2.5)], atol=0.03)
+
+
+def test_hypotheses_close_gaps_and_extend_free_ends():
+    axes, thickness, _ = two_rooms()
+    lines, kinds, gaps = layout_lines(axes, thickness, box(-1, -1, 11, 6), door_max_m=2.0)
+    assert kinds[:6] == [WALL] * 6
+    # each jamb of the door extends across it to the other: a closed opening, 0.9 m
+    assert kinds[6:].count(CLOSED) == 2 and kinds.count(OPEN) == 0
+    assert sorted(round(g[3], 6) for g in gaps) == [0.9, 0.9]
+    cells, edges = layout_cells(lines, kinds)
+    assert len(cells) == 3  # two rooms and the outside, within the frame
+    assert all(closed == length for a, b, length, closed in edges)  # every edge is wall or closed
+
+
+def test_junctions_snap_and_directions_turn():
+    # an L whose ends stop 4 cm short of each other, a T 6 cm short, one wall 1.5 degrees off
+    axes = np.array([[0, 0, 3.96, 0], [4, 0.04, 4, 3], [2, 0.06, 2, 2], [0, 3, 3, 3.0785]], float)
+    snapped, free = snapped_axes(axes, np.full(4, 0.1))
+    np.testing.assert_allclose(snapped[0, 2:], snapped[1, :2])  # the corner: one point
+    assert not free[0, 1] and not free[1, 0] and not free[2, 0] and free[2, 1]
+    from shapely.geometry import LineString, Point
+
+    # the T's end moved onto the (moved) wall's axis, a millimetre past it
+    assert LineString(snapped[0].reshape(2, 2)).distance(Point(snapped[2, :2])) < 2e-3
+    turned = dominant_axes(axes)
+    angle = [np.arctan2(*(turned[k, 2:] - turned[k, :2])[::-1]) for k in (0, 3)]
+    assert abs(angle[0] - angle[1]) < 1e-9  # the two near-horizontal walls on one direction ...
+    assert 0 < angle[0] < np.deg2rad(1.5)  # ... their length-weighted mean
+    np.testing.assert_allclose(turned[3, :2] + turned[3, 2:], axes[3, :2] + axes[3, 2:])  # about its midpoint
+
+
+def test_grouping_by_boundary_evidence():
+    # four cells in a row: 0|1 no evidence, 1|2 all wall, 2|3 a third wall; cell 4 outside
+    inside = np.array([True, True, True, True, False])
+    edges = [(0, 1, 3.0, 0.0), (1, 2, 3.0, 3.0), (2, 3, 3.0, 1.0), (3, 4, 3.0, 3.0)]
+    region = group_cells(inside, edges, np.full(5, 10.0), min_area_m2=2.0)
+    assert region[0] == region[1] and region[2] == region[3] and region[1] != region[2] and region[4] == -1
