@@ -234,7 +234,8 @@ def write_room_bag(
     TF: the ``links`` on /tf at 10 Hz, half a period off the scans (``map -> odom`` a slow
     drift correction, so it is no static link, ending after ``map_until_s`` seconds (the
     localizer stopped); any other link the base pose), the ``static`` links (the laser's
-    mount) on /tf_static. ``pose_topic``: the base pose on /amcl_pose as well. ``still``:
+    mount) on /tf_static (no /tf_static topic when there are none, no /tf when ``links``
+    is empty). ``pose_topic``: the base pose on /amcl_pose as well. ``still``:
     the robot never moves (every link sends one pose over and over). ``change(i, msg)``
     edits scan ``i``'s message; ``raw(i)`` gives bytes stored instead of its
     serialization (or None); ``stamps``: the scans' header stamps (the bag's own times
@@ -250,7 +251,7 @@ def write_room_bag(
                 translation=Vec(x=float(x), y=float(y), z=float(z)), rotation=Q(*_quat(float(yaw)))))
 
     msgs = [(T0_NS - 1, "/tf_static", T["tf2_msgs/msg/TFMessage"](
-        transforms=[transform(p, c, T0_NS, MOUNT_X, 0.0, 0.0, MOUNT_Z) for p, c in static]))]
+        transforms=[transform(p, c, T0_NS, MOUNT_X, 0.0, 0.0, MOUNT_Z) for p, c in static]))] if static else []
     for i in range(n):
         t = T0_NS + int(i * 0.1e9)
         msg = _scan_message(ts, t if stamps is None else stamps[i], scan_frame, ranges(i), ros2, cloud)

@@ -46,6 +46,7 @@ from floorscan.ingest.params import PosesParams
 from floorscan.ingest.points import FrameError, ScanLosses, filter_points, no_point_reason, no_return_reason
 from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
 from floorscan.ingest.ros_messages import (
+    bag_messages,
     laser_scan_limits,
     laser_scan_problem,
     laser_scan_xyz,
@@ -191,7 +192,7 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
         try:
             with _reader(path) as reader:
                 conns = [c for c in reader.connections if c.topic == scan_topic]
-                for i, (c, bag_t, raw) in enumerate(reader.messages(connections=conns)):
+                for i, (c, bag_t, raw) in enumerate(bag_messages(reader, conns)):
                     losses.n_read += 1
                     try:
                         scan = _scan(reader, c, bag_t, raw, path, scan_topic, i, rmin_cfg, rmax_cfg)
@@ -224,7 +225,7 @@ def _scan_frame(reader, path: Path, topic: str, conns) -> str:
     """The frame of the first scan message that can be decoded (a broken one is skipped
     later, as the scans are read)."""
     error = None
-    for c, _, raw in reader.messages(connections=conns):
+    for c, _, raw in bag_messages(reader, conns):
         try:
             return reader.deserialize(raw, c.msgtype).header.frame_id.lstrip("/")
         except Exception as e:  # rosbags raises several deserialization errors
@@ -255,7 +256,7 @@ def _pose_topic_stream(
     topic = pose_cfg["topic"]
     conns = _connections(reader, path, topic, POSE_TYPES, "poses")
     t, xyz, quat = [], [], []
-    for i, (c, bag_t, raw) in enumerate(reader.messages(connections=conns)):
+    for i, (c, bag_t, raw) in enumerate(bag_messages(reader, conns)):
         msg = reader.deserialize(raw, c.msgtype)
         stamped = c.msgtype.endswith("/PoseStamped")
         pose = msg.pose if stamped else msg.pose.pose
