@@ -32,6 +32,7 @@ for the scans and for a pose topic, and noted; more is an ``InputError``.
 
 from __future__ import annotations
 
+import dataclasses
 import heapq
 import logging
 from pathlib import Path
@@ -64,7 +65,7 @@ from floorscan.ingest.rosbag_detect import (
     short_type,
 )
 from floorscan.ingest.tf_chains import TfLink, read_tf
-from floorscan.ingest.tf_poses import planar_pose_stream, static_transform, tf_pose_stream
+from floorscan.ingest.tf_poses import is_upside_down, planar_pose_stream, static_transform, tf_pose_stream, turn_over
 
 log = logging.getLogger(__name__)
 
@@ -161,6 +162,7 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
                 phrase = None
             if pose_cfg is None:
                 stream, pose_kind = pose_stream_frame([], [], [], [], []), "none"
+                stream.attrs["upside_down"] = _mount_upside_down(tf.edges, scan_frame)
             else:
                 pose_kind = "map"
                 source = pose_cfg["source"]
@@ -178,6 +180,12 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
                 if phrase is None:
                     phrase = f"{described} (set in the dataset)"
                     notes.append(f"pose source {phrase}: used as the map pose")
+            upside_down = bool(stream.attrs.pop("upside_down", False))
+            if upside_down:
+                note = (f"scanner frame {scan_frame!r} is mounted upside down (its TF turns it half a turn about a "
+                        "level axis): its scans are turned over (y and z negated) to lie level under its pose")
+                notes.append(note)
+                log.info("%s: %s", path, note)
     except InputError:
         raise
     except Exception as e:  # rosbags raises several reader/deserialization errors
@@ -196,6 +204,8 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
                     losses.n_read += 1
                     try:
                         scan = _scan(reader, c, bag_t, raw, path, scan_topic, i, rmin_cfg, rmax_cfg)
+                        if upside_down:
+                            scan = dataclasses.replace(scan, points=turn_over(scan.points))
                     except FrameError as e:
                         losses.skip(i, e)
                         if losses.too_many_bad(max(n_total, losses.n_read)):
@@ -219,6 +229,19 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
     return Recording(
         scans=_scans(), pose_stream=stream, source=f"{path} {scan_topic}", notes=notes, detected=detected
     )
+
+
+def _mount_upside_down(edges, scan_frame: str) -> bool:
+    """Whether the static mount ``base_link`` -> the scanner (when the bag has one) turns
+    the scanner upside down; a broken TF tree is no mount (without a pose source the
+    scans are registered by LIDAR odometry, in the scanner's frame)."""
+    if not edges:
+        return False
+    try:
+        mount = static_transform(edges, "base_link", scan_frame)
+    except InputError:
+        return False
+    return mount is not None and is_upside_down(mount[0])
 
 
 def _scan_frame(reader, path: Path, topic: str, conns) -> str:
