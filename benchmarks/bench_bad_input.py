@@ -588,6 +588,10 @@ def cases() -> list[Case]:
              _bag("upside_down_topic.bag", mount_roll=math.pi, ranges=_upside_down, pose_topic=True,
                   links=(("odom", "base_link"),)),
              "correct", n_index=n, check=_all(MAP_POSE, _points_on_walls)),
+        # --- a pose topic in the odometry frame is no map pose (issue 45 item 4)
+        Case("bag_pose_topic_in_odom_frame",
+             _bag("odom_frame_topic.bag", pose_topic=True, pose_frame="odom", links=(("odom", "base_link"),)),
+             "warning", ("/amcl_pose skipped", "frame_id is 'odom'", "LIDAR odometry"), n_index=n),
         # --- scans dropped before registration are in the verdict (issue 45 item 3)
         Case("carmen_three_poses_500_m_off", _log("jumps.log", bad=_jumped((10, 11, 20))),
              "warning", (f"3 of the recording's {n} scans", "pose_jump", "2 jumps", "at scan 10 (1.0 s into the scans) 500.05 m"),

@@ -226,6 +226,7 @@ def write_room_bag(
     pose_topic: bool = False,
     still: bool = False,
     mount_roll: float = 0.0,
+    pose_frame: str = "map",
 ) -> Path:
     """A bag (ROS1 file, or ROS2 folder with ``ros2``) of ``n`` scans on ``/scan`` at
     10 Hz along :func:`base_pose`: LaserScans of ``ranges(i)`` (181 beams over 180
@@ -236,7 +237,7 @@ def write_room_bag(
     drift correction, so it is no static link, ending after ``map_until_s`` seconds (the
     localizer stopped); any other link the base pose), the ``static`` links (the laser's
     mount) on /tf_static (no /tf_static topic when there are none, no /tf when ``links``
-    is empty). ``pose_topic``: the base pose on /amcl_pose as well. ``still``:
+    is empty). ``pose_topic``: the base pose on /amcl_pose as well (in ``pose_frame``). ``still``:
     the robot never moves (every link sends one pose over and over). ``mount_roll``: the
     static links' roll, radians (pi: the scanner mounted upside down, whose ranges are
     then the level scanner's in reverse order). ``change(i, msg)``
@@ -279,7 +280,7 @@ def write_room_bag(
             pose = T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=float(x), y=float(y), z=0.0),
                                                orientation=Q(*_quat(float(yaw))))
             msgs.append((t, "/amcl_pose", T["geometry_msgs/msg/PoseWithCovarianceStamped"](
-                header=_header(ts, t, "map", not ros2),
+                header=_header(ts, t, pose_frame, not ros2),
                 pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)))))
     _write_messages(writer, ts, ser, msgs)
     return path

@@ -148,3 +148,15 @@ def test_an_upside_down_scanner_is_level_turned_over_and_a_tilted_one_refused():
     mixed = Rotation.from_euler("x", [[0], [0], [180]], degrees=True)
     with pytest.raises(InputError, match=r"level at first and upside down from pose 2"):
         _stream(mixed)
+
+
+def test_a_pose_topic_in_the_odometry_frame_is_no_map_pose(tmp_path):
+    """Issue 45 item 4: /amcl_pose whose header.frame_id is 'odom' was taken as "the
+    bag's one map pose topic"; it is wheel odometry, so the scans run by LIDAR odometry
+    and the note names the topic and its frame."""
+    from floorscan.ingest.rosbag_detect import is_odometry_frame
+
+    (o,) = run_corpus(tmp_path, [c for c in cases() if c.name == "bag_pose_topic_in_odom_frame"], echo=None)
+    assert o.outcome == "warning", o.detail
+    assert [is_odometry_frame(f) for f in ("odom", "/odom", "odom_combined", "map", "world", "")] == [
+        True, True, True, False, False, False]

@@ -58,6 +58,7 @@ from floorscan.ingest.ros_messages import (
 )
 from floorscan.ingest.rosbag_detect import (
     MAP_FRAME,
+    MAP_POSE_TYPES,
     POSE_TYPES,
     SCAN_TYPES,
     detect_pose_source,
@@ -156,7 +157,8 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
             tf = _LazyTF(reader, path)
             pose_cfg = dataset.get("pose")
             if pose_cfg is None:
-                pose_cfg, phrase, note = detect_pose_source(topics, tf.edges, scan_frame, path)
+                pose_cfg, phrase, note = detect_pose_source(topics, tf.edges, scan_frame, path,
+                                                            _pose_frames(reader, topics))
                 notes.append(note)
             else:
                 phrase = None
@@ -229,6 +231,22 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
     return Recording(
         scans=_scans(), pose_stream=stream, source=f"{path} {scan_topic}", notes=notes, detected=detected
     )
+
+
+def _pose_frames(reader, topics) -> dict[str, str]:
+    """Pose topic -> the ``header.frame_id`` of its first message that decodes (detection
+    leaves a topic in an odometry frame out of the map poses)."""
+    out = {}
+    for topic, (msgtype, n) in topics.items():
+        if msgtype not in MAP_POSE_TYPES or not n:
+            continue
+        for c, _, raw in bag_messages(reader, [c for c in reader.connections if c.topic == topic]):
+            try:
+                out[topic] = reader.deserialize(raw, c.msgtype).header.frame_id
+                break
+            except Exception:  # noqa: BLE001 - a broken message is read (and refused) later
+                continue
+    return out
 
 
 def _mount_upside_down(edges, scan_frame: str) -> bool:
