@@ -91,12 +91,15 @@ def carmen_lines(n: int = N_SCANS, kind: str = "FLASER", bad: Callable[[int], di
     """Laser lines of the room along ``laser_pose`` (FLASER: 180 beams at pi/180 from
     -pi/2; ROBOTLASER1: 181 beams over pi; :func:`conftest.flaser_line`,
     :func:`conftest.robotlaser_line`). ``bad(i)`` -> keyword changes of line ``i``
-    (ROBOTLASER1: ``start``/``fov``/``res``; either: ``ranges``)."""
+    (ROBOTLASER1: ``start``/``fov``/``res``; either: ``ranges``, ``shift``: (dx, dy)
+    metres added to the line's pose, the scan unchanged: the localizer jumped)."""
     lines = []
     for i in range(n):
         t_s = 10.0 + i * DT_S if stamps is None else stamps[i]
         pose = tuple(float(v) for v in laser_pose(0.0 if still else i * DT_S))
         kw = dict(bad(i) or {}) if bad else {}
+        dx, dy = kw.pop("shift", (0.0, 0.0))
+        pose = (pose[0] + dx, pose[1] + dy, pose[2])
         if kind == "FLASER":
             r = kw.pop("ranges", None)
             if r is None:
@@ -119,9 +122,10 @@ def write_log(path: Path, lines: list[str], prefix: bytes = b"", suffix: bytes =
 
 
 def pcd_folder(folder: Path, n: int = 40, listed: Callable[[int], bool] | None = None,
-               nan_at: tuple[int, ...] = ()) -> Path:
+               nan_at: tuple[int, ...] = (), stamps: list[int] | None = None) -> Path:
     """A folder of ``n`` ascii PCD scans of the room (the laser's beams as points, z 0.4 m)
-    and its locations.csv (``listed(i)`` False: file i is left out of it)."""
+    and its locations.csv (``listed(i)`` False: file i is left out of it; ``stamps``: the
+    ``t_ns`` of each file, else ``T0_NS`` + 0.1 s steps)."""
     folder.mkdir(parents=True)
     rows = ["file,t_ns,x,y,z,yaw"]
     ang = np.linspace(-math.pi / 2, math.pi / 2, N_BEAMS)
@@ -136,7 +140,8 @@ def pcd_folder(folder: Path, n: int = 40, listed: Callable[[int], bool] | None =
             f"VIEWPOINT 0 0 0 1 0 0 0\nPOINTS {N_BEAMS}\nDATA ascii\n{body}\n")
         if listed is None or listed(i):
             x, y, yaw = laser_pose(i * DT_S)
-            rows.append(f"{i:04d}.pcd,{T0_NS + int(i * DT_S * 1e9)},{x:.5f},{y:.5f},0.0,{yaw:.6f}")
+            t_ns = T0_NS + int(i * DT_S * 1e9) if stamps is None else stamps[i]
+            rows.append(f"{i:04d}.pcd,{t_ns},{x:.5f},{y:.5f},0.0,{yaw:.6f}")
     (folder / "locations.csv").write_text("\n".join(rows) + "\n")
     return folder
 
@@ -154,7 +159,7 @@ class Case:
     ``"correct|error"`` (either a correct run or an error containing ``words``).
     ``n_index``: the scans the index should hold after a run; ``check(run)`` returns a
     problem of the result (None: none). ``{path}`` and ``{name}`` in ``words`` are the
-    recording's path and file name. ``issue``: a class of issue 35 (else a control or an
+    recording's path and file name. ``issue``: a class of issue 35 or 45 (else a control or an
     older class)."""
 
     name: str
@@ -171,6 +176,7 @@ class Run:
     """What the three stages gave."""
 
     dataset: dict
+    out: Path | None = None  # the folder of the stages' tables
     notes: list[str] = dataclasses.field(default_factory=list)
     detected: dict = dataclasses.field(default_factory=dict)
     index: Any = None
@@ -367,9 +373,88 @@ def _short_line_log(root: Path) -> dict:
 
 LOST_BAD = ("lost_bad_frames",)
 
+# --- issue 45: valid recordings that were refused, pose jumps ----------------------------------
+
+#: Real epoch stamps in nanoseconds: ~1.6e18 with every digit set (a float64 keeps 15-16).
+EPOCH_STAMPS = [1_612_345_678_123_456_789 + i * 100_000_117 for i in range(40)]
+
+
+def _first_base_pose(run: Run) -> str | None:
+    """A pose topic without a mount (no /tf_static): the scanner is taken to be at the
+    base's pose."""
+    from conftest import X0, Y0
+
+    return _first_pose_at(X0, Y0)(run)
+
+
+def _points_on_walls(run: Run, tol_m: float = 0.05) -> str | None:
+    """The first scans' points at their poses lie on the room's walls (a mirrored scan's
+    do not)."""
+    from floorscan.core.io import read_table
+
+    scans = read_table(run.out / "scans.parquet")
+    p = run.poses.set_index("scan_id")
+    seg = SEGMENTS.reshape(-1, 2, 2)
+    for sid in (0, 10, 20):
+        pts = scans.loc[scans["scan_id"] == sid, ["x", "y"]].to_numpy(np.float64)
+        x, y, yaw = (float(p.loc[sid, c]) for c in ("x", "y", "yaw"))
+        c, s_ = math.cos(yaw), math.sin(yaw)
+        w = np.c_[x + c * pts[:, 0] - s_ * pts[:, 1], y + s_ * pts[:, 0] + c * pts[:, 1]]
+        a, b = seg[:, 0], seg[:, 1]
+        ab = b - a
+        u = np.clip(((w[:, None] - a) * ab).sum(-1) / (ab * ab).sum(-1), 0.0, 1.0)
+        d = np.linalg.norm(w[:, None] - (a + u[..., None] * ab), axis=-1).min(axis=1)
+        if np.median(d) > tol_m:
+            return f"scan {sid}: its points lie {np.median(d):.2f} m (median) off the room's walls"
+    return None
+
+
+def _exact_stamps(stamps: list[int]):
+    def check(run: Run) -> str | None:
+        got = run.index["t_ns"].to_numpy(np.int64)
+        if got.tolist() != stamps[: len(got)]:
+            i = int(np.flatnonzero(got != np.asarray(stamps[: len(got)], np.int64))[0])
+            return f"scan {i} stamped {got[i]} ns in the index, {stamps[i]} ns in the CSV"
+        return None
+    return check
+
+
+def _reduces(run: Run) -> str | None:
+    """The reduced recording of every third scan is written (the select stage's check
+    of the recording against the scan index: stamps, counts)."""
+    from floorscan.core.io import InputError
+    from floorscan.select.recording import read_detection, write_reduced_recording
+
+    ids = run.index["scan_id"].to_numpy()[::3]
+    try:
+        write_reduced_recording(run.dataset["path"], run.dataset.get("format"), ids, run.out / "reduced",
+                                read_detection(run.out / "scan_index.parquet"))
+    except InputError as e:
+        return f"the reduced recording fails: {e}"
+    return None
+
+
+def _span360(extra_beams: int):
+    """A 360 degree scanner with ``extra_beams`` beams past the full turn (1 degree apart)."""
+    n, inc = 360 + extra_beams, math.radians(1.0)
+
+    def change(i, m):
+        m.angle_min, m.angle_increment, m.angle_max = -math.pi, inc, -math.pi + (n - 1) * inc
+        m.ranges = room_ranges(i, n=n, fov=(n - 1) * inc, start=-math.pi)
+    return change
+
+
+def _upside_down(i: int) -> np.ndarray:
+    """The ranges of a scanner mounted upside down: the level scanner's, in reverse."""
+    return np.ascontiguousarray(room_ranges(i)[::-1])
+
+
+def _jumped(which: tuple[int, ...], dx: float = 500.0):
+    return lambda i: {"shift": (dx, 0.0)} if i in which else None
+
 
 def cases() -> list[Case]:
-    """The corpus: issue 35's classes, a few older ones and good controls."""
+    """The corpus: issue 35's and 45's classes, a few older ones and good controls."""
     n = N_SCANS
     one = (7,)
     lost1 = (f"1 of the recording's {n} scans",)
@@ -483,6 +568,34 @@ def cases() -> list[Case]:
              "warning", ("2 of the recording's 40 scans", "locations CSV"), n_index=38),
         Case("pcd_one_nan_file", _pcd("pcd_one_nan", nan_at=(7,)),
              "warning", ("1 of the recording's 40 scans", "lost_no_points"), n_index=39),
+        # --- valid recordings refused until issue 45 (item 1)
+        Case("bag_no_tf_scan_only_ros1", _bag("no_tf.bag", links=(), static=()),
+             "warning", ("LIDAR odometry", "no map poses"), n_index=n),
+        Case("bag_no_tf_scan_only_ros2", lambda root: _ros2_bag(root, "no_tf_ros2", links=(), static=()),
+             "warning", ("LIDAR odometry", "no map poses"), n_index=n),
+        Case("bag_no_tf_pose_topic_ros1", _bag("no_tf_topic.bag", links=(), static=(), pose_topic=True),
+             "correct", n_index=n, check=_all(_first_base_pose, _reduces)),
+        Case("bag_no_tf_pose_topic_ros2",
+             lambda root: _ros2_bag(root, "no_tf_topic_ros2", links=(), static=(), pose_topic=True),
+             "correct", n_index=n, check=_all(_first_base_pose, _reduces)),
+        Case("pcd_epoch_stamps", _pcd("pcd_epoch", stamps=EPOCH_STAMPS),
+             "correct", n_index=40, check=_all(_exact_stamps(EPOCH_STAMPS), _reduces)),
+        Case("scan_360_span_a_little_over_two_pi", _bag("span360.bag", change=_span360(3)),
+             "correct", n_index=n, check=_all(MAP_POSE, _points_on_walls)),
+        Case("scan_upside_down_tf", _bag("upside_down.bag", mount_roll=math.pi, ranges=_upside_down),
+             "correct", n_index=n, check=_all(MAP_POSE, _points_on_walls, _reduces)),
+        Case("scan_upside_down_pose_topic",
+             _bag("upside_down_topic.bag", mount_roll=math.pi, ranges=_upside_down, pose_topic=True,
+                  links=(("odom", "base_link"),)),
+             "correct", n_index=n, check=_all(MAP_POSE, _points_on_walls)),
+        # --- a pose topic in the odometry frame is no map pose (issue 45 item 4)
+        Case("bag_pose_topic_in_odom_frame",
+             _bag("odom_frame_topic.bag", pose_topic=True, pose_frame="odom", links=(("odom", "base_link"),)),
+             "warning", ("/amcl_pose skipped", "frame_id is 'odom'", "LIDAR odometry"), n_index=n),
+        # --- scans dropped before registration are in the verdict (issue 45 item 3)
+        Case("carmen_three_poses_500_m_off", _log("jumps.log", bad=_jumped((10, 11, 20))),
+             "warning", (f"3 of the recording's {n} scans", "pose_jump", "2 jumps", "at scan 10 (1.0 s into the scans) 500.05 m"),
+             n_index=n),
         # --- older classes (issue 24)
         Case("older_truncated_bag", _truncated_bag, "error", ("{name}",), issue=False),
         Case("older_empty_bag", _empty_bag, "error", ("{name}",), issue=False),
@@ -527,7 +640,7 @@ def run_stages(dataset: dict, out: Path) -> Run:
     from floorscan.register.stream import register_recording
 
     out.mkdir(parents=True, exist_ok=True)
-    run = Run(dataset)
+    run = Run(dataset, out)
     collect = _Collect()
     root = logging.getLogger()
     root.addHandler(collect)
@@ -669,7 +782,7 @@ def tally(outcomes: list[Outcome]) -> dict[str, int]:
 def tally_line(outcomes: list[Outcome]) -> str:
     t = tally(outcomes)
     n_issue = sum(o.case.issue for o in outcomes)
-    return (f"{len(outcomes)} recordings ({n_issue} of issue 35's classes): "
+    return (f"{len(outcomes)} recordings ({n_issue} of issues 35 and 45's classes): "
             + " / ".join(f"{k} {t[k]}" for k in OUTCOMES))
 
 

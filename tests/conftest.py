@@ -225,6 +225,8 @@ def write_room_bag(
     map_until_s: float | None = None,
     pose_topic: bool = False,
     still: bool = False,
+    mount_roll: float = 0.0,
+    pose_frame: str = "map",
 ) -> Path:
     """A bag (ROS1 file, or ROS2 folder with ``ros2``) of ``n`` scans on ``/scan`` at
     10 Hz along :func:`base_pose`: LaserScans of ``ranges(i)`` (181 beams over 180
@@ -234,8 +236,11 @@ def write_room_bag(
     TF: the ``links`` on /tf at 10 Hz, half a period off the scans (``map -> odom`` a slow
     drift correction, so it is no static link, ending after ``map_until_s`` seconds (the
     localizer stopped); any other link the base pose), the ``static`` links (the laser's
-    mount) on /tf_static. ``pose_topic``: the base pose on /amcl_pose as well. ``still``:
-    the robot never moves (every link sends one pose over and over). ``change(i, msg)``
+    mount) on /tf_static (no /tf_static topic when there are none, no /tf when ``links``
+    is empty). ``pose_topic``: the base pose on /amcl_pose as well (in ``pose_frame``). ``still``:
+    the robot never moves (every link sends one pose over and over). ``mount_roll``: the
+    static links' roll, radians (pi: the scanner mounted upside down, whose ranges are
+    then the level scanner's in reverse order). ``change(i, msg)``
     edits scan ``i``'s message; ``raw(i)`` gives bytes stored instead of its
     serialization (or None); ``stamps``: the scans' header stamps (the bag's own times
     stay in order).
@@ -243,14 +248,15 @@ def write_room_bag(
     ts, T, ser, writer = _bag_writer(path, ros2)
     Vec, Q = T["geometry_msgs/msg/Vector3"], T["geometry_msgs/msg/Quaternion"]
 
-    def transform(parent, child, t, x, y, yaw, z=0.0):
+    def transform(parent, child, t, x, y, yaw, z=0.0, roll=0.0):
+        q = _quat(float(yaw)) if roll == 0.0 else (math.sin(roll / 2.0), 0.0, 0.0, math.cos(roll / 2.0))
         return T["geometry_msgs/msg/TransformStamped"](
             header=_header(ts, t, parent, not ros2), child_frame_id=child,
             transform=T["geometry_msgs/msg/Transform"](
-                translation=Vec(x=float(x), y=float(y), z=float(z)), rotation=Q(*_quat(float(yaw)))))
+                translation=Vec(x=float(x), y=float(y), z=float(z)), rotation=Q(*q)))
 
     msgs = [(T0_NS - 1, "/tf_static", T["tf2_msgs/msg/TFMessage"](
-        transforms=[transform(p, c, T0_NS, MOUNT_X, 0.0, 0.0, MOUNT_Z) for p, c in static]))]
+        transforms=[transform(p, c, T0_NS, MOUNT_X, 0.0, 0.0, MOUNT_Z, mount_roll) for p, c in static]))] if static else []
     for i in range(n):
         t = T0_NS + int(i * 0.1e9)
         msg = _scan_message(ts, t if stamps is None else stamps[i], scan_frame, ranges(i), ros2, cloud)
@@ -274,7 +280,7 @@ def write_room_bag(
             pose = T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=float(x), y=float(y), z=0.0),
                                                orientation=Q(*_quat(float(yaw))))
             msgs.append((t, "/amcl_pose", T["geometry_msgs/msg/PoseWithCovarianceStamped"](
-                header=_header(ts, t, "map", not ros2),
+                header=_header(ts, t, pose_frame, not ros2),
                 pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)))))
     _write_messages(writer, ts, ser, msgs)
     return path

@@ -101,7 +101,7 @@ def read_locations(folder: Path, name: str, period_s: float) -> pd.DataFrame:
     for c in ["x", "y", "z"] + [c for c in ("yaw",) if c in df.columns]:
         df[c] = _finite_column(path, c, df[c])
     if "t_ns" in df.columns:
-        df["t_ns"] = _stamp_column(path, df["t_ns"])
+        df["t_ns"] = stamp_column(path, df["t_ns"])
     if "yaw" not in df.columns:
         df["yaw"] = 0.0
     df.attrs["stamps"] = "recorded" if "t_ns" in df.columns else "made_up"
@@ -131,8 +131,17 @@ def _finite_column(path: Path, name: str, col: pd.Series) -> np.ndarray:
     return out
 
 
-def _stamp_column(path: Path, col: pd.Series) -> np.ndarray:
-    """The ``t_ns`` column: decimal integers in [0, 2^63) as int64."""
+def stamp_column(path: Path, col: pd.Series) -> np.ndarray:
+    """The ``t_ns`` column of a locations CSV read as text: decimal integers in [0, 2^63)
+    as int64, exact (an epoch stamp in nanoseconds, ~1.6e18, has more digits than a
+    float64 holds: never parse it as a float). Ingest and the reduced recording
+    (:mod:`floorscan.select.recording_pcd`) read it here.
+
+    Raises
+    ------
+    InputError
+        A cell that is not such an integer, naming the CSV ``path`` and the row.
+    """
     out = np.empty(len(col), dtype=np.int64)
     for i, v in enumerate(col):
         t = str(v).strip()

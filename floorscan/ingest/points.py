@@ -409,9 +409,12 @@ class ScanLosses:
             log.warning("%s", line)
 
 
-#: A scan's angles may span a full turn and this much more (radians) before they are
-#: taken to be degrees.
-ANGLE_SPAN_TOLERANCE_RAD = 0.01
+#: A scan's angles may span a full turn and this much more (radians: a tenth of a turn)
+#: before they are taken to be degrees. A 360 degree scanner often reports a few beams
+#: past the full turn (its first directions measured again); a span in degrees this
+#: small (under 6.91) would be a field of view of under 7 degrees, which no floor
+#: scanner has.
+ANGLE_SPAN_TOLERANCE_RAD = 0.2 * math.pi
 
 
 def angle_span_problem(span: float, what: str) -> str | None:

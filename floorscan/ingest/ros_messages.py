@@ -38,6 +38,28 @@ from floorscan.ingest.points import FrameError, angle_span_problem, laser_scan_p
 QUATERNION_TOLERANCE = 0.01
 
 
+def bag_messages(reader, connections):
+    """The messages of ``connections`` in the bag of ``reader``, in time order: (connection,
+    bag time in ns, raw bytes). Every read of a bag's messages goes through here.
+
+    rosbags' ``AnyReader.messages(connections=[])`` yields *every* message of the bag (an
+    empty list reads as "no filter"), so a bag without a topic asked for (no ``/tf``, no
+    ``/tf_static``) would have its scans read as transforms. An empty ``connections``
+    yields nothing here.
+
+    Parameters
+    ----------
+    reader : rosbags.highlevel.AnyReader
+        An open reader.
+    connections : sequence of rosbags connections
+        The connections to read; empty: none.
+    """
+    connections = list(connections)
+    if not connections:
+        return iter(())
+    return reader.messages(connections=connections)
+
+
 def stamp_ns(header, bag_t: int) -> int:
     """A header's stamp; the bag's receive time when the stamp is zero.
 

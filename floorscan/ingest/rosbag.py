@@ -32,6 +32,7 @@ for the scans and for a pose topic, and noted; more is an ``InputError``.
 
 from __future__ import annotations
 
+import dataclasses
 import heapq
 import logging
 from pathlib import Path
@@ -46,6 +47,7 @@ from floorscan.ingest.params import PosesParams
 from floorscan.ingest.points import FrameError, ScanLosses, filter_points, no_point_reason, no_return_reason
 from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
 from floorscan.ingest.ros_messages import (
+    bag_messages,
     laser_scan_limits,
     laser_scan_problem,
     laser_scan_xyz,
@@ -56,6 +58,7 @@ from floorscan.ingest.ros_messages import (
 )
 from floorscan.ingest.rosbag_detect import (
     MAP_FRAME,
+    MAP_POSE_TYPES,
     POSE_TYPES,
     SCAN_TYPES,
     detect_pose_source,
@@ -63,7 +66,7 @@ from floorscan.ingest.rosbag_detect import (
     short_type,
 )
 from floorscan.ingest.tf_chains import TfLink, read_tf
-from floorscan.ingest.tf_poses import planar_pose_stream, static_transform, tf_pose_stream
+from floorscan.ingest.tf_poses import is_upside_down, planar_pose_stream, static_transform, tf_pose_stream, turn_over
 
 log = logging.getLogger(__name__)
 
@@ -154,12 +157,14 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
             tf = _LazyTF(reader, path)
             pose_cfg = dataset.get("pose")
             if pose_cfg is None:
-                pose_cfg, phrase, note = detect_pose_source(topics, tf.edges, scan_frame, path)
+                pose_cfg, phrase, note = detect_pose_source(topics, tf.edges, scan_frame, path,
+                                                            _pose_frames(reader, topics))
                 notes.append(note)
             else:
                 phrase = None
             if pose_cfg is None:
                 stream, pose_kind = pose_stream_frame([], [], [], [], []), "none"
+                stream.attrs["upside_down"] = _mount_upside_down(tf.edges, scan_frame)
             else:
                 pose_kind = "map"
                 source = pose_cfg["source"]
@@ -177,6 +182,12 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
                 if phrase is None:
                     phrase = f"{described} (set in the dataset)"
                     notes.append(f"pose source {phrase}: used as the map pose")
+            upside_down = bool(stream.attrs.pop("upside_down", False))
+            if upside_down:
+                note = (f"scanner frame {scan_frame!r} is mounted upside down (its TF turns it half a turn about a "
+                        "level axis): its scans are turned over (y and z negated) to lie level under its pose")
+                notes.append(note)
+                log.info("%s: %s", path, note)
     except InputError:
         raise
     except Exception as e:  # rosbags raises several reader/deserialization errors
@@ -191,10 +202,12 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
         try:
             with _reader(path) as reader:
                 conns = [c for c in reader.connections if c.topic == scan_topic]
-                for i, (c, bag_t, raw) in enumerate(reader.messages(connections=conns)):
+                for i, (c, bag_t, raw) in enumerate(bag_messages(reader, conns)):
                     losses.n_read += 1
                     try:
                         scan = _scan(reader, c, bag_t, raw, path, scan_topic, i, rmin_cfg, rmax_cfg)
+                        if upside_down:
+                            scan = dataclasses.replace(scan, points=turn_over(scan.points))
                     except FrameError as e:
                         losses.skip(i, e)
                         if losses.too_many_bad(max(n_total, losses.n_read)):
@@ -220,11 +233,40 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
     )
 
 
+def _pose_frames(reader, topics) -> dict[str, str]:
+    """Pose topic -> the ``header.frame_id`` of its first message that decodes (detection
+    leaves a topic in an odometry frame out of the map poses)."""
+    out = {}
+    for topic, (msgtype, n) in topics.items():
+        if msgtype not in MAP_POSE_TYPES or not n:
+            continue
+        for c, _, raw in bag_messages(reader, [c for c in reader.connections if c.topic == topic]):
+            try:
+                out[topic] = reader.deserialize(raw, c.msgtype).header.frame_id
+                break
+            except Exception:  # noqa: BLE001 - a broken message is read (and refused) later
+                continue
+    return out
+
+
+def _mount_upside_down(edges, scan_frame: str) -> bool:
+    """Whether the static mount ``base_link`` -> the scanner (when the bag has one) turns
+    the scanner upside down; a broken TF tree is no mount (without a pose source the
+    scans are registered by LIDAR odometry, in the scanner's frame)."""
+    if not edges:
+        return False
+    try:
+        mount = static_transform(edges, "base_link", scan_frame)
+    except InputError:
+        return False
+    return mount is not None and is_upside_down(mount[0])
+
+
 def _scan_frame(reader, path: Path, topic: str, conns) -> str:
     """The frame of the first scan message that can be decoded (a broken one is skipped
     later, as the scans are read)."""
     error = None
-    for c, _, raw in reader.messages(connections=conns):
+    for c, _, raw in bag_messages(reader, conns):
         try:
             return reader.deserialize(raw, c.msgtype).header.frame_id.lstrip("/")
         except Exception as e:  # rosbags raises several deserialization errors
@@ -255,7 +297,7 @@ def _pose_topic_stream(
     topic = pose_cfg["topic"]
     conns = _connections(reader, path, topic, POSE_TYPES, "poses")
     t, xyz, quat = [], [], []
-    for i, (c, bag_t, raw) in enumerate(reader.messages(connections=conns)):
+    for i, (c, bag_t, raw) in enumerate(bag_messages(reader, conns)):
         msg = reader.deserialize(raw, c.msgtype)
         stamped = c.msgtype.endswith("/PoseStamped")
         pose = msg.pose if stamped else msg.pose.pose

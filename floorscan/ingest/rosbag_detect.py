@@ -121,11 +121,19 @@ def metadata_hint(path: Path | str) -> str:
             f"the storage file, regenerate it with `ros2 bag reindex {meta.parent}`)")
 
 
+def is_odometry_frame(frame: str) -> bool:
+    """Whether a pose's ``header.frame_id`` is an odometry frame (``odom``,
+    ``odom_combined``, ``wheel_odom``, ...; REP 105): wheel odometry drifts, it is no map
+    pose."""
+    return "odom" in frame.lstrip("/").lower()
+
+
 def detect_pose_source(
     topics: Mapping[str, tuple[str, int]],
     edges: Mapping[tuple[str, str], TfLink],
     scan_frame: str,
     path: Path | str = "",
+    frames: Mapping[str, str] | None = None,
 ) -> tuple[dict | None, str, str]:
     """The map pose source of a bag, or none (see the module docstring for the order).
 
@@ -137,6 +145,9 @@ def detect_pose_source(
         The bag's TF links (parent, child) -> link, as :func:`floorscan.ingest.tf_chains.read_tf` returns them.
     scan_frame : str
         Frame of the scans (no leading slash).
+    frames : mapping of str to str, optional
+        Pose topic -> its first message's ``header.frame_id``: a topic in an odometry
+        frame (:func:`is_odometry_frame`) is not a map pose, and is named in the note.
 
     Returns
     -------
@@ -159,6 +170,11 @@ def detect_pose_source(
         the scan frame, why there is no chain, the frames TF has and its chains).
     """
     poses = {t: (m, n) for t, (m, n) in topics.items() if m in MAP_POSE_TYPES and n > 0}
+    in_odom = sorted(t for t in poses if is_odometry_frame((frames or {}).get(t, "")))
+    poses = {t: v for t, v in poses.items() if t not in in_odom}
+    skipped = "".join(
+        f"; {t} skipped: its frame_id is {(frames or {})[t]!r}, wheel odometry, not a map pose" for t in in_odom
+    )
     if len(poses) > 1 and PREFERRED_POSE_TOPIC in poses:
         poses = {PREFERRED_POSE_TOPIC: poses[PREFERRED_POSE_TOPIC]}
         why = f"{PREFERRED_POSE_TOPIC} among several pose topics"
@@ -172,7 +188,7 @@ def detect_pose_source(
     if poses:
         (topic, (msgtype, n)), = poses.items()
         phrase = f"topic {topic} ({short_type(msgtype)})"
-        note = f"pose source {phrase} (detected: {why}, {n} messages)"
+        note = f"pose source {phrase} (detected: {why}, {n} messages{skipped})"
         return {"source": "topic", "topic": topic, "base_frame": "base_link"}, phrase, note
     if MAP_FRAME in tf_frames(edges) and scan_frame != MAP_FRAME:
         try:
@@ -180,13 +196,14 @@ def detect_pose_source(
         except TfChainError as e:
             raise InputError(f"{e} {_no_fallback(e, edges, scan_frame)}") from None
         phrase = "TF " + " -> ".join([MAP_FRAME] + [e.child for e in chain])
-        note = f"pose source {phrase} (detected: no pose topic, and the TF chain from {MAP_FRAME!r} to the scan frame)"
+        note = (f"pose source {phrase} (detected: no map pose topic, and the TF chain from {MAP_FRAME!r} to the scan "
+                f"frame{skipped})")
         return {"source": "tf", "fixed_frame": MAP_FRAME}, phrase, note
     wheel = []
     root_chain = tf_chain_from_root(edges, scan_frame)
     if len(root_chain) > 1:
         wheel.append("TF " + " -> ".join(root_chain))
-    odom = sorted(t for t, (m, n) in topics.items() if m == ODOMETRY_TYPE and n > 0)
+    odom = sorted([t for t, (m, n) in topics.items() if m == ODOMETRY_TYPE and n > 0] + in_odom)
     if odom:
         wheel.append(f"Odometry on {', '.join(odom)}")
     if wheel:
@@ -197,7 +214,7 @@ def detect_pose_source(
     broken = f"; the TF tree is broken: {problem}" if kind else ""
     note = (
         f"pose source none (detected: no PoseWithCovarianceStamped or PoseStamped topic and no {MAP_FRAME!r} "
-        f"frame in TF{broken}; wheel odometry drifts and is never taken for the map pose): "
+        f"frame in TF{broken}{skipped}; wheel odometry drifts and is never taken for the map pose): "
         "the pose stream is empty (pose kind none) and the register stage runs LIDAR odometry"
     )
     if kind:

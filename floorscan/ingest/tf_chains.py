@@ -20,7 +20,7 @@ from scipy.spatial.transform import Rotation, Slerp
 
 from floorscan.core.io import InputError
 from floorscan.core.messages import quoted
-from floorscan.ingest.ros_messages import message_label, pose_problem, stamp_ns
+from floorscan.ingest.ros_messages import bag_messages, message_label, pose_problem, stamp_ns
 
 
 TF_TOPICS = ("/tf", "/tf_static")
@@ -105,7 +105,7 @@ def read_tf(reader, path: Path) -> dict[tuple[str, str], TfLink]:
     conns = [c for c in reader.connections if c.topic in TF_TOPICS]
     edges: dict[tuple[str, str], TfLink] = {}
     seen: dict[str, int] = defaultdict(int)
-    for c, bag_t, raw in reader.messages(connections=conns):
+    for c, bag_t, raw in bag_messages(reader, conns):
         msg = reader.deserialize(raw, c.msgtype)
         index = seen[c.topic]
         seen[c.topic] += 1

@@ -7,7 +7,11 @@ moving link are left out. The mount of the scanner on the base is the chain of s
 links between them (:func:`static_transform`). A link with a bad sample
 (:func:`floorscan.ingest.ros_messages.pose_problem`) is refused only when a chain uses
 it. A pose stream whose scanner is tilted more than :data:`MAX_TILT_DEG` from level is
-refused (:func:`planar_pose_stream`).
+refused (:func:`planar_pose_stream`), unless it is upside down (rolled or pitched half a
+turn, within :data:`MAX_TILT_DEG`: a scanner mounted under a robot or on a ceiling): its
+scans are level scans seen from below, mirrored, and the reader turns their points over
+(:func:`turn_over`, ``y`` and ``z`` negated: a rotation of half a turn about the
+scanner's x axis) so that the pose stream's level pose places them.
 """
 
 from __future__ import annotations
@@ -29,6 +33,12 @@ MAX_TILT_DEG = 10.0
 def planar_pose_stream(t, rot: Rotation, trans, what: str):
     """Pose stream of a chain of 3D poses, refusing a tilted scanner.
 
+    A scanner upside down (its z axis within :data:`MAX_TILT_DEG` of straight down at
+    every pose) is accepted: the stream is the pose of the level frame ``rot`` x (half a
+    turn about x), whose heading is the scanner's x axis, and
+    ``stream.attrs["upside_down"]`` is True: the scans' points are to be turned over
+    (:func:`turn_over`) before this pose places them.
+
     Parameters
     ----------
     t : (N,) int ndarray
@@ -41,22 +51,52 @@ def planar_pose_stream(t, rot: Rotation, trans, what: str):
     Returns
     -------
     pandas.DataFrame
-        :func:`~floorscan.ingest.recording.pose_stream_frame` (yaw of the rotated x axis).
+        :func:`~floorscan.ingest.recording.pose_stream_frame` (yaw of the rotated x axis),
+        with ``attrs["upside_down"]`` (bool).
 
     Raises
     ------
     InputError
-        A pose's z axis tilts more than :data:`MAX_TILT_DEG` degrees from vertical.
+        A pose's z axis tilts more than :data:`MAX_TILT_DEG` degrees from vertical (up or
+        down), or the scanner is upside down at some poses and level at others.
     """
     mat = rot.as_matrix()
-    tilt = np.degrees(np.arccos(np.clip(mat[:, 2, 2], -1.0, 1.0)))
-    if np.max(tilt) > MAX_TILT_DEG:
+    tilt = np.degrees(np.arccos(np.clip(mat[:, 2, 2], -1.0, 1.0)))  # 0: level, 180: upside down
+    level, down = tilt <= MAX_TILT_DEG, tilt >= 180.0 - MAX_TILT_DEG
+    if not np.all(level | down):
+        worst = float(np.max(np.minimum(tilt, 180.0 - tilt)))
         raise InputError(
-            f"{what}: the scanner is tilted {np.max(tilt):.1f} deg from level; floorscan expects a level "
-            f"scanner (tilt under {MAX_TILT_DEG} deg)"
+            f"{what}: the scanner is tilted {worst:.1f} deg from level; floorscan expects a level "
+            f"scanner (tilt under {MAX_TILT_DEG} deg, or upside down within {MAX_TILT_DEG} deg)"
         )
-    yaw = np.arctan2(mat[:, 1, 0], mat[:, 0, 0])
-    return pose_stream_frame(t, trans[:, 0], trans[:, 1], trans[:, 2], yaw)
+    if np.any(level) and np.any(down):
+        i = int(np.flatnonzero(down != down[0])[0])
+        raise InputError(
+            f"{what}: the scanner is {'upside down' if down[0] else 'level'} at first and "
+            f"{'upside down' if down[i] else 'level'} from pose {i} ({int(t[i])} ns); expected one mount"
+        )
+    yaw = np.arctan2(mat[:, 1, 0], mat[:, 0, 0])  # the x axis: the same turned over about it
+    stream = pose_stream_frame(t, trans[:, 0], trans[:, 1], trans[:, 2], yaw)
+    stream.attrs["upside_down"] = bool(down.size and down[0])
+    return stream
+
+
+def is_upside_down(rot: Rotation) -> bool:
+    """Whether a mount's rotation points the scanner's z axis down, within
+    :data:`MAX_TILT_DEG` (a single rotation)."""
+    return bool(rot.as_matrix().reshape(-1, 3, 3)[0, 2, 2] <= np.cos(np.radians(180.0 - MAX_TILT_DEG)))
+
+
+def turn_over(points: np.ndarray) -> np.ndarray:
+    """The points of an upside-down scanner in the level frame of its pose: ``y`` and
+    ``z`` negated (half a turn about the scanner's x axis); a new array.
+
+    Parameters
+    ----------
+    points : (N, 3) float ndarray
+        Points in the scanner frame, metres.
+    """
+    return points * np.array([1.0, -1.0, -1.0], dtype=points.dtype)
 
 
 def _check_links(chain: list[TfLink]) -> None:

@@ -8,6 +8,12 @@ counts the scans lost before registration against all the recording's scans, by 
 
 - ``no_pose``: the poses stage gave the scan no pose (before the first pose, after the
   last, in a gap; pose mode only: LIDAR odometry does not use the poses);
+- ``pose_jump``: the localizer's pose jumped (moved or turned faster than
+  ``register.max_speed_m_s`` / ``max_turn_rate_rad_s`` since the last plausible pose,
+  :class:`floorscan.register.screening.Screener`); the warning says where (scan, time)
+  and by how much, per jump (:func:`pose_jump_episodes`);
+- ``too_few_points``: scans with some points but fewer than ``register.min_points``
+  (a scan without any is ``lost_no_points``);
 - ``lost_bad_frames``: frames ingest could not read and skipped;
 - ``lost_no_points``: scans without a valid return: those ingest skipped, and the scan
   index's scans with ``n_points`` 0 (such a scan is not counted again as without a
@@ -15,7 +21,9 @@ counts the scans lost before registration against all the recording's scans, by 
 - ``lost_unlisted_files``: PCD files not in the locations CSV;
 - ``lost_unknown_lines``: CARMEN lines of an unknown type.
 
-Ingest's counts are in the scan index's schema metadata (``Recording.detected``, read by
+A scan dropped as a ``duplicate`` (the stamp or the very returns of the scan before it, as a
+simulator or a stopped driver repeats them) is not counted: nothing of the recording is
+lost with it. Ingest's counts are in the scan index's schema metadata (``Recording.detected``, read by
 :func:`floorscan.core.io.read_metadata`); a missing key counts 0. The recording's scans
 (the denominator) are ``n_frames_read`` (every frame ingest read, lost or not; at least
 the scan index's scans and the frames ingest skipped, its only count when the key is
@@ -28,6 +36,7 @@ recording's scans lost stops the stage (:meth:`Losses.problem`).
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections import Counter
 from dataclasses import dataclass
 from typing import Mapping
@@ -50,11 +59,17 @@ INGEST_LOSSES = {
 }
 #: Every frame ingest read, lost or not (scan index metadata).
 N_FRAMES_READ = "n_frames_read"
+#: Scans the register stage's screening drops before registration (its reasons).
+POSE_JUMP, TOO_FEW_POINTS = "pose_jump", "too_few_points"
 #: The causes, in the order the verdict names them.
-CAUSES = (NO_POSE, *INGEST_LOSSES)
+CAUSES = (NO_POSE, POSE_JUMP, TOO_FEW_POINTS, *INGEST_LOSSES)
+#: Pose jumps named one by one in the warning, the largest first.
+MAX_JUMPS_NAMED = 3
 #: Short names of the causes, for the one-line total.
 SHORT = {
     NO_POSE: "without a pose",
+    POSE_JUMP: "pose jumps",
+    TOO_FEW_POINTS: "with too few points",
     "lost_bad_frames": "bad frames",
     "lost_no_points": "without a valid point",
     "lost_unlisted_files": "files not in the locations CSV",
@@ -90,6 +105,9 @@ class Losses:
     no_pose_detail : str
         Why the scans without a pose have none (reasons, counts and when the poses
         start and end), for the warning.
+    details : dict of str to str
+        Cause -> what the warning says after the count: ``pose_jump``: the jumps (where
+        and by how much), ``too_few_points``: the option.
     empty_ids : (E,) int ndarray
         ``scan_id`` of the scan index's scans without points (counted under
         ``lost_no_points``, not again under ``no_pose``).
@@ -99,6 +117,7 @@ class Losses:
     counts: dict[str, int] = dataclasses.field(default_factory=dict)
     no_pose_detail: str = ""
     empty_ids: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, np.int64))
+    details: dict[str, str] = dataclasses.field(default_factory=dict)
 
     @property
     def n_lost(self) -> int:
@@ -118,6 +137,12 @@ class Losses:
             head = f"{n} of the recording's {self.n_recording} scans ({percent(n, self.n_recording)})"
             if cause == NO_POSE:
                 out.append(f"{head} have no pose ({self.no_pose_detail})" if self.no_pose_detail else f"{head} have no pose")
+            elif cause == POSE_JUMP:
+                out.append(f"{head} were dropped where the localizer's pose jumped (pose_jump"
+                           + (f": {self.details[POSE_JUMP]})" if self.details.get(POSE_JUMP) else ")"))
+            elif cause == TOO_FEW_POINTS:
+                out.append(f"{head} have too few points (too_few_points"
+                           + (f": {self.details[TOO_FEW_POINTS]})" if self.details.get(TOO_FEW_POINTS) else ")"))
             else:
                 out.append(f"{head} {INGEST_LOSSES[cause]} ({cause})")
         return out
@@ -228,5 +253,138 @@ def with_pose_losses(losses: Losses, scan_ids: np.ndarray, t_ns: np.ndarray, rea
             when.append(f"end {last:.1f} s" if when else f"the poses end {last:.1f} s")
         if when:
             detail += f"; {' and '.join(when)} into the {span:.1f} s of scans"
-    counts = {NO_POSE: n, **{k: v for k, v in losses.counts.items() if k != NO_POSE}}
+    counts = _ordered({**losses.counts, NO_POSE: n})
     return dataclasses.replace(losses, counts=counts, no_pose_detail=detail)
+
+
+def _ordered(counts: Mapping[str, int]) -> dict[str, int]:
+    """The non-zero counts in the order of :data:`CAUSES`."""
+    return {c: int(counts[c]) for c in CAUSES if counts.get(c)}
+
+
+def with_screening_losses(losses: Losses, scan_ids: np.ndarray, t_ns: np.ndarray, reasons: np.ndarray,
+                          poses: pd.DataFrame | None, max_speed: str = "", min_points: int | None = None) -> Losses:
+    """``losses`` with the scans the register stage's screening dropped before
+    registration: ``pose_jump`` (with :func:`pose_jump_episodes`) and ``too_few_points``
+    (without the scans of ``losses.empty_ids``, counted as ``lost_no_points``).
+
+    Parameters
+    ----------
+    scan_ids : (S,) int ndarray
+    t_ns : (S,) int64 ndarray
+        Scan stamps, nanoseconds, in scan order.
+    reasons : (S,) str ndarray
+        The screening's reasons (:class:`floorscan.register.screening.Screener`).
+    poses : pandas.DataFrame or None
+        The localizer's poses aligned with the scans (``x, y, yaw``); None in odometry
+        mode (no pose jumps).
+    max_speed : str
+        The options of the speed check, for the warning (e.g.
+        ``register.max_speed_m_s 2.0, max_turn_rate_rad_s 3.0``).
+    min_points : int, optional
+        ``register.min_points``, for the warning.
+    """
+    reasons = np.asarray(reasons).astype(str)
+    jump = reasons == POSE_JUMP
+    few = (reasons == TOO_FEW_POINTS) & ~np.isin(np.asarray(scan_ids, dtype=np.int64), losses.empty_ids)
+    if not jump.any() and not few.any():
+        return losses
+    counts = dict(losses.counts)
+    details = dict(losses.details)
+    if jump.any():
+        counts[POSE_JUMP] = int(jump.sum())
+        if poses is not None:
+            xyyaw = poses[["x", "y", "yaw"]].to_numpy(np.float64)
+            t = np.asarray(t_ns, np.int64)
+            details[POSE_JUMP] = describe_jumps(pose_jump_episodes(reasons, t, xyyaw), np.asarray(scan_ids), t,
+                                                max_speed)
+    if few.any():
+        counts[TOO_FEW_POINTS] = int(few.sum())
+        if min_points is not None:
+            details[TOO_FEW_POINTS] = f"fewer than register.min_points {min_points}"
+    return dataclasses.replace(losses, counts=_ordered(counts), details=details)
+
+
+@dataclass(frozen=True)
+class PoseJump:
+    """A jump of the localizer's pose: the scans dropped as ``pose_jump`` after one
+    plausible pose (index positions; ``last`` -1: no plausible pose before)."""
+
+    first: int
+    n_scans: int
+    last: int
+    distance_m: float
+    turn_rad: float
+    dt_s: float
+    back: int  # the next plausible scan, -1: none (the poses never came back)
+
+
+def pose_jump_episodes(reasons: np.ndarray, t_ns: np.ndarray, xyyaw: np.ndarray) -> list[PoseJump]:
+    """The jumps of the localizer's pose: the ``pose_jump`` scans grouped by the last
+    plausible pose before them (as :class:`floorscan.register.screening.Screener` checks
+    them: a scan with a pose that is neither a jump nor a duplicate is plausible), each
+    with the first jumped pose's distance and turn from it.
+
+    Parameters
+    ----------
+    reasons : (S,) str ndarray
+        The screening's reasons, in scan order.
+    t_ns : (S,) int64 ndarray
+    xyyaw : (S, 3) float ndarray
+        The localizer's pose of each scan (metres, radians).
+
+    Returns
+    -------
+    list of PoseJump
+        In scan order.
+    """
+    reasons = np.asarray(reasons).astype(str)
+    plausible = ~np.char.startswith(reasons, "no_pose") & (reasons != "duplicate") & (reasons != POSE_JUMP)
+    out: list[PoseJump] = []
+    last, group = -1, None
+    for i, r in enumerate(reasons):
+        if r == POSE_JUMP:
+            if group is not None and group[0] == last:
+                group[2] += 1
+            else:
+                if group is not None:
+                    out.append(_jump(group, t_ns, xyyaw, i))
+                group = [last, i, 1]
+        elif plausible[i]:
+            if group is not None:
+                out.append(_jump(group, t_ns, xyyaw, i))
+                group = None
+            last = i
+    if group is not None:
+        out.append(_jump(group, t_ns, xyyaw, -1))
+    return out
+
+
+def _jump(group: list[int], t_ns: np.ndarray, xyyaw: np.ndarray, back: int) -> PoseJump:
+    last, first, n = group
+    if last < 0:
+        return PoseJump(first, n, last, float("nan"), float("nan"), float("nan"), back)
+    d = xyyaw[first] - xyyaw[last]
+    turn = abs(math.remainder(float(d[2]), 2 * math.pi))
+    return PoseJump(first, n, last, float(math.hypot(d[0], d[1])), turn, float((t_ns[first] - t_ns[last]) * 1e-9), back)
+
+
+def describe_jumps(jumps: list[PoseJump], scan_ids: np.ndarray, t_ns: np.ndarray, max_speed: str = "") -> str:
+    """The jumps in words, the largest (by distance) first, at most
+    :data:`MAX_JUMPS_NAMED` of them, each where (scan id, seconds into the scans) and by
+    how much: e.g. ``2 jumps: at scan 120 (12.0 s into the scans) 500.30 m and 1 deg in
+    0.10 s, 14 scans until the pose came back; ...``."""
+    if not jumps:
+        return ""
+    t = np.asarray(t_ns, dtype=np.int64)
+    parts = []
+    for j in sorted(jumps, key=lambda j: -(j.distance_m if math.isfinite(j.distance_m) else 0.0))[:MAX_JUMPS_NAMED]:
+        n = f"{j.n_scans} scan{'s' if j.n_scans != 1 else ''}"
+        until = "until the pose came back" if j.back >= 0 else "to the end of the recording (the poses never came back)"
+        by = (f"{j.distance_m:.2f} m and {math.degrees(j.turn_rad):.0f} deg in {j.dt_s:.2f} s"
+              if math.isfinite(j.distance_m) else "from the first pose")
+        into = (t[j.first] - t.min()) * 1e-9
+        parts.append(f"at scan {int(scan_ids[j.first])} ({into:.1f} s into the scans) {by}, {n} {until}")
+    head = f"{len(jumps)} jump{'s' if len(jumps) != 1 else ''}"
+    more = f"; and {len(jumps) - MAX_JUMPS_NAMED} more" if len(jumps) > MAX_JUMPS_NAMED else ""
+    return f"{head}: {'; '.join(parts)}{more}" + (f"; faster than {max_speed}" if max_speed else "")

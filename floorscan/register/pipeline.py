@@ -47,7 +47,7 @@ from floorscan.core.config import stage_params
 from floorscan.core.geometry import transform_points
 from floorscan.core.io import InputError, split_by_scan
 from floorscan.register.consistency import stamps_warning
-from floorscan.register.losses import Losses, ingest_losses, with_pose_losses
+from floorscan.register.losses import Losses, ingest_losses, with_pose_losses, with_screening_losses
 from floorscan.register.odometry import register_odometry
 from floorscan.register.params import RegistrationConfig
 from floorscan.register.posegraph import register_graph
@@ -316,6 +316,10 @@ def register_screened(index, aligned, reasons, clouds: ScanStore, cfg: Registrat
     summary = summarize(table, cfg)
     if losses is None:
         losses = ingest_losses(index, None)
+    losses = with_screening_losses(
+        losses, sids, t, reasons, aligned,
+        f"register.max_speed_m_s {cfg.max_speed_m_s:g} or max_turn_rate_rad_s {cfg.max_turn_rate_rad_s:g}",
+        cfg.min_points)
     if not odometry:  # LIDAR odometry does not use the poses: a scan without one is not lost
         losses = with_pose_losses(losses, sids, t, table["reason"].to_numpy())
     summary["losses"] = losses.as_dict()

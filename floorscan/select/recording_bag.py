@@ -119,6 +119,7 @@ def reduce_bag(source: Path, ids, out_path: Path, detection, t_ns, window_s: flo
     from rosbags.typesys import Stores, get_typestore
 
     from floorscan.ingest.detect import bag_path
+    from floorscan.ingest.ros_messages import bag_messages
 
     path = bag_path(source)
     ros2 = path.is_dir()
@@ -139,7 +140,7 @@ def reduce_bag(source: Path, ids, out_path: Path, detection, t_ns, window_s: flo
             times = []
             stamps = np.zeros(len(ids), dtype=np.int64)  # in the order of ids
             n = 0
-            for i, (c, t, raw) in enumerate(reader.messages(connections=scan_conns)):
+            for i, (c, t, raw) in enumerate(bag_messages(reader, scan_conns)):
                 n += 1
                 j = selected.get(i)
                 if j is not None:
@@ -170,7 +171,7 @@ def reduce_bag(source: Path, ids, out_path: Path, detection, t_ns, window_s: flo
                 with writer:
                     out_conns: list = []  # (key, output connection)
                     by_id: dict = {}
-                    for c, t, raw in reader.messages(connections=kept):
+                    for c, t, raw in bag_messages(reader, kept):
                         k = kind[c.id]
                         if k == "scan":
                             if (c.id, t) not in pairs:

@@ -8,11 +8,11 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
 from floorscan.core.io import InputError
 from floorscan.core.files import staged_path
+from floorscan.ingest.pcd import stamp_column
 from floorscan.select.recording_checks import check_count, check_stamps, scan_frames, size_of
 
 
@@ -56,8 +56,8 @@ def reduce_pcd(source: Path, ids, out_path: Path, detection, t_ns, window_s: flo
     check_count(csv, len(loc), ids, t_ns, "scan locations", frames, detection)
     rows = loc.iloc[frames]
     if "t_ns" in loc.columns:
-        got = pd.to_numeric(rows["t_ns"], errors="coerce").to_numpy(dtype=np.float64)
-        check_stamps(csv, ids, np.nan_to_num(got, nan=-1).astype(np.int64), t_ns)
+        got = stamp_column(csv, loc["t_ns"])[frames]  # int64: an epoch stamp has more digits than a float64
+        check_stamps(csv, ids, got, t_ns)
     files = []
     for f in rows["file"]:
         rel = Path(str(f))

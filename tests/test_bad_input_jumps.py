@@ -1,0 +1,88 @@
+"""Every scan dropped before registration is in the verdict (issue 45 item 3): the
+screening's ``pose_jump`` and ``too_few_points`` drops are losses by reason, beside
+ingest's and the scans without a pose; a jump of the localizer's pose is a warning that
+says where (scan, seconds into the scans) and by how much
+(:mod:`floorscan.register.losses`)."""
+
+import numpy as np
+import pandas as pd
+
+from benchmarks.bench_bad_input import cases, run_corpus
+from floorscan.register.consistency import verdict
+from floorscan.register.losses import (
+    Losses,
+    describe_jumps,
+    ingest_losses,
+    pose_jump_episodes,
+    with_pose_losses,
+    with_screening_losses,
+)
+
+T = 1_700_000_000_000_000_000 + np.arange(10, dtype=np.int64) * 100_000_000
+
+
+def test_carmen_poses_500_m_off_are_a_warning_naming_the_jumps(tmp_path):
+    """Three lines of a CARMEN log 500 m off: the verdict was ``kept 4 of 4 sampled scans
+    (100 %)`` with nothing of the three scans; now it counts them and names the jumps."""
+    case = next(c for c in cases() if c.name == "carmen_three_poses_500_m_off")
+    (o,) = run_corpus(tmp_path, [case], echo=None)
+    assert o.outcome == "warning", o.detail
+
+
+def _poses(jump_at=(), dx=500.0):
+    x = np.arange(10) * 0.05
+    x[list(jump_at)] += dx
+    return pd.DataFrame({"x": x, "y": 0.0, "yaw": 0.0})
+
+
+def test_jumps_are_grouped_by_the_last_plausible_pose_and_say_where_and_how_far():
+    reasons = np.array(["", "", "", "pose_jump", "pose_jump", "", "duplicate", "pose_jump", "", ""])
+    poses = _poses(jump_at=(3, 4, 7))
+    jumps = pose_jump_episodes(reasons, T, poses[["x", "y", "yaw"]].to_numpy())
+    assert [(j.first, j.n_scans, j.last, j.back) for j in jumps] == [(3, 2, 2, 5), (7, 1, 5, 8)]
+    assert abs(jumps[0].distance_m - 500.05) < 1e-9 and abs(jumps[0].dt_s - 0.1) < 1e-9
+    assert abs(jumps[1].distance_m - 500.10) < 1e-9  # from scan 5 (6 is a duplicate), 0.2 s
+    text = describe_jumps(jumps, np.arange(100, 110), T, "register.max_speed_m_s 2")
+    assert text == (
+        "2 jumps: at scan 107 (0.7 s into the scans) 500.10 m and 0 deg in 0.20 s, 1 scan until the pose came "
+        "back; at scan 103 (0.3 s into the scans) 500.05 m and 0 deg in 0.10 s, 2 scans until the pose came back; "
+        "faster than register.max_speed_m_s 2"
+    )
+    # a relocalisation: the poses never come back within the recording
+    reasons = np.array([""] * 6 + ["pose_jump"] * 4)
+    (j,) = pose_jump_episodes(reasons, T, _poses(jump_at=range(6, 10), dx=3.0)[["x", "y", "yaw"]].to_numpy())
+    assert (j.first, j.n_scans, j.back) == (6, 4, -1)
+    assert "to the end of the recording (the poses never came back)" in describe_jumps([j], np.arange(10), T)
+
+
+def test_screening_losses_count_jumps_and_thin_scans_not_duplicates_nor_empty_scans_twice():
+    index = pd.DataFrame({"scan_id": np.arange(10), "n_points": [50] * 9 + [0]})
+    losses = ingest_losses(index, {"n_frames_read": "10"})
+    assert losses.counts == {"lost_no_points": 1}
+    reasons = np.array(["", "pose_jump", "duplicate", "too_few_points", "", "", "no_pose:gap", "", "",
+                        "too_few_points"])
+    out = with_screening_losses(losses, np.arange(10), T, reasons, _poses(jump_at=(1,)), "register.max_speed_m_s 2", 30)
+    out = with_pose_losses(out, np.arange(10), T, reasons)
+    assert out.counts == {"no_pose": 1, "pose_jump": 1, "too_few_points": 1, "lost_no_points": 1}
+    assert list(out.counts) == ["no_pose", "pose_jump", "too_few_points", "lost_no_points"]
+    w = out.warnings()
+    assert w[1].startswith("1 of the recording's 10 scans (10 %) were dropped where the localizer's pose jumped "
+                           "(pose_jump: 1 jump: at scan 1 (0.1 s into the scans) 500.05 m")
+    assert w[2] == "1 of the recording's 10 scans (10 %) have too few points (too_few_points: fewer than register.min_points 30)"
+    # odometry mode: no poses, the jumps counted without detail
+    bare = with_screening_losses(Losses(10), np.arange(10), T, reasons, None)
+    assert bare.counts == {"pose_jump": 1, "too_few_points": 2}
+    none = Losses(10)
+    assert with_screening_losses(none, np.arange(10), T, np.array([""] * 9 + ["duplicate"]), None) is none
+
+
+def test_the_verdict_line_counts_the_jumps_and_too_many_stop_the_stage():
+    reasons = np.array([""] * 7 + ["pose_jump"] * 3)
+    losses = with_screening_losses(Losses(10), np.arange(10), T, reasons, _poses(jump_at=(7, 8, 9)))
+    v = verdict(20, 20, 0.9, 1000, 0.2, 0.3, losses=losses, max_lost_fraction=0.5)
+    assert v.line().startswith("WARNING: kept 20 of 20 sampled scans (100 %), 3 of the recording's 10 scans (30 %) "
+                               "lost before registration; map consistency 0.90")
+    assert ("pose_jump: 1 jump: at scan 7 (0.7 s into the scans) 500.05 m and 0 deg in 0.10 s, 3 scans to the end "
+            "of the recording (the poses never came back))") in v.line()
+    v = verdict(20, 20, 0.9, 1000, 0.2, 0.3, losses=losses, max_lost_fraction=0.2)
+    assert not v.ok and "never reached registration (3 pose jumps), more than register.max_lost_fraction 0.2" in v.line()
