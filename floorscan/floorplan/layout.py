@@ -156,15 +156,6 @@ def layout_rooms(axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, p
     return polys, doors
 
 
-def _largest(geom):
-    """The largest polygon of a geometry (empty Polygon for none)."""
-    import shapely
-    from shapely.geometry import Polygon
-
-    parts = [g for g in shapely.get_parts(geom) if g.geom_type == "Polygon" and not g.is_empty]
-    return max(parts, key=lambda g: g.area) if parts else Polygon()
-
-
 def layout_plan_rooms(axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, params, hypotheses=None):
     """The rooms and doors tables of a plan as one layout: :func:`layout_rooms`, then
     :func:`floorscan.floorplan.room_tables.room_tables`.
