@@ -296,7 +296,7 @@ def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thic
     """A valid shapely Polygon per room of ``labels`` (module docstring, step 5): its
     cells traced (contourpy), grown by a cell up to the wall faces and cut by the walls'
     footprints and the other rooms, simplified by half a cell; the largest part when
-    the cut leaves several.
+    the cut leaves several. No two overlap: a sliver two rooms grew into is the first's.
 
     Parameters
     ----------
@@ -342,6 +342,13 @@ def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thic
     for k, poly in enumerate(out):
         others = shapely.union_all([p for j, p in enumerate(out) if j != k])
         out[k] = _bounded_by_walls(poly, axes, thickness, foot, walls, others, res)
+    # the rooms are a coverage: where two grown rooms overlap (a sliver along a door or
+    # a gap in a wall, each grown into it), the room first in reading order keeps it
+    taken = shapely.Polygon()
+    for k, poly in enumerate(out):
+        if not poly.is_empty and shapely.intersection(taken, poly).area > 0:
+            out[k] = _largest(poly.difference(taken))
+        taken = shapely.union(taken, out[k])
     return out
 
 
