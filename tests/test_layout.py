@@ -103,3 +103,13 @@ def test_grouping_by_boundary_evidence():
     edges = [(0, 1, 3.0, 0.0), (1, 2, 3.0, 3.0), (2, 3, 3.0, 1.0), (3, 4, 3.0, 3.0)]
     region = group_cells(inside, edges, np.full(5, 10.0), min_area_m2=2.0)
     assert region[0] == region[1] and region[2] == region[3] and region[1] != region[2] and region[4] == -1
+
+
+def test_an_opening_next_to_a_junction_is_closed():
+    """The outer wall's piece that ends where an inner wall meets it still goes on in its
+    line past the entrance: the opening between the junction and the next piece is closed."""
+    axes = np.array([[0, 0, 6, 0], [6, 0, 6, 5], [6, 5, 0, 5], [0, 5, 0, 3.5], [0, 2.5, 0, 0], [0, 2.5, 4, 2.5]], float)
+    lines, kinds, gaps = layout_lines(axes, np.full(6, 0.2), box(-1, -1, 7, 6), door_max_m=2.0)
+    entrance = sorted((g[2], round(g[3], 6)) for g in gaps if abs(g[0][0]) < 1e-9 and abs(g[1][0]) < 1e-9)
+    assert entrance == [(3, 1.0), (4, 1.0)]  # from each side; a door is taken once (layout_rooms)
+    assert [(g[2], round(g[3], 6)) for g in gaps if g[2] == 5] == [(5, 1.9)]  # the inner wall's free end

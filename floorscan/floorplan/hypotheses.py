@@ -71,6 +71,13 @@ def layout_lines(axes: np.ndarray, thickness: np.ndarray, frame, door_max_m: flo
     for i in np.flatnonzero(length > 0):
         for k, (end, u) in enumerate(((p0[i], -dirs[i]), (p1[i], dirs[i]))):
             if not free_end[i, k]:
+                # a junction: the wall may still go on in its line past an opening (an
+                # entrance between two junctions, a door next to a corner)
+                ahead = _in_line_ahead(end, u, i, p0, p1, dirs, length, thickness)
+                if ahead is not None and JUNCTION_M < ahead <= door_max_m:
+                    lines.append(LineString([end, end + u * ahead]))
+                    kinds.append(CLOSED)
+                    gaps.append((np.array(end, float), np.array(end + u * ahead, float), int(i), float(ahead)))
                 continue
             stop = _first_wall(end, u, i, p0, p1, dirs, length, thickness)
             if stop is None:  # nothing ahead: open to the frame
@@ -210,6 +217,22 @@ def snapped_axes(axes: np.ndarray, thickness: np.ndarray) -> tuple[np.ndarray, n
                 axes[i, 2 * k:2 * k + 2] = end + u * (best + 10 * ARRANGEMENT_PRECISION_M)  # just past: noded after rounding
                 free_end[i, k] = False
     return axes, free_end
+
+
+def _in_line_ahead(end, u, i, p0, p1, dirs, length, thickness) -> float | None:
+    """How far ahead of wall ``i``'s end ``end`` along ``u`` the nearest wall in its line
+    (parallel, within half a thickness) begins, metres; None when none is ahead."""
+    best = None
+    for j in range(len(p0)):
+        if j == i or length[j] <= 0 or abs(u[0] * dirs[j, 1] - u[1] * dirs[j, 0]) >= 1e-6:
+            continue
+        d = p0[j] - end
+        if abs(d[0] * u[1] - d[1] * u[0]) > max(thickness[j], thickness[i]) / 2 + ARRANGEMENT_PRECISION_M:
+            continue
+        t = min(float(np.dot(p0[j] - end, u)), float(np.dot(p1[j] - end, u)))
+        if t > 0 and (best is None or t < best):
+            best = t
+    return best
 
 
 def _first_wall(end, u, i, p0, p1, dirs, length, thickness):

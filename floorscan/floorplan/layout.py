@@ -96,6 +96,7 @@ def layout_rooms(axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, p
     share = cell_free_share(cells, grid)
     area = np.array([c.area for c in cells])
     inside = share >= INSIDE_SHARE
+
     region = group_cells(inside, edges, area, params.min_room_area_m2)
     roots = sorted(set(region[region >= 0].tolist()))
     feet = shapely.union_all([shapely.buffer(LineString([a[:2], a[2:]]), max(t, 1e-3) / 2, cap_style="flat")
