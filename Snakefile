@@ -11,7 +11,7 @@ from snakemake_interface_executor_plugins.settings import ExecMode
 from snakemake.utils import min_version
 
 from floorscan.core.config import ConfigError, config_errors_exit, validate_config
-from floorscan.core.datasets import add_path_datasets, check_datasets, resolve_building
+from floorscan.core.datasets import add_path_datasets, check_datasets, config_paths, resolve_building
 from floorscan.core.io import InputError
 from floorscan.ingest.detect import recordings_in
 
@@ -30,14 +30,21 @@ with config_errors_exit():
     check_datasets(config)  # empty paths, unknown buildings
     # `--config path=/data/run.bag`: that recording, detected, is the dataset to build;
     # a folder of recordings: each one is (floorscan.ingest.detect.recordings_in)
-    if config.get("path"):
-        try:
-            _recordings, _skipped = recordings_in(config["path"])
-        except InputError as e:
-            raise ConfigError(f"path: {e}") from None
+    # several paths (a list, `floorscan run A B`): one run of the recordings of all of them
+    if config_paths(config):
+        _recordings, _skipped = [], []
+        for _path in config_paths(config):
+            try:
+                _found, _left_out = recordings_in(_path)
+            except InputError as e:
+                raise ConfigError(f"path: {e}") from None
+            _recordings += [r for r in _found if r not in _recordings]
+            _skipped += _left_out
         add_path_datasets(config, _recordings)
+        # the datasets made of the paths, with path_options: checked as a config file's
+        validate_config(config, workflow.basedir + "/workflow/schemas/config.schema.yaml")
         if len(_recordings) > 1:
-            print(f"{config['path']}: {len(_recordings)} recordings, one dataset each: {', '.join(config['target'])}"
+            print(f"{', '.join(config_paths(config))}: {len(_recordings)} recordings, one dataset each: {', '.join(config['target'])}"
                   + (f" (not recordings, left out: {', '.join(_skipped)})" if _skipped else ""), file=sys.stderr)
     else:
         resolve_building(config)
@@ -99,7 +106,7 @@ def print_answer(failed_jobs=()):
     if len(datasets) > 1:
         statuses = [{**dataset_status(ds), "failed": failed[ds]} if ds in failed else dataset_status(ds) for ds in datasets]
         write_index(statuses, "results/index.html")
-    command = f"{sys.argv[0]} --cores 2 --config path={config['path']}" if config.get("path") else ""
+    command = f"{sys.argv[0]} --cores 2 --config path={config['path']}" if isinstance(config.get("path"), str) else ""
     for line in answer_lines(datasets, failed=failed, command=command):
         print(line)
     building = building_outputs()  # building.ifc, its page, the floors' GeoJSON

@@ -80,7 +80,8 @@ def layer(module: str) -> tuple[str, int | None]:
 def test_every_subpackage_has_a_layer():
     subs = {p.name for p in PACKAGE.iterdir() if p.is_dir() and (p / "__init__.py").exists()}
     assert subs == set(LAYER), f"subpackages without a layer: {sorted(subs - set(LAYER))}"
-    stray = sorted(p.name for p in PACKAGE.glob("*.py") if p.name != "__init__.py")
+    # the `floorscan` command (ARCHITECTURE: floorscan/cli.py runs Snakemake, no stage logic)
+    stray = sorted(p.name for p in PACKAGE.glob("*.py") if p.name not in ("__init__.py", "cli.py"))
     assert stray == [], f"modules outside the stage packages and core: {stray}"
 
 

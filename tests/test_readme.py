@@ -50,7 +50,8 @@ def readme_commands() -> list[str]:
 def test_the_readme_has_the_commands_this_test_knows():
     cmds = readme_commands()
     assert len(cmds) >= 15 and "make test" in cmds
-    assert all(c.startswith(("make ", ".venv/bin/snakemake ", ".venv/bin/python -m benchmarks ", "FLOORSCAN_PROFILE="))
+    assert all(c.startswith(("make ", ".venv/bin/snakemake ", ".venv/bin/python -m benchmarks ", "FLOORSCAN_PROFILE=",
+                             ".venv/bin/floorscan "))
                for c in cmds), cmds  # fmt: skip
     assert not [c for c in cmds if c.startswith("snakemake")]  # without .venv/bin: "command not found"
 
@@ -59,6 +60,19 @@ def test_the_readme_has_the_commands_this_test_knows():
 def test_make_targets_exist(cmd):
     res = subprocess.run(["make", "-n", *shlex.split(cmd)[1:]], cwd=REPO, capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
+
+
+@pytest.mark.parametrize("cmd", [c for c in readme_commands() if c.startswith(".venv/bin/floorscan ")])
+def test_floorscan_commands_parse(cmd, tmp_path, monkeypatch):
+    """The `floorscan` command's options parse as written (its config file made; the
+    paths are the user's, not checked here)."""
+    from floorscan import cli
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "house.yaml").write_text("evaluate: false\n")
+    own, extra = cli.split_passthrough(shlex.split(cmd)[1:])
+    args = cli.parser().parse_args(own)
+    assert args.command in ("run", "report")
 
 
 @pytest.mark.parametrize("cmd", [c for c in readme_commands() if c.startswith(".venv/bin/python -m benchmarks")])

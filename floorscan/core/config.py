@@ -35,11 +35,11 @@ SCHEMA_DIR = Path(__file__).resolve().parents[2] / "workflow" / "schemas"
 @functools.lru_cache(maxsize=None)
 def _schema(stage: str) -> dict:
     """The parsed schema of ``stage`` (``workflow/schemas/<stage>.schema.yaml``)."""
-    return _load_schema(os.path.realpath(SCHEMA_DIR / f"{stage}.schema.yaml"))
+    return load_schema(os.path.realpath(SCHEMA_DIR / f"{stage}.schema.yaml"))
 
 
 @functools.lru_cache(maxsize=None)
-def _load_schema(path: str) -> dict:
+def load_schema(path: str) -> dict:
     """The YAML schema at ``path`` (a resolved path), parsed once per process with libyaml
     when PyYAML has it; shared, not to be changed."""
     import yaml
@@ -278,21 +278,21 @@ def _check_value(value: Any, schema: dict, section: str, field: str) -> None:
     property of the schema of ``section``) or holds a NaN or infinity."""
     from jsonschema.exceptions import best_match
 
-    plain = _plain(value)
+    plain = json_value(value)
     error = best_match(_stage_validator(section.split(".")[0]).evolve(schema=schema).iter_errors(plain))
     if error is not None:
-        raise ConfigError(_message(error, field))
+        raise ConfigError(error_line(error, field))
     found = _non_finite(plain)
     if found is not None:
         raise ConfigError(f"{_field(field, found[0])}: {found[1]!r}: expected a finite number, not NaN or infinity")
 
 
-def _plain(value: Any) -> Any:
+def json_value(value: Any) -> Any:
     """``value`` with its tuples as lists (JSON arrays, for jsonschema)."""
     if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
+        return [json_value(v) for v in value]
     if isinstance(value, Mapping):
-        return {k: _plain(v) for k, v in value.items()}
+        return {k: json_value(v) for k, v in value.items()}
     return value
 
 
@@ -344,7 +344,7 @@ def _field(section: str, path) -> str:
     return ".".join(keys if section == "config" and keys else [section, *keys])
 
 
-def _message(error, section: str) -> str:
+def error_line(error, section: str) -> str:
     """One line for a jsonschema ``ValidationError``: the field and what is wrong; for
     an unknown key the known ones (``additionalProperties: false``)."""
     field = _field(section, error.absolute_path)
@@ -395,14 +395,14 @@ def validate_config(data: dict, schema_path: str | os.PathLike, section: str = "
     from snakemake.exceptions import WorkflowError
     from snakemake.utils import validate
 
-    schema = _load_schema(os.path.realpath(os.fspath(schema_path)))
+    schema = load_schema(os.path.realpath(os.fspath(schema_path)))
     _typed_strings(data, schema, schema)
     try:
         validate(data, os.fspath(schema_path), set_default=True)
     except WorkflowError as e:  # raised while handling the jsonschema error, its context
         if not isinstance(e.__context__, ValidationError):
             raise
-        raise ConfigError(f"{_message(e.__context__, section)} (schema {os.fspath(schema_path)})") from None
+        raise ConfigError(f"{error_line(e.__context__, section)} (schema {os.fspath(schema_path)})") from None
     found = _non_finite(data)
     if found is not None:
         raise ConfigError(f"{_field(section, found[0])}: {found[1]!r}: expected a finite number, not NaN or infinity")
@@ -450,3 +450,4 @@ def _typed_strings(data: Any, schema: dict, root: dict) -> Any:
         for i, item in enumerate(data):
             data[i] = _typed_strings(item, schema["items"], root)
     return data
+

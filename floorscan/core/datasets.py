@@ -6,6 +6,7 @@ after :func:`floorscan.core.config.validate_config`.
 
 from __future__ import annotations
 
+import copy
 import os
 from pathlib import Path
 from typing import Mapping
@@ -43,8 +44,10 @@ def check_datasets(config: Mapping, buildings_dir: str | os.PathLike = BUILDINGS
         a synthetic dataset's ``building`` without a file in ``buildings_dir``, listing
         the known buildings.
     """
-    if "path" in config and not str(config["path"] or "").strip():
-        raise ConfigError(f"path (--config path=...) is empty; expected {RECORDING_PATH}")
+    if "path" in config:
+        paths = config_paths(config)
+        if not paths or not all(str(p or "").strip() for p in paths):
+            raise ConfigError(f"path (--config path=...) is empty; expected {RECORDING_PATH}")
     for name, ds in (config.get("datasets") or {}).items():
         if ds.get("format") == "synthetic":
             building = str(ds.get("building"))
@@ -55,6 +58,15 @@ def check_datasets(config: Mapping, buildings_dir: str | os.PathLike = BUILDINGS
                 )
         elif "path" in ds and not str(ds["path"] or "").strip():
             raise ConfigError(f"datasets.{name}.path is empty; expected {RECORDING_PATH}")
+
+
+def config_paths(config: Mapping) -> list[str]:
+    """The top-level ``path`` of a config as a list: one path (``--config path=...``),
+    several (``floorscan run A B``: a list), or none."""
+    path = config.get("path")
+    if path is None:
+        return []
+    return [os.fspath(p) for p in path] if isinstance(path, (list, tuple)) else [os.fspath(path)]
 
 
 def _same_file(a: str | None, b: str) -> bool:
@@ -84,8 +96,10 @@ def add_path_datasets(config: dict, recordings: list) -> list[str]:
     """Make the recordings of the top-level ``path`` (``--config path=/data/run.bag``, or
     a folder of recordings) datasets, the run's targets.
 
-    Each dataset is named by :func:`dataset_name`, holds only ``path`` (ingest detects
-    the rest) and, for a map image, the top-level ``resolution_m``. A dataset of that name with the same recording (the same path, relative
+    Each dataset is named by :func:`dataset_name`, holds ``path`` (ingest detects
+    the rest), the keys of the top-level ``path_options`` (``scan_topic``, ``pose``, ...:
+    what the user sets of every recording of ``path``) and, for a map image, the
+    top-level ``resolution_m``. A dataset of that name with the same recording (the same path, relative
     to the working directory or absolute) is reused; with another recording the name
     gets a numeric suffix. The ``building`` section's floors name their recording by
     dataset name or file name; they are resolved to dataset names
@@ -122,6 +136,7 @@ def add_path_datasets(config: dict, recordings: list) -> list[str]:
         if config.get("resolution_m") is not None and Path(path).suffix.lower() in (".pgm", ".png"):
             entry["resolution_m"] = config["resolution_m"]  # a map image's metres a pixel
         datasets.setdefault(name, entry)
+        datasets[name].update(copy.deepcopy(config.get("path_options") or {}))  # a reused dataset too
         names.append(name)
         by_file[Path(path).name] = name
     if names:
