@@ -48,7 +48,8 @@ taken from the walls:
    to the wall faces and cut by the wall footprints (shapely), simplified by half a
    cell; a room seen in part, convex between its walls, completed up to them (the
    bounding box of its seen floor cut by each nearby wall's half-plane); the door
-   openings in the walls belong to no room. Valid polygons, holes allowed, in map
+   openings in the walls belong to no room; the rooms a coverage (:func:`disjoint_rooms`:
+   a sliver two rooms grew into is the first's). Valid polygons, holes allowed, in map
    metres, numbered ``Room 1``, ``Corridor 1``, ``Space 1`` in reading order (top to
    bottom, left to right).
 
@@ -296,7 +297,7 @@ def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thic
     """A valid shapely Polygon per room of ``labels`` (module docstring, step 5): its
     cells traced (contourpy), grown by a cell up to the wall faces and cut by the walls'
     footprints and the other rooms, simplified by half a cell; the largest part when
-    the cut leaves several. No two overlap: a sliver two rooms grew into is the first's.
+    the cut leaves several.
 
     Parameters
     ----------
@@ -342,13 +343,32 @@ def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thic
     for k, poly in enumerate(out):
         others = shapely.union_all([p for j, p in enumerate(out) if j != k])
         out[k] = _bounded_by_walls(poly, axes, thickness, foot, walls, others, res)
-    # the rooms are a coverage: where two grown rooms overlap (a sliver along a door or
-    # a gap in a wall, each grown into it), the room first in reading order keeps it
-    taken = shapely.Polygon()
-    for k, poly in enumerate(out):
-        if not poly.is_empty and shapely.intersection(taken, poly).area > 0:
-            out[k] = _largest(poly.difference(taken))
-        taken = shapely.union(taken, out[k])
+    return out
+
+
+def disjoint_rooms(polys: list) -> list:
+    """The rooms as a coverage: where two overlap (a sliver along a door or a gap in a
+    wall, each grown into it), the room first in the list keeps it.
+
+    Parameters
+    ----------
+    polys : list of shapely Polygon
+        In reading order.
+
+    Returns
+    -------
+    list of shapely Polygon
+        The same rooms, each the largest part of what is left of it.
+    """
+    import shapely
+
+    out, taken = [], shapely.Polygon()
+    for poly in polys:
+        # on the exports' grid, so that no overlap comes back when they round the vertices
+        if not poly.is_empty and shapely.intersection(taken, poly, grid_size=POLYGON_GRID_M).area > 0:
+            poly = _largest(shapely.difference(poly, taken, grid_size=POLYGON_GRID_M))
+        out.append(poly)
+        taken = shapely.union(taken, poly, grid_size=POLYGON_GRID_M)
     return out
 
 
@@ -444,6 +464,7 @@ def plan_rooms(
              for p, q, w, *_ in doors]
         )  # fmt: skip
         polys = [_largest(shapely.simplify(p.difference(openings), raster.resolution_m / 4)) for p in polys]
+    polys = disjoint_rooms(polys)
     keep = [k for k in range(n) if not polys[k].is_empty and polys[k].area >= params.min_room_area_m2]
     new_id = {k + 1: i for i, k in enumerate(keep)}
     polys = [polys[k] for k in keep]
