@@ -478,7 +478,12 @@ def test_svg_fits_the_window_with_title_scale_bar_legend_and_axes(tmp_path, box_
     assert (root.get("width"), root.get("height")) == ("100%", "100%")
     vb_w, vb_h = (float(v) for v in root.get("viewBox").split()[2:])
     assert root.find("s:title", SVG_NS).text == "intel random ransac k5"
-    assert "5 walls (1 with both faces seen, 4 with one)" in root.find(".//s:text[@id='subtitle']", SVG_NS).text
+    subtitle = root.find(".//s:text[@id='subtitle']", SVG_NS).text
+    assert "5 walls (1 with both faces seen, 4 with one)" in subtitle
+    assert subtitle.endswith("map frame of the recording, metres")  # no time stamp: no date (1970)
+    write_floorplan(box_segments, {}, {"svg": path}, **META, timestamp=1_600_000_000.7)
+    dated = ET.parse(path).getroot().find(".//s:text[@id='subtitle']", SVG_NS).text
+    assert dated.endswith("map frame of the recording, metres \u00b7 2020-09-13T12:26:40+00:00")
     # the plan group: matrix(s 0 0 -s tx ty), y flipped; the plan's longer side 1000 px
     plan_g = root.find(".//s:g[@id='plan']", SVG_NS)
     s, b, c, d, tx, ty = (float(v) for v in plan_g.get("transform")[len("matrix("):-1].split())

@@ -24,7 +24,7 @@ import numpy as np
 from floorscan.core.files import atomic_path
 from floorscan.floorplan.footprints import PlanExports
 from floorscan.floorplan.georeference import Georeference, as_georeference
-from floorscan.floorplan.metadata import PlanMetadata, count_text, floor_area_m2, floorscan_version
+from floorscan.floorplan.metadata import PlanMetadata, count_text, export_time, floor_area_m2, floorscan_version
 
 if TYPE_CHECKING:
     from floorscan.floorplan.params import FloorplanParams
@@ -36,6 +36,9 @@ if TYPE_CHECKING:
 SVG_PLAN_PX, SVG_MIN_WIDTH_PX, SVG_MARGIN_PX, SVG_HEAD_PX, SVG_FOOT_PX = 1000.0, 720.0, 20.0, 56.0, 84.0
 #: A legend row of a kind of room or of doors, pixels: the foot band grows by one each.
 SVG_LEGEND_ROW_PX = 19.0
+#: Seconds since the epoch from which a time stamp is a date (2000-01-01): below it the
+#: stamps count from the recording's start or from nothing (a CARMEN log, a map).
+ABSOLUTE_TIME_S = 946_684_800
 #: Room fills by kind (light, under the walls), the fill of another kind, and how the
 #: legend names each kind.
 SVG_ROOM_FILLS = {"room": "#fbefc4", "corridor": "#d3e8f5", "space": "#dff0d8"}
@@ -113,9 +116,12 @@ def _write_svg(
     paired = walls["paired"].to_numpy(dtype=bool)
     n_paired = int(paired.sum())
     title = meta.title
+    # the date only when the recording has one: stamps counted from 0 (a CARMEN log, a
+    # map) are no date a person would read
+    dated = export_time(meta.timestamp) >= ABSOLUTE_TIME_S
     sub = (
         f"{n} walls ({n_paired} with both faces seen, {n - n_paired} with one)"
-        f" \u00b7 map frame of the recording, metres \u00b7 {meta.time_stamp}"
+        f" \u00b7 map frame of the recording, metres" + (f" \u00b7 {meta.time_stamp}" if dated else "")
     )
     about = "; ".join(f"{k}: {v or '-'}" for k, v in meta.fields)
     desc = (
