@@ -42,7 +42,9 @@ with config_errors_exit():
             _skipped += _left_out
         add_path_datasets(config, _recordings)
         # the datasets made of the paths, with path_options: checked as a config file's
-        validate_config(config, workflow.basedir + "/workflow/schemas/config.schema.yaml")
+        # (the building, checked above, now names its floors' datasets: left out)
+        validate_config({k: v for k, v in config.items() if k != "building"},
+                        workflow.basedir + "/workflow/schemas/config.schema.yaml")
         if len(_recordings) > 1:
             print(f"{', '.join(config_paths(config))}: {len(_recordings)} recordings, one dataset each: {', '.join(config['target'])}"
                   + (f" (not recordings, left out: {', '.join(_skipped)})" if _skipped else ""), file=sys.stderr)
