@@ -60,6 +60,10 @@ def layout_rooms(axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, p
         The free space (of the plan's scans, or a map's free cells).
     params : RoomParams
         ``door_min_m``, ``door_max_m``, ``min_room_area_m2`` and the corridor's limits.
+    hypotheses : (M, 4) float ndarray, optional
+        More lines for the complex, metres (e.g. the plan's clutter faces): without
+        evidence of their own (:data:`~floorscan.floorplan.hypotheses.OPEN`), their
+        edges weighed by the grid's occupied cells; not extended.
 
     Returns
     -------
@@ -163,7 +167,7 @@ def layout_plan_rooms(axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGr
 
     Parameters
     ----------
-    axes, thickness, grid, params
+    axes, thickness, grid, params, hypotheses
         As :func:`layout_rooms`.
 
     Returns
