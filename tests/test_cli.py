@@ -47,7 +47,7 @@ def test_help_says_it_all(capsys):
         (["run", "/no/such/run.bag"], "/no/such/run.bag: no such file or folder"),
         (["run", "--set", "select.k"], "expected KEY=VALUE"),
         (["run", "--set", "select.kk=5"], "select.kk: unknown key; expected one of ["),
-        (["run", "--set", "select.k=five"], "select.k: 'five' is not valid"),
+        (["run", "--set", "select.k=five"], "select.k: got 'five'; expected 'auto', an integer >= 1 or a number > 0 and < 1"),
         (["run", "--set", "resolution_m=-1"], "resolution_m: -1 is less than or equal to the minimum of 0"),
         (["run", "--set", "nosuch=1"], "nosuch: unknown key"),
         (["run", "--set", "scan_topic=/base_scan"], "scan_topic is a key of a dataset"),

@@ -422,3 +422,18 @@ def test_schema_enum_is_the_schemas_own_list():
         schema_enum("walls", "seed")
     with pytest.raises(KeyError, match="no property 'nope'"):
         schema_enum("hulls", "nope")
+
+
+def test_a_value_of_none_of_the_alternatives_says_what_each_is():
+    """``select.k: five`` names the three things k may be (issue 47, item 7 of the user's
+    list), not jsonschema's "is not valid under any of the given schemas"."""
+    from floorscan.core.config import ConfigError, validate_config
+
+    schema = REPO / "workflow" / "schemas" / "select.schema.yaml"
+    with pytest.raises(ConfigError) as info:
+        validate_config({"k": "five"}, schema, "select")
+    assert str(info.value).startswith(
+        "select.k: got 'five'; expected 'auto', an integer >= 1 or a number > 0 and < 1 (schema "
+    )
+    with pytest.raises(ConfigError, match=r"^select\.k: got 0; expected 'auto', an integer >= 1 or a number > 0 and < 1"):
+        validate_config({"k": 0}, schema, "select")

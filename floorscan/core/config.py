@@ -353,7 +353,37 @@ def error_line(error, section: str) -> str:
     if error.validator == "additionalProperties" and error.validator_value is False and known:
         unknown = sorted(str(k) for k in error.instance if k not in known)
         return f"{field}: unknown keys {unknown}; expected one of {sorted(known)}"
+    alternatives = error.validator_value if error.validator in ("oneOf", "anyOf") else None
+    if isinstance(alternatives, list) and alternatives and all(isinstance(a, dict) for a in alternatives):
+        said = [alternative_text(a) for a in alternatives]
+        expected = said[0] if len(said) == 1 else f"{', '.join(said[:-1])} or {said[-1]}"
+        return f"{field}: got {error.instance!r}; expected {expected}"
     return f"{field}: {error.message}"
+
+
+def alternative_text(schema: dict) -> str:
+    """What one schema of a ``oneOf`` / ``anyOf`` accepts, for people: ``'auto'``, ``an
+    integer >= 1``, ``a number > 0 and < 1``, ``one of ['a', 'b']``.
+
+    Parameters
+    ----------
+    schema : dict
+        A JSON schema.
+
+    Returns
+    -------
+    str
+    """
+    if "const" in schema:
+        return repr(schema["const"])
+    if "enum" in schema:
+        return f"one of {schema['enum']}"
+    kind = schema.get("type", "value")
+    kind = " or ".join(kind) if isinstance(kind, list) else kind
+    article = "an" if str(kind)[:1] in "aeiou" else "a"
+    bounds = [f"{op} {schema[key]}" for key, op in (("minimum", ">="), ("exclusiveMinimum", ">"), ("maximum", "<="),
+                                                     ("exclusiveMaximum", "<")) if key in schema]  # fmt: skip
+    return f"{article} {kind}" + (f" {' and '.join(bounds)}" if bounds else "")
 
 
 def validate_config(data: dict, schema_path: str | os.PathLike, section: str = "config") -> dict:
