@@ -108,7 +108,13 @@ def print_answer(failed_jobs=()):
     if len(datasets) > 1:
         statuses = [{**dataset_status(ds), "failed": failed[ds]} if ds in failed else dataset_status(ds) for ds in datasets]
         write_index(statuses, "results/index.html")
-    command = f"{sys.argv[0]} --cores 2 --config path={config['path']}" if isinstance(config.get("path"), str) else ""
+    command = ""
+    if isinstance(config.get("path"), str):  # the run's own paths and config files, quoted for a shell
+        import shlex
+
+        files = [str(f) for f in (workflow.config_settings.configfiles or []) if Path(str(f)).name != "config.yaml"]
+        words = [sys.argv[0], "--cores", "2", "--config", f"path={config['path']}"]
+        command = shlex.join(words + (["--configfile", *files] if files else []))
     for line in answer_lines(datasets, failed=failed, command=command):
         print(line)
     building = building_outputs()  # building.ifc, its page, the floors' GeoJSON

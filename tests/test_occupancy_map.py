@@ -220,9 +220,13 @@ def test_map_plan_target(demo_run, tmp_path):
     import ifcopenshell
     from shapely.geometry import shape
 
-    yaml = write_map(tmp_path, two_rooms_image(), "two_rooms", origin=(-0.5, -0.5))
+    folder = tmp_path / "my maps"  # a space in the path
+    folder.mkdir()
+    yaml = write_map(folder, two_rooms_image(), "two_rooms", origin=(-0.5, -0.5))
     res = snakemake(demo_run, "--config", f"path={yaml}")
     assert res.returncode == 0, res.stderr[-3000:]
+    # the report's command, pasted into a shell, names the same path (issue 47)
+    assert f"--config 'path={yaml}' --report results/report.html" in res.stdout
     out = demo_run / "results" / "two_rooms"
     answer = res.stdout[res.stdout.index("two_rooms: floor plan of an occupancy map"):]
     assert "220 x 120 cells of 0.05 m" in answer.splitlines()[0]
