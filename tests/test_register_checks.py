@@ -135,3 +135,21 @@ def test_the_graph_section_is_parsed_once_per_run(monkeypatch, tmp_path):
     assert resolved.graph_params is cfg.graph_params and len(calls) == 1
     with pytest.raises(ConfigError, match=r"register\.graph\.loop_radius: unknown key"):
         stage_params(RegistrationConfig, {"graph": {"loop_radius": 3}})
+
+
+def test_a_scan_or_two_without_a_pose_is_a_note_not_a_warning():
+    """Under 1 % of the recording's scans without a pose (a localizer that starts a moment
+    late) is said in the verdict but does not make it a WARNING (issue 47: trace0's 1 of
+    958); 1 % or more still does, as does any other loss."""
+    from floorscan.register.losses import Losses
+
+    detail = "after_pose_stream 1: after the last pose"
+    few = Losses(958, {"no_pose": 1}, no_pose_detail=detail)
+    v = verdict(221, 221, 0.93, 31117, 0.2, 0.3, losses=few)
+    assert v.warnings == [] and v.notes == [f"1 of the recording's 958 scans (<1 %) have no pose ({detail})"]
+    assert v.line().startswith("GOOD: kept 221 of 221 sampled scans (100 %), 1 of the recording's 958 scans (<1 %) lost")
+    assert v.line().endswith(f"have no pose ({detail})") and v.as_dict()["notes"] == v.notes
+    many = verdict(221, 221, 0.93, 31117, 0.2, 0.3, losses=Losses(958, {"no_pose": 10}))
+    assert many.line().startswith("WARNING") and many.notes == []
+    jump = verdict(221, 221, 0.93, 31117, 0.2, 0.3, losses=Losses(958, {"pose_jump": 1}))
+    assert jump.line().startswith("WARNING")

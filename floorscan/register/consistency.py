@@ -137,6 +137,9 @@ class Verdict:
     warnings : list of str
         What a reader should know although the stage goes on (few scans, no revisits,
         each loss, a fall-back to LIDAR odometry).
+    notes : list of str
+        Facts in the line that do not make it a warning (a few scans without a pose at
+        the recording's ends: :meth:`floorscan.register.losses.Losses.notes`).
     losses : Losses or None
         The scans lost before registration, against all the recording's scans; None:
         not counted.
@@ -149,6 +152,7 @@ class Verdict:
     n_revisited: int
     problems: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
     losses: Losses | None = None
 
     @property
@@ -167,7 +171,7 @@ class Verdict:
             f"{head}: kept {self.n_kept} of {self.n_sampled} sampled scans ({100 * self.kept_fraction:.0f} %){lost}; "
             f"map consistency {cons} ({self.n_revisited} revisited points)"
         )
-        return "; ".join([text, *self.problems, *self.warnings])
+        return "; ".join([text, *self.problems, *self.warnings, *self.notes])
 
     def as_dict(self) -> dict:
         return {
@@ -180,6 +184,7 @@ class Verdict:
             "n_revisited": self.n_revisited,
             "problems": list(self.problems),
             "warnings": list(self.warnings),
+            "notes": list(self.notes),
             "losses": self.losses.as_dict() if self.losses is not None else None,
         }
 
@@ -266,6 +271,7 @@ def verdict(
         if problem:
             v.problems.append(problem)
         v.warnings.extend(losses.warnings())
+        v.notes.extend(losses.notes())
     if frac < min_kept_fraction:
         why = f"; most were dropped as '{worst_reason}' ({worst_option})" if worst_reason else ""
         v.problems.append(

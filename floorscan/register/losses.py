@@ -92,6 +92,12 @@ def percent(n: int, total: int) -> str:
     return "<1 %" if 0 < p < 0.5 else f"{p:.0f} %"
 
 
+#: Scans without a pose under this share of the recording's are a note of the verdict,
+#: not a warning: a localizer that starts a moment after the scanner, or stops a moment
+#: before it, leaves a scan or two at the ends (issue 47: 1 of trace0's 958).
+NOTE_SHARE = 0.01
+
+
 @dataclass(frozen=True)
 class Losses:
     """The scans of a recording lost before registration.
@@ -131,20 +137,37 @@ class Losses:
 
     def warnings(self) -> list[str]:
         """One line per cause with its count, e.g. ``201 of the recording's 300 scans
-        (67 %) have no pose (after_pose_stream 201: after the last pose; ...)``."""
+        (67 %) have no pose (after_pose_stream 201: after the last pose; ...)``; the
+        scans without a pose under :data:`NOTE_SHARE` of the recording are a note
+        (:meth:`notes`), not a warning."""
+        return [text for cause, text in self.lines() if not self.is_note(cause)]
+
+    def notes(self) -> list[str]:
+        """The lines of :meth:`lines` that are facts, not warnings: scans without a pose,
+        fewer than :data:`NOTE_SHARE` of the recording's (a localizer that starts a
+        moment after the scanner)."""
+        return [text for cause, text in self.lines() if self.is_note(cause)]
+
+    def is_note(self, cause: str) -> bool:
+        """Whether the loss of ``cause`` is a note (:meth:`notes`)."""
+        return cause == NO_POSE and self.counts.get(cause, 0) < NOTE_SHARE * self.n_recording
+
+    def lines(self) -> list[tuple[str, str]]:
+        """``(cause, line)`` per cause, in :data:`CAUSES` order (:meth:`warnings`)."""
         out = []
         for cause, n in self.counts.items():
             head = f"{n} of the recording's {self.n_recording} scans ({percent(n, self.n_recording)})"
             if cause == NO_POSE:
-                out.append(f"{head} have no pose ({self.no_pose_detail})" if self.no_pose_detail else f"{head} have no pose")
+                text = f"{head} have no pose ({self.no_pose_detail})" if self.no_pose_detail else f"{head} have no pose"
             elif cause == POSE_JUMP:
-                out.append(f"{head} were dropped where the localizer's pose jumped (pose_jump"
-                           + (f": {self.details[POSE_JUMP]})" if self.details.get(POSE_JUMP) else ")"))
+                text = (f"{head} were dropped where the localizer's pose jumped (pose_jump"
+                        + (f": {self.details[POSE_JUMP]})" if self.details.get(POSE_JUMP) else ")"))
             elif cause == TOO_FEW_POINTS:
-                out.append(f"{head} have too few points (too_few_points"
-                           + (f": {self.details[TOO_FEW_POINTS]})" if self.details.get(TOO_FEW_POINTS) else ")"))
+                text = (f"{head} have too few points (too_few_points"
+                        + (f": {self.details[TOO_FEW_POINTS]})" if self.details.get(TOO_FEW_POINTS) else ")"))
             else:
-                out.append(f"{head} {INGEST_LOSSES[cause]} ({cause})")
+                text = f"{head} {INGEST_LOSSES[cause]} ({cause})"
+            out.append((cause, text))
         return out
 
     def problem(self, max_lost_fraction: float) -> str:
