@@ -45,8 +45,9 @@ with config_errors_exit():
         # (the building, checked above, now names its floors' datasets: left out)
         validate_config({k: v for k, v in config.items() if k != "building"},
                         workflow.basedir + "/workflow/schemas/config.schema.yaml")
-        if len(_recordings) > 1:
-            print(f"{', '.join(config_paths(config))}: {len(_recordings)} recordings, one dataset each: {', '.join(config['target'])}"
+        if len(_recordings) > 1 or _skipped:  # what a folder held that is no recording: always said
+            _one = "1 recording, one dataset" if len(_recordings) == 1 else f"{len(_recordings)} recordings, one dataset each"
+            print(f"{', '.join(config_paths(config))}: {_one}: {', '.join(config['target'])}"
                   + (f" (not recordings, left out: {', '.join(_skipped)})" if _skipped else ""), file=sys.stderr)
     else:
         resolve_building(config)

@@ -108,3 +108,17 @@ def test_the_recordings_of_a_folder_are_independent_jobs(survey_run):
     ingests = [ids[n] for n, label in nodes.items() if label.startswith("ingest")]
     assert n_parts == 3 and len(ingests) == 3  # broken, first, ground
     assert len({part[i] for i in ingests}) == 3
+
+
+def test_a_folder_of_one_recording_names_what_it_left_out(demo_run, tmp_path):
+    """What a folder holds that is no recording (a text file, a subfolder) is named
+    however few recordings it holds (issue 45, item 5: it was said only for several)."""
+    import shutil
+
+    folder = tmp_path / "one"
+    (folder / "day2").mkdir(parents=True)
+    shutil.copy(demo_run / "results" / "demo" / "sim" / "recording.bag", folder / "ground.bag")
+    (folder / "notes.txt").write_text("the survey\n")
+    res = snakemake(demo_run, "-n", "--config", f"path={folder}/")
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert f"{folder}/: 1 recording, one dataset: ground (not recordings, left out: day2, notes.txt)" in res.stderr
