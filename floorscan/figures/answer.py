@@ -81,8 +81,9 @@ def answer_lines(
         if ds in failed:
             lines.append(f"{ds}: FAILED: {failed[ds]}")
             continue
-        if (root / ds / "map" / "map.json").is_file():  # an occupancy map: its plan, no scans
-            lines += map_answer_lines(ds, root, many)
+        map_lines = map_answer_lines(ds, root, many)  # an occupancy map: its plan, no scans
+        if map_lines:
+            lines += map_lines
             continue
         summary_path = root / ds / "selection" / "selection.json"
         if not summary_path.is_file():
@@ -129,25 +130,6 @@ NOT_FROM_A_MAP = (
 )
 
 
-def read_map_info(path: str | os.PathLike) -> dict:
-    """``map/map.json`` of a map dataset (:meth:`floorscan.ingest.occupancy_map.MapInfo.as_dict`).
-
-    Parameters
-    ----------
-    path : path
-
-    Returns
-    -------
-    dict
-
-    Raises
-    ------
-    OSError, ValueError
-        When the file cannot be read as JSON.
-    """
-    return json.loads(Path(path).read_text(encoding="utf-8"))
-
-
 def map_answer_lines(dataset: str, root: str | os.PathLike, many: bool = False) -> list[str]:
     """The answer of a map dataset as the run prints it (one line when the run has
     several datasets).
@@ -165,7 +147,7 @@ def map_answer_lines(dataset: str, root: str | os.PathLike, many: bool = False) 
     list of str
         Empty when ``<root>/<dataset>/map/map.json`` is not made yet.
     """
-    from floorscan.ingest.occupancy_map import map_line
+    from floorscan.ingest.occupancy_map import map_line, read_map_info
 
     folder = Path(root) / dataset
     info_path = folder / "map" / "map.json"

@@ -17,7 +17,7 @@ import os
 from pathlib import Path
 
 from floorscan.core.files import atomic_path
-from floorscan.figures.answer import NOT_FROM_A_MAP, plan_counts, read_map_info
+from floorscan.figures.answer import NOT_FROM_A_MAP, plan_counts
 from floorscan.figures.report import FRONT_STYLE, ROOT_CLASS, facts_table, inline_svg
 from floorscan.figures.room_table import read_plan_rooms, rooms_table_html
 
@@ -42,7 +42,7 @@ def write_map_summary(
     str
         The Markdown written.
     """
-    from floorscan.ingest.occupancy_map import map_line
+    from floorscan.ingest.occupancy_map import map_line, read_map_info
 
     root = Path(path).parent
     lines = [
@@ -142,6 +142,7 @@ def write_map_front_page(
         The page.
     """
     from floorscan.core.plan_tables import plan_faces_and_walls
+    from floorscan.ingest.occupancy_map import read_map_info
 
     text = map_front_page(
         dataset, floorplan_svg=Path(floorplan_svg).read_text(encoding="utf-8"), info=read_map_info(info),

@@ -18,11 +18,8 @@ import math
 import numpy as np
 
 from floorscan.core.occupancy import OccupancyGrid
-from floorscan.floorplan.hypotheses import ARRANGEMENT_PRECISION_M, CLOSED, OPEN, WALL
+from floorscan.floorplan.hypotheses import CLOSED, OPEN, PRECISION_M, WALL
 
-#: Coordinates are snapped to this grid before noding and polygonising, metres: far
-#: below a map cell (5 cm), far above GEOS's floating-point trouble.
-PRECISION_M = ARRANGEMENT_PRECISION_M
 #: An edge of the complex is on a wall where it passes this close to an occupied cell,
 #: metres: half the thickness of a common wall (the axis runs inside the wall, its faces
 #: are the occupied cells) and a cell.

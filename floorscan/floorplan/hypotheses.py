@@ -16,8 +16,10 @@ from __future__ import annotations
 
 import numpy as np
 
-#: Coordinates are rounded to this before noding (:data:`floorscan.floorplan.arrangement.PRECISION_M`).
-ARRANGEMENT_PRECISION_M = 1e-4
+#: Coordinates are snapped to this grid before noding and polygonising
+#: (:mod:`floorscan.floorplan.arrangement`), metres: far below a map cell (5 cm), far
+#: above GEOS's floating-point trouble.
+PRECISION_M = 1e-4
 
 #: A wall end this close to another wall's footprint meets that wall (a junction the
 #: axes do not quite reach), metres: two 5 cm cells of a map.
@@ -77,14 +79,14 @@ def layout_lines(axes: np.ndarray, thickness: np.ndarray, frame, door_max_m: flo
                 if ahead is not None and JUNCTION_M < ahead <= door_max_m:
                     lines.append(LineString([end, end + u * ahead]))
                     kinds.append(CLOSED)
-                    gaps.append((np.array(end, float), np.array(end + u * ahead, float), int(i), float(ahead)))
+                    gaps.append((end.copy(), end + u * ahead, int(i), float(ahead)))
                 continue
             stop = _first_wall(end, u, i, p0, p1, dirs, length, thickness)
             if stop is None:  # nothing ahead: open to the frame
                 ray = LineString([end, end + u * 1e6])
                 hit = frame.exterior.intersection(ray)
                 t = min((float(np.dot(c - end, u)) for c in shapely.get_coordinates(hit)), default=0.0)
-                if t > ARRANGEMENT_PRECISION_M:
+                if t > PRECISION_M:
                     lines.append(LineString([end, end + u * t]))
                     kinds.append(OPEN)
                 continue
@@ -92,7 +94,7 @@ def layout_lines(axes: np.ndarray, thickness: np.ndarray, frame, door_max_m: flo
             lines.append(LineString([end, end + u * (t_axis + JUNCTION_M)]))  # past it: noded at any angle
             if gap <= door_max_m:
                 kinds.append(CLOSED)
-                gaps.append((np.array(end, float), np.array(end + u * gap, float), int(i), float(gap)))
+                gaps.append((end.copy(), end + u * gap, int(i), float(gap)))
             else:
                 kinds.append(OPEN)
     lines.append(frame.exterior)
@@ -200,39 +202,48 @@ def snapped_axes(axes: np.ndarray, thickness: np.ndarray) -> tuple[np.ndarray, n
                 continue
             end = axes[i, 2 * k:2 * k + 2]
             u = dirs[i] if k else -dirs[i]
-            best = None
-            for j in range(n):
-                if j == i or length[j] <= 0:
-                    continue
-                d = p0[j] - end
-                cross = u[0] * dirs[j, 1] - u[1] * dirs[j, 0]
-                if abs(cross) < 1e-6:
-                    continue  # parallel: a gap in one line, not a T
-                t = (d[0] * dirs[j, 1] - d[1] * dirs[j, 0]) / cross
-                s = (d[0] * u[1] - d[1] * u[0]) / cross
-                reach = thickness[j] / 2 + JUNCTION_M
-                if abs(t) <= reach / abs(cross) and -1e-9 <= s <= length[j] + 1e-9 and (best is None or abs(t) < abs(best)):
-                    best = t
-            if best is not None:
-                axes[i, 2 * k:2 * k + 2] = end + u * (best + 10 * ARRANGEMENT_PRECISION_M)  # just past: noded after rounding
+            cross, t, s, _ = _rays(end, u, p0, dirs)
+            reach = thickness / 2 + JUNCTION_M
+            with np.errstate(invalid="ignore"):
+                hit = (np.abs(cross) >= 1e-6) & (np.abs(t) * np.abs(cross) <= reach) & (s >= -1e-9) & (s <= length + 1e-9)
+            hit &= (np.arange(n) != i) & (length > 0)
+            if hit.any():
+                best = t[hit][np.argmin(np.abs(t[hit]))]
+                axes[i, 2 * k:2 * k + 2] = end + u * (best + 10 * PRECISION_M)  # just past: noded after rounding
                 free_end[i, k] = False
     return axes, free_end
+
+
+def _rays(end: np.ndarray, u: np.ndarray, p0: np.ndarray, dirs: np.ndarray):
+    """Where the ray ``end + t u`` meets each wall's line ``p0 + s dirs``: ``cross`` (the
+    sine of their angle), ``t`` and ``s`` (metres; NaN for a parallel wall) and ``off``,
+    each wall's line's distance from the ray's line (metres), all (N,)."""
+    d = p0 - end
+    cross = u[0] * dirs[:, 1] - u[1] * dirs[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(np.abs(cross) >= 1e-6, (d[:, 0] * dirs[:, 1] - d[:, 1] * dirs[:, 0]) / cross, np.nan)
+        s = np.where(np.abs(cross) >= 1e-6, (d[:, 0] * u[1] - d[:, 1] * u[0]) / cross, np.nan)
+    off = np.abs(d[:, 0] * u[1] - d[:, 1] * u[0])
+    return cross, t, s, off
+
+
+def _in_line(end, u, i, p0, p1, dirs, length, thickness) -> tuple[np.ndarray, np.ndarray]:
+    """The walls in wall ``i``'s line (parallel, within half the thicker one's thickness
+    of it) and how far along ``u`` from ``end`` each one's ends lie: ``(mask (N,),
+    (N, 2) metres)``."""
+    cross, _, _, off = _rays(end, u, p0, dirs)
+    same = (np.abs(cross) < 1e-6) & (off <= np.maximum(thickness, thickness[i]) / 2 + PRECISION_M)
+    same &= (np.arange(len(p0)) != i) & (length > 0)
+    return same, np.c_[(p0 - end) @ u, (p1 - end) @ u]
 
 
 def _in_line_ahead(end, u, i, p0, p1, dirs, length, thickness) -> float | None:
     """How far ahead of wall ``i``'s end ``end`` along ``u`` the nearest wall in its line
     (parallel, within half a thickness) begins, metres; None when none is ahead."""
-    best = None
-    for j in range(len(p0)):
-        if j == i or length[j] <= 0 or abs(u[0] * dirs[j, 1] - u[1] * dirs[j, 0]) >= 1e-6:
-            continue
-        d = p0[j] - end
-        if abs(d[0] * u[1] - d[1] * u[0]) > max(thickness[j], thickness[i]) / 2 + ARRANGEMENT_PRECISION_M:
-            continue
-        t = min(float(np.dot(p0[j] - end, u)), float(np.dot(p1[j] - end, u)))
-        if t > 0 and (best is None or t < best):
-            best = t
-    return best
+    same, ts = _in_line(end, u, i, p0, p1, dirs, length, thickness)
+    t = ts.min(axis=1)
+    ahead = same & (t > 0)
+    return float(t[ahead].min()) if ahead.any() else None
 
 
 def _first_wall(end, u, i, p0, p1, dirs, length, thickness):
@@ -241,32 +252,21 @@ def _first_wall(end, u, i, p0, p1, dirs, length, thickness):
     before its face; None when no wall is ahead. A wall counts when the ray meets its
     line within its footprint grown by :data:`JUNCTION_M`; a wall in the same line
     (parallel, within its half thickness) at its nearest end ahead."""
-    d = p0 - end
-    cross = u[0] * dirs[:, 1] - u[1] * dirs[:, 0]
-    best = None
-    for j in range(len(p0)):
-        if j == i or length[j] <= 0:
-            continue
-        half = thickness[j] / 2
-        if abs(cross[j]) < 1e-6:  # parallel
-            off = abs(d[j, 0] * u[1] - d[j, 1] * u[0])
-            if off > max(half, thickness[i] / 2) + ARRANGEMENT_PRECISION_M:
-                continue
-            ts = [float(np.dot(p0[j] - end, u)), float(np.dot(p1[j] - end, u))]
-            t = min(ts)
-            if max(ts) < 0 or t < -JUNCTION_M:
-                continue
-            t = max(t, 0.0)
-            cand = (t, t)
-        else:
-            # end + t u = p0[j] + s dirs[j]
-            t = (d[j, 0] * dirs[j, 1] - d[j, 1] * dirs[j, 0]) / cross[j]
-            s = (d[j, 0] * u[1] - d[j, 1] * u[0]) / cross[j]
-            reach = half + JUNCTION_M
-            if t < -JUNCTION_M or s < -reach or s > length[j] + reach:
-                continue
-            face = half / abs(cross[j])  # from the axis back to the face, along the ray
-            cand = (t, max(t - face, 0.0))
-        if best is None or cand[0] < best[0]:
-            best = cand
-    return best
+    cross, t, s, _ = _rays(end, u, p0, dirs)
+    others = (np.arange(len(p0)) != i) & (length > 0)
+    reach = thickness / 2 + JUNCTION_M
+    with np.errstate(invalid="ignore"):
+        crossing = others & (np.abs(cross) >= 1e-6) & (t >= -JUNCTION_M) & (s >= -reach) & (s <= length + reach)
+    same, ts = _in_line(end, u, i, p0, p1, dirs, length, thickness)
+    same &= (ts.max(axis=1) >= 0) & (ts.min(axis=1) >= -JUNCTION_M)
+    cand_t = np.full(len(p0), np.inf)
+    cand_gap = np.zeros(len(p0))
+    cand_t[crossing] = t[crossing]
+    face = thickness[crossing] / 2 / np.abs(cross[crossing])  # from the axis back to the face, along the ray
+    cand_gap[crossing] = np.maximum(t[crossing] - face, 0.0)
+    cand_t[same] = np.maximum(ts[same].min(axis=1), 0.0)
+    cand_gap[same] = cand_t[same]
+    if not np.isfinite(cand_t).any():
+        return None
+    j = int(np.argmin(cand_t))
+    return float(cand_t[j]), float(cand_gap[j])

@@ -30,8 +30,10 @@ BOUNDARY_EVIDENCE = 0.5
 #: opening: a closet, a shaft; kept however small.
 ENCLOSED_SHARE = 0.9
 
+
 class _Regions:
-    """Union-find over cells with the summed boundary between regions."""
+    """Union-find over cells: each region named by its root cell (the merge keeps the
+    root it is given, whose boundaries the grouping has summed)."""
 
     def __init__(self, n: int):
         self.parent = list(range(n))
@@ -49,8 +51,9 @@ def group_cells(inside: np.ndarray, edges, area: np.ndarray, min_area_m2: float)
     Parameters
     ----------
     inside : (C,) bool ndarray
-    edges : list of (a, b, length_m, kind)
-        :func:`layout_cells`.
+    edges : list of (a, b, length_m, closed_m)
+        :func:`~floorscan.floorplan.arrangement.layout_cells`: two cells, their edge's
+        length and the length of it that is evidence of a wall.
     area : (C,) float ndarray
         Cell areas, m2.
     min_area_m2 : float

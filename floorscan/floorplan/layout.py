@@ -40,6 +40,7 @@ from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.arrangement import PRECISION_M, cell_free_share, layout_cells
 from floorscan.floorplan.hypotheses import OPEN, layout_lines
 from floorscan.floorplan.labelling import INSIDE_SHARE, group_cells
+from floorscan.floorplan.room_space import wall_footprints
 
 log = logging.getLogger(__name__)
 
@@ -100,19 +101,15 @@ def layout_rooms(axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, p
     share = cell_free_share(cells, grid)
     area = np.array([c.area for c in cells])
     inside = share >= INSIDE_SHARE
-
     region = group_cells(inside, edges, area, params.min_room_area_m2)
     roots = sorted(set(region[region >= 0].tolist()))
-    feet = shapely.union_all([shapely.buffer(LineString([a[:2], a[2:]]), max(t, 1e-3) / 2, cap_style="flat")
-                              for a, t in zip(axes, thickness)]) if len(axes) else None  # fmt: skip
-    openings = [shapely.buffer(LineString([p, q]), max(thickness[wall_rows[i]], 1e-3) / 2, cap_style="flat")
-                for p, q, i, _ in gaps]  # fmt: skip
-    solid = shapely.union_all([g for g in [feet, *openings] if g is not None]) if (feet is not None or openings) else None
+    # a room ends at the wall faces and at the door openings in them
+    gap_axes = np.array([np.r_[p, q] for p, q, *_ in gaps]).reshape(-1, 4)
+    gap_thickness = thickness[wall_rows[[g[2] for g in gaps]]] if gaps else np.zeros(0)
+    solid = shapely.union_all([*wall_footprints(axes, thickness), *wall_footprints(gap_axes, gap_thickness)])
     polys, kept_roots = [], []
     for r in roots:
-        poly = shapely.union_all([cells[k] for k in np.flatnonzero(region == r)])
-        if solid is not None:
-            poly = poly.difference(solid)
+        poly = shapely.union_all([cells[k] for k in np.flatnonzero(region == r)]).difference(solid)
         # the walls may part a region's cells into pieces: each large enough is a room
         for part in shapely.get_parts(shapely.set_precision(poly, PRECISION_M)):
             if part.geom_type == "Polygon" and part.area >= params.min_room_area_m2:

@@ -174,9 +174,12 @@ def map_images(path: str | Path) -> list[Path]:
     except InputError:
         return []
     image = doc.get("image") if isinstance(doc, dict) else None
-    if not isinstance(image, str) or not image.strip():
-        return []
-    return [Path(image) if Path(image).is_absolute() else path.parent / image]
+    return [_beside(path, image)] if isinstance(image, str) and image.strip() else []
+
+
+def _beside(yaml_path: Path, image: str) -> Path:
+    """The image a map_server yaml names, resolved as map_server resolves it: beside the yaml."""
+    return Path(image) if Path(image).is_absolute() else yaml_path.parent / image
 
 
 def read_occupancy_map(path: str | Path, resolution_m: float | None = None) -> tuple[OccupancyGrid, MapInfo]:
@@ -256,7 +259,7 @@ def _map_yaml(path: Path, defaults: list[str]) -> dict:
     image = doc["image"]
     if not isinstance(image, str) or not image.strip():
         raise InputError(f"{path}: image: expected the map image's file name, got {quoted(image, 60)}")
-    image_path = Path(image) if Path(image).is_absolute() else path.parent / image
+    image_path = _beside(path, image)
     if not image_path.is_file():
         raise InputError(f"{path}: its image {quoted(image, 80)} does not exist (looked for {image_path})")
     if "resolution" not in doc:
@@ -325,24 +328,16 @@ def _occupancy(image: Path, negate: bool, mode: str, where: Path) -> tuple[np.nd
     try:
         with Image.open(image) as im:
             im.load()
-            bands = im.getbands()
-            if im.mode in ("I;16", "I;16B", "I;16L", "I", "F"):
+            if im.mode in ("I;16", "I;16B", "I;16L", "I", "F"):  # 16-bit or float grey: scaled to 0..255
                 a = np.asarray(im, dtype=np.float64)
-                a = a * (255.0 / max(float(a.max()), 1.0)) if a.max() > 255 else a
-                a = a[..., None]
+                a = (a * (255.0 / max(float(a.max()), 1.0)) if a.max() > 255 else a)[..., None]
                 bands = ("L",)
-            elif im.mode == "P":
-                im = im.convert("RGBA")
-                bands = im.getbands()
-                a = np.asarray(im, dtype=np.float64)
-            elif im.mode in ("1", "L", "LA", "RGB", "RGBA"):
-                a = np.asarray(im, dtype=np.float64)
-                a = a[..., None] if a.ndim == 2 else a
-                a = a * 255.0 if im.mode == "1" else a
             else:
-                im = im.convert("RGBA")
+                if im.mode not in ("1", "L", "LA", "RGB", "RGBA"):  # a palette, CMYK, ...
+                    im = im.convert("RGBA")
                 bands = im.getbands()
-                a = np.asarray(im, dtype=np.float64)
+                a = np.asarray(im, dtype=np.float64) * (255.0 if im.mode == "1" else 1.0)
+                a = a[..., None] if a.ndim == 2 else a
     except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as e:
         raise InputError(f"{named}: not an image that can be read ({e}); {EXPECTED}") from None
     if a.shape[0] < 2 or a.shape[1] < 2:
@@ -369,8 +364,8 @@ def _occupancy(image: Path, negate: bool, mode: str, where: Path) -> tuple[np.nd
 
 def _check_classes(path: Path, image: Path, occ, known, occupied, free) -> None:
     named = f"{path}" if path == image else f"{path}: its image {image}"
-    values = np.unique(occ[known]) if known.any() else np.empty(0)
-    if len(values) <= 1:
+    values = occ[known]
+    if not len(values) or values.min() == values.max():
         what = "every pixel is transparent" if not known.any() else "every pixel has one value"
         raise InputError(f"{named}: {what}, so there is no free space and no wall to make a plan of; {EXPECTED}")
     if not free.any():
@@ -422,11 +417,33 @@ def write_map_ingest(
     from floorscan.core.occupancy import write_grid, write_map_server
 
     grid, info = read_occupancy_map(path, resolution_m)
-    write_grid(grid, grid_path, metadata={"source": "map", "map": json.dumps(info.as_dict())})
+    write_grid(grid, grid_path, metadata={"source": "map"})
     write_map_server(grid, pgm_path, yaml_path, title=f"occupancy map {Path(path).name}")
     with atomic_path(info_path) as tmp:
         Path(tmp).write_text(json.dumps(info.as_dict(), indent=1) + "\n", encoding="utf-8")
     return info
+
+
+def read_map_info(path: str | Path) -> dict:
+    """What :func:`write_map_ingest` wrote of a map (``map/map.json``).
+
+    Parameters
+    ----------
+    path : path
+
+    Returns
+    -------
+    dict
+        :meth:`MapInfo.as_dict`.
+
+    Raises
+    ------
+    OSError, ValueError
+        When the file cannot be read as JSON.
+    """
+    import json
+
+    return json.loads(Path(path).read_text(encoding="utf-8"))
 
 
 def map_line(info: MapInfo | dict) -> str:

@@ -81,8 +81,7 @@ def map_of_scans(
     if len(pts) == 0:
         raise ValueError(f"none of the {len(wanted)} scans has a wall point")
     grid = occupancy_grid(zip(origins, points), replace(OccupancyParams(), resolution_m=params.support_cell_m))
-    segments = map_segments(pts, grid, params, seed=int(cfg.get("seed", schema_section_defaults("walls")["seed"])))
-    segments.insert(0, "scan_id", np.full(len(segments), -1, dtype=np.int32))
+    segments = _map_table(pts, grid, params, cfg)
     log.info("map of %d scans (%d wall points): %d wall segments; grid %d x %d cells of %.3f m",
              len(origins), len(pts), len(segments), grid.shape[1], grid.shape[0], grid.resolution_m)
     return segments, grid
@@ -145,10 +144,17 @@ def map_of_grid(grid: OccupancyGrid, cfg: Mapping[str, Any] | None) -> pd.DataFr
     cfg = cfg or {}
     params = stage_params(MapParams, cfg.get("map"))
     pts = grid.cell_centres(wall_cells(grid))
-    segments = map_segments(pts, grid, params, seed=int(cfg.get("seed", schema_section_defaults("walls")["seed"])))
-    segments.insert(0, "scan_id", np.full(len(segments), -1, dtype=np.int32))
+    segments = _map_table(pts, grid, params, cfg)
     log.info("map of %d x %d cells of %.3f m: %d wall cells, %d wall segments",
              grid.shape[1], grid.shape[0], grid.resolution_m, len(pts), len(segments))
+    return segments
+
+
+def _map_table(points: np.ndarray, grid: OccupancyGrid, params: MapParams, cfg: Mapping[str, Any]) -> pd.DataFrame:
+    """:func:`~floorscan.walls.map_lines.map_segments` seeded by ``cfg``'s ``seed``, as a
+    wall table of many scans (``scan_id`` -1)."""
+    segments = map_segments(points, grid, params, seed=int(cfg.get("seed", schema_section_defaults("walls")["seed"])))
+    segments.insert(0, "scan_id", np.full(len(segments), -1, dtype=np.int32))
     return segments
 
 

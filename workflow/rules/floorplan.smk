@@ -128,10 +128,9 @@ rule map_floorplan:
         "../../scripts/map_floorplan.py"
 
 
-MAP_PLAN_OUTPUTS.extend(floorplan_outputs("results/{dataset}/floorplan", FLOORPLAN_FORMATS).values())
-MAP_PLAN_OUTPUTS.append("results/{dataset}/plan_tables")
-PLAN_OUTPUTS.extend(floorplan_outputs("results/{dataset}/floorplan", FLOORPLAN_FORMATS).values())
-PLAN_OUTPUTS.extend(["results/{dataset}/plan_tables", "results/{dataset}/map.pgm", "results/{dataset}/map.yaml"])
+_PLAN_FILES = [*floorplan_outputs("results/{dataset}/floorplan", FLOORPLAN_FORMATS).values(), "results/{dataset}/plan_tables"]
+MAP_PLAN_OUTPUTS.extend(_PLAN_FILES)  # map.pgm, map.yaml: map_ingest's
+PLAN_OUTPUTS.extend([*_PLAN_FILES, "results/{dataset}/map.pgm", "results/{dataset}/map.yaml"])
 EVALUATION_OUTPUTS.extend(floorplan_outputs("results/{dataset}/evaluation/floorplan/all_scans_map", ["svg"]).values())
 EVALUATION_OUTPUTS.append("results/{dataset}/evaluation/plans/all_scans_map")
 EVALUATION_OUTPUTS.extend(

@@ -83,11 +83,6 @@ def map_resolution(wildcards):
     return DATASETS[wildcards.dataset].get("resolution_m")
 
 
-def map_path(wildcards):
-    """The map file ingest reads (a param: the image a yaml names is an input too)."""
-    return recording_input(wildcards)
-
-
 # An occupancy map as the recording (floorscan.ingest.occupancy_map): its grid, the map as
 # read (map.pgm, map.yaml: the classes the plan is built on) and what was read.
 rule map_ingest:
@@ -101,7 +96,7 @@ rule map_ingest:
         map_pgm="results/{dataset}/map.pgm",
         map_yaml="results/{dataset}/map.yaml",
     params:
-        path=map_path,
+        path=recording_input,  # the file to read; the image a yaml names is an input too
         resolution_m=map_resolution,
         recording=map_state,
     log:
