@@ -110,16 +110,11 @@ RACK_IS_A_CLOSET = pytest.mark.xfail(strict=True, reason=(
     "and its end faces snap onto the core wall: a closet of three walls, whose 2.1 m2 the room C2 loses (IoU 0.87-0.88; "
     "13 of 14 rooms at >= 0.95, 13 of 13 doors within 0.03 m). A recording sees the rack's front only, and structure "
     "pass 6 (loose in the free space) makes it clutter there"))  # fmt: skip
-CORRIDOR_CUT = pytest.mark.xfail(strict=True, reason=(
-    "demo with furniture, shifted origin: the watershed leaves the corridor in two regions, and their contact in the "
-    "line of partition_cd (1.3 m, the corridor's width) passes contact_door's narrowing test because the probes along "
-    "the corridor (0.2-1.2 m each side) reach into the mouths of door_c and door_d: the corridor is two rooms with a "
-    "door between them (6 rooms, 6 doors). The same map without furniture, or with it at the default origin, is exact"))  # fmt: skip
 
 
 @pytest.mark.parametrize(("name", "origin"), [
     ("demo", None),
-    pytest.param("demo", SHIFTED_ORIGIN, marks=CORRIDOR_CUT),
+    ("demo", SHIFTED_ORIGIN),
     pytest.param("hallways", None, marks=RACK_IS_A_CLOSET),
     pytest.param("hallways", SHIFTED_ORIGIN, marks=RACK_IS_A_CLOSET),
 ], ids=["demo-origin", "demo-shifted", "hallways-origin", "hallways-shifted"])  # fmt: skip

@@ -9,15 +9,15 @@ Two ways to find one, both in the wall's line, as a plan drawn by people shows a
   ``jamb_m`` of the other's line) when the scans saw free space in it and on both of
   its sides. The rooms are cut along these before they are segmented, so a room seen
   only through its door (a fan of rays) ends at the door.
-- :func:`contact_door`: where two regions of the segmentation meet: the contact is a
-  door when it is ``door_min_m`` to ``door_max_m`` wide, both of its ends lie within
-  ``jamb_m`` of a wall (the jambs; one may be the side of a wall, a door beside a
-  corner), it lies in the line of a wall whose end is within ``jamb_m`` of one of its
-  ends, and the space on both sides is wider than it by ``door_narrowing_m`` (a
-  corridor cut where a partition meets it is not a door). Anywhere else the two
-  regions are one room.
+- where two regions of the segmentation meet between jambs (both ends of the contact
+  within ``jamb_m`` of a wall or a seen obstacle, :func:`jamb_cells`), ``door_min_m``
+  to ``door_max_m`` wide, and the persistence of
+  :mod:`floorscan.floorplan.persistence` keeps the two regions apart: the door is
+  :func:`contact_door` when it lies in the line of a wall whose end is within
+  ``jamb_m`` of one of its ends (the opening runs from that end to the other jamb, on
+  the line), else :func:`free_door`, the contact as it is.
 
-A door is kept only when the rooms on its two sides differ (:func:`doors_table`).
+A door is kept only when the rooms on its two sides differ.
 Source: the door criterion of ipa_room_segmentation's Voronoi segmentation (Bormann et
 al., ICRA 2016: a room boundary is a narrow passage between two wall points), here
 restricted to openings in a plan wall's line.
@@ -25,12 +25,10 @@ restricted to openings in a plan wall's line.
 
 from __future__ import annotations
 
-from typing import Callable
-
 import numpy as np
 import pandas as pd
 
-from floorscan.floorplan.room_space import RoomParams, RoomRaster
+from floorscan.floorplan.room_space import RoomParams, RoomRaster, dilate
 
 
 def _units(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -276,14 +274,10 @@ def _point_segment_distance(p: np.ndarray, axes: np.ndarray) -> np.ndarray:
 
 
 def contact_door(
-    p: np.ndarray, q: np.ndarray, axes: np.ndarray, thickness: np.ndarray, params: RoomParams,
-    side_width: Callable[[np.ndarray, np.ndarray], tuple[float, float]] | None = None,
+    p: np.ndarray, q: np.ndarray, axes: np.ndarray, thickness: np.ndarray, params: RoomParams
 ) -> tuple[np.ndarray, np.ndarray, int] | None:
-    """The door a contact ``p``-``q`` ((2,) metres) is, or None (module docstring).
-
-    ``side_width(centre, normal)`` gives the width of the space on either side of the
-    contact (metres); a door is narrower than both by ``door_narrowing_m`` (a corridor
-    cut where a wall meets it is as wide as the corridor).
+    """The door in a wall's line a contact ``p``-``q`` ((2,) metres) between two rooms
+    is, or None (module docstring).
 
     Parameters
     ----------
@@ -294,12 +288,7 @@ def contact_door(
     thickness : (N,) float ndarray
         Metres.
     params : RoomParams
-        ``door_min_m``, ``door_max_m``, ``jamb_m``, ``door_narrowing_m``,
-        ``door_angle_deg``.
-    side_width : callable, optional
-        ``side_width(centre, normal)`` -> the width of the space on either side of the
-        contact, metres; a door is narrower than both by ``door_narrowing_m`` (a corridor
-        cut where a wall meets it is as wide as the corridor). None skips this test.
+        ``door_min_m``, ``door_max_m``, ``jamb_m``, ``door_angle_deg``.
 
     Returns
     -------
@@ -318,10 +307,6 @@ def contact_door(
         return None  # a jamb is missing: the contact ends in open or unseen space
     v = d / width
     mid = (p + q) / 2
-    if side_width is not None:
-        wa, wb = side_width(mid, np.array([-v[1], v[0]]))
-        if min(wa, wb) < width + params.door_narrowing_m:
-            return None  # no narrowing: the space is as wide on a side as the contact
     cos_max = np.cos(np.radians(params.door_angle_deg))
     ends = axes.reshape(-1, 2, 2)
     best = None
@@ -340,3 +325,22 @@ def contact_door(
                 best = (abs(t_near), (end.copy(), end + g * t_far, int(i)))  # to the far jamb, on the line
     return None if best is None else best[1]
 
+
+def free_door(p: np.ndarray, q: np.ndarray, axes: np.ndarray) -> tuple[np.ndarray, np.ndarray, int] | None:
+    """A door where two rooms meet between jambs out of any wall's line (a door between
+    a wall's end and a cupboard, or beside a wall the plan lacks): the contact
+    ``p``-``q`` ((2,) metres) as it is, in the nearest wall's name; None without walls.
+
+    Returns
+    -------
+    (p, q, wall) or None
+    """
+    if not len(axes):
+        return None
+    return p.copy(), q.copy(), int(np.argmin(_point_segment_distance((p + q) / 2, axes)))
+
+
+def jamb_cells(raster: RoomRaster, jamb_m: float) -> np.ndarray:
+    """(H, W) bool: the cells within ``jamb_m`` (metres) of a wall's footprint or of a
+    cell the scans saw occupied: where a door's jamb can stand."""
+    return dilate(raster.walls | raster.occupied, jamb_m / raster.resolution_m)

@@ -34,7 +34,6 @@ class RoomParams:
     door_angle_deg: float
     line_offset_m: float
     jamb_m: float
-    door_narrowing_m: float
     min_enclosure: float
     min_room_area_m2: float
     corridor_elongation: float
@@ -120,7 +119,7 @@ class RoomRaster:
         return out
 
 
-def _dilate(mask: np.ndarray, radius_cells: float) -> np.ndarray:
+def dilate(mask: np.ndarray, radius_cells: float) -> np.ndarray:
     """``mask`` dilated by a disc of ``radius_cells``: the cells within that Euclidean
     distance of a True cell (an exact distance transform, SciPy: time linear in the
     cells, whatever the radius)."""
@@ -145,8 +144,8 @@ def _closing(mask: np.ndarray, radius_cells: float) -> np.ndarray:
     if radius_cells <= 0:
         return mask.copy()
     r = int(np.ceil(radius_cells)) + 1
-    grown = _dilate(np.pad(mask, r), radius_cells)
-    return (~_dilate(~grown, radius_cells))[r:-r, r:-r]
+    grown = dilate(np.pad(mask, r), radius_cells)
+    return (~dilate(~grown, radius_cells))[r:-r, r:-r]
 
 
 def _opening(mask: np.ndarray, radius_cells: float) -> np.ndarray:
@@ -154,7 +153,7 @@ def _opening(mask: np.ndarray, radius_cells: float) -> np.ndarray:
     that radius inside the mask cover."""
     if radius_cells <= 0:
         return mask.copy()
-    return _dilate(_erode(mask, radius_cells), radius_cells) & mask
+    return dilate(_erode(mask, radius_cells), radius_cells) & mask
 
 
 def wall_footprints(axes: np.ndarray, thickness: np.ndarray) -> np.ndarray:

@@ -24,13 +24,12 @@ taken from the walls:
    (scikit-image) of the negated distance to the nearest wall or unseen cell, from the
    maxima of that distance that stand ``marker_depth_m`` above the saddles around them
    (h-maxima): every narrowing of the space is a candidate boundary between two rooms.
-4. **Where regions meet** (:mod:`floorscan.floorplan.doors`), each place of contact
-   judged on its own: a door (:func:`~floorscan.floorplan.doors.contact_door`: an
-   opening ``door_min_m`` to ``door_max_m`` wide with a wall at both ends, in the line
-   of a wall that ends at one of them, narrower than the space on both sides by
-   ``door_narrowing_m``), a slit between wall pieces narrower than a door (nobody
-   passes: the regions stay apart), or anything else (a narrowing of a corridor, a
-   passage wider than a door, an over-segmented room): the two regions are one room.
+4. **Rooms by persistence** (:mod:`floorscan.floorplan.persistence`): the regions
+   merged from the widest passage down, unless the passage is a door (no wider than
+   ``door_max_m``, at most three quarters of the width of the narrower side): one
+   global order for the whole plan instead of a rule per contact. Where two rooms
+   meet, the contact is their door (:mod:`floorscan.floorplan.doors`), in a wall's
+   line when one ends there.
    Groups of regions whose edge runs along walls and seen obstacles for less than
    ``min_enclosure`` of its length, that are reached only through openings no wider
    than a door and where no scan was taken are the outside seen through a window or
@@ -66,6 +65,7 @@ import pandas as pd
 
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan import doors as D
+from floorscan.floorplan.persistence import persistent_rooms
 from floorscan.floorplan.room_space import RoomParams, RoomRaster, room_space, space_regions, wall_footprints
 from floorscan.floorplan.room_tables import room_tables
 
@@ -121,35 +121,37 @@ def segment_rooms(
     cut = RoomRaster(raster.origin_xy, raster.resolution_m, raster.walls | barrier, raster.space & ~barrier, raster.occupied)
     labels, distance = space_regions(cut, params)
     n = int(labels.max())
-    res = raster.resolution_m
-    steps = np.arange(0.2, 1.2 + 1e-9, res)
-
-    def side_width(centre: np.ndarray, normal: np.ndarray) -> tuple[float, float]:
-        wa, wb = (2.0 * float(raster.at(distance, centre + sign * steps[:, None] * normal).max()) for sign in (1.0, -1.0))
-        return wa, wb
-
-    sets = _sets(n)
-    found = []  # (p, q, wall, a, b)
-    touching: dict[tuple[int, int], float] = {}  # contact length between regions, metres
-    kinds: dict[tuple[int, int], str] = {}  # slit, door, narrow (merge), wide (merge)
-    rank = {"slit": 0, "door": 1, "narrow": 2, "wide": 3}  # a pair is its most open place
-    for (a, b), places in D.contacts(labels).items():
-        touching[(a, b)] = sum(len(cells) for cells in places) * raster.resolution_m
+    # the places where two regions meet between jambs: both ends within jamb_m of a wall
+    # or of an obstacle the scans saw, no wider than a door (a narrowing that ends in
+    # unseen or open space, a shadow behind furniture, is no door); narrower than a door
+    # it is a slit nobody passes, which keeps two regions apart without a door
+    jambs = D.jamb_cells(cut, params.jamb_m)
+    contacts = D.contacts(labels)
+    framed: dict[tuple[int, int], list] = {}
+    for pair, places in contacts.items():
         for cells in places:
             p, q = D.contact_segment(cut, cells)
             width = float(np.hypot(*(q - p)))
-            door = None
-            if width < params.door_min_m and D.near_walls(p, axes, thickness, params.jamb_m) and D.near_walls(
-                q, axes, thickness, params.jamb_m
-            ):
-                kind = "slit"  # between wall pieces, too narrow to pass: neither door nor one room
-            else:
-                door = D.contact_door(p, q, axes, thickness, params, side_width)
-                kind = "door" if door is not None else ("narrow" if width <= params.door_max_m else "wide")
-            if door is not None:
-                found.append((*door, a, b))
-            if rank[kind] >= rank.get(kinds.get((a, b), "slit"), 0):
-                kinds[(a, b)] = kind
+            if width > params.door_max_m or not cut.at(jambs, np.array([p, q])).all():
+                continue
+            doors_here = framed.setdefault(pair, [])
+            if width >= params.door_min_m:
+                door = D.contact_door(p, q, axes, thickness, params) or D.free_door(p, q, axes)
+                if door is not None:
+                    doors_here.append(door)
+    root, _ = persistent_rooms(labels, distance, params.door_max_m, set(framed))
+    sets = _sets(n)
+    found = []  # (p, q, wall, a, b)
+    touching: dict[tuple[int, int], float] = {}  # contact length between regions, metres
+    kinds: dict[tuple[int, int], str] = {}  # door (apart), narrow or wide (one room)
+    for (a, b), places in contacts.items():
+        touching[(a, b)] = sum(len(cells) for cells in places) * raster.resolution_m
+        if root[a] == root[b]:
+            width = max(float(np.hypot(*np.subtract(*D.contact_segment(cut, cells)))) for cells in places)
+            kinds[(a, b)] = "narrow" if width <= params.door_max_m else "wide"
+        else:
+            kinds[(a, b)] = "door"
+            found += [(*door, a, b) for door in framed[(a, b)]]
     for p, q, wall in gaps:
         d = q - p
         nrm = np.array([-d[1], d[0]]) / max(float(np.hypot(*d)), 1e-12) * 2 * raster.resolution_m
@@ -368,7 +370,9 @@ def disjoint_rooms(polys: list) -> list:
         if not poly.is_empty and shapely.intersection(taken, poly, grid_size=POLYGON_GRID_M).area > 0:
             poly = _largest(shapely.difference(poly, taken, grid_size=POLYGON_GRID_M))
         out.append(poly)
-        taken = shapely.union(taken, poly, grid_size=POLYGON_GRID_M)
+        # a union on the grid may collapse a sliver to a line: only its area is taken
+        union = shapely.union(taken, poly, grid_size=POLYGON_GRID_M)
+        taken = shapely.union_all([g for g in shapely.get_parts(union) if isinstance(g, shapely.Polygon)])
     return out
 
 

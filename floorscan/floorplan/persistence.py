@@ -1,0 +1,133 @@
+"""Step 4 of the rooms (:mod:`floorscan.floorplan.rooms`): the watershed regions of the
+space merged into rooms by persistence, in one global order.
+
+The regions are the basins of the distance to the nearest wall (step 3); two basins
+meet at a saddle, the widest passage between them, of half-width ``s`` (the distance
+at the saddle). Visiting every pair of touching regions from the highest saddle down
+(the widest passage first), as the persistence-based clustering ToMATo does (Chazal,
+Guibas, Oudot and Skraba, "Persistence-based clustering in Riemannian manifolds",
+J. ACM 60(6), 2013), the two groups the pair belongs to merge unless the passage is a
+door:
+
+- walls frame it: both ends of the contact stand near a wall or a seen obstacle (the
+  caller's ``framed`` pairs, :mod:`floorscan.floorplan.rooms`): a narrowing that ends
+  in unseen space (the shadow of a table) is no door;
+- it is no wider than a door: ``2 s <= door_max_m``;
+- and the space on both sides is wider than it: the saddle is at most
+  :data:`DOOR_SHARE` of the smaller group's peak (the radius of the largest disc inside
+  it, the "younger" cluster of ToMATo).
+
+A corridor cut into basins by the noise of its walls merges (its saddles are as high
+as its peaks); a room behind a door stays apart, whichever order the local rules
+would have met them in; a passage wider than a door joins its two sides. The
+decision uses the distance field and where the walls stand, nothing of the order the
+regions were numbered in, so it is the same under any rigid motion of the input, up
+to the raster.
+
+Bormann et al. ("Room segmentation: survey, implementation, and analysis", ICRA
+2016) segment on the same distance transform by a global threshold; the persistence
+order makes the threshold local to each pair of rooms.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: A door is at most this share of the width of the narrower space it joins: a 0.9 m
+#: door into a 1.2 m closet is 0.75 of it, while a corridor narrowed by the end of a
+#: wall, a jamb or the raster's cells by less than a quarter of its width is still one
+#: corridor (the room benchmarks and the synthetic buildings: ``benchmarks/README.md``).
+DOOR_SHARE = 0.75
+
+
+def saddles(labels: np.ndarray, distance: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The saddle between every pair of 4-adjacent regions.
+
+    Parameters
+    ----------
+    labels : (H, W) int ndarray
+        0 outside the space, else the region (1..R).
+    distance : (H, W) float ndarray
+        Distance to the nearest cell outside the space, metres.
+
+    Returns
+    -------
+    pairs : (P, 2) int64 ndarray
+        ``a < b``, each pair once.
+    height : (P,) float64 ndarray
+        The saddle: the largest, over the cells where ``a`` and ``b`` touch, of the
+        smaller distance of the two touching cells, metres.
+    """
+    keys, heights = [], []
+    n = int(labels.max()) + 1
+    for a_sl, b_sl in (((slice(None), slice(0, -1)), (slice(None), slice(1, None))),
+                       ((slice(0, -1), slice(None)), (slice(1, None), slice(None)))):  # fmt: skip
+        la, lb = labels[a_sl], labels[b_sl]
+        m = (la != lb) & (la > 0) & (lb > 0)
+        lo, hi = np.minimum(la[m], lb[m]).astype(np.int64), np.maximum(la[m], lb[m]).astype(np.int64)
+        keys.append(lo * n + hi)
+        heights.append(np.minimum(distance[a_sl][m], distance[b_sl][m]))
+    key, height = np.concatenate(keys), np.concatenate(heights)
+    if not len(key):
+        return np.zeros((0, 2), dtype=np.int64), np.zeros(0)
+    order = np.lexsort((height, key))
+    key, height = key[order], height[order]
+    last = np.r_[key[1:] != key[:-1], True]
+    key = key[last]
+    return np.column_stack([key // n, key % n]), height[last].astype(np.float64)
+
+
+def persistent_rooms(labels: np.ndarray, distance: np.ndarray, door_max_m: float, framed=None):
+    """The regions merged into rooms (the module docstring).
+
+    Parameters
+    ----------
+    labels : (H, W) int ndarray
+        0 outside the space, else the region (1..R).
+    distance : (H, W) float ndarray
+        Metres.
+    door_max_m : float
+        The widest door, metres.
+    framed : set of (int, int), optional
+        The pairs ``(a, b)``, ``a < b``, whose contact walls frame (a door in a wall's
+        line, or a slit between wall pieces): only these can be doors. None: any pair.
+
+    Returns
+    -------
+    root : (R + 1,) int64 ndarray
+        Each region's room (the label of one of its regions); ``root[0] == 0``.
+    doors : (P, 2) int64 ndarray
+        The pairs of touching regions kept apart by a door, in the order visited.
+    """
+    from scipy import ndimage
+
+    n = int(labels.max())
+    peak = np.zeros(n + 1)
+    if n:
+        peak[1:] = ndimage.maximum(distance, labels, np.arange(1, n + 1))
+    pairs, height = saddles(labels, distance)
+    parent = np.arange(n + 1)
+
+    def find(x: int) -> int:
+        while parent[x] != x:
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        return x
+
+    kept = []
+    # highest saddle first; ties in the pairs' order, so the result is deterministic
+    for k in np.lexsort((pairs[:, 1], pairs[:, 0], -height)):
+        a, b = (find(int(v)) for v in pairs[k])
+        if a == b:
+            continue
+        s = height[k]
+        young = min(peak[a], peak[b])
+        pair = (int(pairs[k, 0]), int(pairs[k, 1]))
+        if (framed is None or pair in framed) and 2 * s <= door_max_m and s <= DOOR_SHARE * young:
+            kept.append(pairs[k])
+            continue
+        a, b = min(a, b), max(a, b)
+        parent[b] = a
+        peak[a] = max(peak[a], peak[b])
+    root = np.array([find(i) for i in range(n + 1)], dtype=np.int64)
+    return root, np.array(kept, dtype=np.int64).reshape(-1, 2)
