@@ -513,7 +513,7 @@ def _two_scanners(root: Path) -> dict:
 
 def _two_logs(root: Path) -> dict:
     """Two CARMEN logs of the room concatenated: the second recorded earlier (its stamps
-    start 20 s before the first's), its poses in its own map frame (1.5 m, 0.5 m off)."""
+    start 8 s before the first's), its poses in its own map frame (1.5 m, 0.5 m off)."""
     first = carmen_lines()
     second = carmen_lines(n=20, stamps=[2.0 + i * DT_S for i in range(20)],
                           bad=lambda i: {"shift": (1.5, 0.5)})
@@ -524,7 +524,7 @@ def _two_logs(root: Path) -> dict:
 
 def _early_line(root: Path) -> dict:
     """One laser line stamped a minute before the line before it (line 12)."""
-    stamps = [10.0 + i * DT_S for i in range(N_SCANS)]
+    stamps = [100.0 + i * DT_S for i in range(N_SCANS)]
     stamps[11] -= 60.0
     p = write_log(root / "early_line.log", carmen_lines(stamps=stamps))
     return {"name": p.name, "path": str(p)}
@@ -685,7 +685,10 @@ def cases() -> list[Case]:
              "error", ("{name}", "'/scan'", "'laser' (18 scans)", "'laser_link' (12 scans)", "static")),
         Case("carmen_two_logs_concatenated", _two_logs, "error",
              ("{name}", "2 logs", "line 35", f"{n} scans", "20 scans", "split")),
-        Case("carmen_one_line_a_minute_early", _early_line, "error", ("{name}:12", "60.0 s", "earlier")),
+        Case("carmen_one_line_a_minute_early", _early_line, "error", ("{name}:12", "59.9 s earlier", "line 11")),
+        Case("bag_one_scan_stamped_a_minute_early",
+             _bag("early.bag", stamps=[T0_NS + int(i * DT_S * 1e9) - (60 * 10**9 if i == 5 else 0) for i in range(n)]),
+             "error", ("{name}", "'/scan'", "59.9 s earlier")),
         Case("bag_localizer_relocalises", _bag("relocalised.bag", n=RELOCALISED_N,
                                                map_jump=(RELOCALISED_AT_S, RELOCALISED_M)),
              "warning", ("at scan 50", "5.0 s into", "the map pose jumped", "relocalised"), n_index=RELOCALISED_N,

@@ -11,16 +11,21 @@ CARMEN logs in one file. Each used to run to a wrong map with exit 0.
 
 The relocalising localizer (the third class) is in ``tests/test_bad_input_jumps.py``.
 The recordings are the bad-input corpus's (``benchmarks/bench_bad_input.py``), made from
-the test room; none needs ``../shared``.
+the test room; the real logs concatenated come from ``../shared/data/radish`` (skipped
+without it).
 """
 
+import gzip
 import math
 
 import numpy as np
 import pytest
 
+from conftest import SHARED_DATA, needs_shared
 from benchmarks.bench_bad_input import REAR_MOUNT, cases, run_corpus, run_stages
 from floorscan.core.io import InputError, read_table
+from floorscan.ingest.carmen import open_carmen
+from floorscan.ingest.carmen_stamps import log_starts
 from floorscan.ingest.tf_chains import TfLink
 from floorscan.ingest.tf_poses import static_between
 
@@ -90,3 +95,73 @@ def test_a_second_frame_in_a_bag_without_tf_is_refused(tmp_path):
     assert isinstance(run.error, InputError)
     assert "carries scans in 2 frames, 'b' (10 scans), 'laser' (20 scans)" in str(run.error)
     assert "the bag has no TF" in str(run.error)
+
+
+def test_two_carmen_logs_in_one_file_are_refused_naming_where_the_second_starts(tmp_path):
+    """Two logs of the test room concatenated, the second stamped before the first: they
+    used to be sorted by stamp into one trajectory (the verdict GOOD)."""
+    (o,) = run_corpus(tmp_path, [_case("carmen_two_logs_concatenated")], echo=None)
+    assert o.outcome == "clear", o.detail
+    assert "two_logs.log: holds 2 logs, not one: at line 35 the laser stamps step back 10.9 s" in o.detail
+    assert "lines 3-32 hold 30 scans, lines 35-54 hold 20 scans" in o.detail
+    assert not list((tmp_path / "out" / o.case.name).glob("*.parquet"))
+
+
+@pytest.mark.parametrize("name, words", [
+    ("carmen_one_line_a_minute_early", "early_line.log:12: FLASER line stamped 59.9 s earlier than the laser line "
+                                       "before it (line 11, 101.000 s)"),
+    ("bag_one_scan_stamped_a_minute_early", "early.bag: '/scan' message 5 (t 1699999940500000000 ns): header stamp "
+                                            "is 59.9 s earlier than the scan before it"),
+])
+def test_a_scan_stamped_far_back_is_never_sorted_into_the_trajectory(tmp_path, name, words):
+    """One line (CARMEN) or message (bag) stamped a minute back used to be sorted to its
+    stamp's place, silently in a bag (within the reordering window)."""
+    (o,) = run_corpus(tmp_path, [_case(name)], echo=None)
+    assert o.outcome == "clear" and words in o.detail, o.detail
+
+
+def test_log_starts_splits_concatenated_logs_only():
+    t = np.r_[200.0 + np.arange(30) * 0.1, 100.0 + np.arange(20) * 0.1]
+    assert log_starts(t).tolist() == [30]
+    assert log_starts(np.r_[t, 2.0 + np.arange(12) * 0.1]).tolist() == [30, 50]  # three logs
+    one_stray = 100.0 + np.arange(50) * 0.1
+    one_stray[20] = 3.0  # a single broken stamp: not a log
+    assert log_starts(one_stray).size == 0
+    short = np.r_[100.0 + np.arange(30) * 0.1, 2.0 + np.arange(5) * 0.1]  # 5 lines: no recording
+    assert log_starts(short).size == 0
+    junk = np.random.default_rng(0).uniform(0, 1000, 200)  # stamps stepping back everywhere: the stamp class decides
+    assert log_starts(junk).size == 0
+    jitter = 100.0 + np.arange(50) * 0.1
+    jitter[[10, 30]] -= 0.86  # as intel's worst line: sorted, no second log
+    assert log_starts(jitter).size == 0
+
+
+def _laser_lines(text: str) -> list[int]:
+    return [i for i, line in enumerate(text.splitlines(), 1) if line.split()[:1] in (["FLASER"], ["ROBOTLASER1"])]
+
+
+@needs_shared
+def test_two_real_logs_concatenated_are_refused_and_intel_still_opens(tmp_path):
+    """acapulco and aces concatenated (the issue's case: their stamps overlap, 19-1383 s
+    and 21-1339 s, so sorting interleaved two buildings); intel's lines written up to
+    0.86 s late are still sorted."""
+    radish = SHARED_DATA / "radish"
+    first = gzip.decompress((radish / "acapulco-corrected.log.gz").read_bytes()).decode()
+    second = gzip.decompress((radish / "aces-corrected.log.gz").read_bytes()).decode()
+    if not first.endswith("\n"):
+        first += "\n"
+    path = tmp_path / "acapulco_then_aces.log"
+    path.write_text(first + second)
+    n_first_lines = len(first.splitlines())
+    a, b = _laser_lines(first), _laser_lines(second)
+    start = n_first_lines + b[0]
+    with pytest.raises(InputError) as info:
+        open_carmen(path, {}, None)
+    msg = str(info.value)
+    assert msg.startswith(f"{path}: holds 2 logs, not one: at line {start} the laser stamps step back"), msg
+    assert (f"lines {a[0]}-{a[-1]} hold {len(a)} scans, lines {start}-{n_first_lines + b[-1]} hold {len(b)} scans"
+            in msg), msg
+    assert f"split the file before line {start}" in msg
+    rec = open_carmen(radish / "intel-corrected.log.gz", {}, None)
+    assert rec.detected["stamps"] == "recorded"
+    assert any("4 laser lines earlier than the line before them" in n for n in rec.notes)

@@ -30,7 +30,8 @@ is skipped and counted (:class:`~floorscan.ingest.points.ScanLosses`: ``lost_bad
 more than half of them broken, or none usable, is an ``InputError`` naming the first.
 Header stamps a little out of order (a message earlier than the one before it, at most
 :data:`MAX_OUT_OF_ORDER_FRACTION` of the messages, each within
-:data:`REORDER_WINDOW` messages of its place) are sorted, as a CARMEN log's lines are,
+:data:`REORDER_WINDOW` messages of its place and at most
+:data:`~floorscan.ingest.recording.MAX_STEP_BACK_S` back) are sorted, as a CARMEN log's lines are,
 for the scans and for a pose topic, and noted; more is an ``InputError``.
 """
 
@@ -49,7 +50,7 @@ from floorscan.core.io import InputError
 from floorscan.core.messages import MAX_QUOTE
 from floorscan.ingest.params import PosesParams
 from floorscan.ingest.points import FrameError, ScanLosses, filter_points, no_point_reason, no_return_reason
-from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
+from floorscan.ingest.recording import MAX_STEP_BACK_S, Recording, Scan, pose_stream_frame
 from floorscan.ingest.ros_messages import (
     bag_messages,
     laser_scan_limits,
@@ -397,6 +398,14 @@ class _StampOrder:
 
     def push(self, index: int, scan: Scan) -> Iterator[Scan]:
         t = scan.t_ns
+        if self.last_in is not None and t < self.last_in - MAX_STEP_BACK_S * 1e9:
+            raise InputError(
+                f"{message_label(self.path, self.topic, index, t)}: header stamp is {(self.last_in - t) * 1e-9:.1f} s "
+                f"earlier than the scan before it ({self.last_in} ns); scans a little out of order (up to "
+                f"{MAX_STEP_BACK_S:g} s back) are sorted by stamp, one this far back is a clock reset or a second "
+                "recording in the bag: expected stamps in recording order (split the bag where the other recording "
+                "starts)"
+            )
         if self.last_in is not None and t < self.last_in:
             self.back.append(index)
             if self.last_out is not None and t < self.last_out:
