@@ -387,15 +387,15 @@ def _first_base_pose(run: Run) -> str | None:
     return _first_pose_at(X0, Y0)(run)
 
 
-def _points_on_walls(run: Run, tol_m: float = 0.05) -> str | None:
-    """The first scans' points at their poses lie on the room's walls (a mirrored scan's
-    do not)."""
+def _points_on_walls(run: Run, tol_m: float = 0.05, sids: tuple[int, ...] = (0, 10, 20)) -> str | None:
+    """The points of scans ``sids`` at their poses lie on the room's walls (a mirrored
+    scan's do not)."""
     from floorscan.core.io import read_table
 
     scans = read_table(run.out / "scans.parquet")
     p = run.poses.set_index("scan_id")
     seg = SEGMENTS.reshape(-1, 2, 2)
-    for sid in (0, 10, 20):
+    for sid in sids:
         pts = scans.loc[scans["scan_id"] == sid, ["x", "y"]].to_numpy(np.float64)
         x, y, yaw = (float(p.loc[sid, c]) for c in ("x", "y", "yaw"))
         c, s_ = math.cos(yaw), math.sin(yaw)
@@ -407,6 +407,27 @@ def _points_on_walls(run: Run, tol_m: float = 0.05) -> str | None:
         if np.median(d) > tol_m:
             return f"scan {sid}: its points lie {np.median(d):.2f} m (median) off the room's walls"
     return None
+
+
+def _rear_points_on_walls(run: Run) -> str | None:
+    """The rear scanner's scans (odd ones of the two-scanner bag) lie on the walls too."""
+    return _points_on_walls(run, sids=(1, 11, 21))
+
+
+def _jump_named(metres: float, tol_m: float = 0.2):
+    """The verdict says the map pose jumped ``metres``, within ``tol_m`` (the rover's
+    way over the dropped scans is extrapolated)."""
+    def check(run: Run) -> str | None:
+        import re
+
+        text = " ".join(t for _, t in _said(run))
+        found = [float(v) for v in re.findall(r"the map pose jumped ([0-9.]+) m", text)]
+        if not found:
+            return "no 'the map pose jumped ... m' in what the run said"
+        if abs(found[0] - metres) > tol_m:
+            return f"the verdict says the map pose jumped {found[0]:.2f} m, expected {metres:.2f} m"
+        return None
+    return check
 
 
 def _exact_stamps(stamps: list[int]):
@@ -451,6 +472,67 @@ def _upside_down(i: int) -> np.ndarray:
 
 def _jumped(which: tuple[int, ...], dx: float = 500.0):
     return lambda i: {"shift": (dx, 0.0)} if i in which else None
+
+
+# --- issue 45 item 2: two sources in one recording -------------------------------------------
+
+#: The rear scanner of the two-scanner bag: its static mount on base_link (x, y metres,
+#: yaw radians): 0.2 m behind the base, looking back.
+REAR_MOUNT = (-0.2, 0.0, math.pi)
+
+
+def _rear_ranges(i: int) -> np.ndarray:
+    """Ranges of the rear scanner (:data:`REAR_MOUNT`) at scan ``i``'s time, as
+    :func:`room_ranges` reads the front one's."""
+    from conftest import base_pose
+
+    x, y, yaw = (float(v) for v in base_pose(i * DT_S))
+    mx, my, myaw = REAR_MOUNT
+    sx, sy = x + mx * math.cos(yaw) - my * math.sin(yaw), y + mx * math.sin(yaw) + my * math.cos(yaw)
+    ang = yaw + myaw - math.pi / 2 + np.arange(N_BEAMS) * (math.pi / (N_BEAMS - 1))
+    r = cast_rays(SEGMENTS, (sx, sy), ang)
+    return (r + np.random.default_rng(1000 + i).normal(0.0, NOISE_M, N_BEAMS)).astype(np.float32)
+
+
+def _frame_of(frame: str, which: Callable[[int], bool]):
+    """A ``change`` giving scan ``i``'s header ``frame`` when ``which(i)``."""
+    def change(i, m):
+        if which(i):
+            m.header.frame_id = frame
+    return change
+
+
+def _two_scanners(root: Path) -> dict:
+    """Front ('laser') and rear ('rear') scanners on one topic, alternating, each with its
+    static mount on /tf_static."""
+    path = room_bag(root / "two_scanners.bag", ranges=lambda i: _rear_ranges(i) if i % 2 else room_ranges(i),
+                    change=_frame_of("rear", lambda i: i % 2 == 1), static=(("base_link", "laser"), ("base_link", "rear")),
+                    mounts={"rear": REAR_MOUNT})
+    return _bag_ds(path)
+
+
+def _two_logs(root: Path) -> dict:
+    """Two CARMEN logs of the room concatenated: the second recorded earlier (its stamps
+    start 8 s before the first's), its poses in its own map frame (1.5 m, 0.5 m off)."""
+    first = carmen_lines()
+    second = carmen_lines(n=20, stamps=[2.0 + i * DT_S for i in range(20)],
+                          bad=lambda i: {"shift": (1.5, 0.5)})
+    header = ["# CARMEN Logfile", "PARAM robot_front_laser_max 81.9 nohost 0"]
+    p = write_log(root / "two_logs.log", [*header, *first, *header, *second])
+    return {"name": p.name, "path": str(p)}
+
+
+def _early_line(root: Path) -> dict:
+    """One laser line stamped a minute before the line before it (line 12)."""
+    stamps = [100.0 + i * DT_S for i in range(N_SCANS)]
+    stamps[11] -= 60.0
+    p = write_log(root / "early_line.log", carmen_lines(stamps=stamps))
+    return {"name": p.name, "path": str(p)}
+
+
+#: The relocalising localizer's recording: 100 scans (10 s), ``map -> odom`` jumping 3 m
+#: at 5 s and staying there.
+RELOCALISED_N, RELOCALISED_AT_S, RELOCALISED_M = 100, 5.0, 3.0
 
 
 def cases() -> list[Case]:
@@ -596,6 +678,21 @@ def cases() -> list[Case]:
         Case("carmen_three_poses_500_m_off", _log("jumps.log", bad=_jumped((10, 11, 20))),
              "warning", (f"3 of the recording's {n} scans", "pose_jump", "2 jumps", "at scan 10 (1.0 s into the scans) 500.05 m"),
              n_index=n),
+        # --- two sources in one recording (issue 45 item 2)
+        Case("bag_two_scanners_one_topic", _two_scanners, "correct", n_index=n,
+             check=_all(MAP_POSE, _points_on_walls, _rear_points_on_walls)),
+        Case("bag_scan_frame_renamed_midway", _bag("renamed.bag", change=_frame_of("laser_link", lambda i: i >= 18)),
+             "error", ("{name}", "'/scan'", "'laser' (18 scans)", "'laser_link' (12 scans)", "static")),
+        Case("carmen_two_logs_concatenated", _two_logs, "error",
+             ("{name}", "2 logs", "line 35", f"{n} scans", "20 scans", "split")),
+        Case("carmen_one_line_a_minute_early", _early_line, "error", ("{name}:12", "59.9 s earlier", "line 11")),
+        Case("bag_one_scan_stamped_a_minute_early",
+             _bag("early.bag", stamps=[T0_NS + int(i * DT_S * 1e9) - (60 * 10**9 if i == 5 else 0) for i in range(n)]),
+             "error", ("{name}", "'/scan'", "59.9 s earlier")),
+        Case("bag_localizer_relocalises", _bag("relocalised.bag", n=RELOCALISED_N,
+                                               map_jump=(RELOCALISED_AT_S, RELOCALISED_M)),
+             "warning", ("at scan 50", "5.0 s into", "the map pose jumped", "relocalised"), n_index=RELOCALISED_N,
+             check=_jump_named(RELOCALISED_M)),
         # --- older classes (issue 24)
         Case("older_truncated_bag", _truncated_bag, "error", ("{name}",), issue=False),
         Case("older_empty_bag", _empty_bag, "error", ("{name}",), issue=False),

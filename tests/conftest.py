@@ -227,6 +227,8 @@ def write_room_bag(
     still: bool = False,
     mount_roll: float = 0.0,
     pose_frame: str = "map",
+    mounts: dict[str, tuple[float, float, float]] | None = None,
+    map_jump: tuple[float, float] | None = None,
 ) -> Path:
     """A bag (ROS1 file, or ROS2 folder with ``ros2``) of ``n`` scans on ``/scan`` at
     10 Hz along :func:`base_pose`: LaserScans of ``ranges(i)`` (181 beams over 180
@@ -243,9 +245,13 @@ def write_room_bag(
     then the level scanner's in reverse order). ``change(i, msg)``
     edits scan ``i``'s message; ``raw(i)`` gives bytes stored instead of its
     serialization (or None); ``stamps``: the scans' header stamps (the bag's own times
-    stay in order).
+    stay in order). ``mounts``: child frame -> (x, y, yaw) of its static link (metres,
+    radians; the others at ``MOUNT_X``). ``map_jump``: (t_s, dx): ``map -> odom`` jumps
+    ``dx`` metres along x from ``t_s`` seconds on and stays there (a localizer that
+    relocalises).
     """
     ts, T, ser, writer = _bag_writer(path, ros2)
+    mounts = mounts or {}
     Vec, Q = T["geometry_msgs/msg/Vector3"], T["geometry_msgs/msg/Quaternion"]
 
     def transform(parent, child, t, x, y, yaw, z=0.0, roll=0.0):
@@ -256,7 +262,7 @@ def write_room_bag(
                 translation=Vec(x=float(x), y=float(y), z=float(z)), rotation=Q(*q)))
 
     msgs = [(T0_NS - 1, "/tf_static", T["tf2_msgs/msg/TFMessage"](
-        transforms=[transform(p, c, T0_NS, MOUNT_X, 0.0, 0.0, MOUNT_Z, mount_roll) for p, c in static]))] if static else []
+        transforms=[transform(p, c, T0_NS, *mounts.get(c, (MOUNT_X, 0.0, 0.0)), MOUNT_Z, mount_roll) for p, c in static]))] if static else []
     for i in range(n):
         t = T0_NS + int(i * 0.1e9)
         msg = _scan_message(ts, t if stamps is None else stamps[i], scan_frame, ranges(i), ros2, cloud)
@@ -271,7 +277,8 @@ def write_room_bag(
         for p, c in links:
             if (p, c) == ("map", "odom"):
                 if map_until_s is None or t_s <= map_until_s:
-                    tf.append(transform(p, c, t, 0.0 if still else 1e-4 * k, 0.0, 0.0))
+                    jump = map_jump[1] if map_jump is not None and t_s >= map_jump[0] else 0.0
+                    tf.append(transform(p, c, t, (0.0 if still else 1e-4 * k) + jump, 0.0, 0.0))
             else:
                 tf.append(transform(p, c, t, x, y, yaw))
         if tf:

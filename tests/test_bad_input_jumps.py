@@ -86,3 +86,35 @@ def test_the_verdict_line_counts_the_jumps_and_too_many_stop_the_stage():
             "of the recording (the poses never came back))") in v.line()
     v = verdict(20, 20, 0.9, 1000, 0.2, 0.3, losses=losses, max_lost_fraction=0.2)
     assert not v.ok and "never reached registration (3 pose jumps), more than register.max_lost_fraction 0.2" in v.line()
+
+
+def test_a_localizer_that_relocalises_is_a_warning_naming_the_scan_and_the_metres(tmp_path):
+    """``map -> odom`` jumps 3 m at 5 s and stays (issue 45 item 2): the scans after it
+    were placed 3 m from those before, and the verdict named one scan without a pose.
+    Now it says where the map pose jumped, by how much, and that it stayed."""
+    case = next(c for c in cases() if c.name == "bag_localizer_relocalises")
+    (o,) = run_corpus(tmp_path, [case], echo=None)
+    assert o.outcome == "warning", o.detail
+    assert "at scan 50 (5.0 s into the scans) the map pose jumped 2.9" in o.detail, o.detail
+    assert "relocalised" in o.detail
+
+
+def test_a_jump_that_stays_is_a_relocalisation_and_one_that_comes_back_is_not():
+    t = 1_700_000_000_000_000_000 + np.arange(12, dtype=np.int64) * 100_000_000
+    x = np.arange(12) * 0.05  # 0.5 m/s along x
+    x[5:] += 3.0  # relocalised at scan 5: the poses stay 3 m on
+    reasons = np.array([""] * 5 + ["pose_jump"] * 3 + [""] * 4)
+    xyyaw = np.c_[x, np.zeros(12), np.zeros(12)]
+    (j,) = pose_jump_episodes(reasons, t, xyyaw)
+    assert (j.first, j.n_scans, j.last, j.back) == (5, 3, 4, 8)
+    assert j.relocalised and abs(j.offset_m - 3.0) < 1e-9 and abs(j.size_m - 3.0) < 1e-9
+    text = describe_jumps([j], np.arange(12), t)
+    assert text.startswith("1 jump: at scan 5 (0.5 s into the scans) the map pose jumped 3.00 m and stayed there "
+                           "(the localizer relocalised"), text
+    assert "3 scans dropped until the new pose fit the speed limit" in text
+    # the same jump, but the poses come back: an outlier, not a relocalisation
+    x2 = np.arange(12) * 0.05
+    x2[5:8] += 3.0
+    (k,) = pose_jump_episodes(reasons, t, np.c_[x2, np.zeros(12), np.zeros(12)])
+    assert not k.relocalised and abs(k.offset_m) < 1e-9
+    assert "3.05 m and 0 deg in 0.10 s, 3 scans until the pose came back" in describe_jumps([k], np.arange(12), t)

@@ -10,7 +10,11 @@ beyond the log's no-return range (:mod:`floorscan.ingest.carmen_ranges`: configu
 ``ingest.carmen_max_range_m``, else detected from the readings), or at or below zero,
 are dropped and counted. The stamps are recorded, spread or made up
 (:mod:`floorscan.ingest.carmen_stamps`); the few lines that step back in time are
-sorted by stamp (a stable sort; each line carries its own pose, so nothing is lost).
+sorted by stamp (a stable sort; each line carries its own pose, so nothing is lost),
+but never a line more than :data:`~floorscan.ingest.recording.MAX_STEP_BACK_S` back
+(an error naming it), and a file holding several logs (two recordings concatenated:
+:func:`~floorscan.ingest.carmen_stamps.log_starts`) is refused naming the lines where
+each starts and their scans, never merged by stamp into one trajectory.
 A log whose stamps are junk (more than half out of range or out of time order) keeps
 its line order with made-up stamps, said in a warning (``stamps made up: ...``) and in
 ``detected["stamps_reason"]``; a few stamps out of range in a good log are an error
@@ -43,11 +47,11 @@ from floorscan.ingest.carmen_lines import (
 )
 from floorscan.ingest.carmen_ranges import NoReturn, no_return_range
 from floorscan.ingest.carmen_stamps import (
-    StampClass, StampsOutOfRange, made_up_stamps_ns, spread_stamps, stamp_class,
+    StampClass, StampsOutOfRange, log_starts, made_up_stamps_ns, spread_stamps, stamp_class,
 )
 from floorscan.ingest.params import IngestParams
 from floorscan.ingest.points import FrameError, ScanLosses, laser_scan_points, no_return_reason
-from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
+from floorscan.ingest.recording import MAX_STEP_BACK_S, Recording, Scan, pose_stream_frame
 from floorscan.ingest.text import open_text
 
 log = logging.getLogger(__name__)
@@ -165,6 +169,9 @@ def _stamp_class(path: Path, lines: list[dict]) -> StampClass:
         how many), or zero stamps among non-zero ones (names the lines).
     """
     t = np.array([s["t_s"] for s in lines], dtype=np.float64)
+    starts = log_starts(t)
+    if starts.size:
+        raise InputError(_several_logs(path, lines, t, starts))
     try:
         return stamp_class(t)
     except StampsOutOfRange as e:
@@ -179,6 +186,26 @@ def _stamp_class(path: Path, lines: list[dict]) -> StampClass:
         raise InputError(
             f"{path}: laser lines with timestamp 0 among stamped ones (lines {bad}); expected all stamped or all 0"
         ) from None
+
+
+def _several_logs(path: Path, lines: list[dict], t: np.ndarray, starts: np.ndarray) -> str:
+    """The message of a file holding several logs (:func:`~floorscan.ingest.carmen_stamps.log_starts`):
+    where each starts (line numbers), how far back its stamps step, and each part's scans."""
+    bounds = np.r_[0, starts, len(lines)]
+    parts = ", ".join(
+        f"lines {lines[a]['line']}-{lines[b - 1]['line']} hold {b - a} scans" for a, b in zip(bounds[:-1], bounds[1:])
+    )
+    steps = "; ".join(
+        f"at line {lines[k]['line']} the laser stamps step back {t[k - 1] - t[k]:.1f} s "
+        f"(from {t[k - 1]:.3f} s on line {lines[k - 1]['line']} to {t[k]:.3f} s)"
+        for k in starts
+    )
+    at = ", ".join(str(lines[k]["line"]) for k in starts)
+    return (
+        f"{path}: holds {len(starts) + 1} logs, not one: {steps}, and stay back, so another log starts there; "
+        f"{parts}. Sorting them by stamp would merge several recordings into one trajectory; expected one recording "
+        f"per file: split the file before line {at} and give each part as its own dataset"
+    )
 
 
 def open_carmen(path: Path, dataset: Mapping[str, Any], cfg: "IngestParams | Mapping[str, Any] | None") -> Recording:
@@ -242,6 +269,15 @@ def open_carmen(path: Path, dataset: Mapping[str, Any], cfg: "IngestParams | Map
         log.warning("%s", line)
     else:
         t_ns = np.round(t * 1e9).astype(np.int64)
+        far = np.flatnonzero(np.diff(t_ns) < -MAX_STEP_BACK_S * 1e9)
+        if far.size:
+            prev, s = scans[far[0]], scans[far[0] + 1]
+            raise InputError(
+                f"{path}:{s['line']}: {s['kind']} line stamped {(t_ns[far[0]] - t_ns[far[0] + 1]) * 1e-9:.1f} s earlier "
+                f"than the laser line before it (line {prev['line']}, {t[far[0]]:.3f} s); lines a little out of order "
+                f"(up to {MAX_STEP_BACK_S:g} s back) are sorted by stamp, one this far back is a broken ipc_timestamp or a "
+                "second recording: fix the stamp, or split the file where the other recording starts"
+            )
         back = np.flatnonzero(np.diff(t_ns) < 0)
         if back.size:
             # Each line carries its own corrected pose, so order by time without losing one.

@@ -31,6 +31,12 @@ Stamp classes, one of:
   ingest log and the registration's verdict.
 
 Zero stamps among non-zero ones mean a corrupt log and are rejected.
+
+Two logs in one file (two recordings concatenated) are found before the class
+(:func:`log_starts`): where the stamps step back by more than
+:data:`floorscan.ingest.recording.MAX_STEP_BACK_S` and stay back for at least
+:data:`MIN_LOG_LINES` lines, another log starts; the reader refuses the file, naming
+the lines, rather than sorting two recordings into one trajectory.
 """
 
 from __future__ import annotations
@@ -40,11 +46,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from floorscan.ingest.recording import MAX_STEP_BACK_S
+
 #: Stamps at or past this are out of range, seconds: 2^31 s (2038-01-19), where a
 #: signed 32-bit count of seconds wraps; a negative stamp written as an unsigned 32-bit
 #: count (``-0.45`` -> 4294967295.55) lands between it and 2^32. Below it a stamp's
 #: nanoseconds fit in int64.
 WRAP_S = 2.0**31
+
+
+#: A part of a log shorter than this many laser lines (a second at 10 Hz) is no second
+#: recording: a stray line or a few stamped far back are broken stamps, refused one by one.
+MIN_LOG_LINES = 10
 
 
 @dataclass(frozen=True)
@@ -132,6 +145,44 @@ def n_out_of_time_order(t_s: np.ndarray) -> int:
         else:
             tails[i] = v
     return int(t.size - len(tails))
+
+
+def log_starts(t_s: np.ndarray) -> np.ndarray:
+    """Where another log starts in a file of several concatenated logs.
+
+    A log starts at line ``k`` when its stamp is more than :data:`MAX_STEP_BACK_S`
+    before the line before it and the next :data:`MIN_LOG_LINES` lines (those there
+    are) stay that far back. Only when every such step back starts a log, and every
+    part holds at least :data:`MIN_LOG_LINES` lines, are the parts logs; otherwise (a
+    stray stamp, junk stamps stepping back everywhere) none is returned and the stamp
+    class (:func:`stamp_class`) decides.
+
+    Parameters
+    ----------
+    t_s : (S,) float ndarray
+        ipc timestamps of the laser lines in line order, seconds (out-of-range values
+        allowed: a file with any is left to :func:`stamp_class`).
+
+    Returns
+    -------
+    (P-1,) int ndarray
+        Positions (0-based, line order) where the second, third, ... log starts; empty:
+        one log.
+    """
+    t = np.asarray(t_s, dtype=np.float64)
+    none = np.zeros(0, dtype=np.int64)
+    if t.size < 2 * MIN_LOG_LINES or out_of_range(t).any():
+        return none
+    steps = np.flatnonzero(np.diff(t) < -MAX_STEP_BACK_S) + 1
+    if steps.size == 0:
+        return none
+    for k in steps:
+        if not np.all(t[k:k + MIN_LOG_LINES] < t[k - 1] - MAX_STEP_BACK_S):
+            return none
+    bounds = np.r_[0, steps, t.size]
+    if np.any(np.diff(bounds) < MIN_LOG_LINES):
+        return none
+    return steps.astype(np.int64)
 
 
 def _out_of_range_kinds(t: np.ndarray) -> str:

@@ -17,6 +17,14 @@ import numpy as np
 import pandas as pd
 
 
+#: Scans stamped at most this many seconds before the scan before them are sorted by
+#: stamp (a logger that writes a line late, a publisher's jitter: the shared CARMEN
+#: logs step back at most 0.86 s, intel's); a step back by more is never sorted into
+#: one trajectory: it is a second recording appended (it steps back by the length of
+#: the first, minutes), a clock reset or a broken stamp, and the readers refuse it.
+MAX_STEP_BACK_S = 5.0
+
+
 @dataclasses.dataclass(frozen=True)
 class Scan:
     """One scan of a recording.

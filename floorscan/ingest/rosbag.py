@@ -17,6 +17,10 @@ The scan topic and the pose source are detected when the dataset does not name t
 :mod:`floorscan.ingest.ros_messages`, the TF chains by :mod:`floorscan.ingest.tf_chains` and
 :mod:`floorscan.ingest.tf_poses`.
 
+Scans of the topic in several frames (two scanners, a renamed frame) are each placed by
+their own frame's pose when static TF links the frames, else refused naming the frames
+(:mod:`floorscan.ingest.scan_frames`).
+
 ROS2 bags that store no message definitions are read with the Humble typestore. A
 ``.db3`` / ``.mcap`` file is read as its folder's bag.
 
@@ -26,7 +30,8 @@ is skipped and counted (:class:`~floorscan.ingest.points.ScanLosses`: ``lost_bad
 more than half of them broken, or none usable, is an ``InputError`` naming the first.
 Header stamps a little out of order (a message earlier than the one before it, at most
 :data:`MAX_OUT_OF_ORDER_FRACTION` of the messages, each within
-:data:`REORDER_WINDOW` messages of its place) are sorted, as a CARMEN log's lines are,
+:data:`REORDER_WINDOW` messages of its place and at most
+:data:`~floorscan.ingest.recording.MAX_STEP_BACK_S` back) are sorted, as a CARMEN log's lines are,
 for the scans and for a pose topic, and noted; more is an ``InputError``.
 """
 
@@ -45,7 +50,7 @@ from floorscan.core.io import InputError
 from floorscan.core.messages import MAX_QUOTE
 from floorscan.ingest.params import PosesParams
 from floorscan.ingest.points import FrameError, ScanLosses, filter_points, no_point_reason, no_return_reason
-from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
+from floorscan.ingest.recording import MAX_STEP_BACK_S, Recording, Scan, pose_stream_frame
 from floorscan.ingest.ros_messages import (
     bag_messages,
     laser_scan_limits,
@@ -56,6 +61,7 @@ from floorscan.ingest.ros_messages import (
     pose_problem,
     stamp_ns,
 )
+from floorscan.ingest.scan_frames import ScanFrames
 from floorscan.ingest.rosbag_detect import (
     MAP_FRAME,
     MAP_POSE_TYPES,
@@ -182,6 +188,7 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
                 if phrase is None:
                     phrase = f"{described} (set in the dataset)"
                     notes.append(f"pose source {phrase}: used as the map pose")
+            edges = tf.edges  # read by every pose source above (and by detection)
             upside_down = bool(stream.attrs.pop("upside_down", False))
             if upside_down:
                 note = (f"scanner frame {scan_frame!r} is mounted upside down (its TF turns it half a turn about a "
@@ -199,13 +206,16 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
     def _scans() -> Iterator[Scan]:
         losses = ScanLosses(f"scans on {scan_topic!r}")
         order = _StampOrder(path, scan_topic)
+        frames = ScanFrames(path, scan_topic, scan_frame, edges)
         try:
             with _reader(path) as reader:
                 conns = [c for c in reader.connections if c.topic == scan_topic]
                 for i, (c, bag_t, raw) in enumerate(bag_messages(reader, conns)):
                     losses.n_read += 1
                     try:
-                        scan = _scan(reader, c, bag_t, raw, path, scan_topic, i, rmin_cfg, rmax_cfg)
+                        scan = frames.place(_scan(reader, c, bag_t, raw, path, scan_topic, i, rmin_cfg, rmax_cfg))
+                        if scan is None:  # a frame TF does not place: counted, refused below
+                            continue
                         if upside_down:
                             scan = dataclasses.replace(scan, points=turn_over(scan.points))
                     except FrameError as e:
@@ -222,6 +232,7 @@ def open_bag(path: Path, dataset: Mapping[str, Any], max_gap_s: float | None = N
                 f"({type(e).__name__}: {str(e)[:MAX_QUOTE]})"
             ) from None
         losses.report(detected, notes, str(path))
+        frames.finish(notes, detected)
         yield from order.flush(losses.n_read)
         note = order.note()
         if note:
@@ -387,6 +398,14 @@ class _StampOrder:
 
     def push(self, index: int, scan: Scan) -> Iterator[Scan]:
         t = scan.t_ns
+        if self.last_in is not None and t < self.last_in - MAX_STEP_BACK_S * 1e9:
+            raise InputError(
+                f"{message_label(self.path, self.topic, index, t)}: header stamp is {(self.last_in - t) * 1e-9:.1f} s "
+                f"earlier than the scan before it ({self.last_in} ns); scans a little out of order (up to "
+                f"{MAX_STEP_BACK_S:g} s back) are sorted by stamp, one this far back is a clock reset or a second "
+                "recording in the bag: expected stamps in recording order (split the bag where the other recording "
+                "starts)"
+            )
         if self.last_in is not None and t < self.last_in:
             self.back.append(index)
             if self.last_out is not None and t < self.last_out:

@@ -23,7 +23,7 @@ from scipy.spatial.transform import Rotation
 
 from floorscan.core.io import InputError
 from floorscan.ingest.recording import pose_stream_frame
-from floorscan.ingest.tf_chains import TfChainError, TfLink, tf_chain
+from floorscan.ingest.tf_chains import TfChainError, TfLink, tf_chain, tf_chain_from_root
 
 
 #: A scanner tilted more than this (degrees) cannot be treated as planar.
@@ -142,6 +142,47 @@ def static_transform(edges, base: str, frame: str, path: Path | str = ""):
     if not all(e.static for e in chain):
         return None
     return _compose_static(chain)
+
+
+def static_between(edges, target: str, frame: str):
+    """The rigid transform taking points of ``frame`` into ``target`` when both hang
+    from a common frame by static links only (two scanners' mounts on ``base_link``),
+    or None.
+
+    Parameters
+    ----------
+    edges : mapping of (str, str) to TfLink
+    target, frame : str
+
+    Returns
+    -------
+    (scipy.spatial.transform.Rotation, (3,) float64 ndarray) or None
+        ``p_target = R p_frame + t`` (metres). None: a frame is not in the TF tree, they
+        have no common frame, a link between them moves, or the tree is broken on the
+        way (several parents, a loop).
+
+    Raises
+    ------
+    InputError
+        A link on the way had a bad sample.
+    """
+    if target == frame:
+        return Rotation.identity(), np.zeros(3)
+    if not edges:
+        return None
+    above_frame = set(tf_chain_from_root(edges, frame))
+    for common in reversed(tf_chain_from_root(edges, target)):  # the nearest common frame
+        if common not in above_frame:
+            continue
+        try:
+            to_target, to_frame = static_transform(edges, common, target), static_transform(edges, common, frame)
+        except TfChainError:
+            return None
+        if to_target is None or to_frame is None:
+            return None
+        inv = to_target[0].inv()
+        return inv * to_frame[0], inv.apply(to_frame[1] - to_target[1])
+    return None
 
 
 def _compose_static(chain: list[TfLink]):

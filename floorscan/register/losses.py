@@ -328,10 +328,34 @@ def with_screening_losses(losses: Losses, scan_ids: np.ndarray, t_ns: np.ndarray
     return dataclasses.replace(losses, counts=_ordered(counts), details=details)
 
 
+#: An offset of the map pose that stays after a jump (the pose where the scans resume,
+#: against the way the rover was going before it) at least this large is a
+#: relocalisation, not an outlier that came back, metres: half a metre between the
+#: scans before and after it is a second wall; a localizer's noise and the
+#: extrapolation of a rover's way over the seconds of a jump are centimetres to
+#: decimetres.
+RELOCALISED_M = 0.5
+
+
 @dataclass(frozen=True)
 class PoseJump:
     """A jump of the localizer's pose: the scans dropped as ``pose_jump`` after one
-    plausible pose (index positions; ``last`` -1: no plausible pose before)."""
+    plausible pose (index positions; ``last`` -1: no plausible pose before).
+
+    Attributes
+    ----------
+    first, n_scans, last : int
+        The first jumped scan, how many were dropped, the last plausible scan before.
+    distance_m, turn_rad, dt_s : float
+        The first jumped pose from the last plausible one: metres, radians, seconds.
+    back : int
+        The next plausible scan, -1: none (the poses never came back).
+    offset_m : float
+        Metres between the pose at ``back`` and where the rover would be then, going on
+        as it went between the two plausible poses before the jump (NaN without
+        ``back`` or ``last``): about 0 when the pose came back, the jump's size when it
+        stayed (:attr:`relocalised`).
+    """
 
     first: int
     n_scans: int
@@ -339,14 +363,29 @@ class PoseJump:
     distance_m: float
     turn_rad: float
     dt_s: float
-    back: int  # the next plausible scan, -1: none (the poses never came back)
+    back: int
+    offset_m: float = float("nan")
+
+    @property
+    def relocalised(self) -> bool:
+        """The pose jumped and stayed: the scans resumed at least :data:`RELOCALISED_M`
+        and half the first jump away from the way before it (a localizer that
+        relocalised: the map of the scans after it is shifted from the map before)."""
+        return bool(math.isfinite(self.offset_m) and self.offset_m >= max(RELOCALISED_M, 0.5 * self.distance_m))
+
+    @property
+    def size_m(self) -> float:
+        """How far the map pose jumped: the offset that stayed (a relocalisation), else
+        the first jumped pose's distance, metres (NaN: no pose before)."""
+        return self.offset_m if self.relocalised else self.distance_m
 
 
 def pose_jump_episodes(reasons: np.ndarray, t_ns: np.ndarray, xyyaw: np.ndarray) -> list[PoseJump]:
     """The jumps of the localizer's pose: the ``pose_jump`` scans grouped by the last
     plausible pose before them (as :class:`floorscan.register.screening.Screener` checks
     them: a scan with a pose that is neither a jump nor a duplicate is plausible), each
-    with the first jumped pose's distance and turn from it.
+    with the first jumped pose's distance and turn from it and the offset at which the
+    scans resumed (:attr:`PoseJump.offset_m`).
 
     Parameters
     ----------
@@ -364,50 +403,69 @@ def pose_jump_episodes(reasons: np.ndarray, t_ns: np.ndarray, xyyaw: np.ndarray)
     reasons = np.asarray(reasons).astype(str)
     plausible = ~np.char.startswith(reasons, "no_pose") & (reasons != "duplicate") & (reasons != POSE_JUMP)
     out: list[PoseJump] = []
-    last, group = -1, None
+    before, last, group = -1, -1, None
     for i, r in enumerate(reasons):
         if r == POSE_JUMP:
-            if group is not None and group[0] == last:
-                group[2] += 1
+            if group is not None and group[1] == last:
+                group[3] += 1
             else:
                 if group is not None:
                     out.append(_jump(group, t_ns, xyyaw, i))
-                group = [last, i, 1]
+                group = [before, last, i, 1]
         elif plausible[i]:
             if group is not None:
                 out.append(_jump(group, t_ns, xyyaw, i))
                 group = None
-            last = i
+            before, last = last, i
     if group is not None:
         out.append(_jump(group, t_ns, xyyaw, -1))
     return out
 
 
 def _jump(group: list[int], t_ns: np.ndarray, xyyaw: np.ndarray, back: int) -> PoseJump:
-    last, first, n = group
+    before, last, first, n = group
     if last < 0:
         return PoseJump(first, n, last, float("nan"), float("nan"), float("nan"), back)
     d = xyyaw[first] - xyyaw[last]
     turn = abs(math.remainder(float(d[2]), 2 * math.pi))
-    return PoseJump(first, n, last, float(math.hypot(d[0], d[1])), turn, float((t_ns[first] - t_ns[last]) * 1e-9), back)
+    offset = float("nan")
+    if back >= 0:
+        expected = xyyaw[last, :2].astype(np.float64)
+        if before >= 0 and t_ns[last] > t_ns[before]:
+            velocity = (xyyaw[last, :2] - xyyaw[before, :2]) / float(t_ns[last] - t_ns[before])
+            expected = expected + velocity * float(t_ns[back] - t_ns[last])
+        offset = float(np.hypot(*(xyyaw[back, :2] - expected)))
+    return PoseJump(first, n, last, float(math.hypot(d[0], d[1])), turn, float((t_ns[first] - t_ns[last]) * 1e-9),
+                    back, offset)
 
 
 def describe_jumps(jumps: list[PoseJump], scan_ids: np.ndarray, t_ns: np.ndarray, max_speed: str = "") -> str:
-    """The jumps in words, the largest (by distance) first, at most
+    """The jumps in words, the largest (:attr:`PoseJump.size_m`) first, at most
     :data:`MAX_JUMPS_NAMED` of them, each where (scan id, seconds into the scans) and by
     how much: e.g. ``2 jumps: at scan 120 (12.0 s into the scans) 500.30 m and 1 deg in
-    0.10 s, 14 scans until the pose came back; ...``."""
+    0.10 s, 14 scans until the pose came back; ...``; a relocalisation
+    (:attr:`PoseJump.relocalised`) says that the map pose jumped and stayed, e.g. ``at
+    scan 50 (5.0 s into the scans) the map pose jumped 3.00 m and stayed there (the
+    localizer relocalised: ...)``."""
     if not jumps:
         return ""
     t = np.asarray(t_ns, dtype=np.int64)
     parts = []
-    for j in sorted(jumps, key=lambda j: -(j.distance_m if math.isfinite(j.distance_m) else 0.0))[:MAX_JUMPS_NAMED]:
+    for j in sorted(jumps, key=lambda j: -(j.size_m if math.isfinite(j.size_m) else 0.0))[:MAX_JUMPS_NAMED]:
         n = f"{j.n_scans} scan{'s' if j.n_scans != 1 else ''}"
+        into = (t[j.first] - t.min()) * 1e-9
+        where = f"at scan {int(scan_ids[j.first])} ({into:.1f} s into the scans)"
+        if j.relocalised:
+            parts.append(
+                f"{where} the map pose jumped {j.offset_m:.2f} m and stayed there (the localizer relocalised: the "
+                f"scans after it are placed {j.offset_m:.2f} m from where those before it put the same walls, so "
+                f"walls seen on both sides are doubled), {n} dropped until the new pose fit the speed limit"
+            )
+            continue
         until = "until the pose came back" if j.back >= 0 else "to the end of the recording (the poses never came back)"
         by = (f"{j.distance_m:.2f} m and {math.degrees(j.turn_rad):.0f} deg in {j.dt_s:.2f} s"
               if math.isfinite(j.distance_m) else "from the first pose")
-        into = (t[j.first] - t.min()) * 1e-9
-        parts.append(f"at scan {int(scan_ids[j.first])} ({into:.1f} s into the scans) {by}, {n} {until}")
+        parts.append(f"{where} {by}, {n} {until}")
     head = f"{len(jumps)} jump{'s' if len(jumps) != 1 else ''}"
     more = f"; and {len(jumps) - MAX_JUMPS_NAMED} more" if len(jumps) > MAX_JUMPS_NAMED else ""
     return f"{head}: {'; '.join(parts)}{more}" + (f"; faster than {max_speed}" if max_speed else "")
