@@ -437,3 +437,34 @@ def test_a_value_of_none_of_the_alternatives_says_what_each_is():
     )
     with pytest.raises(ConfigError, match=r"^select\.k: got 0; expected 'auto', an integer >= 1 or a number > 0 and < 1"):
         validate_config({"k": 0}, schema, "select")
+
+
+def test_a_path_with_braces_gets_one_line_naming_it_and_the_link_that_works(tmp_path):
+    """Snakemake reads { } in an input path as a wildcard, even escaped: a WildcardError
+    ('b') before issue 45, item 6. Square brackets are no wildcard and run."""
+    from floorscan.core.config import ConfigError
+    from floorscan.core.datasets import brace_problem, check_datasets
+    from floorscan.core.io import InputError
+    from floorscan.ingest.detect import recordings_in
+
+    folder = tmp_path / "survey{2}"
+    folder.mkdir()
+    one = folder / "run{1}.bag"
+    one.write_bytes(b"")
+    with pytest.raises(InputError, match=r"run\{1\}\.bag: the path holds \{ or \}, which Snakemake reads as a wildcard"):
+        recordings_in(one)
+    assert f"(ln -s '{one}' run1.bag) and give the link" in brace_problem(one)
+    assert brace_problem(tmp_path / "run[1].bag") is None
+    # a folder of recordings: the entry with a brace is left out, and said why
+    plain = tmp_path / "plain"
+    plain.mkdir()
+    (plain / "good.log").write_text("FLASER 0\n")
+    (plain / "x{1}.log").write_text("FLASER 0\n")
+    found, skipped = recordings_in(plain)
+    assert found == [plain / "good.log"]
+    assert skipped == ["x{1}.log (holds { or }, which Snakemake reads as a wildcard: rename or link it)"]
+    # a folder whose own path holds one: its recordings could not be inputs either
+    with pytest.raises(InputError, match=r"survey\{2\}: the path holds"):
+        recordings_in(folder)
+    with pytest.raises(ConfigError, match=r"datasets\.mine\.path: .*run\{1\}\.bag: the path holds"):
+        check_datasets({"datasets": {"mine": {"path": str(one)}}})

@@ -42,7 +42,7 @@ def check_datasets(config: Mapping, buildings_dir: str | os.PathLike = BUILDINGS
     ConfigError
         A ``path`` (top-level or of a dataset) that is empty, saying what a path names;
         a synthetic dataset's ``building`` without a file in ``buildings_dir``, listing
-        the known buildings.
+        the known buildings; a dataset's ``path`` with a brace (:func:`brace_problem`).
     """
     if "path" in config:
         paths = config_paths(config)
@@ -58,6 +58,33 @@ def check_datasets(config: Mapping, buildings_dir: str | os.PathLike = BUILDINGS
                 )
         elif "path" in ds and not str(ds["path"] or "").strip():
             raise ConfigError(f"datasets.{name}.path is empty; expected {RECORDING_PATH}")
+        elif "path" in ds and (problem := brace_problem(ds["path"])) is not None:
+            raise ConfigError(f"datasets.{name}.path: {problem}")
+
+
+def brace_problem(path: str | os.PathLike) -> str | None:
+    """Why a recording's path cannot be a workflow input, or None: a ``{`` or ``}`` in
+    it, which Snakemake reads as a wildcard even escaped (it formats the paths an input
+    function returns).
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Returns
+    -------
+    str or None
+        The message: the path, the cause, and the renaming or the link that works.
+    """
+    import shlex
+
+    text = os.fspath(path)
+    if "{" not in text and "}" not in text:
+        return None
+    name = Path(text).name.replace("{", "").replace("}", "") or "recording"
+    return (f"{text}: the path holds {{ or }}, which Snakemake reads as a wildcard: rename the file or folder, or "
+            f"link it under a name without them (ln -s {shlex.quote(str(Path(text).resolve()))} {shlex.quote(name)}) "
+            "and give the link")
 
 
 def config_paths(config: Mapping) -> list[str]:

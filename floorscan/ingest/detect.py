@@ -29,6 +29,7 @@ from __future__ import annotations
 import zlib
 from pathlib import Path
 
+from floorscan.core.datasets import brace_problem
 from floorscan.core.io import InputError
 from floorscan.core.messages import quoted, system_error
 from floorscan.ingest.carmen_lines import CARMEN_TYPES
@@ -235,6 +236,8 @@ def recordings_in(path: str | Path) -> tuple[list[Path], list[str]]:
     path = Path(path)
     if not path.exists():
         raise InputError(f"{path}: no such file or folder; {EXPECTED}")
+    if (problem := brace_problem(path)) is not None:
+        raise InputError(problem)
     if not path.is_dir() or is_one_recording(path):
         return [path], []
     recordings, skipped = [], []
@@ -249,7 +252,10 @@ def recordings_in(path: str | Path) -> tuple[list[Path], list[str]]:
             or entry.is_file() and entry.suffix.lower() in RECORDING_SUFFIXES
             or entry in map_yamls
         ):
-            recordings.append(entry)
+            if brace_problem(entry.name) is not None:
+                skipped.append(f"{entry.name} (holds {{ or }}, which Snakemake reads as a wildcard: rename or link it)")
+            else:
+                recordings.append(entry)
         else:
             skipped.append(entry.name)
     if not recordings:
