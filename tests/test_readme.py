@@ -1,20 +1,28 @@
-"""Issue 36: every command of the README works as written.
+"""Issues 36 and 47: every command of the README and of the pages of docs/ works as
+written, and the pages hold together.
 
-Each command of the README's ``bash`` blocks is checked here (a test fails on a command
-it does not know):
+Each command of their ``bash`` blocks is checked here (a test fails on a command it
+does not know):
 
 - ``make <target>``: ``make -n <target>`` (the recipe exists; ``make test`` is what CI
   runs);
+- ``.venv/bin/floorscan ...``: its options parse (``--help`` exits 0);
 - ``.venv/bin/python -m benchmarks <name> [options]``: the options parse, and the run
   stops there (a run takes minutes to hours: ``benchmarks/README.md``);
 - ``.venv/bin/snakemake ...``: in a copy of the workflow with the demo built, as
-  written and run for real, except the three that redo the demo's stages or need a
-  cluster (``-R``, ``--forcerun``, ``--profile``), which are dry runs (``-n``); the
-  README's example paths (``/data/lab_run.bag``, ``/data/survey/``,
-  ``/data/floor/map.yaml``, ``/data/floor.png``) stand for the demo's recording, a
-  folder of two copies of it and the demo building rasterised as a map (the map_server
-  yaml, and its image alone), and its example config files
-  (``my.yaml``, ``house.yaml``) are its own YAML blocks.
+  written and run for real, except those that redo the demo's stages, build a whole
+  evaluation or need a cluster (``-R``, ``--forcerun``, the target ``evaluation``,
+  ``--profile``), which are dry runs (``-n``); the pages' example paths
+  (``/data/lab_run.bag``, ``/data/survey/``, ``/data/floor/map.yaml``,
+  ``/data/floor.png``) stand for the demo's recording, a folder of two copies of it and
+  the demo building rasterised as a map (the map_server yaml, and its image alone), the
+  example recording's folder ``results/lab_run/`` for the demo recording's
+  ``results/recording/``, and the example config files (``my.yaml``, ``house.yaml``)
+  are the pages' own YAML blocks.
+
+A command written inline in the prose is one of the blocks' commands, so that it is
+tested too; the pages' links and anchors resolve, the README stays short and links
+every page, and a stage option a page names exists in its schema.
 """
 
 from __future__ import annotations
@@ -24,22 +32,33 @@ import re
 import shlex
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
+import yaml
 
 from conftest import REPO, SNAKEMAKE
 
 README = REPO / "README.md"
+#: The README and the reference pages it links: every command in them is tested here.
+PAGES = [README, *sorted((REPO / "docs").glob("*.md"))]
+#: What a command of the pages starts with: the checks below know these.
+KNOWN = ("make ", ".venv/bin/snakemake ", ".venv/bin/python -m benchmarks", "FLOORSCAN_PROFILE=", ".venv/bin/floorscan ")
+
+
+def blocks(lang: str, pages=PAGES) -> list[str]:
+    """The fenced blocks of one language in ``pages`` (an indented fence included)."""
+    return [b for page in pages for b in re.findall(rf"```{lang}\n(.*?)```", page.read_text(), re.S)]
 
 
 def readme_blocks(lang: str) -> list[str]:
-    return re.findall(rf"```{lang}\n(.*?)```", README.read_text(), re.S)
+    return blocks(lang, [README])
 
 
-def readme_commands() -> list[str]:
-    """The commands of the README's bash blocks (comments and blank lines left out)."""
+def commands(pages=PAGES) -> list[str]:
+    """The commands of the pages' bash blocks (comments and blank lines left out)."""
     out = []
-    for block in readme_blocks("bash"):
+    for block in blocks("bash", pages):
         for line in block.splitlines():
             line = re.sub(r"\s+#.*$", "", line).strip()
             if line and not line.startswith("#"):
@@ -47,13 +66,21 @@ def readme_commands() -> list[str]:
     return out
 
 
+def readme_commands() -> list[str]:
+    """The commands of the README and of docs/, each once (the name of issue 36's test)."""
+    return list(dict.fromkeys(commands()))
+
+
 def test_the_readme_has_the_commands_this_test_knows():
     cmds = readme_commands()
     assert len(cmds) >= 15 and "make test" in cmds
-    assert all(c.startswith(("make ", ".venv/bin/snakemake ", ".venv/bin/python -m benchmarks ", "FLOORSCAN_PROFILE=",
-                             ".venv/bin/floorscan "))
-               for c in cmds), cmds  # fmt: skip
+    assert all(c.startswith(KNOWN) for c in cmds), [c for c in cmds if not c.startswith(KNOWN)]
     assert not [c for c in cmds if c.startswith("snakemake")]  # without .venv/bin: "command not found"
+    # the README's own: the two set-up commands and the one command for a recording, both forms
+    own = commands([README])
+    assert own[:2] == ["make run", "make test"], own
+    assert ".venv/bin/floorscan run /data/lab_run.bag" in own
+    assert ".venv/bin/snakemake --cores 2 --config path=/data/lab_run.bag" in own
 
 
 @pytest.mark.parametrize("cmd", [c for c in readme_commands() if c.startswith("make ")])
@@ -71,6 +98,11 @@ def test_floorscan_commands_parse(cmd, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "house.yaml").write_text("evaluate: false\n")
     own, extra = cli.split_passthrough(shlex.split(cmd)[1:])
+    if "--help" in own:
+        with pytest.raises(SystemExit) as e:
+            cli.parser().parse_args(own)
+        assert e.value.code == 0
+        return
     args = cli.parser().parse_args(own)
     assert args.command in ("run", "report")
 
@@ -118,7 +150,7 @@ def readme_workdir(survey_run):
     find their datasets built: the same paths)."""
     wd, _, _, survey = survey_run
     bag = wd / "results" / "demo" / "sim" / "recording.bag"
-    for block in readme_blocks("yaml"):
+    for block in blocks("yaml"):
         m = re.match(r"# (\S+\.yaml)\n", block)
         if m:
             (wd / m.group(1)).write_text(block.replace("/data/lab_run.bag", str(bag)))
@@ -132,7 +164,8 @@ def readme_workdir(survey_run):
 
     Image.open(wd / "maps" / "floor" / "map.pgm").save(wd / "maps" / "floor.png")
     return wd, {"/data/lab_run.bag": str(bag), "/data/survey/": str(survey) + "/",
-                "/data/floor/map.yaml": str(wd / "maps" / "floor" / "map.yaml"), "/data/floor.png": str(wd / "maps" / "floor.png")}
+                "/data/floor/map.yaml": str(wd / "maps" / "floor" / "map.yaml"), "/data/floor.png": str(wd / "maps" / "floor.png"),
+                "results/lab_run/": "results/recording/"}
 
 
 @pytest.mark.workflow
@@ -149,7 +182,7 @@ def test_snakemake_commands_work_as_written(readme_workdir, cmd):
         key, value = words.pop(0).split("=", 1)
         env[key] = value
     assert words[0] == ".venv/bin/snakemake"
-    heavy = any(w in ("-R", "--forcerun", "--profile") for w in words)
+    heavy = any(w in ("-R", "--forcerun", "--profile", "evaluation") for w in words)
     args = [*words[1:], "-n"] if heavy else words[1:]
     res = subprocess.run([str(SNAKEMAKE), *args], cwd=wd, capture_output=True, text=True, env=env, timeout=600)
     assert res.returncode == 0, res.stderr[-3000:]
@@ -166,3 +199,4 @@ def test_the_slurm_profile_names_an_installed_executor():
 
     assert "executor: slurm" in (REPO / "workflow" / "profiles" / "slurm" / "config.yaml").read_text()
     assert importlib.util.find_spec("snakemake_executor_plugin_slurm") is not None
+
