@@ -200,3 +200,113 @@ def test_the_slurm_profile_names_an_installed_executor():
     assert "executor: slurm" in (REPO / "workflow" / "profiles" / "slurm" / "config.yaml").read_text()
     assert importlib.util.find_spec("snakemake_executor_plugin_slurm") is not None
 
+
+# ------------------------------------------------------------------ the pages hold together (issue 47, item 5)
+
+#: The stage sections of the config, each with its schema (workflow/schemas/<section>.schema.yaml).
+SECTIONS = ("ingest", "poses", "simulate", "register", "hulls", "select", "walls", "floorplan", "score")
+#: A file's suffix, not an option (`floorplan.svg`, `select.schema.yaml`).
+SUFFIXES = {"geojson", "svg", "dxf", "ifc", "smk", "py", "yaml", "parquet", "png", "pgm", "log", "tsv", "csv", "json", "md"}
+
+
+def slug(heading: str) -> str:
+    """A heading's anchor as GitHub makes it: lower case, code marks and punctuation
+    dropped, spaces to hyphens."""
+    text = re.sub(r"[^\w\- ]", "", heading.strip().lower().replace("`", ""))
+    return text.replace(" ", "-")
+
+
+def prose(text: str) -> str:
+    """A page without its fenced blocks."""
+    return re.sub(r"```.*?```", "", text, flags=re.S)
+
+
+def broken_links(page: Path, text: str) -> list[str]:
+    """The relative links of a page whose file, or whose anchor in that file, is missing."""
+    bad = []
+    for target in re.findall(r"\]\(([^)\s]+)\)|<img src=\"([^\"]+)\"", prose(text)):
+        target = next(t for t in target if t)
+        if re.match(r"[a-z]+:", target):  # https:, mailto:
+            continue
+        file, _, anchor = target.partition("#")
+        path = (page.parent / file).resolve() if file else page
+        if not path.exists():
+            bad.append(target)
+        elif anchor and path.suffix == ".md":
+            headings = re.findall(r"^#+ (.+)$", prose(path.read_text()), re.M)
+            if anchor not in {slug(h) for h in headings}:
+                bad.append(target)
+    return bad
+
+
+def inline_commands(text: str) -> list[str]:
+    """The code spans of a page's prose written as a command of KNOWN's kinds."""
+    spans = re.findall(r"`([^`\n]+(?:\n[^`\n]+)?)`", prose(text))
+    return [" ".join(s.split()) for s in spans if s.startswith(KNOWN)]
+
+
+def unknown_options(text: str) -> list[str]:
+    """The ``<section>.<key>[.<key>...]`` a page's code spans name that its section's
+    schema does not have (``--set select.k=5``, ``register.graph.agreement_m``)."""
+    bad = []
+    for span in re.findall(r"`([^`]+)`", prose(text)):
+        for section, keys in re.findall(rf"(?<![\w./-])({'|'.join(SECTIONS)})\.([A-Za-z0-9_.]+)", span):
+            keys = keys.rstrip(".").removesuffix(".*").split(".")
+            if keys[-1] in SUFFIXES or keys == ["{geojson,svg,dxf,ifc}"]:
+                continue
+            node = yaml.safe_load((REPO / "workflow" / "schemas" / f"{section}.schema.yaml").read_text())
+            for key in keys:
+                node = (node.get("properties") or {}).get(key) if isinstance(node, dict) else None
+                if node is None:
+                    bad.append(f"{section}.{'.'.join(keys)}")
+                    break
+    return bad
+
+
+def test_the_readme_is_short_and_links_every_page():
+    text = README.read_text()
+    assert len(text.splitlines()) <= 150
+    assert max(len(line) for line in text.splitlines()) <= 300
+    linked = {Path(t).name for t in re.findall(r"\]\(docs/([^)#]+)", text)}
+    assert linked == {p.name for p in PAGES[1:]}, linked
+    assert "[LICENSE](LICENSE)" in text and (REPO / "LICENSE").read_text().startswith("MIT License")
+
+
+def test_the_readme_shows_a_small_picture_of_a_real_plan():
+    text = README.read_text()
+    first_screen = "\n".join(text.splitlines()[:20])
+    images = re.findall(r"<img src=\"([^\"]+)\"|!\[[^]]*\]\(([^)]+)\)", first_screen)
+    assert len(images) == 1, images
+    image = REPO / next(i for i in images[0] if i)
+    assert image.parent == REPO / "docs" / "images" and image.suffix == ".png"
+    assert image.stat().st_size < 300_000
+    assert "intel-corrected.log.gz" in first_screen  # which recording it is
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+def test_links_and_anchors_resolve(page):
+    assert broken_links(page, page.read_text()) == []
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+def test_a_command_in_the_prose_is_a_tested_command(page):
+    cmds = {" ".join(c.split()) for c in readme_commands()}
+    assert [c for c in inline_commands(page.read_text()) if c not in cmds] == []
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+def test_the_options_a_page_names_exist(page):
+    assert unknown_options(page.read_text()) == []
+
+
+def test_the_page_checks_can_fail(tmp_path):
+    """Each check above finds a planted defect."""
+    page = tmp_path / "page.md"
+    (tmp_path / "there.md").write_text("# Here\n")
+    assert broken_links(page, "[a](nowhere.md) [b](there.md#here) [c](there.md#gone) [d](https://x.org)") == [
+        "nowhere.md", "there.md#gone"]
+    assert inline_commands("run `.venv/bin/snakemake --cores 2 plan`, not `--cores`") == [
+        ".venv/bin/snakemake --cores 2 plan"]
+    assert unknown_options("`select.k`, `--set select.kk=5`, `register.graph.agreement_m`, `floorplan.svg`, "
+                           "`floorplan.rooms.door_width_m`") == ["select.kk", "floorplan.rooms.door_width_m"]
+    assert slug("The `floorscan` command") == "the-floorscan-command"
