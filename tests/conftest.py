@@ -440,9 +440,9 @@ def demo_run(tmp_path_factory):
 @pytest.fixture(scope="session")
 def survey_run(demo_run):
     """A folder of recordings run once for the session in the demo's workflow copy, as
-    the README's folder commands run it: ``survey/`` holds the demo's recording twice
+    the README's folder commands (docs/running.md) run it: ``survey/`` holds the demo's recording twice
     (``ground.bag``, ``first.bag``), a truncated copy (``broken.bag``) and a text file,
-    run with ``--config path=<survey>/ --configfile house.yaml`` (the README's
+    run with ``--config path=<survey>/ --configfile house.yaml`` (the docs'
     house.yaml block: the two good recordings are the floors of one building) and the
     repository's default profile (keep-going). Then ``broken.bag`` is moved out, so the
     README's commands on the folder (tests/test_readme.py) find its two recordings
@@ -461,7 +461,8 @@ def survey_run(demo_run):
         shutil.copy2(bag, folder / name)
     (folder / "broken.bag").write_bytes(bag.read_bytes()[:300_000])
     (folder / "notes.txt").write_text("taken on Tuesday")
-    house = next(b for b in re.findall(r"```yaml\n(.*?)```", (REPO / "README.md").read_text(), re.S)
+    pages = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]  # where tests/test_readme.py reads commands
+    house = next(b for page in pages for b in re.findall(r"```yaml\n(.*?)```", page.read_text(), re.S)
                  if b.startswith("# house.yaml\n"))
     (wd / "house.yaml").write_text(house)
     path = f"path={folder}/"
