@@ -4,6 +4,7 @@
 #      snakemake --cores 2 --config path=/data/run.bag   (a recording of your own)
 #      snakemake --cores 2 --config path=/data/survey/   (a folder of recordings: one answer each)
 import atexit
+import os
 import sys
 from pathlib import Path
 
@@ -90,6 +91,7 @@ rule evaluation:
 # runs no hook then, so an exit handler of the main process prints it). A run of
 # several recordings also writes results/index.html.
 _ANSWER = {"printed": False}
+_WORKDIR = Path.cwd()  # the working directory: an exit handler runs after Snakemake has left it
 
 
 def print_answer(failed_jobs=()):
@@ -128,6 +130,7 @@ def print_answer(failed_jobs=()):
 def _answer_if_nothing_was_done():
     ran = getattr(workflow, "scheduler", None) is not None and workflow.dag is not None
     if ran and len(workflow.dag) == 0 and not workflow.dryrun:
+        os.chdir(_WORKDIR)  # `--directory` (floorscan run from another folder): results/ is here
         print_answer()
 
 

@@ -184,6 +184,10 @@ def test_run_prints_progress_and_the_answer_from_anywhere(tmp_path):
     assert f"{wd}/results/demo/floorplan.{{geojson,svg,dxf,ifc}}" in res.stdout  # from the repository, not cwd
     assert "Building DAG" not in res.stdout + res.stderr and "SNAKEMAKE" not in res.stdout
     assert "Building DAG of jobs" in (wd / ".snakemake" / "floorscan" / "run.log").read_text()
+    # again, nothing to be done: the answer still, though the exit handler runs outside the workflow's folder
+    again = floorscan("run")
+    assert again.returncode == 0, again.stdout + again.stderr
+    assert "demo: 10 of 76 kept scans" in again.stdout and "no answer yet" not in again.stdout, again.stdout
 
     (elsewhere / "my data").mkdir()
     bag = wd / "results" / "demo" / "sim" / "recording.bag"
