@@ -317,3 +317,16 @@ def test_coarse_icp_stage_keeps_edges_accurate(recording):
         ]
         assert np.median(err) < 0.004  # the priors are 5 cm off
     assert not np.array_equal(on[["dx_m", "dy_m"]].to_numpy(), off[["dx_m", "dy_m"]].to_numpy())
+
+
+@pytest.mark.parametrize("n", [1, 2])
+def test_a_graph_with_nothing_to_move_returns_the_poses(n):
+    """One scan (held) or scans without an edge, by odometry: the poses as given, not a
+    ValueError of an empty normal matrix (a 3-scan recording placed by LIDAR odometry
+    whose sampling kept one scan stopped the register stage)."""
+    poses = np.zeros((n, 4))
+    poses[:, 0] = np.arange(n, dtype=np.float64)
+    edges = pd.DataFrame({c: pd.Series(dtype=np.float64) for c in EDGE_COLUMNS})
+    edges = edges.astype({"i": np.int64, "j": np.int64}) if "i" in edges else edges
+    out, info = optimize_pose_graph(poses, edges)
+    assert np.array_equal(out, poses) and info["n_edges"] == 0 and info["n_isolated"] == n

@@ -285,7 +285,8 @@ def verdict(
             "registers without them; register.min_consistency 0 accepts the map)"
         )
     if n_kept < FEW_SCANS:
-        v.warnings.append(f"only {n_kept} scans kept: scores from so few scans mean little")
+        v.warnings.append(f"only {n_kept} scan{'' if n_kept == 1 else 's'} kept: the recording is too short (or the "
+                          "scanner too still) for a map; scores from so few scans mean little")
     if math.isnan(consistency):
         v.warnings.append("no place was passed twice, so the map's consistency could not be checked")
     return v

@@ -153,6 +153,8 @@ def _gauss_newton(x0, ii, jj, z, loop, w_edge, prior, w_prior, mu) -> tuple[np.n
         free[:3] = False  # odometry mode: the first scan is held
     col = np.cumsum(free) - 1
     n_free = int(free.sum())
+    if n_free == 0 or (e == 0 and prior is None):
+        return x, np.ones(e)  # one scan, held; or nothing that moves a scan
     k3 = 3 * np.arange(e)
     one = np.ones(e)
     # Jacobian layout: (row offset, column of i or j, which derivative) per entry
