@@ -691,7 +691,7 @@ def cases() -> list[Case]:
              "error", ("{name}", "'/scan'", "59.9 s earlier")),
         Case("bag_localizer_relocalises", _bag("relocalised.bag", n=RELOCALISED_N,
                                                map_jump=(RELOCALISED_AT_S, RELOCALISED_M)),
-             "warning", ("at scan 50", "5.0 s into", "the map pose jumped", "relocalised"), n_index=RELOCALISED_N,
+             "warning", ("at scan 50", "5.0 s into", "the map pose jumped", "relocalisation"), n_index=RELOCALISED_N,
              check=_jump_named(RELOCALISED_M)),
         # --- older classes (issue 24)
         Case("older_truncated_bag", _truncated_bag, "error", ("{name}",), issue=False),

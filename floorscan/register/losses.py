@@ -445,8 +445,8 @@ def describe_jumps(jumps: list[PoseJump], scan_ids: np.ndarray, t_ns: np.ndarray
     how much: e.g. ``2 jumps: at scan 120 (12.0 s into the scans) 500.30 m and 1 deg in
     0.10 s, 14 scans until the pose came back; ...``; a relocalisation
     (:attr:`PoseJump.relocalised`) says that the map pose jumped and stayed, e.g. ``at
-    scan 50 (5.0 s into the scans) the map pose jumped 3.00 m and stayed there (the
-    localizer relocalised: ...)``."""
+    scan 50 (5.0 s into the scans) the map pose jumped 3.00 m and stayed there (a
+    relocalisation: ...)``."""
     if not jumps:
         return ""
     t = np.asarray(t_ns, dtype=np.int64)
@@ -457,9 +457,8 @@ def describe_jumps(jumps: list[PoseJump], scan_ids: np.ndarray, t_ns: np.ndarray
         where = f"at scan {int(scan_ids[j.first])} ({into:.1f} s into the scans)"
         if j.relocalised:
             parts.append(
-                f"{where} the map pose jumped {j.offset_m:.2f} m and stayed there (the localizer relocalised: the "
-                f"scans after it are placed {j.offset_m:.2f} m from where those before it put the same walls, so "
-                f"walls seen on both sides are doubled), {n} dropped until the new pose fit the speed limit"
+                f"{where} the map pose jumped {j.offset_m:.2f} m and stayed there (a relocalisation: walls seen "
+                f"before and after it may be doubled), {n} dropped until the new pose fit the speed limit"
             )
             continue
         until = "until the pose came back" if j.back >= 0 else "to the end of the recording (the poses never came back)"
