@@ -18,5 +18,6 @@ def test_a_failed_dataset_gets_its_error_not_an_older_answer(tmp_path):
     lines = answer_lines(["a", "b"], tmp_path, failed={"a": "ingest failed: x.bag: truncated"})
     assert lines == [
         "a: FAILED: ingest failed: x.bag: truncated",
-        f"b: no answer yet ({tmp_path}/b/selection/selection.json is not made; the plan target makes it)",
+        f"b: not finished: no answer yet ({tmp_path}/b/selection/selection.json is not made: the run stopped before "
+        "it, or its targets do not include the plan); run it again to go on",
     ]

@@ -43,3 +43,25 @@ def test_stage_log_logs_and_reraises_a_failure(tmp_path, monkeypatch):
             raise ValueError("bad scan")
     assert "stage hulls_shard failed" in (tmp_path / "stage.log").read_text()
     assert (tmp_path / "prof" / "hulls_shard_demo_scans_0-9.prof").exists()
+
+
+@pytest.mark.parametrize("how", ["SIGINT", "SIGTERM"])
+def test_an_interrupted_stage_says_so_in_its_log(tmp_path, monkeypatch, how):
+    """Ctrl-C or Snakemake stopping its jobs (SIGTERM): the log's last line says the stage
+    was interrupted, by what and after how long, not a bare 'start' line; the handler
+    SIGTERM had before is back afterwards."""
+    import os
+    import signal
+
+    from floorscan.core.stage import Interrupted
+
+    monkeypatch.delenv("FLOORSCAN_PROFILE", raising=False)
+    before = signal.getsignal(signal.SIGTERM)
+    with pytest.raises(KeyboardInterrupt if how == "SIGINT" else Interrupted):
+        with stage_log(_smk(tmp_path)):
+            os.kill(os.getpid(), getattr(signal, how))
+            _work(10_000_000)  # the signal arrives before this ends
+    last = (tmp_path / "stage.log").read_text().splitlines()[-1]
+    want = "SIGINT (Ctrl-C)" if how == "SIGINT" else "SIGTERM"
+    assert f"hulls_shard interrupted by {want} after " in last and "run the workflow again" in last, last
+    assert signal.getsignal(signal.SIGTERM) is before

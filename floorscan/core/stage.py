@@ -59,6 +59,27 @@ EXPECTED_ERRORS = (
 _FAILURE = {"floorscan_failure": True}
 
 
+class Interrupted(BaseException):
+    """A stage stopped by SIGTERM (Snakemake stopping its jobs, a cluster's time limit),
+    raised where it runs so that its log says so (:func:`stage_log`)."""
+
+
+def _raise_on_sigterm():
+    """Make SIGTERM raise :class:`Interrupted` in the main thread until the returned
+    function restores the previous handler (a no-op off the main thread)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+
+    def handler(signum, frame):
+        raise Interrupted(signal.Signals(signum).name)
+
+    previous = signal.signal(signal.SIGTERM, handler)
+    return lambda: signal.signal(signal.SIGTERM, previous)
+
+
 def is_expected_error(exc: BaseException) -> bool:
     """Whether ``exc`` is one of :data:`EXPECTED_ERRORS` (or a subclass): an error of
     the input or config, reported without a traceback.
@@ -209,9 +230,15 @@ def stage_log(smk: Any, name: str | None = None, source: str | os.PathLike | Non
 
         profiler = cProfile.Profile()
         profiler.enable()
+    on_term = _raise_on_sigterm()
     try:
         yield logger
         logger.info("done %s in %.2f s (%.2f s CPU)", rule, time.perf_counter() - t0, time.process_time() - c0)
+    except (KeyboardInterrupt, Interrupted) as e:
+        how = "SIGINT (Ctrl-C)" if isinstance(e, KeyboardInterrupt) else "SIGTERM"
+        logger.error("%s interrupted by %s after %.1f s: its outputs are not written; run the workflow again to go "
+                     "on from here", rule, how, time.perf_counter() - t0, extra=_FAILURE)
+        raise
     except Exception as e:
         from floorscan.core.messages import system_error, system_error_message
 
@@ -228,6 +255,7 @@ def stage_log(smk: Any, name: str | None = None, source: str | os.PathLike | Non
         logger.error("%s", failure_message(rule, e, source), extra=_FAILURE)
         raise SystemExit(1) from e
     finally:
+        on_term()
         if profiler is not None:
             profiler.disable()
             stem = "_".join([str(rule), *(str(v) for v in wildcards.values())])

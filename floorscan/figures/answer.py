@@ -87,7 +87,8 @@ def answer_lines(
             continue
         summary_path = root / ds / "selection" / "selection.json"
         if not summary_path.is_file():
-            lines.append(f"{ds}: no answer yet ({summary_path} is not made; the plan target makes it)")
+            lines.append(f"{ds}: not finished: no answer yet ({summary_path} is not made: the run stopped before it, "
+                         "or its targets do not include the plan); run it again to go on")
             continue
         s = read_selection(summary_path)
         v = registration_verdict(root / ds)
