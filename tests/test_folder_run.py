@@ -83,7 +83,9 @@ def test_the_answer_is_printed_wherever_the_run_starts(demo_run):
 def test_a_wrong_path_is_one_line(demo_run):
     res = snakemake(demo_run, "--config", "path=no/such/run.bag")
     assert res.returncode != 0
-    assert "path: no/such/run.bag: no such file or folder; expected a ROS1 .bag file" in res.stderr
+    # relative: read from the working directory, which the line names (`-d` from elsewhere)
+    assert (f"path: no/such/run.bag: no such file or folder in {demo_run} (a relative path is read from the working "
+            "directory); expected a ROS1 .bag file") in res.stderr
     assert "Traceback" not in res.stderr and "MissingInputException" not in res.stderr
     assert not (demo_run / "results" / "run").exists()
 

@@ -235,7 +235,8 @@ def recordings_in(path: str | Path) -> tuple[list[Path], list[str]]:
     """
     path = Path(path)
     if not path.exists():
-        raise InputError(f"{path}: no such file or folder; {EXPECTED}")
+        where = "" if path.is_absolute() else f" in {Path.cwd()} (a relative path is read from the working directory)"
+        raise InputError(f"{path}: no such file or folder{where}; {EXPECTED}")
     if (problem := brace_problem(path)) is not None:
         raise InputError(problem)
     if not path.is_dir() or is_one_recording(path):
