@@ -92,24 +92,28 @@ def carmen_lines(n: int = N_SCANS, kind: str = "FLASER", bad: Callable[[int], di
     -pi/2; ROBOTLASER1: 181 beams over pi; :func:`conftest.flaser_line`,
     :func:`conftest.robotlaser_line`). ``bad(i)`` -> keyword changes of line ``i``
     (ROBOTLASER1: ``start``/``fov``/``res``; either: ``ranges``, ``shift``: (dx, dy)
-    metres added to the line's pose, the scan unchanged: the localizer jumped)."""
+    metres added to the line's pose, the scan unchanged: the localizer jumped; ``scale``:
+    the ranges written in metres x scale, 1000 for millimetres; ``theta_deg``: the pose's
+    heading written in degrees)."""
     lines = []
     for i in range(n):
         t_s = 10.0 + i * DT_S if stamps is None else stamps[i]
         pose = tuple(float(v) for v in laser_pose(0.0 if still else i * DT_S))
         kw = dict(bad(i) or {}) if bad else {}
         dx, dy = kw.pop("shift", (0.0, 0.0))
-        pose = (pose[0] + dx, pose[1] + dy, pose[2])
+        scale = kw.pop("scale", 1.0)
+        theta = math.degrees(pose[2]) if kw.pop("theta_deg", False) else pose[2]
+        pose = (pose[0] + dx, pose[1] + dy, theta)
         if kind == "FLASER":
             r = kw.pop("ranges", None)
             if r is None:
                 r = room_ranges(i, n=180, fov=math.pi * 179 / 180, still=still)
-            lines.append(flaser_line(r, pose, t_s))
+            lines.append(flaser_line(r * scale, pose, t_s))
         else:
             r = kw.pop("ranges", None)
             if r is None:
                 r = room_ranges(i, still=still)
-            lines.append(robotlaser_line(r, pose, t_s, **kw))
+            lines.append(robotlaser_line(r * scale, pose, t_s, **kw))
     return lines
 
 
@@ -122,16 +126,19 @@ def write_log(path: Path, lines: list[str], prefix: bytes = b"", suffix: bytes =
 
 
 def pcd_folder(folder: Path, n: int = 40, listed: Callable[[int], bool] | None = None,
-               nan_at: tuple[int, ...] = (), stamps: list[int] | None = None) -> Path:
+               nan_at: tuple[int, ...] = (), stamps: list[int] | None = None, scale: float = 1.0,
+               yaw_deg: bool = False) -> Path:
     """A folder of ``n`` ascii PCD scans of the room (the laser's beams as points, z 0.4 m)
     and its locations.csv (``listed(i)`` False: file i is left out of it; ``stamps``: the
-    ``t_ns`` of each file, else ``T0_NS`` + 0.1 s steps)."""
+    ``t_ns`` of each file, else ``T0_NS`` + 0.1 s steps). ``scale``: points and locations
+    written in metres x ``scale`` (1000: millimetres); ``yaw_deg``: the yaw column in
+    degrees."""
     folder.mkdir(parents=True)
     rows = ["file,t_ns,x,y,z,yaw"]
     ang = np.linspace(-math.pi / 2, math.pi / 2, N_BEAMS)
     for i in range(n):
         r = room_ranges(i)
-        pts = np.c_[r * np.cos(ang), r * np.sin(ang), np.full(N_BEAMS, 0.4)]
+        pts = np.c_[r * np.cos(ang), r * np.sin(ang), np.full(N_BEAMS, 0.4)] * scale
         if i in nan_at:
             pts[:] = np.nan
         body = "\n".join(f"{a:.4f} {b:.4f} {c:.4f}" for a, b, c in pts)
@@ -141,7 +148,8 @@ def pcd_folder(folder: Path, n: int = 40, listed: Callable[[int], bool] | None =
         if listed is None or listed(i):
             x, y, yaw = laser_pose(i * DT_S)
             t_ns = T0_NS + int(i * DT_S * 1e9) if stamps is None else stamps[i]
-            rows.append(f"{i:04d}.pcd,{t_ns},{x:.5f},{y:.5f},0.0,{yaw:.6f}")
+            yaw = math.degrees(yaw) if yaw_deg else yaw
+            rows.append(f"{i:04d}.pcd,{t_ns},{x * scale:.5f},{y * scale:.5f},0.0,{yaw:.6f}")
     (folder / "locations.csv").write_text("\n".join(rows) + "\n")
     return folder
 
@@ -535,6 +543,22 @@ def _early_line(root: Path) -> dict:
 RELOCALISED_N, RELOCALISED_AT_S, RELOCALISED_M = 100, 5.0, 3.0
 
 
+# --- issue 45 item 4: units -----------------------------------------------------------------
+
+
+def _in_units(scale: float):
+    """A LaserScan ``change``: ranges and range limits written in metres x ``scale`` (a
+    driver publishing millimetres, 1000, or centimetres, 100, throughout)."""
+    def change(i, m):
+        m.ranges = (np.asarray(m.ranges, np.float64) * scale).astype(np.float32)
+        m.range_min, m.range_max = m.range_min * scale, m.range_max * scale
+    return change
+
+
+def _every(**kw):
+    return lambda i: dict(kw)
+
+
 def cases() -> list[Case]:
     """The corpus: issue 35's and 45's classes, a few older ones and good controls."""
     n = N_SCANS
@@ -693,6 +717,22 @@ def cases() -> list[Case]:
                                                map_jump=(RELOCALISED_AT_S, RELOCALISED_M)),
              "warning", ("at scan 50", "5.0 s into", "the map pose jumped", "relocalisation"), n_index=RELOCALISED_N,
              check=_jump_named(RELOCALISED_M)),
+        # --- units (issue 45 item 4): ranges in millimetres or centimetres, headings in degrees
+        Case("bag_ranges_in_millimetres", _bag("ranges_mm.bag", change=_in_units(1000.0)),
+             "error", ("{name}", "'/scan'", "look like millimetres", "expected metres")),
+        Case("bag_ranges_in_centimetres_ros2", lambda root: _ros2_bag(root, "ranges_cm_ros2", change=_in_units(100.0)),
+             "error", ("{name}", "'/scan'", "look like centimetres", "expected metres")),
+        Case("carmen_ranges_in_millimetres", _log("ranges_mm.log", bad=_every(scale=1000.0)),
+             "error", ("{name}", "r1..rn of the FLASER lines", "look like millimetres", "expected metres")),
+        Case("carmen_ranges_in_centimetres_robotlaser1",
+             _log("ranges_cm.log", kind="ROBOTLASER1", bad=_every(scale=100.0)),
+             "error", ("{name}", "ROBOTLASER1 lines", "look like centimetres", "expected metres")),
+        Case("carmen_theta_in_degrees", _log("theta_deg.log", bad=_every(theta_deg=True)),
+             "error", ("{name}", "theta of the FLASER lines", "looks like degrees", "expected radians")),
+        Case("pcd_yaw_in_degrees", _pcd("pcd_yaw_deg", yaw_deg=True),
+             "error", ("locations.csv", "column 'yaw'", "looks like degrees", "expected radians")),
+        Case("pcd_folder_in_millimetres", _pcd("pcd_mm", scale=1000.0),
+             "error", ("{name}", ".pcd files", "look like millimetres", "expected metres")),
         # --- older classes (issue 24)
         Case("older_truncated_bag", _truncated_bag, "error", ("{name}",), issue=False),
         Case("older_empty_bag", _empty_bag, "error", ("{name}",), issue=False),

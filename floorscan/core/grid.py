@@ -6,11 +6,68 @@ offsets from the minimum), whose order is the lexicographic order of the cells, 
 ``numpy.unique`` replaces ``numpy.unique(cells, axis=0)`` (a sort of structured rows,
 ~6x slower); sums come from ``numpy.bincount``, which adds in point order as
 ``numpy.add.at`` does: the same floats, bit for bit (tested).
+
+A raster sized by the data's extent (the occupancy grid of the scans, the selection's
+coverage raster, the scoring grid) is checked by :func:`check_raster_size` before it is
+allocated: coordinates in millimetres, or one scan far from the others, would otherwise
+ask for gigabytes and end in a ``MemoryError`` traceback.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+#: The memory one job of the workflow may use, bytes: the project's per-job budget of
+#: 2 GB (the benchmarks' largest job takes 0.56 GB; the SLURM profile asks 4 GB a job).
+JOB_MEMORY_BYTES = 2_000_000_000
+#: A raster sized by the data's extent may take at most this, bytes: half of a job's
+#: budget, the other half for the points and the arrays derived from the raster (its
+#: log-odds, masks, distance transforms). 1 GB is 41 M cells of the occupancy grid's 24
+#: bytes, a building 320 m square at 5 cm; the shared recordings' largest grid is 2.7 M
+#: cells (2798 x 963, acapulco's 100 m x 45 m hall).
+MAX_RASTER_BYTES = JOB_MEMORY_BYTES // 2
+
+
+def check_raster_size(what: str, lo_xy, hi_xy, cell_m: float, shape: tuple[int, int], bytes_per_cell: int) -> None:
+    """Refuse a raster sized by the data's extent that would take more than
+    :data:`MAX_RASTER_BYTES`, before it is allocated.
+
+    Parameters
+    ----------
+    what : str
+        The raster and whose data it covers, for the message (``the occupancy grid of
+        the 40 selected scans of dataset 'x'``).
+    lo_xy, hi_xy : (2,) float
+        The data's extent, metres (map frame).
+    cell_m : float
+        Cell side, metres.
+    shape : (int, int)
+        Rows, columns the raster would have.
+    bytes_per_cell : int
+        Bytes the raster's arrays take per cell.
+
+    Raises
+    ------
+    floorscan.core.io.InputError
+        Naming the extent in metres, the cells and the memory it would need, and the bound.
+    """
+    n_cells = int(shape[0]) * int(shape[1])
+    need = n_cells * int(bytes_per_cell)
+    if need <= MAX_RASTER_BYTES:
+        return
+    from floorscan.core.io import InputError
+
+    w, h = (float(b) - float(a) for a, b in zip(lo_xy, hi_xy))
+    side = math.sqrt(MAX_RASTER_BYTES / bytes_per_cell) * cell_m
+    raise InputError(
+        f"{what}: the data spans {w:.6g} m x {h:.6g} m, which at {cell_m:g} m cells needs {shape[1]} x {shape[0]} = "
+        f"{n_cells:.3g} cells, {need / 2**30:.3g} GiB ({bytes_per_cell} bytes a cell), more than the "
+        f"{MAX_RASTER_BYTES / 1e9:g} GB a raster may take (half of a job's {JOB_MEMORY_BYTES / 1e9:g} GB): expected a "
+        f"building's extent in metres, at most about {side:.0f} m square at {cell_m:g} m. Are the recording's ranges "
+        "or poses in millimetres, or is a pose far from the others?"
+    )
 
 
 def cell_groups(cells: np.ndarray, first: bool = False, inverse: bool = True):

@@ -49,7 +49,7 @@ import pandas as pd
 
 from floorscan.core.files import atomic_path
 from floorscan.core.config import schema_defaults
-from floorscan.core.grid import raster_cells
+from floorscan.core.grid import check_raster_size, raster_cells
 
 #: map_server's PGM values (trinary mode): occupied, free, unknown.
 PGM_OCCUPIED, PGM_FREE, PGM_UNKNOWN = 0, 254, 205
@@ -233,7 +233,8 @@ class OccupancyGrid:
         }
 
 
-def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: OccupancyParams = OccupancyParams()) -> OccupancyGrid:
+def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: OccupancyParams = OccupancyParams(),
+                   what: str = "occupancy grid") -> OccupancyGrid:
     """Build the occupancy grid of a set of registered scans (see the module docstring).
 
     Parameters
@@ -242,6 +243,8 @@ def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: Occup
         Per scan the scanner's position in the map frame ((2,) float, metres) and its
         returns in the map frame ((M, 2) float, metres, plan view).
     params : OccupancyParams
+    what : str
+        The grid and whose scans, for the error of a grid too large.
 
     Returns
     -------
@@ -250,7 +253,8 @@ def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: Occup
     Raises
     ------
     ValueError
-        When no scan has a return, or a coordinate is not finite.
+        When no scan has a return, or a coordinate is not finite; an ``InputError`` when the
+        grid would be too large (:func:`floorscan.core.grid.check_raster_size`), before it is.
     """
     params.check()
     scans = [(np.asarray(o, dtype=np.float64)[:2], np.asarray(p, dtype=np.float64)[:, :2]) for o, p in scans]
@@ -264,6 +268,7 @@ def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: Occup
     r = float(params.resolution_m)
     origin = np.floor((lo - params.margin_m) / r) * r
     width, height = (np.floor((hi + params.margin_m - origin) / r).astype(np.int64) + 1).tolist()
+    check_raster_size(what, lo, hi, r, (height, width), 4 + 4 + 8 + 8)  # the four arrays below
     n_cells = width * height
     hits = np.zeros(n_cells, dtype=np.int32)
     misses = np.zeros(n_cells, dtype=np.int32)
@@ -284,14 +289,9 @@ def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: Occup
         crossed = _distinct(_sample_cells(o, d, ray, frac, origin, r, width), last)
         hits[hit] += 1
         misses[crossed[hit_by[crossed] != i]] += 1
-    return OccupancyGrid(
-        origin_xy=origin,
-        resolution_m=r,
-        n_hit_scans=hits.reshape(height, width),
-        n_miss_scans=misses.reshape(height, width),
-        params=params,
-        scan_xy=np.array([o for o, _ in scans], dtype=np.float64).reshape(-1, 2),
-    )
+    return OccupancyGrid(origin_xy=origin, resolution_m=r, n_hit_scans=hits.reshape(height, width),
+                         n_miss_scans=misses.reshape(height, width), params=params,
+                         scan_xy=np.array([o for o, _ in scans], dtype=np.float64).reshape(-1, 2))
 
 
 def _sample_cells(o, d, ray, frac, origin, r: float, width: int) -> np.ndarray:

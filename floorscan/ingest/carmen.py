@@ -28,11 +28,17 @@ in the pose stream), the first named in a note; more than half of the lines brok
 none usable, is an ``InputError`` (:class:`~floorscan.ingest.points.ScanLosses`). Lines
 of a type CARMEN does not define (:data:`~floorscan.ingest.carmen_lines.CARMEN_TYPES`)
 are counted (``lost_unknown_lines``) and the first few named in a note.
+
+Units: a log whose ranges are not metres (millimetres, centimetres) or whose laser
+headings are not radians (degrees) is refused naming the field
+(:mod:`floorscan.ingest.units`); the ranges are checked before the no-return limit,
+which would drop every reading of a log in millimetres.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import zlib
 from pathlib import Path
 from typing import Any, Iterator, Mapping
@@ -53,6 +59,7 @@ from floorscan.ingest.params import IngestParams
 from floorscan.ingest.points import FrameError, ScanLosses, laser_scan_points, no_return_reason
 from floorscan.ingest.recording import MAX_STEP_BACK_S, Recording, Scan, pose_stream_frame
 from floorscan.ingest.text import open_text
+from floorscan.ingest.units import MedianReturn, range_units_problem, yaw_units_problem
 
 log = logging.getLogger(__name__)
 
@@ -106,7 +113,8 @@ def parse_carmen(
         its layout's, a field that is not a number, a non-finite pose, angle or maximum
         range (names ``file:line``, the field and the layout); a stamp out of range in a
         log whose stamps are not junk (:mod:`floorscan.ingest.carmen_stamps`: names the
-        first such line); zero stamps among non-zero ones; or no laser lines at all.
+        first such line); zero stamps among non-zero ones; no laser lines at all; or
+        ranges that are not metres (:func:`floorscan.ingest.units.range_units_problem`).
     """
     fov = IngestParams().carmen_fov_rad if fov_rad is None else fov_rad
     scans, counts, _, _, _ = _parse(Path(path), max_range_m, fov)
@@ -146,6 +154,7 @@ def _parse(
         raise InputError(f"{path}: no laser lines; expected FLASER or ROBOTLASER1 lines ({_found_types(counts)})")
     stamps = _stamp_class(path, lines)
     limit = no_return_range([s["ranges"] for s in lines], max_range_m)
+    _check_range_units(path, lines, limit)
     scans = []
     for ordinal, s in enumerate(lines):
         s["ordinal"] = ordinal
@@ -157,6 +166,43 @@ def _parse(
             s["no_return"] = no_return_reason(ranges, 1e-9, rmax)
         scans.append(s)
     return scans, counts, limit, unknown, stamps
+
+
+def _check_range_units(path: Path, lines: list[dict], limit: NoReturn) -> None:
+    """Refuse a log whose ranges are not metres (:func:`floorscan.ingest.units.range_units_problem`),
+    before the no-return limit would drop every reading of a log in millimetres: the
+    median return of the readings above zero (and below a detected or configured limit).
+
+    Raises
+    ------
+    InputError
+        Naming the file, the lines' range field and the median return.
+    """
+    cap = math.inf if limit.how == "fallback" else limit.max_range_m
+    median = MedianReturn()
+    for s in lines:
+        r = np.asarray(s["ranges"], dtype=np.float64)
+        with np.errstate(invalid="ignore"):
+            median.add_distances(r[(r > 0) & (r < cap)])
+    problem = range_units_problem(median.value, median.n_scans)
+    if problem:
+        kinds = "/".join(sorted({s["kind"] for s in lines}))
+        raise InputError(f"{path}: the ranges r1..rn of the {kinds} lines {problem}")
+
+
+def _check_yaw_units(path: Path, scans: list[dict], t_ns: np.ndarray) -> None:
+    """Refuse a log whose laser headings are not radians (:func:`floorscan.ingest.units.yaw_units_problem`).
+
+    Raises
+    ------
+    InputError
+        Naming the file and the lines' heading field.
+    """
+    problem = yaw_units_problem(t_ns, np.array([s["pose"][2] for s in scans], dtype=np.float64))
+    if problem:
+        kinds = sorted({s["kind"] for s in scans})
+        field = " and ".join(f"{'theta' if k == 'FLASER' else 'laser_theta'} of the {k} lines" for k in kinds)
+        raise InputError(f"{path}: the laser heading ({field}) {problem}")
 
 
 def _stamp_class(path: Path, lines: list[dict]) -> StampClass:
@@ -235,7 +281,8 @@ def open_carmen(path: Path, dataset: Mapping[str, Any], cfg: "IngestParams | Map
     ------
     InputError
         See :func:`parse_carmen`; also more than half of the laser lines with broken
-        geometry, or no line with a valid return (names the first line and field).
+        geometry, or no line with a valid return (names the first line and field), or
+        laser headings that are not radians (:func:`floorscan.ingest.units.yaw_units_problem`).
     """
     params = stage_params(IngestParams, cfg)
     cfg_max = params.carmen_max_range_m
@@ -297,6 +344,7 @@ def open_carmen(path: Path, dataset: Mapping[str, Any], cfg: "IngestParams | Map
                 f"({int(np.count_nonzero(runs > 1))} runs, the longest {int(runs.max())} lines); "
                 "each run spread evenly up to the next stamp, in line order"
             )
+    _check_yaw_units(path, scans, t_ns)
     poses = np.array([s["pose"] for s in scans])
     stream = pose_stream_frame(t_ns, poses[:, 0], poses[:, 1], np.zeros(len(t_ns)), poses[:, 2])
     kinds = sorted({s["kind"] for s in scans})

@@ -20,7 +20,8 @@ column), never a wrong point or pose. Each ``.pcd`` file is read and checked by
 :func:`floorscan.ingest.pcd_file.read_pcd_xyz` (header and data rules in
 :mod:`floorscan.ingest.pcd_file`); the locations CSV here: ``x, y, z, yaw`` finite
 numbers, ``t_ns`` a decimal integer in [0, 2^63), strictly increasing, every named
-file present.
+file present, ``yaw`` in radians (not degrees: :mod:`floorscan.ingest.units`); the
+points in metres (not millimetres) are checked by the ingest writer.
 
 Losses: a listed file without a valid point (all NaN, or none inside the dataset's range
 limits) is skipped and counted (``lost_no_points``), the first named in a note; none
@@ -47,6 +48,7 @@ from floorscan.ingest.pcd_file import read_pcd_xyz
 from floorscan.ingest.points import FrameError, ScanLosses, filter_points, no_point_reason
 from floorscan.ingest.recording import Recording, Scan, pose_stream_frame
 from floorscan.ingest.text import parse_number
+from floorscan.ingest.units import yaw_units_problem
 
 log = logging.getLogger(__name__)
 
@@ -82,8 +84,9 @@ def read_locations(folder: Path, name: str, period_s: float) -> pd.DataFrame:
         Missing file or one pandas cannot read as CSV; a column of ``file, x, y, z``
         missing; no row; an ``x, y, z`` or ``yaw`` cell that is not a finite number; a
         ``t_ns`` cell that is not a decimal integer in [0, 2^63); stamps not strictly
-        increasing; a named file that is not in ``folder``. The message names the CSV
-        and the column and row.
+        increasing; a named file that is not in ``folder``; a ``yaw`` column that is not
+        radians (:func:`floorscan.ingest.units.yaw_units_problem`: degrees). The message
+        names the CSV and the column (and row).
     """
     path = folder / name
     if not path.is_file():
@@ -116,6 +119,9 @@ def read_locations(folder: Path, name: str, period_s: float) -> pd.DataFrame:
     for f in df["file"]:
         if not (folder / str(f)).is_file():
             raise InputError(f"{path}: names {f!r}, which is not in {folder}")
+    problem = yaw_units_problem(t, df["yaw"].to_numpy(np.float64))
+    if problem:
+        raise InputError(f"{path}: column 'yaw' {problem}")
     return df
 
 

@@ -4,7 +4,9 @@
 at a time (row groups written in a thread by :class:`floorscan.core.io.ScanRowGroups`),
 so memory grows with the largest scan, not with the recording. The three files are
 written atomically, and what the reader detected goes into the schema metadata of the
-scan index and the pose stream.
+scan index and the pose stream. Scans whose ranges are not metres (millimetres,
+centimetres: :func:`floorscan.ingest.units.range_units_problem`) are refused, after
+:data:`~floorscan.ingest.units.EARLY_CHECK_SCANS` scans or at the end.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ from floorscan.core.io import (
 )
 from floorscan.core.files import atomic_path
 from floorscan.ingest.recording import Recording, pose_stream_frame
+from floorscan.ingest.units import EARLY_CHECK_SCANS, MedianReturn, range_units_problem
 
 log = logging.getLogger(__name__)
 
@@ -72,8 +75,9 @@ def write_recording(
     Raises
     ------
     InputError
-        No scans, scan timestamps going backwards, or no poses while the pose kind is
-        not ``none`` (a map pose source was found or set but has no poses).
+        No scans, scan timestamps going backwards, no poses while the pose kind is
+        not ``none`` (a map pose source was found or set but has no poses), or scans
+        whose ranges are not metres (names the recording and its scans).
     """
     rows: list[tuple[int, int, int, int, str, int | None]] = []
     meta = {k.encode(): str(v).encode() for k, v in (metadata or {}).items()}
@@ -81,6 +85,7 @@ def write_recording(
         with pq.ParquetWriter(tmp, SCANS.with_metadata(meta), **parquet_options(SCANS, ["scan_id"])) as writer:
             with ScanRowGroups(writer) as batch:  # row groups written in a thread
                 last_t = None
+                median = MedianReturn()
                 for scan_id, scan in enumerate(progress(recording.scans, log, what="scans read")):
                     if last_t is not None and scan.t_ns < last_t:
                         raise InputError(
@@ -94,9 +99,13 @@ def write_recording(
                     rows.append((scan_id, int(scan.t_ns), n, int(scan.n_dropped), scan.frame, ordinal))
                     if n:
                         batch.add(scan_id, pts)
+                    median.add(pts)
+                    if median.n_scans == EARLY_CHECK_SCANS:
+                        _check_range_units(recording, median)
         if not rows:
             raise InputError(f"{recording.source}: no scans found")
         index = pd.DataFrame(rows, columns=["scan_id", "t_ns", "n_points", "n_dropped", "frame", "source_ordinal"])
+        _check_range_units(recording, median)
         if index["source_ordinal"].isna().any():  # a reader that does not number its frames: all null
             index["source_ordinal"] = None
         else:
@@ -114,3 +123,20 @@ def write_recording(
         write_table(index, index_path, schema=SCAN_INDEX, metadata=table_meta)
         write_table(stream, pose_stream_path, schema=POSE_STREAM, metadata=table_meta)
     return index
+
+
+def _check_range_units(recording: Recording, median: MedianReturn) -> None:
+    """Refuse scans whose ranges are not metres (:func:`floorscan.ingest.units.range_units_problem`),
+    naming the recording and its scans (a bag's topic, a CARMEN log's lines, a PCD
+    folder's files)."""
+    problem = range_units_problem(median.value, median.n_scans)
+    if not problem:
+        return
+    topic = recording.detected.get("scan_topic", "")
+    if recording.detected.get("format") == "pcd" or topic == "pcd files":
+        what = "the points of the .pcd files (their distance from the scan locations of the locations CSV)"
+    elif recording.detected.get("format") == "carmen":
+        what = f"the ranges of the {topic} lines"
+    else:
+        what = f"the ranges of the scans on {topic!r}" if topic else "the ranges of the scans"
+    raise InputError(f"{recording.source}: {what} {problem}")

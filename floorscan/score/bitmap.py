@@ -38,10 +38,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from floorscan.core.geometry import point_segment_dist2
+from floorscan.core.grid import MAX_RASTER_BYTES, check_raster_size
 from floorscan.score.segments import split_long, as_segments
 
-#: Largest grid a bitmap metric may allocate (cells), a guard against a bad cell size.
-MAX_CELLS = 200_000_000
+#: Bytes a cell of the scoring grid takes: the inferred and ground-truth bitmaps, their
+#: error map and the metrics' masks (bool).
+BITMAP_BYTES_PER_CELL = 5
+#: Largest grid a bitmap metric may allocate (cells): the project's raster bound
+#: (:data:`floorscan.core.grid.MAX_RASTER_BYTES`), 200 M cells.
+MAX_CELLS = MAX_RASTER_BYTES // BITMAP_BYTES_PER_CELL
 #: Candidate cells per chunk of :func:`rasterize_segments` (bounds its memory: a dozen
 #: arrays of this length).
 RASTER_CHUNK = 500_000
@@ -100,7 +105,8 @@ def grid_for(segments, cell_m: float = 0.05, margin_m: float = 1.0) -> Grid:
     Raises
     ------
     ValueError
-        When ``segments`` is empty, ``cell_m`` is not positive or the grid would exceed
+        When ``segments`` is empty or ``cell_m`` is not positive; an ``InputError``
+        (:func:`floorscan.core.grid.check_raster_size`) when the grid would exceed
         :data:`MAX_CELLS` cells.
     """
     seg = as_segments(segments)
@@ -115,10 +121,8 @@ def grid_for(segments, cell_m: float = 0.05, margin_m: float = 1.0) -> Grid:
     nx = int(math.ceil((xs.max() + margin_m - x0) / cell_m - 1e-9))
     ny = int(math.ceil((ys.max() + margin_m - y0) / cell_m - 1e-9))
     nx, ny = max(nx, 1), max(ny, 1)
-    if nx * ny > MAX_CELLS:
-        raise ValueError(
-            f"scoring grid of {nx} x {ny} cells exceeds {MAX_CELLS}; increase score.cell_m"
-        )
+    check_raster_size("scoring grid of the reference walls (score.cell_m)", (xs.min(), ys.min()), (xs.max(), ys.max()),
+                      cell_m, (ny, nx), BITMAP_BYTES_PER_CELL)
     return Grid(float(x0), float(y0), float(cell_m), nx, ny)
 
 

@@ -35,6 +35,8 @@ import numpy as np
 import pandas as pd
 import shapely
 
+from floorscan.core.grid import check_raster_size
+
 
 class RasterCoverage:
     """Coverage geometries as sets of raster cells, and the union ``U`` of chosen ones.
@@ -57,8 +59,10 @@ class RasterCoverage:
 
     Raises
     ------
-    ValueError
-        When the grid would exceed 2**31 cells (use a coarser ``raster_m``).
+    floorscan.core.io.InputError
+        When the grid would take more than :data:`floorscan.core.grid.MAX_RASTER_BYTES`
+        at 1 byte a cell (:func:`floorscan.core.grid.check_raster_size`; fewer than
+        2**31 cells, as the int32 cell numbers need).
     """
 
     def __init__(self, geometries: Sequence, raster_m: float = 0.05, chunk: int = 512):
@@ -77,11 +81,10 @@ class RasterCoverage:
         else:
             self.x0 = self.y0 = 0.0
             self.nx = self.ny = 1
-        if self.nx * self.ny >= 2**31:
-            raise ValueError(
-                f"coverage raster of {self.nx} x {self.ny} cells at {r} m is too large; "
-                "raise select.raster_m"
-            )
+        if nonempty.any():  # 1 GB of cells, under 2**31: the int32 cell numbers hold
+            check_raster_size(f"coverage raster of {int(nonempty.sum())} scans (select.raster_m)",
+                              (b[:, 0].min(), b[:, 1].min()), (b[:, 2].max(), b[:, 3].max()), r,
+                              (self.ny, self.nx), 1)
         cells, counts = [], np.zeros(self.n, dtype=np.int64)
         for a in range(0, self.n, chunk):
             c, k = self._rasterize(geoms[a : a + chunk])

@@ -56,6 +56,10 @@ def map_of_scans(
     ------
     ValueError
         When a scan to use has no kept row, or none of them has a wall point.
+    floorscan.core.io.InputError
+        When the grid of the scans' extent would be too large
+        (:func:`floorscan.core.grid.check_raster_size`: names the dataset, the extent
+        in metres, the cells and the memory), before it is allocated.
     """
     from floorscan.core.io import iter_scans
     from floorscan.core.config import stage_params
@@ -80,7 +84,12 @@ def map_of_scans(
     pts = np.concatenate(points) if points else np.empty((0, 2))
     if len(pts) == 0:
         raise ValueError(f"none of the {len(wanted)} scans has a wall point")
-    grid = occupancy_grid(zip(origins, points), replace(OccupancyParams(), resolution_m=params.support_cell_m))
+    from floorscan.core.io import read_metadata
+
+    dataset = read_metadata(registered_path).get("dataset")
+    what = (f"the occupancy grid of {'all kept' if scan_ids is None else 'the selected'} {len(origins)} scans"
+            f"{f' of dataset {dataset!r}' if dataset else ''} ({registered_path})")
+    grid = occupancy_grid(zip(origins, points), replace(OccupancyParams(), resolution_m=params.support_cell_m), what)
     segments = _map_table(pts, grid, params, cfg)
     log.info("map of %d scans (%d wall points): %d wall segments; grid %d x %d cells of %.3f m",
              len(origins), len(pts), len(segments), grid.shape[1], grid.shape[0], grid.resolution_m)
