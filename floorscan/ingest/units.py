@@ -64,6 +64,10 @@ MAX_TURN_RATE_RAD_S = 4.0 * math.pi
 #: this far apart, seconds: a step is measured wrapped into [-pi, pi), so over a longer
 #: interval every step is a possible turn.
 MAX_STEP_DT_S = math.pi / MAX_TURN_RATE_RAD_S
+#: ... and at least this far apart, seconds: the fastest scanners sweep at 100 Hz, so
+#: poses closer in time than a millisecond are stamps that do not measure time (made up,
+#: or a simulator's counter), not a turn rate.
+MIN_STEP_DT_S = 1e-3
 #: Steps faster than any robot turns make a heading degrees when they are at least this
 #: share of all the steps between poses. A few are stamps, not turns: the shared intel log
 #: has 8 of 909 (lines written late, 0.01 s apart after sorting), belgioioso 2 of 394 and
@@ -170,7 +174,7 @@ def yaw_units_problem(t_ns: np.ndarray, yaw: np.ndarray) -> str | None:
     dt = np.diff(t) * 1e-9
     step = np.abs((raw + math.pi) % (2.0 * math.pi) - math.pi)  # wrapped into [0, pi]
     rate = step / np.where(dt > 0, dt, np.inf)
-    fast = (dt > 0) & (dt <= MAX_STEP_DT_S) & (rate > MAX_TURN_RATE_RAD_S)
+    fast = (dt >= MIN_STEP_DT_S) & (dt <= MAX_STEP_DT_S) & (rate > MAX_TURN_RATE_RAD_S)
     n_fast = int(np.count_nonzero(fast))
     jumps = np.flatnonzero(np.abs(raw) > math.pi)
     # beyond a turn, and not unwrapped: it starts beyond a turn, or jumps by half a turn or more
