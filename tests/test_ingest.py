@@ -1062,3 +1062,29 @@ def test_carmen_log_with_a_byte_order_mark_keeps_its_first_scan(tmp_path):
         out.mkdir()
         index, _, _, poses = ingest({"format": "carmen", "path": str(log)}, out, {})
         assert len(index) == 2 and poses["x"].tolist() == [1.0, 1.5]
+
+
+def test_a_locations_csv_with_spaces_after_its_commas_reads_as_without(tmp_path):
+    """'file, t_ns, x, y, z, yaw' (as people and spreadsheets write it) was refused as
+    'columns ['x', 'y', 'z'] missing' (issue 45, item 6); a header that lacks a column
+    now shows the columns it has."""
+    from floorscan.core.io import InputError
+    from floorscan.ingest.pcd import read_locations
+
+    rows = ["a.pcd,1600000000000000000,0.5,1.25,0.3,0.1", "b.pcd,1600000000100000000,0.75,1.5,0.3,0.2"]
+    for sub in ("plain", "spaced"):
+        (tmp_path / sub).mkdir()
+        for name in ("a.pcd", "b.pcd"):
+            (tmp_path / sub / name).write_text("")
+    (tmp_path / "plain" / "locations.csv").write_text("\n".join(["file,t_ns,x,y,z,yaw", *rows]) + "\n")
+    (tmp_path / "spaced" / "locations.csv").write_text(
+        "\n".join(["file, t_ns, x, y, z, yaw", *[r.replace(",", ", ") for r in rows]]) + "\n")
+    plain = read_locations(tmp_path / "plain", "locations.csv", 0.1)
+    spaced = read_locations(tmp_path / "spaced", "locations.csv", 0.1)
+    import pandas as pd
+
+    pd.testing.assert_frame_equal(plain, spaced)
+    assert list(spaced["file"]) == ["a.pcd", "b.pcd"] and spaced["t_ns"].iloc[1] == 1600000000100000000
+    (tmp_path / "spaced" / "locations.csv").write_text("name, t_ns, x, y, z\n" + rows[0][:-4] + "\n")
+    with pytest.raises(InputError, match=r"columns \['file'\] missing \(the header has \['name', 't_ns', 'x', 'y', 'z'\]\)"):
+        read_locations(tmp_path / "spaced", "locations.csv", 0.1)

@@ -92,13 +92,16 @@ def read_locations(folder: Path, name: str, period_s: float) -> pd.DataFrame:
     if not path.is_file():
         raise InputError(f"{path}: scan locations CSV not found (dataset option 'locations')")
     try:  # every cell as text: each column is parsed here, so nothing is guessed or rounded
-        df = pd.read_csv(path, dtype=str, keep_default_na=False)
+        # spaces after the commas ("file, t_ns, x, ...", as people and spreadsheets write) are no part of a name or a value
+        df = pd.read_csv(path, dtype=str, keep_default_na=False, skipinitialspace=True)
     except Exception as e:
         raise InputError(f"{path}: cannot read the CSV ({e})") from None
+    df.columns = [str(c).strip() for c in df.columns]
     need = ["file", "x", "y", "z"]
     missing = [c for c in need if c not in df.columns]
     if missing:
-        raise InputError(f"{path}: columns {missing} missing; expected file,t_ns,x,y,z,yaw (t_ns, yaw optional)")
+        raise InputError(f"{path}: columns {missing} missing (the header has {list(df.columns)}); expected "
+                         "file,t_ns,x,y,z,yaw (t_ns, yaw optional)")
     if df.empty:
         raise InputError(f"{path}: no scan locations")
     for c in ["x", "y", "z"] + [c for c in ("yaw",) if c in df.columns]:
