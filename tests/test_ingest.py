@@ -1088,3 +1088,32 @@ def test_a_locations_csv_with_spaces_after_its_commas_reads_as_without(tmp_path)
     (tmp_path / "spaced" / "locations.csv").write_text("name, t_ns, x, y, z\n" + rows[0][:-4] + "\n")
     with pytest.raises(InputError, match=r"columns \['file'\] missing \(the header has \['name', 't_ns', 'x', 'y', 'z'\]\)"):
         read_locations(tmp_path / "spaced", "locations.csv", 0.1)
+
+
+def test_a_ros2_folder_rosbags_cannot_open_is_said_as_such(tmp_path):
+    """Without metadata.yaml, or declaring a storage or serialization rosbags does not
+    read: each named, not 'cannot read the bag, truncated or corrupt' (issue 45, item 6)."""
+    import yaml
+
+    from floorscan.core.io import InputError
+    from floorscan.ingest.rosbag import open_bag
+
+    bag = tmp_path / "run2"
+    bag.mkdir()
+    (bag / "run2_0.db3").write_bytes(b"")
+    with pytest.raises(InputError, match=r"run2: a ROS2 bag folder without its metadata.yaml \(it holds run2_0.db3\); "
+                                         r".*'ros2 bag reindex .*run2'"):
+        open_bag(bag, {})
+
+    def meta(store, fmt):
+        topic = {"topic_metadata": {"name": "/scan", "type": "sensor_msgs/msg/LaserScan", "serialization_format": fmt}}
+        info = {"version": 4, "storage_identifier": store, "relative_file_paths": ["run2_0.db3"],
+                "topics_with_message_count": [topic]}
+        (bag / "metadata.yaml").write_text(yaml.safe_dump({"rosbag2_bagfile_information": info}))
+
+    meta("rocksdb", "cdr")
+    with pytest.raises(InputError, match=r"metadata.yaml: storage_identifier 'rocksdb'; expected one of sqlite3, mcap"):
+        open_bag(bag, {})
+    meta("sqlite3", "json")
+    with pytest.raises(InputError, match=r"metadata.yaml: topics /scan are not serialized as 'cdr'"):
+        open_bag(bag, {})
