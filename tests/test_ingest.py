@@ -1117,3 +1117,18 @@ def test_a_ros2_folder_rosbags_cannot_open_is_said_as_such(tmp_path):
     meta("sqlite3", "json")
     with pytest.raises(InputError, match=r"metadata.yaml: topics /scan are not serialized as 'cdr'"):
         open_bag(bag, {})
+
+
+def test_a_pcd_folder_whose_scans_sit_in_a_sub_folder_is_one_recording(tmp_path):
+    """locations.csv beside a 'scans/' folder was taken as a folder of recordings, and
+    the error pointed at scans/locations.csv (issue 45, item 5): the locations CSV makes
+    it one PCD recording."""
+    from floorscan.ingest.detect import detect_format, is_one_recording, recordings_in
+
+    rec = tmp_path / "survey"
+    (rec / "scans").mkdir(parents=True)
+    (rec / "scans" / "a.pcd").write_text("")
+    (rec / "locations.csv").write_text("file,x,y,z\nscans/a.pcd,0,0,0\n")
+    assert detect_format(rec) == "pcd" and is_one_recording(rec)
+    assert recordings_in(rec) == ([rec], [])
+    assert recordings_in(tmp_path) == ([rec], [])  # in a folder of recordings: one of them

@@ -58,6 +58,11 @@ EXPECTED = (
 )
 
 
+#: The locations CSV of a PCD folder, by default (dataset option ``locations``): a folder
+#: holding one is a PCD recording, wherever the scans it names sit below it.
+LOCATIONS_CSV = "locations.csv"
+
+
 def detect_format(path: str | Path) -> str:
     """The format of the recording at ``path``: ``'rosbag'``, ``'carmen'``, ``'pcd'`` or
     ``'map'``.
@@ -87,8 +92,8 @@ def detect_format(path: str | Path) -> str:
         names = sorted(p.name for p in path.iterdir())
         if (path / "metadata.yaml").is_file() or any(n.endswith(ROS2_STORAGE_SUFFIXES) for n in names):
             return "rosbag"
-        if any(n.lower().endswith(".pcd") for n in names):
-            return "pcd"
+        if any(n.lower().endswith(".pcd") for n in names) or (path / LOCATIONS_CSV).is_file():
+            return "pcd"  # its scans may sit in a sub-folder its locations CSV names
         shown = ", ".join(n if len(n) <= 60 else quoted(n, 60) for n in names[:10])
         shown += f" ... ({len(names)} entries)" if len(names) > 10 else ""
         raise InputError(
@@ -188,7 +193,8 @@ RECORDING_SUFFIXES = (".bag", *ROS2_STORAGE_SUFFIXES, *CARMEN_SUFFIXES, *MAP_IMA
 
 def is_one_recording(folder: Path) -> bool:
     """Whether a folder is itself one recording: a ROS2 bag (``metadata.yaml``, or
-    ``.db3`` / ``.mcap`` files) or a PCD folder (``.pcd`` files).
+    ``.db3`` / ``.mcap`` files) or a PCD folder (``.pcd`` files, or a
+    :data:`LOCATIONS_CSV` whose scans sit in a sub-folder).
 
     Parameters
     ----------
@@ -200,7 +206,8 @@ def is_one_recording(folder: Path) -> bool:
     bool
     """
     names = [p.name.lower() for p in folder.iterdir()]
-    return "metadata.yaml" in names or any(n.endswith((*ROS2_STORAGE_SUFFIXES, ".pcd")) for n in names)
+    return ("metadata.yaml" in names or LOCATIONS_CSV in names
+            or any(n.endswith((*ROS2_STORAGE_SUFFIXES, ".pcd")) for n in names))
 
 
 def recordings_in(path: str | Path) -> tuple[list[Path], list[str]]:
