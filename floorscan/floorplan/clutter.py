@@ -175,7 +175,9 @@ def loose_in_free_space(
       the face, are free space (:func:`~floorscan.floorplan.free_space.passable`): the
       rover saw past them, so no free end is an occluded continuation;
     - its longest face has free space on both sides, or another face parallel behind
-      it (:func:`walls_behind`, walls up to ``max_thickness_m`` thick).
+      it (:func:`walls_behind`, walls up to ``max_thickness_m`` thick);
+    - it encloses no free space (:func:`_encloses_free_space`): a core of rooms whose
+      loop a junction missed by a cell still holds its rooms.
 
     A building's walls hold each other up: the wall graph is connected, and a wall
     that ends in free space ends at an opening, with the rest of its wall in line. A
@@ -240,8 +242,33 @@ def loose_in_free_space(
             p, q = (seg[m, :2], seg[m, 2:]) if e == 0 else (seg[m, 2:], seg[m, :2])
             d = (p - q) / max(float(length[m]), 1e-12)  # outwards from the end
             beyond.append(p + d * steps[:, None])
-        out[members] = bool(mask_at(grid, free, np.concatenate(beyond)).all())
+        out[members] = bool(mask_at(grid, free, np.concatenate(beyond)).all()) and not _encloses_free_space(
+            seg[members], grid, free, params.join_max_gap_m
+        )
     return out
+
+
+def _encloses_free_space(seg: np.ndarray, grid: OccupancyGrid, free: np.ndarray, max_gap_m: float) -> bool:
+    """Whether faces (``(F, 4)`` metres) enclose seen free space once their gaps up to
+    ``max_gap_m`` (openings, junctions missed by a cell) are closed: the union of the faces
+    buffered by half of it has a hole holding a passable cell. A core of rooms standing
+    free of the outer walls encloses its rooms' floor however its corners fall on the
+    cells; a rack, a table or a row of chairs, seen all around, encloses nothing the
+    rover saw."""
+    import shapely
+
+    lines = shapely.linestrings(seg.reshape(-1, 2, 2))
+    union = shapely.union_all(shapely.buffer(lines, max_gap_m / 2, cap_style="square"))
+    holes = [shapely.Polygon(ring) for part in shapely.get_parts(union) if part.geom_type == "Polygon"
+             for ring in part.interiors]  # fmt: skip
+    r = grid.resolution_m
+    for hole in holes:
+        x0, y0, x1, y1 = hole.bounds
+        xs, ys = np.meshgrid(np.arange(x0 + r / 2, x1, r), np.arange(y0 + r / 2, y1, r))
+        inside = shapely.contains_xy(hole, xs.ravel(), ys.ravel())
+        if inside.any() and mask_at(grid, free, np.column_stack([xs.ravel()[inside], ys.ravel()[inside]])).any():
+            return True
+    return False
 
 
 def _held_across_openings(seg: np.ndarray, i: np.ndarray, j: np.ndarray, max_gap_m: float) -> np.ndarray:
