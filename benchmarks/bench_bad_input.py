@@ -530,6 +530,18 @@ def _two_logs(root: Path) -> dict:
     return {"name": p.name, "path": str(p)}
 
 
+def _two_logs_forward(root: Path) -> dict:
+    """Two CARMEN logs of the room concatenated, the second recorded a day later (its
+    stamps go on forward), its poses in its own map frame (1.5 m, 0.5 m off)."""
+    first = carmen_lines()
+    day = 86_400.0
+    second = carmen_lines(n=20, stamps=[10.0 + day + i * DT_S for i in range(20)],
+                          bad=lambda i: {"shift": (1.5, 0.5)})
+    header = ["# CARMEN Logfile", "PARAM robot_front_laser_max 81.9 nohost 0"]
+    p = write_log(root / "two_logs_forward.log", [*header, *first, *header, *second])
+    return {"name": p.name, "path": str(p)}
+
+
 def _early_line(root: Path) -> dict:
     """One laser line stamped a minute before the line before it (line 12)."""
     stamps = [100.0 + i * DT_S for i in range(N_SCANS)]
@@ -709,6 +721,8 @@ def cases() -> list[Case]:
              "error", ("{name}", "'/scan'", "'laser' (18 scans)", "'laser_link' (12 scans)", "static")),
         Case("carmen_two_logs_concatenated", _two_logs, "error",
              ("{name}", "2 logs", "line 35", f"{n} scans", "20 scans", "split")),
+        Case("carmen_two_logs_a_day_apart", _two_logs_forward, "warning",
+             ("the scans pause for 24.0 h after scan 29", "two recordings in one file", "split")),
         Case("carmen_one_line_a_minute_early", _early_line, "error", ("{name}:12", "59.9 s earlier", "line 11")),
         Case("bag_one_scan_stamped_a_minute_early",
              _bag("early.bag", stamps=[T0_NS + int(i * DT_S * 1e9) - (60 * 10**9 if i == 5 else 0) for i in range(n)]),

@@ -118,3 +118,32 @@ def test_a_jump_that_stays_is_a_relocalisation_and_one_that_comes_back_is_not():
     (k,) = pose_jump_episodes(reasons, t, np.c_[x2, np.zeros(12), np.zeros(12)])
     assert not k.relocalised and abs(k.offset_m) < 1e-9
     assert "3.05 m and 0 deg in 0.10 s, 3 scans until the pose came back" in describe_jumps([k], np.arange(12), t)
+
+
+def test_a_pause_in_the_scans_is_a_warning_naming_where_and_how_long():
+    """Two recordings in one file whose stamps go on forward (the second a day later)
+    were merged silently; a pause longer than a minute and than 20 of the scans' periods
+    is named. The shared logs' pauses (aces: up to 38 s, a scan every 2.2 s) are not."""
+    from floorscan.register.consistency import PAUSE_S, pause_warning
+
+    t = (np.arange(50) * 100_000_000).astype(np.int64)
+    assert pause_warning(t) == ""
+    t2 = t.copy()
+    t2[30:] += 86_400 * 10**9  # the second recording, a day later
+    text = pause_warning(t2)
+    assert text.startswith("the scans pause for 24.0 h after scan 29 (2.9 s into the scans): two recordings in one"), text
+    assert "split the file where the second starts" in text
+    aces_like = np.cumsum(np.r_[0, np.full(99, 2.2), 37.7, np.full(50, 2.2)]) * 1e9
+    assert pause_warning(aces_like.astype(np.int64)) == "" and 37.7 < PAUSE_S
+    slow = (np.arange(20) * 10 * 10**9).astype(np.int64)  # a scan every 10 s: 20 periods is 200 s
+    slow[10:] += 150 * 10**9
+    assert pause_warning(slow) == ""  # 160 s, under 20 of its periods
+    slow[10:] += 100 * 10**9
+    assert "for 4.3 min after scan 9" in pause_warning(slow)
+
+
+def test_two_logs_a_day_apart_are_a_warning(tmp_path):
+    case = next(c for c in cases() if c.name == "carmen_two_logs_a_day_apart")
+    (o,) = run_corpus(tmp_path, [case], echo=None)
+    assert o.outcome == "warning", o.detail
+    assert "the scans pause for 24.0 h after scan 29" in o.detail

@@ -189,6 +189,53 @@ class Verdict:
         }
 
 
+#: A pause in the scans is worth a warning when it is longer than this, seconds, and than
+#: :data:`PAUSE_PERIODS` of their median period: the shared recordings pause at most 38 s
+#: (aces, a corrected log with a scan every 2.2 s), while a second recording appended to
+#: the first (the next day, the next floor) pauses for as long as it was not recording.
+PAUSE_S = 60.0
+#: ... and than this many of the scans' median periods.
+PAUSE_PERIODS = 20
+
+
+def pause_warning(t_ns: np.ndarray) -> str:
+    """The verdict's warning for scans whose stamps pause: two recordings in one file, or a
+    scanner stopped and started again; ``""`` when they do not.
+
+    Parameters
+    ----------
+    t_ns : (N,) int64 ndarray
+        The scans' stamps, nanoseconds, in scan order.
+
+    Returns
+    -------
+    str
+        E.g. ``the scans pause for 26.4 h after scan 499 (49.9 s into the scans): two
+        recordings in one file? ...``, naming the three longest pauses.
+    """
+    t = np.asarray(t_ns, dtype=np.int64)
+    if len(t) < 3:
+        return ""
+    dt = np.diff(t) * 1e-9
+    positive = dt[dt > 0]
+    if not len(positive):
+        return ""
+    limit = max(PAUSE_S, PAUSE_PERIODS * float(np.median(positive)))
+    at = np.flatnonzero(dt > limit)
+    if not len(at):
+        return ""
+
+    def span(sec: float) -> str:
+        return f"{sec / 3600:.1f} h" if sec >= 3600 else (f"{sec / 60:.1f} min" if sec >= 60 else f"{sec:.0f} s")
+
+    longest = sorted(at[np.argsort(-dt[at], kind="stable")[:3]].tolist())
+    where = "; ".join(f"for {span(float(dt[k]))} after scan {k} ({(t[k] - t[0]) * 1e-9:.1f} s into the scans)"
+                      for k in longest)
+    more = f" (and {len(at) - len(longest)} more)" if len(at) > len(longest) else ""
+    return (f"the scans pause {where}{more}: two recordings in one file? If so, their maps need not agree: split "
+            "the file where the second starts; a scanner stopped and started again in one place needs nothing")
+
+
 def stamps_warning(recording: Mapping[str, str] | None) -> str:
     """The verdict's warning for a recording whose stamps ingest made up; ``""`` otherwise.
 
