@@ -6,6 +6,9 @@ from floorscan.figures.report import write_front_page_of_files
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
+    # summary.md first: the page links it when it exists
+    write_summary_markdown(smk.output.summary_md, smk.wildcards.dataset, smk.input.selection, smk.input.registration,
+                           smk.input.index, evaluation=smk.input.get("evaluation_md"))
     write_front_page_of_files(
         smk.output.front, smk.wildcards.dataset,
         floorplan_svg=smk.input.floorplan_svg, plan=smk.input.plan,
@@ -14,6 +17,4 @@ with stage_log(snakemake) as log:  # noqa: F821
         extractor=smk.params.extractor, description=smk.params.description, answer=smk.input.get("answer"),
         answer_curve=smk.input.get("answer_curve"), room_scores=smk.input.get("rooms"),
     )
-    write_summary_markdown(smk.output.summary_md, smk.wildcards.dataset, smk.input.selection, smk.input.registration,
-                           smk.input.index, evaluation=smk.input.get("evaluation_md"))
     log.info("front page %s, %s", smk.output.front, smk.output.summary_md)

@@ -15,6 +15,7 @@ import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 
 from floorscan.figures import report as R  # noqa: E402
+from floorscan.figures.pages import OutputFile  # noqa: E402
 from floorscan.score.curve_summary import SUMMARY_COLUMNS  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
@@ -91,13 +92,14 @@ def _tiny_png(path: Path) -> Path:
 def _page(tmp_path, **kw):
     args = dict(
         floorplan_svg=SVG, summary=_summary(), verdict=VERDICT, detected=DETECTED, mode="pose",
-        quality_png=_tiny_png(tmp_path / "quality_vs_k.png"), scan_list="results/toy/selection/scans.csv",
+        quality_png=_tiny_png(tmp_path / "quality_vs_k.png"),
+        scan_list=OutputFile("scan list", "selection/scans.csv", True),
         k=4, n_kept=76, n_recorded=321, bytes_in=3_456_789, bytes_out=61_234,
         k_reason="k = 4: the first k scans reach 99 % of the coverage of all 76.",
         ordering="wall_coverage", extractor="cluster_ransac", n_walls=16, description="A toy building",
     )  # fmt: skip
     args.update(kw)
-    return R.front_page("toy", **args)
+    return R.front_page(R.FrontPage("toy", **args))
 
 
 def test_front_page_holds_the_plan_the_verdict_the_detection_and_the_table(tmp_path):
@@ -117,7 +119,8 @@ def test_front_page_holds_the_plan_the_verdict_the_detection_and_the_table(tmp_p
     rows = {r[0]: r[1:] for r in tables.rows if len(r) == 2}
     assert rows["scans used"] == ["4 of 76 kept, 321 recorded (1.2 %)"]
     assert rows["recording"] == ["3.46 MB → 61.2 kB (1.8 %)"]
-    assert rows["scan list"] == ["results/toy/selection/scans.csv"]
+    assert rows["scan list"] == ["selection/scans.csv"]  # relative to the page, a link
+    assert '<a href="selection/scans.csv"><code>selection/scans.csv</code></a>' in page
     assert rows["format"] == ["rosbag"] and rows["scan topic"] == ["/scan"]
     assert rows["pose source"] == ["topic /amcl_pose"] and rows["registered in"] == ["pose mode"]
     # the summary: one row per ordering, the cells as summary.md has them (± for random's seeds)
@@ -153,7 +156,7 @@ def test_front_page_can_sit_in_the_reports_script_string(tmp_path):
 
 
 def test_front_page_without_evaluation_or_selection(tmp_path):
-    page = R.front_page("toy", floorplan_svg=SVG, verdict=None, detected={})
+    page = R.front_page(R.FrontPage("toy", floorplan_svg=SVG, verdict=None, detected={}))
     assert "Not evaluated in this run" in page
     assert "Registration: no verdict recorded." in page
     assert "<h3>Scans</h3>" not in page and "data:image/png" not in page
@@ -162,7 +165,7 @@ def test_front_page_without_evaluation_or_selection(tmp_path):
 
 def test_write_front_page_writes_the_page_and_no_temporary_file(tmp_path):
     out = tmp_path / "toy" / "front.html"
-    text = R.write_front_page(out, "toy", floorplan_svg=SVG, summary=_summary(), verdict=VERDICT)
+    text = R.write_front_page(out, R.FrontPage("toy", floorplan_svg=SVG, summary=_summary(), verdict=VERDICT))
     assert out.read_text(encoding="utf-8") == text
     assert [p.name for p in out.parent.iterdir()] == ["front.html"]
 
@@ -221,7 +224,7 @@ def test_workflow_description_includes_each_front_page(tmp_path, monkeypatch):
     fronts = {}
     for ds in ("beta", "alpha"):
         path = Path("results") / ds / "front.html"
-        R.write_front_page(path, ds, floorplan_svg=SVG, summary=_summary(), verdict=VERDICT)
+        R.write_front_page(path, R.FrontPage(ds, floorplan_svg=SVG, summary=_summary(), verdict=VERDICT))
         fronts[ds] = type("Record", (), {"name": path.name, "path": path})()
     figure = type("Record", (), {"name": "quality_vs_k.png", "path": Path("results/alpha/q.png")})()
     categories = {
@@ -242,3 +245,178 @@ def test_workflow_description_includes_each_front_page(tmp_path, monkeypatch):
     assert alpha < beta < body.index("How the workflow works")
     assert body.count("<svg") == 2 and "No front page in this report" not in body
     assert "#app .prose.max-w-lg" in body  # the report's layout opened up for the pages
+
+
+# ------------------------------------------------------------------ links, k, escaping
+
+
+class _Links(HTMLParser):
+    """The page's links (href) and the text of each ``<code class="missing">``."""
+
+    def __init__(self):
+        super().__init__()
+        self.hrefs, self.missing, self._in_missing = [], [], False
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if tag == "a":
+            self.hrefs.append(a["href"])
+        elif tag == "code" and a.get("class") == "missing":
+            self._in_missing = True
+            self.missing.append("")
+
+    def handle_endtag(self, tag):
+        if tag == "code":
+            self._in_missing = False
+
+    def handle_data(self, data):
+        if self._in_missing:
+            self.missing[-1] += data
+
+
+def _links(page: str) -> _Links:
+    links = _Links()
+    links.feed(page)
+    return links
+
+
+def _answer_folder(root: Path, ds: str = "toy", skip=()) -> tuple[Path, dict]:
+    """results/<ds>/ with every file a front page links, but those in ``skip``; the
+    selection as selection.json names them (relative to ``root``, the working directory)."""
+    folder = root / "results" / ds
+    names = ["floorplan.svg", "floorplan.geojson", "floorplan.dxf", "floorplan.ifc", "map.pgm", "map.yaml",
+             "selection/scans.csv", "selection/recording/recording.bag", "selection/points.ply",
+             "selection/points.pcd", "summary.md"]  # fmt: skip
+    for name in names:
+        if name not in skip:
+            (folder / name).parent.mkdir(parents=True, exist_ok=True)
+            (folder / name).write_text("x")
+    sel = {"scans": f"results/{ds}/selection/scans.csv", "points": [f"results/{ds}/selection/points.ply",
+           f"results/{ds}/selection/points.pcd"], "recording": {"path": f"results/{ds}/selection/recording/recording.bag"}}  # fmt: skip
+    return folder, sel
+
+
+def test_every_file_the_page_names_is_a_link_that_resolves(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # the selection's paths are relative to the working directory
+    folder, sel = _answer_folder(tmp_path)
+    (tmp_path / "results" / "index.html").write_text("index")
+    files = R.answer_files(folder, sel)
+    assert [f.href for f in files] == [
+        "floorplan.svg", "floorplan.geojson", "floorplan.dxf", "floorplan.ifc", "map.pgm", "map.yaml",
+        "selection/scans.csv", "selection/recording/recording.bag", "selection/points.ply", "selection/points.pcd",
+        "summary.md",
+    ]  # fmt: skip
+    page = R.front_page(R.FrontPage("toy", floorplan_svg=SVG, files=files, report=R.report_file(folder),
+                                    scan_list=files[6]))  # fmt: skip
+    links = _links(page)
+    assert links.missing == ["../report.html"]  # no report made: named, not linked, and said so
+    assert "<code class=\"missing\">../report.html</code> (not made)" in page
+    assert "../index.html" in links.hrefs  # back to the index
+    for f in files:
+        assert f.href in links.hrefs, f.href
+    for href in links.hrefs:  # every link resolves from the page's folder
+        assert (folder / href).is_file(), href
+    assert links.hrefs.count("selection/scans.csv") == 2  # in the files and in the scans' table
+    # a report made since: linked too
+    (tmp_path / "results" / "report.html").write_text("report")
+    assert "../report.html" in _links(R.front_page(R.FrontPage("toy", floorplan_svg=SVG, report=R.report_file(folder)))).hrefs
+
+
+def test_a_missing_file_is_named_and_not_linked(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    folder, sel = _answer_folder(tmp_path, skip=("floorplan.ifc", "selection/points.pcd"))
+    page = R.front_page(R.FrontPage("toy", floorplan_svg=SVG, files=R.answer_files(folder, sel)))
+    links = _links(page)
+    assert sorted(links.missing) == ["floorplan.ifc", "selection/points.pcd"]
+    assert "floorplan.ifc" not in links.hrefs and "selection/points.pcd" not in links.hrefs
+    assert "floorplan.dxf" in links.hrefs
+    assert 'was not there when this page was written: it is named, not linked' in page
+
+
+def test_the_page_of_the_stage_outputs_links_what_exists(tmp_path, monkeypatch):
+    """write_front_page_of_files: links relative to results/<dataset>/, from the
+    selection's paths (relative to the working directory)."""
+    from floorscan.core.io import SCAN_INDEX, write_table
+    from floorscan.floorplan.plan import build_floorplan
+    from floorscan.floorplan.scans import write_plan
+    from floorscan.floorplan.svg import write_svg
+
+    monkeypatch.chdir(tmp_path)
+    folder, sel = _answer_folder(tmp_path, skip=("map.yaml",))
+    segments = pd.DataFrame([(0, 0, 6, 0), (6, 0.2, 0, 0.2), (6, 0, 6, 4), (0, 4, 0, 0)],
+                            columns=["x0", "y0", "x1", "y1"]).assign(n_inliers=100)  # fmt: skip
+    plan = build_floorplan(segments)
+    write_svg(plan, folder / "floorplan.svg")
+    write_plan(plan, folder / "plan_tables")
+    sel.update({"dataset": "toy", "ordering": "wall_coverage", "k": 3, "reason": "k = 3 by the rule", "n_kept": 30,
+                "n_recorded": 40})  # fmt: skip
+    sel["recording"].update(bytes_in=2_000_000, bytes_out=150_000)
+    (folder / "selection" / "selection.json").write_text(json.dumps(sel))
+    index = pd.DataFrame({"scan_id": range(40), "t_ns": range(40), "n_points": 10, "n_dropped": 0, "frame": "laser"})
+    write_table(index, folder / "scan_index.parquet", SCAN_INDEX, metadata=DETECTED)
+    write_table(pd.DataFrame({"scan_id": [0, 1]}), folder / "registration.parquet",
+                metadata={"verdict": json.dumps(VERDICT), "mode": "pose"})  # fmt: skip
+    page = R.write_front_page_of_files(
+        "results/toy/front.html", "toy", floorplan_svg="results/toy/floorplan.svg", plan="results/toy/plan_tables",
+        selection="results/toy/selection/selection.json", registration="results/toy/registration.parquet",
+        index="results/toy/scan_index.parquet",
+    )  # fmt: skip
+    links = _links(page)
+    assert sorted(links.missing) == ["../report.html", "map.yaml"]
+    for href in links.hrefs:
+        assert href == "../index.html" or (folder / href).is_file(), href
+    for name in ("floorplan.ifc", "floorplan.dxf", "map.pgm", "selection/scans.csv", "summary.md",
+                 "selection/recording/recording.bag", "selection/points.ply", "selection/points.pcd"):  # fmt: skip
+        assert name in links.hrefs, name
+
+
+def test_the_template_escapes_what_it_is_given(tmp_path):
+    """Autoescape: a dataset name, a description, a file's name and a verdict are text."""
+    page = R.front_page(R.FrontPage(
+        "a<b&c", floorplan_svg=SVG, description="<i>x</i>", verdict="GOOD: <b>ok</b>",
+        files=[OutputFile('odd"<name>', 'x"<y>.ifc', True)],
+    ))  # fmt: skip
+    assert "<title>a&lt;b&amp;c: floor plan</title>" in page and "<h2>a&lt;b&amp;c: floor plan</h2>" in page
+    assert 'id="front-a&lt;b&amp;c"' in page
+    assert "<p>&lt;i&gt;x&lt;/i&gt;</p>" in page and "GOOD: &lt;b&gt;ok&lt;/b&gt;" in page
+    assert 'href="x&#34;&lt;y&gt;.ifc"' in page and "odd&#34;&lt;name&gt;:" in page
+    assert "<i>" not in page and "<b>" not in page and "a<b" not in page
+    assert '<line x1="0" y1="0.05"' in page  # the plan's SVG alone passes as markup
+
+
+def test_the_page_says_why_k_differs_from_k95_and_k99_beside_them(tmp_path):
+    curve = pd.DataFrame({"k": [1, 2, 3, 4, 5, 76], "f1_5cm": [0.5, 0.8, 0.90, 0.91, 0.93, 0.93]})
+    answer = pd.DataFrame([{"plan": "recommended", "n_walls": 5}, {"plan": "all_scans_map", "n_walls": 6}])
+    reason = "k = 10 of 76 kept scans: the smallest k whose wall_coverage reaches 99 % of what all scans cover"
+    page = _page(tmp_path, k=10, k_reason=reason, answer=answer, answer_curve=curve)
+    why = re.search(r'<p class="note why-k">([^<]*)</p>', page).group(1)
+    assert why.startswith("k = 10 is more than the k95 = 3 and k99 = 5 of this plan&#39;s curve because")
+    assert reason in why and "the extra scans are a margin" in why
+    # beside the figures: after both tables with k95 / k99, before the rooms and what ingest detected
+    assert page.index("(k99)</th>") < page.index("Scans needed") < page.index('class="note why-k"') < page.index("What ingest detected")
+    assert page.count(reason) == 1  # said once, as the explanation
+    # fewer than k95 (trace0: k = 53, k99 = 221), from the summary when no answer curve
+    fewer = _page(tmp_path, k=2, k_reason="k = 2 by the rule")
+    assert "k = 2 is fewer than the k95 = 4 and k99 = 5 of the wall_coverage curve because" in fewer
+    assert "below 95 %" in fewer
+    # k equal to one of them: nothing to explain; the reason stays under the scans
+    same = _page(tmp_path, k=4, k_reason="k = 4 by the rule")
+    assert 'class="note why-k"' not in same and '<p class="note">k = 4 by the rule</p>' in same
+
+
+def test_the_map_page_links_its_files_and_the_index(tmp_path, monkeypatch):
+    from floorscan.figures.map_page import MapFrontPage, map_front_page
+
+    monkeypatch.chdir(tmp_path)
+    folder, _ = _answer_folder(tmp_path, "two<rooms", skip=("floorplan.dxf",))
+    info = {"image": "m.pgm", "path": "m.yaml", "width": 10, "height": 5, "resolution_m": 0.05, "origin_x_m": 0,
+            "origin_y_m": 0, "mode": "trinary", "negate": 0, "occupied_thresh": 0.65, "free_thresh": 0.196,
+            "n_occupied": 1, "n_free": 2, "n_unknown": 3}  # fmt: skip
+    page = map_front_page(MapFrontPage("two<rooms", floorplan_svg=SVG, info=info, files=R.answer_files(folder)))
+    links = _links(page)
+    assert links.missing == ["floorplan.dxf"] and "../index.html" in links.hrefs
+    assert [h for h in links.hrefs if h != "../index.html"] == [
+        "floorplan.svg", "floorplan.geojson", "floorplan.ifc", "map.pgm", "map.yaml", "summary.md"]
+    assert all((folder / h).is_file() for h in links.hrefs if h != "../index.html")
+    assert "<h2>two&lt;rooms: floor plan of an occupancy map</h2>" in page and "What was read" in page
+    assert "<script" not in page and "<!--" not in page

@@ -319,7 +319,7 @@ def test_a_plan_without_rooms_exports_no_room_features_counts_or_legend(tmp_path
 
 def test_front_page_lists_the_rooms_and_the_run_counts_them(tmp_path):
     from floorscan.figures.answer import plan_counts
-    from floorscan.figures.report import front_page
+    from floorscan.figures.report import FrontPage, front_page
     from floorscan.figures.room_table import read_plan_rooms
     from floorscan.floorplan.scans import write_plan
 
@@ -330,9 +330,10 @@ def test_front_page_lists_the_rooms_and_the_run_counts_them(tmp_path):
     assert [(r["name"], r["kind"]) for r in rooms] == [("Room 1", "room"), ("Corridor 1", "corridor")]
     assert [r["area_m2"] for r in rooms] == pytest.approx([10.83, 9.83])
     svg = write(rooms_plan(), tmp_path, "svg").read_text()
-    page = front_page("box", floorplan_svg=svg, rooms=rooms)
+    page = front_page(FrontPage("box", floorplan_svg=svg, rooms=rooms))
     assert "<h3>Rooms (2)</h3>" in page
     assert '<tr><td>Room 1</td><td>room</td><td class="num">10.8</td></tr>' in page
     assert '<th colspan="2">floor area</th><td class="num">20.7</td>' in page
-    assert "<h3>Rooms" not in front_page("box", floorplan_svg=svg, rooms=read_plan_rooms(tmp_path / "bare"))
+    assert "<h3>Rooms" not in front_page(FrontPage("box", floorplan_svg=svg, rooms=read_plan_rooms(tmp_path / "bare")))
     assert plan_counts(path) == " (6 walls, 2 rooms, 1 door)"
+

@@ -12,14 +12,15 @@ recording would list them.
 
 from __future__ import annotations
 
-import html
 import os
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from floorscan.core.files import atomic_path
 from floorscan.figures.answer import NOT_FROM_A_MAP, plan_counts
-from floorscan.figures.report import FRONT_STYLE, ROOT_CLASS, facts_table, inline_svg
-from floorscan.figures.room_table import read_plan_rooms, rooms_table_html
+from floorscan.figures.pages import OutputFile, render
+from floorscan.figures.report import INDEX, answer_files, inline_svg, report_file
+from floorscan.figures.room_table import read_plan_rooms
 
 def write_map_summary(
     path: str | os.PathLike, dataset: str, info: str | os.PathLike, floorplan_geojson: str | os.PathLike
@@ -61,12 +62,13 @@ def write_map_summary(
     return text
 
 
-def map_front_page(dataset: str, *, floorplan_svg: str, info: dict, rooms: list[dict] | None = None,
-                   n_walls: int | None = None, description: str = "") -> str:  # fmt: skip
-    """The front page of a map's plan as one self-contained HTML document, in the
-    style of a recording's (:func:`floorscan.figures.report.front_page`).
+@dataclass
+class MapFrontPage:
+    """What the front page of a map's plan shows, in the style of a recording's
+    (:class:`floorscan.figures.report.FrontPage`): given to its template as one object
+    (:func:`map_front_page`).
 
-    Parameters
+    Attributes
     ----------
     dataset : str
     floorplan_svg : str
@@ -77,6 +79,68 @@ def map_front_page(dataset: str, *, floorplan_svg: str, info: dict, rooms: list[
         :func:`floorscan.figures.room_table.read_plan_rooms`.
     n_walls : int, optional
     description : str
+    files : list of OutputFile
+        The plan's files and the map as read
+        (:func:`floorscan.figures.report.answer_files` without a selection).
+    index : OutputFile
+        The index of every dataset.
+    report : OutputFile, optional
+        Snakemake's report, linked when it exists.
+    """
+
+    dataset: str
+    floorplan_svg: str
+    info: dict
+    rooms: list[dict] | None = None
+    n_walls: int | None = None
+    description: str = ""
+    files: list[OutputFile] = field(default_factory=list)
+    index: OutputFile = field(default_factory=lambda: INDEX)
+    report: OutputFile | None = None
+
+    @property
+    def head(self) -> str:
+        return f"{self.dataset}: floor plan of an occupancy map"
+
+    @property
+    def plan_svg(self):
+        """The plan's SVG, checked and made fit to inline (:func:`inline_svg`)."""
+        from markupsafe import Markup
+
+        return Markup(inline_svg(self.floorplan_svg))
+
+    @property
+    def caption(self) -> str:
+        caption = "The plan of the map's walls and free space (walls, clutter dashed, rooms, doors)"
+        return caption + (f": {self.n_walls} walls." if self.n_walls is not None else ".")
+
+    @property
+    def read_rows(self) -> list[tuple[str, str, bool]]:
+        """What was read of the map: (label, text, shown as code)."""
+        info = self.info
+        kind = "ROS map_server map" if Path(info["image"]).name != Path(info["path"]).name else "map image"
+        return [
+            ("format", kind, False),
+            ("read from", str(info["path"]), True),
+            ("cells", f"{info['width']} x {info['height']} of {info['resolution_m']:g} m", False),
+            ("origin", f"({info['origin_x_m']:g}, {info['origin_y_m']:g}) m", False),
+            ("mode", f"{info['mode']}{', negated' if info['negate'] else ''}; occupied above "
+                     f"{info['occupied_thresh']:g}, free below {info['free_thresh']:g}", False),
+            ("occupied / free / unknown", f"{info['n_occupied']} / {info['n_free']} / {info['n_unknown']} cells", False),
+        ]  # fmt: skip
+
+    @property
+    def not_from_a_map(self) -> str:
+        return NOT_FROM_A_MAP[0].upper() + NOT_FROM_A_MAP[1:]
+
+
+def map_front_page(page: MapFrontPage) -> str:
+    """The front page of a map's plan as one self-contained HTML document: the template
+    ``map_front_page.html.j2`` given ``page``.
+
+    Parameters
+    ----------
+    page : MapFrontPage
 
     Returns
     -------
@@ -85,35 +149,9 @@ def map_front_page(dataset: str, *, floorplan_svg: str, info: dict, rooms: list[
     Raises
     ------
     ValueError
-        ``floorplan_svg`` is not an SVG or holds a script.
+        ``page.floorplan_svg`` is not an SVG or holds a script.
     """
-    esc = html.escape
-    head = f"{dataset}: floor plan of an occupancy map"
-    parts = [f'<div class="{ROOT_CLASS}" id="front-{esc(dataset, quote=True)}">', f"<h2>{esc(head)}</h2>"]
-    if description:
-        parts.append(f"<p>{esc(description)}</p>")
-    caption = "The plan of the map's walls and free space (walls, clutter dashed, rooms, doors)"
-    caption += f": {n_walls} walls." if n_walls is not None else "."
-    parts += ['<div class="top">', f'<figure class="plan">{inline_svg(floorplan_svg)}<figcaption>{esc(caption)}</figcaption></figure>',
-              '<div class="facts">']  # fmt: skip
-    rows = [
-        ("format", esc("ROS map_server map" if Path(info["image"]).name != Path(info["path"]).name else "map image")),
-        ("read from", f"<code>{esc(info['path'])}</code>"),
-        ("cells", esc(f"{info['width']} x {info['height']} of {info['resolution_m']:g} m")),
-        ("origin", esc(f"({info['origin_x_m']:g}, {info['origin_y_m']:g}) m")),
-        ("mode", esc(f"{info['mode']}{', negated' if info['negate'] else ''}; occupied above "
-                     f"{info['occupied_thresh']:g}, free below {info['free_thresh']:g}")),
-        ("occupied / free / unknown", esc(f"{info['n_occupied']} / {info['n_free']} / {info['n_unknown']} cells")),
-    ]  # fmt: skip
-    parts += ["<h3>What was read</h3>", facts_table(rows)]
-    parts += rooms_table_html(rooms)
-    parts += ["<h3>What a map does not give</h3>", f"<p>{esc(NOT_FROM_A_MAP[0].upper() + NOT_FROM_A_MAP[1:])}.</p>"]
-    parts += ["</div></div>", "</div>"]
-    body = "\n".join(parts)
-    return (
-        '<!DOCTYPE html>\n<html lang="en">\n<head>\n<meta charset="utf-8">\n'
-        f"<title>{esc(head)}</title>\n<style>{FRONT_STYLE}</style>\n</head>\n<body>\n{body}\n</body>\n</html>\n"
-    )
+    return render("map_front_page.html.j2", page)
 
 
 def write_map_front_page(
@@ -126,7 +164,8 @@ def write_map_front_page(
     Parameters
     ----------
     path : path
-        ``results/<dataset>/front.html``.
+        ``results/<dataset>/front.html``; the plan's files and the map are linked
+        relative to its folder, those that exist now.
     dataset : str
     floorplan_svg : path
         ``floorplan.svg``.
@@ -144,10 +183,12 @@ def write_map_front_page(
     from floorscan.core.plan_tables import plan_faces_and_walls
     from floorscan.ingest.occupancy_map import read_map_info
 
-    text = map_front_page(
+    page_dir = Path(path).parent
+    text = map_front_page(MapFrontPage(
         dataset, floorplan_svg=Path(floorplan_svg).read_text(encoding="utf-8"), info=read_map_info(info),
         rooms=read_plan_rooms(plan), n_walls=plan_faces_and_walls(plan)[1], description=description,
-    )  # fmt: skip
+        files=answer_files(page_dir), report=report_file(page_dir),
+    ))  # fmt: skip
     with atomic_path(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
     return text

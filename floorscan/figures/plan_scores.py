@@ -6,8 +6,6 @@ scores them (``evaluation/answer_scores.csv``, the room scores joined:
 
 from __future__ import annotations
 
-import html
-
 
 #: Rows of the answer's table: the column of ``answer_scores.csv`` and its label.
 ANSWER_ROWS = (
@@ -23,9 +21,10 @@ ANSWER_ROWS = (
 )  # fmt: skip
 
 
-def answer_html(answer, curve=None) -> list[str]:
+def answer_table(answer, curve=None) -> dict | None:
     """"How good the plan is": the recommended plan beside the plan of all kept scans
-    and how many scans of the default ordering its plan needs (k95 and k99).
+    and how many scans of the default ordering its plan needs (k95 and k99), as cells
+    for the front page's template.
 
     Parameters
     ----------
@@ -36,39 +35,58 @@ def answer_html(answer, curve=None) -> list[str]:
 
     Returns
     -------
-    list of str
-        HTML pieces; empty when neither plan was scored.
+    dict or None
+        ``header`` (list of str), ``rows`` (list of (label, list of cell texts)),
+        ``k95`` and ``k99`` (int or None: the curve's); None when neither plan was
+        scored.
     """
     import pandas as pd
-
-    from floorscan.score.answer_curve import k_reaching
 
     table = answer if isinstance(answer, pd.DataFrame) else pd.read_csv(answer)
     by_plan = {row["plan"]: row for row in table.to_dict("records")}
     plans = [p for p in ("recommended", "all_scans_map") if p in by_plan]
     if not plans:
-        return []
-    head = "".join(f"<th>{html.escape(h)}</th>" for h in ("", "this plan", "all kept scans")[: len(plans) + 1])
+        return None
     rows = []
     for col, label in ANSWER_ROWS:
         values = [by_plan[p].get(col) for p in plans]
         if all(v is None or (isinstance(v, float) and v != v) for v in values):
             continue
-        cells = "".join(f'<td class="num">{_answer_cell(col, v)}</td>' for v in values)
-        rows.append(f"<tr><th>{html.escape(label)}</th>{cells}</tr>")
-    if curve is not None:
-        c = curve if isinstance(curve, pd.DataFrame) else pd.read_csv(curve)
-        for level in (0.95, 0.99):
-            k = k_reaching(c, level)
-            if k is not None:
-                label = f"scans for {round(level * 100)} % of the all-scan plan's F1 (k{round(level * 100)})"
-                rows.append(f'<tr><th>{html.escape(label)}</th><td class="num">{k}</td></tr>')
-    return ["<h4>How good the plan is</h4>", f'<table class="facts-table"><tr>{head}</tr>{"".join(rows)}</table>']
+        rows.append((label, [_answer_cell(col, v) for v in values]))
+    ks = answer_curve_k(curve)
+    for level, k in ks.items():
+        if k is not None:
+            rows.append((f"scans for {level} % of the all-scan plan's F1 (k{level})", [f"{k}"]))
+    return {"header": ["", "this plan", "all kept scans"][: len(plans) + 1], "rows": rows,
+            "k95": ks.get(95), "k99": ks.get(99)}  # fmt: skip
+
+
+def answer_curve_k(curve) -> dict:
+    """k95 and k99 of the answer's curve.
+
+    Parameters
+    ----------
+    curve : pandas.DataFrame, path or None
+        ``answer_curve.csv``.
+
+    Returns
+    -------
+    dict
+        ``{95: k or None, 99: k or None}``; empty for no curve.
+    """
+    if curve is None:
+        return {}
+    import pandas as pd
+
+    from floorscan.score.answer_curve import k_reaching
+
+    c = curve if isinstance(curve, pd.DataFrame) else pd.read_csv(curve)
+    return {round(level * 100): k_reaching(c, level) for level in (0.95, 0.99)}
 
 
 def _answer_cell(col: str, value) -> str:
     if value is None or (isinstance(value, float) and value != value):
-        return "&ndash;"
+        return "\u2013"
     if col.startswith("n_"):
         return f"{int(value)}"
     return f"{100 * float(value):.0f} %"

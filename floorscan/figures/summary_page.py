@@ -65,23 +65,44 @@ def summary_table_html(
     str
     """
     esc = html.escape
+    table = summary_rows(summary, n_kept, ordering, extractor)
     out = [
         "<table>",
-        "<thead><tr>" + "".join(f"<th>{esc(h)}</th>" for _, h in SUMMARY_COLUMNS) + "</tr></thead>",
+        "<thead><tr>" + "".join(f"<th>{esc(h)}</th>" for h in table["header"]) + "</tr></thead>",
         "<tbody>",
     ]
+    for cls, cells in table["rows"]:
+        tds = "".join(f'<td class="num">{esc(c)}</td>' if numeric else f"<td>{esc(c)}</td>" for numeric, c in cells)
+        attr = f' class="{cls}"' if cls else ""
+        out.append(f"<tr{attr}>{tds}</tr>")
+    out += ["</tbody>", "</table>"]
+    return "\n".join(out)
+
+
+def summary_rows(
+    summary: "pd.DataFrame", n_kept: int | None = None, ordering: str = "", extractor: str = ""
+) -> dict:
+    """The cells of :func:`summary_table_html`, for a template: the header, and per row
+    its classes (``recommended``, ``bound``) and its cells (numeric or not, text).
+
+    Parameters
+    ----------
+    summary : pandas.DataFrame
+    n_kept : int, optional
+    ordering, extractor : str
+
+    Returns
+    -------
+    dict
+        ``header``: list of str; ``rows``: list of (str, list of (bool, str)).
+    """
+    rows = []
     for r in summary.to_dict("records"):
         cls = []
         if ordering and r.get("ordering") == ordering and (not extractor or r.get("extractor") == extractor):
             cls.append("recommended")
         if r.get("ordering") == "oracle":
             cls.append("bound")
-        cells = [
-            f"<td>{esc(summary_cell(r, col, n_kept))}</td>" if col in ("extractor", "ordering")
-            else f'<td class="num">{esc(summary_cell(r, col, n_kept))}</td>'
-            for col, _ in SUMMARY_COLUMNS
-        ]
-        attr = f' class="{" ".join(cls)}"' if cls else ""
-        out.append(f"<tr{attr}>" + "".join(cells) + "</tr>")
-    out += ["</tbody>", "</table>"]
-    return "\n".join(out)
+        cells = [(col not in ("extractor", "ordering"), summary_cell(r, col, n_kept)) for col, _ in SUMMARY_COLUMNS]
+        rows.append((" ".join(cls), cells))
+    return {"header": [h for _, h in SUMMARY_COLUMNS], "rows": rows}

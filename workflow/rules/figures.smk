@@ -246,6 +246,12 @@ EVALUATION_OUTPUTS.extend(
 )
 
 
+# The answer's files a front page links, under results/<dataset>/ (floorscan.figures.report.answer_files):
+# inputs of its rule, so that they exist when it is written and it links them.
+FRONT_PAGE_LINKED = ["floorplan.dxf", "floorplan.ifc", "map.pgm", "map.yaml"]
+SCAN_FRONT_PAGE_LINKED = [f"selection/{name}" for name in ("scans.csv", "points.ply", "points.pcd", "recording")]
+
+
 def front_page_inputs(wildcards):
     ds = wildcards.dataset
     inputs = {
@@ -256,6 +262,8 @@ def front_page_inputs(wildcards):
         "selection": f"results/{ds}/selection/selection.json",
         "registration": f"results/{ds}/registration.parquet",
         "index": f"results/{ds}/scan_index.parquet",
+        # the answer's files the page links (figures.report.answer_files): made before it
+        "linked": [f"results/{ds}/{name}" for name in FRONT_PAGE_LINKED + SCAN_FRONT_PAGE_LINKED],
     }
     if evaluate_by_default():
         inputs["summary"] = f"results/{ds}/summary.parquet"
@@ -307,6 +315,7 @@ rule map_front_page:
         floorplan_geojson="results/{dataset}/floorplan.geojson",
         plan="results/{dataset}/plan_tables",
         info="results/{dataset}/map/map.json",
+        linked=expand("results/{{dataset}}/{name}", name=FRONT_PAGE_LINKED),  # linked by the page
     output:
         front=report(
             "results/{dataset}/front.html",
