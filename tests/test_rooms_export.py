@@ -337,3 +337,33 @@ def test_front_page_lists_the_rooms_and_the_run_counts_them(tmp_path):
     assert "<h3>Rooms" not in front_page(FrontPage("box", floorplan_svg=svg, rooms=read_plan_rooms(tmp_path / "bare")))
     assert plan_counts(path) == " (6 walls, 2 rooms, 1 door)"
 
+
+def _text_sizes(el, size=None, scale=1.0, out=None):
+    """Each text of an SVG element tree with its size as drawn, px of the viewBox: its
+    own or an ancestor's font-size times its ancestors' scale()."""
+    import re
+
+    out = [] if out is None else out
+    m = re.search(r"scale\(([\d.]+)", el.get("transform", ""))
+    scale *= float(m.group(1)) if m else 1.0
+    size = float(el.get("font-size", size or 0))
+    if el.tag.endswith("}text") or el.tag.endswith("}tspan"):
+        own = "".join(t for t in [el.text] if t and t.strip())
+        if own:
+            out.append((own.strip(), size * scale))
+    for child in el:
+        _text_sizes(child, size, scale, out)
+    return out
+
+
+def test_the_drawings_text_is_readable_when_the_page_shows_it_900_px_wide(tmp_path):
+    """Issue 47: room labels, legend, title and scale bar at least 11 px when the plan is
+    shown 900 px wide (its longer side 1000 px of the viewBox); before, 7 to 10 px."""
+    root = ET.parse(write(rooms_plan(), tmp_path, "svg")).getroot()
+    vb_w = float(root.get("viewBox").split()[2])
+    sizes = _text_sizes(root)
+    names = {text for text, _ in sizes}
+    assert {"Room 1", "Corridor 1", "wall axis", "door (opening in a wall, its leaf)", "map frame (m)"} <= names
+    assert any(t.endswith(" m") for t in names) and any(t.endswith("m\u00b2") for t in names)
+    small = [(t, round(s * 900 / vb_w, 1)) for t, s in sizes if s * 900 / vb_w < 11]
+    assert not small, small

@@ -31,11 +31,20 @@ if TYPE_CHECKING:
     from floorscan.floorplan.plan import FloorPlan
 
 
+#: Size of the text and of the marks around the plan (title, legend, scale bar, axes)
+#: against the 12 px they were laid out for: the plan's longer side is 1000 px of the
+#: viewBox, so a page that shows the drawing 600 to 900 px wide shows 12 px text at 7 to
+#: 11 px; 1.6 times it is 11 to 17 px, readable at 100 % zoom.
+SVG_TEXT_SCALE = 1.6
+#: Room labels: the name and the area under it, px of the viewBox (inside the plan,
+#: where a larger label no longer fits a small room).
+SVG_ROOM_LABEL_PX, SVG_ROOM_AREA_PX = 18.0, 15.0
 #: SVG layout, pixels of the viewBox (the SVG scales to the window): the plan's longer
 #: side, the least canvas width (title, scale bar and legend fit), margins and bands.
-SVG_PLAN_PX, SVG_MIN_WIDTH_PX, SVG_MARGIN_PX, SVG_HEAD_PX, SVG_FOOT_PX = 1000.0, 720.0, 20.0, 56.0, 84.0
+SVG_PLAN_PX, SVG_MARGIN_PX = 1000.0, 20.0
+SVG_MIN_WIDTH_PX, SVG_HEAD_PX, SVG_FOOT_PX = 720.0 * SVG_TEXT_SCALE, 56.0 * SVG_TEXT_SCALE, 84.0 * SVG_TEXT_SCALE
 #: A legend row of a kind of room or of doors, pixels: the foot band grows by one each.
-SVG_LEGEND_ROW_PX = 19.0
+SVG_LEGEND_ROW_PX = 19.0 * SVG_TEXT_SCALE
 #: Seconds since the epoch from which a time stamp is a date (2000-01-01): below it the
 #: stamps count from the recording's start or from nothing (a CARMEN log, a map).
 ABSOLUTE_TIME_S = 946_684_800
@@ -136,6 +145,7 @@ def _write_svg(
             f"+x axis at {georeference.heading_deg} degrees clockwise from north."
         )
     px = 1.0 / s  # one pixel, metres
+    T = SVG_TEXT_SCALE
     out = [
         '<?xml version="1.0" encoding="UTF-8"?>',
         f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="100%" height="100%" '
@@ -144,13 +154,13 @@ def _write_svg(
         f"<title>{_xml(title)}</title>",
         f"<desc>{_xml(desc)}</desc>",
         f'<rect id="background" width="{width:.2f}" height="{height:.2f}" fill="#ffffff"/>',
-        f'<text id="title" x="{m:.2f}" y="26" font-size="18" font-weight="bold">{_xml(title)}</text>',
-        f'<text id="subtitle" x="{m:.2f}" y="45" font-size="12" fill="#444444">{_xml(sub)}</text>',
+        f'<text id="title" x="{m:.2f}" y="{26 * T:g}" font-size="{18 * T:g}" font-weight="bold">{_xml(title)}</text>',
+        f'<text id="subtitle" x="{m:.2f}" y="{45 * T:g}" font-size="{12 * T:g}" fill="#444444">{_xml(sub)}</text>',
     ]
     if len(plan.rooms) or len(plan.doors):
         rooms, doors = count_text(len(plan.rooms), "room"), count_text(len(plan.doors), "door")
         summary = f"{rooms}, {floor_area_m2(plan):.1f} m\u00b2 \u00b7 {doors}"
-        out.append(f'<text id="rooms-summary" x="{width - m:.2f}" y="26" font-size="12" text-anchor="end" '
+        out.append(f'<text id="rooms-summary" x="{width - m:.2f}" y="{26 * T:g}" font-size="{12 * T:g}" text-anchor="end" '
                    f'fill="#444444">{_xml(summary)}</text>')
     out.append(f'<g id="plan" transform="matrix({s:.10g} 0 0 {-s:.10g} {tx:.6f} {ty:.6f})">')
     out += _svg_rooms(exports, px)
@@ -186,10 +196,10 @@ def _write_svg(
     out += _svg_doors(plan, px)
     out.append("</g>")
     out += _svg_room_labels(exports, s, tx, ty)
-    out += _svg_scale_bar(s, m, height - 30)
-    out += _svg_frame_axes(m + 250, height - 30, georeference)
-    legend_y = height - (80 if len(clutter) else 74) - SVG_LEGEND_ROW_PX * n_extra
-    out += _svg_legend(width - m - 270, legend_y, with_clutter=bool(len(clutter)), room_kinds=kinds,
+    out += _svg_scale_bar(s, m, height - 30 * T)
+    out += _svg_frame_axes(m + 250 * T, height - 30 * T, georeference)
+    legend_y = height - (80 if len(clutter) else 74) * T - SVG_LEGEND_ROW_PX * n_extra
+    out += _svg_legend(width - m - 300 * T, legend_y, with_clutter=bool(len(clutter)), room_kinds=kinds,
                        with_doors=bool(len(plan.doors)))
     out.append("</svg>")
     with atomic_path(path) as tmp:
@@ -200,12 +210,14 @@ def _svg_scale_bar(s: float, x: float, y: float) -> list[str]:
     """A scale bar of a round length (at most 200 px) at ``(x, y)`` px, ``s`` px a metre."""
     length = _scale_bar_length(200.0 / s)
     bar = length * s
+    t = 5 * SVG_TEXT_SCALE  # half a tick
     return [
-        f'<g id="scale-bar" transform="translate({x:.2f} {y:.2f})" stroke="#000000" stroke-width="2">',
+        f'<g id="scale-bar" transform="translate({x:.2f} {y:.2f})" stroke="#000000" stroke-width="{2 * SVG_TEXT_SCALE:g}">',
         f'<line x1="0" y1="0" x2="{bar:.4f}" y2="0"/>',
-        '<line x1="0" y1="-5" x2="0" y2="5"/>',
-        f'<line x1="{bar:.4f}" y1="-5" x2="{bar:.4f}" y2="5"/>',
-        f'<text x="{bar / 2:.4f}" y="-8" font-size="12" text-anchor="middle" stroke="none">{length:g} m</text>',
+        f'<line x1="0" y1="{-t:g}" x2="0" y2="{t:g}"/>',
+        f'<line x1="{bar:.4f}" y1="{-t:g}" x2="{bar:.4f}" y2="{t:g}"/>',
+        f'<text x="{bar / 2:.4f}" y="{-8 * SVG_TEXT_SCALE:g}" font-size="{12 * SVG_TEXT_SCALE:g}" text-anchor="middle" '
+        f'stroke="none">{length:g} m</text>',
         "</g>",
     ]
 
@@ -228,7 +240,7 @@ def _svg_frame_axes(x: float, y: float, georeference: Georeference | None) -> li
     """The map frame's x (right) and y (up) axes at ``(x, y)`` px, and with a
     georeference the direction of true north in the map frame (``(cos h, sin h)``,
     ``h`` the heading; flipped to SVG's y down)."""
-    out = [f'<g id="frame-axes" transform="translate({x:.2f} {y:.2f})">']
+    out = [f'<g id="frame-axes" transform="translate({x:.2f} {y:.2f}) scale({SVG_TEXT_SCALE:g})">']
     out += _svg_arrow(32.0, 0.0, "x", "#000000")
     out += _svg_arrow(0.0, -32.0, "y", "#000000")
     if georeference is not None:
@@ -326,13 +338,14 @@ def _svg_room_labels(exports: PlanExports, s: float, tx: float, ty: float) -> li
     r = exports.plan.rooms
     if not len(r):
         return []
-    out = ['<g id="room-labels" font-size="12" text-anchor="middle" fill="#333333">']
+    out = [f'<g id="room-labels" font-size="{SVG_ROOM_LABEL_PX:g}" text-anchor="middle" fill="#333333">']
     for name, area, (x, y) in zip(r["name"].tolist(), r["area_m2"].tolist(), exports.room_labels.tolist()):
         if x != x:  # NaN: no polygon
             continue
         lx, ly = tx + s * x, ty - s * y
         out.append(
-            f'<text x="{lx:.2f}" y="{ly - 2:.2f}">{_xml(str(name))}<tspan x="{lx:.2f}" dy="13" font-size="10">'
+            f'<text x="{lx:.2f}" y="{ly - 2:.2f}">{_xml(str(name))}<tspan x="{lx:.2f}" dy="{SVG_ROOM_AREA_PX + 3:g}" '
+            f'font-size="{SVG_ROOM_AREA_PX:g}">'
             f"{float(area):.1f} m\u00b2</tspan></text>"
         )
     out.append("</g>")
@@ -342,7 +355,7 @@ def _svg_room_labels(exports: PlanExports, s: float, tx: float, ty: float) -> li
 def _svg_legend(
     x: float, y: float, with_clutter: bool = False, room_kinds: Sequence[str] = (), with_doors: bool = False
 ) -> list[str]:
-    """The legend at ``(x, y)`` px: the kinds of things the plan draws (clutter only
+    """The legend at ``(x, y)`` px, scaled by :data:`SVG_TEXT_SCALE`: the kinds of things the plan draws (clutter only
     when the plan has some; a row per kind of room and one for doors only when the
     plan has them, :data:`SVG_LEGEND_ROW_PX` apart)."""
     clutter = [
@@ -350,17 +363,18 @@ def _svg_legend(
         '<text x="30" y="69">clutter (furniture, not a wall)</text>',
     ] if with_clutter else []  # fmt: skip
     rows, base = [], (69.0 if with_clutter else 50.0)
+    row = SVG_LEGEND_ROW_PX / SVG_TEXT_SCALE  # the group is scaled by SVG_TEXT_SCALE
     for kind in room_kinds:
-        base += SVG_LEGEND_ROW_PX
+        base += row
         fill = SVG_ROOM_FILLS.get(kind, SVG_ROOM_FILL_OTHER)
         rows += [f'<rect x="0" y="{base - 10:g}" width="22" height="10" fill="{fill}" stroke="#bbbbbb" '
                  'stroke-width="0.6"/>', f'<text x="30" y="{base:g}">{_xml(SVG_ROOM_LABELS.get(kind, kind))}</text>']
     if with_doors:
-        base += SVG_LEGEND_ROW_PX
+        base += row
         rows += [f'<path d="M 2 {base:g} L 2 {base - 12:g} A 12 12 0 0 1 14 {base:g} Z" fill="none" '
                  f'stroke="{SVG_DOOR_COLOUR}" stroke-width="1.2"/>', f'<text x="30" y="{base:g}">door (opening in a wall, its leaf)</text>']
     return [
-        f'<g id="legend" transform="translate({x:.2f} {y:.2f})" font-size="12">',
+        f'<g id="legend" transform="translate({x:.2f} {y:.2f}) scale({SVG_TEXT_SCALE:g})" font-size="12">',
         '<rect x="0" y="0" width="22" height="10" fill="#8c8c8c" stroke="#333333" stroke-width="0.6"/>',
         '<text x="30" y="10">wall (both faces seen)</text>',
         '<rect x="0" y="20" width="22" height="10" fill="#dddddd" stroke="#333333" stroke-width="0.6" '
