@@ -88,8 +88,8 @@ rule evaluation:
 # The answer, wherever the run starts (floorscan.figures.answer): the datasets of the
 # run's targets, when it ends, when it fails (each failed recording's error; the others
 # go on: `keep-going` in the profile) and when there was nothing to be done (Snakemake
-# runs no hook then, so an exit handler of the main process prints it). A run of
-# several recordings also writes results/index.html.
+# runs no hook then, so an exit handler of the main process prints it). Every run
+# rewrites results/index.html: its datasets, then the others results/ holds.
 _ANSWER = {"printed": False}
 _WORKDIR = Path.cwd()  # the working directory: an exit handler runs after Snakemake has left it
 
@@ -108,9 +108,10 @@ def print_answer(failed_jobs=()):
         if ds in datasets and ds not in failed:
             where = f"rule {job.rule.name} failed; its log: {', '.join(map(str, job.log))}"
             failed[ds] = (failure_text(ds) or where) if len(datasets) > 1 else f"{where} (the error is above)"
-    if len(datasets) > 1:
-        statuses = [{**dataset_status(ds), "failed": failed[ds]} if ds in failed else dataset_status(ds) for ds in datasets]
-        write_index(statuses, "results/index.html")
+    # results/index.html: this run's datasets, then every other one results/ holds a page of
+    statuses = [{**dataset_status(ds), "failed": failed[ds]} if ds in failed else dataset_status(ds) for ds in datasets]
+    earlier = sorted({p.parent.name for p in Path("results").glob("*/front.html")} - set(datasets))
+    write_index(statuses + [dataset_status(ds) for ds in earlier], "results/index.html")
     command = ""
     if isinstance(config.get("path"), str):  # the run's own paths and config files, quoted for a shell
         import shlex

@@ -184,6 +184,9 @@ def test_run_prints_progress_and_the_answer_from_anywhere(tmp_path):
     assert f"{wd}/results/demo/floorplan.{{geojson,svg,dxf,ifc}}" in res.stdout  # from the repository, not cwd
     assert "Building DAG" not in res.stdout + res.stderr and "SNAKEMAKE" not in res.stdout
     assert "Building DAG of jobs" in (wd / ".snakemake" / "floorscan" / "run.log").read_text()
+    # one dataset's run writes the index too: the front page's link back to it resolves
+    index = (wd / "results" / "index.html").read_text()
+    assert 'href="demo/front.html"' in index and 'href="../index.html"' in (wd / "results" / "demo" / "front.html").read_text()
     # again, nothing to be done: the answer still, though the exit handler runs outside the workflow's folder
     again = floorscan("run")
     assert again.returncode == 0, again.stdout + again.stderr
