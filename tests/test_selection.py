@@ -109,12 +109,13 @@ def test_raster_size_follows_the_cells_hit_not_the_bounding_box():
                       zip(lo, rng.uniform(0.5, 6, 24), rng.uniform(0.5, 6, 24))], dtype=object)
     cov = RasterCoverage(geoms, 0.05)
     bbox_cells = (1010 / 0.05) ** 2
-    # each cluster spans at most 10 m = 200 cells: at most 2 x 2 tiles of 256 cells
-    assert len(cov.tiles) <= 8
-    assert cov.covered.size == len(cov.tiles) * TILE**2 <= 8 * TILE**2 < bbox_cells / 500
-    # a box's runs: one per row it covers and tile it crosses (<= 2 tiles across)
+    # each cluster spans at most 10 m = 200 cells, so at most `across` tiles a side
+    across = -(-200 // TILE) + 1
+    assert len(cov.tiles) <= 2 * across**2
+    assert cov.covered.size == len(cov.tiles) * TILE**2 <= 2 * across**2 * TILE**2 < bbox_cells / 500
+    # a box's runs: one per row it covers and tile it crosses (<= 6 m = 120 cells wide)
     rows = np.ceil(np.array([shapely.bounds(g)[3] - shapely.bounds(g)[1] for g in geoms]) / 0.05) + 1
-    assert np.all(cov.run_stop - cov.run_start <= 2 * rows)
+    assert np.all(cov.run_stop - cov.run_start <= (-(-120 // TILE) + 1) * rows)
     assert len(cov.run_row) < cov.counts.sum() / 20
     cells = [set(cov.cells_of(j).tolist()) for j in range(len(geoms))]
     assert [len(c) for c in cells] == cov.counts.tolist()

@@ -44,9 +44,10 @@ import shapely
 
 
 #: Side of a raster tile, cells: the union ``U`` is kept only in the tiles some scan
-#: touches (a tile of 256 cells is 12.8 m at the default 5 cm), and a run of a scan's
-#: cells never crosses a tile's edge.
-TILE = 256
+#: touches (a tile of 128 cells is 6.4 m at the default 5 cm), and a run of a scan's
+#: cells never crosses a tile's edge. A wider tile makes fewer runs of a large scan and
+#: a longer row to sum again when a scan is added.
+TILE = 128
 
 
 class RasterCoverage:
@@ -118,9 +119,17 @@ class RasterCoverage:
             self.counts[a : a + chunk] = cnt
         self.tiles = np.unique(np.concatenate([np.unique(k) for k in key] or [np.zeros(0, np.int64)]))
         dtype = np.int32 if len(self.tiles) * TILE < 2**31 else np.int64
+        bands = []
         for i, k in enumerate(key):
             row[i] = np.searchsorted(self.tiles, k).astype(dtype) * TILE + row[i]
             key[i] = None
+            bands.append(self._bands(row[i], runs_per_scan[i * chunk : (i + 1) * chunk]))
+        # each scan's rows of `covered` in each tile it touches: [band_lo, band_hi)
+        band_count = np.concatenate([b[2] for b in bands]) if bands else np.zeros(0, np.int64)
+        self.band_lo = np.concatenate([b[0] for b in bands]) if bands else np.zeros(0, dtype)
+        self.band_hi = np.concatenate([b[1] for b in bands]) if bands else np.zeros(0, dtype)
+        self.band_stop = np.cumsum(band_count)
+        self.band_start = self.band_stop - band_count
         # the run's row of `covered`, its first column there and its length
         self.run_row = np.concatenate(row) if row else np.zeros(0, dtype)
         self.run_col = np.concatenate(col) if col else np.zeros(0, np.int16)
@@ -129,6 +138,19 @@ class RasterCoverage:
         self.run_start = self.run_stop - runs_per_scan
         self.covered = np.zeros((len(self.tiles) * TILE, TILE), dtype=bool)
         self._prefix = np.zeros((len(self.tiles) * TILE, TILE + 1), dtype=np.int16)
+
+    @staticmethod
+    def _bands(run_row: np.ndarray, runs_per_scan: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The first and past-the-last row of ``covered`` of each (scan, tile) of runs
+        laid out by scan, by scan, and the number of tiles of each scan."""
+        owner = np.repeat(np.arange(len(runs_per_scan)), runs_per_scan)
+        key = owner * (int(run_row.max(initial=0)) // TILE + 1) + run_row // TILE
+        order = np.argsort(key, kind="stable")
+        starts, _, _ = runs(key[order])
+        rows = run_row[order]
+        lo = np.minimum.reduceat(rows, starts) if len(rows) else rows
+        hi = np.maximum.reduceat(rows, starts) + 1 if len(rows) else rows
+        return lo, hi, np.bincount(owner[order][starts], minlength=len(runs_per_scan))
 
     def _rasterize(self, geoms: np.ndarray) -> tuple[np.ndarray, ...]:
         """The runs of ``geoms``: tile key, row, first column, length and scan (a position
@@ -259,8 +281,9 @@ class RasterCoverage:
         if self.counts[j] == 0:
             return
         self.covered.reshape(-1)[self.cells_of(j)] = True
-        rows = np.unique(self._runs(j)[0])
-        self._prefix[rows, 1:] = np.cumsum(self.covered[rows], axis=1, dtype=np.int16)
+        a, b = self.band_start[j], self.band_stop[j]
+        for lo, hi in zip(self.band_lo[a:b].tolist(), self.band_hi[a:b].tolist()):
+            np.cumsum(self.covered[lo:hi], axis=1, dtype=np.int16, out=self._prefix[lo:hi, 1:])
 
     def reset(self) -> None:
         """Empty the union (the scans' cells are kept), to order the same scans again."""
