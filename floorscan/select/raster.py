@@ -69,9 +69,9 @@ class RasterCoverage:
     counts : (S,) int64 ndarray
         Cells of each scan.
     tiles : (N,) int64 ndarray
-        The tiles some scan touches (``tile_row * tiles_per_row + tile_col`` of
-        :data:`TILE` x :data:`TILE` cells), ascending; tile ``t`` is slot ``t``'s
-        position here.
+        The tiles some scan touches, as ``tile_row * _tiles_per_row + tile_col`` on
+        the grid of :data:`TILE` x :data:`TILE` cells anchored at ``(x0, y0)``,
+        ascending; a tile's slot is its position here.
     covered : (N * TILE, TILE) bool ndarray
         The union ``U``: row ``slot * TILE + r`` is row ``r`` of the slot's tile.
 
@@ -81,10 +81,10 @@ class RasterCoverage:
     even-odd rule over all rings, half-open in y and x, vectorised over all scans).
     A scan is held as runs, the cells of one raster row within one tile, not as cells,
     and the union only in the tiles the scans touch; its row prefix sums make a gain a
-    sum over the scan's runs. Memory: 8 bytes per run (16 while rasterising) and 3 bytes
-    per cell of a touched tile, whatever the site's bounding box. Areas are integer cell counts, so
-    gains compare exactly: no float ties. Cell numbers (:meth:`cells_of`) are
-    ``covered.ravel()`` positions.
+    sum over the scan's runs. Memory: 8 bytes per run (16 while rasterising) and 3
+    bytes per cell of a touched tile, whatever the site's bounding box. Areas are
+    integer cell counts, so gains compare exactly: no float ties. Cell numbers
+    (:meth:`cells_of`) are ``covered.ravel()`` positions.
     """
 
     def __init__(self, geometries: Sequence, raster_m: float = 0.05, chunk: int = 128):
