@@ -19,10 +19,8 @@ from floorscan.core.occupancy import (
     PGM_FREE,
     PGM_OCCUPIED,
     PGM_UNKNOWN,
-    OccupancyGrid,
     OccupancyParams,
     _sample_cells,
-    logit,
     map_image,
     occupancy_grid,
     read_grid,
@@ -261,17 +259,3 @@ def test_bad_settings_and_empty_input_are_refused():
         occupancy_grid([(np.zeros(2), np.empty((0, 2)))])
     with pytest.raises(ValueError, match="not finite"):
         occupancy_grid([(np.zeros(2), np.array([[np.nan, 1.0]]))])
-
-
-def test_classes_by_row_blocks_equal_the_whole_log_odds():
-    """occupied() and free() threshold the log-odds a block of rows at a time (issue 46:
-    no (H, W) float64 temporaries): the same cells as thresholding the whole array,
-    on a grid of several blocks with cells at the thresholds' edges."""
-    rng = np.random.default_rng(5)
-    shape = (700, 1000)  # 2**18 // 1000 = 262 rows a block: 3 blocks
-    grid = OccupancyGrid(np.zeros(2), 0.05, rng.integers(0, 4, shape).astype(np.int32),
-                         rng.integers(0, 6, shape).astype(np.int32), OccupancyParams())
-    p = grid.params
-    np.testing.assert_array_equal(grid.occupied(), grid.log_odds > logit(p.occupied_thresh))
-    np.testing.assert_array_equal(grid.free(), grid.log_odds < logit(p.free_thresh))
-    assert grid.occupied().any() and grid.free().any() and not (grid.occupied() | grid.free()).all()

@@ -169,24 +169,11 @@ class OccupancyGrid:
 
     def occupied(self) -> np.ndarray:
         """(H, W) bool: probability above ``occupied_thresh``."""
-        return self._log_odds_beyond(logit(self.params.occupied_thresh), above=True)
+        return self.log_odds > logit(self.params.occupied_thresh)
 
     def free(self) -> np.ndarray:
         """(H, W) bool: probability below ``free_thresh``."""
-        return self._log_odds_beyond(logit(self.params.free_thresh), above=False)
-
-    def _log_odds_beyond(self, threshold: float, above: bool) -> np.ndarray:
-        """``log_odds > threshold`` (``above``) or ``log_odds < threshold``, by blocks of
-        rows: the same float64 values per cell, without the (H, W) float64 temporaries
-        of :attr:`log_odds`."""
-        a, b = logit(self.params.prob_hit), logit(self.params.prob_miss)
-        out = np.empty(self.shape, dtype=bool)
-        beyond = np.greater if above else np.less
-        step = max(1, 2**18 // max(self.shape[1], 1))
-        for i in range(0, self.shape[0], step):
-            rows = slice(i, i + step)
-            beyond(self.n_hit_scans[rows] * a + self.n_miss_scans[rows] * b, threshold, out=out[rows])
-        return out
+        return self.log_odds < logit(self.params.free_thresh)
 
     def structure(self) -> np.ndarray:
         """(H, W) bool: occupied and hit by at least ``min_scans`` scans."""
@@ -280,10 +267,8 @@ def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: Occup
     n_cells = width * height
     hits = np.zeros(n_cells, dtype=np.int32)
     misses = np.zeros(n_cells, dtype=np.int32)
-    # positions within a scan's cells and scan numbers: int32 unless the inputs are huge
-    small = np.int32 if max(n_cells, len(scans)) < 2**31 else np.int64
-    last = np.zeros(n_cells, dtype=small)  # scratch of _distinct
-    hit_by = np.full(n_cells, -1, dtype=small)  # the last scan with a return in the cell
+    last = np.zeros(n_cells, dtype=np.int64)  # scratch of _distinct
+    hit_by = np.full(n_cells, -1, dtype=np.int32)  # the last scan with a return in the cell
     step = params.step_fraction * r
     for i, (o, p) in enumerate(scans):
         end = np.floor((p - origin) / r).astype(np.int64)
@@ -331,9 +316,7 @@ def _distinct(cells: np.ndarray, last: np.ndarray) -> np.ndarray:
     """The distinct values of ``cells`` (cell indices below ``len(last)``), without a
     sort: every entry writes its position into the scratch array ``last`` at its cell;
     whichever write stays, exactly one position per distinct cell finds itself there."""
-    if len(cells) > np.iinfo(last.dtype).max:
-        raise ValueError(f"{len(cells)} ray samples in one scan: more than {last.dtype} positions")
-    pos = np.arange(len(cells), dtype=last.dtype)
+    pos = np.arange(len(cells))
     last[cells] = pos
     return cells[last[cells] == pos]
 
