@@ -72,15 +72,18 @@ def test_the_raster_bound_passes_the_largest_shared_grid():
         check_raster_size("grid", (0.0, 0.0), (2000.0, 2000.0), 0.05, (40000, 40000), 24)
 
 
-def test_the_coverage_raster_and_the_scoring_grid_are_bounded_too():
+def test_the_scoring_grid_is_bounded_too_and_the_coverage_raster_needs_no_bound():
+    """The scoring grid is sized by the walls' extent: bounded. The selection's coverage
+    raster holds only the tiles its scans touch (issue 46): two scans 300 km apart take
+    two tiles, not the extent between them."""
     import shapely
 
     from floorscan.score.bitmap import grid_for
     from floorscan.select.raster import RasterCoverage
 
     far = [shapely.box(0, 0, 1, 1), shapely.box(3e5, 3e5, 3e5 + 1, 3e5 + 1)]
-    with pytest.raises(InputError, match=r"^coverage raster of 2 scans \(select.raster_m\): the data spans 300001 m"):
-        RasterCoverage(far)
+    cov = RasterCoverage(far)
+    assert cov.covered.size <= 2 * 4 * 128 * 128 and list(cov.counts) == [400, 400]
     with pytest.raises(InputError, match=r"^scoring grid of the reference walls \(score.cell_m\): the data spans "
                                          r"300000 m x 1 m, which at 0.05 m cells needs 6000040 x 60"):
         grid_for([[0.0, 0.0, 3e5, 0.0], [3e5, 0.0, 3e5, 1.0]])

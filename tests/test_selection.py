@@ -15,7 +15,7 @@ from floorscan.select.baselines import motion_filter_mask, motion_filter_order, 
 from floorscan.select.greedy import greedy_coverage, greedy_exact, greedy_reference
 from floorscan.select.orderings import coverage_along, select_stage
 from floorscan.select.params import HullParams, SelectParams
-from floorscan.select.raster import RasterCoverage, _order_crossings
+from floorscan.select.raster import TILE, RasterCoverage, _order_crossings
 from floorscan.select.registry import ORDERINGS
 from floorscan.select.summary import first_k, k_for_fraction, summarize
 
@@ -96,6 +96,34 @@ def test_raster_counts_cells_by_centre():
     cov.add(2)
     # box(0.01..1.01, 0.01..2.01) minus holed square's cells
     assert cov.gains([0]).tolist() == [200 - 150]
+
+
+def test_raster_size_follows_the_cells_hit_not_the_bounding_box():
+    """Two clusters of scans 1 km apart (issue 46): the raster holds the tiles the scans
+    touch and a scan's runs (about its perimeter), not a grid of the bounding box
+    (20 000 x 20 000 cells at 5 cm) nor a cell per (scan, cell); the greedies still
+    agree with set arithmetic on the scans' cells."""
+    rng = np.random.default_rng(3)
+    lo = np.r_[rng.uniform(0, 4, (12, 2)), rng.uniform(0, 4, (12, 2)) + 1000.0]
+    geoms = np.array([box(x, y, x + w, y + h) for (x, y), w, h in
+                      zip(lo, rng.uniform(0.5, 6, 24), rng.uniform(0.5, 6, 24))], dtype=object)
+    cov = RasterCoverage(geoms, 0.05)
+    bbox_cells = (1010 / 0.05) ** 2
+    # each cluster spans at most 10 m = 200 cells, so at most `across` tiles a side
+    across = -(-200 // TILE) + 1
+    assert len(cov.tiles) <= 2 * across**2
+    assert cov.covered.size == len(cov.tiles) * TILE**2 <= 2 * across**2 * TILE**2 < bbox_cells / 500
+    # a box's runs: one per row it covers and tile it crosses (<= 6 m = 120 cells wide)
+    rows = np.ceil(np.array([shapely.bounds(g)[3] - shapely.bounds(g)[1] for g in geoms]) / 0.05) + 1
+    assert np.all(cov.run_stop - cov.run_start <= (-(-120 // TILE) + 1) * rows)
+    assert len(cov.run_row) < cov.counts.sum() / 20
+    cells = [set(cov.cells_of(j).tolist()) for j in range(len(geoms))]
+    assert [len(c) for c in cells] == cov.counts.tolist()
+    order, gains = _set_greedy(cells)
+    for fn in (greedy_reference, greedy_coverage):
+        o = fn(np.arange(len(geoms)), geoms, 0.05)
+        assert o["scan_id"].tolist() == order
+        np.testing.assert_allclose(o["gain_m2"], np.asarray(gains) * 0.05**2, rtol=0, atol=1e-9)
 
 
 def test_greedy_hand_geometry_ties_and_zero_area_last():

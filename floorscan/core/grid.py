@@ -7,8 +7,8 @@ offsets from the minimum), whose order is the lexicographic order of the cells, 
 ~6x slower); sums come from ``numpy.bincount``, which adds in point order as
 ``numpy.add.at`` does: the same floats, bit for bit (tested).
 
-A raster sized by the data's extent (the occupancy grid of the scans, the selection's
-coverage raster, the scoring grid) is checked by :func:`check_raster_size` before it is
+A raster sized by the data's extent (the occupancy grid of the scans, the scoring grid)
+is checked by :func:`check_raster_size` before it is
 allocated: coordinates in millimetres, or one scan far from the others, would otherwise
 ask for gigabytes and end in a ``MemoryError`` traceback.
 """

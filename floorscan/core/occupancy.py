@@ -273,7 +273,7 @@ def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: Occup
     hits = np.zeros(n_cells, dtype=np.int32)
     misses = np.zeros(n_cells, dtype=np.int32)
     last = np.zeros(n_cells, dtype=np.int64)  # scratch of _distinct
-    hit_by = np.full(n_cells, -1, dtype=np.int64)  # the last scan with a return in the cell
+    hit_by = np.full(n_cells, -1, dtype=np.int32)  # the last scan with a return in the cell
     step = params.step_fraction * r
     for i, (o, p) in enumerate(scans):
         end = np.floor((p - origin) / r).astype(np.int64)

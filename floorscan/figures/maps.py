@@ -37,8 +37,12 @@ def plot_reference_map(grid, out, title: str = "", faces=None) -> None:
     faces : (F, 4) float ndarray, optional
         ``x0, y0, x1, y1``, metres.
     """
-    rgb = np.full(grid.shape + (3,), 0.80)
-    rgb[grid.free()] = 1.0
+    # RGBA bytes, not float RGB: matplotlib copies the image and makes it RGBA (4 bytes
+    # a cell instead of 24 + 32 of float64); 204 / 255 and 255 / 255 are the greys
+    # 0.80 and 1.0 exactly in the bytes it draws
+    rgb = np.full(grid.shape + (4,), 255, dtype=np.uint8)
+    rgb[..., :3] = 204
+    rgb[grid.free(), :3] = 255
     h, w = grid.shape
     x0, y0 = grid.origin_xy
     r = grid.resolution_m

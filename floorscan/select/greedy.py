@@ -16,10 +16,8 @@ in ``scan_id`` order. Areas are counted on the coverage raster
   bound of the current one. It returns the reference's ordering and gains.
 - :func:`greedy_exact` is Algorithm 1 literally on Shapely unions (validation only).
 
-Exact shortcuts: a covered cell stays covered, so both raster greedies drop the cells
-found covered from what they gather next time (the reference from the remaining
-candidates' cells laid end to end, the lazy greedy per scan once half of a scan's
-cells are covered).
+A gain is a sum over the scan's runs of cells (:class:`~floorscan.select.raster.RasterCoverage`),
+not over its cells, so neither greedy holds the scans' cells.
 
 Usage::
 
@@ -36,21 +34,12 @@ import numpy as np
 import pandas as pd
 import shapely
 
-from floorscan.select.raster import RasterCoverage, ordering_table, raster_for, runs
+from floorscan.select.raster import RasterCoverage, ordering_table, raster_for
 
 
 def _zero_tail(ids: np.ndarray, cov: RasterCoverage) -> list[int]:
     zero = np.flatnonzero(cov.counts == 0)
     return zero[np.argsort(ids[zero], kind="stable")].tolist()
-
-
-def _cells_of_scans(cov: RasterCoverage, scans: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The cells of ``scans`` laid end to end and the position in ``scans`` of the
-    scan of each cell."""
-    counts = cov.counts[scans]
-    offs = np.cumsum(counts) - counts
-    idx = np.repeat(cov.start[scans] - offs, counts) + np.arange(int(counts.sum()))
-    return cov.cells[idx], np.repeat(np.arange(len(scans)), counts)
 
 
 def greedy_reference(scan_ids: Sequence[int], geometries: Sequence, raster_m: float = 0.05) -> pd.DataFrame:
@@ -77,39 +66,17 @@ def greedy_reference(scan_ids: Sequence[int], geometries: Sequence, raster_m: fl
         ``gain_m2`` float64: all S scans.
     """
     ids, cov = raster_for(scan_ids, geometries, raster_m)
-    remaining = np.flatnonzero(cov.counts > 0)
-    remaining = remaining[np.argsort(ids[remaining], kind="stable")]  # ascending id
+    cand = np.flatnonzero(cov.counts > 0)
+    cand = cand[np.argsort(ids[cand], kind="stable")]  # ascending id
     order, gains = [], []
-    # every round recomputes every remaining candidate's gain against the union: one
-    # gather over the candidates' cells laid end to end. A covered cell stays covered,
-    # so the cells already covered and the chosen candidates are dropped from that
-    # array whenever they are half of it (instead of indexing the remaining cells
-    # anew every round); a dropped cell adds 0 to every gain, so the gains are exact.
-    cand = remaining
-    cells, seg = _cells_of_scans(cov, cand)
-    starts, owners, lens = runs(seg)
-    alive = np.ones(len(cand), dtype=bool)
-    n_alive = len(cand)
-    while n_alive:
-        g = np.zeros(len(cand), dtype=np.int64)
-        if len(cells):
-            g[owners] = lens - np.add.reduceat(cov.covered[cells], starts, dtype=np.int64)
-        g[~alive] = -1
+    while len(cand):
+        g = cov.gains(cand)
         i = int(np.argmax(g))  # first maximum = lowest scan_id (ascending order)
         j = int(cand[i])
         order.append(j)
         gains.append(int(g[i]))
         cov.add(j)
-        alive[i] = False
-        n_alive -= 1
-        # cells to keep: at most the alive candidates' gains this round
-        if n_alive and 2 * int(g[alive].sum()) <= len(cells):
-            keep = alive[seg]
-            keep &= ~cov.covered[cells]
-            renum = np.cumsum(alive) - 1
-            cells, seg, cand = cells[keep], renum[seg[keep]], cand[alive]
-            starts, owners, lens = runs(seg)
-            alive = np.ones(len(cand), dtype=bool)
+        cand = np.delete(cand, i)
     zero = _zero_tail(ids, cov)
     return ordering_table(ids, order + zero, gains + [0] * len(zero), raster_m**2)
 
@@ -162,7 +129,6 @@ def greedy_coverage(
     heap = [(-int(cov.counts[j]), int(ids[j]), int(j), 0) for j in active]  # round-0 gains are exact
     heapq.heapify(heap)
     order, gains = [], []
-    live: dict[int, np.ndarray] = {}
     evaluations, rnd = len(active), 0
     while heap:
         neg, sid, j, stamp = heap[0]
@@ -173,16 +139,8 @@ def greedy_coverage(
             cov.add(j)
             rnd += 1
             continue
-        # the scan's cells not covered at its last evaluation (covered ones stay so)
-        cells = live.get(j)
-        if cells is None:
-            cells = cov.cells_of(j)
-        hit = cov.covered[cells]
-        g = len(cells) - int(np.count_nonzero(hit))
-        if 2 * g <= len(cells):
-            live[j] = cells[~hit]
         evaluations += 1
-        heapq.heapreplace(heap, (-g, sid, j, rnd))
+        heapq.heapreplace(heap, (-cov.gain(j), sid, j, rnd))
     zero = _zero_tail(ids, cov)
     if stats is not None:
         stats.update(evaluations=evaluations, rounds=rnd)

@@ -7,10 +7,17 @@ at the map origin: a scan covers the cells whose centre lies in its coverage pol
 chosen scans is a boolean grid, and a gain is the number of the scan's cells not yet
 in ``U`` times ``raster_m**2``.
 
+Memory follows the scans and the cells they touch, not the site's bounding box: a scan
+is held as runs (the cells of one row within one tile of :data:`TILE` x :data:`TILE`
+cells: about the scan's perimeter, not its area), and ``U`` only in the tiles some scan
+touches, with prefix sums along each tile row so that a gain is a sum over the scan's
+runs (a tiled raster; the same idea as run-length scan conversion, Foley et al.,
+Computer Graphics, section 3.6).
+
 Why not exact polygon overlays: hulls of neighbouring scans share nearly collinear wall
 edges, which make each GEOS difference against the growing union slow, and a greedy
 over thousands of scans needs ~10^5 of them; on the raster an evaluation is a gather
-over the scan's cells and, gains being integers, comparisons are exact, with no float
+over the scan's runs and, gains being integers, comparisons are exact, with no float
 tie tolerance. The raster area differs from the polygon area by at most about half a
 cell along the boundary; :func:`floorscan.select.greedy.greedy_exact` (literal
 Algorithm 1 on Shapely unions) checks that the raster greedy picks the same scans
@@ -35,7 +42,13 @@ import numpy as np
 import pandas as pd
 import shapely
 
-from floorscan.core.grid import check_raster_size
+
+
+#: Side of a raster tile, cells: the union ``U`` is kept only in the tiles some scan
+#: touches (a tile of 128 cells is 6.4 m at the default 5 cm), and a run of a scan's
+#: cells never crosses a tile's edge. A wider tile makes fewer runs of a large scan and
+#: a longer row to sum again when a scan is added.
+TILE = 128
 
 
 class RasterCoverage:
@@ -49,23 +62,33 @@ class RasterCoverage:
     raster_m : float
         Cell side, metres. The grid is anchored at multiples of ``raster_m`` in the map
         frame, so a scan's cells do not depend on the other scans.
+    chunk : int
+        Scans rasterised at once.
+
+    Attributes
+    ----------
+    counts : (S,) int64 ndarray
+        Cells of each scan.
+    tiles : (N,) int64 ndarray
+        The tiles some scan touches, as ``tile_row * _tiles_per_row + tile_col`` on
+        the grid of :data:`TILE` x :data:`TILE` cells anchored at ``(x0, y0)``,
+        ascending; a tile's slot is its position here.
+    covered : (N * TILE, TILE) bool ndarray
+        The union ``U``: row ``slot * TILE + r`` is row ``r`` of the slot's tile.
 
     Notes
     -----
     A cell belongs to a geometry when its centre is inside (scanline fill with the
     even-odd rule over all rings, half-open in y and x, vectorised over all scans).
-    Areas are integer cell counts, so gains compare exactly: no float ties.
-    Memory: 4 bytes per (scan, covered cell).
-
-    Raises
-    ------
-    floorscan.core.io.InputError
-        When the grid would take more than :data:`floorscan.core.grid.MAX_RASTER_BYTES`
-        at 1 byte a cell (:func:`floorscan.core.grid.check_raster_size`; fewer than
-        2**31 cells, as the int32 cell numbers need).
+    A scan is held as runs, the cells of one raster row within one tile, not as cells,
+    and the union only in the tiles the scans touch; its row prefix sums make a gain a
+    sum over the scan's runs. Memory: 8 bytes per run (16 while rasterising) and 3
+    bytes per cell of a touched tile, whatever the site's bounding box. Areas are
+    integer cell counts, so gains compare exactly: no float ties. Cell numbers
+    (:meth:`cells_of`) are ``covered.ravel()`` positions.
     """
 
-    def __init__(self, geometries: Sequence, raster_m: float = 0.05, chunk: int = 512):
+    def __init__(self, geometries: Sequence, raster_m: float = 0.05, chunk: int = 128):
         geoms = np.asarray(geometries, dtype=object)
         if geoms.ndim != 1:
             raise ValueError("geometries must be 1-D")
@@ -76,33 +99,70 @@ class RasterCoverage:
             b = shapely.bounds(geoms[nonempty])
             self.x0 = np.floor(b[:, 0].min() / r) * r
             self.y0 = np.floor(b[:, 1].min() / r) * r
-            self.nx = int(np.ceil((b[:, 2].max() - self.x0) / r)) + 1
-            self.ny = int(np.ceil((b[:, 3].max() - self.y0) / r)) + 1
+            nx = int(np.ceil((b[:, 2].max() - self.x0) / r)) + 1
         else:
             self.x0 = self.y0 = 0.0
-            self.nx = self.ny = 1
-        if nonempty.any():  # 1 GB of cells, under 2**31: the int32 cell numbers hold
-            check_raster_size(f"coverage raster of {int(nonempty.sum())} scans (select.raster_m)",
-                              (b[:, 0].min(), b[:, 1].min()), (b[:, 2].max(), b[:, 3].max()), r,
-                              (self.ny, self.nx), 1)
-        cells, counts = [], np.zeros(self.n, dtype=np.int64)
+            nx = 1
+        self._tiles_per_row = nx // TILE + 2
+        # a scan as runs (tile, row in the tile, first column in the tile, length), in
+        # scan order, kept in small dtypes chunk by chunk; the tiles get their slots
+        # (their rows of `covered`) once every chunk is known
+        key, row, col, length = [], [], [], []
+        runs_per_scan = np.zeros(self.n, dtype=np.int64)
+        self.counts = np.zeros(self.n, dtype=np.int64)
         for a in range(0, self.n, chunk):
-            c, k = self._rasterize(geoms[a : a + chunk])
-            cells.append(c)
-            counts[a : a + chunk] = k
-        self.cells = np.concatenate(cells) if cells else np.zeros(0, np.int32)
-        self.stop = np.cumsum(counts)
-        self.start = self.stop - counts
-        self.counts = counts
-        self.covered = np.zeros(self.nx * self.ny, dtype=bool)
+            k, rw, c, ln, own, cnt = self._rasterize(geoms[a : a + chunk])
+            key.append(k)
+            row.append((rw % TILE).astype(np.int16))
+            col.append((c % TILE).astype(np.int16))
+            length.append(ln.astype(np.int16))
+            runs_per_scan[a : a + chunk] = np.bincount(own, minlength=len(cnt))
+            self.counts[a : a + chunk] = cnt
+        self.tiles = np.unique(np.concatenate([np.unique(k) for k in key] or [np.zeros(0, np.int64)]))
+        dtype = np.int32 if len(self.tiles) * TILE < 2**31 else np.int64
+        bands = []
+        for i, k in enumerate(key):
+            row[i] = np.searchsorted(self.tiles, k).astype(dtype) * TILE + row[i]
+            key[i] = None
+            bands.append(self._bands(row[i], runs_per_scan[i * chunk : (i + 1) * chunk]))
+        # each scan's rows of `covered` in each tile it touches: [band_lo, band_hi)
+        band_count = np.concatenate([b[2] for b in bands]) if bands else np.zeros(0, np.int64)
+        self.band_lo = np.concatenate([b[0] for b in bands]) if bands else np.zeros(0, dtype)
+        self.band_hi = np.concatenate([b[1] for b in bands]) if bands else np.zeros(0, dtype)
+        self.band_stop = np.cumsum(band_count)
+        self.band_start = self.band_stop - band_count
+        # the run's row of `covered`, its first column there and its length
+        self.run_row = np.concatenate(row) if row else np.zeros(0, dtype)
+        self.run_col = np.concatenate(col) if col else np.zeros(0, np.int16)
+        self.run_len = np.concatenate(length) if length else np.zeros(0, np.int16)
+        self.run_stop = np.cumsum(runs_per_scan)
+        self.run_start = self.run_stop - runs_per_scan
+        self.covered = np.zeros((len(self.tiles) * TILE, TILE), dtype=bool)
+        self._prefix = np.zeros((len(self.tiles) * TILE, TILE + 1), dtype=np.int16)
 
-    def _rasterize(self, geoms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    @staticmethod
+    def _bands(run_row: np.ndarray, runs_per_scan: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The first and past-the-last row of ``covered`` of each (scan, tile) of runs
+        laid out by scan, by scan, and the number of tiles of each scan."""
+        owner = np.repeat(np.arange(len(runs_per_scan)), runs_per_scan)
+        key = owner * (int(run_row.max(initial=0)) // TILE + 1) + run_row // TILE
+        order = np.argsort(key, kind="stable")
+        starts, _, _ = runs(key[order])
+        rows = run_row[order]
+        lo = np.minimum.reduceat(rows, starts) if len(rows) else rows
+        hi = np.maximum.reduceat(rows, starts) + 1 if len(rows) else rows
+        return lo, hi, np.bincount(owner[order][starts], minlength=len(runs_per_scan))
+
+    def _rasterize(self, geoms: np.ndarray) -> tuple[np.ndarray, ...]:
+        """The runs of ``geoms``: tile key, row, first column, length and scan (a position
+        in ``geoms``) of each, by scan; and the cells of each scan."""
         r, n = self.raster_m, len(geoms)
+        empty = np.zeros(0, np.int64)
         parts, owner = shapely.get_parts(geoms, return_index=True)
         poly = shapely.get_type_id(parts) == 3  # Polygon parts; points/lines have no area
         parts, owner = parts[poly], owner[poly]
         if len(parts) == 0:
-            return np.zeros(0, np.int32), np.zeros(n, np.int64)
+            return empty, empty, empty, empty, empty, np.zeros(n, np.int64)
         rings, part_idx = shapely.get_rings(parts, return_index=True)
         xy, ring_idx = shapely.get_coordinates(rings, return_index=True)
         same = ring_idx[:-1] == ring_idx[1:]
@@ -116,25 +176,35 @@ class RasterCoverage:
         span = np.maximum(k_hi - k_lo, 0)
         edge = np.repeat(np.arange(len(span)), span)
         row = k_lo[edge] + (np.arange(span.sum()) - np.repeat(np.cumsum(span) - span, span))
+        if len(row) == 0:
+            return empty, empty, empty, empty, empty, np.zeros(n, np.int64)
         yc = self.y0 + (row + 0.5) * r
         p0, p1 = e0[edge], e1[edge]
         x = p0[:, 0] + (yc - p0[:, 1]) * (p1[:, 0] - p0[:, 0]) / (p1[:, 1] - p0[:, 1])
         own = e_owner[edge]
         order = _order_crossings(own * (int(row.max()) + 1) + row, x)
         x, row, own = x[order], row[order], own[order]
-        # crossings pair up (even-odd) within each (owner, row)
+        # crossings pair up (even-odd) within each (owner, row): the runs of cells
         xa, xb, row, own = x[0::2], x[1::2], row[0::2], own[0::2]
         i_lo = np.ceil((xa - self.x0) / r - 0.5).astype(np.int64)
         i_hi = np.ceil((xb - self.x0) / r - 0.5).astype(np.int64)
         width = np.maximum(i_hi - i_lo, 0)
-        first = np.cumsum(width) - width  # position of each interval's first cell
-        # int32 throughout: the cell numbers are < 2**31 (checked) and the wrapping
-        # intermediate sums are exact modulo 2**32
-        base = (row * self.nx + i_lo - first).astype(np.int32)
-        cells = np.arange(int(width.sum()), dtype=np.int32)
-        cells += np.repeat(base, width)
         counts = np.bincount(own, weights=width, minlength=n).astype(np.int64)
-        return cells, counts
+        run = width > 0
+        i_lo, i_hi, row, own = i_lo[run], i_hi[run], row[run], own[run]
+        # split the runs at the tiles' edges, in place (the order stays by scan)
+        pieces = (i_hi - 1) // TILE - i_lo // TILE + 1
+        src = np.repeat(np.arange(len(i_lo)), pieces)
+        k = np.arange(int(pieces.sum())) - np.repeat(np.cumsum(pieces) - pieces, pieces)
+        tile_col = i_lo[src] // TILE + k
+        lo = np.maximum(i_lo[src], tile_col * TILE)
+        hi = np.minimum(i_hi[src], (tile_col + 1) * TILE)
+        row = row[src]
+        return (row // TILE) * self._tiles_per_row + tile_col, row, lo, hi - lo, own[src], counts
+
+    def _runs(self, j: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        a, b = self.run_start[j], self.run_stop[j]
+        return self.run_row[a:b], self.run_col[a:b], self.run_len[a:b]
 
     def cells_of(self, j: int) -> np.ndarray:
         """Cells covered by scan ``j``.
@@ -146,10 +216,19 @@ class RasterCoverage:
 
         Returns
         -------
-        (C,) int ndarray
-            Flat cell indices ``row * nx + col`` (a view).
+        (C,) int64 ndarray
+            Cell numbers (positions in ``covered.ravel()``), a new array; a cell of the
+            map has one number whichever scan covers it.
         """
-        return self.cells[self.start[j] : self.stop[j]]
+        rows, cols, lens = self._runs(j)
+        lens = lens.astype(np.int64)
+        first = np.cumsum(lens) - lens
+        base = rows.astype(np.int64) * TILE + cols - first
+        return np.repeat(base, lens) + np.arange(int(lens.sum()), dtype=np.int64)
+
+    def _covered_in_runs(self, a: int, b: int) -> np.ndarray:
+        rows, cols = self.run_row[a:b], self.run_col[a:b]
+        return self._prefix[rows, cols + self.run_len[a:b]] - self._prefix[rows, cols]
 
     def gains(self, scans: Sequence[int] | np.ndarray) -> np.ndarray:
         """Cells each scan would add to the current union.
@@ -164,18 +243,16 @@ class RasterCoverage:
         (M,) int64 ndarray
         """
         scans = np.asarray(scans, dtype=np.int64)
-        counts = self.counts[scans]
-        out = np.zeros(len(scans), dtype=np.int64)
-        nz = counts > 0
+        out = self.counts[scans].copy()
+        n_runs = self.run_stop[scans] - self.run_start[scans]
+        nz = n_runs > 0
         if not nz.any():
             return out
-        if len(scans) == 1:
-            out[0] = counts[0] - np.count_nonzero(self.covered[self.cells_of(int(scans[0]))])
-            return out
-        idx = np.repeat(self.start[scans] - np.r_[0, np.cumsum(counts)[:-1]], counts) + np.arange(counts.sum())
-        new = ~self.covered[self.cells[idx]]
-        offs = np.r_[0, np.cumsum(counts)[:-1]]
-        out[nz] = np.add.reduceat(new, offs[nz], dtype=np.int64)
+        offs = np.cumsum(n_runs) - n_runs
+        idx = np.repeat(self.run_start[scans] - offs, n_runs) + np.arange(int(n_runs.sum()))
+        rows, cols = self.run_row[idx], self.run_col[idx]
+        hit = self._prefix[rows, cols + self.run_len[idx]] - self._prefix[rows, cols]
+        out[nz] -= np.add.reduceat(hit, offs[nz], dtype=np.int64)
         return out
 
     def gain(self, j: int) -> int:
@@ -191,8 +268,8 @@ class RasterCoverage:
         -------
         int
         """
-        a, b = self.start[j], self.stop[j]
-        return int(b - a) - int(np.count_nonzero(self.covered[self.cells[a:b]]))
+        hit = self._covered_in_runs(self.run_start[j], self.run_stop[j])
+        return int(self.counts[j]) - int(hit.sum(dtype=np.int64))
 
     def add(self, j: int) -> None:
         """Add scan ``j``'s cells to the union (in place).
@@ -202,11 +279,17 @@ class RasterCoverage:
         j : int
             Position of the scan in the raster.
         """
-        self.covered[self.cells_of(j)] = True
+        if self.counts[j] == 0:
+            return
+        self.covered.reshape(-1)[self.cells_of(j)] = True
+        a, b = self.band_start[j], self.band_stop[j]
+        for lo, hi in zip(self.band_lo[a:b].tolist(), self.band_hi[a:b].tolist()):
+            np.cumsum(self.covered[lo:hi], axis=1, dtype=np.int16, out=self._prefix[lo:hi, 1:])
 
     def reset(self) -> None:
         """Empty the union (the scans' cells are kept), to order the same scans again."""
         self.covered[:] = False
+        self._prefix[:] = 0
 
 
 def _order_crossings(key: np.ndarray, x: np.ndarray) -> np.ndarray:
