@@ -330,6 +330,44 @@ def _pcd(name: str, **kw) -> Callable[[Path], dict]:
     return lambda root: {"name": name, "path": str(pcd_folder(root / name, **kw)), "format": "pcd"}
 
 
+def _ros2_without_metadata(root: Path) -> dict:
+    """A ROS2 bag folder whose metadata.yaml is gone (copied without it)."""
+    folder = room_bag(root / "no_metadata_ros2", ros2=True)
+    (folder / "metadata.yaml").unlink()
+    return {"name": folder.name, "path": str(folder), "format": "rosbag"}
+
+
+def _not_cdr(text: str) -> str:
+    """Every topic's serialization_format given as json in a ROS2 metadata.yaml."""
+    import yaml
+
+    doc = yaml.safe_load(text)
+    for entry in doc["rosbag2_bagfile_information"]["topics_with_message_count"]:
+        entry["topic_metadata"]["serialization_format"] = "json"
+    return yaml.safe_dump(doc, sort_keys=False)
+
+
+def _pcd_spaced_header(root: Path) -> dict:
+    """A PCD folder whose locations.csv has a space after each comma, header and rows."""
+    folder = pcd_folder(root / "pcd_spaced_csv")
+    csv = folder / "locations.csv"
+    csv.write_text(csv.read_text().replace(",", ", "))
+    return {"name": folder.name, "path": str(folder)}
+
+
+def _pcd_in_subfolder(root: Path) -> dict:
+    """A PCD folder whose .pcd files sit in ``scans/``, named so in locations.csv; the
+    format left to detection."""
+    folder = pcd_folder(root / "pcd_subfolder")
+    (folder / "scans").mkdir()
+    for f in folder.glob("*.pcd"):
+        f.rename(folder / "scans" / f.name)
+    csv = folder / "locations.csv"
+    head, *rows = csv.read_text().splitlines()
+    csv.write_text("\n".join([head, *(f"scans/{r}" for r in rows)]) + "\n")
+    return {"name": folder.name, "path": str(folder)}
+
+
 def _truncated_bag(root: Path) -> dict:
     good = room_bag(root / "whole_for_truncated.bag")
     p = root / "truncated.bag"
@@ -731,6 +769,15 @@ def cases() -> list[Case]:
                                                map_jump=(RELOCALISED_AT_S, RELOCALISED_M)),
              "warning", ("at scan 50", "5.0 s into", "the map pose jumped", "relocalisation"), n_index=RELOCALISED_N,
              check=_jump_named(RELOCALISED_M)),
+        # --- clear messages and folders (issue 45, items 5 and 6)
+        Case("ros2_folder_without_metadata", _ros2_without_metadata, "error",
+             ("{name}", "without its metadata.yaml", "ros2 bag reindex")),
+        Case("ros2_metadata_not_cdr", lambda root: _ros2_bag(root, "json_ros2", edit=_not_cdr), "error",
+             ("metadata.yaml", "not serialized as 'cdr'", "/scan")),
+        Case("pcd_csv_header_with_spaces", _pcd_spaced_header, "correct", n_index=40),
+        Case("pcd_scans_in_a_subfolder", _pcd_in_subfolder, "correct", n_index=40),
+        Case("bag_three_scans_lidar_odometry", _bag("three.bag", n=3, links=(), static=()), "warning",
+             ("only", "the recording is too short"), n_index=3),
         # --- units (issue 45 item 4): ranges in millimetres or centimetres, headings in degrees
         Case("bag_ranges_in_millimetres", _bag("ranges_mm.bag", change=_in_units(1000.0)),
              "error", ("{name}", "'/scan'", "look like millimetres", "expected metres")),
