@@ -36,7 +36,9 @@ def test_a_folder_gives_one_answer_per_recording_and_names_the_bad_one(folder_ru
     assert sorted(p.relative_to(wd / "results" / "broken").as_posix() for p in (wd / "results" / "broken").rglob("*")) == [
         "logs", "logs/ingest.log"]
     index = (wd / "results" / "index.html").read_text()
-    assert "3 recordings: 2 with a plan, 1 failed" in index
+    # the run's three first, then the dataset an earlier run left in results/ (the fixture's demo)
+    assert "4 recordings: 3 with a plan, 1 failed" in index
+    assert index.index('href="first/front.html"') < index.index('href="demo/front.html"')
     assert 'src="ground/floorplan.svg"' in index and 'href="first/front.html"' in index
     assert "truncated or corrupt" in index
 
