@@ -15,10 +15,22 @@ import math
 import re
 from pathlib import Path
 
+import os
+
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, settings
 
 REPO = Path(__file__).resolve().parents[1]
+
+# Hypothesis runs derandomized (profile ``ci``: the same examples on every run, no example
+# database) unless ``FLOORSCAN_HYPOTHESIS_PROFILE=dev`` asks for fresh random examples.
+settings.register_profile(
+    "ci", derandomize=True, deadline=None, database=None, print_blob=True,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
+settings.register_profile("dev", deadline=None, database=None, suppress_health_check=[HealthCheck.too_slow])
+settings.load_profile(os.environ.get("FLOORSCAN_HYPOTHESIS_PROFILE", "ci"))
 SHARED_DATA = (REPO / ".." / "shared" / "data").resolve()
 needs_shared = pytest.mark.skipif(
     not SHARED_DATA.is_dir(), reason=f"real recordings not found at {SHARED_DATA} (../shared/data)"

@@ -31,7 +31,7 @@ def two_rooms(gap_m: float, room_m: float = 4.0) -> np.ndarray:
 
 def n_rooms(space: np.ndarray, framed=None) -> int:
     labels, distance = regions(space)
-    root, _ = persistent_rooms(labels, distance, RoomParams().door_max_m, framed)
+    root = persistent_rooms(labels, distance, RoomParams().door_max_m, framed)
     return len(np.unique(root[labels[labels > 0]]))
 
 
@@ -68,11 +68,11 @@ def test_the_rooms_do_not_depend_on_the_raster_orientation():
     space = two_rooms(1.0)
     space[20:30, 30:60] = False  # something in the first room
     labels, distance = regions(space)
-    root, _ = persistent_rooms(labels, distance, 2.0)
+    root = persistent_rooms(labels, distance, 2.0)
     base = root[labels]
     for f, inv in ((np.transpose, np.transpose), (np.fliplr, np.fliplr), (np.rot90, lambda a: np.rot90(a, -1))):
         lab2, dist2 = regions(f(space))
-        root2, _ = persistent_rooms(lab2, dist2, 2.0)
+        root2 = persistent_rooms(lab2, dist2, 2.0)
         back = inv(root2[lab2])
         # the same partition: each room of one is one room of the other
         pairs = {(int(a), int(b)) for a, b in zip(base[space], back[space])}

@@ -3,7 +3,7 @@ building drawn as a map at any origin a fraction of a cell away gives the same r
 and doors, with and without its furniture.
 
 The origins are Hypothesis examples, derandomized (profile ``ci`` of
-``tests/test_readers_property.py``: the same examples on every run) unless
+``tests/conftest.py``: the same examples on every run) unless
 ``FLOORSCAN_HYPOTHESIS_PROFILE=dev`` asks for fresh ones. Before the enclosure test of
 ``loose_in_free_space``, hallways with furniture lost its core's three rooms (11 rooms,
 10 doors) in 10 of 30 such shifts: a corner of the core missed by a cell left its loop
@@ -13,11 +13,10 @@ of walls open, and the loop was taken for a rack.
 from __future__ import annotations
 
 import logging
-import os
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from floorscan.floorplan.params import FloorplanParams
@@ -27,12 +26,6 @@ from floorscan.sim.ground_truth import true_doors, true_rooms
 from floorscan.sim.occupancy_map import MAP_RESOLUTION_M, building_map
 from floorscan.walls.map_stage import map_of_grid
 
-settings.register_profile(
-    "ci", derandomize=True, deadline=None, database=None, print_blob=True,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
-)
-settings.register_profile("dev", deadline=None, database=None, suppress_health_check=[HealthCheck.too_slow])
-settings.load_profile(os.environ.get("FLOORSCAN_HYPOTHESIS_PROFILE", "ci"))
 
 BUILDINGS = Path(__file__).resolve().parents[1] / "config" / "buildings"
 #: The corner of the map before the shift, metres: no whole number of cells from the

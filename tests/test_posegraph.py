@@ -326,7 +326,6 @@ def test_a_graph_with_nothing_to_move_returns_the_poses(n):
     whose sampling kept one scan stopped the register stage)."""
     poses = np.zeros((n, 4))
     poses[:, 0] = np.arange(n, dtype=np.float64)
-    edges = pd.DataFrame({c: pd.Series(dtype=np.float64) for c in EDGE_COLUMNS})
-    edges = edges.astype({"i": np.int64, "j": np.int64}) if "i" in edges else edges
+    edges = pd.DataFrame({c: pd.Series(dtype=np.float64) for c in EDGE_COLUMNS}).astype({"i": np.int64, "j": np.int64})
     out, info = optimize_pose_graph(poses, edges)
     assert np.array_equal(out, poses) and info["n_edges"] == 0 and info["n_isolated"] == n

@@ -6,31 +6,24 @@ never another exception, never a silent misread. Inputs are valid records, or va
 records with one mutation (a field dropped, added, duplicated or replaced; a row or
 bytes cut or added; a header value broken).
 
-Runs derandomized (profile ``ci``: the same examples on every run, no example database)
-unless ``FLOORSCAN_HYPOTHESIS_PROFILE=dev`` asks for fresh random examples.
+Runs derandomized (profile ``ci`` of ``tests/conftest.py``: the same examples on every
+run, no example database) unless ``FLOORSCAN_HYPOTHESIS_PROFILE=dev`` asks for fresh ones.
 """
 
 from __future__ import annotations
 
 import math
-import os
 import re
 import struct
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from floorscan.core.io import InputError
 
-settings.register_profile(
-    "ci", derandomize=True, deadline=None, database=None, print_blob=True,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
-)
-settings.register_profile("dev", deadline=None, database=None, suppress_health_check=[HealthCheck.too_slow])
-settings.load_profile(os.environ.get("FLOORSCAN_HYPOTHESIS_PROFILE", "ci"))
 
 
 @pytest.fixture(scope="module")

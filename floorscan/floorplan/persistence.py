@@ -94,40 +94,28 @@ def persistent_rooms(labels: np.ndarray, distance: np.ndarray, door_max_m: float
 
     Returns
     -------
-    root : (R + 1,) int64 ndarray
-        Each region's room (the label of one of its regions); ``root[0] == 0``.
-    doors : (P, 2) int64 ndarray
-        The pairs of touching regions kept apart by a door, in the order visited.
+    (R + 1,) int64 ndarray
+        Each region's room (the label of one of its regions); ``root[0] == 0`` (label 0
+        touches no region, so it stays alone).
     """
     from scipy import ndimage
+    from scipy.cluster.hierarchy import DisjointSet
 
     n = int(labels.max())
     peak = np.zeros(n + 1)
     if n:
         peak[1:] = ndimage.maximum(distance, labels, np.arange(1, n + 1))
     pairs, height = saddles(labels, distance)
-    parent = np.arange(n + 1)
-
-    def find(x: int) -> int:
-        while parent[x] != x:
-            parent[x] = parent[parent[x]]
-            x = parent[x]
-        return x
-
-    kept = []
+    groups = DisjointSet(range(n + 1))  # a group's peak is kept at its representative
     # highest saddle first; ties in the pairs' order, so the result is deterministic
     for k in np.lexsort((pairs[:, 1], pairs[:, 0], -height)):
-        a, b = (find(int(v)) for v in pairs[k])
+        a, b = groups[int(pairs[k, 0])], groups[int(pairs[k, 1])]
         if a == b:
             continue
         s = height[k]
-        young = min(peak[a], peak[b])
         pair = (int(pairs[k, 0]), int(pairs[k, 1]))
-        if (framed is None or pair in framed) and 2 * s <= door_max_m and s <= DOOR_SHARE * young:
-            kept.append(pairs[k])
+        if (framed is None or pair in framed) and 2 * s <= door_max_m and s <= DOOR_SHARE * min(peak[a], peak[b]):
             continue
-        a, b = min(a, b), max(a, b)
-        parent[b] = a
-        peak[a] = max(peak[a], peak[b])
-    root = np.array([find(i) for i in range(n + 1)], dtype=np.int64)
-    return root, np.array(kept, dtype=np.int64).reshape(-1, 2)
+        groups.merge(a, b)
+        peak[groups[a]] = max(peak[a], peak[b])
+    return np.array([groups[i] for i in range(n + 1)], dtype=np.int64)

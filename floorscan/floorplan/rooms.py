@@ -128,10 +128,12 @@ def segment_rooms(
     jambs = D.jamb_cells(cut, params.jamb_m)
     contacts = D.contacts(labels)
     framed: dict[tuple[int, int], list] = {}
+    widest: dict[tuple[int, int], float] = {}  # the widest contact of each pair, metres
     for pair, places in contacts.items():
         for cells in places:
             p, q = D.contact_segment(cut, cells)
             width = float(np.hypot(*(q - p)))
+            widest[pair] = max(widest.get(pair, 0.0), width)
             if width > params.door_max_m or not cut.at(jambs, np.array([p, q])).all():
                 continue
             doors_here = framed.setdefault(pair, [])
@@ -139,7 +141,7 @@ def segment_rooms(
                 door = D.contact_door(p, q, axes, thickness, params) or D.free_door(p, q, axes)
                 if door is not None:
                     doors_here.append(door)
-    root, _ = persistent_rooms(labels, distance, params.door_max_m, set(framed))
+    root = persistent_rooms(labels, distance, params.door_max_m, set(framed))
     sets = _sets(n)
     found = []  # (p, q, wall, a, b)
     touching: dict[tuple[int, int], float] = {}  # contact length between regions, metres
@@ -147,8 +149,7 @@ def segment_rooms(
     for (a, b), places in contacts.items():
         touching[(a, b)] = sum(len(cells) for cells in places) * raster.resolution_m
         if root[a] == root[b]:
-            width = max(float(np.hypot(*np.subtract(*D.contact_segment(cut, cells)))) for cells in places)
-            kinds[(a, b)] = "narrow" if width <= params.door_max_m else "wide"
+            kinds[(a, b)] = "narrow" if widest[(a, b)] <= params.door_max_m else "wide"
         else:
             kinds[(a, b)] = "door"
             found += [(*door, a, b) for door in framed[(a, b)]]

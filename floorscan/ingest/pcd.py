@@ -43,6 +43,7 @@ import pandas as pd
 
 from floorscan.core.config import stage_params
 from floorscan.core.io import InputError
+from floorscan.ingest.detect import LOCATIONS_CSV
 from floorscan.ingest.params import IngestParams
 from floorscan.ingest.pcd_file import read_pcd_xyz
 from floorscan.ingest.points import FrameError, ScanLosses, filter_points, no_point_reason
@@ -207,10 +208,10 @@ def open_pcd_folder(path: Path, dataset: Mapping[str, Any], cfg: Mapping[str, An
     if not path.is_dir():
         raise InputError(f"{path}: expected a folder of .pcd files")
     period = stage_params(IngestParams, cfg).missing_time_period_s
-    loc = read_locations(path, dataset.get("locations", "locations.csv"), float(period))
+    name = dataset.get("locations", LOCATIONS_CSV)
+    loc = read_locations(path, name, float(period))
     stream = pose_stream_frame(loc["t_ns"].to_numpy(), loc["x"], loc["y"], loc["z"], loc["yaw"])
     rmin, rmax = dataset.get("range_min_m"), dataset.get("range_max_m")
-    name = dataset.get("locations", "locations.csv")
     detected = {
         "scan_topic": "pcd files",
         "pose_source": f"embedded (scan locations in {name})",

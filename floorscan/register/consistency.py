@@ -236,14 +236,17 @@ def pause_warning(t_ns: np.ndarray) -> str:
             "the file where the second starts; a scanner stopped and started again in one place needs nothing")
 
 
-def stamps_warning(recording: Mapping[str, str] | None) -> str:
-    """The verdict's warning for a recording whose stamps ingest made up; ``""`` otherwise.
+def stamps_warning(recording: Mapping[str, str] | None, t_ns: np.ndarray | None = None) -> str:
+    """The verdict's warning on a recording's stamps: made up by ingest, or (its own)
+    pausing (:func:`pause_warning`); ``""`` otherwise.
 
     Parameters
     ----------
     recording : mapping of str to str, or None
         The scan index's schema metadata (:func:`floorscan.core.io.read_metadata`): keys
         ``stamps`` (``made_up``: made up) and ``stamps_reason`` (why, with the counts).
+    t_ns : (N,) int64 ndarray, optional
+        The scans' stamps, nanoseconds, in scan order; None: no pause is looked for.
 
     Returns
     -------
@@ -254,7 +257,7 @@ def stamps_warning(recording: Mapping[str, str] | None) -> str:
     """
     rec = dict(recording or {})
     if rec.get("stamps") != "made_up":
-        return ""
+        return "" if t_ns is None else pause_warning(t_ns)
     why = str(rec.get("stamps_reason") or "").strip()
     return (
         f"stamps made up{': ' + why if why else ''}; the scans keep the recording's order, "

@@ -46,7 +46,7 @@ import pandas as pd
 from floorscan.core.config import stage_params
 from floorscan.core.geometry import transform_points
 from floorscan.core.io import InputError, split_by_scan
-from floorscan.register.consistency import pause_warning, stamps_warning
+from floorscan.register.consistency import stamps_warning
 from floorscan.register.losses import Losses, ingest_losses, with_pose_losses, with_screening_losses
 from floorscan.register.odometry import register_odometry
 from floorscan.register.params import RegistrationConfig
@@ -143,7 +143,7 @@ def register_scans(
     reasons = screen_scans(index, clouds, aligned, cfg)
     table, summary = register_screened(
         index, aligned, reasons, ScanStore(cfg, clouds), cfg, losses=losses, fallback=fallback,
-        stamps="; ".join(filter(None, [stamps_warning(recording), pause_warning(index["t_ns"].to_numpy())])),
+        stamps=stamps_warning(recording, index["t_ns"].to_numpy()),
     )
     sids = table["scan_id"].to_numpy()
     final = table[["x_m", "y_m", "z_m", "yaw_rad"]].to_numpy(np.float64)

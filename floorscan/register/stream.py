@@ -36,7 +36,7 @@ from floorscan.core.files import atomic_path
 from floorscan.core.runtime import process_pool, progress, start_workers
 from floorscan.register.edge_stream import EdgeStream
 from floorscan.register.params import RegistrationConfig
-from floorscan.register.consistency import pause_warning, stamps_warning
+from floorscan.register.consistency import stamps_warning
 from floorscan.register.losses import ingest_losses
 from floorscan.register.pipeline import fallback_reason, register_screened, resolve_config
 from floorscan.register.prepare import ScanStore
@@ -179,7 +179,7 @@ def register_recording(
                 pool = None
             table, summary = register_screened(
                 index, aligned, screen.reasons, store, cfg, ahead, pool, losses=losses, fallback=fallback,
-                stamps="; ".join(filter(None, [stamps_warning(recording), pause_warning(index["t_ns"].to_numpy())])),
+                stamps=stamps_warning(recording, index["t_ns"].to_numpy()),
             )
             store = None
             if pool is not None:  # odometry's loop closure ran in them
