@@ -281,3 +281,28 @@ def test_rooms_are_a_coverage_on_a_real_robot_map():
     assert len(rooms) >= 10
     overlaps = [(i, j, a.intersection(b).area) for (i, a), (j, b) in itertools.combinations(enumerate(rooms), 2)]
     assert max(area for *_, area in overlaps) < 1e-6, [o for o in overlaps if o[2] >= 1e-6]
+
+
+@pytest.mark.parametrize("shade", [180, 204])
+def test_a_wall_drawn_in_grey_divides_the_rooms(tmp_path, shade):
+    """A map may draw a wall in a shade its thresholds read as unknown (ipa's maps draw
+    some in light grey 170-211): in a map, what is not free bounds the rooms, so a
+    partition of that shade, 0.2 m thick with a 0.9 m door, keeps two rooms of 4 x 5 m
+    apart. Before, the room step closed the unknown seam over as it closes the
+    shadows of a recording, and made one room of 40 m2."""
+    from floorscan.floorplan.params import FloorplanParams
+    from floorscan.floorplan.scans import plan_of_scans
+
+    image = np.full((140, 220), 205, np.uint8)  # 5 cm pixels: the outside unknown
+    image[10:130, 10:210] = 0  # black outer walls, 0.2 m thick
+    image[14:114, 14:174] = 255  # 8 m x 5 m of floor (rows: y from the top)
+    image[14:114, 92:96] = shade  # the partition, 4 pixels thick
+    image[60:78, 92:96] = 255  # its 0.9 m door
+    path = tmp_path / "grey_wall.png"
+    Image.fromarray(image).save(path)
+    grid, _ = read_occupancy_map(path)
+    plan = plan_of_scans(map_of_grid(grid, None), None, FloorplanParams(), grid)
+    areas = sorted(round(p.area, 1) for p in plan.rooms["polygon"])
+    assert len(areas) == 2 and all(19.0 <= a <= 20.5 for a in areas), areas
+    assert len(plan.doors) == 1
+    assert 0.8 <= float(plan.doors["width_m"].iloc[0]) <= 1.0

@@ -12,7 +12,7 @@ RES = 0.05
 
 
 def regions(space: np.ndarray):
-    raster = RoomRaster(np.zeros(2), RES, ~space, space, ~space)
+    raster = RoomRaster(np.zeros(2), RES, ~space, space, ~space, ~space)
     return space_regions(raster, RoomParams())
 
 

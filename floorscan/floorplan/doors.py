@@ -342,5 +342,6 @@ def free_door(p: np.ndarray, q: np.ndarray, axes: np.ndarray) -> tuple[np.ndarra
 
 def jamb_cells(raster: RoomRaster, jamb_m: float) -> np.ndarray:
     """(H, W) bool: the cells within ``jamb_m`` (metres) of a wall's footprint or of a
-    cell the scans saw occupied: where a door's jamb can stand."""
-    return dilate(raster.walls | raster.occupied, jamb_m / raster.resolution_m)
+    cell that bounds the space (:attr:`RoomRaster.bounds`): where a door's jamb can
+    stand."""
+    return dilate(raster.walls | raster.bounds, jamb_m / raster.resolution_m)

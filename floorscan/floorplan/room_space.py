@@ -57,6 +57,9 @@ class RoomRaster:
         The space to segment (module docstring, step 1).
     occupied : (H, W) bool ndarray
         Cells the scans saw occupied (walls, the plan's or not, and furniture).
+    bounds : (H, W) bool ndarray
+        Cells that bound the space: the scans' occupied cells; for a map (a grid
+        without scan positions), every cell the map does not mark free.
     """
 
     origin_xy: np.ndarray
@@ -64,6 +67,7 @@ class RoomRaster:
     walls: np.ndarray
     space: np.ndarray
     occupied: np.ndarray
+    bounds: np.ndarray
 
     def centres(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """Map-frame centres of cells.
@@ -254,6 +258,10 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
     padded[:] = False
     padded[: grid.shape[0], : grid.shape[1]] = grid.structure()
     occupied = padded.reshape(h, f, w, f).any(axis=(1, 3))
+    # what bounds the space: the cells the scans saw occupied; in a map, every cell it
+    # does not mark free (a map may draw its walls in a shade its thresholds read as
+    # unknown: light grey in ipa's maps, blurred by resampling in others)
+    bounds = occupied if grid.scan_xy is not None else ~free
     # the rest on the part of the raster that holds space or walls (and a margin the
     # closings reach across): the same cells, fewer of them
     origin = np.asarray(grid.origin_xy, dtype=np.float64)
@@ -263,15 +271,15 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
         rows, cols = np.flatnonzero(used.any(axis=1)), np.flatnonzero(used.any(axis=0))
         r0, r1 = max(int(rows[0]) - m, 0), min(int(rows[-1]) + m + 1, h)
         c0, c1 = max(int(cols[0]) - m, 0), min(int(cols[-1]) + m + 1, w)
-        walls, opened, occupied = walls[r0:r1, c0:c1], opened[r0:r1, c0:c1], occupied[r0:r1, c0:c1]
+        walls, opened, occupied, bounds = (a[r0:r1, c0:c1] for a in (walls, opened, occupied, bounds))
         origin = origin + np.array([c0, r0]) * res
     # gaps between walls narrower than a door are wall: nobody passes them
     walls = _closing(walls, params.door_min_m / 2 / res) | walls
     space = opened & ~walls
     space = _closing(space | walls, params.close_m / res) & ~walls
-    # the closing fills unseen cells, never the cells the scans saw occupied (a wall
+    # the closing fills unseen cells, never the cells that bound the space (a wall
     # the plan lacks stays a boundary)
-    space &= ~occupied | opened
+    space &= ~bounds | opened
     # holes without a wall in them: the floor under furniture, shadows of objects
     holes, n = ndimage.label(~space)
     if n:
@@ -282,7 +290,7 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
         fill[border] = False
         fill[with_wall] = False
         space |= fill[holes]
-    return RoomRaster(origin_xy=origin, resolution_m=res, walls=walls, space=space, occupied=occupied)
+    return RoomRaster(origin_xy=origin, resolution_m=res, walls=walls, space=space, occupied=occupied, bounds=bounds)
 
 
 def space_regions(raster: RoomRaster, params: RoomParams) -> tuple[np.ndarray, np.ndarray]:

@@ -13,7 +13,9 @@ taken from the walls:
    footprints, whose gaps narrower than ``door_min_m`` are closed (nobody passes
    them); closed together with the walls by a disc of ``close_m`` (the unseen strips
    behind furniture along a wall and the shadows of objects join the room; the cells
-   the scans saw occupied stay out, so a wall the plan lacks is not bridged) and its
+   that bound the space stay out, so a wall the plan lacks is not bridged: the cells
+   the scans saw occupied, and in a map every cell it does not mark free, since a map
+   may draw a wall in a shade its thresholds read as unknown) and its
    holes without walls filled (the floor under a table). Furniture and clutter are
    not obstacles: a room's area is its floor area.
 2. **Doors between walls** (:func:`~floorscan.floorplan.doors.wall_gaps`): the gap
@@ -118,7 +120,7 @@ def segment_rooms(
     for p, q, _ in gaps:
         rr, cc = D.barrier_cells(raster, p, q)
         barrier[rr, cc] = True
-    cut = RoomRaster(raster.origin_xy, raster.resolution_m, raster.walls | barrier, raster.space & ~barrier, raster.occupied)
+    cut = RoomRaster(raster.origin_xy, raster.resolution_m, raster.walls | barrier, raster.space & ~barrier, raster.occupied, raster.bounds)
     labels, distance = space_regions(cut, params)
     n = int(labels.max())
     # the places where two regions meet between jambs: both ends within jamb_m of a wall
