@@ -1,6 +1,6 @@
 """Stage `score`, the figures of the walls and floor plans of a dataset (thesis Figs.
-5.1, 5.5, 5.10 - 5.12): they need no metrics, so they are drawn while the runs are
-scored."""
+5.1, 5.5, 5.10 - 5.12): they need the figure extractor's scores alone, so they are
+drawn while the other runs are scored."""
 
 from floorscan.core.io import read_table
 from floorscan.core.stage import stage_log
@@ -25,6 +25,7 @@ with stage_log(snakemake) as log:  # noqa: F821
         reference=reference,
         reference_kind=kind,
         walls=walls,
+        scores=read_table(smk.input.scores[0]) if smk.input.scores else None,  # the figure extractor's
         floorplans=floorplans,
         points=str(smk.input.registered),  # read in batches, not held whole
         scan_status={e: read_table(p) for e, p in zip(extractors, smk.input.scan_status)},

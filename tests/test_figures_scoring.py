@@ -127,8 +127,8 @@ def test_all_figures_from_tiny_tables(tmp_path):
            "seed": 0, "points_z_band_m": [0.5, 2.0]}
     make_walls_figures(
         dataset="toy", reference={"ransac": gt, "cluster_ransac": gt}, reference_kind=GROUND_TRUTH,
-        walls=walls, floorplans=floorplans, points=pts, scan_status=status, scan_times=times, outputs=outputs,
-        cfg=cfg,
+        walls=walls, scores=_metrics(), floorplans=floorplans, points=pts, scan_status=status, scan_times=times,
+        outputs=outputs, cfg=cfg,
     )
     table = make_score_figures(dataset="toy", metrics=_metrics(), bench_dir=bench, outputs=outputs, cfg=cfg)
     for n in names:

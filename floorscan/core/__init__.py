@@ -15,6 +15,8 @@
 - :mod:`~floorscan.core.occupancy` (the occupancy grid of scans, map_server maps),
   :mod:`~floorscan.core.occupancy_classes` (a grid of given classes: a map);
 - :mod:`~floorscan.core.geometry` (SE(2), points along wall segments),
+  :mod:`~floorscan.core.segments` (wall segments as arrays),
+  :mod:`~floorscan.core.segment_raster` (wall segments on the scoring grid),
   :mod:`~floorscan.core.grid` (integer grid cells), :mod:`~floorscan.core.greedy` (lazy
   greedy maximum coverage, for the coverage orderings and the score stage's oracle).
 """

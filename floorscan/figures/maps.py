@@ -19,7 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from floorscan.figures.style import DPI, segments_collection, square_axes, save_figure  # noqa: E402
-from floorscan.score.segments import as_segments  # noqa: E402
+from floorscan.core.segments import as_segments  # noqa: E402
 
 
 def plot_reference_map(grid, out, title: str = "", faces=None) -> None:

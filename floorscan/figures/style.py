@@ -23,7 +23,7 @@ from matplotlib.collections import LineCollection  # noqa: E402
 
 from floorscan.core.files import atomic_path  # noqa: E402
 from floorscan.score.ground_truth import GROUND_TRUTH  # noqa: E402
-from floorscan.score.segments import as_segments  # noqa: E402
+from floorscan.core.segments import as_segments  # noqa: E402
 from floorscan.select.registry import COVERAGE_ORDERINGS, ORDERINGS  # noqa: E402
 
 #: Resolution of every figure, dots per inch.

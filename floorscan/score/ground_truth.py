@@ -12,7 +12,7 @@ of the ``reference_kind`` column, :func:`reference_label` their wording in capti
 from __future__ import annotations
 
 from floorscan.score.geojson import read_wall_faces
-from floorscan.score.segments import as_segments
+from floorscan.core.segments import as_segments
 
 #: Values of the ``reference_kind`` column: what the inferred walls are scored against.
 GROUND_TRUTH = "ground_truth"

@@ -35,7 +35,8 @@ import numpy as np
 
 from floorscan.score.capsule import lengths_within, length_within
 from floorscan.score.nearest import SegmentIndex, pairs_within, nearest_distances
-from floorscan.score.segments import MIN_SEGMENT_M, row_keys, as_segments, gt_samples, segment_lengths
+from floorscan.score.segments import row_keys, gt_samples
+from floorscan.core.segments import MIN_SEGMENT_M, as_segments, segment_lengths
 
 
 def _f1(p: float, r: float, has_inferred: bool, has_gt: bool) -> float:
