@@ -4,7 +4,8 @@ from floorscan.core.files import atomic_path
 from floorscan.core.io import read_table
 from floorscan.core.occupancy import read_grid
 from floorscan.core.stage import stage_log
-from floorscan.score.answer_curve import answer_curve, k_reaching
+from floorscan.score.answer_curve import answer_curve
+from floorscan.core.score_tables import k_reaching
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821

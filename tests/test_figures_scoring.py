@@ -18,7 +18,7 @@ from floorscan.figures.floorplans import plot_floorplans, read_geojson_geometrie
 from floorscan.figures.maps import plot_walls_over_points, subsample_points
 from floorscan.figures.scoring import make_score_figures, make_walls_figures
 from floorscan.figures.stage_times import plot_stage_times, stage_of, stage_times
-from floorscan.score.ground_truth import GROUND_TRUTH
+from floorscan.core.score_tables import GROUND_TRUTH
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 

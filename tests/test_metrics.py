@@ -15,7 +15,8 @@ from floorscan.score.bitmap import bitmap_metrics, error_map
 from floorscan.core.segment_raster import Grid, segment_cells, grid_for, rasterize_segments
 from floorscan.score.capsule import length_within
 from floorscan.score.geojson import wall_faces, floorplan_faces, floorplan_wall_count, read_wall_faces
-from floorscan.score.ground_truth import GROUND_TRUTH, REFERENCE, load_recall_references
+from floorscan.score.ground_truth import load_recall_references
+from floorscan.core.score_tables import GROUND_TRUTH, REFERENCE
 from floorscan.score.growing import SamplePairs, score_walls
 from floorscan.score.nearest import SegmentIndex, nearest_below, nearest_distances
 from floorscan.score.runs import score_dataset

@@ -100,7 +100,7 @@ class FrontPage:
         The ordering and the wall extractor of the recommended plan: named in its
         caption, highlighted in the summary table; the ordering and the thesis's
         (:data:`THESIS_ORDERING`) are compared with random
-        (:func:`floorscan.score.curve_summary.beats_random_line`).
+        (:func:`floorscan.core.score_tables.beats_random_line`).
     n_walls : int, optional
         Walls of the recommended plan.
     description : str

@@ -22,7 +22,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 
 from floorscan.core.files import atomic_path  # noqa: E402
-from floorscan.score.ground_truth import GROUND_TRUTH  # noqa: E402
+from floorscan.core.score_tables import GROUND_TRUTH  # noqa: E402
 from floorscan.core.segments import as_segments  # noqa: E402
 from floorscan.select.registry import COVERAGE_ORDERINGS, ORDERINGS  # noqa: E402
 

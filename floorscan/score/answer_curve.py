@@ -109,26 +109,3 @@ def answer_curve(
         rows.append({"k": k, "n_walls": len(plan.walls), "completeness_5cm": m["completeness_5cm"],
                      "correctness_5cm": m["correctness_5cm"], "f1_5cm": m["f1_5cm"]})  # fmt: skip
     return pd.DataFrame(rows)
-
-
-def k_reaching(curve: pd.DataFrame, level: float) -> int | None:
-    """The first k of ``curve`` whose ``f1_5cm`` reaches ``level`` times the F1 of its
-    last row (all kept scans).
-
-    Parameters
-    ----------
-    curve : pandas.DataFrame
-        ``k`` and ``f1_5cm`` in increasing k.
-    level : float
-        Fraction, e.g. 0.99.
-
-    Returns
-    -------
-    int or None
-        None for an empty curve; the last k when none reaches it (a NaN target).
-    """
-    if curve.empty:
-        return None
-    target = level * float(curve["f1_5cm"].iloc[-1])
-    hit = curve["f1_5cm"].to_numpy() >= target
-    return int(curve["k"].to_numpy()[int(np.argmax(hit))]) if hit.any() else int(curve["k"].iloc[-1])

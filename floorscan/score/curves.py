@@ -31,12 +31,8 @@ from scipy.spatial import cKDTree
 
 from floorscan.core.geometry import sample_segments, samples_per_segment
 from floorscan.core.greedy import lazy_greedy
+from floorscan.core.score_tables import ORACLE, RANDOM
 from floorscan.score.against_reference import Structure, plan_against_reference, within_bound
-
-#: Ordering name of the completeness-maximising bound.
-ORACLE = "oracle"
-#: Ordering name of the seeded random permutations.
-RANDOM = "random"
 
 
 def k_grid(n_kept: int, step_fraction: float = 0.02) -> list[int]:

@@ -24,7 +24,8 @@ from floorscan.score.capsule import lengths_within
 from floorscan.score.nearest import grown_boxes, nearest_below, SegmentIndex
 from floorscan.score.segments import row_keys
 from floorscan.core.segments import MIN_SEGMENT_M, split_long, segment_lengths
-from floorscan.score.tolerance import tolerance_from, tau_label, tolerance_metrics
+from floorscan.score.tolerance import tolerance_from, tolerance_metrics
+from floorscan.core.score_tables import tau_label
 
 
 def score_walls(
