@@ -373,7 +373,8 @@ def test_stage_params_checks_values_against_the_schema_and_builds_subsections():
     from floorscan.floorplan.params import FloorplanParams
     from floorscan.register.params import RegistrationConfig
     from floorscan.select.params import SelectParams
-    from floorscan.walls.params import RansacParams, ScanParams
+    from floorscan.walls.params import RansacParams
+    from floorscan.core.wall_points import ScanParams
 
     with pytest.raises(ConfigError, match=r"^walls\.ransac\.iterations: 'many' is not of type 'integer'"):
         stage_params(RansacParams, {"iterations": "many"})

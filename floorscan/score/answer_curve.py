@@ -78,10 +78,8 @@ def answer_curve(
     from floorscan.floorplan.params import FloorplanParams
     from floorscan.floorplan.plan import build_floorplan
     from floorscan.score.against_reference import Structure, plan_against_reference
-    from floorscan.walls.map_lines import map_segments
-    from floorscan.walls.map_lines import MapParams
-    from floorscan.walls.params import ScanParams
-    from floorscan.walls.points import scan_points_2d
+    from floorscan.walls.map_lines import map_segments, MapParams
+    from floorscan.core.wall_points import ScanParams, scan_points_2d
 
     walls_cfg = walls_cfg or {}
     mp, sp = stage_params(MapParams, walls_cfg.get("map")), stage_params(ScanParams, walls_cfg)

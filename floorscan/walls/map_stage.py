@@ -63,8 +63,7 @@ def map_of_scans(
     """
     from floorscan.core.io import iter_scans
     from floorscan.core.config import stage_params
-    from floorscan.walls.params import ScanParams
-    from floorscan.walls.points import scan_points_2d
+    from floorscan.core.wall_points import ScanParams, scan_points_2d
 
     cfg = cfg or {}
     params = stage_params(MapParams, cfg.get("map"))
