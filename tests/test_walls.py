@@ -9,7 +9,8 @@ import yaml
 
 from floorscan.walls.cluster import cluster_ransac, wall_signature
 from floorscan.walls.extract import extract_walls
-from floorscan.walls.first_k import first_k_walls, parse_k
+from floorscan.walls.first_k import first_k_walls
+from floorscan.core.selection import parse_k
 from floorscan.walls.meanshift import mean_shift
 from floorscan.walls.normals import point_normals
 from floorscan.walls.params import ClusterParams, RansacParams

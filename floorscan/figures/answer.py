@@ -71,7 +71,7 @@ def answer_lines(
     list of str
     """
     from floorscan.figures.index_page import registration_verdict, verdict_class
-    from floorscan.select.recommend import read_selection
+    from floorscan.core.selection import read_selection
 
     failed = dict(failed or {})
     root = Path(results)
@@ -277,7 +277,7 @@ def write_summary_markdown(
     """
     from floorscan.core.files import atomic_path
     from floorscan.core.io import read_metadata
-    from floorscan.select.recommend import read_selection
+    from floorscan.core.selection import read_selection
 
     s = read_selection(selection)
     reg = read_metadata(registration)

@@ -281,7 +281,7 @@ def answer_files(page_dir: "str | os.PathLike", selection: Mapping | None = None
     page_dir : path
         The page's folder, ``results/<dataset>``.
     selection : mapping, optional
-        ``selection/selection.json`` (:func:`floorscan.select.recommend.read_selection`):
+        ``selection/selection.json`` (:func:`floorscan.core.selection.read_selection`):
         where the scan list, the reduced recording and the points are; None for a map.
 
     Returns
@@ -407,7 +407,7 @@ def write_front_page_of_files(
     """
     from floorscan.core.plan_tables import plan_faces_and_walls
     from floorscan.core.io import read_metadata
-    from floorscan.select.recommend import read_selection
+    from floorscan.core.selection import read_selection
 
     page_dir = Path(path).parent
     sel = read_selection(selection)

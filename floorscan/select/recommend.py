@@ -19,7 +19,6 @@ these scans by the floorplan stage.
 
 from __future__ import annotations
 
-import json
 import logging
 import os
 from pathlib import Path
@@ -140,17 +139,3 @@ def write_selection(
     }
     write_json(summary, outputs["summary"])
     return summary
-
-
-def read_selection(path: str | os.PathLike) -> dict:
-    """``selection.json`` as written by :func:`write_selection`.
-
-    Parameters
-    ----------
-    path : path
-
-    Returns
-    -------
-    dict
-    """
-    return json.loads(Path(path).read_text())

@@ -196,7 +196,7 @@ def write_map_walls(
     """
     from floorscan.core.io import read_table, write_table
     from floorscan.core.occupancy import write_grid
-    from floorscan.select.deliverables import selected_scan_ids
+    from floorscan.core.selection import selected_scan_ids
     from floorscan.walls.tables import WALLS
 
     registration = read_table(registration_path)
