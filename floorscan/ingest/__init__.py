@@ -35,9 +35,15 @@ plus a pose stream (:mod:`floorscan.ingest.recording`);
 one batch at a time, so memory grows with the largest scan, not with the recording. The
 ``poses`` stage (:mod:`floorscan.ingest.poses`) interpolates a pose for each scan.
 
+The other way round, :mod:`floorscan.ingest.reduced` writes the recording cut to a set
+of scans (the select stage's answer), in its own format, finding each scan where the
+reader found it (one module per format: ``reduced_bag``, ``reduced_carmen``,
+``reduced_pcd``; their checks ``reduced_checks``).
+
 To add a format: a reader module whose ``open_...`` function returns a
 :class:`~floorscan.ingest.recording.Recording`, its branch in
 :func:`~floorscan.ingest.readers.open_recording`, its rule in
-:mod:`floorscan.ingest.detect`, and the format in the dataset ``format`` enum of
-``workflow/schemas/config.schema.yaml``. The package imports only :mod:`floorscan.core`.
+:mod:`floorscan.ingest.detect`, its reduced-recording writer
+(:data:`floorscan.ingest.reduced.REDUCERS`), and the format in the dataset ``format``
+enum of ``workflow/schemas/config.schema.yaml``. The package imports only :mod:`floorscan.core`.
 """

@@ -23,8 +23,8 @@ Stage ``select`` (``scripts/select.py``: merges the hull shards, then orders the
 - :mod:`~floorscan.select.summary`: the k reaching 90/95/99 % coverage;
 - :mod:`~floorscan.select.deliverables`, :mod:`~floorscan.select.recommend`: how many
   scans to keep, the scan list and their points;
-- :mod:`~floorscan.select.recording` (and ``recording_bag``, ``recording_carmen``,
-  ``recording_pcd``, ``recording_checks``): the recording cut to the selected scans;
+  (the recording cut to the selected scans is the ingest stage's writer,
+  :mod:`floorscan.ingest.reduced`: it reads the recording's formats);
 - :mod:`~floorscan.select.params`: ``HullParams``, ``SelectParams``, ``CoverageParams``.
 
 Adding an ordering

@@ -14,8 +14,8 @@ deliverables come from it:
 - :func:`write_selected_points`: the selected scans' map-frame points as PLY and PCD
   (Open3D), for a point-cloud viewer or a CAD tool.
 
-The reduced recording (the same recording with the selected scans only) is
-:mod:`floorscan.select.recording`.
+The reduced recording (the same recording with the selected scans only) is written by
+the ingest stage, which reads the recording's formats: :mod:`floorscan.ingest.reduced`.
 
 Usage::
 
