@@ -74,6 +74,12 @@ POSES = pa.schema(
         ("reason", pa.string()),
     ]
 )
+#: Values of ``poses.parquet``'s ``reason``: why a scan has no pose (the ``poses``
+#: stage's interpolation, :mod:`floorscan.ingest.poses`; the register stage counts them).
+BEFORE = "before_pose_stream"
+AFTER = "after_pose_stream"
+GAP = "pose_gap"
+NO_POSE_SOURCE = "no_pose_source"
 
 
 class InputError(ValueError):

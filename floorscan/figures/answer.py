@@ -186,7 +186,7 @@ def plan_counts(geojson: str | os.PathLike) -> str:
     str
         Empty when the file cannot be read or names no count.
     """
-    from floorscan.floorplan.metadata import count_text
+    from floorscan.core.messages import count_text
 
     try:
         meta = json.loads(Path(geojson).read_text()).get("floorscan") or {}
