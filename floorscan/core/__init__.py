@@ -13,7 +13,9 @@
   (``concurrent.futures`` with spawn), thread limits;
 - :mod:`~floorscan.core.shards`: the per-scan stages split by scan range into jobs;
 - :mod:`~floorscan.core.occupancy` (the occupancy grid of scans, map_server maps),
-  :mod:`~floorscan.core.occupancy_classes` (a grid of given classes: a map);
+  :mod:`~floorscan.core.occupancy_classes` (a grid of given classes: a map),
+  :mod:`~floorscan.core.occupancy_map` (a map_server map or a map image read as that
+  grid: ingest's map input, and what was read of it, ``map/map.json``, for the pages);
 - what a stage's files hold, as the stages after it read them:
   :mod:`~floorscan.core.plan_tables` (a floor plan's tables),
   :mod:`~floorscan.core.selection` (which scans: the first k of an ordering, the

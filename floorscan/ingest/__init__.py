@@ -14,6 +14,10 @@ Three formats are read, each by its own reader:
   a CSV of scan locations (the thesis's synthetic layout, section 4.1); each ``.pcd``
   file's header and points are read by :mod:`floorscan.ingest.pcd_file`.
 
+An occupancy map given instead of a recording (``map``: a ROS map_server map or an
+image) is read by :mod:`floorscan.core.occupancy_map` into the grid the walls and rooms
+read (rule ``map_ingest``); the pages read what was read of it too, so it is in core.
+
 A dataset may name only its ``path``: the format is then detected from it
 (:func:`floorscan.ingest.detect.detect_format`), a bag's scan topic and pose source from
 its topics and TF tree (:mod:`floorscan.ingest.rosbag_detect`), a CARMEN log's no-return
