@@ -307,7 +307,8 @@ def test_an_ordering_has_one_colour_in_every_figure(tmp_path, monkeypatch):
     plot_metrics_vs_k(_metrics(), tmp_path / "metrics.png")
     figures += _capture_figures(monkeypatch, figures_selection)
     area = pd.DataFrame({"rank": [1, 2, 3], "covered_area_m2": [5.0, 9.0, 10.0]})
-    figures_selection.plot_coverage_vs_scans({"sequential": area, "cluster_hull": area}, tmp_path / "area.png")
+    figures_selection.plot_coverage_vs_scans({"sequential": area, "cluster_hull": area},
+                                             {"sequential": 3, "cluster_hull": 3}, tmp_path / "area.png")
     for fig in figures:
         lines = [ln for ax in fig.axes for ln in ax.get_lines() if not ln.get_label().startswith("_")]
         assert {ln.get_label().split(" ")[0] for ln in lines} == {"sequential", "cluster_hull"}
