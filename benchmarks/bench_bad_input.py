@@ -490,7 +490,7 @@ def _reduces(run: Run) -> str | None:
     """The reduced recording of every third scan is written (the select stage's check
     of the recording against the scan index: stamps, counts)."""
     from floorscan.core.io import InputError
-    from floorscan.select.recording import read_detection, write_reduced_recording
+    from floorscan.ingest.reduced import read_detection, write_reduced_recording
 
     ids = run.index["scan_id"].to_numpy()[::3]
     try:

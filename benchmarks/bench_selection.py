@@ -202,7 +202,8 @@ def _hallways3d_cpu(root: Path) -> None:
     result set (issue 8)."""
     import tempfile
 
-    from floorscan.figures.selection import FigureParams, selection_figures
+    from floorscan.figures.selection import selection_figures
+    from floorscan.select.figure_data import FigureParams, selection_figure_data
     from floorscan.core.io import iter_scans, read_table
 
     registration = read_table(root / "registration.parquet")
@@ -218,9 +219,10 @@ def _hallways3d_cpu(root: Path) -> None:
     t_select = time.process_time() - t0
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.process_time()
-        selection_figures(root / "registered.parquet", registration, hulls, orderings, HullParams(),
-                          SelectParams(), FigureParams(), *(Path(tmp) / f"{n}.png" for n in "abc"),
-                          title="hallways3d", convex_hulls=convex)
+        data = selection_figure_data(root / "registered.parquet", registration, hulls, orderings, HullParams(),
+                                     SelectParams(), FigureParams(), convex_hulls=convex)
+        selection_figures(orderings, data.k99, data.clusters, data.timing,
+                          *(Path(tmp) / f"{n}.png" for n in "abc"), title="hallways3d")
         t_fig = time.process_time() - t0
     print(f"hallways3d [{root}]: hulls of {counts['n_scans']} scans {t_hulls:.2f} CPU-s, select of "
           f"{len(kept)} scans {t_select:.2f} CPU-s, selection figures {t_fig:.2f} CPU-s")

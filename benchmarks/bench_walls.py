@@ -42,8 +42,8 @@ from floorscan.core.io import iter_scans, read_table, split_by_scan
 from floorscan.walls.extract import extract_scan, extract_walls
 from floorscan.core.config import stage_params
 from floorscan.walls.extractors import EXTRACTORS, REGISTRY
-from floorscan.walls.params import ClusterParams, RansacParams, ScanParams
-from floorscan.walls.points import scan_points_2d
+from floorscan.walls.params import ClusterParams, RansacParams
+from floorscan.core.wall_points import ScanParams, scan_points_2d
 
 REPO = Path(__file__).resolve().parents[1]
 DATASETS = ["intel", "aces", "freiburg101", "orebro", "trace0", "mac_ros2"]

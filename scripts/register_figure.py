@@ -4,8 +4,7 @@ its title leads with the registration's verdict and what ingest detected."""
 import json
 
 from floorscan.figures.registration import density_of_file, plot_registered_map
-from floorscan.ingest.recording import describe_recording
-from floorscan.core.io import read_metadata, read_table
+from floorscan.core.io import describe_recording, read_metadata, read_table
 from floorscan.core.stage import stage_log
 
 with stage_log(snakemake) as log:

@@ -1,11 +1,12 @@
 """Stage `score`, the figures of the walls and floor plans of a dataset (thesis Figs.
-5.1, 5.5, 5.10 - 5.12): they need no metrics, so they are drawn while the runs are
-scored."""
+5.1, 5.5, 5.10 - 5.12): they need the figure extractor's scores alone, so they are
+drawn while the other runs are scored. The floor plans are drawn as their exports draw
+them (the floorplan stage's footprints)."""
 
 from floorscan.core.io import read_table
 from floorscan.core.stage import stage_log
-from floorscan.figures.floorplans import plan_geometries
 from floorscan.figures.scoring import make_walls_figures
+from floorscan.floorplan.footprints import read_plan_footprints
 from floorscan.score.ground_truth import load_references
 
 with stage_log(snakemake) as log:  # noqa: F821
@@ -17,7 +18,7 @@ with stage_log(snakemake) as log:  # noqa: F821
     )
     walls = {tuple(r): read_table(p) for r, p in zip(smk.params.walls_runs, smk.input.walls)}
     floorplans = {
-        tuple(r): plan_geometries(p)
+        tuple(r): read_plan_footprints(p)
         for r, p in zip(smk.params.floorplan_runs, smk.input.floorplans)
     }
     make_walls_figures(
@@ -25,6 +26,7 @@ with stage_log(snakemake) as log:  # noqa: F821
         reference=reference,
         reference_kind=kind,
         walls=walls,
+        scores=read_table(smk.input.scores[0]) if smk.input.scores else None,  # the figure extractor's
         floorplans=floorplans,
         points=str(smk.input.registered),  # read in batches, not held whole
         scan_status={e: read_table(p) for e, p in zip(extractors, smk.input.scan_status)},

@@ -10,8 +10,8 @@ from floorscan.core.io import iter_scans, read_table, write_table
 from floorscan.select.coverage import COVERAGE_ORDERING, OBJECTIVE_COLUMN
 from floorscan.select.orderings import coverage_orderings
 from floorscan.select.params import CoverageParams
-from floorscan.walls.params import RansacParams, ScanParams
-from floorscan.walls.points import scan_points_2d
+from floorscan.walls.params import RansacParams
+from floorscan.core.wall_points import ScanParams, scan_points_2d
 from floorscan.core.config import stage_params
 from floorscan.core.stage import stage_log
 

@@ -1,8 +1,11 @@
-"""The layout of ../shared/ARCHITECTURE.md, checked on the source (issue 25).
+"""The layout of ../shared/ARCHITECTURE.md, checked on the source (issues 25, 47).
 
 - Modules are small: none over :data:`MAX_LINES` lines.
-- Imports point down only: a stage package imports ``floorscan.core`` and the packages
-  of earlier stages (:data:`LAYER`), never a later one; ``core`` imports no stage.
+- No two stage packages import each other (:data:`STAGES`); what both need is in
+  ``floorscan.core``, which imports no stage (:func:`layer_violations`, counting
+  imports inside functions and every form: ``import floorscan.x``, ``from floorscan
+  import x``, relative imports). The glue may import any stage: ``scripts/``, the
+  rules, ``floorscan/cli.py`` (the command), the tests and benchmarks.
 - No import cycle between modules, counting imports inside functions.
 - Names used across modules are public: no module of the package or script imports
   another module's ``_private`` name (issue 37).
@@ -14,26 +17,18 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parents[1] / "floorscan"
 MAX_LINES = 500
 
-#: Layer of each subpackage: a module may import its own package and lower layers.
-#: The simulator stands beside ingest (both make the input of the pipeline).
-LAYER = {
-    "core": 0,
-    "ingest": 1,
-    "sim": 1,
-    "register": 2,
-    "select": 3,
-    "walls": 4,
-    "floorplan": 5,
-    "score": 6,
-    "figures": 7,
-}
+#: The stage packages (ARCHITECTURE.md's table: one subpackage per stage name); none
+#: imports another.
+STAGES = {"ingest", "sim", "register", "select", "walls", "floorplan", "score", "figures"}
+#: The shared layer: every stage may import it; it imports no stage.
+CORE = "core"
 
 
-def modules() -> dict[str, Path]:
-    """Dotted module name -> file, for every module of the package."""
+def modules(package: Path = PACKAGE) -> dict[str, Path]:
+    """Dotted module name -> file, for every module of the package at ``package``."""
     out = {}
-    for path in sorted(PACKAGE.rglob("*.py")):
-        parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    for path in sorted(package.rglob("*.py")):
+        parts = path.relative_to(package.parent).with_suffix("").parts
         if parts[-1] == "__init__":
             parts = parts[:-1]
         out[".".join(parts)] = path
@@ -65,21 +60,49 @@ def imports(name: str, path: Path, known: set[str]) -> set[str]:
     return found
 
 
-def graph() -> dict[str, set[str]]:
-    mods = modules()
+def graph(package: Path = PACKAGE) -> dict[str, set[str]]:
+    mods = modules(package)
     known = set(mods)
     return {name: imports(name, path, known) for name, path in mods.items()}
 
 
-def layer(module: str) -> tuple[str, int | None]:
+def subpackage(module: str) -> str:
+    """``floorscan.score.bitmap`` -> ``score``; ``""`` for the package's own modules
+    (``floorscan.cli``)."""
     parts = module.split(".")
-    sub = parts[1] if len(parts) > 1 else ""
-    return sub, LAYER.get(sub)
+    return parts[1] if len(parts) > 1 and parts[1] in STAGES | {CORE} else ""
 
 
-def test_every_subpackage_has_a_layer():
+def layer_violations(package: Path = PACKAGE) -> list[str]:
+    """``module -> imported module`` for every import, anywhere in a module of
+    ``package`` (top level or inside a function), of one stage package's module by
+    another stage package, or of a stage by ``core``.
+
+    Parameters
+    ----------
+    package : Path
+        The ``floorscan`` folder (a copy of its layout in the tests).
+
+    Returns
+    -------
+    list of str
+        Sorted.
+    """
+    wrong = []
+    for name, targets in graph(package).items():
+        sub = subpackage(name)
+        if sub not in STAGES | {CORE}:
+            continue  # the package's own modules (cli.py: the command, glue like the scripts)
+        for t in targets:
+            tsub = subpackage(t)
+            if tsub in STAGES and tsub != sub:
+                wrong.append(f"{name} -> {t}")
+    return sorted(wrong)
+
+
+def test_every_subpackage_is_a_stage_or_core():
     subs = {p.name for p in PACKAGE.iterdir() if p.is_dir() and (p / "__init__.py").exists()}
-    assert subs == set(LAYER), f"subpackages without a layer: {sorted(subs - set(LAYER))}"
+    assert subs == STAGES | {CORE}, f"subpackages that are neither a stage nor core: {sorted(subs - STAGES - {CORE})}"
     # the `floorscan` command (ARCHITECTURE: floorscan/cli.py runs Snakemake, no stage logic)
     stray = sorted(p.name for p in PACKAGE.glob("*.py") if p.name not in ("__init__.py", "cli.py"))
     assert stray == [], f"modules outside the stage packages and core: {stray}"
@@ -92,17 +115,45 @@ def test_no_module_is_over_the_limit():
     assert not over, f"over {MAX_LINES} lines (split them by operation): " + "; ".join(over)
 
 
-def test_imports_point_down_only():
-    wrong = []
-    for name, targets in graph().items():
-        sub, rank = layer(name)
-        for t in sorted(targets):
-            tsub, trank = layer(t)
-            if tsub == sub or rank is None or trank is None:
-                continue
-            if trank >= rank:
-                wrong.append(f"{name} -> {t}")
-    assert wrong == [], "imports of a later (or a sibling) stage:\n" + "\n".join(wrong)
+def test_no_stage_package_imports_another():
+    """ARCHITECTURE.md: no two stage packages import each other; what both need moves
+    down to core, which imports no stage."""
+    wrong = layer_violations()
+    assert wrong == [], "imports between stage packages (or of a stage by core):\n" + "\n".join(wrong)
+
+
+def test_the_layer_check_finds_a_planted_import(tmp_path):
+    """The check above cannot pass vacuously: in a copy of the layout, each form of
+    import of one stage by another (top level, inside a function, ``import a.b``,
+    ``from a import b``, relative) and of a stage by core is found, and the allowed
+    ones (a stage's own modules, core, the command) are not."""
+    root = tmp_path / "floorscan"
+    files = {
+        "__init__.py": "",
+        "cli.py": "from floorscan.figures import page\n",  # the command: glue, allowed
+        "core/__init__.py": "",
+        "core/grid.py": "def f():\n    from floorscan.walls import lines\n",  # core -> a stage
+        "walls/__init__.py": "",
+        "walls/lines.py": "from floorscan.core import grid\nfrom . import extract\n",  # allowed
+        "walls/extract.py": "import numpy\n",
+        "score/__init__.py": "",
+        "score/runs.py": "import floorscan.walls.lines as wl\nfrom floorscan.core.grid import f\n",
+        "score/curves.py": "def g():\n    from floorscan.walls.extract import numpy\n",
+        "figures/__init__.py": "from floorscan import score\n",
+        "figures/page.py": "from ..walls import lines\n",
+    }
+    for rel, text in files.items():
+        (root / rel).parent.mkdir(parents=True, exist_ok=True)
+        (root / rel).write_text(text)
+    assert layer_violations(root) == [
+        "floorscan.core.grid -> floorscan.walls.lines",
+        "floorscan.figures -> floorscan.score",
+        "floorscan.figures.page -> floorscan.walls.lines",
+        "floorscan.score.curves -> floorscan.walls.extract",
+        "floorscan.score.runs -> floorscan.walls.lines",
+    ]
+    (root / "score/curves.py").write_text("def g():\n    from floorscan.core.grid import f\n")
+    assert "floorscan.score.curves -> floorscan.walls.extract" not in layer_violations(root)
 
 
 def test_no_import_cycle():

@@ -78,7 +78,7 @@ def test_the_scoring_grid_is_bounded_too_and_the_coverage_raster_needs_no_bound(
     two tiles, not the extent between them."""
     import shapely
 
-    from floorscan.score.bitmap import grid_for
+    from floorscan.core.segment_raster import grid_for
     from floorscan.select.raster import RasterCoverage
 
     far = [shapely.box(0, 0, 1, 1), shapely.box(3e5, 3e5, 3e5 + 1, 3e5 + 1)]

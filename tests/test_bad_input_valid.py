@@ -87,7 +87,7 @@ def test_the_reduced_bag_of_a_bag_without_tf(tmp_path):
     """The select stage's copy of a bag with only a scan topic: the selected scans."""
     from benchmarks.bench_bad_input import room_bag
     from floorscan.ingest.readers import open_recording
-    from floorscan.select.recording import write_reduced_recording
+    from floorscan.ingest.reduced import write_reduced_recording
 
     src = room_bag(tmp_path / "scan_only.bag", n=12, links=(), static=())
     rec = open_recording({"path": str(src)}, {}, 0.5)

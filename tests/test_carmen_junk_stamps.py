@@ -141,7 +141,7 @@ def test_the_verdict_names_made_up_stamps_as_a_warning(tmp_path):
 
 
 def test_reduced_junk_log_keeps_the_odometry_beside_the_selected_scans(tmp_path):
-    from floorscan.select.recording import write_reduced_recording
+    from floorscan.ingest.reduced import write_reduced_recording
 
     src = _log(tmp_path / "junk.log", _junk_stamps())
     lines = src.read_text().splitlines()  # comment, then laser i at 1 + 2i and its ODOM at 2 + 2i

@@ -347,7 +347,7 @@ def test_command_line_strings_reach_the_schema_with_their_types():
          r"score\.tau_m: unknown key; expected one of \['cell_m', "),
         ("floorscan.ingest.params", "IngestParams", {"carmen_fov": 3.14},
          r"ingest\.carmen_fov: unknown key; expected one of \['carmen_fov_rad', "),
-        ("floorscan.figures.selection", "FigureParams", {"figure_k": [1, 5]},
+        ("floorscan.select.figure_data", "FigureParams", {"figure_k": [1, 5]},
          r"select\.figure_k: unknown key; expected one of \['coverage', "),
     ],
     ids=["walls.ransac", "register.graph", "floorplan.structure", "score", "ingest", "select(figures)"],
@@ -373,7 +373,8 @@ def test_stage_params_checks_values_against_the_schema_and_builds_subsections():
     from floorscan.floorplan.params import FloorplanParams
     from floorscan.register.params import RegistrationConfig
     from floorscan.select.params import SelectParams
-    from floorscan.walls.params import RansacParams, ScanParams
+    from floorscan.walls.params import RansacParams
+    from floorscan.core.wall_points import ScanParams
 
     with pytest.raises(ConfigError, match=r"^walls\.ransac\.iterations: 'many' is not of type 'integer'"):
         stage_params(RansacParams, {"iterations": "many"})

@@ -8,6 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from floorscan.core.score_tables import beats_random_line
 from floorscan.score import curve_summary as CS
 from floorscan.score import curves as C
 from floorscan.score.against_reference import Structure
@@ -119,9 +120,9 @@ def test_curve_summary_averages_random_seeds_and_compares_with_the_oracle():
     assert s.loc["oracle", "k_99"] == 50 and s.loc["cluster_hull", "k_99"] == 100
     # areas to 20 %: trapezoids from (0, 0)
     assert s.loc["cluster_hull", "auc"] == pytest.approx((0.1 * 0.5 / 2 + 0.1 * (0.5 + 0.96) / 2) / 0.2)
-    line = CS.beats_random_line(s.reset_index(), "cluster_hull", "ransac")
+    line = beats_random_line(s.reset_index(), "cluster_hull", "ransac")
     assert line.startswith("cluster_hull beats random with ransac") and "k95 20 against 35" in line
-    worse = CS.beats_random_line(s.reset_index(), "random", "ransac")
+    worse = beats_random_line(s.reset_index(), "random", "ransac")
     assert "random does not beat random" in worse
 
 

@@ -15,7 +15,7 @@ from floorscan.ingest.writer import write_recording
 from floorscan.core.io import REGISTERED, InputError, write_table
 from floorscan.core.files import staged_path
 from floorscan.select.deliverables import recommended_k, scan_list, write_scan_list, write_selected_points
-from floorscan.select.recording import read_detection, write_reduced_recording
+from floorscan.ingest.reduced import read_detection, write_reduced_recording
 
 # --- recommended k --------------------------------------------------------------------
 

@@ -18,7 +18,7 @@ from floorscan.figures.floorplans import plot_floorplans, read_geojson_geometrie
 from floorscan.figures.maps import plot_walls_over_points, subsample_points
 from floorscan.figures.scoring import make_score_figures, make_walls_figures
 from floorscan.figures.stage_times import plot_stage_times, stage_of, stage_times
-from floorscan.score.ground_truth import GROUND_TRUTH
+from floorscan.core.score_tables import GROUND_TRUTH
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -127,8 +127,8 @@ def test_all_figures_from_tiny_tables(tmp_path):
            "seed": 0, "points_z_band_m": [0.5, 2.0]}
     make_walls_figures(
         dataset="toy", reference={"ransac": gt, "cluster_ransac": gt}, reference_kind=GROUND_TRUTH,
-        walls=walls, floorplans=floorplans, points=pts, scan_status=status, scan_times=times, outputs=outputs,
-        cfg=cfg,
+        walls=walls, scores=_metrics(), floorplans=floorplans, points=pts, scan_status=status, scan_times=times,
+        outputs=outputs, cfg=cfg,
     )
     table = make_score_figures(dataset="toy", metrics=_metrics(), bench_dir=bench, outputs=outputs, cfg=cfg)
     for n in names:
@@ -307,7 +307,8 @@ def test_an_ordering_has_one_colour_in_every_figure(tmp_path, monkeypatch):
     plot_metrics_vs_k(_metrics(), tmp_path / "metrics.png")
     figures += _capture_figures(monkeypatch, figures_selection)
     area = pd.DataFrame({"rank": [1, 2, 3], "covered_area_m2": [5.0, 9.0, 10.0]})
-    figures_selection.plot_coverage_vs_scans({"sequential": area, "cluster_hull": area}, tmp_path / "area.png")
+    figures_selection.plot_coverage_vs_scans({"sequential": area, "cluster_hull": area},
+                                             {"sequential": 3, "cluster_hull": 3}, tmp_path / "area.png")
     for fig in figures:
         lines = [ln for ax in fig.axes for ln in ax.get_lines() if not ln.get_label().startswith("_")]
         assert {ln.get_label().split(" ")[0] for ln in lines} == {"sequential", "cluster_hull"}

@@ -11,28 +11,17 @@ import shapely
 
 from floorscan.core.io import InputError
 from floorscan.core.geometry import point_segment_dist2
-from floorscan.score.bitmap import (
-    Grid,
-    raster_cells,
-    bitmap_metrics,
-    error_map,
-    grid_for,
-    rasterize_segments,
-)
+from floorscan.score.bitmap import bitmap_metrics, error_map
+from floorscan.core.segment_raster import Grid, segment_cells, grid_for, rasterize_segments
 from floorscan.score.capsule import length_within
 from floorscan.score.geojson import wall_faces, floorplan_faces, floorplan_wall_count, read_wall_faces
-from floorscan.score.ground_truth import GROUND_TRUTH, REFERENCE, load_recall_references
+from floorscan.score.ground_truth import load_recall_references
+from floorscan.core.score_tables import GROUND_TRUTH, REFERENCE
 from floorscan.score.growing import SamplePairs, score_walls
 from floorscan.score.nearest import SegmentIndex, nearest_below, nearest_distances
 from floorscan.score.runs import score_dataset
-from floorscan.score.segments import (
-    row_keys,
-    as_segments,
-    dedupe_samples,
-    gt_samples,
-    sample_segments,
-    segment_lengths,
-)
+from floorscan.score.segments import row_keys, dedupe_samples, gt_samples, sample_segments
+from floorscan.core.segments import as_segments, segment_lengths
 from floorscan.score.summary import grid_summary_markdown, summarize
 from floorscan.score.tolerance import tolerance_metrics
 
@@ -560,7 +549,7 @@ def test_wall_cells_of_batches_union_to_the_bitmap():
     whole = rasterize_segments(seg, grid, 0.1)
     parts = np.zeros(grid.shape, bool)
     for i in range(len(seg)):
-        owner, flat = raster_cells(seg[i:i + 1], grid, 0.1)
+        owner, flat = segment_cells(seg[i:i + 1], grid, 0.1)
         assert (owner == 0).all()
         parts.reshape(-1)[flat] = True
     assert np.array_equal(parts, whole) and whole.sum() > 1000

@@ -16,7 +16,8 @@ from floorscan.floorplan.plan import FloorPlan, build_floorplan
 from floorscan.floorplan.scans import ScanPlans, plan_of_scans, read_plan, write_plan
 from floorscan.floorplan.writer import FloorplanWriter
 from floorscan.score.geojson import read_floorplan
-from floorscan.select.deliverables import SCAN_TABLE, selected_scan_ids, write_scan_table
+from floorscan.select.deliverables import SCAN_TABLE, write_scan_table
+from floorscan.core.selection import selected_scan_ids
 from floorscan.walls.first_k import first_k_walls
 from test_floorplan import BOX, THICK, scans_segments
 

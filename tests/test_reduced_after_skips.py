@@ -20,7 +20,7 @@ import pytest
 from conftest import T0_NS, flaser_line, robotlaser_line, write_carmen
 from floorscan.core.io import SCAN_INDEX, InputError, read_metadata, read_table, write_table
 from floorscan.ingest.readers import open_recording
-from floorscan.select.recording import read_detection, write_reduced_recording
+from floorscan.ingest.reduced import read_detection, write_reduced_recording
 from test_bad_input_frames import _bag, _ds, _ingest
 
 

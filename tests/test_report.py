@@ -16,7 +16,7 @@ import pytest  # noqa: E402
 
 from floorscan.figures import report as R  # noqa: E402
 from floorscan.figures.pages import OutputFile  # noqa: E402
-from floorscan.score.curve_summary import SUMMARY_COLUMNS  # noqa: E402
+from floorscan.core.score_tables import SUMMARY_COLUMNS  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -279,7 +279,7 @@ def test_a_registered_ordering_is_made_measured_and_summarised(synthetic, monkey
 
 
 def test_schema_defaults_match_dataclasses():
-    from floorscan.figures.selection import FigureParams
+    from floorscan.select.figure_data import FigureParams
     from floorscan.select.params import CoverageParams
 
     schema = yaml.safe_load((REPO / "workflow/schemas/select.schema.yaml").read_text())
@@ -298,22 +298,27 @@ def test_schema_defaults_match_dataclasses():
 
 
 def test_figures(synthetic, tmp_path):
-    from floorscan.figures.selection import FigureParams, selection_figures
+    from floorscan.figures.selection import selection_figures
+    from floorscan.select.figure_data import FigureParams, selection_figure_data
 
     registered, registration, hulls, convex, ids, _ = synthetic
     orderings, _ = select_stage(hulls, convex, registration)
     out = [tmp_path / f"{n}.png" for n in ("cov", "clu", "time")]
-    timing = selection_figures(registered, registration, hulls, orderings, HullParams(), SelectParams(),
-                               FigureParams(figure_k_clusters=(1, 10), figure_reference_max_scans=30),
-                               *out, title="synthetic", convex_hulls=convex)
+    data = selection_figure_data(registered, registration, hulls, orderings, HullParams(), SelectParams(),
+                                 FigureParams(figure_k_clusters=(1, 10), figure_reference_max_scans=30),
+                                 convex_hulls=convex)
+    selection_figures(orderings, data.k99, data.clusters, data.timing, *out, title="synthetic")
     assert all(p.stat().st_size > 10_000 for p in out)
+    assert data.k99 == {name: k_for_fraction(o.sort_values("rank"), 0.99) for name, o in orderings.items()}
+    assert sorted(data.clusters) == [1, 10]
+    timing = data.timing
     assert timing["n_scans"].max() == len(ids)
     ran = timing.dropna(subset=["reference_s"])
     assert len(ran) >= 2 and ran["identical"].all()
 
 
 def test_coverage_vs_clusters_streamed_and_reusing_the_stage_hulls(synthetic, tmp_path):
-    from floorscan.figures.selection import coverage_vs_clusters
+    from floorscan.select.figure_data import coverage_vs_clusters
     from floorscan.core.io import write_table
 
     registered, _, hulls, convex, ids, _ = synthetic
@@ -415,7 +420,7 @@ def test_crossings_ordered_as_lexsort():
 def test_coverage_vs_clusters_streams_float64_tables_unrounded(synthetic, tmp_path, monkeypatch):
     """registered.parquet is float32 (read as stored, widened exactly); a table stored
     in float64 is read as float64, not rounded to float32."""
-    import floorscan.figures.selection as fsel
+    import floorscan.select.figure_data as fsel
     from floorscan.core.io import write_table
 
     registered, _, _, _, ids, _ = synthetic

@@ -9,11 +9,12 @@ import yaml
 
 from floorscan.walls.cluster import cluster_ransac, wall_signature
 from floorscan.walls.extract import extract_walls
-from floorscan.walls.first_k import first_k_walls, parse_k
+from floorscan.walls.first_k import first_k_walls
+from floorscan.core.selection import parse_k
 from floorscan.walls.meanshift import mean_shift
 from floorscan.walls.normals import point_normals
-from floorscan.walls.params import ClusterParams, RansacParams, ScanParams
-from floorscan.walls.points import scan_points_2d
+from floorscan.walls.params import ClusterParams, RansacParams
+from floorscan.core.wall_points import ScanParams, scan_points_2d
 from floorscan.walls.ransac import ransac
 
 REPO = Path(__file__).resolve().parents[1]

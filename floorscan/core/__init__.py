@@ -13,8 +13,18 @@
   (``concurrent.futures`` with spawn), thread limits;
 - :mod:`~floorscan.core.shards`: the per-scan stages split by scan range into jobs;
 - :mod:`~floorscan.core.occupancy` (the occupancy grid of scans, map_server maps),
-  :mod:`~floorscan.core.occupancy_classes` (a grid of given classes: a map);
-- :mod:`~floorscan.core.geometry` (SE(2), points along wall segments),
+  :mod:`~floorscan.core.occupancy_classes` (a grid of given classes: a map),
+  :mod:`~floorscan.core.occupancy_map` (a map_server map or a map image read as that
+  grid: ingest's map input, and what was read of it, ``map/map.json``, for the pages);
+- what a stage's files hold, as the stages after it read them:
+  :mod:`~floorscan.core.plan_tables` (a floor plan's tables),
+  :mod:`~floorscan.core.selection` (which scans: the first k of an ordering, the
+  selected ones), :mod:`~floorscan.core.score_tables` (the score stage's tables: the
+  values and names of their columns, their cells for people);
+- :mod:`~floorscan.core.wall_points` (a scan's 2D wall points: the height band of 3D
+  scans), :mod:`~floorscan.core.geometry` (SE(2), points along wall segments),
+  :mod:`~floorscan.core.segments` (wall segments as arrays),
+  :mod:`~floorscan.core.segment_raster` (wall segments on the scoring grid),
   :mod:`~floorscan.core.grid` (integer grid cells), :mod:`~floorscan.core.greedy` (lazy
   greedy maximum coverage, for the coverage orderings and the score stage's oracle).
 """

@@ -74,6 +74,12 @@ POSES = pa.schema(
         ("reason", pa.string()),
     ]
 )
+#: Values of ``poses.parquet``'s ``reason``: why a scan has no pose (the ``poses``
+#: stage's interpolation, :mod:`floorscan.ingest.poses`; the register stage counts them).
+BEFORE = "before_pose_stream"
+AFTER = "after_pose_stream"
+GAP = "pose_gap"
+NO_POSE_SOURCE = "no_pose_source"
 
 
 class InputError(ValueError):
@@ -237,6 +243,27 @@ def recording_source(path: str | os.PathLike) -> str | None:
         return read_metadata(path).get("source")
     except (OSError, pa.ArrowException):
         return None
+
+
+def describe_recording(detected: Mapping[str, str], mode: str = "") -> str:
+    """What a recording was found to be and how it was registered, for people (the
+    report's figure title, ``summary.md``): ``format rosbag, scan_topic /scan,
+    pose_source ..., stamps recorded; registered in odometry mode``.
+
+    Parameters
+    ----------
+    detected : mapping of str to str
+        The scan index's schema metadata (:func:`read_metadata`): what ingest detected
+        (:attr:`floorscan.ingest.recording.Recording.detected`).
+    mode : str
+        The register mode used; ``""``: ``pose``.
+
+    Returns
+    -------
+    str
+    """
+    found = ", ".join(f"{k} {detected[k]}" for k in ("format", "scan_topic", "pose_source", "stamps") if k in detected)
+    return f"{found or 'as configured'}; registered in {mode or 'pose'} mode"
 
 
 def split_by_scan(df: pd.DataFrame, columns: tuple[str, ...] = ("x", "y", "z")) -> dict[int, np.ndarray]:

@@ -7,7 +7,9 @@
   the user's data without :func:`quoted`;
 - :func:`system_error` and :func:`system_error_message`: an ``OSError`` that is the
   machine's, not the recording's (no space left, a read-only file system, permission
-  denied), as one paragraph that names the path and what to do.
+  denied), as one paragraph that names the path and what to do;
+- :func:`count_text`: a count and its noun (``1 room``, ``12 rooms``), as every message
+  and page counts things.
 """
 
 from __future__ import annotations
@@ -201,3 +203,20 @@ def _is_input(path: str, inputs: Iterable[str | os.PathLike]) -> bool:
         if p == q or q in p.parents:
             return True
     return False
+
+
+def count_text(n: int, noun: str) -> str:
+    """``"1 room"``, ``"12 rooms"``: a count of things as the plan's SVG summary, the
+    pages and the run's last lines give it.
+
+    Parameters
+    ----------
+    n : int
+    noun : str
+        Singular; the plural adds ``s``.
+
+    Returns
+    -------
+    str
+    """
+    return f"{n} {noun}{'' if n == 1 else 's'}"

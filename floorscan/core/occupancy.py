@@ -25,7 +25,7 @@ the returns evidence of an obstacle. Each cell's log-odds is the sum of its upda
 Rays are sampled every ``step_fraction`` of a cell along their length (the cells a
 ray crosses, up to a corner clipped by less than a quarter cell); the return's own
 cell is not a miss of that scan. 3D scans are cut to the walls' height band first
-(:func:`floorscan.walls.points.scan_points_2d`), so the grid is the plan view the floor plan
+(:func:`floorscan.core.wall_points.scan_points_2d`), so the grid is the plan view the floor plan
 is drawn in.
 
 Usage::

@@ -14,7 +14,9 @@ counter-clockwise exterior, clockwise holes), so the tables and the export of on
 give the same numbers, vertex for vertex.
 
 :func:`write_plan_tables` writes the folder (into a temporary folder, then renamed:
-a crash leaves no half plan); :func:`read_plan_tables` reads it back, any parts.
+a crash leaves no half plan); :func:`read_plan_tables` reads it back, any parts;
+:func:`plan_faces_and_walls` and :func:`plan_rooms` read what the scores and the pages
+take of it.
 """
 
 from __future__ import annotations
@@ -211,3 +213,46 @@ def plan_faces_and_walls(folder: str | os.PathLike) -> tuple[np.ndarray, int]:
     """
     t = read_plan_tables(folder, ("walls", "faces"), {"walls": ["wall_id"], "faces": ["x0", "y0", "x1", "y1"]})
     return t["faces"].to_numpy(np.float64).reshape(-1, 4), len(t["walls"])
+
+
+def plan_rooms(folder: str | os.PathLike) -> tuple[list[dict], pd.DataFrame]:
+    """The rooms and doors of a plan folder, as the plan's exports and the room scores
+    take them: a room without a polygon (missing or empty), which the exports skip, is
+    left out.
+
+    Parameters
+    ----------
+    folder : path
+
+    Returns
+    -------
+    rooms : list of dict
+        In the tables' order (the GeoJSON export's), one per room with a polygon:
+        ``room_id`` (int), ``name`` (str), ``kind`` (``room``, ``corridor`` or
+        ``space``), ``area_m2`` (float, square metres), ``perimeter_m`` (float, metres)
+        and ``polygon`` (shapely Polygon, map metres, as stored: rounded to
+        :data:`PLAN_DECIMALS`). Empty for a plan without rooms.
+    doors : pandas.DataFrame
+        The doors table (:data:`PLAN_SCHEMAS` ``doors``), as stored.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the folder is not a plan folder.
+    """
+    import shapely
+
+    # walls: a folder that is not a plan raises (rooms and doors may be absent)
+    t = read_plan_tables(folder, ("walls", "rooms", "doors"), {"walls": ["wall_id"]})
+    r = t["rooms"]
+    rooms = []
+    polys = shapely.from_wkb(r["polygon"].to_numpy()) if len(r) else []
+    for room_id, name, kind, area, perimeter, poly in zip(
+        r["room_id"].tolist(), r["name"].tolist(), r["kind"].tolist(), r["area_m2"].tolist(),
+        r["perimeter_m"].tolist(), polys,
+    ):  # fmt: skip
+        if poly is None or poly.is_empty:
+            continue
+        rooms.append({"room_id": int(room_id), "name": str(name), "kind": str(kind), "area_m2": float(area),
+                      "perimeter_m": float(perimeter), "polygon": poly})  # fmt: skip
+    return rooms, t["doors"]

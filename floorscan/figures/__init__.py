@@ -1,6 +1,10 @@
 """Figures and the report (stage ``figures``): the thesis's Chapter 5 figures and the
-dataset's front page. The top layer: it reads every stage's outputs and may import any
-stage package.
+dataset's front page. It reads every stage's files (through :mod:`floorscan.core`'s
+readers) and imports no other stage package (../shared/ARCHITECTURE.md); what a figure
+needs computed by a stage is in that stage's files (the bitmap overlay's numbers:
+``score/<extractor>.parquet``) or is handed over by the figure job's script (the
+selection figures' curves, :mod:`floorscan.select.figure_data`; the plans' footprints,
+:func:`floorscan.floorplan.footprints.read_plan_footprints`).
 
 - :mod:`~floorscan.figures.registration` (the registered map),
   :mod:`~floorscan.figures.selection` (coverage against scans and clusters, Figs 5.6-5.8);

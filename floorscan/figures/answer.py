@@ -71,7 +71,7 @@ def answer_lines(
     list of str
     """
     from floorscan.figures.index_page import registration_verdict, verdict_class
-    from floorscan.select.recommend import read_selection
+    from floorscan.core.selection import read_selection
 
     failed = dict(failed or {})
     root = Path(results)
@@ -148,7 +148,7 @@ def map_answer_lines(dataset: str, root: str | os.PathLike, many: bool = False) 
     list of str
         Empty when ``<root>/<dataset>/map/map.json`` is not made yet.
     """
-    from floorscan.ingest.occupancy_map import map_line, read_map_info
+    from floorscan.core.occupancy_map import map_line, read_map_info
 
     folder = Path(root) / dataset
     info_path = folder / "map" / "map.json"
@@ -186,7 +186,7 @@ def plan_counts(geojson: str | os.PathLike) -> str:
     str
         Empty when the file cannot be read or names no count.
     """
-    from floorscan.floorplan.metadata import count_text
+    from floorscan.core.messages import count_text
 
     try:
         meta = json.loads(Path(geojson).read_text()).get("floorscan") or {}
@@ -217,6 +217,35 @@ def format_bytes(n: int) -> str:
     return f"{n} B"
 
 
+def summary_header(dataset: str, verdict=None, recording=None, mode: str = "") -> list[str]:
+    """The lines that head ``summary.md``: the title, the registration's verdict and
+    what the recording was found to be.
+
+    Parameters
+    ----------
+    dataset : str
+    verdict : dict, optional
+        :meth:`floorscan.register.consistency.Verdict.as_dict`.
+    recording : mapping, optional
+        Ingest's detection, the scan index's metadata
+        (:func:`floorscan.core.io.describe_recording`).
+    mode : str
+        The register mode used.
+
+    Returns
+    -------
+    list of str
+    """
+    from floorscan.core.io import describe_recording
+
+    lines = [f"# Scan reduction summary: {dataset}" if dataset else "# Scan reduction summary", ""]
+    if verdict:
+        lines += [f"**Verdict: {verdict['line']}**", ""]
+    if recording or mode:
+        lines += [f"Recording: {describe_recording(recording or {}, mode)}.", ""]
+    return lines
+
+
 def write_summary_markdown(
     path: str | os.PathLike,
     dataset: str,
@@ -226,7 +255,7 @@ def write_summary_markdown(
     evaluation: str | os.PathLike | None = None,
 ) -> str:
     """Write ``summary.md``, the answer in Markdown: the registration's verdict, what
-    ingest detected (:func:`floorscan.score.summary.summary_header`), k and why, where
+    ingest detected (:func:`summary_header`), k and why, where
     the answer's files are; then the evaluation's part (``evaluation/summary.md`` of
     the score stage) when the dataset was evaluated.
 
@@ -248,8 +277,7 @@ def write_summary_markdown(
     """
     from floorscan.core.files import atomic_path
     from floorscan.core.io import read_metadata
-    from floorscan.score.summary import summary_header
-    from floorscan.select.recommend import read_selection
+    from floorscan.core.selection import read_selection
 
     s = read_selection(selection)
     reg = read_metadata(registration)

@@ -2,7 +2,9 @@
 truth's (reference's), ground truth only blue (false negative), inferred only red
 (false positive), both purple (correct match).
 
-The bitmaps are those of :mod:`floorscan.score.bitmap` on the scoring grid;
+The bitmaps are the walls rasterized on the scoring grid
+(:mod:`floorscan.core.segment_raster`), as the score stage compares them; each panel's
+numbers are the score stage's (its table ``score/<extractor>.parquet``, the same grid).
 :func:`block_any` reduces a large grid for display without losing one-cell walls.
 """
 
@@ -15,7 +17,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from floorscan.figures.style import DPI, square_axes, reference_name, save_figure  # noqa: E402
-from floorscan.score.bitmap import Grid, bitmap_metrics, rasterize_segments  # noqa: E402
+from floorscan.core.segment_raster import Grid, rasterize_segments  # noqa: E402
 
 
 def overlay_image(inferred: np.ndarray, ground_truth: np.ndarray) -> np.ndarray:
@@ -70,11 +72,14 @@ def plot_bitmap_overlay(
 
     Parameters
     ----------
-    panels : list of (str, (M, 4) segments)
-        Panel title and inferred wall segments, metres.
+    panels : list of (str, (M, 4) segments, mapping or None)
+        Panel title, inferred wall segments (metres) and their scores: the score
+        stage's row of that run (``correct_match``, ``false_positive``,
+        ``false_negative``, ``wall_correct_match``; fractions), or None when the run
+        was not scored.
     reference : (K, 4) segments
         Ground truth or reference, metres.
-    grid : floorscan.score.bitmap.Grid
+    grid : floorscan.core.segment_raster.Grid
         The scoring grid (the same as ``metrics.parquet``'s).
     wall_width_m : float
         Drawn wall width, metres.
@@ -85,19 +90,18 @@ def plot_bitmap_overlay(
     n = max(1, len(panels))
     fig, axes = plt.subplots(1, n, figsize=(1050 * n / DPI, 900 / DPI), squeeze=False)
     ref = reference_name(reference_kind)
-    for ax, (name, seg) in zip(axes[0], panels):
+    for ax, (name, seg, m) in zip(axes[0], panels):
         bi = rasterize_segments(seg, grid, wall_width_m)
-        m = bitmap_metrics(bi, bg)
         img = overlay_image(block_any(bi, factor), block_any(bg, factor))
         x0, _, y0, _ = grid.extent
         step = grid.cell_m * factor
         extent = (x0, x0 + img.shape[1] * step, y0, y0 + img.shape[0] * step)
         ax.imshow(img, origin="lower", extent=extent, interpolation="nearest")
-        ax.set_title(
-            f"{name}\nCM {m['correct_match']:.4f}  FP {m['false_positive']:.4f}  "
-            f"FN {m['false_negative']:.4f}  wall-cell CM {m['wall_correct_match']:.3f}",
-            fontsize=9,
+        scores = (
+            f"CM {m['correct_match']:.4f}  FP {m['false_positive']:.4f}  FN {m['false_negative']:.4f}  "
+            f"wall-cell CM {m['wall_correct_match']:.3f}" if m is not None else "not scored"
         )
+        ax.set_title(f"{name}\n{scores}", fontsize=9)
         square_axes(ax)
     handles = [
         plt.Rectangle((0, 0), 1, 1, color=(0.1, 0.2, 1.0), label=f"{ref} only (FN)"),

@@ -18,8 +18,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from floorscan.figures.style import ORDERING_COLOURS, reference_name, save_figure  # noqa: E402
-from floorscan.score.ground_truth import GROUND_TRUTH  # noqa: E402
-from floorscan.score.tolerance import tau_label  # noqa: E402
+from floorscan.core.score_tables import GROUND_TRUTH, tau_label  # noqa: E402
 
 
 def plot_metrics_vs_k(metrics: pd.DataFrame, out, tau: float = 0.05) -> None:

@@ -1,9 +1,11 @@
 """Merged floor plans of the first k scans, orderings side by side over the ground truth
 or reference (thesis Fig. 5.5).
 
-:func:`plan_geometries` reads a plan's Parquet tables (the evaluation grid's) as one
-geometry per wall, its footprint; :func:`read_geojson_geometries` a floor plan's GeoJSON
-(footprint, or axis without one); :func:`plot_floorplans` draws the panels.
+:func:`plot_floorplans` draws the panels, given one geometry per wall: its footprint,
+as the plan's exports draw it (of a plan folder, the evaluation grid's Parquet tables:
+:func:`floorscan.floorplan.footprints.read_plan_footprints`, which the stage's script
+calls), or of a floor plan's GeoJSON (footprint, or axis without one:
+:func:`read_geojson_geometries`).
 """
 
 from __future__ import annotations
@@ -55,31 +57,6 @@ def read_geojson_geometries(path) -> list:
     walls = [footprints.get(w, g) for w, g in axes.items()]
     walls += [g for w, g in footprints.items() if w not in axes]
     return plain + walls
-
-
-def plan_geometries(folder) -> list:
-    """Shapely geometries of the walls of a plan folder (the evaluation grid's Parquet
-    tables, :func:`floorscan.floorplan.scans.read_plan`), one per wall: its footprint,
-    as the plan's exports draw it (:class:`~floorscan.floorplan.footprints.PlanExports`).
-
-    Parameters
-    ----------
-    folder : path
-
-    Returns
-    -------
-    list of shapely Polygon
-        Map metres, one per row of the plan's walls.
-
-    Raises
-    ------
-    FileNotFoundError
-        When the folder is not a plan folder.
-    """
-    from floorscan.floorplan.footprints import PlanExports
-    from floorscan.floorplan.scans import read_plan
-
-    return list(PlanExports(read_plan(folder)).polys)
 
 
 def _draw_geometry(ax, geom, colour, lw=1.2) -> None:

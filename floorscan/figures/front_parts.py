@@ -12,7 +12,7 @@ import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Mapping
 
-from floorscan.score.curve_summary import summary_cell
+from floorscan.core.score_tables import summary_cell
 
 if TYPE_CHECKING:  # pandas is imported by the functions that use it
     import pandas as pd
@@ -140,8 +140,7 @@ def read_summary(summary) -> "pd.DataFrame | None":
 
 def beats_random_lines(table: "pd.DataFrame", ordering: str) -> list[str]:
     """Does the recommended ordering, and the thesis's, beat random, per extractor."""
-    from floorscan.score.curve_summary import beats_random_line
-    from floorscan.score.curves import RANDOM
+    from floorscan.core.score_tables import RANDOM, beats_random_line
 
     present = set(table["ordering"])
     if RANDOM not in present:

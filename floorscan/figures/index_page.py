@@ -22,7 +22,7 @@ from pathlib import Path
 from urllib.parse import quote
 
 from floorscan.core.files import atomic_path
-from floorscan.floorplan.metadata import count_text
+from floorscan.core.messages import count_text
 
 #: Verdict classes, as :meth:`floorscan.register.consistency.Verdict.line` begins.
 VERDICT_CLASSES = ("GOOD", "WARNING", "POOR")

@@ -19,7 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from floorscan.figures.style import DPI, segments_collection, square_axes, save_figure  # noqa: E402
-from floorscan.score.segments import as_segments  # noqa: E402
+from floorscan.core.segments import as_segments  # noqa: E402
 
 
 def plot_reference_map(grid, out, title: str = "", faces=None) -> None:
@@ -118,9 +118,9 @@ def subsample_points(
     """``(N, 2)`` x, y of at most ``max_points`` points (seeded), optionally only those
     with z inside ``z_band`` when the points are 3D.
 
-    2D against 3D as the walls stage decides it (:func:`floorscan.walls.points.scan_points_2d`):
+    2D against 3D as the walls stage decides it (:func:`floorscan.core.wall_points.scan_points_2d`):
     points whose z spans at most ``planar_tolerance_m`` (default
-    :attr:`floorscan.walls.params.ScanParams.planar_tolerance_m`) came from a 2D scanner, at
+    :attr:`floorscan.core.wall_points.ScanParams.planar_tolerance_m`) came from a 2D scanner, at
     whatever height it was mounted (the simulated rovers' 0.3 m), and are all kept;
     here the span is the whole table's, not each scan's.
 
@@ -152,7 +152,7 @@ def subsample_points(
         A points file without ``x``, ``y`` or ``z``.
     """
     if planar_tolerance_m is None:
-        from floorscan.walls.params import ScanParams
+        from floorscan.core.wall_points import ScanParams
 
         planar_tolerance_m = ScanParams.planar_tolerance_m
     if isinstance(points, (str, Path)):

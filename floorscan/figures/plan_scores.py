@@ -78,7 +78,7 @@ def answer_curve_k(curve) -> dict:
         return {}
     import pandas as pd
 
-    from floorscan.score.answer_curve import k_reaching
+    from floorscan.core.score_tables import k_reaching
 
     c = curve if isinstance(curve, pd.DataFrame) else pd.read_csv(curve)
     return {round(level * 100): k_reaching(c, level) for level in (0.95, 0.99)}

@@ -100,7 +100,7 @@ class FrontPage:
         The ordering and the wall extractor of the recommended plan: named in its
         caption, highlighted in the summary table; the ordering and the thesis's
         (:data:`THESIS_ORDERING`) are compared with random
-        (:func:`floorscan.score.curve_summary.beats_random_line`).
+        (:func:`floorscan.core.score_tables.beats_random_line`).
     n_walls : int, optional
         Walls of the recommended plan.
     description : str
@@ -281,7 +281,7 @@ def answer_files(page_dir: "str | os.PathLike", selection: Mapping | None = None
     page_dir : path
         The page's folder, ``results/<dataset>``.
     selection : mapping, optional
-        ``selection/selection.json`` (:func:`floorscan.select.recommend.read_selection`):
+        ``selection/selection.json`` (:func:`floorscan.core.selection.read_selection`):
         where the scan list, the reduced recording and the points are; None for a map.
 
     Returns
@@ -407,7 +407,7 @@ def write_front_page_of_files(
     """
     from floorscan.core.plan_tables import plan_faces_and_walls
     from floorscan.core.io import read_metadata
-    from floorscan.select.recommend import read_selection
+    from floorscan.core.selection import read_selection
 
     page_dir = Path(path).parent
     sel = read_selection(selection)

@@ -13,8 +13,8 @@ import os
 
 def read_plan_rooms(folder: str | os.PathLike) -> list[dict]:
     """The rooms of a plan folder, in the tables' order (the GeoJSON export's), as the
-    scorer reads them (:func:`floorscan.score.rooms.read_plan_folder_rooms`: a room
-    without a polygon, which the export skips, is skipped).
+    scorer reads them (:func:`floorscan.core.plan_tables.plan_rooms`: a room without a
+    polygon, which the export skips, is skipped).
 
     Parameters
     ----------
@@ -33,10 +33,10 @@ def read_plan_rooms(folder: str | os.PathLike) -> list[dict]:
     FileNotFoundError
         When the folder is not a plan folder.
     """
-    from floorscan.score.rooms import read_plan_folder_rooms
+    from floorscan.core.plan_tables import plan_rooms
 
-    rooms, _ = read_plan_folder_rooms(folder)
-    return rooms[["room_id", "name", "kind", "area_m2"]].to_dict("records")
+    rooms, _ = plan_rooms(folder)
+    return [{k: room[k] for k in ("room_id", "name", "kind", "area_m2")} for room in rooms]
 
 
 def with_room_scores(answer, room_scores):

@@ -17,6 +17,8 @@ output in the rule's ``output:`` (``workflow/rules/score.smk``).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pandas as pd
 
@@ -28,10 +30,52 @@ from floorscan.figures.maps import plot_walls_over_points, subsample_points
 from floorscan.figures.stage_times import plot_stage_times, stage_times
 from floorscan.figures.style import reference_name
 from floorscan.figures.wall_extraction import plot_wall_extraction
-from floorscan.score.bitmap import grid_for
-from floorscan.core.config import stage_params
-from floorscan.score.params import ScoreParams
-from floorscan.score.segments import as_segments
+from floorscan.core.config import schema_defaults, stage_params
+from floorscan.core.segment_raster import grid_for
+from floorscan.core.segments import as_segments
+
+
+@dataclass(frozen=True)
+@schema_defaults("score")
+class ScoreFigureParams:
+    """The keys of the ``score`` config section the figures read
+    (``stage_params(ScoreFigureParams, config["score"])``: the section's other keys are
+    the score stage's, :class:`floorscan.score.params.ScoreParams`).
+
+    Attributes
+    ----------
+    figure_k : int
+        The k of the floor plan, bitmap overlay and walls-over-points figures.
+    figure_orderings : list of str
+        Orderings side by side in the floor plan and bitmap overlay figures.
+    figure_ordering : str
+        Ordering of the walls-over-points figures.
+    figure_extractor : str
+        Extractor of the floor plan and bitmap overlay figures.
+    cell_m, margin_m, wall_width_m : float
+        The scoring grid (cell side, margin around the walls) and the wall width drawn
+        on it, metres: the score stage's (thesis section 5.1).
+    max_plot_points : int
+        Points drawn under the walls at most.
+    points_z_band_m : list of float
+        Height band of the points drawn, metres.
+    seed : int
+        Seed of the point subsample.
+    summary_tau_m : float
+        The tolerance of the F1 drawn against k, metres.
+    """
+
+    figure_k: int
+    figure_orderings: list
+    figure_ordering: str
+    figure_extractor: str
+    cell_m: float
+    margin_m: float
+    wall_width_m: float
+    max_plot_points: int
+    points_z_band_m: list
+    seed: int
+    summary_tau_m: float
 
 
 def make_walls_figures(
@@ -40,6 +84,7 @@ def make_walls_figures(
     reference: dict,
     reference_kind: str,
     walls: dict,
+    scores,
     floorplans: dict,
     points,
     scan_status: dict,
@@ -62,6 +107,11 @@ def make_walls_figures(
     walls : dict
         ``{(ordering, extractor, k_label): DataFrame}`` raw wall segments for the
         figure runs (``cfg.figure_k`` and ``"all"``).
+    scores : pandas.DataFrame or None
+        The score stage's scores of the figure extractor's runs
+        (``score/<extractor>.parquet``: ``ordering``, ``extractor``, ``k`` and the bitmap
+        metrics), the numbers of the bitmap overlay's panels; None: not scored (the
+        figure extractor is not one of the extractors).
     floorplans : dict
         ``{(ordering, extractor): list of geometries}`` merged floor plans at
         ``cfg.figure_k``.
@@ -77,10 +127,10 @@ def make_walls_figures(
     outputs : dict
         Paths: ``floorplan``, ``bitmap_overlay``, ``walls_over_points_k``,
         ``walls_over_points_all``, ``wall_extraction``.
-    cfg : ScoreParams or mapping
+    cfg : ScoreFigureParams or mapping
         The ``score`` config section.
     """
-    cfg = stage_params(ScoreParams, cfg)
+    cfg = stage_params(ScoreFigureParams, cfg)
     k = str(cfg.figure_k)
     ext_fig = cfg.figure_extractor
     ordering_fig = cfg.figure_ordering
@@ -97,8 +147,10 @@ def make_walls_figures(
 
     all_refs = [as_segments(s) for s in reference.values() if len(as_segments(s))]
     grid = grid_for(np.vstack(all_refs), cfg.cell_m, cfg.margin_m)
+    rows = [] if scores is None else scores.to_dict("records")
+    scored = {(r["ordering"], r["extractor"], str(r["k"])): r for r in rows}
     panels = [
-        (f"{o}, {ext_fig}, first {k} scans", walls.get((o, ext_fig, k), np.zeros((0, 4))))
+        (f"{o}, {ext_fig}, first {k} scans", walls.get((o, ext_fig, k), np.zeros((0, 4))), scored.get((o, ext_fig, k)))
         for o in cfg.figure_orderings
     ]
     plot_bitmap_overlay(panels, ref_fig, reference_kind, grid, cfg.wall_width_m,
@@ -138,7 +190,7 @@ def make_score_figures(*, dataset: str, metrics: pd.DataFrame, bench_dir, output
         (the rule runs last, after the other figures).
     outputs : dict
         Paths: ``metrics_vs_k``, ``stage_times_png``, ``stage_times_tsv``.
-    cfg : ScoreParams or mapping
+    cfg : ScoreFigureParams or mapping
         The ``score`` config section.
 
     Returns
@@ -146,7 +198,7 @@ def make_score_figures(*, dataset: str, metrics: pd.DataFrame, bench_dir, output
     pandas.DataFrame
         :func:`floorscan.figures.stage_times.stage_times`.
     """
-    cfg = stage_params(ScoreParams, cfg)
+    cfg = stage_params(ScoreFigureParams, cfg)
     plot_metrics_vs_k(metrics, outputs["metrics_vs_k"], cfg.summary_tau_m)
     table = stage_times(bench_dir)
     with atomic_path(outputs["stage_times_tsv"]) as tmp:

@@ -1,21 +1,20 @@
-"""Figures of the scan selection (thesis Figs 5.6, 5.7, 5.8), matplotlib Agg.
+"""Figures of the scan selection (thesis Figs 5.6, 5.7, 5.8), matplotlib Agg, of the data
+the select stage computes for them (:mod:`floorscan.select.figure_data`, which the
+figure job's script hands over):
 
 - :func:`plot_coverage_vs_scans`: covered area against number of scans, per ordering
   (Fig. 5.6), with the 99 % point of each ordering marked.
-- :func:`coverage_vs_clusters` / :func:`plot_coverage_vs_clusters`: the greedy
-  ``cluster_hull`` coverage curve for several numbers of KMeans clusters (Fig. 5.7).
-- :func:`selection_timing` / :func:`plot_selection_time`: time to order n scans, the
-  lazy greedy against the reference Algorithm 1 (Fig. 5.8). The reference is
-  O(n^2) and is timed only up to ``reference_max_scans`` (default 150), so that the
-  figure stage stays short.
+- :func:`plot_coverage_vs_clusters`: the greedy ``cluster_hull`` coverage curve for
+  several numbers of KMeans clusters (Fig. 5.7).
+- :func:`plot_selection_time`: time to order n scans, the lazy greedy against the
+  reference Algorithm 1 (Fig. 5.8).
+- :func:`selection_figures`: the three.
 """
 
 from __future__ import annotations
 
 import os
-import time
-from dataclasses import dataclass
-from typing import Iterable, Mapping, Sequence
+from typing import Mapping
 
 import matplotlib
 
@@ -23,43 +22,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
-import pyarrow as pa  # noqa: E402
-import pyarrow.parquet as pq  # noqa: E402
 
 from floorscan.figures.style import ORDERING_COLOURS, save_figure  # noqa: E402
-from floorscan.select.hulls import kept_scan_ids, scan_coverage, scan_hulls  # noqa: E402
-from floorscan.core.io import split_by_scan  # noqa: E402
-from floorscan.core.io import iter_scans  # noqa: E402
-from floorscan.select.greedy import greedy_coverage, greedy_reference  # noqa: E402
-from floorscan.select.params import HullParams, SelectParams  # noqa: E402
-from floorscan.select.registry import ORDERINGS  # noqa: E402
-from floorscan.select.summary import k_for_fraction  # noqa: E402
-from floorscan.core.config import schema_defaults
 
 #: Line width of the greedy orderings in Fig. 5.6 (the baselines: 1.2).
 _LINE_WIDTHS = {"cluster_hull": 2.0, "convex_hull": 1.5, "wall_coverage": 2.0, "surface_coverage": 1.5}
-
-
-@dataclass(frozen=True)
-@schema_defaults("select", figure_k_clusters=lambda d: tuple(int(k) for k in d["figure_k_clusters"]))
-class FigureParams:
-    """The ``figure_*`` keys of the ``select`` config section
-    (``stage_params(FigureParams, config["select"])``: the section's other keys are
-    other classes', an unknown key a :class:`~floorscan.core.config.ConfigError`).
-
-    Attributes
-    ----------
-    figure_k_clusters : tuple of int
-        Cluster counts of Fig. 5.7 (1 = convex hull).
-    figure_max_scans : int
-        Figs 5.7/5.8 use at most this many scans, evenly spaced in recording order.
-    figure_reference_max_scans : int
-        Fig. 5.8 times the reference greedy only up to this many scans.
-    """
-
-    figure_k_clusters: tuple[int, ...]
-    figure_max_scans: int
-    figure_reference_max_scans: int
 
 
 def _finish(fig, ax, dataset: str, what: str, path: str | os.PathLike) -> None:
@@ -72,7 +39,9 @@ def _finish(fig, ax, dataset: str, what: str, path: str | os.PathLike) -> None:
     save_figure(fig, path)
 
 
-def plot_coverage_vs_scans(orderings: Mapping[str, pd.DataFrame], path: str | os.PathLike, title: str = "") -> None:
+def plot_coverage_vs_scans(
+    orderings: Mapping[str, pd.DataFrame], k99: Mapping[str, int], path: str | os.PathLike, title: str = ""
+) -> None:
     """Thesis Fig. 5.6: cumulative covered area against number of scans per ordering;
     the point where each ordering reaches 99 % of its final area is marked.
 
@@ -80,103 +49,28 @@ def plot_coverage_vs_scans(orderings: Mapping[str, pd.DataFrame], path: str | os
     ----------
     orderings : mapping of str to pandas.DataFrame
         Ordering name -> ``rank``, ``covered_area_m2`` (square metres).
+    k99 : mapping of str to int
+        Ordering name -> the fewest scans reaching 99 % of its final area
+        (:func:`floorscan.select.figure_data.k99`); 0: none marked.
     path : path
         PNG output, written atomically (:func:`~floorscan.figures.style.save_figure`).
     title : str
     """
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    for name in [o for o in ORDERINGS if o in orderings] + [o for o in orderings if o not in ORDERINGS]:
+    # the registry's orderings in its order (their colours'), then any other
+    for name in [o for o in ORDERING_COLOURS if o in orderings] + [o for o in orderings if o not in ORDERING_COLOURS]:
         o = orderings[name].sort_values("rank")
         cov = o["covered_area_m2"].to_numpy()
         n = np.arange(1, len(cov) + 1)
-        k99 = k_for_fraction(o, 0.99)
+        k = int(k99[name])
         colour = ORDERING_COLOURS.get(name)
-        ax.plot(n, cov, label=f"{name} (99 % at {k99})", color=colour, lw=_LINE_WIDTHS.get(name, 1.2))
-        if k99:
-            ax.plot([k99], [cov[k99 - 1]], "o", color=colour, ms=5)
+        ax.plot(n, cov, label=f"{name} (99 % at {k})", color=colour, lw=_LINE_WIDTHS.get(name, 1.2))
+        if k:
+            ax.plot([k], [cov[k - 1]], "o", color=colour, ms=5)
     ax.set_xscale("log")
     ax.set_xlabel("number of scans")
     ax.set_ylabel("covered area (cluster hulls), m²")
     _finish(fig, ax, title, "covered area against the number of scans, per ordering", path)
-
-
-def _spaced(ids: np.ndarray, max_scans: int) -> np.ndarray:
-    if len(ids) <= max_scans:
-        return ids
-    return ids[np.unique(np.linspace(0, len(ids) - 1, max_scans).round().astype(int))]
-
-
-def coverage_vs_clusters(
-    registered: pd.DataFrame | str | os.PathLike | Iterable[tuple[int, np.ndarray]],
-    scan_ids: Sequence[int],
-    k_values: Sequence[int],
-    hull_params: HullParams = HullParams(),
-    raster_m: float = 0.05,
-    hulls: pd.DataFrame | None = None,
-    convex: pd.DataFrame | None = None,
-) -> dict[int, pd.DataFrame]:
-    """Greedy ``cluster_hull`` ordering for each number of clusters (Fig. 5.7).
-
-    Parameters
-    ----------
-    registered : DataFrame, path or iterable of (int, (n, >=2) ndarray)
-        Map-frame points ``scan_id, x, y`` (metres): a frame, ``registered.parquet``
-        (streamed scan by scan, :func:`floorscan.core.io.iter_scans`), or the scans.
-        Read once for all ``k_values``.
-    scan_ids : sequence of int
-        The scans to order.
-    k_values : sequence of int
-        KMeans cluster counts; 1 gives the convex hull.
-    hull_params : HullParams
-        The other hull parameters (``k_clusters`` is replaced).
-    raster_m : float
-        Coverage raster cell, metres.
-    hulls : DataFrame, optional
-        The hulls stage's table (made with ``hull_params``): its rows are used for
-        ``k = hull_params.k_clusters`` instead of clustering again (the same hulls:
-        a scan's hulls depend only on the scan, the parameters and the seed).
-    convex : DataFrame, optional
-        The hulls stage's convex hulls (``convex_hulls.parquet``): used for ``k = 1``,
-        whose cluster hull is the convex hull of the scan (one cluster, every point
-        kept), instead of hulling every scan again.
-
-    Returns
-    -------
-    dict k -> ordering frame (``rank, scan_id, covered_area_m2, gain_m2``).
-    """
-    return _coverage_curves(registered, scan_ids, k_values, hull_params, raster_m, hulls, convex)[0]
-
-
-def _coverage_curves(registered, scan_ids, k_values, hull_params, raster_m, hulls, convex):
-    """:func:`coverage_vs_clusters` and, per k, the scans' coverage (ids, geometries)
-    that the curves ordered (Fig. 5.8 times the greedy on those of the stage's k)."""
-    ids = np.asarray(scan_ids, dtype=np.int64)
-    known = {}
-    if hulls is not None:
-        known[int(hull_params.k_clusters)] = hulls[np.isin(hulls["scan_id"].to_numpy(), ids)]
-    if convex is not None:
-        known[1] = convex[np.isin(convex["scan_id"].to_numpy(), ids)]
-    todo = [int(k) for k in dict.fromkeys(int(k) for k in k_values) if int(k) not in known]
-    if todo:
-        if isinstance(registered, pd.DataFrame):
-            scans = split_by_scan(registered[np.isin(registered["scan_id"].to_numpy(), ids)], ("x", "y")).items()
-        elif isinstance(registered, (str, os.PathLike)):
-            # float32 as stored (the registered.parquet contract): the scans not drawn
-            # are skipped without a float64 copy, scan_hulls widens the drawn ones exactly
-            schema = pq.read_schema(registered)
-            f32 = all(schema.field(c).type == pa.float32() for c in ("x", "y") if c in schema.names)
-            scans = iter_scans(registered, ("x", "y"), dtype=np.float32 if f32 else np.float64)
-        else:
-            scans = registered
-        params = [HullParams(**{**hull_params.as_dict(), "k_clusters": k}) for k in todo]
-        made, _, _ = scan_hulls(scans, params, scan_ids=ids, convex=False)
-        known.update(zip(todo, made))
-    out, coverage = {}, {}
-    for k in k_values:
-        if int(k) not in coverage:
-            coverage[int(k)] = scan_coverage(known[int(k)], ids)
-        out[int(k)] = greedy_coverage(*coverage[int(k)], raster_m)
-    return out, coverage
 
 
 def plot_coverage_vs_clusters(curves: Mapping[int, pd.DataFrame], path: str | os.PathLike, title: str = "") -> None:
@@ -203,50 +97,6 @@ def plot_coverage_vs_clusters(curves: Mapping[int, pd.DataFrame], path: str | os
     _finish(fig, ax, title, "covered area against the number of scans, per number of KMeans clusters", path)
 
 
-def selection_timing(
-    scan_ids: Sequence[int],
-    geometries: Sequence,
-    sizes: Sequence[int],
-    reference_max_scans: int = 150,
-    raster_m: float = 0.05,
-) -> pd.DataFrame:
-    """Time the lazy and the reference greedy on the first n scans (Fig. 5.8).
-
-    Parameters
-    ----------
-    scan_ids : (S,) sequence of int
-    geometries : (S,) sequence of shapely geometry
-        Coverage of each scan, metres.
-    sizes : sequence of int
-        The n to time (capped at S).
-    reference_max_scans : int
-    raster_m : float
-        Metres.
-
-    Returns
-    -------
-    DataFrame
-        ``n_scans``, ``fast_s``, ``reference_s`` (NaN above ``reference_max_scans``),
-        ``identical`` (bool, orderings equal; NA when the reference was not run).
-    """
-    ids = np.asarray(scan_ids, dtype=np.int64)
-    geoms = np.asarray(geometries, dtype=object)
-    rows = []
-    for n in sizes:
-        n = int(min(n, len(ids)))
-        t0 = time.perf_counter()
-        fast = greedy_coverage(ids[:n], geoms[:n], raster_m)
-        fast_s = time.perf_counter() - t0
-        ref_s, same = np.nan, pd.NA
-        if n <= reference_max_scans:
-            t0 = time.perf_counter()
-            ref = greedy_reference(ids[:n], geoms[:n], raster_m)
-            ref_s = time.perf_counter() - t0
-            same = bool(np.array_equal(fast["scan_id"].to_numpy(), ref["scan_id"].to_numpy()))
-        rows.append({"n_scans": n, "fast_s": fast_s, "reference_s": ref_s, "identical": same})
-    return pd.DataFrame(rows)
-
-
 def plot_selection_time(timing: pd.DataFrame, path: str | os.PathLike, title: str = "") -> None:
     """Thesis Fig. 5.8: selection time against number of scans, lazy vs reference
     greedy.
@@ -254,7 +104,8 @@ def plot_selection_time(timing: pd.DataFrame, path: str | os.PathLike, title: st
     Parameters
     ----------
     timing : pandas.DataFrame
-        :func:`selection_timing`.
+        :func:`floorscan.select.figure_data.selection_timing`: ``n_scans``, ``fast_s``,
+        ``reference_s`` (seconds).
     path : path
         PNG output, written atomically (:func:`~floorscan.figures.style.save_figure`).
     title : str
@@ -271,57 +122,32 @@ def plot_selection_time(timing: pd.DataFrame, path: str | os.PathLike, title: st
 
 
 def selection_figures(
-    registered: pd.DataFrame | str | os.PathLike,
-    registration: pd.DataFrame,
-    hulls: pd.DataFrame,
     orderings: Mapping[str, pd.DataFrame],
-    hull_params: HullParams,
-    select_params: SelectParams,
-    params: FigureParams,
+    k99: Mapping[str, int],
+    clusters: Mapping[int, pd.DataFrame],
+    timing: pd.DataFrame,
     out_coverage: str | os.PathLike,
     out_clusters: str | os.PathLike,
     out_timing: str | os.PathLike,
     title: str = "",
-    convex_hulls: pd.DataFrame | None = None,
-) -> pd.DataFrame:
-    """Write the three selection figures (thesis Figs. 5.6 to 5.8).
+) -> None:
+    """Write the three selection figures (thesis Figs. 5.6 to 5.8) of the select stage's
+    data (:func:`floorscan.select.figure_data.selection_figure_data`).
 
     Parameters
     ----------
-    registered : pandas.DataFrame or path
-        The points frame or ``registered.parquet`` (streamed scan by scan: memory
-        follows the largest scan).
-    registration : pandas.DataFrame
-        ``registration.parquet``.
-    hulls : pandas.DataFrame
-        The hulls stage's table, made with ``hull_params``: the Fig. 5.7 curve of
-        ``hull_params.k_clusters`` without clustering again.
     orderings : mapping of str to pandas.DataFrame
-        Fig. 5.6.
-    hull_params : HullParams
-    select_params : SelectParams
-    params : FigureParams
+        Ordering name -> ``rank``, ``covered_area_m2`` (Fig. 5.6).
+    k99 : mapping of str to int
+        Their 99 % points (Fig. 5.6).
+    clusters : mapping of int to pandas.DataFrame
+        The ``cluster_hull`` curve per number of clusters (Fig. 5.7).
+    timing : pandas.DataFrame
+        The time to order the scans (Fig. 5.8).
     out_coverage, out_clusters, out_timing : path
         PNG outputs of Figs. 5.6, 5.7, 5.8.
     title : str
-    convex_hulls : pandas.DataFrame, optional
-        The stage's ``convex_hulls.parquet``: the curve of k = 1.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The Fig. 5.8 timing table (:func:`selection_timing`).
     """
-    plot_coverage_vs_scans(orderings, out_coverage, title)
-    ids = _spaced(kept_scan_ids(registration), params.figure_max_scans)
-    curves, coverage = _coverage_curves(
-        registered, ids, params.figure_k_clusters, hull_params, select_params.raster_m, hulls, convex_hulls
-    )
-    plot_coverage_vs_clusters(curves, out_clusters, title)
-    # the coverage of the stage's hulls: the same unions as scan_coverage(hulls, ids)
-    sid, geoms = coverage.get(int(hull_params.k_clusters)) or scan_coverage(hulls, ids)
-    sizes = sorted({int(s) for s in np.unique(np.geomspace(10, max(len(ids), 10), 8).round())} | {len(ids)})
-    sizes = [s for s in sizes if 0 < s <= len(ids)]
-    timing = selection_timing(sid, geoms, sizes, params.figure_reference_max_scans, select_params.raster_m)
+    plot_coverage_vs_scans(orderings, k99, out_coverage, title)
+    plot_coverage_vs_clusters(clusters, out_clusters, title)
     plot_selection_time(timing, out_timing, title)
-    return timing

@@ -5,8 +5,10 @@ Matplotlib with the Agg backend; every figure module writes its figures by
 :func:`save_figure` (at :data:`DPI`, atomically: :func:`floorscan.core.files.atomic_path`).
 On real recordings the walls scored against are a *reference* (walls from all kept
 scans), never called ground truth (:func:`reference_name`). An ordering's colour follows
-its place in the ordering registry (:mod:`floorscan.select.registry`), so a new ordering
-needs no edit here; a new extractor gets its colour in :data:`EXTRACTOR_COLOURS`.
+its place in the schema's enum of orderings (``walls.orderings``, which lists the
+ordering registry's, :mod:`floorscan.select.registry`, in its order: a test checks), so
+a new ordering needs no edit here; a new extractor gets its colour in
+:data:`EXTRACTOR_COLOURS`.
 """
 
 from __future__ import annotations
@@ -22,18 +24,19 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 
 from floorscan.core.files import atomic_path  # noqa: E402
-from floorscan.score.ground_truth import GROUND_TRUTH  # noqa: E402
-from floorscan.score.segments import as_segments  # noqa: E402
-from floorscan.select.registry import COVERAGE_ORDERINGS, ORDERINGS  # noqa: E402
+from floorscan.core.score_tables import GROUND_TRUTH  # noqa: E402
+from floorscan.core.segments import as_segments  # noqa: E402
+from floorscan.core.config import schema_enum  # noqa: E402
 
 #: Resolution of every figure, dots per inch.
 DPI = 110
 #: Tableau 10, matplotlib's default colours, in its order.
 _TABLEAU = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple",
             "tab:brown", "tab:pink", "tab:gray", "tab:olive", "tab:cyan")
-#: One colour per ordering, by its place in the registry (the select job's, then the
-#: select_coverage job's); a line that is not a registry ordering (``oracle``) has none.
-ORDERING_COLOURS = dict(zip(ORDERINGS + COVERAGE_ORDERINGS, itertools.cycle(_TABLEAU)))
+#: One colour per ordering, by its place in the schema's enum of orderings (the
+#: registry's: the select job's, then the select_coverage job's); a line that is not
+#: an ordering of the registry (``oracle``) has none.
+ORDERING_COLOURS = dict(zip(schema_enum("walls", "orderings"), itertools.cycle(_TABLEAU)))
 EXTRACTOR_COLOURS = {"ransac": "tab:blue", "cluster_ransac": "tab:red"}
 
 

@@ -9,7 +9,7 @@ import os
 from typing import TYPE_CHECKING
 
 from floorscan.core.files import atomic_path
-from floorscan.score.curve_summary import SUMMARY_COLUMNS, summary_cell
+from floorscan.core.score_tables import SUMMARY_COLUMNS, summary_cell
 
 if TYPE_CHECKING:
     import pandas as pd

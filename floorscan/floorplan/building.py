@@ -24,7 +24,8 @@ from urllib.parse import quote
 from floorscan.core.files import atomic_path
 from floorscan.floorplan.geojson import floorplan_geojson, write_geojson_document
 from floorscan.floorplan.ifc import write_building_ifc
-from floorscan.floorplan.metadata import PlanMetadata, count_text, floor_area_m2
+from floorscan.floorplan.metadata import PlanMetadata, floor_area_m2
+from floorscan.core.messages import count_text
 
 if TYPE_CHECKING:
     from floorscan.floorplan.plan import FloorPlan

@@ -2,7 +2,8 @@
 (each axis buffered by half its thickness) oriented as RFC 7946 wants them, their
 exterior rings in map metres (:func:`exterior_rings`), the plan's extent, the room
 polygons oriented the same way and a label point inside each room, each made once for
-all formats, and the IFC model, kept for a plan written again.
+all formats, and the IFC model, kept for a plan written again; the footprints of a plan
+folder (:func:`read_plan_footprints`), which the figures draw.
 """
 
 from __future__ import annotations
@@ -134,3 +135,28 @@ def exterior_rings(polys, transform: Callable[[np.ndarray], np.ndarray] | None =
     for n, k in enumerate(ok.tolist()):
         out[k] = pts[bounds[n] : bounds[n + 1]]
     return out
+
+
+def read_plan_footprints(folder) -> list:
+    """The wall footprints of a plan folder (the evaluation grid's Parquet tables,
+    :func:`floorscan.floorplan.scans.read_plan`), one per wall, as the plan's exports
+    draw them (:attr:`PlanExports.polys`): the floor plans figure's walls (thesis Fig.
+    5.5, :func:`floorscan.figures.floorplans.plot_floorplans`).
+
+    Parameters
+    ----------
+    folder : path
+
+    Returns
+    -------
+    list of shapely Polygon
+        Map metres, one per row of the plan's walls.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the folder is not a plan folder.
+    """
+    from floorscan.floorplan.scans import read_plan
+
+    return list(PlanExports(read_plan(folder)).polys)

@@ -22,7 +22,7 @@ from floorscan.floorplan.footprints import PlanExports
 from floorscan.floorplan.metadata import PlanMetadata
 from floorscan.floorplan.scans import ScanPlans, write_plan
 from floorscan.floorplan.writer import FloorplanWriter
-from floorscan.walls.first_k import first_k_scans
+from floorscan.core.selection import first_k_scans
 
 log = logging.getLogger(__name__)
 

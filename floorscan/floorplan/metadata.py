@@ -184,23 +184,6 @@ def floor_area_m2(plan: FloorPlan) -> float:
     return round(float(plan.rooms["area_m2"].to_numpy(dtype=np.float64).sum()), 4) if len(plan.rooms) else 0.0
 
 
-def count_text(n: int, noun: str) -> str:
-    """``"1 room"``, ``"12 rooms"``: a count of the plan's things as the SVG's summary
-    and the run's last lines give it.
-
-    Parameters
-    ----------
-    n : int
-    noun : str
-        Singular; the plural adds ``s``.
-
-    Returns
-    -------
-    str
-    """
-    return f"{n} {noun}{'' if n == 1 else 's'}"
-
-
 def recording_timestamp(index_path: str | os.PathLike) -> int:
     """The exports' time stamp: the recording's first scan stamp; the same recording
     gives the same files.

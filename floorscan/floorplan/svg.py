@@ -24,7 +24,8 @@ import numpy as np
 from floorscan.core.files import atomic_path
 from floorscan.floorplan.footprints import PlanExports
 from floorscan.floorplan.georeference import Georeference, as_georeference
-from floorscan.floorplan.metadata import PlanMetadata, count_text, export_time, floor_area_m2, floorscan_version
+from floorscan.floorplan.metadata import PlanMetadata, export_time, floor_area_m2, floorscan_version
+from floorscan.core.messages import count_text
 
 if TYPE_CHECKING:
     from floorscan.floorplan.params import FloorplanParams

@@ -272,7 +272,7 @@ def recommended_plan(
     from floorscan.core.io import read_table
     from floorscan.core.occupancy import read_grid
     from floorscan.floorplan.scans import ScanPlans
-    from floorscan.select.deliverables import selected_scan_ids
+    from floorscan.core.selection import selected_scan_ids
 
     ids = selected_scan_ids(scans_path)
     grid = None if grid_path is None else read_grid(grid_path)

@@ -14,6 +14,10 @@ Three formats are read, each by its own reader:
   a CSV of scan locations (the thesis's synthetic layout, section 4.1); each ``.pcd``
   file's header and points are read by :mod:`floorscan.ingest.pcd_file`.
 
+An occupancy map given instead of a recording (``map``: a ROS map_server map or an
+image) is read by :mod:`floorscan.core.occupancy_map` into the grid the walls and rooms
+read (rule ``map_ingest``); the pages read what was read of it too, so it is in core.
+
 A dataset may name only its ``path``: the format is then detected from it
 (:func:`floorscan.ingest.detect.detect_format`), a bag's scan topic and pose source from
 its topics and TF tree (:mod:`floorscan.ingest.rosbag_detect`), a CARMEN log's no-return
@@ -35,9 +39,15 @@ plus a pose stream (:mod:`floorscan.ingest.recording`);
 one batch at a time, so memory grows with the largest scan, not with the recording. The
 ``poses`` stage (:mod:`floorscan.ingest.poses`) interpolates a pose for each scan.
 
+The other way round, :mod:`floorscan.ingest.reduced` writes the recording cut to a set
+of scans (the select stage's answer), in its own format, finding each scan where the
+reader found it (one module per format: ``reduced_bag``, ``reduced_carmen``,
+``reduced_pcd``; their checks ``reduced_checks``).
+
 To add a format: a reader module whose ``open_...`` function returns a
 :class:`~floorscan.ingest.recording.Recording`, its branch in
 :func:`~floorscan.ingest.readers.open_recording`, its rule in
-:mod:`floorscan.ingest.detect`, and the format in the dataset ``format`` enum of
-``workflow/schemas/config.schema.yaml``. The package imports only :mod:`floorscan.core`.
+:mod:`floorscan.ingest.detect`, its reduced-recording writer
+(:data:`floorscan.ingest.reduced.REDUCERS`), and the format in the dataset ``format``
+enum of ``workflow/schemas/config.schema.yaml``. The package imports only :mod:`floorscan.core`.
 """

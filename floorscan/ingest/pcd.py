@@ -145,7 +145,7 @@ def stamp_column(path: Path, col: pd.Series) -> np.ndarray:
     """The ``t_ns`` column of a locations CSV read as text: decimal integers in [0, 2^63)
     as int64, exact (an epoch stamp in nanoseconds, ~1.6e18, has more digits than a
     float64 holds: never parse it as a float). Ingest and the reduced recording
-    (:mod:`floorscan.select.recording_pcd`) read it here.
+    (:mod:`floorscan.ingest.reduced_pcd`) read it here.
 
     Raises
     ------

@@ -17,14 +17,8 @@ import numpy as np
 import pandas as pd
 
 from floorscan.core.geometry import wrap_angle
-from floorscan.core.io import InputError
+from floorscan.core.io import AFTER, BEFORE, GAP, NO_POSE_SOURCE, InputError
 from floorscan.ingest.params import PosesParams
-
-#: Reasons a scan has no pose.
-BEFORE = "before_pose_stream"
-AFTER = "after_pose_stream"
-GAP = "pose_gap"
-NO_POSE_SOURCE = "no_pose_source"
 
 
 def interpolate_poses(

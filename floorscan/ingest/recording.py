@@ -5,7 +5,7 @@ A reader (:mod:`floorscan.ingest.rosbag`, :mod:`floorscan.ingest.carmen`,
 records in recording order, the pose stream (:func:`pose_stream_frame`: the columns of
 :data:`floorscan.core.io.POSE_STREAM`), notes for the stage log and what it detected
 (:data:`DETECTED_KEYS`; one log line by :func:`detected_line`, a phrase for people by
-:func:`describe_recording`).
+:func:`floorscan.core.io.describe_recording`).
 """
 
 from __future__ import annotations
@@ -128,26 +128,6 @@ def detected_line(detected: Mapping[str, str]) -> str:
     """
     keys = [k for k in DETECTED_KEYS if k in detected] + sorted(k for k in detected if k not in DETECTED_KEYS)
     return ", ".join(f"{k}={detected[k]}" for k in keys)
-
-
-def describe_recording(detected: Mapping[str, str], mode: str = "") -> str:
-    """What a recording was found to be and how it was registered, for people (the
-    report's figure title, ``summary.md``): ``format rosbag, scan_topic /scan,
-    pose_source ..., stamps recorded; registered in odometry mode``.
-
-    Parameters
-    ----------
-    detected : mapping of str to str
-        The scan index's schema metadata (:func:`floorscan.core.io.read_metadata`).
-    mode : str
-        The register mode used; ``""``: ``pose``.
-
-    Returns
-    -------
-    str
-    """
-    found = ", ".join(f"{k} {detected[k]}" for k in ("format", "scan_topic", "pose_source", "stamps") if k in detected)
-    return f"{found or 'as configured'}; registered in {mode or 'pose'} mode"
 
 
 def yaw_from_quaternion(qx, qy, qz, qw):

@@ -33,12 +33,11 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from floorscan.core.grid import cell_means
+from floorscan.core.score_tables import FEW_SCANS
 from floorscan.register.losses import Losses, percent
 
 #: Fewer revisited sample points than this: consistency undefined.
 MIN_REVISITED = 300
-#: A result from fewer kept scans than this is flagged in the summary and report.
-FEW_SCANS = 10
 
 
 def map_consistency(

@@ -46,7 +46,7 @@ import pandas as pd
 
 from floorscan.core.io import InputError
 from floorscan.core.messages import quoted
-from floorscan.ingest.poses import AFTER, BEFORE, GAP, NO_POSE_SOURCE
+from floorscan.core.io import AFTER, BEFORE, GAP, NO_POSE_SOURCE
 
 #: Scans without a pose (poses stage), a cause of :data:`CAUSES`.
 NO_POSE = "no_pose"

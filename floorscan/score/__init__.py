@@ -4,10 +4,11 @@ floor plans of the first k scans of every ordering against the ground truth
 
 Modules, from the segments up:
 
-- :mod:`floorscan.score.segments`: wall segments as ``(M, 4)`` arrays, samples along
-  them;
+- :mod:`floorscan.score.segments`: samples along wall segments (the segments as
+  ``(M, 4)`` arrays: :mod:`floorscan.core.segments`);
 - :mod:`floorscan.score.bitmap`: the thesis's section 5.1 bitmap metrics (correct
-  match, false positive, false negative) on a raster of the walls;
+  match, false positive, false negative) on the scoring raster of the walls
+  (:mod:`floorscan.core.segment_raster`);
 - :mod:`floorscan.score.capsule`, :mod:`floorscan.score.nearest`: the exact length of
   walls within a tolerance of others, the exact distance of points to the nearest
   wall;

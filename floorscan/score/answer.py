@@ -29,7 +29,7 @@ import pandas as pd
 
 from floorscan.core.plan_tables import read_plan_tables
 from floorscan.score.geojson import feature_collection, wall_faces
-from floorscan.score.segments import as_segments
+from floorscan.core.segments import as_segments
 
 #: Plans a person should not see: walls shorter than this, metres.
 SHORT_WALL_M = 0.5
@@ -49,7 +49,7 @@ def plan_parts(folder) -> dict[str, np.ndarray]:
     dict of str to ndarray
         ``faces`` (merged faces), ``axes`` (wall axes), ``clutter``: (N, 4) float64
         ``x0, y0, x1, y1``, map metres, rows with a non-finite coordinate dropped
-        (:func:`floorscan.score.segments.as_segments`, as the GeoJSON reader does);
+        (:func:`floorscan.core.segments.as_segments`, as the GeoJSON reader does);
         ``junctions``: (J, 2) float64, map metres.
 
     Raises

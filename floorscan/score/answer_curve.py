@@ -6,17 +6,20 @@ The thesis's quality curves (thesis Fig. 5.8; :mod:`floorscan.score.curves`) sco
 per-scan extractors' plans of every ordering on a dense grid; this curve scores the plan
 a user gets, so its k95 and k99 (the first k whose plan reaches 95 / 99 % of the F1 of
 the plan of all kept scans) are what the automatic k (``select.k: auto``) is measured
-against.
+against. The plan of a set of scans is made by the walls and floorplan stages'
+functions, which the stage's script hands to :func:`answer_curve` (``plan_of``).
 """
 
 from __future__ import annotations
 
 import os
-from dataclasses import replace
-from typing import Any, Mapping
+from typing import Any, Callable
 
 import numpy as np
 import pandas as pd
+
+from floorscan.core.occupancy import OccupancyGrid, OccupancyParams, occupancy_grid
+from floorscan.core.wall_points import ScanParams, scan_points_2d
 
 
 def curve_ks(n_kept: int, n_points: int = 24) -> list[int]:
@@ -44,8 +47,9 @@ def answer_curve(
     registration: pd.DataFrame,
     ordering: pd.DataFrame,
     reference,
-    walls_cfg: Mapping[str, Any] | None = None,
-    floorplan_cfg: Mapping[str, Any] | None = None,
+    plan_of: Callable[[np.ndarray, OccupancyGrid], Any],
+    scan_params: ScanParams,
+    grid_params: OccupancyParams,
     n_points: int = 24,
 ) -> pd.DataFrame:
     """F1, completeness and correctness at 5 cm against the reference map of the
@@ -61,8 +65,19 @@ def answer_curve(
         ``orderings/<ordering>.parquet``: ``rank`` and ``scan_id``.
     reference : OccupancyGrid or Structure
         The reference map.
-    walls_cfg, floorplan_cfg : mapping, optional
-        The ``walls`` and ``floorplan`` config sections.
+    plan_of : callable
+        ``plan_of(points, grid)``: the answer's floor plan of the wall points of a set
+        of scans (``(N, 2)`` float64, map metres) on their occupancy grid, with the
+        tables ``walls`` and ``faces`` (``x0, y0, x1, y1``, metres): the map
+        extractor's segments (:func:`floorscan.walls.map_lines.map_segments`) made a
+        plan (:func:`floorscan.floorplan.plan.build_floorplan`), as the answer's plan
+        is made; ``scripts/answer_curve.py`` makes it of the ``walls`` and
+        ``floorplan`` config sections.
+    scan_params : ScanParams
+        How a scan becomes wall points (the ``walls`` section's height band and grid).
+    grid_params : OccupancyParams
+        The occupancy grid of the scans (the map extractor's: cells of
+        ``walls.map.support_cell_m``).
     n_points : int
         Grid size (:func:`curve_ks`).
 
@@ -73,27 +88,15 @@ def answer_curve(
         per k.
     """
     from floorscan.core.io import iter_scans
-    from floorscan.core.occupancy import OccupancyParams, occupancy_grid
-    from floorscan.core.config import stage_params
-    from floorscan.floorplan.params import FloorplanParams
-    from floorscan.floorplan.plan import build_floorplan
     from floorscan.score.against_reference import Structure, plan_against_reference
-    from floorscan.walls.map_lines import map_segments
-    from floorscan.walls.map_lines import MapParams
-    from floorscan.walls.params import ScanParams
-    from floorscan.walls.points import scan_points_2d
 
-    walls_cfg = walls_cfg or {}
-    mp, sp = stage_params(MapParams, walls_cfg.get("map")), stage_params(ScanParams, walls_cfg)
-    fp = stage_params(FloorplanParams, floorplan_cfg)
-    grid_params = replace(OccupancyParams(), resolution_m=mp.support_cell_m)
     structure = reference if isinstance(reference, Structure) else Structure(reference)
     reg = registration[registration["kept"]].set_index("scan_id")
     order = ordering.sort_values("rank")["scan_id"].to_numpy(np.int64)
     points = {}
     for sid, xyz in iter_scans(registered_path):
         if sid in reg.index:
-            points[sid] = scan_points_2d(xyz, sp)[0]
+            points[sid] = scan_points_2d(xyz, scan_params)[0]
     order = order[np.isin(order, list(points))]
     rows = []
     for k in curve_ks(len(order), n_points):
@@ -104,31 +107,8 @@ def answer_curve(
             rows.append({"k": k, "n_walls": 0, "completeness_5cm": 0.0, "correctness_5cm": np.nan, "f1_5cm": 0.0})
             continue
         grid = occupancy_grid(scans, grid_params)
-        plan = build_floorplan(map_segments(pts, grid, mp, seed=int(walls_cfg.get("seed", 0))), fp, grid)
+        plan = plan_of(pts, grid)
         m = plan_against_reference(plan.faces[["x0", "y0", "x1", "y1"]].to_numpy(np.float64), structure, (0.05,))
         rows.append({"k": k, "n_walls": len(plan.walls), "completeness_5cm": m["completeness_5cm"],
                      "correctness_5cm": m["correctness_5cm"], "f1_5cm": m["f1_5cm"]})  # fmt: skip
     return pd.DataFrame(rows)
-
-
-def k_reaching(curve: pd.DataFrame, level: float) -> int | None:
-    """The first k of ``curve`` whose ``f1_5cm`` reaches ``level`` times the F1 of its
-    last row (all kept scans).
-
-    Parameters
-    ----------
-    curve : pandas.DataFrame
-        ``k`` and ``f1_5cm`` in increasing k.
-    level : float
-        Fraction, e.g. 0.99.
-
-    Returns
-    -------
-    int or None
-        None for an empty curve; the last k when none reaches it (a NaN target).
-    """
-    if curve.empty:
-        return None
-    target = level * float(curve["f1_5cm"].iloc[-1])
-    hit = curve["f1_5cm"].to_numpy() >= target
-    return int(curve["k"].to_numpy()[int(np.argmax(hit))]) if hit.any() else int(curve["k"].iloc[-1])

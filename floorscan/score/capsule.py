@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
-from floorscan.score.segments import MIN_SEGMENT_M, as_segments, segment_lengths
+from floorscan.core.segments import MIN_SEGMENT_M, as_segments, segment_lengths
 
 
 def _clip_interval(v0, dv, lo, hi, t_lo, t_hi):

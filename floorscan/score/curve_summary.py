@@ -4,8 +4,11 @@
 all-scan plan's F1 (:func:`first_k_reaching`), the area under the F1-vs-k curve up to
 20 % of the kept scans (:func:`area_under_curve`), and the ratio of k95 to the
 oracle's. :func:`curve_summary_markdown` writes it as the Markdown table of
-``summary.md`` (cells by :func:`summary_cell`, columns :data:`SUMMARY_COLUMNS`, the
-same the HTML pages show), headed by :func:`beats_random_line`.
+``summary.md``, headed by the line of
+:func:`~floorscan.core.score_tables.beats_random_line`; its columns and cells
+(:data:`~floorscan.core.score_tables.SUMMARY_COLUMNS`,
+:func:`~floorscan.core.score_tables.summary_cell`) are those the HTML pages show
+(:mod:`floorscan.core.score_tables`).
 """
 
 from __future__ import annotations
@@ -15,8 +18,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from floorscan.register.consistency import FEW_SCANS
-from floorscan.score.curves import ORACLE, RANDOM
+from floorscan.core.score_tables import ORACLE, SUMMARY_COLUMNS, summary_cell
 
 
 def first_k_reaching(k: np.ndarray, f1: np.ndarray, target: float) -> float:
@@ -126,110 +128,15 @@ def curve_summary(
     return out
 
 
-def beats_random_line(summary: pd.DataFrame, ordering: str, extractor: str) -> str:
-    """One sentence: does ``ordering`` beat random (area under the curve and k95).
-
-    Parameters
-    ----------
-    summary : pandas.DataFrame
-        :func:`curve_summary`'s table (``extractor, ordering, auc, auc_seed_sd, k_95,
-        k_95_seed_sd`` read).
-    ordering : str
-        The ordering compared with ``random``.
-    extractor : str
-        The wall extractor whose rows are compared.
-
-    Returns
-    -------
-    str
-        ``<ordering> beats random with <extractor>: ...`` (or ``does not beat``: by the
-        area under the curve), with both areas and their difference (random's seed
-        spread when finite) and both k95 (or that one of them does not reach it); or
-        ``<ordering> or random was not scored for <extractor>.``
-    """
-    s = summary[summary["extractor"] == extractor].set_index("ordering")
-    if ordering not in s.index or RANDOM not in s.index:
-        return f"{ordering} or {RANDOM} was not scored for {extractor}."
-    a, r = s.loc[ordering], s.loc[RANDOM]
-    d_auc = a["auc"] - r["auc"]
-    verb = "beats" if d_auc > 0 else "does not beat"
-    spread = f" +- {r['auc_seed_sd']:.3f}" if np.isfinite(r["auc_seed_sd"]) else ""
-    k_text = (
-        f"k95 {a['k_95']:.0f} against {r['k_95']:.0f} (random's seeds +- {r['k_95_seed_sd']:.0f})"
-        if np.isfinite(a["k_95"]) and np.isfinite(r["k_95"])
-        else "k95 not reached by one of them"
-    )
-    return (
-        f"{ordering} {verb} random with {extractor}: area under the F1 curve up to 20 % of the kept scans "
-        f"{a['auc']:.3f} against {r['auc']:.3f}{spread} ({d_auc:+.3f}); {k_text}."
-    )
-
-
-#: Columns of the summary tables (``summary.md``, ``summary.html``, the report's front
-#: page): ``summary.parquet`` column and header.
-SUMMARY_COLUMNS = (
-    ("extractor", "extractor"),
-    ("ordering", "ordering"),
-    ("f1_all", "F1 all"),
-    ("k_95", "k95"),
-    ("fraction_kept_95", "k95 / kept"),
-    ("fraction_recorded_95", "k95 / recorded"),
-    ("k_99", "k99"),
-    ("fraction_kept_99", "k99 / kept"),
-    ("fraction_recorded_99", "k99 / recorded"),
-    ("auc", "AUC 20 %"),
-    ("k95_over_oracle", "k95 / oracle's"),
-)
-
-
-def summary_cell(row, col: str, n_kept: int | None = None, pm: str = "±") -> str:
-    """One cell of a summary table: k as a count with random's seed spread (``pm``),
-    the AUC likewise, fractions and F1 to 3 decimals, k95 / oracle's to 2; ``-`` for a
-    missing value; an F1 from fewer than ``FEW_SCANS`` kept scans (``n_kept``) marked.
-
-    Parameters
-    ----------
-    row : mapping
-        A row of :func:`curve_summary`'s table (column -> value; a ``*_seed_sd``
-        column is read when present).
-    col : str
-        A column of :data:`SUMMARY_COLUMNS`.
-    n_kept : int, optional
-        Kept scans; with fewer than
-        :data:`floorscan.register.consistency.FEW_SCANS` the ``f1_all`` cell says so.
-    pm : str
-        The plus-minus sign (``"+-"`` in Markdown).
-
-    Returns
-    -------
-    str
-        The cell's text (not escaped); ``-`` for a missing or non-finite value.
-    """
-    v = row.get(col)
-    if col in ("extractor", "ordering"):
-        return str(v)
-    if v is None or not np.isfinite(float(v)):
-        return "-"
-    if col in ("k_95", "k_99", "auc"):
-        sd = row.get(f"{col}_seed_sd" if col != "auc" else "auc_seed_sd")
-        digits = 3 if col == "auc" else 0
-        return f"{v:.{digits}f}" + (f" {pm} {sd:.{digits}f}" if sd is not None and np.isfinite(sd) else "")
-    if col == "k95_over_oracle":
-        return f"{v:.2f}"
-    text = f"{v:.3f}"
-    if col == "f1_all" and n_kept is not None and n_kept < FEW_SCANS:
-        text += f" (warning: from {n_kept} scans)"
-    return text
-
-
 def curve_summary_markdown(summary: pd.DataFrame, tau_m: float, n_kept: int, n_recorded: int, line: str) -> str:
     """The curve summary (:func:`curve_summary`) as a Markdown table for ``summary.md``,
-    headed by ``line`` (:func:`beats_random_line`).
+    headed by ``line`` (:func:`floorscan.core.score_tables.beats_random_line`).
 
     Parameters
     ----------
     summary : pandas.DataFrame
-        :func:`curve_summary`'s table; the columns of :data:`SUMMARY_COLUMNS` are shown.
+        :func:`curve_summary`'s table; the columns of
+        :data:`~floorscan.core.score_tables.SUMMARY_COLUMNS` are shown.
     tau_m : float
         The tolerance of the F1, metres (shown in cm).
     n_kept, n_recorded : int

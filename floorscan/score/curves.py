@@ -3,7 +3,7 @@
 For an ordering of the kept scans, the floor plan of its first k scans (the walls
 stage's per-scan segments of those scans, merged by the one plan builder,
 :class:`floorscan.floorplan.scans.ScanPlans`, as the evaluation grid's and the answer's
-plans are) is scored against the reference map
+plans are; the stage's script hands it to :func:`score_curves`) is scored against the reference map
 (:func:`floorscan.score.against_reference.plan_against_reference`) at every k of a
 grid (:func:`k_grid`: a step of at most 2 % of the kept scans, so that the k reaching a
 level is read to within 2 %). Orderings scored:
@@ -31,12 +31,8 @@ from scipy.spatial import cKDTree
 
 from floorscan.core.geometry import sample_segments, samples_per_segment
 from floorscan.core.greedy import lazy_greedy
+from floorscan.core.score_tables import ORACLE, RANDOM
 from floorscan.score.against_reference import Structure, plan_against_reference, within_bound
-
-#: Ordering name of the completeness-maximising bound.
-ORACLE = "oracle"
-#: Ordering name of the seeded random permutations.
-RANDOM = "random"
 
 
 def k_grid(n_kept: int, step_fraction: float = 0.02) -> list[int]:
@@ -284,7 +280,7 @@ def score_curves(
     per_scan: pd.DataFrame,
     orderings: dict[str, pd.DataFrame],
     reference_path,
-    floorplan_cfg: dict | None = None,
+    plan_faces: Callable[[tuple[int, ...]], np.ndarray],
     taus_m: tuple[float, ...] = (0.05, 0.10),
     oracle_tau_m: float = 0.05,
     step_fraction: float = 0.02,
@@ -305,8 +301,12 @@ def score_curves(
         replaced by ``random_seeds`` seeded permutations.
     reference_path : path
         ``reference/occupancy.parquet``.
-    floorplan_cfg : mapping, optional
-        The ``floorplan`` config section (the plan is merged as the floorplan stage does).
+    plan_faces : callable
+        ``plan_faces(scan_ids) -> (F, 4) float64 ndarray``: the merged wall faces
+        (``x0, y0, x1, y1``, metres) of the floor plan of those scans' segments of
+        ``per_scan``, scan ids sorted: the one plan builder's
+        (:meth:`floorscan.floorplan.scans.ScanPlans.faces`, prepared for ``per_scan``
+        with the ``floorplan`` config section; ``scripts/score_curves.py`` makes it).
     taus_m : tuple of float
     oracle_tau_m : float
         Tolerance of the completeness the oracle maximises.
@@ -330,14 +330,9 @@ def score_curves(
     oracle : pandas.DataFrame
         The oracle ordering (:func:`oracle_ordering`).
     """
-    from floorscan.core.config import stage_params
     from floorscan.core.occupancy import read_grid
-    from floorscan.floorplan.params import FloorplanParams
-    from floorscan.floorplan.scans import ScanPlans
 
     structure = Structure(read_grid(reference_path))
-    # the one plan builder, its merge's first pass tested once for every subset
-    plans = ScanPlans(per_scan, stage_params(FloorplanParams, floorplan_cfg), prepared=True)
     cache: dict[tuple, dict] = {}
 
     def score_scans(scan_ids) -> dict:
@@ -345,7 +340,7 @@ def score_curves(
         scans (the same scans give the same plan: k = all of every ordering)."""
         key = tuple(sorted(int(s) for s in scan_ids))
         if key not in cache:
-            cache[key] = plan_against_reference(plans.faces(key), structure, taus_m)
+            cache[key] = plan_against_reference(plan_faces(key), structure, taus_m)
         return cache[key]
 
     any_ordering = next(iter(orderings.values()))

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from floorscan.score.segments import as_segments
+from floorscan.core.segments import as_segments
 
 
 def read_wall_faces(path, kind: str = "face") -> np.ndarray:
@@ -74,7 +74,7 @@ def feature_collection(path) -> dict:
 
 def wall_faces(doc: dict, kind: str) -> np.ndarray:
     """The straight pieces of the (Multi)LineString features of ``kind`` (a z is
-    dropped; non-finite rows too, :func:`floorscan.score.segments.as_segments`).
+    dropped; non-finite rows too, :func:`floorscan.core.segments.as_segments`).
 
     Parameters
     ----------

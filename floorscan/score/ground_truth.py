@@ -5,18 +5,17 @@ kept scans, as the thesis does in section 5.4; never called ground truth).
 :func:`load_references` gives the walls precision and the bitmap metrics are measured
 against, :func:`load_recall_references` those recall is measured against (on synthetic
 datasets the observed parts of the faces, thesis 5.2: walls never visible from the
-LIDAR cannot be recovered). :data:`GROUND_TRUTH` and :data:`REFERENCE` are the values
+LIDAR cannot be recovered). :data:`~floorscan.core.score_tables.GROUND_TRUTH` and
+:data:`~floorscan.core.score_tables.REFERENCE` are the values
 of the ``reference_kind`` column, :func:`reference_label` their wording in captions.
 """
 
 from __future__ import annotations
 
+from floorscan.core.score_tables import GROUND_TRUTH
 from floorscan.score.geojson import read_wall_faces
-from floorscan.score.segments import as_segments
+from floorscan.core.segments import as_segments
 
-#: Values of the ``reference_kind`` column: what the inferred walls are scored against.
-GROUND_TRUTH = "ground_truth"
-REFERENCE = "reference"
 #: Ground-truth feature kind of the observed parts of the faces (recall's reference).
 OBSERVED_FACE = "observed_face"
 

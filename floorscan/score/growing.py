@@ -18,11 +18,14 @@ import math
 import numpy as np
 import shapely
 
-from floorscan.score.bitmap import Grid, raster_cells, bitmap_metrics, rasterize_segments
+from floorscan.score.bitmap import bitmap_metrics
+from floorscan.core.segment_raster import Grid, segment_cells, rasterize_segments
 from floorscan.score.capsule import lengths_within
 from floorscan.score.nearest import grown_boxes, nearest_below, SegmentIndex
-from floorscan.score.segments import MIN_SEGMENT_M, row_keys, split_long, segment_lengths
-from floorscan.score.tolerance import tolerance_from, tau_label, tolerance_metrics
+from floorscan.score.segments import row_keys
+from floorscan.core.segments import MIN_SEGMENT_M, split_long, segment_lengths
+from floorscan.score.tolerance import tolerance_from, tolerance_metrics
+from floorscan.core.score_tables import tau_label
 
 
 def score_walls(
@@ -177,7 +180,7 @@ class GrowingWalls:
     are measured by :func:`floorscan.score.nearest.nearest_below`.
     ``recall_all_<tau>`` takes the pairs within the largest tau of ``all_pairs``. The
     pairs and ``raster_cache`` (``{row key: flat wall cells}``, see
-    :func:`floorscan.score.bitmap.raster_cells`) may be shared by the growing sets of
+    :func:`floorscan.core.segment_raster.segment_cells`) may be shared by the growing sets of
     one extractor (same samples, grid and wall width), so that a wall is measured and
     rasterized once for all orderings.
 
@@ -213,7 +216,7 @@ class GrowingWalls:
         cache = self.raster_cache
         todo = [i for i, k in enumerate(add_keys) if k not in cache]
         if todo:
-            owner, flat = raster_cells(add[todo], self.grid, self.width)  # owner ascending
+            owner, flat = segment_cells(add[todo], self.grid, self.width)  # owner ascending
             bounds = np.searchsorted(owner, np.arange(len(todo) + 1))
             flat = flat.astype(np.int32 if self.grid.nx * self.grid.ny < 2**31 else np.int64)
             for j, i in enumerate(todo):

@@ -17,7 +17,8 @@ import numpy as np
 import shapely
 
 from floorscan.core.geometry import point_segment_dist2
-from floorscan.score.segments import densify, split_long, as_segments
+from floorscan.score.segments import densify
+from floorscan.core.segments import split_long, as_segments
 
 #: Spacing (metres) of the points along segments whose KD-tree gives each query point an
 #: upper bound of its distance to the nearest segment (:func:`nearest_distances`).

@@ -37,7 +37,7 @@ def reference_of_recording(
         registered position, the rays' origin).
     walls_config : mapping, optional
         The ``walls`` config section: its height band cuts 3D scans
-        (:func:`floorscan.walls.points.scan_points_2d`), as for the walls themselves.
+        (:func:`floorscan.core.wall_points.scan_points_2d`), as for the walls themselves.
     params : OccupancyParams
 
     Returns
@@ -52,8 +52,7 @@ def reference_of_recording(
     """
     from floorscan.core.io import iter_scans
     from floorscan.core.config import stage_params
-    from floorscan.walls.params import ScanParams
-    from floorscan.walls.points import scan_points_2d
+    from floorscan.core.wall_points import ScanParams, scan_points_2d
 
     scan_params = stage_params(ScanParams, walls_config)
     reg = registration[registration["kept"]].set_index("scan_id")

@@ -82,7 +82,7 @@ def _scored_polygon(poly):
 
 
 def read_plan_folder_rooms(folder) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """The rooms and doors of a plan folder (:func:`floorscan.core.plan_tables.read_plan_tables`),
+    """The rooms and doors of a plan folder (:func:`floorscan.core.plan_tables.plan_rooms`),
     as :func:`read_rooms` reads them from the plan's GeoJSON export: the same rows, in
     the same order, with the same numbers.
 
@@ -109,23 +109,10 @@ def read_plan_folder_rooms(folder) -> tuple[pd.DataFrame, pd.DataFrame]:
     FileNotFoundError
         When the folder is not a plan folder.
     """
-    import shapely
+    from floorscan.core.plan_tables import plan_rooms
 
-    from floorscan.core.plan_tables import read_plan_tables
-
-    # walls: a folder that is not a plan raises (rooms and doors may be absent)
-    t = read_plan_tables(folder, ("walls", "rooms", "doors"), {"walls": ["wall_id"]})
-    r, d = t["rooms"], t["doors"]
-    rooms = []
-    polys = shapely.from_wkb(r["polygon"].to_numpy()) if len(r) else []
-    for room_id, name, kind, area, perimeter, poly in zip(
-        r["room_id"].tolist(), r["name"].tolist(), r["kind"].tolist(), r["area_m2"].tolist(),
-        r["perimeter_m"].tolist(), polys,
-    ):  # fmt: skip
-        if poly is None or poly.is_empty:
-            continue
-        rooms.append({"room_id": int(room_id), "name": str(name), "kind": str(kind), "area_m2": float(area),
-                      "perimeter_m": float(perimeter), "polygon": _scored_polygon(poly)})  # fmt: skip
+    rooms, d = plan_rooms(folder)
+    rooms = [{**room, "polygon": _scored_polygon(room["polygon"])} for room in rooms]
     doors = [
         {"door_id": int(door_id), "x0": x0, "y0": y0, "x1": x1, "y1": y1, "x": (x0 + x1) / 2, "y": (y0 + y1) / 2,
          "width_m": float(width), "wall_id": int(wall_id), "room_a": int(a), "room_b": int(b), "exterior": False}

@@ -25,14 +25,16 @@ from typing import Mapping
 
 import numpy as np
 
-from floorscan.score.bitmap import grid_for, rasterize_segments
+from floorscan.core.segment_raster import grid_for, rasterize_segments
 from floorscan.core.plan_tables import plan_faces_and_walls
-from floorscan.score.ground_truth import GROUND_TRUTH, REFERENCE
+from floorscan.core.score_tables import GROUND_TRUTH, REFERENCE
 from floorscan.score.growing import PAIR_REACH_M, GrowingWalls, SamplePairs
 from floorscan.core.config import stage_params
 from floorscan.score.params import ScoreParams
-from floorscan.score.segments import as_segments, gt_samples
-from floorscan.score.tolerance import recall_precision, tau_label
+from floorscan.score.segments import gt_samples
+from floorscan.core.segments import as_segments
+from floorscan.score.tolerance import recall_precision
+from floorscan.core.score_tables import tau_label
 
 
 def run_grid(orderings, extractors, ks) -> list[list[str]]:

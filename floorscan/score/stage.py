@@ -18,7 +18,8 @@ import pandas as pd
 
 from floorscan.core.files import atomic_path
 from floorscan.core.io import read_metadata, read_table, write_table
-from floorscan.score.curve_summary import beats_random_line, curve_summary, curve_summary_markdown
+from floorscan.score.curve_summary import curve_summary, curve_summary_markdown
+from floorscan.core.score_tables import beats_random_line
 from floorscan.core.config import stage_params
 from floorscan.score.params import ScoreParams
 from floorscan.score.runs import sort_scores

@@ -1,7 +1,7 @@
 """The scan-reduction summary of the walls on the configured k grid: the smallest k whose
 F1 reaches a fraction of the all-scan F1 (:func:`summarize`; the thesis claims a
 tenfold reduction), and its Markdown (:func:`grid_summary_markdown`, in the evaluation's
-``summary.md``); :func:`summary_header` heads the dataset's ``summary.md``.
+``summary.md``).
 
 The floor plans' curves against the reference map have their own summary and Markdown
 (:func:`floorscan.score.curve_summary.curve_summary`, :func:`~floorscan.score.curve_summary.curve_summary_markdown`).
@@ -11,8 +11,7 @@ from __future__ import annotations
 
 import math
 
-from floorscan.score.ground_truth import GROUND_TRUTH
-from floorscan.score.tolerance import tau_label
+from floorscan.core.score_tables import FEW_SCANS, GROUND_TRUTH, tau_label
 
 
 def summarize(metrics, tau: float = 0.05, levels=(0.95, 0.99)):
@@ -91,38 +90,10 @@ def summarize(metrics, tau: float = 0.05, levels=(0.95, 0.99)):
     return pd.DataFrame(rows)
 
 
-def summary_header(dataset: str, verdict=None, recording=None, mode: str = "") -> list[str]:
-    """The lines that head ``summary.md``: the title, the registration's verdict and
-    what the recording was found to be.
-
-    Parameters
-    ----------
-    dataset : str
-    verdict : dict, optional
-        :meth:`floorscan.register.consistency.Verdict.as_dict`.
-    recording : mapping, optional
-        Ingest's detection (:func:`floorscan.ingest.recording.describe_recording`).
-    mode : str
-        The register mode used.
-
-    Returns
-    -------
-    list of str
-    """
-    from floorscan.ingest.recording import describe_recording
-
-    lines = [f"# Scan reduction summary: {dataset}" if dataset else "# Scan reduction summary", ""]
-    if verdict:
-        lines += [f"**Verdict: {verdict['line']}**", ""]
-    if recording or mode:
-        lines += [f"Recording: {describe_recording(recording or {}, mode)}.", ""]
-    return lines
-
-
 def grid_summary_markdown(summary, tau: float = 0.05, levels=(0.95, 0.99)) -> str:
     """The table of :func:`summarize` (the k of the configured grid) as Markdown, after
     what F1 is measured against, and the all-scan plans against the reference map. An
-    F1 from fewer than :data:`floorscan.register.consistency.FEW_SCANS` kept scans is
+    F1 from fewer than :data:`floorscan.core.score_tables.FEW_SCANS` kept scans is
     marked.
 
     Parameters
@@ -137,8 +108,6 @@ def grid_summary_markdown(summary, tau: float = 0.05, levels=(0.95, 0.99)) -> st
     -------
     str
     """
-    from floorscan.register.consistency import FEW_SCANS
-
     kind = summary["reference_kind"].iloc[0]
     against = (
         "the simulator's ground-truth walls"

@@ -14,7 +14,7 @@ to 2D wall segments; thesis Chapter 6 asks for "more robust error metrics".
 - *F1*: the harmonic mean; *median distance*: the median (and mean) of the same
   samples' distances to the nearest inferred segment.
 
-Columns are named by the tolerance (:func:`tau_label`): ``precision_5cm``,
+Columns are named by the tolerance (:func:`~floorscan.core.score_tables.tau_label`): ``precision_5cm``,
 ``recall_5cm``, ``f1_5cm``, ...
 
 On real recordings the reference is the union of the walls of all kept scans, and the
@@ -33,9 +33,11 @@ import math
 
 import numpy as np
 
+from floorscan.core.score_tables import tau_label
 from floorscan.score.capsule import lengths_within, length_within
 from floorscan.score.nearest import SegmentIndex, pairs_within, nearest_distances
-from floorscan.score.segments import MIN_SEGMENT_M, row_keys, as_segments, gt_samples, segment_lengths
+from floorscan.score.segments import row_keys, gt_samples
+from floorscan.core.segments import MIN_SEGMENT_M, as_segments, segment_lengths
 
 
 def _f1(p: float, r: float, has_inferred: bool, has_gt: bool) -> float:
@@ -44,21 +46,6 @@ def _f1(p: float, r: float, has_inferred: bool, has_gt: bool) -> float:
     if not has_inferred or not has_gt:
         return 0.0
     return 2 * p * r / (p + r) if (p + r) > 0 else 0.0
-
-
-def tau_label(tau: float) -> str:
-    """Column suffix for a tolerance: 0.05 -> ``"5cm"``, 0.025 -> ``"2.5cm"``.
-
-    Parameters
-    ----------
-    tau : float
-        Metres.
-
-    Returns
-    -------
-    str
-    """
-    return f"{round(tau * 100, 6):g}cm"
 
 
 def tolerance_metrics(
@@ -100,7 +87,7 @@ def tolerance_metrics(
     -------
     dict
         ``precision_<tau>``, ``recall_<tau>``, ``f1_<tau>`` for each tau (suffix from
-        :func:`tau_label`, e.g. ``f1_5cm``); ``median_distance_m`` and
+        :func:`~floorscan.core.score_tables.tau_label`, e.g. ``f1_5cm``); ``median_distance_m`` and
         ``mean_distance_m`` (NaN without inferred or ground-truth walls);
         ``inferred_length_m``, ``gt_length_m`` (sums of segment lengths) and
         ``n_gt_samples``. Empty sets: see the module docstring (precision NaN and F1 0

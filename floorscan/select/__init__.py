@@ -22,9 +22,11 @@ Stage ``select`` (``scripts/select.py``: merges the hull shards, then orders the
 - :mod:`~floorscan.select.coverage`: ``wall_coverage``, ``surface_coverage`` cell sets;
 - :mod:`~floorscan.select.summary`: the k reaching 90/95/99 % coverage;
 - :mod:`~floorscan.select.deliverables`, :mod:`~floorscan.select.recommend`: how many
-  scans to keep, the scan list and their points;
-- :mod:`~floorscan.select.recording` (and ``recording_bag``, ``recording_carmen``,
-  ``recording_pcd``, ``recording_checks``): the recording cut to the selected scans;
+  scans to keep, the scan list and their points (the recording cut to the selected
+  scans is the ingest stage's writer, :mod:`floorscan.ingest.reduced`: it reads the
+  recording's formats);
+- :mod:`~floorscan.select.figure_data`: the data of the selection figures (Figs
+  5.6-5.8, drawn by :mod:`floorscan.figures.selection`);
 - :mod:`~floorscan.select.params`: ``HullParams``, ``SelectParams``, ``CoverageParams``.
 
 Adding an ordering
@@ -38,7 +40,8 @@ Adding an ordering
    quality, value)``).
 3. Add its name to the enums of ``select.default_ordering``
    (``workflow/schemas/select.schema.yaml``) and ``walls.orderings``
-   (``workflow/schemas/walls.schema.yaml``).
+   (``workflow/schemas/walls.schema.yaml``), in the registry's order (the figures
+   colour the orderings by their place in ``walls.orderings``; a test checks).
 
 ``ORDERINGS`` and ``COVERAGE_ORDERINGS`` of the registry follow, and with them the
 rules' outputs, the summary table and the figures.

@@ -148,7 +148,7 @@ def surface_cells(scans: Iterable[tuple[int, np.ndarray]], params: CoverageParam
     ----------
     scans : iterable of (scan_id, (M, 2) float ndarray)
         Each scan's plan-view points in the map frame, metres (for 3D scans the
-        walls' height band, :func:`floorscan.walls.points.scan_points_2d`).
+        walls' height band, :func:`floorscan.core.wall_points.scan_points_2d`).
     params : CoverageParams
 
     Returns

@@ -14,8 +14,8 @@ deliverables come from it:
 - :func:`write_selected_points`: the selected scans' map-frame points as PLY and PCD
   (Open3D), for a point-cloud viewer or a CAD tool.
 
-The reduced recording (the same recording with the selected scans only) is
-:mod:`floorscan.select.recording`.
+The reduced recording (the same recording with the selected scans only) is written by
+the ingest stage, which reads the recording's formats: :mod:`floorscan.ingest.reduced`.
 
 Usage::
 
@@ -370,26 +370,3 @@ def write_scan_table(df: pd.DataFrame, path: str | os.PathLike, metadata: dict |
     from floorscan.core.io import write_table
 
     write_table(df, path, SCAN_TABLE, metadata=metadata)
-
-
-def selected_scan_ids(path: str | os.PathLike) -> np.ndarray:
-    """The selected scans of a ``selection/scans.parquet`` (:func:`write_scan_table`).
-
-    Parameters
-    ----------
-    path : path
-
-    Returns
-    -------
-    (k,) int64 ndarray
-        Scan ids in rank order.
-
-    Raises
-    ------
-    KeyError
-        When the table has no ``rank`` or ``scan_id`` column.
-    """
-    from floorscan.core.io import read_table
-
-    table = read_table(path, columns=["rank", "scan_id"])
-    return table.sort_values("rank", kind="stable")["scan_id"].to_numpy(np.int64)

@@ -84,7 +84,7 @@ class SelectParams:
     """Parameters of the ``select`` stage (``workflow/schemas/select.schema.yaml``).
 
     The section's other keys are read by other classes: ``figure_*`` by
-    :class:`floorscan.figures.selection.FigureParams`, ``coverage`` by
+    :class:`floorscan.select.figure_data.FigureParams`, ``coverage`` by
     :class:`CoverageParams`, ``default_ordering``, ``k`` and ``k_coverage`` by the
     recommended selection (:mod:`floorscan.select.recommend`).
 

@@ -8,8 +8,9 @@ and writes, under ``results/<dataset>/selection/``:
 - ``scans.parquet``: the same table for the later stages (the recommended plan,
   the map extractor's walls of the selected scans);
 - ``points.ply``, ``points.pcd``: the selected scans' points in the map frame;
-- ``recording/``: the recording cut to the selected scans, in its own format
-  (:mod:`floorscan.select.recording`);
+- ``recording/``: the recording cut to the selected scans, in its own format (written
+  by the ingest stage's writer, :mod:`floorscan.ingest.reduced`, which the stage's
+  script hands to :func:`write_selection`);
 - ``selection.json``: k and the reason for it, the counts, and the size of the
   recording before and after (what :func:`floorscan.figures.answer.answer_lines` prints at the end of a run).
 
@@ -19,21 +20,17 @@ these scans by the floorplan stage.
 
 from __future__ import annotations
 
-import json
 import logging
 import os
-from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 import numpy as np
 import pandas as pd
 
-from floorscan.ingest.detect import bag_path
 from floorscan.core.io import read_table
 from floorscan.core.files import write_json
 from floorscan.select.coverage import OBJECTIVE_COLUMN
 from floorscan.select.deliverables import recommended_k, scan_list, write_scan_list, write_scan_table, write_selected_points
-from floorscan.select.recording import read_detection, write_reduced_recording
 
 log = logging.getLogger(__name__)
 
@@ -66,10 +63,10 @@ def write_selection(
     index_path: str | os.PathLike,
     registration_path: str | os.PathLike,
     registered_path: str | os.PathLike,
-    recording_path: str | os.PathLike,
     dataset: Mapping[str, Any],
     select_cfg: Mapping[str, Any],
     outputs: Mapping[str, str | os.PathLike],
+    reduce_recording: Callable[[list[int]], dict],
 ) -> dict:
     """Pick k, write the scan list, the points and the reduced recording.
 
@@ -81,15 +78,17 @@ def write_selection(
         ``select.default_ordering``.
     index_path, registration_path, registered_path : path
         ``scan_index.parquet``, ``registration.parquet``, ``registered.parquet``.
-    recording_path : path
-        The recording ingest read.
     dataset : mapping
-        The dataset as ingest read it (``format``, ``path``, ``locations``).
+        The dataset as ingest read it (``name``).
     select_cfg : mapping
         The ``select`` config section as the schema fills it (``k``, ``k_coverage``).
     outputs : mapping
-        Paths ``scans`` (CSV), ``table`` (the same, Parquet), ``ply``, ``pcd``, ``recording`` (a folder, made here) and
-        ``summary`` (JSON).
+        Paths ``scans`` (CSV), ``table`` (the same, Parquet), ``ply``, ``pcd`` and ``summary`` (JSON).
+    reduce_recording : callable
+        ``reduce_recording(scan_ids) -> dict``: writes the recording cut to the selected
+        scans (ingest's ``scan_id``, rank order) and returns what it wrote, the
+        ``recording`` of ``selection.json``
+        (:func:`floorscan.ingest.reduced.write_selected_recording`).
 
     Returns
     -------
@@ -101,16 +100,17 @@ def write_selection(
     ValueError
         From :func:`recommended_k` (a bad rule, an empty ordering).
     floorscan.core.io.InputError
-        When the recording no longer holds the scans ingest numbered.
+        When the recording no longer holds the scans ingest numbered
+        (``reduce_recording``).
     """
     ordering = read_table(ordering_path)
     covered, unit = objective_of(ordering)
     k, reason = recommended_k(covered, select_cfg["k"], float(select_cfg["k_coverage"]), objective=ordering_name,
                               unit=unit)
     log.info("%s", reason)
-    detection = read_detection(index_path, dataset)  # checks scan_id is 0..N-1: t_ns[i] is scan i's
-    t_ns = detection["t_ns"]
-    index = pd.DataFrame({"scan_id": np.arange(len(t_ns), dtype=np.int64), "t_ns": t_ns})
+    stamps = read_table(index_path, columns=["scan_id", "t_ns"])  # ingest's scan index
+    t_ns = stamps["t_ns"].to_numpy(np.int64)
+    index = pd.DataFrame({"scan_id": stamps["scan_id"].to_numpy(np.int64), "t_ns": t_ns})
     table = scan_list(ordering, k, index, read_table(registration_path))
     write_scan_list(table, outputs["scans"])
     write_scan_table(table, outputs["table"], {"ordering": ordering_name, "k": str(int(k))})
@@ -118,12 +118,7 @@ def write_selection(
     n_points = write_selected_points(registered_path, ids, outputs["ply"], outputs["pcd"])
     log.info("scan list %s; %d points of the %d scans in %s and %s", outputs["scans"], n_points, k,
              outputs["ply"], outputs["pcd"])
-    # the recording's own name (a ROS2 bag given by its .db3 / .mcap file: its folder's)
-    out = Path(outputs["recording"]) / bag_path(recording_path).name
-    rec = write_reduced_recording(recording_path, detection.get("format") or dataset.get("format"), ids, out,
-                                  detection)
-    log.info("reduced recording %s: %d of %d messages, %d bytes of %d (%.1f %%)", out, rec["messages_out"],
-             rec["messages_in"], rec["bytes_out"], rec["bytes_in"], 100.0 * rec["bytes_out"] / max(rec["bytes_in"], 1))
+    rec = reduce_recording(ids)
     summary = {
         "dataset": str(dataset.get("name", "")),
         "ordering": ordering_name,
@@ -140,17 +135,3 @@ def write_selection(
     }
     write_json(summary, outputs["summary"])
     return summary
-
-
-def read_selection(path: str | os.PathLike) -> dict:
-    """``selection.json`` as written by :func:`write_selection`.
-
-    Parameters
-    ----------
-    path : path
-
-    Returns
-    -------
-    dict
-    """
-    return json.loads(Path(path).read_text())

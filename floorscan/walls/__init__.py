@@ -10,7 +10,8 @@ ordering or k.
 Modules, in the order of the work:
 
 * :mod:`~floorscan.walls.params`: the parameters (config section ``walls``);
-* :mod:`~floorscan.walls.points`: a scan's 2D wall points (2D rule, height band, grid);
+* :mod:`floorscan.core.wall_points`: a scan's 2D wall points (2D rule, height band, grid;
+  shared with the reference map and the coverage orderings);
 * :mod:`~floorscan.walls.segments`: a fitted line's wall segments (gaps, coverage, ends);
 * :mod:`~floorscan.walls.ransac`: iterative RANSAC (section 5.3, Algorithm 4);
 * :mod:`~floorscan.walls.normals`, :mod:`~floorscan.walls.meanshift`,

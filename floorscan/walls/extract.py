@@ -7,7 +7,7 @@ file: memory holds one scan) and an extractor name of
 scan (schema :data:`floorscan.walls.tables.WALLS`) and a status row per scan
 (:data:`~floorscan.walls.tables.SCAN_STATUS`, with the seconds of its extraction,
 :data:`~floorscan.walls.tables.SCAN_TIMES`). Per scan (:func:`extract_scan`): its 2D
-wall points (:func:`floorscan.walls.points.scan_points_2d`), then the extractor's
+wall points (:func:`floorscan.core.wall_points.scan_points_2d`), then the extractor's
 lines and segments (:mod:`floorscan.walls.ransac`, thesis section 5.3, Algorithm 4;
 :mod:`floorscan.walls.cluster`, section 3.4).
 
@@ -31,8 +31,8 @@ import pandas as pd
 
 from floorscan.core.config import schema_section_defaults, stage_params
 from floorscan.walls.extractors import REGISTRY, Extractor, get_extractor
-from floorscan.walls.params import RansacParams, ScanParams
-from floorscan.walls.points import scan_points_2d
+from floorscan.walls.params import RansacParams
+from floorscan.core.wall_points import ScanParams, scan_points_2d
 from floorscan.walls.tables import SCAN_STATUS, WALLS, segments_frame
 
 log = logging.getLogger(__name__)

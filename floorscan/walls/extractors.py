@@ -73,7 +73,7 @@ REGISTRY: dict[str, Extractor] = {
 EXTRACTORS = tuple(REGISTRY)
 
 #: The keys of the ``walls`` config section that decide the per-scan walls: the scan
-#: points (:class:`~floorscan.walls.params.ScanParams`), the seed and the sections the
+#: points (:class:`~floorscan.core.wall_points.ScanParams`), the seed and the sections the
 #: extractors read. The workflow passes only these to the per-scan extraction
 #: (``walls_extract_config``, common.smk), so that a change of k or of the orderings
 #: does not rerun it.

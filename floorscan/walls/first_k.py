@@ -2,9 +2,11 @@
 
 The per-scan walls (:func:`floorscan.walls.extract.extract_walls`) do not depend on
 the ordering or on k, so the walls of the first k scans of an ordering are a filter
-of them (:func:`first_k_walls`), in rank order; :func:`k_walls_tables` makes the
-tables of every ordering and k of a run (``walls/{ordering}/{extractor}/k{k}.parquet``,
-schema :data:`floorscan.walls.tables.WALLS`). The thesis evaluates the floor plans of
+of them (:func:`first_k_walls`, the scans of
+:func:`floorscan.core.selection.first_k_scans`), in rank order; :func:`k_walls_tables`
+makes the tables of every ordering and k of a run
+(``walls/{ordering}/{extractor}/k{k}.parquet``, schema
+:data:`floorscan.walls.tables.WALLS`). The thesis evaluates the floor plans of
 the first k scans against k (section 5.4).
 """
 
@@ -14,67 +16,8 @@ from typing import Iterator, Mapping, Sequence
 
 import pandas as pd
 
+from floorscan.core.selection import first_k_scans
 from floorscan.walls.tables import WALLS
-
-
-def parse_k(k: str | int) -> int | None:
-    """The ``k`` of the first-k extractor: ``"all"`` -> None, ``"15"`` or 15 -> 15.
-
-    Parameters
-    ----------
-    k : str or int
-        ``"all"`` or a positive integer (as text or int).
-
-    Returns
-    -------
-    int or None
-        None for ``"all"``.
-
-    Raises
-    ------
-    ValueError
-        For anything else or k < 1.
-    """
-    if str(k) == "all":
-        return None
-    try:
-        v = int(k)
-    except (TypeError, ValueError):
-        raise ValueError(f"k must be a positive integer or 'all', got {k!r}") from None
-    if v < 1:
-        raise ValueError(f"k must be a positive integer or 'all', got {k!r}")
-    return v
-
-
-def first_k_scans(ordering: pd.DataFrame, k: str | int) -> list[int]:
-    """The first ``k`` scans of an ordering, in rank order.
-
-    Parameters
-    ----------
-    ordering : pandas.DataFrame
-        ``orderings/{ordering}.parquet``: ``rank`` (0-based), ``scan_id``.
-    k : int, str
-        Number of scans; ``"all"`` or a k larger than the number of ranked scans
-        takes all of them.
-
-    Returns
-    -------
-    list of int
-        Scan ids.
-
-    Raises
-    ------
-    KeyError
-        When ``ordering`` lacks ``rank`` or ``scan_id``.
-    ValueError
-        For a k that is neither ``"all"`` nor a positive integer (:func:`parse_k`).
-    """
-    for c in ("rank", "scan_id"):
-        if c not in ordering.columns:
-            raise KeyError(f"ordering lacks column {c!r}; expected rank, scan_id")
-    kk = parse_k(k)
-    ids = ordering.sort_values("rank", kind="stable")["scan_id"].astype(int).tolist()
-    return ids if kk is None else ids[:kk]
 
 
 def first_k_walls(walls: pd.DataFrame, ordering: pd.DataFrame, k: str | int) -> tuple[pd.DataFrame, list[int]]:

@@ -9,7 +9,7 @@ is. The per-scan extractors (:mod:`~floorscan.walls.ransac`,
 :mod:`~floorscan.walls.cluster`) stay: they drive the orderings and the quality curves.
 
 :func:`map_segments` works on the union of the scans' 2D wall points
-(:func:`floorscan.walls.points.scan_points_2d`, in the map frame):
+(:func:`floorscan.core.wall_points.scan_points_2d`, in the map frame):
 
 1. **Support** (:func:`supported_points`). A point counts when its cell of the
    occupancy grid of the same scans (:mod:`floorscan.core.occupancy`, cells of

@@ -63,8 +63,7 @@ def map_of_scans(
     """
     from floorscan.core.io import iter_scans
     from floorscan.core.config import stage_params
-    from floorscan.walls.params import ScanParams
-    from floorscan.walls.points import scan_points_2d
+    from floorscan.core.wall_points import ScanParams, scan_points_2d
 
     cfg = cfg or {}
     params = stage_params(MapParams, cfg.get("map"))
@@ -139,7 +138,7 @@ def map_of_grid(grid: OccupancyGrid, cfg: Mapping[str, Any] | None) -> pd.DataFr
     Parameters
     ----------
     grid : OccupancyGrid
-        The map (:func:`floorscan.ingest.occupancy_map.read_occupancy_map`).
+        The map (:func:`floorscan.core.occupancy_map.read_occupancy_map`).
     cfg : mapping or None
         The ``walls`` config section (``map``, ``seed``).
 
@@ -197,7 +196,7 @@ def write_map_walls(
     """
     from floorscan.core.io import read_table, write_table
     from floorscan.core.occupancy import write_grid
-    from floorscan.select.deliverables import selected_scan_ids
+    from floorscan.core.selection import selected_scan_ids
     from floorscan.walls.tables import WALLS
 
     registration = read_table(registration_path)

@@ -1,23 +1,23 @@
 """Parameters of the wall extraction (config section ``walls``), with their defaults.
 
-* :class:`ScanParams`: how a scan becomes 2D wall points (height band, 2D rule, grid;
-  :func:`floorscan.walls.points.scan_points_2d`);
 * :class:`RansacParams` (``walls.ransac``): RANSAC and the wall segment rules, shared
   by every extractor (thesis section 5.3, Algorithm 4);
 * :class:`ClusterParams` (``walls.cluster_ransac``): the clustering of
   :func:`floorscan.walls.cluster.cluster_ransac` (thesis section 3.4).
 
 Each is built from its section with :func:`floorscan.core.config.stage_params`
-(``stage_params(RansacParams, cfg["ransac"])``, ``stage_params(ScanParams, cfg)``); the
-defaults are written once, in ``workflow/schemas/walls.schema.yaml``
-(:func:`floorscan.core.config.schema_defaults`).
+(``stage_params(RansacParams, cfg["ransac"])``); the defaults are written once, in
+``workflow/schemas/walls.schema.yaml`` (:func:`floorscan.core.config.schema_defaults`).
+How a scan becomes 2D wall points (the section's height band, 2D rule and grid) is
+shared with the reference map and the coverage orderings:
+:class:`floorscan.core.wall_points.ScanParams`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from floorscan.core.config import ConfigError, schema_defaults, schema_enum
+from floorscan.core.config import schema_defaults, schema_enum
 
 #: The MeanShift implementations (config ``walls.cluster_ransac.meanshift``; the schema's enum).
 MEANSHIFT_METHODS = schema_enum("walls.cluster_ransac", "meanshift")
@@ -111,38 +111,3 @@ class ClusterParams:
             raise ValueError(f"cluster_ransac.meanshift must be one of {list(MEANSHIFT_METHODS)}, got {self.meanshift!r}")
         if self.meanshift == "numpy" and not self.bin_seeding:
             raise ValueError("cluster_ransac.meanshift 'numpy' needs bin_seeding true")
-
-
-@dataclass(frozen=True)
-@schema_defaults(
-    "walls",
-    min_height_m=lambda d: float(d["height_band_m"][0]),
-    max_height_m=lambda d: float(d["height_band_m"][1]),
-    planar_tolerance_m=lambda d: float(d["planar_tolerance_m"]),
-    grid_m=lambda d: float(d["grid_m"]),
-)
-class ScanParams:
-    """How a scan becomes 2D wall points (config ``walls``: height band and grid).
-
-    Attributes
-    ----------
-    min_height_m, max_height_m : float
-        Height band (above the floor) kept of 3D scans, metres.
-    planar_tolerance_m : float
-        A scan whose finite ``z`` values span at most this is 2D and passes unchanged
-        (a 2D scanner has one height whatever it is); otherwise it is 3D.
-    grid_m : float
-        3D scans only: after the band cut and the projection to (x, y), keep one
-        point (the mean) per grid cell of this size, metres; 0 keeps all points.
-    """
-
-    min_height_m: float
-    max_height_m: float
-    planar_tolerance_m: float
-    grid_m: float
-
-    def __post_init__(self):
-        if not self.min_height_m < self.max_height_m:
-            raise ConfigError(
-                f"walls.height_band_m must be [min, max] with min < max, got {[self.min_height_m, self.max_height_m]}"
-            )

@@ -9,7 +9,7 @@ from floorscan.core.files import writable_problem
 from floorscan.core.sections import check_sections, dataset_section, evaluation_grid_errors, merge_override
 from floorscan.core.shards import SHARD_LABEL
 from floorscan.floorplan.building import building_files
-from floorscan.score.ground_truth import GROUND_TRUTH, REFERENCE
+from floorscan.core.score_tables import GROUND_TRUTH, REFERENCE
 from floorscan.walls.extractors import EXTRACT_KEYS as WALLS_EXTRACT_KEYS
 from floorscan.walls.extractors import REGISTRY as WALLS_REGISTRY
 
@@ -17,10 +17,10 @@ DATASETS = config["datasets"]
 
 
 def is_map_dataset(dataset):
-    """Whether a dataset is an occupancy map (floorscan.ingest.occupancy_map), not a
+    """Whether a dataset is an occupancy map (floorscan.core.occupancy_map), not a
     recording of scans: `format: map`, or, without a format, a path to a map_server
     yaml or a .pgm/.png image."""
-    from floorscan.ingest.occupancy_map import is_map_path
+    from floorscan.core.occupancy_map import is_map_path
 
     ds = DATASETS[dataset]
     if ds.get("format"):

@@ -5,7 +5,8 @@
 #   selection_figures:   covered area against scans, per ordering and per KMeans k; the
 #                        time to order the scans
 #   score_walls_figures: walls and floor plans of the first score.figure_k scans, over
-#                        the reference and the points; the time per scan of each extractor
+#                        the reference and the points (the bitmap overlay with the score
+#                        stage's numbers); the time per scan of each extractor
 #   score_figures:       wall metrics against k; the time and memory of every stage
 #   front_page:          the answer on one page (floorscan.figures.report): the
 #                        recommended floor plan, the selection and its size reduction,
@@ -122,9 +123,12 @@ def score_bench_dir(wildcards):
 def score_walls_figure_inputs(wildcards):
     evaluation_grid_check()  # the walls of score.figure_k
     ds = wildcards.dataset
-    k = str(stage_config("score")(wildcards)["figure_k"])
+    cfg = stage_config("score")(wildcards)
+    k = str(cfg["figure_k"])
     return {
         "walls": [f"results/{ds}/walls/{o}/{e}/k{kk}.parquet" for o, e, kk in score_figure_runs(wildcards)],
+        # the bitmap overlay's numbers: the score stage's scores of the figure extractor's runs
+        "scores": [f"results/{ds}/score/{e}.parquet" for e in score_extractors(wildcards) if e == cfg["figure_extractor"]],
         "floorplans": [
             f"results/{ds}/evaluation/plans/{o}_{e}_k{k}" for o, e in score_figure_floorplans(wildcards)
         ],
@@ -135,7 +139,8 @@ def score_walls_figure_inputs(wildcards):
     }
 
 
-# The figures of walls and floor plans need no metrics: drawn while the runs are scored.
+# The figures of walls and floor plans need only the figure extractor's scores: drawn
+# while the other extractors' runs are scored.
 rule score_walls_figures:
     priority: PRIORITY["score_walls_figures"]
     input:

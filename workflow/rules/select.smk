@@ -112,7 +112,7 @@ def selection_inputs(wildcards):
 
 # The answer (issue 23): the first k scans of the default ordering (select.k), as a scan
 # list, their registered points (PLY, PCD) and the recording cut to them
-# (floorscan.select.deliverables, floorscan.select.recording).
+# (floorscan.select.deliverables; the recording by ingest's writer, floorscan.ingest.reduced).
 rule selection:
     priority: PRIORITY["selection"]
     input:

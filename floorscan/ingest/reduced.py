@@ -8,34 +8,36 @@ on the scan topic, a CARMEN log's laser line, a PCD folder's locations row;
 stamps would break, nor by ``scan_id``, which skipped frames and re-sorted stamps move.
 An index written before that column existed is read as ingest numbered scans then: the
 frames in reading order without the ``skipped_frames``
-(:func:`floorscan.select.recording_checks.scan_frames`). The count of frames and the
-stamps are checked (:mod:`floorscan.select.recording_checks`). What is kept depends on
+(:func:`floorscan.ingest.reduced_checks.scan_frames`). The count of frames and the
+stamps are checked (:mod:`floorscan.ingest.reduced_checks`). What is kept depends on
 the format, one module each:
 
-- ROS1 ``.bag`` and ROS2 bag folders: :mod:`floorscan.select.recording_bag` (the
+- ROS1 ``.bag`` and ROS2 bag folders: :mod:`floorscan.ingest.reduced_bag` (the
   selected scan messages, static and latched topics, pose messages near a selected
   scan);
-- CARMEN ``.log`` / ``.log.gz``: :mod:`floorscan.select.recording_carmen` (comments and
+- CARMEN ``.log`` / ``.log.gz``: :mod:`floorscan.ingest.reduced_carmen` (comments and
   parameters, the selected laser lines, pose lines near a selected scan);
-- PCD folders: :mod:`floorscan.select.recording_pcd` (the selected ``.pcd`` files and
+- PCD folders: :mod:`floorscan.ingest.reduced_pcd` (the selected ``.pcd`` files and
   their rows of the locations CSV).
 
 Outputs are written under a temporary name beside the target and renamed
 (:func:`floorscan.core.files.atomic_path`, :func:`floorscan.core.files.staged_path`).
 
-Usage (the workflow)::
+Usage (the workflow's rule ``selection``, for the select stage's scans:
+:func:`write_selected_recording`)::
 
     detection = read_detection("results/trace0/scan_index.parquet")
     info = write_reduced_recording(dataset_path, detection["format"], table["scan_id"],
-                                   "results/trace0/deliverables/recording.bag", detection)
+                                   "results/trace0/selection/recording/trace0.bag", detection)
 
-To add a format: a module ``recording_<format>.py`` with a function
+To add a format: a module ``reduced_<format>.py`` with a function
 ``reduce_<format>(source, ids, out_path, detection, t_ns, window_s)`` returning the
 dict of :func:`write_reduced_recording`, and its entry in :data:`REDUCERS`.
 """
 
 from __future__ import annotations
 
+import logging
 import os
 from pathlib import Path
 from typing import Any, Iterable, Mapping
@@ -43,9 +45,11 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 
 from floorscan.core.io import InputError, read_metadata
-from floorscan.select.recording_bag import reduce_bag
-from floorscan.select.recording_carmen import reduce_carmen
-from floorscan.select.recording_pcd import reduce_pcd
+from floorscan.ingest.reduced_bag import reduce_bag
+from floorscan.ingest.reduced_carmen import reduce_carmen
+from floorscan.ingest.reduced_pcd import reduce_pcd
+
+log = logging.getLogger(__name__)
 
 #: ``fmt`` values read as a bag (``synthetic``: the simulator's ROS1 bag).
 BAG_FORMATS = ("rosbag", "synthetic")
@@ -206,3 +210,49 @@ def write_reduced_recording(
         names = list(REDUCERS)
         raise InputError(f"{source}: unsupported format {fmt!r}; expected {', '.join(names[:-1])} or {names[-1]}")
     return reduce(source, ids, Path(out_path), detection, t_ns, window_s)
+
+
+def write_selected_recording(
+    recording_path: str | os.PathLike,
+    index_path: str | os.PathLike,
+    dataset: Mapping[str, Any],
+    scan_ids: Iterable[int],
+    folder: str | os.PathLike,
+) -> dict:
+    """The recording cut to the selected scans (rule ``selection``): what ingest found
+    (:func:`read_detection`) and :func:`write_reduced_recording` into ``folder``, under
+    the recording's own name (a ROS2 bag given by its ``.db3`` / ``.mcap`` file: its
+    folder's).
+
+    Parameters
+    ----------
+    recording_path : path
+        The recording ingest read.
+    index_path : path
+        Its ``scan_index.parquet``.
+    dataset : mapping
+        The dataset as ingest read it (``format``, ``locations``).
+    scan_ids : iterable of int
+        The selected scans, ingest's ``scan_id``.
+    folder : path
+        Output folder (``selection/recording/``).
+
+    Returns
+    -------
+    dict
+        As :func:`write_reduced_recording`.
+
+    Raises
+    ------
+    InputError
+        As :func:`read_detection` and :func:`write_reduced_recording`.
+    """
+    from floorscan.ingest.detect import bag_path
+
+    detection = read_detection(index_path, dataset)  # checks scan_id is 0..N-1: t_ns[i] is scan i's
+    out = Path(folder) / bag_path(recording_path).name
+    rec = write_reduced_recording(recording_path, detection.get("format") or dataset.get("format"), scan_ids, out,
+                                  detection)
+    log.info("reduced recording %s: %d of %d messages, %d bytes of %d (%.1f %%)", out, rec["messages_out"],
+             rec["messages_in"], rec["bytes_out"], rec["bytes_in"], 100.0 * rec["bytes_out"] / max(rec["bytes_in"], 1))
+    return rec

@@ -7,7 +7,7 @@ recording (``results/<dataset>/sim/recording.bag``) is a ROS1 bag. Kept:
 
 - the selected messages of the scan topic: scan ``i`` is the message of the topic the
   scan index's ``source_ordinal[i]`` counts, in the order rosbags' ``AnyReader`` yields
-  them, as ingest reads it (:func:`floorscan.select.recording_checks.scan_frames`;
+  them, as ingest reads it (:func:`floorscan.ingest.reduced_checks.scan_frames`;
   the messages ingest skipped or sorted by stamp are not counted by ``scan_id``);
 - every message of ``/tf_static`` (:data:`STATIC_TOPICS`) and of latched topics (ROS1
   ``latching=1``, ROS2 durability ``transient_local``);
@@ -30,7 +30,7 @@ import numpy as np
 
 from floorscan.core.io import InputError
 from floorscan.core.files import staged_path
-from floorscan.select.recording_checks import check_count, check_stamps, scan_frames, size_of
+from floorscan.ingest.reduced_checks import check_count, check_stamps, scan_frames, size_of
 
 #: Message types of the pose topics kept within the window of a selected scan
 #: (rosbags' names; ``tf/msg/tfMessage`` is the old ROS1 TF type).
@@ -106,7 +106,7 @@ def reduce_bag(source: Path, ids, out_path: Path, detection, t_ns, window_s: flo
     Returns
     -------
     dict
-        As :func:`floorscan.select.recording.write_reduced_recording`, ``format``
+        As :func:`floorscan.ingest.reduced.write_reduced_recording`, ``format``
         ``rosbag1`` or ``rosbag2``.
 
     Raises

@@ -1,20 +1,59 @@
 """The 2D wall points of a scan: the 2D/3D rule, the height band and the grid thinning.
 
 A scan's registered points (map frame, metres, ``z`` = height above the floor) become
-the 2D points the extractors fit lines to (:func:`scan_points_2d`, parameters
-:class:`~floorscan.walls.params.ScanParams`): a 2D scan passes unchanged, a 3D scan
-is cut to the height band of the walls (above furniture, below the ceiling, thesis
-section 5.3), projected to the floor plane and thinned to one mean point per grid
-cell (:func:`floorscan.core.grid.cell_means`). The reference map
-(:mod:`floorscan.score.reference`) and the coverage orderings use the same points.
+the 2D points the wall extractors fit lines to (:func:`scan_points_2d`, parameters
+:class:`ScanParams`, config ``walls``): a 2D scan passes unchanged, a 3D scan is cut
+to the height band of the walls (above furniture, below the ceiling, thesis section
+5.3), projected to the floor plane and thinned to one mean point per grid cell
+(:func:`floorscan.core.grid.cell_means`). The walls stage
+(:mod:`floorscan.walls.extract`, :mod:`floorscan.walls.map_stage`), the reference map
+and the answer's curve (:mod:`floorscan.score.reference`,
+:mod:`floorscan.score.answer_curve`) and the coverage orderings use the same points.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
+from floorscan.core.config import ConfigError, schema_defaults
 from floorscan.core.grid import cell_means
-from floorscan.walls.params import ScanParams
+
+
+@dataclass(frozen=True)
+@schema_defaults(
+    "walls",
+    min_height_m=lambda d: float(d["height_band_m"][0]),
+    max_height_m=lambda d: float(d["height_band_m"][1]),
+    planar_tolerance_m=lambda d: float(d["planar_tolerance_m"]),
+    grid_m=lambda d: float(d["grid_m"]),
+)
+class ScanParams:
+    """How a scan becomes 2D wall points (config ``walls``: height band and grid).
+
+    Attributes
+    ----------
+    min_height_m, max_height_m : float
+        Height band (above the floor) kept of 3D scans, metres.
+    planar_tolerance_m : float
+        A scan whose finite ``z`` values span at most this is 2D and passes unchanged
+        (a 2D scanner has one height whatever it is); otherwise it is 3D.
+    grid_m : float
+        3D scans only: after the band cut and the projection to (x, y), keep one
+        point (the mean) per grid cell of this size, metres; 0 keeps all points.
+    """
+
+    min_height_m: float
+    max_height_m: float
+    planar_tolerance_m: float
+    grid_m: float
+
+    def __post_init__(self):
+        if not self.min_height_m < self.max_height_m:
+            raise ConfigError(
+                f"walls.height_band_m must be [min, max] with min < max, got {[self.min_height_m, self.max_height_m]}"
+            )
 
 
 def scan_points_2d(xyz: np.ndarray, params: ScanParams = ScanParams()) -> tuple[np.ndarray, str]:
@@ -37,7 +76,7 @@ def scan_points_2d(xyz: np.ndarray, params: ScanParams = ScanParams()) -> tuple[
     points : (M, 2) float64 ndarray
         Wall points (x, y), metres; empty when ``reason`` is not "".
     reason : str
-        "" or one of :data:`~floorscan.walls.tables.REASONS` (``non_finite_coordinates``,
+        "" or one of :data:`floorscan.walls.tables.REASONS` (``non_finite_coordinates``,
         ``no_points_in_height_band``).
 
     Raises

@@ -31,7 +31,7 @@ import numpy as np
 
 from floorscan.core.io import InputError
 from floorscan.core.files import atomic_path
-from floorscan.select.recording_checks import check_count, check_stamps, scan_frames, size_of
+from floorscan.ingest.reduced_checks import check_count, check_stamps, scan_frames, size_of
 
 #: CARMEN pose lines kept within the window. Their ``ipc_timestamp`` is the third field
 #: from the end (``ODOM x y theta tv rv accel ipc_timestamp host logger_timestamp``), as
@@ -64,14 +64,14 @@ def reduce_carmen(source: Path, ids, out_path: Path, detection, t_ns, window_s: 
     Parameters
     ----------
     source, ids, out_path, detection, t_ns
-        As :func:`floorscan.select.recording_bag.reduce_bag`.
+        As :func:`floorscan.ingest.reduced_bag.reduce_bag`.
     window_s : float
         Pose lines within this many seconds of a selected scan are kept.
 
     Returns
     -------
     dict
-        As :func:`floorscan.select.recording.write_reduced_recording`, ``format``
+        As :func:`floorscan.ingest.reduced.write_reduced_recording`, ``format``
         ``carmen``.
 
     Raises

@@ -13,7 +13,7 @@ import pandas as pd
 from floorscan.core.io import InputError
 from floorscan.core.files import staged_path
 from floorscan.ingest.pcd import stamp_column
-from floorscan.select.recording_checks import check_count, check_stamps, scan_frames, size_of
+from floorscan.ingest.reduced_checks import check_count, check_stamps, scan_frames, size_of
 
 
 def reduce_pcd(source: Path, ids, out_path: Path, detection, t_ns, window_s: float = 0.0) -> dict:
@@ -23,14 +23,14 @@ def reduce_pcd(source: Path, ids, out_path: Path, detection, t_ns, window_s: flo
     Parameters
     ----------
     source, ids, out_path, detection, t_ns
-        As :func:`floorscan.select.recording_bag.reduce_bag`.
+        As :func:`floorscan.ingest.reduced_bag.reduce_bag`.
     window_s : float
         Not used (a PCD folder has no pose messages).
 
     Returns
     -------
     dict
-        As :func:`floorscan.select.recording.write_reduced_recording`, ``format``
+        As :func:`floorscan.ingest.reduced.write_reduced_recording`, ``format``
         ``pcd``.
 
     Raises

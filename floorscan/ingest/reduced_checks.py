@@ -1,4 +1,4 @@
-"""Checks shared by the reduced-recording writers (:mod:`floorscan.select.recording`):
+"""Checks shared by the reduced-recording writers (:mod:`floorscan.ingest.reduced`):
 where each selected scan is in the recording, that it still holds the frames ingest
 read, with the stamps it recorded; the size of what was read and written.
 
@@ -84,7 +84,7 @@ def scan_frames(
     ids : (S,) int64 ndarray
         The selected scan_ids, sorted, unique, >= 0.
     detection : mapping
-        See :func:`floorscan.select.recording.write_reduced_recording`.
+        See :func:`floorscan.ingest.reduced.write_reduced_recording`.
     order : (n,) int ndarray, optional
         Without ``source_ordinal``: the recording's n frames in the order ingest turns
         them into scans (a CARMEN log's laser lines sorted by stamp); default file order.
