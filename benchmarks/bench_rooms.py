@@ -2,7 +2,7 @@
 ``../shared/data/room-maps/`` (its README: the data and the metric definitions).
 
 For every map the plan is built as a map is a recording (issue 43):
-:func:`floorscan.core.occupancy_map.read_occupancy_map` (5 cm a pixel, origin 0),
+:func:`floorscan.ingest.occupancy_map.read_occupancy_map` (5 cm a pixel, origin 0),
 :func:`floorscan.walls.map_stage.map_of_grid`, then
 :func:`floorscan.floorplan.scans.plan_of_scans` with the default
 :class:`~floorscan.floorplan.params.FloorplanParams`; the time per map is of these three.
@@ -106,7 +106,7 @@ def plan_labels(path: Path, rooms: str = "plan"):
 
     from floorscan.floorplan.params import FloorplanParams
     from floorscan.floorplan.scans import plan_of_scans
-    from floorscan.core.occupancy_map import read_occupancy_map
+    from floorscan.ingest.occupancy_map import read_occupancy_map
     from floorscan.walls.map_stage import map_of_grid
 
     t0 = time.perf_counter()

@@ -1,6 +1,6 @@
 """A floor plan from a map whose rooms and doors are known: the simulator rasterises its
 own building (:mod:`floorscan.sim.occupancy_map`), writes it as a map_server map, and
-the map input (:func:`floorscan.core.occupancy_map.read_occupancy_map`, the map's
+the map input (:func:`floorscan.ingest.occupancy_map.read_occupancy_map`, the map's
 walls, :func:`floorscan.walls.map_stage.map_of_grid`, and the plan,
 :func:`floorscan.floorplan.scans.plan_of_scans`) must find every room and door exactly.
 
@@ -31,7 +31,7 @@ import pytest
 
 from floorscan.floorplan.params import FloorplanParams
 from floorscan.floorplan.scans import plan_of_scans
-from floorscan.core.occupancy_map import read_occupancy_map
+from floorscan.ingest.occupancy_map import read_occupancy_map
 from floorscan.score.rooms import match_doors, match_rooms
 from floorscan.sim.building_file import load_building
 from floorscan.sim.footprint import building_outline

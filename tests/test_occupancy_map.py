@@ -1,4 +1,4 @@
-"""An occupancy map as the recording (issue 43): floorscan.core.occupancy_map reads a
+"""An occupancy map as the recording (issue 43): floorscan.ingest.occupancy_map reads a
 map_server map or an image as map_server does, refuses bad maps with one message naming
 the file, is detected and found in folders; the map's walls are the occupied cells facing
 its free space; and the workflow's plan target makes the plan of a map with nothing that
@@ -16,7 +16,8 @@ from floorscan.core.datasets import dataset_name
 from floorscan.core.io import InputError
 from floorscan.ingest.detect import detect_format, recordings_in
 from floorscan.core.occupancy_classes import grid_of_classes
-from floorscan.core.occupancy_map import is_map_path, map_line, read_occupancy_map
+from floorscan.core.map_info import map_line
+from floorscan.ingest.occupancy_map import is_map_path, read_occupancy_map
 from floorscan.walls.map_stage import map_of_grid, wall_cells
 
 from conftest import snakemake

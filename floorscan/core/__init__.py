@@ -14,8 +14,9 @@
 - :mod:`~floorscan.core.shards`: the per-scan stages split by scan range into jobs;
 - :mod:`~floorscan.core.occupancy` (the occupancy grid of scans, map_server maps),
   :mod:`~floorscan.core.occupancy_classes` (a grid of given classes: a map),
-  :mod:`~floorscan.core.occupancy_map` (a map_server map or a map image read as that
-  grid: ingest's map input, and what was read of it, ``map/map.json``, for the pages);
+  :mod:`~floorscan.core.map_info` (what the ingest stage read of a map,
+  ``map/map.json``, for the pages; the map reader is ingest's
+  :mod:`floorscan.ingest.occupancy_map`);
 - what a stage's files hold, as the stages after it read them:
   :mod:`~floorscan.core.plan_tables` (a floor plan's tables),
   :mod:`~floorscan.core.selection` (which scans: the first k of an ordering, the

@@ -1,5 +1,5 @@
 """An occupancy grid whose classes are given, not measured: a map (what a ROS map_server
-map holds, :mod:`floorscan.core.occupancy_map`; the simulator's plan view of its own
+map holds, :mod:`floorscan.ingest.occupancy_map`; the simulator's plan view of its own
 building, :mod:`floorscan.sim.occupancy_map`) as the grid the walls and rooms read
 (:class:`~floorscan.core.occupancy.OccupancyGrid`).
 

@@ -148,7 +148,7 @@ def map_answer_lines(dataset: str, root: str | os.PathLike, many: bool = False) 
     list of str
         Empty when ``<root>/<dataset>/map/map.json`` is not made yet.
     """
-    from floorscan.core.occupancy_map import map_line, read_map_info
+    from floorscan.core.map_info import map_line, read_map_info
 
     folder = Path(root) / dataset
     info_path = folder / "map" / "map.json"

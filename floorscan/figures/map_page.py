@@ -1,4 +1,4 @@
-"""The answer of an occupancy map given as the recording (:mod:`floorscan.core.occupancy_map`):
+"""The answer of an occupancy map given as the recording (:mod:`floorscan.ingest.occupancy_map`):
 its front page (:func:`write_map_front_page`) and ``summary.md`` (:func:`write_map_summary`);
 the run's last lines are :func:`floorscan.figures.answer.map_answer_lines`.
 
@@ -43,7 +43,7 @@ def write_map_summary(
     str
         The Markdown written.
     """
-    from floorscan.core.occupancy_map import map_line, read_map_info
+    from floorscan.core.map_info import map_line, read_map_info
 
     root = Path(path).parent
     lines = [
@@ -74,7 +74,7 @@ class MapFrontPage:
     floorplan_svg : str
         The plan as SVG text, inlined.
     info : dict
-        :meth:`floorscan.core.occupancy_map.MapInfo.as_dict`.
+        :meth:`floorscan.core.map_info.MapInfo.as_dict`.
     rooms : list of dict, optional
         :func:`floorscan.figures.room_table.read_plan_rooms`.
     n_walls : int, optional
@@ -181,7 +181,7 @@ def write_map_front_page(
         The page.
     """
     from floorscan.core.plan_tables import plan_faces_and_walls
-    from floorscan.core.occupancy_map import read_map_info
+    from floorscan.core.map_info import read_map_info
 
     page_dir = Path(path).parent
     text = map_front_page(MapFrontPage(

@@ -15,7 +15,7 @@ Three formats are read, each by its own reader:
   file's header and points are read by :mod:`floorscan.ingest.pcd_file`.
 
 An occupancy map given instead of a recording (``map``: a ROS map_server map or an
-image) is read by :mod:`floorscan.core.occupancy_map` into the grid the walls and rooms
+image) is read by :mod:`floorscan.ingest.occupancy_map` into the grid the walls and rooms
 read (rule ``map_ingest``); the pages read what was read of it too, so it is in core.
 
 A dataset may name only its ``path``: the format is then detected from it

@@ -18,7 +18,7 @@ A dataset without ``format`` is read as what its path is:
   :mod:`floorscan.ingest.pcd`);
 - ``map``: an occupancy map, not a recording of scans: a ROS map_server ``.yaml`` (with
   an ``image`` key) or a ``.pgm`` / ``.png`` image on its own
-  (:mod:`floorscan.core.occupancy_map`).
+  (:mod:`floorscan.ingest.occupancy_map`).
 
 Anything else is an :class:`~floorscan.core.io.InputError` naming the path and listing what
 is expected. An explicit ``format`` in the dataset always wins over detection.
@@ -33,7 +33,7 @@ from floorscan.core.datasets import brace_problem
 from floorscan.core.io import InputError
 from floorscan.core.messages import quoted, system_error
 from floorscan.ingest.carmen_lines import CARMEN_TYPES
-from floorscan.core.occupancy_map import MAP_IMAGE_SUFFIXES, MAP_YAML_SUFFIXES, is_map_path, map_images
+from floorscan.ingest.occupancy_map import MAP_IMAGE_SUFFIXES, MAP_YAML_SUFFIXES, is_map_path, map_images
 from floorscan.ingest.text import open_text
 
 #: File suffixes of a ROS2 bag's storage (sqlite3, MCAP).

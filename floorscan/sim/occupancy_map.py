@@ -1,5 +1,5 @@
 """The simulator's own map of a building: its plan view at the scanner's height as an
-occupancy map, the input a robot's SLAM map gives (:mod:`floorscan.core.occupancy_map`),
+occupancy map, the input a robot's SLAM map gives (:mod:`floorscan.ingest.occupancy_map`),
 with the walls, rooms and doors known exactly (:mod:`floorscan.sim.ground_truth`).
 
 The classes of a cell (:func:`building_map_classes`):
@@ -31,7 +31,7 @@ differently).
 (:func:`~floorscan.core.occupancy_classes.grid_of_classes`: no scan positions);
 :func:`write_building_map` writes it as a ROS map_server map (``map.pgm`` and
 ``map.yaml``, :func:`~floorscan.core.occupancy.write_map_server`), which
-:func:`floorscan.core.occupancy_map.read_occupancy_map` reads back.
+:func:`floorscan.ingest.occupancy_map.read_occupancy_map` reads back.
 
 Usage::
 

@@ -138,7 +138,7 @@ def map_of_grid(grid: OccupancyGrid, cfg: Mapping[str, Any] | None) -> pd.DataFr
     Parameters
     ----------
     grid : OccupancyGrid
-        The map (:func:`floorscan.core.occupancy_map.read_occupancy_map`).
+        The map (:func:`floorscan.ingest.occupancy_map.read_occupancy_map`).
     cfg : mapping or None
         The ``walls`` config section (``map``, ``seed``).
 

@@ -17,10 +17,10 @@ DATASETS = config["datasets"]
 
 
 def is_map_dataset(dataset):
-    """Whether a dataset is an occupancy map (floorscan.core.occupancy_map), not a
+    """Whether a dataset is an occupancy map (floorscan.ingest.occupancy_map), not a
     recording of scans: `format: map`, or, without a format, a path to a map_server
     yaml or a .pgm/.png image."""
-    from floorscan.core.occupancy_map import is_map_path
+    from floorscan.ingest.occupancy_map import is_map_path
 
     ds = DATASETS[dataset]
     if ds.get("format"):

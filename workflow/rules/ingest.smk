@@ -63,7 +63,7 @@ PLAN_OUTPUTS.append("results/{dataset}/poses.parquet")
 
 def map_input(wildcards):
     """The files of an occupancy map: its yaml and the image it names, or the image."""
-    from floorscan.core.occupancy_map import map_images
+    from floorscan.ingest.occupancy_map import map_images
 
     path = recording_input(wildcards)
     return [path, *[str(p) for p in map_images(path) if p.is_file()]]
@@ -83,7 +83,7 @@ def map_resolution(wildcards):
     return DATASETS[wildcards.dataset].get("resolution_m")
 
 
-# An occupancy map as the recording (floorscan.core.occupancy_map): its grid, the map as
+# An occupancy map as the recording (floorscan.ingest.occupancy_map): its grid, the map as
 # read (map.pgm, map.yaml: the classes the plan is built on) and what was read.
 rule map_ingest:
     wildcard_constraints:
