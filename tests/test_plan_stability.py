@@ -1,6 +1,7 @@
-"""The plan stands still under shifts of the input (issue 44, item 4): a synthetic
-building drawn as a map at any origin a fraction of a cell away gives the same rooms
-and doors, with and without its furniture.
+"""The plan stands still under shifts, rotations and mirroring of the input (issue 44,
+item 4): a synthetic building drawn as a map at any origin a fraction of a cell away,
+turned by any angle and mirrored, gives the same rooms and doors, with and without its
+furniture, each room within about a cell of the true room.
 
 The origins are Hypothesis examples, derandomized (profile ``ci`` of
 ``tests/conftest.py``: the same examples on every run) unless
@@ -12,8 +13,12 @@ of walls open, and the loop was taken for a rack.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
+import math
 from pathlib import Path
+
+import numpy as np
 
 import pytest
 from hypothesis import given, settings
@@ -22,6 +27,7 @@ from hypothesis import strategies as st
 from floorscan.floorplan.params import FloorplanParams
 from floorscan.floorplan.scans import plan_of_scans
 from floorscan.sim.building_file import load_building
+from floorscan.sim.footprint import building_outline
 from floorscan.sim.ground_truth import true_doors, true_rooms
 from floorscan.sim.occupancy_map import MAP_RESOLUTION_M, building_map
 from floorscan.walls.map_stage import map_of_grid
@@ -33,6 +39,11 @@ BUILDINGS = Path(__file__).resolve().parents[1] / "config" / "buildings"
 CORNER = (-3.0, -2.0)
 #: Examples per building and furniture: four cases make 80 plans, about 25 s.
 EXAMPLES = 20
+#: A plan room and its true room overlap at least this much (intersection over union):
+#: a room of 3 m x 3 m whose outline lies a 5 cm cell off all round has 0.94; hallways'
+#: room C2 with its furniture has 0.87 at any pose, its rack drawn as a closet (the
+#: expected failure of tests/test_building_map.py).
+MIN_ROOM_IOU = 0.85
 
 
 @pytest.fixture(scope="module", params=["demo", "hallways"])
@@ -55,3 +66,68 @@ def test_a_sub_cell_shift_keeps_every_room_and_door(building, furniture, dx, dy)
     finally:
         logging.disable(logging.NOTSET)
     assert (len(plan.rooms), len(plan.doors)) == (n_rooms, n_doors), (dx, dy)
+
+
+def moved(b, theta: float, mirror: bool):
+    """The building turned by ``theta`` (radians) about the origin, mirrored in the y
+    axis first when ``mirror``: walls, openings (their segment and offset do not
+    change), furniture and waypoints."""
+    c, s = math.cos(theta), math.sin(theta)
+    rot = np.array([[c, s], [-s, c]])  # row vectors: p @ rot turns p by theta
+
+    def f(p):
+        p = np.array(p, dtype=np.float64)
+        if mirror:
+            p[..., 0] = -p[..., 0]
+        return p @ rot
+
+    walls = tuple(dataclasses.replace(w, points=f(w.points)) for w in b.walls)
+    furniture = tuple(
+        dataclasses.replace(
+            fu, center=tuple(float(v) for v in f(fu.center)), yaw_rad=(math.pi - fu.yaw_rad if mirror else fu.yaw_rad) + theta
+        )
+        for fu in b.furniture
+    )
+    return dataclasses.replace(b, walls=walls, furniture=furniture, waypoints=f(b.waypoints).reshape(-1, 2))
+
+
+#: Poses per building and furniture, drawn from a seeded generator.
+POSES = 30
+#: The most poses of :data:`POSES` on which the plan may lose or gain a room or door
+#: today (measured: the docstring of the test). Issue 44 wants none; a change that
+#: makes the plan less stable fails here.
+WRONG_POSES = {("demo", False): 0, ("demo", True): 0, ("hallways", False): 3, ("hallways", True): 2}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("furniture", [False, True], ids=["empty", "furnished"])
+def test_a_rigid_motion_keeps_every_room_and_door(building, furniture):
+    """Any rotation, mirroring and sub-cell shift (:data:`POSES` seeded poses) gives the
+    true rooms and doors, each plan room within :data:`MIN_ROOM_IOU` of a true room, on
+    all but :data:`WRONG_POSES` poses (of these 30: hallways 3 empty, 2 furnished; on 60
+    other random poses, hallways 6 and 7, demo furnished 0). On hallways, turned by some
+    angles, the ring corridor splits in two or three (15 rooms, 15 doors): its peak is
+    the wider disc at its corners (0.90 m) while the walls' T junctions narrow it to a
+    saddle of 0.67 m, a share of 0.746 against the door share 0.75
+    (:mod:`floorscan.floorplan.persistence`). Hypothesis found demo wrong too, at 0.033
+    rad and at 1.05 rad mirrored: a room joins the corridor (4 rooms, 4 doors)."""
+    b0, n_rooms, n_doors = building
+    rng = np.random.default_rng(44)
+    wrong = []
+    for _ in range(POSES):
+        theta, mirror = float(rng.uniform(0, 2 * math.pi)), bool(rng.integers(2))
+        dx, dy = (float(v) for v in rng.uniform(0, MAP_RESOLUTION_M, 2))
+        b = moved(b0, theta, mirror)
+        x0, y0 = (math.floor(v / MAP_RESOLUTION_M) * MAP_RESOLUTION_M - 1.0 for v in building_outline(b).bounds[:2])
+        logging.disable(logging.INFO)
+        try:
+            grid = building_map(b, furniture=furniture, origin_xy=(x0 + dx, y0 + dy))
+            plan = plan_of_scans(map_of_grid(grid, None), None, FloorplanParams(), grid)
+        finally:
+            logging.disable(logging.NOTSET)
+        truth = list(true_rooms(b)["polygon"])
+        iou = min((max(r.intersection(t).area / r.union(t).area for t in truth) for r in plan.rooms["polygon"]), default=0)
+        if (len(plan.rooms), len(plan.doors)) != (n_rooms, n_doors) or iou < MIN_ROOM_IOU:
+            wrong.append((round(theta, 3), mirror, len(plan.rooms), len(plan.doors), round(iou, 2)))
+    print(b0.name, furniture, len(wrong), wrong)
+    assert len(wrong) <= WRONG_POSES[(b0.name, furniture)], wrong
