@@ -12,7 +12,9 @@ from snakemake_interface_executor_plugins.settings import ExecMode
 from snakemake.utils import min_version
 
 from floorscan.core.config import ConfigError, config_errors_exit, validate_config
-from floorscan.core.datasets import add_path_datasets, check_datasets, config_paths, resolve_building
+from floorscan.core.datasets import (
+    SHIPPED_CONFIG, add_path_datasets, check_datasets, config_paths, resolve_building, shipped_datasets,
+)
 from floorscan.core.io import InputError
 from floorscan.ingest.detect import recordings_in
 
@@ -41,7 +43,8 @@ with config_errors_exit():
                 raise ConfigError(f"path: {e}") from None
             _recordings += [r for r in _found if r not in _recordings]
             _skipped += _left_out
-        add_path_datasets(config, _recordings)
+        # each named after its file; a shipped example of that name gives way
+        add_path_datasets(config, _recordings, shipped_datasets(Path(workflow.basedir) / SHIPPED_CONFIG))
         # the datasets made of the paths, with path_options: checked as a config file's
         # (the building, checked above, now names its floors' datasets: left out)
         validate_config({k: v for k, v in config.items() if k != "building"},
