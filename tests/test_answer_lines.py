@@ -8,7 +8,8 @@ import shlex
 
 from floorscan.figures.answer import answer_lines
 from floorscan.figures.run_end import (
-    failed_since, finish_run, read_manifest, report_command, results_datasets, run_datasets, write_manifest,
+    failed_since, finish_run, read_manifest, report_command, results_datasets, run_answer, run_datasets,
+    write_manifest,
 )
 
 T0 = 1_700_000_000 * 10**9  # the run's start, ns
@@ -77,6 +78,21 @@ def test_the_end_of_a_run_rewrites_the_index_of_every_dataset(tmp_path):
     assert "4 recordings: 0 with a plan, 4 failed" in index  # broken, lab, then earlier, old_failure: no plan
     order = [index.index(f'id="{ds}"') for ds in ("broken", "lab", "earlier", "old_failure")]
     assert order == sorted(order) and 'id="building"' not in index
+
+
+def test_one_failed_recording_points_at_its_paragraph_several_repeat_theirs(tmp_path):
+    """run_answer: a run of one recording that failed names the log of the paragraph
+    printed just above (the error once, tests/test_bad_input.py); of several, each
+    paragraph again at the end; a job Snakemake said failed whose stage logged no
+    error gets the text its caller gives."""
+    log = _log(tmp_path, "lab", "ingest", ERROR, T0 + 10**9)
+    lines = run_answer(["lab"], [], T0, tmp_path)
+    assert lines[0] == f"lab: FAILED: its error is the paragraph above; its log: {log}"
+    assert lines[-1] == "1 of 1 recordings failed: lab"
+    _log(tmp_path, "other", "poses", INFO, T0 + 10**9)  # ran, logged no error: killed
+    lines = run_answer(["lab", "other"], [], T0, tmp_path, failed_jobs=[("other", "poses failed; its log: x")])
+    assert lines[:2] == ["lab: FAILED: ingest failed: x.bag: truncated", "other: FAILED: poses failed; its log: x"]
+    assert lines[-1] == "2 of 2 recordings failed: lab, other"
 
 
 def test_the_manifest_is_written_once(tmp_path):

@@ -94,12 +94,17 @@ def failed_since(dataset: str, start_ns: int, results: str | os.PathLike = "resu
     """The error a job of ``dataset`` logged since ``start_ns``: the paragraph of the
     newest log written since that holds one (:func:`floorscan.figures.index_page.log_error`),
     or None."""
+    found = _failed_log_since(dataset, start_ns, results)
+    return found[1] if found else None
+
+
+def _failed_log_since(dataset: str, start_ns: int, results: str | os.PathLike) -> tuple[Path, str] | None:
     from floorscan.figures.index_page import log_error
 
     for log in _logs_since(dataset, start_ns, results):
         text = log_error(log)
         if text:
-            return text
+            return log, text
     return None
 
 
@@ -208,7 +213,10 @@ def run_answer(targets: list[str], datasets, start_ns: int, results: str | os.Pa
                failed_jobs=(), report: str = "", building: dict | None = None) -> list[str]:
     """The end of a run, as both callers make it: the run's datasets
     (:func:`run_datasets`), the failed ones' errors from their stage logs
-    (:func:`failed_since`), else from ``failed_jobs``, then :func:`finish_run`.
+    (:func:`failed_since`), else from ``failed_jobs``, then :func:`finish_run`. A run
+    of one dataset names the log of its error, not the paragraph again: the command
+    printed it when the job failed, and Snakemake shows the failed job's log
+    (``show-failed-logs`` in the default profile), just above.
 
     Parameters
     ----------
@@ -232,7 +240,11 @@ def run_answer(targets: list[str], datasets, start_ns: int, results: str | os.Pa
     list of str
     """
     runs = run_datasets(targets, datasets, start_ns, results)
-    failed = {ds: text for ds in runs if (text := failed_since(ds, start_ns, results))}
+    failed = {}
+    for ds in runs:
+        found = _failed_log_since(ds, start_ns, results)
+        if found:  # one recording: its paragraph is right above (the command's, or the log Snakemake shows)
+            failed[ds] = f"its error is the paragraph above; its log: {found[0]}" if len(runs) == 1 else found[1]
     for ds, text in failed_jobs:
         if ds in runs:
             failed.setdefault(ds, text)
