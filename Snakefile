@@ -3,17 +3,19 @@
 #      snakemake --cores 2 --config target='[intel]'
 #      snakemake --cores 2 --config path=/data/run.bag   (a recording of your own)
 #      snakemake --cores 2 --config path=/data/survey/   (a folder of recordings: one answer each)
-import atexit
 import os
 import sys
+import time
 from pathlib import Path
 
-from snakemake_interface_executor_plugins.settings import ExecMode
 from snakemake.utils import min_version
 
 from floorscan.core.config import ConfigError, config_errors_exit, validate_config
-from floorscan.core.datasets import add_path_datasets, check_datasets, config_paths, resolve_building
+from floorscan.core.datasets import (
+    SHIPPED_CONFIG, add_path_datasets, check_datasets, config_paths, resolve_building, shipped_datasets,
+)
 from floorscan.core.io import InputError
+from floorscan.figures.run_end import MANIFEST_ENV, failed_since, report_command, run_answer, write_manifest
 from floorscan.ingest.detect import recordings_in
 
 min_version("9.14.8")
@@ -41,7 +43,8 @@ with config_errors_exit():
                 raise ConfigError(f"path: {e}") from None
             _recordings += [r for r in _found if r not in _recordings]
             _skipped += _left_out
-        add_path_datasets(config, _recordings)
+        # each named after its file; a shipped example of that name gives way
+        add_path_datasets(config, _recordings, shipped_datasets(Path(workflow.basedir) / SHIPPED_CONFIG))
         # the datasets made of the paths, with path_options: checked as a config file's
         # (the building, checked above, now names its floors' datasets: left out)
         validate_config({k: v for k, v in config.items() if k != "building"},
@@ -66,82 +69,74 @@ include: "workflow/rules/score.smk"
 include: "workflow/rules/figures.smk"
 
 
+# The three target rules run a command that does nothing and have no output: Snakemake
+# always runs such a rule when it is a target ("Rules with a run or shell declaration but
+# no output are always executed"), so a run with nothing else to do still ends in
+# onsuccess, which prints the answer (below). A file target that is up to date is
+# "Nothing to be done": Snakemake runs no handler then (the `floorscan` command prints
+# the answer all the same).
 rule all:
     default_target: True
+    localrule: True
     input:
         all_outputs() + building_outputs(),
+    shell:
+        ":"
 
 
 # The answer alone: the selected scans and the recommended floor plan.
 rule plan:
+    localrule: True
     input:
         plan_outputs() + building_outputs(),
+    shell:
+        ":"
 
 
 # The evaluation grid, the reference map, the scores, curves and figures, with the
 # answer they score.
 rule evaluation:
+    localrule: True
     input:
         plan_outputs() + evaluation_outputs(),
+    shell:
+        ":"
 
 
-# The answer, wherever the run starts (floorscan.figures.answer): the datasets of the
-# run's targets, when it ends, when it fails (each failed recording's error; the others
-# go on: `keep-going` in the profile) and when there was nothing to be done (Snakemake
-# runs no hook then, so an exit handler of the main process prints it). Every run
-# rewrites results/index.html: its datasets, then the others results/ holds.
-_ANSWER = {"printed": False}
-_WORKDIR = Path.cwd()  # the working directory: an exit handler runs after Snakemake has left it
+# The answer of the run's datasets (floorscan.figures.run_end), from public API only:
+# Snakemake's onsuccess / onerror handlers, which read the run's files (a dataset ran when
+# its stage logs were written since the Snakefile was read, failed when one of them holds
+# an error; the others go on: `keep-going` in the profile), and rewrite results/index.html
+# (every dataset results/ holds, this run's first). The `floorscan` command asks for a
+# manifest of the run instead (MANIFEST_ENV) and prints the answer itself after Snakemake
+# ends, a file target with nothing to be done included.
+_RUN_START_NS = time.time_ns()
+_MANIFEST = os.environ.get(MANIFEST_ENV)
 
 
-def print_answer(failed_jobs=()):
-    from floorscan.figures.answer import answer_lines, run_datasets
-    from floorscan.figures.index_page import dataset_status, failure_text, write_index
+def building_answer():
+    """The building's page, IFC and number of storeys, for the answer; None without one."""
+    files = building_outputs()
+    return {"ifc": files[0], "page": files[1], "storeys": len(building_floors())} if files else None
 
-    if _ANSWER["printed"]:
-        return
-    _ANSWER["printed"] = True
-    datasets = run_datasets(workflow.dag_settings.targets, DATASETS, target_datasets())
-    failed = {}  # several recordings: each error again at the end; one: where it is
-    for job in failed_jobs:
-        ds = dict(job.wildcards_dict).get("dataset")
-        if ds in datasets and ds not in failed:
-            where = f"rule {job.rule.name} failed; its log: {', '.join(map(str, job.log))}"
-            failed[ds] = (failure_text(ds) or where) if len(datasets) > 1 else f"{where} (the error is above)"
-    # results/index.html: this run's datasets, then every other one results/ holds a page of
-    statuses = [{**dataset_status(ds), "failed": failed[ds]} if ds in failed else dataset_status(ds) for ds in datasets]
-    earlier = sorted({p.parent.name for p in Path("results").glob("*/front.html")} - set(datasets))
-    write_index(statuses + [dataset_status(ds) for ds in earlier], "results/index.html")
-    command = ""
-    if isinstance(config.get("path"), str):  # the run's own paths and config files, quoted for a shell
-        import shlex
 
-        files = [str(f) for f in (workflow.config_settings.configfiles or []) if Path(str(f)).name != "config.yaml"]
-        words = [sys.argv[0], "--cores", "2", "--config", f"path={config['path']}"]
-        command = shlex.join(words + (["--configfile", *files] if files else []))
-    for line in answer_lines(datasets, failed=failed, command=command):
+if _MANIFEST:
+    write_manifest(_MANIFEST, target_datasets(), building_answer())
+
+
+def print_answer(log, error):
+    if _MANIFEST:
+        return  # the floorscan command prints it
+    command = report_command(sys.argv, config.get("path"))  # (a line may not begin with the keyword `report`)
+    for line in run_answer(target_datasets(), DATASETS, _RUN_START_NS, "results", (), command, building_answer()):
         print(line)
-    building = building_outputs()  # building.ifc, its page, the floors' GeoJSON
-    if building and Path(building[1]).is_file():
-        print(f"building: {building[1]}, {building[0]} ({len(building_floors())} storeys)")
-    if failed:
-        print(f"{len(failed)} of {len(datasets)} recordings failed: {', '.join(failed)}")
-
-
-def _answer_if_nothing_was_done():
-    ran = getattr(workflow, "scheduler", None) is not None and workflow.dag is not None
-    if ran and len(workflow.dag) == 0 and not workflow.dryrun:
-        os.chdir(_WORKDIR)  # `--directory` (floorscan run from another folder): results/ is here
-        print_answer()
-
-
-if workflow.exec_mode == ExecMode.DEFAULT:
-    atexit.register(_answer_if_nothing_was_done)
+    if error and not any(failed_since(ds, _RUN_START_NS) for ds in DATASETS):  # no stage logged its error
+        print(f"a job failed (killed, or an output missing); Snakemake's log: {log}")
 
 
 onsuccess:
-    print_answer()
+    print_answer(log, error=False)
 
 
 onerror:
-    print_answer(workflow.scheduler.failed)
+    print_answer(log, error=True)

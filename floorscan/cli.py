@@ -5,10 +5,12 @@ Snakemake stays the engine: the command runs it as a subprocess on the Snakefile
 the repository this package lives in (``--snakefile``, ``--directory``: it works from
 any folder), with a config file it writes from its options
 (``.snakemake/floorscan/run.yaml`` in the repository; ``--set`` typed by the schemas,
-:func:`floorscan.core.settings.setting`). It holds no stage logic: the answer is the one
-the Snakefile prints at the end of a run, a failed job's paragraph the one its stage
-wrote to its log (:func:`floorscan.figures.index_page.log_error`), and everything else
-Snakemake says goes to ``.snakemake/floorscan/run.log``::
+:func:`floorscan.core.settings.setting`). It holds no stage logic: the answer is read
+from the run's files once Snakemake has ended (the datasets of the manifest the
+Snakefile writes, their results and stage logs: :mod:`floorscan.figures.run_end`), a
+failed job's paragraph the one its stage wrote to its log
+(:func:`floorscan.figures.index_page.log_error`), and everything else Snakemake says
+goes to ``.snakemake/floorscan/run.log``::
 
     floorscan run /data/lab_run.bag                      # the plan
     floorscan run /data/survey/ /data/floor/map.yaml --evaluate --set select.k=5
@@ -31,6 +33,8 @@ import sys
 import threading
 import time
 from pathlib import Path
+
+from floorscan.figures.progress import Progress, job_dataset, jobs_to_run
 
 #: The folder that holds the package, the Snakefile and config/ (a git checkout).
 PACKAGE_ROOT = Path(__file__).resolve().parents[1]
@@ -219,124 +223,19 @@ def _environment() -> dict:
     return env
 
 
-def elapsed(seconds: float) -> str:
-    """``7.3 s``, ``2 min 05 s``."""
-    if seconds < 60:
-        return f"{seconds:.1f} s"
-    m, s = divmod(int(round(seconds)), 60)
-    return f"{m} min {s:02d} s"
+def print_answer(repo: Path, manifest: dict, start_ns: int, progress: Progress) -> None:
+    """The run's answer, read from its files (:func:`floorscan.figures.run_end.run_answer`),
+    its paths from the repository when the user is elsewhere; a failed job whose stage
+    logged no error is named by its rule and log, as Snakemake said them."""
+    from floorscan.figures.run_end import run_answer
 
-
-_JOB = re.compile(r"^(?:local)?(?:rule|checkpoint) (\w+):$")
-_FIELD = re.compile(r"^    (jobid|wildcards|log): (.*)$")
-_FINISHED = re.compile(r"^Finished jobid: (\d+) \(Rule: (\w+)\)")
-_STEPS = re.compile(r"^(\d+) of (\d+) steps \(.*\) done")
-_ERROR = re.compile(r"^Error in rule (\w+):$")
-#: The workflow's own lines to the user (the Snakefile's, not Snakemake's).
-_OWN = re.compile(r"^(Config error: |Cannot run: |.*: \d+ recordings, one dataset each: )")
-
-
-class Progress:
-    """Reads Snakemake's log, line by line: prints a line per finished job, the failed
-    jobs' own paragraphs and the workflow's messages; keeps the rest for the log file."""
-
-    def __init__(self, repo: Path, out=None, start: float | None = None):
-        self.repo, self.out = repo, out
-        self.start = time.monotonic() if start is None else start
-        self.jobs: dict[str, dict] = {}
-        self.block: dict | None = None
-        self.finished: str | None = None
-        self.failures: list[dict] = []
-        self.shown = 0  # lines shown besides progress: the workflow's messages, failures
-
-    def _print(self, line: str) -> None:
-        print(line, file=self.out or sys.stdout, flush=True)
-
-    def feed(self, line: str) -> None:
-        line = line.rstrip("\n")
-        field = _FIELD.match(line)
-        if field and self.block is not None:
-            name, value = field.groups()
-            if name == "jobid":
-                self.block["jobid"] = value
-                self.jobs[value] = self.block
-            elif name == "wildcards":
-                self.block["wildcards"] = dict(w.split("=", 1) for w in value.split(", ") if "=" in w)
-            else:
-                self.block["log"] = value.replace(" (check log file(s) for error details)", "").split(", ")
-            return
-        if line.startswith("    ") and self.block is not None:
-            return
-        self._end_block()
-        m = _JOB.match(line)
-        if m:
-            self.block = {"rule": m.group(1)}
-            return
-        m = _ERROR.match(line)
-        if m:
-            self.block = {"rule": m.group(1), "error": True}
-            return
-        m = _FINISHED.match(line)
-        if m:
-            self.finished = m.group(1)
-            self.jobs.setdefault(m.group(1), {"rule": m.group(2)})
-            return
-        m = _STEPS.match(line)
-        if m and self.finished is not None:
-            job = self.jobs.get(self.finished, {})
-            self.finished = None
-            ds = _dataset(job)
-            label = job.get("rule", "?") + (f" ({ds})" if ds else "")
-            self._print(f"{m.group(1):>4} of {m.group(2):<4} {label:<44} {elapsed(time.monotonic() - self.start):>10}")
-            return
-        if _OWN.match(line):
-            self.shown += 1
-            self._print(line)
-
-    def _end_block(self) -> None:
-        block, self.block = self.block, None
-        if block and block.get("error"):
-            self.failures.append(block)
-            self.shown += 1
-            self._print(self.failure_text(block))
-
-    def close(self) -> None:
-        self._end_block()
-
-    def failure_text(self, block: dict) -> str:
-        """The failed job's paragraph from its log (the stage's own error)."""
-        from floorscan.figures.index_page import log_error
-
-        ds = _dataset(block)
-        head = f"FAILED {block['rule']}" + (f" ({ds})" if ds else "")
-        for log in block.get("log") or []:
-            path = self.repo / log
-            text = log_error(path) if path.is_file() else None
-            if text:
-                return f"{head}: {text}\n  its log: {path}"
-        logs = ", ".join(os.fspath(self.repo / p) for p in block.get("log") or [])
-        return f"{head}" + (f"; its log: {logs}" if logs else "")
-
-
-def _dataset(job: dict) -> str | None:
-    """A job's dataset: its wildcard, else the results/<dataset>/ of its log (an
-    error's block names no wildcards)."""
-    ds = (job.get("wildcards") or {}).get("dataset")
-    for log in job.get("log") or [] if ds is None else []:
-        m = re.match(r"^(?:\./)?results/([^/]+)/", log)
-        if m:
-            return m.group(1)
-    return ds
-
-
-def _answer_line(line: str, repo: Path) -> str:
-    """A line of the Snakefile's answer for this command: its paths from the
-    repository (the user may be elsewhere), the report made by ``floorscan report``."""
-    if line.startswith("report: "):
-        return "report: floorscan report"
-    if Path.cwd().resolve() != repo:
-        line = re.sub(r"(?<![\w/.])results/", f"{repo}/results/", line)
-    return line
+    root = Path("results") if Path.cwd().resolve() == repo else repo / "results"
+    failed = [(job_dataset(b), f"{b['rule']} failed; its log: {', '.join(os.fspath(repo / p) for p in b.get('log') or [])}")
+              for b in progress.failures]
+    program = shlex.quote(sys.argv[0]) if Path(sys.argv[0]).name == "floorscan" else "floorscan"  # as typed (make)
+    ran = [ds for ds in map(job_dataset, progress.jobs.values()) if ds]  # the target rule's job has none
+    for line in run_answer(manifest["datasets"], ran, start_ns, root, failed, f"{program} report", manifest.get("building")):
+        print(line, flush=True)
 
 
 def _stream(proc: subprocess.Popen, progress: Progress, log, dry_run: bool, repo: Path) -> None:
@@ -350,8 +249,8 @@ def _stream(proc: subprocess.Popen, progress: Progress, log, dry_run: bool, repo
                 log.write(line)
                 if dry_run:
                     progress.feed(line)
-                else:
-                    print(_answer_line(line.rstrip("\n"), repo), flush=True)
+                else:  # Snakemake's own stdout (a passed-through --list-rules, --summary, ...)
+                    print(line.rstrip("\n"), flush=True)
 
     reader = threading.Thread(target=answer, daemon=True)
     reader.start()
@@ -373,13 +272,14 @@ def _state(repo: Path) -> Path:
     return state
 
 
-def run_snakemake(cmd: list[str], repo: Path, log_path: Path, dry_run: bool = False) -> tuple[int, Progress]:
+def run_snakemake(cmd: list[str], repo: Path, log_path: Path, dry_run: bool = False,
+                  env: dict | None = None) -> tuple[int, Progress]:
     """Run Snakemake, showing progress; its output saved to ``log_path``."""
     progress = Progress(repo)
     with open(log_path, "w", encoding="utf-8") as log:
         log.write("$ " + shlex.join(cmd) + "\n")
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, bufsize=1,
-                                env=_environment(), errors="replace")
+                                env=env or _environment(), errors="replace")
         try:
             _stream(proc, progress, log, dry_run, repo)
             code = proc.wait()
@@ -408,10 +308,20 @@ def command_run(args: argparse.Namespace, extra: list[str]) -> int:
     (state / "configfiles").write_text("\n".join(map(os.fspath, configfiles)) + "\n", encoding="utf-8")
     dry_run = any(a in ("-n", "--dry-run", "--dryrun") for a in extra)
     log_path = state / "run.log"
-    code, progress = run_snakemake(snakemake_command(repo, configfiles, args.cores, extra), repo, log_path, dry_run)
+    # the Snakefile writes the run's datasets to the manifest; the answer is printed here,
+    # from the run's files, once Snakemake has ended (nothing to be done included)
+    from floorscan.figures.run_end import MANIFEST_ENV, read_manifest
+
+    manifest = state / "manifest.json"
+    manifest.unlink(missing_ok=True)
+    env = {**_environment(), MANIFEST_ENV: os.fspath(manifest)}
+    start_ns = time.time_ns()
+    code, progress = run_snakemake(snakemake_command(repo, configfiles, args.cores, extra), repo, log_path, dry_run, env)
+    run = None if dry_run or code == 130 else read_manifest(manifest)
+    if run is not None:
+        print_answer(repo, run, start_ns, progress)
     if dry_run and code == 0:
-        total = re.findall(r"^total\s+(\d+)$", log_path.read_text(encoding="utf-8"), re.M)
-        print(f"dry run: {total[-1] if total else 'no'} jobs to run (the job table: {log_path})")
+        print(f"dry run: {jobs_to_run(log_path.read_text(encoding='utf-8'))} jobs to run (the job table: {log_path})")
     elif code not in (0, 130) and not progress.shown:
         print(f"floorscan run: Snakemake stopped (exit status {code}): {_tail(log_path)}\n  its output: {log_path}",
               file=sys.stderr)

@@ -187,10 +187,14 @@ def test_run_prints_progress_and_the_answer_from_anywhere(tmp_path):
     # one dataset's run writes the index too: the front page's link back to it resolves
     index = (wd / "results" / "index.html").read_text()
     assert 'href="demo/front.html"' in index and 'href="../index.html"' in (wd / "results" / "demo" / "front.html").read_text()
-    # again, nothing to be done: the answer still, though the exit handler runs outside the workflow's folder
-    again = floorscan("run")
+    # again, nothing to be done (a file target: Snakemake runs no handler): the answer still, read from the files
+    again = floorscan("run", "--", "results/demo/front.html")
     assert again.returncode == 0, again.stdout + again.stderr
-    assert "demo: 10 of 76 kept scans" in again.stdout and "no answer yet" not in again.stdout, again.stdout
+    assert "Nothing to be done" in (wd / ".snakemake" / "floorscan" / "run.log").read_text()
+    lines = again.stdout.splitlines()
+    assert lines[0].startswith("demo: 10 of 76 kept scans") and "no answer yet" not in again.stdout, again.stdout
+    assert lines[-1] == "report: floorscan report" and f"  front page:         {wd}/results/demo/front.html" in lines
+    assert "dry run: 0 jobs to run" in floorscan("run", "--", "-n").stdout  # the target rule is no work
 
     (elsewhere / "my data").mkdir()
     bag = wd / "results" / "demo" / "sim" / "recording.bag"
@@ -199,7 +203,7 @@ def test_run_prints_progress_and_the_answer_from_anywhere(tmp_path):
     res = floorscan("run", "my data/lab run.bag", "second.bag", "--set", "select.k=5", "--", "-n")
     assert res.returncode == 0, res.stdout + res.stderr
     assert "2 recordings, one dataset each: lab_run, second" in res.stdout
-    assert "dry run: 21 jobs to run" in res.stdout, res.stdout  # 10 a recording before register, all
+    assert "dry run: 20 jobs to run" in res.stdout, res.stdout  # 10 a recording before register
     written = yaml.safe_load((wd / ".snakemake" / "floorscan" / "run.yaml").read_text())
     assert written["path"] == [str(elsewhere / "my data" / "lab run.bag"), str(elsewhere / "second.bag")]
     assert written["select"] == {"k": 5} and written["evaluate"] is False

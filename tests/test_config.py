@@ -1,4 +1,5 @@
 """The config schema rejects bad values before any job starts, naming the field."""
+import copy
 import subprocess
 import sys
 from pathlib import Path
@@ -76,7 +77,7 @@ def test_validate_config_names_the_field_and_copies_defaults():
 def test_a_path_alone_is_a_dataset():
     """`--config path=...`: the recording becomes a dataset named after the file, with
     nothing but its path, and the only target; the schema accepts it."""
-    from floorscan.core.config import validate_config
+    from floorscan.core.config import ConfigError, validate_config
     from floorscan.core.datasets import add_path_datasets
 
     def add_path_dataset(cfg):
@@ -87,26 +88,33 @@ def test_a_path_alone_is_a_dataset():
     cfg = {"datasets": {"demo": {"format": "synthetic", "building": "demo", "scanner": "2d", "seed": 1}},
            "path": "/data/my-run.2024.bag"}
     validate_config(cfg, schema)
-    assert add_path_dataset(cfg) == "my_run_2024"
-    assert cfg["datasets"]["my_run_2024"]["path"] == "/data/my-run.2024.bag"
-    assert cfg["target"] == ["my_run_2024"]
+    assert add_path_dataset(cfg) == "my-run_2024"
+    assert cfg["datasets"]["my-run_2024"]["path"] == "/data/my-run.2024.bag"
+    assert cfg["target"] == ["my-run_2024"]
     validate_config(cfg, schema)  # format, scan topic and pose are detected by ingest
-    # the same path again: the same dataset; another file of the same name: a new one
-    assert add_path_dataset(cfg) == "my_run_2024"
+    # the same path again: the same dataset; another file of the same name is not renamed
+    assert add_path_dataset(cfg) == "my-run_2024"
     cfg["path"] = "/other/my-run.2024.bag"
-    assert add_path_dataset(cfg) == "my_run_2024_2"
-    for path, name in (("/d/intel.log.gz", "intel"), ("/d/ros2_run/", "ros2_run"), ("/d/2024.bag", "r_2024")):
+    with pytest.raises(ConfigError, match=r"datasets\.my-run_2024 names /data/my-run\.2024\.bag; the recording "
+                                          r"/other/my-run\.2024\.bag would be the dataset 'my-run_2024' too"):
+        add_path_dataset(cfg)
+    for path, name in (("/d/intel-corrected.log.gz", "intel-corrected"), ("/d/ros2_run/", "ros2_run"),
+                       ("/d/2024.bag", "2024"), ("/d/lab run (2).bag", "lab_run__2_")):
         assert add_path_dataset({"path": path}) == name
     assert add_path_dataset({"datasets": {}}) is None
 
 
 def test_a_path_to_a_shipped_recording_reuses_its_dataset(tmp_path, monkeypatch):
     """The shipped config names recordings by relative paths; the same file given by
-    its absolute path (or through a symbolic link) is that dataset, not simpath2_2."""
+    its absolute path (or through a symbolic link) is that dataset; another file of
+    that name replaces the shipped example in the run and keeps its own name."""
+    from floorscan.core.config import ConfigError
     from floorscan.core.datasets import add_path_datasets
 
+    shipped = {"simpath2": {"description": "Stage", "path": "data/simpath2.bag"}}
+
     def add_path_dataset(cfg):
-        return add_path_datasets(cfg, [cfg["path"]])[0]
+        return add_path_datasets(cfg, [cfg["path"]], shipped)[0]
 
     (tmp_path / "data").mkdir()
     bag = tmp_path / "data" / "simpath2.bag"
@@ -114,12 +122,44 @@ def test_a_path_to_a_shipped_recording_reuses_its_dataset(tmp_path, monkeypatch)
     (tmp_path / "link").symlink_to(tmp_path / "data")
     monkeypatch.chdir(tmp_path)
     for given in (str(bag), str(tmp_path / "link" / "simpath2.bag"), "./data/simpath2.bag"):
-        cfg = {"datasets": {"simpath2": {"path": "data/simpath2.bag"}}, "path": given}
+        cfg = {"datasets": {"simpath2": {"description": "Stage", "path": "data/simpath2.bag"}}, "path": given}
         assert add_path_dataset(cfg) == "simpath2" and cfg["target"] == ["simpath2"]
         assert cfg["datasets"]["simpath2"]["path"] == "data/simpath2.bag"
     other = tmp_path / "simpath2.bag"
     other.write_bytes(b"")
-    assert add_path_dataset({"datasets": {"simpath2": {"path": "data/simpath2.bag"}}, "path": str(other)}) == "simpath2_2"
+    cfg = {"datasets": {"simpath2": {"description": "Stage", "path": "data/simpath2.bag", "format": "rosbag"}},
+           "path": str(other)}  # the schema filled in a default: still the shipped example
+    assert add_path_dataset(cfg) == "simpath2"
+    assert cfg["datasets"]["simpath2"] == {"description": f"{other} (--config path)", "path": str(other)}
+    # the user's own dataset of that name (here: the shipped one given another path) is not replaced
+    cfg = {"datasets": {"simpath2": {"description": "Stage", "path": "mine/simpath2.bag"}}, "path": str(other)}
+    with pytest.raises(ConfigError, match=r"datasets\.simpath2 names mine/simpath2\.bag; .* rename the dataset or the file"):
+        add_path_dataset(cfg)
+
+
+def test_a_users_trace0_is_trace0(tmp_path):
+    """Issue 47, item 3: trace0.bag of the user's is the dataset trace0 (it was trace0_2:
+    the shipped config has a trace0), and demo.bag is demo, with their own paths."""
+    from floorscan.core.datasets import add_path_datasets, shipped_datasets
+
+    shipped = shipped_datasets(REPO / "config" / "config.yaml")
+    assert {"demo", "trace0", "intel"} <= set(shipped)
+    for name in ("trace0", "demo"):
+        bag = tmp_path / f"{name}.bag"
+        bag.write_bytes(b"")
+        config = {"target": ["demo"], "datasets": copy.deepcopy(shipped)}
+        assert add_path_datasets(config, [bag], shipped) == [name] and config["target"] == [name]
+        assert config["datasets"][name] == {"description": f"{bag} (--config path)", "path": str(bag)}
+        assert config["datasets"]["intel"] == shipped["intel"]  # the other examples stay as they are
+
+
+def test_two_recordings_of_one_name_are_one_line():
+    from floorscan.core.config import ConfigError
+    from floorscan.core.datasets import add_path_datasets
+
+    with pytest.raises(ConfigError, match=r"^path: /a/run\.bag and /b/run\.log\.gz would both be the dataset 'run' "
+                                          r"\(a recording's dataset is named after its file\): rename one"):
+        add_path_datasets({}, [Path("/a/run.bag"), Path("/b/run.log.gz")])
 
 
 def test_a_folder_of_recordings_is_a_dataset_each(tmp_path):
@@ -144,14 +184,16 @@ def test_a_folder_of_recordings_is_a_dataset_each(tmp_path):
     assert [p.name for p in recordings] == ["floor0.bag", "floor1.log.gz", "pcd", "ros2"]
     assert skipped == ["empty", "notes.txt"]
     assert recordings_in(folder / "ros2") == ([folder / "ros2"], [])  # a ROS2 bag folder is one recording
-    cfg = {"datasets": {"floor0": {"path": "/elsewhere/floor0.bag"}},
+    shipped = {"floor0": {"path": "/elsewhere/floor0.bag"}}  # an example of that name gives way
+    cfg = {"datasets": copy.deepcopy(shipped),
            "building": {"name": "HQ", "floors": [{"recording": "floor1.log.gz", "elevation_m": 3.5},
                                                  {"recording": "floor0.bag", "storey": "Ground"}]}}
-    names = add_path_datasets(cfg, recordings)
-    assert names == ["floor0_2", "floor1", "pcd", "ros2"] and cfg["target"] == names
+    names = add_path_datasets(cfg, recordings, shipped)
+    assert names == ["floor0", "floor1", "pcd", "ros2"] and cfg["target"] == names
+    assert cfg["datasets"]["floor0"]["path"] == str(folder / "floor0.bag")
     assert cfg["building"]["floors"] == [
         {"recording": "floor1.log.gz", "elevation_m": 3.5, "dataset": "floor1", "storey": "Floor 0"},
-        {"recording": "floor0.bag", "storey": "Ground", "dataset": "floor0_2", "elevation_m": 0.0},
+        {"recording": "floor0.bag", "storey": "Ground", "dataset": "floor0", "elevation_m": 0.0},
     ]
     bad = {"building": {"floors": [{"recording": "floor9.bag"}]}}
     with pytest.raises(ConfigError, match=r"building.floors\[0\].recording: 'floor9.bag' is neither"):

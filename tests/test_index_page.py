@@ -115,7 +115,7 @@ def test_index_lists_every_dataset_and_the_failed_ones_error(results):
     assert "14 walls, 5 rooms, 1 door" in text and "6 walls, 1 room, 0 doors" in text
     # the error, escaped, in the red block
     assert ('<div class="error"><b>Failed:</b> ingest failed: bad &lt;run&gt;.log:1: malformed FLASER line: '
-            "field 2 is &#x27;x&#x27;; expected an integer &amp; &gt;= 1</div>") in text
+            "field 2 is &#39;x&#39;; expected an integer &amp; &gt;= 1</div>") in text
     assert "<run>" not in text
     assert "<script" not in text
 

@@ -257,7 +257,7 @@ def test_map_plan_target(demo_run, tmp_path):
     Image.fromarray(np.random.default_rng(1).integers(0, 256, (60, 80, 3), dtype=np.uint8)).save(photo)
     res = snakemake(demo_run, "--workflow-profile", "workflow/profiles/default", "--config", f"path={photo}")
     assert res.returncode == 1
-    assert "photo: FAILED: rule map_ingest failed; its log: results/photo/logs/ingest.log" in res.stdout
+    assert "photo: FAILED: its error is the paragraph above; its log: results/photo/logs/ingest.log" in res.stdout
     shown = res.stdout + res.stderr  # the job's log, shown by the profile's show-failed-logs
     assert f"map_ingest failed: {photo}: 99% of its pixels are coloured, so it is a colour picture, not an occupancy map" in shown
     assert not (demo_run / "results" / "photo" / "map").exists() and not (demo_run / "results" / "photo" / "floorplan.svg").exists()

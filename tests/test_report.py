@@ -420,3 +420,28 @@ def test_the_map_page_links_its_files_and_the_index(tmp_path, monkeypatch):
     assert all((folder / h).is_file() for h in links.hrefs if h != "../index.html")
     assert "<h2>two&lt;rooms: floor plan of an occupancy map</h2>" in page and "What was read" in page
     assert "<script" not in page and "<!--" not in page
+
+
+def test_summary_page_is_the_template_with_the_front_pages_table(tmp_path):
+    """summary.html (floorscan.figures.summary_page): the verdict and the beats-random
+    line escaped, and the summary table of the front page's macro: its header, a row per
+    ordering, the recommended ordering's row highlighted, the oracle's grey."""
+    from floorscan.figures.summary_page import write_summary_page
+
+    page = tmp_path / "summary.html"
+    write_summary_page(page, "toy <1>", _summary(), 76, "wall_coverage beats random & more", VERDICT, "wall_coverage")
+    text = page.read_text(encoding="utf-8")
+    assert text.startswith("<!DOCTYPE html>") and "<title>toy &lt;1&gt; summary</title>" in text
+    assert f"<p><b>Verdict: {VERDICT['line']}</b></p>" in text and "<p>wall_coverage beats random &amp; more</p>" in text
+    tables = _Tables()
+    tables.feed(text)
+    assert tables.rows[0] == [h for _, h in SUMMARY_COLUMNS]
+    body = {r[1]: (r, c) for r, c in zip(tables.rows[1:], tables.row_classes[1:])}
+    assert sorted(body) == ["oracle", "random", "wall_coverage"]
+    assert body["wall_coverage"][1] == "recommended" and body["oracle"][1] == "bound" and body["random"][1] == ""
+    assert body["random"][0][3] == "10 ± 4" and body["oracle"][0][3] == "4"
+    # the front page shows the same table, from the same macro
+    front = R.front_page(R.FrontPage(dataset="toy", floorplan_svg=SVG, summary=_summary(), verdict=VERDICT,
+                                     k=4, n_kept=76, n_recorded=321, ordering="wall_coverage"))
+    start = front.index("<table>\n<thead><tr><th>extractor</th>")
+    assert front[start:front.index("</table>", start)] in text

@@ -2,6 +2,11 @@
 recording given by ``--config path=...`` (a file or a folder of them) made datasets, and
 the ``building`` section's floors resolved to datasets. The Snakefile calls them once,
 after :func:`floorscan.core.config.validate_config`.
+
+A recording's dataset is named after its file (:func:`dataset_name`): ``trace0.bag`` is
+the dataset ``trace0`` wherever it lies; the shipped examples of ``config/config.yaml``
+(``demo``, ``trace0``, ...) give way to a path of the same name
+(:func:`add_path_datasets`).
 """
 
 from __future__ import annotations
@@ -103,11 +108,27 @@ def _same_file(a: str | None, b: str) -> bool:
 
 
 def dataset_name(path: str | os.PathLike) -> str:
-    """The dataset name of a recording: its file or folder name without the recording
-    suffixes (``.gz``, ``.log``, ``.clf``, ``.bag``, ``.db3``, ``.mcap``; a map's ``.yaml``,
-    ``.yml``, ``.pgm``, ``.png``), other
-    characters than letters, digits and ``_`` replaced by ``_``, ``r_`` before a
-    leading digit."""
+    """The dataset name of a recording or map: its file or folder name without the
+    recording suffixes (``.gz``, ``.log``, ``.clf``, ``.bag``, ``.db3``, ``.mcap``; a
+    map's ``.yaml``, ``.yml``, ``.pgm``, ``.png``), each character other than a letter, a
+    digit, ``_`` or ``-`` replaced by ``_``.
+
+    The replacement is kept for what the name is used as: a folder ``results/<name>/``
+    printed unquoted in the answer, a word of ``--config target=[...]`` and a key of
+    ``--set datasets.<name>.<key>=...`` (a space or a ``.`` would break the last two).
+    A ``-`` stays: a wildcard holds it (``intel-corrected.log.gz`` is
+    ``intel-corrected``, ``lab run.bag`` is ``lab_run``, ``2024.05.bag`` is
+    ``2024_05``).
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Returns
+    -------
+    str
+        ``recording`` when nothing is left.
+    """
     import re
     from pathlib import PurePath
 
@@ -115,21 +136,61 @@ def dataset_name(path: str | os.PathLike) -> str:
     for suffix in (".gz", ".log", ".clf", ".bag", ".db3", ".mcap", ".yaml", ".yml", ".pgm", ".png"):
         if name.lower().endswith(suffix) and len(name) > len(suffix):
             name = name[: -len(suffix)]
-    name = re.sub(r"[^A-Za-z0-9_]", "_", name) or "recording"
-    return f"r_{name}" if name[0].isdigit() else name
+    return re.sub(r"[^A-Za-z0-9_-]", "_", name) or "recording"
 
 
-def add_path_datasets(config: dict, recordings: list) -> list[str]:
+#: The shipped config: its datasets are the examples (the synthetic buildings, the
+#: recordings of ../shared/data), which give way to a path of the same name.
+SHIPPED_CONFIG = "config/config.yaml"
+
+
+def shipped_datasets(path: str | os.PathLike = SHIPPED_CONFIG) -> dict:
+    """The datasets of the shipped config file, as written there.
+
+    Parameters
+    ----------
+    path : path
+        ``config/config.yaml`` of the repository.
+
+    Returns
+    -------
+    dict
+        ``{name: entry}``; empty when the file is missing or names none.
+    """
+    import yaml
+
+    try:
+        data = yaml.safe_load(Path(path).read_text(encoding="utf-8")) or {}
+    except OSError:
+        return {}
+    return dict(data.get("datasets") or {}) if isinstance(data, dict) else {}
+
+
+def _is_shipped(entry: Mapping, shipped: Mapping | None) -> bool:
+    """Whether a configured dataset is the shipped one: every key the shipped config
+    gives it has the shipped value (the schema may have filled in more)."""
+    return bool(shipped) and all(entry.get(k) == v for k, v in shipped.items())
+
+
+def _what_it_names(entry: Mapping) -> str:
+    if entry.get("format") == "synthetic":
+        return f"the synthetic building {entry.get('building')!r}"
+    return os.fspath(entry.get("path", "another recording"))
+
+
+def add_path_datasets(config: dict, recordings: list, shipped: Mapping | None = None) -> list[str]:
     """Make the recordings of the top-level ``path`` (``--config path=/data/run.bag``, or
     a folder of recordings) datasets, the run's targets.
 
-    Each dataset is named by :func:`dataset_name`, holds ``path`` (ingest detects
-    the rest), the keys of the top-level ``path_options`` (``scan_topic``, ``pose``, ...:
-    what the user sets of every recording of ``path``) and, for a map image, the
-    top-level ``resolution_m``. A dataset of that name with the same recording (the same path, relative
-    to the working directory or absolute) is reused; with another recording the name
-    gets a numeric suffix. The ``building`` section's floors name their recording by
-    dataset name or file name; they are resolved to dataset names
+    A recording's dataset is named after its file, always (:func:`dataset_name`), and
+    holds ``path`` (ingest detects the rest), the keys of the top-level ``path_options``
+    (``scan_topic``, ``pose``, ...: what the user sets of every recording of ``path``)
+    and, for a map image, the top-level ``resolution_m``. A configured dataset of that
+    name is reused when it has the same recording (the same path, relative to the
+    working directory or absolute); a shipped example of that name (``shipped``, as
+    :func:`shipped_datasets` reads it, unchanged by the user's config) gives way: the
+    path's dataset replaces it in this run. The ``building`` section's floors name
+    their recording by dataset name or file name; they are resolved to dataset names
     (``building.floors[i].dataset``).
 
     Parameters
@@ -139,6 +200,8 @@ def add_path_datasets(config: dict, recordings: list) -> list[str]:
         ``building``).
     recordings : list of path
         The recordings ``path`` names (:func:`floorscan.ingest.detect.recordings_in`).
+    shipped : mapping, optional
+        The shipped config's datasets, ``{name: entry}``.
 
     Returns
     -------
@@ -148,21 +211,33 @@ def add_path_datasets(config: dict, recordings: list) -> list[str]:
     Raises
     ------
     ConfigError
-        A floor of ``building`` names no recording of the run or a dataset not
-        configured, or two floors name the same recording.
+        Two recordings of the run with one name; a dataset of the user's config with
+        the name of a recording of the run and another recording; a floor of
+        ``building`` that names no recording of the run or a dataset not configured,
+        or two floors that name the same recording.
     """
     datasets = config.setdefault("datasets", {})
-    names, by_file = [], {}
+    shipped = dict(shipped or {})
+    names, by_file, given = [], {}, {}
     for path in recordings:
-        base = name = dataset_name(path)
-        n = 1
-        while (name in datasets and not _same_file(datasets[name].get("path"), os.fspath(path))) or name in names:
-            n += 1
-            name = f"{base}_{n}"
+        name = dataset_name(path)
+        if name in given:
+            raise ConfigError(
+                f"path: {given[name]} and {os.fspath(path)} would both be the dataset {name!r} (a recording's dataset "
+                "is named after its file): rename one, or run them one at a time"
+            )
+        given[name] = os.fspath(path)
         entry = {"description": f"{os.fspath(path)} (--config path)", "path": os.fspath(path)}
         if config.get("resolution_m") is not None and Path(path).suffix.lower() in (".pgm", ".png"):
             entry["resolution_m"] = config["resolution_m"]  # a map image's metres a pixel
-        datasets.setdefault(name, entry)
+        known = datasets.get(name)
+        if known is None or (not _same_file(known.get("path"), os.fspath(path)) and _is_shipped(known, shipped.get(name))):
+            datasets[name] = entry  # new, or a shipped example of that name giving way
+        elif not _same_file(known.get("path"), os.fspath(path)):
+            raise ConfigError(
+                f"datasets.{name} names {_what_it_names(known)}; the recording {os.fspath(path)} would be the dataset "
+                f"{name!r} too (a recording's dataset is named after its file): rename the dataset or the file"
+            )
         datasets[name].update(copy.deepcopy(config.get("path_options") or {}))  # a reused dataset too
         names.append(name)
         by_file[Path(path).name] = name

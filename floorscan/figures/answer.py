@@ -1,5 +1,7 @@
-"""What a finished run prints: where the answer of each dataset is (the Snakefile's
-``onsuccess``)."""
+"""What a finished run prints: where the answer of each dataset is
+(:func:`answer_lines`, called at the end of a run by
+:func:`floorscan.figures.run_end.finish_run`), and ``summary.md``, the same answer in
+Markdown."""
 
 from __future__ import annotations
 
@@ -8,40 +10,8 @@ import os
 from pathlib import Path
 
 
-def run_datasets(targets, datasets, default: list[str]) -> list[str]:
-    """The datasets a run is about, for its last lines.
-
-    Parameters
-    ----------
-    targets : iterable of str
-        The run's targets (Snakemake's ``workflow.dag_settings.targets``): rule names or
-        files.
-    datasets : iterable of str
-        Every configured dataset.
-    default : list of str
-        The targeted datasets (config ``target``): what a rule target (``all``,
-        ``plan``, ``evaluation``) or no target builds.
-
-    Returns
-    -------
-    list of str
-        ``default`` for a rule target, the dataset of each ``results/<dataset>/...``
-        file target; each once, ``default`` first, then in the order of ``datasets``.
-    """
-    import re
-
-    found = set()
-    for target in targets or ["all"]:
-        m = re.match(r"^(?:\./)?results/([^/]+)/", str(target))
-        if m:
-            found.add(m.group(1))
-        elif "/" not in str(target) and "." not in str(target):
-            found.update(default)
-    return [d for d in dict.fromkeys([*default, *datasets]) if d in found]
-
-
 def answer_lines(
-    datasets, results: str | os.PathLike = "results", failed: dict | None = None, command: str = ""
+    datasets, results: str | os.PathLike = "results", failed: dict | None = None, report: str = ""
 ) -> list[str]:
     """What a finished run prints: the answer of each of its datasets.
 
@@ -61,10 +31,10 @@ def answer_lines(
         The results folder.
     failed : dict, optional
         ``{dataset: error paragraph}`` of the datasets whose run failed.
-    command : str
-        The command that makes the report of these datasets (a run of ``--config
-        path=...``: the default report has the config's targets only); without it,
-        ``results/report.html`` is named when it exists.
+    report : str
+        The command that makes the report of these datasets (``floorscan report``; a
+        run of ``--config path=...``: the default report has the config's targets
+        only); without it, ``results/report.html`` is named when it exists.
 
     Returns
     -------
@@ -105,22 +75,23 @@ def answer_lines(
             lines.append(f"  floor plan:         {root / ds}/floorplan.{{geojson,svg,dxf,ifc}}{plan_counts(root / ds / 'floorplan.geojson')}")
         if (root / ds / "map.pgm").is_file():
             lines.append(f"  occupancy map:      {root / ds}/map.pgm, map.yaml (ROS map_server, Nav2)")
-        lines.append(f"  scan list:          {s['scans']}")
+        # selection.json's paths are from the workflow's folder, the results folder's parent
+        at = root.parent.joinpath
+        lines.append(f"  scan list:          {at(s['scans'])}")
         lines.append(
-            f"  reduced recording:  {rec['path']} ({format_bytes(rec['bytes_out'])} of {format_bytes(rec['bytes_in'])}, "
+            f"  reduced recording:  {at(rec['path'])} ({format_bytes(rec['bytes_out'])} of {format_bytes(rec['bytes_in'])}, "
             f"{rec['scan_messages_out']} scans)"
         )
-        lines.append(f"  points (PLY, PCD):  {s['points'][0]}, {s['points'][1]}")
+        lines.append(f"  points (PLY, PCD):  {at(s['points'][0])}, {at(s['points'][1])}")
         for label, path in (("summary:", root / ds / "summary.md"), ("front page:", front)):
             if path.is_file():
                 lines.append(f"  {label:<20}{path}")
     if many and (root / "index.html").is_file():
         lines.append(f"index: {root / 'index.html'}")
-    report = root / "report.html"
-    if lines and command:
-        lines.append(f"report: {command} --report {report}")
-    elif lines and report.is_file():
+    if lines and report:
         lines.append(f"report: {report}")
+    elif lines and (root / "report.html").is_file():
+        lines.append(f"report: {root / 'report.html'}")
     return lines
 
 

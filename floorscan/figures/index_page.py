@@ -14,10 +14,10 @@ give the same bytes.
 
 from __future__ import annotations
 
-import html
 import json
 import os
 import re
+from dataclasses import dataclass
 from pathlib import Path
 from urllib.parse import quote
 
@@ -34,37 +34,6 @@ THUMB_WIDTH = 280
 _RECORD = re.compile(r"^\d{4}-\d\d-\d\d \d\d:\d\d:\d\d,\d{3} (?P<level>[A-Z]+) (?P<name>\S+): (?P<message>.*)$")
 
 _TRACEBACK = "Traceback (most recent call last):"
-
-_STYLE = """
-body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; color: #1e293b; background: #f8fafc;
-  font-size: 14px; line-height: 1.45; margin: 1.5em auto; max-width: 72rem; padding: 0 1em; }
-h1 { font-size: 1.5em; margin: 0 0 0.2em; }
-.counts { color: #475569; margin: 0 0 1em; }
-.card { display: flex; gap: 1.2em; align-items: flex-start; background: #fff; border: 1px solid #cbd5e1;
-  border-radius: 6px; padding: 0.8em 1em; margin: 0 0 0.8em; }
-.thumb { flex: 0 0 auto; width: %(w)dpx; }
-.thumb img { display: block; width: %(w)dpx; height: auto; max-height: 220px; object-fit: contain;
-  border: 1px solid #e2e8f0; background: #fff; }
-.noplan { width: %(w)dpx; height: 6em; display: flex; align-items: center; justify-content: center;
-  border: 1px dashed #cbd5e1; color: #94a3b8; }
-.facts { flex: 1 1 auto; min-width: 0; }
-.facts h2 { font-size: 1.2em; margin: 0 0 0.3em; }
-.facts p { margin: 0.3em 0; }
-a { color: #1d4ed8; }
-.verdict { padding: 0.3em 0.6em; border-left: 4px solid #64748b; background: #f1f5f9; }
-.verdict b { margin-right: 0.3em; }
-.verdict.good { border-color: #16a34a; background: #f0fdf4; }
-.verdict.good b { color: #15803d; }
-.verdict.warning { border-color: #d97706; background: #fffbeb; }
-.verdict.warning b { color: #b45309; }
-.verdict.poor { border-color: #dc2626; background: #fef2f2; }
-.verdict.poor b { color: #b91c1c; }
-.error { padding: 0.5em 0.7em; border: 1px solid #fca5a5; border-left: 4px solid #dc2626; background: #fef2f2;
-  color: #7f1d1d; white-space: pre-wrap; overflow-wrap: anywhere; font-family: ui-monospace, monospace;
-  font-size: 0.9em; }
-.error b { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; color: #b91c1c; }
-""" % {"w": THUMB_WIDTH}
-
 
 def dataset_status(dataset: str, results: str | os.PathLike = "results") -> dict:
     """What the index shows of one dataset, read from ``<results>/<dataset>/``.
@@ -228,7 +197,8 @@ def write_index(statuses: list[dict], path: str | os.PathLike = "results/index.h
 
 
 def index_html(statuses: list[dict], title: str = "floorscan results") -> str:
-    """The page :func:`write_index` writes, as text.
+    """The page :func:`write_index` writes, as text: the template
+    ``templates/index_page.html.j2`` given one :class:`IndexPage`.
 
     Parameters
     ----------
@@ -240,23 +210,92 @@ def index_html(statuses: list[dict], title: str = "floorscan results") -> str:
     -------
     str
     """
-    esc = html.escape
-    parts = [
-        "<!DOCTYPE html>",
-        '<html lang="en">',
-        "<head>",
-        '<meta charset="utf-8">',
-        '<meta name="viewport" content="width=device-width, initial-scale=1">',
-        f"<title>{esc(title)}</title>",
-        f"<style>{_STYLE}</style>",
-        "</head>",
-        "<body>",
-        f"<h1>{esc(title)}</h1>",
-        f'<p class="counts">{esc(counts_line(statuses))}</p>',
-    ]
-    parts += [_card(s) for s in statuses]
-    parts += ["</body>", "</html>", ""]
-    return "\n".join(parts)
+    from floorscan.figures.pages import render
+
+    return render("index_page.html.j2", IndexPage(tuple(statuses), title))
+
+
+@dataclass(frozen=True)
+class IndexCard:
+    """One dataset's card on the index, as the template shows it.
+
+    Attributes
+    ----------
+    name : str
+    front, plan : str or None
+        ``front.html`` and ``floorplan.svg`` relative to the results folder,
+        percent-encoded for an attribute (the template escapes them for HTML).
+    failed : str or None
+        The error paragraph of a dataset whose run failed.
+    verdict : str or None
+        The verdict's line without its leading class word.
+    verdict_word, verdict_css : str
+        ``GOOD`` / ``WARNING`` / ``POOR`` (``Verdict`` when unknown), and the
+        paragraph's CSS classes (``verdict good``).
+    scans : str
+        ``"10 of 76 kept of 321 recorded scans"``, or empty.
+    plan_counts : str
+        ``"14 walls, 5 rooms, 1 door"``, or empty.
+    """
+
+    name: str
+    front: str | None
+    plan: str | None
+    failed: str | None
+    verdict: str | None
+    verdict_word: str
+    verdict_css: str
+    scans: str
+    plan_counts: str
+
+    @classmethod
+    def of(cls, s: dict) -> "IndexCard":
+        """The card of a status (:func:`dataset_status`; keys but ``name`` may be missing)."""
+        verdict, word, css = None, s.get("verdict_class") or "Verdict", "verdict"
+        if s.get("verdict"):
+            line = str(s["verdict"])
+            head, sep, rest = line.partition(":")
+            verdict = rest.strip() if sep and head.strip().upper() == s.get("verdict_class") else line
+            css = f"verdict {s['verdict_class'].lower()}" if s.get("verdict_class") else "verdict"
+        nouns = (("n_walls", "wall"), ("n_rooms", "room"), ("n_doors", "door"))
+        return cls(
+            name=str(s["name"]),
+            front=_url(s["front"]) if s.get("front") else None,
+            plan=_url(s["floorplan"]) if s.get("floorplan") else None,
+            failed=str(s["failed"]) if s.get("failed") else None,
+            verdict=verdict,
+            verdict_word=word,
+            verdict_css=css,
+            scans=_scans_text(s),
+            plan_counts=", ".join(count_text(s[k], noun) for k, noun in nouns if s.get(k) is not None),
+        )
+
+
+@dataclass(frozen=True)
+class IndexPage:
+    """What the index shows: given to its template as one object (:func:`index_html`).
+
+    Attributes
+    ----------
+    statuses : tuple of dict
+        :func:`dataset_status` of each dataset, in page order.
+    title : str
+        The page's title and heading.
+    thumb_width : int
+        Width of a plan's thumbnail, CSS pixels.
+    """
+
+    statuses: tuple
+    title: str = "floorscan results"
+    thumb_width: int = THUMB_WIDTH
+
+    @property
+    def counts(self) -> str:
+        return counts_line(list(self.statuses))
+
+    @property
+    def cards(self) -> list[IndexCard]:
+        return [IndexCard.of(s) for s in self.statuses]
 
 
 def counts_line(statuses: list[dict]) -> str:
@@ -279,37 +318,6 @@ def counts_line(statuses: list[dict]) -> str:
 # ------------------------------------------------------------------------ parts
 
 
-def _card(s: dict) -> str:
-    esc = html.escape
-    name = esc(str(s["name"]))
-    if s.get("front"):
-        name = f'<a href="{_url(s["front"])}">{name}</a>'
-    if s.get("floorplan"):
-        img = f'<img src="{_url(s["floorplan"])}" width="{THUMB_WIDTH}" alt="{esc("floor plan of " + str(s["name"]))}">'
-        thumb = f'<a href="{_url(s.get("front") or s["floorplan"])}">{img}</a>'
-    else:
-        thumb = '<div class="noplan">no floor plan</div>'
-    facts = [f"<h2>{name}</h2>"]
-    if s.get("failed"):
-        facts.append(f'<div class="error"><b>Failed:</b> {esc(str(s["failed"]))}</div>')
-    if s.get("verdict"):
-        cls = f"verdict {s['verdict_class'].lower()}" if s.get("verdict_class") else "verdict"
-        word = esc(s.get("verdict_class") or "Verdict")
-        line = str(s["verdict"])
-        head, sep, rest = line.partition(":")
-        text = rest.strip() if sep and head.strip().upper() == s.get("verdict_class") else line
-        facts.append(f'<p class="{esc(cls)}"><b>{word}</b>{esc(text)}</p>')
-    scans = _scans_text(s)
-    if scans:
-        facts.append(f"<p>{esc(scans)}</p>")
-    nouns = (("n_walls", "wall"), ("n_rooms", "room"), ("n_doors", "door"))
-    plan = ", ".join(count_text(s[k], noun) for k, noun in nouns if s.get(k) is not None)
-    if plan:
-        facts.append(f"<p>{esc(plan)}</p>")
-    return (f'<section class="card" id="{esc(str(s["name"]))}">\n<div class="thumb">{thumb}</div>\n'
-            f'<div class="facts">\n' + "\n".join(facts) + "\n</div>\n</section>")
-
-
 def _scans_text(s: dict) -> str:
     """``"10 of 76 kept of 321 recorded scans"``, with what is known of it."""
     k, kept, recorded = s.get("k"), s.get("n_kept"), s.get("n_recorded")
@@ -324,8 +332,9 @@ def _scans_text(s: dict) -> str:
 
 
 def _url(rel: str) -> str:
-    """A relative path as an attribute value: percent-encoded, then HTML-escaped."""
-    return html.escape(quote(str(rel), safe="/"), quote=True)
+    """A relative path as an attribute value, percent-encoded (the template escapes it
+    for HTML)."""
+    return quote(str(rel), safe="/")
 
 
 def _paragraph(body: list[str]) -> str:

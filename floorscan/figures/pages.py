@@ -1,7 +1,9 @@
 """The HTML pages of a result rendered from Jinja2 templates (``templates/`` beside this
 module): :func:`render` gives a template ONE object, the dataclass of what its page
 shows (:class:`floorscan.figures.report.FrontPage`,
-:class:`floorscan.figures.map_page.MapFrontPage`), and autoescapes every value; the only
+:class:`floorscan.figures.map_page.MapFrontPage`,
+:class:`floorscan.figures.index_page.IndexPage`,
+:class:`floorscan.figures.summary_page.SummaryPage`), and autoescapes every value; the only
 markup that passes unescaped is what the page's object marks as
 :class:`markupsafe.Markup` (the plan's SVG, checked by
 :func:`floorscan.figures.report.inline_svg`). :class:`OutputFile` is a file a page

@@ -1,24 +1,65 @@
-"""The scan-reduction summary of a dataset as HTML: the table the front page shows and
-``summary.html``, a page of its own (the same cells as ``summary.md``,
-:func:`floorscan.score.curve_summary.summary_cell`)."""
+"""The scan-reduction summary of a dataset as HTML: the cells of the table the front
+page shows (:func:`summary_rows`, the same cells as ``summary.md``,
+:func:`floorscan.core.score_tables.summary_cell`) and ``summary.html``, a page of its
+own rendered from ``templates/summary_page.html.j2`` (:class:`SummaryPage`; the table is
+the macro ``summary_table`` of ``templates/_macros.html.j2``, which the front page uses
+too)."""
 
 from __future__ import annotations
 
-import html
 import os
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from floorscan.core.files import atomic_path
 from floorscan.core.score_tables import SUMMARY_COLUMNS, summary_cell
+from floorscan.figures.pages import render
 
 if TYPE_CHECKING:
     import pandas as pd
 
 
+@dataclass(frozen=True)
+class SummaryPage:
+    """What ``summary.html`` shows: given to its template
+    (``templates/summary_page.html.j2``) as one object.
+
+    Attributes
+    ----------
+    dataset : str
+    table : dict
+        :func:`summary_rows`.
+    verdict_line : str
+        The registration's verdict line, or empty.
+    beats_random : str
+        :func:`floorscan.core.score_tables.beats_random_line`, or empty.
+    """
+
+    dataset: str
+    table: dict
+    verdict_line: str = ""
+    beats_random: str = ""
+
+
+def summary_page_html(page: SummaryPage) -> str:
+    """``summary.html`` as text, rendered from its template.
+
+    Parameters
+    ----------
+    page : SummaryPage
+
+    Returns
+    -------
+    str
+    """
+    return render("summary_page.html.j2", page)
+
+
 def write_summary_page(path: str | os.PathLike, dataset: str, summary: "pd.DataFrame", n_kept: int,
                        beats_random: str, verdict: dict | None, ordering: str) -> None:
-    """``summary.html``: the verdict, the beats-random line and :func:`summary_table_html`
-    of one dataset, a page of its own (the front page includes the same table).
+    """``summary.html``: the verdict, the beats-random line and the summary table
+    (:func:`summary_rows`) of one dataset, a page of its own (the front page shows the
+    same table).
 
     Parameters
     ----------
@@ -29,61 +70,25 @@ def write_summary_page(path: str | os.PathLike, dataset: str, summary: "pd.DataF
         :func:`floorscan.score.curve_summary.curve_summary`.
     n_kept : int
     beats_random : str
-        :func:`floorscan.score.curve_summary.beats_random_line`.
+        :func:`floorscan.core.score_tables.beats_random_line`.
     verdict : dict or None
     ordering : str
         Highlighted.
     """
+    page = SummaryPage(dataset, summary_rows(summary, n_kept, ordering), str((verdict or {}).get("line") or ""),
+                       beats_random or "")
     with atomic_path(path) as tmp:
-        tmp.write_text(
-            f"<html><head><meta charset='utf-8'><title>{dataset} summary</title></head><body>"
-            f"<h1>{dataset}</h1>"
-            + (f"<p><b>Verdict: {verdict['line']}</b></p>" if verdict else "")
-            + f"<p>{beats_random}</p>"
-            + summary_table_html(summary, n_kept, ordering)
-            + "</body></html>\n"
-        )
-
-
-def summary_table_html(
-    summary: "pd.DataFrame", n_kept: int | None = None, ordering: str = "", extractor: str = ""
-) -> str:
-    """The summary as an HTML table, the cells as in ``summary.md`` (random's k and AUC
-    with their seeds' spread); the rows of ``ordering`` (with ``extractor``, when given:
-    the recommended plan) highlighted, the oracle's in grey. An F1 from fewer than
-    :data:`floorscan.register.consistency.FEW_SCANS` kept scans is marked.
-
-    Parameters
-    ----------
-    summary : pandas.DataFrame
-        :func:`floorscan.score.curve_summary.curve_summary`.
-    n_kept : int, optional
-    ordering, extractor : str
-
-    Returns
-    -------
-    str
-    """
-    esc = html.escape
-    table = summary_rows(summary, n_kept, ordering, extractor)
-    out = [
-        "<table>",
-        "<thead><tr>" + "".join(f"<th>{esc(h)}</th>" for h in table["header"]) + "</tr></thead>",
-        "<tbody>",
-    ]
-    for cls, cells in table["rows"]:
-        tds = "".join(f'<td class="num">{esc(c)}</td>' if numeric else f"<td>{esc(c)}</td>" for numeric, c in cells)
-        attr = f' class="{cls}"' if cls else ""
-        out.append(f"<tr{attr}>{tds}</tr>")
-    out += ["</tbody>", "</table>"]
-    return "\n".join(out)
+        tmp.write_text(summary_page_html(page), encoding="utf-8")
 
 
 def summary_rows(
     summary: "pd.DataFrame", n_kept: int | None = None, ordering: str = "", extractor: str = ""
 ) -> dict:
-    """The cells of :func:`summary_table_html`, for a template: the header, and per row
-    its classes (``recommended``, ``bound``) and its cells (numeric or not, text).
+    """The summary table's cells, for a template (macro ``summary_table``): the header,
+    and per row its classes (``recommended``, ``bound``: the rows of ``ordering``, with
+    ``extractor`` when given, highlighted; the oracle's in grey) and its cells (numeric
+    or not, text, as in ``summary.md``; an F1 from fewer than
+    :data:`floorscan.core.score_tables.FEW_SCANS` kept scans is marked).
 
     Parameters
     ----------
