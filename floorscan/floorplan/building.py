@@ -15,7 +15,6 @@ recording, and a storey is placed only by its elevation. The files of a building
 
 from __future__ import annotations
 
-import html
 import os
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Mapping, Sequence
@@ -137,8 +136,8 @@ def building_page(floors: Sequence[Floor], plans: Mapping[str, FloorPlan], name:
     elevation in metres, walls, rooms, floor area in square metres
     (:func:`~floorscan.floorplan.metadata.floor_area_m2`), doors), each with its
     plan's SVG as a thumbnail (``../<dataset>/floorplan.svg``) linking its front page
-    (``../<dataset>/front.html``) and its GeoJSON (``<dataset>.geojson``). Text is
-    escaped.
+    (``../<dataset>/front.html``) and its GeoJSON (``<dataset>.geojson``): the Jinja2
+    template ``templates/building_page.html.j2`` of this package, autoescaped.
 
     Parameters
     ----------
@@ -159,43 +158,17 @@ def building_page(floors: Sequence[Floor], plans: Mapping[str, FloorPlan], name:
     KeyError
         A floor whose dataset has no plan in ``plans``.
     """
-    e = html.escape
+    from jinja2 import Environment, PackageLoader, StrictUndefined
+
     rows = []
     for f in floors:
         plan, ds = plans[f.dataset], quote(f.dataset)
-        front, svg, alt = e(f"../{ds}/front.html"), e(f"../{ds}/floorplan.svg"), e(f"floor plan of {f.dataset}")
-        rows.append(
-            f'<tr><td><a href="{front}"><img src="{svg}" alt="{alt}"></a></td><td class="l">{e(f.storey)}</td>'
-            f'<td>{float(f.elevation_m):.2f}</td><td>{len(plan.walls)}</td>'
-            f"<td>{len(plan.rooms)}</td><td>{floor_area_m2(plan):.1f}</td><td>{len(plan.doors)}</td>"
-            f'<td class="l"><a href="{front}">{e(f.dataset)}</a> (<a href="{e(f"{ds}.geojson")}">GeoJSON</a>)</td></tr>'
-        )
-    body = "\n".join(rows)
-    return f"""<!DOCTYPE html>
-<html lang="en">
-<head>
-<meta charset="utf-8">
-<title>{e(name)}</title>
-<style>
-body {{ font-family: sans-serif; margin: 2em; }}
-table {{ border-collapse: collapse; }}
-th, td {{ border: 1px solid #ccc; padding: 0.4em 0.8em; text-align: right; vertical-align: middle; }}
-.l {{ text-align: left; }}
-img {{ width: 16em; background: #fff; }}
-</style>
-</head>
-<body>
-<h1>{e(name)}</h1>
-<p>{count_text(len(floors), "floor")} in one IFC model: <a href="building.ifc">building.ifc</a> (a storey per floor).
-Each floor is in the map frame of its recording, placed only by its elevation: the floors are
-not registered to each other.</p>
-<table>
-<thead><tr><th>Plan</th><th class="l">Storey</th><th>Elevation (m)</th><th>Walls</th><th>Rooms</th>
-<th>Floor area (m&sup2;)</th><th>Doors</th><th class="l">Recording</th></tr></thead>
-<tbody>
-{body}
-</tbody>
-</table>
-</body>
-</html>
-"""
+        rows.append({
+            "front": f"../{ds}/front.html", "svg": f"../{ds}/floorplan.svg", "geojson": f"{ds}.geojson",
+            "dataset": f.dataset, "storey": f.storey, "elevation_m": float(f.elevation_m), "walls": len(plan.walls),
+            "rooms": len(plan.rooms), "area_m2": floor_area_m2(plan), "doors": len(plan.doors),
+        })  # fmt: skip
+    env = Environment(loader=PackageLoader("floorscan.floorplan", "templates"), autoescape=True,
+                      undefined=StrictUndefined, keep_trailing_newline=True)  # fmt: skip
+    page = {"name": name, "floors_text": count_text(len(floors), "floor"), "rows": rows}
+    return env.get_template("building_page.html.j2").render(page=page)
