@@ -133,3 +133,45 @@ def test_the_outside_seen_through_an_opening_is_not_a_room():
     rooms, doors = plan_rooms(axes, np.full(len(axes), T), grid)
     assert list(rooms["kind"]) == ["space"] and len(doors) == 0
     assert 29.5 < rooms["area_m2"].iloc[0] < 31.5 and rooms["polygon"].iloc[0].bounds[1] > -0.2
+
+
+# A corridor (y 0..1.5) along three offices (y 1.5..4.5) open to it on their whole
+# width: partitions at x = 3 and 6 end at the corridor, short returns at the ends.
+OPEN_OFFICES = [
+    (0, 0, 9, 0), (9, 0, 9, 4.5), (9, 4.5, 0, 4.5), (0, 4.5, 0, 0),
+    (3, 4.5, 3, 1.5), (6, 4.5, 6, 1.5), (0, 1.5, 0.8, 1.5), (9, 1.5, 8.2, 1.5),
+]  # fmt: skip
+
+
+def test_offices_open_to_a_corridor_on_their_whole_width_are_rooms():
+    """The mouths of :mod:`floorscan.floorplan.mouths`: without them the offices and the
+    corridor are one space (no narrowing between them)."""
+    from floorscan.floorplan.mouths import room_mouths
+    from floorscan.floorplan.room_space import room_space
+
+    axes = np.array(OPEN_OFFICES, dtype=np.float64)
+    grid = _grid(OPEN_OFFICES, [(1.5, 0.75), (4.5, 0.75), (7.5, 0.75), (1.5, 3), (4.5, 3), (7.5, 3)])
+    mouths = room_mouths(axes, np.full(len(axes), T), room_space(grid, axes, np.full(len(axes), T), RoomParams()),
+                         RoomParams())  # fmt: skip
+    got = sorted((round(float(min(p[0], q[0])), 2), round(float(max(p[0], q[0])), 2)) for p, q, _ in mouths)
+    assert got == [(0.8, 3.0), (3.0, 6.0), (6.0, 8.2)]
+    assert all(abs(p[1] - 1.5) < 1e-9 and abs(q[1] - 1.5) < 1e-9 for p, q, _ in mouths)
+    rooms, doors = plan_rooms(axes, np.full(len(axes), T), grid, RoomParams())
+    assert sorted(rooms["kind"]) == ["corridor", "room", "room", "room"] and len(doors) == 0
+    offices = rooms[rooms["kind"] == "room"]
+    assert all(8.0 < a < 9.0 for a in offices["area_m2"])  # 3 x 3 m less half walls
+    corridor = rooms[rooms["kind"] == "corridor"]["polygon"].iloc[0]
+    assert shapely.box(0.1, 0.1, 8.9, 1.4).difference(corridor).area < 0.3
+
+
+def test_a_gap_in_one_wall_and_a_short_stub_make_no_mouth():
+    """Two collinear ends are a gap in one wall (wall_gaps' door, not a mouth); a side
+    wall shorter than the opening is a stub of furniture."""
+    from floorscan.floorplan.mouths import room_mouths
+    from floorscan.floorplan.room_space import room_space
+
+    for walls in (BOX + [(4, 0, 4, 1.0), (4, 3.5, 4, 4)], BOX + [(4, 4, 4, 3.0), (6.5, 4, 6.5, 3.0)]):
+        axes = np.array(walls, dtype=np.float64)
+        grid = _grid(walls, [(2, 2), (6, 2)])
+        raster = room_space(grid, axes, np.full(len(axes), T), RoomParams())
+        assert room_mouths(axes, np.full(len(axes), T), raster, RoomParams()) == []

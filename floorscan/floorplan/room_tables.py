@@ -14,11 +14,13 @@ from floorscan.floorplan.room_space import RoomParams
 log = logging.getLogger("floorscan.floorplan.rooms")
 
 
-def room_tables(polys: list, doors: list, resolution_m: float, params: RoomParams) -> tuple[pd.DataFrame, pd.DataFrame]:
+def room_tables(
+    polys: list, doors: list, resolution_m: float, params: RoomParams, divided: bool = False
+) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The rooms and doors tables of room polygons and door openings: each room's kind
     (a ``corridor`` when long for its width: the width the diameter of the largest
     circle inside it, its length the area over that width; ``space`` for every room
-    when no door divides the space) and name (``Room 1``, ``Corridor 1``, ``Space 1``
+    when no door and no room's open side divides the space) and name (``Room 1``, ``Corridor 1``, ``Space 1``
     in the order given).
 
     Parameters
@@ -31,6 +33,9 @@ def room_tables(polys: list, doors: list, resolution_m: float, params: RoomParam
     resolution_m : float
         The tolerance of the largest inscribed circle is half of it, metres.
     params : RoomParams
+    divided : bool
+        Whether a room's open side (:mod:`floorscan.floorplan.mouths`) divides two
+        rooms, when no door does.
 
     Returns
     -------
@@ -46,7 +51,7 @@ def room_tables(polys: list, doors: list, resolution_m: float, params: RoomParam
         length = poly.area / max(width, 1e-9)
         long = width <= params.corridor_max_width_m and length >= max(params.corridor_elongation * width, params.corridor_min_length_m)
         kinds.append("corridor" if long else "room")
-    if polys and not doors:
+    if polys and not doors and not divided:
         kinds = ["space"] * len(polys)
         log.info("rooms: no door divides the free space (an open hall, one corridor, a campus): %s of %.1f m2",
                  "one space" if len(polys) == 1 else f"{len(polys)} spaces apart", sum(p.area for p in polys))

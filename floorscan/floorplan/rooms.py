@@ -21,7 +21,10 @@ taken from the walls:
 2. **Doors between walls** (:func:`~floorscan.floorplan.doors.wall_gaps`): the gap
    between the facing ends of two walls in one line, ``door_min_m`` to ``door_max_m``
    wide, that the scans saw through, is cut from the space first: a room seen only
-   through its door (a fan of rays) ends at the door.
+   through its door (a fan of rays) ends at the door. So is the open side of a room
+   (:func:`~floorscan.floorplan.mouths.room_mouths`): the line between the free ends of
+   the walls that bound a room open on its whole width onto a corridor (an office, a
+   cubicle); a door where no wider than one.
 3. **Regions** (:func:`~floorscan.floorplan.room_space.space_regions`): a watershed
    (scikit-image) of the negated distance to the nearest wall or unseen cell, from the
    maxima of that distance that stand ``marker_depth_m`` above the saddles around them
@@ -67,6 +70,7 @@ import pandas as pd
 
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan import doors as D
+from floorscan.floorplan.mouths import room_mouths
 from floorscan.floorplan.persistence import persistent_rooms
 from floorscan.floorplan.room_space import RoomParams, RoomRaster, room_space, space_regions, wall_footprints
 from floorscan.floorplan.room_tables import room_tables
@@ -88,7 +92,7 @@ def _roots(sets, n: int) -> np.ndarray:
 
 def segment_rooms(
     grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, params: RoomParams = RoomParams()
-) -> tuple[RoomRaster, np.ndarray, list[tuple[np.ndarray, np.ndarray, int, int, int]]]:
+) -> tuple[RoomRaster, np.ndarray, list[tuple[np.ndarray, np.ndarray, int, int, int]], bool]:
     """The rooms and doors on the raster (module docstring, steps 1-5).
 
     Parameters
@@ -110,12 +114,16 @@ def segment_rooms(
     doors : list of (p, q, wall, room_a, room_b)
         Each door's opening from ``p`` to ``q`` ((2,) metres) in the line of wall
         ``wall`` and the rooms it joins (``room_a < room_b``, labels).
+    divided : bool
+        Whether a door or a room's open side (:mod:`floorscan.floorplan.mouths`)
+        divides two rooms: else the rooms are spaces no wall closes.
     """
 
     axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
     thickness = np.asarray(thickness, dtype=np.float64).reshape(-1)
     raster = room_space(grid, axes, thickness, params)
     gaps = [g for g in D.wall_gaps(axes, thickness, params) if D.passes_through(raster, g[0], g[1])]
+    gaps += room_mouths(axes, thickness, raster, params)
     barrier = np.zeros(raster.space.shape, dtype=bool)
     for p, q, _ in gaps:
         rr, cc = D.barrier_cells(raster, p, q)
@@ -155,13 +163,17 @@ def segment_rooms(
         else:
             kinds[(a, b)] = "door"
             found += [(*door, a, b) for door in framed[(a, b)]]
+    open_sides = []  # pairs of regions apart at a room's open side (no door)
     for p, q, wall in gaps:
         d = q - p
         nrm = np.array([-d[1], d[0]]) / max(float(np.hypot(*d)), 1e-12) * 2 * raster.resolution_m
         a, b = (int(v) for v in raster.at(labels, np.array([(p + q) / 2 + nrm, (p + q) / 2 - nrm])))
         if a and b and a != b:
             pair = (min(a, b), max(a, b))
-            found.append((p, q, wall, *pair))
+            if np.hypot(*d) <= params.door_max_m:  # a room's open side wider than a door is no door
+                found.append((p, q, wall, *pair))
+            else:
+                open_sides.append(pair)
             touching[pair] = touching.get(pair, 0.0) + float(np.hypot(*d))
             kinds.setdefault(pair, "door")
     outside = _outside_regions(cut, labels, kinds, params, grid.scan_xy)
@@ -223,7 +235,9 @@ def segment_rooms(
         ra, rb = renum[roots[a]], renum[roots[b]]
         if ra and rb and ra != rb:
             doors.append((p, q, wall, int(min(ra, rb)), int(max(ra, rb))))
-    return raster, final, _distinct_doors(doors)
+    divided = bool(doors) or any(renum[roots[a]] and renum[roots[b]] and renum[roots[a]] != renum[roots[b]]
+                                 for a, b in open_sides)  # fmt: skip
+    return raster, final, _distinct_doors(doors), divided
 
 
 def _enclosure(raster: RoomRaster, labels: np.ndarray, n: int | None = None) -> np.ndarray:
@@ -462,7 +476,7 @@ def plan_rooms(
     import shapely
 
     t0 = time.perf_counter()
-    raster, labels, doors = segment_rooms(grid, axes, thickness, params)
+    raster, labels, doors, divided = segment_rooms(grid, axes, thickness, params)
     n = int(labels.max())
     polys = room_polygons(raster, labels, axes, thickness)
     if doors:  # the opening in the wall belongs to neither room: rooms end at the wall faces
@@ -476,7 +490,7 @@ def plan_rooms(
     new_id = {k + 1: i for i, k in enumerate(keep)}
     polys = [polys[k] for k in keep]
     doors = [(p, q, w, new_id[a], new_id[b]) for p, q, w, a, b in doors if a in new_id and b in new_id]
-    rooms, doors_df = room_tables(polys, doors, raster.resolution_m, params)
+    rooms, doors_df = room_tables(polys, doors, raster.resolution_m, params, divided)
     kinds = list(rooms["kind"])
     log.info("rooms: %d rooms (%d corridors), %d doors, %.1f m2 in all (%.2f s)", len(polys), kinds.count("corridor"),
              len(doors_df), float(rooms["area_m2"].sum()), time.perf_counter() - t0)

@@ -1,0 +1,160 @@
+"""The open side of a room (:func:`room_mouths`): the line between the free ends of two
+walls that bound a room on its sides, where the room opens on its whole width onto a
+corridor or a hall (an office open to the corridor, a cubicle, a corner room, a short
+corridor leading off a hall).
+
+A distance-transform segmentation (:mod:`floorscan.floorplan.persistence`) separates
+two spaces only where the space narrows between them; a room open on its whole width
+does not narrow, so it joins the corridor. People draw the room's boundary there on the
+line that joins the ends of its walls, as they draw a door on the line of its wall
+(the room ground truths of Bormann et al., ICRA 2016, and of ROSE^2, Luperto et al.,
+RA-L 2022, whose layout extends the walls' lines into the open side of a room). A
+mouth is that line, between two wall ends that:
+
+- are free ends (not in an L or T junction, :func:`~floorscan.floorplan.doors.junction_end`);
+- lie ``door_min_m`` to :data:`MOUTH_MAX_M` apart, the line between them in the free
+  space, crossing no wall;
+- belong to walls that bound one side of the line: each wall runs from its end away
+  from the line on the same side (or along the line, away from it: the wall of a
+  corridor going on past a room's side wall), and not both along the line (that is a
+  gap in one wall, :func:`~floorscan.floorplan.doors.wall_gaps`);
+- close a pocket: from the line into that side, the space ends at a wall or at a cell
+  outside the space within :data:`MOUTH_DEPTH` times the line's length, at its
+  middle and at both quarter points (the back wall of the room).
+
+A mouth cuts the space before it is segmented, as a gap in a wall does; where it is
+no wider than a door it is the room's door.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from floorscan.floorplan.doors import junction_end
+from floorscan.floorplan.room_space import RoomParams, RoomRaster
+
+#: The widest open side of a room, metres: two standard office modules (2 x 2.4 m less
+#: the walls) open onto a corridor; wider openings join halls that people draw as one
+#: space (measured on the room benchmarks: ``benchmarks/README.md``).
+MOUTH_MAX_M = 4.0
+#: A pocket is at most this many times as deep as its open side is wide (a room, not
+#: a corridor running on behind the line).
+MOUTH_DEPTH = 4.0
+#: The walls at a mouth are at least this long, and half the mouth (a room's sides,
+#: not the stubs of furniture or of a noisy map), metres.
+MOUTH_WALL_M = 1.0
+#: Two walls bound one side when their directions, seen from the line, point into it
+#: by at least this cosine (about 70 degrees off the line).
+_INTO = np.cos(np.radians(20.0))
+#: Along the line: a wall within this cosine of the line's direction continues it.
+_ALONG = np.cos(np.radians(20.0))
+
+
+def _free_ends(axes: np.ndarray, thickness: np.ndarray) -> list[tuple[int, int]]:
+    return [(i, k) for i in range(len(axes)) for k in (0, 1) if not junction_end(axes, thickness, i, k)]
+
+
+def _ray_hits(raster: RoomRaster, start: np.ndarray, direction: np.ndarray, max_m: float, walls, tree) -> bool:
+    """Whether the space ends at a wall (``walls``, shapely footprints in ``tree``)
+    within ``max_m`` from ``start`` along ``direction``."""
+    import shapely
+
+    step = raster.resolution_m / 2
+    n = max(2, int(np.ceil(max_m / step)))
+    pts = start + np.outer(np.arange(1, n + 1) * step, direction)
+    out = np.flatnonzero(~raster.at(raster.space, pts, outside=False))
+    if not len(out):
+        return False
+    hit = shapely.Point(pts[out[0]])
+    near = tree.query(hit, predicate="dwithin", distance=2 * raster.resolution_m)
+    return bool(len(near))
+
+
+def room_mouths(
+    axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster, params: RoomParams
+) -> list[tuple[np.ndarray, np.ndarray, int]]:
+    """The open sides of rooms (module docstring).
+
+    Parameters
+    ----------
+    axes : (N, 4) float ndarray
+        Wall axes ``x0, y0, x1, y1``, metres.
+    thickness : (N,) float ndarray
+        Metres.
+    raster : RoomRaster
+        The space before it is cut.
+    params : RoomParams
+
+    Returns
+    -------
+    list of (p, q, wall)
+        Each mouth from ``p`` to ``q`` ((2,) metres, wall ends) and the longer of its
+        two walls; no two mouths cross (of two crossing, the shorter is kept).
+    """
+    import shapely
+
+    axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
+    thickness = np.asarray(thickness, dtype=np.float64).reshape(-1)
+    if len(axes) < 2:
+        return []
+    ends = axes.reshape(-1, 2, 2)
+    length = np.hypot(axes[:, 2] - axes[:, 0], axes[:, 3] - axes[:, 1])
+    free = _free_ends(axes, thickness)
+    if len(free) < 2:
+        return []
+    pts = np.array([ends[i, k] for i, k in free])
+    # each wall's direction pointing away from the free end (from the end into the wall)
+    away = np.array([(ends[i, 1 - k] - ends[i, k]) / max(length[i], 1e-12) for i, k in free])
+    footprints = [shapely.buffer(shapely.LineString(a.reshape(2, 2)), t / 2, cap_style="flat")
+                  for a, t in zip(axes, thickness)]  # fmt: skip
+    tree = shapely.STRtree(footprints)
+    def closes_pocket(p, q, s, trim_q=0.15) -> bool:
+        """The line p-q runs in the free space, crosses no wall, and the space on side
+        ``s`` (+1 left of p->q, -1 right) ends at a wall within MOUTH_DEPTH times its
+        length at its quarter points and middle."""
+        L = float(np.hypot(*(q - p)))
+        u = (q - p) / L
+        n = np.array([-u[1], u[0]])
+        line = shapely.LineString([p + u * 0.15, q - u * trim_q])
+        if any(shapely.intersects(footprints[k], line) for k in tree.query(line)):
+            return False
+        t = np.linspace(0.15, L - trim_q, max(3, int(L / raster.resolution_m)))
+        if not raster.at(raster.space, p + np.outer(t, u), outside=False).all():
+            return False
+        starts = [p + u * L * f + s * n * raster.resolution_m for f in (0.25, 0.5, 0.75)]
+        return all(_ray_hits(raster, x, s * n, MOUTH_DEPTH * L, footprints, tree) for x in starts)
+
+    cands = []
+    for a in range(len(free)):
+        d = pts - pts[a]
+        dist = np.hypot(d[:, 0], d[:, 1])
+        for b in np.flatnonzero((dist >= params.door_min_m) & (dist <= MOUTH_MAX_M)):
+            if b <= a or free[a][0] == free[b][0]:
+                continue
+            u = d[b] / dist[b]
+            n = np.array([-u[1], u[0]])
+            along = np.abs(away[[a, b]] @ u) >= _ALONG
+            if along.all():
+                continue  # a gap in one wall's line: wall_gaps
+            side = away[[a, b]] @ n
+            # along the line: the wall must run away from the mouth, outward
+            if along[0] and away[a] @ u > 0 or along[1] and away[b] @ u < 0:
+                continue
+            sides = np.array([free[a][0], free[b][0]])[~along]
+            if length[sides].min() < max(MOUTH_WALL_M, dist[b]):
+                continue  # a stub of furniture or noise bounds no room
+            into = side[~along]
+            if not ((into >= _INTO).all() or (into <= -_INTO).all()):
+                continue
+            if not closes_pocket(pts[a], pts[b], 1.0 if (into > 0).all() else -1.0):
+                continue
+            wall = free[a][0] if length[free[a][0]] >= length[free[b][0]] else free[b][0]
+            cands.append((float(dist[b]), pts[a].copy(), pts[b].copy(), int(wall)))
+    cands.sort(key=lambda c: c[0])
+    kept: list = []
+    for _, p, q, wall in cands:
+        seg = shapely.LineString([p, q])
+        if any(shapely.crosses(seg, shapely.LineString([kp, kq])) for kp, kq, _ in kept):
+            continue
+        kept.append((p, q, wall))
+    return kept
