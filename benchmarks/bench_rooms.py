@@ -2,7 +2,8 @@
 ``../shared/data/room-maps/`` (its README: the data and the metric definitions).
 
 For every map the plan is built as a map is a recording (issue 43):
-:func:`floorscan.ingest.occupancy_map.read_occupancy_map` (5 cm a pixel, origin 0),
+:func:`floorscan.ingest.occupancy_map.read_occupancy_map` (5 cm a pixel, origin 0; a
+Bormann map through a yaml of :data:`READINGS`, by default as ipa's evaluation reads it),
 :func:`floorscan.walls.map_stage.map_of_grid`, then
 :func:`floorscan.floorplan.scans.plan_of_scans` with the default
 :class:`~floorscan.floorplan.params.FloorplanParams`; the time per map is of these three.
@@ -33,7 +34,8 @@ what the map extractor fits the plan's faces on. Completeness is the share of th
 cells within tau of a plan face, correctness the share of the plan's face length
 within tau of one (:func:`floorscan.score.drawn.score_against_drawn`), at 5 and 10 cm.
 
-``python -m benchmarks rooms [--maps NAME ...] [--out DIR] [--workers 2] [--no-figures] [--rooms plan|layout]``:
+``python -m benchmarks rooms [--maps NAME ...] [--out DIR] [--workers 2] [--no-figures] [--rooms plan|layout]
+[--reading ipa|map_server]``:
 a table per map, the averages per group, the published figures beside them, and one
 figure per map (``--out``, default ``results/bench_rooms/``: the map, the rooms people
 drew, floorscan's rooms, ROSE^2's rooms where there are any).
@@ -83,8 +85,29 @@ def read_image(path: Path) -> np.ndarray:
     return np.asarray(Image.open(path))
 
 
+#: How a Bormann map is read (``--reading``): ``ipa``, as ipa_room_segmentation's
+#: evaluation binarises its maps (a pixel above 250 free, every other pixel an
+#: obstacle, the grey walls of lab_a, office_b, office_d, lab_intel and Freiburg52
+#: included); ``map_server``, the map_server defaults of
+#: :mod:`floorscan.ingest.occupancy_map` (grey 205-211 reads free, 90-204 unknown).
+READINGS = {"ipa": {"occupied_thresh": 4.6 / 255, "free_thresh": 4.5 / 255}, "map_server": None}
+
+
+def map_path(image: Path, reading: str | None, folder: Path) -> Path:
+    """``image`` itself, or a map_server yaml in ``folder`` that reads it as ``reading``
+    (:data:`READINGS`) says."""
+    thresholds = READINGS.get(reading) if reading else None
+    if not thresholds:
+        return image
+    folder.mkdir(parents=True, exist_ok=True)
+    yml = folder / f"{image.stem}.yaml"
+    yml.write_text(f"image: {image.resolve()}\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
+                   f"occupied_thresh: {thresholds['occupied_thresh']!r}\nfree_thresh: {thresholds['free_thresh']!r}\n")
+    return yml
+
+
 def plan_labels(path: Path, rooms: str = "plan"):
-    """The plan of a map image and its rooms on the image's pixels.
+    """The plan of a map image (or of its map_server yaml) and its rooms on the image's pixels.
 
     ``rooms``: ``plan``, the plan's own rooms (the pipeline's room step,
     :mod:`floorscan.floorplan.rooms`); ``layout``, the rooms of the candidate global
@@ -158,7 +181,8 @@ def score_one(group: str, name: str, image: Path, truth: np.ndarray, rooms: str 
     return row, labels, grid, plan
 
 
-def run_task(task: tuple[str, str], data: Path = DATA, out: Path | None = None, rooms: str = "plan") -> list[dict]:
+def run_task(task: tuple[str, str], data: Path = DATA, out: Path | None = None, rooms: str = "plan",
+             reading: str = "ipa") -> list[dict]:
     """Every figure of one map (a Bormann map: both its images), and its figure in ``out``.
 
     Returns
@@ -170,13 +194,17 @@ def run_task(task: tuple[str, str], data: Path = DATA, out: Path | None = None, 
     """
     from floorscan.score.segmentation import grey_of_image, label_colours, label_drawn_regions, score_label_images
 
+    import tempfile
+
     group, name = task
     rows, panels = [], []
     if group == "bormann":
         folder = data / "bormann"
         truth = label_drawn_regions(grey_of_image(read_image(folder / f"{name}_gt_segmentation.png")))
-        clean, clean_labels, clean_grid, clean_plan = score_one("bormann", name, folder / f"{name}.png", truth, rooms)
-        furn, furn_labels, _, furn_plan = score_one("bormann_furniture", name, folder / f"{name}_furnitures.png", truth, rooms)
+        with tempfile.TemporaryDirectory() as tmp:
+            clean_map, furn_map = (map_path(folder / f"{name}{s}.png", reading, Path(tmp)) for s in ("", "_furnitures"))
+            clean, clean_labels, clean_grid, clean_plan = score_one("bormann", name, clean_map, truth, rooms)
+            furn, furn_labels, _, furn_plan = score_one("bormann_furniture", name, furn_map, truth, rooms)
         clean |= {f"walls_{k}": v for k, v in wall_scores(clean_plan, clean_grid).items()}
         furn |= {f"walls_{k}": v for k, v in wall_scores(furn_plan, clean_grid).items()}
         rows += [clean, furn]
@@ -304,6 +332,9 @@ def main(argv: list[str] | None = None) -> list[dict]:
     ap.add_argument("--rooms", choices=["plan", "layout"], default="plan",
                     help="plan: the pipeline's room step (default); layout: the candidate global layout of issue 44")
     ap.add_argument("--data", type=Path, default=DATA, help="the room-maps folder")
+    ap.add_argument("--reading", choices=sorted(READINGS), default="ipa",
+                    help="how a Bormann map is read: ipa (default; a pixel above 250 free, every other an obstacle, "
+                         "as ipa's evaluation reads them) or map_server (its default thresholds)")
     args = ap.parse_args(argv or [])
     if not args.data.is_dir():
         print(f"skipped: {args.data} is absent (the shared room-maps data, see issue 43)")
@@ -314,7 +345,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
     out = None if args.no_figures else args.out
     t0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=max(1, args.workers)) as pool:
-        done = list(pool.map(run_task, todo, [args.data] * len(todo), [out] * len(todo), [args.rooms] * len(todo)))
+        done = list(pool.map(run_task, todo, [args.data] * len(todo), [out] * len(todo), [args.rooms] * len(todo),
+                              [args.reading] * len(todo)))
     wall = time.perf_counter() - t0
     order = {g: i for i, g in enumerate(GROUPS)}
     rows = sorted((r for rs in done for r in rs), key=lambda r: order[r["group"]])
