@@ -122,6 +122,19 @@ def test_path_options_and_several_paths_make_the_datasets(tmp_path):
         check_datasets({"path": ["/a.bag", " "], "datasets": {}})
 
 
+def test_the_report_has_every_file_of_the_complete_datasets():
+    """floorscan report's targets: the inputs of `all` in the dry run's job list that
+    belong to the complete datasets (their figures with them), not the others' nor the
+    building's; their front pages when the list names no `all`."""
+    dry_run = ("[Wed Nov 25 14:00:27 2026]\nrule front_page:\n    input: results/a/x.png\n    jobid: 4\n"
+               "[Wed Nov 25 14:00:27 2026]\nlocalrule all:\n    input: results/a/poses.parquet, results/b/poses.parquet, "
+               "results/a/figures/registered_map.png, results/building/building.ifc, results/a/front.html, "
+               "results/b/front.html\n    jobid: 0\n    resources: tmpdir=/tmp\n")
+    assert cli.report_targets(dry_run, ["a"]) == ["results/a/poses.parquet", "results/a/figures/registered_map.png",
+                                                  "results/a/front.html"]
+    assert cli.report_targets("Nothing to be done", ["a", "b"]) == ["results/a/front.html", "results/b/front.html"]
+
+
 def test_progress_lines_and_a_failed_jobs_paragraph(tmp_path):
     """One line per finished job (n of N, rule, dataset, elapsed); a failed job's own
     paragraph from its log; the workflow's messages; Snakemake's other lines not."""
