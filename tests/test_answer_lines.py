@@ -95,6 +95,22 @@ def test_one_failed_recording_points_at_its_paragraph_several_repeat_theirs(tmp_
     assert lines[-1] == "2 of 2 recordings failed: lab, other"
 
 
+def test_the_answer_says_when_the_summary_holds_the_evaluation(tmp_path):
+    """What --evaluate adds is said on the answer's summary line: only when summary.md
+    ends with the evaluation's part (a plan-only summary beside an older evaluation
+    does not)."""
+    from floorscan.figures.answer import evaluation_note
+
+    folder = tmp_path / "lab"
+    (folder / "evaluation").mkdir(parents=True)
+    assert evaluation_note(folder) == ""
+    (folder / "evaluation" / "summary.md").write_text("## Floor plans against the reference map\n")
+    (folder / "summary.md").write_text("# Scan reduction summary: lab\n")
+    assert evaluation_note(folder) == ""
+    (folder / "summary.md").write_text("# Scan reduction summary: lab\n\n## Floor plans against the reference map\n")
+    assert evaluation_note(folder) == f" (with the evaluation: every plan and score in {folder}/evaluation/)"
+
+
 def test_the_manifest_is_written_once(tmp_path):
     """The Snakefile is read again by every job's process: the first manifest stays."""
     path = tmp_path / "state" / "manifest.json"

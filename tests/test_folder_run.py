@@ -101,6 +101,7 @@ def test_the_answer_is_printed_wherever_the_run_starts(demo_run):
         text = "\n".join(lines)
         for name in ("results/demo/map.pgm", "results/demo/summary.md", "results/demo/front.html"):
             assert name in text
+        assert "(with the evaluation: every plan and score in results/demo/evaluation/)" in text  # the demo's default
     md = (demo_run / "results" / "demo" / "summary.md").read_text()
     assert md.startswith("# Scan reduction summary: demo") and "## The answer" in md
     assert "## Floor plans against the reference map" in md  # the evaluation's part

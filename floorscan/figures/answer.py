@@ -87,14 +87,40 @@ def answer_lines(
             f"{rec['scan_messages_out']} scans)"
         )
         lines.append(f"  points (PLY, PCD):  {at(s['points'][0])}, {at(s['points'][1])}")
-        for label, path in (("summary:", root / ds / "summary.md"), ("front page:", front)):
-            if path.is_file():
-                lines.append(f"  {label:<20}{path}")
+        summary = root / ds / "summary.md"
+        if summary.is_file():
+            lines.append(f"  {'summary:':<20}{summary}" + evaluation_note(root / ds))
+        if front.is_file():
+            lines.append(f"  {'front page:':<20}{front}")
     if many and (root / "index.html").is_file():
         lines.append(f"index: {root / 'index.html'}")
     if answered and report:
         lines.append(f"report: {report}")
     return lines
+
+
+def evaluation_note(folder: str | os.PathLike) -> str:
+    """`` (with the evaluation: every plan and score in <folder>/evaluation/)`` when the
+    dataset's ``summary.md`` holds its evaluation (``evaluation/summary.md`` of the
+    score stage, which it ends with), else empty: what ``--evaluate`` adds, said in the
+    answer.
+
+    Parameters
+    ----------
+    folder : path
+        ``results/<dataset>``.
+
+    Returns
+    -------
+    str
+    """
+    folder = Path(folder)
+    try:
+        part = (folder / "evaluation" / "summary.md").read_text(encoding="utf-8")
+        evaluated = bool(part.strip()) and (folder / "summary.md").read_text(encoding="utf-8").endswith(part)
+    except OSError:
+        return ""
+    return f" (with the evaluation: every plan and score in {folder}/evaluation/)" if evaluated else ""
 
 
 #: What the answer of a recording has and a map's has not.
