@@ -178,7 +178,7 @@ def run_config(args: argparse.Namespace) -> dict:
         path = Path(p).expanduser()
         if not path.exists():
             raise UsageError(f"floorscan run: {p}: no such file or folder")
-        paths.append(os.fspath(path.absolute()))
+        paths.append(os.path.abspath(path))  # absolute and normal (`../my data/` has no `..` left)
     if paths:
         config["path"] = paths[0] if len(paths) == 1 else paths
     user = yaml.safe_load(args.config.read_text(encoding="utf-8")) if args.config else {}

@@ -103,7 +103,7 @@ def test_the_config_it_writes(tmp_path, monkeypatch):
         "walls": {"k": [5, "all"], "ransac": {"threshold_m": 0.03}},
         "datasets": {"lab": {"params": {"select": {"k": "auto"}}}},
     }
-    args, _ = run_args("my data", "floor.png", "--evaluate")
+    args, _ = run_args("my data/", "../" + tmp_path.name + "/floor.png", "--evaluate")  # normalised
     config = cli.run_config(args)
     assert config == {"path": [str(tmp_path / "my data"), str(tmp_path / "floor.png")], "evaluate": True}
     (tmp_path / "eval.yaml").write_text("evaluate: true\n")
