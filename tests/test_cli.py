@@ -194,6 +194,8 @@ def test_run_prints_progress_and_the_answer_from_anywhere(tmp_path):
     assert progress[-1].split()[0] == progress[-1].split()[2]  # n of N: the last is N
     answer = lines[lines.index(next(l for l in lines if l.startswith("demo: "))):]
     assert answer[0].startswith("demo: 10 of 76 kept scans")
+    # all it prints: the progress, then the answer (`make run`, with the evaluation: 45 lines)
+    assert lines == progress + answer and len(lines) < 60
     assert f"{wd}/results/demo/floorplan.{{geojson,svg,dxf,ifc}}" in res.stdout  # from the repository, not cwd
     assert "Building DAG" not in res.stdout + res.stderr and "SNAKEMAKE" not in res.stdout
     assert "Building DAG of jobs" in (wd / ".snakemake" / "floorscan" / "run.log").read_text()
