@@ -126,6 +126,11 @@ def test_a_misspelt_benchmark_option_fails_the_check():
     assert parse_benchmark_args(["selectionz"]).returncode != 0
 
 
+def test_the_benchmarks_have_a_help():
+    res = subprocess.run([sys.executable, "-m", "benchmarks", "--help"], cwd=REPO, capture_output=True, text=True,
+                         timeout=120)
+    assert res.returncode == 0 and "benchmarks: " in res.stdout and "pipeline" in res.stdout, res.stderr
+
 
 @pytest.fixture(scope="module")
 def readme_workdir(survey_run):
