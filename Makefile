@@ -8,7 +8,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.floorscan-installed
 CORES ?= 2
 
-.PHONY: run test test-fast report bench lock sysdeps clean-results
+.PHONY: run test test-fast report bench lock sysdeps clean-results help
 
 # The demo with its evaluation, through the floorscan command: a line per finished job,
 # then the answer (Snakemake's own output goes to .snakemake/floorscan/run.log).
@@ -57,3 +57,13 @@ lock:
 
 clean-results:
 	rm -rf results
+
+help:
+	@echo "make run          set up .venv (once), then the demo with its evaluation: results/demo/front.html"
+	@echo "make test         set up .venv (once), then every test (about 8 minutes)"
+	@echo "make test-fast    the unit tests alone (about a minute)"
+	@echo "make report       the HTML report of the last run: results/report.html"
+	@echo "make bench        every benchmark (python -m benchmarks --help)"
+	@echo "make lock         recompile environment.lock from requirements.in (needs uv)"
+	@echo "make clean-results  remove results/"
+	@echo "Your own recording or map: .venv/bin/floorscan run PATH (.venv/bin/floorscan run --help)"

@@ -3,6 +3,7 @@
 #      snakemake --cores 2 --config target='[intel]'
 #      snakemake --cores 2 --config path=/data/run.bag   (a recording of your own)
 #      snakemake --cores 2 --config path=/data/survey/   (a folder of recordings: one answer each)
+import functools
 import os
 import sys
 import time
@@ -127,7 +128,7 @@ if _MANIFEST:
 def print_answer(log, error):
     if _MANIFEST:
         return  # the floorscan command prints it
-    command = report_command(sys.argv, config.get("path"))  # (a line may not begin with the keyword `report`)
+    command = functools.partial(report_command, sys.argv)  # (a line may not begin with the keyword `report`)
     for line in run_answer(target_datasets(), DATASETS, _RUN_START_NS, "results", (), command, building_answer()):
         print(line)
     if error and not any(failed_since(ds, _RUN_START_NS) for ds in DATASETS):  # no stage logged its error

@@ -45,6 +45,10 @@ def split_args(argv: list[str], known: list[str]) -> list[tuple[str, list[str]]]
 def main(argv: list[str]) -> int:
     here = Path(__file__).parent
     known = sorted(p.stem[len("bench_"):] for p in here.glob("bench_*.py"))
+    if argv[:1] in (["-h"], ["--help"]):
+        print(f"{__doc__.strip()}\n\nbenchmarks: {' '.join(known)}; `python -m benchmarks <name> --help`: a benchmark's "
+              "options; the measurements: benchmarks/README.md")
+        return 0
     runs = split_args(argv, known)
     print(f"# floorscan benchmarks on {machine()}")
     for name, opts in runs:

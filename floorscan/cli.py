@@ -178,7 +178,7 @@ def run_config(args: argparse.Namespace) -> dict:
         path = Path(p).expanduser()
         if not path.exists():
             raise UsageError(f"floorscan run: {p}: no such file or folder")
-        paths.append(os.fspath(path.absolute()))
+        paths.append(os.path.abspath(path))  # absolute and normal (`../my data/` has no `..` left)
     if paths:
         config["path"] = paths[0] if len(paths) == 1 else paths
     user = yaml.safe_load(args.config.read_text(encoding="utf-8")) if args.config else {}
@@ -331,6 +331,33 @@ def command_run(args: argparse.Namespace, extra: list[str]) -> int:
 
 
 _DATASET = re.compile(r"^\s+wildcards: (?:.*, )?dataset=([^,\s]+)", re.M)
+#: The inputs of the target rule ``all`` in a dry run's job list (Snakemake 9's text).
+_ALL_INPUT = re.compile(r"^(?:local)?rule all:\n(?:    .*\n)*?    input: (.*)$", re.M)
+
+
+def report_targets(dry_run: str, datasets: list[str]) -> list[str]:
+    """The files of the target rule ``all`` that belong to ``datasets``
+    (``results/<dataset>/...``), read from a dry run's job list: as targets of
+    ``snakemake --report`` they give the report every figure the run made of those
+    datasets and nothing of the others (a failed one's figures do not exist). Their
+    front pages when the dry run names no inputs of ``all``.
+
+    Parameters
+    ----------
+    dry_run : str
+        The output of ``snakemake -n --forceall``.
+    datasets : list of str
+
+    Returns
+    -------
+    list of str
+        Paths relative to the workflow's folder.
+    """
+    wanted = set(datasets)
+    m = _ALL_INPUT.search(dry_run)
+    files = [f for f in (m.group(1).split(", ") if m else []) if f.split("/")[:1] == ["results"]
+             and len(f.split("/")) > 2 and f.split("/")[1] in wanted]
+    return files or [f"results/{ds}/front.html" for ds in datasets]
 
 
 def command_report(args: argparse.Namespace, extra: list[str]) -> int:
@@ -349,14 +376,18 @@ def command_report(args: argparse.Namespace, extra: list[str]) -> int:
         raise UsageError(f"floorscan report: the last run's config file {missing[0]} is gone; run `floorscan run` again")
     base = snakemake_command(repo, configfiles, 1, [])
 
-    def datasets(*flags) -> list[str]:
+    def dry_run(*flags) -> str:
         res = subprocess.run([*base, "-n", *flags], capture_output=True, text=True, env=_environment())
         if res.returncode != 0:
             raise UsageError(f"floorscan report: the last run's workflow does not load: {_tail_text(res)}")
-        return list(dict.fromkeys(_DATASET.findall(res.stdout + res.stderr)))
+        return res.stdout + res.stderr
 
-    every = datasets("--forceall")
-    pending = set(datasets())
+    def datasets(text: str) -> list[str]:
+        return list(dict.fromkeys(_DATASET.findall(text)))
+
+    jobs = dry_run("--forceall")
+    every = datasets(jobs)
+    pending = set(datasets(dry_run()))
     complete = [d for d in every if d not in pending]
     for ds in every:
         if ds in pending:
@@ -366,7 +397,7 @@ def command_report(args: argparse.Namespace, extra: list[str]) -> int:
         print("floorscan report: no dataset of the last run is complete; nothing to report", file=sys.stderr)
         return 1
     out = Path(args.output).expanduser().absolute() if args.output else repo / "results" / "report.html"
-    targets = [f"results/{ds}/front.html" for ds in complete]
+    targets = report_targets(jobs, complete)
     log_path = state / "report.log"
     code, _ = run_snakemake([*base, "--report", os.fspath(out), *extra, *targets], repo, log_path)
     if code == 0:

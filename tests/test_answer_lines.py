@@ -72,8 +72,8 @@ def test_the_end_of_a_run_rewrites_the_index_of_every_dataset(tmp_path):
     lines = finish_run(["broken", "lab"], results, failed, report="floorscan report")
     assert lines[0] == "broken: FAILED: ingest failed: x.bag: truncated"
     assert lines[1].startswith("lab: not finished: no answer yet")
-    assert lines[2:] == [f"index: {results / 'index.html'}", "report: floorscan report",
-                         "1 of 2 recordings failed: broken"]
+    # no report: none of the run's datasets has an answer to report
+    assert lines[2:] == [f"index: {results / 'index.html'}", "1 of 2 recordings failed: broken"]
     index = (results / "index.html").read_text()
     assert "4 recordings: 0 with a plan, 4 failed" in index  # broken, lab, then earlier, old_failure: no plan
     order = [index.index(f'id="{ds}"') for ds in ("broken", "lab", "earlier", "old_failure")]
@@ -95,6 +95,22 @@ def test_one_failed_recording_points_at_its_paragraph_several_repeat_theirs(tmp_
     assert lines[-1] == "2 of 2 recordings failed: lab, other"
 
 
+def test_the_answer_says_when_the_summary_holds_the_evaluation(tmp_path):
+    """What --evaluate adds is said on the answer's summary line: only when summary.md
+    ends with the evaluation's part (a plan-only summary beside an older evaluation
+    does not)."""
+    from floorscan.figures.answer import evaluation_note
+
+    folder = tmp_path / "lab"
+    (folder / "evaluation").mkdir(parents=True)
+    assert evaluation_note(folder) == ""
+    (folder / "evaluation" / "summary.md").write_text("## Floor plans against the reference map\n")
+    (folder / "summary.md").write_text("# Scan reduction summary: lab\n")
+    assert evaluation_note(folder) == ""
+    (folder / "summary.md").write_text("# Scan reduction summary: lab\n\n## Floor plans against the reference map\n")
+    assert evaluation_note(folder) == f" (with the evaluation: every plan and score in {folder}/evaluation/)"
+
+
 def test_the_manifest_is_written_once(tmp_path):
     """The Snakefile is read again by every job's process: the first manifest stays."""
     path = tmp_path / "state" / "manifest.json"
@@ -107,13 +123,46 @@ def test_the_manifest_is_written_once(tmp_path):
     assert read_manifest(path) is None
 
 
-def test_the_report_command_of_a_path_run_is_its_own_quoted():
-    argv = ["/v/bin/snakemake", "--cores", "2", "--config", "path=/d/my run.bag", "--configfile", "my.yaml",
-            "x y.yaml", "-n", "--configfile=z.yaml"]
-    command = report_command(argv, "/d/my run.bag")
+def test_the_report_command_of_a_run_is_its_own_quoted():
+    """The run's program, config entries, config files, Snakefile and folder, quoted
+    (issue 47: a path with spaces, a dropped --configfile); its targets and other
+    options not; with the datasets that have an answer, their front pages."""
+    argv = ["/v/bin/snakemake", "--cores", "2", "plan", "--config", "path=/d/my run.bag", "resolution_m=0.1",
+            "--configfile", "my.yaml", "x y.yaml", "-n", "--configfile=z.yaml", "-d", "/w d", "--keep-going"]
+    command = report_command(argv)
     assert shlex.split(command) == ["/v/bin/snakemake", "--cores", "2", "--config", "path=/d/my run.bag",
-                                    "--configfile", "my.yaml", "x y.yaml", "z.yaml", "--report", "results/report.html"]
-    assert report_command(argv, None) == ""
+                                    "resolution_m=0.1", "--configfile", "my.yaml", "x y.yaml", "--configfile=z.yaml",
+                                    "-d", "/w d", "--report", "results/report.html"]
+    assert shlex.split(report_command(["snakemake", "--cores", "2"], only=["a", "b"])) == [
+        "snakemake", "--cores", "2", "--report", "results/report.html", "results/a/front.html", "results/b/front.html"]
+
+
+def test_the_report_named_is_of_the_datasets_with_an_answer(tmp_path):
+    """finish_run with report_command: every dataset answered, the run's report; one
+    failed, the front pages of the others (a report of all would stop at the failed
+    one's missing figures); all failed, no report (an older results/report.html is not
+    named either)."""
+    import functools
+
+    results = tmp_path / "results"
+    for ds in ("a", "b"):
+        (results / ds).mkdir(parents=True)
+        (results / ds / "front.html").write_text("<html></html>")
+    (results / "report.html").write_text("an older report")
+    command = functools.partial(report_command, ["snakemake", "--cores", "2"])
+
+    def report_line(datasets, failed):
+        return [l for l in finish_run(datasets, results, failed, report=command) if l.startswith("report: ")]
+
+    assert report_line(["a"], {}) == []  # a has no answer (no selection.json): nothing to report
+    (results / "a" / "map").mkdir()
+    (results / "a" / "map" / "map.json").write_text(json.dumps({"width": 2, "height": 2, "resolution_m": 0.05}))
+    (results / "b" / "map").mkdir()
+    (results / "b" / "map" / "map.json").write_text(json.dumps({"width": 2, "height": 2, "resolution_m": 0.05}))
+    assert report_line(["a", "b"], {}) == ["report: snakemake --cores 2 --report results/report.html"]
+    assert report_line(["a", "b"], {"b": "ingest failed"}) == [
+        "report: snakemake --cores 2 --report results/report.html results/a/front.html"]
+    assert report_line(["a", "b"], {"a": "x", "b": "y"}) == []
 
 
 def test_the_workflow_reads_no_snakemake_internals():

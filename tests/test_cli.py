@@ -103,7 +103,7 @@ def test_the_config_it_writes(tmp_path, monkeypatch):
         "walls": {"k": [5, "all"], "ransac": {"threshold_m": 0.03}},
         "datasets": {"lab": {"params": {"select": {"k": "auto"}}}},
     }
-    args, _ = run_args("my data", "floor.png", "--evaluate")
+    args, _ = run_args("my data/", "../" + tmp_path.name + "/floor.png", "--evaluate")  # normalised
     config = cli.run_config(args)
     assert config == {"path": [str(tmp_path / "my data"), str(tmp_path / "floor.png")], "evaluate": True}
     (tmp_path / "eval.yaml").write_text("evaluate: true\n")
@@ -120,6 +120,19 @@ def test_path_options_and_several_paths_make_the_datasets(tmp_path):
     check_datasets({"path": ["/a.bag", "/b.bag"], "datasets": {}})
     with pytest.raises(ConfigError, match="path .* is empty"):
         check_datasets({"path": ["/a.bag", " "], "datasets": {}})
+
+
+def test_the_report_has_every_file_of_the_complete_datasets():
+    """floorscan report's targets: the inputs of `all` in the dry run's job list that
+    belong to the complete datasets (their figures with them), not the others' nor the
+    building's; their front pages when the list names no `all`."""
+    dry_run = ("[Wed Nov 25 14:00:27 2026]\nrule front_page:\n    input: results/a/x.png\n    jobid: 4\n"
+               "[Wed Nov 25 14:00:27 2026]\nlocalrule all:\n    input: results/a/poses.parquet, results/b/poses.parquet, "
+               "results/a/figures/registered_map.png, results/building/building.ifc, results/a/front.html, "
+               "results/b/front.html\n    jobid: 0\n    resources: tmpdir=/tmp\n")
+    assert cli.report_targets(dry_run, ["a"]) == ["results/a/poses.parquet", "results/a/figures/registered_map.png",
+                                                  "results/a/front.html"]
+    assert cli.report_targets("Nothing to be done", ["a", "b"]) == ["results/a/front.html", "results/b/front.html"]
 
 
 def test_progress_lines_and_a_failed_jobs_paragraph(tmp_path):
@@ -181,6 +194,8 @@ def test_run_prints_progress_and_the_answer_from_anywhere(tmp_path):
     assert progress[-1].split()[0] == progress[-1].split()[2]  # n of N: the last is N
     answer = lines[lines.index(next(l for l in lines if l.startswith("demo: "))):]
     assert answer[0].startswith("demo: 10 of 76 kept scans")
+    # all it prints: the progress, then the answer (`make run`, with the evaluation: 45 lines)
+    assert lines == progress + answer and len(lines) < 60
     assert f"{wd}/results/demo/floorplan.{{geojson,svg,dxf,ifc}}" in res.stdout  # from the repository, not cwd
     assert "Building DAG" not in res.stdout + res.stderr and "SNAKEMAKE" not in res.stdout
     assert "Building DAG of jobs" in (wd / ".snakemake" / "floorscan" / "run.log").read_text()

@@ -8,6 +8,7 @@ import ast
 import re
 import sys
 import tomllib
+from pathlib import Path
 
 from conftest import REPO
 
@@ -36,19 +37,43 @@ def imported_packages(root) -> dict[str, str]:
     return found
 
 
-def declared() -> set[str]:
-    deps = tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))["project"]["dependencies"]
-    return {re.split(r"[<>=!~;\[ ]", d, maxsplit=1)[0].strip().lower() for d in deps}
+def normal(name: str) -> str:
+    """A distribution's name as PEP 503 compares them: lower case, runs of ``-_.`` one ``-``."""
+    return re.sub(r"[-_.]+", "-", name).lower()
+
+
+def declared(pyproject=REPO / "pyproject.toml") -> set[str]:
+    deps = tomllib.loads(Path(pyproject).read_text(encoding="utf-8"))["project"]["dependencies"]
+    return {normal(re.split(r"[<>=!~;\[ ]", d, maxsplit=1)[0].strip()) for d in deps}
+
+
+def undeclared(root, names: set[str]) -> dict[str, str]:
+    """The third-party distributions the modules under ``root`` import that ``names``
+    (normalised) lacks: distribution -> a file importing it."""
+    third_party = {
+        name: where for name, where in imported_packages(root).items()
+        if name not in sys.stdlib_module_names and name != "floorscan"
+    }
+    return {normal(DISTRIBUTION.get(n, n)): where for n, where in third_party.items()
+            if normal(DISTRIBUTION.get(n, n)) not in names}
 
 
 def test_every_imported_package_is_declared():
-    third_party = {
-        name: where for name, where in imported_packages(REPO / "floorscan").items()
-        if name not in sys.stdlib_module_names and name != "floorscan"
-    }
-    missing = {DISTRIBUTION.get(n, n).lower(): where for n, where in third_party.items()
-               if DISTRIBUTION.get(n, n).lower() not in declared()}
+    missing = undeclared(REPO / "floorscan", declared())
     assert not missing, f"imported but not in pyproject.toml's dependencies: {missing}"
+
+
+def test_the_check_finds_a_planted_undeclared_import(tmp_path):
+    """The check above cannot pass vacuously: a package imported inside a function that
+    pyproject.toml lacks is found (by its distribution's name), the declared ones, the
+    standard library and the package itself are not."""
+    package = tmp_path / "floorscan" / "walls"
+    package.mkdir(parents=True)
+    (package / "fit.py").write_text("import os\nimport numpy as np\nfrom floorscan.core import grid\n\n"
+                                    "def f():\n    import requests\n    from skimage import measure\n")
+    assert undeclared(tmp_path / "floorscan", declared()) == {"requests": "walls/fit.py"}
+    assert undeclared(tmp_path / "floorscan", declared() - {"scikit-image"}) == {
+        "requests": "walls/fit.py", "scikit-image": "walls/fit.py"}
 
 
 def test_the_check_sees_imports_inside_functions(tmp_path):

@@ -227,7 +227,7 @@ def test_map_plan_target(demo_run, tmp_path):
     res = snakemake(demo_run, "--config", f"path={yaml}")
     assert res.returncode == 0, res.stderr[-3000:]
     # the report's command, pasted into a shell, names the same path (issue 47)
-    assert f"--config 'path={yaml}' --report results/report.html" in res.stdout
+    assert f"--config 'path={yaml}' --report results/report.html\n" in res.stdout
     out = demo_run / "results" / "two_rooms"
     answer = res.stdout[res.stdout.index("two_rooms: floor plan of an occupancy map"):]
     assert "220 x 120 cells of 0.05 m" in answer.splitlines()[0]

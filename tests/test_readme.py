@@ -6,7 +6,9 @@ does not know):
 
 - ``make <target>``: ``make -n <target>`` (the recipe exists; ``make test`` is what CI
   runs);
-- ``.venv/bin/floorscan ...``: its options parse (``--help`` exits 0);
+- ``.venv/bin/floorscan ...``: in the copy of the workflow below, run for real, except
+  those that build an evaluation or set the pages' example scan topic, which are dry
+  runs (``-- -n``); ``--help`` exits 0;
 - ``.venv/bin/python -m benchmarks <name> [options]``: the options parse, and the run
   stops there (a run takes minutes to hours: ``benchmarks/README.md``);
 - ``.venv/bin/snakemake ...``: in a copy of the workflow with the demo built, as
@@ -89,24 +91,6 @@ def test_make_targets_exist(cmd):
     assert res.returncode == 0, res.stderr
 
 
-@pytest.mark.parametrize("cmd", [c for c in readme_commands() if c.startswith(".venv/bin/floorscan ")])
-def test_floorscan_commands_parse(cmd, tmp_path, monkeypatch):
-    """The `floorscan` command's options parse as written (its config file made; the
-    paths are the user's, not checked here)."""
-    from floorscan import cli
-
-    monkeypatch.chdir(tmp_path)
-    (tmp_path / "house.yaml").write_text("evaluate: false\n")
-    own, extra = cli.split_passthrough(shlex.split(cmd)[1:])
-    if "--help" in own:
-        with pytest.raises(SystemExit) as e:
-            cli.parser().parse_args(own)
-        assert e.value.code == 0
-        return
-    args = cli.parser().parse_args(own)
-    assert args.command in ("run", "report")
-
-
 @pytest.mark.parametrize("cmd", [c for c in readme_commands() if c.startswith(".venv/bin/python -m benchmarks")])
 def test_benchmark_commands_parse(cmd):
     """The benchmark's options parse as written (its argparse parser runs, then the run
@@ -140,6 +124,12 @@ def test_a_misspelt_benchmark_option_fails_the_check():
     assert parse_benchmark_args(["pipeline", "--datasetz", "hallways"]).returncode == 2
     assert parse_benchmark_args(["pipeline", "--datasets", "hallways", "--target", "plan"]).returncode == 0
     assert parse_benchmark_args(["selectionz"]).returncode != 0
+
+
+def test_the_benchmarks_have_a_help():
+    res = subprocess.run([sys.executable, "-m", "benchmarks", "--help"], cwd=REPO, capture_output=True, text=True,
+                         timeout=120)
+    assert res.returncode == 0 and "benchmarks: " in res.stdout and "pipeline" in res.stdout, res.stderr
 
 
 @pytest.fixture(scope="module")
@@ -194,6 +184,51 @@ def test_snakemake_commands_work_as_written(readme_workdir, cmd):
     if not heavy and "--unlock" not in words and not (restricted and "Nothing to be done" in res.stderr):
         answers = (" kept scans (", ": no answer yet (", ": floor plan of an occupancy map, ")
         assert any(a in res.stdout for a in answers), res.stdout[-2000:]
+
+
+@pytest.mark.workflow
+@pytest.mark.parametrize("cmd", [c for c in readme_commands() if c.startswith(".venv/bin/floorscan ")])
+def test_floorscan_commands_work_as_written(readme_workdir, cmd):
+    """The `floorscan` commands, run in the same copy of the workflow
+    (``FLOORSCAN_REPOSITORY``), in the pages' order: a plan is run for real, a run
+    with ``--evaluate`` or with the pages' example scan topic (``/base_scan``; the demo
+    recording's is ``/scan``) as a dry run (``-- -n``), the report of the last run for
+    real, the help as it is. The real runs of trace0, a folder, a map, --set and
+    --evaluate: tests/test_cli_realdata.py."""
+    wd, paths = readme_workdir
+    paths = {**paths, "run.bag": paths["/data/lab_run.bag"]}
+    words = shlex.split(cmd)
+    words = [paths.get(w, w) for w in words]
+    assert words[0] == ".venv/bin/floorscan"
+    env = {**os.environ, "FLOORSCAN_REPOSITORY": str(wd),
+           "PYTHONPATH": os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")]))}
+
+    def floorscan(*argv):
+        return subprocess.run([sys.executable, "-m", "floorscan.cli", *argv], cwd=wd, capture_output=True,
+                              text=True, env=env, timeout=600)
+
+    args = words[1:]
+    if "--help" in args:
+        res = floorscan(*args)
+        assert res.returncode == 0 and res.stdout.startswith("usage: floorscan"), res.stderr
+        return
+    dry = "--" in args and "-n" in args[args.index("--"):]
+    if args[0] == "run" and not dry and ("--evaluate" in args or "--set" in args):
+        args, dry = [*args, "--", "-n"], True
+    if args == ["report"] and not (wd / ".snakemake" / "floorscan" / "configfiles").is_file():
+        assert floorscan("run", paths["/data/lab_run.bag"]).returncode == 0  # a run to report on
+    try:
+        res = floorscan(*args)
+    finally:  # the session's demo run stays as it was: its front page, made again later, links a report that exists
+        (wd / "results" / "report.html").unlink(missing_ok=True)
+    assert res.returncode == 0, res.stdout[-2000:] + res.stderr[-2000:]
+    assert "Traceback" not in res.stdout + res.stderr
+    if dry:
+        assert re.search(r"^dry run: \d+ jobs to run", res.stdout, re.M), res.stdout[-2000:]
+    elif args[0] == "run":
+        assert re.search(r"^recording: \d+ of \d+ kept scans \(\d+ recorded\)", res.stdout, re.M), res.stdout[-2000:]
+    else:
+        assert re.search(r"^report: .*results/report\.html \(", res.stdout, re.M), res.stdout[-2000:]
 
 
 def test_the_slurm_profile_names_an_installed_executor():

@@ -245,6 +245,8 @@ def test_workflow_description_includes_each_front_page(tmp_path, monkeypatch):
     assert alpha < beta < body.index("How the workflow works")
     assert body.count("<svg") == 2 and "No front page in this report" not in body
     assert "#app .prose.max-w-lg" in body  # the report's layout opened up for the pages
+    # the datasets of its front pages, not the run's targets (a failed one has none)
+    assert "Datasets in this report: alpha, beta." in body
 
 
 # ------------------------------------------------------------------ links, k, escaping

@@ -32,9 +32,10 @@ def answer_lines(
     failed : dict, optional
         ``{dataset: error paragraph}`` of the datasets whose run failed.
     report : str
-        The command that makes the report of these datasets (``floorscan report``; a
-        run of ``--config path=...``: the default report has the config's targets
-        only); without it, ``results/report.html`` is named when it exists.
+        The command that makes the report of these datasets (``floorscan report``, or
+        the run's own ``snakemake ... --report``), named when one of them has an
+        answer; empty: no report is named (an older ``results/report.html`` may not
+        hold them).
 
     Returns
     -------
@@ -47,6 +48,7 @@ def answer_lines(
     root = Path(results)
     lines = []
     many = len(datasets) > 1
+    answered = 0  # datasets with an answer: a report of them can be made
     for ds in datasets:
         if ds in failed:
             lines.append(f"{ds}: FAILED: {failed[ds]}")
@@ -54,6 +56,7 @@ def answer_lines(
         map_lines = map_answer_lines(ds, root, many)  # an occupancy map: its plan, no scans
         if map_lines:
             lines += map_lines
+            answered += 1
             continue
         summary_path = root / ds / "selection" / "selection.json"
         if not summary_path.is_file():
@@ -61,6 +64,7 @@ def answer_lines(
                          "or its targets do not include the plan); run it again to go on")
             continue
         s = read_selection(summary_path)
+        answered += 1
         v = registration_verdict(root / ds)
         head = f"{ds}: {s['k']} of {s['n_kept']} kept scans ({s['n_recorded']} recorded), {s['ordering']}"
         front = root / ds / "front.html"
@@ -83,16 +87,40 @@ def answer_lines(
             f"{rec['scan_messages_out']} scans)"
         )
         lines.append(f"  points (PLY, PCD):  {at(s['points'][0])}, {at(s['points'][1])}")
-        for label, path in (("summary:", root / ds / "summary.md"), ("front page:", front)):
-            if path.is_file():
-                lines.append(f"  {label:<20}{path}")
+        summary = root / ds / "summary.md"
+        if summary.is_file():
+            lines.append(f"  {'summary:':<20}{summary}" + evaluation_note(root / ds))
+        if front.is_file():
+            lines.append(f"  {'front page:':<20}{front}")
     if many and (root / "index.html").is_file():
         lines.append(f"index: {root / 'index.html'}")
-    if lines and report:
+    if answered and report:
         lines.append(f"report: {report}")
-    elif lines and (root / "report.html").is_file():
-        lines.append(f"report: {root / 'report.html'}")
     return lines
+
+
+def evaluation_note(folder: str | os.PathLike) -> str:
+    """`` (with the evaluation: every plan and score in <folder>/evaluation/)`` when the
+    dataset's ``summary.md`` holds its evaluation (``evaluation/summary.md`` of the
+    score stage, which it ends with), else empty: what ``--evaluate`` adds, said in the
+    answer.
+
+    Parameters
+    ----------
+    folder : path
+        ``results/<dataset>``.
+
+    Returns
+    -------
+    str
+    """
+    folder = Path(folder)
+    try:
+        part = (folder / "evaluation" / "summary.md").read_text(encoding="utf-8")
+        evaluated = bool(part.strip()) and (folder / "summary.md").read_text(encoding="utf-8").endswith(part)
+    except OSError:
+        return ""
+    return f" (with the evaluation: every plan and score in {folder}/evaluation/)" if evaluated else ""
 
 
 #: What the answer of a recording has and a map's has not.

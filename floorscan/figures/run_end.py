@@ -26,6 +26,7 @@ from __future__ import annotations
 import json
 import os
 import shlex
+from collections.abc import Callable
 from pathlib import Path
 
 from floorscan.core.files import atomic_path
@@ -174,7 +175,7 @@ def write_results_index(datasets: list[str], failed: dict | None = None, results
 
 
 def finish_run(datasets: list[str], results: str | os.PathLike = "results", failed: dict | None = None,
-               report: str = "", building: dict | None = None) -> list[str]:
+               report: str | Callable[[list[str] | None], str] = "", building: dict | None = None) -> list[str]:
     """Rewrite the index and give the run's last lines: the answer of each dataset
     (:func:`floorscan.figures.answer.answer_lines`), the building, and which recordings
     failed.
@@ -187,8 +188,10 @@ def finish_run(datasets: list[str], results: str | os.PathLike = "results", fail
         The results folder, as the lines name it (relative to where they are read).
     failed : dict, optional
         ``{dataset: error paragraph}``.
-    report : str
-        The command that makes the report of these datasets, or empty.
+    report : str or callable
+        The command that makes the report of these datasets, or empty; or a function
+        of the datasets with a front page (None when every dataset has one) that gives
+        it (:func:`report_command`).
     building : dict, optional
         ``page``, ``ifc`` (relative to the results folder's parent) and ``storeys``.
 
@@ -200,6 +203,9 @@ def finish_run(datasets: list[str], results: str | os.PathLike = "results", fail
 
     failed = {ds: text for ds, text in (failed or {}).items() if ds in datasets}
     write_results_index(datasets, failed, results)
+    if callable(report):  # the report of the datasets with an answer, or of the run
+        complete = [ds for ds in datasets if ds not in failed and (Path(results) / ds / "front.html").is_file()]
+        report = report(complete if len(complete) < len(datasets) else None) if complete else ""
     lines = answer_lines(datasets, results, failed=failed, report=report)
     base = Path(results).parent
     if building and (base / building["page"]).is_file():
@@ -210,7 +216,8 @@ def finish_run(datasets: list[str], results: str | os.PathLike = "results", fail
 
 
 def run_answer(targets: list[str], datasets, start_ns: int, results: str | os.PathLike = "results",
-               failed_jobs=(), report: str = "", building: dict | None = None) -> list[str]:
+               failed_jobs=(), report: str | Callable[[list[str] | None], str] = "",
+               building: dict | None = None) -> list[str]:
     """The end of a run, as both callers make it: the run's datasets
     (:func:`run_datasets`), the failed ones' errors from their stage logs
     (:func:`failed_since`), else from ``failed_jobs``, then :func:`finish_run`. A run
@@ -251,35 +258,42 @@ def run_answer(targets: list[str], datasets, start_ns: int, results: str | os.Pa
     return finish_run(runs, results, failed, report, building)
 
 
-def report_command(argv: list[str], path) -> str:
-    """The ``snakemake`` command that makes the report of a ``--config path=...`` run:
-    this run's program, its path and its config files (``--configfile``, read from its
-    own command line ``argv``), quoted for a shell; empty for a run without ``path``
-    (its report is the default one).
+def report_command(argv: list[str], only: list[str] | None = None) -> str:
+    """The ``snakemake`` command that makes the report of a run, quoted for a shell: the
+    run's program, its ``--config`` entries, config files, Snakefile and working
+    directory (read from its own command line ``argv``), ``--report
+    results/report.html``, and with ``only`` the front pages of those datasets as
+    targets (a run in which other datasets failed: the report of all of them would
+    stop at the first missing figure).
 
     Parameters
     ----------
     argv : list of str
         ``sys.argv`` of the Snakemake process.
-    path : str, list or None
-        Config ``path``.
+    only : list of str, optional
+        The datasets of the run that have an answer, when some of its datasets have none.
 
     Returns
     -------
     str
     """
-    if not isinstance(path, str):
-        return ""
-    files, i = [], 1
+    kept, i = [], 1
     while i < len(argv):
-        if argv[i] in ("--configfile", "--configfiles"):
+        word = argv[i]
+        if word in ("--config", "-C", "--configfile", "--configfiles"):
+            values = []
             i += 1
-            while i < len(argv) and not argv[i].startswith("-"):
-                files.append(argv[i])
+            while i < len(argv) and not argv[i].startswith("-") and (word.startswith("--configfile") or "=" in argv[i]):
+                values.append(argv[i])
                 i += 1
+            kept += [word, *values] if values else []
             continue
-        if argv[i].startswith("--configfile="):
-            files.append(argv[i].split("=", 1)[1])
+        if word in ("--snakefile", "-s", "--directory", "-d") and i + 1 < len(argv):
+            kept += [word, argv[i + 1]]
+            i += 2
+            continue
+        if word.startswith(("--configfile=", "--snakefile=", "--directory=")):
+            kept.append(word)
         i += 1
-    words = [argv[0], "--cores", "2", "--config", f"path={path}"] + (["--configfile", *files] if files else [])
-    return shlex.join(words) + " --report results/report.html"
+    targets = [f"results/{ds}/front.html" for ds in only or []]
+    return shlex.join([argv[0], "--cores", "2", *kept, "--report", "results/report.html", *targets])
