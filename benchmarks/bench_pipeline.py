@@ -93,8 +93,8 @@ def prepare_copy(workdir: Path) -> Path:
         else:
             shutil.copy2(item, target)
     venv = dst / ".venv"
-    if not venv.exists():
-        venv.symlink_to(REPO / ".venv")
+    if not venv.exists():  # a worktree has no .venv of its own: the environment running this
+        venv.symlink_to(REPO / ".venv" if (REPO / ".venv").exists() else Path(sys.prefix))
     shared = workdir / "shared"  # datasets refer to ../shared/data
     if not shared.exists() and (REPO.parent / "shared").exists():
         shared.symlink_to(REPO.parent / "shared")
