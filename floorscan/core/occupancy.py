@@ -53,7 +53,8 @@ import pandas as pd
 from floorscan.core.files import atomic_path
 from floorscan.core.config import schema_defaults
 from floorscan.core.grid import raster_cells
-from floorscan.core.ray_casting import CellCounts, GridFrame, with_returns
+from floorscan.core.memory import JobMemory
+from floorscan.core.ray_casting import CellCounts, GridFrame, check_memory_of_casting, with_returns
 
 #: map_server's PGM values (trinary mode): occupied, free, unknown.
 PGM_OCCUPIED, PGM_FREE, PGM_UNKNOWN = 0, 254, 205
@@ -238,7 +239,7 @@ class OccupancyGrid:
 
 
 def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: OccupancyParams = OccupancyParams(),
-                   what: str = "occupancy grid") -> OccupancyGrid:
+                   what: str = "occupancy grid", memory: JobMemory | None = None) -> OccupancyGrid:
     """Build the occupancy grid of a set of registered scans (see the module docstring;
     the casting: :mod:`floorscan.core.ray_casting`).
 
@@ -250,6 +251,10 @@ def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: Occup
     params : OccupancyParams
     what : str
         The grid and whose scans, for the error of a grid too large.
+    memory : JobMemory, optional
+        What the job's rasters take a cell of the grid: the job stops before the grid
+        is allocated when they and the rays of its largest scan would not fit in the
+        free memory (:func:`floorscan.core.ray_casting.check_memory_of_casting`).
 
     Returns
     -------
@@ -259,13 +264,17 @@ def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: Occup
     ------
     ValueError
         When no scan has a return, or a coordinate is not finite; an ``InputError`` when the
-        grid would be too large (:func:`floorscan.core.grid.check_raster_size`), before it is.
+        grid would be too large (:func:`floorscan.core.grid.check_raster_size`) or, with
+        ``memory``, need more memory than is free
+        (:class:`~floorscan.core.memory.MemoryEstimateError`), before it is allocated.
     """
     params.check()
     scans = with_returns(scans)
     if not scans:
         raise ValueError("occupancy grid: no scan has a return")
     frame = GridFrame.of(scans, params.resolution_m, params.margin_m, what)
+    if memory is not None:
+        check_memory_of_casting(scans, frame, params.step_fraction, what, memory)
     counts = CellCounts(frame, params.step_fraction)
     for o, p in scans:
         counts.add(*counts.cells(o, p, frame)[:2])
@@ -397,20 +406,34 @@ def write_grid(grid: OccupancyGrid, path: str | Path, metadata: dict[str, str] |
     write_table(grid_table(grid), path, metadata={**grid_metadata(grid), **counts, **(metadata or {})})
 
 
-def read_grid(path: str | Path) -> OccupancyGrid:
+def read_grid(path: str | Path, memory: JobMemory | None = None, what: str | None = None) -> OccupancyGrid:
     """The grid :func:`write_grid` wrote (``reference/occupancy.parquet``).
 
     Parameters
     ----------
     path : path
+    memory : JobMemory, optional
+        What the reading job's rasters take a cell of the grid: the job stops before
+        the grid is read when they would not fit in the free memory.
+    what : str, optional
+        What the job makes of the grid, for that message (default: the path).
 
     Returns
     -------
     OccupancyGrid
+
+    Raises
+    ------
+    floorscan.core.memory.MemoryEstimateError
+        With ``memory``, when the job's rasters would need more memory than is free.
     """
     from floorscan.core.io import read_metadata, read_table
 
-    return grid_from_table(read_table(path), read_metadata(path))
+    metadata = read_metadata(path)
+    if memory is not None:
+        shape = (int(metadata["height"]), int(metadata["width"]))
+        memory.check(what or f"the job reading the grid {path}", shape, float(metadata["resolution_m"]))
+    return grid_from_table(read_table(path), metadata)
 
 
 def grid_from_table(table: pd.DataFrame, metadata: dict[str, str]) -> OccupancyGrid:

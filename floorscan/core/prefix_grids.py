@@ -23,13 +23,14 @@ from typing import Iterable, Iterator, Sequence
 
 import numpy as np
 
+from floorscan.core.memory import JobMemory
 from floorscan.core.occupancy import OccupancyGrid, OccupancyParams
-from floorscan.core.ray_casting import CellCounts, GridFrame, with_returns
+from floorscan.core.ray_casting import CellCounts, GridFrame, check_memory_of_casting, with_returns
 
 
 def prefix_grids(
     scans: Sequence[tuple[np.ndarray, np.ndarray]], ks: Iterable[int], params: OccupancyParams = OccupancyParams(),
-    what: str = "occupancy grid",
+    what: str = "occupancy grid", memory: JobMemory | None = None,
 ) -> Iterator[tuple[int, OccupancyGrid | None]]:
     """The occupancy grids of the first k scans, for increasing k (see the module docstring).
 
@@ -44,6 +45,10 @@ def prefix_grids(
     params : OccupancyParams
     what : str
         The grids and whose scans, for the error of a grid too large.
+    memory : JobMemory, optional
+        What the job's rasters take a cell of the grid of all the scans: the job stops
+        before it is allocated when they and the rays of the largest scan would not fit
+        in the free memory (:func:`floorscan.core.ray_casting.check_memory_of_casting`).
 
     Yields
     ------
@@ -56,7 +61,8 @@ def prefix_grids(
     ValueError
         When the ks do not increase within 1 .. ``len(scans)``, or a coordinate is not
         finite; an ``InputError`` when the grid of all the scans would be too large
-        (:func:`floorscan.core.grid.check_raster_size`), before it is allocated.
+        (:func:`floorscan.core.grid.check_raster_size`) or, with ``memory``, need more
+        memory than is free, before it is allocated.
     """
     params.check()
     scans = [(np.asarray(o, dtype=np.float64)[:2], np.asarray(p, dtype=np.float64)[:, :2]) for o, p in scans]
@@ -65,7 +71,10 @@ def prefix_grids(
         raise ValueError(f"prefix grids: expected increasing k from 1 to {len(scans)}, got {ks}")
     returns = with_returns(scans)
     if returns:
-        counts = CellCounts(GridFrame.of(returns, params.resolution_m, params.margin_m, what), params.step_fraction)
+        frame = GridFrame.of(returns, params.resolution_m, params.margin_m, what)
+        if memory is not None:
+            check_memory_of_casting(returns, frame, params.step_fraction, what, memory)
+        counts = CellCounts(frame, params.step_fraction)
     done, origins, on_edge = 0, [], []
     cast: list[list] = []  # per scan of on_edge: [hit, missed, width] from the origin `origin`
     origin = None

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from floorscan.core.grid import check_raster_size
+from floorscan.core.memory import JobMemory
 
 #: How near a cell's edge (in cells) a return or ray sample counts as on it. Measured
 #: from two origins, a point's cell coordinate differs by rounding, some 1e-12 cells for
@@ -33,6 +34,9 @@ EDGE_CELLS = 1e-9
 #: with a return in the cell (int32 each) and a scratch position (int64), 20, rounded up
 #: to the 24 that :func:`floorscan.core.grid.check_raster_size` has always counted.
 COUNTS_BYTES_PER_CELL = 24
+#: Bytes a ray sample takes while its scan is cast (:meth:`CellCounts.cells`: its ray,
+#: its place along it, its cell, and their temporaries), rounded up.
+RAY_SAMPLE_BYTES = 40
 
 
 def with_returns(scans) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -107,6 +111,64 @@ class GridFrame:
         if what is not None:
             check_raster_size(what, lo, hi, r, (height, width), COUNTS_BYTES_PER_CELL)
         return cls(origin, cell0, r, height, width)
+
+
+def ray_samples(o: np.ndarray, p: np.ndarray, r: float, step_fraction: float) -> int:
+    """At most how many ray samples :meth:`CellCounts.cells` takes of one scan: a ray
+    per return, to a cell centre at most a cell farther than the return.
+
+    Parameters
+    ----------
+    o : (2,) float64 ndarray
+        The scanner's position, metres.
+    p : (M, 2) float64 ndarray
+        Its returns, metres.
+    r : float
+        Cell size, metres.
+    step_fraction : float
+        Sample spacing, in cells.
+
+    Returns
+    -------
+    int
+    """
+    length = np.hypot(p[:, 0] - o[0], p[:, 1] - o[1]) + r
+    return int(np.maximum(np.ceil(length / (step_fraction * r)), 1).sum())
+
+
+def check_memory_of_casting(scans, frame: GridFrame, step_fraction: float, what: str, memory: JobMemory) -> float:
+    """Stop a job whose grid of scans would not fit in the memory free on the machine,
+    before the grid is allocated: ``memory``'s bytes a cell of ``frame`` and a point of
+    the scans, and the ray samples of the largest scan (:func:`ray_samples`,
+    :data:`RAY_SAMPLE_BYTES` each).
+
+    Parameters
+    ----------
+    scans : list of (origin, points)
+        :func:`with_returns`' scans.
+    frame : GridFrame
+    step_fraction : float
+        Ray sample spacing, in cells.
+    what : str
+        The grid and whose scans, for the message.
+    memory : JobMemory
+        What the job's rasters take a cell of the grid.
+
+    Returns
+    -------
+    float
+        The estimate, bytes.
+
+    Raises
+    ------
+    floorscan.core.memory.MemoryEstimateError
+        When it would not fit.
+    """
+    samples = max((ray_samples(o, p, frame.r, step_fraction) for o, p in scans), default=0)
+    rays = {f"the rays of the largest scan ({samples / 1e6:.3g} M samples x {RAY_SAMPLE_BYTES} bytes)":
+            float(samples) * RAY_SAMPLE_BYTES}
+    points = sum(len(p) for _, p in scans)
+    return memory.check(what, (frame.height, frame.width), frame.r, rays, points=points)
 
 
 class CellCounts:

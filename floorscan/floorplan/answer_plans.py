@@ -24,16 +24,26 @@ from typing import Callable, Iterator, Mapping
 import numpy as np
 import pandas as pd
 
+from floorscan.core.memory import JobMemory
 from floorscan.core.occupancy import OccupancyGrid, OccupancyParams
 from floorscan.core.plan_tables import N_WALL_POINTS
 from floorscan.core.prefix_grids import prefix_grids
+from floorscan.core.ray_casting import COUNTS_BYTES_PER_CELL
 from floorscan.core.selection import curve_ks
 from floorscan.core.wall_points import ScanParams
 from floorscan.floorplan.params import FloorplanParams
-from floorscan.floorplan.plan import FloorPlan, plan_of_segments
+from floorscan.floorplan.plan import PLAN_MEMORY, FloorPlan, plan_of_segments
 from floorscan.floorplan.scans import ScanPlans, write_plan
 
 log = logging.getLogger(__name__)
+
+#: What the job takes a cell of the grid of all the scans (the counts being built,
+#: :data:`floorscan.core.ray_casting.COUNTS_BYTES_PER_CELL`, a grid's window copied out of
+#: them, int32 counts, and the plan built on it, :data:`~floorscan.floorplan.plan.PLAN_MEMORY`)
+#: and a wall point (the points of the first k scans concatenated, float64 x 2, and the
+#: map extractor's work on them, 40: ``floorscan.walls.map_stage.MAP_MEMORY``).
+ANSWER_PLANS_MEMORY = JobMemory(COUNTS_BYTES_PER_CELL + 8 + PLAN_MEMORY.bytes_per_cell, "walls.map.support_cell_m",
+                                bytes_per_point=16 + 40)
 
 def first_k_scans_points(
     registered_path: str | os.PathLike, registration: pd.DataFrame, ordering: pd.DataFrame, scan_params: ScanParams
@@ -97,7 +107,7 @@ def answer_plans(
     n_points : int
         Size of the k grid.
     what : str
-        The grid and whose scans, for the error of a grid too large.
+        The grid and whose scans, for the error of a grid too large or of memory.
 
     Yields
     ------
@@ -108,12 +118,13 @@ def answer_plans(
     ------
     floorscan.core.io.InputError
         Before the first grid, when the grid of all the scans would be too large
-        (:func:`floorscan.core.grid.check_raster_size`).
+        (:func:`floorscan.core.grid.check_raster_size`) or the job's rasters
+        (:data:`ANSWER_PLANS_MEMORY`) would not fit in the memory free on the machine.
     """
     ks = curve_ks(len(scans), n_points)
     pairs = [(o, p) for _, o, p in scans]
     wall_points = np.cumsum([len(p) for _, p in pairs])  # of the first k scans, at k - 1
-    for k, grid in prefix_grids(pairs, ks, grid_params, what):
+    for k, grid in prefix_grids(pairs, ks, grid_params, what, ANSWER_PLANS_MEMORY):
         n = int(wall_points[k - 1])
         if grid is None:
             yield k, n, plan_of_segments(np.empty((0, 4)), None, params)
