@@ -2,8 +2,8 @@
 and time and peak memory of every stage (issue 8; thesis Table 5.1).
 
 Run: ``.venv/bin/python -m benchmarks pipeline [--datasets hallways hallways3d
-hallways3d_6000] [--cores 2] [--target all|plan|evaluation] [--workdir DIR] [--keep]
-[--snakemake-args '...']``
+hallways3d_6000 campus200] [--cores 2] [--target all|plan|evaluation ...] [--workdir DIR]
+[--keep] [--snakemake-args '...']``
 
 For each dataset the workflow runs in a copy of the repository (so ``results/`` of
 the checkout is never touched; ``PYTHONPATH`` points at the copy): first the
@@ -30,9 +30,15 @@ project's). Only a hint: it cannot see the drift during a run (measured 30-46 ms
 hallways3d runs of 52-74 s; the fastest run had the fastest probe, but one at 34 ms
 took 74 s).
 
-``hallways3d_6000`` is not in ``config/config.yaml``: the benchmark adds it with a
-``--configfile`` overlay (:data:`EXTRA_DATASETS`): the hallways floor, 3D scanner,
-the rover at 0.248 m/s instead of 0.3, so ~6000 scans over ~600 s.
+``hallways3d_6000`` and ``campus200`` are not in ``config/config.yaml``: the benchmark
+adds them with a ``--configfile`` overlay (:data:`EXTRA_DATASETS`). ``hallways3d_6000``:
+the hallways floor, 3D scanner, the rover at 0.248 m/s instead of 0.3, so ~6000 scans
+over ~600 s. ``campus200``: a 200 m x 200 m floor of 240 rooms on a grid of corridors
+(:mod:`benchmarks.campus`, its building file written into the copy), 2D scanner, the
+rover at 1.5 m/s: ~20 000 scans over ~2100 s.
+
+With several ``--target`` values each dataset runs each target in turn, from its
+recording (everything but the simulation rebuilt), and the table of each is printed.
 
 ``--workdir DIR`` keeps the copy in DIR and reuses its simulated recordings (only
 ``results/<ds>/sim`` is kept between runs; everything else is rebuilt).
@@ -57,10 +63,13 @@ import pandas as pd
 import pyarrow.parquet as pq
 import yaml
 
+from benchmarks.campus import CAMPUS_SPEED_MPS, write_campus
 from floorscan.figures.stage_times import read_benchmark
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_DATASETS = ("hallways", "hallways3d", "hallways3d_6000")
+#: The building of the ``campus200`` dataset (config/buildings/<name>.yaml in the copy).
+CAMPUS = "campus200"
 #: Datasets the benchmark adds to the config (a --configfile overlay).
 EXTRA_DATASETS = {
     "hallways3d_6000": {
@@ -70,7 +79,15 @@ EXTRA_DATASETS = {
         "scanner": "3d",
         "seed": 1,
         "params": {"simulate": {"speed_mps": 0.248}},
-    }
+    },
+    "campus200": {
+        "description": "200 m x 200 m campus floor, corridors every 40 m, 240 rooms, 2D scanner: ~20 000 scans (benchmark)",
+        "format": "synthetic",
+        "building": CAMPUS,
+        "scanner": "2d",
+        "seed": 1,
+        "params": {"simulate": {"speed_mps": CAMPUS_SPEED_MPS}},
+    },
 }
 _IGNORE = shutil.ignore_patterns("results", ".snakemake", ".git", ".venv", "__pycache__", ".pytest_cache")
 _SCRIPT = re.compile(r"\.snakemake/scripts/tmp[^./]*\.([A-Za-z0-9_]+)\.py")
@@ -93,12 +110,13 @@ def prepare_copy(workdir: Path) -> Path:
         else:
             shutil.copy2(item, target)
     venv = dst / ".venv"
-    if not venv.exists():
-        venv.symlink_to(REPO / ".venv")
+    if not venv.exists():  # a worktree has no .venv of its own: the environment running this
+        venv.symlink_to(REPO / ".venv" if (REPO / ".venv").exists() else Path(sys.prefix))
     shared = workdir / "shared"  # datasets refer to ../shared/data
     if not shared.exists() and (REPO.parent / "shared").exists():
         shared.symlink_to(REPO.parent / "shared")
     (dst / "config" / "bench_pipeline.yaml").write_text(yaml.safe_dump({"datasets": EXTRA_DATASETS}))
+    write_campus(dst / "config" / "buildings" / f"{CAMPUS}.yaml", name=CAMPUS)
     return dst
 
 
@@ -212,7 +230,7 @@ def snakemake(repo: Path, dataset: str, cores: int, targets: list[str], poll: bo
 #: these that its name starts with (``hulls_shard_scans_0-99`` -> ``hulls``).
 STAGES = (
     "simulate", "ingest", "poses", "register", "register_figure", "hulls", "select", "selection_figures",
-    "scan_walls", "walls", "floorplan", "score_runs", "score", "score_walls_figures", "score_figures",
+    "scan_walls", "walls", "map_walls", "floorplan", "score_runs", "score", "score_walls_figures", "score_figures",
 )  # fmt: skip
 
 
@@ -363,8 +381,9 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--cores", type=int, default=2)
     ap.add_argument("--workdir", type=Path, help="keep the copy here and reuse its simulated recordings")
     ap.add_argument("--keep", action="store_true", help="do not delete the temporary copy")
-    ap.add_argument("--target", default="all", choices=("all", "plan", "evaluation"),
-                    help="the workflow target timed: all (default), plan (the recommended plan alone), evaluation")
+    ap.add_argument("--target", nargs="+", default=["all"], choices=("all", "plan", "evaluation"),
+                    help="the workflow targets timed, each in turn: all (default), plan (the recommended plan "
+                         "alone), evaluation")
     ap.add_argument("--snakemake-args", default="", help="more Snakemake options for the timed run, e.g. '--scheduler greedy'")
     args = ap.parse_args(argv)
     extra = tuple(shlex.split(args.snakemake_args))
@@ -374,15 +393,16 @@ def main(argv: list[str] | None = None) -> None:
     try:
         results = []
         for ds in args.datasets:
-            r = run_dataset(repo, ds, args.cores, extra, args.target)
-            report(r, args.cores)
-            results.append(r)
+            for target in args.target:
+                r = run_dataset(repo, ds, args.cores, extra, target)
+                report(r, args.cores)
+                results.append(r)
         print("\n### summary")
-        print(f"{'dataset':<18}{'duration s':>11}{'scans':>7}{'largest':>9}{'wall s':>9}{'RTF':>7}"
+        print(f"{'dataset':<18}{'target':>11}{'duration s':>11}{'scans':>7}{'largest':>9}{'wall s':>9}{'RTF':>7}"
               f"{'CPU s':>8}{'RTF/CPU':>9}{'max job RSS MB':>16}{'probe ms':>10}")
         for r in results:
             cpu = r["stages"]["cpu_s"].sum()
-            print(f"{r['dataset']:<18}{r['duration_s']:>11.1f}{r['scans']:>7d}{r['largest_scan']:>9d}"
+            print(f"{r['dataset']:<18}{r['target']:>11}{r['duration_s']:>11.1f}{r['scans']:>7d}{r['largest_scan']:>9d}"
                   f"{r['wall_s']:>9.1f}{r['rtf']:>7.2f}{cpu:>8.0f}{r['duration_s'] / cpu:>9.2f}"
                   f"{r['stages']['rss_polled_mb'].max():>16.0f}{max(r['probe_ms']):>10.0f}")
         print("RTF = recording duration / end-to-end wall time; RTF/CPU = duration / CPU seconds of all jobs "

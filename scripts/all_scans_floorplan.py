@@ -5,6 +5,7 @@ from floorscan.core.io import read_table
 from floorscan.core.occupancy import read_grid
 from floorscan.core.stage import stage_log
 from floorscan.floorplan.metadata import recording_timestamp
+from floorscan.floorplan.plan import PLAN_MEMORY
 from floorscan.floorplan.scans import write_plan
 from floorscan.floorplan.writer import FloorplanWriter
 
@@ -13,7 +14,7 @@ with stage_log(snakemake) as log:  # noqa: F821
     walls = read_table(smk.input.walls)
     plan, _ = FloorplanWriter(smk.params.cfg).write(
         walls, {k: v for k, v in smk.output.items() if k != "plan"}, dataset=smk.wildcards.dataset, ordering="all", extractor="map", k="all",
-        timestamp=recording_timestamp(smk.input.index), grid=read_grid(smk.input.grid),
+        timestamp=recording_timestamp(smk.input.index), grid=read_grid(smk.input.grid, PLAN_MEMORY, f"the floor plan on the grid {smk.input.grid}"),
     )
     write_plan(plan, smk.output.plan, {"dataset": smk.wildcards.dataset, "ordering": "all", "extractor": "map", "k": "all"})
     log.info("plan of all kept scans (map extractor): %d walls, %d clutter, %d junctions",

@@ -3,10 +3,10 @@ the all-scan map plans scored against it (floorscan.score.drawn), and the overla
 the same alignment their rooms against the rooms drawn by people, when the dataset's
 reference names them (floorscan.score.rooms), and the rooms overlay."""
 from floorscan.core.files import atomic_path
-from floorscan.core.occupancy import read_grid
 from floorscan.core.stage import stage_log
 from floorscan.figures.drawn import drawn_overlay_figure
 from floorscan.figures.rooms import rooms_overlay_figure
+from floorscan.score.against_reference import read_reference
 from floorscan.score.drawn import score_drawn_plans
 from floorscan.score.drawn_rooms import read_drawn_rooms, score_drawn_rooms
 from floorscan.score.rooms import score_room_plans
@@ -14,7 +14,7 @@ from floorscan.score.rooms import score_room_plans
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
     plans = {"recommended": smk.input.recommended, "all_scans_map": smk.input.all_scans_map}
-    grid = read_grid(smk.input.reference)
+    grid = read_reference(smk.input.reference)
     table, info, overlay = score_drawn_plans(plans, smk.input.drawn, grid, smk.params.reference)
     with atomic_path(smk.output.table) as tmp:
         table.to_csv(tmp, index=False, float_format="%.4f")

@@ -20,13 +20,14 @@ from floorscan.core.occupancy import (
     PGM_OCCUPIED,
     PGM_UNKNOWN,
     OccupancyParams,
-    _sample_cells,
     map_image,
     occupancy_grid,
     read_grid,
     write_grid,
     write_map_server,
 )
+from floorscan.core.prefix_grids import prefix_grids
+from floorscan.core.ray_casting import CellCounts, sample_cells
 from test_registration import ROOM, SEGMENTS, ray_cast
 
 # off the 5 cm cell boundaries, so that no wall lies on one
@@ -118,6 +119,46 @@ def test_the_grid_does_not_depend_on_the_scans_order():
     np.testing.assert_array_equal(a.n_hit_scans, b.n_hit_scans)
     np.testing.assert_array_equal(a.n_miss_scans, b.n_miss_scans)
     np.testing.assert_array_equal(a.log_odds, b.log_odds)
+
+
+def _same_grid(a, b) -> bool:
+    return (a.shape == b.shape and a.origin_xy.tobytes() == b.origin_xy.tobytes() and a.resolution_m == b.resolution_m
+            and np.array_equal(a.n_hit_scans, b.n_hit_scans) and np.array_equal(a.n_miss_scans, b.n_miss_scans)
+            and a.scan_xy.tobytes() == b.scan_xy.tobytes() and a.params == b.params)
+
+
+def test_prefix_grids_are_the_grids_of_the_first_k_scans(monkeypatch):
+    """The grids of the first k scans built incrementally equal occupancy_grid of those
+    scans, array for array, also for scanners on cell edges (poses in whole
+    centimetres, on the 5 cm lattice: measured from another origin, their own cell and
+    their rays' first samples would round to the cell beside); a scan without a
+    return counts in k; the extent grows with k. Each scan away from an edge is cast
+    once; a scan on an edge once per origin the grids take."""
+    on_edge = [(np.array([x, y]), pts - np.array([x, y]) - SHIFT + np.array([round(x, 2), round(y, 2)]))
+               for (x, y), pts in [(o - SHIFT, p) for o, p in _scans([(2.0, 1.5, 0.3), (7.0, 2.5, 1.0)])]]
+    on_edge = [(np.round(o, 2), p) for o, p in on_edge]
+    assert all((np.abs(o / 0.05 - np.round(o / 0.05)) < 1e-9).all() for o, _ in on_edge)
+    empty = (np.array([5.0, 3.0]), np.empty((0, 2)))
+    base = _scans()
+    part = (base[0][0], base[0][1][base[0][1][:, 0] > 3.0])  # sees the right of the room only
+    scans = [empty, part, on_edge[0], base[1], base[2], empty, on_edge[1], base[3], base[4]]
+    calls = []
+    cells = CellCounts.cells
+    monkeypatch.setattr(CellCounts, "cells", lambda self, *a, **kw: calls.append(1) or cells(self, *a, **kw))
+    ks = [1, 2, 3, 5, 6, 8, 9]
+    grids = dict(prefix_grids(scans, ks))
+    n_cast = len(calls)
+    assert list(grids) == ks and grids[1] is None
+    for k in ks[1:]:
+        assert _same_grid(grids[k], occupancy_grid(scans[:k])), k
+    assert len({grids[k].shape for k in ks[1:]}) >= 2 and len({grids[k].origin_xy.tobytes() for k in ks[1:]}) >= 2
+    # 5 scans away from edges once; 2 on edges once each, then again per origin of the grids after them
+    origins = {grids[k].origin_xy.tobytes() for k in ks if k >= 3}
+    assert 5 + 2 + 2 <= n_cast <= 5 + 2 + 2 * len(origins)
+    with pytest.raises(ValueError, match="increasing k"):
+        list(prefix_grids(scans, [3, 2]))
+    with pytest.raises(ValueError, match="increasing k"):
+        list(prefix_grids(scans, [10]))
 
 
 def test_map_server_files_and_the_cell_table_round_trip(tmp_path):
@@ -228,7 +269,7 @@ def test_ray_samples_fall_in_the_cells_of_the_whole_expression():
     ray = np.repeat(np.arange(500), 40)
     frac = np.tile(np.arange(40), 500) / 40
     c = np.floor((o + d[ray] * frac[:, None] - origin) / r).astype(np.int64)
-    assert np.array_equal(_sample_cells(o, d, ray, frac, origin, r, width), c[:, 1] * width + c[:, 0])
+    assert np.array_equal(sample_cells(o, d, ray, frac, origin, r, width)[0], c[:, 1] * width + c[:, 0])
     # exact binary fractions: many samples fall on cell edges, where a floor off by a
     # rounding or taken on the other side of zero would show
     o, origin, r = np.array([0.5, -0.25]), np.array([-8.0, -4.0]), 0.25
@@ -237,7 +278,7 @@ def test_ray_samples_fall_in_the_cells_of_the_whole_expression():
     c = np.floor((o + d[ray] * frac[:, None] - origin) / r).astype(np.int64)
     edge = (o + d[ray] * frac[:, None] - origin) / r
     assert (edge == np.round(edge)).mean() > 0.05
-    assert np.array_equal(_sample_cells(o, d, ray, frac, origin, r, width), c[:, 1] * width + c[:, 0])
+    assert np.array_equal(sample_cells(o, d, ray, frac, origin, r, width)[0], c[:, 1] * width + c[:, 0])
 
 
 def test_reference_against_the_true_walls():

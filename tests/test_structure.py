@@ -223,7 +223,7 @@ def test_duplicates_merge_and_shallow_crossings_meet():
 
 
 def test_answer_curve_grid_and_k_reaching():
-    from floorscan.score.answer_curve import curve_ks
+    from floorscan.core.selection import curve_ks
     from floorscan.core.score_tables import k_reaching
 
     assert curve_ks(1) == [1] and curve_ks(0) == []

@@ -293,3 +293,8 @@ def test_default_run_scores_the_answer(default_run):
     curve = pd.read_csv(out / "evaluation" / "answer_curve.csv")
     assert curve["k"].iloc[-1] == 76 and curve["k"].is_monotonic_increasing
     assert curve["f1_5cm"].iloc[-1] >= 0.85 and curve["f1_5cm"].iloc[0] < curve["f1_5cm"].iloc[-1]
+    # each k's plan is built once, by the floorplan stage, and read by the score stage
+    plans = sorted(int(p.name[1:]) for p in (out / "evaluation" / "answer_plans").iterdir() if p.is_dir())
+    assert plans == curve["k"].tolist()
+    walls = read_table(out / "evaluation" / "answer_plans" / "k76" / "walls.parquet")
+    assert len(walls) == curve["n_walls"].iloc[-1]

@@ -34,6 +34,9 @@ Usage::
     write_map_server(grid, "map.pgm", "map.yaml")
     write_grid(grid, "occupancy.parquet")  # read_grid restores it
     structure_xy = grid.cell_centres(grid.structure())
+
+The grids of the first k scans for increasing k, each scan cast once:
+:func:`floorscan.core.prefix_grids.prefix_grids`.
 """
 
 from __future__ import annotations
@@ -49,7 +52,9 @@ import pandas as pd
 
 from floorscan.core.files import atomic_path
 from floorscan.core.config import schema_defaults
-from floorscan.core.grid import check_raster_size, raster_cells
+from floorscan.core.grid import raster_cells
+from floorscan.core.memory import JobMemory
+from floorscan.core.ray_casting import CellCounts, GridFrame, check_memory_of_casting, with_returns
 
 #: map_server's PGM values (trinary mode): occupied, free, unknown.
 PGM_OCCUPIED, PGM_FREE, PGM_UNKNOWN = 0, 254, 205
@@ -234,8 +239,9 @@ class OccupancyGrid:
 
 
 def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: OccupancyParams = OccupancyParams(),
-                   what: str = "occupancy grid") -> OccupancyGrid:
-    """Build the occupancy grid of a set of registered scans (see the module docstring).
+                   what: str = "occupancy grid", memory: JobMemory | None = None) -> OccupancyGrid:
+    """Build the occupancy grid of a set of registered scans (see the module docstring;
+    the casting: :mod:`floorscan.core.ray_casting`).
 
     Parameters
     ----------
@@ -245,6 +251,10 @@ def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: Occup
     params : OccupancyParams
     what : str
         The grid and whose scans, for the error of a grid too large.
+    memory : JobMemory, optional
+        What the job's rasters take a cell of the grid: the job stops before the grid
+        is allocated when they and the rays of its largest scan would not fit in the
+        free memory (:func:`floorscan.core.ray_casting.check_memory_of_casting`).
 
     Returns
     -------
@@ -254,71 +264,23 @@ def occupancy_grid(scans: Iterable[tuple[np.ndarray, np.ndarray]], params: Occup
     ------
     ValueError
         When no scan has a return, or a coordinate is not finite; an ``InputError`` when the
-        grid would be too large (:func:`floorscan.core.grid.check_raster_size`), before it is.
+        grid would be too large (:func:`floorscan.core.grid.check_raster_size`) or, with
+        ``memory``, need more memory than is free
+        (:class:`~floorscan.core.memory.MemoryEstimateError`), before it is allocated.
     """
     params.check()
-    scans = [(np.asarray(o, dtype=np.float64)[:2], np.asarray(p, dtype=np.float64)[:, :2]) for o, p in scans]
-    scans = [(o, p) for o, p in scans if len(p)]
+    scans = with_returns(scans)
     if not scans:
         raise ValueError("occupancy grid: no scan has a return")
-    lo = np.min([np.minimum(o, p.min(axis=0)) for o, p in scans], axis=0)
-    hi = np.max([np.maximum(o, p.max(axis=0)) for o, p in scans], axis=0)
-    if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
-        raise ValueError("occupancy grid: a scan origin or return is not finite")
-    r = float(params.resolution_m)
-    origin = np.floor((lo - params.margin_m) / r) * r
-    width, height = (np.floor((hi + params.margin_m - origin) / r).astype(np.int64) + 1).tolist()
-    check_raster_size(what, lo, hi, r, (height, width), 4 + 4 + 8 + 8)  # the four arrays below
-    n_cells = width * height
-    hits = np.zeros(n_cells, dtype=np.int32)
-    misses = np.zeros(n_cells, dtype=np.int32)
-    last = np.zeros(n_cells, dtype=np.int64)  # scratch of _distinct
-    hit_by = np.full(n_cells, -1, dtype=np.int32)  # the last scan with a return in the cell
-    step = params.step_fraction * r
-    for i, (o, p) in enumerate(scans):
-        end = np.floor((p - origin) / r).astype(np.int64)
-        hit = _distinct(end[:, 1] * width + end[:, 0], last)
-        hit_by[hit] = i
-        # one ray per return cell (rays to the same cell cross the same cells)
-        tip = (np.column_stack([hit % width, hit // width]) + 0.5) * r + origin
-        d = tip - o
-        length = np.hypot(d[:, 0], d[:, 1])
-        n = np.maximum(np.ceil(length / step).astype(np.int64), 1)
-        ray = np.repeat(np.arange(len(n)), n)
-        frac = (np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n, n)
-        crossed = _distinct(_sample_cells(o, d, ray, frac, origin, r, width), last)
-        hits[hit] += 1
-        misses[crossed[hit_by[crossed] != i]] += 1
-    return OccupancyGrid(origin_xy=origin, resolution_m=r, n_hit_scans=hits.reshape(height, width),
-                         n_miss_scans=misses.reshape(height, width), params=params,
-                         scan_xy=np.array([o for o, _ in scans], dtype=np.float64).reshape(-1, 2))
-
-
-def _sample_cells(o, d, ray, frac, origin, r: float, width: int) -> np.ndarray:
-    """Flat cell index of each ray sample ``o + d[ray] * frac``: floor((o + d[ray] *
-    frac - origin) / r) per axis, computed in place one axis at a time (the same
-    values as the whole expression, without its (N, 2) temporaries)."""
-    axes = []
-    for a in (0, 1):
-        v = np.ascontiguousarray(d[:, a])[ray]
-        v *= frac
-        v += o[a]
-        v -= origin[a]
-        v /= r
-        axes.append(np.floor(v, out=v).astype(np.int64))
-    cells = axes[1]
-    cells *= width
-    cells += axes[0]
-    return cells
-
-
-def _distinct(cells: np.ndarray, last: np.ndarray) -> np.ndarray:
-    """The distinct values of ``cells`` (cell indices below ``len(last)``), without a
-    sort: every entry writes its position into the scratch array ``last`` at its cell;
-    whichever write stays, exactly one position per distinct cell finds itself there."""
-    pos = np.arange(len(cells))
-    last[cells] = pos
-    return cells[last[cells] == pos]
+    frame = GridFrame.of(scans, params.resolution_m, params.margin_m, what)
+    if memory is not None:
+        check_memory_of_casting(scans, frame, params.step_fraction, what, memory)
+    counts = CellCounts(frame, params.step_fraction)
+    for o, p in scans:
+        counts.add(*counts.cells(o, p, frame)[:2])
+    hits, misses = counts.window(frame)
+    return OccupancyGrid(origin_xy=frame.origin, resolution_m=frame.r, n_hit_scans=hits, n_miss_scans=misses,
+                         params=params, scan_xy=np.array([o for o, _ in scans], dtype=np.float64).reshape(-1, 2))
 
 
 def map_image(grid: OccupancyGrid) -> np.ndarray:
@@ -444,20 +406,34 @@ def write_grid(grid: OccupancyGrid, path: str | Path, metadata: dict[str, str] |
     write_table(grid_table(grid), path, metadata={**grid_metadata(grid), **counts, **(metadata or {})})
 
 
-def read_grid(path: str | Path) -> OccupancyGrid:
+def read_grid(path: str | Path, memory: JobMemory | None = None, what: str | None = None) -> OccupancyGrid:
     """The grid :func:`write_grid` wrote (``reference/occupancy.parquet``).
 
     Parameters
     ----------
     path : path
+    memory : JobMemory, optional
+        What the reading job's rasters take a cell of the grid: the job stops before
+        the grid is read when they would not fit in the free memory.
+    what : str, optional
+        What the job makes of the grid, for that message (default: the path).
 
     Returns
     -------
     OccupancyGrid
+
+    Raises
+    ------
+    floorscan.core.memory.MemoryEstimateError
+        With ``memory``, when the job's rasters would need more memory than is free.
     """
     from floorscan.core.io import read_metadata, read_table
 
-    return grid_from_table(read_table(path), read_metadata(path))
+    metadata = read_metadata(path)
+    if memory is not None:
+        shape = (int(metadata["height"]), int(metadata["width"]))
+        memory.check(what or f"the job reading the grid {path}", shape, float(metadata["resolution_m"]))
+    return grid_from_table(read_table(path), metadata)
 
 
 def grid_from_table(table: pd.DataFrame, metadata: dict[str, str]) -> OccupancyGrid:

@@ -11,7 +11,8 @@ tables): ``walls.parquet``, ``faces.parquet``, ``clutter.parquet`` and
 metres rounded to :data:`PLAN_DECIMALS` decimals, as the plan's GeoJSON export
 rounds them, and room polygons are oriented as it orients them (RFC 7946:
 counter-clockwise exterior, clockwise holes), so the tables and the export of one plan
-give the same numbers, vertex for vertex.
+give the same numbers, vertex for vertex. A plan that is scored and never exported (the
+answer's plans of the first k scans) may keep its numbers as computed (``rounded=False``).
 
 :func:`write_plan_tables` writes the folder (into a temporary folder, then renamed:
 a crash leaves no half plan); :func:`read_plan_tables` reads it back, any parts;
@@ -59,6 +60,10 @@ PLAN_SCHEMAS: dict[str, pa.Schema] = {
          ("room_b", pa.int32())]  # fmt: skip
     ),
 }
+#: Metadata key of a plan of some scans (the answer's plans of the first k scans,
+#: :mod:`floorscan.floorplan.answer_plans`): the wall points of its scans, ``"0"`` when
+#: they have none and so no plan could be made of them.
+N_WALL_POINTS = "n_wall_points"
 #: The parts every plan folder holds; rooms and doors only when the plan has rooms.
 ALWAYS = ("walls", "faces", "clutter", "junctions")
 #: Decimals of the coordinates (metres), 10 micrometres: the plan's GeoJSON export
@@ -77,7 +82,8 @@ def _rounded(values: np.ndarray, decimals: int) -> np.ndarray:
 
 
 def write_plan_tables(
-    tables: Mapping[str, pd.DataFrame], folder: str | os.PathLike, metadata: Mapping[str, str] | None = None
+    tables: Mapping[str, pd.DataFrame], folder: str | os.PathLike, metadata: Mapping[str, str] | None = None,
+    rounded: bool = True,
 ) -> None:
     """Write a plan's tables as a plan folder, atomically (a temporary folder renamed;
     an existing folder is replaced).
@@ -94,6 +100,10 @@ def write_plan_tables(
         The plan folder, e.g. ``evaluation/plans/<ordering>_<extractor>_k<k>``.
     metadata : mapping of str to str, optional
         Stored in each file's schema metadata (dataset, ordering, extractor, k).
+    rounded : bool
+        Round coordinates and lengths as the GeoJSON export does (False: as computed,
+        for a plan that is scored and never exported: a face on the reference map's
+        cell lattice is 5 cm from a cell centre, where 10 micrometres move a score).
 
     Raises
     ------
@@ -114,7 +124,7 @@ def write_plan_tables(
     tmp.mkdir(parents=True)
     meta = {k.encode(): str(v).encode() for k, v in (metadata or {}).items()}
     for part in parts:
-        table = _arrow_table(tables[part], PLAN_SCHEMAS[part])
+        table = _arrow_table(tables[part], PLAN_SCHEMAS[part], rounded)
         if meta:
             table = table.replace_schema_metadata(meta)
         pq.write_table(table, tmp / f"{part}.parquet", **parquet_options(table.schema))
@@ -123,34 +133,36 @@ def write_plan_tables(
     os.replace(tmp, folder)
 
 
-def _arrow_table(df: pd.DataFrame, schema: pa.Schema) -> pa.Table:
+def _arrow_table(df: pd.DataFrame, schema: pa.Schema, rounded: bool = True) -> pa.Table:
     absent = [n for n in schema.names if n not in df.columns]
     if absent:
         raise KeyError(f"plan table lacks columns {absent}; expected {schema.names}")
     columns = {}
     for field in schema:
         values = df[field.name].to_numpy()
-        if field.name in _COORDINATES:
+        if field.name in _COORDINATES and rounded:
             values = _rounded(values, PLAN_DECIMALS)
-        elif field.name in _MEASURES:
+        elif field.name in _MEASURES and rounded:
             values = _rounded(values, 4)
         elif field.name == "polygon":
-            values = [v if isinstance(v, bytes) else _polygon_wkb(v) for v in values]
+            values = [v if isinstance(v, bytes) else _polygon_wkb(v, rounded) for v in values]
         columns[field.name] = pa.array(values, type=field.type) if len(values) else pa.array([], type=field.type)
     return pa.table(columns, schema=schema)
 
 
-def _polygon_wkb(poly) -> bytes | None:
+def _polygon_wkb(poly, rounded: bool = True) -> bytes | None:
     """A room polygon as the GeoJSON export writes it, as WKB: oriented (counter-clockwise
-    exterior, clockwise holes) and its coordinates rounded to :data:`PLAN_DECIMALS` (Python's
-    ``round``); None stays None (the export skips a missing or empty room)."""
+    exterior, clockwise holes) and, when ``rounded``, its coordinates rounded to
+    :data:`PLAN_DECIMALS` (Python's ``round``); None stays None (the export skips a
+    missing or empty room)."""
     import shapely
 
     if poly is None:
         return None
     if not poly.is_empty:
         poly = shapely.orient_polygons(poly, exterior_cw=False)
-        poly = shapely.transform(poly, lambda xy: _rounded(xy.ravel(), PLAN_DECIMALS).reshape(-1, 2))
+        if rounded:
+            poly = shapely.transform(poly, lambda xy: _rounded(xy.ravel(), PLAN_DECIMALS).reshape(-1, 2))
     return shapely.to_wkb(poly, output_dimension=2, byte_order=1)
 
 

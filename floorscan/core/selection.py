@@ -3,6 +3,8 @@
 - :func:`parse_k`, :func:`first_k_scans`: the first k scans of an ordering
   (``orderings/<name>.parquet``: ``rank``, ``scan_id``), for the walls stage's walls of
   the first k scans and the floorplan stage's evaluation grid;
+- :func:`curve_ks`: the numbers of scans of the answer's plans of the first k scans
+  (the floorplan stage builds them, the score stage scores them: the answer curve);
 - :func:`selected_scan_ids`: the selected scans (``selection/scans.parquet``), for the
   map extractor's walls and the recommended plan;
 - :func:`read_selection`: ``selection/selection.json``, for the answer and the pages.
@@ -81,6 +83,27 @@ def first_k_scans(ordering: pd.DataFrame, k: str | int) -> list[int]:
     kk = parse_k(k)
     ids = ordering.sort_values("rank", kind="stable")["scan_id"].astype(int).tolist()
     return ids if kk is None else ids[:kk]
+
+
+def curve_ks(n_kept: int, n_points: int = 24) -> list[int]:
+    """About ``n_points`` values of k from 1 to ``n_kept``, geometrically spaced: the
+    answer's plans of the first k scans (:mod:`floorscan.floorplan.answer_plans`).
+
+    Parameters
+    ----------
+    n_kept : int
+        Kept scans.
+    n_points : int
+
+    Returns
+    -------
+    list of int
+        Distinct, increasing, ``n_kept`` last; empty when ``n_kept`` < 1.
+    """
+    if n_kept < 1:
+        return []
+    ks = np.unique(np.round(np.geomspace(1, n_kept, max(2, n_points))).astype(np.int64))
+    return sorted(set(ks.tolist()) | {int(n_kept)})
 
 
 def selected_scan_ids(path: str | os.PathLike) -> np.ndarray:

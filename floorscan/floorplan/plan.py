@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from floorscan.core.memory import JobMemory
 from floorscan.floorplan.merge import merge_segments
 from floorscan.floorplan.pairing import pair_faces
 from floorscan.floorplan.params import FloorplanParams
@@ -26,6 +27,12 @@ if TYPE_CHECKING:
     from floorscan.core.occupancy import OccupancyGrid
 
 log = logging.getLogger(__name__)
+
+#: What a cell of the free space's grid takes a job that builds a plan on it (the grid
+#: read, its log-odds and masks, the structure passes' distance transforms, the rooms'
+#: rasters) at the job's peak, rounded up (``benchmarks/README.md``); the grid's cells
+#: are the map extractor's.
+PLAN_MEMORY = JobMemory(56, "walls.map.support_cell_m")
 
 
 #: Columns of :attr:`FloorPlan.walls`.

@@ -174,9 +174,12 @@ def plan_tables(plan: FloorPlan) -> dict[str, pd.DataFrame]:
             "rooms": plan.rooms, "doors": plan.doors}  # fmt: skip
 
 
-def write_plan(plan: FloorPlan, folder: str | os.PathLike, metadata: Mapping[str, str] | None = None) -> None:
+def write_plan(
+    plan: FloorPlan, folder: str | os.PathLike, metadata: Mapping[str, str] | None = None, rounded: bool = True
+) -> None:
     """Write a plan as Parquet tables (:func:`floorscan.core.plan_tables.write_plan_tables`:
-    coordinates rounded to 10 micrometres as its GeoJSON export rounds them).
+    coordinates rounded to 10 micrometres as its GeoJSON export rounds them, unless
+    ``rounded`` is False).
 
     Parameters
     ----------
@@ -185,8 +188,10 @@ def write_plan(plan: FloorPlan, folder: str | os.PathLike, metadata: Mapping[str
         The plan folder (replaced when it exists).
     metadata : mapping of str to str, optional
         What the plan is of (dataset, ordering, extractor, k), in each file.
+    rounded : bool
+        False: the numbers as computed (a plan that is scored, never exported).
     """
-    write_plan_tables(plan_tables(plan), folder, metadata)
+    write_plan_tables(plan_tables(plan), folder, metadata, rounded)
 
 
 def read_plan(folder: str | os.PathLike) -> FloorPlan:

@@ -271,11 +271,12 @@ def recommended_plan(
     """
     from floorscan.core.io import read_table
     from floorscan.core.occupancy import read_grid
+    from floorscan.floorplan.plan import PLAN_MEMORY
     from floorscan.floorplan.scans import ScanPlans
     from floorscan.core.selection import selected_scan_ids
 
     ids = selected_scan_ids(scans_path)
-    grid = None if grid_path is None else read_grid(grid_path)
+    grid = None if grid_path is None else read_grid(grid_path, PLAN_MEMORY, f"the floor plan on the grid {grid_path}")
     meta = PlanMetadata(dataset, ordering, extractor, len(ids), recording_timestamp(index_path))
     plans = ScanPlans(read_table(walls_path), stage_params(FloorplanParams, cfg))
     scans = None if extractor == "map" else ids  # the map extractor's table is the selected scans' map whole

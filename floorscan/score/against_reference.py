@@ -34,11 +34,38 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from floorscan.core.geometry import sample_segments, samples_per_segment, segment_weights
-from floorscan.core.occupancy import OccupancyGrid
+from floorscan.core.memory import JobMemory
+from floorscan.core.occupancy import OccupancyGrid, read_grid
 
 if TYPE_CHECKING:
     import pandas as pd
 
+
+#: What a cell of the reference map takes a job that scores plans against it: the grid
+#: read (int32 counts), its log-odds and their temporaries (float64) for the structure
+#: and free masks, and the masks; rounded up (``benchmarks/README.md``).
+SCORING_MEMORY = JobMemory(48, "score.reference.resolution_m")
+
+
+def read_reference(path) -> OccupancyGrid:
+    """The reference map (:func:`floorscan.core.occupancy.read_grid`), read when the
+    scoring job's rasters (:data:`SCORING_MEMORY`) fit in the memory free on the machine.
+
+    Parameters
+    ----------
+    path : path
+        ``reference/occupancy.parquet``.
+
+    Returns
+    -------
+    OccupancyGrid
+
+    Raises
+    ------
+    floorscan.core.memory.MemoryEstimateError
+        Before the grid is read, when they would not fit.
+    """
+    return read_grid(path, SCORING_MEMORY, f"scoring against the reference map {path}")
 
 class Structure:
     """The reference map's structure, prepared once for scoring many plans.

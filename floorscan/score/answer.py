@@ -308,10 +308,9 @@ def score_answer(plans: dict, reference_path=None, truth_path=None) -> pd.DataFr
     FileNotFoundError
         When a plan's folder is not a plan folder.
     """
-    from floorscan.core.occupancy import read_grid
-    from floorscan.score.against_reference import Structure
+    from floorscan.score.against_reference import Structure, read_reference
 
-    reference = None if reference_path is None else Structure(read_grid(reference_path))
+    reference = None if reference_path is None else Structure(read_reference(reference_path))
     truth = None if truth_path is None else read_truth(truth_path)
     rows = [{"plan": name, **score_answer_plan(folder, reference, truth)} for name, folder in plans.items()]
     return pd.DataFrame(rows)

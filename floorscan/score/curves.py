@@ -330,9 +330,9 @@ def score_curves(
     oracle : pandas.DataFrame
         The oracle ordering (:func:`oracle_ordering`).
     """
-    from floorscan.core.occupancy import read_grid
+    from floorscan.score.against_reference import read_reference
 
-    structure = Structure(read_grid(reference_path))
+    structure = Structure(read_reference(reference_path))
     cache: dict[tuple, dict] = {}
 
     def score_scans(scan_ids) -> dict:

@@ -16,7 +16,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from floorscan.core.memory import JobMemory
 from floorscan.core.occupancy import OccupancyGrid, OccupancyParams, occupancy_grid
+from floorscan.core.ray_casting import COUNTS_BYTES_PER_CELL
+
+#: What a cell of the reference map takes the job that makes it: the counts being built
+#: (:data:`floorscan.core.ray_casting.COUNTS_BYTES_PER_CELL`) and the figure of the
+#: whole grid drawn by the same job (its RGBA image and matplotlib's copies of it: 56
+#: bytes a cell at the job's peak, rounded up, ``benchmarks/README.md``).
+REFERENCE_MEMORY = JobMemory(COUNTS_BYTES_PER_CELL + 56, "score.reference.resolution_m")
 
 
 def reference_of_recording(
@@ -49,6 +57,9 @@ def reference_of_recording(
     ValueError
         When a scan of ``registered_path`` has no kept row with a pose, or none has a
         return in the height band.
+    floorscan.core.io.InputError
+        When the grid would be too large, or the job's rasters (:data:`REFERENCE_MEMORY`)
+        would not fit in the memory free on the machine, before it is allocated.
     """
     from floorscan.core.io import iter_scans
     from floorscan.core.config import stage_params
@@ -65,4 +76,5 @@ def reference_of_recording(
             xy, _ = scan_points_2d(pts, scan_params)
             yield origin.loc[sid].to_numpy(np.float64), xy
 
-    return occupancy_grid(scans(), params)
+    what = f"the reference map of the {len(origin)} kept scans of {registered_path}"
+    return occupancy_grid(scans(), params, what, REFERENCE_MEMORY)

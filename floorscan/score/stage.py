@@ -167,10 +167,9 @@ def write_run_scores(
         The table written (one row per run).
     """
     cfg = stage_params(ScoreParams, cfg)
-    from floorscan.score.against_reference import score_plans
+    from floorscan.score.against_reference import read_reference, score_plans
     from floorscan.core.plan_tables import plan_faces_and_walls
     from floorscan.score.ground_truth import load_recall_references, load_references
-    from floorscan.core.occupancy import read_grid
     from floorscan.score.runs import SCORE_TIME, score_dataset
 
     kind = reference["kind"]
@@ -192,7 +191,7 @@ def write_run_scores(
     table = score_dataset(run_files, references, kind, cfg, dataset, log, recall_references=recall_refs,
                           workers=workers)
     # the plans against the reference map (occupancy grid of all kept scans)
-    against_map = score_plans(run_files, read_grid(inputs["reference_map"]), tuple(cfg.taus_m),
+    against_map = score_plans(run_files, read_reference(inputs["reference_map"]), tuple(cfg.taus_m),
                               lambda path: plans[path][0])
     table = table.merge(against_map, on=["ordering", "extractor", "k"], how="left", validate="one_to_one")
     # the time of each run to the log, not into the metrics (the same input gives the same file)

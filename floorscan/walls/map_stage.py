@@ -17,10 +17,18 @@ import numpy as np
 import pandas as pd
 
 from floorscan.core.config import schema_section_defaults
+from floorscan.core.memory import JobMemory
 from floorscan.core.occupancy import OccupancyGrid, OccupancyParams, occupancy_grid
+from floorscan.core.ray_casting import COUNTS_BYTES_PER_CELL
 from floorscan.walls.map_lines import MapParams, map_segments
 
 log = logging.getLogger(__name__)
+
+#: What the map extractor's job takes a cell of the grid of the scans (the counts being
+#: built, :data:`floorscan.core.ray_casting.COUNTS_BYTES_PER_CELL`, and the support
+#: test's log-odds, float64) and a wall point (the support test's cells, the thinning's
+#: keys and sums: 40 at the job's peak, rounded up, ``benchmarks/README.md``).
+MAP_MEMORY = JobMemory(COUNTS_BYTES_PER_CELL + 8, "walls.map.support_cell_m", bytes_per_point=40)
 
 
 def map_of_scans(
@@ -59,7 +67,8 @@ def map_of_scans(
     floorscan.core.io.InputError
         When the grid of the scans' extent would be too large
         (:func:`floorscan.core.grid.check_raster_size`: names the dataset, the extent
-        in metres, the cells and the memory), before it is allocated.
+        in metres, the cells and the memory), or the job's rasters (:data:`MAP_MEMORY`)
+        would not fit in the memory free on the machine, before it is allocated.
     """
     from floorscan.core.io import iter_scans
     from floorscan.core.config import stage_params
@@ -88,7 +97,8 @@ def map_of_scans(
     dataset = read_metadata(registered_path).get("dataset")
     what = (f"the occupancy grid of {'all kept' if scan_ids is None else 'the selected'} {len(origins)} scans"
             f"{f' of dataset {dataset!r}' if dataset else ''} ({registered_path})")
-    grid = occupancy_grid(zip(origins, points), replace(OccupancyParams(), resolution_m=params.support_cell_m), what)
+    grid = occupancy_grid(zip(origins, points), replace(OccupancyParams(), resolution_m=params.support_cell_m), what,
+                          MAP_MEMORY)
     segments = _map_table(pts, grid, params, cfg)
     log.info("map of %d scans (%d wall points): %d wall segments; grid %d x %d cells of %.3f m",
              len(origins), len(pts), len(segments), grid.shape[1], grid.shape[0], grid.resolution_m)

@@ -72,6 +72,7 @@ PRIORITY = {
     "select_coverage": 22,
     "selection": 21,
     "floorplan": 20,
+    "answer_floorplans": 24,
     "selection_figures": 14,
     "reference": 36,
     "score_curves": 24,

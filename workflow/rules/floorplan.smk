@@ -11,6 +11,9 @@
 #               tables, evaluation/plans/<ordering>_<extractor>_k<k>/ (what the score
 #               stage reads), and in the formats of floorplan.evaluation_formats for
 #               people, evaluation/floorplan/<ordering>_<extractor>_k<k>.*
+#   answer_floorplans: the answer's plan of the first k scans of the default ordering on
+#               the answer curve's k grid, evaluation/answer_plans/k<k>/ (what the score
+#               stage's answer_curve reads)
 from floorscan.floorplan import EXPORT_FORMATS, FLOORPLAN_FORMATS, floorplan_outputs
 
 # The file suffixes of the evaluation grid's formats (floorplan.evaluation_formats).
@@ -104,6 +107,38 @@ rule all_scans_floorplan:
         "results/{dataset}/benchmarks/all_scans_floorplan.tsv"
     script:
         "../../scripts/all_scans_floorplan.py"
+
+
+def answer_floorplans_inputs(wildcards):
+    ds = wildcards.dataset
+    return {
+        "registered": f"results/{ds}/registered.parquet",
+        "registration": f"results/{ds}/registration.parquet",
+        "ordering": f"results/{ds}/orderings/{select_default_ordering(wildcards)}.parquet",
+    }
+
+
+# The answer's plans of the first k scans (floorscan.floorplan.answer_plans): the plan the
+# answer is made with (the map extractor's walls, the structure passes) of the first k
+# scans of the default ordering, for k on a geometric grid, as Parquet tables
+# (evaluation/answer_plans/k<k>/); the occupancy grid of k + dk scans is that of k plus
+# dk scans. The score stage's answer_curve scores them.
+rule answer_floorplans:
+    priority: PRIORITY["answer_floorplans"]
+    input:
+        unpack(answer_floorplans_inputs),
+    output:
+        plans=directory("results/{dataset}/evaluation/answer_plans"),
+    params:
+        walls=walls_map_config,
+        floorplan=floorplan_grid_config,
+        ordering=select_default_ordering,
+    log:
+        log_path("answer_floorplans"),
+    benchmark:
+        benchmark_path("answer_floorplans")
+    script:
+        "../../scripts/answer_floorplans.py"
 
 
 # The plan of an occupancy map given as the recording: its walls on its grid, every

@@ -224,29 +224,17 @@ rule score_answer:
 EVALUATION_OUTPUTS.append("results/{dataset}/evaluation/answer_scores.csv")
 
 
-def answer_curve_inputs(wildcards):
-    ds = wildcards.dataset
-    return {
-        "registered": f"results/{ds}/registered.parquet",
-        "registration": f"results/{ds}/registration.parquet",
-        "ordering": f"results/{ds}/orderings/{select_default_ordering(wildcards)}.parquet",
-        "reference": f"results/{ds}/reference/occupancy.parquet",
-    }
-
-
 # The quality curve of the plan the answer is made with (floorscan.score.answer_curve):
-# the map extractor's plan of the first k scans of the default ordering against the
-# reference map, on a geometric k grid; its k95 / k99 are what select.k: auto is
-# measured against.
+# the answer's plans of the first k scans of the default ordering (rule
+# answer_floorplans, evaluation/answer_plans/k<k>/) against the reference map; its k95 /
+# k99 are what select.k: auto is measured against.
 rule answer_curve:
     priority: PRIORITY["score_runs"]
     input:
-        unpack(answer_curve_inputs),
+        plans="results/{dataset}/evaluation/answer_plans",
+        reference="results/{dataset}/reference/occupancy.parquet",
     output:
         curve="results/{dataset}/evaluation/answer_curve.csv",
-    params:
-        walls=walls_map_config,
-        floorplan=floorplan_grid_config,
     log:
         log_path("answer_curve"),
     benchmark:

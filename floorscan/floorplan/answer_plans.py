@@ -1,0 +1,178 @@
+"""The answer's plans of the first k scans (stage ``floorplan``, rule ``answer_floorplans``):
+the plan the answer is made with (the map extractor's walls and the structure passes) of
+the first k scans of the default ordering, for k on a geometric grid
+(:func:`floorscan.core.selection.curve_ks`), each written as plan tables
+(``evaluation/answer_plans/k<k>/``, :func:`~floorscan.floorplan.scans.write_plan`). The
+score stage scores them against the reference map (:mod:`floorscan.score.answer_curve`):
+the answer's quality curve, whose k95 and k99 the automatic k is measured against.
+
+The occupancy grids of the first k scans are built incrementally
+(:func:`floorscan.core.prefix_grids.prefix_grids`: each scan is cast once, the grid of k + dk
+scans is the counts of k plus dk scans), and each k's plan is built once, by the one
+plan builder (:class:`~floorscan.floorplan.scans.ScanPlans`) from the map extractor's
+segments of those scans. The map extractor belongs to the walls stage, which this
+package does not import: the stage's script hands it in (``segments_of``).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from pathlib import Path
+from typing import Callable, Iterator, Mapping
+
+import numpy as np
+import pandas as pd
+
+from floorscan.core.memory import JobMemory
+from floorscan.core.occupancy import OccupancyGrid, OccupancyParams
+from floorscan.core.plan_tables import N_WALL_POINTS
+from floorscan.core.prefix_grids import prefix_grids
+from floorscan.core.ray_casting import COUNTS_BYTES_PER_CELL
+from floorscan.core.selection import curve_ks
+from floorscan.core.wall_points import ScanParams
+from floorscan.floorplan.params import FloorplanParams
+from floorscan.floorplan.plan import PLAN_MEMORY, FloorPlan, plan_of_segments
+from floorscan.floorplan.scans import ScanPlans, write_plan
+
+log = logging.getLogger(__name__)
+
+#: What the job takes a cell of the grid of all the scans (the counts being built,
+#: :data:`floorscan.core.ray_casting.COUNTS_BYTES_PER_CELL`, a grid's window copied out of
+#: them, int32 counts, and the plan built on it, :data:`~floorscan.floorplan.plan.PLAN_MEMORY`)
+#: and a wall point (the points of the first k scans concatenated, float64 x 2, and the
+#: map extractor's work on them, 40: ``floorscan.walls.map_stage.MAP_MEMORY``).
+ANSWER_PLANS_MEMORY = JobMemory(COUNTS_BYTES_PER_CELL + 8 + PLAN_MEMORY.bytes_per_cell, "walls.map.support_cell_m",
+                                bytes_per_point=16 + 40)
+
+def first_k_scans_points(
+    registered_path: str | os.PathLike, registration: pd.DataFrame, ordering: pd.DataFrame, scan_params: ScanParams
+) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """The kept scans of an ordering, in rank order, as the answer's plans take them.
+
+    Parameters
+    ----------
+    registered_path : path
+        ``registered.parquet`` (kept scans' points in the map frame, metres).
+    registration : pandas.DataFrame
+        ``registration.parquet`` (``scan_id``, ``kept``, ``x_m``, ``y_m``).
+    ordering : pandas.DataFrame
+        ``orderings/<ordering>.parquet``: ``rank`` and ``scan_id``.
+    scan_params : ScanParams
+        How a scan becomes wall points (the ``walls`` section's height band and grid).
+
+    Returns
+    -------
+    list of (scan_id, origin, points)
+        Per ranked scan with points in ``registered_path``: its id, the scanner's
+        position ((2,) float64, map metres) and its wall points ((N, 2) float64, map
+        metres; N may be 0).
+    """
+    from floorscan.core.io import iter_scans
+    from floorscan.core.wall_points import scan_points_2d
+
+    reg = registration[registration["kept"]].set_index("scan_id")
+    points = {}
+    for sid, xyz in iter_scans(registered_path):
+        if sid in reg.index:
+            points[sid] = scan_points_2d(xyz, scan_params)[0]
+    order = ordering.sort_values("rank")["scan_id"].to_numpy(np.int64)
+    order = order[np.isin(order, list(points))]
+    return [(int(s), reg.loc[s, ["x_m", "y_m"]].to_numpy(np.float64), points[s]) for s in order]
+
+
+def answer_plans(
+    scans: list[tuple[int, np.ndarray, np.ndarray]],
+    segments_of: Callable[[np.ndarray, OccupancyGrid], pd.DataFrame],
+    grid_params: OccupancyParams,
+    params: FloorplanParams = FloorplanParams(),
+    n_points: int = 24,
+    what: str = "the occupancy grid of the answer's plans",
+) -> Iterator[tuple[int, int, FloorPlan]]:
+    """The answer's plan of the first k scans, for k in :func:`~floorscan.core.selection.curve_ks`.
+
+    Parameters
+    ----------
+    scans : list of (scan_id, origin, points)
+        :func:`first_k_scans_points`, in rank order.
+    segments_of : callable
+        ``segments_of(points, grid)``: the wall segments (``x0, y0, x1, y1``, metres,
+        optional ``n_inliers``) of wall points ((N, 2) float64, map metres) on their
+        occupancy grid; the map extractor
+        (:func:`floorscan.walls.map_lines.map_segments`) in the workflow.
+    grid_params : OccupancyParams
+        The occupancy grid of the scans (the map extractor's: cells of
+        ``walls.map.support_cell_m``).
+    params : FloorplanParams
+    n_points : int
+        Size of the k grid.
+    what : str
+        The grid and whose scans, for the error of a grid too large or of memory.
+
+    Yields
+    ------
+    (k, n_wall_points, FloorPlan)
+        In increasing k; a plan without walls when the first k scans have no wall point.
+
+    Raises
+    ------
+    floorscan.core.io.InputError
+        Before the first grid, when the grid of all the scans would be too large
+        (:func:`floorscan.core.grid.check_raster_size`) or the job's rasters
+        (:data:`ANSWER_PLANS_MEMORY`) would not fit in the memory free on the machine.
+    """
+    ks = curve_ks(len(scans), n_points)
+    pairs = [(o, p) for _, o, p in scans]
+    wall_points = np.cumsum([len(p) for _, p in pairs])  # of the first k scans, at k - 1
+    for k, grid in prefix_grids(pairs, ks, grid_params, what, ANSWER_PLANS_MEMORY):
+        n = int(wall_points[k - 1])
+        if grid is None:
+            yield k, n, plan_of_segments(np.empty((0, 4)), None, params)
+            continue
+        points = np.concatenate([p for _, p in pairs[:k]])
+        yield k, n, ScanPlans(segments_of(points, grid), params).plan(None, grid)
+
+
+def write_answer_plans(
+    scans: list[tuple[int, np.ndarray, np.ndarray]],
+    segments_of: Callable[[np.ndarray, OccupancyGrid], pd.DataFrame],
+    grid_params: OccupancyParams,
+    params: FloorplanParams,
+    folder: str | os.PathLike,
+    metadata: Mapping[str, str] | None = None,
+    n_points: int = 24,
+) -> list[dict]:
+    """Write the plans of :func:`answer_plans` into ``folder``, one plan folder
+    ``k<k>/`` each (:func:`~floorscan.floorplan.scans.write_plan`, the numbers as
+    computed: these plans are scored, not exported), written whole or not at all.
+
+    Parameters
+    ----------
+    scans, segments_of, grid_params, params, n_points
+        As :func:`answer_plans`.
+    folder : path
+        ``evaluation/answer_plans`` (replaced when it exists).
+    metadata : mapping of str to str, optional
+        What the plans are of (dataset, ordering), in every file; each plan adds
+        ``k``, ``n_scans`` and :data:`N_WALL_POINTS`.
+
+    Returns
+    -------
+    list of dict
+        Per k: ``k``, ``n_wall_points``, ``n_walls``, ``n_faces``.
+    """
+    from floorscan.core.files import staged_path
+
+    done = []
+    dataset = (metadata or {}).get("dataset")
+    what = f"the grids of the answer's plans of the first k of {len(scans)} scans" + (
+        f" of dataset {dataset!r}" if dataset else "")
+    with staged_path(folder) as tmp:
+        tmp.mkdir()
+        for k, n, plan in answer_plans(scans, segments_of, grid_params, params, n_points, what):
+            write_plan(plan, Path(tmp) / f"k{k}", {**(metadata or {}), "extractor": "map", "k": str(k),
+                                                   "n_scans": str(k), N_WALL_POINTS: str(n)}, rounded=False)
+            done.append({"k": k, "n_wall_points": n, "n_walls": len(plan.walls), "n_faces": len(plan.faces)})
+            log.info("the answer's plan of the first %d scans: %d wall points, %d walls, %d faces",
+                     k, n, len(plan.walls), len(plan.faces))
+    return done

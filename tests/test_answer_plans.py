@@ -1,0 +1,91 @@
+"""The answer's plans of the first k scans, built once by the floorplan stage and scored by
+the score stage (issue 46, item 2): the same curve as building each k's grid and plan
+anew from the points."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from floorscan.core.occupancy import OccupancyParams, occupancy_grid
+from floorscan.core.plan_tables import read_plan_tables
+from floorscan.core.selection import curve_ks
+from floorscan.floorplan.answer_plans import answer_plans, write_answer_plans
+from floorscan.floorplan.params import FloorplanParams
+from floorscan.floorplan.plan import build_floorplan
+from floorscan.score.against_reference import Structure, plan_against_reference
+from floorscan.score.answer_curve import answer_curve
+from floorscan.walls.map_lines import MapParams, map_segments
+from test_reference import _scans
+
+MAP = MapParams()
+GRID = OccupancyParams(resolution_m=MAP.support_cell_m)
+POSES = [(1.5, 1.5, 0.0), (5.0, 1.2, 0.4), (8.5, 3.0, 2.0), (3.0, 3.5, -1.0), (8.0, 5.0, 3.0), (6.5, 4.0, 1.2),
+         (2.5, 2.0, 2.5), (9.0, 1.0, -2.0)]
+
+
+def segments_of(points, grid):
+    return map_segments(points, grid, MAP, seed=0)
+
+
+@pytest.fixture(scope="module")
+def scans():
+    """(scan_id, origin, points) in rank order: the first scan without a wall point, the
+    second seeing the right part of the room only."""
+    room = _scans(POSES)
+    room[0] = (room[0][0], room[0][1][room[0][1][:, 0] > 3.0])
+    return [(10, np.array([5.0, 3.0]), np.empty((0, 2)))] + [(i, o, p) for i, (o, p) in enumerate(room)]
+
+
+def test_the_answer_plans_are_the_plans_built_anew(scans):
+    """Each k's plan from the incremental grids equals the plan of the map extractor's
+    segments on the grid of the first k scans built from their points; k = 1 (no wall
+    point) is a plan without walls."""
+    ks = curve_ks(len(scans), 6)
+    got = list(answer_plans(scans, segments_of, GRID, FloorplanParams(), n_points=6))
+    assert [k for k, _, _ in got] == ks and ks[0] == 1 and ks[-1] == len(scans) == 9
+    for k, n, plan in got:
+        pairs = [(o, p) for _, o, p in scans[:k]]
+        assert n == sum(len(p) for _, p in pairs)
+        if n == 0:
+            assert plan.walls.empty and plan.faces.empty
+            continue
+        grid = occupancy_grid(pairs, GRID)
+        want = build_floorplan(segments_of(np.concatenate([p for _, p in pairs]), grid), FloorplanParams(), grid)
+        for part in ("walls", "faces", "clutter", "junctions", "doors"):
+            pd.testing.assert_frame_equal(getattr(plan, part), getattr(want, part), check_exact=True)
+        assert len(plan.walls) >= 4
+
+
+def test_the_score_stage_scores_the_plans_as_built(scans, tmp_path):
+    """The curve read from the plan folders is the curve of the plans in memory, to the
+    last bit (the answer's plans keep their numbers as computed); the plan folders hold
+    k, the scans and the wall points in their metadata."""
+    from floorscan.core.io import read_metadata
+
+    folder = tmp_path / "answer_plans"
+    done = write_answer_plans(scans, segments_of, GRID, FloorplanParams(), folder, {"dataset": "room"}, n_points=6)
+    reference = Structure(occupancy_grid([(o, p) for _, o, p in scans[1:]], OccupancyParams()))
+    curve = answer_curve(folder, reference)
+    assert curve["k"].tolist() == [d["k"] for d in done] == curve_ks(len(scans), 6)
+    assert curve["n_walls"].tolist() == [d["n_walls"] for d in done]
+    first = curve.iloc[0]
+    assert first["k"] == 1 and first["n_walls"] == 0 and first["f1_5cm"] == 0.0 and math.isnan(first["correctness_5cm"])
+    for (k, n, plan), row in zip(answer_plans(scans, segments_of, GRID, FloorplanParams(), n_points=6), curve.itertuples()):
+        meta = read_metadata(folder / f"k{k}" / "walls.parquet")
+        assert meta["k"] == str(k) and meta["n_wall_points"] == str(n) and meta["dataset"] == "room"
+        if n:
+            m = plan_against_reference(plan.faces[["x0", "y0", "x1", "y1"]].to_numpy(np.float64), reference, (0.05,))
+            assert (row.f1_5cm, row.completeness_5cm, row.correctness_5cm) == (
+                m["f1_5cm"], m["completeness_5cm"], m["correctness_5cm"])
+            stored = read_plan_tables(folder / f"k{k}", ("faces",))["faces"]
+            np.testing.assert_array_equal(stored[["x0", "y0", "x1", "y1"]].to_numpy(), plan.faces[["x0", "y0", "x1", "y1"]].to_numpy())
+    assert curve["f1_5cm"].iloc[-1] > 0.8
+
+
+def test_a_folder_without_plans_is_refused(tmp_path):
+    with pytest.raises(FileNotFoundError, match="answer's plans"):
+        answer_curve(tmp_path / "missing", None)
