@@ -124,13 +124,13 @@ def answer_plans(
     ks = curve_ks(len(scans), n_points)
     pairs = [(o, p) for _, o, p in scans]
     wall_points = np.cumsum([len(p) for _, p in pairs])  # of the first k scans, at k - 1
+    points = np.concatenate([p.reshape(-1, 2) for _, p in pairs]) if pairs else np.empty((0, 2))  # rank order
     for k, grid in prefix_grids(pairs, ks, grid_params, what, ANSWER_PLANS_MEMORY):
         n = int(wall_points[k - 1])
         if grid is None:
             yield k, n, plan_of_segments(np.empty((0, 4)), None, params)
             continue
-        points = np.concatenate([p for _, p in pairs[:k]])
-        yield k, n, ScanPlans(segments_of(points, grid), params).plan(None, grid)
+        yield k, n, ScanPlans(segments_of(points[:n], grid), params).plan(None, grid)
 
 
 def write_answer_plans(

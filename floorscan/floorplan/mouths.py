@@ -14,10 +14,11 @@ mouth is that line, between two wall ends that:
 - are free ends (not in an L or T junction, :func:`~floorscan.floorplan.doors.junction_end`);
 - lie ``door_min_m`` to :data:`MOUTH_MAX_M` apart, the line between them in the free
   space, crossing no wall;
-- belong to walls that bound one side of the line: each wall runs from its end away
-  from the line on the same side (or along the line, away from it: the wall of a
-  corridor going on past a room's side wall), and not both along the line (that is a
-  gap in one wall, :func:`~floorscan.floorplan.doors.wall_gaps`);
+- belong to walls that bound one side of the line: each wall runs from its end square
+  to the line into the same side (or along the line, away from it: the wall of a
+  corridor going on past a room's side wall), within ``door_angle_deg``, and not both
+  along the line (that is a gap in one wall, :func:`~floorscan.floorplan.doors.wall_gaps`);
+  a side wall is at least as long as the line and :data:`MOUTH_WALL_M`;
 - close a pocket: from the line into that side, the space ends at a wall or at a cell
   outside the space within :data:`MOUTH_DEPTH` times the line's length, at its
   middle and at both quarter points (the back wall of the room).
@@ -31,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from floorscan.floorplan.doors import junction_end
-from floorscan.floorplan.room_space import RoomParams, RoomRaster
+from floorscan.floorplan.room_space import RoomParams, RoomRaster, wall_footprints
 
 #: The widest open side of a room, metres: two standard office modules (2 x 2.4 m less
 #: the walls) open onto a corridor; wider openings join halls that people draw as one
@@ -40,23 +41,18 @@ MOUTH_MAX_M = 4.0
 #: A pocket is at most this many times as deep as its open side is wide (a room, not
 #: a corridor running on behind the line).
 MOUTH_DEPTH = 4.0
-#: The walls at a mouth are at least this long, and half the mouth (a room's sides,
-#: not the stubs of furniture or of a noisy map), metres.
+#: The side walls of a mouth are at least this long, and as long as the mouth is wide
+#: (a room's sides, not the stubs of furniture or of a noisy map), metres.
 MOUTH_WALL_M = 1.0
-#: Two walls bound one side when their directions, seen from the line, point into it
-#: by at least this cosine (about 70 degrees off the line).
-_INTO = np.cos(np.radians(20.0))
-#: Along the line: a wall within this cosine of the line's direction continues it.
-_ALONG = np.cos(np.radians(20.0))
 
 
 def _free_ends(axes: np.ndarray, thickness: np.ndarray) -> list[tuple[int, int]]:
     return [(i, k) for i in range(len(axes)) for k in (0, 1) if not junction_end(axes, thickness, i, k)]
 
 
-def _ray_hits(raster: RoomRaster, start: np.ndarray, direction: np.ndarray, max_m: float, walls, tree) -> bool:
-    """Whether the space ends at a wall (``walls``, shapely footprints in ``tree``)
-    within ``max_m`` from ``start`` along ``direction``."""
+def _ray_hits(raster: RoomRaster, start: np.ndarray, direction: np.ndarray, max_m: float, tree) -> bool:
+    """Whether the space ends at a wall (the footprints in ``tree``, a shapely
+    STRtree) within ``max_m`` from ``start`` along ``direction``."""
     import shapely
 
     step = raster.resolution_m / 2
@@ -105,24 +101,25 @@ def room_mouths(
     pts = np.array([ends[i, k] for i, k in free])
     # each wall's direction pointing away from the free end (from the end into the wall)
     away = np.array([(ends[i, 1 - k] - ends[i, k]) / max(length[i], 1e-12) for i, k in free])
-    footprints = [shapely.buffer(shapely.LineString(a.reshape(2, 2)), t / 2, cap_style="flat")
-                  for a, t in zip(axes, thickness)]  # fmt: skip
+    footprints = wall_footprints(axes, thickness)
     tree = shapely.STRtree(footprints)
-    def closes_pocket(p, q, s, trim_q=0.15) -> bool:
-        """The line p-q runs in the free space, crosses no wall, and the space on side
-        ``s`` (+1 left of p->q, -1 right) ends at a wall within MOUTH_DEPTH times its
-        length at its quarter points and middle."""
-        L = float(np.hypot(*(q - p)))
-        u = (q - p) / L
-        n = np.array([-u[1], u[0]])
-        line = shapely.LineString([p + u * 0.15, q - u * trim_q])
-        if any(shapely.intersects(footprints[k], line) for k in tree.query(line)):
+    # a wall within door_angle_deg of the line's direction runs along it (as a door's
+    # walls run along the door), one within it of square to the line bounds a side
+    cos_tol = np.cos(np.radians(params.door_angle_deg))
+
+    def closes_pocket(p: np.ndarray, u: np.ndarray, length_m: float, s: float) -> bool:
+        """The line from ``p`` along ``u`` runs ``length_m`` in the free space, crosses
+        no wall, and the space on side ``s`` (+1 left of ``u``, -1 right) ends at a
+        wall within MOUTH_DEPTH times its length at its quarter points and middle."""
+        n = s * np.array([-u[1], u[0]])
+        line = shapely.LineString([p + u * 0.15, p + u * (length_m - 0.15)])
+        if tree.query(line, predicate="intersects").size:
             return False
-        t = np.linspace(0.15, L - trim_q, max(3, int(L / raster.resolution_m)))
+        t = np.linspace(0.15, length_m - 0.15, max(3, int(length_m / raster.resolution_m)))
         if not raster.at(raster.space, p + np.outer(t, u), outside=False).all():
             return False
-        starts = [p + u * L * f + s * n * raster.resolution_m for f in (0.25, 0.5, 0.75)]
-        return all(_ray_hits(raster, x, s * n, MOUTH_DEPTH * L, footprints, tree) for x in starts)
+        starts = [p + u * length_m * f + n * raster.resolution_m for f in (0.25, 0.5, 0.75)]
+        return all(_ray_hits(raster, x, n, MOUTH_DEPTH * length_m, tree) for x in starts)
 
     cands = []
     for a in range(len(free)):
@@ -133,7 +130,7 @@ def room_mouths(
                 continue
             u = d[b] / dist[b]
             n = np.array([-u[1], u[0]])
-            along = np.abs(away[[a, b]] @ u) >= _ALONG
+            along = np.abs(away[[a, b]] @ u) >= cos_tol
             if along.all():
                 continue  # a gap in one wall's line: wall_gaps
             side = away[[a, b]] @ n
@@ -144,9 +141,9 @@ def room_mouths(
             if length[sides].min() < max(MOUTH_WALL_M, dist[b]):
                 continue  # a stub of furniture or noise bounds no room
             into = side[~along]
-            if not ((into >= _INTO).all() or (into <= -_INTO).all()):
+            if not ((into >= cos_tol).all() or (into <= -cos_tol).all()):
                 continue
-            if not closes_pocket(pts[a], pts[b], 1.0 if (into > 0).all() else -1.0):
+            if not closes_pocket(pts[a], u, float(dist[b]), 1.0 if (into > 0).all() else -1.0):
                 continue
             wall = free[a][0] if length[free[a][0]] >= length[free[b][0]] else free[b][0]
             cands.append((float(dist[b]), pts[a].copy(), pts[b].copy(), int(wall)))

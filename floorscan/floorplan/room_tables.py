@@ -20,8 +20,8 @@ def room_tables(
     """The rooms and doors tables of room polygons and door openings: each room's kind
     (a ``corridor`` when long for its width: the width the diameter of the largest
     circle inside it, its length the area over that width; ``space`` for every room
-    when no door and no room's open side divides the space) and name (``Room 1``, ``Corridor 1``, ``Space 1``
-    in the order given).
+    when no door and no room's open side divides the space) and name (``Room 1``,
+    ``Corridor 1``, ``Space 1`` in the order given).
 
     Parameters
     ----------

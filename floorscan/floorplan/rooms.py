@@ -115,8 +115,8 @@ def segment_rooms(
         Each door's opening from ``p`` to ``q`` ((2,) metres) in the line of wall
         ``wall`` and the rooms it joins (``room_a < room_b``, labels).
     divided : bool
-        Whether a door or a room's open side (:mod:`floorscan.floorplan.mouths`)
-        divides two rooms: else the rooms are spaces no wall closes.
+        Whether a room's open side wider than a door (:mod:`floorscan.floorplan.mouths`)
+        divides two rooms (:func:`~floorscan.floorplan.room_tables.room_tables`).
     """
 
     axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
@@ -235,8 +235,7 @@ def segment_rooms(
         ra, rb = renum[roots[a]], renum[roots[b]]
         if ra and rb and ra != rb:
             doors.append((p, q, wall, int(min(ra, rb)), int(max(ra, rb))))
-    divided = bool(doors) or any(renum[roots[a]] and renum[roots[b]] and renum[roots[a]] != renum[roots[b]]
-                                 for a, b in open_sides)  # fmt: skip
+    divided = any(renum[roots[a]] and renum[roots[b]] and renum[roots[a]] != renum[roots[b]] for a, b in open_sides)
     return raster, final, _distinct_doors(doors), divided
 
 
