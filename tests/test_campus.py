@@ -14,7 +14,6 @@ from floorscan.sim.trajectory import rover_trajectory
 
 def test_the_campus_is_a_200_m_building_of_240_rooms_and_20000_scans(tmp_path):
     path = tmp_path / "campus200.yaml"
-    write_campus(path)
     mapping = write_campus(path)
     building = load_building(path)  # checks the walls, the openings and the rover's path
     assert mapping["walls"][0]["points"] == [[0, 0], [200, 0], [200, 200], [0, 200]]
