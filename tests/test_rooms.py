@@ -175,3 +175,33 @@ def test_a_gap_in_one_wall_and_a_short_stub_make_no_mouth():
         grid = _grid(walls, [(2, 2), (6, 2)])
         raster = room_space(grid, axes, np.full(len(axes), T), RoomParams())
         assert room_mouths(axes, np.full(len(axes), T), raster, RoomParams()) == []
+
+
+def test_a_room_is_as_wide_as_its_median_local_thickness():
+    """room_width: a square is as wide as its side, a corridor as its two walls are
+    apart, and a network of 2.5 m corridors around a 7 m round hall as its corridors
+    (its largest inscribed circle is the hall's 7 m)."""
+    from floorscan.floorplan.room_tables import room_width
+
+    network = shapely.union_all(
+        [shapely.box(0, 0, 2.5, 60), shapely.box(-30, 30, 30, 32.5), shapely.Point(1.25, 31.25).buffer(3.5)]
+    )
+    assert room_width(shapely.box(0, 0, 4, 4), 0.025) == pytest.approx(4.0, abs=0.03)
+    assert room_width(shapely.box(0, 0, 2, 20), 0.025) == pytest.approx(2.0, abs=0.03)
+    assert room_width(network, 0.025) == pytest.approx(2.5, abs=0.05)
+    assert room_width(shapely.Polygon(), 0.025) == 0.0
+
+
+def test_a_network_of_corridors_is_a_corridor_and_a_hall_is_a_room():
+    """room_tables: the kinds of a corridor network with a wide crossing (a corridor),
+    a 6 m x 5 m office (a room) and a 2.5 m x 2.5 m closet (a room: not long)."""
+    from floorscan.floorplan.room_tables import room_tables
+
+    network = shapely.union_all(
+        [shapely.box(0, 0, 2.5, 60), shapely.box(-30, 30, 30, 32.5), shapely.Point(1.25, 31.25).buffer(3.5)]
+    )
+    polys = [network, shapely.box(3, 0, 9, 5), shapely.box(-3, 0, -0.5, 2.5)]
+    doors = [(np.array([2.5, 1.0]), np.array([2.5, 2.0]), 0, 0, 1)]
+    rooms, _ = room_tables(polys, doors, 0.05, RoomParams())
+    assert list(rooms["kind"]) == ["corridor", "room", "room"]
+    assert list(rooms["name"]) == ["Corridor 1", "Room 1", "Room 2"]

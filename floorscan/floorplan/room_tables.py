@@ -18,8 +18,8 @@ def room_tables(
     polys: list, doors: list, resolution_m: float, params: RoomParams, divided: bool = False
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The rooms and doors tables of room polygons and door openings: each room's kind
-    (a ``corridor`` when long for its width: the width the diameter of the largest
-    circle inside it, its length the area over that width; ``space`` for every room
+    (a ``corridor`` when long for its width: the width its median local thickness
+    (:func:`room_width`), its length the area over that width; ``space`` for every room
     when no door and no room's open side divides the space) and name (``Room 1``,
     ``Corridor 1``, ``Space 1`` in the order given).
 
@@ -31,7 +31,7 @@ def room_tables(
         The openings ((2,) metres) in wall ``wall``, between rooms ``room_a < room_b``
         (indices into ``polys``).
     resolution_m : float
-        The tolerance of the largest inscribed circle is half of it, metres.
+        The tolerance of a room's width is half of it, metres.
     params : RoomParams
     divided : bool
         Whether a room's open side (:mod:`floorscan.floorplan.mouths`) divides two
@@ -42,12 +42,9 @@ def room_tables(
     rooms, doors : pandas.DataFrame
         As :func:`floorscan.floorplan.rooms.plan_rooms`.
     """
-    import shapely
-
     kinds = []
     for poly in polys:
-        # width: the largest circle inside the room (its radius: the circle's centre to the wall)
-        width = 2.0 * float(shapely.maximum_inscribed_circle(poly, resolution_m / 2).length)
+        width = room_width(poly, resolution_m / 2, params.corridor_max_width_m)
         length = poly.area / max(width, 1e-9)
         long = width <= params.corridor_max_width_m and length >= max(params.corridor_elongation * width, params.corridor_min_length_m)
         kinds.append("corridor" if long else "room")
@@ -81,3 +78,54 @@ def room_tables(
         }  # fmt: skip
     )
     return rooms, doors_df
+
+
+def room_width(poly, tolerance_m: float, cap_m: float | None = None) -> float:
+    """A room's width: its median local thickness, the diameter ``w`` of the largest
+    disc whose opening of the room (erosion, then dilation, by a disc of diameter
+    ``w``) keeps half of its area.
+
+    The local thickness of a point of a shape is the diameter of the largest disc
+    inside the shape that covers the point (Hildebrand and Rüegsegger, "A new method
+    for the model-independent assessment of thickness in three-dimensional images",
+    J. Microscopy 1997); the area the opening by a disc of diameter ``w`` keeps is the
+    area whose local thickness is at least ``w``, so its median is where that area is
+    half. A corridor 2 m wide is 2 m wide wherever a hall or a junction widens it; a
+    network of corridors is as wide as its corridors (the largest inscribed circle
+    says how wide its widest crossing is); a square room is as wide as its side (the
+    inscribed disc covers pi / 4 of it).
+
+    Parameters
+    ----------
+    poly : shapely.Polygon
+        The room, metres.
+    tolerance_m : float
+        The bisection stops when the bracket of ``w`` is narrower, metres.
+    cap_m : float, optional
+        When the room is at least this wide, the diameter of its largest inscribed
+        circle (an upper bound of the width) is returned without the bisection, metres:
+        a room's kind needs no more, and a hall's openings cost the most.
+
+    Returns
+    -------
+    float
+        Metres; 0 for an empty polygon.
+    """
+    import shapely
+
+    if poly.is_empty or poly.area <= 0:
+        return 0.0
+    def keeps_half(w: float) -> bool:
+        opened = shapely.buffer(shapely.buffer(poly, -w / 2, quad_segs=4), w / 2, quad_segs=4)
+        return opened.area >= poly.area / 2.0
+
+    # the diameter of the largest inscribed circle bounds the thickness from above
+    lo, hi = 0.0, 2.0 * float(shapely.maximum_inscribed_circle(poly, tolerance_m).length) + 2 * tolerance_m
+    if cap_m is not None and cap_m < hi:
+        if keeps_half(cap_m):
+            return hi
+        hi = cap_m
+    while hi - lo > tolerance_m:
+        w = (lo + hi) / 2
+        lo, hi = (w, hi) if keeps_half(w) else (lo, w)
+    return lo
