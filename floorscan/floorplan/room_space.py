@@ -16,6 +16,7 @@ from floorscan.core.config import schema_defaults
 from floorscan.core.grid import raster_cells
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.free_space import passable
+from floorscan.floorplan.outline import building_outside
 
 
 
@@ -60,6 +61,9 @@ class RoomRaster:
     bounds : (H, W) bool ndarray
         Cells that bound the space: the scans' occupied cells; for a map (a grid
         without scan positions), every cell the map does not mark free.
+    beyond : (H, W) bool ndarray or None
+        Cells beyond the building's closed outline
+        (:func:`~floorscan.floorplan.outline.building_outside`); None: none.
     """
 
     origin_xy: np.ndarray
@@ -68,6 +72,7 @@ class RoomRaster:
     space: np.ndarray
     occupied: np.ndarray
     bounds: np.ndarray
+    beyond: np.ndarray | None = None
 
     def centres(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """Map-frame centres of cells.
@@ -280,6 +285,10 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
     # the closing fills unseen cells, never the cells that bound the space (a wall
     # the plan lacks stays a boundary)
     space &= ~bounds | opened
+    # the seen space outside the building's closed outline: rays through windows, open doors
+    outside, beyond, _ = building_outside(walls | occupied, res, origin, grid.scan_xy, params.door_max_m, seen=space,
+                                          walls=walls)
+    space &= ~outside
     # holes without a wall in them: the floor under furniture, shadows of objects
     holes, n = ndimage.label(~space)
     if n:
@@ -290,7 +299,8 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
         fill[border] = False
         fill[with_wall] = False
         space |= fill[holes]
-    return RoomRaster(origin_xy=origin, resolution_m=res, walls=walls, space=space, occupied=occupied, bounds=bounds)
+    return RoomRaster(origin_xy=origin, resolution_m=res, walls=walls, space=space, occupied=occupied, bounds=bounds,
+                      beyond=beyond)
 
 
 def space_regions(raster: RoomRaster, params: RoomParams) -> tuple[np.ndarray, np.ndarray]:

@@ -16,8 +16,10 @@ taken from the walls:
    that bound the space stay out, so a wall the plan lacks is not bridged: the cells
    the scans saw occupied, and in a map every cell it does not mark free, since a map
    may draw a wall in a shade its thresholds read as unknown) and its
-   holes without walls filled (the floor under a table). Furniture and clutter are
-   not obstacles: a room's area is its floor area.
+   holes without walls filled (the floor under a table); in a recording, without the
+   space outside the building's closed outline (:mod:`floorscan.floorplan.outline`:
+   the walls and seen obstacles closed by the smallest disc that holds the rover's
+   path). Furniture and clutter are not obstacles: a room's area is its floor area.
 2. **Doors between walls** (:func:`~floorscan.floorplan.doors.wall_gaps`): the gap
    between the facing ends of two walls in one line, ``door_min_m`` to ``door_max_m``
    wide, that the scans saw through, is cut from the space first: a room seen only
@@ -38,21 +40,21 @@ taken from the walls:
    Groups of regions whose edge runs along walls and seen obstacles for less than
    ``min_enclosure`` of its length, that are reached only through openings no wider
    than a door and where no scan was taken are the outside seen through a window or
-   an open door: not rooms.
+   an open door: not rooms; nor are the regions lying mostly beyond the closed outline.
 5. **Rooms**: a region below ``min_room_area_m2`` joins the neighbour it touches most;
    a scrap no door joins to a room, no wall encloses and no scan was taken in is
    dropped. A room is a
    ``corridor`` when it is long for its width (its length, area over width, at least
    ``corridor_elongation`` times its width and ``corridor_min_length_m``; the width,
-   the diameter of the largest circle inside its polygon, at most
-   ``corridor_max_width_m``). When no door divides the space (an open hall, one
+   its polygon's median local thickness (:func:`~floorscan.floorplan.room_tables.room_width`),
+   at most ``corridor_max_width_m``). When no door divides the space (an open hall, one
    corridor, a campus), it is one region of kind ``space`` (or a few, where the
    seen space falls apart).
-6. **Polygons** (:func:`room_polygons`): each room's cells traced (contourpy), grown up
+6. **Polygons** (:func:`~floorscan.floorplan.room_polygons.room_polygons`): each room's cells traced (contourpy), grown up
    to the wall faces and cut by the wall footprints (shapely), simplified by half a
    cell; a room seen in part, convex between its walls, completed up to them (the
    bounding box of its seen floor cut by each nearby wall's half-plane); the door
-   openings in the walls belong to no room; the rooms a coverage (:func:`disjoint_rooms`:
+   openings in the walls belong to no room; the rooms a coverage (:func:`~floorscan.floorplan.room_polygons.disjoint_rooms`:
    a sliver two rooms grew into is the first's). Valid polygons, holes allowed, in map
    metres, numbered ``Room 1``, ``Corridor 1``, ``Space 1`` in reading order (top to
    bottom, left to right).
@@ -62,6 +64,7 @@ Parameters: :class:`RoomParams` (config ``floorplan.rooms``).
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 
@@ -71,8 +74,10 @@ import pandas as pd
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan import doors as D
 from floorscan.floorplan.mouths import room_mouths
+from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
-from floorscan.floorplan.room_space import RoomParams, RoomRaster, room_space, space_regions, wall_footprints
+from floorscan.floorplan.room_polygons import disjoint_rooms, largest_polygon, room_polygons
+from floorscan.floorplan.room_space import RoomParams, RoomRaster, room_space, space_regions
 from floorscan.floorplan.room_tables import room_tables
 
 log = logging.getLogger(__name__)
@@ -128,7 +133,7 @@ def segment_rooms(
     for p, q, _ in gaps:
         rr, cc = D.barrier_cells(raster, p, q)
         barrier[rr, cc] = True
-    cut = RoomRaster(raster.origin_xy, raster.resolution_m, raster.walls | barrier, raster.space & ~barrier, raster.occupied, raster.bounds)
+    cut = dataclasses.replace(raster, walls=raster.walls | barrier, space=raster.space & ~barrier)
     labels, distance = space_regions(cut, params)
     n = int(labels.max())
     # the places where two regions meet between jambs: both ends within jamb_m of a wall
@@ -177,6 +182,8 @@ def segment_rooms(
             touching[pair] = touching.get(pair, 0.0) + float(np.hypot(*d))
             kinds.setdefault(pair, "door")
     outside = _outside_regions(cut, labels, kinds, params, grid.scan_xy)
+    if raster.beyond is not None:  # the regions beyond the building's closed outline
+        outside |= regions_beyond(labels, raster.beyond) & ~_visited(cut, labels, grid.scan_xy, n)
     for (a, b), kind in kinds.items():
         if kind in ("narrow", "wide") and not (outside[a] or outside[b]):
             sets.merge(a, b)
@@ -311,141 +318,6 @@ def _distinct_doors(doors: list) -> list:
     return out
 
 
-def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thickness: np.ndarray) -> list:
-    """A valid shapely Polygon per room of ``labels`` (module docstring, step 5): its
-    cells traced (contourpy), grown by a cell up to the wall faces and cut by the walls'
-    footprints and the other rooms, simplified by half a cell; the largest part when
-    the cut leaves several.
-
-    Parameters
-    ----------
-    raster : RoomRaster
-    labels : (H, W) int ndarray
-        Rooms 1..R, 0 for none.
-    axes : (N, 4) float ndarray
-        Wall axes, metres.
-    thickness : (N,) float ndarray
-        Metres.
-
-    Returns
-    -------
-    list of shapely Polygon
-        R polygons in map metres, room k at index k - 1 (possibly empty).
-    """
-    import contourpy
-    import shapely
-    from scipy import ndimage
-
-    res = raster.resolution_m
-    foot = wall_footprints(axes, thickness)
-    walls = shapely.union_all(foot) if len(axes) else shapely.Polygon()
-    traced = []
-    for k, box in enumerate(ndimage.find_objects(labels), start=1):
-        if box is None:
-            traced.append(shapely.Polygon())
-            continue
-        r0, c0 = box[0].start, box[1].start
-        z = np.pad(labels[box] == k, 1).astype(np.float64)
-        filled, offsets = contourpy.contour_generator(z=z, fill_type="OuterOffset").filled(0.5, 2.0)
-        parts = []
-        for pts, off in zip(filled, offsets):
-            xy = (pts + [c0 - 1 + 0.5, r0 - 1 + 0.5]) * res + raster.origin_xy
-            rings = [xy[a:b] for a, b in zip(off[:-1], off[1:])]
-            parts.append(shapely.Polygon(rings[0], rings[1:]))
-        traced.append(shapely.simplify(shapely.make_valid(shapely.union_all(parts)), res / 4))
-    out = []
-    for k, poly in enumerate(traced):
-        others = shapely.union_all([p for j, p in enumerate(traced) if j != k and shapely.distance(p, poly) < 2 * res])
-        grown = shapely.buffer(poly, res, join_style="mitre").difference(walls).difference(others)
-        out.append(_largest(shapely.simplify(grown, res / 2)))
-    for k, poly in enumerate(out):
-        others = shapely.union_all([p for j, p in enumerate(out) if j != k])
-        out[k] = _bounded_by_walls(poly, axes, thickness, foot, walls, others, res)
-    return out
-
-
-def disjoint_rooms(polys: list) -> list:
-    """The rooms as a coverage: where two overlap (a sliver along a door or a gap in a
-    wall, each grown into it), the room first in the list keeps it.
-
-    Parameters
-    ----------
-    polys : list of shapely Polygon
-        In reading order.
-
-    Returns
-    -------
-    list of shapely Polygon
-        The same rooms, each the largest part of what is left of it.
-    """
-    import shapely
-
-    out, taken = [], shapely.Polygon()
-    for poly in polys:
-        # on the exports' grid, so that no overlap comes back when they round the vertices
-        if not poly.is_empty and shapely.intersection(taken, poly, grid_size=POLYGON_GRID_M).area > 0:
-            poly = _largest(shapely.difference(poly, taken, grid_size=POLYGON_GRID_M))
-        out.append(poly)
-        # a union on the grid may collapse a sliver to a line: only its area is taken
-        union = shapely.union(taken, poly, grid_size=POLYGON_GRID_M)
-        taken = shapely.union_all([g for g in shapely.get_parts(union) if isinstance(g, shapely.Polygon)])
-    return out
-
-
-#: Rooms' vertices are snapped to this grid, metres: the exports' precision (GeoJSON's
-#: 5 decimals), so a polygon stays valid when written.
-POLYGON_GRID_M = 1e-5
-
-
-def _largest(geom):
-    """The largest polygon of a geometry made valid on the grid of
-    :data:`POLYGON_GRID_M` (an empty Polygon if none)."""
-    import shapely
-
-    geom = shapely.set_precision(shapely.make_valid(geom), POLYGON_GRID_M)
-    pieces = [g for g in getattr(geom, "geoms", [geom]) if isinstance(g, shapely.Polygon) and not g.is_empty]
-    return max(pieces, key=lambda g: g.area) if pieces else shapely.Polygon()
-
-
-def _bounded_by_walls(
-    poly, axes: np.ndarray, thickness: np.ndarray, foot, walls, others, res: float, near_m: float = 0.3
-):
-    """A room seen only in part (through its door) completed up to its walls: the
-    bounding box of its seen floor cut by the half-plane of the room's side of each
-    wall within ``near_m`` of it (on the wall's face), without the wall footprints and
-    the other rooms; taken when it keeps all but 5 % of the seen floor (the room is
-    convex between its walls: an L-shaped room or a ring corridor keeps its traced
-    outline). ``foot``: the walls' footprints, ``walls`` their union. Metres."""
-    import shapely
-
-    if poly.is_empty or not len(axes):
-        return poly
-    near = np.flatnonzero(shapely.distance(foot, poly) <= near_m)
-    if not len(near):
-        return poly
-    x0, y0, x1, y1 = poly.bounds
-    region = shapely.box(x0, y0, x1, y1)
-    big = 4.0 * max(x1 - x0, y1 - y0, 1.0)
-    inside = poly.representative_point()
-    for i in near.tolist():
-        a, b = axes[i, :2], axes[i, 2:]
-        d = b - a
-        length = float(np.hypot(*d))
-        if length < 0.5:
-            continue
-        u = d / length
-        n = np.array([-u[1], u[0]])
-        side = 1.0 if float((np.array(inside.coords[0]) - a) @ n) >= 0 else -1.0
-        face = a + side * n * thickness[i] / 2
-        c = face - u * big
-        half = shapely.Polygon([c, c + 2 * big * u, c + 2 * big * u + side * big * n, c + side * big * n])
-        region = region.intersection(half)
-    region = _largest(region.difference(walls).difference(others))
-    if region.is_empty or poly.difference(region).area > 0.05 * poly.area or region.area < poly.area:
-        return poly
-    return _largest(shapely.simplify(region, res / 2))
-
-
 def plan_rooms(
     axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, params: RoomParams = RoomParams()
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -483,7 +355,7 @@ def plan_rooms(
             [shapely.buffer(shapely.LineString([p, q]), thickness[w] / 2 + raster.resolution_m / 2, cap_style="square")
              for p, q, w, *_ in doors]
         )  # fmt: skip
-        polys = [_largest(shapely.simplify(p.difference(openings), raster.resolution_m / 4)) for p in polys]
+        polys = [largest_polygon(shapely.simplify(p.difference(openings), raster.resolution_m / 4)) for p in polys]
     polys = disjoint_rooms(polys)
     keep = [k for k in range(n) if not polys[k].is_empty and polys[k].area >= params.min_room_area_m2]
     new_id = {k + 1: i for i, k in enumerate(keep)}

@@ -1,0 +1,146 @@
+"""The polygons of a plan's rooms (:mod:`floorscan.floorplan.rooms`, step 6): each room's
+cells traced, grown up to the wall faces, completed up to its walls when seen in part,
+and the rooms made a coverage. Map metres; shapely geometry on the exports' precision
+grid (:data:`POLYGON_GRID_M`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from floorscan.floorplan.room_space import RoomRaster, wall_footprints
+
+
+def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thickness: np.ndarray) -> list:
+    """A valid shapely Polygon per room of ``labels`` (module docstring, step 5): its
+    cells traced (contourpy), grown by a cell up to the wall faces and cut by the walls'
+    footprints and the other rooms, simplified by half a cell; the largest part when
+    the cut leaves several.
+
+    Parameters
+    ----------
+    raster : RoomRaster
+    labels : (H, W) int ndarray
+        Rooms 1..R, 0 for none.
+    axes : (N, 4) float ndarray
+        Wall axes, metres.
+    thickness : (N,) float ndarray
+        Metres.
+
+    Returns
+    -------
+    list of shapely Polygon
+        R polygons in map metres, room k at index k - 1 (possibly empty).
+    """
+    import contourpy
+    import shapely
+    from scipy import ndimage
+
+    res = raster.resolution_m
+    foot = wall_footprints(axes, thickness)
+    walls = shapely.union_all(foot) if len(axes) else shapely.Polygon()
+    traced = []
+    for k, box in enumerate(ndimage.find_objects(labels), start=1):
+        if box is None:
+            traced.append(shapely.Polygon())
+            continue
+        r0, c0 = box[0].start, box[1].start
+        z = np.pad(labels[box] == k, 1).astype(np.float64)
+        filled, offsets = contourpy.contour_generator(z=z, fill_type="OuterOffset").filled(0.5, 2.0)
+        parts = []
+        for pts, off in zip(filled, offsets):
+            xy = (pts + [c0 - 1 + 0.5, r0 - 1 + 0.5]) * res + raster.origin_xy
+            rings = [xy[a:b] for a, b in zip(off[:-1], off[1:])]
+            parts.append(shapely.Polygon(rings[0], rings[1:]))
+        traced.append(shapely.simplify(shapely.make_valid(shapely.union_all(parts)), res / 4))
+    out = []
+    for k, poly in enumerate(traced):
+        others = shapely.union_all([p for j, p in enumerate(traced) if j != k and shapely.distance(p, poly) < 2 * res])
+        grown = shapely.buffer(poly, res, join_style="mitre").difference(walls).difference(others)
+        out.append(largest_polygon(shapely.simplify(grown, res / 2)))
+    for k, poly in enumerate(out):
+        others = shapely.union_all([p for j, p in enumerate(out) if j != k])
+        out[k] = _bounded_by_walls(poly, axes, thickness, foot, walls, others, res)
+    return out
+
+
+def disjoint_rooms(polys: list) -> list:
+    """The rooms as a coverage: where two overlap (a sliver along a door or a gap in a
+    wall, each grown into it), the room first in the list keeps it.
+
+    Parameters
+    ----------
+    polys : list of shapely Polygon
+        In reading order.
+
+    Returns
+    -------
+    list of shapely Polygon
+        The same rooms, each the largest part of what is left of it.
+    """
+    import shapely
+
+    out, taken = [], shapely.Polygon()
+    for poly in polys:
+        # on the exports' grid, so that no overlap comes back when they round the vertices
+        if not poly.is_empty and shapely.intersection(taken, poly, grid_size=POLYGON_GRID_M).area > 0:
+            poly = largest_polygon(shapely.difference(poly, taken, grid_size=POLYGON_GRID_M))
+        out.append(poly)
+        # a union on the grid may collapse a sliver to a line: only its area is taken
+        union = shapely.union(taken, poly, grid_size=POLYGON_GRID_M)
+        taken = shapely.union_all([g for g in shapely.get_parts(union) if isinstance(g, shapely.Polygon)])
+    return out
+
+
+#: Rooms' vertices are snapped to this grid, metres: the exports' precision (GeoJSON's
+#: 5 decimals), so a polygon stays valid when written.
+POLYGON_GRID_M = 1e-5
+
+
+def largest_polygon(geom):
+    """The largest polygon of a geometry made valid on the grid of
+    :data:`POLYGON_GRID_M` (an empty Polygon if none)."""
+    import shapely
+
+    geom = shapely.set_precision(shapely.make_valid(geom), POLYGON_GRID_M)
+    pieces = [g for g in getattr(geom, "geoms", [geom]) if isinstance(g, shapely.Polygon) and not g.is_empty]
+    return max(pieces, key=lambda g: g.area) if pieces else shapely.Polygon()
+
+
+def _bounded_by_walls(
+    poly, axes: np.ndarray, thickness: np.ndarray, foot, walls, others, res: float, near_m: float = 0.3
+):
+    """A room seen only in part (through its door) completed up to its walls: the
+    bounding box of its seen floor cut by the half-plane of the room's side of each
+    wall within ``near_m`` of it (on the wall's face), without the wall footprints and
+    the other rooms; taken when it keeps all but 5 % of the seen floor (the room is
+    convex between its walls: an L-shaped room or a ring corridor keeps its traced
+    outline). ``foot``: the walls' footprints, ``walls`` their union. Metres."""
+    import shapely
+
+    if poly.is_empty or not len(axes):
+        return poly
+    near = np.flatnonzero(shapely.distance(foot, poly) <= near_m)
+    if not len(near):
+        return poly
+    x0, y0, x1, y1 = poly.bounds
+    region = shapely.box(x0, y0, x1, y1)
+    big = 4.0 * max(x1 - x0, y1 - y0, 1.0)
+    inside = poly.representative_point()
+    for i in near.tolist():
+        a, b = axes[i, :2], axes[i, 2:]
+        d = b - a
+        length = float(np.hypot(*d))
+        if length < 0.5:
+            continue
+        u = d / length
+        n = np.array([-u[1], u[0]])
+        side = 1.0 if float((np.array(inside.coords[0]) - a) @ n) >= 0 else -1.0
+        face = a + side * n * thickness[i] / 2
+        c = face - u * big
+        half = shapely.Polygon([c, c + 2 * big * u, c + 2 * big * u + side * big * n, c + side * big * n])
+        region = region.intersection(half)
+    region = largest_polygon(region.difference(walls).difference(others))
+    if region.is_empty or poly.difference(region).area > 0.05 * poly.area or region.area < poly.area:
+        return poly
+    return largest_polygon(shapely.simplify(region, res / 2))
