@@ -13,7 +13,6 @@ of walls open, and the loop was taken for a rack.
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
 from pathlib import Path
@@ -28,6 +27,7 @@ from floorscan.floorplan.params import FloorplanParams
 from floorscan.floorplan.scans import plan_of_scans
 from floorscan.sim.building_file import load_building
 from floorscan.sim.footprint import building_outline
+from floorscan.sim.generated import moved
 from floorscan.sim.ground_truth import true_doors, true_rooms
 from floorscan.sim.occupancy_map import MAP_RESOLUTION_M, building_map
 from floorscan.walls.map_stage import map_of_grid
@@ -66,29 +66,6 @@ def test_a_sub_cell_shift_keeps_every_room_and_door(building, furniture, dx, dy)
     finally:
         logging.disable(logging.NOTSET)
     assert (len(plan.rooms), len(plan.doors)) == (n_rooms, n_doors), (dx, dy)
-
-
-def moved(b, theta: float, mirror: bool):
-    """The building turned by ``theta`` (radians) about the origin, mirrored in the y
-    axis first when ``mirror``: walls, openings (their segment and offset do not
-    change), furniture and waypoints."""
-    c, s = math.cos(theta), math.sin(theta)
-    rot = np.array([[c, s], [-s, c]])  # row vectors: p @ rot turns p by theta
-
-    def f(p):
-        p = np.array(p, dtype=np.float64)
-        if mirror:
-            p[..., 0] = -p[..., 0]
-        return p @ rot
-
-    walls = tuple(dataclasses.replace(w, points=f(w.points)) for w in b.walls)
-    furniture = tuple(
-        dataclasses.replace(
-            fu, center=tuple(float(v) for v in f(fu.center)), yaw_rad=(math.pi - fu.yaw_rad if mirror else fu.yaw_rad) + theta
-        )
-        for fu in b.furniture
-    )
-    return dataclasses.replace(b, walls=walls, furniture=furniture, waypoints=f(b.waypoints).reshape(-1, 2))
 
 
 #: Poses per building and furniture, drawn from a seeded generator.

@@ -11,6 +11,13 @@ Usage::
 
 SE(2) as in Lynch and Park, "Modern Robotics" (2017), ch. 3, and the relative-pose
 convention of graph SLAM (Grisetti et al. 2010).
+
+Overlay operations on polygons (union, difference, intersection) that floating-point
+precision can make fail (a GEOS TopologyException) run on the fixed precision grid
+:data:`OVERLAY_GRID_M`: shapely's ``grid_size``, GEOS's OverlayNG with snap-rounding,
+which is robust by construction (Hobby 1999; the JTS/GEOS OverlayNG documentation):
+``shapely.difference(a, b, grid_size=OVERLAY_GRID_M)``. Such a result may hold parts of
+lower dimension where areas meet in a line; keep its polygons before the next overlay.
 """
 
 from __future__ import annotations
@@ -18,6 +25,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+#: The fixed precision grid of polygon overlays, metres: the exports' precision
+#: (GeoJSON's 5 decimals), far below a map cell and far above the floating-point
+#: trouble of coordinates of a building's size.
+OVERLAY_GRID_M = 1e-5
 
 
 def samples_per_segment(segments: np.ndarray, sample_m: float) -> np.ndarray:
@@ -226,3 +238,49 @@ def point_segment_dist2(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> np.n
     ex = ax + t * dx - px
     ey = ay + t * dy - py
     return ex * ex + ey * ey
+
+
+def polygons_of(geom):
+    """The polygons of a geometry (an overlay's result on :data:`OVERLAY_GRID_M`, where two
+    areas may also meet in a line or a point), as one polygonal geometry on that grid.
+
+    Parameters
+    ----------
+    geom : shapely geometry
+
+    Returns
+    -------
+    shapely Polygon, MultiPolygon or empty GeometryCollection
+        Map metres.
+    """
+    import shapely
+
+    parts = shapely.get_parts(shapely.get_parts(geom))
+    return shapely.union_all([g for g in parts if g.geom_type == "Polygon"], grid_size=OVERLAY_GRID_M)
+
+
+def minus(geom, *others):
+    """``geom`` without each of ``others``, on :data:`OVERLAY_GRID_M` (GEOS overlays
+    that cannot fail on precision); of a geometry of mixed dimensions, its polygons.
+
+    Parameters
+    ----------
+    geom : shapely geometry
+    *others : shapely geometry
+
+    Returns
+    -------
+    shapely geometry
+        Map metres.
+    """
+    import shapely
+
+    for other in others:  # one by one: a union of a large one with each small one costs more
+        geom = shapely.difference(_areas(geom), _areas(other), grid_size=OVERLAY_GRID_M)
+    return geom
+
+
+def _areas(geom):
+    """A polygonal geometry as it is; any other (a GeometryCollection of make_valid or of
+    an overlay on the grid, which OverlayNG refuses as input) as :func:`polygons_of`."""
+    return geom if geom.is_empty or geom.geom_type in ("Polygon", "MultiPolygon") else polygons_of(geom)

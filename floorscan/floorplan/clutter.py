@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from floorscan.core.geometry import point_segment_dist2
+from floorscan.core.geometry import OVERLAY_GRID_M, point_segment_dist2
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
@@ -258,7 +258,7 @@ def _encloses_free_space(seg: np.ndarray, grid: OccupancyGrid, free: np.ndarray,
     import shapely
 
     lines = shapely.linestrings(seg.reshape(-1, 2, 2))
-    union = shapely.union_all(shapely.buffer(lines, max_gap_m / 2, cap_style="square"))
+    union = shapely.union_all(shapely.buffer(lines, max_gap_m / 2, cap_style="square"), grid_size=OVERLAY_GRID_M)
     holes = [shapely.Polygon(ring) for part in shapely.get_parts(union) if part.geom_type == "Polygon"
              for ring in part.interiors]  # fmt: skip
     r = grid.resolution_m

@@ -106,10 +106,12 @@ def layout_rooms(axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, p
     # a room ends at the wall faces and at the door openings in them
     gap_axes = np.array([np.r_[p, q] for p, q, *_ in gaps]).reshape(-1, 4)
     gap_thickness = thickness[wall_rows[[g[2] for g in gaps]]] if gaps else np.zeros(0)
-    solid = shapely.union_all([*wall_footprints(axes, thickness), *wall_footprints(gap_axes, gap_thickness)])
+    solid = shapely.union_all([*wall_footprints(axes, thickness), *wall_footprints(gap_axes, gap_thickness)],
+                              grid_size=PRECISION_M)
     polys, kept_roots = [], []
     for r in roots:
-        poly = shapely.union_all([cells[k] for k in np.flatnonzero(region == r)]).difference(solid)
+        cells_r = shapely.union_all([cells[k] for k in np.flatnonzero(region == r)], grid_size=PRECISION_M)
+        poly = shapely.difference(cells_r, solid, grid_size=PRECISION_M)
         # the walls may part a region's cells into pieces: each large enough is a room
         for part in shapely.get_parts(shapely.set_precision(poly, PRECISION_M)):
             if part.geom_type == "Polygon" and part.area >= params.min_room_area_m2:

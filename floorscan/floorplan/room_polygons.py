@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from floorscan.core.geometry import OVERLAY_GRID_M, minus, polygons_of
 from floorscan.floorplan.room_space import RoomRaster, wall_footprints
 
 
@@ -38,7 +39,7 @@ def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thic
 
     res = raster.resolution_m
     foot = wall_footprints(axes, thickness)
-    walls = shapely.union_all(foot) if len(axes) else shapely.Polygon()
+    walls = shapely.union_all(foot, grid_size=POLYGON_GRID_M) if len(axes) else shapely.Polygon()
     traced = []
     for k, box in enumerate(ndimage.find_objects(labels), start=1):
         if box is None:
@@ -52,14 +53,14 @@ def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thic
             xy = (pts + [c0 - 1 + 0.5, r0 - 1 + 0.5]) * res + raster.origin_xy
             rings = [xy[a:b] for a, b in zip(off[:-1], off[1:])]
             parts.append(shapely.Polygon(rings[0], rings[1:]))
-        traced.append(shapely.simplify(shapely.make_valid(shapely.union_all(parts)), res / 4))
+        traced.append(shapely.simplify(shapely.make_valid(shapely.union_all(parts, grid_size=POLYGON_GRID_M)), res / 4))
     out = []
     for k, poly in enumerate(traced):
-        others = shapely.union_all([p for j, p in enumerate(traced) if j != k and shapely.distance(p, poly) < 2 * res])
-        grown = shapely.buffer(poly, res, join_style="mitre").difference(walls).difference(others)
+        others = [p for j, p in enumerate(traced) if j != k and shapely.distance(p, poly) < 2 * res]
+        grown = minus(shapely.buffer(poly, res, join_style="mitre"), walls, *others)
         out.append(largest_polygon(shapely.simplify(grown, res / 2)))
     for k, poly in enumerate(out):
-        others = shapely.union_all([p for j, p in enumerate(out) if j != k])
+        others = shapely.union_all([p for j, p in enumerate(out) if j != k], grid_size=POLYGON_GRID_M)
         out[k] = _bounded_by_walls(poly, axes, thickness, foot, walls, others, res)
     return out
 
@@ -92,9 +93,9 @@ def disjoint_rooms(polys: list) -> list:
     return out
 
 
-#: Rooms' vertices are snapped to this grid, metres: the exports' precision (GeoJSON's
-#: 5 decimals), so a polygon stays valid when written.
-POLYGON_GRID_M = 1e-5
+#: Rooms' vertices are snapped to this grid and their overlays run on it, metres: the
+#: exports' precision, so a polygon stays valid when written.
+POLYGON_GRID_M = OVERLAY_GRID_M
 
 
 def largest_polygon(geom):
@@ -139,8 +140,8 @@ def _bounded_by_walls(
         face = a + side * n * thickness[i] / 2
         c = face - u * big
         half = shapely.Polygon([c, c + 2 * big * u, c + 2 * big * u + side * big * n, c + side * big * n])
-        region = region.intersection(half)
-    region = largest_polygon(region.difference(walls).difference(others))
-    if region.is_empty or poly.difference(region).area > 0.05 * poly.area or region.area < poly.area:
+        region = polygons_of(shapely.intersection(region, half, grid_size=POLYGON_GRID_M))
+    region = largest_polygon(minus(region, walls, others))
+    if region.is_empty or minus(poly, region).area > 0.05 * poly.area or region.area < poly.area:
         return poly
     return largest_polygon(shapely.simplify(region, res / 2))

@@ -71,6 +71,7 @@ import time
 import numpy as np
 import pandas as pd
 
+from floorscan.core.geometry import OVERLAY_GRID_M, minus
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan import doors as D
 from floorscan.floorplan.mouths import room_mouths
@@ -353,9 +354,9 @@ def plan_rooms(
     if doors:  # the opening in the wall belongs to neither room: rooms end at the wall faces
         openings = shapely.union_all(
             [shapely.buffer(shapely.LineString([p, q]), thickness[w] / 2 + raster.resolution_m / 2, cap_style="square")
-             for p, q, w, *_ in doors]
+             for p, q, w, *_ in doors], grid_size=OVERLAY_GRID_M
         )  # fmt: skip
-        polys = [largest_polygon(shapely.simplify(p.difference(openings), raster.resolution_m / 4)) for p in polys]
+        polys = [largest_polygon(shapely.simplify(minus(p, openings), raster.resolution_m / 4)) for p in polys]
     polys = disjoint_rooms(polys)
     keep = [k for k in range(n) if not polys[k].is_empty and polys[k].area >= params.min_room_area_m2]
     new_id = {k + 1: i for i, k in enumerate(keep)}
