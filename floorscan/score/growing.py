@@ -220,6 +220,11 @@ class GrowingWalls:
 
     ``samples`` (recall, distances) and ``all_samples`` (``recall_all_<tau>``, or
     None) are ground-truth samples (:func:`floorscan.score.segments.gt_samples`).
+
+    The walls a set adds are paired, rasterized and added in batches of at most
+    :data:`PAIR_BATCH_PIECES` pieces (:func:`wall_batches`), so that the memory of a
+    step follows the batch, not the number of walls added (every ordering's k = all
+    adds all the walls of the dataset at once).
     """
 
     def __init__(self, gt, gt_bitmap, grid, wall_width_m, taus, samples, all_samples,
