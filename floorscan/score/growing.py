@@ -80,6 +80,38 @@ PAIR_REACH_M = 0.1
 #: Longest piece (metres) of the walls whose grown boxes find their samples in
 #: :class:`SamplePairs`.
 PAIR_PIECE_M = 2.0
+#: Most pieces (of :data:`PAIR_PIECE_M`) of the walls measured or added at once: the
+#: candidate pairs of a batch and their temporaries (about 100 bytes a candidate, some
+#: hundreds of candidates a piece at 1 cm samples) are bounded by it, not by the number
+#: of walls a run adds.
+PAIR_BATCH_PIECES = 8192
+
+
+def wall_batches(walls: np.ndarray, max_pieces: int | None = None) -> list[slice]:
+    """Consecutive row ranges of ``walls`` of at most ``max_pieces`` pieces of
+    :data:`PAIR_PIECE_M` each (a wall of more pieces alone).
+
+    Parameters
+    ----------
+    walls : (M, 4) float64 ndarray
+        Metres.
+    max_pieces : int, optional
+        Default :data:`PAIR_BATCH_PIECES`.
+
+    Returns
+    -------
+    list of slice
+        Covering ``0..M`` in order; empty for no walls.
+    """
+    max_pieces = PAIR_BATCH_PIECES if max_pieces is None else int(max_pieces)
+    n = np.maximum(1, np.ceil(segment_lengths(walls) / PAIR_PIECE_M).astype(np.int64))
+    ends = np.cumsum(n)
+    out, i = [], 0
+    while i < len(walls):
+        j = max(int(np.searchsorted(ends, (ends[i - 1] if i else 0) + max_pieces, side="right")), i + 1)
+        out.append(slice(i, j))
+        i = j
+    return out
 
 
 class SamplePairs:
@@ -123,7 +155,9 @@ class SamplePairs:
         cache = self.cache
         todo = [i for i, k in enumerate(keys) if k not in cache]
         if todo:
-            self._measure(walls[todo], [keys[i] for i in todo])
+            seg, todo_keys = walls[todo], [keys[i] for i in todo]
+            for b in wall_batches(seg):  # a wall's pairs do not depend on its batch
+                self._measure(seg[b], todo_keys[b])
         if not keys:
             return np.zeros(0, np.int64), np.zeros(0)
         parts = [cache[k] for k in keys]
@@ -186,6 +220,11 @@ class GrowingWalls:
 
     ``samples`` (recall, distances) and ``all_samples`` (``recall_all_<tau>``, or
     None) are ground-truth samples (:func:`floorscan.score.segments.gt_samples`).
+
+    The walls a set adds are paired, rasterized and added in batches of at most
+    :data:`PAIR_BATCH_PIECES` pieces (:func:`wall_batches`), so that the memory of a
+    step follows the batch, not the number of walls added (every ordering's k = all
+    adds all the walls of the dataset at once).
     """
 
     def __init__(self, gt, gt_bitmap, grid, wall_width_m, taus, samples, all_samples,
@@ -223,6 +262,16 @@ class GrowingWalls:
                 cache[add_keys[i]] = flat[bounds[j]:bounds[j + 1]]
         return np.concatenate([cache[k] for k in add_keys])
 
+    def _add_near(self, add: np.ndarray, add_keys: list[bytes]) -> None:
+        """Add walls' pairs (nearest distances, ``recall_all`` hits) and bitmap cells."""
+        si, d = self.pairs.of(add, add_keys)
+        np.minimum.at(self.d_near, si, d)
+        if self.all_samples is not None:
+            si, d = self.all_pairs.of(add, add_keys)
+            for t, tau in enumerate(self.taus):
+                self.hit_all[t, si[d <= tau]] = True
+        self.bitmap.reshape(-1)[self._wall_cells(add, add_keys)] = True
+
     def score(self, walls: np.ndarray) -> dict[str, float]:
         """:func:`score_walls` of a wall set, from the previous set's state when it is a
         superset of it.
@@ -246,19 +295,16 @@ class GrowingWalls:
         add = walls[new]
         if len(add):
             add_keys = [k for k, n in zip(keys, new) if n]
-            si, d = self.pairs.of(add, add_keys)
-            np.minimum.at(self.d_near, si, d)
+            # In batches of walls: minima and unions, the same in any grouping; the
+            # pairs and cells of all the walls of k = all are never held at once.
+            for b in wall_batches(add):
+                self._add_near(add[b], add_keys[b])
             far = np.flatnonzero(np.isinf(self.d_near))
             if len(far):
                 self.d_far[far] = nearest_below(
                     self.samples[far], SegmentIndex(add), self.d_far[far], self.pairs.geoms[far]
                 )
             self.d = np.where(np.isinf(self.d_near), self.d_far, self.d_near)
-            if self.all_samples is not None:
-                si, d = self.all_pairs.of(add, add_keys)
-                for t, tau in enumerate(self.taus):
-                    self.hit_all[t, si[d <= tau]] = True
-            self.bitmap.reshape(-1)[self._wall_cells(add, add_keys)] = True
             # Measured once per wall for every tau (the caches of the taus hold the
             # same walls), in the same batches as tau by tau: a wall's covered length
             # depends, in its last bits, on its row in the batch (the sweep's offset).

@@ -293,6 +293,7 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
         key = (run["ordering"], ext)
         m = scored.get(same) if last_of_group[key] == n_run else None
         if m is not None:
+            growing.pop(key, None)  # the ordering's last run: its state is not needed again
             rows.append(_score_row(run, dataset, reference_kind, walls, nfp, grid, cfg, dict(m), t0))
             continue
         if key not in growing:
@@ -310,6 +311,8 @@ def _score_rows(runs, references, reference_kind, cfg, dataset, recall_reference
                 for what in ("precision", "recall", "f1"):
                     m[f"plan_{what}_{tau_label(tau)}"] = pm[f"{what}_{tau_label(tau)}"]
         scored.setdefault(same, dict(m))
+        if last_of_group[key] == n_run:  # its bitmap and distances are not needed again
+            growing.pop(key)
         rows.append(_score_row(run, dataset, reference_kind, walls, nfp, grid, cfg, m, t0))
     return rows
 
