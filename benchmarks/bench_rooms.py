@@ -113,7 +113,7 @@ def plan_labels(path: Path, rooms: str = "plan"):
     :mod:`floorscan.floorplan.rooms`); ``layout``, the rooms of the candidate global
     layout of issue 44 (:func:`floorscan.floorplan.layout.layout_plan_rooms` on the
     plan's walls, its clutter faces as hypotheses without evidence of their own, and
-    the map's grid), in the plan's place.
+    the map's grid, whose own wall lines it adds), in the plan's place.
 
     Returns
     -------

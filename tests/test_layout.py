@@ -1,6 +1,7 @@
 """The candidate global layout of issue 44 (floorscan.floorplan.layout): the cell complex
-of the plan's walls, labelled inside and grouped into rooms by the evidence of a wall on
-the boundaries between cells. Measured beside today's room step by ``python -m
+of the plan's walls and of the map's own wall lines
+(floorscan.floorplan.representative_lines), labelled inside and grouped into rooms by the
+evidence of a wall on the boundaries between cells. Measured beside today's room step by ``python -m
 benchmarks rooms --rooms layout`` (benchmarks/README.md); here its steps on known
 geometry."""
 
@@ -113,3 +114,74 @@ def test_an_opening_next_to_a_junction_is_closed():
     entrance = sorted((g[2], round(g[3], 6)) for g in gaps if abs(g[0][0]) < 1e-9 and abs(g[1][0]) < 1e-9)
     assert entrance == [(3, 1.0), (4, 1.0)]  # from each side; a door is taken once (layout_rooms)
     assert [(g[2], round(g[3], 6)) for g in gaps if g[2] == 5] == [(5, 1.9)]  # the inner wall's free end
+
+
+def test_grouping_joins_the_longest_open_boundary_first():
+    """A cell cut out of a corridor by a line (cell 2) whose only boundary with an office
+    (cell 3) is the office's door: the corridor's cells join first (their open boundary
+    is longer), so the corridor then meets the office along wall and door together
+    (3 m wall, 1 m door) and they stay apart; joined by least evidence first, the door
+    cell would have joined office and corridor."""
+    inside = np.ones(4, dtype=bool)
+    edges = [(0, 1, 4.0, 0.0), (1, 2, 2.0, 0.0), (2, 3, 1.0, 0.0), (1, 3, 3.0, 3.0)]
+    region = group_cells(inside, edges, np.full(4, 10.0), min_area_m2=2.0)
+    assert region[0] == region[1] == region[2] != region[3]
+
+
+def _grid_of(occupied_cells, shape, free_everywhere_else=True):
+    wall = np.zeros(shape, dtype=bool)
+    wall[tuple(np.asarray(occupied_cells).T)] = True
+    return grid_of_classes(wall, ~wall if free_everywhere_else else np.zeros(shape, bool), (0.0, 0.0), RES)
+
+
+def test_representative_lines_of_a_dashed_wall_and_clutter():
+    """A wall drawn dashed (0.3 m dashes, 0.1 m gaps, 6 m) is one line over its whole
+    extent; 300 seeded cells of clutter scattered over 6 x 4 m make none."""
+    from floorscan.floorplan.representative_lines import representative_lines
+
+    rows, cols = [], []
+    for c in range(0, 120):
+        if c % 8 < 6:  # 6 cells on, 2 off
+            rows.append(40)
+            cols.append(c)
+    rng = np.random.default_rng(7)
+    clutter = np.c_[rng.integers(50, 80, 300), rng.integers(0, 120, 300)]
+    cells = np.r_[np.c_[rows, cols], clutter]
+    grid = _grid_of(cells, (80, 120))
+    lines, support, openings = representative_lines(grid.cell_centres(grid.occupied()), RES, np.array([0.0, np.pi / 2]))
+    assert len(lines) == 1 and len(openings) == 0
+    np.testing.assert_allclose(lines[0], [0.0, 2.025, 5.9, 2.025], atol=1e-9)  # cell centres' row, first to last cell
+    np.testing.assert_allclose(support[0], 90 * RES)
+
+
+def test_an_opening_between_two_runs_of_wall_is_closed_and_a_row_of_desks_is_not():
+    from floorscan.floorplan.representative_lines import representative_lines
+
+    wall = [(20, c) for c in list(range(0, 40)) + list(range(58, 100))]  # 2 m, a 0.9 m gap, 2.1 m
+    desks = [(60, c) for k in range(6) for c in range(16 * k, 16 * k + 12)]  # 0.6 m desks, 0.2 m apart
+    grid = _grid_of(wall + desks, (80, 100))
+    lines, _, openings = representative_lines(grid.cell_centres(grid.occupied()), RES, np.array([0.0]), door_max_m=2.0)
+    assert len(lines) == 2  # the wall's line and the desks' front
+    assert len(openings) == 1
+    np.testing.assert_allclose(openings[0], [2.0, 1.025, 2.9, 1.025], atol=1e-9)
+
+
+def test_a_line_along_a_plan_wall_takes_the_wall_s_line():
+    from floorscan.floorplan.representative_lines import onto_walls
+
+    lines = np.array([[0.0, 2.08, 6.0, 2.08], [0.0, 3.0, 6.0, 3.0]])
+    axes = np.array([[1.0, 2.0, 4.0, 2.0], [0.0, 0.0, 0.0, 5.0]])
+    out = onto_walls(lines, axes, np.array([0.1, 0.1]))
+    np.testing.assert_allclose(out, [[0.0, 2.0, 6.0, 2.0], [0.0, 3.0, 6.0, 3.0]])
+
+
+def test_a_wall_the_plan_lacks_still_parts_two_rooms():
+    """The map draws the middle wall with its door; the plan has only the outline. The
+    map's own line of that wall, and the door between its runs closed, part the rooms."""
+    axes, thickness, grid = two_rooms()
+    polys, _ = layout_rooms(axes[:4], thickness[:4], grid, RoomParams())
+    assert len(polys) == 2
+    # each from the outline's wall faces to the middle wall's line (it has no footprint
+    # in the plan): 4.9 x 4.8 m, within a cell of the line's place
+    np.testing.assert_allclose(sorted(p.area for p in polys), [4.9 * 4.8] * 2, atol=4.8 * RES)
+    assert not polys[0].intersects(polys[1].buffer(-1e-6))

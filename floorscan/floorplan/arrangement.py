@@ -6,7 +6,7 @@ The lines are noded and polygonised (shapely's ``node`` and ``polygonize``) on a
 precision grid of :data:`PRECISION_M`, so that a sub-cell shift of the input cannot make
 GEOS fail (:func:`layout_cells`). Each edge between two cells gets its evidence of a
 boundary: all of it on a wall or a closed opening of the plan; on an open hypothesis,
-the share of it that runs over the grid's occupied cells (:func:`edge_evidence`: a wall
+the share of it that runs over the grid's occupied cells (:func:`edges_evidence`: a wall
 the plan lacks, a map's faint or dashed wall, still parts two cells). Each cell gets
 the share of its area that is free space (:func:`cell_free_share`).
 """
@@ -35,7 +35,7 @@ def layout_cells(lines, kinds, grid: OccupancyGrid | None = None):
     kinds : list of int
         As :func:`layout_lines`.
     grid : OccupancyGrid, optional
-        Its occupied cells are wall evidence too (:func:`edge_evidence`).
+        Its occupied cells are wall evidence too (:func:`edges_evidence`).
 
     Returns
     -------
@@ -59,50 +59,51 @@ def layout_cells(lines, kinds, grid: OccupancyGrid | None = None):
     snapped = [shapely.set_precision(ln, PRECISION_M) for ln in lines]
     noded = shapely.node(shapely.MultiLineString([c for ln in snapped for c in _parts(ln)]))
     cells = [c for c in shapely.get_parts(shapely.polygonize(shapely.get_parts(noded))) if c.area > PRECISION_M**2 * 100]
-    source = STRtree(snapped)
+    parts = shapely.get_parts(noded)
+    length = shapely.length(parts)
+    parts, length = parts[length > PRECISION_M * 10], length[length > PRECISION_M * 10]
+    if not len(parts) or not cells:
+        return cells, []
+    # the cell on each side of each edge: a point just off its middle, square to it
+    coords, which = shapely.get_coordinates(parts, return_index=True)
+    first = np.searchsorted(which, np.arange(len(parts)))
+    last = np.r_[first[1:], len(coords)] - 1
+    d = coords[last] - coords[first]
+    nrm = np.c_[-d[:, 1], d[:, 0]] / np.maximum(np.hypot(*d.T), 1e-12)[:, None] * PRECISION_M * 20
+    mid = shapely.get_coordinates(shapely.line_interpolate_point(parts, 0.5, normalized=True))
     cell_tree = STRtree(cells)
-    edges = []
-    for e in shapely.get_parts(noded):
-        length = float(e.length)
-        if length <= PRECISION_M * 10:
-            continue
-        mid = e.interpolate(0.5, normalized=True)
-        c = shapely.get_coordinates(e)
-        d = c[-1] - c[0]
-        nrm = np.array([-d[1], d[0]]) / max(float(np.hypot(*d)), 1e-12) * PRECISION_M * 20
-        sides = []
-        for s in (1.0, -1.0):
-            pt = shapely.points(shapely.get_coordinates(mid)[0] + s * nrm)
-            hit = [k for k in cell_tree.query(pt, predicate="within")]
-            sides.append(hit[0] if hit else -1)
-        if sides[0] < 0 or sides[1] < 0:
-            continue
-        near = source.query(mid, predicate="dwithin", distance=PRECISION_M * 5)
-        kind = min((kinds[k] for k in near), default=OPEN)  # a wall over an extension on it
-        if kind in (WALL, CLOSED):
-            closed = length
-        elif grid is not None and kind == OPEN:
-            closed = length * edge_evidence(c, occupied, grid)
-        else:
-            closed = 0.0
-        edges.append((sides[0], sides[1], length, closed))
+    sides = np.full((len(parts), 2), -1, dtype=np.int64)
+    for j, sgn in enumerate((1.0, -1.0)):
+        e, c = cell_tree.query(shapely.points(mid + sgn * nrm), predicate="within")
+        sides[e[::-1], j] = c[::-1]  # the first hit of each point
+    # each edge's kind: a wall over an extension on it
+    e, k = STRtree(snapped).query(shapely.points(mid), predicate="dwithin", distance=PRECISION_M * 5)
+    kind = np.full(len(parts), OPEN, dtype=np.int64)
+    np.minimum.at(kind, e, np.asarray(kinds, dtype=np.int64)[k])
+    closed = np.where(np.isin(kind, (WALL, CLOSED)), length, 0.0)
+    measure = (kind == OPEN) & (sides >= 0).all(axis=1)
+    if grid is not None and measure.any():
+        idx = np.flatnonzero(measure)
+        closed[idx] = length[idx] * edges_evidence(coords[first[idx]], coords[last[idx]], occupied, grid)
+    keep = (sides >= 0).all(axis=1)
+    edges = [(int(a), int(b), float(n), float(c)) for a, b, n, c in zip(sides[keep, 0], sides[keep, 1], length[keep], closed[keep])]
     return cells, edges
 
 
-def edge_evidence(coords: np.ndarray, occupied: np.ndarray, grid: OccupancyGrid) -> float:
-    """The share of a polyline's length over cells within :data:`EVIDENCE_REACH_M` of an
-    occupied cell of ``grid`` (``occupied``: its occupied cells so grown), sampled every
-    half cell: a wall the plan lacks (a map's dashed or faint wall, a wall seen in
-    pieces) still divides two cells."""
-    pts = [coords[0]]
-    for a, b in zip(coords[:-1], coords[1:]):
-        n = max(int(np.ceil(np.hypot(*(b - a)) / (grid.resolution_m / 2))), 1)
-        pts.append(a + (b - a) * np.arange(1, n + 1)[:, None] / n)
-    pts = np.vstack([np.atleast_2d(p) for p in pts])
+def edges_evidence(p: np.ndarray, q: np.ndarray, occupied: np.ndarray, grid: OccupancyGrid) -> np.ndarray:
+    """The share of each straight edge from ``p`` to ``q`` ((E, 2) float ndarrays,
+    metres) that lies over ``occupied`` cells of ``grid`` (the grid's occupied cells
+    grown by :data:`EVIDENCE_REACH_M`), sampled every half cell: (E,) float64. A wall
+    the plan lacks (a map's dashed or faint wall, a wall seen in pieces) still divides
+    two cells."""
+    n = np.maximum(np.ceil(np.hypot(*(q - p).T) / (grid.resolution_m / 2)).astype(np.int64), 1) + 1
+    which = np.repeat(np.arange(len(p)), n)
+    t = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n - 1, n)
+    pts = p[which] + (q - p)[which] * t[:, None]
     rows, cols, ok = grid.cells_of(pts)
     hit = np.zeros(len(pts), dtype=bool)
     hit[ok] = occupied[rows[ok], cols[ok]]
-    return float(hit.mean())
+    return np.bincount(which, weights=hit, minlength=len(p)) / n
 
 
 def cell_free_share(cells, grid: OccupancyGrid) -> np.ndarray:

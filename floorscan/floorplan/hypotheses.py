@@ -104,9 +104,8 @@ def layout_lines(axes: np.ndarray, thickness: np.ndarray, frame, door_max_m: flo
 
 def dominant_axes(axes: np.ndarray) -> np.ndarray:
     """Wall axes turned onto the building's dominant directions (ROSE^2's first step,
-    without forcing Manhattan): the directions (mod 180 degrees) that hold at least
-    :data:`DOMINANT_SHARE` of the walls' length within :data:`DIRECTION_TOLERANCE_RAD`;
-    each wall within that tolerance of one is turned about its midpoint onto it, the
+    without forcing Manhattan; :func:`dominant_directions`): each wall within
+    :data:`DIRECTION_TOLERANCE_RAD` of one is turned about its midpoint onto it, the
     others (a curved or oblique wall) stay.
 
     Parameters
@@ -119,13 +118,48 @@ def dominant_axes(axes: np.ndarray) -> np.ndarray:
     (N, 4) float64 ndarray
     """
     axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4).copy()
+    directions, group = dominant_directions(axes)
+    d = axes[:, 2:] - axes[:, :2]
+    length = np.hypot(*d.T)
+    for k, mean in enumerate(directions):
+        near = group == k
+        u = np.array([np.cos(mean), np.sin(mean)])
+        mid = (axes[near, :2] + axes[near, 2:]) / 2
+        half = (length[near] / 2)[:, None] * np.sign(d[near] @ u)[:, None]
+        axes[near, :2] = mid - half * u
+        axes[near, 2:] = mid + half * u
+    return axes
+
+
+def dominant_directions(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The building's dominant wall directions (ROSE^2's first step, Luperto et al.,
+    RA-L 2022, without forcing Manhattan): the directions (mod 180 degrees) that hold
+    at least :data:`DOMINANT_SHARE` of the walls' length within
+    :data:`DIRECTION_TOLERANCE_RAD`, each the length-weighted mean direction of its
+    walls, the strongest first.
+
+    Parameters
+    ----------
+    axes : (N, 4) float ndarray
+        Wall axes ``x0, y0, x1, y1``, metres.
+
+    Returns
+    -------
+    directions : (D,) float64 ndarray
+        Radians, counter-clockwise from +x, in (-pi/2, pi/2].
+    group : (N,) int64 ndarray
+        Each wall's direction (an index into ``directions``), -1 for none.
+    """
+    axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
+    group = np.full(len(axes), -1, dtype=np.int64)
     if not len(axes):
-        return axes
+        return np.zeros(0), group
     d = axes[:, 2:] - axes[:, :2]
     length = np.hypot(*d.T)
     angle = np.mod(np.arctan2(d[:, 1], d[:, 0]), np.pi)
     remaining = np.ones(len(axes), dtype=bool)
     total = length.sum()
+    directions = []
     for _ in range(8):  # a few directions at most
         if not remaining.any():
             break
@@ -138,13 +172,10 @@ def dominant_axes(axes: np.ndarray) -> np.ndarray:
         near = idx[diff[k] <= DIRECTION_TOLERANCE_RAD]
         # the length-weighted mean direction of its walls, on the doubled-angle circle
         mean = 0.5 * np.arctan2((length[near] * np.sin(2 * angle[near])).sum(), (length[near] * np.cos(2 * angle[near])).sum())
-        u = np.array([np.cos(mean), np.sin(mean)])
-        mid = (axes[near, :2] + axes[near, 2:]) / 2
-        half = (length[near] / 2)[:, None] * np.sign(d[near] @ u)[:, None]
-        axes[near, :2] = mid - half * u
-        axes[near, 2:] = mid + half * u
+        group[near] = len(directions)
+        directions.append(float(mean))
         remaining[near] = False
-    return axes
+    return np.array(directions, dtype=np.float64), group
 
 
 def snapped_axes(axes: np.ndarray, thickness: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -2,10 +2,15 @@
 inside or outside, then by room.
 
 A cell is inside when at least :data:`INSIDE_SHARE` of its area is free space. The
-inside cells are grouped by agglomerative merging of adjacent regions in order of the
-least evidence of a boundary between them (:func:`group_cells`; the evidence of an edge:
-:mod:`floorscan.floorplan.arrangement`), while that evidence is below
-:data:`BOUNDARY_EVIDENCE` of their shared boundary: a room cut by a hypothesis without
+inside cells are grouped by agglomerative merging of adjacent regions, the pair with the
+longest open boundary (its length less the length of it that is evidence of a wall) first
+(:func:`group_cells`; the evidence of an edge: :mod:`floorscan.floorplan.arrangement`), as
+long as the evidence is below :data:`BOUNDARY_EVIDENCE` of their shared boundary. The
+order matters where lines cross the complex: a line extended across a corridor may cut
+a cell whose only boundary with an office is the office's door; merged first by least
+evidence (both zero), that cell would join office and corridor before the corridor's own
+cells, whose open boundaries are metres long, have joined each other and summed the
+office's wall. So: a room cut by a hypothesis without
 evidence is one room again, a corridor cut into pieces one corridor, an office whose
 boundary with the corridor is wall and a door stays an office. A region below the room
 area joins the neighbour it shares most boundary with, unless walls enclose it
@@ -81,7 +86,10 @@ def group_cells(inside: np.ndarray, edges, area: np.ndarray, min_area_m2: float)
                 entry[1] += length
     regions = _Regions(n)
     area = np.asarray(area, dtype=np.float64).copy()
-    heap = [(nb[a][b][0] / nb[a][b][1], a, b) for a in range(n) for b in nb[a] if a < b]
+    def key(cl: float, tl: float) -> float:
+        return cl - tl  # the longest open boundary first (a heap pops the least)
+
+    heap = [(key(*nb[a][b]), a, b) for a in range(n) for b in nb[a] if a < b]
     heapq.heapify(heap)
 
     def merge(a: int, b: int) -> None:
@@ -96,18 +104,18 @@ def group_cells(inside: np.ndarray, edges, area: np.ndarray, min_area_m2: float)
             entry[1] += tl
             nb[c].pop(b)
             nb[c][a] = entry
-            heapq.heappush(heap, (entry[0] / entry[1], min(a, c), max(a, c)))
+            heapq.heappush(heap, (key(*entry), min(a, c), max(a, c)))
         nb[b] = {}
 
     while heap:
         ev, a, b = heapq.heappop(heap)
-        if ev >= BOUNDARY_EVIDENCE:
-            break
         if regions.find(a) != a or regions.find(b) != b or b not in nb[a]:
             continue
         cl, tl = nb[a][b]
-        if abs(cl / tl - ev) > 1e-12:
+        if abs(key(cl, tl) - ev) > 1e-12:
             continue  # stale: this pair's boundary grew since
+        if cl / tl >= BOUNDARY_EVIDENCE:
+            continue  # more wall than opening: two rooms
         merge(a, b)
     # regions below the room area join the neighbour they share most boundary with,
     # unless walls enclose them

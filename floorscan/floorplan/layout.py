@@ -1,6 +1,7 @@
-"""Rooms and doors as one global layout (issue 44's candidate): the plan's walls
-extended into a cell complex, its cells labelled inside or outside by the free space,
-then grouped into rooms by the evidence of a wall on the boundaries between them.
+"""Rooms and doors as one global layout (issue 44's candidate): the plan's walls and the
+map's own wall lines extended into a cell complex, its cells labelled inside or outside
+by the free space, then grouped into rooms by the evidence of a wall on the boundaries
+between them.
 
 The formulation is that of the cell-complex methods of the field: the floor partitioned
 by the lines of the walls, each cell labelled, the rooms the groups of cells no wall
@@ -12,13 +13,17 @@ ISPRS J. 2019). :func:`layout_rooms` runs the steps in order, one module each:
 
 1. **Hypotheses** (:mod:`floorscan.floorplan.hypotheses`): the wall axes on the
    dominant directions, junctions closed, free ends extended to the next wall; an
-   extension no longer than ``door_max_m`` closes an opening.
+   extension no longer than ``door_max_m`` closes an opening. Then the grid's own
+   walls (:mod:`floorscan.floorplan.representative_lines`): the lines on which its
+   occupied cells gather, on the same directions, extended across the frame, and the
+   openings between their runs of wall closed (the walls the plan lacks: a map's
+   dashed, faint or blurred walls).
 2. **Arrangement** (:mod:`floorscan.floorplan.arrangement`): the lines noded and
    polygonised on a fixed precision grid; each edge's evidence of a boundary (a wall, a
    closed opening, or the grid's occupied cells along it) and each cell's free share.
 3. **Labelling** (:mod:`floorscan.floorplan.labelling`): inside or outside by the free
-   share, then rooms by agglomerative merging while the boundary between two regions
-   is more opening than wall.
+   share, then rooms by agglomerative merging, the longest open boundary first, while
+   the boundary between two regions is more opening than wall.
 4. **Rooms and doors** (here): each room the union of its cells less the wall footprints
    and the door openings (its floor area, furniture included; the walls may part a
    region into several rooms), in reading order; a door each closed opening
@@ -38,8 +43,9 @@ import numpy as np
 
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.arrangement import PRECISION_M, cell_free_share, layout_cells
-from floorscan.floorplan.hypotheses import OPEN, layout_lines
+from floorscan.floorplan.hypotheses import CLOSED, OPEN, layout_lines
 from floorscan.floorplan.labelling import INSIDE_SHARE, group_cells
+from floorscan.floorplan.representative_lines import map_hypotheses
 from floorscan.floorplan.room_space import wall_footprints
 
 log = logging.getLogger(__name__)
@@ -94,6 +100,14 @@ def layout_rooms(axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, p
             if ln.length > 0 and ln.intersects(frame):
                 lines.append(ln)
                 kinds.append(OPEN)
+    # the map's own walls: its representative lines and the openings between their runs
+    map_lines, openings = map_hypotheses(grid, axes[keep], thickness[keep], frame, params.door_max_m)
+    for rows, kind in ((map_lines, OPEN), (openings, CLOSED)):
+        for h in rows:
+            ln = LineString([h[:2], h[2:]])
+            if ln.length > 0 and ln.intersects(frame):
+                lines.append(ln)
+                kinds.append(kind)
     wall_rows = np.flatnonzero(keep)
     cells, edges = layout_cells(lines, kinds, grid)
     if not cells:
