@@ -55,12 +55,17 @@ def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thic
             parts.append(shapely.Polygon(rings[0], rings[1:]))
         traced.append(shapely.simplify(shapely.make_valid(shapely.union_all(parts, grid_size=POLYGON_GRID_M)), res / 4))
     out = []
+    tree = shapely.STRtree(traced)
     for k, poly in enumerate(traced):
-        others = [p for j, p in enumerate(traced) if j != k and shapely.distance(p, poly) < 2 * res]
-        grown = minus(shapely.buffer(poly, res, join_style="mitre"), walls, *others)
+        near = sorted(int(j) for j in tree.query(poly, predicate="dwithin", distance=2 * res) if j != k)
+        grown = minus(shapely.buffer(poly, res, join_style="mitre"), walls, *[traced[j] for j in near])
         out.append(largest_polygon(shapely.simplify(grown, res / 2)))
+    # a room's completion stays in its bounding box: only the rooms whose boxes meet it matter
+    boxes = shapely.box(*np.array([p.bounds if not p.is_empty else (0, 0, 0, 0) for p in out]).reshape(-1, 4).T)
+    tree = shapely.STRtree(boxes)
     for k, poly in enumerate(out):
-        others = shapely.union_all([p for j, p in enumerate(out) if j != k], grid_size=POLYGON_GRID_M)
+        near = sorted(int(j) for j in tree.query(boxes[k]) if j != k and not out[j].is_empty) if not poly.is_empty else []
+        others = shapely.union_all([out[j] for j in near], grid_size=POLYGON_GRID_M)
         out[k] = _bounded_by_walls(poly, axes, thickness, foot, walls, others, res)
     return out
 
@@ -81,15 +86,19 @@ def disjoint_rooms(polys: list) -> list:
     """
     import shapely
 
-    out, taken = [], shapely.Polygon()
-    for poly in polys:
-        # on the exports' grid, so that no overlap comes back when they round the vertices
-        if not poly.is_empty and shapely.intersection(taken, poly, grid_size=POLYGON_GRID_M).area > 0:
-            poly = largest_polygon(shapely.difference(poly, taken, grid_size=POLYGON_GRID_M))
+    out: list = []
+    # what the rooms before a room took, of those whose boxes meet its box
+    boxes = shapely.box(*np.array([p.bounds if not p.is_empty else (0, 0, 0, 0) for p in polys]).reshape(-1, 4).T)
+    tree = shapely.STRtree(shapely.buffer(boxes, POLYGON_GRID_M, join_style="mitre"))
+    for k, poly in enumerate(polys):
+        if not poly.is_empty:
+            near = sorted(int(j) for j in tree.query(boxes[k]) if j < k and not out[j].is_empty)
+            # a union on the grid may collapse a sliver to a line: only its area is taken
+            taken = polygons_of(shapely.union_all([out[j] for j in near], grid_size=POLYGON_GRID_M))
+            # on the exports' grid, so that no overlap comes back when they round the vertices
+            if shapely.intersection(taken, poly, grid_size=POLYGON_GRID_M).area > 0:
+                poly = largest_polygon(shapely.difference(poly, taken, grid_size=POLYGON_GRID_M))
         out.append(poly)
-        # a union on the grid may collapse a sliver to a line: only its area is taken
-        union = shapely.union(taken, poly, grid_size=POLYGON_GRID_M)
-        taken = shapely.union_all([g for g in shapely.get_parts(union) if isinstance(g, shapely.Polygon)])
     return out
 
 
