@@ -182,9 +182,10 @@ def segment_rooms(
                 open_sides.append(pair)
             touching[pair] = touching.get(pair, 0.0) + float(np.hypot(*d))
             kinds.setdefault(pair, "door")
-    outside = _outside_regions(cut, labels, kinds, params, grid.scan_xy)
+    visited = _visited(cut, labels, grid.scan_xy, n)
+    outside = _outside_regions(cut, labels, kinds, params, visited)
     if raster.beyond is not None:  # the regions beyond the building's closed outline
-        outside |= regions_beyond(labels, raster.beyond) & ~_visited(cut, labels, grid.scan_xy, n)
+        outside |= regions_beyond(labels, raster.beyond) & ~visited
     for (a, b), kind in kinds.items():
         if kind in ("narrow", "wide") and not (outside[a] or outside[b]):
             sets.merge(a, b)
@@ -264,13 +265,14 @@ def _enclosure(raster: RoomRaster, labels: np.ndarray, n: int | None = None) -> 
 
 
 def _outside_regions(
-    raster: RoomRaster, labels: np.ndarray, kinds: dict, params: RoomParams, scan_xy: np.ndarray | None = None
+    raster: RoomRaster, labels: np.ndarray, kinds: dict, params: RoomParams, visited: np.ndarray
 ) -> np.ndarray:
     """(R + 1,) bool: the regions that are not the building's space: groups of regions
     whose edge lies along walls and seen obstacles for less than
     ``rooms.min_enclosure`` of its length (a fan of rays seen through a window or an
     open door into the outside) and that meet the other regions only through openings
-    no wider than a door, where no scan was taken from (``scan_xy``, (S, 2) metres). A
+    no wider than a door, where no scan was taken from (``visited``, (R + 1,) bool:
+    :func:`_visited`). A
     room seen only through its door is walled on most of its edge (the walls the plan
     found, the obstacles the scans saw), the outside is not."""
     from scipy import ndimage
@@ -281,7 +283,7 @@ def _outside_regions(
         return out
     # never where the scanner was: an open hall whose walls are out of range is walled
     # on little of its edge, but the rover drove in it
-    low = (_enclosure(raster, labels) < params.min_enclosure) & ~_visited(raster, labels, scan_xy, n)
+    low = (_enclosure(raster, labels) < params.min_enclosure) & ~visited
     groups = _sets(n)
     for (a, b), kind in kinds.items():
         if low[a] and low[b] and kind in ("narrow", "wide"):
