@@ -100,6 +100,31 @@ def test_modes_negate_alpha_and_bare_image(tmp_path):
     np.testing.assert_array_equal(grid.free()[::-1], [[0, 1], [0, 1]])
 
 
+def test_a_bare_image_whose_unknown_grey_is_not_205_keeps_its_outside_unknown(tmp_path):
+    """A photographed or re-encoded map: its unknown grey spread over 203-214 (part of
+    it brighter than map_server's free threshold, a shade of 205.02). Read on its own,
+    the free threshold lies midway between the unknown and free shades' modes, so the
+    outside stays unknown; the same image with a yaml keeps the yaml's thresholds."""
+    rng = np.random.default_rng(7)
+    img = two_rooms_image().astype(np.int64)
+    grey = img == 205
+    img[grey] = np.where(rng.random(int(grey.sum())) < 0.6, 205, rng.integers(203, 215, int(grey.sum())))
+    Image.fromarray(img.astype(np.uint8)).save(tmp_path / "photo.png")
+    grid, info = read_occupancy_map(tmp_path / "photo.png")
+    assert info.free_thresh == pytest.approx((255 - (205 + 254) / 2) / 255)
+    free = grid.free()[::-1]
+    assert not free[grey].any()
+    assert free[img == 254].all()
+    yaml = tmp_path / "photo.yaml"
+    yaml.write_text(MAP_YAML.format(image="photo.png", res=RES, x=0, y=0))
+    _, by_yaml = read_occupancy_map(yaml)
+    assert by_yaml.free_thresh == 0.196 and by_yaml.n_free > info.n_free + 0.25 * grey.sum()
+    # a black-and-white drawing has no unknown grey: map_server's threshold stays
+    bw = np.where(two_rooms_image() == 0, 0, 255).astype(np.uint8)
+    Image.fromarray(bw).save(tmp_path / "bw.png")
+    assert read_occupancy_map(tmp_path / "bw.png")[1].free_thresh == 0.196
+
+
 def test_grid_of_classes_keeps_the_classes():
     rng = np.random.default_rng(3)
     labels = rng.integers(0, 3, size=(7, 9))

@@ -22,6 +22,10 @@ The image is read as ROS map_server reads it (``map_server/src/image_loader.cpp`
   ``origin`` (x, y, metres; the map frame is map_server's, so the plan lies on the map
   in RViz).
 
+An image on its own gives no thresholds: its free threshold is found from its shades
+(:func:`image_free_thresh`), so an unknown grey that is not exactly map_saver's 205 is
+not read as floor.
+
 One choice differs from map_server: map_server's trinary mode averages an image's alpha
 channel in with its colours (kept there "to preserve existing behavior"), which reads an
 opaque black pixel of a grey-and-alpha PNG as unknown. Here the colours alone give the
@@ -64,6 +68,11 @@ MAP_MODES = ("trinary", "scale", "raw")
 #: map_server's defaults (its tutorials' and Nav2's): thresholds on ``occ``, not negated.
 DEFAULT_OCCUPIED_THRESH = 0.65
 DEFAULT_FREE_THRESH = 0.196
+#: An image has an unknown grey when its most common shade between map_server's default
+#: thresholds covers at least this share of its pixels: the outside of a building is a
+#: region, while the greys of a black-and-white drawing's antialiased edges are a few
+#: pixels each.
+UNKNOWN_MIN_SHARE = 0.01
 #: The cell size of an image read on its own, metres (ROS maps' usual 5 cm).
 DEFAULT_RESOLUTION_M = 0.05
 #: A pixel is coloured when its channels differ by more than this (of 255): more than
@@ -144,8 +153,8 @@ def read_occupancy_map(path: str | Path, resolution_m: float | None = None) -> t
     ----------
     path : str or Path
         A map_server yaml (its ``image`` resolved beside it), or a ``.pgm`` / ``.png``
-        image read with ``resolution_m`` and origin 0 and map_server's default
-        thresholds.
+        image read with ``resolution_m``, origin 0, map_server's default occupied
+        threshold and a free threshold from its own shades (:func:`image_free_thresh`).
     resolution_m : float, optional
         Metres a pixel of an image on its own (default :data:`DEFAULT_RESOLUTION_M`);
         not allowed with a yaml, which has its own.
@@ -179,6 +188,8 @@ def read_occupancy_map(path: str | Path, resolution_m: float | None = None) -> t
     else:
         raise InputError(f"{path}: not a map (suffix {quoted(path.suffix or 'none', 20)}); {EXPECTED}")
     occ, known = _occupancy(meta["image"], meta["negate"], meta["mode"], where=path)
+    if path.suffix.lower() in MAP_IMAGE_SUFFIXES:  # an image gives no thresholds: its shades do
+        meta["free_thresh"] = image_free_thresh(occ, known, meta["free_thresh"], meta["occupied_thresh"])
     occupied = known & (occ > meta["occupied_thresh"])
     free = known & (occ < meta["free_thresh"])
     _check_classes(path, meta["image"], occ, known, occupied, free)
@@ -193,6 +204,45 @@ def read_occupancy_map(path: str | Path, resolution_m: float | None = None) -> t
         defaults=tuple(defaults),
     )  # fmt: skip
     return grid, info
+
+
+def image_free_thresh(occ: np.ndarray, known: np.ndarray, free_thresh: float, occupied_thresh: float) -> float:
+    """The free threshold of a map that gives none, from its own shades.
+
+    A map image has three shades, one per class; map_saver writes 254 (free), 205
+    (unknown) and 0 (occupied), and map_server's default ``free_thresh`` (0.196, a shade
+    of 205.02) falls a hair above its unknown grey. An image whose unknown grey is not
+    exactly 205 (a photographed, scaled or re-encoded map: its grey spreads over 200-215)
+    is half read as free, and the unknown outside becomes floor. So the threshold
+    between free and unknown is placed midway between the two shades' modes (the
+    nearest-mode rule): the unknown grey is the most common shade in map_server's
+    unknown band (between the default thresholds), the free shade the most common one
+    brighter than it.
+
+    Parameters
+    ----------
+    occ : (H, W) float ndarray
+        Occupancy ``(255 - shade) / 255``.
+    known : (H, W) bool ndarray
+    free_thresh, occupied_thresh : float
+        The thresholds the map would be read with (map_server's defaults).
+
+    Returns
+    -------
+    float
+        The free threshold on ``occ``; ``free_thresh`` when the image has no unknown
+        grey (fewer than :data:`UNKNOWN_MIN_SHARE` of its pixels in the band).
+    """
+    shade = np.rint(255.0 * (1.0 - occ[known])).astype(np.int64).clip(0, 255)
+    counts = np.bincount(shade, minlength=256)
+    lo, hi = math.ceil(255.0 * (1.0 - occupied_thresh)), math.floor(255.0 * (1.0 - free_thresh))
+    if hi < lo or not shade.size:
+        return free_thresh
+    unknown = lo + int(np.argmax(counts[lo : hi + 1]))
+    if counts[unknown] < UNKNOWN_MIN_SHARE * shade.size or unknown >= 255:
+        return free_thresh
+    free = unknown + 1 + int(np.argmax(counts[unknown + 1 :]))
+    return (255.0 - (unknown + free) / 2.0) / 255.0
 
 
 def _load_yaml(path: Path):
