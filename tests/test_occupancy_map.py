@@ -332,3 +332,28 @@ def test_a_wall_drawn_in_grey_divides_the_rooms(tmp_path, shade):
     assert len(areas) == 2 and all(19.0 <= a <= 20.5 for a in areas), areas
     assert len(plan.doors) == 1
     assert 0.8 <= float(plan.doors["width_m"].iloc[0]) <= 1.0
+
+
+def test_the_rays_a_map_holds_beyond_its_walls_are_no_room(tmp_path):
+    """A SLAM map marks free the rays its scans cast through windows and glass into the
+    outside. Here a 3 m window in the north wall of an 8 m x 5 m room lets a fan of free
+    space 5 m deep out, wider than the window: the room ends at the convex hull of the
+    map's walls, and no room lies beyond it (before: the room took the fan, 5 m out)."""
+    from floorscan.floorplan.params import FloorplanParams
+    from floorscan.floorplan.scans import plan_of_scans
+
+    image = np.full((260, 220), 205, np.uint8)  # 5 cm pixels; rows: y from the top
+    image[110:250, 10:210] = 0  # black outer walls, 0.2 m thick
+    image[114:246, 14:206] = 255  # the room: 9.6 m x 6.6 m of floor
+    image[110:114, 80:140] = 255  # a 3 m window in the north wall
+    rows, cols = np.mgrid[0:110, 0:220]
+    image[:110][(rows >= 10) & (np.abs(cols - 110) <= 30 + (110 - rows) * 0.8)] = 255  # the fan, 5 m out
+    path = tmp_path / "fan.png"
+    Image.fromarray(image).save(path)
+    grid, _ = read_occupancy_map(path)
+    plan = plan_of_scans(map_of_grid(grid, None), None, FloorplanParams(), grid)
+    north = grid.origin_xy[1] + (260 - 110) * RES  # the outer face of the north wall
+    assert len(plan.rooms) == 1
+    room = plan.rooms["polygon"].iloc[0]
+    assert room.bounds[3] <= north + 0.05, room.bounds
+    assert 60.0 <= room.area <= 66.0, room.area

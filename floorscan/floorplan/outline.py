@@ -15,8 +15,9 @@ which every scan position is inside. The rover drove inside the building, so the
 closing must hold it; a wider ``D`` would also close the building's concave corners
 and the near ends of the fans. Where the rover drove outside too (a campus, a
 forecourt) the closing grows until it holds those positions and cuts little; where
-none holds them, nothing is cut. A map has no scan positions and needs no closing:
-its outside is what it does not mark free (:mod:`floorscan.floorplan.room_space`).
+none holds them, nothing is cut. A map has no scan positions and no closing: its
+outside is what it does not mark free (:mod:`floorscan.floorplan.room_space`) and what
+lies beyond the convex hull of its walls (:func:`beyond_walls_hull`).
 
 Two bounds on what the border reaches, from the walls and the scans:
 
@@ -165,6 +166,25 @@ def _hull_of_own_walls(walls: np.ndarray, flood: np.ndarray, distance: np.ndarra
     if not len(own):
         return np.zeros(walls.shape, dtype=bool)
     return convex_hull_image(np.isin(pieces, own))
+
+
+def beyond_walls_hull(walls: np.ndarray) -> np.ndarray:
+    """(H, W) bool: the cells outside the convex hull of ``walls`` ((H, W) bool, the
+    plan's wall cells); all False without walls.
+
+    A map has no scan positions to choose a closing by, and its free space holds every
+    ray its scans cast: through the windows and the glass doors of an office, a map
+    marks fans of free space reaching metres into the outside. The building is what
+    its walls enclose, so the space beyond the convex hull of the map's walls is not
+    the building's; a fan inside the hull (at a concave corner) stays for the room
+    step's enclosure test.
+    """
+    from skimage.morphology import convex_hull_image
+
+    walls = np.asarray(walls, dtype=bool)
+    if not walls.any():
+        return np.zeros(walls.shape, dtype=bool)
+    return ~convex_hull_image(walls)
 
 
 def regions_beyond(labels: np.ndarray, beyond: np.ndarray) -> np.ndarray:

@@ -19,7 +19,8 @@ taken from the walls:
    holes without walls filled (the floor under a table); in a recording, without the
    space outside the building's closed outline (:mod:`floorscan.floorplan.outline`:
    the walls and seen obstacles closed by the smallest disc that holds the rover's
-   path). Furniture and clutter are not obstacles: a room's area is its floor area.
+   path), in a map without the space beyond the convex hull of its walls (the rays it
+   holds through windows). Furniture and clutter are not obstacles: a room's area is its floor area.
 2. **Doors between walls** (:func:`~floorscan.floorplan.doors.wall_gaps`): the gap
    between the facing ends of two walls in one line, ``door_min_m`` to ``door_max_m``
    wide, that the scans saw through, is cut from the space first: a room seen only
