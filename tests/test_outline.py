@@ -113,3 +113,19 @@ def test_a_room_seen_through_its_door_whose_far_wall_is_missing_stays_inside_the
     outside, beyond, d = building_outside(solid, RES, np.zeros(2), scans, 2.0, walls=solid)
     assert d == 2.0 and not _at(outside, 10.0, 13.5) and not _at(beyond, 10.0, 13.5)
     assert _at(outside, 10.0, 17.0) and _at(outside, 2.0, 10.0)  # beyond the hull
+
+
+def test_beyond_the_walls_hull_the_parts_the_rover_never_entered_are_outside():
+    """A 5 m gap and a rover that drove to 1.5 m of it: the closing that holds the rover
+    is as wide as the gap, and its round ends leave the mouth of the fan outside the gap
+    to the building. Beyond the convex hull of the building's walls the parts the rover
+    never entered are outside all the same; where it drove out they stay."""
+    solid = _building(5.0)
+    walls = solid.copy()
+    inside_only = np.array([[10.0, 10.0], [13.5, 10.0]])
+    outside, beyond, d = building_outside(solid, RES, np.zeros(2), inside_only, 2.0, walls=walls)
+    assert _at(outside, 15.5, 10.0) and _at(outside, 16.0, 12.0)  # just past the gap, in the fan's mouth
+    assert not _at(outside, 14.5, 10.0) and not outside[52:148, 52:148].any()  # the building stays
+    drove_out = np.array([[10.0, 10.0], [17.0, 10.0]])
+    outside, _, _ = building_outside(solid, RES, np.zeros(2), drove_out, 2.0, walls=walls)
+    assert not _at(outside, 17.0, 10.0) and not _at(outside, 15.5, 10.0)

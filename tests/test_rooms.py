@@ -132,7 +132,8 @@ def test_the_outside_seen_through_an_opening_is_not_a_room():
     axes = np.array(walls, dtype=np.float64)
     rooms, doors = plan_rooms(axes, np.full(len(axes), T), grid)
     assert list(rooms["kind"]) == ["space"] and len(doors) == 0
-    assert 29.5 < rooms["area_m2"].iloc[0] < 31.5 and rooms["polygon"].iloc[0].bounds[1] > -0.2
+    # the room ends in its opening, within two 0.1 m cells of the wall's outer face (y -0.06)
+    assert 29.5 < rooms["area_m2"].iloc[0] < 31.5 and rooms["polygon"].iloc[0].bounds[1] > -0.25
 
 
 # A corridor (y 0..1.5) along three offices (y 1.5..4.5) open to it on their whole

@@ -25,7 +25,10 @@ Two bounds on what the border reaches, from the walls and the scans:
   next to the space the closing holds, not a facade across the street seen through a
   window) it is not outside: a room the rover saw only through its door, whose far
   wall the scans never saw, lets the closing in, and the walls around it say it is
-  the building's;
+  the building's; beyond that hull, every part the rover never entered is outside,
+  whether the closing reaches it or not (the fans a gap as wide as the closing's
+  diameter lets out, which the closing's round ends leave), as for a map
+  (:func:`beyond_walls_hull`);
 - a part of the space the closing seals off, where the rover never was and which the
   scans saw less than half of (a courtyard, seen through the windows around it), is
   outside wherever it lies; a room seen through its door is seen for the most part.
@@ -135,8 +138,16 @@ def building_outside(
             lo, hi = (lo, mid) if holds(mid) else (mid, hi)
     flood = _outside(distance, hi)
     outside = flood.copy()
+    unentered = None
     if walls is not None and np.any(walls):
-        outside &= ~_hull_of_own_walls(np.pad(np.asarray(walls, dtype=bool), 1), flood, distance, hi, resolution_m)
+        hull = _hull_of_own_walls(np.pad(np.asarray(walls, dtype=bool), 1), flood, distance, hi, resolution_m)
+        outside &= ~hull
+        if hull.any():  # beyond the hull, the parts the rover never entered
+            parts, n = ndimage.label(~hull & (distance > 0))
+            entered = np.zeros(n + 1, dtype=bool)
+            entered[parts[rows, cols]] = True
+            entered[0] = True
+            unentered = ~entered[parts]
     if seen is not None:  # the courtyards: sealed off, not visited, mostly unseen
         parts, n = ndimage.label((distance > hi / 2) & ~flood)
         if n:
@@ -145,8 +156,12 @@ def building_outside(
             court = np.r_[False, unseen]
             court[parts[rows, cols]] = False
             outside |= court[parts]
-    # grown back by the closing's radius: the outside ends at the walls' faces
+    # grown back by the closing's radius: the outside ends at the walls' faces; the
+    # parts beyond the hull end there already
     beyond = ndimage.distance_transform_edt(~outside) * resolution_m <= hi / 2
+    if unentered is not None:
+        outside |= unentered
+        beyond |= unentered
     log.info("rooms: the building's outline closed by a disc of %.2f m, the smallest that holds the %d scan positions",
              hi, len(rows))
     return outside[1:-1, 1:-1], beyond[1:-1, 1:-1], hi
