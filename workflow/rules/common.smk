@@ -260,7 +260,7 @@ def walls_extract_config(wildcards):
 def walls_map_config(wildcards):
     """The `walls` keys the map extractor reads: the scan points, the seed, `map`."""
     cfg = stage_config("walls")(wildcards)
-    return {key: cfg[key] for key in ("seed", "height_band_m", "planar_tolerance_m", "grid_m", "map") if key in cfg}
+    return {key: cfg[key] for key in ("seed", "height_band_m", "map") if key in cfg}
 
 
 def hulls_config(wildcards):
