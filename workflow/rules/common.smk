@@ -114,7 +114,6 @@ SCHEMA_DIR = Path(workflow.basedir) / "workflow" / "schemas"
 # stage_config(stage), with the dataset's overrides, in every rule.
 FILE_GRID_KEYS = {
     "walls": ("k", "orderings", "extractors"),
-    "floorplan": ("evaluation_formats",),
     "score": ("figure_k",),
 }
 
