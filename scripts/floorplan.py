@@ -1,6 +1,6 @@
 """Stage floorplan, the evaluation grid: the plan of the first k scans of every ordering
 and k of one extractor (floorscan.floorplan.grid), as Parquet tables for the score stage
-and in the formats of floorplan.evaluation_formats for people, in the map frame."""
+and in the formats of floorscan.floorplan.EVALUATION_FORMATS for people, in the map frame."""
 from floorscan.core.io import read_table
 from floorscan.core.stage import stage_log
 from floorscan.floorplan import floorplan_outputs

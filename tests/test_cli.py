@@ -91,7 +91,7 @@ def test_the_config_it_writes(tmp_path, monkeypatch):
     (tmp_path / "floor.png").write_bytes(b"")
     args, _ = run_args("my data/lab run.bag", "--set", "select.k=5", "--set", "scan_topic=/base_scan",
                        "--set", "resolution_m=0.1", "--set", "walls.k=[5, all]", "--set", "select.k_coverage=0.95",
-                       "--set", "pose.source=tf", "--set", "walls.ransac.threshold_m=0.03",
+                       "--set", "pose.source=tf", "--set", "walls.map.support_cell_m=0.04",
                        "--set", "datasets.lab.params.select.k=auto")
     config = cli.run_config(args)
     assert config == {
@@ -100,7 +100,7 @@ def test_the_config_it_writes(tmp_path, monkeypatch):
         "select": {"k": 5, "k_coverage": 0.95},
         "path_options": {"scan_topic": "/base_scan", "pose": {"source": "tf"}},
         "resolution_m": 0.1,
-        "walls": {"k": [5, "all"], "ransac": {"threshold_m": 0.03}},
+        "walls": {"k": [5, "all"], "map": {"support_cell_m": 0.04}},
         "datasets": {"lab": {"params": {"select": {"k": "auto"}}}},
     }
     args, _ = run_args("my data/", "../" + tmp_path.name + "/floor.png", "--evaluate")  # normalised

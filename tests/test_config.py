@@ -234,8 +234,8 @@ def test_a_number_that_is_not_finite_is_rejected_naming_its_key(value):
     cfg = {"datasets": {"x": {"path": "/d/r.bag", "params": {"walls": {"k": [5, value]}}}}}
     with pytest.raises(ConfigError, match=r"^datasets\.x\.params\.walls\.k\.1: "):
         validate_config(cfg, SCHEMA)
-    with pytest.raises(ConfigError, match=r"^walls\.ransac\.threshold_m: "):
-        validate_config({"ransac": {"threshold_m": value}}, REPO / "workflow" / "schemas" / "walls.schema.yaml", "walls")
+    with pytest.raises(ConfigError, match=r"^walls\.map\.support_cell_m: "):
+        validate_config({"map": {"support_cell_m": value}}, REPO / "workflow" / "schemas" / "walls.schema.yaml", "walls")
 
 
 def test_a_misspelt_stage_under_params_lists_the_stages():
@@ -303,8 +303,7 @@ def test_schema_defaults_give_a_dataclass_the_schema_defaults_once():
 
     from floorscan.core.config import schema_defaults, schema_section_defaults
 
-    ransac = schema_section_defaults("walls.ransac")
-    assert ransac["threshold_m"] == 0.03 and ransac["iterations"] == 200
+    assert schema_section_defaults("walls.map") == {"support_cell_m": 0.05}
 
     @dataclasses.dataclass(frozen=True)
     @schema_defaults("walls", low_m=lambda d: d["height_band_m"][0])
@@ -379,12 +378,14 @@ def test_command_line_strings_reach_the_schema_with_their_types():
 @pytest.mark.parametrize(
     "module, cls, section, message",
     [
-        ("floorscan.walls.params", "RansacParams", {"max_iterations": 50},
-         r"walls\.ransac\.max_iterations: unknown key; expected one of \['coverage_gap_m', 'iterations', "),
+        ("floorscan.walls.map_lines", "MapParams", {"max_iterations": 50},
+         r"walls\.map\.max_iterations: unknown key; expected one of \['grid_m', 'iterations', "),
         ("floorscan.register.params", "RegistrationConfig", {"graph": {"loop_radius": 3.0}},
          r"register\.graph\.loop_radius: unknown key; expected one of \['agreement_fitness_ratio', "),
         ("floorscan.floorplan.params", "FloorplanParams", {"structure": {"snap": 0.1}},
          r"floorplan\.structure\.snap: unknown key; expected one of \['clutter_max_length_m', "),
+        ("floorscan.floorplan.params", "FloorplanParams", {"rooms": {"door_width_m": 0.8}},
+         r"floorplan\.rooms\.door_width_m: unknown key; expected one of \['close_m', "),
         ("floorscan.score.params", "ScoreParams", {"tau_m": 0.1},
          r"score\.tau_m: unknown key; expected one of \['cell_m', "),
         ("floorscan.ingest.params", "IngestParams", {"carmen_fov": 3.14},
@@ -392,7 +393,7 @@ def test_command_line_strings_reach_the_schema_with_their_types():
         ("floorscan.select.figure_data", "FigureParams", {"figure_k": [1, 5]},
          r"select\.figure_k: unknown key; expected one of \['coverage', "),
     ],
-    ids=["walls.ransac", "register.graph", "floorplan.structure", "score", "ingest", "select(figures)"],
+    ids=["walls.map", "register.graph", "floorplan.structure", "floorplan.rooms", "score", "ingest", "select(figures)"],
 )
 def test_an_unknown_key_is_one_config_error_naming_it_in_every_stage(module, cls, section, message):
     """Every stage builds its parameters with stage_params: an unknown key, top-level or
@@ -415,18 +416,19 @@ def test_stage_params_checks_values_against_the_schema_and_builds_subsections():
     from floorscan.floorplan.params import FloorplanParams
     from floorscan.register.params import RegistrationConfig
     from floorscan.select.params import SelectParams
+    from floorscan.walls.map_lines import MapParams
     from floorscan.walls.params import RansacParams
     from floorscan.core.wall_points import ScanParams
 
-    with pytest.raises(ConfigError, match=r"^walls\.ransac\.iterations: 'many' is not of type 'integer'"):
-        stage_params(RansacParams, {"iterations": "many"})
+    with pytest.raises(ConfigError, match=r"^walls\.map\.support_cell_m: 'fine' is not of type 'number'"):
+        stage_params(MapParams, {"support_cell_m": "fine"})
     enum = yaml.safe_load((REPO / "workflow/schemas/register.schema.yaml").read_text())["properties"]["mode"]["enum"]
     with pytest.raises(ConfigError, match=rf"^register\.mode: 'bogus' is not one of {enum!r}".replace("[", r"\[")):
         stage_params(RegistrationConfig, {"mode": "bogus"})
     with pytest.raises(ConfigError, match=r"^register\.max_lost_fraction: 1\.5 is greater than the maximum of 1"):
         stage_params(RegistrationConfig, {"max_lost_fraction": 1.5})
-    with pytest.raises(ConfigError, match=r"^walls\.ransac\.threshold_m: nan: expected a finite number"):
-        stage_params(RansacParams, {"threshold_m": float("nan")})
+    with pytest.raises(ConfigError, match=r"^floorplan\.rooms\.door_min_m: nan: expected a finite number"):
+        stage_params(FloorplanParams, {"rooms": {"door_min_m": float("nan")}})
     with pytest.raises(ConfigError, match=r"^floorplan\.georeference\.lon: missing"):
         stage_params(FloorplanParams, {"georeference": {"lat": 50.0}})
     plan = stage_params(FloorplanParams, {"extractor": "map", "structure": {"snap_m": 0.2}, "georeference": {"lat": 50, "lon": 8}})
@@ -448,8 +450,8 @@ def test_a_null_subsection_the_schema_allows_is_none():
     from floorscan.floorplan.params import FloorplanParams
 
     assert stage_params(FloorplanParams, {"georeference": None}).georeference is None
-    with pytest.raises(ConfigError, match=r"floorplan\.structure: None is not of type 'object'"):
-        stage_params(FloorplanParams, {"structure": None})
+    with pytest.raises(ConfigError, match=r"floorplan\.rooms: None is not of type 'object'"):
+        stage_params(FloorplanParams, {"rooms": None})
 
 
 def test_schema_enum_is_the_schemas_own_list():
@@ -458,7 +460,7 @@ def test_schema_enum_is_the_schemas_own_list():
     from floorscan.select.params import RADIUS_RULES
     from floorscan.walls.params import MEANSHIFT_METHODS
 
-    assert schema_enum("floorplan", "evaluation_formats") == ("geojson", "svg", "dxf", "ifc")  # an array's items
+    assert schema_enum("walls", "extractors") == ("ransac", "cluster_ransac")  # an array's items
     assert (DXF_VERSIONS, RADIUS_RULES, MEANSHIFT_METHODS) == (
         ("R2010", "R12"), ("nearest_centre", "global_min"), ("numpy", "sklearn"))
     with pytest.raises(KeyError, match="no enum"):

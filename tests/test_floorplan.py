@@ -140,26 +140,33 @@ def test_bad_config_and_columns_are_named():
 
 
 def test_schema_defaults_agree_with_floorplan_params():
+    """The options' defaults are the schema's, the other fields' the named constants."""
+    from floorscan.floorplan import free_space, params, room_space
+
     schema = yaml.safe_load((REPO / "workflow/schemas/floorplan.schema.yaml").read_text())["properties"]
     defaults = {k: v.get("default") for k, v in schema.items()}  # georeference: none, unset
-    # the workflow's keys: the recommended plan's extractor, the evaluation grid's formats
-    assert {k: defaults.pop(k) for k in WORKFLOW_KEYS} == {"extractor": "map", "evaluation_formats": ["svg"]}
-    # the structure passes' and the rooms' sections: their own dataclasses, filled from the schema's defaults
-    for section in ("structure", "rooms"):
-        assert defaults.pop(section) == {}
-        properties = schema[section]["properties"]
-        assert {k: v["default"] for k, v in properties.items()} == vars(getattr(FloorplanParams(), section))
-    fields = [f for f in FloorplanParams.__dataclass_fields__ if f not in ("structure", "rooms")]
-    assert defaults == {f: getattr(FloorplanParams(), f) for f in fields}
-    assert stage_params(FloorplanParams, {"extractor": "cluster_ransac", "evaluation_formats": ["geojson"]}) == FloorplanParams()
+    # the workflow's key: the recommended plan's extractor
+    assert {k: defaults.pop(k) for k in WORKFLOW_KEYS} == {"extractor": "map"}
+    assert defaults.pop("rooms") == {}
+    rooms = vars(FloorplanParams().rooms)
+    for key, prop in schema["rooms"]["properties"].items():
+        assert rooms.pop(key) == prop["default"]
+    assert rooms == {k: getattr(room_space, k.upper()) for k in rooms}
+    structure = vars(FloorplanParams().structure)
+    assert structure == {k: getattr(free_space, k.upper()) for k in structure}
+    plan = {f: getattr(FloorplanParams(), f) for f in FloorplanParams.__dataclass_fields__ if f not in ("structure", "rooms")}
+    assert {k: plan.pop(k) for k in defaults} == defaults
+    assert plan == {k: getattr(params, k.upper()) for k in plan}
+    assert stage_params(FloorplanParams, {"extractor": "cluster_ransac"}) == FloorplanParams()
 
 
 def test_export_registry_names_the_formats_of_the_schema():
-    """FLOORPLAN_FORMATS is the registry's; the schema's evaluation formats are its
-    names; a plan's files are its stem and each format's suffix."""
-    schema = yaml.safe_load((REPO / "workflow/schemas/floorplan.schema.yaml").read_text())["properties"]
+    """FLOORPLAN_FORMATS is the registry's; the evaluation grid's formats are some of
+    them; a plan's files are its stem and each format's suffix."""
+    from floorscan.floorplan import EVALUATION_FORMATS
+
     assert FLOORPLAN_FORMATS == tuple(EXPORT_FORMATS) and {"geojson", "svg", "dxf", "ifc"} <= set(FLOORPLAN_FORMATS)
-    assert sorted(schema["evaluation_formats"]["items"]["enum"]) == sorted(FLOORPLAN_FORMATS)
+    assert EVALUATION_FORMATS == ("svg",)
     assert floorplan_outputs("r/floorplan", ["svg", "geojson"]) == {"svg": "r/floorplan.svg", "geojson": "r/floorplan.geojson"}
     with pytest.raises(KeyError, match="pdf"):
         floorplan_outputs("r/floorplan", ["pdf"])

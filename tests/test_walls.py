@@ -322,13 +322,15 @@ def test_first_k_walls_takes_the_first_k_scans_of_the_ordering():
 
 
 def test_schema_defaults_agree_with_the_parameter_classes():
+    """The options' defaults are the schema's; the extractors' thresholds are no options
+    (no section of the schema) and default to the constants of floorscan.walls.params."""
+    from floorscan.walls import params
+
     schema = yaml.safe_load((REPO / "workflow/schemas/walls.schema.yaml").read_text())["properties"]
-    for section, cls in (("ransac", RansacParams), ("cluster_ransac", ClusterParams)):
-        defaults = {k: v["default"] for k, v in schema[section]["properties"].items()}
-        assert defaults == {f: getattr(cls(), f) for f in cls.__dataclass_fields__}
+    assert "ransac" not in schema and "cluster_ransac" not in schema and "grid_m" not in schema
     assert schema["height_band_m"]["default"] == [ScanParams.min_height_m, ScanParams.max_height_m]
-    assert schema["planar_tolerance_m"]["default"] == ScanParams.planar_tolerance_m
-    assert schema["grid_m"]["default"] == ScanParams.grid_m
+    assert RansacParams() == RansacParams(**{f: getattr(params, f.upper()) for f in RansacParams.__dataclass_fields__})
+    assert ClusterParams() == ClusterParams(**{f: getattr(params, f.upper()) for f in ClusterParams.__dataclass_fields__})
 
 
 def _legs(center, size, leg=0.05):
@@ -595,7 +597,7 @@ def test_the_schema_enum_names_the_registered_extractors():
 
     schema = yaml.safe_load((REPO / "workflow/schemas/walls.schema.yaml").read_text())["properties"]
     assert schema["extractors"]["items"]["enum"] == list(EXTRACTORS) == ["ransac", "cluster_ransac"]
-    assert EXTRACT_KEYS == ("seed", "height_band_m", "planar_tolerance_m", "grid_m", "ransac", "cluster_ransac")
+    assert EXTRACT_KEYS == ("seed", "height_band_m")
     assert all(key in schema for key in EXTRACT_KEYS)
     with pytest.raises(ValueError, match="unknown extractor 'hough'; expected one of"):
         get_extractor("hough")

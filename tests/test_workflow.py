@@ -90,7 +90,7 @@ def test_default_run_selection_walls_and_scores(default_run):
         assert mi.loc[("cluster_hull", ext, "all"), "plan_f1_5cm"] >= 0.88
         # recall against every face is lower: rooms C and D are only seen through doors
         assert 0.6 < mi.loc[("cluster_hull", ext, "all"), "recall_all_5cm"] < 0.85
-    # floorplan.evaluation_formats (svg); the recommended plan has all four
+    # floorscan.floorplan.EVALUATION_FORMATS (svg); the recommended plan has all four
     assert (out / "evaluation" / "floorplan" / "cluster_hull_cluster_ransac_k15.svg").stat().st_size > 500
     for fmt in ("geojson", "ifc"):
         assert not (out / "evaluation" / "floorplan" / f"cluster_hull_cluster_ransac_k15.{fmt}").exists()

@@ -11,7 +11,12 @@ through its stage's typed parameter dataclass, one way for every stage and subse
 section, :func:`stage_params` builds it from a section, checking each key and value
 against that section of the schema (:class:`ConfigError` naming the key)::
 
-    ransac = stage_params(RansacParams, config["walls"]["ransac"])   # "walls.ransac"
+    support = stage_params(MapParams, config["walls"]["map"])   # "walls.map"
+
+A threshold a user has no reason to set is no option: it is a named constant of the
+module that uses it (or of its stage's params module), the default of a field of the
+parameter class, with its reason and source beside it. The schema then has no such
+key, so a config that sets it stops with the schema's ``unknown key`` message naming it.
 """
 
 from __future__ import annotations
@@ -53,7 +58,7 @@ def load_schema(path: str) -> dict:
 
 
 def _section_properties(section: str) -> dict[str, Any]:
-    """The ``properties`` of a section of a stage schema (``"walls"``, ``"walls.ransac"``)."""
+    """The ``properties`` of a section of a stage schema (``"walls"``, ``"walls.map"``)."""
     stage, *keys = section.split(".")
     node = _schema(stage)
     for key in keys:
@@ -71,7 +76,7 @@ def schema_enum(section: str, key: str) -> tuple:
     Parameters
     ----------
     section : str
-        A stage schema's section, ``"hulls"``, ``"walls.cluster_ransac"``.
+        A stage schema's section, ``"hulls"``, ``"floorplan.rooms"``.
     key : str
         The property.
 
@@ -100,7 +105,7 @@ def schema_section_defaults(section: str) -> dict[str, Any]:
     ----------
     section : str
         ``"<stage>"`` or ``"<stage>.<key>[.<key>...]"`` for a nested object, e.g.
-        ``"walls.ransac"``.
+        ``"walls.map"``.
 
     Returns
     -------
@@ -129,10 +134,10 @@ def schema_defaults(section: str, **derived: Callable[[dict], Any]) -> Callable[
     the package reads has the same defaults::
 
         @dataclass(frozen=True)
-        @schema_defaults("walls.ransac")
-        class RansacParams:
-            threshold_m: float
-            iterations: int
+        @schema_defaults("walls.map")
+        class MapParams:
+            support_cell_m: float
+            grid_m: float = MAP_GRID_M   # no option: a constant of the code
 
     A property without a default (``required`` in the schema) stays a field without a
     default. A list or mapping default becomes a ``default_factory`` (each instance its
@@ -188,7 +193,10 @@ def stage_params(cls: type[T], values: "T | Mapping[str, Any] | None", name: str
     Parameters
     ----------
     cls : dataclass type
-        A parameter class of :func:`schema_defaults` (its section, e.g. ``"walls.ransac"``).
+        A parameter class of :func:`schema_defaults` (its section, e.g. ``"walls.map"``),
+        or a dataclass whose defaults are constants of the code and no option
+        (e.g. :class:`floorscan.walls.params.RansacParams`): built from the keys of
+        ``values`` that are its fields, without a schema to check them against.
     values : mapping, None or cls
         The config section (None: the defaults); an instance of ``cls`` is returned as
         it is.
@@ -214,10 +222,10 @@ def stage_params(cls: type[T], values: "T | Mapping[str, Any] | None", name: str
     """
     if isinstance(values, cls):
         return values
-    section, derived = PARAMS_SECTIONS[cls]
-    name = name or section
+    section, derived = PARAMS_SECTIONS.get(cls, (None, {}))
+    name = name or section or cls.__name__
     values = dict(values or {})
-    props = _section_properties(section)
+    props = _section_properties(section) if section else {}
     fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
     known = sorted(set(props) | {f for f in fields if f not in derived})
     for key in values:

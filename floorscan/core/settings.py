@@ -32,7 +32,7 @@ def setting(key: str, text: str) -> tuple[list[str], Any]:
     goes in the config and its value, typed by the schemas.
 
     The dotted ``key`` is walked through the config schema, and into a stage's own
-    schema at its section (``select.k``, ``datasets.lab.params.walls.ransac.threshold_m``).
+    schema at its section (``select.k``, ``datasets.lab.params.walls.map.support_cell_m``).
     A key of a dataset that is not a top-level key (``scan_topic``, ``pose.source``)
     goes under ``path_options``: the recordings of ``path`` get it. The text is read as
     YAML and taken when the schema allows that value (``5`` an integer, ``true`` a

@@ -21,16 +21,21 @@ from floorscan.core.config import ConfigError, schema_defaults
 from floorscan.core.grid import cell_means
 
 
+#: A scan whose z values span at most this is 2D, metres: a 2D scanner gives one height, a 3D scan spans metres.
+PLANAR_TOLERANCE_M = 0.01
+#: 3D scans: one mean point per cell of this side, metres: below the RANSAC inlier distance (3 cm), so no wall moves.
+GRID_M = 0.02
+
+
 @dataclass(frozen=True)
 @schema_defaults(
     "walls",
     min_height_m=lambda d: float(d["height_band_m"][0]),
     max_height_m=lambda d: float(d["height_band_m"][1]),
-    planar_tolerance_m=lambda d: float(d["planar_tolerance_m"]),
-    grid_m=lambda d: float(d["grid_m"]),
 )
 class ScanParams:
-    """How a scan becomes 2D wall points (config ``walls``: height band and grid).
+    """How a scan becomes 2D wall points (config ``walls.height_band_m``; the 2D rule
+    and the grid are the module's constants).
 
     Attributes
     ----------
@@ -46,8 +51,8 @@ class ScanParams:
 
     min_height_m: float
     max_height_m: float
-    planar_tolerance_m: float
-    grid_m: float
+    planar_tolerance_m: float = PLANAR_TOLERANCE_M
+    grid_m: float = GRID_M
 
     def __post_init__(self):
         if not self.min_height_m < self.max_height_m:

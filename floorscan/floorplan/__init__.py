@@ -68,8 +68,6 @@ Adding an export format
    :class:`~floorscan.floorplan.writer.FloorplanWriter` writes and the files of the
    recommended plan (``results/<dataset>/floorplan<suffix>``,
    workflow/rules/floorplan.smk).
-3. Add ``<name>`` to the enum of ``evaluation_formats`` in
-   workflow/schemas/floorplan.schema.yaml, so the evaluation grid may write it too.
 
 tests/test_floorplan.py writes every registered format twice and compares the bytes;
 add a test that opens the new format with its own tool.
@@ -108,8 +106,7 @@ class ExportFormat:
     write: Callable[[PlanExports, str | os.PathLike, PlanMetadata, FloorplanParams], None]
 
 
-#: The export formats: name (as in ``floorplan.evaluation_formats``) -> file suffix and
-#: writer. The one place a format is registered (see the package docstring).
+#: The export formats: name -> file suffix and writer. The one place a format is registered (see the package docstring).
 EXPORT_FORMATS: dict[str, ExportFormat] = {
     "geojson": ExportFormat(".geojson", geojson.export),
     "svg": ExportFormat(".svg", svg.export),
@@ -120,6 +117,10 @@ EXPORT_FORMATS: dict[str, ExportFormat] = {
 #: Names of the export formats, in the order of :data:`EXPORT_FORMATS` (the recommended
 #: plan is written in all of them; workflow/rules/floorplan.smk imports this).
 FLOORPLAN_FORMATS = tuple(EXPORT_FORMATS)
+
+#: Formats of the evaluation grid's plans for people (evaluation/floorplan/): SVG, to look at; the score
+#: stage reads the grid's Parquet tables, and the recommended plan is written in every format.
+EVALUATION_FORMATS = ("svg",)
 
 
 def floorplan_outputs(stem: str, formats: Iterable[str]) -> dict[str, str]:

@@ -1,5 +1,5 @@
 """The free space of a plan's scans, as the structure passes probe it: their parameters
-(:class:`StructureParams`, config ``floorplan.structure``), which cells the rover saw
+(:class:`StructureParams`, the constants below), which cells the rover saw
 free (:func:`passable`), a mask read at points (:func:`mask_at`) and points along faces
 (:func:`segment_samples`). Used by :mod:`~floorscan.floorplan.structure`,
 :mod:`~floorscan.floorplan.clutter` and :mod:`~floorscan.floorplan.junctions`.
@@ -11,32 +11,66 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from floorscan.core.config import schema_defaults
 from floorscan.core.occupancy import OccupancyGrid
 
 
-@dataclass(frozen=True)
-@schema_defaults("floorplan.structure")
-class StructureParams:
-    """Parameters of the structure passes (config ``floorplan.structure``; see the
-    module docstring). Lengths in metres, angles in degrees."""
+# The structure passes' thresholds (floorscan.floorplan.structure: walls bound the free space the rover saw,
+# Bormann et al., ICRA 2016; clutter, thesis section 2.3): sizes of walls and furniture, not a user's choice.
+#: Free space is probed this far to each side of a face, metres: past a wall's half thickness and the map's cells.
+SIDE_OFFSET_M = 0.15
+#: A wall has free space on at least one side over this fraction of its length: the rest may be occluded by furniture.
+MIN_FREE_SIDE = 0.3
+#: Collinear faces at most this far apart are joined unless free space passes the gap, metres: an occlusion by furniture.
+JOIN_MAX_GAP_M = 1.5
+#: Collinear: the shorter face's ends lie within this of the longer face's line, metres: two map cells and the noise.
+JOIN_OFFSET_M = 0.08
+#: Collinear: directions differ by at most this, degrees: one wall seen in pieces by scans of different headings.
+JOIN_ANGLE_DEG = 5.0
+#: A gap holding a run of free cells this long on the faces' line is an opening, not joined, metres: a narrow door.
+MIN_OPENING_M = 0.5
+#: Ends within this of a junction with another face move onto it, metres: a wall's own thickness and a missed corner.
+SNAP_M = 0.4
+#: Faces meet in a junction when their directions differ by at least this, degrees: a corner, not one bent wall.
+JUNCTION_MIN_ANGLE_DEG = 30.0
+#: A group of returns is an object in free space when at least this fraction of the cells around it are free.
+OBJECT_FREE_AROUND = 0.6
+#: A short face parallel to a long wall this far or more in front of it (free side), metres: off the wall's face ...
+FRONT_MIN_M = 0.2
+#: ... and at most this far is a desk, cabinet or shelf against the wall, metres: the depth of a desk or a cabinet ...
+FRONT_MAX_M = 0.9
+#: ... when it lies along the wall over at least this fraction of its length: furniture stands along the wall.
+FRONT_OVERLAP = 0.8
+#: Walls lying on each other (within a wall's thickness) whose directions differ by at most this are one wall, degrees.
+DUPLICATE_ANGLE_DEG = 20.0
+#: Objects in free space shorter than this are furniture, metres: the longest desk, shelf or row of chairs is shorter.
+CLUTTER_MAX_LENGTH_M = 2.5
+#: Faces shorter than this without a junction are clutter, metres: a wall that meets no other is at least this long.
+MIN_WALL_LENGTH_M = 0.5
+#: A face that meets no face, none in its line within this, free at both ends, stands in the room (clutter), metres.
+LOOSE_REACH_M = 2.5
 
-    side_offset_m: float
-    min_free_side: float
-    join_max_gap_m: float
-    join_offset_m: float
-    join_angle_deg: float
-    min_opening_m: float
-    snap_m: float
-    junction_min_angle_deg: float
-    object_free_around: float
-    front_min_m: float
-    front_max_m: float
-    front_overlap: float
-    duplicate_angle_deg: float
-    clutter_max_length_m: float
-    min_wall_length_m: float
-    loose_reach_m: float
+
+@dataclass(frozen=True)
+class StructureParams:
+    """Parameters of the structure passes (see the module docstring; defaults: the
+    module's constants, no config option). Lengths in metres, angles in degrees."""
+
+    side_offset_m: float = SIDE_OFFSET_M
+    min_free_side: float = MIN_FREE_SIDE
+    join_max_gap_m: float = JOIN_MAX_GAP_M
+    join_offset_m: float = JOIN_OFFSET_M
+    join_angle_deg: float = JOIN_ANGLE_DEG
+    min_opening_m: float = MIN_OPENING_M
+    snap_m: float = SNAP_M
+    junction_min_angle_deg: float = JUNCTION_MIN_ANGLE_DEG
+    object_free_around: float = OBJECT_FREE_AROUND
+    front_min_m: float = FRONT_MIN_M
+    front_max_m: float = FRONT_MAX_M
+    front_overlap: float = FRONT_OVERLAP
+    duplicate_angle_deg: float = DUPLICATE_ANGLE_DEG
+    clutter_max_length_m: float = CLUTTER_MAX_LENGTH_M
+    min_wall_length_m: float = MIN_WALL_LENGTH_M
+    loose_reach_m: float = LOOSE_REACH_M
 
 
 def passable(grid: OccupancyGrid) -> np.ndarray:

@@ -4,7 +4,7 @@ first k scans of every ordering and k of the walls stage's grid, for one extract
 Every plan is built by the one plan builder (:class:`~floorscan.floorplan.scans.ScanPlans`,
 prepared once for the extractor's per-scan walls) and written as Parquet tables
 (:func:`~floorscan.floorplan.scans.write_plan`, ``evaluation/plans/<ordering>_<extractor>_k<k>/``),
-which the score stage reads, and in the formats of ``floorplan.evaluation_formats``
+which the score stage reads, and in the formats of :data:`floorscan.floorplan.EVALUATION_FORMATS`
 for people (``evaluation/floorplan/<ordering>_<extractor>_k<k>.*``). A plan of the
 same scans as an earlier one (every ordering's ``k = all``) is built once and written
 again with its own metadata (:class:`~floorscan.floorplan.writer.FloorplanWriter`).

@@ -2,7 +2,7 @@
 into L, T and X junctions (:func:`snap_junctions`), near-parallel duplicates merged
 (:func:`merge_parallel_duplicates`), short loose pieces found (:func:`short_loose`).
 Sources: the topology of CAD wall graphs (walls meet at their ends or along another);
-the tolerances are ours (config ``floorplan.structure``).
+the tolerances are ours (:class:`~floorscan.floorplan.free_space.StructureParams`).
 """
 
 from __future__ import annotations

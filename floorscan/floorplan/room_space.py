@@ -1,5 +1,5 @@
 """The raster the rooms of a floor plan are cut from (:mod:`floorscan.floorplan.rooms`,
-steps 1 and 2): :class:`RoomParams` (config ``floorplan.rooms``), the space the plan's
+steps 1 and 2): :class:`RoomParams` (config ``floorplan.rooms`` and constants), the space the plan's
 scans saw free bounded by its walls (:func:`room_space`, a :class:`RoomRaster`) and its
 watershed regions (:func:`space_regions`). Source: the distance-transform room
 segmentation of Bormann et al., ICRA 2016 (see :mod:`floorscan.floorplan.rooms`).
@@ -19,27 +19,53 @@ from floorscan.floorplan.free_space import passable
 from floorscan.floorplan.outline import beyond_walls_hull, building_outside
 
 
+# The room segmentation's thresholds (floorscan.floorplan.rooms; Bormann et al., ICRA 2016); the door widths and
+# the smallest room are options (config floorplan.rooms).
+#: Cell of the room raster, metres (rounded to whole occupancy cells): finer than a door, coarse enough for a quick watershed.
+RESOLUTION_M = 0.1
+#: The seen free space is opened by a disc of this radius, metres: fans of rays narrower than 0.3 m (windows) are no space.
+FREE_OPEN_M = 0.15
+#: The space is closed with the walls by a disc of this radius, metres: unseen strips behind furniture join the room.
+CLOSE_M = 0.4
+#: A maximum of the distance to the walls seeds a region when this far above the saddles around it, metres: a door's jambs.
+MARKER_DEPTH_M = 0.15
+#: A door lies in a wall's line: their directions differ by at most this, degrees: jambs seen over a short span, not a diagonal.
+DOOR_ANGLE_DEG = 20.0
+#: Two walls are in one line when the shorter's ends lie within this plus half the thicker of the longer's, metres: a frame's step.
+LINE_OFFSET_M = 0.12
+#: Each end of a door lies within this of a wall, metres: a door frame and the scan's gap at its edge.
+JAMB_M = 0.35
+#: A region walled along less than this fraction of its edge, seen through a door, is outside: a room is walled on most sides.
+MIN_ENCLOSURE = 0.25
+#: A room whose length (area over width) is at least this times its width (a corridor is long and narrow, Bormann et al.) ...
+CORRIDOR_ELONGATION = 4.0
+#: ... and at least this long, metres (shorter: a closet or an entrance) ...
+CORRIDOR_MIN_LENGTH_M = 3.0
+#: ... is a corridor when at most this wide (median local thickness), metres: wider is a hall.
+CORRIDOR_MAX_WIDTH_M = 3.0
+
 
 @dataclass(frozen=True)
 @schema_defaults("floorplan.rooms")
 class RoomParams:
-    """Parameters of the room segmentation (config ``floorplan.rooms``; see the module
-    docstring). Lengths in metres, areas in square metres, angles in degrees."""
+    """Parameters of the room segmentation (see the module docstring): the door widths
+    and the smallest room from config ``floorplan.rooms``, the others the module's
+    constants. Lengths in metres, areas in square metres, angles in degrees."""
 
-    resolution_m: float
-    free_open_m: float
-    close_m: float
-    marker_depth_m: float
+    resolution_m: float = RESOLUTION_M
+    free_open_m: float = FREE_OPEN_M
+    close_m: float = CLOSE_M
+    marker_depth_m: float = MARKER_DEPTH_M
     door_min_m: float
     door_max_m: float
-    door_angle_deg: float
-    line_offset_m: float
-    jamb_m: float
-    min_enclosure: float
+    door_angle_deg: float = DOOR_ANGLE_DEG
+    line_offset_m: float = LINE_OFFSET_M
+    jamb_m: float = JAMB_M
+    min_enclosure: float = MIN_ENCLOSURE
     min_room_area_m2: float
-    corridor_elongation: float
-    corridor_min_length_m: float
-    corridor_max_width_m: float
+    corridor_elongation: float = CORRIDOR_ELONGATION
+    corridor_min_length_m: float = CORRIDOR_MIN_LENGTH_M
+    corridor_max_width_m: float = CORRIDOR_MAX_WIDTH_M
 
 
 @dataclass

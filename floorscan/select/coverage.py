@@ -91,9 +91,9 @@ def segment_quality(n_inliers: np.ndarray, rmse_m: np.ndarray, min_inliers: int,
     rmse_m : (F,) float ndarray
         Inlier RMS distance to the line, metres.
     min_inliers : int
-        RANSAC's fewest inliers of a segment (``walls.ransac.min_inliers``).
+        RANSAC's fewest inliers of a segment (:attr:`~floorscan.walls.params.RansacParams.min_inliers`).
     threshold_m : float
-        RANSAC's inlier distance, metres (``walls.ransac.threshold_m``).
+        RANSAC's inlier distance, metres (:attr:`~floorscan.walls.params.RansacParams.threshold_m`).
     min_quality : float
 
     Returns

@@ -110,9 +110,10 @@ def extract_walls(
         A name of :data:`floorscan.walls.extractors.REGISTRY` (``"ransac"``,
         ``"cluster_ransac"``).
     cfg : mapping
-        The ``walls`` config section (``seed``, ``height_band_m``, ``planar_tolerance_m``,
-        ``grid_m``, ``ransac``, ``cluster_ransac``: the keys of
-        :data:`floorscan.walls.extractors.EXTRACT_KEYS`). Scan ``s`` uses the generator
+        The ``walls`` config section (``seed``, ``height_band_m``: the keys of
+        :data:`floorscan.walls.extractors.EXTRACT_KEYS`); a key named as an extractor's
+        parameter class (``ransac``, ``cluster_ransac``) may hold an instance of it or a
+        mapping of its fields (default: the class's defaults). Scan ``s`` uses the generator
         ``numpy.random.default_rng((seed, s))``, independent of the other scans.
 
     Returns
@@ -141,9 +142,10 @@ def extract_walls(
     else:
         scans = points
     entry = get_extractor(extractor)
-    scan_p = stage_params(ScanParams, cfg)
-    # every extractor's section (walls.ransac, walls.cluster_ransac, ...), checked
-    params = {key: stage_params(cls, cfg.get(key)) for e in REGISTRY.values() for key, cls in e.config.items()}
+    # every extractor's parameters (ransac, cluster_ransac, ...): their defaults unless cfg holds them
+    classes = {key: cls for e in REGISTRY.values() for key, cls in e.config.items()}
+    scan_p = stage_params(ScanParams, {key: value for key, value in cfg.items() if key not in classes})
+    params = {key: stage_params(cls, cfg.get(key), f"walls.{key}") for key, cls in classes.items()}
     ransac_p, own = params["ransac"], [params[key] for key in entry.config]
     seed = int(cfg.get("seed", schema_section_defaults("walls")["seed"]))
     if entry.prepare is not None:  # imports before timing the first scan

@@ -37,8 +37,9 @@ class Extractor:
         scans with at least ``RansacParams.min_points`` points; an empty list means
         ``no_wall_found``.
     config : mapping of str to dataclass type
-        The sections ``walls.<key>`` of the config it reads and their parameter
-        classes, in the order ``rows`` takes them. Every extractor reads ``ransac``
+        Its parameter classes by name, in the order ``rows`` takes them, built with
+        their defaults (the constants of :mod:`floorscan.walls.params`; no config
+        option). Every extractor takes ``ransac``
         (:class:`~floorscan.walls.params.RansacParams`, the segment rules all share).
     cost : float
         Its seconds per scan relative to ransac's; the priority of its
@@ -72,14 +73,11 @@ REGISTRY: dict[str, Extractor] = {
 #: Extractor names (config ``walls.extractors``, wildcard ``{extractor}``).
 EXTRACTORS = tuple(REGISTRY)
 
-#: The keys of the ``walls`` config section that decide the per-scan walls: the scan
-#: points (:class:`~floorscan.core.wall_points.ScanParams`), the seed and the sections the
-#: extractors read. The workflow passes only these to the per-scan extraction
-#: (``walls_extract_config``, common.smk), so that a change of k or of the orderings
-#: does not rerun it.
-EXTRACT_KEYS = ("seed", "height_band_m", "planar_tolerance_m", "grid_m") + tuple(
-    dict.fromkeys(key for e in REGISTRY.values() for key in e.config)
-)
+#: The keys of the ``walls`` config section that decide the per-scan walls: the seed
+#: and the scan points' height band (:class:`~floorscan.core.wall_points.ScanParams`).
+#: The workflow passes only these to the per-scan extraction (``walls_extract_config``,
+#: common.smk), so that a change of k or of the orderings does not rerun it.
+EXTRACT_KEYS = ("seed", "height_band_m")
 
 
 def get_extractor(name: str) -> Extractor:

@@ -48,10 +48,27 @@ from floorscan.walls.ransac import ransac_rows
 from floorscan.walls.tables import segments_frame
 
 
+#: Thinning cell, metres: finer than the inlier distance, so thinning moves no wall off its line.
+MAP_GRID_M = 0.03
+#: RANSAC inlier distance on the map, metres: the scans' registration error adds to the range noise of one scan.
+MAP_THRESHOLD_M = 0.04
+#: RANSAC hypotheses per line: a map's wall holds a far smaller share of its points than a scan's wall.
+MAP_ITERATIONS = 1000
+#: Inliers of a line and points of a piece, at least: five thinned points span a 0.12 m piece.
+MAP_MIN_INLIERS = 5
+#: A line's points split into pieces at gaps wider than this, metres (the floor plan joins what free space does not cross).
+MAP_MAX_GAP_M = 0.3
+#: Pieces shorter than this are no wall segment, metres: the floor plan's passes judge the short ones by the free space.
+MAP_MIN_LENGTH_M = 0.1
+#: RANSAC lines, at most: a bound far above the wall lines of a floor of hundreds of rooms.
+MAP_MAX_LINES = 5000
+
+
 @dataclass(frozen=True)
 @schema_defaults("walls.map")
 class MapParams:
-    """Parameters of the map extractor (config ``walls.map``; see the module docstring).
+    """Parameters of the map extractor (config ``walls.map``: ``support_cell_m``; the
+    others are the module's constants; see the module docstring).
 
     Attributes
     ----------
@@ -74,13 +91,13 @@ class MapParams:
     """
 
     support_cell_m: float
-    grid_m: float
-    threshold_m: float
-    iterations: int
-    min_inliers: int
-    max_gap_m: float
-    min_length_m: float
-    max_lines: int
+    grid_m: float = MAP_GRID_M
+    threshold_m: float = MAP_THRESHOLD_M
+    iterations: int = MAP_ITERATIONS
+    min_inliers: int = MAP_MIN_INLIERS
+    max_gap_m: float = MAP_MAX_GAP_M
+    min_length_m: float = MAP_MIN_LENGTH_M
+    max_lines: int = MAP_MAX_LINES
 
     def ransac(self) -> RansacParams:
         """The :class:`~floorscan.walls.params.RansacParams` of the map's RANSAC (two

@@ -3,8 +3,8 @@
 Steps 2 and 3 of :func:`floorscan.walls.cluster.cluster_ransac` (thesis section 3.4):
 flat-kernel MeanShift with bin seeding (Comaniciu and Meer 2002), by default
 :func:`mean_shift`, scikit-learn's algorithm step for step, vectorised over the seeds;
-:func:`mean_shift_labels` picks it or :class:`sklearn.cluster.MeanShift` (config
-``walls.cluster_ransac.meanshift``) and estimates a missing bandwidth.
+:func:`mean_shift_labels` picks it or :class:`sklearn.cluster.MeanShift`
+(:attr:`floorscan.walls.params.ClusterParams.meanshift`) and estimates a missing bandwidth.
 
 MeanShift stays custom because scikit-learn's moves one seed and queries one
 neighbourhood at a time, about 30x slower on the small 1D and 2D projections of a

@@ -114,7 +114,6 @@ SCHEMA_DIR = Path(workflow.basedir) / "workflow" / "schemas"
 # stage_config(stage), with the dataset's overrides, in every rule.
 FILE_GRID_KEYS = {
     "walls": ("k", "orderings", "extractors"),
-    "floorplan": ("evaluation_formats",),
     "score": ("figure_k",),
 }
 
@@ -260,7 +259,7 @@ def walls_extract_config(wildcards):
 def walls_map_config(wildcards):
     """The `walls` keys the map extractor reads: the scan points, the seed, `map`."""
     cfg = stage_config("walls")(wildcards)
-    return {key: cfg[key] for key in ("seed", "height_band_m", "planar_tolerance_m", "grid_m", "map") if key in cfg}
+    return {key: cfg[key] for key in ("seed", "height_band_m", "map") if key in cfg}
 
 
 def hulls_config(wildcards):

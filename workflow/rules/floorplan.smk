@@ -9,15 +9,15 @@
 #   floorplan:  the evaluation grid: the plan of the first k scans of every ordering x k
 #               of walls.k, one job per extractor (floorscan.floorplan.grid), as Parquet
 #               tables, evaluation/plans/<ordering>_<extractor>_k<k>/ (what the score
-#               stage reads), and in the formats of floorplan.evaluation_formats for
+#               stage reads), and in the formats of floorscan.floorplan.EVALUATION_FORMATS for
 #               people, evaluation/floorplan/<ordering>_<extractor>_k<k>.*
 #   answer_floorplans: the answer's plan of the first k scans of the default ordering on
 #               the answer curve's k grid, evaluation/answer_plans/k<k>/ (what the score
 #               stage's answer_curve reads)
-from floorscan.floorplan import EXPORT_FORMATS, FLOORPLAN_FORMATS, floorplan_outputs
+from floorscan.floorplan import EVALUATION_FORMATS, EXPORT_FORMATS, FLOORPLAN_FORMATS, floorplan_outputs
 
-# The file suffixes of the evaluation grid's formats (floorplan.evaluation_formats).
-EVALUATION_SUFFIXES = [EXPORT_FORMATS[fmt].suffix for fmt in config["floorplan"]["evaluation_formats"]]
+# The file suffixes of the evaluation grid's formats (SVG, for people).
+EVALUATION_SUFFIXES = [EXPORT_FORMATS[fmt].suffix for fmt in EVALUATION_FORMATS]
 
 
 def floorplan_grid_inputs(wildcards):
@@ -78,7 +78,7 @@ rule floorplan:
         cfg=floorplan_grid_config,
         runs=floorplan_grid_runs,
         orderings=config["walls"]["orderings"],
-        formats=config["floorplan"]["evaluation_formats"],
+        formats=list(EVALUATION_FORMATS),
     log:
         "results/{dataset}/logs/floorplan_{extractor}.log",
     benchmark:
