@@ -8,7 +8,7 @@ taken from the walls:
 
 1. **Space** (:func:`~floorscan.floorplan.room_space.room_space`): the cells the scans
    saw free (:func:`~floorscan.floorplan.free_space.passable`) on a raster of
-   ``rooms.resolution_m``, opened by a disc of radius ``free_open_m`` (the thin fans
+   ``resolution_m``, opened by a disc of radius ``free_open_m`` (the thin fans
    of rays through windows and doorways into the outside go), minus the plan's wall
    footprints, whose gaps narrower than ``door_min_m`` are closed (nobody passes
    them); closed together with the walls by a disc of ``close_m`` (the unseen strips
@@ -60,7 +60,8 @@ taken from the walls:
    metres, numbered ``Room 1``, ``Corridor 1``, ``Space 1`` in reading order (top to
    bottom, left to right).
 
-Parameters: :class:`RoomParams` (config ``floorplan.rooms``).
+Parameters: :class:`RoomParams` (config ``floorplan.rooms``: the door widths and the smallest
+room; the other fields are constants of :mod:`floorscan.floorplan.room_space`).
 """
 
 from __future__ import annotations
