@@ -56,11 +56,18 @@ def free_standing_objects(
     labels, n = ndimage.label(hit, structure=np.ones((3, 3), bool))
     if n == 0:
         return np.zeros(grid.shape, dtype=bool)
-    ring = square_dilation(hit, 1) & ~hit
-    ring_labels = ndimage.grey_dilation(labels, size=(3, 3)) * ring
+    # each cell of the ring around the components: the largest label among its 3 x 3
+    # neighbours on the raster (ndimage.grey_dilation of the labels, at the ring's cells)
+    ring_r, ring_c = np.nonzero(square_dilation(hit, 1) & ~hit)
+    ring_labels = np.zeros(len(ring_r), dtype=labels.dtype)
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            r = np.clip(ring_r + dr, 0, grid.shape[0] - 1)
+            c = np.clip(ring_c + dc, 0, grid.shape[1] - 1)
+            np.maximum(ring_labels, labels[r, c], out=ring_labels)
     free = passable(grid)
-    around = np.bincount(ring_labels[ring], minlength=n + 1).astype(np.float64)
-    around_free = np.bincount(ring_labels[ring & free], minlength=n + 1)
+    around = np.bincount(ring_labels, minlength=n + 1).astype(np.float64)
+    around_free = np.bincount(ring_labels[free[ring_r, ring_c]], minlength=n + 1)
     surrounded = around_free >= params.object_free_around * np.maximum(around, 1)
     rows, cols = np.nonzero(labels)
     lab = labels[rows, cols]
