@@ -230,7 +230,8 @@ def snakemake(repo: Path, dataset: str, cores: int, targets: list[str], poll: bo
 #: these that its name starts with (``hulls_shard_scans_0-99`` -> ``hulls``).
 STAGES = (
     "simulate", "ingest", "poses", "register", "register_figure", "hulls", "select", "selection_figures",
-    "scan_walls", "walls", "map_walls", "floorplan", "score_runs", "score", "score_walls_figures", "score_figures",
+    "scan_walls", "walls", "map_walls", "floorplan", "answer_floorplans", "score_runs", "score", "score_walls_figures",
+    "score_figures",
 )  # fmt: skip
 
 

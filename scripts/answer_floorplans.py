@@ -1,34 +1,10 @@
-"""Stage floorplan, the answer's plans of the first k scans: the plan the answer is made
-with of the first k scans of the default ordering, for k on a geometric grid, as Parquet
-tables for the score stage's answer curve (floorscan.floorplan.answer_plans). The walls of
-a set of scans are the walls stage's map extractor (floorscan.walls.map_lines)."""
-from dataclasses import replace
-
-from floorscan.core.config import stage_params
-from floorscan.core.io import read_table
-from floorscan.core.occupancy import OccupancyParams
+"""Stage floorplan, the answer's plans of the first k scans: the jobs' shares
+(rule answer_floorplans_part) moved into one folder, evaluation/answer_plans/k<k>/
+(floorscan.floorplan.answer_plans.merge_answer_plans)."""
 from floorscan.core.stage import stage_log
-from floorscan.core.wall_points import ScanParams
-from floorscan.floorplan.answer_plans import first_k_scans_points, write_answer_plans
-from floorscan.floorplan.params import FloorplanParams
-from floorscan.walls.map_lines import MapParams, map_segments
+from floorscan.floorplan.answer_plans import merge_answer_plans
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
-    walls = smk.params.walls or {}
-    map_params = stage_params(MapParams, walls.get("map"))
-    seed = int(walls.get("seed", 0))
-
-    def segments_of(points, grid):
-        """The map extractor's segments of these wall points on their grid."""
-        return map_segments(points, grid, map_params, seed=seed)
-
-    scans = first_k_scans_points(smk.input.registered, read_table(smk.input.registration),
-                                 read_table(smk.input.ordering), stage_params(ScanParams, walls))
-    done = write_answer_plans(
-        scans, segments_of, replace(OccupancyParams(), resolution_m=map_params.support_cell_m),
-        stage_params(FloorplanParams, smk.params.floorplan), smk.output.plans,
-        {"dataset": smk.wildcards.dataset, "ordering": smk.params.ordering},
-    )
-    log.info("the answer's plans of the first k scans of %s: k %s; walls %s", smk.params.ordering,
-             " ".join(str(d["k"]) for d in done), " ".join(str(d["n_walls"]) for d in done))
+    ks = merge_answer_plans(smk.input.parts, smk.output.plans)
+    log.info("the answer's plans of the first k scans: k %s", " ".join(map(str, ks)))

@@ -89,3 +89,35 @@ def test_the_score_stage_scores_the_plans_as_built(scans, tmp_path):
 def test_a_folder_without_plans_is_refused(tmp_path):
     with pytest.raises(FileNotFoundError, match="answer's plans"):
         answer_curve(tmp_path / "missing", None)
+
+
+def test_the_parts_of_the_k_grid_make_the_same_plans(scans, tmp_path):
+    """Two jobs' shares of the k grid are disjoint, together the whole grid, balanced by
+    their scans; their plans, merged into one folder, are the files of one job's plans
+    byte for byte."""
+    from floorscan.floorplan.answer_plans import answer_plan_ks, merge_answer_plans
+
+    for n in (1, 2, 9, 815, 5000):
+        shares = [answer_plan_ks(n, 24, p, 2) for p in range(2)]
+        assert sorted(shares[0] + shares[1]) == curve_ks(n, 24) and not set(shares[0]) & set(shares[1])
+        if n > 100:
+            assert abs(sum(shares[0]) - sum(shares[1])) <= max(curve_ks(n, 24)) / 2
+    with pytest.raises(ValueError, match="part 2 of 2"):
+        answer_plan_ks(9, 6, 2, 2)
+    whole = tmp_path / "whole"
+    write_answer_plans(scans, segments_of, GRID, FloorplanParams(), whole, {"dataset": "room"}, n_points=6)
+    parts = [tmp_path / f"part{p}" for p in range(2)]
+    for p, folder in enumerate(parts):
+        done = write_answer_plans(scans, segments_of, GRID, FloorplanParams(), folder, {"dataset": "room"}, n_points=6,
+                                  part=p, parts=2)
+        assert [d["k"] for d in done] == answer_plan_ks(len(scans), 6, p, 2)
+    merged = tmp_path / "answer_plans"
+    assert merge_answer_plans(parts, merged) == curve_ks(len(scans), 6)
+    files = sorted(f.relative_to(whole) for f in whole.rglob("*") if f.is_file())
+    assert files == sorted(f.relative_to(merged) for f in merged.rglob("*") if f.is_file()) and files
+    for f in files:
+        assert (whole / f).read_bytes() == (merged / f).read_bytes(), f
+    with pytest.raises(ValueError, match="k1"):
+        write_answer_plans(scans, segments_of, GRID, FloorplanParams(), parts[0], n_points=6, part=0, parts=1)
+        write_answer_plans(scans, segments_of, GRID, FloorplanParams(), parts[1], n_points=6, part=0, parts=1)
+        merge_answer_plans(parts, tmp_path / "twice")

@@ -19,7 +19,9 @@ from floorscan.core.occupancy import (
     PGM_FREE,
     PGM_OCCUPIED,
     PGM_UNKNOWN,
+    OccupancyGrid,
     OccupancyParams,
+    logit,
     map_image,
     occupancy_grid,
     read_grid,
@@ -300,3 +302,23 @@ def test_bad_settings_and_empty_input_are_refused():
         occupancy_grid([(np.zeros(2), np.empty((0, 2)))])
     with pytest.raises(ValueError, match="not finite"):
         occupancy_grid([(np.zeros(2), np.array([[np.nan, 1.0]]))])
+
+
+def test_occupied_and_free_are_the_thresholds_of_the_log_odds():
+    """occupied() and free() sum the log-odds only where a threshold can be passed: the
+    same cells as comparing the whole log-odds array (random counts, and settings whose
+    signs make the short cut not apply)."""
+    from dataclasses import replace
+
+    rng = np.random.default_rng(3)
+    params = OccupancyParams()
+    for settings in (params, replace(params, occupied_thresh=0.52, free_thresh=0.48),
+                     replace(params, occupied_thresh=0.45, free_thresh=0.55)):
+        for _ in range(50):
+            hits = rng.integers(0, 5, (23, 31)).astype(np.int32)
+            misses = (rng.integers(0, 9, hits.shape) * (rng.random(hits.shape) < 0.7)).astype(np.int32)
+            grid = OccupancyGrid(np.zeros(2), 0.05, hits, misses, settings)
+            assert np.array_equal(grid.occupied(), grid.log_odds > logit(settings.occupied_thresh))
+            assert np.array_equal(grid.free(), grid.log_odds < logit(settings.free_thresh))
+    empty = OccupancyGrid(np.zeros(2), 0.05, np.zeros((0, 4), np.int32), np.zeros((0, 4), np.int32), params)
+    assert empty.occupied().shape == (0, 4) and empty.free().shape == (0, 4)

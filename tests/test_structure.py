@@ -286,3 +286,25 @@ def test_answer_line_names_the_plan_counts(tmp_path):
                                 "floorscan": {"n_walls": 12, "n_junctions": 9, "n_clutter": 3}}))
     assert plan_counts(path) == " (12 walls, 9 junctions, 3 clutter pieces)"
     assert plan_counts(tmp_path / "missing.geojson") == ""
+
+
+def test_square_dilation_is_scipys_dilation_by_a_square():
+    """clutter.square_dilation: ndimage.binary_dilation by a 3 x 3 square ``cells`` times,
+    and grey_dilation of that size on labels, cell for cell (borders, thin rasters)."""
+    from scipy import ndimage
+
+    from floorscan.floorplan.clutter import square_dilation
+
+    rng = np.random.default_rng(5)
+    for shape in [(1, 1), (1, 7), (6, 1), (2, 3), (17, 29)]:
+        for p in (0.05, 0.3):
+            mask = rng.random(shape) < p
+            for cells in (0, 1, 2, 3):
+                want = ndimage.binary_dilation(mask, structure=np.ones((3, 3), bool), iterations=cells) if cells else mask
+                assert np.array_equal(square_dilation(mask, cells), want)
+            labels, _ = ndimage.label(mask, structure=np.ones((3, 3)))
+            assert np.array_equal(square_dilation(labels, 1), ndimage.grey_dilation(labels, size=(3, 3)))
+    mask = rng.random((9, 9)) < 0.3
+    before = mask.copy()
+    square_dilation(mask, 2)
+    assert np.array_equal(mask, before)

@@ -174,11 +174,29 @@ class OccupancyGrid:
 
     def occupied(self) -> np.ndarray:
         """(H, W) bool: probability above ``occupied_thresh``."""
-        return self.log_odds > logit(self.params.occupied_thresh)
+        return self._log_odds_beyond(logit(self.params.occupied_thresh), above=True)
 
     def free(self) -> np.ndarray:
         """(H, W) bool: probability below ``free_thresh``."""
-        return self.log_odds < logit(self.params.free_thresh)
+        return self._log_odds_beyond(logit(self.params.free_thresh), above=False)
+
+    def _log_odds_beyond(self, threshold: float, above: bool) -> np.ndarray:
+        """``log_odds > threshold`` (``above``) or ``log_odds < threshold``, the log-odds
+        summed only where they can pass it: with ``l_hit > 0 > l_miss``, a cell no scan
+        hit has log-odds <= 0, one no ray crossed >= 0, so a positive threshold is passed
+        only by cells with a hit, a negative one only by cells with a miss. Those cells'
+        log-odds are the same floats as :attr:`log_odds`' (the same products and sum)."""
+        l_hit, l_miss = logit(self.params.prob_hit), logit(self.params.prob_miss)
+        hits, misses = self.n_hit_scans, self.n_miss_scans
+        sparse = l_hit > 0 > l_miss and (threshold >= 0 if above else threshold <= 0)
+        if not sparse or (hits.size and min(int(hits.min()), int(misses.min())) < 0):
+            return self.log_odds > threshold if above else self.log_odds < threshold
+        out = np.zeros(hits.shape, dtype=bool)
+        hits, misses = hits.reshape(-1), misses.reshape(-1)
+        cells = np.flatnonzero(hits if above else misses)
+        lo = hits[cells] * l_hit + misses[cells] * l_miss
+        out.reshape(-1)[cells] = lo > threshold if above else lo < threshold
+        return out
 
     def structure(self) -> np.ndarray:
         """(H, W) bool: occupied and hit by at least ``min_scans`` scans."""

@@ -12,6 +12,12 @@ scans is the counts of k plus dk scans), and each k's plan is built once, by the
 plan builder (:class:`~floorscan.floorplan.scans.ScanPlans`) from the map extractor's
 segments of those scans. The map extractor belongs to the walls stage, which this
 package does not import: the stage's script hands it in (``segments_of``).
+
+The plans are built in :data:`ANSWER_PLAN_PARTS` jobs (rule ``answer_floorplans_part``),
+each a share of the k grid (:func:`answer_plan_ks`), so that they run on two cores; a
+plan does not depend on the other ks built beside it (each grid is that of its first k
+scans). Rule ``answer_floorplans`` moves the parts' plan folders into one
+(:func:`merge_answer_plans`).
 """
 
 from __future__ import annotations
@@ -19,7 +25,7 @@ from __future__ import annotations
 import logging
 import os
 from pathlib import Path
-from typing import Callable, Iterator, Mapping
+from typing import Callable, Iterable, Iterator, Mapping
 
 import numpy as np
 import pandas as pd
@@ -44,6 +50,46 @@ log = logging.getLogger(__name__)
 #: map extractor's work on them, 40: ``floorscan.walls.map_stage.MAP_MEMORY``).
 ANSWER_PLANS_MEMORY = JobMemory(COUNTS_BYTES_PER_CELL + 8 + PLAN_MEMORY.bytes_per_cell, "walls.map.support_cell_m",
                                 bytes_per_point=16 + 40)
+
+#: The jobs the answer's plans are built in (rule ``answer_floorplans_part``).
+ANSWER_PLAN_PARTS = 2
+
+
+def answer_plan_ks(n_scans: int, n_points: int = 24, part: int = 0, parts: int = 1) -> list[int]:
+    """The ks of :func:`~floorscan.core.selection.curve_ks` that job ``part`` of ``parts``
+    builds: from the largest k down, each to the job with the fewest scans summed over
+    its ks so far (longest processing time first: a plan's cost grows with its scans).
+
+    Parameters
+    ----------
+    n_scans : int
+        The ordering's kept scans.
+    n_points : int
+        Size of the k grid.
+    part, parts : int
+        The job, ``0 <= part < parts``.
+
+    Returns
+    -------
+    list of int
+        Increasing; the parts' ks are disjoint and together the whole k grid.
+
+    Raises
+    ------
+    ValueError
+        When ``part`` is not in ``0 .. parts - 1``.
+    """
+    if not 0 <= part < parts:
+        raise ValueError(f"answer plans: part {part} of {parts} does not exist")
+    load = [0] * parts
+    mine = []
+    for k in sorted(curve_ks(n_scans, n_points), reverse=True):
+        j = min(range(parts), key=lambda i: (load[i], i))
+        load[j] += k
+        if j == part:
+            mine.append(k)
+    return sorted(mine)
+
 
 def first_k_scans_points(
     registered_path: str | os.PathLike, registration: pd.DataFrame, ordering: pd.DataFrame, scan_params: ScanParams
@@ -88,8 +134,11 @@ def answer_plans(
     params: FloorplanParams = FloorplanParams(),
     n_points: int = 24,
     what: str = "the occupancy grid of the answer's plans",
+    part: int = 0,
+    parts: int = 1,
 ) -> Iterator[tuple[int, int, FloorPlan]]:
-    """The answer's plan of the first k scans, for k in :func:`~floorscan.core.selection.curve_ks`.
+    """The answer's plan of the first k scans, for k in :func:`~floorscan.core.selection.curve_ks`
+    (those of job ``part`` of ``parts``: :func:`answer_plan_ks`).
 
     Parameters
     ----------
@@ -108,6 +157,8 @@ def answer_plans(
         Size of the k grid.
     what : str
         The grid and whose scans, for the error of a grid too large or of memory.
+    part, parts : int
+        The share of the k grid (:func:`answer_plan_ks`); by default all of it.
 
     Yields
     ------
@@ -121,7 +172,7 @@ def answer_plans(
         (:func:`floorscan.core.grid.check_raster_size`) or the job's rasters
         (:data:`ANSWER_PLANS_MEMORY`) would not fit in the memory free on the machine.
     """
-    ks = curve_ks(len(scans), n_points)
+    ks = answer_plan_ks(len(scans), n_points, part, parts)
     pairs = [(o, p) for _, o, p in scans]
     wall_points = np.cumsum([len(p) for _, p in pairs])  # of the first k scans, at k - 1
     points = np.concatenate([p.reshape(-1, 2) for _, p in pairs]) if pairs else np.empty((0, 2))  # rank order
@@ -141,6 +192,8 @@ def write_answer_plans(
     folder: str | os.PathLike,
     metadata: Mapping[str, str] | None = None,
     n_points: int = 24,
+    part: int = 0,
+    parts: int = 1,
 ) -> list[dict]:
     """Write the plans of :func:`answer_plans` into ``folder``, one plan folder
     ``k<k>/`` each (:func:`~floorscan.floorplan.scans.write_plan`, the numbers as
@@ -148,10 +201,10 @@ def write_answer_plans(
 
     Parameters
     ----------
-    scans, segments_of, grid_params, params, n_points
+    scans, segments_of, grid_params, params, n_points, part, parts
         As :func:`answer_plans`.
     folder : path
-        ``evaluation/answer_plans`` (replaced when it exists).
+        ``evaluation/answer_plans``, or a job's share of it (replaced when it exists).
     metadata : mapping of str to str, optional
         What the plans are of (dataset, ordering), in every file; each plan adds
         ``k``, ``n_scans`` and :data:`N_WALL_POINTS`.
@@ -169,10 +222,47 @@ def write_answer_plans(
         f" of dataset {dataset!r}" if dataset else "")
     with staged_path(folder) as tmp:
         tmp.mkdir()
-        for k, n, plan in answer_plans(scans, segments_of, grid_params, params, n_points, what):
+        for k, n, plan in answer_plans(scans, segments_of, grid_params, params, n_points, what, part, parts):
             write_plan(plan, Path(tmp) / f"k{k}", {**(metadata or {}), "extractor": "map", "k": str(k),
                                                    "n_scans": str(k), N_WALL_POINTS: str(n)}, rounded=False)
             done.append({"k": k, "n_wall_points": n, "n_walls": len(plan.walls), "n_faces": len(plan.faces)})
             log.info("the answer's plan of the first %d scans: %d wall points, %d walls, %d faces",
                      k, n, len(plan.walls), len(plan.faces))
     return done
+
+
+def merge_answer_plans(parts: Iterable[str | os.PathLike], folder: str | os.PathLike) -> list[int]:
+    """Move the plan folders ``k<k>/`` of the jobs' shares (:func:`write_answer_plans`
+    with ``part``) into ``folder``, whole or not at all; the files are not rewritten.
+
+    Parameters
+    ----------
+    parts : iterable of path
+        The shares' folders; they are left without their plan folders.
+    folder : path
+        ``evaluation/answer_plans`` (replaced when it exists).
+
+    Returns
+    -------
+    list of int
+        The ks, increasing.
+
+    Raises
+    ------
+    ValueError
+        When two shares hold the same k.
+    """
+    from floorscan.core.files import staged_path
+
+    plans = {}
+    for share in parts:
+        for sub in sorted(Path(share).glob("k*")):
+            if sub.is_dir():
+                if sub.name in plans:
+                    raise ValueError(f"answer plans: {sub.name} is in {plans[sub.name].parent} and {share}")
+                plans[sub.name] = sub
+    with staged_path(folder) as tmp:
+        tmp.mkdir()
+        for name, sub in plans.items():
+            sub.rename(Path(tmp) / name)
+    return sorted(int(name[1:]) for name in plans)

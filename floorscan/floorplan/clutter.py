@@ -51,16 +51,23 @@ def free_standing_objects(
         rows, cols, inside = grid.cells_of(pts)
         on_wall = np.zeros(grid.shape, dtype=bool)
         on_wall[rows[inside], cols[inside]] = True
-        hit = hit & ~ndimage.binary_dilation(on_wall, structure=np.ones((3, 3), bool), iterations=2)
-    hit = ndimage.binary_dilation(hit, structure=np.ones((3, 3), bool))
+        hit = hit & ~square_dilation(on_wall, 2)
+    hit = square_dilation(hit, 1)
     labels, n = ndimage.label(hit, structure=np.ones((3, 3), bool))
     if n == 0:
         return np.zeros(grid.shape, dtype=bool)
-    ring = ndimage.binary_dilation(hit, structure=np.ones((3, 3), bool)) & ~hit
-    ring_labels = ndimage.grey_dilation(labels, size=(3, 3)) * ring
+    # each cell of the ring around the components: the largest label among its 3 x 3
+    # neighbours on the raster (ndimage.grey_dilation of the labels, at the ring's cells)
+    ring_r, ring_c = np.nonzero(square_dilation(hit, 1) & ~hit)
+    ring_labels = np.zeros(len(ring_r), dtype=labels.dtype)
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            r = np.clip(ring_r + dr, 0, grid.shape[0] - 1)
+            c = np.clip(ring_c + dc, 0, grid.shape[1] - 1)
+            np.maximum(ring_labels, labels[r, c], out=ring_labels)
     free = passable(grid)
-    around = np.bincount(ring_labels[ring], minlength=n + 1).astype(np.float64)
-    around_free = np.bincount(ring_labels[ring & free], minlength=n + 1)
+    around = np.bincount(ring_labels, minlength=n + 1).astype(np.float64)
+    around_free = np.bincount(ring_labels[free[ring_r, ring_c]], minlength=n + 1)
     surrounded = around_free >= params.object_free_around * np.maximum(around, 1)
     rows, cols = np.nonzero(labels)
     lab = labels[rows, cols]
@@ -83,6 +90,37 @@ def free_standing_objects(
     is_object = surrounded & (length < params.clutter_max_length_m) & ~wall_like
     is_object[0] = False
     return is_object[labels]
+
+
+def square_dilation(image: np.ndarray, cells: int) -> np.ndarray:
+    """The largest value of ``image`` within ``cells`` rows and columns of each cell (a
+    square of side ``2 * cells + 1``, cells beyond the border left out): a binary
+    dilation by that square, or a grey one (SciPy's ``ndimage.binary_dilation`` with a
+    3 x 3 square ``cells`` times, ``grey_dilation`` of that size), done as the maxima of
+    shifted copies along the rows, then the columns (the square is the sum of two
+    segments).
+
+    Parameters
+    ----------
+    image : (H, W) bool or integer ndarray
+    cells : int
+        At least 0.
+
+    Returns
+    -------
+    (H, W) ndarray
+        ``image``'s dtype; ``image`` is not modified.
+    """
+    out = np.array(image, copy=True)
+    for axis in (0, 1):
+        src = out.copy()
+        for s in range(1, cells + 1):
+            lo = [slice(None)] * 2
+            hi = [slice(None)] * 2
+            lo[axis], hi[axis] = slice(s, None), slice(None, -s)
+            np.maximum(out[tuple(lo)], src[tuple(hi)], out=out[tuple(lo)])
+            np.maximum(out[tuple(hi)], src[tuple(lo)], out=out[tuple(hi)])
+    return out
 
 
 def on_objects(seg: np.ndarray, grid: OccupancyGrid, objects: np.ndarray) -> np.ndarray:

@@ -57,12 +57,18 @@ def _outside(distance_m: np.ndarray, diameter_m: float) -> np.ndarray:
     """(H + 2, W + 2) bool: the cells the padded raster's border reaches through cells
     farther than ``diameter_m / 2`` from every solid cell (``distance_m``: the padded
     raster's distance to the nearest solid cell, metres)."""
+    labels, edge = _reached(distance_m, diameter_m)
+    return np.isin(labels, edge)
+
+
+def _reached(distance_m: np.ndarray, diameter_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """The parts of the cells farther than ``diameter_m / 2`` from every solid cell
+    ((H + 2, W + 2) int labels, 0 for none) and those the border reaches (their labels)."""
     from scipy import ndimage
 
-    open_ = distance_m > diameter_m / 2
-    labels, _ = ndimage.label(open_)
+    labels, _ = ndimage.label(distance_m > diameter_m / 2)
     edge = np.unique(np.r_[labels[0], labels[-1], labels[:, 0], labels[:, -1]])
-    return np.isin(labels, edge[edge > 0])
+    return labels, edge[edge > 0]
 
 
 def building_outside(
@@ -121,8 +127,9 @@ def building_outside(
     if not len(rows):
         return nothing, nothing, float("inf")
 
-    def holds(d: float) -> bool:
-        return not _outside(distance, d)[rows, cols].any()
+    def holds(d: float) -> bool:  # no scan's cell in a part the border reaches
+        labels, edge = _reached(distance, d)
+        return not np.isin(labels[rows, cols], edge).any()
 
     lo = float(door_max_m)
     hi = float(np.hypot(*solid.shape)) * resolution_m  # no gap is wider than the raster

@@ -98,13 +98,15 @@ def persistent_rooms(labels: np.ndarray, distance: np.ndarray, door_max_m: float
         Each region's room (the label of one of its regions); ``root[0] == 0`` (label 0
         touches no region, so it stays alone).
     """
-    from scipy import ndimage
     from scipy.cluster.hierarchy import DisjointSet
 
     n = int(labels.max())
     peak = np.zeros(n + 1)
-    if n:
-        peak[1:] = ndimage.maximum(distance, labels, np.arange(1, n + 1))
+    if n:  # each region's largest distance (SciPy's ndimage.maximum, without its sort)
+        inside = labels > 0
+        peak[1:] = -np.inf
+        np.maximum.at(peak, labels[inside], distance[inside])
+        peak[np.isneginf(peak)] = 0.0  # a label without cells, as ndimage.maximum
     pairs, height = saddles(labels, distance)
     groups = DisjointSet(range(n + 1))  # a group's peak is kept at its representative
     # highest saddle first; ties in the pairs' order, so the result is deterministic

@@ -62,17 +62,21 @@ REPORT_OUTPUTS = []
 # longest chain of jobs from its start to the end of the workflow; a walls shard's is
 # the 21.5 s of the chain after it plus ransac's 7.5 s times its extractor's relative
 # cost (floorscan.walls.extractors). The measured chains and why select is raised above
-# its rank: benchmarks/README.md, "Rule priorities".
+# its rank: benchmarks/README.md, "Rule priorities". The answer's plans of the first k
+# scans are the longest chain of a large recording's evaluation (acapulco), so the
+# short jobs before them (the coverage extractor's shard, scan_walls, select_coverage:
+# "coverage_chain") go first and the plans before the hulls and select.
 PRIORITY = {
     "scan_walls_shard": {name: round(21.5 + 7.5 * e.cost) for name, e in WALLS_REGISTRY.items()},
+    "coverage_chain": 37,
     "hulls_shard": 33,
     "select": 31,
     "walls": 21,
-    "scan_walls": 23,
-    "select_coverage": 22,
+    "scan_walls": 37,
+    "select_coverage": 37,
     "selection": 21,
     "floorplan": 20,
-    "answer_floorplans": 24,
+    "answer_floorplans": 34,
     "selection_figures": 14,
     "reference": 36,
     "score_curves": 24,
@@ -87,10 +91,13 @@ PRIORITY = {
 
 def shard_priority(wildcards):
     """Priority of a walls shard job: by its extractor (PRIORITY; an extractor that is
-    not registered in floorscan.walls.extractors raises)."""
+    not registered in floorscan.walls.extractors raises); the dataset's coverage
+    extractor's (select.coverage.wall_extractor) at least the coverage chain's."""
     by_extractor = PRIORITY["scan_walls_shard"]
     if wildcards.extractor not in by_extractor:
         raise ValueError(f"unknown extractor {wildcards.extractor!r}; expected one of {list(by_extractor)}")
+    if wildcards.extractor == stage_config("select")(wildcards)["coverage"]["wall_extractor"]:
+        return max(by_extractor[wildcards.extractor], PRIORITY["coverage_chain"])
     return by_extractor[wildcards.extractor]
 
 

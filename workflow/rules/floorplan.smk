@@ -13,8 +13,10 @@
 #               people, evaluation/floorplan/<ordering>_<extractor>_k<k>.*
 #   answer_floorplans: the answer's plan of the first k scans of the default ordering on
 #               the answer curve's k grid, evaluation/answer_plans/k<k>/ (what the score
-#               stage's answer_curve reads)
+#               stage's answer_curve reads), built by ANSWER_PLAN_PARTS jobs
+#               (answer_floorplans_part, a share of the k grid each) and merged
 from floorscan.floorplan import EVALUATION_FORMATS, EXPORT_FORMATS, FLOORPLAN_FORMATS, floorplan_outputs
+from floorscan.floorplan.answer_plans import ANSWER_PLAN_PARTS
 
 # The file suffixes of the evaluation grid's formats (SVG, for people).
 EVALUATION_SUFFIXES = [EXPORT_FORMATS[fmt].suffix for fmt in EVALUATION_FORMATS]
@@ -122,17 +124,37 @@ def answer_floorplans_inputs(wildcards):
 # answer is made with (the map extractor's walls, the structure passes) of the first k
 # scans of the default ordering, for k on a geometric grid, as Parquet tables
 # (evaluation/answer_plans/k<k>/); the occupancy grid of k + dk scans is that of k plus
-# dk scans. The score stage's answer_curve scores them.
-rule answer_floorplans:
+# dk scans. They are the evaluation's longest job on a large recording, so
+# ANSWER_PLAN_PARTS jobs build a share of the k grid each (on both cores), and
+# answer_floorplans moves their plan folders into one. The score stage's answer_curve
+# scores them.
+rule answer_floorplans_part:
     priority: PRIORITY["answer_floorplans"]
     input:
         unpack(answer_floorplans_inputs),
     output:
-        plans=directory("results/{dataset}/evaluation/answer_plans"),
+        plans=temp(directory("results/{dataset}/evaluation/answer_plans_parts/{part}")),
+    wildcard_constraints:
+        part=r"\d+",
     params:
         walls=walls_map_config,
         floorplan=floorplan_grid_config,
         ordering=select_default_ordering,
+        parts=ANSWER_PLAN_PARTS,
+    log:
+        "results/{dataset}/logs/answer_floorplans_part{part}.log",
+    benchmark:
+        "results/{dataset}/benchmarks/answer_floorplans_part{part}.tsv"
+    script:
+        "../../scripts/answer_floorplans_part.py"
+
+
+rule answer_floorplans:
+    priority: PRIORITY["answer_floorplans"]
+    input:
+        parts=expand("results/{{dataset}}/evaluation/answer_plans_parts/{part}", part=range(ANSWER_PLAN_PARTS)),
+    output:
+        plans=directory("results/{dataset}/evaluation/answer_plans"),
     log:
         log_path("answer_floorplans"),
     benchmark:
