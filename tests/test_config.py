@@ -278,8 +278,12 @@ def test_an_empty_path_and_an_unknown_building_say_what_is_expected(tmp_path):
          "Config error: datasets.x.building: no building 'hallway'; expected one of ['demo', 'hallways']"),
         ("target: [nowhere]\n", "Config error: target names unknown datasets ['nowhere']"),
         ("register: {every_nn: 3}\n", "Config error: register: unknown keys ['every_nn']; expected one of"),
+        # an option that is a constant of the code now (issue 44): named, with the options left
+        ("floorplan:\n  structure: {snap_m: 0.3}\n",
+         "Config error: floorplan: unknown keys ['structure']; expected one of "
+         "['extractor', 'georeference', 'rooms', 'wall_height_m']"),
     ],
-    ids=["nan", "params_typo", "empty_path", "unknown_building", "unknown_target", "stage_key_typo"],
+    ids=["nan", "params_typo", "empty_path", "unknown_building", "unknown_target", "stage_key_typo", "removed_option"],
 )
 def test_a_bad_config_file_stops_the_run_with_one_paragraph(tmp_path, text, message):
     """`--configfile`: the run stops before any job with the message alone, no

@@ -87,7 +87,9 @@ def building_outside(
     origin_xy : (2,) float ndarray
         Map-frame corner of cell (row 0, column 0), metres.
     scan_xy : (S, 2) float ndarray or None
-        The scan positions, map metres; None or empty for a map: all inside.
+        The scan positions, map metres. None for a map: outside is what lies beyond
+        the convex hull of ``walls`` (:func:`beyond_walls_hull`; all inside without
+        ``walls``). Empty: all inside.
     door_max_m : float
         The smallest closing diameter, metres.
     seen : (H, W) bool ndarray, optional
@@ -117,6 +119,9 @@ def building_outside(
 
     solid = np.asarray(solid, dtype=bool)
     nothing = np.zeros(solid.shape, dtype=bool)
+    if scan_xy is None and walls is not None:  # a map: its rays beyond its walls' hull
+        cut = beyond_walls_hull(walls)
+        return cut, cut, float("inf")
     if scan_xy is None or not len(scan_xy) or not solid.any():
         return nothing, nothing, float("inf")
     distance = ndimage.distance_transform_edt(~np.pad(solid, 1)) * resolution_m

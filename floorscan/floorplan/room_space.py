@@ -16,7 +16,7 @@ from floorscan.core.config import schema_defaults
 from floorscan.core.grid import raster_cells
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.free_space import passable
-from floorscan.floorplan.outline import beyond_walls_hull, building_outside
+from floorscan.floorplan.outline import building_outside
 
 
 # The room segmentation's thresholds (floorscan.floorplan.rooms; Bormann et al., ICRA 2016); the door widths and
@@ -314,9 +314,6 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
     # the seen space outside the building's closed outline: rays through windows, open doors
     outside, beyond, _ = building_outside(walls | occupied, res, origin, grid.scan_xy, params.door_max_m, seen=space,
                                           walls=walls)
-    if grid.scan_xy is None:  # a map: the fans of rays beyond its walls' hull
-        beyond = beyond_walls_hull(walls)
-        outside = beyond
     space &= ~outside
     # holes without a wall in them: the floor under furniture, shadows of objects
     holes, n = ndimage.label(~space)

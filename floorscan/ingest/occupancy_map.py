@@ -239,7 +239,7 @@ def image_free_thresh(occ: np.ndarray, known: np.ndarray, free_thresh: float, oc
     if hi < lo or not shade.size:
         return free_thresh
     unknown = lo + int(np.argmax(counts[lo : hi + 1]))
-    if counts[unknown] < UNKNOWN_MIN_SHARE * shade.size or unknown >= 255:
+    if counts[unknown] < UNKNOWN_MIN_SHARE * shade.size:
         return free_thresh
     free = unknown + 1 + int(np.argmax(counts[unknown + 1 :]))
     return (255.0 - (unknown + free) / 2.0) / 255.0
