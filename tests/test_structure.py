@@ -15,6 +15,7 @@ from floorscan.core.occupancy import OccupancyParams, occupancy_grid
 from floorscan.floorplan.params import FloorplanParams
 from floorscan.floorplan.plan import build_floorplan, plan_faces
 from floorscan.floorplan.free_space import StructureParams
+from floorscan.floorplan.hidden import covered_by_fronts
 from floorscan.floorplan.junctions import merge_parallel_duplicates, snap_junctions
 from floorscan.floorplan.structure import border_and_support, join_collinear, structure_passes
 from floorscan.score.answer import crossings, true_corners, true_wall_pieces
@@ -157,6 +158,37 @@ def test_join_keeps_a_gap_free_space_passes_and_joins_an_unseen_one():
     assert jw.tolist() == [2.0]
     opened, _, _ = join_collinear(faces, np.ones(2), seen, StructureParams())
     assert len(opened) == 2
+
+
+def test_a_wall_hidden_by_cabinets_is_joined_behind_them_and_their_fronts_are_clutter():
+    # a wall at y = 0 seen from the north; two cabinets 1.5 m long and 0.6 m deep stand
+    # against it at x 3..4.5 and 4.5..6 (a 3 m gap in the seen face, longer than a join
+    # may bridge on its own); their fronts at y = 0.6 hide the wall between the pieces
+    pieces = [((0.0, 0.0), (3.0, 0.0)), ((6.0, 0.0), (9.0, 0.0))]
+    cabinets = [shapely.box(3.0, 0.0, 4.5, 0.6).exterior, shapely.box(4.5, 0.0, 6.0, 0.6).exterior]
+    segments = pieces + [((0.0, 0.0), (0.0, 4.0)), ((9.0, 0.0), (9.0, 4.0)), ((0.0, 4.0), (9.0, 4.0))]
+    segments += [tuple(map(tuple, np.asarray(c.coords)[k:k + 2])) for c in cabinets for k in range(4)]
+    rng = np.random.default_rng(0)
+    scans = [(np.array(p), _scan(p, rng, segments)) for p in [(1.5, 2.0), (4.5, 2.5), (7.5, 2.0)]]
+    grid = occupancy_grid(scans, OccupancyParams())
+    faces = np.array([[0.0, 0.0, 3.0, 0.0], [6.0, 0.0, 9.0, 0.0], [3.0, 0.6, 6.0, 0.6]])
+    side = np.array([1, 1, 1])  # free to the north of all three
+    assert covered_by_fronts(faces, side, 0, 3.0, 6.0, StructureParams())
+    assert not covered_by_fronts(faces, np.array([1, 1, -1]), 0, 3.0, 6.0, StructureParams())  # a face turned away
+    joined, _, group = join_collinear(faces, np.ones(3), grid, StructureParams(), side)
+    assert group.tolist() == [0, 0, 1] and np.allclose(joined[0], [0, 0, 9, 0])
+    # without the fronts, or without the free sides, the 3 m gap stays open
+    assert len(join_collinear(faces[:2], np.ones(2), grid, StructureParams(), side[:2])[0]) == 2
+    assert len(join_collinear(faces, np.ones(3), grid, StructureParams())[0]) == 3
+    # a gap the free space passes through stays an opening, cabinets beside it or not
+    seen = occupancy_grid(scans + [(np.array([4.5, 2.5]), np.array([[x, -1.0] for x in np.arange(3.1, 5.9, 0.05)]))],
+                          OccupancyParams())
+    assert len(join_collinear(faces, np.ones(3), seen, StructureParams(), side)[0]) == 3
+    # the whole pass: the wall is one face from 0 to 9 m, the front is clutter
+    walls, _, _, clutter, reason = structure_passes(faces, np.ones(3), grid, StructureParams())
+    south = walls[(np.abs(walls[:, 1]) < 0.05) & (np.abs(walls[:, 3]) < 0.05)]
+    assert len(south) == 1 and _length(south)[0] > 8.9
+    assert not (np.abs(walls[:, 1] - 0.6) < 0.05).any() and (np.abs(clutter[:, 1] - 0.6) < 0.05).sum() == 1
 
 
 def test_snap_makes_l_and_t_junctions_and_trims_an_overshoot():

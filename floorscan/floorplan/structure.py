@@ -17,7 +17,10 @@ order (:func:`structure_passes`):
    ``join_offset_m``) less than ``join_max_gap_m`` apart are one face when the rover's
    free space does not pass through the gap: the gap holds no run of free cells
    ``min_opening_m`` long on the faces' line. A gap that free space passes through is an
-   opening (a door, a passage) and is kept; an unseen or occluded gap is joined.
+   opening (a door, a passage) and is kept; an unseen or occluded gap is joined. So is a
+   longer gap, up to :data:`~floorscan.floorplan.hidden.HIDDEN_MAX_GAP_M`, that objects
+   standing against the wall hide (:mod:`floorscan.floorplan.hidden`: their fronts
+   parallel in front of it), whose fronts step 5 then makes clutter.
 3. **Junctions** (:func:`snap_junctions`). An end within ``snap_m`` of where its line
    meets another face's line (at least ``junction_min_angle_deg`` apart) moves there:
    overshoots are trimmed, short ends extended, so faces meet in L, T and X junctions.
@@ -54,6 +57,7 @@ from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.clutter import free_standing_objects, in_front_of_walls, loose_in_free_space, on_objects
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
+from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, covered_by_fronts
 from floorscan.floorplan.junctions import junction_ends, short_loose, shorter_on_longer, snap_junctions
 
 
@@ -111,8 +115,12 @@ def border_and_support(seg: np.ndarray, grid: OccupancyGrid, params: StructurePa
     return structure, side
 
 
-def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams()):
-    """Step 2: collinear faces joined across gaps that free space does not pass through.
+def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams(),
+                   side: np.ndarray | None = None):  # fmt: skip
+    """Step 2: collinear faces joined across gaps that free space does not pass through:
+    up to ``join_max_gap_m``, or up to :data:`~floorscan.floorplan.hidden.HIDDEN_MAX_GAP_M`
+    where objects standing against the wall hide the gap
+    (:func:`~floorscan.floorplan.hidden.covered_by_fronts`; needs ``side``).
 
     Parameters
     ----------
@@ -122,6 +130,8 @@ def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, pa
         Their weights (inlier counts); a joined face's is the sum.
     grid : OccupancyGrid
     params : StructureParams
+    side : (F,) int ndarray, optional
+        The faces' free sides (:func:`border_and_support`); None: no gap is hidden.
 
     Returns
     -------
@@ -139,14 +149,21 @@ def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, pa
     nf = len(seg)
     if nf < 2:
         return seg.copy(), w.copy(), np.arange(nf)
-    i, j = candidate_pairs(seg, params.join_max_gap_m, np.radians(params.join_angle_deg))
+    reach = params.join_max_gap_m if side is None else max(params.join_max_gap_m, HIDDEN_MAX_GAP_M)
+    i, j = candidate_pairs(seg, reach, np.radians(params.join_angle_deg))
     length, a, b, tb, off = shorter_on_longer(seg, i, j)  # along and across the longer face's line
     keep = np.zeros(len(i), dtype=bool)
     if len(i):
         u = (seg[a, 2:] - seg[a, :2]) / np.maximum(length[a], 1e-12)[:, None]
         lo_b, hi_b = tb.min(axis=1), tb.max(axis=1)
         gap = np.maximum(lo_b - length[a], -hi_b)
-        keep = (np.abs(off).max(axis=1) <= params.join_offset_m) & (gap <= params.join_max_gap_m)
+        keep = (np.abs(off).max(axis=1) <= params.join_offset_m) & (gap <= reach)
+        if side is not None:
+            side = np.asarray(side)
+            for k in np.flatnonzero(keep & (gap > params.join_max_gap_m)).tolist():
+                t0, t1 = (length[a[k]], lo_b[k]) if lo_b[k] > length[a[k]] else (hi_b[k], 0.0)
+                same_way = side[a[k]] * side[b[k]] * (u[k] @ (seg[b[k], 2:] - seg[b[k], :2])) > 0
+                keep[k] = same_way and covered_by_fronts(seg, side, int(a[k]), min(t0, t1), max(t0, t1), params)
         free = passable(grid)
         step = grid.resolution_m / 2
         for k in np.flatnonzero(keep & (gap > step)).tolist():
@@ -222,10 +239,10 @@ def structure_passes(
     """
     seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
     w = np.asarray(weights, dtype=np.float64).ravel()
-    structure, _ = border_and_support(seg, grid, params)
+    structure, side0 = border_and_support(seg, grid, params)
     clutter = [seg[~structure]]
     reason = [np.full(int((~structure).sum()), "not_a_boundary", dtype=object)]
-    joined, jw, _ = join_collinear(seg[structure], w[structure], grid, params)
+    joined, jw, _ = join_collinear(seg[structure], w[structure], grid, params, side0[structure])
     snapped, junctions = snap_junctions(joined, params)
     length = np.hypot(snapped[:, 2] - snapped[:, 0], snapped[:, 3] - snapped[:, 1])
     anchor = length >= params.clutter_max_length_m
