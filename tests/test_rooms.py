@@ -4,6 +4,8 @@ thickness), the free space comes from the scans' occupancy grid."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import shapely
@@ -11,22 +13,23 @@ import shapely
 from conftest import cast_rays
 from floorscan.core.occupancy import OccupancyParams, occupancy_grid
 from floorscan.floorplan.doors import wall_gaps
-from floorscan.floorplan.room_space import RoomParams
+from floorscan.floorplan.room_space import RoomParams, room_space
 from floorscan.floorplan.rooms import plan_rooms
 
 T = 0.12  # wall thickness, metres
 
 
-def _grid(walls: list, poses: list, seed: int = 1):
+def _grid(walls: list, poses: list, seed: int = 1, objects: list = ()):
     """The occupancy grid of 360-degree scans from ``poses`` of the wall faces of
-    ``walls`` ((x0, y0, x1, y1) axes, thickness T)."""
+    ``walls`` ((x0, y0, x1, y1) axes, thickness T) and of the faces ``objects``
+    ((x0, y0, x1, y1) each)."""
     rng = np.random.default_rng(seed)
     faces = []
     for x0, y0, x1, y1 in walls:
         d = np.array([x1 - x0, y1 - y0]) / np.hypot(x1 - x0, y1 - y0)
         n = np.array([-d[1], d[0]]) * T / 2
         faces += [[x0 + n[0], y0 + n[1], x1 + n[0], y1 + n[1]], [x0 - n[0], y0 - n[1], x1 - n[0], y1 - n[1]]]
-    faces = np.array(faces)
+    faces = np.array(faces + [list(f) for f in objects])
     a = np.linspace(-np.pi, np.pi, 1440, endpoint=False)
     scans = []
     for p in poses:
@@ -46,6 +49,25 @@ def _rooms(walls, poses, params=RoomParams()):
 # Two rooms 4 x 4 m side by side, joined by a 0.9 m door in the partition (y 1.5..2.4).
 BOX = [(0, 0, 8, 0), (8, 0, 8, 4), (8, 4, 0, 4), (0, 4, 0, 0)]
 TWO_ROOMS = BOX + [(4, 0, 4, 1.5), (4, 2.4, 4, 4)]
+
+
+def test_the_floor_under_a_cabinet_against_a_wall_is_space():
+    # one room 4 x 4 m; a cabinet 2 x 0.6 m against its north wall (faces 0.06 m inside);
+    # as a map (no scan positions), every cell it does not mark free bounds the space
+    box = [(0, 0, 4, 0), (4, 0, 4, 4), (4, 4, 0, 4), (0, 4, 0, 0)]
+    cabinet = [(1, 3.34, 3, 3.34), (1, 3.34, 1, 3.94), (3, 3.34, 3, 3.94)]
+    grid = dataclasses.replace(_grid(box, [(1.0, 1.0), (3.0, 1.5), (2.0, 2.5)], objects=cabinet), scan_xy=None)
+    axes = np.array(box, dtype=np.float64)
+    under = np.array([[[1, 3.34], [3, 3.34], [3, 3.94], [1, 3.94]]], dtype=np.float64)
+    without = room_space(grid, axes, np.full(4, T), RoomParams())
+    with_floor = room_space(grid, axes, np.full(4, T), RoomParams(), under)
+    xy = np.array([[x, y] for x in np.arange(1.15, 2.9, 0.1) for y in (3.45, 3.6, 3.75)])
+    assert not without.at(without.space, xy).any()  # the cabinet's cells bound the space
+    assert with_floor.at(with_floor.space, xy).all() and not with_floor.at(with_floor.bounds, xy).any()
+    # elsewhere the same space
+    assert (with_floor.space & ~without.space).sum() * with_floor.resolution_m**2 == pytest.approx(1.2, abs=0.25)
+    rooms, _ = plan_rooms(axes, np.full(4, T), grid, RoomParams(), under)
+    assert len(rooms) == 1 and 14.6 < rooms["area_m2"][0] < 15.3
 
 
 def test_two_rooms_and_their_door():

@@ -17,7 +17,7 @@ from floorscan.floorplan.plan import build_floorplan, plan_faces
 from floorscan.floorplan.free_space import StructureParams
 from floorscan.floorplan.hidden import covered_by_fronts
 from floorscan.floorplan.junctions import merge_parallel_duplicates, snap_junctions
-from floorscan.floorplan.structure import border_and_support, join_collinear, structure_passes
+from floorscan.floorplan.structure import border_and_support, floor_under, join_collinear, structure_passes
 from floorscan.score.answer import crossings, true_corners, true_wall_pieces
 from floorscan.walls.map_lines import MapParams, map_segments, supported_points
 
@@ -85,7 +85,7 @@ def test_structure_passes_on_the_room(room):
     pts, _, grid = room
     seg = map_segments(pts, grid, MapParams(), seed=0)
     faces, w, _ = plan_faces(seg[["x0", "y0", "x1", "y1"]].to_numpy(), seg["n_inliers"].to_numpy(float))
-    walls, ww, side, clutter, reason = structure_passes(faces, w, grid, StructureParams())
+    walls, ww, side, clutter, reason, _ = structure_passes(faces, w, grid, StructureParams())
     # the table's faces are clutter, no wall lies on it
     table = shapely.box(4.95, 1.95, 6.25, 2.65)
     wall_lines = shapely.linestrings(walls.reshape(-1, 2, 2))
@@ -131,7 +131,7 @@ def test_a_rack_in_front_of_a_wall_is_clutter_the_wall_between_two_doors_is_not(
     grid = occupancy_grid(scans, OccupancyParams())
     seg = map_segments(np.concatenate([s for _, s in scans]), grid, MapParams(), seed=0)
     faces, w, _ = plan_faces(seg[["x0", "y0", "x1", "y1"]].to_numpy(), seg["n_inliers"].to_numpy(float))
-    walls, _, _, clutter, reason = structure_passes(faces, w, grid, StructureParams())
+    walls, _, _, clutter, reason, _ = structure_passes(faces, w, grid, StructureParams())
     rack = shapely.box(3.35, 0.4, 6.65, 1.1)
     assert not shapely.intersects(shapely.linestrings(walls.reshape(-1, 2, 2)), rack).any()
     front = (np.abs(clutter[:, 1] - 1.05) < 0.05) & (np.abs(clutter[:, 3] - 1.05) < 0.05)
@@ -185,10 +185,19 @@ def test_a_wall_hidden_by_cabinets_is_joined_behind_them_and_their_fronts_are_cl
                           OccupancyParams())
     assert len(join_collinear(faces, np.ones(3), seen, StructureParams(), side)[0]) == 3
     # the whole pass: the wall is one face from 0 to 9 m, the front is clutter
-    walls, _, _, clutter, reason = structure_passes(faces, np.ones(3), grid, StructureParams())
+    walls, _, _, clutter, reason, _ = structure_passes(faces, np.ones(3), grid, StructureParams())
     south = walls[(np.abs(walls[:, 1]) < 0.05) & (np.abs(walls[:, 3]) < 0.05)]
     assert len(south) == 1 and _length(south)[0] > 8.9
     assert not (np.abs(walls[:, 1] - 0.6) < 0.05).any() and (np.abs(clutter[:, 1] - 0.6) < 0.05).sum() == 1
+
+
+def test_the_floor_under_an_object_runs_from_its_front_to_the_wall_behind():
+    front = np.array([[1.0, 0.6, 2.5, 0.62]])
+    wall = np.array([[0.0, 0.0, 9.0, 0.0]])
+    quad = floor_under(front, wall)[0]
+    assert np.allclose(quad, [[1.0, 0.6], [2.5, 0.62], [2.5, 0.0], [1.0, 0.0]])
+    assert shapely.Polygon(quad).area == pytest.approx(1.5 * 0.61)
+    assert floor_under(np.zeros((0, 4)), np.zeros((0, 4))).shape == (0, 4, 2)
 
 
 def test_snap_makes_l_and_t_junctions_and_trims_an_overshoot():

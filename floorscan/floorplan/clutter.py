@@ -165,13 +165,16 @@ def in_front_of_walls(seg: np.ndarray, side: np.ndarray, wall: np.ndarray, param
 
     Returns
     -------
-    (F,) bool ndarray
+    front : (F,) bool ndarray
+    behind : (F,) int64 ndarray
+        The wall face each front stands against (the nearest), -1 for the others.
     """
     seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
     out = np.zeros(len(seg), dtype=bool)
+    behind = np.full(len(seg), -1, dtype=np.int64)
     i, j = candidate_pairs(seg, params.front_max_m, np.radians(params.join_angle_deg))
     if len(i) == 0:
-        return out
+        return out, behind
     i, j = np.r_[i, j], np.r_[j, i]  # face i in front of wall j
     ok = wall[j] & ~wall[i]
     i, j = i[ok], j[ok]
@@ -187,7 +190,9 @@ def in_front_of_walls(seg: np.ndarray, side: np.ndarray, wall: np.ndarray, param
         overlap >= params.front_overlap * length[i]
     )
     out[i[hit]] = True
-    return out
+    order = np.argsort(-dist[hit], kind="stable")  # the nearest wall written last
+    behind[i[hit][order]] = j[hit][order]
+    return out, behind
 
 
 def loose_in_free_space(

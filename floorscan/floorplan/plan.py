@@ -270,11 +270,12 @@ def plan_of_segments(
     seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
     faces, face_w, n_seg = plan_faces(seg, weights, params, first_groups)
     clutter = _empty(CLUTTER_COLUMNS)
+    under = None
     if grid is not None:
         from floorscan.floorplan.structure import structure_passes
 
         n_before = len(faces)
-        faces, face_w, side, cl, reason = structure_passes(faces, face_w, grid, params.structure, params.pair_max_m)
+        faces, face_w, side, cl, reason, under = structure_passes(faces, face_w, grid, params.structure, params.pair_max_m)
         n_seg = np.ones(len(faces), dtype=np.int64)
         clutter = pd.DataFrame(
             {
@@ -319,7 +320,7 @@ def plan_of_segments(
     if grid is not None and len(axes):
         from floorscan.floorplan.rooms import plan_rooms
 
-        rooms, doors = plan_rooms(axes, thick, grid, params.rooms)
+        rooms, doors = plan_rooms(axes, thick, grid, params.rooms, under)
     nw = len(axes)
     faces_df = pd.DataFrame(
         {

@@ -215,16 +215,49 @@ def wall_footprints(axes: np.ndarray, thickness: np.ndarray) -> np.ndarray:
 
 
 def wall_mask(axes: np.ndarray, thickness: np.ndarray, origin_xy: np.ndarray, res: float, shape) -> np.ndarray:
-    """The cells of the walls' footprints, each axis also drawn as an 8-connected line,
-    so a wall blocks the 4-connected space (scikit-image ``draw.polygon`` and
-    ``draw.line``).
+    """The cells of the walls' footprints (:func:`polygon_mask`; each at least 0.75 cell
+    to each side of its axis), each axis also drawn as an 8-connected line, so a wall
+    blocks the 4-connected space (scikit-image ``draw.line``).
 
     Parameters
     ----------
     axes : (N, 4) float ndarray
         ``x0, y0, x1, y1``, metres.
     thickness : (N,) float ndarray
-        Metres; the footprint is at least 0.75 cell to each side.
+        Metres.
+    origin_xy, res, shape
+        The raster, as :func:`polygon_mask`'s.
+
+    Returns
+    -------
+    (H, W) bool ndarray
+    """
+    from skimage.draw import line
+
+    axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
+    thickness = np.asarray(thickness, dtype=np.float64).reshape(-1)
+    d = axes[:, 2:] - axes[:, :2]
+    length = np.hypot(d[:, 0], d[:, 1])
+    keep = length > 0
+    axes, d, length, thickness = axes[keep], d[keep], length[keep], thickness[keep]
+    n = np.column_stack([-d[:, 1], d[:, 0]]) / length[:, None] * np.maximum(0.5 * thickness, 0.75 * res)[:, None]
+    corners = np.stack([axes[:, :2] + n, axes[:, 2:] + n, axes[:, 2:] - n, axes[:, :2] - n], axis=1)
+    mask = polygon_mask(corners, origin_xy, res, shape)
+    for x0, y0, x1, y1 in axes:
+        e = np.round((np.array([[x0, y0], [x1, y1]]) - origin_xy) / res - 0.5).astype(np.int64)
+        rr, cc = line(e[0, 1], e[0, 0], e[1, 1], e[1, 0])
+        ok = (rr >= 0) & (cc >= 0) & (rr < shape[0]) & (cc < shape[1])
+        mask[rr[ok], cc[ok]] = True
+    return mask
+
+
+def polygon_mask(polygons: np.ndarray, origin_xy: np.ndarray, res: float, shape) -> np.ndarray:
+    """The cells whose centres lie in any of the polygons (scikit-image ``draw.polygon``).
+
+    Parameters
+    ----------
+    polygons : (K, V, 2) float ndarray
+        Corners, map metres.
     origin_xy : (2,) float ndarray
         Map-frame corner of cell (0, 0), metres.
     res : float
@@ -236,27 +269,18 @@ def wall_mask(axes: np.ndarray, thickness: np.ndarray, origin_xy: np.ndarray, re
     -------
     (H, W) bool ndarray
     """
-    from skimage.draw import line, polygon
+    from skimage.draw import polygon
 
     mask = np.zeros(shape, dtype=bool)
-    for (x0, y0, x1, y1), t in zip(np.asarray(axes, dtype=np.float64).reshape(-1, 4), np.asarray(thickness, dtype=np.float64)):
-        d = np.array([x1 - x0, y1 - y0])
-        length = float(np.hypot(*d))
-        if length <= 0:
-            continue
-        n = np.array([-d[1], d[0]]) / length * max(0.5 * t, 0.75 * res)
-        corners = np.array([[x0, y0] + n, [x1, y1] + n, [x1, y1] - n, [x0, y0] - n])
+    for corners in np.asarray(polygons, dtype=np.float64):
         c = (corners - origin_xy) / res - 0.5  # cell-centre coordinates
         rr, cc = polygon(c[:, 1], c[:, 0], shape)
         mask[rr, cc] = True
-        e = np.round((np.array([[x0, y0], [x1, y1]]) - origin_xy) / res - 0.5).astype(np.int64)
-        rr, cc = line(e[0, 1], e[0, 0], e[1, 1], e[1, 0])
-        ok = (rr >= 0) & (cc >= 0) & (rr < shape[0]) & (cc < shape[1])
-        mask[rr[ok], cc[ok]] = True
     return mask
 
 
-def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, params: RoomParams) -> RoomRaster:
+def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, params: RoomParams,
+               under: np.ndarray | None = None) -> RoomRaster:  # fmt: skip
     """The space the rooms are cut from (module docstring, step 1).
 
     Parameters
@@ -268,6 +292,10 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
     thickness : (N,) float ndarray
         Their thickness, metres.
     params : RoomParams
+    under : (K, 4, 2) float ndarray, optional
+        Quadrilaterals of floor under the objects standing against walls
+        (:func:`~floorscan.floorplan.structure.floor_under`), metres: space, whatever the
+        scans saw there.
 
     Returns
     -------
@@ -311,6 +339,12 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
     # the closing fills unseen cells, never the cells that bound the space (a wall
     # the plan lacks stays a boundary)
     space &= ~bounds | opened
+    # the floor under the objects standing against walls is the room's (a room's area is
+    # its floor area): their cells are space, and no longer bound it
+    if under is not None and len(under):
+        floor = polygon_mask(under, origin, res, space.shape)
+        bounds = bounds & ~floor
+        space |= floor & ~walls
     # the seen space outside the building's closed outline: rays through windows, open doors
     outside, beyond, _ = building_outside(walls | occupied, res, origin, grid.scan_xy, params.door_max_m, seen=space,
                                           walls=walls)

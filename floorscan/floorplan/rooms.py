@@ -20,7 +20,9 @@ taken from the walls:
    space outside the building's closed outline (:mod:`floorscan.floorplan.outline`:
    the walls and seen obstacles closed by the smallest disc that holds the rover's
    path), in a map without the space beyond the convex hull of its walls (the rays it
-   holds through windows). Furniture and clutter are not obstacles: a room's area is its floor area.
+   holds through windows). Furniture and clutter are not obstacles: a room's area is its floor area,
+   and the floor under an object standing against a wall (the structure passes' step 5,
+   :func:`~floorscan.floorplan.structure.floor_under`) is space, whatever bounds it.
 2. **Doors between walls** (:func:`~floorscan.floorplan.doors.wall_gaps`): the gap
    between the facing ends of two walls in one line, ``door_min_m`` to ``door_max_m``
    wide, that the scans saw through, is cut from the space first: a room seen only
@@ -99,7 +101,8 @@ def _roots(sets, n: int) -> np.ndarray:
 
 
 def segment_rooms(
-    grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, params: RoomParams = RoomParams()
+    grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, params: RoomParams = RoomParams(),
+    under: np.ndarray | None = None,
 ) -> tuple[RoomRaster, np.ndarray, list[tuple[np.ndarray, np.ndarray, int, int, int]], bool]:
     """The rooms and doors on the raster (module docstring, steps 1-5).
 
@@ -112,6 +115,8 @@ def segment_rooms(
     thickness : (N,) float ndarray
         Metres.
     params : RoomParams
+    under : (K, 4, 2) float ndarray, optional
+        The floor under the objects against walls, metres (:func:`plan_rooms`).
 
     Returns
     -------
@@ -129,7 +134,7 @@ def segment_rooms(
 
     axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
     thickness = np.asarray(thickness, dtype=np.float64).reshape(-1)
-    raster = room_space(grid, axes, thickness, params)
+    raster = room_space(grid, axes, thickness, params, under)
     gaps = [g for g in D.wall_gaps(axes, thickness, params) if D.passes_through(raster, g[0], g[1])]
     gaps += room_mouths(axes, thickness, raster, params)
     barrier = np.zeros(raster.space.shape, dtype=bool)
@@ -324,7 +329,8 @@ def _distinct_doors(doors: list) -> list:
 
 
 def plan_rooms(
-    axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, params: RoomParams = RoomParams()
+    axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, params: RoomParams = RoomParams(),
+    under: np.ndarray | None = None,
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The rooms and doors of a plan (the module docstring): the tables of
     :attr:`~floorscan.floorplan.plan.FloorPlan.rooms` and
@@ -339,6 +345,9 @@ def plan_rooms(
     grid : OccupancyGrid
         The free space of the plan's scans.
     params : RoomParams
+    under : (K, 4, 2) float ndarray, optional
+        The floor under the objects standing against walls
+        (:func:`~floorscan.floorplan.structure.floor_under`), metres: the rooms' floor.
 
     Returns
     -------
@@ -352,7 +361,7 @@ def plan_rooms(
     import shapely
 
     t0 = time.perf_counter()
-    raster, labels, doors, divided = segment_rooms(grid, axes, thickness, params)
+    raster, labels, doors, divided = segment_rooms(grid, axes, thickness, params, under)
     n = int(labels.max())
     polys = room_polygons(raster, labels, axes, thickness)
     if doors:  # the opening in the wall belongs to neither room: rooms end at the wall faces

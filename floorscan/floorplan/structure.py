@@ -33,7 +33,8 @@ order (:func:`structure_passes`):
 5. **In front of a wall** (:func:`in_front_of_walls`). A face shorter than
    ``clutter_max_length_m`` parallel to a long wall face, ``front_min_m`` to
    ``front_max_m`` in front of it on its free side, is the front of a desk, a cabinet
-   or a shelf standing against the wall: clutter.
+   or a shelf standing against the wall: clutter. The floor between it and the wall
+   (:func:`floor_under`) is the room's floor (:mod:`floorscan.floorplan.rooms`).
 6. **Loose in the free space** (:func:`loose_in_free_space`). A face that meets no
    other face at either end, has no face in its line within ``loose_reach_m``, whose
    ends both stand in free space, and that has free space on both sides or a face
@@ -236,6 +237,9 @@ def structure_passes(
     reason : (C,) object ndarray
         Why each clutter face is clutter: ``not_a_boundary`` (no free space beside it, or returns on both sides, or on cells that are not occupied),
         ``free_standing_object``, ``in_front_of_wall``, ``short`` or ``loose_in_free_space``.
+    under : (K, 4, 2) float64 ndarray
+        The floor under each object standing against a wall (step 5): the quadrilateral
+        from its front to the wall face behind it, metres (:func:`floor_under`).
     """
     seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
     w = np.asarray(weights, dtype=np.float64).ravel()
@@ -248,7 +252,8 @@ def structure_passes(
     anchor = length >= params.clutter_max_length_m
     standing = on_objects(snapped, grid, free_standing_objects(grid, params, snapped[anchor])) & ~anchor
     _, side = border_and_support(snapped, grid, params)
-    front = in_front_of_walls(snapped, side, anchor, params) & ~standing
+    front, behind = in_front_of_walls(snapped, side, anchor, params)
+    front &= ~standing
     short = short_loose(snapped, junctions, params.min_wall_length_m) & ~standing & ~front
     loose = loose_in_free_space(snapped, junction_ends(snapped, junctions), side, grid, params, max_thickness_m)
     loose &= ~standing & ~front & ~short
@@ -265,4 +270,32 @@ def structure_passes(
     reason.append(np.full(int((~still).sum()), "short", dtype=object))
     walls, _ = snap_junctions(joined[keep][still], params)
     _, side = border_and_support(walls, grid, params)
-    return walls, jw[keep][still], side, np.concatenate(clutter).reshape(-1, 4), np.concatenate(reason)
+    under = floor_under(snapped[front], snapped[behind[front]])
+    return walls, jw[keep][still], side, np.concatenate(clutter).reshape(-1, 4), np.concatenate(reason), under
+
+
+def floor_under(fronts: np.ndarray, walls: np.ndarray) -> np.ndarray:
+    """The floor under objects standing against walls: each front and its ends'
+    projections onto the line of the wall face behind it.
+
+    Parameters
+    ----------
+    fronts, walls : (K, 4) float ndarray
+        Each front and its wall face, metres.
+
+    Returns
+    -------
+    (K, 4, 2) float64 ndarray
+        Corners in order (front's first end, front's second end, their projections),
+        metres.
+    """
+    fronts = np.asarray(fronts, dtype=np.float64).reshape(-1, 4)
+    walls = np.asarray(walls, dtype=np.float64).reshape(-1, 4)
+    d = walls[:, 2:] - walls[:, :2]
+    u = d / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-12)[:, None]
+
+    def onto(p):
+        return walls[:, :2] + np.einsum("ij,ij->i", p - walls[:, :2], u)[:, None] * u
+
+    return np.stack([fronts[:, :2], fronts[:, 2:], onto(fronts[:, 2:]), onto(fronts[:, :2])], axis=1)
+
