@@ -33,7 +33,11 @@ Modules, from the segments up:
   :mod:`floorscan.score.drawn_rooms` against rooms drawn by people (rule
   ``score_drawn``); both, and the room benchmark (``benchmarks/bench_rooms.py``), score
   through :mod:`floorscan.score.segmentation` (Bormann's per-room mean and pooled
-  precision and recall, and the IoU-0.5 matching, from one intersection matrix).
+  precision and recall, and the IoU-0.5 matching, from one intersection matrix);
+- :mod:`floorscan.score.drawn`: a plan drawn by people, aligned to the map frame
+  (its search over rotation and scale: :mod:`floorscan.score.correlative`, correlative
+  matching with branch and bound) and the plans scored against it (rule
+  ``score_drawn``).
 
 A new metric of a wall set is computed in :func:`floorscan.score.growing.score_walls`
 (and its incremental twin ``_GrowingWalls.score``, tested equal) and becomes a column

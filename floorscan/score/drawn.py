@@ -8,8 +8,9 @@ used to score a floor plan's walls (rule ``score_drawn``).
 - :func:`align_drawn`: the similarity transform (rotation, scale, translation) that
   puts them on the reference map's structure (:mod:`floorscan.core.occupancy`): a
   coarse search over rotation and scale, the translation of each by FFT
-  cross-correlation of the two rasterised point sets (SciPy), then trimmed ICP with
-  Umeyama's closed-form similarity (Umeyama, "Least-squares estimation of
+  cross-correlation of the two rasterised point sets (SciPy; a branch and bound with
+  the exhaustive search's answer, :mod:`floorscan.score.correlative`), then trimmed
+  ICP with Umeyama's closed-form similarity (Umeyama, "Least-squares estimation of
   transformation parameters between two point patterns", PAMI 1991); or, from at least
   two control points (pixel -> map metres), Umeyama on them, refined the same way. The
   residual is the distance from the structure cells near a drawn face to the nearest
@@ -244,38 +245,22 @@ def align_drawn(
 
 
 def _coarse_search(src, dst, resolution_m, scale_range, angle_step_deg, cell_m: float = 0.2):
-    """Rotation and scale on a grid, the translation of each by FFT cross-correlation of
-    the rasterised points (the reference blurred by a cell): the best score's
+    """Rotation and scale on a grid (9 scales, ``angle_step_deg`` steps), the translation
+    of each by FFT cross-correlation of the rasterised points
+    (:func:`floorscan.score.correlative.correlative_search`): the best score's
     (scale, angle, translation)."""
-    from scipy import fft, ndimage
+    from scipy import fft
+
+    from floorscan.score.correlative import correlative_search
 
     lo = dst.min(axis=0) - 2.0
     src = src[:: max(1, len(src) // 20000)]  # enough points for a coarse score
     src_c = src - src.mean(axis=0)
     extent = max(np.ptp(dst, axis=0).max(), np.ptp(src_c, axis=0).max() * resolution_m * (1 + scale_range)) + 8.0
     n = int(fft.next_fast_len(int(math.ceil(2 * extent / cell_m))))
-    ref = np.zeros((n, n))
-    ij = np.floor((dst - lo) / cell_m).astype(np.int64)
-    ij = ij[(ij >= 0).all(axis=1) & (ij < n).all(axis=1)]
-    ref[ij[:, 1], ij[:, 0]] = 1.0
-    ref = ndimage.gaussian_filter(ref, 1.0)
-    ref_f = fft.rfft2(ref)
-    best = (-np.inf, resolution_m, 0.0, np.zeros(2))
-    for scale in resolution_m * np.linspace(1 - scale_range, 1 + scale_range, 9):
-        for deg in np.arange(0.0, 360.0, angle_step_deg):
-            a = math.radians(deg)
-            c, s = math.cos(a), math.sin(a)
-            moved = scale * (src_c @ np.array([[c, s], [-s, c]]))
-            img = np.zeros((n, n))
-            k = np.floor(moved / cell_m).astype(np.int64) % n
-            np.add.at(img, (k[:, 1], k[:, 0]), 1.0)
-            corr = fft.irfft2(ref_f * np.conj(fft.rfft2(img)), s=(n, n))
-            peak = int(np.argmax(corr))
-            score = corr.flat[peak]
-            if score > best[0]:
-                dy, dx = divmod(peak, n)
-                best = (score, scale, a, np.array([dx, dy], dtype=np.float64) * cell_m + lo)
-    _, scale, a, shift = best
+    scales = resolution_m * np.linspace(1 - scale_range, 1 + scale_range, 9)
+    angles = [math.radians(deg) for deg in np.arange(0.0, 360.0, angle_step_deg)]
+    scale, a, shift, _ = correlative_search(src_c, dst, scales, angles, cell_m, origin=lo, size=n)
     c, s = math.cos(a), math.sin(a)
     t = shift - scale * (src.mean(axis=0) @ np.array([[c, s], [-s, c]]))
     return scale, a, t
