@@ -14,6 +14,7 @@ from conftest import cast_rays
 from floorscan.core.occupancy import OccupancyParams, occupancy_grid
 from floorscan.floorplan.doors import wall_gaps
 from floorscan.floorplan.room_space import RoomParams, room_space
+from floorscan.floorplan.mouths import room_mouths
 from floorscan.floorplan.rooms import plan_rooms
 
 T = 0.12  # wall thickness, metres
@@ -68,6 +69,26 @@ def test_the_floor_under_a_cabinet_against_a_wall_is_space():
     assert (with_floor.space & ~without.space).sum() * with_floor.resolution_m**2 == pytest.approx(1.2, abs=0.25)
     rooms, _ = plan_rooms(axes, np.full(4, T), grid, RoomParams(), under)
     assert len(rooms) == 1 and 14.6 < rooms["area_m2"][0] < 15.3
+
+
+def test_no_room_mouth_runs_diagonally_between_two_perpendicular_walls():
+    # a 2 x 2 grid of rooms whose inner walls cross, with a 0.9 m door in each of the
+    # four arms; the south arm's free end (2.125, 0.8) and the west arm's (1.59, 2.5) lie
+    # 1.78 m apart on a line 17.5 degrees off both walls' directions: no room's open side
+    box = [(0, 0, 5.625, 0), (5.625, 0, 5.625, 5.75), (5.625, 5.75, 0, 5.75), (0, 5.75, 0, 0)]
+    inner = [(2.125, 0, 2.125, 0.8), (2.125, 1.7, 2.125, 3.67), (2.125, 4.57, 2.125, 5.75),
+             (0, 2.5, 0.69, 2.5), (1.59, 2.5, 3.68, 2.5), (4.57, 2.5, 5.625, 2.5)]  # fmt: skip
+    walls = box + inner
+    poses = [(1.0, 1.2), (3.9, 1.2), (1.0, 4.1), (3.9, 4.1), (2.125, 1.25), (1.14, 2.5), (4.1, 2.5), (2.125, 4.1)]
+    grid = _grid(walls, poses)
+    axes = np.array(walls, dtype=np.float64)
+    mouths = room_mouths(axes, np.full(len(axes), T), room_space(grid, axes, np.full(len(axes), T), RoomParams()),
+                         RoomParams())  # fmt: skip
+    ends = [{tuple(np.round(p, 2)), tuple(np.round(q, 2))} for p, q, _ in mouths]
+    assert {(2.12, 0.8), (1.59, 2.5)} not in ends and {(2.13, 0.8), (1.59, 2.5)} not in ends
+    rooms, doors = plan_rooms(axes, np.full(len(axes), T), grid)
+    assert len(rooms) == 4 and len(doors) == 4
+    assert sorted(np.round(doors["width_m"], 1).tolist()) == [0.9, 0.9, 0.9, 0.9]
 
 
 def test_two_rooms_and_their_door():

@@ -15,8 +15,9 @@ mouth is that line, between two wall ends that:
 - lie ``door_min_m`` to :data:`MOUTH_MAX_M` apart, the line between them in the free
   space, crossing no wall;
 - belong to walls that bound one side of the line: each wall runs from its end square
-  to the line into the same side (or along the line, away from it: the wall of a
-  corridor going on past a room's side wall), within ``door_angle_deg``, and not both
+  to the line into the same side (or along the line, away from it, the line in its
+  line within ``line_offset_m`` plus half its thickness: the wall of a corridor going
+  on past a room's side wall), within ``door_angle_deg``, and not both
   along the line (that is a gap in one wall, :func:`~floorscan.floorplan.doors.wall_gaps`);
   a side wall is at least as long as the line and :data:`MOUTH_WALL_M`;
 - close a pocket: from the line into that side, the space ends at a wall or at a cell
@@ -48,6 +49,12 @@ MOUTH_WALL_M = 1.0
 
 def _free_ends(axes: np.ndarray, thickness: np.ndarray) -> list[tuple[int, int]]:
     return [(i, k) for i in range(len(axes)) for k in (0, 1) if not junction_end(axes, thickness, i, k)]
+
+
+def _in_line(x: np.ndarray, p: np.ndarray, u: np.ndarray, tol_m: float) -> bool:
+    """Whether point ``x`` lies within ``tol_m`` of the line through ``p`` along ``u``
+    (a unit vector), metres."""
+    return abs(float((x - p) @ np.array([-u[1], u[0]]))) <= tol_m
 
 
 def _ray_hits(raster: RoomRaster, start: np.ndarray, direction: np.ndarray, max_m: float, tree) -> bool:
@@ -134,8 +141,13 @@ def room_mouths(
             if along.all():
                 continue  # a gap in one wall's line: wall_gaps
             side = away[[a, b]] @ n
-            # along the line: the wall must run away from the mouth, outward
+            # along the line: the wall must run away from the mouth, outward, and the
+            # mouth lie in the wall's line (the corridor's wall going on past the room)
             if along[0] and away[a] @ u > 0 or along[1] and away[b] @ u < 0:
+                continue
+            if along[0] and not _in_line(pts[b], pts[a], away[a], params.line_offset_m + thickness[free[a][0]] / 2):
+                continue
+            if along[1] and not _in_line(pts[a], pts[b], away[b], params.line_offset_m + thickness[free[b][0]] / 2):
                 continue
             sides = np.array([free[a][0], free[b][0]])[~along]
             if length[sides].min() < max(MOUTH_WALL_M, dist[b]):
