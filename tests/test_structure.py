@@ -200,6 +200,34 @@ def test_the_floor_under_an_object_runs_from_its_front_to_the_wall_behind():
     assert floor_under(np.zeros((0, 4)), np.zeros((0, 4))).shape == (0, 4, 2)
 
 
+def test_a_partition_stub_as_thick_as_a_wall_is_no_free_standing_object():
+    # a map of 5 cm cells: a wall 0.3 m thick along y = 1.0..1.3, a stub of the same
+    # thickness standing 2 m out of it (x 2.0..2.3), and a desk 0.8 x 1.2 m in the room
+    from floorscan.core.occupancy import OccupancyGrid
+    from floorscan.floorplan.clutter import free_standing_objects
+
+    r, shape = 0.05, (100, 120)
+    hit = np.zeros(shape, dtype=np.int32)
+    hit[20:26, :] = 1  # the wall, rows 20..25 (y 1.0..1.3)
+    hit[26:66, 40:46] = 1  # the stub, y 1.3..3.3, x 2.0..2.3
+    hit[50:66, 80:104] = 1  # the desk, y 2.5..3.3, x 4.0..5.2
+    grid = OccupancyGrid(origin_xy=np.zeros(2), resolution_m=r, n_hit_scans=hit, n_miss_scans=np.where(hit > 0, 0, 5),
+                         params=OccupancyParams(), scan_xy=None)  # fmt: skip
+    wall = np.array([[0.0, 1.3, 6.0, 1.3]])  # the wall's face on the room side
+    stub_xy, desk_xy = np.array([[2.15, 2.5]]), np.array([[4.6, 2.9]])
+
+    def on(mask, xy):
+        rows, cols, _ = grid.cells_of(xy)
+        return bool(mask[rows[0], cols[0]])
+
+    # as thin as a wall by the largest disc inside it (0.3 m, 0.4 m grown by a cell each
+    # side), not by its area over its length (0.40 m, not under 2 x side_offset_m + 2 cells)
+    thin = free_standing_objects(grid, StructureParams(), wall, max_thickness_m=0.4)
+    assert not on(thin, stub_xy) and on(thin, desk_xy)
+    old = free_standing_objects(grid, StructureParams(), wall)
+    assert on(old, stub_xy) and on(old, desk_xy)
+
+
 def test_snap_makes_l_and_t_junctions_and_trims_an_overshoot():
     seg = np.array([
         [0.0, 0.0, 4.9, 0.0],    # stops 0.1 short of the corner at x = 5

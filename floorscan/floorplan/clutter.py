@@ -17,7 +17,8 @@ from floorscan.floorplan.junctions import ends_on_line, shorter_on_longer
 
 
 def free_standing_objects(
-    grid: OccupancyGrid, params: StructureParams = StructureParams(), walls: np.ndarray | None = None
+    grid: OccupancyGrid, params: StructureParams = StructureParams(), walls: np.ndarray | None = None,
+    max_thickness_m: float | None = None,
 ) -> np.ndarray:
     """Step 4's objects: the cells of things standing in the free space.
 
@@ -27,8 +28,13 @@ def free_standing_objects(
     component is a free-standing object when the free space surrounds it (at least
     ``object_free_around`` of the cells around it are :func:`passable`) and it is small: its
     extent along its principal axis is below ``clutter_max_length_m``. A thin long
-    component (its area over its length below ``side_offset_m`` * 2 plus two cells, at
-    least ``min_wall_length_m`` long: a wall between two doors) is not an object.
+    component, at least ``min_wall_length_m`` long, is not an object: its area over its
+    length below ``side_offset_m`` * 2 plus two cells (a wall between two doors), or,
+    in a map (a grid without scan positions, whose obstacles are solid: scans see only
+    their outlines) and given ``max_thickness_m``, the largest disc inside it narrower
+    than that plus two cells (a partition's stub as thick as a wall, the cross of walls
+    between four doors; the local thickness of Hildebrand and Ruegsegger, J. Microscopy
+    1997).
 
     Parameters
     ----------
@@ -37,6 +43,8 @@ def free_standing_objects(
     params : StructureParams
     walls : (A, 4) float ndarray, optional
         Long wall faces, metres, cut out of the returns first.
+    max_thickness_m : float, optional
+        The thickest wall, metres (the plan's ``pair_max_m``).
 
     Returns
     -------
@@ -87,6 +95,16 @@ def free_standing_objects(
     length = np.where(np.isfinite(hi), hi - lo + r, 0.0)
     mean_width = cnt * r * r / np.maximum(length, r)  # area over length: stray returns aside
     wall_like = (mean_width < 2 * params.side_offset_m + 2 * r) & (length >= params.min_wall_length_m)
+    if max_thickness_m is not None and grid.scan_xy is None:
+        # in a map (its obstacles solid, where scans see outlines): thinner than the
+        # thickest wall, the diameter of the largest disc inside the component, on each
+        # candidate's bounding box (the distance transform's maximum)
+        candidate = surrounded & (length < params.clutter_max_length_m) & (length >= params.min_wall_length_m)
+        candidate &= ~wall_like
+        for k, box in enumerate(ndimage.find_objects(labels), start=1):
+            if box is not None and candidate[k]:
+                inside = np.pad(labels[box] == k, 1)
+                wall_like[k] = 2 * ndimage.distance_transform_edt(inside).max() * r < max_thickness_m + 2 * r
     is_object = surrounded & (length < params.clutter_max_length_m) & ~wall_like
     is_object[0] = False
     return is_object[labels]

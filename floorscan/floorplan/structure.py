@@ -250,7 +250,7 @@ def structure_passes(
     snapped, junctions = snap_junctions(joined, params)
     length = np.hypot(snapped[:, 2] - snapped[:, 0], snapped[:, 3] - snapped[:, 1])
     anchor = length >= params.clutter_max_length_m
-    standing = on_objects(snapped, grid, free_standing_objects(grid, params, snapped[anchor])) & ~anchor
+    standing = on_objects(snapped, grid, free_standing_objects(grid, params, snapped[anchor], max_thickness_m)) & ~anchor
     _, side = border_and_support(snapped, grid, params)
     front, behind = in_front_of_walls(snapped, side, anchor, params)
     front &= ~standing
