@@ -191,6 +191,23 @@ def test_a_wall_hidden_by_cabinets_is_joined_behind_them_and_their_fronts_are_cl
     assert not (np.abs(walls[:, 1] - 0.6) < 0.05).any() and (np.abs(clutter[:, 1] - 0.6) < 0.05).sum() == 1
 
 
+def test_a_front_stands_against_the_nearest_wall_behind_it():
+    from floorscan.floorplan.clutter import in_front_of_walls
+
+    seg = np.array([
+        [0.0, 0.0, 6.0, 0.0],    # a wall, free side north
+        [0.0, 0.3, 6.0, 0.3],    # a second wall face 0.3 m north of it, free side north
+        [2.0, 0.9, 3.5, 0.9],    # a cabinet's front: 0.9 m and 0.6 m in front of them
+        [0.0, 5.0, 6.0, 5.0],    # a far wall, free side south: nothing stands against it
+    ])  # fmt: skip
+    side = np.array([1, 1, 1, -1])
+    wall = np.array([True, True, False, True])
+    front, behind = in_front_of_walls(seg, side, wall, StructureParams())
+    assert front.tolist() == [False, False, True, False] and behind.tolist() == [-1, -1, 1, -1]
+    front, behind = in_front_of_walls(seg[:2], side[:2], wall[:2], StructureParams())  # a pair, no front
+    assert not front.any() and behind.tolist() == [-1, -1]
+
+
 def test_the_floor_under_an_object_runs_from_its_front_to_the_wall_behind():
     front = np.array([[1.0, 0.6, 2.5, 0.62]])
     wall = np.array([[0.0, 0.0, 9.0, 0.0]])
@@ -355,25 +372,3 @@ def test_answer_line_names_the_plan_counts(tmp_path):
                                 "floorscan": {"n_walls": 12, "n_junctions": 9, "n_clutter": 3}}))
     assert plan_counts(path) == " (12 walls, 9 junctions, 3 clutter pieces)"
     assert plan_counts(tmp_path / "missing.geojson") == ""
-
-
-def test_square_dilation_is_scipys_dilation_by_a_square():
-    """clutter.square_dilation: ndimage.binary_dilation by a 3 x 3 square ``cells`` times,
-    and grey_dilation of that size on labels, cell for cell (borders, thin rasters)."""
-    from scipy import ndimage
-
-    from floorscan.floorplan.clutter import square_dilation
-
-    rng = np.random.default_rng(5)
-    for shape in [(1, 1), (1, 7), (6, 1), (2, 3), (17, 29)]:
-        for p in (0.05, 0.3):
-            mask = rng.random(shape) < p
-            for cells in (0, 1, 2, 3):
-                want = ndimage.binary_dilation(mask, structure=np.ones((3, 3), bool), iterations=cells) if cells else mask
-                assert np.array_equal(square_dilation(mask, cells), want)
-            labels, _ = ndimage.label(mask, structure=np.ones((3, 3)))
-            assert np.array_equal(square_dilation(labels, 1), ndimage.grey_dilation(labels, size=(3, 3)))
-    mask = rng.random((9, 9)) < 0.3
-    before = mask.copy()
-    square_dilation(mask, 2)
-    assert np.array_equal(mask, before)

@@ -59,14 +59,14 @@ def free_standing_objects(
         rows, cols, inside = grid.cells_of(pts)
         on_wall = np.zeros(grid.shape, dtype=bool)
         on_wall[rows[inside], cols[inside]] = True
-        hit = hit & ~square_dilation(on_wall, 2)
-    hit = square_dilation(hit, 1)
+        hit = hit & ~ndimage.maximum_filter(on_wall, size=5, mode="constant")  # a 5 x 5 square
+    hit = ndimage.maximum_filter(hit, size=3, mode="constant")
     labels, n = ndimage.label(hit, structure=np.ones((3, 3), bool))
     if n == 0:
         return np.zeros(grid.shape, dtype=bool)
     # each cell of the ring around the components: the largest label among its 3 x 3
     # neighbours on the raster (ndimage.grey_dilation of the labels, at the ring's cells)
-    ring_r, ring_c = np.nonzero(square_dilation(hit, 1) & ~hit)
+    ring_r, ring_c = np.nonzero(ndimage.maximum_filter(hit, size=3, mode="constant") & ~hit)
     ring_labels = np.zeros(len(ring_r), dtype=labels.dtype)
     for dr in (-1, 0, 1):
         for dc in (-1, 0, 1):
@@ -108,37 +108,6 @@ def free_standing_objects(
     is_object = surrounded & (length < params.clutter_max_length_m) & ~wall_like
     is_object[0] = False
     return is_object[labels]
-
-
-def square_dilation(image: np.ndarray, cells: int) -> np.ndarray:
-    """The largest value of ``image`` within ``cells`` rows and columns of each cell (a
-    square of side ``2 * cells + 1``, cells beyond the border left out): a binary
-    dilation by that square, or a grey one (SciPy's ``ndimage.binary_dilation`` with a
-    3 x 3 square ``cells`` times, ``grey_dilation`` of that size), done as the maxima of
-    shifted copies along the rows, then the columns (the square is the sum of two
-    segments).
-
-    Parameters
-    ----------
-    image : (H, W) bool or integer ndarray
-    cells : int
-        At least 0.
-
-    Returns
-    -------
-    (H, W) ndarray
-        ``image``'s dtype; ``image`` is not modified.
-    """
-    out = np.array(image, copy=True)
-    for axis in (0, 1):
-        src = out.copy()
-        for s in range(1, cells + 1):
-            lo = [slice(None)] * 2
-            hi = [slice(None)] * 2
-            lo[axis], hi[axis] = slice(s, None), slice(None, -s)
-            np.maximum(out[tuple(lo)], src[tuple(hi)], out=out[tuple(lo)])
-            np.maximum(out[tuple(hi)], src[tuple(lo)], out=out[tuple(hi)])
-    return out
 
 
 def on_objects(seg: np.ndarray, grid: OccupancyGrid, objects: np.ndarray) -> np.ndarray:
@@ -208,8 +177,11 @@ def in_front_of_walls(seg: np.ndarray, side: np.ndarray, wall: np.ndarray, param
         overlap >= params.front_overlap * length[i]
     )
     out[i[hit]] = True
-    order = np.argsort(-dist[hit], kind="stable")  # the nearest wall written last
-    behind[i[hit][order]] = j[hit][order]
+    i, j = i[hit], j[hit]
+    order = np.lexsort((j, dist[hit], i))  # by front, the nearest wall first (ties: the lower index)
+    first = np.ones(len(order), dtype=bool)
+    first[1:] = i[order][1:] != i[order][:-1]
+    behind[i[order][first]] = j[order][first]
     return out, behind
 
 

@@ -58,7 +58,7 @@ from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.clutter import free_standing_objects, in_front_of_walls, loose_in_free_space, on_objects
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
-from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, covered_by_fronts
+from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, covered_by_fronts, free_normals
 from floorscan.floorplan.junctions import junction_ends, short_loose, shorter_on_longer, snap_junctions
 
 
@@ -159,11 +159,12 @@ def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, pa
         lo_b, hi_b = tb.min(axis=1), tb.max(axis=1)
         gap = np.maximum(lo_b - length[a], -hi_b)
         keep = (np.abs(off).max(axis=1) <= params.join_offset_m) & (gap <= reach)
-        if side is not None:
+        if side is not None:  # a longer gap: hidden by fronts, both faces free on the same side
             side = np.asarray(side)
+            _, _, free_n = free_normals(seg, side)
             for k in np.flatnonzero(keep & (gap > params.join_max_gap_m)).tolist():
                 t0, t1 = (length[a[k]], lo_b[k]) if lo_b[k] > length[a[k]] else (hi_b[k], 0.0)
-                same_way = side[a[k]] * side[b[k]] * (u[k] @ (seg[b[k], 2:] - seg[b[k], :2])) > 0
+                same_way = free_n[a[k]] @ free_n[b[k]] > 0
                 keep[k] = same_way and covered_by_fronts(seg, side, int(a[k]), min(t0, t1), max(t0, t1), params)
         free = passable(grid)
         step = grid.resolution_m / 2
