@@ -191,6 +191,23 @@ def _opening(mask: np.ndarray, radius_cells: float) -> np.ndarray:
     return dilate(_erode(mask, radius_cells), radius_cells) & mask
 
 
+def enclosure_cells(raster: RoomRaster) -> tuple[np.ndarray, np.ndarray]:
+    """The cells that measure how enclosed a room is.
+
+    Returns
+    -------
+    edge : (H, W) bool ndarray
+        The space's cells next to cells outside it (8-neighbours).
+    solid : (H, W) bool ndarray
+        The cells within two cells of a wall or a seen obstacle.
+    """
+    from scipy import ndimage
+
+    solid = ndimage.binary_dilation(raster.walls | raster.occupied, structure=np.ones((3, 3)), iterations=2)
+    edge = raster.space & ~ndimage.binary_erosion(raster.space, structure=np.ones((3, 3)))
+    return edge, solid
+
+
 def wall_footprints(axes: np.ndarray, thickness: np.ndarray) -> np.ndarray:
     """Each wall axis buffered by half its thickness, flat ends (shapely).
 

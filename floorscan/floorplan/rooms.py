@@ -29,7 +29,10 @@ taken from the walls:
    through its door (a fan of rays) ends at the door. So is the open side of a room
    (:func:`~floorscan.floorplan.mouths.room_mouths`): the line between the free ends of
    the walls that bound a room open on its whole width onto a corridor (an office, a
-   cubicle); a door where no wider than one.
+   cubicle); a door where no wider than one. The rooms are then segmented again
+   (steps 3-5) where a partition stopping short of a wall, with an opening wider
+   than a door, divides a room that wraps around it
+   (:func:`~floorscan.floorplan.extensions.partition_cuts`).
 3. **Regions** (:func:`~floorscan.floorplan.room_space.space_regions`): a watershed
    (scikit-image) of the negated distance to the nearest wall or unseen cell, from the
    maxima of that distance that stand ``marker_depth_m`` above the saddles around them
@@ -78,11 +81,12 @@ import pandas as pd
 from floorscan.core.geometry import OVERLAY_GRID_M, minus
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan import doors as D
+from floorscan.floorplan.extensions import partition_cuts
 from floorscan.floorplan.mouths import room_mouths
 from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
 from floorscan.floorplan.room_polygons import disjoint_rooms, largest_polygon, room_polygons
-from floorscan.floorplan.room_space import RoomParams, RoomRaster, room_space, space_regions
+from floorscan.floorplan.room_space import RoomParams, RoomRaster, enclosure_cells, room_space, space_regions
 from floorscan.floorplan.room_tables import room_tables
 
 log = logging.getLogger(__name__)
@@ -137,6 +141,18 @@ def segment_rooms(
     raster = room_space(grid, axes, thickness, params, under)
     gaps = [g for g in D.wall_gaps(axes, thickness, params) if D.passes_through(raster, g[0], g[1])]
     gaps += room_mouths(axes, thickness, raster, params)
+    segmented = _segment(grid, axes, thickness, params, raster, gaps)
+    cuts = partition_cuts(axes, thickness, raster, segmented[1], params)
+    if cuts:  # the rooms again, cut where partitions stop short of a wall
+        segmented = _segment(grid, axes, thickness, params, raster, gaps + cuts)
+    return segmented
+
+
+def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, params: RoomParams, raster: RoomRaster,
+             gaps: list) -> tuple[RoomRaster, np.ndarray, list, bool]:
+    """:func:`segment_rooms` on ``raster`` cut along ``gaps`` ((p, q, wall) lines
+    that bound rooms: gaps in walls, open sides, partitions' extensions); returns as
+    :func:`segment_rooms`."""
     barrier = np.zeros(raster.space.shape, dtype=bool)
     for p, q, _ in gaps:
         rr, cc = D.barrier_cells(raster, p, q)
@@ -264,8 +280,7 @@ def _enclosure(raster: RoomRaster, labels: np.ndarray, n: int | None = None) -> 
     n = int(labels.max()) if n is None else int(n)
     if n == 0:
         return np.ones(1)
-    solid = ndimage.binary_dilation(raster.walls | raster.occupied, structure=np.ones((3, 3)), iterations=2)
-    edge = raster.space & ~ndimage.binary_erosion(raster.space, structure=np.ones((3, 3)))
+    edge, solid = enclosure_cells(raster)
     ids = np.arange(1, n + 1)
     total = ndimage.sum(edge, labels, ids)
     return np.r_[1.0, np.where(total > 0, ndimage.sum(edge & solid, labels, ids) / np.maximum(total, 1), 1.0)]

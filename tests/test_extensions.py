@@ -1,0 +1,65 @@
+"""Partitions that stop short of a wall (floorscan.floorplan.extensions)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapely
+
+from floorscan.floorplan.extensions import wall_extensions
+from floorscan.floorplan.room_space import RoomParams, room_space
+from test_rooms import T, _grid, _rooms
+
+# A room 8 x 6 m between wall axes.
+HALL = [(0, 0, 8, 0), (8, 0, 8, 6), (8, 6, 0, 6), (0, 6, 0, 0)]
+
+
+def test_a_partition_that_stops_short_is_extended_to_the_wall_it_points_at():
+    walls = HALL + [(4, 0, 4, 3.2)]
+    axes = np.array(walls, dtype=np.float64)
+    raster = room_space(_grid(walls, [(2, 3), (6, 3)]), axes, np.full(len(axes), T), RoomParams())
+    (p, q, wall), = wall_extensions(axes, np.full(len(axes), T), raster, RoomParams())
+    assert wall == 4
+    # from the partition's end (4, 3.2) up to the north wall's face (y = 6 - T / 2)
+    assert p == pytest.approx([4.0, 3.2], abs=0.1) and q == pytest.approx([4.0, 5.94], abs=0.1)
+
+
+def test_a_room_wrapped_around_a_partition_longer_than_its_opening_is_two_rooms():
+    # the partition is 3.2 m long, the opening 2.74 m (wider than door_max_m, 2.0)
+    rooms, doors = _rooms(HALL + [(4, 0, 4, 3.2)], [(2, 3), (6, 3)])
+    assert len(rooms) == 2 and len(doors) == 0
+    west, east = sorted(rooms["polygon"], key=lambda p: p.centroid.x)
+    assert west.bounds[2] == pytest.approx(4.0, abs=0.2) and east.bounds[0] == pytest.approx(4.0, abs=0.2)
+    assert west.area == pytest.approx(east.area, rel=0.05) and 21.5 < west.area < 24.0
+
+
+def test_more_opening_than_wall_leaves_one_room():
+    # a partition of 2.6 m leaves 3.34 m open
+    rooms, doors = _rooms(HALL + [(4, 0, 4, 2.6)], [(2, 3), (6, 3)])
+    assert len(rooms) == 1 and len(doors) == 0
+
+
+def test_a_free_standing_wall_does_not_divide_its_hall():
+    # both ends stand 2.5 m from the hall's walls: the hall goes on around either end
+    walls = [(0, 0, 10, 0), (10, 0, 10, 8), (10, 8, 0, 8), (0, 8, 0, 0), (5, 2.5, 5, 5.5)]
+    axes = np.array(walls, dtype=np.float64)
+    raster = room_space(_grid(walls, [(2.5, 4), (7.5, 4)]), axes, np.full(len(axes), T), RoomParams())
+    assert len(wall_extensions(axes, np.full(len(axes), T), raster, RoomParams())) == 2
+    rooms, _ = _rooms(walls, [(2.5, 4), (7.5, 4)])
+    assert len(rooms) == 1
+
+
+def test_a_corridor_is_not_cut_on_the_line_of_a_partition_between_its_offices():
+    # a 2.6 m corridor (y 0..2.6) under two offices split at x = 4 by a partition whose
+    # end stands free in a 0.6 m slit of the corridor wall; a door into each office
+    walls = [(0, 0, 8, 0), (8, 0, 8, 5.6), (8, 5.6, 0, 5.6), (0, 5.6, 0, 0),
+             (0, 2.6, 1.5, 2.6), (2.4, 2.6, 3.7, 2.6), (4.3, 2.6, 5.5, 2.6), (6.4, 2.6, 8, 2.6),
+             (4, 5.6, 4, 2.6)]  # fmt: skip
+    poses = [(1, 1.3), (4, 1.3), (7, 1.3), (2, 4), (6, 4), (1.95, 2.4), (5.95, 2.4)]
+    axes = np.array(walls, dtype=np.float64)
+    raster = room_space(_grid(walls, poses), axes, np.full(len(axes), T), RoomParams())
+    assert [w for _, _, w in wall_extensions(axes, np.full(len(axes), T), raster, RoomParams())] == [8]
+    rooms, doors = _rooms(walls, poses)
+    assert len(rooms) == 3 and len(doors) == 2
+    corridor = next(p for p in rooms["polygon"] if p.contains(shapely.Point(4, 1.3)))
+    assert corridor.bounds[0] < 0.2 and corridor.bounds[2] > 7.8 and 18.5 < corridor.area < 20.5
