@@ -15,7 +15,7 @@ from floorscan.core.occupancy import OccupancyParams, occupancy_grid
 from floorscan.floorplan.params import FloorplanParams
 from floorscan.floorplan.plan import build_floorplan, plan_faces
 from floorscan.floorplan.free_space import StructureParams
-from floorscan.floorplan.hidden import covered_by_fronts
+from floorscan.floorplan.hidden import covered_by_fronts, into_corners
 from floorscan.floorplan.junctions import merge_parallel_duplicates, snap_junctions
 from floorscan.floorplan.structure import border_and_support, floor_under, join_collinear, structure_passes
 from floorscan.score.answer import crossings, true_corners, true_wall_pieces
@@ -189,6 +189,25 @@ def test_a_wall_hidden_by_cabinets_is_joined_behind_them_and_their_fronts_are_cl
     south = walls[(np.abs(walls[:, 1]) < 0.05) & (np.abs(walls[:, 3]) < 0.05)]
     assert len(south) == 1 and _length(south)[0] > 8.9
     assert not (np.abs(walls[:, 1] - 0.6) < 0.05).any() and (np.abs(clutter[:, 1] - 0.6) < 0.05).sum() == 1
+
+
+def test_a_wall_hidden_by_a_cabinet_in_a_corner_runs_on_to_the_corner():
+    # the room's north wall face (y = 4) is seen from x = 1.5 on; a cabinet 1.5 m long,
+    # 0.6 m deep stands in the north-west corner, its front at y = 3.4 (free to the south)
+    wall, front, west = [1.5, 4.0, 8.0, 4.0], [0.0, 3.4, 1.5, 3.4], [0.0, 0.0, 0.0, 3.4]
+    side = np.array([-1, -1, -1])
+    closed = lambda p, q: 0.0  # noqa: E731  (no free space on the stretch)
+    out = into_corners(np.array([wall, front, west]), side, closed, StructureParams())
+    assert np.allclose(out[0], [0.0, 4.0, 8.0, 4.0]) and np.allclose(out[1:], [front, west])
+    # no front, free space across the stretch, or the front facing away: the face stays
+    assert np.allclose(into_corners(np.array([wall, west]), side[:2], closed, StructureParams())[0], wall)
+    assert np.allclose(into_corners(np.array([wall, front, west]), side, lambda p, q: 1.0, StructureParams())[0], wall)
+    assert np.allclose(into_corners(np.array([wall, front, west]), np.array([-1, 1, -1]), closed, StructureParams())[0],
+                       wall)  # fmt: skip
+    # the other face of a thin wall, 0.3 m away, runs beside the face (and on past its
+    # end): the wall's own face, no front
+    other = [0.0, 3.7, 8.0, 3.7]
+    assert np.allclose(into_corners(np.array([wall, other, west]), side, closed, StructureParams())[0], wall)
 
 
 def test_a_front_stands_against_the_nearest_wall_behind_it():

@@ -10,8 +10,10 @@ object: the room's floor runs under its furniture, and its walls are its structu
 
 two collinear faces whose gap is covered by such fronts (:func:`covered_by_fronts`) are
 one face across it, up to :data:`HIDDEN_MAX_GAP_M`
-(:func:`floorscan.floorplan.structure.join_collinear`), and the fronts, now in front of
-a wall, are clutter (:func:`floorscan.floorplan.clutter.in_front_of_walls`). Free space
+(:func:`floorscan.floorplan.structure.join_collinear`); a face that ends at an object
+standing in a corner runs on behind its front to the corner (:func:`into_corners`);
+and the fronts, now in front of a wall, are clutter
+(:func:`floorscan.floorplan.clutter.in_front_of_walls`). Free space
 across the gap still makes it an opening (the joins' own test): a doorway between two
 cabinets stays a door. Sides of the objects are left to the other passes: a face that
 runs from a wall to the end of a front may be a partition's stub as well.
@@ -56,7 +58,7 @@ def free_normals(seg: np.ndarray, side: np.ndarray) -> tuple[np.ndarray, np.ndar
 
 
 def covered_by_fronts(seg: np.ndarray, side: np.ndarray, a: int, t0: float, t1: float,
-                      params: StructureParams = StructureParams()) -> bool:  # fmt: skip
+                      params: StructureParams = StructureParams(), beside_max_m: float | None = None) -> bool:  # fmt: skip
     """Whether the stretch ``t0..t1`` of face ``a``'s line is hidden by objects standing
     against it: faces parallel to it (within ``join_angle_deg``), with their free side
     the same way, ``front_min_m`` to ``front_max_m`` in front of it, cover at least
@@ -73,6 +75,9 @@ def covered_by_fronts(seg: np.ndarray, side: np.ndarray, a: int, t0: float, t1: 
     t0, t1 : float
         The stretch along ``a``'s line from its first end, metres, ``t0 < t1``.
     params : StructureParams
+    beside_max_m : float, optional
+        Fronts that run beside face ``a`` itself for longer than this (metres: the
+        other face of its wall) do not count; None: all count.
 
     Returns
     -------
@@ -87,9 +92,12 @@ def covered_by_fronts(seg: np.ndarray, side: np.ndarray, a: int, t0: float, t1: 
     depth = (mid - seg[a, :2]) @ n[a]
     front = parallel & same_way & (depth >= params.front_min_m) & (depth <= params.front_max_m)
     front[a] = False
+    s = np.sort(np.column_stack([(seg[:, :2] - seg[a, :2]) @ u[a], (seg[:, 2:] - seg[a, :2]) @ u[a]]), axis=1)
+    if beside_max_m is not None:
+        front &= np.minimum(s[:, 1], length[a]) - np.maximum(s[:, 0], 0.0) <= beside_max_m
     if not front.any():
         return False
-    s = np.sort(np.column_stack([(seg[front, :2] - seg[a, :2]) @ u[a], (seg[front, 2:] - seg[a, :2]) @ u[a]]), axis=1)
+    s = s[front]
     s = np.clip(s, t0, t1)
     s = s[np.argsort(s[:, 0])]
     covered, reach = 0.0, t0
@@ -99,3 +107,64 @@ def covered_by_fronts(seg: np.ndarray, side: np.ndarray, a: int, t0: float, t1: 
             covered += hi - lo
             reach = hi
     return covered >= params.front_overlap * (t1 - t0)
+
+
+def into_corners(seg: np.ndarray, side: np.ndarray, open_run, params: StructureParams = StructureParams()) -> np.ndarray:
+    """Faces that end at an object standing in a corner, extended to the corner.
+
+    An object in a room's corner (a cabinet, an L of shelves) hides the two walls up to
+    their corner: a wall face ends at the object's side, the object's front runs on,
+    parallel, in front of the face's line up to the other wall. Face ``a``'s end is
+    moved to where its line meets a face square to it (at least
+    ``junction_min_angle_deg`` apart) when that point lies at most
+    :data:`HIDDEN_MAX_GAP_M` beyond the end and within ``front_max_m`` of that face,
+    fronts cover the stretch (:func:`covered_by_fronts`; a face running beside ``a``
+    itself for more than ``front_max_m`` is the other face of its wall, not a front)
+    and free space does not cross it (``open_run`` shorter than ``min_opening_m``).
+    The nearest such face along the line is the corner.
+
+    Parameters
+    ----------
+    seg : (F, 4) float ndarray
+        Faces, metres.
+    side : (F,) int ndarray
+        Free sides.
+    open_run : callable
+        ``open_run(p, q)``: the longest run of free space on the line from ``p`` to
+        ``q`` ((2,) metres), metres.
+    params : StructureParams
+
+    Returns
+    -------
+    (F, 4) float64 ndarray
+        The faces, some ends moved; metres.
+    """
+    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4).copy()
+    side = np.asarray(side)
+    u, length, _ = free_normals(seg, side)
+    square = np.sin(np.radians(params.junction_min_angle_deg))
+    out = seg.copy()
+    for a in np.flatnonzero(side != 0).tolist():
+        for k in (0, 1):
+            end = seg[a, 2 * k : 2 * k + 2]
+            out_dir = u[a] if k == 1 else -u[a]
+            # where a's line meets each other face's line, t beyond a's end
+            denom = out_dir[0] * u[:, 1] - out_dir[1] * u[:, 0]
+            w = seg[:, :2] - end
+            with np.errstate(divide="ignore", invalid="ignore"):  # parallel lines: t inf or nan, not ok
+                t = (w[:, 0] * u[:, 1] - w[:, 1] * u[:, 0]) / denom
+                x = end + t[:, None] * out_dir
+                s = np.einsum("ij,ij->i", x - seg[:, :2], u)
+                ok = (np.abs(denom) >= square) & (t > 0) & (t <= HIDDEN_MAX_GAP_M)
+                ok &= (s >= -params.front_max_m) & (s <= length + params.front_max_m)
+            ok[a] = False
+            if not ok.any():
+                continue
+            p = int(np.flatnonzero(ok)[np.argmin(t[ok])])
+            t, x = float(t[p]), x[p]
+            t0 = float((end - seg[a, :2]) @ u[a])
+            lo, hi = (t0, t0 + t) if k == 1 else (t0 - t, t0)
+            covered = covered_by_fronts(seg, side, a, lo, hi, params, beside_max_m=params.front_max_m)
+            if covered and open_run(end, x) < params.min_opening_m:
+                out[a, 2 * k : 2 * k + 2] = x
+    return out

@@ -20,7 +20,9 @@ order (:func:`structure_passes`):
    opening (a door, a passage) and is kept; an unseen or occluded gap is joined. So is a
    longer gap, up to :data:`~floorscan.floorplan.hidden.HIDDEN_MAX_GAP_M`, that objects
    standing against the wall hide (:mod:`floorscan.floorplan.hidden`: their fronts
-   parallel in front of it), whose fronts step 5 then makes clutter.
+   parallel in front of it), whose fronts step 5 then makes clutter; and a face that
+   ends at an object in a room's corner runs on behind its front to the corner
+   (:func:`~floorscan.floorplan.hidden.into_corners`).
 3. **Junctions** (:func:`snap_junctions`). An end within ``snap_m`` of where its line
    meets another face's line (at least ``junction_min_angle_deg`` apart) moves there:
    overshoots are trimmed, short ends extended, so faces meet in L, T and X junctions.
@@ -58,7 +60,7 @@ from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.clutter import free_standing_objects, in_front_of_walls, loose_in_free_space, on_objects
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
-from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, covered_by_fronts, free_normals
+from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, covered_by_fronts, free_normals, into_corners
 from floorscan.floorplan.junctions import junction_ends, short_loose, shorter_on_longer, snap_junctions
 
 
@@ -183,6 +185,30 @@ def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, pa
     return joined, np.bincount(group, weights=w, minlength=n_groups), group.astype(np.int64)
 
 
+def _group_sides(seg: np.ndarray, side: np.ndarray, group: np.ndarray, n: int) -> np.ndarray:
+    """(n,) int8: each joined face's free side, its longest member's."""
+    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    out = np.zeros(n, dtype=np.int8)
+    for i in np.argsort(length, kind="stable"):  # the longest member written last
+        out[group[i]] = side[i]
+    return out
+
+
+def _open_run(grid: OccupancyGrid):
+    """``open_run(p, q)``: the longest run of passable cells on the line from ``p`` to
+    ``q`` ((2,) metres), metres (the joins' opening test)."""
+    free = passable(grid)
+    step = grid.resolution_m / 2
+
+    def open_run(p: np.ndarray, q: np.ndarray) -> float:
+        span = float(np.hypot(*(q - p)))
+        n = max(int(np.ceil(span / step)), 1)
+        line = p + np.outer((np.arange(n) + 0.5) / n, q - p)
+        return _longest_run(mask_at(grid, free, line)) * span / n
+
+    return open_run
+
+
 def _longest_run(flags: np.ndarray) -> int:
     """Length of the longest run of True in a 1D bool array."""
     if not flags.any():
@@ -247,7 +273,9 @@ def structure_passes(
     structure, side0 = border_and_support(seg, grid, params)
     clutter = [seg[~structure]]
     reason = [np.full(int((~structure).sum()), "not_a_boundary", dtype=object)]
-    joined, jw, _ = join_collinear(seg[structure], w[structure], grid, params, side0[structure])
+    joined, jw, group = join_collinear(seg[structure], w[structure], grid, params, side0[structure])
+    joined = into_corners(joined, _group_sides(seg[structure], side0[structure], group, len(joined)), _open_run(grid),
+                          params)
     snapped, junctions = snap_junctions(joined, params)
     length = np.hypot(snapped[:, 2] - snapped[:, 0], snapped[:, 3] - snapped[:, 1])
     anchor = length >= params.clutter_max_length_m
