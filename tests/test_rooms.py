@@ -52,9 +52,10 @@ BOX = [(0, 0, 8, 0), (8, 0, 8, 4), (8, 4, 0, 4), (0, 4, 0, 0)]
 TWO_ROOMS = BOX + [(4, 0, 4, 1.5), (4, 2.4, 4, 4)]
 
 
-def test_the_floor_under_a_cabinet_against_a_wall_is_space():
+def test_the_floor_under_a_cabinet_against_a_wall_is_the_room_s():
     # one room 4 x 4 m; a cabinet 2 x 0.6 m against its north wall (faces 0.06 m inside);
-    # as a map (no scan positions), every cell it does not mark free bounds the space
+    # as a map (no scan positions), every cell it does not mark free bounds the space;
+    # the floor under the cabinet bounds it no longer, and joins the room once it is cut
     box = [(0, 0, 4, 0), (4, 0, 4, 4), (4, 4, 0, 4), (0, 4, 0, 0)]
     cabinet = [(1, 3.34, 3, 3.34), (1, 3.34, 1, 3.94), (3, 3.34, 3, 3.94)]
     grid = dataclasses.replace(_grid(box, [(1.0, 1.0), (3.0, 1.5), (2.0, 2.5)], objects=cabinet), scan_xy=None)
@@ -64,11 +65,30 @@ def test_the_floor_under_a_cabinet_against_a_wall_is_space():
     with_floor = room_space(grid, axes, np.full(4, T), RoomParams(), under)
     xy = np.array([[x, y] for x in np.arange(1.15, 2.9, 0.1) for y in (3.45, 3.6, 3.75)])
     assert not without.at(without.space, xy).any()  # the cabinet's cells bound the space
-    assert with_floor.at(with_floor.space, xy).all() and not with_floor.at(with_floor.bounds, xy).any()
-    # elsewhere the same space
-    assert (with_floor.space & ~without.space).sum() * with_floor.resolution_m**2 == pytest.approx(1.2, abs=0.25)
+    assert with_floor.at(with_floor.under, xy).all() and not with_floor.at(with_floor.bounds, xy).any()
+    assert not with_floor.at(with_floor.space, xy).any() and without.under is None
+    assert with_floor.under.sum() * with_floor.resolution_m**2 == pytest.approx(1.2, abs=0.25)
+    assert np.array_equal(with_floor.space, without.space)  # elsewhere the same space
     rooms, _ = plan_rooms(axes, np.full(4, T), grid, RoomParams(), under)
     assert len(rooms) == 1 and 14.6 < rooms["area_m2"][0] < 15.3
+
+
+def test_the_floor_under_a_cabinet_row_across_a_partition_joins_no_two_rooms():
+    # two rooms 4 x 4 m; the partition between them (a 0.9 m door at y 1..1.9) ends at
+    # the front of a cabinet row (x 2.5..5.5, 0.9 m deep) against the north wall: the
+    # floor under the row is no passage (no second door) and each room takes its half
+    box = [(0, 0, 8, 0), (8, 0, 8, 4), (8, 4, 0, 4), (0, 4, 0, 0), (4, 0, 4, 1.0), (4, 1.9, 4, 3.04)]
+    cabinet = [(2.5, 3.04, 5.5, 3.04), (2.5, 3.04, 2.5, 3.94), (5.5, 3.04, 5.5, 3.94)]
+    grid = dataclasses.replace(_grid(box, [(1.5, 1.5), (6.5, 1.5), (2, 2.5), (6, 2.5)], objects=cabinet), scan_xy=None)
+    axes = np.array(box, dtype=np.float64)
+    under = np.array([[[2.5, 3.04], [5.5, 3.04], [5.5, 3.94], [2.5, 3.94]]], dtype=np.float64)
+    rooms, doors = plan_rooms(axes, np.full(len(axes), T), grid, RoomParams(), under)
+    assert len(rooms) == 2 and len(doors) == 1
+    assert ((doors.x0 + doors.x1) / 2).iloc[0] == pytest.approx(4.0, abs=0.1)
+    assert ((doors.y0 + doors.y1) / 2).iloc[0] == pytest.approx(1.45, abs=0.1)
+    west, east = sorted(rooms["polygon"], key=lambda p: p.centroid.x)
+    assert west.contains(shapely.Point(3.0, 3.5)) and east.contains(shapely.Point(5.0, 3.5))
+    assert 14.6 < west.area < 15.6 and 14.6 < east.area < 15.6
 
 
 def test_no_room_mouth_runs_diagonally_between_two_perpendicular_walls():

@@ -14,6 +14,7 @@ from conftest import cast_rays
 from floorscan.core.occupancy import OccupancyParams, occupancy_grid
 from floorscan.floorplan.params import FloorplanParams
 from floorscan.floorplan.plan import build_floorplan, plan_faces
+from floorscan.floorplan.clutter import in_front_of_walls
 from floorscan.floorplan.free_space import StructureParams
 from floorscan.floorplan.hidden import covered_by_fronts, into_corners
 from floorscan.floorplan.junctions import merge_parallel_duplicates, snap_junctions
@@ -208,6 +209,20 @@ def test_a_wall_hidden_by_a_cabinet_in_a_corner_runs_on_to_the_corner():
     # end): the wall's own face, no front
     other = [0.0, 3.7, 8.0, 3.7]
     assert np.allclose(into_corners(np.array([wall, other, west]), side, closed, StructureParams())[0], wall)
+
+
+def test_a_row_of_cabinets_longer_than_a_piece_of_furniture_is_a_front():
+    # a wall face 8 m long, free to the north; a row of cabinets 3.4 m long, 0.6 m in front
+    # of it, free to the north too: a front; the same face free to the south (the other
+    # face of a wall 0.6 m thick) or longer than HIDDEN_MAX_GAP_M (5 m) is not
+    wall, row = [0.0, 0.0, 8.0, 0.0], [1.0, 0.6, 4.4, 0.6]
+    faces = np.array([wall, row])
+    long = np.hypot(faces[:, 2] - faces[:, 0], faces[:, 3] - faces[:, 1]) >= StructureParams().clutter_max_length_m
+    front, behind = in_front_of_walls(faces, np.array([1, 1]), long, StructureParams())
+    assert front.tolist() == [False, True] and behind.tolist() == [-1, 0]
+    assert not in_front_of_walls(faces, np.array([1, -1]), long, StructureParams())[0].any()
+    longer = np.array([wall, [1.0, 0.6, 6.6, 0.6]])
+    assert not in_front_of_walls(longer, np.array([1, 1]), np.array([True, True]), StructureParams())[0].any()
 
 
 def test_a_front_stands_against_the_nearest_wall_behind_it():

@@ -13,6 +13,7 @@ from floorscan.core.geometry import OVERLAY_GRID_M, point_segment_dist2
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
+from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, free_normals
 from floorscan.floorplan.junctions import ends_on_line, shorter_on_longer
 
 
@@ -139,6 +140,9 @@ def in_front_of_walls(seg: np.ndarray, side: np.ndarray, wall: np.ndarray, param
     of a long wall face, on its free side, between ``front_min_m`` and ``front_max_m``
     from it and along it over ``front_overlap`` of their length: the fronts of desks,
     cabinets and shelves against a wall (the thesis's clutter, sections 1.3 and 2.3).
+    So is a longer face, up to :data:`~floorscan.floorplan.hidden.HIDDEN_MAX_GAP_M` (a
+    row of cabinets), shorter than the wall face behind it and free on the same side
+    (the other face of a wall is free on the other side).
 
     Parameters
     ----------
@@ -163,9 +167,13 @@ def in_front_of_walls(seg: np.ndarray, side: np.ndarray, wall: np.ndarray, param
     if len(i) == 0:
         return out, behind
     i, j = np.r_[i, j], np.r_[j, i]  # face i in front of wall j
-    ok = wall[j] & ~wall[i]
-    i, j = i[ok], j[ok]
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    # a front shorter than a long wall; or a row of them, up to the longest object
+    # against a wall, shorter than the wall face behind it and free on the same side
+    _, _, free_n = free_normals(seg, side)
+    same_way = np.einsum("ij,ij->i", free_n[i], free_n[j]) > 0
+    ok = wall[j] & (~wall[i] | (length[i] < HIDDEN_MAX_GAP_M) & (length[i] < length[j]) & same_way)
+    i, j = i[ok], j[ok]
     u = (seg[j, 2:] - seg[j, :2]) / np.maximum(length[j], 1e-12)[:, None]
     n = np.column_stack([-u[:, 1], u[:, 0]]) * side[j][:, None]  # towards the wall's free side
     mid = 0.5 * (seg[i, :2] + seg[i, 2:])

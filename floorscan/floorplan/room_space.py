@@ -90,6 +90,9 @@ class RoomRaster:
     beyond : (H, W) bool ndarray or None
         Cells beyond the building's closed outline
         (:func:`~floorscan.floorplan.outline.building_outside`); None: none.
+    under : (H, W) bool ndarray or None
+        Cells of floor under objects standing against walls, outside ``space``: they
+        join the room in front of them after the segmentation; None: none.
     """
 
     origin_xy: np.ndarray
@@ -99,6 +102,7 @@ class RoomRaster:
     occupied: np.ndarray
     bounds: np.ndarray
     beyond: np.ndarray | None = None
+    under: np.ndarray | None = None
 
     def centres(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """Map-frame centres of cells.
@@ -357,11 +361,14 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
     # the plan lacks stays a boundary)
     space &= ~bounds | opened
     # the floor under the objects standing against walls is the room's (a room's area is
-    # its floor area): their cells are space, and no longer bound it
+    # its floor area): their cells no longer bound the space, and join the room in front
+    # of them once the rooms are cut (not a passage between two rooms: a cabinet row
+    # runs on behind a partition)
+    beneath = None
     if under is not None and len(under):
         floor = polygon_mask(under, origin, res, space.shape)
         bounds = bounds & ~floor
-        space |= floor & ~walls
+        beneath = floor & ~walls
     # the seen space outside the building's closed outline: rays through windows, open doors
     outside, beyond, _ = building_outside(walls | occupied, res, origin, grid.scan_xy, params.door_max_m, seen=space,
                                           walls=walls)
@@ -376,8 +383,10 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
         fill[border] = False
         fill[with_wall] = False
         space |= fill[holes]
+    if beneath is not None:
+        beneath &= ~space
     return RoomRaster(origin_xy=origin, resolution_m=res, walls=walls, space=space, occupied=occupied, bounds=bounds,
-                      beyond=beyond)
+                      beyond=beyond, under=beneath)
 
 
 def space_regions(raster: RoomRaster, params: RoomParams) -> tuple[np.ndarray, np.ndarray]:

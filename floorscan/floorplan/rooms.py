@@ -22,7 +22,8 @@ taken from the walls:
    path), in a map without the space beyond the convex hull of its walls (the rays it
    holds through windows). Furniture and clutter are not obstacles: a room's area is its floor area,
    and the floor under an object standing against a wall (the structure passes' step 5,
-   :func:`~floorscan.floorplan.structure.floor_under`) is space, whatever bounds it.
+   :func:`~floorscan.floorplan.structure.floor_under`) no longer bounds it, and joins
+   the nearest room once the rooms are cut (step 5), not as a passage between rooms.
 2. **Doors between walls** (:func:`~floorscan.floorplan.doors.wall_gaps`): the gap
    between the facing ends of two walls in one line, ``door_min_m`` to ``door_max_m``
    wide, that the scans saw through, is cut from the space first: a room seen only
@@ -82,6 +83,7 @@ from floorscan.core.geometry import OVERLAY_GRID_M, minus
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan import doors as D
 from floorscan.floorplan.extensions import partition_cuts
+from floorscan.floorplan.free_space import FRONT_MAX_M
 from floorscan.floorplan.mouths import room_mouths
 from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
@@ -262,6 +264,9 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
 
     grown = expand_labels(final, 1)
     final = np.where(barrier & raster.space, grown, final).astype(np.int32)
+    if raster.under is not None:  # the floor under the objects against walls: the nearest room's
+        reach = int(np.ceil(FRONT_MAX_M / raster.resolution_m)) + 1
+        final = np.where(raster.under & (final == 0), expand_labels(final, reach), final).astype(np.int32)
     doors = []
     for p, q, wall, a, b in found:
         ra, rb = renum[roots[a]], renum[roots[b]]

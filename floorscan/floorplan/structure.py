@@ -33,9 +33,10 @@ order (:func:`structure_passes`):
    clutter. A face shorter than ``min_wall_length_m`` is clutter unless it connects
    two junctions.
 5. **In front of a wall** (:func:`in_front_of_walls`). A face shorter than
-   ``clutter_max_length_m`` parallel to a long wall face, ``front_min_m`` to
-   ``front_max_m`` in front of it on its free side, is the front of a desk, a cabinet
-   or a shelf standing against the wall: clutter. The floor between it and the wall
+   ``clutter_max_length_m`` (or, free on the same side, shorter than the wall and
+   :data:`~floorscan.floorplan.hidden.HIDDEN_MAX_GAP_M`: a row of cabinets) parallel to
+   a long wall face, ``front_min_m`` to ``front_max_m`` in front of it on its free
+   side, is the front of a desk, a cabinet or a shelf standing against the wall: clutter. The floor between it and the wall
    (:func:`floor_under`) is the room's floor (:mod:`floorscan.floorplan.rooms`).
 6. **Loose in the free space** (:func:`loose_in_free_space`). A face that meets no
    other face at either end, has no face in its line within ``loose_reach_m``, whose
