@@ -197,12 +197,13 @@ def test_a_wall_hidden_by_a_cabinet_in_a_corner_runs_on_to_the_corner():
     # 0.6 m deep stands in the north-west corner, its front at y = 3.4 (free to the south)
     wall, front, west = [1.5, 4.0, 8.0, 4.0], [0.0, 3.4, 1.5, 3.4], [0.0, 0.0, 0.0, 3.4]
     side = np.array([-1, -1, -1])
-    closed = lambda p, q: 0.0  # noqa: E731  (no free space on the stretch)
+    closed = lambda p, u, t0, t1: 0.0  # noqa: E731  (no free space on the stretch)
     out = into_corners(np.array([wall, front, west]), side, closed, StructureParams())
     assert np.allclose(out[0], [0.0, 4.0, 8.0, 4.0]) and np.allclose(out[1:], [front, west])
     # no front, free space across the stretch, or the front facing away: the face stays
     assert np.allclose(into_corners(np.array([wall, west]), side[:2], closed, StructureParams())[0], wall)
-    assert np.allclose(into_corners(np.array([wall, front, west]), side, lambda p, q: 1.0, StructureParams())[0], wall)
+    opened = lambda p, u, t0, t1: 1.0  # noqa: E731  (a metre of free space on the stretch)
+    assert np.allclose(into_corners(np.array([wall, front, west]), side, opened, StructureParams())[0], wall)
     assert np.allclose(into_corners(np.array([wall, front, west]), np.array([-1, 1, -1]), closed, StructureParams())[0],
                        wall)  # fmt: skip
     # the other face of a thin wall, 0.3 m away, runs beside the face (and on past its

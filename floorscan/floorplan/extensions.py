@@ -164,7 +164,7 @@ def partition_cuts(
         ok = (br >= 0) & (bc >= 0) & (br < mask.shape[0]) & (bc < mask.shape[1])
         mask[br[ok], bc[ok]] = False
         comp, count = ndimage.label(mask)
-        sr, sc, inside = raster.cells_of(sides)
+        sr, sc, _ = raster.cells_of(sides)
         ca, cb = (int(comp[r - r0, c - c0]) if 0 <= r - r0 < mask.shape[0] and 0 <= c - c0 < mask.shape[1] else 0
                   for r, c in zip(sr, sc))  # fmt: skip
         if not ca or not cb or ca == cb:

@@ -130,8 +130,9 @@ def into_corners(seg: np.ndarray, side: np.ndarray, open_run, params: StructureP
     side : (F,) int ndarray
         Free sides.
     open_run : callable
-        ``open_run(p, q)``: the longest run of free space on the line from ``p`` to
-        ``q`` ((2,) metres), metres.
+        ``open_run(p, u, t0, t1)``: the longest run of free space on the stretch
+        ``t0..t1`` of the line through ``p`` along ``u``, metres
+        (:func:`floorscan.floorplan.structure.join_collinear`'s test).
     params : StructureParams
 
     Returns
@@ -139,7 +140,7 @@ def into_corners(seg: np.ndarray, side: np.ndarray, open_run, params: StructureP
     (F, 4) float64 ndarray
         The faces, some ends moved; metres.
     """
-    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4).copy()
+    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
     side = np.asarray(side)
     u, length, _ = free_normals(seg, side)
     square = np.sin(np.radians(params.junction_min_angle_deg))
@@ -165,6 +166,6 @@ def into_corners(seg: np.ndarray, side: np.ndarray, open_run, params: StructureP
             t0 = float((end - seg[a, :2]) @ u[a])
             lo, hi = (t0, t0 + t) if k == 1 else (t0 - t, t0)
             covered = covered_by_fronts(seg, side, a, lo, hi, params, beside_max_m=params.front_max_m)
-            if covered and open_run(end, x) < params.min_opening_m:
+            if covered and open_run(end, out_dir, 0.0, t) < params.min_opening_m:
                 out[a, 2 * k : 2 * k + 2] = x
     return out

@@ -315,8 +315,9 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
     params : RoomParams
     under : (K, 4, 2) float ndarray, optional
         Quadrilaterals of floor under the objects standing against walls
-        (:func:`~floorscan.floorplan.structure.floor_under`), metres: space, whatever the
-        scans saw there.
+        (:func:`~floorscan.floorplan.structure.floor_under`), metres: its cells no
+        longer bound the space and are :attr:`RoomRaster.under`, whatever the scans saw
+        there.
 
     Returns
     -------

@@ -36,8 +36,9 @@ order (:func:`structure_passes`):
    ``clutter_max_length_m`` (or, free on the same side, shorter than the wall and
    :data:`~floorscan.floorplan.hidden.HIDDEN_MAX_GAP_M`: a row of cabinets) parallel to
    a long wall face, ``front_min_m`` to ``front_max_m`` in front of it on its free
-   side, is the front of a desk, a cabinet or a shelf standing against the wall: clutter. The floor between it and the wall
-   (:func:`floor_under`) is the room's floor (:mod:`floorscan.floorplan.rooms`).
+   side, is the front of a desk, a cabinet or a shelf standing against the wall:
+   clutter. The floor between it and the wall (:func:`floor_under`) is the room's floor
+   (:mod:`floorscan.floorplan.rooms`).
 6. **Loose in the free space** (:func:`loose_in_free_space`). A face that meets no
    other face at either end, has no face in its line within ``loose_reach_m``, whose
    ends both stand in free space, and that has free space on both sides or a face
@@ -120,7 +121,7 @@ def border_and_support(seg: np.ndarray, grid: OccupancyGrid, params: StructurePa
 
 
 def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams(),
-                   side: np.ndarray | None = None):  # fmt: skip
+                   side: np.ndarray | None = None, open_run=None):  # fmt: skip
     """Step 2: collinear faces joined across gaps that free space does not pass through:
     up to ``join_max_gap_m``, or up to :data:`~floorscan.floorplan.hidden.HIDDEN_MAX_GAP_M`
     where objects standing against the wall hide the gap
@@ -136,6 +137,8 @@ def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, pa
     params : StructureParams
     side : (F,) int ndarray, optional
         The faces' free sides (:func:`border_and_support`); None: no gap is hidden.
+    open_run : callable, optional
+        :func:`_open_run` of ``grid``, when the caller has it.
 
     Returns
     -------
@@ -169,15 +172,10 @@ def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, pa
                 t0, t1 = (length[a[k]], lo_b[k]) if lo_b[k] > length[a[k]] else (hi_b[k], 0.0)
                 same_way = free_n[a[k]] @ free_n[b[k]] > 0
                 keep[k] = same_way and covered_by_fronts(seg, side, int(a[k]), min(t0, t1), max(t0, t1), params)
-        free = passable(grid)
-        step = grid.resolution_m / 2
-        for k in np.flatnonzero(keep & (gap > step)).tolist():
+        open_run = _open_run(grid) if open_run is None else open_run
+        for k in np.flatnonzero(keep & (gap > grid.resolution_m / 2)).tolist():
             t0, t1 = (length[a[k]], lo_b[k]) if lo_b[k] > length[a[k]] else (hi_b[k], 0.0)
-            n = max(int(np.ceil((t1 - t0) / step)), 1)
-            t = t0 + (np.arange(n) + 0.5) / n * (t1 - t0)
-            line = seg[a[k], :2] + u[k] * t[:, None]
-            open_run = _longest_run(mask_at(grid, free, line)) * (t1 - t0) / n
-            keep[k] = open_run < params.min_opening_m
+            keep[k] = open_run(seg[a[k], :2], u[k], t0, t1) < params.min_opening_m
     graph = coo_matrix((np.ones(int(keep.sum())), (i[keep], j[keep])), shape=(nf, nf))
     n_groups, group = connected_components(graph, directed=False)
     joined = np.empty((n_groups, 4))
@@ -196,16 +194,16 @@ def _group_sides(seg: np.ndarray, side: np.ndarray, group: np.ndarray, n: int) -
 
 
 def _open_run(grid: OccupancyGrid):
-    """``open_run(p, q)``: the longest run of passable cells on the line from ``p`` to
-    ``q`` ((2,) metres), metres (the joins' opening test)."""
+    """``open_run(p, u, t0, t1)``: the longest run of passable cells on the stretch
+    ``t0..t1`` (metres, ``t0 < t1``) of the line through ``p`` along the unit vector
+    ``u``, sampled every half cell, metres (the joins' opening test)."""
     free = passable(grid)
     step = grid.resolution_m / 2
 
-    def open_run(p: np.ndarray, q: np.ndarray) -> float:
-        span = float(np.hypot(*(q - p)))
-        n = max(int(np.ceil(span / step)), 1)
-        line = p + np.outer((np.arange(n) + 0.5) / n, q - p)
-        return _longest_run(mask_at(grid, free, line)) * span / n
+    def open_run(p: np.ndarray, u: np.ndarray, t0: float, t1: float) -> float:
+        n = max(int(np.ceil((t1 - t0) / step)), 1)
+        t = t0 + (np.arange(n) + 0.5) / n * (t1 - t0)
+        return _longest_run(mask_at(grid, free, p + u * t[:, None])) * (t1 - t0) / n
 
     return open_run
 
@@ -274,9 +272,9 @@ def structure_passes(
     structure, side0 = border_and_support(seg, grid, params)
     clutter = [seg[~structure]]
     reason = [np.full(int((~structure).sum()), "not_a_boundary", dtype=object)]
-    joined, jw, group = join_collinear(seg[structure], w[structure], grid, params, side0[structure])
-    joined = into_corners(joined, _group_sides(seg[structure], side0[structure], group, len(joined)), _open_run(grid),
-                          params)
+    open_run = _open_run(grid)
+    joined, jw, group = join_collinear(seg[structure], w[structure], grid, params, side0[structure], open_run)
+    joined = into_corners(joined, _group_sides(seg[structure], side0[structure], group, len(joined)), open_run, params)
     snapped, junctions = snap_junctions(joined, params)
     length = np.hypot(snapped[:, 2] - snapped[:, 0], snapped[:, 3] - snapped[:, 1])
     anchor = length >= params.clutter_max_length_m
