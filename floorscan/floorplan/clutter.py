@@ -13,7 +13,7 @@ from floorscan.core.geometry import OVERLAY_GRID_M, point_segment_dist2
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
-from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, free_normals
+from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, OBJECT_MAX_DEPTH_M, backed, body_seen_free, free_normals
 from floorscan.floorplan.junctions import ends_on_line, shorter_on_longer
 
 
@@ -135,14 +135,19 @@ def on_objects(seg: np.ndarray, grid: OccupancyGrid, objects: np.ndarray) -> np.
     return share >= 0.5 * np.bincount(owner, minlength=len(seg))
 
 
-def in_front_of_walls(seg: np.ndarray, side: np.ndarray, wall: np.ndarray, params: StructureParams = StructureParams()):
+def in_front_of_walls(seg: np.ndarray, side: np.ndarray, wall: np.ndarray, params: StructureParams = StructureParams(),
+                      free_at=None):  # fmt: skip
     """Step 5: faces shorter than ``clutter_max_length_m`` that stand parallel in front
     of a long wall face, on its free side, between ``front_min_m`` and ``front_max_m``
     from it and along it over ``front_overlap`` of their length: the fronts of desks,
     cabinets and shelves against a wall (the thesis's clutter, sections 1.3 and 2.3).
     So is a longer face, up to :data:`~floorscan.floorplan.hidden.HIDDEN_MAX_GAP_M` (a
     row of cabinets), shorter than the wall face behind it and free on the same side
-    (the other face of a wall is free on the other side).
+    (the other face of a wall is free on the other side). Where the wall's other face
+    runs on behind the front (:func:`~floorscan.floorplan.hidden.backed`), the front
+    may stand up to :data:`~floorscan.floorplan.hidden.OBJECT_MAX_DEPTH_M` in front of
+    it, when the scans did not see its body free: the wall is a wall's thickness there,
+    so what stands deeper is an object.
 
     Parameters
     ----------
@@ -153,6 +158,10 @@ def in_front_of_walls(seg: np.ndarray, side: np.ndarray, wall: np.ndarray, param
     wall : (F,) bool ndarray
         Which faces are long walls (the candidates behind).
     params : StructureParams
+    free_at : callable, optional
+        ``free_at(xy)``: (N,) bool, whether the scans saw map points free; a deeper
+        front's body must not be (:func:`~floorscan.floorplan.hidden.body_seen_free`).
+        None: no front deeper than ``front_max_m``.
 
     Returns
     -------
@@ -163,7 +172,8 @@ def in_front_of_walls(seg: np.ndarray, side: np.ndarray, wall: np.ndarray, param
     seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
     out = np.zeros(len(seg), dtype=bool)
     behind = np.full(len(seg), -1, dtype=np.int64)
-    i, j = candidate_pairs(seg, params.front_max_m, np.radians(params.join_angle_deg))
+    deepest = params.front_max_m if free_at is None else max(params.front_max_m, OBJECT_MAX_DEPTH_M)
+    i, j = candidate_pairs(seg, deepest, np.radians(params.join_angle_deg))
     if len(i) == 0:
         return out, behind
     i, j = np.r_[i, j], np.r_[j, i]  # face i in front of wall j
@@ -181,9 +191,15 @@ def in_front_of_walls(seg: np.ndarray, side: np.ndarray, wall: np.ndarray, param
     t0 = np.einsum("ij,ij->i", seg[i, :2] - seg[j, :2], u)
     t1 = np.einsum("ij,ij->i", seg[i, 2:] - seg[j, :2], u)
     overlap = np.minimum(np.maximum(t0, t1), length[j]) - np.maximum(np.minimum(t0, t1), 0.0)
-    hit = (side[j] != 0) & (dist >= params.front_min_m) & (dist <= params.front_max_m) & (
-        overlap >= params.front_overlap * length[i]
-    )
+    hit = (side[j] != 0) & (dist >= params.front_min_m) & (dist <= deepest)
+    hit &= overlap >= params.front_overlap * length[i]
+    deep = hit & (dist > params.front_max_m)
+    hit &= ~deep | same_way[ok]  # an object's front faces the room the wall's face does
+    for k in np.flatnonzero(hit & deep).tolist():  # deeper: the wall's other face behind it
+        lo, hi = max(min(t0[k], t1[k]), 0.0), min(max(t0[k], t1[k]), length[j[k]])
+        hit[k] = backed(seg, side, int(j[k]), lo, hi, params) and body_seen_free(
+            seg[j[k], :2], u[k], n[k], lo, hi, float(dist[k]), free_at, params.side_offset_m
+        ) < params.min_free_side
     out[i[hit]] = True
     i, j = i[hit], j[hit]
     order = np.lexsort((j, dist[hit], i))  # by front, the nearest wall first (ties: the lower index)

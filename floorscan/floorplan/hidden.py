@@ -17,6 +17,16 @@ and the fronts, now in front of a wall, are clutter
 across the gap still makes it an opening (the joins' own test): a doorway between two
 cabinets stays a door. Sides of the objects are left to the other passes: a face that
 runs from a wall to the end of a front may be a partition's stub as well.
+
+Deeper objects (a desk with its chair, a bed, cabinets back to back; up to
+:data:`OBJECT_MAX_DEPTH_M`) count only where the wall's thickness is seen: its other
+face runs on straight behind the stretch (:func:`backed`), and the scans did not see
+the object's body free (:func:`body_seen_free`). From the room alone a deep object and
+a step of the wall (a shaft, an alcove, an outer wall's jog) look the same; a wall
+that steps moves both its faces, so its other face is not behind the stretch. This is
+the thickness evidence of wall detection from both sides (Ochmann et al., "Automatic
+reconstruction of fully volumetric 3D building models from oriented point clouds",
+ISPRS J. 2019: a wall is two opposite faces a wall's thickness apart).
 """
 
 from __future__ import annotations
@@ -28,6 +38,20 @@ from floorscan.floorplan.free_space import StructureParams
 #: The longest object against a wall whose hidden face is joined, metres: a row of
 #: cabinets or shelves, two of the longest pieces of furniture (``clutter_max_length_m``).
 HIDDEN_MAX_GAP_M = 5.0
+
+#: The deepest object against a wall whose hidden face is restored when the wall's other
+#: face is seen running on behind the object (:func:`backed`), metres: a desk with its
+#: chair, a bed, two rows of cabinets back to back. Without the other face only
+#: ``front_max_m`` (a cabinet): a wall that steps back by more (a shaft, an alcove, an
+#: outer wall's jog) looks the same from the room, and only the wall's thickness, seen
+#: where its other face runs on straight, tells the object from the structure.
+OBJECT_MAX_DEPTH_M = 2.0
+
+#: The thickest wall whose other face backs an object (:func:`backed`), metres: outer
+#: and load-bearing walls, and the 0.5 to 1 m strokes of a map drawn by hand. A wall
+#: that steps into the room by more than it is thick moves its other face too, in
+#: front of the line, so a real step of the structure is not backed.
+BACKING_MAX_M = 1.0
 
 
 def free_normals(seg: np.ndarray, side: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -57,8 +81,96 @@ def free_normals(seg: np.ndarray, side: np.ndarray) -> tuple[np.ndarray, np.ndar
     return u, length, n
 
 
+def _along(seg: np.ndarray, a: int, u: np.ndarray) -> np.ndarray:
+    """(F, 2): each face's ends along face ``a``'s line (unit ``u``) from its first end,
+    sorted, metres."""
+    return np.sort(np.column_stack([(seg[:, :2] - seg[a, :2]) @ u, (seg[:, 2:] - seg[a, :2]) @ u]), axis=1)
+
+
+def _covers(s: np.ndarray, t0: float, t1: float) -> float:
+    """The length of ``t0..t1`` the union of the stretches ``s`` ((K, 2), sorted ends)
+    covers, metres."""
+    s = np.clip(s, t0, t1)
+    s = s[np.argsort(s[:, 0])]
+    covered, reach = 0.0, t0
+    for lo, hi in s.tolist():
+        lo = max(lo, reach)
+        if hi > lo:
+            covered += hi - lo
+            reach = hi
+    return covered
+
+
+def body_seen_free(p: np.ndarray, u: np.ndarray, n: np.ndarray, t0: float, t1: float, depth: float, free_at,
+                   step: float) -> float:  # fmt: skip
+    """The share of the body of an object against a wall that the scans saw free: the
+    rectangle from the wall's line (through ``p``, along the unit ``u``) ``t0..t1``
+    along it and up to ``depth`` in front of it (along the unit ``n``), sampled every
+    ``step`` (metres) inside its edges; ``free_at(xy)``: (N,) bool of map points
+    ((N, 2) metres). A wall's face across a corridor is not an object's front: the
+    corridor between is free."""
+    along = np.arange(t0 + step, t1 - step / 2, step)
+    across = np.arange(step, depth - step / 2, step)
+    if not len(along) or not len(across):
+        return 0.0
+    tt, dd = np.meshgrid(along, across)
+    return float(free_at(p + u * tt.reshape(-1, 1) + n * dd.reshape(-1, 1)).mean())
+
+
+def backed(seg: np.ndarray, side: np.ndarray, a: int, t0: float, t1: float,
+           params: StructureParams = StructureParams()) -> bool:  # fmt: skip
+    """Whether the other face of face ``a``'s wall runs on behind the stretch ``t0..t1``
+    of its line: faces parallel to it (within ``join_angle_deg``), free the other way,
+    behind its line by at most :data:`BACKING_MAX_M`, cover at least
+    ``front_overlap`` of the stretch. The wall is then a wall's thickness there, and what
+    stands on the free side of ``a``'s line is in front of it.
+
+    Parameters
+    ----------
+    seg : (F, 4) float ndarray
+        Faces, metres.
+    side : (F,) int ndarray
+        Free sides.
+    a : int
+        The face; its free side must be known.
+    t0, t1 : float
+        Metres along ``a``'s line from its first end, ``t0 < t1``.
+    params : StructureParams
+
+    Returns
+    -------
+    bool
+    """
+    u, _, n = free_normals(seg, side)
+    if side[a] == 0 or t1 <= t0:
+        return False
+    parallel = np.abs(u @ u[a]) >= np.cos(np.radians(params.join_angle_deg))
+    ends = np.stack([(seg[:, :2] - seg[a, :2]) @ n[a], (seg[:, 2:] - seg[a, :2]) @ n[a]], axis=1)
+    behind = parallel & ((n @ n[a]) < 0) & (ends.max(axis=1) < 0) & (ends.min(axis=1) >= -BACKING_MAX_M)
+    behind[a] = False
+    if not behind.any():
+        return False
+    s = _along(seg, a, u[a])
+    return _covers(s[behind], t0, t1) >= params.front_overlap * (t1 - t0)
+
+
+def hidden_by_objects(seg: np.ndarray, side: np.ndarray, a: int, t0: float, t1: float,
+                      params: StructureParams = StructureParams(), free_at=None,
+                      beside_max_m: float | None = None, shallow: bool = True) -> bool:  # fmt: skip
+    """Whether objects against face ``a``'s wall hide the stretch ``t0..t1`` of its line:
+    fronts up to ``front_max_m`` deep cover it (:func:`covered_by_fronts`; unless not
+    ``shallow``), or, where the wall's other face runs on behind it (:func:`backed`;
+    with ``free_at``), fronts up to :data:`OBJECT_MAX_DEPTH_M` deep do. Parameters as
+    :func:`covered_by_fronts`; returns bool."""
+    if shallow and covered_by_fronts(seg, side, a, t0, t1, params, beside_max_m):
+        return True
+    return (free_at is not None and backed(seg, side, a, t0, t1, params)
+            and covered_by_fronts(seg, side, a, t0, t1, params, beside_max_m, OBJECT_MAX_DEPTH_M, free_at))  # fmt: skip
+
+
 def covered_by_fronts(seg: np.ndarray, side: np.ndarray, a: int, t0: float, t1: float,
-                      params: StructureParams = StructureParams(), beside_max_m: float | None = None) -> bool:  # fmt: skip
+                      params: StructureParams = StructureParams(), beside_max_m: float | None = None,
+                      depth_max_m: float | None = None, free_at=None) -> bool:  # fmt: skip
     """Whether the stretch ``t0..t1`` of face ``a``'s line is hidden by objects standing
     against it: faces parallel to it (within ``join_angle_deg``), with their free side
     the same way, ``front_min_m`` to ``front_max_m`` in front of it, cover at least
@@ -78,11 +190,18 @@ def covered_by_fronts(seg: np.ndarray, side: np.ndarray, a: int, t0: float, t1: 
     beside_max_m : float, optional
         Fronts that run beside face ``a`` itself for longer than this (metres: the
         other face of its wall) do not count; None: all count.
+    depth_max_m : float, optional
+        The deepest front, metres; None: ``front_max_m``. A front deeper than
+        ``front_max_m`` counts only when the scans saw less than ``min_free_side`` of
+        the body between it and the line free (:func:`body_seen_free`, with ``free_at``).
+    free_at : callable, optional
+        ``free_at(xy)``: (N,) bool, whether the scans saw the map points ``xy`` free.
 
     Returns
     -------
     bool
     """
+    depth_max_m = params.front_max_m if depth_max_m is None else depth_max_m
     u, length, n = free_normals(seg, side)
     if side[a] == 0 or t1 <= t0:
         return False
@@ -90,26 +209,22 @@ def covered_by_fronts(seg: np.ndarray, side: np.ndarray, a: int, t0: float, t1: 
     same_way = (n @ n[a]) > 0
     mid = 0.5 * (seg[:, :2] + seg[:, 2:])
     depth = (mid - seg[a, :2]) @ n[a]
-    front = parallel & same_way & (depth >= params.front_min_m) & (depth <= params.front_max_m)
+    front = parallel & same_way & (depth >= params.front_min_m) & (depth <= depth_max_m)
     front[a] = False
-    s = np.sort(np.column_stack([(seg[:, :2] - seg[a, :2]) @ u[a], (seg[:, 2:] - seg[a, :2]) @ u[a]]), axis=1)
+    s = _along(seg, a, u[a])
     if beside_max_m is not None:
         front &= np.minimum(s[:, 1], length[a]) - np.maximum(s[:, 0], 0.0) <= beside_max_m
+    for k in np.flatnonzero(front & (depth > params.front_max_m)).tolist():  # deeper: its body not seen free
+        front[k] = free_at is not None and body_seen_free(
+            seg[a, :2], u[a], n[a], max(s[k, 0], t0), min(s[k, 1], t1), float(depth[k]), free_at, params.side_offset_m
+        ) < params.min_free_side
     if not front.any():
         return False
-    s = s[front]
-    s = np.clip(s, t0, t1)
-    s = s[np.argsort(s[:, 0])]
-    covered, reach = 0.0, t0
-    for lo, hi in s.tolist():  # the union of the fronts' stretches
-        lo = max(lo, reach)
-        if hi > lo:
-            covered += hi - lo
-            reach = hi
-    return covered >= params.front_overlap * (t1 - t0)
+    return _covers(s[front], t0, t1) >= params.front_overlap * (t1 - t0)
 
 
-def into_corners(seg: np.ndarray, side: np.ndarray, open_run, params: StructureParams = StructureParams()) -> np.ndarray:
+def into_corners(seg: np.ndarray, side: np.ndarray, open_run, params: StructureParams = StructureParams(),
+                 free_at=None) -> np.ndarray:  # fmt: skip
     """Faces that end at an object standing in a corner, extended to the corner.
 
     An object in a room's corner (a cabinet, an L of shelves) hides the two walls up to
@@ -121,7 +236,10 @@ def into_corners(seg: np.ndarray, side: np.ndarray, open_run, params: StructureP
     fronts cover the stretch (:func:`covered_by_fronts`; a face running beside ``a``
     itself for more than ``front_max_m`` is the other face of its wall, not a front)
     and free space does not cross it (``open_run`` shorter than ``min_opening_m``).
-    The nearest such face along the line is the corner.
+    Where the other face of ``a``'s wall runs on behind the stretch (:func:`backed`),
+    the object may be :data:`OBJECT_MAX_DEPTH_M` deep, and the square face end as far
+    from the corner (the object hides it too). The nearest such face along the line is
+    the corner.
 
     Parameters
     ----------
@@ -134,6 +252,8 @@ def into_corners(seg: np.ndarray, side: np.ndarray, open_run, params: StructureP
         ``t0..t1`` of the line through ``p`` along ``u``, metres
         (:func:`floorscan.floorplan.structure.join_collinear`'s test).
     params : StructureParams
+    free_at : callable, optional
+        As :func:`covered_by_fronts`; None: no object deeper than ``front_max_m``.
 
     Returns
     -------
@@ -144,6 +264,7 @@ def into_corners(seg: np.ndarray, side: np.ndarray, open_run, params: StructureP
     side = np.asarray(side)
     u, length, _ = free_normals(seg, side)
     square = np.sin(np.radians(params.junction_min_angle_deg))
+    reach = params.front_max_m if free_at is None else OBJECT_MAX_DEPTH_M
     out = seg.copy()
     for a in np.flatnonzero(side != 0).tolist():
         for k in (0, 1):
@@ -157,15 +278,18 @@ def into_corners(seg: np.ndarray, side: np.ndarray, open_run, params: StructureP
                 x = end + t[:, None] * out_dir
                 s = np.einsum("ij,ij->i", x - seg[:, :2], u)
                 ok = (np.abs(denom) >= square) & (t > 0) & (t <= HIDDEN_MAX_GAP_M)
-                ok &= (s >= -params.front_max_m) & (s <= length + params.front_max_m)
+                ok &= (s >= -reach) & (s <= length + reach)
             ok[a] = False
             if not ok.any():
                 continue
             p = int(np.flatnonzero(ok)[np.argmin(t[ok])])
+            near = -params.front_max_m <= s[p] <= length[p] + params.front_max_m
             t, x = float(t[p]), x[p]
             t0 = float((end - seg[a, :2]) @ u[a])
             lo, hi = (t0, t0 + t) if k == 1 else (t0 - t, t0)
-            covered = covered_by_fronts(seg, side, a, lo, hi, params, beside_max_m=params.front_max_m)
+            # a square face ending farther than front_max_m from the corner: only a
+            # deeper object hides it
+            covered = hidden_by_objects(seg, side, a, lo, hi, params, free_at, params.front_max_m, shallow=near)
             if covered and open_run(end, out_dir, 0.0, t) < params.min_opening_m:
                 out[a, 2 * k : 2 * k + 2] = x
     return out

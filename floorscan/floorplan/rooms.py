@@ -83,7 +83,7 @@ from floorscan.core.geometry import OVERLAY_GRID_M, minus
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan import doors as D
 from floorscan.floorplan.extensions import partition_cuts
-from floorscan.floorplan.free_space import FRONT_MAX_M
+from floorscan.floorplan.hidden import OBJECT_MAX_DEPTH_M
 from floorscan.floorplan.mouths import room_mouths
 from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
@@ -265,7 +265,7 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     grown = expand_labels(final, 1)
     final = np.where(barrier & raster.space, grown, final).astype(np.int32)
     if raster.under is not None:  # the floor under the objects against walls: the nearest room's
-        reach = int(np.ceil(FRONT_MAX_M / raster.resolution_m)) + 1
+        reach = int(np.ceil(OBJECT_MAX_DEPTH_M / raster.resolution_m)) + 1
         final = np.where(raster.under & (final == 0), expand_labels(final, reach), final).astype(np.int32)
     doors = []
     for p, q, wall, a, b in found:

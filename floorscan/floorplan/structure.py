@@ -37,7 +37,10 @@ order (:func:`structure_passes`):
    :data:`~floorscan.floorplan.hidden.HIDDEN_MAX_GAP_M`: a row of cabinets) parallel to
    a long wall face, ``front_min_m`` to ``front_max_m`` in front of it on its free
    side, is the front of a desk, a cabinet or a shelf standing against the wall:
-   clutter. The floor between it and the wall (:func:`floor_under`) is the room's floor
+   clutter; up to :data:`~floorscan.floorplan.hidden.OBJECT_MAX_DEPTH_M` where the
+   wall's other face runs on behind it and the object's body was not seen free
+   (:mod:`floorscan.floorplan.hidden`), as in the joins and corners of step 2. The
+   floor between it and the wall (:func:`floor_under`) is the room's floor
    (:mod:`floorscan.floorplan.rooms`).
 6. **Loose in the free space** (:func:`loose_in_free_space`). A face that meets no
    other face at either end, has no face in its line within ``loose_reach_m``, whose
@@ -62,7 +65,7 @@ from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.clutter import free_standing_objects, in_front_of_walls, loose_in_free_space, on_objects
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
-from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, covered_by_fronts, free_normals, into_corners
+from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, free_normals, hidden_by_objects, into_corners
 from floorscan.floorplan.junctions import junction_ends, short_loose, shorter_on_longer, snap_junctions
 
 
@@ -121,7 +124,7 @@ def border_and_support(seg: np.ndarray, grid: OccupancyGrid, params: StructurePa
 
 
 def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams(),
-                   side: np.ndarray | None = None, open_run=None):  # fmt: skip
+                   side: np.ndarray | None = None, open_run=None, free_at=None):  # fmt: skip
     """Step 2: collinear faces joined across gaps that free space does not pass through:
     up to ``join_max_gap_m``, or up to :data:`~floorscan.floorplan.hidden.HIDDEN_MAX_GAP_M`
     where objects standing against the wall hide the gap
@@ -139,6 +142,11 @@ def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, pa
         The faces' free sides (:func:`border_and_support`); None: no gap is hidden.
     open_run : callable, optional
         :func:`_open_run` of ``grid``, when the caller has it.
+    free_at : callable, optional
+        ``free_at(xy)``: (N,) bool, whether the scans saw map points free: objects up to
+        :data:`~floorscan.floorplan.hidden.OBJECT_MAX_DEPTH_M` deep then hide a gap where
+        the wall's other face runs on behind it
+        (:func:`~floorscan.floorplan.hidden.hidden_by_objects`); None: only ``front_max_m``.
 
     Returns
     -------
@@ -171,7 +179,8 @@ def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, pa
             for k in np.flatnonzero(keep & (gap > params.join_max_gap_m)).tolist():
                 t0, t1 = (length[a[k]], lo_b[k]) if lo_b[k] > length[a[k]] else (hi_b[k], 0.0)
                 same_way = free_n[a[k]] @ free_n[b[k]] > 0
-                keep[k] = same_way and covered_by_fronts(seg, side, int(a[k]), min(t0, t1), max(t0, t1), params)
+                hidden = hidden_by_objects(seg, side, int(a[k]), min(t0, t1), max(t0, t1), params, free_at)
+                keep[k] = same_way and hidden
         open_run = _open_run(grid) if open_run is None else open_run
         for k in np.flatnonzero(keep & (gap > grid.resolution_m / 2)).tolist():
             t0, t1 = (length[a[k]], lo_b[k]) if lo_b[k] > length[a[k]] else (hi_b[k], 0.0)
@@ -257,7 +266,8 @@ def structure_passes(
     wall_weights : (W,) float64 ndarray
     free_side : (W,) int8 ndarray
         Which side of each face the free space is on (+1 left, -1 right, 0 both or
-        neither; see :func:`border_and_support`).
+        neither; see :func:`border_and_support`); a face run on behind objects, with
+        too little free space beside it to tell, keeps the side of its seen pieces.
     clutter : (C, 4) float64 ndarray
         The faces that are not structure (furniture, single-scan returns), metres.
     reason : (C,) object ndarray
@@ -273,14 +283,23 @@ def structure_passes(
     clutter = [seg[~structure]]
     reason = [np.full(int((~structure).sum()), "not_a_boundary", dtype=object)]
     open_run = _open_run(grid)
-    joined, jw, group = join_collinear(seg[structure], w[structure], grid, params, side0[structure], open_run)
-    joined = into_corners(joined, _group_sides(seg[structure], side0[structure], group, len(joined)), open_run, params)
+    free = passable(grid)
+
+    def free_at(xy: np.ndarray) -> np.ndarray:
+        return mask_at(grid, free, xy)
+
+    joined, jw, group = join_collinear(seg[structure], w[structure], grid, params, side0[structure], open_run, free_at)
+    joined_side = _group_sides(seg[structure], side0[structure], group, len(joined))
+    joined = into_corners(joined, joined_side, open_run, params, free_at)
     snapped, junctions = snap_junctions(joined, params)
     length = np.hypot(snapped[:, 2] - snapped[:, 0], snapped[:, 3] - snapped[:, 1])
     anchor = length >= params.clutter_max_length_m
     standing = on_objects(snapped, grid, free_standing_objects(grid, params, snapped[anchor], max_thickness_m)) & ~anchor
+    # a face run on behind objects has too little free space beside it to show a side;
+    # it keeps the side its seen pieces had
     _, side = border_and_support(snapped, grid, params)
-    front, behind = in_front_of_walls(snapped, side, anchor, params)
+    side = np.where(side != 0, side, joined_side).astype(side.dtype)
+    front, behind = in_front_of_walls(snapped, side, anchor, params, free_at)
     front &= ~standing
     short = short_loose(snapped, junctions, params.min_wall_length_m) & ~standing & ~front
     loose = loose_in_free_space(snapped, junction_ends(snapped, junctions), side, grid, params, max_thickness_m)
@@ -298,6 +317,7 @@ def structure_passes(
     reason.append(np.full(int((~still).sum()), "short", dtype=object))
     walls, _ = snap_junctions(joined[keep][still], params)
     _, side = border_and_support(walls, grid, params)
+    side = np.where(side != 0, side, joined_side[keep][still]).astype(side.dtype)
     under = floor_under(snapped[front], snapped[behind[front]])
     return walls, jw[keep][still], side, np.concatenate(clutter).reshape(-1, 4), np.concatenate(reason), under
 

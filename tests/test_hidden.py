@@ -1,0 +1,82 @@
+"""Objects deeper than a cabinet against a wall whose thickness is seen
+(floorscan.floorplan.hidden: backed, body_seen_free; their use in into_corners and
+clutter.in_front_of_walls)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from floorscan.floorplan.clutter import in_front_of_walls
+from floorscan.floorplan.free_space import StructureParams
+from floorscan.floorplan.hidden import BACKING_MAX_M, OBJECT_MAX_DEPTH_M, backed, body_seen_free, into_corners
+
+P = StructureParams()
+NONE_FREE = lambda xy: np.zeros(len(xy), dtype=bool)  # noqa: E731  (an object's body: never seen free)
+ALL_FREE = lambda xy: np.ones(len(xy), dtype=bool)  # noqa: E731  (a corridor: seen free)
+CLOSED = lambda p, u, t0, t1: 0.0  # noqa: E731  (no free space on a wall's line)
+
+# a wall 0.3 m thick along y = -0.3..0: its room face (free to the north) seen from x = 0
+# to 5, its corridor face (free to the south) from 0 to 8; a desk 3 m long and 1.5 m deep
+# stands in the room's south-east corner against it (x 5..8, y 0..1.5), so
+# its front at y = 1.5 (free to the north) and its side at x = 5 (free to the west) are
+# what the room face shows; the room's east wall face is x = 8, seen from y = 1.5 up
+ROOM_FACE = [0.0, 0.0, 5.0, 0.0]
+OTHER_FACE = [0.0, -0.3, 8.0, -0.3]
+FRONT = [5.0, 1.5, 8.0, 1.5]
+SIDE_FACE = [5.0, 0.0, 5.0, 1.5]
+EAST = [8.0, 1.5, 8.0, 6.0]
+
+
+def test_a_wall_is_backed_where_its_other_face_runs_on_behind_the_stretch():
+    seg = np.array([[0.0, 0.0, 8.0, 0.0], OTHER_FACE])
+    side = np.array([1, -1])  # free north of the first (left of +x), south of the second
+    assert backed(seg, side, 0, 5.0, 8.0, P)
+    assert not backed(seg[:1], side[:1], 0, 5.0, 8.0, P)  # no other face
+    assert not backed(seg, np.array([1, 1]), 0, 5.0, 8.0, P)  # free the same way: a second wall face
+    far = np.array([[0.0, 0.0, 8.0, 0.0], [0.0, -BACKING_MAX_M - 0.1, 8.0, -BACKING_MAX_M - 0.1]])
+    assert not backed(far, side, 0, 5.0, 8.0, P)  # thicker than a wall: another room's wall
+    short = np.array([[0.0, 0.0, 8.0, 0.0], [0.0, -0.3, 6.0, -0.3]])
+    assert not backed(short, side, 0, 5.0, 8.0, P)  # covers a third of the stretch
+    assert backed(short, side, 0, 5.0, 6.2, P)  # covers 1.0 of 1.2 m, over front_overlap (0.8)
+
+
+def test_the_share_of_an_objects_body_seen_free():
+    p, u, n = np.zeros(2), np.array([1.0, 0.0]), np.array([0.0, 1.0])
+    assert body_seen_free(p, u, n, 5.0, 8.0, 1.5, NONE_FREE, 0.15) == 0.0
+    assert body_seen_free(p, u, n, 5.0, 8.0, 1.5, ALL_FREE, 0.15) == 1.0
+    # free beyond y = 0.75: the samples at 0.15 .. 1.35 m in steps of 0.15, half of them
+    assert body_seen_free(p, u, n, 5.0, 8.0, 1.5, lambda xy: xy[:, 1] > 0.75, 0.15) == pytest.approx(4 / 9)
+
+
+def test_a_deep_object_in_a_corner_hides_the_wall_to_the_corner_only_where_the_wall_is_backed():
+    seg = np.array([ROOM_FACE, OTHER_FACE, FRONT, SIDE_FACE, EAST])
+    side = np.array([1, -1, 1, 1, 1])  # north, south, north, west (left of +y), west
+    out = into_corners(seg, side, CLOSED, P, NONE_FREE)
+    assert np.allclose(out[0], [0.0, 0.0, 8.0, 0.0]) and np.allclose(out[1:], seg[1:])
+    # a cabinet's depth only, without the free-space test: the 1.5 m deep desk hides nothing
+    assert np.allclose(into_corners(seg, side, CLOSED, P)[0], ROOM_FACE)
+    # no other face behind (an outer wall, or a step of the wall): the face stays
+    assert np.allclose(into_corners(np.delete(seg, 1, axis=0), np.delete(side, 1), CLOSED, P, NONE_FREE)[0], ROOM_FACE)
+    # the "desk" seen through (a corridor between the faces), or deeper than an object
+    assert np.allclose(into_corners(seg, side, CLOSED, P, ALL_FREE)[0], ROOM_FACE)
+    deeper = seg.copy()
+    deeper[2, [1, 3]] = deeper[4, 1] = deeper[3, 3] = OBJECT_MAX_DEPTH_M + 0.2
+    assert np.allclose(into_corners(deeper, side, CLOSED, P, NONE_FREE)[0], ROOM_FACE)
+
+
+def test_a_deep_front_is_clutter_only_where_the_wall_is_backed_and_its_body_unseen():
+    seg = np.array([[0.0, 0.0, 8.0, 0.0], OTHER_FACE, FRONT])
+    side = np.array([1, -1, 1])
+    wall = np.array([True, True, True])  # all longer than a piece of furniture
+    front, behind = in_front_of_walls(seg, side, wall, P, NONE_FREE)
+    assert front.tolist() == [False, False, True] and behind.tolist() == [-1, -1, 0]
+    assert not in_front_of_walls(seg, side, wall, P)[0].any()  # 1.5 m: deeper than front_max_m
+    assert not in_front_of_walls(seg, side, wall, P, ALL_FREE)[0].any()  # a corridor between
+    assert not in_front_of_walls(seg[[0, 2]], side[[0, 2]], wall[[0, 2]], P, NONE_FREE)[0].any()  # not backed
+    # a face 1.5 m north of the wall and free to the north as the wall's face is: the
+    # far face of a wall across a corridor, when the corridor between them was seen free
+    across = np.array([[0.0, 0.0, 8.0, 0.0], OTHER_FACE, [2.0, 1.5, 6.0, 1.5]])
+    corridor = lambda xy: (xy[:, 1] > 0.0) & (xy[:, 1] < 1.5)  # noqa: E731
+    assert not in_front_of_walls(across, side, wall, P, corridor)[0].any()
+    assert in_front_of_walls(across, side, wall, P, NONE_FREE)[0].tolist() == [False, False, True]
