@@ -3,8 +3,9 @@ the plan the answer is made with (the map extractor's walls and the structure pa
 the first k scans of the default ordering, for k on a geometric grid
 (:func:`floorscan.core.selection.curve_ks`), each written as plan tables
 (``evaluation/answer_plans/k<k>/``, :func:`~floorscan.floorplan.scans.write_plan`). The
-score stage scores them against the reference map (:mod:`floorscan.score.answer_curve`):
-the answer's quality curve, whose k95 and k99 the automatic k is measured against.
+score stage scores their walls against the reference map (:mod:`floorscan.score.answer_curve`):
+the answer's quality curve, whose k95 and k99 the automatic k is measured against. The
+walls do not depend on the rooms, so these plans are built without them.
 
 The occupancy grids of the first k scans are built incrementally
 (:func:`floorscan.core.prefix_grids.prefix_grids`: each scan is cast once, the grid of k + dk
@@ -164,6 +165,9 @@ def answer_plans(
     ------
     (k, n_wall_points, FloorPlan)
         In increasing k; a plan without walls when the first k scans have no wall point.
+        Without rooms and doors: the answer curve scores the walls
+        (:mod:`floorscan.score.answer_curve`), which do not depend on them, and the
+        rooms were about half of a plan's time (``benchmarks/README.md``, issue 46).
 
     Raises
     ------
@@ -181,7 +185,7 @@ def answer_plans(
         if grid is None:
             yield k, n, plan_of_segments(np.empty((0, 4)), None, params)
             continue
-        yield k, n, ScanPlans(segments_of(points[:n], grid), params).plan(None, grid)
+        yield k, n, ScanPlans(segments_of(points[:n], grid), params).plan(None, grid, rooms=False)
 
 
 def write_answer_plans(
@@ -224,7 +228,9 @@ def write_answer_plans(
         tmp.mkdir()
         for k, n, plan in answer_plans(scans, segments_of, grid_params, params, n_points, what, part, parts):
             write_plan(plan, Path(tmp) / f"k{k}", {**(metadata or {}), "extractor": "map", "k": str(k),
-                                                   "n_scans": str(k), N_WALL_POINTS: str(n)}, rounded=False)
+                                                   "n_scans": str(k), N_WALL_POINTS: str(n),
+                                                   "rooms": "not segmented (the curve scores the walls)"},
+                       rounded=False)  # fmt: skip
             done.append({"k": k, "n_wall_points": n, "n_walls": len(plan.walls), "n_faces": len(plan.faces)})
             log.info("the answer's plan of the first %d scans: %d wall points, %d walls, %d faces",
                      k, n, len(plan.walls), len(plan.faces))

@@ -109,7 +109,8 @@ class ScanPlans:
         seg, weights, first = self._parts(self.rows(scan_ids))
         return plan_faces(seg, weights, self.params, first)[0]
 
-    def plan(self, scan_ids: Iterable[int] | None = None, grid: OccupancyGrid | None = None) -> FloorPlan:
+    def plan(self, scan_ids: Iterable[int] | None = None, grid: OccupancyGrid | None = None,
+             rooms: bool = True) -> FloorPlan:  # fmt: skip
         """The floor plan of the segments of ``scan_ids``
         (:func:`~floorscan.floorplan.plan.build_floorplan` of those rows).
 
@@ -120,13 +121,15 @@ class ScanPlans:
             of the selected scans is their plan whole).
         grid : OccupancyGrid, optional
             The free space of those scans: structure passes, junctions, rooms.
+        rooms : bool
+            Whether to segment the rooms (:func:`~floorscan.floorplan.plan.plan_of_segments`).
 
         Returns
         -------
         FloorPlan
         """
         seg, weights, first = self._parts(self.rows(scan_ids))
-        return plan_of_segments(seg, weights, self.params, grid, first)
+        return plan_of_segments(seg, weights, self.params, grid, first, rooms)
 
 
 def plan_of_scans(
