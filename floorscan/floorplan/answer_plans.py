@@ -166,8 +166,7 @@ def answer_plans(
     (k, n_wall_points, FloorPlan)
         In increasing k; a plan without walls when the first k scans have no wall point.
         Without rooms and doors: the answer curve scores the walls
-        (:mod:`floorscan.score.answer_curve`), which do not depend on them, and the
-        rooms were about half of a plan's time (``benchmarks/README.md``, issue 46).
+        (:mod:`floorscan.score.answer_curve`), which do not depend on them.
 
     Raises
     ------
@@ -185,7 +184,7 @@ def answer_plans(
         if grid is None:
             yield k, n, plan_of_segments(np.empty((0, 4)), None, params)
             continue
-        yield k, n, ScanPlans(segments_of(points[:n], grid), params).plan(None, grid, rooms=False)
+        yield k, n, ScanPlans(segments_of(points[:n], grid), params).plan(None, grid, with_rooms=False)
 
 
 def write_answer_plans(

@@ -81,10 +81,14 @@ def free_normals(seg: np.ndarray, side: np.ndarray) -> tuple[np.ndarray, np.ndar
     return u, length, n
 
 
-def _along(seg: np.ndarray, a: int, u: np.ndarray) -> np.ndarray:
-    """(F, 2): each face's ends along face ``a``'s line (unit ``u``) from its first end,
-    sorted, metres."""
-    return np.sort(np.column_stack([(seg[:, :2] - seg[a, :2]) @ u, (seg[:, 2:] - seg[a, :2]) @ u]), axis=1)
+def _line_frame(seg: np.ndarray, side: np.ndarray, a: int, params: StructureParams):
+    """Face ``a``'s frame: every face's direction ``u``, length and free normal ``n``
+    (:func:`free_normals`), whether it is parallel to ``a`` (within ``join_angle_deg``)
+    and its ends along ``a``'s line from ``a``'s first end ((F, 2), sorted, metres)."""
+    u, length, n = free_normals(seg, side)
+    parallel = np.abs(u @ u[a]) >= np.cos(np.radians(params.join_angle_deg))
+    along = np.sort(np.column_stack([(seg[:, :2] - seg[a, :2]) @ u[a], (seg[:, 2:] - seg[a, :2]) @ u[a]]), axis=1)
+    return u, length, n, parallel, along
 
 
 def _covers(s: np.ndarray, t0: float, t1: float) -> float:
@@ -123,35 +127,16 @@ def backed(seg: np.ndarray, side: np.ndarray, a: int, t0: float, t1: float,
     of its line: faces parallel to it (within ``join_angle_deg``), free the other way,
     behind its line by at most :data:`BACKING_MAX_M`, cover at least
     ``front_overlap`` of the stretch. The wall is then a wall's thickness there, and what
-    stands on the free side of ``a``'s line is in front of it.
-
-    Parameters
-    ----------
-    seg : (F, 4) float ndarray
-        Faces, metres.
-    side : (F,) int ndarray
-        Free sides.
-    a : int
-        The face; its free side must be known.
-    t0, t1 : float
-        Metres along ``a``'s line from its first end, ``t0 < t1``.
-    params : StructureParams
-
-    Returns
-    -------
-    bool
-    """
-    u, _, n = free_normals(seg, side)
+    stands on the free side of ``a``'s line is in front of it. Parameters as
+    :func:`covered_by_fronts` (``seg``, ``side``, ``a``, ``t0``, ``t1``, ``params``);
+    returns bool."""
     if side[a] == 0 or t1 <= t0:
         return False
-    parallel = np.abs(u @ u[a]) >= np.cos(np.radians(params.join_angle_deg))
+    _, _, n, parallel, s = _line_frame(seg, side, a, params)
     ends = np.stack([(seg[:, :2] - seg[a, :2]) @ n[a], (seg[:, 2:] - seg[a, :2]) @ n[a]], axis=1)
     behind = parallel & ((n @ n[a]) < 0) & (ends.max(axis=1) < 0) & (ends.min(axis=1) >= -BACKING_MAX_M)
     behind[a] = False
-    if not behind.any():
-        return False
-    s = _along(seg, a, u[a])
-    return _covers(s[behind], t0, t1) >= params.front_overlap * (t1 - t0)
+    return bool(behind.any()) and _covers(s[behind], t0, t1) >= params.front_overlap * (t1 - t0)
 
 
 def hidden_by_objects(seg: np.ndarray, side: np.ndarray, a: int, t0: float, t1: float,
@@ -202,16 +187,14 @@ def covered_by_fronts(seg: np.ndarray, side: np.ndarray, a: int, t0: float, t1: 
     bool
     """
     depth_max_m = params.front_max_m if depth_max_m is None else depth_max_m
-    u, length, n = free_normals(seg, side)
     if side[a] == 0 or t1 <= t0:
         return False
-    parallel = np.abs(u @ u[a]) >= np.cos(np.radians(params.join_angle_deg))
+    u, length, n, parallel, s = _line_frame(seg, side, a, params)
     same_way = (n @ n[a]) > 0
     mid = 0.5 * (seg[:, :2] + seg[:, 2:])
     depth = (mid - seg[a, :2]) @ n[a]
     front = parallel & same_way & (depth >= params.front_min_m) & (depth <= depth_max_m)
     front[a] = False
-    s = _along(seg, a, u[a])
     if beside_max_m is not None:
         front &= np.minimum(s[:, 1], length[a]) - np.maximum(s[:, 0], 0.0) <= beside_max_m
     for k in np.flatnonzero(front & (depth > params.front_max_m)).tolist():  # deeper: its body not seen free

@@ -244,7 +244,7 @@ def build_floorplan(
 
 def plan_of_segments(
     seg: np.ndarray, weights: np.ndarray | None = None, params: FloorplanParams = FloorplanParams(),
-    grid: OccupancyGrid | None = None, first_groups: np.ndarray | None = None, rooms: bool = True,
+    grid: OccupancyGrid | None = None, first_groups: np.ndarray | None = None, with_rooms: bool = True,
 ) -> FloorPlan:
     """:func:`build_floorplan` of segment arrays (:func:`segment_arrays`' output): the
     faces of :func:`plan_faces`, paired into walls, with the structure passes when a
@@ -262,7 +262,7 @@ def plan_of_segments(
     first_groups : (M,) int64 ndarray, optional
         The merge's first pass, prepared (:class:`~floorscan.floorplan.merge.FirstMergePass`):
         the same plan, sooner.
-    rooms : bool
+    with_rooms : bool
         Whether to segment the rooms (with a grid); without, the plan's rooms and doors
         tables are empty and its walls, faces and clutter the same (the walls do not
         depend on the rooms): for a plan scored on its walls alone.
@@ -320,9 +320,8 @@ def plan_of_segments(
             axes, thick, wall_of_face = pair_faces(faces, face_w, params)
             axes, thick, wall_of_face = _one_wall_per_wall(axes, thick, wall_of_face, params)
             axes, junctions = _wall_junctions(axes, thick, wall_of_face, side, params)
-    segment_rooms = rooms
     rooms, doors = _empty(ROOM_COLUMNS), _empty(DOOR_COLUMNS)
-    if grid is not None and len(axes) and segment_rooms:
+    if grid is not None and len(axes) and with_rooms:
         from floorscan.floorplan.rooms import plan_rooms
 
         rooms, doors = plan_rooms(axes, thick, grid, params.rooms, under)

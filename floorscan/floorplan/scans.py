@@ -110,7 +110,7 @@ class ScanPlans:
         return plan_faces(seg, weights, self.params, first)[0]
 
     def plan(self, scan_ids: Iterable[int] | None = None, grid: OccupancyGrid | None = None,
-             rooms: bool = True) -> FloorPlan:  # fmt: skip
+             with_rooms: bool = True) -> FloorPlan:  # fmt: skip
         """The floor plan of the segments of ``scan_ids``
         (:func:`~floorscan.floorplan.plan.build_floorplan` of those rows).
 
@@ -121,7 +121,7 @@ class ScanPlans:
             of the selected scans is their plan whole).
         grid : OccupancyGrid, optional
             The free space of those scans: structure passes, junctions, rooms.
-        rooms : bool
+        with_rooms : bool
             Whether to segment the rooms (:func:`~floorscan.floorplan.plan.plan_of_segments`).
 
         Returns
@@ -129,7 +129,7 @@ class ScanPlans:
         FloorPlan
         """
         seg, weights, first = self._parts(self.rows(scan_ids))
-        return plan_of_segments(seg, weights, self.params, grid, first, rooms)
+        return plan_of_segments(seg, weights, self.params, grid, first, with_rooms)
 
 
 def plan_of_scans(

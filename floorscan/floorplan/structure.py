@@ -202,11 +202,12 @@ def _group_sides(seg: np.ndarray, side: np.ndarray, group: np.ndarray, n: int) -
     return out
 
 
-def _open_run(grid: OccupancyGrid):
-    """``open_run(p, u, t0, t1)``: the longest run of passable cells on the stretch
-    ``t0..t1`` (metres, ``t0 < t1``) of the line through ``p`` along the unit vector
-    ``u``, sampled every half cell, metres (the joins' opening test)."""
-    free = passable(grid)
+def _open_run(grid: OccupancyGrid, free: np.ndarray | None = None):
+    """``open_run(p, u, t0, t1)``: the longest run of passable cells (``free``, the
+    grid's :func:`passable` cells by default) on the stretch ``t0..t1`` (metres,
+    ``t0 < t1``) of the line through ``p`` along the unit vector ``u``, sampled every
+    half cell, metres (the joins' opening test)."""
+    free = passable(grid) if free is None else free
     step = grid.resolution_m / 2
 
     def open_run(p: np.ndarray, u: np.ndarray, t0: float, t1: float) -> float:
@@ -282,8 +283,8 @@ def structure_passes(
     structure, side0 = border_and_support(seg, grid, params)
     clutter = [seg[~structure]]
     reason = [np.full(int((~structure).sum()), "not_a_boundary", dtype=object)]
-    open_run = _open_run(grid)
-    free = passable(grid)
+    free = passable(grid)  # once, for the openings and the objects' bodies
+    open_run = _open_run(grid, free)
 
     def free_at(xy: np.ndarray) -> np.ndarray:
         return mask_at(grid, free, xy)
