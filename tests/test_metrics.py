@@ -541,6 +541,28 @@ def test_segment_index_exact_and_nearest_below_match_brute_force():
     assert np.array_equal(got, np.minimum(bound, brute[:, :20].min(axis=1)))
 
 
+def test_far_points_by_cells_match_brute_force(monkeypatch):
+    """SegmentIndex.far (the points far from every segment, by cells) gives the
+    brute-force minimum under each point's bound bit for bit, in one chunk of pairs
+    or in many, for dense runs of samples along far walls and scattered points."""
+    import floorscan.score.nearest as N
+
+    seg = _stacked_walls(30, seed=21)
+    rng = np.random.default_rng(22)
+    wall = np.column_stack([np.linspace(-40, 50, 3000), np.full(3000, 25.0)])  # a far wall's samples, 3 cm apart
+    pts = np.vstack([wall, rng.uniform([-60, -60], [70, 66], (600, 2)), rng.uniform([0, 0.4], [10, 5.6], (200, 2))])
+    brute = _brute_d(pts, seg).min(axis=1)
+    bound = rng.choice([np.inf, 0.5, 3.0, 19.3, 40.0], len(pts))
+    ids = np.arange(len(pts))
+    want = np.minimum(bound, brute)
+    assert np.array_equal(SegmentIndex(seg).far(pts, ids, bound), want)
+    monkeypatch.setattr(N, "FAR_CHUNK_PAIRS", 97)  # many chunks, each of whole cells
+    assert np.array_equal(SegmentIndex(seg).far(pts, ids, bound), want)
+    some = ids[::7]
+    assert np.array_equal(SegmentIndex(seg).far(pts, some, bound[some]), want[some])
+    assert (brute[:3000] > 18).all() and (want < bound).sum() > 1000 and (want == bound).sum() > 500
+
+
 def test_wall_cells_of_batches_union_to_the_bitmap():
     """Rasterizing walls one by one (the cache shared by the orderings) gives the
     bitmap of rasterizing them all at once."""
