@@ -171,6 +171,41 @@ def test_covariances_are_open3d_estimate_covariances_bit_for_bit():
     assert np.isnan(point_normals(pts, 0.25, 20)[-1]).all()
 
 
+def test_tiled_inlier_counts_and_runs_equal_the_whole_product(monkeypatch):
+    """The inlier counts of a large map by tiles (each line against the tiles it
+    passes near) are the counts of one product over all points, bit for bit, for tiles
+    of one point to thousands and hypotheses near one tile or all; a RANSAC run gives
+    the same rows either way."""
+    import floorscan.walls.ransac as R
+
+    rng = np.random.default_rng(21)
+    a = rng.uniform(0, 60, (40, 2))
+    b = a + np.column_stack([np.cos(rng.integers(0, 4, 40) * np.pi / 2), np.sin(rng.integers(0, 4, 40) * np.pi / 2)]) * rng.uniform(1, 20, (40, 1))
+    t, w = rng.uniform(0, 1, 30000), rng.integers(0, 40, 30000)
+    pts = np.vstack([a[w] + t[:, None] * (b[w] - a[w]) + rng.normal(0, 0.01, (30000, 2)), rng.uniform(-20, 80, (50, 2))])
+    pt = np.vstack([pts.T, np.ones(len(pts))])
+    i, j = rng.integers(len(pts), size=600), rng.integers(len(pts), size=600)
+    d = pts[j] - pts[i] + 1e-3
+    normal = np.column_stack([-d[:, 1], d[:, 0]]) / np.hypot(*d.T)[:, None]
+    hyp = np.column_stack([normal, (normal * pts[i]).sum(axis=1)])
+    hyp = np.vstack([hyp, [[0.0, 1.0, 1000.0]]])  # a line far from every tile
+    want = R._hypothesis_counts(pt, hyp, 0.04, negate=True)
+    for tile_points in (1, 7, 2048, 10**6):
+        monkeypatch.setattr(R, "TILE_POINTS", tile_points)
+        assert np.array_equal(R._tiled_counts(pts, pt, hyp, 0.04), want), tile_points
+    assert want.max() > 500 and want[-1] == 0
+    line = np.column_stack([np.linspace(0, 900, 30000), np.full(30000, 3.0)])  # one straight wall: a box of no area
+    on_line = np.vstack([line.T, np.ones(len(line))])
+    assert np.array_equal(R._tiled_counts(line, on_line, hyp, 0.04), R._hypothesis_counts(on_line, hyp, 0.04, negate=True))
+    params = R.RansacParams(threshold_m=0.04, iterations=300, min_points=5, min_inliers=5, max_lines=30,
+                            min_length_m=0.1, max_gap_m=0.3, min_coverage=0.0, coverage_gap_m=0.3)
+    monkeypatch.setattr(R, "TILE_POINTS", 256)
+    monkeypatch.setattr(R, "TILED_MIN_POINTS", 10**9)
+    whole = R.ransac_rows(pts, params, 3)
+    monkeypatch.setattr(R, "TILED_MIN_POINTS", 1000)
+    assert R.ransac_rows(pts, params, 3) == whole and len(whole) >= 30
+
+
 def test_fast_grid_means_and_inlier_counts_equal_the_plain_numpy():
     from floorscan.core.grid import cell_groups, cell_means
     from floorscan.walls.ransac import _inlier_counts

@@ -13,7 +13,10 @@ one wall (section 5.3). Fischler and Bolles (1981), Random sample consensus.
 
 The inlier counts of all hypotheses are one BLAS product per cache-sized block
 (:func:`_hypothesis_counts`): the same counts as ``abs(points @ normals.T - offsets)
-< threshold`` (the tests check it bit for bit). Parameters:
+< threshold`` (the tests check it bit for bit). On many points (the map of a large
+site) each line is measured only on the tiles of points it passes near
+(:func:`_tiled_counts`): the same counts, at a cost that grows with the site's size,
+not with its square. Parameters:
 :class:`~floorscan.walls.params.RansacParams`; randomness from
 ``numpy.random.default_rng(seed)``: the same seed, the same walls.
 """
@@ -163,8 +166,72 @@ def _best_line(points: np.ndarray, rng: np.random.Generator, params: RansacParam
     np.multiply(hyp[0], sx, out=sx)
     np.multiply(hyp[1], sy, out=sy)
     np.add(sx, sy, out=hyp[2])  # the offsets
-    best = int(np.argmax(_hypothesis_counts(pt, hyp.T, params.threshold_m, negate=True)))
+    if n >= TILED_MIN_POINTS:
+        counts = _tiled_counts(points, pt, hyp.T, params.threshold_m)
+    else:
+        counts = _hypothesis_counts(pt, hyp.T, params.threshold_m, negate=True)
+    best = int(np.argmax(counts))
     return _refine_line(points, hyp[:2, best].copy(), hyp[2, best], params)
+
+
+#: Points of a RANSAC run from which :func:`_tiled_counts` counts the inliers by tiles:
+#: below it one product over all points is as quick (a scan, a room's map).
+TILED_MIN_POINTS = 20_000
+#: Points per tile of :func:`_tiled_counts`, about: a tile's product is large enough
+#: for BLAS, and a line crosses few of the tiles of a large map.
+TILE_POINTS = 2048
+
+
+def _tiled_counts(points: np.ndarray, pt: np.ndarray, hyp: np.ndarray, threshold: float) -> np.ndarray:
+    """:func:`_hypothesis_counts` (``negate=True``) of many points, by square tiles of
+    about :data:`TILE_POINTS` points: a hypothesis' line is measured only against the
+    tiles it passes within ``threshold`` of (the distance from a tile's centre to the
+    line, less the half diagonal of the tile's points, bounds the distance of each of
+    its points; a relative margin of 1e-9 and 1e-9 m), so a run on the map of a large
+    site measures each line against the few tiles it crosses, not the whole site.
+
+    Each count is the same integer as :func:`_hypothesis_counts`': the same product
+    (BLAS, ``(nx, ny, -offset)`` with ``(x, y, 1)``, a test checks it bit for bit) on
+    the tile's columns, and the tiles it skips hold no inlier.
+
+    Parameters
+    ----------
+    points : (N, 2) float64 ndarray
+        Metres.
+    pt : (3, N) float64 ndarray
+        Rows x, y, 1 of ``points``.
+    hyp : (H, 3) float ndarray
+        ``(nx, ny, offset)`` per line.
+    threshold : float
+        Metres.
+
+    Returns
+    -------
+    (H,) int64 ndarray
+    """
+    n = len(points)
+    h3 = hyp * np.array([1.0, 1.0, -1.0])  # (nx, ny, -offset), C-ordered
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    extent = np.maximum(hi - lo, 1e-9)
+    # about n / TILE_POINTS tiles over the box, and no more along its longer side (the
+    # points of one straight wall, whose box has no area)
+    side = max(float(np.sqrt(np.prod(extent) * TILE_POINTS / n)), float(extent.max()) * TILE_POINTS / n, 1e-6)
+    cell = np.floor((points - lo) / side).astype(np.int64)
+    key = cell[:, 0] * (int(cell[:, 1].max()) + 1) + cell[:, 1]
+    order = np.argsort(key, kind="stable")
+    key = key[order]
+    starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
+    stops = np.r_[starts[1:], n]
+    ps = np.ascontiguousarray(pt[:, order])
+    t_lo, t_hi = np.minimum.reduceat(ps[:2], starts, axis=1), np.maximum.reduceat(ps[:2], starts, axis=1)
+    centre, radius = (t_lo + t_hi) / 2, np.hypot(*(t_hi - t_lo)) / 2  # (2, T), (T,)
+    reach = np.abs(h3[:, :2] @ centre + h3[:, 2:])  # (H, T) distance of each tile's centre
+    near = reach <= (radius + threshold) * (1 + 1e-9) + 1e-9
+    counts = np.zeros(len(h3), dtype=np.int64)
+    for t in np.flatnonzero(near.any(axis=0)):
+        sel = np.flatnonzero(near[:, t])
+        counts[sel] += _hypothesis_counts(ps[:, starts[t]:stops[t]], h3[sel], threshold)
+    return counts
 
 
 def _refine_line(points: np.ndarray, normal: np.ndarray, offset: float, params: RansacParams):
