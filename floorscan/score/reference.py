@@ -67,14 +67,14 @@ def reference_of_recording(
 
     scan_params = stage_params(ScanParams, walls_config)
     reg = registration[registration["kept"]].set_index("scan_id")
-    origin = reg[["x_m", "y_m"]]
+    origin = dict(zip(reg.index.tolist(), reg[["x_m", "y_m"]].to_numpy(np.float64)))  # one lookup a scan
 
     def scans():
         for sid, pts in iter_scans(registered_path):
-            if sid not in origin.index:
+            if sid not in origin:
                 raise ValueError(f"{registered_path}: scan {sid} has no kept row in the registration table")
             xy, _ = scan_points_2d(pts, scan_params)
-            yield origin.loc[sid].to_numpy(np.float64), xy
+            yield origin[sid], xy
 
     what = f"the reference map of the {len(origin)} kept scans of {registered_path}"
     return occupancy_grid(scans(), params, what, REFERENCE_MEMORY)

@@ -82,13 +82,14 @@ def map_of_scans(
     missing = sorted(wanted - set(reg.index.tolist()))
     if missing:
         raise ValueError(f"scans {missing[:5]} are not kept scans of the registration table")
+    position = dict(zip(reg.index.tolist(), reg[["x_m", "y_m"]].to_numpy(np.float64)))  # one lookup a scan
     points, origins = [], []
     for sid, xyz in iter_scans(registered_path):
         if sid not in wanted:
             continue
         xy, _ = scan_points_2d(xyz, sp)
         points.append(xy)
-        origins.append(reg.loc[sid, ["x_m", "y_m"]].to_numpy(np.float64))
+        origins.append(position[sid])
     pts = np.concatenate(points) if points else np.empty((0, 2))
     if len(pts) == 0:
         raise ValueError(f"none of the {len(wanted)} scans has a wall point")
