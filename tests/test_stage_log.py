@@ -57,10 +57,16 @@ def test_an_interrupted_stage_says_so_in_its_log(tmp_path, monkeypatch, how):
 
     monkeypatch.delenv("FLOORSCAN_PROFILE", raising=False)
     before = signal.getsignal(signal.SIGTERM)
-    with pytest.raises(KeyboardInterrupt if how == "SIGINT" else Interrupted):
-        with stage_log(_smk(tmp_path)):
-            os.kill(os.getpid(), getattr(signal, how))
-            _work(10_000_000)  # the signal arrives before this ends
+    # a process started in the background (`nohup`, `cmd &`) inherits SIGINT ignored;
+    # in a terminal Ctrl-C meets Python's own handler, as here
+    sigint = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt if how == "SIGINT" else Interrupted):
+            with stage_log(_smk(tmp_path)):
+                os.kill(os.getpid(), getattr(signal, how))
+                _work(10_000_000)  # the signal arrives before this ends
+    finally:
+        signal.signal(signal.SIGINT, sigint)
     last = (tmp_path / "stage.log").read_text().splitlines()[-1]
     want = "SIGINT (Ctrl-C)" if how == "SIGINT" else "SIGTERM"
     assert f"hulls_shard interrupted by {want} after " in last and "run the workflow again" in last, last
