@@ -118,6 +118,37 @@ def test_pairing_range_and_overlap():
     assert len(set(w2.tolist())) == 4
 
 
+def test_faces_a_thick_wall_apart_pair_where_the_map_shows_its_body_occupied():
+    from floorscan.core.occupancy_classes import grid_of_classes
+    from floorscan.floorplan.pairing import THICK_WALL_MAX_M
+
+    # a map with walls 0.5 m thick: A (y 0..0.5, x 0..4) meets a wall whose face runs
+    # along x 4.2, and a partition (x 2) joins A to B (y 2..2.5); a rack 0.55 m deep
+    # stands free (y 4..4.55, x 0..3); two shelves 0.55 m apart have the floor between
+    # them seen free (y 6..6.05 and 6.55..6.6)
+    r = 0.05
+    occupied = np.zeros((160, 120), dtype=bool)  # rows: y -1..7, cols: x -1..5
+    occupied[20:30, 20:100] = occupied[60:70, 20:100] = True  # A, B
+    occupied[30:60, 59:61] = True  # the partition
+    occupied[100:111, 20:80] = True  # the rack
+    occupied[140, 20:100] = occupied[151, 20:100] = True  # the shelves
+    occupied[:, 104:110] = True  # the wall A meets
+    grid = grid_of_classes(occupied, ~occupied, (-1.0, -1.0), r)
+    faces = np.array([[0, 0, 4, 0], [0, 0.5, 4, 0.5], [4.2, -1, 4.2, 1.5], [0, 2.0, 4, 2.0], [0, 2.5, 4, 2.5],
+                      [2, 0.5, 2, 2], [0, 4.0, 3, 4.0], [0, 4.55, 3, 4.55], [0, 6.0, 4, 6.0], [0, 6.55, 4, 6.55]], dtype=float)  # fmt: skip
+    assert 0.55 < THICK_WALL_MAX_M
+    axes, thick, wall_of_face = pair_faces(faces, np.ones(len(faces)), FloorplanParams(), grid)
+    assert wall_of_face.tolist() == [0, 0, 2, 1, 1, 3, 4, 5, 6, 7]
+    np.testing.assert_allclose(thick[:2], [0.5, 0.5])
+    np.testing.assert_allclose(axes[:2], [[0, 0.25, 4, 0.25], [0, 2.25, 4, 2.25]], atol=1e-9)
+    # without a grid (a recording's faces: a wall's inside is never seen) and beyond
+    # the thickest wall, the faces stay apart
+    assert len(set(pair_faces(faces, np.ones(len(faces)), FloorplanParams())[2].tolist())) == len(faces)
+    wide = faces.copy()
+    wide[[1, 4], 1::2] += 0.2
+    assert len(set(pair_faces(wide, np.ones(len(faces)), FloorplanParams(), grid)[2].tolist())) == len(faces)
+
+
 def test_bad_config_and_columns_are_named():
     from floorscan.core.config import ConfigError
 

@@ -291,7 +291,7 @@ def plan_of_segments(
         )
         log.info("structure passes: %d faces -> %d wall faces, %d clutter", n_before, len(faces), len(cl))
     flen = np.hypot(faces[:, 2] - faces[:, 0], faces[:, 3] - faces[:, 1])
-    axes, thick, wall_of_face = pair_faces(faces, face_w, params)
+    axes, thick, wall_of_face = pair_faces(faces, face_w, params, grid)
     junctions = _empty(JUNCTION_COLUMNS)
     if grid is not None:
         axes, thick, wall_of_face = _one_wall_per_wall(axes, thick, wall_of_face, params)
@@ -317,7 +317,7 @@ def plan_of_segments(
             clutter = pd.concat([clutter, dropped], ignore_index=True)
             faces, face_w, n_seg, side = faces[~drop], face_w[~drop], n_seg[~drop], side[~drop]
             flen = flen[~drop]
-            axes, thick, wall_of_face = pair_faces(faces, face_w, params)
+            axes, thick, wall_of_face = pair_faces(faces, face_w, params, grid)
             axes, thick, wall_of_face = _one_wall_per_wall(axes, thick, wall_of_face, params)
             axes, junctions = _wall_junctions(axes, thick, wall_of_face, side, params)
     rooms, doors = _empty(ROOM_COLUMNS), _empty(DOOR_COLUMNS)
@@ -387,7 +387,11 @@ def _wall_junctions(axes, thick, wall_of_face, side, params: FloorplanParams):
             n = np.array([-d[1], d[0]]) / max(float(np.hypot(*d)), 1e-12)
             shift = -float(side[f]) * 0.5 * thick[wall] * n  # away from the free side
             axes[wall] += np.r_[shift, shift]
-    tol = replace(params.structure, snap_m=params.structure.snap_m + (float(thick.max()) if len(thick) else 0.0))
+    # the thickest wall widens the tolerance, up to ``pair_max_m``: a map's thicker walls
+    # (:data:`~floorscan.floorplan.pairing.THICK_WALL_MAX_M`) do not move every other
+    # junction of the plan
+    thickest = min(float(thick.max()), params.pair_max_m) if len(thick) else 0.0
+    tol = replace(params.structure, snap_m=params.structure.snap_m + thickest)
     axes, junc = snap_junctions(axes, tol, trim_shallow=True)
     kinds = np.array(["", "L", "T", "X"], dtype=object)
     junctions = pd.DataFrame(
