@@ -14,7 +14,7 @@ from conftest import cast_rays
 from floorscan.core.occupancy import OccupancyParams, occupancy_grid
 from floorscan.floorplan.doors import wall_gaps
 from floorscan.floorplan.room_space import RoomParams, room_space
-from floorscan.floorplan.mouths import room_mouths
+from floorscan.floorplan.mouths import corner_mouths, room_mouths
 from floorscan.floorplan.rooms import plan_rooms
 
 T = 0.12  # wall thickness, metres
@@ -269,3 +269,39 @@ def test_a_network_of_corridors_is_a_corridor_and_a_hall_is_a_room():
     rooms, _ = room_tables(polys, doors, 0.05, RoomParams())
     assert list(rooms["kind"]) == ["corridor", "room", "room"]
     assert list(rooms["name"]) == ["Corridor 1", "Room 1", "Room 2"]
+
+
+# A ring corridor's corner (office_h of Bormann et al.'s benchmark): the corridor, 1.3 m
+# wide, runs up along x 3..4.3 and right along y 3.7..5; its two outer walls stop 1 m
+# short of the corner (3, 5) their lines make, so the corridor's corner opens 1.41 m
+# wide onto the corner room beyond it (x < 3 above y 3, y > 5 left of x 6).
+CORNER = [(0, 0, 10, 0), (10, 0, 10, 8), (10, 8, 0, 8), (0, 8, 0, 0),
+          (3, 0, 3, 4.0), (0, 3, 3, 3), (4.0, 5, 10, 5), (6, 5, 6, 8),
+          (4.3, 0, 4.3, 3.7), (4.3, 3.7, 10, 3.7)]  # fmt: skip
+CORNER_POSES = [(3.65, 1.0), (3.65, 4.35), (7.5, 4.35), (1.5, 5.5), (4.5, 6.5), (1.5, 3.8)]
+
+
+def test_a_corner_mouth_joins_the_free_ends_of_two_walls_across_their_missing_corner():
+    axes = np.array(CORNER, dtype=np.float64)
+    mouths = corner_mouths(axes, np.full(len(axes), T), RoomParams())
+    assert [({tuple(np.round(p, 2)), tuple(np.round(q, 2))}, w) for p, q, w in mouths] == [({(3.0, 4.0), (4.0, 5.0)}, 6)]
+    # a wall end whose corner lies more than a door's width beyond it (a partition
+    # ending across a corridor from the other wall's jamb) makes none
+    far = axes.copy()
+    far[4, 3] = 2.8  # the corridor's west wall ends 2.2 m short of the corner
+    assert corner_mouths(far, np.full(len(far), T), RoomParams()) == []
+    # nor do two walls in one line (a gap in a wall, wall_gaps') or stubs shorter than the opening
+    stubs = np.array([(3, 3.2, 3, 4.0), (4.0, 5, 4.9, 5)], dtype=np.float64)
+    assert corner_mouths(stubs, np.full(2, T), RoomParams()) == []
+
+
+def test_a_corridor_corner_open_to_the_room_beyond_it_is_two_rooms_and_their_door():
+    rooms, doors = _rooms(CORNER, CORNER_POSES)
+    assert len(rooms) == 2
+    corridor = rooms["polygon"][int(np.argmax([p.contains(shapely.Point(3.65, 1.0)) for p in rooms["polygon"]]))]
+    corner = rooms["polygon"][int(np.argmax([p.contains(shapely.Point(1.5, 5.5)) for p in rooms["polygon"]]))]
+    assert not corridor.equals(corner)
+    assert corridor.contains(shapely.Point(7.5, 4.35)) and corner.contains(shapely.Point(4.5, 6.5))
+    assert len(doors) == 1 and doors["width_m"].iloc[0] == pytest.approx(np.sqrt(2), abs=0.1)
+    d = doors.iloc[0]
+    assert np.hypot((d.x0 + d.x1) / 2 - 3.5, (d.y0 + d.y1) / 2 - 4.5) < 0.1

@@ -31,7 +31,9 @@ import pandas as pd
 from floorscan.floorplan.room_space import RoomParams, RoomRaster, dilate
 
 
-def _units(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def wall_units(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each wall's unit direction, (N, 2), and length, (N,) metres, of axes ``x0, y0, x1,
+    y1`` (N, 4) in metres."""
     d = axes[:, 2:] - axes[:, :2]
     length = np.hypot(d[:, 0], d[:, 1])
     return d / np.maximum(length, 1e-12)[:, None], length
@@ -55,7 +57,7 @@ def wall_gaps(axes: np.ndarray, thickness: np.ndarray, params: RoomParams) -> li
         the longer of the two), ``door_min_m <= |q - p| <= door_max_m``.
     """
     axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
-    u, length = _units(axes)
+    u, length = wall_units(axes)
     cos_max = np.cos(np.radians(params.door_angle_deg))
     ends = axes.reshape(-1, 2, 2)
     out = []
@@ -298,7 +300,7 @@ def contact_door(
     """
     if not len(axes):
         return None
-    u, _ = _units(axes)
+    u, _ = wall_units(axes)
     d = q - p
     width = float(np.hypot(*d))
     if not params.door_min_m <= width <= params.door_max_m:

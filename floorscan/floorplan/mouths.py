@@ -26,13 +26,17 @@ mouth is that line, between two wall ends that:
 
 A mouth cuts the space before it is segmented, as a gap in a wall does; where it is
 no wider than a door it is the room's door.
+
+:func:`corner_mouths` are the same line across the missing corner of two walls: the
+corner of a corridor (a ring corridor's, Bormann et al.'s office_h) open to the room
+beyond it.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from floorscan.floorplan.doors import junction_end
+from floorscan.floorplan.doors import junction_end, wall_units
 from floorscan.floorplan.room_space import RoomParams, RoomRaster, wall_footprints
 
 #: The widest open side of a room, metres: two standard office modules (2 x 2.4 m less
@@ -167,3 +171,55 @@ def room_mouths(
             continue
         kept.append((p, q, wall))
     return kept
+
+
+def corner_mouths(
+    axes: np.ndarray, thickness: np.ndarray, params: RoomParams
+) -> list[tuple[np.ndarray, np.ndarray, int]]:
+    """The open sides of rooms across the missing corner of two walls.
+
+    Two walls whose free ends (:func:`~floorscan.floorplan.doors.junction_end`) stop
+    short of the corner their lines make leave an opening from one end to the other:
+    the corner of a corridor open to the room beyond it, which people draw across the
+    corner (the chamfered corridor corners of Bormann et al.'s ground truths, ICRA
+    2016). Each end lies at most ``door_max_m`` from the corner, on its wall's line
+    beyond the wall (a door's width missing from each wall); the opening is at least
+    ``door_min_m`` wide, and each wall at least as long as it and :data:`MOUTH_WALL_M`
+    (a room's side, not a stub). Where no wider than ``door_max_m`` the opening is the
+    room's door, as a mouth's.
+
+    Parameters and returns as :func:`~floorscan.floorplan.doors.wall_gaps`: each
+    opening from ``p`` to ``q`` is from one free end to the other, in the name of the
+    longer wall, at most ``door_max_m`` times the square root of two wide.
+    """
+    axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
+    u, length = wall_units(axes)
+    cos_max = np.cos(np.radians(params.door_angle_deg))
+    ends = axes.reshape(-1, 2, 2)
+    free = [[not junction_end(axes, thickness, i, k) for k in (0, 1)] for i in range(len(axes))]
+    out = []
+    for i in range(len(axes)):
+        for j in range(i + 1, len(axes)):
+            cross = float(u[i, 0] * u[j, 1] - u[i, 1] * u[j, 0])
+            if abs(float(u[i] @ u[j])) >= cos_max or abs(cross) < 1e-9:
+                continue  # collinear: :func:`~floorscan.floorplan.doors.wall_gaps`
+            for ki in (0, 1):
+                if not free[i][ki]:
+                    continue
+                for kj in (0, 1):
+                    if not free[j][kj]:
+                        continue
+                    a, b = ends[i, ki], ends[j, kj]
+                    # the corner c = a + s u_i = b + t u_j
+                    rhs = b - a
+                    s = float(rhs[0] * u[j, 1] - rhs[1] * u[j, 0]) / cross
+                    t = float(rhs[0] * u[i, 1] - rhs[1] * u[i, 0]) / cross
+                    out_i = s if ki == 1 else -s  # beyond end ki, away from the wall
+                    out_j = t if kj == 1 else -t
+                    if not (0 < out_i <= params.door_max_m and 0 < out_j <= params.door_max_m):
+                        continue
+                    width = float(np.hypot(*(b - a)))
+                    side = min(length[i], length[j])
+                    if params.door_min_m <= width <= side and side >= MOUTH_WALL_M:
+                        out.append((a.copy(), b.copy(), i if length[i] >= length[j] else j))
+    return out

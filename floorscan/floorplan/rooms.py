@@ -30,7 +30,9 @@ taken from the walls:
    through its door (a fan of rays) ends at the door. So is the open side of a room
    (:func:`~floorscan.floorplan.mouths.room_mouths`): the line between the free ends of
    the walls that bound a room open on its whole width onto a corridor (an office, a
-   cubicle); a door where no wider than one. The rooms are then segmented again
+   cubicle), or across the missing corner of two walls
+   (:func:`~floorscan.floorplan.mouths.corner_mouths`: a corridor's corner open to the
+   room beyond it); a door where no wider than one. The rooms are then segmented again
    (steps 3-5) where a partition stopping short of a wall, with an opening wider
    than a door, divides a room that wraps around it
    (:func:`~floorscan.floorplan.extensions.partition_cuts`).
@@ -84,7 +86,7 @@ from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan import doors as D
 from floorscan.floorplan.extensions import partition_cuts
 from floorscan.floorplan.hidden import OBJECT_MAX_DEPTH_M
-from floorscan.floorplan.mouths import room_mouths
+from floorscan.floorplan.mouths import corner_mouths, room_mouths
 from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
 from floorscan.floorplan.room_polygons import disjoint_rooms, largest_polygon, room_polygons
@@ -141,7 +143,8 @@ def segment_rooms(
     axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
     thickness = np.asarray(thickness, dtype=np.float64).reshape(-1)
     raster = room_space(grid, axes, thickness, params, under)
-    gaps = [g for g in D.wall_gaps(axes, thickness, params) if D.passes_through(raster, g[0], g[1])]
+    gaps = [g for g in D.wall_gaps(axes, thickness, params) + corner_mouths(axes, thickness, params)
+            if D.passes_through(raster, g[0], g[1])]
     gaps += room_mouths(axes, thickness, raster, params)
     segmented = _segment(grid, axes, thickness, params, raster, gaps)
     cuts = partition_cuts(axes, thickness, raster, segmented[1], params)
