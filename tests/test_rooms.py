@@ -305,3 +305,40 @@ def test_a_corridor_corner_open_to_the_room_beyond_it_is_two_rooms_and_their_doo
     assert len(doors) == 1 and doors["width_m"].iloc[0] == pytest.approx(np.sqrt(2), abs=0.1)
     d = doors.iloc[0]
     assert np.hypot((d.x0 + d.x1) / 2 - 3.5, (d.y0 + d.y1) / 2 - 4.5) < 0.1
+
+
+def test_a_desk_standing_free_frames_no_door():
+    # one room 8 x 4 m with a desk 0.8 x 1.8 m standing free in its middle, 1.04 m from
+    # the south and the north wall, its short sides taken for walls (as a map's plan
+    # takes a piece of furniture's faces): each narrowing beside it has a wall at one
+    # end and the desk at the other. A door is an opening in the building's structure,
+    # so the room stays one (a map: no scan positions, every cell not free bounds the
+    # space); the tree before the change cut it in two rooms with two doors
+    box = [(0, 0, 8, 0), (8, 0, 8, 4), (8, 4, 0, 4), (0, 4, 0, 0)]
+    desk = [(3.6, 1.1, 4.4, 1.1), (4.4, 1.1, 4.4, 2.9), (4.4, 2.9, 3.6, 2.9), (3.6, 2.9, 3.6, 1.1)]
+    poses = [(1.5, 2.0), (6.5, 2.0), (4.0, 0.55), (4.0, 3.45), (2.5, 1.0), (5.5, 3.0)]
+    grid = dataclasses.replace(_grid(box, poses, objects=desk), scan_xy=None)
+    axes = np.array(box + [(3.6, 1.1, 4.4, 1.1), (3.6, 2.9, 4.4, 2.9)], dtype=np.float64)
+    rooms, doors = plan_rooms(axes, np.full(len(axes), T), grid, RoomParams())
+    assert len(rooms) == 1 and len(doors) == 0
+    assert 28.5 < rooms["area_m2"].iloc[0] < 30.5
+
+
+def test_standing_free_is_an_obstacle_apart_shorter_than_a_piece_of_furniture():
+    from floorscan.floorplan.doors import standing_free
+
+    r = 0.05
+    solid = np.zeros((200, 200), dtype=bool)
+    solid[10, 10:190] = True  # a wall 9 m long
+    solid[10:60, 10] = True  # and its L
+    solid[100:116, 100:136] = True  # a desk 1.8 x 0.8 m
+    solid[185:187, 100:150] = True  # a shelf 2.5 m long: not shorter
+    yy, xx = np.mgrid[:200, :200]
+    u, v = (xx - 60) + (yy - 140), (xx - 60) - (yy - 140)  # a square 1.5 m a side turned by 45 degrees
+    solid |= (np.abs(u) <= 21) & (np.abs(v) <= 21)
+    free = standing_free(solid, r)
+    assert free[100:116, 100:136].all() and free[140, 60]
+    assert not free[10].any() and not free[:, 10].any() and not free[185:187].any()
+    assert free.sum() == 16 * 36 + ((np.abs(u) <= 21) & (np.abs(v) <= 21)).sum()
+    # the same objects on the raster turned by 90 degrees
+    assert np.array_equal(standing_free(np.rot90(solid), r), np.rot90(free))

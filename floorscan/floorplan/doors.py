@@ -10,7 +10,8 @@ Two ways to find one, both in the wall's line, as a plan drawn by people shows a
   its sides. The rooms are cut along these before they are segmented, so a room seen
   only through its door (a fan of rays) ends at the door.
 - where two regions of the segmentation meet between jambs (both ends of the contact
-  within ``jamb_m`` of a wall or a seen obstacle, :func:`jamb_cells`), ``door_min_m``
+  within ``jamb_m`` of a wall or a seen obstacle, but of no object standing free in
+  the room, :func:`jamb_cells`), ``door_min_m``
   to ``door_max_m`` wide, and the persistence of
   :mod:`floorscan.floorplan.persistence` keeps the two regions apart: the door is
   :func:`contact_door` when it lies in the line of a wall whose end is within
@@ -28,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from floorscan.floorplan.free_space import CLUTTER_MAX_LENGTH_M
 from floorscan.floorplan.room_space import RoomParams, RoomRaster, dilate
 
 
@@ -344,6 +346,44 @@ def free_door(p: np.ndarray, q: np.ndarray, axes: np.ndarray) -> tuple[np.ndarra
 
 def jamb_cells(raster: RoomRaster, jamb_m: float) -> np.ndarray:
     """(H, W) bool: the cells within ``jamb_m`` (metres) of a wall's footprint or of a
-    cell that bounds the space (:attr:`RoomRaster.bounds`): where a door's jamb can
-    stand."""
-    return dilate(raster.walls | raster.bounds, jamb_m / raster.resolution_m)
+    cell that bounds the space (:attr:`RoomRaster.bounds`), but of no object standing
+    free in the space: where a door's jamb can stand. A door is an opening in the
+    building's structure; the narrowing between a desk and a wall is none.
+
+    An object standing free is a component of the cells outside the space (walls,
+    obstacles, what was not seen free) that the space surrounds and that is shorter
+    than the longest piece of furniture (:func:`standing_free`): a desk or a table in a
+    room, whether the plan took its faces for walls or not. A stub of wall whose
+    junction the scans did not see belongs with the unseen cells beyond it, so it stays
+    a jamb."""
+    solid = raster.walls | raster.bounds
+    return dilate(solid & ~standing_free(~raster.space, raster.resolution_m), jamb_m / raster.resolution_m)
+
+
+def standing_free(solid: np.ndarray, resolution_m: float, max_extent_m: float = CLUTTER_MAX_LENGTH_M) -> np.ndarray:
+    """(H, W) bool: the cells of the 8-connected components of ``solid`` ((H, W) bool)
+    whose extent, the largest distance between two of their cells plus one cell, is
+    below ``max_extent_m`` (metres; by default the longest piece of furniture,
+    :data:`~floorscan.floorplan.free_space.CLUTTER_MAX_LENGTH_M`). The extent is the
+    component's diameter, so the test does not depend on the raster's orientation
+    (SciPy's ``ndimage.label`` and ``ConvexHull``)."""
+    from scipy import ndimage
+    from scipy.spatial import ConvexHull, QhullError
+
+    labels, n = ndimage.label(solid, structure=np.ones((3, 3), dtype=bool))
+    boxes = ndimage.find_objects(labels)
+    size = np.array([(b[0].stop - b[0].start, b[1].stop - b[1].start) for b in boxes], dtype=np.float64).reshape(-1, 2)
+    limit = max_extent_m / resolution_m - 1.0  # in cells, between cell centres
+    out = np.zeros(n + 1, dtype=bool)
+    out[1:] = np.hypot(size[:, 0] - 1, size[:, 1] - 1) < limit  # the box's diagonal bounds the diameter
+    # the diameter is at least the box's longer side: between the two, measure it
+    for k in np.flatnonzero(~out[1:] & (size.max(axis=1) - 1 < limit)) + 1:
+        box = boxes[k - 1]
+        xy = np.column_stack(np.nonzero(labels[box] == k)).astype(np.float64)
+        try:
+            xy = xy[ConvexHull(xy).vertices]
+        except QhullError:  # collinear cells: the ends are among them all
+            pass
+        out[k] = float(np.sqrt(((xy[:, None] - xy[None]) ** 2).sum(-1)).max()) < limit
+    out[0] = False
+    return out[labels]

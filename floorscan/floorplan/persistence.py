@@ -9,9 +9,10 @@ Guibas, Oudot and Skraba, "Persistence-based clustering in Riemannian manifolds"
 J. ACM 60(6), 2013), the two groups the pair belongs to merge unless the passage is a
 door:
 
-- walls frame it: both ends of the contact stand near a wall or a seen obstacle (the
-  caller's ``framed`` pairs, :mod:`floorscan.floorplan.rooms`): a narrowing that ends
-  in unseen space (the shadow of a table) is no door;
+- walls frame it: both ends of the contact stand near a wall or a seen obstacle that
+  is no object standing free (the caller's ``framed`` pairs,
+  :mod:`floorscan.floorplan.rooms`, :func:`~floorscan.floorplan.doors.jamb_cells`): a
+  narrowing that ends in unseen space (the shadow of a table) or at a desk is no door;
 - it is no wider than a door: ``2 s <= door_max_m``;
 - and the space on both sides is wider than it: the saddle is at most
   :data:`DOOR_SHARE` of the smaller group's peak (the radius of the largest disc inside

@@ -166,8 +166,9 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     labels, distance = space_regions(cut, params)
     n = int(labels.max())
     # the places where two regions meet between jambs: both ends within jamb_m of a wall
-    # or of an obstacle the scans saw, no wider than a door (a narrowing that ends in
-    # unseen or open space, a shadow behind furniture, is no door); narrower than a door
+    # or of an obstacle the scans saw that is no object standing free, no wider than a
+    # door (a narrowing that ends in unseen or open space, a shadow behind furniture, or
+    # at a desk, is no door); narrower than a door
     # it is a slit nobody passes, which keeps two regions apart without a door
     jambs = D.jamb_cells(cut, params.jamb_m)
     contacts = D.contacts(labels)
