@@ -196,18 +196,21 @@ def corner_mouths(
     u, length = wall_units(axes)
     cos_max = np.cos(np.radians(params.door_angle_deg))
     ends = axes.reshape(-1, 2, 2)
-    free = [[not junction_end(axes, thickness, i, k) for k in (0, 1)] for i in range(len(axes))]
+    free = np.zeros((len(axes), 2), dtype=bool)
+    for i, k in _free_ends(axes, thickness):
+        free[i, k] = True
+    has_free = np.flatnonzero(free.any(axis=1))
     out = []
-    for i in range(len(axes)):
-        for j in range(i + 1, len(axes)):
+    for i in has_free.tolist():
+        for j in has_free[has_free > i].tolist():
             cross = float(u[i, 0] * u[j, 1] - u[i, 1] * u[j, 0])
             if abs(float(u[i] @ u[j])) >= cos_max or abs(cross) < 1e-9:
                 continue  # collinear: :func:`~floorscan.floorplan.doors.wall_gaps`
             for ki in (0, 1):
-                if not free[i][ki]:
+                if not free[i, ki]:
                     continue
                 for kj in (0, 1):
-                    if not free[j][kj]:
+                    if not free[j, kj]:
                         continue
                     a, b = ends[i, ki], ends[j, kj]
                     # the corner c = a + s u_i = b + t u_j
