@@ -228,6 +228,45 @@ def test_offices_open_to_a_corridor_on_their_whole_width_are_rooms():
     assert shapely.box(0.1, 0.1, 8.9, 1.4).difference(corridor).area < 0.3
 
 
+def test_an_office_open_between_its_side_wall_s_corner_and_its_front_wall_s_free_end_is_a_room():
+    """A mouth from a corner: the office (x 4..10, y 0..4) opens onto the corridor above
+    it from the corner of its west wall (which meets the corridor's slanted end wall) to
+    the free end of its front wall at x 6.5, 2.5 m; a partition with a door parts off
+    its east end, so its front wall is not a partition standing in one room. Without the
+    mouth the office and the corridor are one room (no narrowing between them)."""
+    from floorscan.floorplan.mouths import room_mouths
+    from floorscan.floorplan.room_space import room_space
+
+    walls = [(4, 0, 10, 0), (10, 0, 10, 7), (10, 7, 1, 7), (1, 7, 4, 4), (4, 4, 4, 0), (6.5, 4, 10, 4),
+             (7.5, 0, 7.5, 1.5), (7.5, 2.4, 7.5, 4)]  # fmt: skip
+    axes, th = np.array(walls, dtype=np.float64), np.full(len(walls), T)
+    grid = _grid(walls, [(5.5, 2), (8.7, 2), (5, 5.5), (8, 5.5), (3, 6)])
+    mouths = room_mouths(axes, th, room_space(grid, axes, th, RoomParams()), RoomParams())
+    assert [sorted((round(float(p[0]), 2), round(float(q[0]), 2))) for p, q, _ in mouths] == [[4.0, 6.5]]
+    assert all(abs(p[1] - 4) < 1e-9 and abs(q[1] - 4) < 1e-9 for p, q, _ in mouths)
+    rooms, doors = plan_rooms(axes, th, grid, RoomParams())
+    assert len(rooms) == 3 and len(doors) == 1  # corridor, office, east office; the partition's door
+    office = [p for p in rooms["polygon"] if p.contains(shapely.Point(5.5, 2))][0]
+    assert not office.contains(shapely.Point(5, 5.5)) and 12.5 < office.area < 14.0  # 3.5 x 4 m less half walls
+
+
+def test_no_mouth_from_a_corner_crosses_a_corridor_that_goes_on_around_a_block():
+    """A ring corridor around a block (x 2.5..5, y 2.5..5.5); a stub from the north wall
+    ends at (2.5, 7) above the block's corner (2.5, 5.5). The line between them closes a
+    pocket by the rays' test, but the corridor goes on around the block: cut, its two
+    sides are still connected, so it is no room's open side."""
+    from floorscan.floorplan.mouths import room_mouths
+    from floorscan.floorplan.room_space import room_space
+
+    walls = [(0, 0, 7.5, 0), (7.5, 0, 7.5, 8), (7.5, 8, 0, 8), (0, 8, 0, 0), (2.5, 2.5, 5, 2.5), (5, 2.5, 5, 5.5),
+             (5, 5.5, 2.5, 5.5), (2.5, 5.5, 2.5, 2.5), (2.5, 8, 2.5, 7.0)]  # fmt: skip
+    axes, th = np.array(walls, dtype=np.float64), np.full(len(walls), T)
+    grid = _grid(walls, [(1.2, 1.2), (6.2, 1.2), (6.2, 6.8), (1.2, 6.8), (3.75, 1.2), (3.75, 6.8), (1.2, 4), (6.2, 4)])
+    assert room_mouths(axes, th, room_space(grid, axes, th, RoomParams()), RoomParams()) == []
+    rooms, doors = plan_rooms(axes, th, grid, RoomParams())
+    assert len(rooms) == 1 and len(doors) == 0
+
+
 def test_a_gap_in_one_wall_and_a_short_stub_make_no_mouth():
     """Two collinear ends are a gap in one wall (wall_gaps' door, not a mouth); a side
     wall shorter than the opening is a stub of furniture."""

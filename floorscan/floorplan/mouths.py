@@ -1,4 +1,4 @@
-"""The open side of a room (:func:`room_mouths`): the line between the free ends of two
+"""The open side of a room (:func:`room_mouths`): the line between the ends of two
 walls that bound a room on its sides, where the room opens on its whole width onto a
 corridor or a hall (an office open to the corridor, a cubicle, a corner room, a short
 corridor leading off a hall).
@@ -11,15 +11,23 @@ line that joins the ends of its walls, as they draw a door on the line of its wa
 RA-L 2022, whose layout extends the walls' lines into the open side of a room). A
 mouth is that line, between two wall ends that:
 
-- are free ends (not in an L or T junction, :func:`~floorscan.floorplan.doors.junction_end`);
-- lie ``door_min_m`` to :data:`MOUTH_MAX_M` apart, the line between them in the free
-  space, crossing no wall;
+- are free ends (not in an L or T junction, :func:`~floorscan.floorplan.doors.junction_end`),
+  or one free end and a corner of the room: the end of its side wall where that wall
+  meets another (a room open on its whole width between its side wall and the free end
+  of its front wall, Bormann et al.'s lab_a and lab_intel). A line from a corner is
+  wider than ``door_max_m`` (a narrower opening is a door, which the persistence
+  weighs; across a corridor at its corner it would cut the corridor) and parts the
+  space in two (cut, its two sides are no longer connected: from the corner of a block
+  that a corridor runs around, the same line crosses the corridor);
+- lie ``door_min_m`` to :data:`MOUTH_MAX_M` apart between the side walls' faces (the
+  room's clear opening), the line between them in the free space, crossing no wall;
 - belong to walls that bound one side of the line: each wall runs from its end square
   to the line into the same side (or along the line, away from it, the line in its
   line within ``line_offset_m`` plus half its thickness: the wall of a corridor going
   on past a room's side wall), within ``door_angle_deg``, and not both
   along the line (that is a gap in one wall, :func:`~floorscan.floorplan.doors.wall_gaps`);
-  a side wall is at least as long as the line and :data:`MOUTH_WALL_M`;
+  a corner's wall is a side wall; a side wall is at least as long as the line and
+  :data:`MOUTH_WALL_M`;
 - close a pocket: from the line into that side, the space ends at a wall or at a cell
   outside the space within :data:`MOUTH_DEPTH` times the line's length, at its
   middle and at both quarter points (the back wall of the room).
@@ -36,7 +44,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from floorscan.floorplan.doors import junction_end, wall_units
+from floorscan.floorplan.doors import barrier_cells, junction_end, wall_units
 from floorscan.floorplan.room_space import RoomParams, RoomRaster, wall_footprints
 
 #: The widest open side of a room, metres: two standard office modules (2 x 2.4 m less
@@ -107,11 +115,15 @@ def room_mouths(
     ends = axes.reshape(-1, 2, 2)
     length = np.hypot(axes[:, 2] - axes[:, 0], axes[:, 3] - axes[:, 1])
     free = _free_ends(axes, thickness)
-    if len(free) < 2:
+    if not free:
         return []
-    pts = np.array([ends[i, k] for i, k in free])
-    # each wall's direction pointing away from the free end (from the end into the wall)
-    away = np.array([(ends[i, 1 - k] - ends[i, k]) / max(length[i], 1e-12) for i, k in free])
+    # the ends a mouth joins: the free ends first, then the corners (ends in a junction)
+    taken = set(free)
+    tips = free + [(i, k) for i in range(len(axes)) for k in (0, 1) if (i, k) not in taken]
+    is_free = np.arange(len(tips)) < len(free)
+    pts = np.array([ends[i, k] for i, k in tips])
+    # each wall's direction pointing away from its end (from the end into the wall)
+    away = np.array([(ends[i, 1 - k] - ends[i, k]) / max(length[i], 1e-12) for i, k in tips])
     footprints = wall_footprints(axes, thickness)
     tree = shapely.STRtree(footprints)
     # a wall within door_angle_deg of the line's direction runs along it (as a door's
@@ -132,28 +144,50 @@ def room_mouths(
         starts = [p + u * length_m * f + n * raster.resolution_m for f in (0.25, 0.5, 0.75)]
         return all(_ray_hits(raster, x, n, MOUTH_DEPTH * length_m, tree) for x in starts)
 
+    def separates(p: np.ndarray, q: np.ndarray) -> bool:
+        """Whether the line from ``p`` to ``q`` parts the space in two: its two sides
+        are no longer connected once it is cut."""
+        from scipy import ndimage
+
+        d = q - p
+        nrm = np.array([-d[1], d[0]]) / float(np.hypot(*d)) * 2 * raster.resolution_m
+        sr, sc, inside = raster.cells_of(np.array([(p + q) / 2 + nrm, (p + q) / 2 - nrm]))
+        if not inside.all():
+            return False
+        cut = raster.space.copy()
+        cut[barrier_cells(raster, p, q)] = False
+        comp, _ = ndimage.label(cut)
+        ca, cb = int(comp[sr[0], sc[0]]), int(comp[sr[1], sc[1]])
+        return bool(ca and cb and ca != cb)
+
     cands = []
-    for a in range(len(free)):
+    for a in range(len(tips)):
         d = pts - pts[a]
         dist = np.hypot(d[:, 0], d[:, 1])
-        for b in np.flatnonzero((dist >= params.door_min_m) & (dist <= MOUTH_MAX_M)):
-            if b <= a or free[a][0] == free[b][0]:
+        for b in np.flatnonzero((dist >= params.door_min_m) & (dist <= MOUTH_MAX_M + thickness.max())):
+            if b <= a or tips[a][0] == tips[b][0] or not (is_free[a] or is_free[b]):
                 continue
+            if not (is_free[a] and is_free[b]) and dist[b] <= params.door_max_m:
+                continue  # a narrower opening from a corner is a door the persistence weighs
             u = d[b] / dist[b]
             n = np.array([-u[1], u[0]])
             along = np.abs(away[[a, b]] @ u) >= cos_tol
             if along.all():
                 continue  # a gap in one wall's line: wall_gaps
+            if (along & ~is_free[[a, b]]).any():
+                continue  # a corner bounds a mouth by a side wall only
             side = away[[a, b]] @ n
             # along the line: the wall must run away from the mouth, outward, and the
             # mouth lie in the wall's line (the corridor's wall going on past the room)
             if along[0] and away[a] @ u > 0 or along[1] and away[b] @ u < 0:
                 continue
-            if along[0] and not _in_line(pts[b], pts[a], away[a], params.line_offset_m + thickness[free[a][0]] / 2):
+            if along[0] and not _in_line(pts[b], pts[a], away[a], params.line_offset_m + thickness[tips[a][0]] / 2):
                 continue
-            if along[1] and not _in_line(pts[a], pts[b], away[b], params.line_offset_m + thickness[free[b][0]] / 2):
+            if along[1] and not _in_line(pts[a], pts[b], away[b], params.line_offset_m + thickness[tips[b][0]] / 2):
                 continue
-            sides = np.array([free[a][0], free[b][0]])[~along]
+            sides = np.array([tips[a][0], tips[b][0]])[~along]
+            if dist[b] - thickness[sides].sum() / 2 > MOUTH_MAX_M:
+                continue  # wider than a room's open side, between the side walls' faces
             if length[sides].min() < max(MOUTH_WALL_M, dist[b]):
                 continue  # a stub of furniture or noise bounds no room
             into = side[~along]
@@ -161,7 +195,9 @@ def room_mouths(
                 continue
             if not closes_pocket(pts[a], u, float(dist[b]), 1.0 if (into > 0).all() else -1.0):
                 continue
-            wall = free[a][0] if length[free[a][0]] >= length[free[b][0]] else free[b][0]
+            if not (is_free[a] and is_free[b]) and not separates(pts[a], pts[b]):
+                continue  # a corner's line across a corridor that goes on around
+            wall = tips[a][0] if length[tips[a][0]] >= length[tips[b][0]] else tips[b][0]
             cands.append((float(dist[b]), pts[a].copy(), pts[b].copy(), int(wall)))
     cands.sort(key=lambda c: c[0])
     kept: list = []
