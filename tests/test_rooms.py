@@ -267,6 +267,28 @@ def test_no_mouth_from_a_corner_crosses_a_corridor_that_goes_on_around_a_block()
     assert len(rooms) == 1 and len(doors) == 0
 
 
+def test_a_niche_shallower_than_half_its_width_is_the_corridor_s():
+    """A niche 3.1 m wide and 1.3 m deep (x 4..7.1, y 2..3.3) beside a corridor (y 0..2),
+    between the corner of a partition and the free end of the corridor's wall: its line
+    closes a pocket by the rays' test, but a recess shallower than half its width is
+    part of the space it opens onto (the tree before MOUTH_MIN_DEPTH made it a room with
+    the room behind it)."""
+    from floorscan.floorplan.mouths import room_mouths
+    from floorscan.floorplan.room_space import room_space
+
+    walls = [(0, 0, 12, 0), (12, 0, 12, 6), (12, 6, 0, 6), (0, 6, 0, 0), (0, 2, 1.5, 2), (2.4, 2, 4, 2), (4, 2, 4, 6),
+             (4, 3.3, 6.0, 3.3), (6.9, 3.3, 12, 3.3), (7, 3.3, 7, 2.3), (7.1, 2, 12, 2)]  # fmt: skip
+    axes, th = np.array(walls, dtype=np.float64), np.full(len(walls), T)
+    grid = _grid(walls, [(2, 1), (6, 1), (10, 1), (5.5, 2.6), (2, 4), (8, 4.5)])
+    assert room_mouths(axes, th, room_space(grid, axes, th, RoomParams()), RoomParams()) == []
+    rooms, _ = plan_rooms(axes, th, grid, RoomParams())
+
+    def room_of(x, y):
+        return [k for k, p in enumerate(rooms["polygon"]) if p.contains(shapely.Point(x, y))]
+
+    assert room_of(5.5, 2.6) == room_of(2, 1) == room_of(10, 1) != []
+
+
 def test_a_gap_in_one_wall_and_a_short_stub_make_no_mouth():
     """Two collinear ends are a gap in one wall (wall_gaps' door, not a mouth); a side
     wall shorter than the opening is a stub of furniture."""

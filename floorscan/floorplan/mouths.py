@@ -30,7 +30,9 @@ mouth is that line, between two wall ends that:
   :data:`MOUTH_WALL_M`;
 - close a pocket: from the line into that side, the space ends at a wall or at a cell
   outside the space within :data:`MOUTH_DEPTH` times the line's length, at its
-  middle and at both quarter points (the back wall of the room).
+  middle and at both quarter points (the back wall of the room), and not before
+  :data:`MOUTH_MIN_DEPTH` times its length at its middle (a recess is part of the
+  space it opens onto).
 
 A mouth cuts the space before it is segmented, as a gap in a wall does; where it is
 no wider than a door it is the room's door.
@@ -54,6 +56,11 @@ MOUTH_MAX_M = 4.0
 #: A pocket is at most this many times as deep as its open side is wide (a room, not
 #: a corridor running on behind the line).
 MOUTH_DEPTH = 4.0
+#: A pocket is at least this many times as deep as its open side is wide: a shallower
+#: one is a recess of the corridor or hall it opens onto (a niche, the bay of a
+#: window), which people draw as part of that space (the niches beside the corridors
+#: of Bormann et al.'s NLB).
+MOUTH_MIN_DEPTH = 0.5
 #: The side walls of a mouth are at least this long, and as long as the mouth is wide
 #: (a room's sides, not the stubs of furniture or of a noisy map), metres.
 MOUTH_WALL_M = 1.0
@@ -132,9 +139,11 @@ def room_mouths(
 
     def closes_pocket(p: np.ndarray, u: np.ndarray, length_m: float, s: float) -> bool:
         """The line from ``p`` along ``u`` runs ``length_m`` in the free space, crosses
-        no wall, and the space on side ``s`` (+1 left of ``u``, -1 right) ends at a
-        wall within MOUTH_DEPTH times its length at its quarter points and middle."""
+        no wall, and the space on side ``s`` (+1 left of ``u``, -1 right) runs on at
+        least MOUTH_MIN_DEPTH times its length from its middle and ends at a wall within
+        MOUTH_DEPTH times its length at its quarter points and middle."""
         n = s * np.array([-u[1], u[0]])
+        step = raster.resolution_m / 2
         line = shapely.LineString([p + u * 0.15, p + u * (length_m - 0.15)])
         if tree.query(line, predicate="intersects").size:
             return False
@@ -142,6 +151,9 @@ def room_mouths(
         if not raster.at(raster.space, p + np.outer(t, u), outside=False).all():
             return False
         starts = [p + u * length_m * f + n * raster.resolution_m for f in (0.25, 0.5, 0.75)]
+        depth = np.arange(1, int(np.ceil(MOUTH_MIN_DEPTH * length_m / step)) + 1) * step
+        if not raster.at(raster.space, starts[1] + np.outer(depth, n), outside=False).all():
+            return False  # a recess of the space the line borders, not a room
         return all(_ray_hits(raster, x, n, MOUTH_DEPTH * length_m, tree) for x in starts)
 
     def separates(p: np.ndarray, q: np.ndarray) -> bool:
