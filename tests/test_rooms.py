@@ -385,6 +385,24 @@ def test_a_desk_standing_free_frames_no_door():
     assert 28.5 < rooms["area_m2"].iloc[0] < 30.5
 
 
+def test_a_piece_of_wall_between_two_doors_in_the_wall_s_line_frames_them():
+    """A corridor (y 0..2) and a room (y 2..6) parted by a wall with two doors, 1.0 m
+    (x 3..4) and 1.4 m (x 5.8..7.2) wide; the walls beside them end in an L (so no gap
+    in one wall's line: corners are no jambs of ``wall_gaps``), and the 1.8 m piece
+    between the doors stands free in the space, shorter than a piece of furniture. It
+    lies in the wall's line, a door's width from a wall's end on each side: a piece of
+    the wall, whose ends frame both doors (the tree before made one space of the two)."""
+    walls = [(0, 0, 12, 0), (12, 0, 12, 6), (12, 6, 0, 6), (0, 6, 0, 0), (0, 2, 3, 2), (3, 2, 3, 3.5), (4, 2, 5.8, 2),
+             (7.2, 2, 12, 2), (7.2, 2, 7.2, 3.5)]  # fmt: skip
+    grid = _grid(walls, [(1.5, 1), (6, 1), (10.5, 1), (1.5, 4), (6, 4.5), (10, 4)])
+    for g in (grid, dataclasses.replace(grid, scan_xy=None)):  # a recording, a map
+        rooms, doors = plan_rooms(np.array(walls, dtype=np.float64), np.full(len(walls), T), g, RoomParams())
+        assert sorted(rooms["kind"]) == ["corridor", "room"] and len(doors) == 2
+        assert sorted(round(float(w), 1) for w in doors["width_m"]) == [0.9, 1.3]  # between the walls' faces
+        corridor = rooms[rooms["kind"] == "corridor"]["polygon"].iloc[0]
+        assert corridor.contains(shapely.Point(6, 1)) and not corridor.contains(shapely.Point(6, 4.5))
+
+
 def test_standing_free_is_an_obstacle_apart_shorter_than_a_piece_of_furniture():
     from floorscan.floorplan.doors import standing_free
 

@@ -344,7 +344,8 @@ def free_door(p: np.ndarray, q: np.ndarray, axes: np.ndarray) -> tuple[np.ndarra
     return p.copy(), q.copy(), int(np.argmin(_point_segment_distance((p + q) / 2, axes)))
 
 
-def jamb_cells(raster: RoomRaster, jamb_m: float) -> np.ndarray:
+def jamb_cells(raster: RoomRaster, jamb_m: float, axes: np.ndarray | None = None, thickness: np.ndarray | None = None,
+               params: RoomParams | None = None) -> np.ndarray:
     """(H, W) bool: the cells within ``jamb_m`` (metres) of a wall's footprint or of a
     cell that bounds the space (:attr:`RoomRaster.bounds`), but of no object standing
     free in the space: where a door's jamb can stand. A door is an opening in the
@@ -355,9 +356,64 @@ def jamb_cells(raster: RoomRaster, jamb_m: float) -> np.ndarray:
     than the longest piece of furniture (:func:`standing_free`): a desk or a table in a
     room, whether the plan took its faces for walls or not. A stub of wall whose
     junction the scans did not see belongs with the unseen cells beyond it, so it stays
-    a jamb."""
+    a jamb; so does a piece of wall between two doors (:func:`_in_wall_lines`: in the
+    line of a wall's end a door's width away on each side), given the plan's walls.
+
+    Parameters
+    ----------
+    raster : RoomRaster
+    jamb_m : float
+        Metres.
+    axes : (N, 4) float ndarray, optional
+        The plan's wall axes ``x0, y0, x1, y1``, metres; without them no object standing
+        free is a piece of wall.
+    thickness : (N,) float ndarray, optional
+        Metres.
+    params : RoomParams, optional
+        ``door_max_m``, ``door_angle_deg``, ``line_offset_m``.
+    """
     solid = raster.walls | raster.bounds
-    return dilate(solid & ~standing_free(~raster.space, raster.resolution_m), jamb_m / raster.resolution_m)
+    free = standing_free(~raster.space, raster.resolution_m)
+    if axes is not None and params is not None and len(axes) and free.any():
+        free &= ~_in_wall_lines(free, raster, axes, thickness, params)
+    return dilate(solid & ~free, jamb_m / raster.resolution_m)
+
+
+def _in_wall_lines(free: np.ndarray, raster: RoomRaster, axes: np.ndarray, thickness: np.ndarray,
+                   params: RoomParams) -> np.ndarray:
+    """(H, W) bool: the components of ``free`` ((H, W) bool, 8-connected) that are
+    pieces of a wall between two doors: along the component's principal axis, each of
+    its ends faces the end of a wall in its line (the wall within ``door_angle_deg`` of
+    the axis, the end within ``line_offset_m`` plus half the wall of the wall's line)
+    across a gap no wider than ``door_max_m``, as a door's jambs stand in one line
+    (:func:`wall_gaps`). A desk between two walls faces their sides, not their ends in
+    its line, and stays an object."""
+    from scipy import ndimage
+
+    labels, n = ndimage.label(free, structure=np.ones((3, 3), dtype=bool))
+    u_w, _ = wall_units(axes)
+    n_w = np.column_stack([-u_w[:, 1], u_w[:, 0]])
+    ends = axes.reshape(-1, 2, 2)
+    tol = np.asarray(thickness, dtype=np.float64) / 2 + params.line_offset_m
+    cos_max = np.cos(np.radians(params.door_angle_deg))
+    r = raster.resolution_m
+    keep = np.zeros(n + 1, dtype=bool)
+    for k, box in enumerate(ndimage.find_objects(labels), start=1):
+        rr, cc = np.nonzero(labels[box] == k)
+        if len(rr) < 2:
+            continue
+        xy = raster.origin_xy + (np.column_stack([cc + box[1].start, rr + box[0].start]) + 0.5) * r
+        c = xy.mean(axis=0)
+        u = np.linalg.eigh((xy - c).T @ (xy - c))[1][:, -1]  # the principal axis
+        t = (xy - c) @ u
+        along = np.abs(u_w @ u) >= cos_max
+        faced = []
+        for sign, e in ((-1.0, c + u * t.min()), (1.0, c + u * t.max())):
+            in_line = along & (np.abs(np.einsum("ij,ij->i", e - ends[:, 0], n_w)) <= tol)
+            ahead = ((ends - e) @ (sign * u)).min(axis=1)  # the nearer end of each wall, ahead of this end
+            faced.append(bool((in_line & (ahead >= 0) & (ahead <= params.door_max_m + r)).any()))
+        keep[k] = all(faced)
+    return keep[labels]
 
 
 def standing_free(solid: np.ndarray, resolution_m: float, max_extent_m: float = CLUTTER_MAX_LENGTH_M) -> np.ndarray:

@@ -170,7 +170,7 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     # door (a narrowing that ends in unseen or open space, a shadow behind furniture, or
     # at a desk, is no door); narrower than a door
     # it is a slit nobody passes, which keeps two regions apart without a door
-    jambs = D.jamb_cells(cut, params.jamb_m)
+    jambs = D.jamb_cells(cut, params.jamb_m, axes, thickness, params)
     contacts = D.contacts(labels)
     framed: dict[tuple[int, int], list] = {}
     widest: dict[tuple[int, int], float] = {}  # the widest contact of each pair, metres
