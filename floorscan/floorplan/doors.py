@@ -365,8 +365,8 @@ def jamb_cells(raster: RoomRaster, jamb_m: float, axes: np.ndarray | None = None
     jamb_m : float
         Metres.
     axes : (N, 4) float ndarray, optional
-        The plan's wall axes ``x0, y0, x1, y1``, metres; without them no object standing
-        free is a piece of wall.
+        The plan's wall axes ``x0, y0, x1, y1``, metres; without them (or ``thickness``
+        or ``params``) no object standing free is a piece of wall.
     thickness : (N,) float ndarray, optional
         Metres.
     params : RoomParams, optional
@@ -374,7 +374,7 @@ def jamb_cells(raster: RoomRaster, jamb_m: float, axes: np.ndarray | None = None
     """
     solid = raster.walls | raster.bounds
     free = standing_free(~raster.space, raster.resolution_m)
-    if axes is not None and params is not None and len(axes) and free.any():
+    if axes is not None and thickness is not None and params is not None and len(axes) and free.any():
         free &= ~_in_wall_lines(free, raster, axes, thickness, params)
     return dilate(solid & ~free, jamb_m / raster.resolution_m)
 

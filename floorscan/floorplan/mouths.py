@@ -124,7 +124,8 @@ def room_mouths(
     free = _free_ends(axes, thickness)
     if not free:
         return []
-    # the ends a mouth joins: the free ends first, then the corners (ends in a junction)
+    # the ends a mouth joins: the free ends first, then the corners (ends in a junction);
+    # every pair (a, b), a < b, has its first end free
     taken = set(free)
     tips = free + [(i, k) for i in range(len(axes)) for k in (0, 1) if (i, k) not in taken]
     is_free = np.arange(len(tips)) < len(free)
@@ -173,20 +174,21 @@ def room_mouths(
         return bool(ca and cb and ca != cb)
 
     cands = []
-    for a in range(len(tips)):
+    for a in range(len(free)):
         d = pts - pts[a]
         dist = np.hypot(d[:, 0], d[:, 1])
         for b in np.flatnonzero((dist >= params.door_min_m) & (dist <= MOUTH_MAX_M + thickness.max())):
-            if b <= a or tips[a][0] == tips[b][0] or not (is_free[a] or is_free[b]):
+            if b <= a or tips[a][0] == tips[b][0]:
                 continue
-            if not (is_free[a] and is_free[b]) and dist[b] <= params.door_max_m:
+            corner = not is_free[b]
+            if corner and dist[b] <= params.door_max_m:
                 continue  # a narrower opening from a corner is a door the persistence weighs
             u = d[b] / dist[b]
             n = np.array([-u[1], u[0]])
             along = np.abs(away[[a, b]] @ u) >= cos_tol
             if along.all():
                 continue  # a gap in one wall's line: wall_gaps
-            if (along & ~is_free[[a, b]]).any():
+            if corner and along[1]:
                 continue  # a corner bounds a mouth by a side wall only
             side = away[[a, b]] @ n
             # along the line: the wall must run away from the mouth, outward, and the
@@ -207,7 +209,7 @@ def room_mouths(
                 continue
             if not closes_pocket(pts[a], u, float(dist[b]), 1.0 if (into > 0).all() else -1.0):
                 continue
-            if not (is_free[a] and is_free[b]) and not separates(pts[a], pts[b]):
+            if corner and not separates(pts[a], pts[b]):
                 continue  # a corner's line across a corridor that goes on around
             wall = tips[a][0] if length[tips[a][0]] >= length[tips[b][0]] else tips[b][0]
             cands.append((float(dist[b]), pts[a].copy(), pts[b].copy(), int(wall)))
