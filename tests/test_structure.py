@@ -407,3 +407,36 @@ def test_answer_line_names_the_plan_counts(tmp_path):
                                 "floorscan": {"n_walls": 12, "n_junctions": 9, "n_clutter": 3}}))
     assert plan_counts(path) == " (12 walls, 9 junctions, 3 clutter pieces)"
     assert plan_counts(tmp_path / "missing.geojson") == ""
+
+
+def test_a_piece_of_wall_between_two_doors_with_a_cabinet_against_it_is_a_wall():
+    # a map of 5 cm cells: a corridor (y 0.5..2.4) and a room (y 2.55..6.5) parted by a
+    # partition 0.15 m thick with two doors (x 3.5..4.5 and 6.3..7.7); a cabinet 1.2 x
+    # 0.6 m stands against the 1.8 m piece between them, so piece and cabinet are one
+    # object standing free, thicker than a wall. The piece's face lies in the
+    # partition's line, a door's width from its ends: a wall, and the doors are doors
+    # (the tree before made one space of corridor and room, without a door)
+    from floorscan.core.occupancy_classes import grid_of_classes
+    from floorscan.floorplan.scans import plan_of_scans
+    from floorscan.walls.map_stage import map_of_grid
+
+    r = 0.05
+    occ = np.zeros((140, 260), dtype=bool)
+
+    def box(x0, y0, x1, y1):
+        occ[round(y0 / r):round(y1 / r), round(x0 / r):round(x1 / r)] = True
+
+    for b in [(0.3, 0.3, 12.5, 0.5), (0.3, 6.5, 12.5, 6.7), (0.3, 0.3, 0.5, 6.7), (12.3, 0.3, 12.5, 6.7),
+              (0.5, 2.4, 3.5, 2.55), (4.5, 2.4, 6.3, 2.55), (7.7, 2.4, 12.3, 2.55), (4.8, 2.55, 6.0, 3.15)]:  # fmt: skip
+        box(*b)
+    free = np.zeros_like(occ)
+    free[6:130, 6:250] = True
+    grid = grid_of_classes(occ, free & ~occ, origin_xy=(0.0, 0.0), resolution_m=r)
+    plan = plan_of_scans(map_of_grid(grid, None), None, FloorplanParams(), grid)
+    piece = plan.walls[(plan.walls["y0"].sub(2.475).abs() < 0.1) & (plan.walls["x0"].clip(4.4, 6.4) == plan.walls["x0"])]
+    assert len(piece) == 1 and abs(piece["length_m"].iloc[0] - 1.8) < 0.15
+    assert sorted(plan.rooms["kind"]) == ["corridor", "room"]
+    widths = np.sort(plan.doors["width_m"].to_numpy())
+    assert len(widths) == 2 and np.abs(widths - [1.0, 1.4]).max() <= 0.1  # within two cells
+    # the cabinet's three other faces stay furniture
+    assert (plan.clutter["reason"] == "free_standing_object").sum() == 3

@@ -279,7 +279,9 @@ def plan_of_segments(
         from floorscan.floorplan.structure import structure_passes
 
         n_before = len(faces)
-        faces, face_w, side, cl, reason, under = structure_passes(faces, face_w, grid, params.structure, params.pair_max_m)
+        faces, face_w, side, cl, reason, under = structure_passes(
+            faces, face_w, grid, params.structure, params.pair_max_m, params.rooms.door_max_m
+        )
         n_seg = np.ones(len(faces), dtype=np.int64)
         clutter = pd.DataFrame(
             {

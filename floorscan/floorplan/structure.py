@@ -30,8 +30,10 @@ order (:func:`structure_passes`):
    face (``clutter_max_length_m``) fall apart into objects; an object smaller than
    ``clutter_max_length_m`` that the free space surrounds (a chair, a desk, a shelf, a
    table top in a 3D scanner's height band) is furniture, and the faces on it are
-   clutter. A face shorter than ``min_wall_length_m`` is clutter unless it connects
-   two junctions.
+   clutter, unless the face is a piece of a wall (:func:`in_wall_lines`: in the line of a
+   face on no object, a door's width from its end; a partition's piece between two
+   doors with a cabinet against it). A face shorter than ``min_wall_length_m`` is
+   clutter unless it connects two junctions.
 5. **In front of a wall** (:func:`in_front_of_walls`). A face shorter than
    ``clutter_max_length_m`` (or, free on the same side, shorter than the wall and
    :data:`~floorscan.floorplan.hidden.HIDDEN_MAX_GAP_M`: a row of cabinets) parallel to
@@ -63,7 +65,9 @@ import numpy as np
 
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
-from floorscan.floorplan.clutter import free_standing_objects, in_front_of_walls, loose_in_free_space, on_objects
+from floorscan.floorplan.clutter import (
+    free_standing_objects, in_front_of_walls, in_wall_lines, loose_in_free_space, on_objects,
+)
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
 from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, free_normals, hidden_by_objects, into_corners
 from floorscan.floorplan.junctions import junction_ends, short_loose, shorter_on_longer, snap_junctions
@@ -244,7 +248,7 @@ def _fit_group(seg: np.ndarray, length: np.ndarray) -> np.ndarray:
 
 def structure_passes(
     seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams(),
-    max_thickness_m: float = 0.4,
+    max_thickness_m: float = 0.4, door_max_m: float = 2.0,
 ):  # fmt: skip
     """Steps 1 to 6 on the merged faces of a plan (see the module docstring).
 
@@ -259,6 +263,9 @@ def structure_passes(
     params : StructureParams
     max_thickness_m : float
         The thickest wall, metres (the plan's ``pair_max_m``; step 6).
+    door_max_m : float
+        The widest door, metres (``floorplan.rooms.door_max_m``; step 4's pieces of a
+        wall).
 
     Returns
     -------
@@ -296,6 +303,7 @@ def structure_passes(
     length = np.hypot(snapped[:, 2] - snapped[:, 0], snapped[:, 3] - snapped[:, 1])
     anchor = length >= params.clutter_max_length_m
     standing = on_objects(snapped, grid, free_standing_objects(grid, params, snapped[anchor], max_thickness_m)) & ~anchor
+    standing &= ~in_wall_lines(snapped, standing, grid.resolution_m, params, door_max_m)
     # a face run on behind objects has too little free space beside it to show a side;
     # it keeps the side its seen pieces had
     _, side = border_and_support(snapped, grid, params)
