@@ -421,3 +421,34 @@ def test_standing_free_is_an_obstacle_apart_shorter_than_a_piece_of_furniture():
     assert free.sum() == 16 * 36 + ((np.abs(u) <= 21) & (np.abs(v) <= 21)).sum()
     # the same objects on the raster turned by 90 degrees
     assert np.array_equal(standing_free(np.rot90(solid), r), np.rot90(free))
+
+
+def test_a_strip_narrower_than_a_walkway_joins_the_room_it_opens_into():
+    """A map of 5 cm cells: two rooms (x 0.5..4.5 and 5.55..9.5, y 0.5..6.5) and
+    between them a strip 0.75 m wide (x 4.65..5.4) with a door of 0.65 m into each room
+    (y 1.0..1.65 and 4.0..4.65). The strip is narrower than the narrowest walkway
+    (``MIN_ROOM_WIDTH_M``): no room of its own (the tree before made it a corridor with
+    two doors), it joins the room of its wider door; one door is left between the two
+    rooms, and the floor area is the same."""
+    from floorscan.core.occupancy_classes import grid_of_classes
+    from floorscan.floorplan.params import FloorplanParams
+    from floorscan.floorplan.rooms import MIN_ROOM_WIDTH_M
+    from floorscan.floorplan.scans import plan_of_scans
+    from floorscan.walls.map_stage import map_of_grid
+
+    assert 0.75 < MIN_ROOM_WIDTH_M
+    r = 0.05
+    occ = np.zeros((140, 200), dtype=bool)
+    for x0, y0, x1, y1 in [(0.3, 0.3, 9.7, 0.5), (0.3, 6.5, 9.7, 6.7), (0.3, 0.3, 0.5, 6.7), (9.5, 0.3, 9.7, 6.7),
+                           (4.5, 0.5, 4.65, 1.0), (4.5, 1.65, 4.65, 6.5), (5.4, 0.5, 5.55, 4.0), (5.4, 4.65, 5.55, 6.5)]:
+        occ[round(y0 / r):round(y1 / r), round(x0 / r):round(x1 / r)] = True  # fmt: skip
+    free = np.zeros_like(occ)
+    free[10:130, 10:190] = True
+    grid = grid_of_classes(occ, free & ~occ, origin_xy=(0.0, 0.0), resolution_m=r)
+    plan = plan_of_scans(map_of_grid(grid, None), None, FloorplanParams(), grid)
+    assert list(plan.rooms["kind"]) == ["room", "room"] and len(plan.doors) == 1
+    assert abs(plan.doors["width_m"].iloc[0] - 0.65) <= 0.1 and abs(plan.doors["x0"].iloc[0] - 4.575) < 0.1
+    strip = shapely.box(4.7, 2.0, 5.35, 3.5)
+    east = plan.rooms["polygon"].iloc[1]
+    assert east.contains(strip) and not plan.rooms["polygon"].iloc[0].intersects(strip)
+    assert 52.0 < plan.rooms["area_m2"].sum() < 54.5

@@ -64,7 +64,10 @@ taken from the walls:
    cell; a room seen in part, convex between its walls, completed up to them (the
    bounding box of its seen floor cut by each nearby wall's half-plane); the door
    openings in the walls belong to no room; the rooms a coverage (:func:`~floorscan.floorplan.room_polygons.disjoint_rooms`:
-   a sliver two rooms grew into is the first's). Valid polygons, holes allowed, in map
+   a sliver two rooms grew into is the first's). A room mostly narrower than a walkway
+   (:data:`MIN_ROOM_WIDTH_M`, its median local thickness: the unseen gap between two
+   walls, a strip beside a corridor) joins the room of its widest doors, or goes
+   without one. Valid polygons, holes allowed, in map
    metres, numbered ``Room 1``, ``Corridor 1``, ``Space 1`` in reading order (top to
    bottom, left to right).
 
@@ -91,9 +94,16 @@ from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
 from floorscan.floorplan.room_polygons import disjoint_rooms, largest_polygon, room_polygons
 from floorscan.floorplan.room_space import RoomParams, RoomRaster, enclosure_cells, room_space, space_regions
-from floorscan.floorplan.room_tables import room_tables
+from floorscan.floorplan.room_tables import room_tables, room_width
 
 log = logging.getLogger(__name__)
+
+#: A room is mostly at least this wide (its median local thickness), metres: the
+#: narrowest walkway, the minimum clear width of a walking surface (36 in, 2010 ADA
+#: Standards 403.5.1; 0.9 m, the narrowest escape route of European building codes).
+#: A narrower strip of space is the gap between two walls or a fan of rays along a
+#: wall, not a room.
+MIN_ROOM_WIDTH_M = 0.9
 
 
 def _sets(n: int):
@@ -352,6 +362,44 @@ def _distinct_doors(doors: list) -> list:
     return out
 
 
+def _narrow_rooms_joined(polys: list, doors: list, thickness: np.ndarray, resolution_m: float):
+    """Rooms mostly narrower than :data:`MIN_ROOM_WIDTH_M` (their median local thickness,
+    :func:`~floorscan.floorplan.room_tables.room_width`) are no rooms: each joins the
+    room it shares the widest doors with (their openings with it), the narrowest first;
+    one without a door goes. Returns the polygons (a joined room's empty) and the doors
+    (``(p, q, wall, a, b)``, rooms numbered from 1) between the rooms left."""
+    import shapely
+
+    narrow = [not p.is_empty and room_width(p, resolution_m / 2, MIN_ROOM_WIDTH_M) < MIN_ROOM_WIDTH_M for p in polys]
+    if not any(narrow):
+        return polys, doors
+    polys, doors = list(polys), list(doors)
+    for k in sorted(np.flatnonzero(narrow).tolist(), key=lambda i: (polys[i].area, i)):
+        room = k + 1
+        widths: dict[int, float] = {}
+        for p, q, _, a, b in doors:
+            if room in (a, b) and a != b:
+                other = b if a == room else a
+                widths[other] = widths.get(other, 0.0) + float(np.hypot(*(q - p)))
+        if widths:
+            other = max(sorted(widths), key=widths.get)
+            between = [shapely.buffer(shapely.LineString([p, q]), thickness[w] / 2 + resolution_m, cap_style="square")
+                       for p, q, w, a, b in doors if {a, b} == {room, other}]  # fmt: skip
+            joined = shapely.union_all([polys[other - 1], polys[k], *between], grid_size=OVERLAY_GRID_M)
+            rest = [p for i, p in enumerate(polys) if i not in (k, other - 1) and not p.is_empty]
+            polys[other - 1] = largest_polygon(minus(joined, *rest))  # the openings reach no third room
+        else:
+            other = 0
+        polys[k] = shapely.Polygon()
+        moved = []
+        for p, q, w, a, b in doors:
+            a, b = (other if a == room else a), (other if b == room else b)
+            if a and b and a != b:
+                moved.append((p, q, w, min(a, b), max(a, b)))
+        doors = moved
+    return polys, doors
+
+
 def plan_rooms(
     axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, params: RoomParams = RoomParams(),
     under: np.ndarray | None = None,
@@ -395,6 +443,7 @@ def plan_rooms(
         )  # fmt: skip
         polys = [largest_polygon(shapely.simplify(minus(p, openings), raster.resolution_m / 4)) for p in polys]
     polys = disjoint_rooms(polys)
+    polys, doors = _narrow_rooms_joined(polys, doors, thickness, raster.resolution_m)
     keep = [k for k in range(n) if not polys[k].is_empty and polys[k].area >= params.min_room_area_m2]
     new_id = {k + 1: i for i, k in enumerate(keep)}
     polys = [polys[k] for k in keep]
