@@ -139,8 +139,9 @@ def in_wall_lines(seg: np.ndarray, standing: np.ndarray, cell_m: float, params: 
                   door_max_m: float = 2.0) -> np.ndarray:  # fmt: skip
     """Which faces on objects (:func:`on_objects`) are pieces of a wall: longer than
     ``min_wall_length_m`` by a cell and in the line of a face on no object (directions
-    within ``duplicate_angle_deg``, both ends within ``side_offset_m`` of its line), at
-    most a door's width (``door_max_m``) beyond its end. A partition's piece between two
+    within ``duplicate_angle_deg``, both ends within ``side_offset_m`` of its line),
+    beyond its end by at most a door's width (``door_max_m``; from a cell short of the
+    end: not alongside it, where it would only repeat that face). A partition's piece between two
     doors with a cabinet against it is one object with the cabinet (its inscribed disc
     the cabinet's); the wall it continues is what tells it from furniture, as a door's
     jambs stand in one line. The cell: a face traced on a raster is up to a cell shorter
@@ -178,8 +179,8 @@ def in_wall_lines(seg: np.ndarray, standing: np.ndarray, cell_m: float, params: 
         return out
     t, off = ends_on_line(seg, j, i)
     in_line = (np.abs(off) <= params.side_offset_m).all(axis=1)
-    gap = np.maximum(np.maximum(t.min(axis=1) - length[j], -t.max(axis=1)), 0.0)
-    hit = in_line & (gap <= door_max_m)
+    beyond = np.maximum(t.min(axis=1) - length[j], -t.max(axis=1))  # past face j's end; < 0 alongside it
+    hit = in_line & (beyond >= -cell_m) & (beyond <= door_max_m)
     out[i[hit]] = True
     return out
 

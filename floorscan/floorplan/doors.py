@@ -356,7 +356,7 @@ def jamb_cells(raster: RoomRaster, jamb_m: float, axes: np.ndarray | None = None
     than the longest piece of furniture (:func:`standing_free`): a desk or a table in a
     room, whether the plan took its faces for walls or not. A stub of wall whose
     junction the scans did not see belongs with the unseen cells beyond it, so it stays
-    a jamb; so does a piece of wall between two doors (:func:`_in_wall_lines`: in the
+    a jamb; so does a piece of wall between two doors (:func:`_pieces_between_doors`: in the
     line of a wall's end a door's width away on each side), given the plan's walls.
 
     Parameters
@@ -375,11 +375,11 @@ def jamb_cells(raster: RoomRaster, jamb_m: float, axes: np.ndarray | None = None
     solid = raster.walls | raster.bounds
     free = standing_free(~raster.space, raster.resolution_m)
     if axes is not None and thickness is not None and params is not None and len(axes) and free.any():
-        free &= ~_in_wall_lines(free, raster, axes, thickness, params)
+        free &= ~_pieces_between_doors(free, raster, axes, thickness, params)
     return dilate(solid & ~free, jamb_m / raster.resolution_m)
 
 
-def _in_wall_lines(free: np.ndarray, raster: RoomRaster, axes: np.ndarray, thickness: np.ndarray,
+def _pieces_between_doors(free: np.ndarray, raster: RoomRaster, axes: np.ndarray, thickness: np.ndarray,
                    params: RoomParams) -> np.ndarray:
     """(H, W) bool: the components of ``free`` ((H, W) bool, 8-connected) that are
     pieces of a wall between two doors: along the component's principal axis, each of

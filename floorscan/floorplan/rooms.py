@@ -362,10 +362,18 @@ def _distinct_doors(doors: list) -> list:
     return out
 
 
+def _opening(p: np.ndarray, q: np.ndarray, thickness_m: float, resolution_m: float):
+    """The opening of a door from ``p`` to ``q`` ((2,) metres) in a wall ``thickness_m``
+    thick: the line grown by half the wall and half a cell, square ends (shapely)."""
+    import shapely
+
+    return shapely.buffer(shapely.LineString([p, q]), thickness_m / 2 + resolution_m / 2, cap_style="square")
+
+
 def _narrow_rooms_joined(polys: list, doors: list, thickness: np.ndarray, resolution_m: float):
     """Rooms mostly narrower than :data:`MIN_ROOM_WIDTH_M` (their median local thickness,
     :func:`~floorscan.floorplan.room_tables.room_width`) are no rooms: each joins the
-    room it shares the widest doors with (their openings with it), the narrowest first;
+    room it shares the widest doors with (their openings with it, :func:`_opening`), the narrowest first;
     one without a door goes. Returns the polygons (a joined room's empty) and the doors
     (``(p, q, wall, a, b)``, rooms numbered from 1) between the rooms left."""
     import shapely
@@ -383,8 +391,7 @@ def _narrow_rooms_joined(polys: list, doors: list, thickness: np.ndarray, resolu
                 widths[other] = widths.get(other, 0.0) + float(np.hypot(*(q - p)))
         if widths:
             other = max(sorted(widths), key=widths.get)
-            between = [shapely.buffer(shapely.LineString([p, q]), thickness[w] / 2 + resolution_m, cap_style="square")
-                       for p, q, w, a, b in doors if {a, b} == {room, other}]  # fmt: skip
+            between = [_opening(p, q, thickness[w], resolution_m) for p, q, w, a, b in doors if {a, b} == {room, other}]
             joined = shapely.union_all([polys[other - 1], polys[k], *between], grid_size=OVERLAY_GRID_M)
             rest = [p for i, p in enumerate(polys) if i not in (k, other - 1) and not p.is_empty]
             polys[other - 1] = largest_polygon(minus(joined, *rest))  # the openings reach no third room
@@ -437,10 +444,8 @@ def plan_rooms(
     n = int(labels.max())
     polys = room_polygons(raster, labels, axes, thickness)
     if doors:  # the opening in the wall belongs to neither room: rooms end at the wall faces
-        openings = shapely.union_all(
-            [shapely.buffer(shapely.LineString([p, q]), thickness[w] / 2 + raster.resolution_m / 2, cap_style="square")
-             for p, q, w, *_ in doors], grid_size=OVERLAY_GRID_M
-        )  # fmt: skip
+        openings = shapely.union_all([_opening(p, q, thickness[w], raster.resolution_m) for p, q, w, *_ in doors],
+                                     grid_size=OVERLAY_GRID_M)  # fmt: skip
         polys = [largest_polygon(shapely.simplify(minus(p, openings), raster.resolution_m / 4)) for p in polys]
     polys = disjoint_rooms(polys)
     polys, doors = _narrow_rooms_joined(polys, doors, thickness, raster.resolution_m)
