@@ -401,6 +401,26 @@ def test_greedies_equal_set_arithmetic_on_overlapping_boxes():
     assert cov.gain(0) == 0 and cov.gain(len(geoms) - 1) == 0
 
 
+def test_gains_after_adds_equal_set_arithmetic_across_tiles():
+    """RasterCoverage.add sums the prefix again only on the rows where a scan adds a
+    cell: after every add, in any order and with scans added twice, each scan's gain is
+    its cells less the union's (set arithmetic), on hulls that cross the tiles' edges
+    and cover one another in part."""
+    rng = np.random.default_rng(11)
+    centres = rng.uniform(0, 12, (40, 2))  # 12 m = 240 cells at 5 cm: two tiles a side
+    geoms = np.array([shapely.MultiPoint(c + rng.normal(0, rng.uniform(0.3, 3), (10, 2))).convex_hull
+                      for c in centres], dtype=object)
+    cov = RasterCoverage(geoms, 0.05)
+    assert len(cov.tiles) >= 4
+    cells = [set(cov.cells_of(j).tolist()) for j in range(len(geoms))]
+    union: set = set()
+    for j in rng.choice(len(geoms), 60):
+        cov.add(int(j))
+        union |= cells[j]
+        assert cov.gains(np.arange(len(geoms))).tolist() == [len(c - union) for c in cells]
+    assert int(cov.covered.sum()) == len(union)
+
+
 
 def test_crossings_ordered_as_lexsort():
     rng = np.random.default_rng(7)

@@ -120,17 +120,9 @@ class RasterCoverage:
             self.counts[a : a + chunk] = cnt
         self.tiles = np.unique(np.concatenate([np.unique(k) for k in key] or [np.zeros(0, np.int64)]))
         dtype = np.int32 if len(self.tiles) * TILE < 2**31 else np.int64
-        bands = []
         for i, k in enumerate(key):
             row[i] = np.searchsorted(self.tiles, k).astype(dtype) * TILE + row[i]
             key[i] = None
-            bands.append(self._bands(row[i], runs_per_scan[i * chunk : (i + 1) * chunk]))
-        # each scan's rows of `covered` in each tile it touches: [band_lo, band_hi)
-        band_count = np.concatenate([b[2] for b in bands]) if bands else np.zeros(0, np.int64)
-        self.band_lo = np.concatenate([b[0] for b in bands]) if bands else np.zeros(0, dtype)
-        self.band_hi = np.concatenate([b[1] for b in bands]) if bands else np.zeros(0, dtype)
-        self.band_stop = np.cumsum(band_count)
-        self.band_start = self.band_stop - band_count
         # the run's row of `covered`, its first column there and its length
         self.run_row = np.concatenate(row) if row else np.zeros(0, dtype)
         self.run_col = np.concatenate(col) if col else np.zeros(0, np.int16)
@@ -139,19 +131,6 @@ class RasterCoverage:
         self.run_start = self.run_stop - runs_per_scan
         self.covered = np.zeros((len(self.tiles) * TILE, TILE), dtype=bool)
         self._prefix = np.zeros((len(self.tiles) * TILE, TILE + 1), dtype=np.int16)
-
-    @staticmethod
-    def _bands(run_row: np.ndarray, runs_per_scan: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The first and past-the-last row of ``covered`` of each (scan, tile) of runs
-        laid out by scan, by scan, and the number of tiles of each scan."""
-        owner = np.repeat(np.arange(len(runs_per_scan)), runs_per_scan)
-        key = owner * (int(run_row.max(initial=0)) // TILE + 1) + run_row // TILE
-        order = np.argsort(key, kind="stable")
-        starts, _, _ = runs(key[order])
-        rows = run_row[order]
-        lo = np.minimum.reduceat(rows, starts) if len(rows) else rows
-        hi = np.maximum.reduceat(rows, starts) + 1 if len(rows) else rows
-        return lo, hi, np.bincount(owner[order][starts], minlength=len(runs_per_scan))
 
     def _rasterize(self, geoms: np.ndarray) -> tuple[np.ndarray, ...]:
         """The runs of ``geoms``: tile key, row, first column, length and scan (a position
@@ -220,11 +199,7 @@ class RasterCoverage:
             Cell numbers (positions in ``covered.ravel()``), a new array; a cell of the
             map has one number whichever scan covers it.
         """
-        rows, cols, lens = self._runs(j)
-        lens = lens.astype(np.int64)
-        first = np.cumsum(lens) - lens
-        base = rows.astype(np.int64) * TILE + cols - first
-        return np.repeat(base, lens) + np.arange(int(lens.sum()), dtype=np.int64)
+        return _cells(*self._runs(j))
 
     def _covered_in_runs(self, a: int, b: int) -> np.ndarray:
         rows, cols = self.run_row[a:b], self.run_col[a:b]
@@ -272,24 +247,39 @@ class RasterCoverage:
         return int(self.counts[j]) - int(hit.sum(dtype=np.int64))
 
     def add(self, j: int) -> None:
-        """Add scan ``j``'s cells to the union (in place).
+        """Add scan ``j``'s cells to the union (in place). The row prefix sums are
+        summed again only on the rows where the scan adds a cell: a scan added late in
+        an ordering covers mostly cells the union holds.
 
         Parameters
         ----------
         j : int
             Position of the scan in the raster.
         """
-        if self.counts[j] == 0:
+        a, b = self.run_start[j], self.run_stop[j]
+        if a == b:
             return
-        self.covered.reshape(-1)[self.cells_of(j)] = True
-        a, b = self.band_start[j], self.band_stop[j]
-        for lo, hi in zip(self.band_lo[a:b].tolist(), self.band_hi[a:b].tolist()):
-            np.cumsum(self.covered[lo:hi], axis=1, dtype=np.int16, out=self._prefix[lo:hi, 1:])
+        rows, cols, lens = self.run_row[a:b], self.run_col[a:b], self.run_len[a:b]
+        fresh = self._prefix[rows, cols + lens] - self._prefix[rows, cols] < lens
+        if not fresh.any():
+            return
+        self.covered.reshape(-1)[_cells(rows[fresh], cols[fresh], lens[fresh])] = True
+        changed = np.unique(rows[fresh])
+        self._prefix[changed, 1:] = np.cumsum(self.covered[changed], axis=1, dtype=np.int16)
 
     def reset(self) -> None:
         """Empty the union (the scans' cells are kept), to order the same scans again."""
         self.covered[:] = False
         self._prefix[:] = 0
+
+
+def _cells(rows: np.ndarray, cols: np.ndarray, lens: np.ndarray) -> np.ndarray:
+    """The cell numbers (positions in ``covered.ravel()``) of runs given by their row of
+    ``covered``, first column and length."""
+    lens = lens.astype(np.int64)
+    first = np.cumsum(lens) - lens
+    base = rows.astype(np.int64) * TILE + cols - first
+    return np.repeat(base, lens) + np.arange(int(lens.sum()), dtype=np.int64)
 
 
 def _order_crossings(key: np.ndarray, x: np.ndarray) -> np.ndarray:
