@@ -280,6 +280,32 @@ def test_a_partition_stub_as_thick_as_a_wall_is_no_free_standing_object():
     assert on(old, stub_xy) and on(old, desk_xy)
 
 
+def test_the_dilation_of_the_cells_hit_is_scipys_maximum_filter():
+    """free_standing_objects grows the cells hit by squares of cells, in time that
+    follows the cells (core.grid.square_dilation): the same cells as SciPy's maximum
+    filter of the raster with a False border, for every radius used, on sets that touch
+    the raster's edges, sparse (one write per cell and offset) and dense (the filter)."""
+    from scipy import ndimage
+
+    from floorscan.core.grid import square_dilation
+
+    rng = np.random.default_rng(5)
+    paths = {False: 0, True: 0}
+    for _ in range(60):
+        shape = tuple(int(v) for v in rng.integers(1, 30, 2))
+        mask = rng.random(shape) < rng.uniform(0.0, 0.4)
+        mask[0, 0] = mask[-1, -1] = True  # the corners
+        for radius in (0, 1, 2):
+            dense = mask.sum() * (2 * radius + 1) ** 2 >= mask.size
+            paths[dense] += 1
+            want = ndimage.maximum_filter(mask, size=2 * radius + 1, mode="constant")
+            np.testing.assert_array_equal(square_dilation(*np.nonzero(mask), radius, shape), want)
+    assert min(paths.values()) >= 20  # both ways taken
+    # cells off the raster (a wall's samples beyond the grid) are ignored
+    out = square_dilation(np.array([-1, 2, 9]), np.array([0, 2, 40]), 1, (5, 5))
+    assert out.sum() == 9 and out[1:4, 1:4].all()  # (2, 2) alone
+
+
 def test_snap_makes_l_and_t_junctions_and_trims_an_overshoot():
     seg = np.array([
         [0.0, 0.0, 4.9, 0.0],    # stops 0.1 short of the corner at x = 5

@@ -1,5 +1,5 @@
 """Grouping points by grid cell (voxels, 2D cells), shared by registration, the wall
-extraction and MeanShift's bin seeding.
+extraction and MeanShift's bin seeding; the dilation of a sparse set of cells.
 
 The cells are numbered by one int64 key (``numpy.ravel_multi_index`` of the cell
 offsets from the minimum), whose order is the lexicographic order of the cells, so a 1D
@@ -196,3 +196,45 @@ def raster_cells(xy: np.ndarray, origin_xy: np.ndarray, resolution_m: float, sha
     c = np.floor((np.asarray(xy, dtype=np.float64).reshape(-1, 2) - origin_xy) / resolution_m).astype(np.int64)
     inside = (c[:, 0] >= 0) & (c[:, 1] >= 0) & (c[:, 0] < shape[1]) & (c[:, 1] < shape[0])
     return c[:, 1], c[:, 0], inside
+
+
+def square_dilation(rows: np.ndarray, cols: np.ndarray, radius: int, shape: tuple[int, int]) -> np.ndarray:
+    """The cells within ``radius`` cells (a square of side ``2 radius + 1``) of the given
+    cells, on a raster of ``shape``: the binary dilation of a sparse set, one write per
+    cell and offset, where a filter over the raster costs its whole area (a recording's
+    returns fill a small share of the box its rays span); when the writes would
+    outnumber the raster's cells (a map's solid cells), SciPy's filter. Either way the
+    cells of ``scipy.ndimage.maximum_filter(mask, size=2 radius + 1, mode="constant")``
+    of the mask of the cells.
+
+    Parameters
+    ----------
+    rows, cols : (N,) int ndarray
+        The cells; those off the raster are ignored.
+    radius : int
+        Cells, at least 0.
+    shape : (int, int)
+        Rows, columns.
+
+    Returns
+    -------
+    (H, W) bool ndarray
+    """
+    rows, cols = np.asarray(rows, dtype=np.int64), np.asarray(cols, dtype=np.int64)
+    h, w = shape
+    on = (rows >= 0) & (rows < h) & (cols >= 0) & (cols < w)
+    rows, cols = rows[on], cols[on]
+    out = np.zeros((h, w), dtype=bool)
+    if len(rows) * (2 * radius + 1) ** 2 >= h * w:  # a dense set (a map's solid cells): the filter is cheaper
+        from scipy import ndimage
+
+        out[rows, cols] = True
+        return ndimage.maximum_filter(out, size=2 * radius + 1, mode="constant")
+    for dr in range(-radius, radius + 1):
+        r = rows + dr
+        on_r = (r >= 0) & (r < h)
+        for dc in range(-radius, radius + 1):
+            c = cols + dc
+            on = on_r & (c >= 0) & (c < w)
+            out[r[on], c[on]] = True
+    return out

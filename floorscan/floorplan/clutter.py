@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from floorscan.core.geometry import OVERLAY_GRID_M, point_segment_dist2
+from floorscan.core.grid import square_dilation
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
@@ -57,17 +58,15 @@ def free_standing_objects(
     hit = grid.n_hit_scans > 0
     if walls is not None and len(walls):
         pts, _, _ = segment_samples(np.asarray(walls, dtype=np.float64).reshape(-1, 4), grid.resolution_m / 2)
-        rows, cols, inside = grid.cells_of(pts)
-        on_wall = np.zeros(grid.shape, dtype=bool)
-        on_wall[rows[inside], cols[inside]] = True
-        hit = hit & ~ndimage.maximum_filter(on_wall, size=5, mode="constant")  # a 5 x 5 square
-    hit = ndimage.maximum_filter(hit, size=3, mode="constant")
+        rows, cols, _ = grid.cells_of(pts)
+        hit = hit & ~square_dilation(rows, cols, 2, grid.shape)  # a 5 x 5 square
+    hit = square_dilation(*np.nonzero(hit), 1, grid.shape)
     labels, n = ndimage.label(hit, structure=np.ones((3, 3), bool))
     if n == 0:
         return np.zeros(grid.shape, dtype=bool)
     # each cell of the ring around the components: the largest label among its 3 x 3
     # neighbours on the raster (ndimage.grey_dilation of the labels, at the ring's cells)
-    ring_r, ring_c = np.nonzero(ndimage.maximum_filter(hit, size=3, mode="constant") & ~hit)
+    ring_r, ring_c = np.nonzero(square_dilation(*np.nonzero(hit), 1, grid.shape) & ~hit)
     ring_labels = np.zeros(len(ring_r), dtype=labels.dtype)
     for dr in (-1, 0, 1):
         for dc in (-1, 0, 1):
