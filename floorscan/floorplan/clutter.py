@@ -60,13 +60,15 @@ def free_standing_objects(
         pts, _, _ = segment_samples(np.asarray(walls, dtype=np.float64).reshape(-1, 4), grid.resolution_m / 2)
         rows, cols, _ = grid.cells_of(pts)
         hit = hit & ~square_dilation(rows, cols, 2, grid.shape)  # a 5 x 5 square
-    hit = square_dilation(*np.nonzero(hit), 1, grid.shape)
+    returns = np.nonzero(hit)
+    hit = square_dilation(*returns, 1, grid.shape)
     labels, n = ndimage.label(hit, structure=np.ones((3, 3), bool))
     if n == 0:
         return np.zeros(grid.shape, dtype=bool)
-    # each cell of the ring around the components: the largest label among its 3 x 3
-    # neighbours on the raster (ndimage.grey_dilation of the labels, at the ring's cells)
-    ring_r, ring_c = np.nonzero(square_dilation(*np.nonzero(hit), 1, grid.shape) & ~hit)
+    # each cell of the ring around the components (the returns grown by two cells, a
+    # 3 x 3 square of 3 x 3 squares, less the components): the largest label among its
+    # 3 x 3 neighbours on the raster (ndimage.grey_dilation of the labels, at the ring's cells)
+    ring_r, ring_c = np.nonzero(square_dilation(*returns, 2, grid.shape) & ~hit)
     ring_labels = np.zeros(len(ring_r), dtype=labels.dtype)
     for dr in (-1, 0, 1):
         for dc in (-1, 0, 1):
