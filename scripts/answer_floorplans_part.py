@@ -2,7 +2,8 @@
 the plan the answer is made with of the first k scans of the default ordering, for k on
 a geometric grid, as Parquet tables for the score stage's answer curve
 (floorscan.floorplan.answer_plans; rule answer_floorplans merges the shares). The walls
-of a set of scans are the walls stage's map extractor (floorscan.walls.map_lines)."""
+of a set of scans are the walls stage's map extractor (floorscan.walls.map_lines). The
+last k, all kept scans, is the plan of rule all_scans_floorplan, not built here."""
 from dataclasses import replace
 
 from floorscan.core.config import stage_params
@@ -30,7 +31,7 @@ with stage_log(snakemake) as log:  # noqa: F821
         scans, segments_of, replace(OccupancyParams(), resolution_m=map_params.support_cell_m),
         stage_params(FloorplanParams, smk.params.floorplan), smk.output.plans,
         {"dataset": smk.wildcards.dataset, "ordering": smk.params.ordering},
-        part=int(smk.wildcards.part), parts=int(smk.params.parts),
+        part=int(smk.wildcards.part), parts=int(smk.params.parts), all_scans=False,
     )
     log.info("the answer's plans of the first k scans of %s, part %s of %d: k %s; walls %s", smk.params.ordering,
              smk.wildcards.part, smk.params.parts,

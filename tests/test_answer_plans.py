@@ -124,3 +124,43 @@ def test_the_parts_of_the_k_grid_make_the_same_plans(scans, tmp_path):
     write_answer_plans(scans, segments_of, GRID, FloorplanParams(), parts[1], n_points=6, part=0, parts=1)
     with pytest.raises(ValueError, match="k1"):  # both shares hold every k
         merge_answer_plans(parts, tmp_path / "twice")
+
+
+def test_the_last_k_is_the_plan_of_all_the_scans_copied_in(scans, tmp_path):
+    """The workflow's shares leave out the last k (all the scans); the merge copies in the
+    plan of all the scans as that k, so the folder is the whole curve's, file for file
+    (a plan folder's hidden marks are not copied)."""
+    from floorscan.floorplan.answer_plans import answer_plan_ks, merge_answer_plans
+
+    for n in (1, 2, 9, 815, 5000):
+        shares = [answer_plan_ks(n, 24, p, 2, all_scans=False) for p in range(2)]
+        assert sorted(shares[0] + shares[1]) == curve_ks(n, 24)[:-1] and not set(shares[0]) & set(shares[1])
+    n = len(scans)
+    whole = tmp_path / "whole"
+    write_answer_plans(scans, segments_of, GRID, FloorplanParams(), whole, {"dataset": "room"}, n_points=6)
+    (whole / f"k{n}" / ".snakemake_timestamp").touch()
+    parts = [tmp_path / f"part{p}" for p in range(2)]
+    for p, folder in enumerate(parts):
+        done = write_answer_plans(scans, segments_of, GRID, FloorplanParams(), folder, {"dataset": "room"}, n_points=6,
+                                  part=p, parts=2, all_scans=False)
+        assert n not in [d["k"] for d in done]
+    merged = tmp_path / "answer_plans"
+    assert merge_answer_plans(parts, merged, whole / f"k{n}") == curve_ks(n, 6)
+    files = sorted(f.relative_to(whole) for f in whole.rglob("*") if f.is_file() and not f.name.startswith("."))
+    assert files == sorted(f.relative_to(merged) for f in merged.rglob("*") if f.is_file()) and len(files) >= 4 * 4
+    for f in files:
+        assert (whole / f).read_bytes() == (merged / f).read_bytes(), f
+    # a share that holds the last k, or no plan folder of all the scans, is refused
+    write_answer_plans(scans, segments_of, GRID, FloorplanParams(), parts[0], n_points=6, part=0, parts=1)
+    with pytest.raises(ValueError, match=f"k{n} .* not below all {n} kept scans"):
+        merge_answer_plans(parts[:1], tmp_path / "again", whole / f"k{n}")
+    with pytest.raises(FileNotFoundError, match="not the plan folder of all"):
+        merge_answer_plans([], tmp_path / "again", tmp_path / "missing")
+    from floorscan.core.io import read_table, write_table
+
+    unsaid = tmp_path / "unsaid"
+    unsaid.mkdir()
+    write_table(read_table(whole / f"k{n}" / "walls.parquet"), unsaid / "walls.parquet")  # without the metadata
+    with pytest.raises(ValueError, match="does not say how many they are"):
+        merge_answer_plans([], tmp_path / "again", unsaid)
+    assert not (tmp_path / "again").exists()

@@ -277,7 +277,8 @@ def test_default_run_scores_the_answer(default_run):
     scans (walls/map/selected.parquet and its occupancy grid) through the structure
     passes, and scored as a plan (evaluation/answer_scores.csv; measured: precision
     0.92, recall 0.91 at 5 cm against the true walls, no crossing, no wall under 0.5 m;
-    the all-scan map plan 0.90 / 0.91). Its quality curve ends at all 76 kept scans."""
+    the all-scan map plan 0.90 / 0.91). Its quality curve ends at all 76 kept scans, whose
+plan is the all-scan map plan."""
     import pandas as pd
 
     out = default_run / "results" / "demo"
@@ -298,3 +299,5 @@ def test_default_run_scores_the_answer(default_run):
     assert plans == curve["k"].tolist()
     walls = read_table(out / "evaluation" / "answer_plans" / "k76" / "walls.parquet")
     assert len(walls) == curve["n_walls"].iloc[-1]
+    # the last k is the plan of all kept scans, built once (rule all_scans_floorplan)
+    assert walls.equals(read_table(out / "evaluation" / "plans" / "all_scans_map" / "walls.parquet"))

@@ -17,8 +17,11 @@ package does not import: the stage's script hands it in (``segments_of``).
 The plans are built in :data:`ANSWER_PLAN_PARTS` jobs (rule ``answer_floorplans_part``),
 each a share of the k grid (:func:`answer_plan_ks`), so that they run on two cores; a
 plan does not depend on the other ks built beside it (each grid is that of its first k
-scans). Rule ``answer_floorplans`` moves the parts' plan folders into one
-(:func:`merge_answer_plans`).
+scans). The last k, all the kept scans, is not built there: its plan is the
+evaluation's plan of all kept scans (rule ``all_scans_floorplan``: the same map
+extractor, structure passes and grid of the same scans), built once. Rule
+``answer_floorplans`` moves the parts' plan folders into one and copies that plan in
+as the last k (:func:`merge_answer_plans`).
 """
 
 from __future__ import annotations
@@ -56,7 +59,7 @@ ANSWER_PLANS_MEMORY = JobMemory(COUNTS_BYTES_PER_CELL + 8 + PLAN_MEMORY.bytes_pe
 ANSWER_PLAN_PARTS = 2
 
 
-def answer_plan_ks(n_scans: int, n_points: int = 24, part: int = 0, parts: int = 1) -> list[int]:
+def answer_plan_ks(n_scans: int, n_points: int = 24, part: int = 0, parts: int = 1, all_scans: bool = True) -> list[int]:
     """The ks of :func:`~floorscan.core.selection.curve_ks` that job ``part`` of ``parts``
     builds: from the largest k down, each to the job with the fewest scans summed over
     its ks so far (longest processing time first: a plan's cost grows with its scans).
@@ -69,11 +72,15 @@ def answer_plan_ks(n_scans: int, n_points: int = 24, part: int = 0, parts: int =
         Size of the k grid.
     part, parts : int
         The job, ``0 <= part < parts``.
+    all_scans : bool
+        Whether the last k, ``n_scans``, is built (False: the plan of all kept scans
+        is made elsewhere, :func:`merge_answer_plans`).
 
     Returns
     -------
     list of int
-        Increasing; the parts' ks are disjoint and together the whole k grid.
+        Increasing; the parts' ks are disjoint and together the whole k grid (without
+        its last k when ``all_scans`` is False).
 
     Raises
     ------
@@ -84,7 +91,8 @@ def answer_plan_ks(n_scans: int, n_points: int = 24, part: int = 0, parts: int =
         raise ValueError(f"answer plans: part {part} of {parts} does not exist")
     load = [0] * parts
     mine = []
-    for k in sorted(curve_ks(n_scans, n_points), reverse=True):
+    ks = curve_ks(n_scans, n_points)
+    for k in sorted(ks if all_scans else ks[:-1], reverse=True):
         j = min(range(parts), key=lambda i: (load[i], i))
         load[j] += k
         if j == part:
@@ -137,6 +145,7 @@ def answer_plans(
     what: str = "the occupancy grid of the answer's plans",
     part: int = 0,
     parts: int = 1,
+    all_scans: bool = True,
 ) -> Iterator[tuple[int, int, FloorPlan]]:
     """The answer's plan of the first k scans, for k in :func:`~floorscan.core.selection.curve_ks`
     (those of job ``part`` of ``parts``: :func:`answer_plan_ks`).
@@ -160,6 +169,8 @@ def answer_plans(
         The grid and whose scans, for the error of a grid too large or of memory.
     part, parts : int
         The share of the k grid (:func:`answer_plan_ks`); by default all of it.
+    all_scans : bool
+        Whether the plan of all the scans (the last k) is built (:func:`answer_plan_ks`).
 
     Yields
     ------
@@ -175,7 +186,7 @@ def answer_plans(
         (:func:`floorscan.core.grid.check_raster_size`) or the job's rasters
         (:data:`ANSWER_PLANS_MEMORY`) would not fit in the memory free on the machine.
     """
-    ks = answer_plan_ks(len(scans), n_points, part, parts)
+    ks = answer_plan_ks(len(scans), n_points, part, parts, all_scans)
     pairs = [(o, p) for _, o, p in scans]
     wall_points = np.cumsum([len(p) for _, p in pairs])  # of the first k scans, at k - 1
     points = np.concatenate([p.reshape(-1, 2) for _, p in pairs]) if pairs else np.empty((0, 2))  # rank order
@@ -197,6 +208,7 @@ def write_answer_plans(
     n_points: int = 24,
     part: int = 0,
     parts: int = 1,
+    all_scans: bool = True,
 ) -> list[dict]:
     """Write the plans of :func:`answer_plans` into ``folder``, one plan folder
     ``k<k>/`` each (:func:`~floorscan.floorplan.scans.write_plan`, the numbers as
@@ -204,7 +216,7 @@ def write_answer_plans(
 
     Parameters
     ----------
-    scans, segments_of, grid_params, params, n_points, part, parts
+    scans, segments_of, grid_params, params, n_points, part, parts, all_scans
         As :func:`answer_plans`.
     folder : path
         ``evaluation/answer_plans``, or a job's share of it (replaced when it exists).
@@ -225,7 +237,7 @@ def write_answer_plans(
         f" of dataset {dataset!r}" if dataset else "")
     with staged_path(folder) as tmp:
         tmp.mkdir()
-        for k, n, plan in answer_plans(scans, segments_of, grid_params, params, n_points, what, part, parts):
+        for k, n, plan in answer_plans(scans, segments_of, grid_params, params, n_points, what, part, parts, all_scans):
             write_plan(plan, Path(tmp) / f"k{k}", {**(metadata or {}), "extractor": "map", "k": str(k),
                                                    "n_scans": str(k), N_WALL_POINTS: str(n),
                                                    "rooms": "not segmented (the curve scores the walls)"},
@@ -236,9 +248,12 @@ def write_answer_plans(
     return done
 
 
-def merge_answer_plans(parts: Iterable[str | os.PathLike], folder: str | os.PathLike) -> list[int]:
+def merge_answer_plans(
+    parts: Iterable[str | os.PathLike], folder: str | os.PathLike, all_scans: str | os.PathLike | None = None
+) -> list[int]:
     """Move the plan folders ``k<k>/`` of the jobs' shares (:func:`write_answer_plans`
-    with ``part``) into ``folder``, whole or not at all; the files are not rewritten.
+    with ``part``) into ``folder``, and copy in the plan of all the scans as its last k,
+    whole or not at all; the files are not rewritten.
 
     Parameters
     ----------
@@ -246,6 +261,10 @@ def merge_answer_plans(parts: Iterable[str | os.PathLike], folder: str | os.Path
         The shares' folders; they are left without their plan folders.
     folder : path
         ``evaluation/answer_plans`` (replaced when it exists).
+    all_scans : path, optional
+        The plan folder of all the kept scans (rule ``all_scans_floorplan``,
+        :func:`~floorscan.floorplan.scans.write_plan`), whose metadata ``n_scans``
+        says how many they are, n: copied as ``k<n>/``. None: the shares hold every k.
 
     Returns
     -------
@@ -255,9 +274,15 @@ def merge_answer_plans(parts: Iterable[str | os.PathLike], folder: str | os.Path
     Raises
     ------
     ValueError
-        When two shares hold the same k.
+        When two shares hold the same k, a share holds a k of at least n, or the plan
+        of all the scans does not say n.
+    FileNotFoundError
+        When the plan of all the scans is not a plan folder.
     """
+    import shutil
+
     from floorscan.core.files import staged_path
+    from floorscan.core.io import read_metadata
 
     plans = {}
     for share in parts:
@@ -266,8 +291,23 @@ def merge_answer_plans(parts: Iterable[str | os.PathLike], folder: str | os.Path
                 if sub.name in plans:
                     raise ValueError(f"answer plans: {sub.name} is in {plans[sub.name].parent} and {share}")
                 plans[sub.name] = sub
+    if all_scans is not None:
+        source = Path(all_scans)
+        if not (source / "walls.parquet").is_file():
+            raise FileNotFoundError(f"answer plans: {source} is not the plan folder of all the kept scans")
+        n = read_metadata(source / "walls.parquet").get("n_scans", "")
+        if not n.isdigit():
+            raise ValueError(f"answer plans: {source / 'walls.parquet'}, the plan of all kept scans, does not say how "
+                             "many they are (metadata n_scans); run rule all_scans_floorplan again")
+        n = int(n)
+        above = [name for name in plans if int(name[1:]) >= n]
+        if above:
+            raise ValueError(f"answer plans: {above[0]} in {plans[above[0]].parent} is not below all {n} kept scans")
     with staged_path(folder) as tmp:
         tmp.mkdir()
         for name, sub in plans.items():
             sub.rename(Path(tmp) / name)
+        if all_scans is not None:
+            shutil.copytree(source, Path(tmp) / f"k{n}", ignore=shutil.ignore_patterns(".*"))  # not Snakemake's marks
+            plans[f"k{n}"] = source
     return sorted(int(name[1:]) for name in plans)

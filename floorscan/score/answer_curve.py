@@ -7,7 +7,8 @@ per-scan extractors' plans of every ordering on a dense grid; this curve scores 
 a user gets, so its k95 and k99 (the first k whose plan reaches 95 / 99 % of the F1 of
 the plan of all kept scans) are what the automatic k (``select.k: auto``) is measured
 against. The plans are built once, by the floorplan stage
-(:mod:`floorscan.floorplan.answer_plans`, ``evaluation/answer_plans/k<k>/``); this module
+(:mod:`floorscan.floorplan.answer_plans`, ``evaluation/answer_plans/k<k>/``; the last k
+is the plan of all kept scans, the one rule ``all_scans_floorplan`` builds); this module
 reads their tables and scores them.
 """
 

@@ -126,8 +126,9 @@ def answer_floorplans_inputs(wildcards):
 # (evaluation/answer_plans/k<k>/); the occupancy grid of k + dk scans is that of k plus
 # dk scans. They are the evaluation's longest job on a large recording, so
 # ANSWER_PLAN_PARTS jobs build a share of the k grid each (on both cores), and
-# answer_floorplans moves their plan folders into one. The score stage's answer_curve
-# scores them.
+# answer_floorplans moves their plan folders into one. The last k, all kept scans, is
+# the plan of all_scans_floorplan (the same plan, built once), which answer_floorplans
+# copies in. The score stage's answer_curve scores them.
 rule answer_floorplans_part:
     priority: PRIORITY["answer_floorplans"]
     input:
@@ -153,6 +154,7 @@ rule answer_floorplans:
     priority: PRIORITY["answer_floorplans"]
     input:
         parts=expand("results/{{dataset}}/evaluation/answer_plans_parts/{part}", part=range(ANSWER_PLAN_PARTS)),
+        all_scans="results/{dataset}/evaluation/plans/all_scans_map",
     output:
         plans=directory("results/{dataset}/evaluation/answer_plans"),
     log:
