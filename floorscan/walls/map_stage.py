@@ -2,8 +2,10 @@
 set of scans (:func:`floorscan.walls.map_lines.map_segments`) and the occupancy grid of
 the same scans (:func:`floorscan.core.occupancy.occupancy_grid`, the free space the
 floor plan's structure passes read), for the selected scans (the answer) or all kept
-scans (the evaluation); or of an occupancy map given as the recording
-(:func:`map_of_grid`, rule ``occupancy_map_walls``), whose grid is all there is.
+scans (the evaluation; their grid is the reference map's when it has the settings of
+:func:`map_grid_params`, so the scans are cast once); or of an occupancy map given as
+the recording (:func:`map_of_grid`, rule ``occupancy_map_walls``), whose grid is all
+there is.
 """
 
 from __future__ import annotations
@@ -31,11 +33,30 @@ log = logging.getLogger(__name__)
 MAP_MEMORY = JobMemory(COUNTS_BYTES_PER_CELL + 8, "walls.map.support_cell_m", bytes_per_point=40)
 
 
+def map_grid_params(cfg: Mapping[str, Any] | None) -> OccupancyParams:
+    """The settings of the map extractor's occupancy grid: cells of
+    ``map.support_cell_m``, the others the reference map's defaults.
+
+    Parameters
+    ----------
+    cfg : mapping or None
+        The ``walls`` config section.
+
+    Returns
+    -------
+    OccupancyParams
+    """
+    from floorscan.core.config import stage_params
+
+    return replace(OccupancyParams(), resolution_m=stage_params(MapParams, (cfg or {}).get("map")).support_cell_m)
+
+
 def map_of_scans(
     registered_path: str | os.PathLike,
     registration: pd.DataFrame,
     scan_ids: np.ndarray | None,
     cfg: Mapping[str, Any] | None,
+    grid: OccupancyGrid | None = None,
 ) -> tuple[pd.DataFrame, OccupancyGrid]:
     """The map extractor's wall segments and the occupancy grid of a set of scans.
 
@@ -50,6 +71,10 @@ def map_of_scans(
         The scans to use; None: every kept scan.
     cfg : mapping
         The ``walls`` config section (height band, ``map``, ``seed``).
+    grid : OccupancyGrid, optional
+        The occupancy grid of these scans, already made with :func:`map_grid_params`
+        (the reference map of all kept scans, when its settings are those): taken, not
+        cast again.
 
     Returns
     -------
@@ -58,12 +83,14 @@ def map_of_scans(
         many scans).
     grid : OccupancyGrid
         Cells of ``map.support_cell_m``; the other settings the reference map's
-        defaults (:class:`~floorscan.core.occupancy.OccupancyParams`).
+        defaults (:func:`map_grid_params`).
 
     Raises
     ------
     ValueError
-        When a scan to use has no kept row, or none of them has a wall point.
+        When a scan to use has no kept row, or none of them has a wall point, or
+        ``grid`` has other settings than :func:`map_grid_params` or another number of
+        scans.
     floorscan.core.io.InputError
         When the grid of the scans' extent would be too large
         (:func:`floorscan.core.grid.check_raster_size`: names the dataset, the extent
@@ -98,8 +125,12 @@ def map_of_scans(
     dataset = read_metadata(registered_path).get("dataset")
     what = (f"the occupancy grid of {'all kept' if scan_ids is None else 'the selected'} {len(origins)} scans"
             f"{f' of dataset {dataset!r}' if dataset else ''} ({registered_path})")
-    grid = occupancy_grid(zip(origins, points), replace(OccupancyParams(), resolution_m=params.support_cell_m), what,
-                          MAP_MEMORY)
+    settings = map_grid_params(cfg)
+    if grid is None:
+        grid = occupancy_grid(zip(origins, points), settings, what, MAP_MEMORY)
+    elif grid.params != settings or grid.scan_xy is None or len(grid.scan_xy) != len(origins):
+        raise ValueError(f"{what}: the grid given is not theirs: {grid.params}, "
+                         f"{0 if grid.scan_xy is None else len(grid.scan_xy)} scans; expected {settings}")
     segments = _map_table(pts, grid, params, cfg)
     log.info("map of %d scans (%d wall points): %d wall segments; grid %d x %d cells of %.3f m",
              len(origins), len(pts), len(segments), grid.shape[1], grid.shape[0], grid.resolution_m)
@@ -178,7 +209,7 @@ def _map_table(points: np.ndarray, grid: OccupancyGrid, params: MapParams, cfg: 
 
 
 def write_map_walls(
-    registered_path, registration_path, scans_path, cfg, walls_path, grid_path
+    registered_path, registration_path, scans_path, cfg, walls_path, grid_path, reference_path=None
 ) -> dict:
     """Rule ``map_walls``: :func:`map_of_scans` of a set of scans, the segments and the
     grid written.
@@ -199,6 +230,10 @@ def write_map_walls(
         ``extractor``, ``n_scans``).
     grid_path : path
         Output: the occupancy grid (:func:`floorscan.core.occupancy.write_grid`).
+    reference_path : path, optional
+        With ``scans_path`` None: the reference map (``reference/occupancy.parquet``),
+        whose grid of all kept scans is taken when made with :func:`map_grid_params`
+        (the rule passes it only then).
 
     Returns
     -------
@@ -212,7 +247,12 @@ def write_map_walls(
 
     registration = read_table(registration_path)
     ids = None if scans_path is None else selected_scan_ids(scans_path)
-    segments, grid = map_of_scans(registered_path, registration, ids, cfg)
+    given = None
+    if reference_path is not None:
+        from floorscan.core.occupancy import read_grid
+
+        given = read_grid(reference_path, MAP_MEMORY, f"the map of all kept scans on the reference map {reference_path}")
+    segments, grid = map_of_scans(registered_path, registration, ids, cfg, given)
     n_scans = int(registration["kept"].sum()) if ids is None else len(ids)
     write_table(segments, walls_path, WALLS, metadata={"extractor": "map", "n_scans": str(n_scans)})
     write_grid(grid, grid_path, metadata={"n_scans": str(n_scans)})

@@ -7,6 +7,10 @@
 #               segments of the first k scans of each ordering (a filter)
 # The floor plans made of them: floorplan.smk.
 
+from floorscan.core.config import stage_params
+from floorscan.core.occupancy import OccupancyParams
+from floorscan.walls.map_stage import map_grid_params
+
 # The evaluation's walls: the k tables of every ordering x extractor x k of the config.
 EVALUATION_OUTPUTS.extend(
     expand(
@@ -126,11 +130,16 @@ rule walls:
 
 
 def map_walls_inputs(wildcards):
-    """The registered scans, and for the selected scans their list."""
+    """The registered scans; for the selected scans their list; for all kept scans the
+    reference map (rule reference), whose grid is theirs when the reference's settings
+    (score.reference) are the map extractor's (floorscan.walls.map_stage.map_grid_params):
+    all kept scans are then cast once."""
     ds = wildcards.dataset
     inputs = {"registered": f"results/{ds}/registered.parquet", "registration": f"results/{ds}/registration.parquet"}
     if wildcards.scans == "selected":
         inputs["scans"] = f"results/{ds}/selection/scans.parquet"
+    elif map_grid_params(stage_config("walls")(wildcards)) == stage_params(OccupancyParams, reference_config(wildcards)):
+        inputs["reference"] = f"results/{ds}/reference/occupancy.parquet"
     return inputs
 
 
