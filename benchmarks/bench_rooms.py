@@ -36,9 +36,10 @@ within tau of one (:func:`floorscan.score.drawn.score_against_drawn`), at 5 and 
 
 ``python -m benchmarks rooms [--maps NAME ...] [--out DIR] [--workers 2] [--no-figures] [--rooms plan|layout]
 [--reading ipa|map_server]``:
-a table per map, the averages per group, the published figures beside them, and one
-figure per map (``--out``, default ``results/bench_rooms/``: the map, the rooms people
-drew, floorscan's rooms, ROSE^2's rooms where there are any).
+a table per map, the averages per group, the published figures beside them, why the
+rooms left unmatched are (:func:`print_errors`), and one figure per map (``--out``,
+default ``results/bench_rooms/``: the map, the rooms people drew, floorscan's rooms,
+ROSE^2's rooms where there are any).
 """
 from __future__ import annotations
 
@@ -310,6 +311,7 @@ def print_tables(rows: list[dict]) -> None:
             if pg == g:
                 print(f"{'':<24} {method + ', published':<44} {p / 100:6.3f} {'':>6} {rc / 100:6.3f}")
     print(f"Published figures: {PUBLISHED_SOURCE}.")
+    print_errors(rows)
     walls = [r for r in rows if r["group"].startswith("bormann") and "walls_f1_5cm" in r]
     if walls:
         print("\nWalls of each Bormann map's plan against the wall cells of <name>.png (no furniture):")
@@ -321,6 +323,28 @@ def print_tables(rows: list[dict]) -> None:
         for g in ("bormann", "bormann_furniture"):
             sub = [r for r in walls if r["group"] == g]
             print(f"{g + ' mean':<18} {'':<28} " + " ".join(f"{_fmt(float(np.mean([r[c] for r in sub]))):>17}" for c in cols))
+
+
+def print_errors(rows: list[dict]) -> None:
+    """Why the rooms left unmatched at IoU 0.5 are unmatched, per map and summed per
+    group (:func:`floorscan.score.segmentation.room_errors`): true rooms merged into a
+    larger found room, split between found rooms, or left uncovered; found rooms that are a
+    piece of one true room, span several, or lie where no room was drawn. ROSE^2's on
+    its maps below each."""
+    from floorscan.score.segmentation import PLAN_CAUSES, ROOM_ERROR_KEYS, TRUE_CAUSES
+
+    print("\nUnmatched rooms: true rooms merged / split / uncovered; found rooms pieces / spanning / extra:")
+    print(f"{'group':<22} {'map':<28} " + " ".join(f"{h:>9}" for h in TRUE_CAUSES + PLAN_CAUSES))
+    for r in rows:
+        print(f"{r['group']:<22} {r['map'][:28]:<28} " + " ".join(f"{r[k]:>9d}" for k in ROOM_ERROR_KEYS))
+        if "rose2_n_true_merged" in r:
+            print(f"{'  ROSE^2':<22} {'':<28} " + " ".join(f"{r['rose2_' + k]:>9d}" for k in ROOM_ERROR_KEYS))
+    for g in GROUPS:
+        sub = [r for r in rows if r["group"] == g]
+        if sub:
+            print(f"{g + ' sum':<22} {str(len(sub)) + ' maps':<28} " + " ".join(f"{sum(r[k] for r in sub):>9d}" for k in ROOM_ERROR_KEYS))
+            if g == "rose2":
+                print(f"{'  ROSE^2 sum':<22} {'':<28} " + " ".join(f"{sum(r['rose2_' + k] for r in sub):>9d}" for k in ROOM_ERROR_KEYS))
 
 
 def main(argv: list[str] | None = None) -> list[dict]:

@@ -111,6 +111,28 @@ def test_match_rooms_on_handmade_polygons():
     assert (scores["n_true_rooms"], scores["n_plan_rooms_scored"], scores["n_matched_rooms"]) == (3, 4, 2)
 
 
+def test_unmatched_rooms_are_merged_split_uncovered_pieces_spanning_or_extra():
+    """A and B in one plan room a little larger than both (IoU 16/36 each): merged, and
+    that plan room spans them; C in three strips of a third (IoU 1/3 each): split, three
+    pieces; D with no plan room: uncovered; a plan room where nothing was drawn: extra; E
+    matched, in no count. A room left out of precision is in none either."""
+    true = [box(0, 0, 4, 4), box(4, 0, 8, 4), box(0, 10, 6, 14), box(20, 0, 24, 4), box(10, 0, 14, 4)]
+    plan = [box(0, 0, 8, 4.5), box(0, 10, 2, 14), box(2, 10, 4, 14), box(4, 10, 6, 14), box(30, 0, 32, 2),
+            box(10, 0, 14, 4), box(20, 0, 24, 1)]  # fmt: skip
+    scores, detail = _match(true, plan)
+    assert detail["pairs"].tolist() == [[4, 5]]
+    assert detail["true_cause"].tolist() == ["merged", "merged", "split", "uncovered", ""]
+    assert detail["plan_cause"].tolist() == ["spanning", "pieces", "pieces", "pieces", "extra", "", "pieces"]
+    got = {k: scores[k] for k in ("n_true_merged", "n_true_split", "n_true_uncovered", "n_plan_pieces",
+                                  "n_plan_spanning", "n_plan_extra")}  # fmt: skip
+    # D's quarter strip is a piece of D, and D, a quarter of it covered, is uncovered
+    assert got == {"n_true_merged": 2, "n_true_split": 1, "n_true_uncovered": 1, "n_plan_pieces": 4,
+                   "n_plan_spanning": 1, "n_plan_extra": 1}  # fmt: skip
+    # the strip in D left out of precision (D not counted): neither piece nor uncovered
+    scores, _ = _match(true, plan, counted=[True, True, True, False, True])
+    assert (scores["n_true_uncovered"], scores["n_plan_pieces"], scores["n_plan_extra"]) == (0, 3, 1)
+
+
 def test_match_rooms_is_one_to_one():
     """Two plan rooms on one true room: one matches, the other is a false room."""
     scores, detail = _match([box(0, 0, 4, 4)], [box(0, 0, 4, 4), box(0, 0, 4, 3.9)])
@@ -369,6 +391,26 @@ def test_rooms_overlay_figure_is_written(tmp_path):
     rooms_overlay_figure(overlay, "tiny", tmp_path / "rooms.png")
     assert mpimg.imread(tmp_path / "rooms.png").shape[:2] == (880, 1100)
     assert table.iloc[0]["room_precision"] == 0.5  # the triangle outside is a false room
+    assert table.iloc[0][["n_true_merged", "n_true_split", "n_true_uncovered", "n_plan_pieces", "n_plan_spanning",
+                          "n_plan_extra"]].tolist() == [0, 0, 0, 0, 0, 1]  # fmt: skip
+
+
+def test_a_plan_room_over_two_true_rooms_is_said_to_merge_them(tmp_path):
+    """Two true rooms of 8 m2 under one plan room of 16 m2 (IoU 0.5 each): one matches
+    it, the other is merged into it; under one of 18 m2 (IoU 4/9) both are merged and
+    the plan room spans them, as the overlay's title says."""
+    from floorscan.figures.rooms import _title
+
+    free = np.ones((40, 100), bool)
+    truth = _geojson(tmp_path / "truth.geojson", [box(0, 0, 4, 2), box(4, 0, 8, 2)])
+    for name, top, want in (("flush", 2.0, [1, 1, 0, 0, 0, 0, 0]), ("over", 2.25, [0, 2, 0, 0, 0, 1, 0])):
+        plan = _plan(tmp_path / name, [box(0, 0, 8, top)])
+        table, overlay = score_room_plans({"recommended": plan}, _grid(free), truth)
+        row = table.iloc[0]
+        assert row[["n_matched_rooms", "n_true_merged", "n_true_split", "n_true_uncovered", "n_plan_pieces",
+                    "n_plan_spanning", "n_plan_extra"]].tolist() == want  # fmt: skip
+    assert "unmatched true rooms: 2 merged, 0 split, 0 uncovered\nunmatched plan rooms: 0 a piece of one, 1 across" in \
+        _title(overlay, "tiny", "recommended")
 
 
 def test_a_plans_tables_give_the_rooms_and_doors_of_its_geojson_export(tmp_path):

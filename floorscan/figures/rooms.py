@@ -1,8 +1,9 @@
 """The overlay of a floor plan's rooms on the true rooms (:mod:`floorscan.score.rooms`):
 the true rooms filled (the simulator's, or a segmentation drawn by people, aligned;
 those the recording saw too little of hatched), the plan's rooms outlined over them,
-matched pairs joined and labelled with their IoU, unmatched rooms flagged; on a
-synthetic recording also the doors."""
+matched pairs joined and labelled with their IoU, unmatched true rooms labelled with
+why (:func:`floorscan.score.segmentation.room_errors`); on a synthetic recording also
+the doors."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import os
 
 #: Colours: matched (green), unmatched plan room (red), left out of precision (grey).
 MATCHED, FALSE_ROOM, LEFT_OUT = "#16a34a", "#dc2626", "#6b7280"
-#: Fills of the true rooms: matched, missed, not scored.
+#: Fills of the true rooms: matched, unmatched, not scored.
 TRUE_MATCHED, TRUE_MISSED, TRUE_UNSCORED = "#bfdbfe", "#fde68a", "#e5e7eb"
 
 
@@ -73,10 +74,11 @@ def rooms_overlay_figure(overlay: dict, dataset: str, path: str | os.PathLike, p
         a, b = overlay["true_rooms"][t].representative_point(), entry["rooms"][p].representative_point()
         ax.plot([a.x, b.x], [a.y, b.y], color=MATCHED, lw=0.8, zorder=4)
         ax.text(b.x, b.y, f"{iou:.2f}", fontsize=7, color="#14532d", ha="center", va="center", zorder=5)
+    cause = detail["true_cause"] if detail is not None else np.full(len(overlay["true_rooms"]), "", dtype=object)
     for t, room in enumerate(overlay["true_rooms"]):
         if overlay["counted"][t] and t not in true_matched:
             c = room.representative_point()
-            ax.text(c.x, c.y, "missed", fontsize=7, color="#92400e", ha="center", va="center", zorder=5)
+            ax.text(c.x, c.y, cause[t] or "unmatched", fontsize=7, color="#92400e", ha="center", va="center", zorder=5)
     txy, tc = overlay["true_doors_xy"], overlay["true_doors_counted"]
     if len(txy):
         ax.scatter(txy[tc, 0], txy[tc, 1], s=40, marker="s", facecolors="none", edgecolors="#1e3a8a", zorder=6)
@@ -86,7 +88,7 @@ def rooms_overlay_figure(overlay: dict, dataset: str, path: str | os.PathLike, p
         ax.scatter(pxy[:, 0], pxy[:, 1], s=14, marker="o", c="#7c3aed", zorder=7)
     handles = [
         Patch(facecolor=TRUE_MATCHED, edgecolor="#1e3a8a", label="true room, matched"),
-        Patch(facecolor=TRUE_MISSED, edgecolor="#1e3a8a", label="true room, missed"),
+        Patch(facecolor=TRUE_MISSED, edgecolor="#1e3a8a", label="true room, unmatched (labelled why)"),
         Patch(facecolor=TRUE_UNSCORED, edgecolor="#1e3a8a", hatch="//", label="true room seen too little (not scored)"),
         Patch(facecolor="none", edgecolor=MATCHED, label=f"{plan} plan's room, matched (IoU)"),
         Patch(facecolor="none", edgecolor=FALSE_ROOM, label=f"{plan} plan's room, unmatched"),
@@ -115,6 +117,10 @@ def _title(overlay: dict, dataset: str, plan: str) -> str:
     text = (f"{head}\nrooms: precision {r.room_precision:.2f}, recall {r.room_recall:.2f} at IoU 0.5, "
             f"mean IoU {r.room_mean_iou:.2f} ({int(r.n_matched_rooms)} of {int(r.n_true_rooms)} seen true rooms, "
             f"{int(r.n_plan_rooms_scored)} plan rooms)")  # fmt: skip
+    if r.n_matched_rooms < max(r.n_true_rooms, r.n_plan_rooms_scored):
+        text += (f"\nunmatched true rooms: {int(r.n_true_merged)} merged, {int(r.n_true_split)} split, "
+                 f"{int(r.n_true_uncovered)} uncovered\nunmatched plan rooms: {int(r.n_plan_pieces)} a piece of one, "
+                 f"{int(r.n_plan_spanning)} across several, {int(r.n_plan_extra)} where none is drawn")  # fmt: skip
     if overlay["truth"] == "ground_truth":
         text += (f"\ndoors: recall {r.door_recall:.2f}, precision {r.door_precision:.2f}, "
                  f"centre error {r.door_centre_error_m:.2f} m")  # fmt: skip

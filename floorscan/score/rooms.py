@@ -41,7 +41,9 @@ import numpy as np
 import pandas as pd
 
 # match_rooms and its constants are read from here too
-from floorscan.score.segmentation import LEFT_OUT_SHARE, MIN_REGION_PX, ROOM_IOU, match_rooms, segmentation_scores  # noqa: F401
+from floorscan.score.segmentation import (  # noqa: F401
+    LEFT_OUT_SHARE, MIN_REGION_PX, ROOM_ERROR_KEYS, ROOM_IOU, match_rooms, segmentation_scores,
+)
 
 #: A true room counts when the recording saw at least this share of its area.
 SEEN_SHARE = 0.5
@@ -54,10 +56,12 @@ SEEN_WITHIN_M = 0.05
 #: Columns of ``room_scores.csv``: ``truth`` is ``ground_truth`` (the simulator's),
 #: ``drawn`` (a segmentation drawn by people) or ``none``; scores without a truth, and
 #: door scores without true doors, are NaN. ``seg_*`` are Bormann's per-room mean and
-#: pooled precision and recall (:func:`floorscan.score.segmentation.bormann_scores`).
+#: pooled precision and recall (:func:`floorscan.score.segmentation.bormann_scores`);
+#: :data:`~floorscan.score.segmentation.ROOM_ERROR_KEYS` why the rooms left unmatched
+#: are (:func:`floorscan.score.segmentation.room_errors`).
 ROOM_SCORE_COLUMNS = [
     "plan", "truth", "room_precision", "room_recall", "room_mean_iou", "n_true_rooms", "n_true_rooms_all",
-    "n_plan_rooms", "n_plan_rooms_scored", "n_matched_rooms", "door_recall", "door_precision",
+    "n_plan_rooms", "n_plan_rooms_scored", "n_matched_rooms", *ROOM_ERROR_KEYS, "door_recall", "door_precision",
     "door_centre_error_m", "n_true_doors", "n_plan_doors", "n_plan_doors_scored", "n_matched_doors",
     "seg_precision_mean", "seg_precision_pooled", "seg_recall_mean", "seg_recall_pooled",
 ]  # fmt: skip

@@ -12,7 +12,10 @@ two room scores the project uses, from the intersection matrix of true and found
   "pooled"); recall the same over the true rooms (:func:`bormann_scores`).
 - The one-to-one matching of rooms whose IoU is at least 0.5, room precision, recall
   and mean IoU (:func:`match_rooms`: the Hungarian method on the IoU of the pairs
-  at least :data:`ROOM_IOU`, SciPy's ``linear_sum_assignment``).
+  at least :data:`ROOM_IOU`, SciPy's ``linear_sum_assignment``), and why each room
+  left unmatched is (:func:`room_errors`: a true room merged into a larger one, split
+  into pieces, or left uncovered; a plan room a piece of one true room, spanning
+  several, or extra).
 
 :func:`segmentation_scores` computes both from an intersection matrix (pixels or m2),
 on the same rooms: the true rooms that count and the found rooms not left out of
@@ -38,6 +41,13 @@ ROOM_IOU = 0.5
 #: A found room with at least this share of its area in true rooms that do not count is
 #: left out of precision.
 LEFT_OUT_SHARE = 0.5
+#: An unmatched room is explained by where most of it lies (:func:`room_errors`): more
+#: than this share of it in one room of the other side, or in rooms of it at all.
+MOST = 0.5
+#: The causes of :func:`room_errors`, a true room's and a plan room's, and the keys of
+#: their counts (``n_true_<cause>``, ``n_plan_<cause>``).
+TRUE_CAUSES, PLAN_CAUSES = ("merged", "split", "uncovered"), ("pieces", "spanning", "extra")
+ROOM_ERROR_KEYS = tuple(f"n_true_{c}" for c in TRUE_CAUSES) + tuple(f"n_plan_{c}" for c in PLAN_CAUSES)
 #: Regions of this many pixels or fewer, true or found, are not scored (ipa's code).
 MIN_REGION_PX = 100
 #: A pixel of a drawing of white regions between lines is white above this grey level,
@@ -106,10 +116,11 @@ def match_rooms(
         ``room_recall`` (matched / counted true rooms; NaN without any),
         ``room_mean_iou`` (of the matched pairs; NaN without any), ``n_true_rooms``
         (counted), ``n_true_rooms_all``, ``n_plan_rooms``, ``n_plan_rooms_scored``,
-        ``n_matched_rooms``.
+        ``n_matched_rooms``, and why the others are unmatched (:func:`room_errors`).
     detail : dict
         ``iou`` (T, P), ``pairs`` (K, 2) int (true, plan index), ``pair_iou`` (K,),
-        ``left_out`` (P,) bool.
+        ``left_out`` (P,) bool, ``true_cause`` (T,) and ``plan_cause`` (P,) str
+        (:func:`room_errors`).
     """
     from scipy.optimize import linear_sum_assignment
 
@@ -139,7 +150,65 @@ def match_rooms(
         "n_true_rooms": len(ti), "n_true_rooms_all": len(ta), "n_plan_rooms": len(pa),
         "n_plan_rooms_scored": len(pi), "n_matched_rooms": k,
     }  # fmt: skip
-    return scores, {"iou": iou, "pairs": pairs, "pair_iou": pair_iou, "left_out": left_out}
+    counts, true_cause, plan_cause = room_errors(inter, ta, pa, ti, pi, pairs)
+    scores.update(counts)
+    return scores, {"iou": iou, "pairs": pairs, "pair_iou": pair_iou, "left_out": left_out,
+                    "true_cause": true_cause, "plan_cause": plan_cause}  # fmt: skip
+
+
+def room_errors(inter: np.ndarray, true_area: np.ndarray, plan_area: np.ndarray, true_rooms: np.ndarray,
+                plan_rooms: np.ndarray, pairs: np.ndarray) -> tuple[dict, np.ndarray, np.ndarray]:  # fmt: skip
+    """Why the rooms that the matching leaves unmatched are unmatched, by where most
+    (:data:`MOST`) of each lies.
+
+    A true room is *merged* when one plan room holds most of it (the match fails on
+    the plan room's other part: other rooms, or space, joined to it), *split* when the
+    plan rooms hold most of it but none alone does, *uncovered* when they do not. A plan
+    room is one of the *pieces* of a true room when most of it lies in that one (the
+    rest of the room is elsewhere), *spanning* when most of it lies in true rooms but in none alone, *extra*
+    when most of it lies in none (space no one drew as a room).
+
+    Parameters
+    ----------
+    inter : (T, P) float ndarray
+        Intersection areas (:func:`match_rooms`).
+    true_area : (T,) float ndarray
+    plan_area : (P,) float ndarray
+    true_rooms, plan_rooms : int ndarray
+        The true rooms that count and the plan rooms scored (indices).
+    pairs : (K, 2) int ndarray
+        The matched (true, plan) pairs.
+
+    Returns
+    -------
+    counts : dict
+        ``n_true_merged``, ``n_true_split``, ``n_true_uncovered``, ``n_plan_pieces``,
+        ``n_plan_spanning``, ``n_plan_extra`` (ints; each side's three sum to its
+        unmatched rooms).
+    true_cause : (T,) object ndarray
+        ``"merged"``, ``"split"`` or ``"uncovered"`` for each unmatched true room that
+        counts, ``""`` for the others.
+    plan_cause : (P,) object ndarray
+        ``"pieces"``, ``"spanning"`` or ``"extra"`` for each unmatched plan room scored,
+        ``""`` for the others.
+    """
+    inter = np.asarray(inter, dtype=np.float64)
+    ta, pa = np.asarray(true_area, np.float64), np.asarray(plan_area, np.float64)
+    true_rooms, plan_rooms = np.asarray(true_rooms, dtype=np.int64), np.asarray(plan_rooms, dtype=np.int64)
+    ti = np.setdiff1d(true_rooms, pairs[:, 0])
+    pi = np.setdiff1d(plan_rooms, pairs[:, 1])
+    t_best = inter[np.ix_(ti, plan_rooms)].max(axis=1, initial=0.0)
+    t_all = inter[np.ix_(ti, plan_rooms)].sum(axis=1)
+    p_best = inter[np.ix_(true_rooms, pi)].max(axis=0, initial=0.0)
+    p_all = inter[np.ix_(true_rooms, pi)].sum(axis=0)
+    t_most, p_most = MOST * ta[ti], MOST * pa[pi]
+    true_cause, plan_cause = np.full(len(ta), "", dtype=object), np.full(len(pa), "", dtype=object)
+    true_cause[ti] = np.where(t_best > t_most, "merged", np.where(t_all > t_most, "split", "uncovered"))
+    plan_cause[pi] = np.where(p_best > p_most, "pieces", np.where(p_all > p_most, "spanning", "extra"))
+    counts = {f"n_{side}_{c}": int(np.count_nonzero(cause == c))
+              for side, cause, causes in (("true", true_cause, TRUE_CAUSES), ("plan", plan_cause, PLAN_CAUSES))
+              for c in causes}  # fmt: skip
+    return counts, true_cause, plan_cause
 
 
 def segmentation_scores(
