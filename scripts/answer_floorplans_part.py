@@ -4,16 +4,14 @@ a geometric grid, as Parquet tables for the score stage's answer curve
 (floorscan.floorplan.answer_plans; rule answer_floorplans merges the shares). The walls
 of a set of scans are the walls stage's map extractor (floorscan.walls.map_lines). The
 last k, all kept scans, is the plan of rule all_scans_floorplan, not built here."""
-from dataclasses import replace
-
 from floorscan.core.config import stage_params
 from floorscan.core.io import read_table
-from floorscan.core.occupancy import OccupancyParams
 from floorscan.core.stage import stage_log
 from floorscan.core.wall_points import ScanParams
 from floorscan.floorplan.answer_plans import first_k_scans_points, write_answer_plans
 from floorscan.floorplan.params import FloorplanParams
 from floorscan.walls.map_lines import MapParams, map_segments
+from floorscan.walls.map_stage import map_grid_params
 
 with stage_log(snakemake) as log:  # noqa: F821
     smk = snakemake  # noqa: F821
@@ -28,7 +26,7 @@ with stage_log(snakemake) as log:  # noqa: F821
     scans = first_k_scans_points(smk.input.registered, read_table(smk.input.registration),
                                  read_table(smk.input.ordering), stage_params(ScanParams, walls))
     done = write_answer_plans(
-        scans, segments_of, replace(OccupancyParams(), resolution_m=map_params.support_cell_m),
+        scans, segments_of, map_grid_params(walls),
         stage_params(FloorplanParams, smk.params.floorplan), smk.output.plans,
         {"dataset": smk.wildcards.dataset, "ordering": smk.params.ordering},
         part=int(smk.wildcards.part), parts=int(smk.params.parts), all_scans=False,
