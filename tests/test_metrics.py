@@ -162,8 +162,31 @@ def test_a_missing_wall_halves_recall():
     assert m["recall_5cm"] == pytest.approx(0.5)
     assert m["precision_5cm"] == pytest.approx(1.0)
     assert m["f1_5cm"] == pytest.approx(2 / 3)
-    # Half the ground truth is 3 m away, half is on the wall: the median lies between.
-    assert 0.0 <= m["median_distance_m"] <= 3.0
+    # Half the ground truth is 3 m away, beyond the cut-off: the distances count the
+    # half on the wall only.
+    assert m["median_distance_m"] == pytest.approx(0.0, abs=1e-12)
+    assert m["mean_distance_m"] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_the_distances_count_the_ground_truth_within_the_cut_off():
+    """The ISPRS benchmark's accuracy: the samples within DISTANCE_CUTOFF_M (1 m) of an
+    inferred wall, here a wall on the inferred one and one 0.5 m from it; the wall 3 m
+    away does not count (with it, the median would be 0.5 m and the mean 1.17 m)."""
+    from floorscan.score.tolerance import DISTANCE_CUTOFF_M
+
+    assert DISTANCE_CUTOFF_M == 1.0
+    gt = [[0, 0, 5, 0], [0, 0.5, 5, 0.5], [0, 3, 5, 3]]
+    m = tolerance_metrics([[0, 0, 5, 0]], gt, taus=(0.05,))
+    assert m["recall_5cm"] == pytest.approx(1 / 3)
+    assert m["median_distance_m"] == pytest.approx(0.25)
+    assert m["mean_distance_m"] == pytest.approx(0.25)
+    # nothing within the cut-off: no distance to report
+    far = tolerance_metrics([[0, 0, 5, 0]], [[0, 3, 5, 3]], taus=(0.05,))
+    assert math.isnan(far["median_distance_m"]) and math.isnan(far["mean_distance_m"])
+    # a tolerance beyond the cut-off is measured in full (the bound is twice it)
+    wide = tolerance_metrics([[0, 0, 5, 0]], gt, taus=(0.05, 3.0))
+    assert wide["recall_300cm"] == pytest.approx(1.0)
+    assert wide["median_distance_m"] == pytest.approx(0.25)
 
 
 def test_partial_overlap_counts_the_end_disk():

@@ -24,7 +24,7 @@ from floorscan.score.capsule import lengths_within
 from floorscan.score.nearest import grown_boxes, nearest_below, SegmentIndex
 from floorscan.score.segments import row_keys
 from floorscan.core.segments import MIN_SEGMENT_M, split_long, segment_lengths
-from floorscan.score.tolerance import tolerance_from, tolerance_metrics
+from floorscan.score.tolerance import distance_bound, tolerance_from, tolerance_metrics
 from floorscan.core.score_tables import tau_label
 
 
@@ -211,7 +211,8 @@ class GrowingWalls:
     The samples within :data:`PAIR_REACH_M` of a new wall take their distance from
     the wall's :class:`SamplePairs` (the nearest wall of a sample within the reach
     of a wall is within it too); the samples no wall has come within reach of yet
-    are measured by :func:`floorscan.score.nearest.nearest_below`.
+    are measured by :func:`floorscan.score.nearest.nearest_below` up to
+    :func:`~floorscan.score.tolerance.distance_bound`, not beyond it.
     ``recall_all_<tau>`` takes the pairs within the largest tau of ``all_pairs``. The
     pairs and ``raster_cache`` (``{row key: flat wall cells}``, see
     :func:`floorscan.core.segment_raster.segment_cells`) may be shared by the growing sets of
@@ -243,7 +244,7 @@ class GrowingWalls:
     def _reset(self):
         self.keys = set()
         self.d_near = np.full(len(self.samples), np.inf)
-        self.d_far = np.full(len(self.samples), np.inf)
+        self.d_far = np.full(len(self.samples), distance_bound(self.taus))
         self.d = np.full(len(self.samples), np.inf)
         if self.all_samples is not None:
             self.hit_all = np.zeros((len(self.taus), len(self.all_samples)), dtype=bool)

@@ -10,9 +10,11 @@ to 2D wall segments; thesis Chapter 6 asks for "more robust error metrics".
   inferred segment, measured on ground-truth samples every ``sample_step_m`` (default
   1 cm) deduplicated on a grid of the same size
   (:func:`floorscan.score.segments.gt_samples`), with exact sample-to-segment distances
-  (:func:`floorscan.score.nearest.nearest_distances`);
+  (:func:`floorscan.score.nearest.nearest_below`);
 - *F1*: the harmonic mean; *median distance*: the median (and mean) of the same
-  samples' distances to the nearest inferred segment.
+  samples' distances to the nearest inferred segment, over the samples within
+  :data:`DISTANCE_CUTOFF_M` of one (the benchmark's *accuracy*: the distances within a
+  cut-off, so that walls no scan has seen yet do not swamp it).
 
 Columns are named by the tolerance (:func:`~floorscan.core.score_tables.tau_label`): ``precision_5cm``,
 ``recall_5cm``, ``f1_5cm``, ...
@@ -35,9 +37,22 @@ import numpy as np
 
 from floorscan.core.score_tables import tau_label
 from floorscan.score.capsule import lengths_within, length_within
-from floorscan.score.nearest import SegmentIndex, pairs_within, nearest_distances
+from floorscan.score.nearest import SegmentIndex, nearest_below, pairs_within
 from floorscan.score.segments import row_keys, gt_samples
 from floorscan.core.segments import MIN_SEGMENT_M, as_segments, segment_lengths
+
+#: The median and mean distance count the ground-truth samples within this of an
+#: inferred wall, metres: ten times the largest default tolerance, the cut-off of the
+#: plans' distances to the reference map
+#: (:mod:`floorscan.score.against_reference`).
+DISTANCE_CUTOFF_M = 1.0
+
+
+def distance_bound(taus) -> float:
+    """How far the samples' distances are measured, metres: the cut-off, and twice the
+    largest tolerance when that is farther (a sample at the bound is beyond every
+    tolerance, so recall needs no farther distance)."""
+    return max(DISTANCE_CUTOFF_M, 2 * max(taus, default=0.0))
 
 
 def _f1(p: float, r: float, has_inferred: bool, has_gt: bool) -> float:
@@ -88,7 +103,9 @@ def tolerance_metrics(
     dict
         ``precision_<tau>``, ``recall_<tau>``, ``f1_<tau>`` for each tau (suffix from
         :func:`~floorscan.core.score_tables.tau_label`, e.g. ``f1_5cm``); ``median_distance_m`` and
-        ``mean_distance_m`` (NaN without inferred or ground-truth walls);
+        ``mean_distance_m`` over the samples within :data:`DISTANCE_CUTOFF_M` of an
+        inferred wall (NaN without inferred or ground-truth walls, or without such a
+        sample);
         ``inferred_length_m``, ``gt_length_m`` (sums of segment lengths) and
         ``n_gt_samples``. Empty sets: see the module docstring (precision NaN and F1 0
         with nothing inferred).
@@ -99,7 +116,8 @@ def tolerance_metrics(
     len_g = float(segment_lengths(gt).sum())
     has_i, has_g = len_i > MIN_SEGMENT_M, len_g > MIN_SEGMENT_M
     pts = gt_samples(gt, sample_step_m) if samples is None else samples
-    d = nearest_distances(pts, inf) if has_i else np.full(len(pts), np.inf)
+    d = (nearest_below(pts, SegmentIndex(inf), np.full(len(pts), distance_bound(taus))) if has_i
+         else np.full(len(pts), np.inf))
     covered = {tau: float(length_within(inf, gt, tau).sum()) if has_i and has_g else 0.0 for tau in taus}
     return tolerance_from(len_i, len_g, len(pts), d, covered, taus)
 
@@ -134,9 +152,10 @@ def tolerance_from(len_i: float, len_g: float, n_pts: int, d: np.ndarray, covere
     for tau in taus:
         r = float(np.mean(d <= tau)) if has_g and n_pts else math.nan
         _set_prf(out, tau, covered[tau], len_i, r, has_i, has_g)
-    if has_i and has_g and n_pts:
-        out["median_distance_m"] = float(np.median(d))
-        out["mean_distance_m"] = float(np.mean(d))
+    near = d[d < DISTANCE_CUTOFF_M]
+    if has_i and has_g and len(near):
+        out["median_distance_m"] = float(np.median(near))
+        out["mean_distance_m"] = float(np.mean(near))
     else:
         out["median_distance_m"] = math.nan
         out["mean_distance_m"] = math.nan
