@@ -199,6 +199,53 @@ def test_the_outside_seen_through_an_opening_is_not_a_room():
     assert 29.5 < rooms["area_m2"].iloc[0] < 31.5 and rooms["polygon"].iloc[0].bounds[1] > -0.25
 
 
+# A corridor (y 0..2) along four offices (y 2..6, 5 m wide), each open to it through
+# a 2.2 m opening, wider than a door and narrower than the office.
+OFFICES_ON_A_CORRIDOR = [
+    (0, 0, 20, 0), (20, 0, 20, 6), (20, 6, 0, 6), (0, 6, 0, 0), (5, 2, 5, 6), (10, 2, 10, 6), (15, 2, 15, 6),
+    (0, 2, 1.4, 2), (3.6, 2, 6.4, 2), (8.6, 2, 11.4, 2), (13.6, 2, 16.4, 2), (18.6, 2, 20, 2),
+]  # fmt: skip
+
+
+def test_offices_open_to_a_corridor_wider_than_a_door_are_rooms():
+    """The sides of a corridor (:mod:`floorscan.floorplan.corridors`): the two parallel
+    lines of wall at y 0 and 2 make the strip between them a corridor, and its openings
+    bound the offices. Without them each office took a part of the corridor: four
+    rooms of 28 m2 with three doors across the corridor."""
+    from floorscan.floorplan.corridors import corridor_sides
+    from floorscan.floorplan.room_space import room_space
+
+    axes = np.array(OFFICES_ON_A_CORRIDOR, dtype=np.float64)
+    scans = [(x, 1.0) for x in (2, 6, 10, 14, 18)] + [(x, 4.5) for x in (2.5, 7.5, 12.5, 17.5)]
+    grid = _grid(OFFICES_ON_A_CORRIDOR, scans)
+    thick = np.full(len(axes), T)
+    cuts = corridor_sides(axes, thick, room_space(grid, axes, thick, RoomParams()), RoomParams())
+    got = sorted((min(p[0], q[0]), max(p[0], q[0])) for p, q, _ in cuts)
+    assert np.allclose(got, [(1.4, 3.6), (6.4, 8.6), (11.4, 13.6), (16.4, 18.6)], atol=0.15)  # 0.1 m cells
+    assert all(abs(p[1] - 2) < 0.02 and abs(q[1] - 2) < 0.02 for p, q, _ in cuts)
+    rooms, doors = plan_rooms(axes, thick, grid, RoomParams())
+    assert sorted(rooms["kind"]) == ["corridor", "room", "room", "room", "room"] and len(doors) == 0
+    assert all(18.0 < a < 19.5 for a in rooms[rooms["kind"] == "room"]["area_m2"])  # 5 x 4 m less half walls
+    corridor = rooms[rooms["kind"] == "corridor"]["polygon"].iloc[0]
+    assert shapely.box(0.1, 0.1, 19.9, 1.9).difference(corridor).area < 0.3
+
+
+def test_a_corridor_that_another_goes_on_from_stays_one_room():
+    """A T junction: the opening in the long corridor's side leads into a corridor 12 m
+    long and 2 m wide (more than four times its width), so it is not cut."""
+    from floorscan.floorplan.corridors import corridor_sides
+    from floorscan.floorplan.room_space import room_space
+
+    walls = [(0, 0, 20, 0), (20, 0, 20, 2), (20, 2, 11, 2), (11, 2, 11, 14), (11, 14, 9, 14), (9, 14, 9, 2),
+             (9, 2, 0, 2), (0, 2, 0, 0)]  # fmt: skip
+    axes = np.array(walls, dtype=np.float64)
+    thick = np.full(len(axes), T)
+    grid = _grid(walls, [(x, 1.0) for x in (2, 6, 10, 14, 18)] + [(10, y) for y in (4, 8, 12)])
+    assert corridor_sides(axes, thick, room_space(grid, axes, thick, RoomParams()), RoomParams()) == []
+    rooms, doors = plan_rooms(axes, thick, grid, RoomParams())
+    assert len(rooms) == 1 and len(doors) == 0 and 58 < rooms["area_m2"].iloc[0] < 62
+
+
 # A corridor (y 0..1.5) along three offices (y 1.5..4.5) open to it on their whole
 # width: partitions at x = 3 and 6 end at the corridor, short returns at the ends.
 OPEN_OFFICES = [

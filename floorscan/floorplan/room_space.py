@@ -43,6 +43,12 @@ CORRIDOR_ELONGATION = 4.0
 CORRIDOR_MIN_LENGTH_M = 3.0
 #: ... is a corridor when at most this wide (median local thickness), metres: wider is a hall.
 CORRIDOR_MAX_WIDTH_M = 3.0
+#: A room is mostly at least this wide (its median local thickness), metres: the
+#: narrowest walkway, the minimum clear width of a walking surface (36 in, 2010 ADA
+#: Standards 403.5.1; 0.9 m, the narrowest escape route of European building codes).
+#: A narrower strip of space is the gap between two walls or a fan of rays along a
+#: wall, not a room.
+MIN_ROOM_WIDTH_M = 0.9
 
 
 @dataclass(frozen=True)

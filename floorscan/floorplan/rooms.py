@@ -32,7 +32,10 @@ taken from the walls:
    the walls that bound a room open on its whole width onto a corridor (an office, a
    cubicle), or across the missing corner of two walls
    (:func:`~floorscan.floorplan.mouths.corner_mouths`: a corridor's corner open to the
-   room beyond it); a door where no wider than one. The rooms are then segmented again
+   room beyond it); a door where no wider than one. So are the openings, however wide,
+   in the sides of a corridor, the strip between two long parallel lines of wall
+   (:func:`~floorscan.floorplan.corridors.corridor_sides`), except where another
+   corridor goes on from it. The rooms are then segmented again
    (steps 3-5) where a partition stopping short of a wall, with an opening wider
    than a door, divides a room that wraps around it
    (:func:`~floorscan.floorplan.extensions.partition_cuts`).
@@ -65,9 +68,9 @@ taken from the walls:
    bounding box of its seen floor cut by each nearby wall's half-plane); the door
    openings in the walls belong to no room; the rooms a coverage (:func:`~floorscan.floorplan.room_polygons.disjoint_rooms`:
    a sliver two rooms grew into is the first's). A room mostly narrower than a walkway
-   (:data:`MIN_ROOM_WIDTH_M`, its median local thickness: the unseen gap between two
-   walls, a strip beside a corridor) joins the room of its widest doors, or goes
-   without one. Valid polygons, holes allowed, in map
+   (:data:`~floorscan.floorplan.room_space.MIN_ROOM_WIDTH_M`, its median local
+   thickness: the unseen gap between two walls, a strip beside a corridor) joins the
+   room of its widest doors, or goes without one. Valid polygons, holes allowed, in map
    metres, numbered ``Room 1``, ``Corridor 1``, ``Space 1`` in reading order (top to
    bottom, left to right).
 
@@ -87,24 +90,18 @@ import pandas as pd
 from floorscan.core.geometry import OVERLAY_GRID_M, minus
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan import doors as D
+from floorscan.floorplan.corridors import corridor_sides
 from floorscan.floorplan.extensions import partition_cuts
 from floorscan.floorplan.hidden import OBJECT_MAX_DEPTH_M
 from floorscan.floorplan.mouths import corner_mouths, room_mouths
 from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
 from floorscan.floorplan.room_polygons import disjoint_rooms, largest_polygon, room_polygons
-from floorscan.floorplan.room_space import RoomParams, RoomRaster, enclosure_cells, room_space, space_regions
+from floorscan.floorplan.room_space import (MIN_ROOM_WIDTH_M, RoomParams, RoomRaster, enclosure_cells, room_space,
+                                            space_regions)
 from floorscan.floorplan.room_tables import room_tables, room_width
 
 log = logging.getLogger(__name__)
-
-#: A room is mostly at least this wide (its median local thickness), metres: the
-#: narrowest walkway, the minimum clear width of a walking surface (36 in, 2010 ADA
-#: Standards 403.5.1; 0.9 m, the narrowest escape route of European building codes).
-#: A narrower strip of space is the gap between two walls or a fan of rays along a
-#: wall, not a room.
-MIN_ROOM_WIDTH_M = 0.9
-
 
 def _sets(n: int):
     """Disjoint sets of region labels 0..n (SciPy's :class:`~scipy.cluster.hierarchy.DisjointSet`)."""
@@ -156,6 +153,7 @@ def segment_rooms(
     gaps = [g for g in D.wall_gaps(axes, thickness, params) + corner_mouths(axes, thickness, params)
             if D.passes_through(raster, g[0], g[1])]
     gaps += room_mouths(axes, thickness, raster, params)
+    gaps += [g for g in corridor_sides(axes, thickness, raster, params) if D.passes_through(raster, g[0], g[1])]
     segmented = _segment(grid, axes, thickness, params, raster, gaps)
     cuts = partition_cuts(axes, thickness, raster, segmented[1], params)
     if cuts:  # the rooms again, cut where partitions stop short of a wall
@@ -371,8 +369,9 @@ def _opening(p: np.ndarray, q: np.ndarray, thickness_m: float, resolution_m: flo
 
 
 def _narrow_rooms_joined(polys: list, doors: list, thickness: np.ndarray, resolution_m: float):
-    """Rooms mostly narrower than :data:`MIN_ROOM_WIDTH_M` (their median local thickness,
-    :func:`~floorscan.floorplan.room_tables.room_width`) are no rooms: each joins the
+    """Rooms mostly narrower than :data:`~floorscan.floorplan.room_space.MIN_ROOM_WIDTH_M`
+    (their median local thickness, :func:`~floorscan.floorplan.room_tables.room_width`)
+    are no rooms: each joins the
     room it shares the widest doors with (their openings with it, :func:`_opening`), the narrowest first;
     one without a door goes. Returns the polygons (a joined room's empty) and the doors
     (``(p, q, wall, a, b)``, rooms numbered from 1) between the rooms left."""

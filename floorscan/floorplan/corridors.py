@@ -1,0 +1,231 @@
+"""The sides of corridors (:func:`corridor_sides`): a corridor is the strip of space
+between two long parallel lines of wall, and an opening in its sides, however wide, is
+a room boundary, unless another corridor goes on from it.
+
+A distance-transform segmentation (:mod:`floorscan.floorplan.persistence`) parts two
+spaces only where the space narrows to a door, so an office open onto a corridor
+through an opening wider than a door, or through a row of cabinets, is one room with
+the corridor. A rule on the opening alone cannot tell it from a widening of the
+corridor; the two parallel lines of wall that run past it can. People draw a
+corridor from its two walls and its rooms' boundaries on their line, as the layouts of
+Luperto et al. ("Robust structure identification and room segmentation of cluttered
+indoor environments from occupancy grid maps", RA-L 2022, ROSE^2) extend the walls'
+lines across their openings; the corridor as a long, narrow strip is that of Bormann
+et al. ("Room segmentation: survey, implementation, and analysis", ICRA 2016).
+
+1. **Lines**: the plan's walls grouped into lines, each wall in the line of the
+   longest wall whose line holds its ends (within half the thicker wall plus
+   ``line_offset_m``, as :func:`~floorscan.floorplan.doors.wall_gaps` joins walls).
+2. **Corridors**: a line and a parallel one (directions within ``door_angle_deg``;
+   the second's walls over their common length within ``2 line_offset_m`` of one
+   offset), with a clear width between the two of at least
+   :data:`~floorscan.floorplan.room_space.MIN_ROOM_WIDTH_M` and at most
+   ``corridor_max_width_m``. The corridor is each run of their common length whose
+   middle line lies in the space and crosses no wall across the middle half of the
+   strip (rooms in a row with doors between them, or a door across a corridor), at
+   least ``corridor_min_length_m`` and ``corridor_elongation`` times its width long,
+   and bounded on each side, within :data:`SIDE_STEP_M` of the side's line, by cells
+   that are not space along at least :data:`SIDE_WALL_SHARE` of it. Of corridors over
+   one another, the narrowest is kept (the inner faces of a stepped side).
+3. **Sides**: each opening in a side, at least ``door_min_m`` wide, that leads into
+   space, is cut on the side's line, unless the space behind it goes on away from the
+   corridor for ``corridor_elongation`` times its width or more, or lies in another
+   corridor (another corridor meets this one there, and the two stay one room), or
+   ends within :data:`~floorscan.floorplan.mouths.MOUTH_MIN_DEPTH` times the opening's
+   width (a niche of the corridor, as the open sides of rooms take it).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from floorscan.floorplan.doors import contact_door, wall_units
+from floorscan.floorplan.mouths import MOUTH_MIN_DEPTH
+from floorscan.floorplan.room_space import MIN_ROOM_WIDTH_M, RoomParams, RoomRaster
+
+#: A corridor's side is bounded along at least this share of the corridor's length:
+#: its sides are walls with doors in them, more wall than opening.
+SIDE_WALL_SHARE = 0.5
+#: A corridor's side steps from its line by at most this, metres, and is still its
+#: side: the depth of a column's face, a door's recess or a row of cabinets along it.
+SIDE_STEP_M = 0.5
+
+
+def _lines(axes: np.ndarray, thickness: np.ndarray, u: np.ndarray, length: np.ndarray,
+           line_offset_m: float) -> list[list[int]]:
+    """Walls grouped into lines (module docstring, step 1): the walls of each line,
+    its longest first (``u``, ``length``: :func:`~floorscan.floorplan.doors.wall_units`)."""
+    ends = axes.reshape(-1, 2, 2)
+    lines: list[list[int]] = []
+    for i in np.argsort(-length, kind="stable"):
+        if length[i] <= 0:
+            continue
+        for line in lines:
+            a = line[0]
+            n = np.array([-u[a, 1], u[a, 0]])
+            off = max(thickness[a], thickness[i]) / 2 + line_offset_m
+            if np.abs((ends[i] - ends[a, 0]) @ n).max() <= off:
+                line.append(int(i))
+                break
+        else:
+            lines.append([int(i)])
+    return lines
+
+
+def _bounded(raster: RoomRaster, o: np.ndarray, u: np.ndarray, n: np.ndarray, t: np.ndarray, a: float,
+             b: float) -> np.ndarray:
+    """(K,) bool: whether the band from ``a`` to ``b`` metres along ``n`` from the line
+    ``o + t u`` holds a cell that is not space (a wall, an obstacle, the unseen), at
+    each ``t``."""
+    offs = np.arange(a, b + raster.resolution_m / 4, raster.resolution_m / 2)
+    pts = o + t[:, None, None] * u + offs[None, :, None] * n
+    free = raster.at(raster.space, pts.reshape(-1, 2), outside=False).reshape(len(t), len(offs))
+    return ~free.all(axis=1)
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Half-open index runs of True in ``mask``."""
+    d = np.diff(np.r_[0, mask.astype(np.int8), 0])
+    return list(zip(np.flatnonzero(d == 1).tolist(), np.flatnonzero(d == -1).tolist()))
+
+
+def _corridors(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster, params: RoomParams) -> list[dict]:
+    """The corridors (module docstring, steps 1-2): per corridor, ``polygon`` (between
+    the axes of its sides), ``origin``, ``u`` (a point of the first side's line and its
+    direction), ``n`` (the unit normal toward the second side), ``sep`` (metres between
+    the sides' lines), ``t0`` (its start along ``u``), ``step`` and, per side,
+    ``open`` ((K,) bool at ``t0 + (i + 1/2) step``) and ``walls`` (the side's line)."""
+    import shapely
+
+    u_all, length = wall_units(axes)
+    lines = _lines(axes, thickness, u_all, length, params.line_offset_m)
+    line_of = np.full(len(axes), -1)
+    for k, ws in enumerate(lines):
+        line_of[ws] = k
+    ends = axes.reshape(-1, 2, 2)
+    cos_par = np.cos(np.radians(params.door_angle_deg))
+    step = raster.resolution_m
+    tree = shapely.STRtree(shapely.linestrings(ends))
+    found = []
+    for ia, wa in enumerate(lines):
+        ua, oa = u_all[wa[0]], ends[wa[0], 0]
+        na = np.array([-ua[1], ua[0]])
+        ta = np.sort((ends[wa] - oa) @ ua, axis=1)
+        lo_a, hi_a = ta[:, 0].min(), ta[:, 1].max()
+        if hi_a - lo_a < params.corridor_min_length_m:
+            continue
+        par = np.flatnonzero((np.abs(u_all @ ua) >= cos_par) & (line_of > ia))
+        if not len(par):
+            continue
+        w_off = ((ends[par] - oa) @ na).mean(axis=1)
+        w_t = np.sort((ends[par] - oa) @ ua, axis=1)
+        for ib in np.unique(line_of[par]).tolist():
+            in_b = line_of[par] == ib
+            lo, hi = max(lo_a, w_t[in_b, 0].min()), min(hi_a, w_t[in_b, 1].max())
+            if hi - lo < params.corridor_min_length_m:
+                continue
+            span = np.clip(w_t[in_b, 1], lo, hi) - np.clip(w_t[in_b, 0], lo, hi)
+            offs = w_off[in_b][span > 0]
+            if not len(offs) or np.ptp(offs) > 2 * params.line_offset_m:
+                continue
+            sep_signed = float(np.average(offs, weights=span[span > 0]))
+            sep = abs(sep_signed)
+            clear = sep - (thickness[wa].max() + thickness[lines[ib]].max()) / 2
+            if not MIN_ROOM_WIDTH_M <= clear <= params.corridor_max_width_m:
+                continue
+            n = na if sep_signed > 0 else -na
+            t = np.arange(lo, hi, step) + step / 2
+            free = raster.at(raster.space, oa + t[:, None] * ua + (sep / 2) * n, outside=False).astype(bool)
+            middle = shapely.Polygon([oa + lo * ua + sep / 4 * n, oa + hi * ua + sep / 4 * n,
+                                      oa + hi * ua + 3 * sep / 4 * n, oa + lo * ua + 3 * sep / 4 * n])
+            for j in tree.query(middle, predicate="intersects").tolist():
+                if abs(float(u_all[j] @ ua)) < cos_par:  # a wall across the strip
+                    tj = (ends[j] - oa) @ ua
+                    free &= ~((t >= tj.min() - thickness[j] / 2) & (t <= tj.max() + thickness[j] / 2))
+            side_a = _bounded(raster, oa, ua, n, t, -SIDE_STEP_M, min(SIDE_STEP_M, clear / 2))
+            side_b = _bounded(raster, oa, ua, n, t, max(sep - SIDE_STEP_M, sep - clear / 2), sep + SIDE_STEP_M)
+            for s, e in _runs(free):
+                if (e - s) * step < max(params.corridor_min_length_m, params.corridor_elongation * clear):
+                    continue
+                if side_a[s:e].mean() < SIDE_WALL_SHARE or side_b[s:e].mean() < SIDE_WALL_SHARE:
+                    continue
+                t0, t1 = float(t[s] - step / 2), float(t[e - 1] + step / 2)
+                corners = [oa + t0 * ua, oa + t1 * ua, oa + t1 * ua + sep * n, oa + t0 * ua + sep * n]
+                sides = ((~side_a[s:e], list(wa), 0.0, -1.0), (~side_b[s:e], list(lines[ib]), sep, 1.0))
+                found.append(dict(polygon=shapely.Polygon(corners), origin=oa, u=ua, n=n, sep=sep, t0=t0, step=step,
+                                  sides=sides))
+    kept: list[dict] = []
+    for c in sorted(found, key=lambda c: (c["sep"], -c["polygon"].area)):
+        if all(c["polygon"].intersection(k["polygon"]).area < 0.5 * c["polygon"].area for k in kept):
+            kept.append(c)
+    return kept
+
+
+def corridor_sides(
+    axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster, params: RoomParams
+) -> list[tuple[np.ndarray, np.ndarray, int]]:
+    """The openings in the sides of the plan's corridors (module docstring).
+
+    Parameters
+    ----------
+    axes : (N, 4) float ndarray
+        Wall axes ``x0, y0, x1, y1``, metres.
+    thickness : (N,) float ndarray
+        Metres.
+    raster : RoomRaster
+        The space before it is cut.
+    params : RoomParams
+
+    Returns
+    -------
+    list of (p, q, wall)
+        Each opening from ``p`` to ``q`` ((2,) metres, on the side's line) and the
+        side's wall nearest to it.
+    """
+    import shapely
+    from scipy import ndimage
+
+    axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
+    thickness = np.asarray(thickness, dtype=np.float64).reshape(-1)
+    if len(axes) < 2:
+        return []
+    strips = _corridors(axes, thickness, raster, params)
+    if not strips:
+        return []
+    mids = (axes[:, :2] + axes[:, 2:]) / 2
+    half_width = ndimage.distance_transform_edt(raster.space) * raster.resolution_m
+    strip_tree = shapely.STRtree([s["polygon"] for s in strips])
+    out = []
+    for k, s in enumerate(strips):
+        for opening, walls, off, outward in s["sides"]:
+            for a, b in _runs(opening):
+                g0, g1 = s["t0"] + a * s["step"], s["t0"] + b * s["step"]
+                if g1 - g0 < params.door_min_m:
+                    continue
+                p = s["origin"] + g0 * s["u"] + off * s["n"]
+                q = s["origin"] + g1 * s["u"] + off * s["n"]
+                mid = (p + q) / 2
+                behind = mid + outward * s["n"] * min(s["sep"] / 2, SIDE_STEP_M)
+                if not raster.at(raster.space, behind[None], outside=False)[0]:
+                    continue
+                if any(j != k for j in strip_tree.query(shapely.Point(behind), predicate="within").tolist()):
+                    continue  # another corridor's strip
+                # how far the space goes on away from the corridor: for
+                # corridor_elongation times its width, another corridor; for less than
+                # MOUTH_MIN_DEPTH times the opening, a recess of this one
+                width = 2 * float(raster.at(half_width, behind[None], outside=0.0)[0])
+                reach = max(params.corridor_elongation * max(width, MIN_ROOM_WIDTH_M), MOUTH_MIN_DEPTH * (g1 - g0))
+                d = np.arange(s["step"] / 2, reach + s["step"], s["step"] / 2)
+                ray = raster.at(raster.space, mid + np.outer(d, outward * s["n"]), outside=False).astype(bool)
+                if ray.all():
+                    continue  # another corridor goes on from here
+                if d[int(np.argmin(ray))] < MOUTH_MIN_DEPTH * (g1 - g0):
+                    continue  # a niche
+                # an opening no wider than a door is the door between its jambs, as a
+                # contact between two rooms is (the run's ends are whole cells)
+                e = s["u"] * s["step"] / 2
+                door = contact_door(p - e, q + e, axes, thickness, params)
+                if door is None:
+                    door = (p, q, int(walls[int(np.argmin(np.hypot(*(mids[walls] - mid).T)))]))
+                out.append(door)
+    return out
