@@ -133,7 +133,8 @@ def first_k_scans_points(
             points[sid] = scan_points_2d(xyz, scan_params)[0]
     order = ordering.sort_values("rank")["scan_id"].to_numpy(np.int64)
     order = order[np.isin(order, list(points))]
-    return [(int(s), reg.loc[s, ["x_m", "y_m"]].to_numpy(np.float64), points[s]) for s in order]
+    origins = reg.loc[order, ["x_m", "y_m"]].to_numpy(np.float64)
+    return [(int(s), origins[i], points[s]) for i, s in enumerate(order)]
 
 
 def answer_plans(
