@@ -499,3 +499,24 @@ def test_a_strip_narrower_than_a_walkway_joins_the_room_it_opens_into():
     east = plan.rooms["polygon"].iloc[1]
     assert east.contains(strip) and not plan.rooms["polygon"].iloc[0].intersects(strip)
     assert 52.0 < plan.rooms["area_m2"].sum() < 54.5
+
+
+def test_a_corridor_crossing_another_keeps_its_short_arm():
+    """A crossing: a corridor 12 m long and 2 m wide meets the long corridor from the
+    south, and goes on north of it, 2.9 m wide, for 3 m to a wall. The north opening
+    faces the south corridor's mouth, so it is that corridor going on through, not a
+    room's side: one room. Cut like an office's open side, the 3 m arm was a room of its
+    own (its walls are in no line of the south corridor's, so it is no part of that
+    corridor's strip)."""
+    from floorscan.floorplan.corridors import corridor_sides
+    from floorscan.floorplan.room_space import room_space
+
+    walls = [(0, 0, 9, 0), (9, 0, 9, -12), (9, -12, 11, -12), (11, -12, 11, 0), (11, 0, 20, 0), (20, 0, 20, 2),
+             (20, 2, 11.6, 2), (11.6, 2, 11.6, 5), (11.6, 5, 8.7, 5), (8.7, 5, 8.7, 2), (8.7, 2, 0, 2),
+             (0, 2, 0, 0)]  # fmt: skip
+    axes = np.array(walls, dtype=np.float64)
+    thick = np.full(len(axes), T)
+    grid = _grid(walls, [(x, 1.0) for x in (2, 6, 10, 14, 18)] + [(10, y) for y in (-10, -6, -2, 3.5)])
+    assert corridor_sides(axes, thick, room_space(grid, axes, thick, RoomParams()), RoomParams()) == []
+    rooms, doors = plan_rooms(axes, thick, grid, RoomParams())
+    assert len(rooms) == 1 and len(doors) == 0 and 66 < rooms["area_m2"].iloc[0] < 69

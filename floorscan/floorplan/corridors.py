@@ -32,7 +32,9 @@ et al. ("Room segmentation: survey, implementation, and analysis", ICRA 2016).
    corridor for ``corridor_elongation`` times its width or more, or lies in another
    corridor (another corridor meets this one there, and the two stay one room), or
    ends within :data:`~floorscan.floorplan.mouths.MOUTH_MIN_DEPTH` times the opening's
-   width (a niche of the corridor, as the open sides of rooms take it).
+   width (a niche of the corridor, as the open sides of rooms take it), or faces, over
+   at least half its width, an opening in the other side into another corridor (a
+   crossing: that corridor goes on through it, however short its far arm).
 """
 
 from __future__ import annotations
@@ -197,7 +199,8 @@ def corridor_sides(
     strip_tree = shapely.STRtree([s["polygon"] for s in strips])
     out = []
     for k, s in enumerate(strips):
-        for opening, walls, off, outward in s["sides"]:
+        mouths, cuts = [], []  # per side: the openings into other corridors, the openings to cut
+        for side, (opening, walls, off, outward) in enumerate(s["sides"]):
             for a, b in _runs(opening):
                 g0, g1 = s["t0"] + a * s["step"], s["t0"] + b * s["step"]
                 if g1 - g0 < params.door_min_m:
@@ -209,7 +212,8 @@ def corridor_sides(
                 if not raster.at(raster.space, behind[None], outside=False)[0]:
                     continue
                 if any(j != k for j in strip_tree.query(shapely.Point(behind), predicate="within").tolist()):
-                    continue  # another corridor's strip
+                    mouths.append((side, g0, g1))  # another corridor's strip
+                    continue
                 # how far the space goes on away from the corridor: for
                 # corridor_elongation times its width, another corridor; for less than
                 # MOUTH_MIN_DEPTH times the opening, a recess of this one
@@ -218,14 +222,19 @@ def corridor_sides(
                 d = np.arange(s["step"] / 2, reach + s["step"], s["step"] / 2)
                 ray = raster.at(raster.space, mid + np.outer(d, outward * s["n"]), outside=False).astype(bool)
                 if ray.all():
-                    continue  # another corridor goes on from here
-                if d[int(np.argmin(ray))] < MOUTH_MIN_DEPTH * (g1 - g0):
-                    continue  # a niche
-                # an opening no wider than a door is the door between its jambs, as a
-                # contact between two rooms is (the run's ends are whole cells)
-                e = s["u"] * s["step"] / 2
-                door = contact_door(p - e, q + e, axes, thickness, params)
-                if door is None:
-                    door = (p, q, int(walls[int(np.argmin(np.hypot(*(mids[walls] - mid).T)))]))
-                out.append(door)
+                    mouths.append((side, g0, g1))  # another corridor goes on from here
+                elif d[int(np.argmin(ray))] >= MOUTH_MIN_DEPTH * (g1 - g0):  # else a niche
+                    cuts.append((side, g0, g1, p, q, mid, walls))
+        for side, g0, g1, p, q, mid, walls in cuts:
+            # across from another corridor's mouth, over half its width or more: that
+            # corridor crosses this one and goes on through it
+            if any(m_side != side and min(g1, m1) - max(g0, m0) >= (g1 - g0) / 2 for m_side, m0, m1 in mouths):
+                continue
+            # an opening no wider than a door is the door between its jambs, as a
+            # contact between two rooms is (the run's ends are whole cells)
+            e = s["u"] * s["step"] / 2
+            door = contact_door(p - e, q + e, axes, thickness, params)
+            if door is None:
+                door = (p, q, int(walls[int(np.argmin(np.hypot(*(mids[walls] - mid).T)))]))
+            out.append(door)
     return out
