@@ -466,3 +466,24 @@ def test_a_piece_of_wall_between_two_doors_with_a_cabinet_against_it_is_a_wall()
     assert len(widths) == 2 and np.abs(widths - [1.0, 1.4]).max() <= 0.1  # within two cells
     # the cabinet's three other faces stay furniture
     assert (plan.clutter["reason"] == "free_standing_object").sum() == 3
+
+
+def test_a_chair_standing_free_in_a_hall_is_loose_however_short_its_pieces():
+    """A chair's back and seat seen as a V of two faces, 0.85 m and 0.25 m, standing in
+    the middle of a hall. The short face is held at the vertex by the long one; its far
+    end, shorter than snap_m from the long face, hangs from the same face and is free,
+    so the V has two free ends in the free space: loose, clutter. Held at both ends by
+    one face, the V was a closed loop and stayed two walls (acapulco's rows of chairs)."""
+    from floorscan.floorplan.clutter import loose_in_free_space
+    from floorscan.floorplan.junctions import junction_ends
+
+    hall = [((0, 0), (10, 0)), ((10, 0), (10, 6)), ((10, 6), (0, 6)), ((0, 6), (0, 0))]
+    chair = [((4.7, 2.2), (5.3, 2.8)), ((5.3, 2.8), (5.55, 2.8))]  # 0.85 m at 45 degrees, 0.25 m
+    rng = np.random.default_rng(2)
+    segments = np.array([[*a, *b] for a, b in hall + chair], dtype=np.float64)
+    scans = [(np.array(p, dtype=np.float64), _scan(p, rng, segments)) for p in [(2, 1.5), (8, 1.5), (2, 4.5), (8, 4.5), (5, 5)]]
+    grid = occupancy_grid(scans, OccupancyParams())
+    snapped, junctions = snap_junctions(segments, StructureParams())
+    _, side = border_and_support(snapped, grid, StructureParams())
+    loose = loose_in_free_space(snapped, junction_ends(snapped, junctions), side, grid, StructureParams())
+    assert loose.tolist() == [False, False, False, False, True, True]

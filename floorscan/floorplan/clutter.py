@@ -270,7 +270,9 @@ def loose_in_free_space(
 
     Faces hold each other at an end: a junction there, another face's end within
     ``snap_m``, or a face at least ``junction_min_angle_deg`` across within ``snap_m``
-    (a curved wall's next piece, a rack's end face). Two faces of one group in one
+    (a curved wall's next piece, a rack's end face). A face within ``snap_m`` at both
+    ends of one face across it (a piece shorter than ``snap_m``: a chair's seat at its
+    back) hangs from it at the nearer end only. Two faces of one group in one
     line hold each other's facing ends across a gap of at most ``join_max_gap_m`` (an
     opening in their wall, which step 2 kept open): a closed loop of walls with doors in
     it (a core of rooms standing free of the outer walls) has no free end. A group of
@@ -407,7 +409,8 @@ def _held_across_openings(seg: np.ndarray, i: np.ndarray, j: np.ndarray, max_gap
 def _holds(seg: np.ndarray, params: StructureParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Which face holds which at which end: ``(f, g, end)``, face ``g`` within
     ``snap_m`` of end ``end`` (0: ``x0, y0``; 1: ``x1, y1``) of face ``f``, by its end, or
-    by its body when it lies at least ``junction_min_angle_deg`` across."""
+    by its body when it lies at least ``junction_min_angle_deg`` across; of a face
+    within reach of ``g`` across it at both ends, the nearer end only."""
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
     i, j = candidate_pairs(seg, params.snap_m)
     f, g = np.r_[i, j], np.r_[j, i]
@@ -415,14 +418,20 @@ def _holds(seg: np.ndarray, params: StructureParams) -> tuple[np.ndarray, np.nda
         return f, g, f.copy()
     angle = np.arctan2(seg[:, 3] - seg[:, 1], seg[:, 2] - seg[:, 0])
     across = np.abs(np.sin(angle[g] - angle[f])) >= np.sin(np.radians(params.junction_min_angle_deg))
-    rows = []
+    hits, near = [], []
     for e in (0, 1):
         pt = seg[f, 2 * e : 2 * e + 2]
         to_ends = np.minimum(np.hypot(*(pt - seg[g, :2]).T), np.hypot(*(pt - seg[g, 2:]).T))
         to_body = np.sqrt(point_segment_dist2(pt[:, 0], pt[:, 1], seg[g]))
-        hit = (to_ends <= params.snap_m) | (across & (to_body <= params.snap_m))
-        hit &= length[f] > 0
-        rows.append((f[hit], g[hit], np.full(int(hit.sum()), e)))
+        hits.append(((to_ends <= params.snap_m) | (across & (to_body <= params.snap_m))) & (length[f] > 0))
+        near.append(to_body)  # an end of g lies on g, so its body is the nearer
+    # a face held at both ends by one face across it (a piece shorter than snap_m)
+    # hangs from it at the nearer end only: its far end is free. Two faces alongside
+    # each other (the two faces of one wall or object) still hold each other at both
+    both = hits[0] & hits[1] & across
+    hits[0] &= ~both | (near[0] <= near[1])
+    hits[1] &= ~both | (near[1] < near[0])
+    rows = [(f[h], g[h], np.full(int(h.sum()), e)) for e, h in enumerate(hits)]
     return tuple(np.concatenate(c) for c in zip(*rows))
 
 
