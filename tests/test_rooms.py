@@ -174,6 +174,24 @@ def test_a_room_seen_only_through_its_door_is_completed_to_its_walls():
     assert east.intersection(true_room).area / east.union(true_room).area > 0.9
 
 
+def test_a_room_against_one_wall_line_is_not_completed_to_its_box():
+    from floorscan.floorplan.room_polygons import _bounded_by_walls
+    from floorscan.floorplan.room_space import wall_footprints
+
+    # the floor seen through a 0.8 m gap in a wall (y 0, in two pieces): a fan of 6.3 m2
+    fan = shapely.Polygon([(1.6, 0.06), (2.4, 0.06), (4.0, 3.0), (0.5, 3.0)])
+
+    def completed(walls):
+        axes = np.array(walls, dtype=np.float64)
+        foot = wall_footprints(axes, np.full(len(axes), T))
+        return _bounded_by_walls(fan, axes, np.full(len(axes), T), foot, shapely.union_all(foot), shapely.Polygon(), 0.1)
+
+    # one wall's line: the fan as seen, not its 10.3 m2 box
+    assert completed([(-2, 0, 1.6, 0), (2.4, 0, 6, 0)]).area == pytest.approx(fan.area, abs=0.05)
+    # a wall across it at x 4.2 makes a corner: the room is completed up to both walls
+    assert completed([(-2, 0, 1.6, 0), (2.4, 0, 6, 0), (4.2, 0, 4.2, 4)]).area == pytest.approx(3.5 * 2.94, abs=0.05)
+
+
 def test_wall_gaps_between_collinear_ends():
     params = RoomParams()
     axes = np.array(TWO_ROOMS, dtype=np.float64)

@@ -53,10 +53,12 @@ SIDE_WALL_SHARE = 0.5
 SIDE_STEP_M = 0.5
 
 
-def _lines(axes: np.ndarray, thickness: np.ndarray, u: np.ndarray, length: np.ndarray,
-           line_offset_m: float) -> list[list[int]]:
-    """Walls grouped into lines (module docstring, step 1): the walls of each line,
-    its longest first (``u``, ``length``: :func:`~floorscan.floorplan.doors.wall_units`)."""
+def wall_lines(axes: np.ndarray, thickness: np.ndarray, u: np.ndarray, length: np.ndarray,
+               line_offset_m: float) -> list[list[int]]:
+    """Walls grouped into lines (module docstring, step 1): a wall is on a line when both
+    its ends lie within ``line_offset_m`` plus half the thicker wall of the line's
+    longest wall; the walls of each line, its longest first (``axes`` (N, 4) and
+    ``thickness`` (N,) metres; ``u``, ``length``: :func:`~floorscan.floorplan.doors.wall_units`)."""
     ends = axes.reshape(-1, 2, 2)
     lines: list[list[int]] = []
     for i in np.argsort(-length, kind="stable"):
@@ -100,7 +102,7 @@ def _corridors(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster, para
     import shapely
 
     u_all, length = wall_units(axes)
-    lines = _lines(axes, thickness, u_all, length, params.line_offset_m)
+    lines = wall_lines(axes, thickness, u_all, length, params.line_offset_m)
     line_of = np.full(len(axes), -1)
     for k, ws in enumerate(lines):
         line_of[ws] = k

@@ -9,7 +9,9 @@ from __future__ import annotations
 import numpy as np
 
 from floorscan.core.geometry import OVERLAY_GRID_M, minus, polygons_of
-from floorscan.floorplan.room_space import RoomRaster, wall_footprints
+from floorscan.floorplan.corridors import wall_lines
+from floorscan.floorplan.doors import wall_units
+from floorscan.floorplan.room_space import LINE_OFFSET_M, RoomRaster, wall_footprints
 
 
 def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thickness: np.ndarray) -> list:
@@ -125,7 +127,11 @@ def _bounded_by_walls(
     wall within ``near_m`` of it (on the wall's face), without the wall footprints and
     the other rooms; taken when it keeps all but 5 % of the seen floor (the room is
     convex between its walls: an L-shaped room or a ring corridor keeps its traced
-    outline). ``foot``: the walls' footprints, ``walls`` their union. Metres."""
+    outline), and only when those walls stand on two lines at least
+    (:func:`~floorscan.floorplan.corridors.wall_lines`):
+    against one wall's line, three sides of the box would be the reach of the rays
+    through its gap, floor nobody saw. ``foot``: the walls' footprints, ``walls`` their
+    union. Metres."""
     import shapely
 
     if poly.is_empty or not len(axes):
@@ -133,22 +139,22 @@ def _bounded_by_walls(
     near = np.flatnonzero(shapely.distance(foot, poly) <= near_m)
     if not len(near):
         return poly
+    u, length = wall_units(axes[near])
+    long = length >= 0.5
+    near, u = near[long], u[long]
+    if len(wall_lines(axes[near], thickness[near], u, length[long], LINE_OFFSET_M)) < 2:
+        return poly  # one wall's line: three sides of the box would be the reach of the rays
     x0, y0, x1, y1 = poly.bounds
     region = shapely.box(x0, y0, x1, y1)
     big = 4.0 * max(x1 - x0, y1 - y0, 1.0)
     inside = poly.representative_point()
-    for i in near.tolist():
-        a, b = axes[i, :2], axes[i, 2:]
-        d = b - a
-        length = float(np.hypot(*d))
-        if length < 0.5:
-            continue
-        u = d / length
-        n = np.array([-u[1], u[0]])
+    for i, ui in zip(near.tolist(), u):
+        a = axes[i, :2]
+        n = np.array([-ui[1], ui[0]])
         side = 1.0 if float((np.array(inside.coords[0]) - a) @ n) >= 0 else -1.0
         face = a + side * n * thickness[i] / 2
-        c = face - u * big
-        half = shapely.Polygon([c, c + 2 * big * u, c + 2 * big * u + side * big * n, c + side * big * n])
+        c = face - ui * big
+        half = shapely.Polygon([c, c + 2 * big * ui, c + 2 * big * ui + side * big * n, c + side * big * n])
         region = polygons_of(shapely.intersection(region, half, grid_size=POLYGON_GRID_M))
     region = largest_polygon(minus(region, walls, others))
     if region.is_empty or minus(poly, region).area > 0.05 * poly.area or region.area < poly.area:
