@@ -468,6 +468,27 @@ def test_a_piece_of_wall_between_two_doors_in_the_wall_s_line_frames_them():
         assert corridor.contains(shapely.Point(6, 1)) and not corridor.contains(shapely.Point(6, 4.5))
 
 
+def test_a_row_of_desks_standing_free_frames_no_door_however_long():
+    # a map of a room 6 x 5 m with a row of two desks (x 0.9..5.0, y 3.4..3.5) standing
+    # free 0.84 and 0.94 m from the side walls; the plan took the row's faces for two
+    # walls of 2.05 m. The row (4.1 m) is longer than a piece of furniture, but it holds
+    # no wall as long as one and encloses nothing: it frames no door, one room
+    box = [(0, 0, 6, 0), (6, 0, 6, 5), (6, 5, 0, 5), (0, 5, 0, 0)]
+    desks = [(0.9, 3.4, 2.95, 3.4), (2.95, 3.4, 5.0, 3.4), (5.0, 3.4, 5.0, 3.5), (5.0, 3.5, 2.95, 3.5),
+             (2.95, 3.5, 0.9, 3.5), (0.9, 3.5, 0.9, 3.4)]  # fmt: skip
+    grid = dataclasses.replace(_grid(box, [(3, 1.2), (3, 4.5), (5.5, 3.5), (0.4, 3.5), (2, 2)], objects=desks),
+                               scan_xy=None)  # fmt: skip
+    axes = np.array(box + [(0.9, 3.45, 2.93, 3.45), (2.97, 3.45, 5.0, 3.45)], dtype=np.float64)
+    thickness = np.r_[np.full(4, T), 0.1, 0.1]
+    rooms, doors = plan_rooms(axes, thickness, grid)
+    assert len(rooms) == 1 and len(doors) == 0
+    assert 28.0 < rooms["area_m2"].iloc[0] < 28.6
+    # a partition as long as the row, joined to nothing, is a wall that holds its doors
+    axes[4:] = [(0.9, 3.45, 5.0, 3.45), (0.9, 3.45, 5.0, 3.45)]
+    rooms, doors = plan_rooms(axes[:5], thickness[:5], grid)
+    assert len(rooms) == 2 and len(doors) == 2
+
+
 def test_standing_free_is_an_obstacle_apart_shorter_than_a_piece_of_furniture():
     from floorscan.floorplan.doors import standing_free
 

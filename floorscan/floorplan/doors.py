@@ -354,7 +354,10 @@ def jamb_cells(raster: RoomRaster, jamb_m: float, axes: np.ndarray | None = None
     An object standing free is a component of the cells outside the space (walls,
     obstacles, what was not seen free) that the space surrounds and that is shorter
     than the longest piece of furniture (:func:`standing_free`): a desk or a table in a
-    room, whether the plan took its faces for walls or not. A stub of wall whose
+    room, whether the plan took its faces for walls or not; or, however long, one that
+    holds no wall of the plan longer than that piece and encloses no space
+    (:func:`furniture_islands`, given the plan's walls): a row or an L of desks, a table
+    and its chairs. A stub of wall whose
     junction the scans did not see belongs with the unseen cells beyond it, so it stays
     a jamb; so does a piece of wall between two doors (:func:`_pieces_between_doors`: in the
     line of a wall's end a door's width away on each side), given the plan's walls.
@@ -374,9 +377,53 @@ def jamb_cells(raster: RoomRaster, jamb_m: float, axes: np.ndarray | None = None
     """
     solid = raster.walls | raster.bounds
     free = standing_free(~raster.space, raster.resolution_m)
+    if axes is not None and len(axes):
+        free |= furniture_islands(raster, axes)
     if axes is not None and thickness is not None and params is not None and len(axes) and free.any():
         free &= ~_pieces_between_doors(free, raster, axes, thickness, params)
     return dilate(solid & ~free, jamb_m / raster.resolution_m)
+
+
+def furniture_islands(raster: RoomRaster, axes: np.ndarray) -> np.ndarray:
+    """(H, W) bool: the groups of furniture standing in the space, whatever their
+    extent: the 8-connected components of the cells outside the space (walls, obstacles,
+    what was not seen free) that
+
+    - the space surrounds: none of their cells lies on the raster's border (the
+      outside of the building and every wall joined to its outer walls are one
+      component that reaches it);
+    - hold no wall of the plan (``axes``, (N, 4) metres) at least
+      :data:`~floorscan.floorplan.free_space.CLUTTER_MAX_LENGTH_M` long, the longest
+      piece of furniture: the structure passes' anchors
+      (:mod:`floorscan.floorplan.structure`, step 4); a core of rooms or a partition
+      standing free of the outer walls holds one;
+    - enclose no space (SciPy's ``ndimage.binary_fill_holes``): a core of rooms
+      closed all round holds its rooms' floor.
+
+    Desks in a row, an L of desks, a table and its chairs are one component longer
+    than any one of them (:func:`standing_free` measures a component against a single
+    piece). A wall is held where a point of its axis, every half cell, falls on the
+    component."""
+    from scipy import ndimage
+
+    labels, n = ndimage.label(~raster.space, structure=np.ones((3, 3), dtype=bool))
+    island = np.ones(n + 1, dtype=bool)
+    island[0] = False
+    island[np.unique(np.r_[labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = False
+    axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
+    length = np.hypot(axes[:, 2] - axes[:, 0], axes[:, 3] - axes[:, 1])
+    r = raster.resolution_m
+    anchors = length >= CLUTTER_MAX_LENGTH_M
+    for a, steps in zip(axes[anchors], np.ceil(length[anchors] / (r / 2)).astype(np.int64)):  # every half cell
+        xy = a[:2] + np.linspace(0.0, 1.0, steps + 1)[:, None] * (a[2:] - a[:2])
+        cells = np.floor((xy - raster.origin_xy) / r).astype(np.int64)
+        inside = (cells >= 0).all(axis=1) & (cells[:, 0] < labels.shape[1]) & (cells[:, 1] < labels.shape[0])
+        island[labels[cells[inside, 1], cells[inside, 0]]] = False
+    for k, box in enumerate(ndimage.find_objects(labels), start=1):
+        if box is not None and island[k]:
+            part = labels[box] == k
+            island[k] = not (ndimage.binary_fill_holes(part) & ~part & raster.space[box]).any()
+    return island[labels]
 
 
 def _pieces_between_doors(free: np.ndarray, raster: RoomRaster, axes: np.ndarray, thickness: np.ndarray,
