@@ -559,3 +559,24 @@ def test_a_corridor_crossing_another_keeps_its_short_arm():
     assert corridor_sides(axes, thick, room_space(grid, axes, thick, RoomParams()), RoomParams()) == []
     rooms, doors = plan_rooms(axes, thick, grid, RoomParams())
     assert len(rooms) == 1 and len(doors) == 0 and 66 < rooms["area_m2"].iloc[0] < 69
+
+
+def test_two_doors_facing_each_other_across_a_corridor_do_not_part_it():
+    """A corridor (x 0..10, y 0..2.2) with an office's door on each side at x 4..5, its
+    walls going on past the doors: the line between the doors' west jambs is no room's
+    open side (the corridor's west part would be a pocket 4 m deep), and the corridor
+    is one room. Without the test of :func:`~floorscan.floorplan.mouths.room_mouths`,
+    the corridor parts at x 4 into two rooms."""
+    walls = [(0, -4, 5, -4), (5, -4, 5, 0), (5, 0, 10, 0), (10, 0, 10, 2.2), (10, 2.2, 5, 2.2), (5, 2.2, 5, 6),
+             (5, 6, 0, 6), (0, 6, 0, -4), (0, 2.2, 4, 2.2), (0, 0, 4, 0)]  # fmt: skip
+    poses = [(2.0, 1.1), (7.5, 1.1), (2.5, 4.0), (2.5, -2.0)]
+    axes = np.array(walls, dtype=np.float64)
+    grid = _grid(walls, poses)
+    raster = room_space(grid, axes, np.full(len(axes), T), RoomParams())
+    mouths = room_mouths(axes, np.full(len(axes), T), raster, RoomParams())
+    assert not any(abs(p[0] - 4) < 0.2 and abs(q[0] - 4) < 0.2 for p, q, _ in mouths)
+    rooms, doors = plan_rooms(axes, np.full(len(axes), T), grid, RoomParams())
+    assert sorted(rooms["kind"]) == ["corridor", "room", "room"] and len(doors) == 2
+    corridor = rooms[rooms["kind"] == "corridor"]["polygon"].iloc[0]
+    assert shapely.box(0.2, 0.2, 9.8, 2.0).difference(corridor).area < 0.3
+    assert sorted(round(float((d.x0 + d.x1) / 2), 1) for d in doors.itertuples()) == [4.5, 4.5]
