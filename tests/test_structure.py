@@ -487,3 +487,27 @@ def test_a_chair_standing_free_in_a_hall_is_loose_however_short_its_pieces():
     _, side = border_and_support(snapped, grid, StructureParams())
     loose = loose_in_free_space(snapped, junction_ends(snapped, junctions), side, grid, StructureParams())
     assert loose.tolist() == [False, False, False, False, True, True]
+
+
+def test_a_row_of_table_legs_with_the_floor_seen_between_them_is_no_wall():
+    """Eight legs 0.12 m square, 0.45 m apart on a line (x 1.0 .. 4.27, y 2.44 .. 2.56),
+    in a room scanned from both sides of the row: the gaps between the legs (0.33 m,
+    narrower than an opening, 71 % of the row's length) are seen free, so their faces
+    are no joined wall: they stay eight faces. Without the test of
+    :func:`~floorscan.floorplan.structure.join_collinear`, they are joined into one face
+    3.27 m long, longer than any piece of furniture."""
+    room = [((0, 0), (6, 0)), ((6, 0), (6, 5)), ((6, 5), (0, 5)), ((0, 5), (0, 0))]
+    legs = [shapely.box(x, 2.44, x + 0.12, 2.56).exterior for x in 1.0 + 0.45 * np.arange(8)]
+    rng = np.random.default_rng(4)
+    rings = [np.asarray(g.coords) for g in legs]
+    segments = np.array([[*a, *b] for a, b in room] + [[*r[k], *r[k + 1]] for r in rings for k in range(len(r) - 1)])
+    poses = [(1.2, 1.0), (3.0, 1.2), (4.8, 0.8), (1.5, 4.0), (3.2, 3.9), (5.0, 4.2)]
+    grid = occupancy_grid([(np.array(p, dtype=np.float64), _scan(p, rng, segments)) for p in poses], OccupancyParams())
+    faces = np.array([[x, 2.44, x + 0.12, 2.44] for x in 1.0 + 0.45 * np.arange(8)])
+    joined, _, group = join_collinear(faces, np.ones(8), grid, StructureParams())
+    assert len(joined) == 8 and sorted(group.tolist()) == list(range(8))
+    # the north wall's face found in two pieces 0.33 m apart, its cells between them
+    # occupied, is still one face
+    wall = np.array([[0.0, 5.0, 2.0, 5.0], [2.33, 5.0, 6.0, 5.0]])
+    one, _, _ = join_collinear(wall, np.ones(2), grid, StructureParams())
+    assert len(one) == 1 and np.allclose(one[0], [0, 5, 6, 5], atol=1e-9)

@@ -22,7 +22,10 @@ order (:func:`structure_passes`):
    standing against the wall hide (:mod:`floorscan.floorplan.hidden`: their fronts
    parallel in front of it), whose fronts step 5 then makes clutter; and a face that
    ends at an object in a room's corner runs on behind its front to the corner
-   (:func:`~floorscan.floorplan.hidden.into_corners`).
+   (:func:`~floorscan.floorplan.hidden.into_corners`). A face joined across a gap, on
+   which the scans saw free space over more than half its length, is parted again: its
+   pieces are a row of objects with the floor seen between them (a table's legs, a row
+   of chairs), not one wall, as step 1 asks of each face.
 3. **Junctions** (:func:`snap_junctions`). An end within ``snap_m`` of where its line
    meets another face's line (at least ``junction_min_angle_deg`` apart) moves there:
    overshoots are trimmed, short ends extended, so faces meet in L, T and X junctions.
@@ -132,7 +135,9 @@ def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, pa
     """Step 2: collinear faces joined across gaps that free space does not pass through:
     up to ``join_max_gap_m``, or up to :data:`~floorscan.floorplan.hidden.HIDDEN_MAX_GAP_M`
     where objects standing against the wall hide the gap
-    (:func:`~floorscan.floorplan.hidden.covered_by_fronts`; needs ``side``).
+    (:func:`~floorscan.floorplan.hidden.covered_by_fronts`; needs ``side``); a face
+    joined across a gap and seen free over more than half its length is parted again
+    (:func:`_apart_where_seen_through`: a row of objects).
 
     Parameters
     ----------
@@ -190,11 +195,50 @@ def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, pa
             t0, t1 = (length[a[k]], lo_b[k]) if lo_b[k] > length[a[k]] else (hi_b[k], 0.0)
             keep[k] = open_run(seg[a[k], :2], u[k], t0, t1) < params.min_opening_m
     graph = coo_matrix((np.ones(int(keep.sum())), (i[keep], j[keep])), shape=(nf, nf))
-    n_groups, group = connected_components(graph, directed=False)
+    group = _apart_where_seen_through(seg, connected_components(graph, directed=False)[1], length, grid, free_at)
+    n_groups = int(group.max()) + 1
     joined = np.empty((n_groups, 4))
     for g in range(n_groups):
         joined[g] = _fit_group(seg[group == g], length[group == g])
     return joined, np.bincount(group, weights=w, minlength=n_groups), group.astype(np.int64)
+
+
+def _apart_where_seen_through(seg: np.ndarray, group: np.ndarray, length: np.ndarray, grid: OccupancyGrid,
+                              free_at=None) -> np.ndarray:
+    """``group`` (:func:`join_collinear`; ``length``: the faces' lengths), with the faces
+    of a joined face parted again where the scans saw free space on more than half of
+    the joined face's length: the
+    pieces are a row of objects with the floor seen between them (a table's legs, a row
+    of chairs), not one wall, as a face that is not occupied over half its length is
+    not (:func:`border_and_support`). A point of the face is seen free when the cells
+    one cell to either side of it are free too. Only a group joined across a gap wider
+    than a cell is tested (faces lying over one another are a wall found twice)."""
+    if free_at is None:
+        free = passable(grid)
+
+        def free_at(xy):
+            return mask_at(grid, free, xy)
+
+    out, nxt = group.copy(), int(group.max()) + 1
+    for g in np.flatnonzero(np.bincount(group) > 1).tolist():
+        members = np.flatnonzero(group == g)
+        f = _fit_group(seg[members], length[members])
+        total = float(np.hypot(f[2] - f[0], f[3] - f[1]))
+        u = (f[2:] - f[:2]) / max(total, 1e-12)
+        t = np.sort(seg[members].reshape(-1, 2, 2) @ u - f[:2] @ u, axis=1)
+        t = t[np.argsort(t[:, 0])]
+        if not (t[1:, 0] - np.maximum.accumulate(t[:-1, 1]) > grid.resolution_m).any():
+            continue  # faces one over another (a wall found twice), no gap joined
+        n = max(int(np.ceil(total / (grid.resolution_m / 2))), 1)
+        on = f[:2] + np.outer((np.arange(n) + 0.5) / n, f[2:] - f[:2])
+        across = np.array([-u[1], u[0]]) * grid.resolution_m
+        # free across the face's line, a cell to either side too (a face fitted on the
+        # returns of a wall lies on the boundary of its cells)
+        seen = free_at(on) & free_at(on + across) & free_at(on - across)
+        if seen.mean() > 0.5:
+            out[members] = nxt + np.arange(len(members))
+            nxt += len(members)
+    return np.unique(out, return_inverse=True)[1].astype(np.int64)
 
 
 def _group_sides(seg: np.ndarray, side: np.ndarray, group: np.ndarray, n: int) -> np.ndarray:
