@@ -511,3 +511,27 @@ def test_a_row_of_table_legs_with_the_floor_seen_between_them_is_no_wall():
     wall = np.array([[0.0, 5.0, 2.0, 5.0], [2.33, 5.0, 6.0, 5.0]])
     one, _, _ = join_collinear(wall, np.ones(2), grid, StructureParams())
     assert len(one) == 1 and np.allclose(one[0], [0, 5, 6, 5], atol=1e-9)
+
+
+def test_the_map_extractor_cuts_a_segment_where_the_floor_is_seen_between_table_legs():
+    """Eight legs 0.12 m square, 0.35 m apart (gaps of 0.23 m, which RANSAC's
+    ``max_gap_m`` of 0.3 m bridges), scanned from both sides of the row: the cells
+    between the legs were seen free and never hit, so no map segment runs along the row
+    for more than one leg and its neighbourhood. Without the cut
+    (:func:`floorscan.walls.map_lines.map_segments`) one segment spans the row's 2.57 m.
+    The room's walls are whole."""
+    room = [((0, 0), (6, 0)), ((6, 0), (6, 5)), ((6, 5), (0, 5)), ((0, 5), (0, 0))]
+    xs = 1.0 + 0.35 * np.arange(8)
+    legs = [shapely.box(x, 2.44, x + 0.12, 2.56).exterior for x in xs]
+    rng = np.random.default_rng(5)
+    rings = [np.asarray(g.coords) for g in legs]
+    segments = np.array([[*a, *b] for a, b in room] + [[*r[k], *r[k + 1]] for r in rings for k in range(len(r) - 1)])
+    poses = [(1.2, 1.0), (2.4, 0.9), (3.6, 1.1), (4.8, 0.8), (1.5, 4.0), (2.6, 4.1), (3.7, 3.9), (5.0, 4.2)]
+    scans = [(np.array(p, dtype=np.float64), _scan(p, rng, segments, n_rays=1440)) for p in poses]
+    grid = occupancy_grid(scans, OccupancyParams())
+    seg = map_segments(np.concatenate([s for _, s in scans]), grid, MapParams(), seed=0)
+    xy = seg[["x0", "y0", "x1", "y1"]].to_numpy()
+    along_row = (np.abs(xy[:, [1, 3]] - 2.5).max(axis=1) < 0.1) & (np.abs(xy[:, 3] - xy[:, 1]) < 0.05)
+    assert along_row.any() and _length(xy[along_row]).max() < 0.6
+    walls = np.abs(xy[:, [1, 3]]).max(axis=1) < 0.05  # the south wall, y = 0
+    assert _length(xy[walls]).max() > 5.5

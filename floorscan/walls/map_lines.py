@@ -26,7 +26,11 @@ is. The per-scan extractors (:mod:`~floorscan.walls.ransac`,
    most inliers, refit by total least squares, cut into pieces at gaps wider than
    ``max_gap_m``; a piece with ``min_inliers`` points and ``min_length_m`` of length is
    a wall segment. No coverage test: a wall seen sparsely at range is sampled every
-   few decimetres.
+   few decimetres. But a segment is cut where the grid saw its line free and no scan
+   hit it, a cell to either side too, over more than two cells
+   (:func:`_apart_where_seen_free`): the floor seen between the legs of a row of tables
+   or chairs, which ``max_gap_m`` bridges, is no wall's. A cell some scans hit and
+   others saw through (a wall smeared by drifting poses) is not cut.
 
 Which segments are walls and which are furniture, which gaps are openings and which
 are occlusions, and where walls meet are the floor plan's passes
@@ -195,4 +199,49 @@ def map_segments(points: np.ndarray, grid: OccupancyGrid | None, params: MapPara
     q = map_points(pts, grid, params)
     if len(q) < params.min_inliers:
         return segments_frame([])
-    return segments_frame(ransac_rows(q, params.ransac(), seed))
+    rows = ransac_rows(q, params.ransac(), seed)
+    if grid is not None:
+        free = grid.free() & (grid.n_hit_scans == 0)
+        rows = [piece for row in rows for piece in _apart_where_seen_free(row, grid, free, params)]
+    return segments_frame(rows)
+
+
+def _apart_where_seen_free(row: tuple, grid: OccupancyGrid, free: np.ndarray, params: MapParams) -> list[tuple]:
+    """A segment ``(x0, y0, x1, y1, n_inliers, rmse_m)`` cut where the grid saw its line
+    free (``free``: the grid's :meth:`~floorscan.core.occupancy.OccupancyGrid.free`
+    cells that no scan hit), a cell to either side too, over more than two cells: the
+    floor seen between the legs of a row of tables, which RANSAC's ``max_gap_m``
+    bridges. The inliers are shared by length; a piece shorter than ``min_length_m`` or
+    with fewer than ``min_inliers`` goes."""
+    from scipy import ndimage
+
+    x0, y0, x1, y1, n, rmse = row
+    a, b = np.array([x0, y0]), np.array([x1, y1])
+    length = float(np.hypot(*(b - a)))
+    res = grid.resolution_m
+    if length < 2 * res:
+        return [row]
+    m = int(np.ceil(length / (res / 2)))
+    t = (np.arange(m) + 0.5) / m
+    on = a + np.outer(t, b - a)
+    across = np.array([a[1] - b[1], b[0] - a[0]]) / length * res
+
+    def at(xy):
+        r, c, inside = grid.cells_of(xy)
+        out = np.zeros(len(xy), dtype=bool)
+        out[inside] = free[r[inside], c[inside]]
+        return out
+
+    runs, _ = ndimage.label(at(on) & at(on + across) & at(on - across))
+    cut = (runs > 0) & (np.bincount(runs)[runs] * length / m > 2 * res)
+    if not cut.any():
+        return [row]
+    pieces, _ = ndimage.label(~cut)
+    out = []
+    for (span,) in ndimage.find_objects(pieces):
+        p, q = a + (b - a) * (span.start / m), a + (b - a) * (span.stop / m)
+        piece = float(np.hypot(*(q - p)))
+        share = int(round(n * piece / length))
+        if piece >= params.min_length_m and share >= params.min_inliers:
+            out.append((float(p[0]), float(p[1]), float(q[0]), float(q[1]), share, rmse))
+    return out
