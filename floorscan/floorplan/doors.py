@@ -415,10 +415,8 @@ def furniture_islands(raster: RoomRaster, axes: np.ndarray) -> np.ndarray:
     r = raster.resolution_m
     anchors = length >= CLUTTER_MAX_LENGTH_M
     for a, steps in zip(axes[anchors], np.ceil(length[anchors] / (r / 2)).astype(np.int64)):  # every half cell
-        xy = a[:2] + np.linspace(0.0, 1.0, steps + 1)[:, None] * (a[2:] - a[:2])
-        cells = np.floor((xy - raster.origin_xy) / r).astype(np.int64)
-        inside = (cells >= 0).all(axis=1) & (cells[:, 0] < labels.shape[1]) & (cells[:, 1] < labels.shape[0])
-        island[labels[cells[inside, 1], cells[inside, 0]]] = False
+        rows, cols, inside = raster.cells_of(a[:2] + np.linspace(0.0, 1.0, steps + 1)[:, None] * (a[2:] - a[:2]))
+        island[labels[rows[inside], cols[inside]]] = False
     for k, box in enumerate(ndimage.find_objects(labels), start=1):
         if box is not None and island[k]:
             part = labels[box] == k
