@@ -561,6 +561,28 @@ def test_a_corridor_crossing_another_keeps_its_short_arm():
     assert len(rooms) == 1 and len(doors) == 0 and 66 < rooms["area_m2"].iloc[0] < 69
 
 
+def test_a_door_facing_a_slit_in_the_corridor_wall_does_not_part_the_corridor():
+    """A corridor (x 0..12, y 0..2.2) with an office's door in its north wall at x 6..7
+    and its south wall broken at x 6.7..7.0 (a slit no one passes, where a map's wall
+    is found in two pieces): each wall goes on past its ends, so the line from the
+    door's jamb to the slit's edge is no room's open side, and the corridor is one
+    room. With only a door-wide gap counting as the wall going on, the corridor parts
+    there into two rooms."""
+    walls = [(0, 0, 6.7, 0), (7.0, 0, 12, 0), (12, 0, 12, 2.2), (12, 2.2, 7, 2.2), (6, 2.2, 0, 2.2), (0, 2.2, 0, 0),
+             (0, 2.2, 0, 6), (0, 6, 12, 6), (12, 6, 12, 2.2)]  # fmt: skip
+    poses = [(2.0, 1.1), (9.5, 1.1), (3.0, 4.0), (9.0, 4.0)]
+    axes = np.array(walls, dtype=np.float64)
+    grid = _grid(walls, poses)
+    raster = room_space(grid, axes, np.full(len(axes), T), RoomParams())
+    mouths = room_mouths(axes, np.full(len(axes), T), raster, RoomParams())
+    assert not any(min(p[1], q[1]) < 0.3 and max(p[1], q[1]) > 1.9 for p, q, _ in mouths)
+    rooms, doors = plan_rooms(axes, np.full(len(axes), T), grid, RoomParams())
+    assert sorted(rooms["kind"]) == ["corridor", "room"] and len(doors) == 1
+    corridor = rooms[rooms["kind"] == "corridor"]["polygon"].iloc[0]
+    assert shapely.box(0.2, 0.2, 11.8, 2.0).difference(corridor).area < 0.3
+    assert round(float((doors.x0.iloc[0] + doors.x1.iloc[0]) / 2), 1) == 6.5
+
+
 def test_two_doors_facing_each_other_across_a_corridor_do_not_part_it():
     """A corridor (x 0..10, y 0..2.2) with an office's door on each side at x 4..5, its
     walls going on past the doors: the line between the doors' west jambs is no room's

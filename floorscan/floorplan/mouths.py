@@ -33,11 +33,12 @@ mouth is that line, between two wall ends that:
   middle and at both quarter points (the back wall of the room), and not before
   :data:`MOUTH_MIN_DEPTH` times its length at its middle (a recess is part of the
   space it opens onto).
-- are not both the jambs of doors: where each side wall's line goes on past its end in
-  another wall, beyond a gap ``door_min_m`` to ``door_max_m`` wide, the line joins two
-  doors facing each other across a corridor whose walls go on past them, and the space
-  on its two sides is one (a corridor's length closes the pocket's depth test as a
-  room would).
+- are not both ends of walls that go on: where each side wall's line goes on past its
+  end in another wall, beyond a gap at most ``door_max_m`` wide (a door's, or a slit
+  narrower than a door where a wall is found in two pieces), the line joins two doors
+  or breaks facing each other across a corridor whose walls go on past them, and the
+  space on its two sides is one (a corridor's length closes the pocket's depth test
+  as a room would).
 
 A mouth cuts the space before it is segmented, as a gap in a wall does; where it is
 no wider than a door it is the room's door.
@@ -180,14 +181,14 @@ def room_mouths(
 
     def goes_on(i: int, k: int) -> bool:
         """Whether wall ``i``'s line goes on past its end ``k`` in another wall, beyond a
-        gap ``door_min_m`` to ``door_max_m`` wide: the end is a door's jamb."""
+        gap at most ``door_max_m`` wide: the end is a door's jamb or the edge of a slit."""
         out = (ends[i, k] - ends[i, 1 - k]) / max(length[i], 1e-12)
         nrm = np.array([-out[1], out[0]])
         rel = ends - ends[i, k]  # (N, 2, 2)
         t, off = rel @ out, np.abs(rel @ nrm)
         in_line = off.max(axis=1) <= params.line_offset_m + np.maximum(thickness, thickness[i]) / 2
         ok = (np.abs(unit @ out) >= cos_tol) & in_line
-        ok &= (t.min(axis=1) >= params.door_min_m) & (t.min(axis=1) <= params.door_max_m)
+        ok &= (t.min(axis=1) >= 0) & (t.min(axis=1) <= params.door_max_m)
         ok[i] = False
         return bool(ok.any())
 
@@ -228,7 +229,7 @@ def room_mouths(
             if not closes_pocket(pts[a], u, float(dist[b]), 1.0 if (into > 0).all() else -1.0):
                 continue
             if not along.any() and goes_on(*tips[a]) and goes_on(*tips[b]):
-                continue  # two doors facing each other across a space that goes on past them
+                continue  # two doors (or slits) facing each other across a space that goes on past them
             if corner and not separates(pts[a], pts[b]):
                 continue  # a corner's line across a corridor that goes on around
             wall = tips[a][0] if length[tips[a][0]] >= length[tips[b][0]] else tips[b][0]
