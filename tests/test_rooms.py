@@ -20,15 +20,15 @@ from floorscan.floorplan.rooms import plan_rooms
 T = 0.12  # wall thickness, metres
 
 
-def _grid(walls: list, poses: list, seed: int = 1, objects: list = ()):
+def _grid(walls: list, poses: list, seed: int = 1, objects: list = (), thickness: float = T):
     """The occupancy grid of 360-degree scans from ``poses`` of the wall faces of
-    ``walls`` ((x0, y0, x1, y1) axes, thickness T) and of the faces ``objects``
+    ``walls`` ((x0, y0, x1, y1) axes, ``thickness`` metres) and of the faces ``objects``
     ((x0, y0, x1, y1) each)."""
     rng = np.random.default_rng(seed)
     faces = []
     for x0, y0, x1, y1 in walls:
         d = np.array([x1 - x0, y1 - y0]) / np.hypot(x1 - x0, y1 - y0)
-        n = np.array([-d[1], d[0]]) * T / 2
+        n = np.array([-d[1], d[0]]) * thickness / 2
         faces += [[x0 + n[0], y0 + n[1], x1 + n[0], y1 + n[1]], [x0 - n[0], y0 - n[1], x1 - n[0], y1 - n[1]]]
     faces = np.array(faces + [list(f) for f in objects])
     a = np.linspace(-np.pi, np.pi, 1440, endpoint=False)
@@ -291,6 +291,25 @@ def test_offices_open_to_a_corridor_on_their_whole_width_are_rooms():
     assert all(8.0 < a < 9.0 for a in offices["area_m2"])  # 3 x 3 m less half walls
     corridor = rooms[rooms["kind"] == "corridor"]["polygon"].iloc[0]
     assert shapely.box(0.1, 0.1, 8.9, 1.4).difference(corridor).area < 0.3
+
+
+def test_offices_between_thick_walls_open_to_a_corridor_are_rooms():
+    """The offices of the test above between walls 0.3 m thick: a mouth's line is
+    tested between the walls' faces, so the thick walls it joins neither cross it nor
+    take its samples of the free space. Tested 0.15 m from each end, the line crossed
+    the footprint of the wall at its end, and the offices joined the corridor."""
+    from floorscan.floorplan.mouths import room_mouths
+    from floorscan.floorplan.room_space import room_space
+
+    axes, th = np.array(OPEN_OFFICES, dtype=np.float64), np.full(len(OPEN_OFFICES), 0.3)
+    poses = [(1.5, 0.75), (4.5, 0.75), (7.5, 0.75), (1.5, 3), (4.5, 3), (7.5, 3)]
+    grid = _grid(OPEN_OFFICES, poses, thickness=0.3)
+    mouths = room_mouths(axes, th, room_space(grid, axes, th, RoomParams()), RoomParams())
+    got = sorted((round(float(min(p[0], q[0])), 2), round(float(max(p[0], q[0])), 2)) for p, q, _ in mouths)
+    assert got == [(0.8, 3.0), (3.0, 6.0), (6.0, 8.2)]
+    rooms, doors = plan_rooms(axes, th, grid, RoomParams())
+    assert sorted(rooms["kind"]) == ["corridor", "room", "room", "room"] and len(doors) == 0
+    assert all(7.0 < a < 8.5 for a in rooms[rooms["kind"] == "room"]["area_m2"])  # 3 x 3 m less half walls
 
 
 def test_an_office_open_between_its_side_wall_s_corner_and_its_front_wall_s_free_end_is_a_room():

@@ -144,17 +144,22 @@ def room_mouths(
     # walls run along the door), one within it of square to the line bounds a side
     cos_tol = np.cos(np.radians(params.door_angle_deg))
 
-    def closes_pocket(p: np.ndarray, u: np.ndarray, length_m: float, s: float) -> bool:
+    def closes_pocket(p: np.ndarray, u: np.ndarray, length_m: float, s: float, ends_m: tuple) -> bool:
         """The line from ``p`` along ``u`` runs ``length_m`` in the free space, crosses
         no wall, and the space on side ``s`` (+1 left of ``u``, -1 right) runs on at
         least MOUTH_MIN_DEPTH times its length from its middle and ends at a wall within
-        MOUTH_DEPTH times its length at its quarter points and middle."""
+        MOUTH_DEPTH times its length at its quarter points and middle. The line is
+        tested from ``ends_m`` (the half thickness of the wall at each end, metres) and a
+        raster cell past each end, at least 0.15 m: between the walls' faces, clear of
+        the cells a face touches."""
         n = s * np.array([-u[1], u[0]])
         step = raster.resolution_m / 2
-        line = shapely.LineString([p + u * 0.15, p + u * (length_m - 0.15)])
+        t0 = max(0.15, ends_m[0] + raster.resolution_m)
+        t1 = max(t0, length_m - max(0.15, ends_m[1] + raster.resolution_m))
+        line = shapely.LineString([p + u * t0, p + u * t1])
         if tree.query(line, predicate="intersects").size:
             return False
-        t = np.linspace(0.15, length_m - 0.15, max(3, int(length_m / raster.resolution_m)))
+        t = np.linspace(t0, t1, max(3, int(length_m / raster.resolution_m)))
         if not raster.at(raster.space, p + np.outer(t, u), outside=False).all():
             return False
         starts = [p + u * length_m * f + n * raster.resolution_m for f in (0.25, 0.5, 0.75)]
@@ -226,7 +231,8 @@ def room_mouths(
             into = side[~along]
             if not ((into >= cos_tol).all() or (into <= -cos_tol).all()):
                 continue
-            if not closes_pocket(pts[a], u, float(dist[b]), 1.0 if (into > 0).all() else -1.0):
+            ends_m = (thickness[tips[a][0]] / 2, thickness[tips[b][0]] / 2)
+            if not closes_pocket(pts[a], u, float(dist[b]), 1.0 if (into > 0).all() else -1.0, ends_m):
                 continue
             if not along.any() and goes_on(*tips[a]) and goes_on(*tips[b]):
                 continue  # two doors (or slits) facing each other across a space that goes on past them
