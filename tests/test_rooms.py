@@ -559,6 +559,66 @@ def test_a_strip_narrower_than_a_walkway_joins_the_room_it_opens_into():
     assert 52.0 < plan.rooms["area_m2"].sum() < 54.5
 
 
+def test_a_dead_end_corridor_off_a_hall_is_a_room_of_its_own():
+    """A hall (x 0..20, y 0..8) with a dead-end corridor 1.6 m wide and 7.4 m long off
+    its north wall: the space does not narrow at its mouth, which lies between two
+    corners, so only the dead end's mouth (:func:`~floorscan.floorplan.mouths.dead_end_mouths`)
+    parts it from the hall, at the hall wall's line. Without it, hall and corridor are
+    one room."""
+    from floorscan.floorplan.mouths import dead_end_mouths
+    from floorscan.floorplan.room_space import room_space
+
+    walls = [(0, 0, 20, 0), (20, 0, 20, 8), (20, 8, 10.6, 8), (9, 8, 0, 8), (0, 8, 0, 0),
+             (9, 8, 9, 15.4), (10.6, 8, 10.6, 15.4), (9, 15.4, 10.6, 15.4)]  # fmt: skip
+    axes, th = np.array(walls, dtype=np.float64), np.full(len(walls), T)
+    grid = _grid(walls, [(4, 4), (10, 4), (16, 4), (9.8, 10), (9.8, 14)])
+    mouths = dead_end_mouths(axes, th, room_space(grid, axes, th, RoomParams()), RoomParams())
+    assert [sorted((round(float(p[0]), 2), round(float(q[0]), 2))) for p, q, _ in mouths] == [[9.0, 10.6]]
+    assert all(abs(p[1] - 8) < 1e-9 and abs(q[1] - 8) < 1e-9 for p, q, _ in mouths)
+    rooms, doors = plan_rooms(axes, th, grid, RoomParams())
+    assert sorted(rooms["kind"]) == ["corridor", "room"] and len(doors) == 1
+    corridor = rooms[rooms["kind"] == "corridor"]["polygon"].iloc[0]
+    assert 10.5 < corridor.area < 11.8 and corridor.bounds[1] > 7.8  # 1.6 x 7.4 m less half walls
+
+
+def test_a_corridor_whose_wall_goes_on_past_a_partition_s_line_is_not_cut_there():
+    """A corridor (x 0..20, y 6..7.5) along two closed rooms, a hall (x 8..16, y -2..6)
+    open onto it on its whole width. The corridor's part west of the hall is closed
+    behind the line of the hall's west wall and the partition above it, and a space
+    twice as wide lies beside that line, but the corridor's north wall goes on through
+    the line: the corridor crosses it, and no dead end's mouth is cut there. Without
+    that test, the corridor's west part is a dead end of its own."""
+    from floorscan.floorplan import mouths
+    from floorscan.floorplan.room_space import room_space
+
+    walls = [(0, 6, 8, 6), (16, 6, 20, 6), (0, 7.5, 20, 7.5), (0, 6, 0, 11), (20, 6, 20, 11), (8, -2, 8, 6),
+             (16, -2, 16, 6), (8, -2, 16, -2), (8, 7.5, 8, 11), (0, 11, 20, 11)]  # fmt: skip
+    axes, th = np.array(walls, dtype=np.float64), np.full(len(walls), T)
+    grid = _grid(walls, [(4, 6.75), (12, 6.75), (12, 2), (4, 9), (14, 9)])
+    raster = room_space(grid, axes, th, RoomParams())
+    assert mouths.dead_end_mouths(axes, th, raster, RoomParams()) == []
+    rooms, _ = plan_rooms(axes, th, grid, RoomParams())
+    corridor = [p for p in rooms["polygon"] if p.contains(shapely.Point(12, 6.75))][0]
+    assert corridor.contains(shapely.Point(4, 6.75))
+
+
+def test_a_room_behind_the_corridor_s_wall_is_not_the_hall_a_dead_end_opens_onto():
+    """A niche 0.8 m wide and 3 m deep off a corridor 1.2 m wide, and behind the
+    corridor's far wall a room 12 x 4 m, whose door lies 4 m away: the room's floor
+    within 3 m of the niche's mouth is farther than 0.8 m from its walls, but it is
+    not seen from the mouth, so the niche opens onto the corridor, not onto a hall, and
+    no dead end's mouth is cut. Measured through the wall, the niche is cut off."""
+    from floorscan.floorplan.mouths import dead_end_mouths
+    from floorscan.floorplan.room_space import room_space
+
+    walls = [(0, 0, 1, 0), (2, 0, 12, 0), (12, 0, 12, 1.2), (12, 1.2, 6.4, 1.2), (5.6, 1.2, 0, 1.2),
+             (0, 1.2, 0, -4), (5.6, 1.2, 5.6, 4.2), (6.4, 1.2, 6.4, 4.2), (5.6, 4.2, 6.4, 4.2), (0, -4, 12, -4),
+             (12, -4, 12, 0)]  # fmt: skip
+    axes, th = np.array(walls, dtype=np.float64), np.full(len(walls), T)
+    grid = _grid(walls, [(1.5, 0.6), (6, 0.6), (10, 0.6), (6, 3), (6, -2), (2, -2), (10, -2)])
+    assert dead_end_mouths(axes, th, room_space(grid, axes, th, RoomParams()), RoomParams()) == []
+
+
 def test_a_corridor_crossing_another_keeps_its_short_arm():
     """A crossing: a corridor 12 m long and 2 m wide meets the long corridor from the
     south, and goes on north of it, 2.9 m wide, for 3 m to a wall. The north opening

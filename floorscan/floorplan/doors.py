@@ -41,7 +41,8 @@ def wall_units(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return d / np.maximum(length, 1e-12)[:, None], length
 
 
-def wall_gaps(axes: np.ndarray, thickness: np.ndarray, params: RoomParams) -> list[tuple[np.ndarray, np.ndarray, int]]:
+def wall_gaps(axes: np.ndarray, thickness: np.ndarray, params: RoomParams,
+              corners: bool = False) -> list[tuple[np.ndarray, np.ndarray, int]]:
     """Door candidates between the facing ends of collinear walls.
 
     Parameters
@@ -51,6 +52,10 @@ def wall_gaps(axes: np.ndarray, thickness: np.ndarray, params: RoomParams) -> li
     thickness : (N,) float ndarray
         Metres.
     params : RoomParams
+    corners : bool
+        False: the gaps between two free ends (an end in an L or T junction is a
+        corner, not a jamb). True: the gaps between two corners instead (the mouth of
+        a corridor or room whose side walls meet the wall it opens in).
 
     Returns
     -------
@@ -82,7 +87,8 @@ def wall_gaps(axes: np.ndarray, thickness: np.ndarray, params: RoomParams) -> li
                 gap = (tb.max(), ta.min())
             else:
                 continue
-            if junction_end(axes, thickness, a, ka) or junction_end(axes, thickness, b, kb):
+            corner_a, corner_b = junction_end(axes, thickness, a, ka), junction_end(axes, thickness, b, kb)
+            if (corner_a or corner_b) if not corners else not (corner_a and corner_b):
                 continue  # an end in an L or T junction is a corner, not a jamb
             width = gap[1] - gap[0]
             if params.door_min_m <= width <= params.door_max_m:

@@ -45,7 +45,9 @@ no wider than a door it is the room's door.
 
 :func:`corner_mouths` are the same line across the missing corner of two walls: the
 corner of a corridor (a ring corridor's, Bormann et al.'s office_h) open to the room
-beyond it.
+beyond it. :func:`dead_end_mouths` are the gaps between two corners in one wall's line
+through which a dead end as wide as the gap opens onto a hall (Bormann et al.'s
+Freiburg101, its dead-end corridors off the hall).
 """
 
 from __future__ import annotations
@@ -303,3 +305,112 @@ def corner_mouths(
                     if params.door_min_m <= width <= side and side >= MOUTH_WALL_M:
                         out.append((a.copy(), b.copy(), i if length[i] >= length[j] else j))
     return out
+
+
+def dead_end_mouths(
+    axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster, params: RoomParams
+) -> list[tuple[np.ndarray, np.ndarray, int]]:
+    """The mouths of dead ends off a hall: a corridor or room as wide as its opening,
+    closed behind it. The space does not narrow there, so the persistence
+    (:mod:`floorscan.floorplan.persistence`) does not part it, and its side walls meet
+    the wall it opens in, so it has no free ends for :func:`room_mouths`; people draw
+    its boundary on the wall's line (the dead-end corridors off the hall of Bormann et
+    al.'s Freiburg101, ICRA 2016). A mouth is a gap ``door_min_m`` to ``door_max_m``
+    wide between two corners in one wall's line
+    (:func:`~floorscan.floorplan.doors.wall_gaps` with ``corners``) that:
+
+    - parts the space in two (cut, its two sides are no longer connected); the larger
+      part is the rest of the space, the other the dead end;
+    - no wall at either corner runs on into the rest of the space, in itself or, beyond
+      a gap at most ``door_max_m`` wide, in another wall of its line (the walls of a
+      corridor going on past the line of a wall that crosses it: that is one
+      corridor, not a dead end off it);
+    - opens onto a space at least twice as wide as itself: within
+      ``corridor_max_width_m`` of the gap's middle and seen from it (the straight line
+      in the space), a cell of the rest of the space lies farther than the gap's width
+      from every cell outside the space (a hall; a corridor that the dead end meets
+      or crosses is not, and keeps it as its arm, as
+      :func:`~floorscan.floorplan.corridors.corridor_sides` does).
+
+    Parameters and returns as :func:`room_mouths`.
+    """
+    from scipy import ndimage
+
+    from floorscan.floorplan.doors import wall_gaps
+
+    out = []
+    clearance = None  # metres from each cell of the space to the nearest cell outside it
+    for p, q, wall in wall_gaps(axes, thickness, params, corners=True):
+        d = q - p
+        nrm = np.array([-d[1], d[0]]) / float(np.hypot(*d)) * 2 * raster.resolution_m
+        sr, sc, inside = raster.cells_of(np.array([(p + q) / 2 + nrm, (p + q) / 2 - nrm]))
+        if not inside.all():
+            continue
+        cut = raster.space.copy()
+        cut[barrier_cells(raster, p, q)] = False
+        comp, _ = ndimage.label(cut)
+        ca, cb = int(comp[sr[0], sc[0]]), int(comp[sr[1], sc[1]])
+        if not (ca and cb and ca != cb):
+            continue
+        # the side the rest of the space lies on; no wall at either corner runs into it
+        big = 1.0 if np.count_nonzero(comp == ca) >= np.count_nonzero(comp == cb) else -1.0
+        n = big * np.array([-d[1], d[0]]) / float(np.hypot(*d))
+        if any(_runs_into(axes, thickness, c, n, params) for c in (p, q)):
+            continue
+        # a hall beside the gap: a cell twice the gap's width across, near and seen
+        if clearance is None:
+            clearance = ndimage.distance_transform_edt(np.pad(raster.space, 1))[1:-1, 1:-1] * raster.resolution_m
+        r = params.corridor_max_width_m
+        rows, cols, _ = raster.cells_of(np.array([(p + q) / 2 - r, (p + q) / 2 + r]))
+        h, w = raster.space.shape
+        r0, r1 = sorted(np.clip(rows, 0, h - 1))
+        c0, c1 = sorted(np.clip(cols, 0, w - 1))
+        yy, xx = np.mgrid[r0:r1 + 1, c0:c1 + 1]
+        x = (xx + 0.5) * raster.resolution_m + raster.origin_xy[0] - (p[0] + q[0]) / 2
+        y = (yy + 0.5) * raster.resolution_m + raster.origin_xy[1] - (p[1] + q[1]) / 2
+        window = (slice(r0, r1 + 1), slice(c0, c1 + 1))
+        beside = (comp[window] == (ca if big > 0 else cb)) & (np.hypot(x, y) <= r)
+        beside &= clearance[window] > float(np.hypot(*d))
+        if not beside.any():
+            continue
+        mid = (p + q) / 2 + n * raster.resolution_m
+        cells = np.column_stack([x[beside], y[beside]]) + (p + q) / 2
+        steps = np.linspace(0.0, 1.0, int(np.ceil(r / (raster.resolution_m / 2))) + 1)
+        seen = raster.at(raster.space, (mid + np.einsum("k,nj->nkj", steps, cells - mid)).reshape(-1, 2),
+                         outside=False).reshape(len(cells), len(steps)).all(axis=1)
+        if not seen.any():
+            continue
+        out.append((p, q, wall))
+    return out
+
+
+def _runs_into(axes: np.ndarray, thickness: np.ndarray, c: np.ndarray, n: np.ndarray, params: RoomParams) -> bool:
+    """Whether a wall through the corner ``c`` (its axis within half its thickness and
+    ``line_offset_m`` of it) reaches past the corner's line into the side ``n`` (a unit
+    normal of the line) by more than half its thickness and ``line_offset_m``, or a wall
+    ending at the corner goes on in its line into that side in another wall, beyond a
+    gap at most ``door_max_m`` wide (a corridor's wall with a door beside the corner)."""
+    a, b = axes[:, :2], axes[:, 2:]
+    d = b - a
+    tol = thickness / 2 + params.line_offset_m
+    t = np.clip(np.einsum("ij,ij->i", c - a, d) / np.maximum(np.einsum("ij,ij->i", d, d), 1e-12), 0.0, 1.0)
+    near = np.hypot(*(a + d * t[:, None] - c).T) <= tol
+    reach = np.maximum((a - c) @ n, (b - c) @ n)
+    if (near & (reach > tol)).any():
+        return True
+    ends = axes.reshape(-1, 2, 2)
+    for i in np.flatnonzero(near):
+        k = int(np.argmin(np.hypot(*(ends[i] - c).T)))
+        out = ends[i, k] - ends[i, 1 - k]
+        length = float(np.hypot(*out))
+        if length < 1e-9 or float(out @ n) < np.cos(np.radians(params.door_angle_deg)) * length:
+            continue  # not a side wall ending at the corner from the other side
+        out /= length
+        rel = ends - ends[i, k]
+        along, off = rel @ out, np.abs(rel @ np.array([-out[1], out[0]]))
+        ok = (off.max(axis=1) <= params.line_offset_m + np.maximum(thickness, thickness[i]) / 2)
+        ok &= (along.min(axis=1) >= 0) & (along.min(axis=1) <= params.door_max_m)
+        ok[i] = False
+        if ok.any():
+            return True
+    return False

@@ -32,7 +32,9 @@ taken from the walls:
    the walls that bound a room open on its whole width onto a corridor (an office, a
    cubicle), or across the missing corner of two walls
    (:func:`~floorscan.floorplan.mouths.corner_mouths`: a corridor's corner open to the
-   room beyond it); a door where no wider than one. So are the openings, however wide,
+   room beyond it), or between two corners in one wall's line where a dead end as wide
+   as its opening leaves a hall (:func:`~floorscan.floorplan.mouths.dead_end_mouths`);
+   a door where no wider than one. So are the openings, however wide,
    in the sides of a corridor, the strip between two long parallel lines of wall
    (:func:`~floorscan.floorplan.corridors.corridor_sides`), except where another
    corridor goes on from it. The rooms are then segmented again
@@ -93,7 +95,7 @@ from floorscan.floorplan import doors as D
 from floorscan.floorplan.corridors import corridor_sides
 from floorscan.floorplan.extensions import partition_cuts
 from floorscan.floorplan.hidden import OBJECT_MAX_DEPTH_M
-from floorscan.floorplan.mouths import corner_mouths, room_mouths
+from floorscan.floorplan.mouths import corner_mouths, dead_end_mouths, room_mouths
 from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
 from floorscan.floorplan.room_polygons import disjoint_rooms, largest_polygon, room_polygons
@@ -153,6 +155,7 @@ def segment_rooms(
     gaps = [g for g in D.wall_gaps(axes, thickness, params) + corner_mouths(axes, thickness, params)
             if D.passes_through(raster, g[0], g[1])]
     gaps += room_mouths(axes, thickness, raster, params)
+    gaps += dead_end_mouths(axes, thickness, raster, params)
     gaps += [g for g in corridor_sides(axes, thickness, raster, params) if D.passes_through(raster, g[0], g[1])]
     segmented = _segment(grid, axes, thickness, params, raster, gaps)
     cuts = partition_cuts(axes, thickness, raster, segmented[1], params)
