@@ -100,6 +100,44 @@ def _ray_hits(raster: RoomRaster, start: np.ndarray, direction: np.ndarray, max_
     return bool(len(near))
 
 
+def _sides_apart(raster: RoomRaster, p: np.ndarray, q: np.ndarray):
+    """The space cut along the line from ``p`` to ``q`` (metres): its components (an
+    ndarray of labels, 0 outside the space) and the components two cells to the left
+    and to the right of the line's middle, or None when the line does not part the
+    space in two (its two sides still connected, or a side off the raster or outside
+    the space)."""
+    from scipy import ndimage
+
+    d = q - p
+    nrm = np.array([-d[1], d[0]]) / float(np.hypot(*d)) * 2 * raster.resolution_m
+    sr, sc, inside = raster.cells_of(np.array([(p + q) / 2 + nrm, (p + q) / 2 - nrm]))
+    if not inside.all():
+        return None
+    cut = raster.space.copy()
+    cut[barrier_cells(raster, p, q)] = False
+    comp, _ = ndimage.label(cut)
+    left, right = int(comp[sr[0], sc[0]]), int(comp[sr[1], sc[1]])
+    return (comp, left, right) if left and right and left != right else None
+
+
+def _goes_on(axes: np.ndarray, thickness: np.ndarray, i: int, k: int, params: RoomParams) -> bool:
+    """Whether wall ``i``'s line goes on past its end ``k`` in another wall (parallel
+    within ``door_angle_deg``, both its ends within ``line_offset_m`` and half the
+    thicker wall of the line), beyond a gap at most ``door_max_m`` wide: the end is a
+    door's jamb or the edge of a slit."""
+    unit, length = wall_units(axes)
+    ends = axes.reshape(-1, 2, 2)
+    out = (ends[i, k] - ends[i, 1 - k]) / max(length[i], 1e-12)
+    nrm = np.array([-out[1], out[0]])
+    rel = ends - ends[i, k]  # (N, 2, 2)
+    t, off = rel @ out, np.abs(rel @ nrm)
+    in_line = off.max(axis=1) <= params.line_offset_m + np.maximum(thickness, thickness[i]) / 2
+    ok = (np.abs(unit @ out) >= np.cos(np.radians(params.door_angle_deg))) & in_line
+    ok &= (t.min(axis=1) >= 0) & (t.min(axis=1) <= params.door_max_m)
+    ok[i] = False
+    return bool(ok.any())
+
+
 def room_mouths(
     axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster, params: RoomParams
 ) -> list[tuple[np.ndarray, np.ndarray, int]]:
@@ -128,7 +166,7 @@ def room_mouths(
     if len(axes) < 2:
         return []
     ends = axes.reshape(-1, 2, 2)
-    unit, length = wall_units(axes)
+    _, length = wall_units(axes)
     free = _free_ends(axes, thickness)
     if not free:
         return []
@@ -170,35 +208,6 @@ def room_mouths(
             return False  # a recess of the space the line borders, not a room
         return all(_ray_hits(raster, x, n, MOUTH_DEPTH * length_m, tree) for x in starts)
 
-    def separates(p: np.ndarray, q: np.ndarray) -> bool:
-        """Whether the line from ``p`` to ``q`` parts the space in two: its two sides
-        are no longer connected once it is cut."""
-        from scipy import ndimage
-
-        d = q - p
-        nrm = np.array([-d[1], d[0]]) / float(np.hypot(*d)) * 2 * raster.resolution_m
-        sr, sc, inside = raster.cells_of(np.array([(p + q) / 2 + nrm, (p + q) / 2 - nrm]))
-        if not inside.all():
-            return False
-        cut = raster.space.copy()
-        cut[barrier_cells(raster, p, q)] = False
-        comp, _ = ndimage.label(cut)
-        ca, cb = int(comp[sr[0], sc[0]]), int(comp[sr[1], sc[1]])
-        return bool(ca and cb and ca != cb)
-
-    def goes_on(i: int, k: int) -> bool:
-        """Whether wall ``i``'s line goes on past its end ``k`` in another wall, beyond a
-        gap at most ``door_max_m`` wide: the end is a door's jamb or the edge of a slit."""
-        out = (ends[i, k] - ends[i, 1 - k]) / max(length[i], 1e-12)
-        nrm = np.array([-out[1], out[0]])
-        rel = ends - ends[i, k]  # (N, 2, 2)
-        t, off = rel @ out, np.abs(rel @ nrm)
-        in_line = off.max(axis=1) <= params.line_offset_m + np.maximum(thickness, thickness[i]) / 2
-        ok = (np.abs(unit @ out) >= cos_tol) & in_line
-        ok &= (t.min(axis=1) >= 0) & (t.min(axis=1) <= params.door_max_m)
-        ok[i] = False
-        return bool(ok.any())
-
     cands = []
     for a in range(len(free)):
         d = pts - pts[a]
@@ -236,9 +245,9 @@ def room_mouths(
             ends_m = (thickness[tips[a][0]] / 2, thickness[tips[b][0]] / 2)
             if not closes_pocket(pts[a], u, float(dist[b]), 1.0 if (into > 0).all() else -1.0, ends_m):
                 continue
-            if not along.any() and goes_on(*tips[a]) and goes_on(*tips[b]):
+            if not along.any() and all(_goes_on(axes, thickness, *tips[e], params) for e in (a, b)):
                 continue  # two doors (or slits) facing each other across a space that goes on past them
-            if corner and not separates(pts[a], pts[b]):
+            if corner and _sides_apart(raster, pts[a], pts[b]) is None:
                 continue  # a corner's line across a corridor that goes on around
             wall = tips[a][0] if length[tips[a][0]] >= length[tips[b][0]] else tips[b][0]
             cands.append((float(dist[b]), pts[a].copy(), pts[b].copy(), int(wall)))
@@ -341,17 +350,11 @@ def dead_end_mouths(
     out = []
     clearance = None  # metres from each cell of the space to the nearest cell outside it
     for p, q, wall in wall_gaps(axes, thickness, params, corners=True):
+        apart = _sides_apart(raster, p, q)
+        if apart is None:
+            continue
+        comp, ca, cb = apart
         d = q - p
-        nrm = np.array([-d[1], d[0]]) / float(np.hypot(*d)) * 2 * raster.resolution_m
-        sr, sc, inside = raster.cells_of(np.array([(p + q) / 2 + nrm, (p + q) / 2 - nrm]))
-        if not inside.all():
-            continue
-        cut = raster.space.copy()
-        cut[barrier_cells(raster, p, q)] = False
-        comp, _ = ndimage.label(cut)
-        ca, cb = int(comp[sr[0], sc[0]]), int(comp[sr[1], sc[1]])
-        if not (ca and cb and ca != cb):
-            continue
         # the side the rest of the space lies on; no wall at either corner runs into it
         big = 1.0 if np.count_nonzero(comp == ca) >= np.count_nonzero(comp == cb) else -1.0
         n = big * np.array([-d[1], d[0]]) / float(np.hypot(*d))
@@ -405,12 +408,6 @@ def _runs_into(axes: np.ndarray, thickness: np.ndarray, c: np.ndarray, n: np.nda
         length = float(np.hypot(*out))
         if length < 1e-9 or float(out @ n) < np.cos(np.radians(params.door_angle_deg)) * length:
             continue  # not a side wall ending at the corner from the other side
-        out /= length
-        rel = ends - ends[i, k]
-        along, off = rel @ out, np.abs(rel @ np.array([-out[1], out[0]]))
-        ok = (off.max(axis=1) <= params.line_offset_m + np.maximum(thickness, thickness[i]) / 2)
-        ok &= (along.min(axis=1) >= 0) & (along.min(axis=1) <= params.door_max_m)
-        ok[i] = False
-        if ok.any():
+        if _goes_on(axes, thickness, int(i), k, params):
             return True
     return False
