@@ -87,9 +87,10 @@ def wall_gaps(axes: np.ndarray, thickness: np.ndarray, params: RoomParams,
                 gap = (tb.max(), ta.min())
             else:
                 continue
-            corner_a, corner_b = junction_end(axes, thickness, a, ka), junction_end(axes, thickness, b, kb)
-            if (corner_a or corner_b) if not corners else not (corner_a and corner_b):
-                continue  # an end in an L or T junction is a corner, not a jamb
+            # an end in an L or T junction is a corner, not a jamb: both ends jambs, or
+            # with ``corners`` both corners
+            if junction_end(axes, thickness, a, ka) != corners or junction_end(axes, thickness, b, kb) != corners:
+                continue
             width = gap[1] - gap[0]
             if params.door_min_m <= width <= params.door_max_m:
                 p = ends[a, 0] + u[a] * gap[0]

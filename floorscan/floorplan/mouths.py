@@ -54,6 +54,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from floorscan.core.geometry import point_segment_dist2
 from floorscan.floorplan.doors import barrier_cells, junction_end, wall_units
 from floorscan.floorplan.room_space import RoomParams, RoomRaster, wall_footprints
 
@@ -353,11 +354,12 @@ def dead_end_mouths(
         apart = _sides_apart(raster, p, q)
         if apart is None:
             continue
-        comp, ca, cb = apart
+        comp, left, right = apart
         d = q - p
         # the side the rest of the space lies on; no wall at either corner runs into it
-        big = 1.0 if np.count_nonzero(comp == ca) >= np.count_nonzero(comp == cb) else -1.0
-        n = big * np.array([-d[1], d[0]]) / float(np.hypot(*d))
+        sizes = np.bincount(comp.ravel())
+        rest, side = (left, 1.0) if sizes[left] >= sizes[right] else (right, -1.0)
+        n = side * np.array([-d[1], d[0]]) / float(np.hypot(*d))
         if any(_runs_into(axes, thickness, c, n, params) for c in (p, q)):
             continue
         # a hall beside the gap: a cell twice the gap's width across, near and seen
@@ -366,18 +368,15 @@ def dead_end_mouths(
         r = params.corridor_max_width_m
         rows, cols, _ = raster.cells_of(np.array([(p + q) / 2 - r, (p + q) / 2 + r]))
         h, w = raster.space.shape
-        r0, r1 = sorted(np.clip(rows, 0, h - 1))
-        c0, c1 = sorted(np.clip(cols, 0, w - 1))
-        yy, xx = np.mgrid[r0:r1 + 1, c0:c1 + 1]
-        x = (xx + 0.5) * raster.resolution_m + raster.origin_xy[0] - (p[0] + q[0]) / 2
-        y = (yy + 0.5) * raster.resolution_m + raster.origin_xy[1] - (p[1] + q[1]) / 2
-        window = (slice(r0, r1 + 1), slice(c0, c1 + 1))
-        beside = (comp[window] == (ca if big > 0 else cb)) & (np.hypot(x, y) <= r)
-        beside &= clearance[window] > float(np.hypot(*d))
+        window = (slice(*np.clip(rows, 0, h - 1) + [0, 1]), slice(*np.clip(cols, 0, w - 1) + [0, 1]))
+        rr, cc = np.mgrid[window]
+        xy = raster.centres(rr.ravel(), cc.ravel())
+        beside = (comp[window].ravel() == rest) & (np.hypot(*(xy - (p + q) / 2).T) <= r)
+        beside &= clearance[window].ravel() > float(np.hypot(*d))
         if not beside.any():
             continue
         mid = (p + q) / 2 + n * raster.resolution_m
-        cells = np.column_stack([x[beside], y[beside]]) + (p + q) / 2
+        cells = xy[beside]
         steps = np.linspace(0.0, 1.0, int(np.ceil(r / (raster.resolution_m / 2))) + 1)
         seen = raster.at(raster.space, (mid + np.einsum("k,nj->nkj", steps, cells - mid)).reshape(-1, 2),
                          outside=False).reshape(len(cells), len(steps)).all(axis=1)
@@ -393,12 +392,9 @@ def _runs_into(axes: np.ndarray, thickness: np.ndarray, c: np.ndarray, n: np.nda
     normal of the line) by more than half its thickness and ``line_offset_m``, or a wall
     ending at the corner goes on in its line into that side in another wall, beyond a
     gap at most ``door_max_m`` wide (a corridor's wall with a door beside the corner)."""
-    a, b = axes[:, :2], axes[:, 2:]
-    d = b - a
     tol = thickness / 2 + params.line_offset_m
-    t = np.clip(np.einsum("ij,ij->i", c - a, d) / np.maximum(np.einsum("ij,ij->i", d, d), 1e-12), 0.0, 1.0)
-    near = np.hypot(*(a + d * t[:, None] - c).T) <= tol
-    reach = np.maximum((a - c) @ n, (b - c) @ n)
+    near = point_segment_dist2(np.full(len(axes), c[0]), np.full(len(axes), c[1]), axes) <= tol**2
+    reach = np.maximum((axes[:, :2] - c) @ n, (axes[:, 2:] - c) @ n)
     if (near & (reach > tol)).any():
         return True
     ends = axes.reshape(-1, 2, 2)
