@@ -508,6 +508,29 @@ def test_a_row_of_desks_standing_free_frames_no_door_however_long():
     assert len(rooms) == 2 and len(doors) == 2
 
 
+def test_a_cabinet_standing_free_with_a_pocket_of_floor_inside_frames_no_door():
+    # a map of a room 7 x 5 m with a cabinet 0.8 x 2.45 m (a little longer than a piece
+    # of furniture, so not standing free by its extent) standing 1.24 and 1.19 m from the
+    # south and the north wall, its long sides taken for walls; the map marks 0.3 m2
+    # inside it free (a shelf seen through). Floor too small for a room makes no core of
+    # rooms: the cabinet frames no door and the room stays one (the tree before the
+    # change: two rooms and two doors)
+    box = [(0, 0, 7, 0), (7, 0, 7, 5), (7, 5, 0, 5), (0, 5, 0, 0)]
+    cabinet = [(3.0, 1.3, 3.8, 1.3), (3.8, 1.3, 3.8, 3.75), (3.8, 3.75, 3.0, 3.75), (3.0, 3.75, 3.0, 1.3)]
+    poses = [(1.5, 2.5), (5.5, 2.5), (3.4, 0.6), (3.4, 4.4), (1.0, 4.0), (6.0, 1.0)]
+    grid = dataclasses.replace(_grid(box, poses, objects=cabinet), scan_xy=None)
+    ys, xs = grid.origin_xy[1] + (np.arange(grid.shape[0]) + 0.5) * grid.resolution_m, \
+        grid.origin_xy[0] + (np.arange(grid.shape[1]) + 0.5) * grid.resolution_m
+    pocket = ((ys > 2.0) & (ys < 2.8))[:, None] & ((xs > 3.2) & (xs < 3.6))[None, :]
+    hit, miss = grid.n_hit_scans.copy(), grid.n_miss_scans.copy()
+    hit[pocket], miss[pocket] = 0, 5
+    grid = dataclasses.replace(grid, n_hit_scans=hit, n_miss_scans=miss)
+    axes = np.array(box + [(3.0, 1.3, 3.0, 3.75), (3.8, 1.3, 3.8, 3.75)], dtype=np.float64)
+    rooms, doors = plan_rooms(axes, np.full(len(axes), T), grid, RoomParams())
+    assert len(rooms) == 1 and len(doors) == 0
+    assert 30.5 < rooms["area_m2"].iloc[0] < 32.5  # the floor less the cabinet's
+
+
 def test_standing_free_is_an_obstacle_apart_shorter_than_a_piece_of_furniture():
     from floorscan.floorplan.doors import standing_free
 

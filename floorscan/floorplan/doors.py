@@ -362,12 +362,12 @@ def jamb_cells(raster: RoomRaster, jamb_m: float, axes: np.ndarray | None = None
     obstacles, what was not seen free) that the space surrounds and that is shorter
     than the longest piece of furniture (:func:`standing_free`): a desk or a table in a
     room, whether the plan took its faces for walls or not; or, however long, one that
-    holds no wall of the plan longer than that piece and encloses no space
+    holds no wall of the plan longer than that piece and encloses no room's floor
     (:func:`furniture_islands`, given the plan's walls): a row or an L of desks, a table
-    and its chairs. A stub of wall whose
-    junction the scans did not see belongs with the unseen cells beyond it, so it stays
-    a jamb; so does a piece of wall between two doors (:func:`_pieces_between_doors`: in the
-    line of a wall's end a door's width away on each side), given the plan's walls.
+    and its chairs, a cabinet with less floor inside than ``params.min_room_area_m2``.
+    A stub of wall whose junction the scans did not see belongs with the unseen cells
+    beyond it, so it stays a jamb; so does a piece of wall between two doors in a wall's
+    line, a door's width from its ends (:func:`_pieces_between_doors`), given the walls.
 
     Parameters
     ----------
@@ -380,18 +380,18 @@ def jamb_cells(raster: RoomRaster, jamb_m: float, axes: np.ndarray | None = None
     thickness : (N,) float ndarray, optional
         Metres.
     params : RoomParams, optional
-        ``door_max_m``, ``door_angle_deg``, ``line_offset_m``.
+        ``door_max_m``, ``door_angle_deg``, ``line_offset_m``, ``min_room_area_m2``.
     """
     solid = raster.walls | raster.bounds
     free = standing_free(~raster.space, raster.resolution_m)
     if axes is not None and len(axes):
-        free |= furniture_islands(raster, axes)
+        free |= furniture_islands(raster, axes, params.min_room_area_m2 if params is not None else 0.0)
     if axes is not None and thickness is not None and params is not None and len(axes) and free.any():
         free &= ~_pieces_between_doors(free, raster, axes, thickness, params)
     return dilate(solid & ~free, jamb_m / raster.resolution_m)
 
 
-def furniture_islands(raster: RoomRaster, axes: np.ndarray) -> np.ndarray:
+def furniture_islands(raster: RoomRaster, axes: np.ndarray, min_room_area_m2: float = 0.0) -> np.ndarray:
     """(H, W) bool: the groups of furniture standing in the space, whatever their
     extent: the 8-connected components of the cells outside the space (walls, obstacles,
     what was not seen free) that
@@ -404,8 +404,10 @@ def furniture_islands(raster: RoomRaster, axes: np.ndarray) -> np.ndarray:
       piece of furniture: the structure passes' anchors
       (:mod:`floorscan.floorplan.structure`, step 4); a core of rooms or a partition
       standing free of the outer walls holds one;
-    - enclose no space (SciPy's ``ndimage.binary_fill_holes``): a core of rooms
-      closed all round holds its rooms' floor.
+    - enclose no more space than ``min_room_area_m2`` (square metres; SciPy's
+      ``ndimage.binary_fill_holes``): a core of rooms closed all round holds its rooms'
+      floor, and a room is no smaller than that; less is the inside of a cabinet or a
+      shelf the map saw through. 0 (the default): no space at all.
 
     Desks in a row, an L of desks, a table and its chairs are one component longer
     than any one of them (:func:`standing_free` measures a component against a single
@@ -427,7 +429,8 @@ def furniture_islands(raster: RoomRaster, axes: np.ndarray) -> np.ndarray:
     for k, box in enumerate(ndimage.find_objects(labels), start=1):
         if box is not None and island[k]:
             part = labels[box] == k
-            island[k] = not (ndimage.binary_fill_holes(part) & ~part & raster.space[box]).any()
+            enclosed = (ndimage.binary_fill_holes(part) & ~part & raster.space[box]).sum() * r**2
+            island[k] = not enclosed or enclosed < min_room_area_m2
     return island[labels]
 
 
