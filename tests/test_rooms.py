@@ -272,6 +272,20 @@ OPEN_OFFICES = [
 ]  # fmt: skip
 
 
+def _office_row(walls: list, thickness: float):
+    """A row of three offices 3 m wide above a corridor (``walls``, ``thickness``
+    metres), scanned from the corridor and each office: the x spans of its room mouths
+    (sorted), and the plan's rooms and doors."""
+    from floorscan.floorplan.mouths import room_mouths
+    from floorscan.floorplan.room_space import room_space
+
+    axes, th = np.array(walls, dtype=np.float64), np.full(len(walls), thickness)
+    grid = _grid(walls, [(1.5, 0.75), (4.5, 0.75), (7.5, 0.75), (1.5, 3), (4.5, 3), (7.5, 3)], thickness=thickness)
+    mouths = room_mouths(axes, th, room_space(grid, axes, th, RoomParams()), RoomParams())
+    spans = sorted((round(float(min(p[0], q[0])), 2), round(float(max(p[0], q[0])), 2)) for p, q, _ in mouths)
+    return spans, *plan_rooms(axes, th, grid, RoomParams())
+
+
 def test_offices_open_to_a_corridor_on_their_whole_width_are_rooms():
     """The mouths of :mod:`floorscan.floorplan.mouths`: without them the offices and the
     corridor are one space (no narrowing between them)."""
@@ -298,18 +312,24 @@ def test_offices_between_thick_walls_open_to_a_corridor_are_rooms():
     tested between the walls' faces, so the thick walls it joins neither cross it nor
     take its samples of the free space. Tested 0.15 m from each end, the line crossed
     the footprint of the wall at its end, and the offices joined the corridor."""
-    from floorscan.floorplan.mouths import room_mouths
-    from floorscan.floorplan.room_space import room_space
-
-    axes, th = np.array(OPEN_OFFICES, dtype=np.float64), np.full(len(OPEN_OFFICES), 0.3)
-    poses = [(1.5, 0.75), (4.5, 0.75), (7.5, 0.75), (1.5, 3), (4.5, 3), (7.5, 3)]
-    grid = _grid(OPEN_OFFICES, poses, thickness=0.3)
-    mouths = room_mouths(axes, th, room_space(grid, axes, th, RoomParams()), RoomParams())
-    got = sorted((round(float(min(p[0], q[0])), 2), round(float(max(p[0], q[0])), 2)) for p, q, _ in mouths)
-    assert got == [(0.8, 3.0), (3.0, 6.0), (6.0, 8.2)]
-    rooms, doors = plan_rooms(axes, th, grid, RoomParams())
+    spans, rooms, doors = _office_row(OPEN_OFFICES, 0.3)
+    assert spans == [(0.8, 3.0), (3.0, 6.0), (6.0, 8.2)]
     assert sorted(rooms["kind"]) == ["corridor", "room", "room", "room"] and len(doors) == 0
     assert all(7.0 < a < 8.5 for a in rooms[rooms["kind"] == "room"]["area_m2"])  # 3 x 3 m less half walls
+
+
+def test_cubicles_as_deep_as_their_clear_opening_are_rooms():
+    """Cubicles 2.9 m deep (to the back wall's axis) whose partitions, 0.2 m thick,
+    stand 3 m apart (axis to axis), open onto a corridor: the side walls are shorter
+    than the line between their ends but as long as the clear opening between the end
+    walls' faces (2.8 m), so they bound rooms (Bormann et al.'s lab_a). The tree before
+    took the partitions for stubs: no mouth, one space."""
+    walls = [(0, 0, 9, 0), (9, 0, 9, 4.5), (9, 4.5, 0, 4.5), (0, 4.5, 0, 0),
+             (3, 4.5, 3, 1.6), (6, 4.5, 6, 1.6), (0, 1.6, 0.8, 1.6), (9, 1.6, 8.2, 1.6)]  # fmt: skip
+    spans, rooms, doors = _office_row(walls, 0.2)
+    assert spans == [(0.8, 3.0), (3.0, 6.0), (6.0, 8.2)]
+    assert sorted(rooms["kind"]) == ["corridor", "room", "room", "room"] and len(doors) == 0
+    assert all(7.5 < a < 8.5 for a in rooms[rooms["kind"] == "room"]["area_m2"])  # 3 x 2.9 m less half walls
 
 
 def test_an_office_open_between_its_side_wall_s_corner_and_its_front_wall_s_free_end_is_a_room():

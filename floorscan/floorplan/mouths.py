@@ -26,8 +26,9 @@ mouth is that line, between two wall ends that:
   line within ``line_offset_m`` plus half its thickness: the wall of a corridor going
   on past a room's side wall), within ``door_angle_deg``, and not both
   along the line (that is a gap in one wall, :func:`~floorscan.floorplan.doors.wall_gaps`);
-  a corner's wall is a side wall; a side wall is at least as long as the line and
-  :data:`MOUTH_WALL_M`;
+  a corner's wall is a side wall; a side wall is at least as long as the line's clear
+  width between the faces of the walls at its ends (the room is as deep as it is
+  open: a cubicle, Bormann et al.'s lab_a) and :data:`MOUTH_WALL_M`;
 - close a pocket: from the line into that side, the space ends at a wall or at a cell
   outside the space within :data:`MOUTH_DEPTH` times the line's length, at its
   middle and at both quarter points (the back wall of the room), and not before
@@ -238,7 +239,8 @@ def room_mouths(
             sides = np.array([tips[a][0], tips[b][0]])[~along]
             if dist[b] - thickness[sides].sum() / 2 > MOUTH_MAX_M:
                 continue  # wider than a room's open side, between the side walls' faces
-            if length[sides].min() < max(MOUTH_WALL_M, dist[b]):
+            clear = dist[b] - (thickness[tips[a][0]] + thickness[tips[b][0]]) / 2  # between the end walls' faces
+            if length[sides].min() < max(MOUTH_WALL_M, clear):
                 continue  # a stub of furniture or noise bounds no room
             into = side[~along]
             if not ((into >= cos_tol).all() or (into <= -cos_tol).all()):
