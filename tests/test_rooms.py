@@ -624,6 +624,38 @@ def test_a_dead_end_corridor_off_a_hall_is_a_room_of_its_own():
     assert 10.5 < corridor.area < 11.8 and corridor.bounds[1] > 7.8  # 1.6 x 7.4 m less half walls
 
 
+def test_a_dead_end_corridor_along_the_hall_s_wall_is_a_corridor_of_its_own():
+    """A hall 12 x 8 m and a dead-end corridor 1.8 m wide and 8 m long north of it,
+    whose west wall is the hall's west wall going on (Bormann et al.'s Freiburg101):
+    its mouth has a corner on one side only, so no gap in a wall's line marks it; the
+    corridor's end opens onto the hall (:func:`~floorscan.floorplan.corridors.corridor_ends`)
+    and is cut across it. The tree before left one space."""
+    from floorscan.floorplan.corridors import corridor_ends, corridor_strips
+    from floorscan.floorplan.room_space import room_space
+
+    walls = [(0, 0, 12, 0), (12, 0, 12, 8), (12, 8, 1.8, 8), (1.8, 8, 1.8, 16), (1.8, 16, 0, 16), (0, 16, 0, 0)]
+    axes, th = np.array(walls, dtype=np.float64), np.full(len(walls), T)
+    grid = _grid(walls, [(3, 2), (9, 2), (3, 6), (9, 6), (0.9, 10), (0.9, 14)])
+    ends = corridor_ends(axes, th, room_space(grid, axes, th, RoomParams()), RoomParams())
+    assert [sorted((round(float(p[0]), 2), round(float(q[0]), 2))) for p, q, _ in ends] == [[0.0, 1.8]]
+    assert all(abs(p[1] - 8) < 0.01 and abs(q[1] - 8) < 0.01 for p, q, _ in ends)
+    rooms, doors = plan_rooms(axes, th, grid, RoomParams())
+    assert sorted(rooms["kind"]) == ["corridor", "room"]
+    assert len(doors) == 1 and doors["width_m"].iloc[0] == pytest.approx(1.8, abs=0.15)  # no wider than a door
+    corridor = rooms[rooms["kind"] == "corridor"]["polygon"].iloc[0]
+    assert 13.0 < corridor.area < 14.5 and corridor.contains(shapely.Point(0.9, 12))  # 1.8 x 8 m less half walls
+    # open at its far end onto a room that opens onto the hall too (a ring): no single
+    # line parts the space there
+    ring = walls[:2] + [(12, 8, 6, 8), (5, 8, 1.8, 8), (1.8, 8, 1.8, 16.2), (1.8, 18, 0, 18), (0, 18, 0, 0),
+                        (1.8, 18, 12, 18), (12, 18, 12, 8)]  # fmt: skip
+    axes, th = np.array(ring, dtype=np.float64), np.full(len(ring), T)
+    grid = _grid(ring, [(3, 2), (9, 2), (3, 6), (9, 6), (0.9, 10), (0.9, 14), (0.9, 17), (6, 17), (10, 12)])
+    raster = room_space(grid, axes, th, RoomParams())
+    strips = corridor_strips(axes, th, raster, RoomParams())
+    assert any(s["polygon"].contains(shapely.Point(0.9, 11)) for s in strips)  # the corridor is still one
+    assert corridor_ends(axes, th, raster, RoomParams(), strips) == []
+
+
 def test_a_corridor_whose_wall_goes_on_past_a_partition_s_line_is_not_cut_there():
     """A corridor (x 0..20, y 6..7.5) along two closed rooms, a hall (x 8..16, y -2..6)
     open onto it on its whole width. The corridor's part west of the hall is closed

@@ -1,6 +1,7 @@
-"""The sides of corridors (:func:`corridor_sides`): a corridor is the strip of space
-between two long parallel lines of wall, and an opening in its sides, however wide, is
-a room boundary, unless another corridor goes on from it.
+"""The sides and ends of corridors (:func:`corridor_sides`, :func:`corridor_ends`): a
+corridor is the strip of space between two long parallel lines of wall; an opening in
+its sides, however wide, is a room boundary, unless another corridor goes on from it,
+and so is its end where it opens onto a hall.
 
 A distance-transform segmentation (:mod:`floorscan.floorplan.persistence`) parts two
 spaces only where the space narrows to a door, so an office open onto a corridor
@@ -35,6 +36,16 @@ et al. ("Room segmentation: survey, implementation, and analysis", ICRA 2016).
    width (a niche of the corridor, as the open sides of rooms take it), or faces, over
    at least half its width, an opening in the other side into another corridor (a
    crossing: that corridor goes on through it, however short its far arm).
+4. **Ends** (:func:`corridor_ends`): the line across a corridor's end, from side to
+   side, where the corridor opens onto a hall: the line parts the space in two, and
+   beyond it lies a space at least twice as wide as the corridor
+   (:func:`~floorscan.floorplan.mouths.hall_beside`). This is the dead end of
+   :func:`~floorscan.floorplan.mouths.dead_end_mouths` whose side walls end apart
+   along it (one side wall goes on beside the hall, the other stops): people draw the
+   corridor's end across it where the shorter side ends (Bormann et al.'s Freiburg101,
+   its dead-end corridor whose west wall is the hall's). A corridor that joins the
+   space at its two ends (a ring, a passage between two blocks) is parted by no single
+   line, and stays one room with the space it joins.
 """
 
 from __future__ import annotations
@@ -42,7 +53,7 @@ from __future__ import annotations
 import numpy as np
 
 from floorscan.floorplan.doors import contact_door, wall_units
-from floorscan.floorplan.mouths import MOUTH_MIN_DEPTH
+from floorscan.floorplan.mouths import MOUTH_MIN_DEPTH, hall_beside, sides_apart
 from floorscan.floorplan.room_space import MIN_ROOM_WIDTH_M, RoomParams, RoomRaster
 
 #: A corridor's side is bounded along at least this share of the corridor's length:
@@ -93,11 +104,12 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(np.flatnonzero(d == 1).tolist(), np.flatnonzero(d == -1).tolist()))
 
 
-def _corridors(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster, params: RoomParams) -> list[dict]:
+def corridor_strips(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster, params: RoomParams) -> list[dict]:
     """The corridors (module docstring, steps 1-2): per corridor, ``polygon`` (between
     the axes of its sides), ``origin``, ``u`` (a point of the first side's line and its
     direction), ``n`` (the unit normal toward the second side), ``sep`` (metres between
-    the sides' lines), ``t0`` (its start along ``u``), ``step`` and, per side,
+    the sides' lines), ``clear`` (metres between the sides' faces), ``t0`` and ``t1``
+    (its start and end along ``u``), ``step`` and, per side,
     ``open`` ((K,) bool at ``t0 + (i + 1/2) step``) and ``walls`` (the side's line)."""
     import shapely
 
@@ -156,8 +168,8 @@ def _corridors(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster, para
                 t0, t1 = float(t[s] - step / 2), float(t[e - 1] + step / 2)
                 corners = [oa + t0 * ua, oa + t1 * ua, oa + t1 * ua + sep * n, oa + t0 * ua + sep * n]
                 sides = ((~side_a[s:e], list(wa), 0.0, -1.0), (~side_b[s:e], list(lines[ib]), sep, 1.0))
-                found.append(dict(polygon=shapely.Polygon(corners), origin=oa, u=ua, n=n, sep=sep, t0=t0, step=step,
-                                  sides=sides))
+                found.append(dict(polygon=shapely.Polygon(corners), origin=oa, u=ua, n=n, sep=sep, clear=clear, t0=t0,
+                                  t1=t1, step=step, sides=sides))
     kept: list[dict] = []
     for c in sorted(found, key=lambda c: (c["sep"], -c["polygon"].area)):
         if all(c["polygon"].intersection(k["polygon"]).area < 0.5 * c["polygon"].area for k in kept):
@@ -165,8 +177,18 @@ def _corridors(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster, para
     return kept
 
 
+def _walls_and_strips(axes, thickness, raster: RoomRaster, params: RoomParams, strips: list[dict] | None):
+    """``axes`` ((N, 4) float64), ``thickness`` ((N,) float64) and the corridor strips:
+    ``strips``, or :func:`corridor_strips` when None (none with fewer than two walls)."""
+    axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
+    thickness = np.asarray(thickness, dtype=np.float64).reshape(-1)
+    if strips is None:
+        strips = corridor_strips(axes, thickness, raster, params) if len(axes) >= 2 else []
+    return axes, thickness, strips
+
+
 def corridor_sides(
-    axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster, params: RoomParams
+    axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster, params: RoomParams, strips: list[dict] | None = None
 ) -> list[tuple[np.ndarray, np.ndarray, int]]:
     """The openings in the sides of the plan's corridors (module docstring).
 
@@ -179,6 +201,8 @@ def corridor_sides(
     raster : RoomRaster
         The space before it is cut.
     params : RoomParams
+    strips : list of dict, optional
+        :func:`corridor_strips` of the same walls and raster (computed when None).
 
     Returns
     -------
@@ -187,17 +211,12 @@ def corridor_sides(
         side's wall nearest to it.
     """
     import shapely
-    from scipy import ndimage
 
-    axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
-    thickness = np.asarray(thickness, dtype=np.float64).reshape(-1)
-    if len(axes) < 2:
-        return []
-    strips = _corridors(axes, thickness, raster, params)
+    axes, thickness, strips = _walls_and_strips(axes, thickness, raster, params, strips)
     if not strips:
         return []
     mids = (axes[:, :2] + axes[:, 2:]) / 2
-    half_width = ndimage.distance_transform_edt(raster.space) * raster.resolution_m
+    half_width = raster.clearance()
     strip_tree = shapely.STRtree([s["polygon"] for s in strips])
     out = []
     for k, s in enumerate(strips):
@@ -237,6 +256,45 @@ def corridor_sides(
             e = s["u"] * s["step"] / 2
             door = contact_door(p - e, q + e, axes, thickness, params)
             if door is None:
-                door = (p, q, int(walls[int(np.argmin(np.hypot(*(mids[walls] - mid).T)))]))
+                door = (p, q, _nearest_wall(mids, walls, mid))
             out.append(door)
     return out
+
+
+def corridor_ends(
+    axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster, params: RoomParams, strips: list[dict] | None = None
+) -> list[tuple[np.ndarray, np.ndarray, int]]:
+    """The ends of the plan's corridors that open onto a hall (module docstring, step 4).
+
+    Parameters and returns as :func:`corridor_sides`, except that ``raster`` is the
+    space cut along the rooms' other boundaries (the line's parting and the hall beyond
+    it are judged there), and each line is a corridor's end from ``p`` to ``q`` ((2,)
+    metres, on its sides' lines) with the sides' wall nearest to its middle.
+    """
+    axes, thickness, strips = _walls_and_strips(axes, thickness, raster, params, strips)
+    if not strips:
+        return []
+    mids = (axes[:, :2] + axes[:, 2:]) / 2
+    clearance = raster.clearance()
+    out = []
+    for s in strips:
+        for t, outward in ((s["t0"], -1.0), (s["t1"], 1.0)):
+            p = s["origin"] + t * s["u"]
+            q = p + s["sep"] * s["n"]
+            hall = (p, q, outward * s["u"], s["clear"], params.corridor_max_width_m)
+            if not hall_beside(raster, clearance, raster.space, *hall):
+                continue  # no hall anywhere beyond: no need to label the space
+            apart = sides_apart(raster, p, q)
+            if apart is None:
+                continue  # the corridor joins the space elsewhere too
+            comp = apart[0]
+            beyond = raster.at(comp, ((p + q) / 2 + outward * s["u"] * 2 * raster.resolution_m)[None], outside=0)[0]
+            if beyond and hall_beside(raster, clearance, comp == beyond, *hall):
+                out.append((p, q, _nearest_wall(mids, s["sides"][0][1] + s["sides"][1][1], (p + q) / 2)))
+    return out
+
+
+def _nearest_wall(mids: np.ndarray, walls: list[int], xy: np.ndarray) -> int:
+    """Of ``walls`` (indices), the one whose middle (``mids``, (N, 2) metres) lies
+    nearest to ``xy`` ((2,) metres)."""
+    return int(walls[int(np.argmin(np.hypot(*(mids[walls] - xy).T)))])

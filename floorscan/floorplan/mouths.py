@@ -102,7 +102,7 @@ def _ray_hits(raster: RoomRaster, start: np.ndarray, direction: np.ndarray, max_
     return bool(len(near))
 
 
-def _sides_apart(raster: RoomRaster, p: np.ndarray, q: np.ndarray):
+def sides_apart(raster: RoomRaster, p: np.ndarray, q: np.ndarray):
     """The space cut along the line from ``p`` to ``q`` (metres): its components (an
     ndarray of labels, 0 outside the space) and the components two cells to the left
     and to the right of the line's middle, or None when the line does not part the
@@ -250,7 +250,7 @@ def room_mouths(
                 continue
             if not along.any() and all(_goes_on(axes, thickness, *tips[e], params) for e in (a, b)):
                 continue  # two doors (or slits) facing each other across a space that goes on past them
-            if corner and _sides_apart(raster, pts[a], pts[b]) is None:
+            if corner and sides_apart(raster, pts[a], pts[b]) is None:
                 continue  # a corner's line across a corridor that goes on around
             wall = tips[a][0] if length[tips[a][0]] >= length[tips[b][0]] else tips[b][0]
             cands.append((float(dist[b]), pts[a].copy(), pts[b].copy(), int(wall)))
@@ -346,14 +346,12 @@ def dead_end_mouths(
 
     Parameters and returns as :func:`room_mouths`.
     """
-    from scipy import ndimage
-
     from floorscan.floorplan.doors import wall_gaps
 
     out = []
     clearance = None  # metres from each cell of the space to the nearest cell outside it
     for p, q, wall in wall_gaps(axes, thickness, params, corners=True):
-        apart = _sides_apart(raster, p, q)
+        apart = sides_apart(raster, p, q)
         if apart is None:
             continue
         comp, left, right = apart
@@ -366,26 +364,35 @@ def dead_end_mouths(
             continue
         # a hall beside the gap: a cell twice the gap's width across, near and seen
         if clearance is None:
-            clearance = ndimage.distance_transform_edt(np.pad(raster.space, 1))[1:-1, 1:-1] * raster.resolution_m
-        r = params.corridor_max_width_m
-        rows, cols, _ = raster.cells_of(np.array([(p + q) / 2 - r, (p + q) / 2 + r]))
-        h, w = raster.space.shape
-        window = (slice(*np.clip(rows, 0, h - 1) + [0, 1]), slice(*np.clip(cols, 0, w - 1) + [0, 1]))
-        rr, cc = np.mgrid[window]
-        xy = raster.centres(rr.ravel(), cc.ravel())
-        beside = (comp[window].ravel() == rest) & (np.hypot(*(xy - (p + q) / 2).T) <= r)
-        beside &= clearance[window].ravel() > float(np.hypot(*d))
-        if not beside.any():
-            continue
-        mid = (p + q) / 2 + n * raster.resolution_m
-        cells = xy[beside]
-        steps = np.linspace(0.0, 1.0, int(np.ceil(r / (raster.resolution_m / 2))) + 1)
-        seen = raster.at(raster.space, (mid + np.einsum("k,nj->nkj", steps, cells - mid)).reshape(-1, 2),
-                         outside=False).reshape(len(cells), len(steps)).all(axis=1)
-        if not seen.any():
-            continue
-        out.append((p, q, wall))
+            clearance = raster.clearance()
+        if hall_beside(raster, clearance, comp == rest, p, q, n, float(np.hypot(*d)), params.corridor_max_width_m):
+            out.append((p, q, wall))
     return out
+
+
+def hall_beside(raster: RoomRaster, clearance: np.ndarray, part: np.ndarray, p: np.ndarray, q: np.ndarray,
+                n: np.ndarray, width_m: float, reach_m: float) -> bool:
+    """Whether the line from ``p`` to ``q`` ((2,) metres) opens on side ``n`` (a unit
+    normal) onto a hall: a cell of ``part`` ((H, W) bool) within ``reach_m`` of the
+    line's middle, farther than ``width_m`` from every cell outside the space
+    (``clearance``, :meth:`RoomRaster.clearance`: a space at least twice as wide as
+    ``width_m``), seen from the line (the straight line from one cell past its middle
+    runs in the space)."""
+    centre = (p + q) / 2
+    rows, cols, _ = raster.cells_of(np.array([centre - reach_m, centre + reach_m]))
+    h, w = raster.space.shape
+    window = (slice(*np.clip(rows, 0, h - 1) + [0, 1]), slice(*np.clip(cols, 0, w - 1) + [0, 1]))
+    rr, cc = np.mgrid[window]
+    xy = raster.centres(rr.ravel(), cc.ravel())
+    beside = part[window].ravel() & (np.hypot(*(xy - centre).T) <= reach_m) & (clearance[window].ravel() > width_m)
+    if not beside.any():
+        return False
+    mid = centre + n * raster.resolution_m
+    cells = xy[beside]
+    steps = np.linspace(0.0, 1.0, int(np.ceil(reach_m / (raster.resolution_m / 2))) + 1)
+    seen = raster.at(raster.space, (mid + np.einsum("k,nj->nkj", steps, cells - mid)).reshape(-1, 2),
+                     outside=False).reshape(len(cells), len(steps)).all(axis=1)
+    return bool(seen.any())
 
 
 def _runs_into(axes: np.ndarray, thickness: np.ndarray, c: np.ndarray, n: np.ndarray, params: RoomParams) -> bool:

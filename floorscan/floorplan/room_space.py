@@ -163,6 +163,13 @@ class RoomRaster:
         out[inside] = image[rows[inside], cols[inside]]
         return out
 
+    def clearance(self) -> np.ndarray:
+        """(H, W) float64: metres from each cell of the space to the nearest cell
+        outside it (0 outside the space; the raster's border counts as outside)."""
+        from scipy import ndimage
+
+        return ndimage.distance_transform_edt(np.pad(self.space, 1))[1:-1, 1:-1] * self.resolution_m
+
 
 def dilate(mask: np.ndarray, radius_cells: float) -> np.ndarray:
     """``mask`` dilated by a disc of ``radius_cells``: the cells within that Euclidean
@@ -417,7 +424,7 @@ def space_regions(raster: RoomRaster, params: RoomParams) -> tuple[np.ndarray, n
     from skimage.segmentation import watershed
 
     space = raster.space
-    distance = ndimage.distance_transform_edt(np.pad(space, 1))[1:-1, 1:-1] * raster.resolution_m
+    distance = raster.clearance()
     if not space.any():
         return np.zeros(space.shape, dtype=np.int32), distance
     # the seeds: h-maxima (in whole centimetres, an integer image) of the distance's

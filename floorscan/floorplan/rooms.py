@@ -37,7 +37,9 @@ taken from the walls:
    a door where no wider than one. So are the openings, however wide,
    in the sides of a corridor, the strip between two long parallel lines of wall
    (:func:`~floorscan.floorplan.corridors.corridor_sides`), except where another
-   corridor goes on from it. The rooms are then segmented again
+   corridor goes on from it; and, once these are drawn, the end of a corridor that
+   opens onto a hall (:func:`~floorscan.floorplan.corridors.corridor_ends`: a dead end
+   whose side walls end apart). The rooms are then segmented again
    (steps 3-5) where a partition stopping short of a wall, with an opening wider
    than a door, divides a room that wraps around it
    (:func:`~floorscan.floorplan.extensions.partition_cuts`).
@@ -92,7 +94,7 @@ import pandas as pd
 from floorscan.core.geometry import OVERLAY_GRID_M, minus
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan import doors as D
-from floorscan.floorplan.corridors import corridor_sides
+from floorscan.floorplan.corridors import corridor_ends, corridor_sides, corridor_strips
 from floorscan.floorplan.extensions import partition_cuts
 from floorscan.floorplan.hidden import OBJECT_MAX_DEPTH_M
 from floorscan.floorplan.mouths import corner_mouths, dead_end_mouths, room_mouths
@@ -156,7 +158,11 @@ def segment_rooms(
             if D.passes_through(raster, g[0], g[1])]
     gaps += room_mouths(axes, thickness, raster, params)
     gaps += dead_end_mouths(axes, thickness, raster, params)
-    gaps += [g for g in corridor_sides(axes, thickness, raster, params) if D.passes_through(raster, g[0], g[1])]
+    strips = corridor_strips(axes, thickness, raster, params) if len(axes) >= 2 else []
+    gaps += [g for g in corridor_sides(axes, thickness, raster, params, strips) if D.passes_through(raster, g[0], g[1])]
+    # a corridor's end opens onto a hall once the rooms' other boundaries are drawn
+    gaps += [g for g in corridor_ends(axes, thickness, _cut_along(raster, gaps)[0], params, strips)
+             if D.passes_through(raster, g[0], g[1])]
     segmented = _segment(grid, axes, thickness, params, raster, gaps)
     cuts = partition_cuts(axes, thickness, raster, segmented[1], params)
     if cuts:  # the rooms again, cut where partitions stop short of a wall
@@ -164,16 +170,23 @@ def segment_rooms(
     return segmented
 
 
+def _cut_along(raster: RoomRaster, gaps: list) -> tuple[RoomRaster, np.ndarray]:
+    """``raster`` cut along ``gaps`` ((p, q, wall) lines): the cells of their barriers
+    ((H, W) bool, :func:`~floorscan.floorplan.doors.barrier_cells`) are walls, no
+    longer space; and the barrier."""
+    barrier = np.zeros(raster.space.shape, dtype=bool)
+    for p, q, _ in gaps:
+        rr, cc = D.barrier_cells(raster, p, q)
+        barrier[rr, cc] = True
+    return dataclasses.replace(raster, walls=raster.walls | barrier, space=raster.space & ~barrier), barrier
+
+
 def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, params: RoomParams, raster: RoomRaster,
              gaps: list) -> tuple[RoomRaster, np.ndarray, list, bool]:
     """:func:`segment_rooms` on ``raster`` cut along ``gaps`` ((p, q, wall) lines
     that bound rooms: gaps in walls, open sides, partitions' extensions); returns as
     :func:`segment_rooms`."""
-    barrier = np.zeros(raster.space.shape, dtype=bool)
-    for p, q, _ in gaps:
-        rr, cc = D.barrier_cells(raster, p, q)
-        barrier[rr, cc] = True
-    cut = dataclasses.replace(raster, walls=raster.walls | barrier, space=raster.space & ~barrier)
+    cut, barrier = _cut_along(raster, gaps)
     labels, distance = space_regions(cut, params)
     n = int(labels.max())
     # the places where two regions meet between jambs: both ends within jamb_m of a wall
