@@ -217,6 +217,26 @@ def test_the_outside_seen_through_an_opening_is_not_a_room():
     assert 29.5 < rooms["area_m2"].iloc[0] < 31.5 and rooms["polygon"].iloc[0].bounds[1] > -0.25
 
 
+def test_a_fan_seen_through_an_opening_wider_than_a_door_is_no_room_and_a_walled_room_is():
+    # an L: a corridor (y 0..2) onto a hall (x 20..26, y 0..10), both scanned; a 2.5 m
+    # opening in the corridor's north wall (x 8.75..11.25), wider than a door, shows a
+    # fan of rays onto a facade at y 7 that is no wall of the plan's: walled at its far
+    # end only (a quarter of its edge), inside the hull of the building's walls
+    walls = [(0, 0, 26, 0), (26, 0, 26, 10), (26, 10, 20, 10), (20, 10, 20, 2), (0, 2, 0, 0), (0, 2, 8.75, 2),
+             (11.25, 2, 20, 2)]  # fmt: skip
+    poses = [(x, 1.0) for x in np.arange(1.0, 19.5, 1.5)] + [(23, 3), (23, 7)]
+    axes = np.array(walls, dtype=np.float64)
+    rooms, doors = plan_rooms(axes, np.full(len(axes), T), _grid(walls + [(4, 7, 18, 7)], poses))
+    assert sorted(rooms["kind"]) == ["corridor", "room"] and len(doors) == 1
+    assert rooms["area_m2"].sum() == pytest.approx(95.6, abs=1.0)  # the hall and the corridor, no fan
+    # the same opening into a room whose walls the plan has (x 6..14, y 2..7): a room
+    walled = walls + [(6, 2, 6, 7), (6, 7, 14, 7), (14, 7, 14, 2)]
+    axes = np.array(walled, dtype=np.float64)
+    rooms, _ = plan_rooms(axes, np.full(len(axes), T), _grid(walled, poses))
+    assert sorted(rooms["kind"]) == ["corridor", "room", "room"]
+    assert sorted(rooms["area_m2"])[0] == pytest.approx(38.5, abs=1.5)
+
+
 # A corridor (y 0..2) along four offices (y 2..6, 5 m wide), each open to it through
 # a 2.2 m opening, wider than a door and narrower than the office.
 OFFICES_ON_A_CORRIDOR = [

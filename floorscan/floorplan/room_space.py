@@ -37,6 +37,12 @@ LINE_OFFSET_M = 0.12
 JAMB_M = 0.35
 #: A region walled along less than this fraction of its edge, seen through a door, is outside: a room is walled on most sides.
 MIN_ENCLOSURE = 0.25
+#: Space no scan was taken in is a room only if walled along at least this fraction of
+#: its edge (unless a door leads into it). Seen from outside through an opening, it is
+#: a fan of rays: its two sides are the rays' limits, which no wall bounds, and only its
+#: far end can be walled; a sector of angle a is walled along at most a / (2 + a) of its
+#: edge, less than half for a < 2 rad (115 degrees). A room is walled on most sides.
+MIN_ENCLOSURE_UNENTERED = 0.5
 #: A room whose length (area over width) is at least this times its width (a corridor is long and narrow, Bormann et al.) ...
 CORRIDOR_ELONGATION = 4.0
 #: ... and at least this long, metres (shorter: a closet or an entrance) ...

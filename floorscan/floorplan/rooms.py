@@ -58,8 +58,11 @@ taken from the walls:
    than a door and where no scan was taken are the outside seen through a window or
    an open door: not rooms; nor are the regions lying mostly beyond the closed outline.
 5. **Rooms**: a region below ``min_room_area_m2`` joins the neighbour it touches most;
-   a scrap no door joins to a room, no wall encloses and no scan was taken in is
-   dropped. A room is a
+   a room no scan was taken in and no door leads into is dropped unless walls and
+   seen obstacles bound it along at least half of its edge
+   (:data:`~floorscan.floorplan.room_space.MIN_ENCLOSURE_UNENTERED`): a fan of rays
+   seen through an opening wider than a door is bounded at its far end at most, not
+   along its two sides. A room is a
    ``corridor`` when it is long for its width (its length, area over width, at least
    ``corridor_elongation`` times its width and ``corridor_min_length_m``; the width,
    its polygon's median local thickness (:func:`~floorscan.floorplan.room_tables.room_width`),
@@ -101,8 +104,8 @@ from floorscan.floorplan.mouths import corner_mouths, dead_end_mouths, room_mout
 from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
 from floorscan.floorplan.room_polygons import disjoint_rooms, largest_polygon, room_polygons
-from floorscan.floorplan.room_space import (MIN_ROOM_WIDTH_M, RoomParams, RoomRaster, enclosure_cells, room_space,
-                                            space_regions)
+from floorscan.floorplan.room_space import (MIN_ENCLOSURE_UNENTERED, MIN_ROOM_WIDTH_M, RoomParams, RoomRaster,
+                                            enclosure_cells, room_space, space_regions)
 from floorscan.floorplan.room_tables import room_tables, room_width
 
 log = logging.getLogger(__name__)
@@ -269,14 +272,16 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     merged = roots[labels]
     merged[outside[labels]] = 0
     # drop what is still below the room area (an isolated scrap of space), and the
-    # scraps of the outside that no door joins to a room and no wall encloses
+    # unentered space that no door joins to a room and walls bound on less than half
+    # its edge (a fan seen through a wide opening)
     room_area = np.bincount(merged.ravel(), minlength=n + 1) * raster.resolution_m**2
     merged[room_area[merged] < params.min_room_area_m2] = 0
     with_door = np.zeros(n + 1, dtype=bool)
     for _, _, _, a, b in found:
         if roots[a] != roots[b]:
             with_door[[roots[a], roots[b]]] = True
-    loose = (_enclosure(cut, merged, n) < params.min_enclosure) & ~with_door & ~_visited(cut, merged, grid.scan_xy, n)
+    unentered = ~with_door & ~_visited(cut, merged, grid.scan_xy, n)
+    loose = (_enclosure(cut, merged, n) < MIN_ENCLOSURE_UNENTERED) & unentered
     loose[0] = False
     if loose.any() and (~loose[1:] & (room_area[1:] > 0)).any():  # never the whole space
         merged[loose[merged]] = 0
