@@ -237,6 +237,42 @@ def test_a_fan_seen_through_an_opening_wider_than_a_door_is_no_room_and_a_walled
     assert sorted(rooms["area_m2"])[0] == pytest.approx(38.5, abs=1.5)
 
 
+def test_a_fan_seen_through_gaps_no_jambs_frame_is_not_the_hall_s_floor():
+    # a hall 20 x 8 m scanned inside; its west wall stops 1.7 m short of both corners
+    # (no jambs: the gaps end at the other walls' faces), its north wall runs on 6 m to
+    # the west, and a facade 7 m out stops the rays: the fan between them, walled on
+    # just under half its edge, is not the hall's floor (before: 170.3 m2)
+    walls = [(-6, 8, 20, 8), (20, 8, 20, 0), (20, 0, -0.5, 0), (0, 1.7, 0, 6.3)]
+    poses = [(x, 4.0) for x in (1, 3, 5, 8, 11, 14, 17)] + [(1.2, 2), (1.2, 6), (3, 1.5), (3, 6.5)]
+    axes = np.array(walls, dtype=np.float64)
+    rooms, doors = plan_rooms(axes, np.full(len(axes), T), _grid(walls + [(-7, -3, -7, 11)], poses))
+    assert len(rooms) == 1 and len(doors) == 0
+    assert rooms["area_m2"].iloc[0] == pytest.approx(160.0, abs=1.5)
+    beyond = shapely.intersection(rooms["polygon"].iloc[0], shapely.box(-10, -5, -T / 2, 12)).area
+    assert beyond < 3.0  # west of the wall's face, the bulges of the gaps alone (2.7 m2; before, 13.3 m2)
+
+
+def test_a_dead_end_seen_through_an_opening_wider_than_a_door_is_not_the_hall_s_and_a_passage_is():
+    # the hall of the test above, its west wall open over 3 m in the middle: the fan
+    # beyond is one region with the hall through an opening wider than a door
+    # (before: 24.7 m2 of it in the hall)
+    walls = [(-6, 8, 20, 8), (20, 8, 20, 0), (20, 0, -0.5, 0), (0, 0, 0, 2.5), (0, 5.5, 0, 8)]
+    poses = [(x, 4.0) for x in (1, 3, 5, 8, 11, 14, 17)] + [(1.2, 2), (1.2, 6), (3, 1.5), (3, 6.5)]
+    axes = np.array(walls, dtype=np.float64)
+    rooms, _ = plan_rooms(axes, np.full(len(axes), T), _grid(walls + [(-7, -3, -7, 11)], poses))
+    assert len(rooms) == 1 and rooms["area_m2"].iloc[0] == pytest.approx(157.1, abs=1.5)
+    # two halls scanned inside, each open over 3 m towards the other: the unentered
+    # space between them, walled on less than half its edge, is the passage that joins
+    # them, no dead end (without that test: two spaces, the 35.6 m2 between them gone)
+    walls = [(0, 0, 10, 0), (0, 8, 10, 8), (0, 0, 0, 8), (10, 0, 10, 2.5), (10, 5.5, 10, 8),
+             (16, 0, 26, 0), (16, 8, 26, 8), (26, 0, 26, 8), (16, 0, 16, 2.5), (16, 5.5, 16, 8)]  # fmt: skip
+    poses = [(x, y) for x in (2, 5, 8, 18, 21, 24) for y in (2, 6)]
+    axes = np.array(walls, dtype=np.float64)
+    rooms, _ = plan_rooms(axes, np.full(len(axes), T), _grid(walls + [(5, -5, 21, -5), (5, 13, 21, 13)], poses))
+    assert len(rooms) == 1
+    assert shapely.intersection(rooms["polygon"].iloc[0], shapely.box(10.1, -1, 15.9, 9)).area > 30.0
+
+
 # A corridor (y 0..2) along four offices (y 2..6, 5 m wide), each open to it through
 # a 2.2 m opening, wider than a door and narrower than the office.
 OFFICES_ON_A_CORRIDOR = [

@@ -30,7 +30,7 @@ import numpy as np
 import pandas as pd
 
 from floorscan.floorplan.free_space import CLUTTER_MAX_LENGTH_M
-from floorscan.floorplan.room_space import RoomParams, RoomRaster, dilate
+from floorscan.floorplan.room_space import RoomParams, RoomRaster, dilate, surrounded
 
 
 def wall_units(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -415,10 +415,7 @@ def furniture_islands(raster: RoomRaster, axes: np.ndarray, min_room_area_m2: fl
     component."""
     from scipy import ndimage
 
-    labels, n = ndimage.label(~raster.space, structure=np.ones((3, 3), dtype=bool))
-    island = np.ones(n + 1, dtype=bool)
-    island[0] = False
-    island[np.unique(np.r_[labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = False
+    labels, island = surrounded(~raster.space, np.ones((3, 3), dtype=bool))
     axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
     length = np.hypot(axes[:, 2] - axes[:, 0], axes[:, 3] - axes[:, 1])
     r = raster.resolution_m

@@ -177,6 +177,20 @@ class RoomRaster:
         return ndimage.distance_transform_edt(np.pad(self.space, 1))[1:-1, 1:-1] * self.resolution_m
 
 
+def surrounded(mask: np.ndarray, structure: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The connected components of ``mask`` ((H, W) bool; SciPy's ``ndimage.label``
+    with ``structure``, 4-connected by default): their labels ((H, W) int, 0 off the
+    mask) and, per label, whether the raster's border misses it ((n + 1,) bool, False
+    for label 0): the parts the rest of the raster surrounds."""
+    from scipy import ndimage
+
+    labels, n = ndimage.label(mask, structure=structure)
+    inner = np.ones(n + 1, dtype=bool)
+    inner[0] = False
+    inner[np.unique(np.r_[labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = False
+    return labels, inner
+
+
 def dilate(mask: np.ndarray, radius_cells: float) -> np.ndarray:
     """``mask`` dilated by a disc of ``radius_cells``: the cells within that Euclidean
     distance of a True cell (an exact distance transform, SciPy: time linear in the
@@ -344,8 +358,6 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
         At ``resolution_m`` rounded to a whole number of the grid's cells, over the part
         of the grid that holds space or walls.
     """
-    from scipy import ndimage
-
     f = max(1, int(round(params.resolution_m / grid.resolution_m)))
     res = grid.resolution_m * f
     free = passable(grid)
@@ -394,15 +406,9 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
                                           walls=walls)
     space &= ~outside
     # holes without a wall in them: the floor under furniture, shadows of objects
-    holes, n = ndimage.label(~space)
-    if n:
-        border = np.unique(np.r_[holes[0], holes[-1], holes[:, 0], holes[:, -1]])
-        with_wall = np.unique(holes[walls])
-        fill = np.ones(n + 1, dtype=bool)
-        fill[0] = False
-        fill[border] = False
-        fill[with_wall] = False
-        space |= fill[holes]
+    holes, fill = surrounded(~space)
+    fill[np.unique(holes[walls])] = False
+    space |= fill[holes]
     if beneath is not None:
         beneath &= ~space
     return RoomRaster(origin_xy=origin, resolution_m=res, walls=walls, space=space, occupied=occupied, bounds=bounds,

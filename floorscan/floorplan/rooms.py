@@ -56,7 +56,12 @@ taken from the walls:
    Groups of regions whose edge runs along walls and seen obstacles for less than
    ``min_enclosure`` of its length, that are reached only through openings no wider
    than a door and where no scan was taken are the outside seen through a window or
-   an open door: not rooms; nor are the regions lying mostly beyond the closed outline.
+   an open door: not rooms; in a recording, nor are the dead ends of unentered space
+   walled on less than half of it
+   (:data:`~floorscan.floorplan.room_space.MIN_ENCLOSURE_UNENTERED`; its edge along a
+   hole in the space counts as walled) that meet one region alone, an entered one,
+   through openings no jambs frame (gaps, windows, openings wider than a door); nor
+   are the regions lying mostly beyond the closed outline.
 5. **Rooms**: a region below ``min_room_area_m2`` joins the neighbour it touches most;
    a room no scan was taken in and no door leads into is dropped unless walls and
    seen obstacles bound it along at least half of its edge
@@ -105,7 +110,7 @@ from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
 from floorscan.floorplan.room_polygons import disjoint_rooms, largest_polygon, room_polygons
 from floorscan.floorplan.room_space import (MIN_ENCLOSURE_UNENTERED, MIN_ROOM_WIDTH_M, RoomParams, RoomRaster,
-                                            enclosure_cells, room_space, space_regions)
+                                            enclosure_cells, room_space, space_regions, surrounded)
 from floorscan.floorplan.room_tables import room_tables, room_width
 
 log = logging.getLogger(__name__)
@@ -239,7 +244,7 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
             touching[pair] = touching.get(pair, 0.0) + float(np.hypot(*d))
             kinds.setdefault(pair, "door")
     visited = _visited(cut, labels, grid.scan_xy, n)
-    outside = _outside_regions(cut, labels, kinds, params, visited)
+    outside = _outside_regions(cut, labels, kinds, params, visited, grid.scan_xy is not None)
     if raster.beyond is not None:  # the regions beyond the building's closed outline
         outside |= regions_beyond(labels, raster.beyond) & ~visited
     for (a, b), kind in kinds.items():
@@ -309,51 +314,64 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     return raster, final, _distinct_doors(doors), divided
 
 
-def _enclosure(raster: RoomRaster, labels: np.ndarray, n: int | None = None) -> np.ndarray:
-    """(n + 1,) float (n: the largest label by default): the share of each region's edge (its cells next to cells outside
-    the space) that lies within two cells of a wall or a seen obstacle; 1 for label 0
+def _enclosure(raster: RoomRaster, labels: np.ndarray, n: int | None = None, cells=None) -> np.ndarray:
+    """(n + 1,) float (n: the largest label by default): the share of each region's edge
+    (its cells next to cells outside the space) that lies within two cells of a wall or
+    a seen obstacle (``cells``: :func:`~floorscan.floorplan.room_space.enclosure_cells`
+    of ``raster``, or another ``(edge, solid)`` pair; computed when None); 1 for label 0
     and for a region without edge."""
     from scipy import ndimage
 
     n = int(labels.max()) if n is None else int(n)
     if n == 0:
         return np.ones(1)
-    edge, solid = enclosure_cells(raster)
+    edge, solid = enclosure_cells(raster) if cells is None else cells
     ids = np.arange(1, n + 1)
     total = ndimage.sum(edge, labels, ids)
     return np.r_[1.0, np.where(total > 0, ndimage.sum(edge & solid, labels, ids) / np.maximum(total, 1), 1.0)]
 
 
 def _outside_regions(
-    raster: RoomRaster, labels: np.ndarray, kinds: dict, params: RoomParams, visited: np.ndarray
+    raster: RoomRaster, labels: np.ndarray, kinds: dict, params: RoomParams, visited: np.ndarray, scanned: bool
 ) -> np.ndarray:
-    """(R + 1,) bool: the regions that are not the building's space: groups of regions
-    whose edge lies along walls and seen obstacles for less than
-    ``rooms.min_enclosure`` of its length (a fan of rays seen through a window or an
-    open door into the outside) and that meet the other regions only through openings
-    no wider than a door, where no scan was taken from (``visited``, (R + 1,) bool:
-    :func:`_visited`). A
-    room seen only through its door is walled on most of its edge (the walls the plan
-    found, the obstacles the scans saw), the outside is not."""
-    from scipy import ndimage
-
+    """(R + 1,) bool: the regions that are not the building's space, where no scan was
+    taken from (``visited``, (R + 1,) bool: :func:`_visited`): groups of regions walled
+    (along walls and seen obstacles) on less than ``rooms.min_enclosure`` of their edge
+    that meet the others only through openings no wider than a door (a fan of rays seen
+    through a window or an open door into the outside; a room seen only through its door
+    is walled on most of its edge); and in a recording (``scanned``: a map's rooms are
+    all unentered), the dead ends walled on less than
+    :data:`~floorscan.floorplan.room_space.MIN_ENCLOSURE_UNENTERED` of it (along a hole
+    in the space too: it opens onto nothing) that meet one region alone, an entered
+    one, through openings no jambs frame (a gap, a window, one wider than a door)."""
     n = int(labels.max())
     out = np.zeros(n + 1, dtype=bool)
     if n < 2:
         return out
-    # never where the scanner was: an open hall whose walls are out of range is walled
-    # on little of its edge, but the rover drove in it
-    low = (_enclosure(raster, labels) < params.min_enclosure) & ~visited
-    groups = _sets(n)
-    for (a, b), kind in kinds.items():
-        if low[a] and low[b] and kind in ("narrow", "wide"):
-            groups.merge(a, b)
-    roots = _roots(groups, n)
-    for r in np.unique(roots[1:][low[1:]]):
-        members = roots == r
-        links = [kind for (a, b), kind in kinds.items() if members[a] != members[b]]
-        if links and all(kind in ("narrow", "door") for kind in links):
-            out |= members
+    from scipy import ndimage
+
+    edge, solid = enclosure_cells(raster)
+    tests = [(_enclosure(raster, labels, n, (edge, solid)), params.min_enclosure, ("narrow", "door"), False)]
+    if scanned:  # the edge along a hole in the space is walled too
+        holes, inner = surrounded(~raster.space)
+        solid = solid | ndimage.binary_dilation(inner[holes], structure=np.ones((3, 3)))
+        tests.append((_enclosure(raster, labels, n, (edge, solid)), MIN_ENCLOSURE_UNENTERED, ("narrow", "wide"), True))
+    for enclosure, least, through, dead_end in tests:
+        # never where the scanner was: an open hall whose walls are out of range is
+        # walled on little of its edge, but the rover drove in it
+        low = (enclosure < least) & ~visited
+        groups = _sets(n)
+        for (a, b), kind in kinds.items():
+            if low[a] and low[b] and kind in ("narrow", "wide"):
+                groups.merge(a, b)
+        roots = _roots(groups, n)
+        for r in np.unique(roots[1:][low[1:]]):
+            members = roots == r
+            links = {(b if members[a] else a, kind) for (a, b), kind in kinds.items() if members[a] != members[b]}
+            beside = {k for k, _ in links}
+            seen_from_one = len(beside) == 1 and visited[min(beside)]  # an entered region
+            if links and all(kind in through for _, kind in links) and (not dead_end or seen_from_one):
+                out |= members
     out[0] = False
     return out
 
