@@ -273,6 +273,26 @@ def test_a_dead_end_seen_through_an_opening_wider_than_a_door_is_not_the_hall_s_
     assert shapely.intersection(rooms["polygon"].iloc[0], shapely.box(10.1, -1, 15.9, 9)).area > 30.0
 
 
+def test_a_room_seen_from_a_hall_through_its_open_side_is_a_room_of_its_own():
+    # a hall 20 x 8 m scanned inside; its north wall open over 3.5 m onto a room 5 x 4 m
+    # that no scan was taken in, whose east wall the plan holds only a 0.8 m stub of (so
+    # no mouth is drawn): walled on most of its edge, it is a room, not the hall's
+    # floor (before: one space of 176.0 m2)
+    hall = [(0, 0, 20, 0), (20, 0, 20, 8), (0, 8, 0, 0), (0, 8, 8, 8), (11.5, 8, 20, 8)]
+    walls = hall + [(7, 8, 7, 12), (7, 12, 12, 12), (12, 8, 12, 8.8)]
+    poses = [(x, y) for x in (2, 6, 10, 14, 18) for y in (2.5, 5.5)]
+    axes = np.array(walls, dtype=np.float64)
+    rooms, doors = plan_rooms(axes, np.full(len(axes), T), _grid(walls, poses))
+    assert sorted(rooms["kind"]) == ["room", "room"] and len(doors) == 0  # an open side, no door
+    small, large = sorted(rooms["polygon"], key=lambda p: p.area)
+    assert small.area == pytest.approx(4.9 * 3.9, abs=0.8) and large.area == pytest.approx(19.9 * 7.9, abs=1.0)
+    assert shapely.box(7.1, 8.1, 11.9, 11.9).difference(small).area < 0.5
+    # the same room entered by the rover is left to the persistence (an opening wider
+    # than a door joins the two)
+    rooms, _ = plan_rooms(axes, np.full(len(axes), T), _grid(walls, poses + [(9.5, 10.5)]))
+    assert len(rooms) == 1
+
+
 # A corridor (y 0..2) along four offices (y 2..6, 5 m wide), each open to it through
 # a 2.2 m opening, wider than a door and narrower than the office.
 OFFICES_ON_A_CORRIDOR = [

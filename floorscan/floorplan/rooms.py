@@ -61,7 +61,11 @@ taken from the walls:
    (:data:`~floorscan.floorplan.room_space.MIN_ENCLOSURE_UNENTERED`; its edge along a
    hole in the space counts as walled) that meet one region alone, an entered one,
    through openings no jambs frame (gaps, windows, openings wider than a door); nor
-   are the regions lying mostly beyond the closed outline.
+   are the regions lying mostly beyond the closed outline
+   (:mod:`floorscan.floorplan.unentered`). In a recording, unentered space walled on at
+   least half its edge that meets one entered region alone through an opening wider
+   than a door, as a room's open side is (:func:`~floorscan.floorplan.unentered.open_side_rooms`),
+   is a room apart from it: a room seen from a hall through its open side.
 5. **Rooms**: a region below ``min_room_area_m2`` joins the neighbour it touches most;
    a room no scan was taken in and no door leads into is dropped unless walls and
    seen obstacles bound it along at least half of its edge
@@ -110,22 +114,12 @@ from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
 from floorscan.floorplan.room_polygons import disjoint_rooms, largest_polygon, room_polygons
 from floorscan.floorplan.room_space import (MIN_ENCLOSURE_UNENTERED, MIN_ROOM_WIDTH_M, RoomParams, RoomRaster,
-                                            enclosure_cells, room_space, space_regions, surrounded)
+                                            room_space, space_regions)
 from floorscan.floorplan.room_tables import room_tables, room_width
+from floorscan.floorplan.unentered import (enclosure, open_side_rooms, outside_regions, region_sets, set_roots,
+                                           visited_regions)
 
 log = logging.getLogger(__name__)
-
-def _sets(n: int):
-    """Disjoint sets of region labels 0..n (SciPy's :class:`~scipy.cluster.hierarchy.DisjointSet`)."""
-    from scipy.cluster.hierarchy import DisjointSet
-
-    return DisjointSet(range(n + 1))
-
-
-def _roots(sets, n: int) -> np.ndarray:
-    """(n + 1,) int: each label's set representative."""
-    return np.array([sets[a] for a in range(n + 1)], dtype=np.int64)
-
 
 def segment_rooms(
     grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, params: RoomParams = RoomParams(),
@@ -219,7 +213,7 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
                 if door is not None:
                     doors_here.append(door)
     root = persistent_rooms(labels, distance, params.door_max_m, set(framed))
-    sets = _sets(n)
+    sets = region_sets(n)
     found = []  # (p, q, wall, a, b)
     touching: dict[tuple[int, int], float] = {}  # contact length between regions, metres
     kinds: dict[tuple[int, int], str] = {}  # door (apart), narrow or wide (one room)
@@ -243,8 +237,12 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
                 open_sides.append(pair)
             touching[pair] = touching.get(pair, 0.0) + float(np.hypot(*d))
             kinds.setdefault(pair, "door")
-    visited = _visited(cut, labels, grid.scan_xy, n)
-    outside = _outside_regions(cut, labels, kinds, params, visited, grid.scan_xy is not None)
+    visited = visited_regions(cut, labels, grid.scan_xy, n)
+    outside = outside_regions(cut, labels, kinds, params, visited, grid.scan_xy is not None)
+    if grid.scan_xy is not None:  # a room seen through its open side is apart from where it was seen
+        for pair in open_side_rooms(cut, labels, kinds, widest, visited, outside):
+            kinds[pair] = "door"
+            open_sides.append(pair)
     if raster.beyond is not None:  # the regions beyond the building's closed outline
         outside |= regions_beyond(labels, raster.beyond) & ~visited
     for (a, b), kind in kinds.items():
@@ -255,7 +253,7 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     # regions below the room area join the neighbour they touch most (through a door too)
     area = np.bincount(labels.ravel(), minlength=n + 1) * raster.resolution_m**2
     for _ in range(n):
-        roots = _roots(sets, n)
+        roots = set_roots(sets, n)
         room_area = np.bincount(roots, weights=area, minlength=n + 1)
         small = [r for r in np.flatnonzero(room_area > 0) if r and room_area[r] < params.min_room_area_m2]
         best = None
@@ -273,7 +271,7 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
         if best is None:
             break
         sets.merge(*best)
-    roots = _roots(sets, n)
+    roots = set_roots(sets, n)
     merged = roots[labels]
     merged[outside[labels]] = 0
     # drop what is still below the room area (an isolated scrap of space), and the
@@ -285,8 +283,8 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     for _, _, _, a, b in found:
         if roots[a] != roots[b]:
             with_door[[roots[a], roots[b]]] = True
-    unentered = ~with_door & ~_visited(cut, merged, grid.scan_xy, n)
-    loose = (_enclosure(cut, merged, n) < MIN_ENCLOSURE_UNENTERED) & unentered
+    unentered = ~with_door & ~visited_regions(cut, merged, grid.scan_xy, n)
+    loose = (enclosure(cut, merged, n) < MIN_ENCLOSURE_UNENTERED) & unentered
     loose[0] = False
     if loose.any() and (~loose[1:] & (room_area[1:] > 0)).any():  # never the whole space
         merged[loose[merged]] = 0
@@ -312,78 +310,6 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
             doors.append((p, q, wall, int(min(ra, rb)), int(max(ra, rb))))
     divided = any(renum[roots[a]] and renum[roots[b]] and renum[roots[a]] != renum[roots[b]] for a, b in open_sides)
     return raster, final, _distinct_doors(doors), divided
-
-
-def _enclosure(raster: RoomRaster, labels: np.ndarray, n: int | None = None, cells=None) -> np.ndarray:
-    """(n + 1,) float (n: the largest label by default): the share of each region's edge
-    (its cells next to cells outside the space) that lies within two cells of a wall or
-    a seen obstacle (``cells``: :func:`~floorscan.floorplan.room_space.enclosure_cells`
-    of ``raster``, or another ``(edge, solid)`` pair; computed when None); 1 for label 0
-    and for a region without edge."""
-    from scipy import ndimage
-
-    n = int(labels.max()) if n is None else int(n)
-    if n == 0:
-        return np.ones(1)
-    edge, solid = enclosure_cells(raster) if cells is None else cells
-    ids = np.arange(1, n + 1)
-    total = ndimage.sum(edge, labels, ids)
-    return np.r_[1.0, np.where(total > 0, ndimage.sum(edge & solid, labels, ids) / np.maximum(total, 1), 1.0)]
-
-
-def _outside_regions(
-    raster: RoomRaster, labels: np.ndarray, kinds: dict, params: RoomParams, visited: np.ndarray, scanned: bool
-) -> np.ndarray:
-    """(R + 1,) bool: the regions that are not the building's space, where no scan was
-    taken from (``visited``, (R + 1,) bool: :func:`_visited`): groups of regions walled
-    (along walls and seen obstacles) on less than ``rooms.min_enclosure`` of their edge
-    that meet the others only through openings no wider than a door (a fan of rays seen
-    through a window or an open door into the outside; a room seen only through its door
-    is walled on most of its edge); and in a recording (``scanned``: a map's rooms are
-    all unentered), the dead ends walled on less than
-    :data:`~floorscan.floorplan.room_space.MIN_ENCLOSURE_UNENTERED` of it (along a hole
-    in the space too: it opens onto nothing) that meet one region alone, an entered
-    one, through openings no jambs frame (a gap, a window, one wider than a door)."""
-    n = int(labels.max())
-    out = np.zeros(n + 1, dtype=bool)
-    if n < 2:
-        return out
-    from scipy import ndimage
-
-    edge, solid = enclosure_cells(raster)
-    tests = [(_enclosure(raster, labels, n, (edge, solid)), params.min_enclosure, ("narrow", "door"), False)]
-    if scanned:  # the edge along a hole in the space is walled too
-        holes, inner = surrounded(~raster.space)
-        solid = solid | ndimage.binary_dilation(inner[holes], structure=np.ones((3, 3)))
-        tests.append((_enclosure(raster, labels, n, (edge, solid)), MIN_ENCLOSURE_UNENTERED, ("narrow", "wide"), True))
-    for enclosure, least, through, dead_end in tests:
-        # never where the scanner was: an open hall whose walls are out of range is
-        # walled on little of its edge, but the rover drove in it
-        low = (enclosure < least) & ~visited
-        groups = _sets(n)
-        for (a, b), kind in kinds.items():
-            if low[a] and low[b] and kind in ("narrow", "wide"):
-                groups.merge(a, b)
-        roots = _roots(groups, n)
-        for r in np.unique(roots[1:][low[1:]]):
-            members = roots == r
-            links = {(b if members[a] else a, kind) for (a, b), kind in kinds.items() if members[a] != members[b]}
-            beside = {k for k, _ in links}
-            seen_from_one = len(beside) == 1 and visited[min(beside)]  # an entered region
-            if links and all(kind in through for _, kind in links) and (not dead_end or seen_from_one):
-                out |= members
-    out[0] = False
-    return out
-
-
-def _visited(raster: RoomRaster, labels: np.ndarray, scan_xy: np.ndarray | None, n: int) -> np.ndarray:
-    """(n + 1,) bool: the labels of ``labels`` that hold the origin of a scan
-    (``scan_xy`` (S, 2) metres; None: none)."""
-    out = np.zeros(n + 1, dtype=bool)
-    if scan_xy is not None and len(scan_xy):
-        out[raster.at(labels, scan_xy)] = True
-    out[0] = False
-    return out
 
 
 def _distinct_doors(doors: list) -> list:
