@@ -389,7 +389,9 @@ def test_rooms_overlay_figure_is_written(tmp_path):
     plan = _plan(tmp_path / "plan", [box(0, 0, 3.5, 2), Polygon([(9, 0), (10, 0), (10, 1)])])
     table, overlay = score_room_plans({"recommended": plan}, grid, truth)
     rooms_overlay_figure(overlay, "tiny", tmp_path / "rooms.png")
-    assert mpimg.imread(tmp_path / "rooms.png").shape[:2] == (880, 1100)
+    # 10 inches wide at 110 dpi; the rooms span 10 x 3 m, so the axes take the shortest
+    # aspect (0.3 of 8.5 inches) and the title and legend 2.6 inches: 5.15 inches tall
+    assert mpimg.imread(tmp_path / "rooms.png").shape[:2] == (566, 1100)
     assert table.iloc[0]["room_precision"] == 0.5  # the triangle outside is a false room
     assert table.iloc[0][["n_true_merged", "n_true_split", "n_true_uncovered", "n_plan_pieces", "n_plan_spanning",
                           "n_plan_extra"]].tolist() == [0, 0, 0, 0, 0, 1]  # fmt: skip

@@ -29,10 +29,14 @@ def drawn_overlay_figure(overlay: dict, info: dict, dataset: str, path: str | os
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
 
-    from floorscan.figures.style import save_figure
+    import numpy as np
+
+    from floorscan.figures.style import map_figsize, save_figure
 
     xy, seen, st = overlay["drawn_xy"], overlay["seen"], overlay["structure"]
-    fig, ax = plt.subplots(figsize=(10, 8))
+    every = np.concatenate([np.asarray(xy, np.float64).reshape(-1, 2), np.asarray(st, np.float64).reshape(-1, 2)])
+    span = np.ptp(every, axis=0) if len(every) else np.ones(2)
+    fig, ax = plt.subplots(figsize=map_figsize(*span), layout="constrained")
     ax.scatter(xy[~seen, 0], xy[~seen, 1], s=0.4, c="#c7d2fe", label="drawn walls, not seen by the recording")
     ax.scatter(xy[seen, 0], xy[seen, 1], s=0.6, c="#4338ca", label="drawn walls the recording saw")
     ax.scatter(st[:, 0], st[:, 1], s=0.3, c="#9ca3af", label="reference map structure (all kept scans)")
@@ -40,7 +44,7 @@ def drawn_overlay_figure(overlay: dict, info: dict, dataset: str, path: str | os
     if faces is not None and len(faces):
         ax.add_collection(LineCollection(faces.reshape(-1, 2, 2), colors="#dc2626", linewidths=1.0,
                                          label=f"{plan} plan's wall faces"))  # fmt: skip
-    ax.set_aspect("equal")
+    ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (m, map frame)")
     ax.set_ylabel("y (m, map frame)")
     ax.set_title(
@@ -48,5 +52,5 @@ def drawn_overlay_figure(overlay: dict, info: dict, dataset: str, path: str | os
         f"{info['angle_deg']:.1f} deg);\nresidual median {info['residual_median_m']:.3f} m, "
         f"90 % {info['residual_p90_m']:.3f} m ({info['start']})", fontsize=10,
     )
-    ax.legend(loc="upper right", fontsize=7, markerscale=8)
+    fig.legend(loc="outside lower center", ncols=2, fontsize=7, markerscale=8, frameon=False)
     save_figure(fig, path)

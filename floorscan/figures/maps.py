@@ -18,7 +18,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from floorscan.figures.style import DPI, segments_collection, square_axes, save_figure  # noqa: E402
+from floorscan.figures.style import (DPI, MAP_AXES_SHARE, map_figsize, segments_collection, square_axes,  # noqa: E402
+                                     save_figure)
 from floorscan.core.segments import as_segments  # noqa: E402
 
 
@@ -47,24 +48,27 @@ def plot_reference_map(grid, out, title: str = "", faces=None) -> None:
     x0, y0 = grid.origin_xy
     r = grid.resolution_m
     counts = grid.counts()
-    fig, ax = plt.subplots(figsize=(8, 8))
+    # the view: what the scans saw free and the structure, 1 m around; a stray
+    # single-scan return tens of metres out would shrink the building to a strip
+    seen = grid.cell_centres(grid.free() | grid.structure())
+    view = ((seen.min(axis=0) - 1.0, seen.max(axis=0) + 1.0) if len(seen)
+            else (np.array([x0, y0]), np.array([x0 + w * r, y0 + h * r])))
+    fig, ax = plt.subplots(figsize=map_figsize(*(view[1] - view[0]), margin_in=1.6), layout="constrained")
     ax.imshow(rgb, origin="lower", extent=(x0, x0 + w * r, y0, y0 + h * r), interpolation="nearest")
     # occupied cells as markers of at least one and a half pixels (marker area in
     # points squared): at a building's scale a 5 cm cell is less than a pixel, and
     # the image alone, or smaller markers, would hide the walls
-    size = max((1.5 * 72.0 / DPI) ** 2, (72.0 * 8 * r / max(w * r, h * r)) ** 2)
+    axes_in = fig.get_figwidth() * MAP_AXES_SHARE  # the axes' width, about: the view's longer side spans it
+    size = max((1.5 * 72.0 / DPI) ** 2, (72.0 * axes_in * r / float(max(view[1] - view[0]))) ** 2)
     for mask, colour in ((grid.single_scan(), (0.85, 0.1, 0.1)), (grid.structure(), "black")):  # structure on top
         xy = grid.cell_centres(mask)
         ax.scatter(xy[:, 0], xy[:, 1], s=size, c=[colour], marker="s", linewidths=0)
     if faces is not None and len(faces):
         ax.add_collection(segments_collection(faces, colors="tab:blue", linewidths=0.8))
-    # the view: what the scans saw free and the structure, 1 m around; a stray
-    # single-scan return tens of metres out would shrink the building to a strip
-    seen = grid.cell_centres(grid.free() | grid.structure())
-    if len(seen):
-        (ax_lo, ay_lo), (ax_hi, ay_hi) = seen.min(axis=0) - 1.0, seen.max(axis=0) + 1.0
-        ax.set_xlim(ax_lo, ax_hi)
-        ax.set_ylim(ay_lo, ay_hi)
+    ax.set_xlim(view[0][0], view[1][0])
+    ax.set_ylim(view[0][1], view[1][1])
+    ax.set_aspect("equal", adjustable="datalim")  # the axes fill their place; the view grows to keep the scale
+    ax.set_facecolor((0.8, 0.8, 0.8))  # beyond the grid, where the view grew: unknown, as the grid's unknown cells
     ax.set_xlabel("x (m, map frame)")
     ax.set_ylabel("y (m, map frame)")
     ax.set_title(

@@ -237,34 +237,37 @@ def plot_registered_map(
     from matplotlib.colors import LogNorm
     from scipy.spatial import cKDTree
 
-    from floorscan.figures.style import save_figure
+    from floorscan.figures.style import map_figsize, save_figure
 
     raster = (registered if isinstance(registered, DensityRaster)
               else DensityRaster.of_points(registered[["x", "y"]].to_numpy(np.float64), cell_m))
     cell_m = raster.cell_m
     kept = registration[registration["kept"].to_numpy(bool)]
     loc = kept[["x_m", "y_m"]].to_numpy(np.float64)
-    fig, ax = plt.subplots(figsize=(8, 8))
     ex, ey, h = raster.grid()
     # a map wider than the figure's pixels would lose its thin walls when drawn, one
     # cell per pixel picked: cells are summed into blocks, at most FIGURE_CELLS across
     ex, ey, h, factor = coarsen_counts(ex, ey, h, FIGURE_CELLS)
+    span = (float(np.ptp(ex)), float(np.ptp(ey))) if len(ex) > 1 and len(ey) > 1 else (1.0, 1.0)
+    fig, ax = plt.subplots(figsize=map_figsize(*span, margin_in=3.2), layout="constrained")
+    fig.get_layout_engine().set(h_pad=0.1)  # the lower colour bar's label clear of the edge
     cell_m = cell_m * factor
     if h.size and h.max() > 0:
         h = np.ma.masked_equal(h, 0)
         # vmin below 1: a cell of one point (a sparse scanner's far wall) is grey, not white
         im = ax.pcolormesh(ex, ey, h, cmap="Greys", norm=LogNorm(vmin=0.5, vmax=max(h.max(), 2)), shading="flat", rasterized=True)
-        fig.colorbar(im, ax=ax, shrink=0.6, label=f"points per {cell_m * 100:.0f} cm cell")
+        fig.colorbar(im, ax=ax, location="bottom", shrink=0.5, aspect=40,
+                     label=f"points per {cell_m * 100:.0f} cm cell")
     if len(loc):
         counts = np.array([len(n) for n in cKDTree(loc).query_ball_point(loc, density_radius_m)])
         sc = ax.scatter(loc[:, 0], loc[:, 1], c=counts, cmap="Blues", vmin=0, s=14, edgecolors="k", linewidths=0.3, zorder=3)
-        fig.colorbar(sc, ax=ax, shrink=0.6, label=f"kept scans within {density_radius_m:g} m")
-    ax.set_aspect("equal")
+        fig.colorbar(sc, ax=ax, location="bottom", shrink=0.5, aspect=40,
+                     label=f"kept scans within {density_radius_m:g} m")
+    ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (m, map frame)")
     ax.set_ylabel("y (m, map frame)")
     n_scans = len(registration)
     what = f"registered map and scan locations, {len(kept)} of {n_scans} scans kept"
     lines = [f"{title}: {what}" if title else what[:1].upper() + what[1:], *subtitle]
-    ax.set_title("\n".join(textwrap.fill(line, 72) for line in lines), fontsize=9 if subtitle else None)
-    fig.tight_layout()
+    ax.set_title("\n".join(textwrap.fill(line, 110) for line in lines), fontsize=9 if subtitle else None)
     save_figure(fig, path)

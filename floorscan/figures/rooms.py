@@ -52,8 +52,8 @@ def rooms_overlay_figure(overlay: dict, dataset: str, path: str | os.PathLike, p
     pair_iou = detail["pair_iou"] if detail is not None else np.empty(0)
     left_out = detail["left_out"] if detail is not None else np.zeros(len(entry["rooms"]), bool)
     true_matched, plan_matched = set(pairs[:, 0].tolist()), set(pairs[:, 1].tolist())
-    fig, ax = plt.subplots(figsize=(10, 8))
     st = overlay["structure"]
+    fig, ax = plt.subplots(figsize=_figsize(st, overlay["true_rooms"], entry["rooms"]), layout="constrained")
     ax.scatter(st[:, 0], st[:, 1], s=0.3, c="#9ca3af", zorder=1)
     for t, room in enumerate(overlay["true_rooms"]):
         counted = bool(overlay["counted"][t])
@@ -96,13 +96,29 @@ def rooms_overlay_figure(overlay: dict, dataset: str, path: str | os.PathLike, p
     ]  # fmt: skip
     if len(txy) or len(pxy):
         handles.append(Patch(facecolor="none", edgecolor="#7c3aed", label="true door (square), plan door (dot)"))
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
-    fig.subplots_adjust(left=0.07, right=0.7)
-    ax.set_aspect("equal")
+    fig.legend(handles=handles, loc="outside lower center", ncols=2, fontsize=7, frameon=False)
+    ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (m, map frame)")
     ax.set_ylabel("y (m, map frame)")
     ax.set_title(_title(overlay, dataset, plan), fontsize=10)
     save_figure(fig, path)
+
+
+def _figsize(structure, true_rooms, plan_rooms) -> tuple[float, float]:
+    """Width and height of the figure, inches (:func:`~floorscan.figures.style.map_figsize`):
+    the extent of ``structure`` ((N, 2) metres) and of the rooms' bounds."""
+    import numpy as np
+
+    from floorscan.figures.style import map_figsize
+
+    bounds = [g.bounds for g in [*true_rooms, *plan_rooms] if not g.is_empty]
+    pts = np.asarray(structure, dtype=np.float64).reshape(-1, 2)
+    if len(pts):
+        bounds.append((*pts.min(axis=0), *pts.max(axis=0)))
+    if not bounds:
+        return map_figsize(1.0, 1.0, margin_in=2.6)
+    b = np.asarray(bounds, dtype=np.float64)
+    return map_figsize(b[:, 2].max() - b[:, 0].min(), b[:, 3].max() - b[:, 1].min(), margin_in=2.6)
 
 
 def _title(overlay: dict, dataset: str, plan: str) -> str:

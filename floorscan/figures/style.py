@@ -40,6 +40,39 @@ ORDERING_COLOURS = dict(zip(schema_enum("walls", "orderings"), itertools.cycle(_
 EXTRACTOR_COLOURS = {"ransac": "tab:blue", "cluster_ransac": "tab:red"}
 
 
+#: The shortest and the tallest a map's axes are for their width, at equal scale: a
+#: building 4 times as long as it is wide is drawn in a frame 0.3 as tall (its long
+#: side across the page), a tall one no taller than 1.2 times the width.
+MAP_ASPECT_RANGE = (0.3, 1.2)
+#: The share of a map figure's width its axes take (the rest: the y axis' label and
+#: ticks, the margins).
+MAP_AXES_SHARE = 0.85
+
+
+def map_figsize(width_m: float, height_m: float, width_in: float = 10.0, margin_in: float = 2.0) -> tuple[float, float]:
+    """The size of a figure of one map at equal scale, inches: ``width_in`` wide, the
+    axes as tall as the map's extent makes them (``height_m`` over ``width_m``, within
+    :data:`MAP_ASPECT_RANGE`) plus ``margin_in`` for the title, the axis labels and
+    what goes below them (a legend, colour bars), so that a long building fills the
+    page instead of a strip in a square.
+
+    Parameters
+    ----------
+    width_m, height_m : float
+        The extent drawn, metres (any unit: only their ratio counts).
+    width_in, margin_in : float
+        Inches.
+
+    Returns
+    -------
+    (float, float)
+        Width and height, inches.
+    """
+    lo, hi = MAP_ASPECT_RANGE
+    ratio = height_m / width_m if width_m > 0 else 1.0
+    return float(width_in), float(width_in * MAP_AXES_SHARE * min(max(ratio, lo), hi) + margin_in)
+
+
 def reference_name(reference_kind: str) -> str:
     """``"ground truth"`` or ``"reference (all scans)"`` for titles and legends.
 
