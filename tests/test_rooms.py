@@ -832,3 +832,36 @@ def test_two_doors_facing_each_other_across_a_corridor_do_not_part_it():
     corridor = rooms[rooms["kind"] == "corridor"]["polygon"].iloc[0]
     assert shapely.box(0.2, 0.2, 9.8, 2.0).difference(corridor).area < 0.3
     assert sorted(round(float((d.x0 + d.x1) / 2), 1) for d in doors.itertuples()) == [4.5, 4.5]
+
+
+def test_a_dead_end_of_unentered_space_is_judged_whole():
+    """The unentered space beyond a hall's open east side, in two watershed regions: a
+    pocket walled on its south and east (walled on all its edge) and a fan beyond it
+    walled nowhere. Each meets the hall and the other; as one dead end, walled on about 8
+    of its 30 m of edge, both are outside. Judged region by region (before), the fan met
+    two regions, so neither was."""
+    from floorscan.floorplan.room_space import RoomRaster
+    from floorscan.floorplan.unentered import enclosure, outside_regions
+
+    res, m = 0.1, 20  # 10 cm cells, a margin of 2 m of unseen cells around
+    h, w = 100 + 2 * m, 200 + 2 * m
+    labels = np.zeros((h, w), dtype=np.int32)
+    labels[m : m + 100, m : m + 100] = 1  # the hall, x 0..10, y 0..10 (rows up)
+    labels[m : m + 40, m + 100 : m + 140] = 2  # the pocket, x 10..14, y 0..4
+    labels[m + 40 : m + 100, m + 100 : m + 200] = 3  # the fan, x 10..20, y 4..10
+    space = labels > 0
+    walls = np.zeros_like(space)
+    walls[m - 1, m - 1 : m + 141] = True  # south of the hall and the pocket
+    walls[m + 100, m - 1 : m + 101] = True  # north of the hall
+    walls[m - 1 : m + 101, m - 1] = True  # west of the hall
+    walls[m - 1 : m + 41, m + 140] = True  # east of the pocket
+    raster = RoomRaster(np.zeros(2), res, walls, space, walls.copy(), ~space)
+    walled = enclosure(raster, labels)
+    assert walled[2] == pytest.approx(1.0) and walled[3] < 0.05
+    assert enclosure(raster, np.where(labels == 3, 2, labels))[2] == pytest.approx(8 / 30, abs=0.03)
+    kinds = {(1, 2): "wide", (1, 3): "wide", (2, 3): "wide"}
+    visited = np.array([False, True, False, False])
+    out = outside_regions(raster, labels, kinds, RoomParams(), visited, True)
+    assert out.tolist() == [False, False, True, True]
+    # the same space in a map (no scans: every room is unentered) is not judged so
+    assert not outside_regions(raster, labels, kinds, RoomParams(), visited, False).any()

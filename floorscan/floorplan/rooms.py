@@ -57,7 +57,8 @@ taken from the walls:
    ``min_enclosure`` of its length, that are reached only through openings no wider
    than a door and where no scan was taken are the outside seen through a window or
    an open door: not rooms; in a recording, nor are the dead ends of unentered space
-   walled on less than half of it
+   (its regions joined through openings no jambs frame, taken together) walled on less
+   than half of their edge
    (:data:`~floorscan.floorplan.room_space.MIN_ENCLOSURE_UNENTERED`; its edge along a
    hole in the space counts as walled) that meet one region alone, an entered one,
    through openings no jambs frame (gaps, windows, openings wider than a door); nor
@@ -114,7 +115,7 @@ from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
 from floorscan.floorplan.room_polygons import disjoint_rooms, largest_polygon, room_polygons
 from floorscan.floorplan.room_space import (MIN_ENCLOSURE_UNENTERED, MIN_ROOM_WIDTH_M, RoomParams, RoomRaster,
-                                            room_space, space_regions)
+                                            enclosure_cells, room_space, space_regions)
 from floorscan.floorplan.room_tables import room_tables, room_width
 from floorscan.floorplan.unentered import (enclosure, open_side_rooms, outside_regions, region_sets, set_roots,
                                            visited_regions)
@@ -238,9 +239,10 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
             touching[pair] = touching.get(pair, 0.0) + float(np.hypot(*d))
             kinds.setdefault(pair, "door")
     visited = visited_regions(cut, labels, grid.scan_xy, n)
-    outside = outside_regions(cut, labels, kinds, params, visited, grid.scan_xy is not None)
+    cells = enclosure_cells(cut)  # the walled cells, for every enclosure below
+    outside = outside_regions(cut, labels, kinds, params, visited, grid.scan_xy is not None, cells)
     if grid.scan_xy is not None:  # a room seen through its open side is apart from where it was seen
-        for pair in open_side_rooms(cut, labels, kinds, widest, visited, outside):
+        for pair in open_side_rooms(cut, labels, kinds, widest, visited, outside, cells):
             kinds[pair] = "door"
             open_sides.append(pair)
     if raster.beyond is not None:  # the regions beyond the building's closed outline
@@ -284,7 +286,7 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
         if roots[a] != roots[b]:
             with_door[[roots[a], roots[b]]] = True
     unentered = ~with_door & ~visited_regions(cut, merged, grid.scan_xy, n)
-    loose = (enclosure(cut, merged, n) < MIN_ENCLOSURE_UNENTERED) & unentered
+    loose = (enclosure(cut, merged, n, cells) < MIN_ENCLOSURE_UNENTERED) & unentered
     loose[0] = False
     if loose.any() and (~loose[1:] & (room_area[1:] > 0)).any():  # never the whole space
         merged[loose[merged]] = 0

@@ -8,9 +8,11 @@ A scanner sees the space beyond an opening as a fan of rays. A fan of angle a se
 through an opening is walled at its far end at most, not along its two sides (the rays'
 limits): at most a / (2 + a) of its edge, under one half for a < 2 rad
 (:data:`~floorscan.floorplan.room_space.MIN_ENCLOSURE_UNENTERED`). A room is walled on
-most of its edge. So the unentered space walled on less than half its edge, that meets
-the building through openings no jambs frame, is outside (a fan through a window, a gap,
-the open end of a hall), and the unentered space walled on more than half its edge
+most of its edge. The watershed may cut a fan in pieces (a pocket beside the opening,
+walled on two sides, and the open rest), so the unentered space joined through openings
+no jambs frame is judged as a whole: walled on less than half its edge and meeting one
+entered region alone through such openings, it is outside (a fan through a window, a
+gap, the open end of a hall); and the unentered space walled on more than half its edge
 that meets one entered region through its open side is a room people draw apart from
 where it was seen from: the room open on its whole width onto a hall or a corridor
 (:mod:`floorscan.floorplan.mouths`) whose side walls the scans saw too little of to
@@ -57,7 +59,8 @@ def enclosure(raster: RoomRaster, labels: np.ndarray, n: int | None = None, cell
 
 
 def outside_regions(
-    raster: RoomRaster, labels: np.ndarray, kinds: dict, params: RoomParams, visited: np.ndarray, scanned: bool
+    raster: RoomRaster, labels: np.ndarray, kinds: dict, params: RoomParams, visited: np.ndarray, scanned: bool,
+    cells=None,
 ) -> np.ndarray:
     """(R + 1,) bool: the regions that are not the building's space, where no scan was
     taken from (``visited``, (R + 1,) bool: :func:`visited_regions`): groups of regions walled
@@ -65,40 +68,71 @@ def outside_regions(
     that meet the others only through openings no wider than a door (a fan of rays seen
     through a window or an open door into the outside; a room seen only through its door
     is walled on most of its edge); and in a recording (``scanned``: a map's rooms are
-    all unentered), the dead ends walled on less than
-    :data:`~floorscan.floorplan.room_space.MIN_ENCLOSURE_UNENTERED` of it (along a hole
-    in the space too: it opens onto nothing) that meet one region alone, an entered
-    one, through openings no jambs frame (a gap, a window, one wider than a door)."""
+    all unentered), the dead ends of unentered space (its regions joined through
+    openings no jambs frame, judged as a whole) walled on less than
+    :data:`~floorscan.floorplan.room_space.MIN_ENCLOSURE_UNENTERED` of their edge (along
+    a hole in the space too: it opens onto nothing) that meet one region alone, an
+    entered one, through openings no jambs frame (a gap, a window, one wider than a
+    door). ``cells``: :func:`~floorscan.floorplan.room_space.enclosure_cells` of
+    ``raster`` (computed when None)."""
     n = int(labels.max())
     out = np.zeros(n + 1, dtype=bool)
     if n < 2:
         return out
     from scipy import ndimage
 
-    edge, solid = enclosure_cells(raster)
-    tests = [(enclosure(raster, labels, n, (edge, solid)), params.min_enclosure, ("narrow", "door"), False)]
+    edge, solid = enclosure_cells(raster) if cells is None else cells
+    # never where the scanner was: an open hall whose walls are out of range is walled
+    # on little of its edge, but the rover drove in it
+    low = (enclosure(raster, labels, n, (edge, solid)) < params.min_enclosure) & ~visited
+    out |= _seen_through(kinds, _joined(kinds, low, n), low, ("narrow", "door"))
     if scanned:  # the edge along a hole in the space is walled too
         holes, inner = surrounded(~raster.space)
         solid = solid | ndimage.binary_dilation(inner[holes], structure=np.ones((3, 3)))
-        tests.append((enclosure(raster, labels, n, (edge, solid)), MIN_ENCLOSURE_UNENTERED, ("narrow", "wide"), True))
-    for walled, least, through, dead_end in tests:
-        # never where the scanner was: an open hall whose walls are out of range is
-        # walled on little of its edge, but the rover drove in it
-        low = (walled < least) & ~visited
-        groups = region_sets(n)
-        for (a, b), kind in kinds.items():
-            if low[a] and low[b] and kind in ("narrow", "wide"):
-                groups.merge(a, b)
-        roots = set_roots(groups, n)
-        for r in np.unique(roots[1:][low[1:]]):
-            members = roots == r
-            links = {(b if members[a] else a, kind) for (a, b), kind in kinds.items() if members[a] != members[b]}
-            beside = {k for k, _ in links}
-            seen_from_one = len(beside) == 1 and visited[min(beside)]  # an entered region
-            if links and all(kind in through for _, kind in links) and (not dead_end or seen_from_one):
-                out |= members
+        roots = _joined(kinds, ~visited, n)
+        low = (enclosure(raster, roots[labels], n, (edge, solid)) < MIN_ENCLOSURE_UNENTERED)[roots] & ~visited
+        out |= _seen_through(kinds, roots, low, ("narrow", "wide"), visited)
     out[0] = False
     return out
+
+
+def _joined(kinds: dict, members: np.ndarray, n: int) -> np.ndarray:
+    """(n + 1,) int: each region's group, the regions of ``members`` ((n + 1,) bool)
+    joined through contacts of kind ``narrow`` or ``wide`` (openings no jambs frame)."""
+    groups = region_sets(n)
+    for (a, b), kind in kinds.items():
+        if members[a] and members[b] and kind in ("narrow", "wide"):
+            groups.merge(a, b)
+    return set_roots(groups, n)
+
+
+def _seen_through(kinds: dict, roots: np.ndarray, low: np.ndarray, through: tuple, visited=None) -> np.ndarray:
+    """(n + 1,) bool: the groups (``roots``) of ``low`` regions whose every contact with
+    the other regions is of a kind in ``through``; with ``visited``, only those that
+    meet one region alone, an entered one (a dead end seen from it)."""
+    out = np.zeros(len(roots), dtype=bool)
+    for r in np.unique(roots[1:][low[1:]]):
+        members = roots == r
+        links, beside = _contacts(kinds, members)
+        if not links or not all(kind in through for _, kind in links):
+            continue
+        if visited is not None and not _seen_from_one(beside, visited):
+            continue
+        out |= members
+    return out
+
+
+def _contacts(kinds: dict, members: np.ndarray) -> tuple[list, set]:
+    """The contacts ``((a, b), kind)`` between the regions of ``members`` ((n + 1,)
+    bool) and the others, and the other regions they meet."""
+    links = [(pair, kind) for pair, kind in kinds.items() if members[pair[0]] != members[pair[1]]]
+    return links, {b if members[a] else a for (a, b), _ in links}
+
+
+def _seen_from_one(beside: set, visited: np.ndarray) -> bool:
+    """Whether a group meets one region alone (``beside``), an entered one: a dead end
+    seen from it."""
+    return len(beside) == 1 and bool(visited[min(beside)])
 
 
 def visited_regions(raster: RoomRaster, labels: np.ndarray, scan_xy: np.ndarray | None, n: int) -> np.ndarray:
@@ -112,7 +146,8 @@ def visited_regions(raster: RoomRaster, labels: np.ndarray, scan_xy: np.ndarray 
 
 
 def open_side_rooms(
-    raster: RoomRaster, labels: np.ndarray, kinds: dict, widest: dict, visited: np.ndarray, outside: np.ndarray
+    raster: RoomRaster, labels: np.ndarray, kinds: dict, widest: dict, visited: np.ndarray, outside: np.ndarray,
+    cells=None,
 ) -> list[tuple[int, int]]:
     """The pairs of regions to keep apart at a room's open side, in a recording.
 
@@ -140,6 +175,9 @@ def open_side_rooms(
     visited, outside : (n + 1,) bool ndarray
         The regions a scan was taken in (:func:`visited_regions`); those outside the
         building (:func:`outside_regions`).
+    cells : tuple, optional
+        :func:`~floorscan.floorplan.room_space.enclosure_cells` of ``raster``
+        (computed when None).
 
     Returns
     -------
@@ -149,20 +187,14 @@ def open_side_rooms(
     n = int(labels.max())
     unentered = ~visited & ~outside
     unentered[0] = False
-    groups = region_sets(n)
-    for (a, b), kind in kinds.items():
-        if unentered[a] and unentered[b] and kind in ("narrow", "wide"):
-            groups.merge(a, b)
-    roots = set_roots(groups, n)
+    roots = _joined(kinds, unentered, n)
     grouped = roots[labels]
-    walled = enclosure(raster, grouped, n)
+    walled = enclosure(raster, grouped, n, cells)
     area = np.bincount(grouped.ravel(), minlength=n + 1) * raster.resolution_m**2
     pairs = []
     for r in np.unique(roots[1:][unentered[1:]]):
-        members = roots == r
-        links = [(pair, kind) for pair, kind in kinds.items() if members[pair[0]] != members[pair[1]]]
-        beside = {b if members[a] else a for (a, b), _ in links}
-        if len(beside) != 1 or not visited[min(beside)] or walled[r] < MIN_ENCLOSURE_UNENTERED:
+        links, beside = _contacts(kinds, roots == r)
+        if not _seen_from_one(beside, visited) or walled[r] < MIN_ENCLOSURE_UNENTERED:
             continue
         if not all(kind == "wide" and widest[pair] <= MOUTH_MAX_M for pair, kind in links):
             continue
