@@ -351,6 +351,10 @@ def test_true_pieces_and_corners():
     assert len(pieces) == 3  # the south wall has an unseen gap of 1 m: two pieces
     corners = true_corners(truth)
     assert corners.tolist() == [[4.0, 0.0]]
+    # a T (an end on another axis' middle, within 2 cm) counts; an end 3 cm short does not
+    truth["axis"] = np.array([[0.0, 0.0, 4.0, 0.0], [2.0, 0.015, 2.0, 3.0], [3.0, 0.03, 3.0, 3.0]])
+    truth["observed_face"] = np.array([[0.0, 0.05, 4.0, 0.05]])
+    assert true_corners(truth).tolist() == [[2.0, 0.015]]
 
 
 def test_duplicates_merge_and_shallow_crossings_meet():

@@ -170,18 +170,18 @@ def true_corners(truth: dict, near_observed_m: float = 0.4) -> np.ndarray:
     (C, 2) float64 ndarray
         Metres, unique to the millimetre.
     """
+    import shapely
+
     from floorscan.score.nearest import nearest_distances
 
-    axes = truth["axis"]
-    pts = []
-    for k, a in enumerate(axes):
-        others = np.delete(axes, k, axis=0)
-        if len(others):
-            ends = a.reshape(2, 2)
-            pts += list(ends[nearest_distances(ends, others) <= 0.02])
-    if not pts:
+    axes = np.asarray(truth["axis"], dtype=np.float64).reshape(-1, 4)
+    ends = axes.reshape(-1, 2)  # the ends of axis k are rows 2k and 2k + 1
+    end, axis = shapely.STRtree(shapely.linestrings(axes.reshape(-1, 2, 2))).query(
+        shapely.points(ends), predicate="dwithin", distance=0.02)
+    on_another = np.unique(end[axis != end // 2])
+    if not len(on_another):
         return np.empty((0, 2))
-    pts = np.unique(np.round(np.array(pts), 3), axis=0)
+    pts = np.unique(np.round(ends[on_another], 3), axis=0)
     obs = truth["observed_face"]
     if not len(obs):
         return np.empty((0, 2))
@@ -199,7 +199,9 @@ def read_truth(path) -> dict:
     -------
     dict
         ``face``, ``observed_face``, ``axis``: (N, 4) float64, metres; ``thickness``:
-        axis row tuple -> metres (0.3 when the feature has none).
+        axis row tuple -> metres (0.3 when the feature has none); ``pieces``
+        (:func:`true_wall_pieces`) and ``corners`` (:func:`true_corners`), derived once
+        for every plan scored against them.
 
     Raises
     ------
@@ -214,6 +216,8 @@ def read_truth(path) -> dict:
         if p.get("kind") == "axis" and f["geometry"]["type"] == "LineString":
             c = f["geometry"]["coordinates"]
             out["thickness"][tuple(np.asarray([*c[0][:2], *c[1][:2]], dtype=np.float64))] = float(p.get("thickness_m", 0.3))
+    out["pieces"] = true_wall_pieces(out)
+    out["corners"] = true_corners(out)
     return out
 
 
@@ -273,8 +277,7 @@ def score_answer_plan(folder, reference=None, truth: dict | None = None, taus_m=
             p, r = precision[f"precision_{cm}"], recall[f"recall_{cm}"]
             out[f"gt_precision_{cm}"], out[f"gt_recall_{cm}"] = p, r
             out[f"gt_f1_{cm}"] = 2 * p * r / (p + r) if p + r > 0 else 0.0
-        pieces = true_wall_pieces(truth)
-        corners = true_corners(truth)
+        pieces, corners = truth["pieces"], truth["corners"]
         out["gt_n_walls"] = len(pieces)
         if len(corners):
             if len(junctions):
