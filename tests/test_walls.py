@@ -558,6 +558,21 @@ def test_issue8_third_round_shortcuts_equal_the_plain_forms_bit_for_bit():
         np.testing.assert_array_equal(cell_keys(cells), np.ravel_multi_index(tuple((cells - lo).T), tuple(span)))
     assert cell_keys(np.array([[0, 0, 0], [2**21, 2**21, 2**21]])) is None  # beyond 2**62 cells
 
+
+def test_unique_ints_are_numpy_unique_by_a_sort():
+    """unique_ints gives numpy.unique's values and dtype: empty, one value, negative keys,
+    repeats and the int16/int32/int64 arrays the stages hold."""
+    from floorscan.core.grid import unique_ints
+
+    rng = np.random.default_rng(5)
+    cases = [np.zeros(0, np.int64), np.array([7]), np.array([3, 3, 3], np.int32), rng.integers(-50, 50, 1000),
+             rng.integers(0, 2**40, 20_000), rng.integers(-3, 3, 999).astype(np.int16)]
+    for values in cases:
+        got = unique_ints(values)
+        np.testing.assert_array_equal(got, np.unique(values))
+        assert got.dtype == values.dtype
+    assert unique_ints(np.array([5, -2, 5, 0, -2])).tolist() == [-2, 0, 5]
+
     for n in (2, 3, 129, 2000):
         r1, r2 = np.random.default_rng((0, n)), np.random.default_rng((0, n))
         np.testing.assert_array_equal(r1.integers(0, n, size=200), r2.integers(n, size=200))

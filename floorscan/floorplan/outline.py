@@ -46,6 +46,8 @@ import logging
 
 import numpy as np
 
+from floorscan.core.grid import unique_ints
+
 log = logging.getLogger("floorscan.floorplan.rooms")
 
 #: The bisection on the closing's diameter stops when its bracket is narrower than this
@@ -189,7 +191,7 @@ def _hull_of_own_walls(walls: np.ndarray, flood: np.ndarray, distance: np.ndarra
 
     held = (ndimage.distance_transform_edt(~flood) * resolution_m > diameter_m / 2) & (distance > 0)
     pieces, _ = ndimage.label(walls, structure=np.ones((3, 3)))
-    own = np.unique(pieces[ndimage.binary_dilation(held, structure=np.ones((3, 3)), iterations=2) & (pieces > 0)])
+    own = unique_ints(pieces[ndimage.binary_dilation(held, structure=np.ones((3, 3)), iterations=2) & (pieces > 0)])
     if not len(own):
         return np.zeros(walls.shape, dtype=bool)
     return convex_hull_image(np.isin(pieces, own))

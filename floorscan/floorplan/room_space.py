@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from floorscan.core.config import schema_defaults
-from floorscan.core.grid import raster_cells
+from floorscan.core.grid import raster_cells, unique_ints
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.free_space import passable
 from floorscan.floorplan.outline import building_outside
@@ -407,7 +407,7 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
     space &= ~outside
     # holes without a wall in them: the floor under furniture, shadows of objects
     holes, fill = surrounded(~space)
-    fill[np.unique(holes[walls])] = False
+    fill[unique_ints(holes[walls])] = False
     space |= fill[holes]
     if beneath is not None:
         beneath &= ~space

@@ -31,6 +31,7 @@ from scipy.spatial import cKDTree
 
 from floorscan.core.geometry import sample_segments, samples_per_segment
 from floorscan.core.greedy import lazy_greedy
+from floorscan.core.grid import unique_ints
 from floorscan.core.score_tables import ORACLE, RANDOM
 from floorscan.score.against_reference import Structure, plan_against_reference, within_bound
 
@@ -147,7 +148,7 @@ def scan_cover(
         mark[keys] = True
         keys = np.flatnonzero(mark)
     else:
-        keys = np.unique(keys)
+        keys = unique_ints(keys)
     scans, cells = scan_ids_of_rows[keys // n_cells], keys % n_cells
     bounds = np.flatnonzero(np.diff(scans)) + 1
     for chunk_scans, chunk_cells in zip(np.split(scans, bounds), np.split(cells, bounds)):

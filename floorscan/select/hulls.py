@@ -37,6 +37,7 @@ import pandas as pd
 import pyarrow as pa
 import shapely
 
+from floorscan.core.grid import unique_ints
 from floorscan.core.io import split_by_scan, write_table
 from floorscan.core.shards import plan_from_files, read_shards
 from floorscan.select.clusters import kmeans_context, kmeans_sample, labels_from_sample
@@ -246,7 +247,7 @@ def scan_coverage(hulls: pd.DataFrame, scan_ids: Iterable[int] | None = None) ->
     geom = hulls["geometry"].to_numpy()
     if len(geom) and isinstance(geom[0], (bytes, bytearray, memoryview)):
         geom = shapely.from_wkb(geom)
-    ids = np.unique(sid) if scan_ids is None else np.asarray(list(scan_ids), dtype=np.int64)
+    ids = unique_ints(sid) if scan_ids is None else np.asarray(list(scan_ids), dtype=np.int64)
     if len(ids) == 0:
         return ids, np.zeros(0, dtype=object)
     order = np.argsort(sid, kind="stable")

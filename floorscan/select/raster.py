@@ -42,7 +42,7 @@ import numpy as np
 import pandas as pd
 import shapely
 
-
+from floorscan.core.grid import unique_ints
 
 #: Side of a raster tile, cells: the union ``U`` is kept only in the tiles some scan
 #: touches (a tile of 128 cells is 6.4 m at the default 5 cm), and a run of a scan's
@@ -118,7 +118,7 @@ class RasterCoverage:
             length.append(ln.astype(np.int16))
             runs_per_scan[a : a + chunk] = np.bincount(own, minlength=len(cnt))
             self.counts[a : a + chunk] = cnt
-        self.tiles = np.unique(np.concatenate([np.unique(k) for k in key] or [np.zeros(0, np.int64)]))
+        self.tiles = unique_ints(np.concatenate([unique_ints(k) for k in key] or [np.zeros(0, np.int64)]))
         dtype = np.int32 if len(self.tiles) * TILE < 2**31 else np.int64
         for i, k in enumerate(key):
             row[i] = np.searchsorted(self.tiles, k).astype(dtype) * TILE + row[i]
@@ -264,7 +264,7 @@ class RasterCoverage:
         if not fresh.any():
             return
         self.covered.reshape(-1)[_cells(rows[fresh], cols[fresh], lens[fresh])] = True
-        changed = np.unique(rows[fresh])
+        changed = unique_ints(rows[fresh])
         self._prefix[changed, 1:] = np.cumsum(self.covered[changed], axis=1, dtype=np.int16)
 
     def reset(self) -> None:

@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 
 from floorscan.core.files import atomic_path, staged_path
+from floorscan.core.grid import unique_ints
 from floorscan.sim.raycast import scanner_points, to_map
 from floorscan.sim.recording import Recording
 from floorscan.sim.ros1 import Ros1Messages
@@ -144,7 +145,7 @@ def write_recording(rec: Recording, bag_path: str | os.PathLike, pcd_dir: str | 
                 map_pts = to_map(pts, rec.scan_poses[k]).astype(np.float32)
                 cells.append(_plan_cells(map_pts, is_2d))
                 if len(cells) >= 256:
-                    cells = [np.unique(np.concatenate(cells))]
+                    cells = [unique_ints(np.concatenate(cells))]
                 (tmp_dir / scan_file_name(k)).write_bytes(pcd_bytes(map_pts, rec.scan_poses[k]))
             flush(np.iinfo(np.int64).max)
         locations = pd.DataFrame(
@@ -158,7 +159,7 @@ def write_recording(rec: Recording, bag_path: str | os.PathLike, pcd_dir: str | 
             }
         )
         locations.to_csv(tmp_dir / "locations.csv", index=False, lineterminator="\n")
-    keys = np.unique(np.concatenate(cells)) if cells else np.zeros(0, np.int64)
+    keys = unique_ints(np.concatenate(cells)) if cells else np.zeros(0, np.int64)
     ij = np.column_stack([keys >> 32, keys & 0xFFFFFFFF]) - 2**30
     return {
         "observed_xy": (ij + 0.5) * OBSERVED_CELL_M,
@@ -176,4 +177,4 @@ def _plan_cells(map_pts: np.ndarray, is_2d: bool) -> np.ndarray:
     if not is_2d:
         p = p[(p[:, 2] >= OBSERVED_BAND_3D_M[0]) & (p[:, 2] <= OBSERVED_BAND_3D_M[1])]
     ij = np.floor(p[:, :2].astype(np.float64) / OBSERVED_CELL_M).astype(np.int64) + 2**30
-    return np.unique((ij[:, 0] << 32) | ij[:, 1])
+    return unique_ints((ij[:, 0] << 32) | ij[:, 1])
