@@ -865,3 +865,35 @@ def test_a_dead_end_of_unentered_space_is_judged_whole():
     assert out.tolist() == [False, False, True, True]
     # the same space in a map (no scans: every room is unentered) is not judged so
     assert not outside_regions(raster, labels, kinds, RoomParams(), visited, False).any()
+
+
+def test_a_short_wall_far_along_a_corridor_side_across_open_floor_is_not_on_its_line():
+    """Walls on a line (:func:`floorscan.floorplan.corridors.wall_lines`) with the room
+    raster: a 0.6 m wall standing in a hall 30 m beyond a corridor, on the line of the
+    corridor's south wall (3 cm off), is not on that line: between them lies the hall's
+    floor, and the line would be less wall than opening (15.6 m of 45.6). Drawn from the
+    walls alone it joins the line and makes it 45.6 m long, so a change to a wall far
+    away reached the corridor's sides (belgioioso's corridor, benchmarks/README.md)."""
+    from floorscan.floorplan.corridors import wall_lines
+    from floorscan.floorplan.doors import wall_units
+
+    corridor = [(0, 0, 15, 0), (0, 2, 15, 2), (0, 0, 0, 2)]
+    hall = [(15, 0, 15, -10), (15, -10, 50, -10), (50, -10, 50, 12), (50, 12, 15, 12), (15, 12, 15, 2)]
+    stub = [(45, 0.03, 45.6, 0.03)]
+    walls = corridor + hall + stub
+    poses = [(2, 1), (7, 1), (12, 1)] + [(x, y) for x in (20, 30, 40) for y in (5, -5)] + [(46, 4), (46, -4)]
+    axes = np.array(walls, dtype=np.float64)
+    thick = np.full(len(axes), T)
+    raster = room_space(_grid(walls, poses), axes, thick, RoomParams())
+    u, length = wall_units(axes)
+    south, far = 0, len(walls) - 1
+    assert [0, far] in wall_lines(axes, thick, u, length, RoomParams().line_offset_m)
+    lines = wall_lines(axes, thick, u, length, RoomParams().line_offset_m, raster)
+    assert [south] in lines and [far] in lines
+    # a door's gap in a line of walls keeps it one line: 2 x 7 m of wall around 1 m
+    gap = [(0, 0, 7, 0), (8, 0, 15, 0)] + walls[1:8]
+    axes = np.array(gap, dtype=np.float64)
+    thick = np.full(len(axes), T)
+    raster = room_space(_grid(gap, poses), axes, thick, RoomParams())
+    u, length = wall_units(axes)
+    assert [0, 1] in wall_lines(axes, thick, u, length, RoomParams().line_offset_m, raster)

@@ -16,7 +16,11 @@ et al. ("Room segmentation: survey, implementation, and analysis", ICRA 2016).
 
 1. **Lines**: the plan's walls grouped into lines, each wall in the line of the
    longest wall whose line holds its ends (within half the thicker wall plus
-   ``line_offset_m``, as :func:`~floorscan.floorplan.doors.wall_gaps` joins walls).
+   ``line_offset_m``, as :func:`~floorscan.floorplan.doors.wall_gaps` joins walls),
+   while the line stays more wall than opening, as a corridor's side is: its walls and
+   the stretches between them that are not space cover at least
+   :data:`SIDE_WALL_SHARE` of it. A short wall far along the line across open floor is
+   no part of it, and a change to it does not reach a corridor's sides.
 2. **Corridors**: a line and a parallel one (directions within ``door_angle_deg``;
    the second's walls over their common length within ``2 line_offset_m`` of one
    offset), with a clear width between the two of at least
@@ -65,11 +69,17 @@ SIDE_STEP_M = 0.5
 
 
 def wall_lines(axes: np.ndarray, thickness: np.ndarray, u: np.ndarray, length: np.ndarray,
-               line_offset_m: float) -> list[list[int]]:
+               line_offset_m: float, raster: RoomRaster | None = None) -> list[list[int]]:
     """Walls grouped into lines (module docstring, step 1): a wall is on a line when both
     its ends lie within ``line_offset_m`` plus half the thicker wall of the line's
     longest wall; the walls of each line, its longest first (``axes`` (N, 4) and
-    ``thickness`` (N,) metres; ``u``, ``length``: :func:`~floorscan.floorplan.doors.wall_units`)."""
+    ``thickness`` (N,) metres; ``u``, ``length``: :func:`~floorscan.floorplan.doors.wall_units`).
+
+    With ``raster``, a line is also more wall than opening, as a corridor's side is: a
+    wall joins it only when its walls and the stretches between them that are not space
+    (within :data:`SIDE_STEP_M` of the line) cover at least :data:`SIDE_WALL_SHARE` of
+    its extent with the wall. A short wall far along a line across open floor is no
+    part of it."""
     ends = axes.reshape(-1, 2, 2)
     lines: list[list[int]] = []
     for i in np.argsort(-length, kind="stable"):
@@ -79,12 +89,31 @@ def wall_lines(axes: np.ndarray, thickness: np.ndarray, u: np.ndarray, length: n
             a = line[0]
             n = np.array([-u[a, 1], u[a, 0]])
             off = max(thickness[a], thickness[i]) / 2 + line_offset_m
-            if np.abs((ends[i] - ends[a, 0]) @ n).max() <= off:
+            if np.abs((ends[i] - ends[a, 0]) @ n).max() <= off and (
+                    raster is None or _mostly_wall(raster, ends, u[a], n, line + [int(i)])):
                 line.append(int(i))
                 break
         else:
             lines.append([int(i)])
     return lines
+
+
+def _mostly_wall(raster: RoomRaster, ends: np.ndarray, u: np.ndarray, n: np.ndarray, walls: list[int]) -> bool:
+    """Whether the walls ``walls`` (``ends`` (N, 2, 2) metres) on the line through the
+    first one's start along ``u`` (normal ``n``) and the stretches between them that
+    are not space cover at least :data:`SIDE_WALL_SHARE` of their extent."""
+    o = ends[walls[0], 0]
+    t = np.sort((ends[walls] - o) @ u, axis=1)
+    lo, hi = float(t[:, 0].min()), float(t[:, 1].max())
+    step = raster.resolution_m
+    along = np.arange(lo, hi, step) + step / 2
+    on_wall = np.zeros(len(along), dtype=bool)
+    for t0, t1 in t.tolist():
+        on_wall |= (along >= t0) & (along <= t1)
+    gaps = np.flatnonzero(~on_wall)
+    if len(gaps):
+        on_wall[gaps] = _bounded(raster, o, u, n, along[gaps], -SIDE_STEP_M, SIDE_STEP_M)
+    return bool(on_wall.mean() >= SIDE_WALL_SHARE) if len(along) else True
 
 
 def _bounded(raster: RoomRaster, o: np.ndarray, u: np.ndarray, n: np.ndarray, t: np.ndarray, a: float,
@@ -114,7 +143,7 @@ def corridor_strips(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster,
     import shapely
 
     u_all, length = wall_units(axes)
-    lines = wall_lines(axes, thickness, u_all, length, params.line_offset_m)
+    lines = wall_lines(axes, thickness, u_all, length, params.line_offset_m, raster)
     line_of = np.full(len(axes), -1)
     for k, ws in enumerate(lines):
         line_of[ws] = k
