@@ -628,7 +628,7 @@ def test_a_cabinet_standing_free_with_a_pocket_of_floor_inside_frames_no_door():
 
 
 def test_standing_free_is_an_obstacle_apart_shorter_than_a_piece_of_furniture():
-    from floorscan.floorplan.doors import standing_free
+    from floorscan.floorplan.jambs import standing_free
 
     r = 0.05
     solid = np.zeros((200, 200), dtype=bool)
@@ -897,3 +897,54 @@ def test_a_short_wall_far_along_a_corridor_side_across_open_floor_is_not_on_its_
     raster = room_space(_grid(gap, poses), axes, thick, RoomParams())
     u, length = wall_units(axes)
     assert [0, 1] in wall_lines(axes, thick, u, length, RoomParams().line_offset_m, raster)
+
+
+def _octagon(cx: float, cy: float, radius: float) -> list:
+    a = np.radians(22.5 + 45 * np.arange(9))
+    x, y = cx + radius * np.cos(a), cy + radius * np.sin(a)
+    return [(x[i], y[i], x[i + 1], y[i + 1]) for i in range(8)]
+
+
+def test_a_plant_against_a_corridor_wall_frames_no_door_and_a_partition_stub_does():
+    """A map of a corridor 16 x 3.5 m. A plant 1.7 m across stands against its north
+    wall at x 8, 1.6 m from the south wall's face: the narrowing runs from the middle of
+    that wall's face, square to it, to an object wider than any wall, so it is no door
+    and the corridor stays one room (the tree before the change: two rooms and a door of
+    1.6 m). A partition stub 0.12 m thick hanging 1.6 m from the north wall in its place
+    (the plan has it as clutter, not a wall) stands in the opening's line: a door."""
+    box = [(0, 0, 16, 0), (16, 0, 16, 3.5), (16, 3.5, 0, 3.5), (0, 3.5, 0, 0)]
+    poses = [(2, 1.5), (5, 1), (8, 0.9), (11, 1), (14, 1.5), (4, 2.8), (12, 2.8)]
+    axes = np.array(box, dtype=np.float64)
+    plant = _octagon(8.0, 3.44 - 0.86, 0.86 / np.cos(np.radians(22.5)))
+    grid = dataclasses.replace(_grid(box, poses, objects=plant), scan_xy=None)
+    rooms, doors = plan_rooms(axes, np.full(len(axes), T), grid, RoomParams())
+    assert len(rooms) == 1 and len(doors) == 0
+    assert 51.0 < rooms["area_m2"].iloc[0] < 54.0  # the floor less the plant's
+    stub = [(7.94, 3.44, 7.94, 1.84), (7.94, 1.84, 8.06, 1.84), (8.06, 1.84, 8.06, 3.44)]
+    grid = dataclasses.replace(_grid(box, poses, objects=stub), scan_xy=None)
+    rooms, doors = plan_rooms(axes, np.full(len(axes), T), grid, RoomParams())
+    assert len(rooms) == 2 and len(doors) == 1
+    assert 1.5 < float(doors["width_m"].iloc[0]) < 1.9
+
+
+def test_a_plant_against_a_corridor_wall_frames_no_door_on_a_turned_raster():
+    """The plant of the test above with the corridor turned by 30 and by 63 degrees: the
+    contact between the watershed regions follows the raster's cells, 22 to 25 degrees
+    off the wall's normal, and frames no door all the same (the rule's first form asked
+    the contact to run within ``door_angle_deg`` of the normal: two rooms and a door)."""
+    box = [(0, 0, 16, 0), (16, 0, 16, 3.5), (16, 3.5, 0, 3.5), (0, 3.5, 0, 0)]
+    poses = [(2, 1.5), (5, 1), (8, 0.9), (11, 1), (14, 1.5), (4, 2.8), (12, 2.8)]
+    plant = _octagon(8.0, 3.44 - 0.86, 0.86 / np.cos(np.radians(22.5)))
+    for deg in (30, 63):
+        c, s = np.cos(np.radians(deg)), np.sin(np.radians(deg))
+        turn = np.array([[c, -s], [s, c]])
+
+        def turned(segs):
+            return [(*(turn @ (x0, y0)), *(turn @ (x1, y1))) for x0, y0, x1, y1 in segs]
+
+        axes = np.array(turned(box), dtype=np.float64)
+        grid = dataclasses.replace(_grid(turned(box), [tuple(turn @ p) for p in poses], objects=turned(plant)),
+                                   scan_xy=None)  # fmt: skip
+        rooms, doors = plan_rooms(axes, np.full(len(axes), T), grid, RoomParams())
+        assert len(rooms) == 1 and len(doors) == 0, deg
+        assert 51.0 < rooms["area_m2"].iloc[0] < 54.0

@@ -11,7 +11,7 @@ door:
 
 - walls frame it: both ends of the contact stand near a wall or a seen obstacle that
   is no object standing free (the caller's ``framed`` pairs,
-  :mod:`floorscan.floorplan.rooms`, :func:`~floorscan.floorplan.doors.jamb_cells`): a
+  :mod:`floorscan.floorplan.rooms`, :func:`~floorscan.floorplan.jambs.jamb_cells`): a
   narrowing that ends in unseen space (the shadow of a table) or at a desk is no door;
 - it is no wider than a door: ``2 s <= door_max_m``;
 - and the space on both sides is wider than it: the saddle is at most

@@ -49,7 +49,9 @@ taken from the walls:
    (h-maxima): every narrowing of the space is a candidate boundary between two rooms.
 4. **Rooms by persistence** (:mod:`floorscan.floorplan.persistence`): the regions
    merged from the widest passage down, unless the passage is a door (no wider than
-   ``door_max_m``, at most three quarters of the width of the narrower side): one
+   ``door_max_m``, at most three quarters of the width of the narrower side, between
+   jambs; not from the face of a wall to an object wider than a wall,
+   :func:`~floorscan.floorplan.jambs.face_to_object`): one
    global order for the whole plan instead of a rule per contact. Where two rooms
    meet, the contact is their door (:mod:`floorscan.floorplan.doors`), in a wall's
    line when one ends there.
@@ -110,6 +112,7 @@ from floorscan.floorplan import doors as D
 from floorscan.floorplan.corridors import corridor_ends, corridor_sides, corridor_strips
 from floorscan.floorplan.extensions import partition_cuts
 from floorscan.floorplan.hidden import OBJECT_MAX_DEPTH_M
+from floorscan.floorplan.jambs import face_to_object, jamb_cells
 from floorscan.floorplan.mouths import corner_mouths, dead_end_mouths, room_mouths
 from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
@@ -196,8 +199,10 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     # or of an obstacle the scans saw that is no object standing free, no wider than a
     # door (a narrowing that ends in unseen or open space, a shadow behind furniture, or
     # at a desk, is no door); narrower than a door
-    # it is a slit nobody passes, which keeps two regions apart without a door
-    jambs = D.jamb_cells(cut, params.jamb_m, axes, thickness, params)
+    # it is a slit nobody passes, which keeps two regions apart without a door; nor is
+    # the narrowing between the face of a wall and an object wider than a wall (a
+    # plant, a cabinet against the opposite wall): no opening in a wall
+    jambs = jamb_cells(cut, params.jamb_m, axes, thickness, params)
     contacts = D.contacts(labels)
     framed: dict[tuple[int, int], list] = {}
     widest: dict[tuple[int, int], float] = {}  # the widest contact of each pair, metres
@@ -207,6 +212,8 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
             width = float(np.hypot(*(q - p)))
             widest[pair] = max(widest.get(pair, 0.0), width)
             if width > params.door_max_m or not cut.at(jambs, np.array([p, q])).all():
+                continue
+            if width >= params.door_min_m and face_to_object(cut, p, q, axes, thickness, params):
                 continue
             doors_here = framed.setdefault(pair, [])
             if width >= params.door_min_m:

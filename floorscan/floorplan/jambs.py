@@ -1,0 +1,234 @@
+"""Where a door's jambs can stand (:mod:`floorscan.floorplan.doors`): the cells near the
+building's structure (:func:`jamb_cells`), less the objects standing free in the space
+(:func:`standing_free`, :func:`furniture_islands`), and the contacts between two regions
+that run from a wall's face to an object, which are narrowings of the space, not
+openings in a wall (:func:`face_to_object`).
+
+A door is an opening in the building's structure, so its two jambs are walls or the
+seen obstacles that bound the space; a desk, a table and its chairs, a plant or a
+cabinet in a room frame none (Bormann et al., ICRA 2016, ipa_room_segmentation: a room
+boundary is a narrow passage between two wall points).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from floorscan.core.geometry import point_segment_dist2
+from floorscan.floorplan.doors import near_walls, wall_units
+from floorscan.floorplan.free_space import CLUTTER_MAX_LENGTH_M
+from floorscan.floorplan.room_space import RoomParams, RoomRaster, dilate, surrounded
+
+
+def jamb_cells(raster: RoomRaster, jamb_m: float, axes: np.ndarray | None = None, thickness: np.ndarray | None = None,
+               params: RoomParams | None = None) -> np.ndarray:
+    """(H, W) bool: the cells within ``jamb_m`` (metres) of a wall's footprint or of a
+    cell that bounds the space (:attr:`RoomRaster.bounds`), but of no object standing
+    free in the space: where a door's jamb can stand. A door is an opening in the
+    building's structure; the narrowing between a desk and a wall is none.
+
+    An object standing free is a component of the cells outside the space (walls,
+    obstacles, what was not seen free) that the space surrounds and that is shorter
+    than the longest piece of furniture (:func:`standing_free`): a desk or a table in a
+    room, whether the plan took its faces for walls or not; or, however long, one that
+    holds no wall of the plan longer than that piece and encloses no room's floor
+    (:func:`furniture_islands`, given the plan's walls): a row or an L of desks, a table
+    and its chairs, a cabinet with less floor inside than ``params.min_room_area_m2``.
+    A stub of wall whose junction the scans did not see belongs with the unseen cells
+    beyond it, so it stays a jamb; so does a piece of wall between two doors in a wall's
+    line, a door's width from its ends (:func:`_pieces_between_doors`), given the walls.
+
+    Parameters
+    ----------
+    raster : RoomRaster
+    jamb_m : float
+        Metres.
+    axes : (N, 4) float ndarray, optional
+        The plan's wall axes ``x0, y0, x1, y1``, metres; without them (or ``thickness``
+        or ``params``) no object standing free is a piece of wall.
+    thickness : (N,) float ndarray, optional
+        Metres.
+    params : RoomParams, optional
+        ``door_max_m``, ``door_angle_deg``, ``line_offset_m``, ``min_room_area_m2``.
+    """
+    solid = raster.walls | raster.bounds
+    free = standing_free(~raster.space, raster.resolution_m)
+    if axes is not None and len(axes):
+        free |= furniture_islands(raster, axes, params.min_room_area_m2 if params is not None else 0.0)
+    if axes is not None and thickness is not None and params is not None and len(axes) and free.any():
+        free &= ~_pieces_between_doors(free, raster, axes, thickness, params)
+    return dilate(solid & ~free, jamb_m / raster.resolution_m)
+
+
+def furniture_islands(raster: RoomRaster, axes: np.ndarray, min_room_area_m2: float = 0.0) -> np.ndarray:
+    """(H, W) bool: the groups of furniture standing in the space, whatever their
+    extent: the 8-connected components of the cells outside the space (walls, obstacles,
+    what was not seen free) that
+
+    - the space surrounds: none of their cells lies on the raster's border (the
+      outside of the building and every wall joined to its outer walls are one
+      component that reaches it);
+    - hold no wall of the plan (``axes``, (N, 4) metres) at least
+      :data:`~floorscan.floorplan.free_space.CLUTTER_MAX_LENGTH_M` long, the longest
+      piece of furniture: the structure passes' anchors
+      (:mod:`floorscan.floorplan.structure`, step 4); a core of rooms or a partition
+      standing free of the outer walls holds one;
+    - enclose no more space than ``min_room_area_m2`` (square metres; SciPy's
+      ``ndimage.binary_fill_holes``): a core of rooms closed all round holds its rooms'
+      floor, and a room is no smaller than that; less is the inside of a cabinet or a
+      shelf the map saw through. 0 (the default): no space at all.
+
+    Desks in a row, an L of desks, a table and its chairs are one component longer
+    than any one of them (:func:`standing_free` measures a component against a single
+    piece). A wall is held where a point of its axis, every half cell, falls on the
+    component."""
+    from scipy import ndimage
+
+    labels, island = surrounded(~raster.space, np.ones((3, 3), dtype=bool))
+    axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
+    length = np.hypot(axes[:, 2] - axes[:, 0], axes[:, 3] - axes[:, 1])
+    r = raster.resolution_m
+    anchors = length >= CLUTTER_MAX_LENGTH_M
+    for a, steps in zip(axes[anchors], np.ceil(length[anchors] / (r / 2)).astype(np.int64)):  # every half cell
+        rows, cols, inside = raster.cells_of(a[:2] + np.linspace(0.0, 1.0, steps + 1)[:, None] * (a[2:] - a[:2]))
+        island[labels[rows[inside], cols[inside]]] = False
+    for k, box in enumerate(ndimage.find_objects(labels), start=1):
+        if box is not None and island[k]:
+            part = labels[box] == k
+            enclosed = (ndimage.binary_fill_holes(part) & ~part & raster.space[box]).sum() * r**2
+            island[k] = not enclosed or enclosed < min_room_area_m2
+    return island[labels]
+
+
+def _pieces_between_doors(free: np.ndarray, raster: RoomRaster, axes: np.ndarray, thickness: np.ndarray,
+                   params: RoomParams) -> np.ndarray:
+    """(H, W) bool: the components of ``free`` ((H, W) bool, 8-connected) that are
+    pieces of a wall between two doors: along the component's principal axis, each of
+    its ends faces the end of a wall in its line (the wall within ``door_angle_deg`` of
+    the axis, the end within ``line_offset_m`` plus half the wall of the wall's line)
+    across a gap no wider than ``door_max_m``, as a door's jambs stand in one line
+    (:func:`~floorscan.floorplan.doors.wall_gaps`). A desk between two walls faces their sides, not their ends in
+    its line, and stays an object."""
+    from scipy import ndimage
+
+    labels, n = ndimage.label(free, structure=np.ones((3, 3), dtype=bool))
+    u_w, _ = wall_units(axes)
+    n_w = np.column_stack([-u_w[:, 1], u_w[:, 0]])
+    ends = axes.reshape(-1, 2, 2)
+    tol = np.asarray(thickness, dtype=np.float64) / 2 + params.line_offset_m
+    cos_max = np.cos(np.radians(params.door_angle_deg))
+    r = raster.resolution_m
+    keep = np.zeros(n + 1, dtype=bool)
+    for k, box in enumerate(ndimage.find_objects(labels), start=1):
+        rr, cc = np.nonzero(labels[box] == k)
+        if len(rr) < 2:
+            continue
+        xy = raster.origin_xy + (np.column_stack([cc + box[1].start, rr + box[0].start]) + 0.5) * r
+        c = xy.mean(axis=0)
+        u = np.linalg.eigh((xy - c).T @ (xy - c))[1][:, -1]  # the principal axis
+        t = (xy - c) @ u
+        along = np.abs(u_w @ u) >= cos_max
+        faced = []
+        for sign, e in ((-1.0, c + u * t.min()), (1.0, c + u * t.max())):
+            in_line = along & (np.abs(np.einsum("ij,ij->i", e - ends[:, 0], n_w)) <= tol)
+            ahead = ((ends - e) @ (sign * u)).min(axis=1)  # the nearer end of each wall, ahead of this end
+            faced.append(bool((in_line & (ahead >= 0) & (ahead <= params.door_max_m + r)).any()))
+        keep[k] = all(faced)
+    return keep[labels]
+
+
+def standing_free(solid: np.ndarray, resolution_m: float, max_extent_m: float = CLUTTER_MAX_LENGTH_M) -> np.ndarray:
+    """(H, W) bool: the cells of the 8-connected components of ``solid`` ((H, W) bool)
+    whose extent, the largest distance between two of their cells plus one cell, is
+    below ``max_extent_m`` (metres; by default the longest piece of furniture,
+    :data:`~floorscan.floorplan.free_space.CLUTTER_MAX_LENGTH_M`). The extent is the
+    component's diameter, so the test does not depend on the raster's orientation
+    (SciPy's ``ndimage.label`` and ``ConvexHull``)."""
+    from scipy import ndimage
+    from scipy.spatial import ConvexHull, QhullError
+
+    labels, n = ndimage.label(solid, structure=np.ones((3, 3), dtype=bool))
+    boxes = ndimage.find_objects(labels)
+    size = np.array([(b[0].stop - b[0].start, b[1].stop - b[1].start) for b in boxes], dtype=np.float64).reshape(-1, 2)
+    limit = max_extent_m / resolution_m - 1.0  # in cells, between cell centres
+    out = np.zeros(n + 1, dtype=bool)
+    out[1:] = np.hypot(size[:, 0] - 1, size[:, 1] - 1) < limit  # the box's diagonal bounds the diameter
+    # the diameter is at least the box's longer side: between the two, measure it
+    for k in np.flatnonzero(~out[1:] & (size.max(axis=1) - 1 < limit)) + 1:
+        box = boxes[k - 1]
+        xy = np.column_stack(np.nonzero(labels[box] == k)).astype(np.float64)
+        try:
+            xy = xy[ConvexHull(xy).vertices]
+        except QhullError:  # collinear cells: the ends are among them all
+            pass
+        out[k] = float(np.sqrt(((xy[:, None] - xy[None]) ** 2).sum(-1)).max()) < limit
+    out[0] = False
+    return out[labels]
+
+
+def face_to_object(raster: RoomRaster, p: np.ndarray, q: np.ndarray, axes: np.ndarray, thickness: np.ndarray,
+                   params: RoomParams) -> bool:
+    """Whether the contact ``p``-``q`` between two regions runs from the face of a wall,
+    at least ``door_min_m`` from its ends, to an object that is no wall and no partition
+    in the contact's line: a narrowing of the space (a plant or a cabinet against the
+    opposite wall), not an opening in a wall, so no door. The contact's direction is
+    not tested: it follows the raster's cells, not the wall (a contact square to a wall
+    on one raster runs 25 degrees off on the raster turned by 30 degrees).
+
+    The object is the run of cells outside the space across the contact, just beyond
+    its end (up to ``jamb_m`` on); a partition stub the plan holds no wall of is at
+    most the thickest wall (:data:`~floorscan.floorplan.params.PAIR_MAX_M`) and a cell
+    on each side across, and continues the opening's line as a door's jamb does.
+
+    Parameters
+    ----------
+    raster : RoomRaster
+        The space the contact lies in.
+    p, q : (2,) float ndarray
+        The contact's ends, metres.
+    axes : (N, 4) float ndarray
+        The plan's wall axes, metres.
+    thickness : (N,) float ndarray
+        Metres.
+    params : RoomParams
+        ``door_min_m``, ``door_max_m``, ``jamb_m``.
+
+    Returns
+    -------
+    bool
+        False without walls.
+    """
+    from floorscan.floorplan.params import PAIR_MAX_M
+
+    if not len(axes):
+        return False
+    u, length = wall_units(axes)
+    d = q - p
+    v = d / max(float(np.hypot(*d)), 1e-12)
+    r = raster.resolution_m
+    for a, b, w in ((p, q, v), (q, p, -v)):
+        if near_walls(b, axes, thickness, params.jamb_m):
+            continue
+        dist = np.sqrt(point_segment_dist2(np.full(len(axes), a[0]), np.full(len(axes), a[1]), axes)) - thickness / 2
+        t = ((a - axes[:, :2]) * u).sum(axis=1)
+        on_face = (dist <= params.jamb_m) & (t >= params.door_min_m) & (t <= length - params.door_min_m)
+        if not on_face.any():
+            continue
+        # the object's width across the contact, just beyond its end
+        n = np.array([-w[1], w[0]])
+        s = np.arange(-round(params.door_max_m / r), round(params.door_max_m / r) + 1) * r
+        for ahead in np.arange(1, round(params.jamb_m / r) + 2) * r:
+            solid = ~raster.at(raster.space, b + w * ahead + s[:, None] * n, outside=False)
+            mid = len(s) // 2
+            if solid[mid]:
+                break
+        else:
+            continue
+        lo, hi = mid, mid
+        while lo > 0 and solid[lo - 1]:
+            lo -= 1
+        while hi < len(s) - 1 and solid[hi + 1]:
+            hi += 1
+        if (hi - lo + 1) * r > PAIR_MAX_M + 2 * r:
+            return True
+    return False
