@@ -249,7 +249,7 @@ def junction_end(axes: np.ndarray, thickness: np.ndarray, i: int, k: int, tol_m:
     if not len(others):
         return False
     end = axes[i, 2 * k : 2 * k + 2]
-    gap = _point_segment_distance(end, others) - np.delete(thickness, i) / 2
+    gap = footprint_distance(end, others, np.delete(thickness, i))
     return bool(gap.min() <= thickness[i] / 2 + tol_m)
 
 
@@ -274,7 +274,14 @@ def near_walls(p: np.ndarray, axes: np.ndarray, thickness: np.ndarray, within_m:
     """
     if not len(axes):
         return False
-    return bool((_point_segment_distance(p, axes) - thickness / 2).min() <= within_m)
+    return bool(footprint_distance(p, axes, thickness).min() <= within_m)
+
+
+def footprint_distance(p: np.ndarray, axes: np.ndarray, thickness: np.ndarray) -> np.ndarray:
+    """(N,) float64: metres from the point ``p`` ((2,) metres) to each wall's footprint,
+    its axis (``axes`` (N, 4) metres) less half its thickness (``thickness`` (N,)
+    metres); negative inside the footprint."""
+    return _point_segment_distance(p, axes) - thickness / 2
 
 
 def _point_segment_distance(p: np.ndarray, axes: np.ndarray) -> np.ndarray:

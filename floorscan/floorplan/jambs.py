@@ -14,8 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from floorscan.core.geometry import point_segment_dist2
-from floorscan.floorplan.doors import near_walls, wall_units
+from floorscan.floorplan.doors import footprint_distance, near_walls, wall_units
 from floorscan.floorplan.free_space import CLUTTER_MAX_LENGTH_M
 from floorscan.floorplan.room_space import RoomParams, RoomRaster, dilate, surrounded
 
@@ -180,23 +179,9 @@ def face_to_object(raster: RoomRaster, p: np.ndarray, q: np.ndarray, axes: np.nd
     most the thickest wall (:data:`~floorscan.floorplan.params.PAIR_MAX_M`) and a cell
     on each side across, and continues the opening's line as a door's jamb does.
 
-    Parameters
-    ----------
-    raster : RoomRaster
-        The space the contact lies in.
-    p, q : (2,) float ndarray
-        The contact's ends, metres.
-    axes : (N, 4) float ndarray
-        The plan's wall axes, metres.
-    thickness : (N,) float ndarray
-        Metres.
-    params : RoomParams
-        ``door_min_m``, ``door_max_m``, ``jamb_m``.
-
-    Returns
-    -------
-    bool
-        False without walls.
+    ``raster`` is the space the contact lies in; ``p`` and ``q`` (2,) its ends, ``axes``
+    (N, 4) and ``thickness`` (N,) the plan's walls, all in metres; ``params``:
+    ``door_min_m``, ``door_max_m``, ``jamb_m``. False without walls.
     """
     from floorscan.floorplan.params import PAIR_MAX_M
 
@@ -209,7 +194,7 @@ def face_to_object(raster: RoomRaster, p: np.ndarray, q: np.ndarray, axes: np.nd
     for a, b, w in ((p, q, v), (q, p, -v)):
         if near_walls(b, axes, thickness, params.jamb_m):
             continue
-        dist = np.sqrt(point_segment_dist2(np.full(len(axes), a[0]), np.full(len(axes), a[1]), axes)) - thickness / 2
+        dist = footprint_distance(a, axes, thickness)
         t = ((a - axes[:, :2]) * u).sum(axis=1)
         on_face = (dist <= params.jamb_m) & (t >= params.door_min_m) & (t <= length - params.door_min_m)
         if not on_face.any():
