@@ -1,6 +1,6 @@
 """Rooms by persistence (:mod:`floorscan.floorplan.persistence`): the regions of the
-distance to the walls merged from the widest passage down, unless the passage is a
-framed door at most three quarters as wide as the narrower side."""
+distance to the walls merged across every passage that is no framed door at most three
+quarters as wide as the space on each side of it."""
 
 import numpy as np
 import pytest
@@ -61,6 +61,42 @@ def test_a_corridor_narrowed_by_less_than_a_quarter_is_one_corridor():
         space[2 : 2 + cut, 118:124] = False
         space[38 - cut : 38, 118:124] = False
         assert n_rooms(space) == rooms, width_m
+
+
+def corridor_between_halls(narrow_m: float) -> np.ndarray:
+    """Two halls 4 m square joined by a corridor 2.1 m wide and 12 m long, entered from
+    each hall through a throat 1.6 m wide and 0.5 m long, narrowed to ``narrow_m`` for
+    0.3 m halfway. One cell of wall around."""
+    hall, throat, corridor = 80, 10, 240  # cells: 4 m, 0.5 m, 12 m
+    width, throat_w = 42, 32  # 2.1 m, 1.6 m
+    length = 2 * hall + 2 * throat + corridor
+    space = np.zeros((hall + 2, length + 2), dtype=bool)
+    space[1 : 1 + hall, 1 : 1 + hall] = True
+    space[1 : 1 + hall, 1 + length - hall : 1 + length] = True
+    top, ttop = 1 + (hall - width) // 2, 1 + (hall - throat_w) // 2
+    space[ttop : ttop + throat_w, 1 + hall : 1 + length - hall] = True
+    space[top : top + width, 1 + hall + throat : 1 + length - hall - throat] = True
+    cut = int(round((2.1 - narrow_m) / 2 / RES))
+    mid = 1 + length // 2
+    space[top : top + cut, mid - 3 : mid + 3] = False
+    space[top + width - cut : top + width, mid - 3 : mid + 3] = False
+    return space
+
+
+def test_a_corridor_narrowed_by_less_than_a_quarter_is_one_corridor_between_two_halls():
+    """The corridor of :func:`corridor_between_halls`: its two halves are basins of their
+    own (1.05 m to their walls, 0.2 m above the narrowing) and join their halls through
+    the throats (a saddle of 0.8 m, 0.76 of the corridor's 1.05: no door). Narrowed to
+    1.7 m (a saddle of 0.85 m, 0.81 of 1.05) the corridor is one room with its halls:
+    the passage is compared with the basins beside it. Compared with the peak of the
+    room each half had joined, its hall's 2 m (ToMATo's order, the tree before), it was a
+    door and the rooms two halves: aces' corridors were cut so. Narrowed to 1.1 m by a
+    door's jambs (0.55 m, 0.52 of 1.05) it is a door."""
+    for narrow_m, rooms in ((1.7, 1), (1.1, 2)):
+        space = corridor_between_halls(narrow_m)
+        labels, _ = regions(space)
+        assert labels.max() >= 4, narrow_m  # the halls and the corridor's halves
+        assert n_rooms(space) == rooms, narrow_m
 
 
 def test_the_rooms_do_not_depend_on_the_raster_orientation():

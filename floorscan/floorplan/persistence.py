@@ -1,33 +1,45 @@
 """Step 4 of the rooms (:mod:`floorscan.floorplan.rooms`): the watershed regions of the
-space merged into rooms by persistence, in one global order.
+space merged into rooms across every passage that is no door.
 
 The regions are the basins of the distance to the nearest wall (step 3); two basins
 meet at a saddle, the widest passage between them, of half-width ``s`` (the distance
-at the saddle). Visiting every pair of touching regions from the highest saddle down
-(the widest passage first), as the persistence-based clustering ToMATo does (Chazal,
-Guibas, Oudot and Skraba, "Persistence-based clustering in Riemannian manifolds",
-J. ACM 60(6), 2013), the two groups the pair belongs to merge unless the passage is a
-door:
+at the saddle), and each basin has a peak ``p``, the radius of the largest disc inside
+it. The passage between two basins is a door when:
 
 - walls frame it: both ends of the contact stand near a wall or a seen obstacle that
   is no object standing free (the caller's ``framed`` pairs,
   :mod:`floorscan.floorplan.rooms`, :func:`~floorscan.floorplan.jambs.jamb_cells`): a
   narrowing that ends in unseen space (the shadow of a table) or at a desk is no door;
 - it is no wider than a door: ``2 s <= door_max_m``;
-- and the space on both sides is wider than it: the saddle is at most
-  :data:`DOOR_SHARE` of the smaller group's peak (the radius of the largest disc inside
-  it, the "younger" cluster of ToMATo).
+- and the space on both sides of it is wider than it: the saddle is at most
+  :data:`DOOR_SHARE` of the peak of each of the two basins it joins (the widest place
+  of the space beside it).
 
-A corridor cut into basins by the noise of its walls merges (its saddles are as high
-as its peaks); a room behind a door stays apart, whichever order the local rules
-would have met them in; a passage wider than a door joins its two sides. The
-decision uses the distance field and where the walls stand, nothing of the order the
-regions were numbered in, so it is the same under any rigid motion of the input, up
-to the raster.
+Every other pair of touching basins is one room: the rooms are the connected
+components of the basins joined across the passages that are no door. A corridor cut
+into basins by the noise of its walls is one corridor (its saddles are as high as its
+peaks), a room behind a door stays apart, and a corridor narrowed by a jamb or a
+cabinet by less than a quarter of the width of its basins beside the narrowing stays
+one corridor, whatever hall or junction it leads to. Where the watershed gives the
+stretch beside a passage to the junction it leads to (a corridor's even stretch has no
+maximum of its own), that basin is as wide as the junction, and the passage can still
+be a door.
+
+The saddle against the peaks is persistence as topological data analysis measures it
+(a basin of peak ``p`` persists from ``p`` down to its saddle ``s``; Chazal, Guibas,
+Oudot and Skraba, "Persistence-based clustering in Riemannian manifolds", J. ACM 60(6),
+2013, ToMATo), relative to the peak. ToMATo visits the pairs from the highest saddle
+down and compares a saddle with the peak of the whole cluster each side has joined so
+far: a corridor's narrowing became a door as soon as each half had joined a wider hall
+or junction (aces' corridors were cut where they narrow by a tenth,
+``benchmarks/README.md``). Compared with the two basins it joins, each passage is
+judged alone, in no order. The decision uses the distance field and where the walls
+stand, nothing of the order the regions were numbered in, so it is the same under any
+rigid motion of the input, up to the raster.
 
 Bormann et al. ("Room segmentation: survey, implementation, and analysis", ICRA
-2016) segment on the same distance transform by a global threshold; the persistence
-order makes the threshold local to each pair of rooms.
+2016) segment on the same distance transform by a global threshold; the saddle against
+the peaks beside it makes the threshold local to each passage.
 """
 
 from __future__ import annotations
@@ -78,7 +90,7 @@ def saddles(labels: np.ndarray, distance: np.ndarray) -> tuple[np.ndarray, np.nd
     return np.column_stack([key // n, key % n]), height[last].astype(np.float64)
 
 
-def persistent_rooms(labels: np.ndarray, distance: np.ndarray, door_max_m: float, framed=None):
+def persistent_rooms(labels: np.ndarray, distance: np.ndarray, door_max_m: float, framed=None) -> np.ndarray:
     """The regions merged into rooms (the module docstring).
 
     Parameters
@@ -109,16 +121,9 @@ def persistent_rooms(labels: np.ndarray, distance: np.ndarray, door_max_m: float
         np.maximum.at(peak, labels[inside], distance[inside])
         peak[np.isneginf(peak)] = 0.0  # a label without cells, as ndimage.maximum
     pairs, height = saddles(labels, distance)
-    groups = DisjointSet(range(n + 1))  # a group's peak is kept at its representative
-    # highest saddle first; ties in the pairs' order, so the result is deterministic
-    for k in np.lexsort((pairs[:, 1], pairs[:, 0], -height)):
-        a, b = groups[int(pairs[k, 0])], groups[int(pairs[k, 1])]
-        if a == b:
-            continue
-        s = height[k]
-        pair = (int(pairs[k, 0]), int(pairs[k, 1]))
-        if (framed is None or pair in framed) and 2 * s <= door_max_m and s <= DOOR_SHARE * min(peak[a], peak[b]):
-            continue
+    groups = DisjointSet(range(n + 1))
+    for (a, b), s in zip(pairs.tolist(), height.tolist()):
+        if (framed is None or (a, b) in framed) and 2 * s <= door_max_m and s <= DOOR_SHARE * min(peak[a], peak[b]):
+            continue  # a door: the rooms on its two sides stay apart
         groups.merge(a, b)
-        peak[groups[a]] = max(peak[a], peak[b])
     return np.array([groups[i] for i in range(n + 1)], dtype=np.int64)

@@ -48,11 +48,11 @@ taken from the walls:
    maxima of that distance that stand ``marker_depth_m`` above the saddles around them
    (h-maxima): every narrowing of the space is a candidate boundary between two rooms.
 4. **Rooms by persistence** (:mod:`floorscan.floorplan.persistence`): the regions
-   merged from the widest passage down, unless the passage is a door (no wider than
-   ``door_max_m``, at most three quarters of the width of the narrower side, between
-   jambs; not from the face of a wall to an object wider than a wall,
-   :func:`~floorscan.floorplan.jambs.face_to_object`): one
-   global order for the whole plan instead of a rule per contact. Where two rooms
+   merged across every passage that is no door (no wider than ``door_max_m``, at most
+   three quarters of the width of each region it joins, between jambs; not from the
+   face of a wall to an object wider than a wall,
+   :func:`~floorscan.floorplan.jambs.face_to_object`): one rule for every passage of
+   the plan, in no order. Where two rooms
    meet, the contact is their door (:mod:`floorscan.floorplan.doors`), in a wall's
    line when one ends there.
    Groups of regions whose edge runs along walls and seen obstacles for less than
