@@ -30,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from floorscan.core.geometry import point_segment_dist2
 from floorscan.floorplan.room_space import RoomParams, RoomRaster
 
 
@@ -281,14 +282,7 @@ def footprint_distance(p: np.ndarray, axes: np.ndarray, thickness: np.ndarray) -
     """(N,) float64: metres from the point ``p`` ((2,) metres) to each wall's footprint,
     its axis (``axes`` (N, 4) metres) less half its thickness (``thickness`` (N,)
     metres); negative inside the footprint."""
-    return _point_segment_distance(p, axes) - thickness / 2
-
-
-def _point_segment_distance(p: np.ndarray, axes: np.ndarray) -> np.ndarray:
-    a, b = axes[:, :2], axes[:, 2:]
-    d = b - a
-    t = np.clip(((p - a) * d).sum(axis=1) / np.maximum((d * d).sum(axis=1), 1e-12), 0, 1)
-    return np.hypot(*(a + d * t[:, None] - p).T)
+    return np.sqrt(point_segment_dist2(p[0], p[1], axes)) - thickness / 2
 
 
 def contact_door(
@@ -355,4 +349,5 @@ def free_door(p: np.ndarray, q: np.ndarray, axes: np.ndarray) -> tuple[np.ndarra
     """
     if not len(axes):
         return None
-    return p.copy(), q.copy(), int(np.argmin(_point_segment_distance((p + q) / 2, axes)))
+    m = (p + q) / 2
+    return p.copy(), q.copy(), int(np.argmin(point_segment_dist2(m[0], m[1], axes)))

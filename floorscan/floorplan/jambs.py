@@ -202,9 +202,9 @@ def face_to_object(raster: RoomRaster, p: np.ndarray, q: np.ndarray, axes: np.nd
         # the object's width across the contact, just beyond its end
         n = np.array([-w[1], w[0]])
         s = np.arange(-round(params.door_max_m / r), round(params.door_max_m / r) + 1) * r
+        mid = len(s) // 2
         for ahead in np.arange(1, round(params.jamb_m / r) + 2) * r:
             solid = ~raster.at(raster.space, b + w * ahead + s[:, None] * n, outside=False)
-            mid = len(s) // 2
             if solid[mid]:
                 break
         else:
