@@ -512,6 +512,23 @@ def test_a_network_of_corridors_is_a_corridor_and_a_hall_is_a_room():
     assert list(rooms["name"]) == ["Corridor 1", "Room 1", "Room 2"]
 
 
+def test_an_office_around_a_table_island_is_a_room_and_a_ring_around_a_core_a_corridor():
+    """room_tables: a 5 m x 7 m office around a 0.8 m x 2 m block drawn as walls (a hole
+    smaller than the smallest room: its floor's median local thickness without the hole
+    is 5 m, with it about 2 m, which reads as a corridor 17 m long) is a room; a 2 m ring
+    of corridor around a 10 m x 10 m core of offices (a hole larger than a room) stays a
+    corridor."""
+    from floorscan.floorplan.room_tables import room_tables, room_width
+
+    office = shapely.box(0, 0, 5, 7).difference(shapely.box(2.1, 2.5, 2.9, 4.5))
+    ring = shapely.box(10, 0, 24, 14).difference(shapely.box(12, 2, 22, 12))
+    assert room_width(office, 0.025) < 3.0  # what made it a corridor
+    doors = [(np.array([5.0, 1.0]), np.array([5.0, 2.0]), 0, 0, 1)]
+    rooms, _ = room_tables([office, ring], doors, 0.05, RoomParams())
+    assert list(rooms["kind"]) == ["room", "corridor"]
+    assert rooms["area_m2"].tolist() == pytest.approx([33.4, 96.0])
+
+
 # A ring corridor's corner (office_h of Bormann et al.'s benchmark): the corridor, 1.3 m
 # wide, runs up along x 3..4.3 and right along y 3.7..5; its two outer walls stop 1 m
 # short of the corner (3, 5) their lines make, so the corridor's corner opens 1.41 m

@@ -19,7 +19,8 @@ def room_tables(
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The rooms and doors tables of room polygons and door openings: each room's kind
     (a ``corridor`` when long for its width: the width its median local thickness
-    (:func:`room_width`), its length the area over that width; ``space`` for every room
+    (:func:`room_width`) with the objects on its floor filled (:func:`objects_filled`),
+    its length the area over that width; ``space`` for every room
     when no door and no room's open side divides the space) and name (``Room 1``,
     ``Corridor 1``, ``Space 1`` in the order given).
 
@@ -44,8 +45,9 @@ def room_tables(
     """
     kinds = []
     for poly in polys:
-        width = room_width(poly, resolution_m / 2, params.corridor_max_width_m)
-        length = poly.area / max(width, 1e-9)
+        floor = objects_filled(poly, params.min_room_area_m2)
+        width = room_width(floor, resolution_m / 2, params.corridor_max_width_m)
+        length = floor.area / max(width, 1e-9)
         long = width <= params.corridor_max_width_m and length >= max(params.corridor_elongation * width, params.corridor_min_length_m)
         kinds.append("corridor" if long else "room")
     if polys and not doors and not divided:
@@ -78,6 +80,31 @@ def room_tables(
         }  # fmt: skip
     )
     return rooms, doors_df
+
+
+def objects_filled(poly, min_room_area_m2: float):
+    """``poly`` without its holes smaller than the smallest room: such a hole holds no
+    room, so it is an object on the floor (a pillar, a table island, a block of
+    cabinets drawn as walls), and a room around it is no narrower for it; a larger hole
+    is the core a corridor goes around (the rooms inside a ring of corridors).
+
+    Parameters
+    ----------
+    poly : shapely.Polygon
+        Metres.
+    min_room_area_m2 : float
+        The smallest room (:class:`~floorscan.floorplan.room_space.RoomParams`), square
+        metres.
+
+    Returns
+    -------
+    shapely.Polygon
+    """
+    import shapely
+
+    if poly.is_empty or not len(poly.interiors):
+        return poly
+    return shapely.Polygon(poly.exterior, [h for h in poly.interiors if shapely.Polygon(h).area >= min_room_area_m2])
 
 
 def room_width(poly, tolerance_m: float, cap_m: float | None = None) -> float:
