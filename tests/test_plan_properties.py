@@ -50,7 +50,7 @@ WRONG_JITTER = 0
 #: Seeded poses of the rigid-motion property, and of them how many may change a count
 #: or move a room farther than :data:`ROOM_TOLERANCE_M` today.
 POSES = 150
-WRONG_POSES = 37
+WRONG_POSES = 33
 #: A room of the moved plan, mapped back, lies within this Hausdorff distance of its
 #: room at the building's own pose, metres. Issue 44 asks for one cell; each plan traces
 #: its rooms on its own cells and cuts them at its doors, and turned maps put rooms 0.15
@@ -182,3 +182,16 @@ def test_a_rigid_motion_keeps_the_plan():
     print(f"{len(miscounted)} of {POSES} poses change a count: {miscounted}; "
           f"{len(far)} move a room farther than {ROOM_TOLERANCE_M:.2f} m: {far}")
     assert len(miscounted) + len(far) <= WRONG_POSES, (miscounted, far)
+
+
+def test_the_pier_between_a_corner_and_a_door_is_a_wall_at_any_pose():
+    """A room of 2.25 m x 2.625 m whose entrance leaves a pier of 0.5 m between the
+    room's corner and the door: traced on the turned map its face is 0.49 m, shorter
+    than the shortest wall (``min_wall_length_m``), and was clutter there and a wall at
+    the building's own pose. As a door's jamb it is a wall at both."""
+    b = room_grid_building((2.25,), (2.625,), (0.375, 0.75, 0.75, 0.5, 0.5, 0.125, 0.25))
+    ref = map_plan(b)
+    got = map_plan(moved(b, 4.01867355926839, True), (0.02261687410704572, 0.006834559085400038))
+    assert counts(ref) == counts(got) == (5, 1, 0)
+    pier = [w for w in ref.walls.itertuples() if max(w.x0, w.x1) < 0.7 and abs(w.y0 - w.y1) < 0.01]
+    assert len(pier) == 1 and 0.45 <= pier[0].length_m <= 0.6

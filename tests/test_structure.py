@@ -539,3 +539,26 @@ def test_the_map_extractor_cuts_a_segment_where_the_floor_is_seen_between_table_
     assert along_row.any() and _length(xy[along_row]).max() < 0.6
     walls = np.abs(xy[:, [1, 3]]).max(axis=1) < 0.05  # the south wall, y = 0
     assert _length(xy[walls]).max() > 5.5
+
+
+def test_a_door_jamb_is_a_face_in_a_wall_line_a_door_s_width_beyond_its_end():
+    """door_jambs: of the short faces, the 0.45 m pier 0.85 m before a wall in its line
+    (a door between them) is a jamb; a face 0.2 m before the wall (a slit, no door),
+    one 2.5 m beyond it (wider than a door), one 2 m beside its line (a desk's side)
+    and one across it are not, nor is the pier when the long face is no wall."""
+    from floorscan.floorplan.wall_pieces import door_jambs
+
+    faces = np.array([
+        [1.3, 0.0, 6.0, 0.0],    # the wall
+        [0.0, 0.0, 0.45, 0.0],   # the pier between the corner and the door
+        [6.2, 0.0, 6.5, 0.0],    # 0.2 m past the wall's end
+        [8.5, 0.0, 8.9, 0.0],    # 2.5 m past it
+        [3.0, 2.0, 3.4, 2.0],    # parallel, 2 m off its line
+        [7.0, -0.2, 7.0, 0.2],   # across its line
+    ])  # fmt: skip
+    short = np.array([False, True, True, True, True, True])
+    assert door_jambs(faces, short, StructureParams(), 0.6, 2.0).tolist() == [False, True, False, False, False, False]
+    assert not door_jambs(faces, short, StructureParams(), 0.9, 2.0)[1]  # a door narrower than the narrowest
+    # the long face a furniture front, no wall: no jamb
+    assert not door_jambs(faces, short, StructureParams(), 0.6, 2.0, not_walls=np.arange(6) == 0).any()
+

@@ -136,56 +136,6 @@ def on_objects(seg: np.ndarray, grid: OccupancyGrid, objects: np.ndarray) -> np.
     return share >= 0.5 * np.bincount(owner, minlength=len(seg))
 
 
-def in_wall_lines(seg: np.ndarray, standing: np.ndarray, cell_m: float, params: StructureParams = StructureParams(),
-                  door_max_m: float = 2.0) -> np.ndarray:  # fmt: skip
-    """Which faces on objects (:func:`on_objects`) are pieces of a wall: longer than
-    ``min_wall_length_m`` by a cell and in the line of a face on no object (directions
-    within ``duplicate_angle_deg``, both ends within ``side_offset_m`` of its line),
-    beyond its end by at most a door's width (``door_max_m``; from a cell short of the
-    end: not alongside it, where it would only repeat that face). A partition's piece between two
-    doors with a cabinet against it is one object with the cabinet (its inscribed disc
-    the cabinet's); the wall it continues is what tells it from furniture, as a door's
-    jambs stand in one line. The cell: a face traced on a raster is up to a cell shorter
-    or longer as the raster turns, and a jamb as long as the shortest wall would be a
-    wall at one pose and furniture at another (the rigid-motion property of the tests).
-
-    Parameters
-    ----------
-    seg : (F, 4) float ndarray
-        Faces, metres.
-    standing : (F,) bool ndarray
-        Which faces lie on objects.
-    cell_m : float
-        The grid's cell, metres.
-    params : StructureParams
-    door_max_m : float
-        The widest door, metres (``floorplan.rooms.door_max_m``).
-
-    Returns
-    -------
-    (F,) bool ndarray
-        The faces of ``standing`` that are pieces of a wall.
-    """
-    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
-    standing = np.asarray(standing, dtype=bool)
-    out = np.zeros(len(seg), dtype=bool)
-    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
-    if not (standing & (length >= params.min_wall_length_m + cell_m)).any() or standing.all():
-        return out
-    i, j = candidate_pairs(seg, door_max_m, np.radians(params.duplicate_angle_deg))
-    i, j = np.r_[i, j], np.r_[j, i]  # face i on an object, face j on none
-    ok = standing[i] & ~standing[j] & (length[i] >= params.min_wall_length_m + cell_m)
-    i, j = i[ok], j[ok]
-    if len(i) == 0:
-        return out
-    t, off = ends_on_line(seg, j, i)
-    in_line = (np.abs(off) <= params.side_offset_m).all(axis=1)
-    beyond = np.maximum(t.min(axis=1) - length[j], -t.max(axis=1))  # past face j's end; < 0 alongside it
-    hit = in_line & (beyond >= -cell_m) & (beyond <= door_max_m)
-    out[i[hit]] = True
-    return out
-
-
 def in_front_of_walls(seg: np.ndarray, side: np.ndarray, wall: np.ndarray, params: StructureParams = StructureParams(),
                       free_at=None):  # fmt: skip
     """Step 5: faces shorter than ``clutter_max_length_m`` that stand parallel in front

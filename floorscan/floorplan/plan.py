@@ -280,7 +280,7 @@ def plan_of_segments(
 
         n_before = len(faces)
         faces, face_w, side, cl, reason, under = structure_passes(
-            faces, face_w, grid, params.structure, params.pair_max_m, params.rooms.door_max_m
+            faces, face_w, grid, params.structure, params.pair_max_m, params.rooms.door_max_m, params.rooms.door_min_m
         )
         n_seg = np.ones(len(faces), dtype=np.int64)
         clutter = pd.DataFrame(

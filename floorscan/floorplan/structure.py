@@ -36,7 +36,9 @@ order (:func:`structure_passes`):
    clutter, unless the face is a piece of a wall (:func:`in_wall_lines`: in the line of a
    face on no object, a door's width from its end; a partition's piece between two
    doors with a cabinet against it). A face shorter than ``min_wall_length_m`` is
-   clutter unless it connects two junctions.
+   clutter unless it connects two junctions or is a door's jamb (:func:`door_jambs`: in
+   the line of a wall face, ``door_min_m`` to ``door_max_m`` beyond its end; the pier
+   between a corner and a door is a wall however short).
 5. **In front of a wall** (:func:`in_front_of_walls`). A face shorter than
    ``clutter_max_length_m`` (or, free on the same side, shorter than the wall and
    :data:`~floorscan.floorplan.hidden.HIDDEN_MAX_GAP_M`: a row of cabinets) parallel to
@@ -68,12 +70,11 @@ import numpy as np
 
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
-from floorscan.floorplan.clutter import (
-    free_standing_objects, in_front_of_walls, in_wall_lines, loose_in_free_space, on_objects,
-)
+from floorscan.floorplan.clutter import free_standing_objects, in_front_of_walls, loose_in_free_space, on_objects
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
 from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, free_normals, hidden_by_objects, into_corners
 from floorscan.floorplan.junctions import junction_ends, short_loose, shorter_on_longer, snap_junctions
+from floorscan.floorplan.wall_pieces import door_jambs, in_wall_lines
 
 
 def border_and_support(seg: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams()):
@@ -292,7 +293,7 @@ def _fit_group(seg: np.ndarray, length: np.ndarray) -> np.ndarray:
 
 def structure_passes(
     seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams(),
-    max_thickness_m: float = 0.4, door_max_m: float = 2.0,
+    max_thickness_m: float = 0.4, door_max_m: float = 2.0, door_min_m: float = 0.6,
 ):  # fmt: skip
     """Steps 1 to 6 on the merged faces of a plan (see the module docstring).
 
@@ -309,7 +310,9 @@ def structure_passes(
         The thickest wall, metres (the plan's ``pair_max_m``; step 6).
     door_max_m : float
         The widest door, metres (``floorplan.rooms.door_max_m``; step 4's pieces of a
-        wall).
+        wall and door jambs).
+    door_min_m : float
+        The narrowest door, metres (``floorplan.rooms.door_min_m``; step 4's door jambs).
 
     Returns
     -------
@@ -355,6 +358,7 @@ def structure_passes(
     front, behind = in_front_of_walls(snapped, side, anchor, params, free_at)
     front &= ~standing
     short = short_loose(snapped, junctions, params.min_wall_length_m) & ~standing & ~front
+    short &= ~door_jambs(snapped, short, params, door_min_m, door_max_m, standing | front)
     loose = loose_in_free_space(snapped, junction_ends(snapped, junctions), side, grid, params, max_thickness_m)
     loose &= ~standing & ~front & ~short
     keep = ~standing & ~front & ~short & ~loose
@@ -366,6 +370,7 @@ def structure_passes(
     # the walls meet again without the clutter; a face the new ends left short goes
     walls, junctions = snap_junctions(joined[keep], params)
     still = ~short_loose(walls, junctions, params.min_wall_length_m)
+    still |= door_jambs(walls, ~still, params, door_min_m, door_max_m)
     clutter.append(walls[~still])
     reason.append(np.full(int((~still).sum()), "short", dtype=object))
     walls, _ = snap_junctions(joined[keep][still], params)

@@ -1,0 +1,109 @@
+"""Faces in the line of a wall (the structure passes' step 4,
+:mod:`floorscan.floorplan.structure`): the faces that would be clutter (on an object,
+or shorter than the shortest wall) but stand in the line of a wall face, a door's
+width or less beyond its end, are pieces of that wall (:func:`in_wall_lines`) or a
+door's jambs (:func:`door_jambs`). A door is an opening in a wall, and the wall goes on
+across it: its jambs stand in one line.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from floorscan.floorplan.candidates import candidate_pairs
+from floorscan.floorplan.free_space import StructureParams
+from floorscan.floorplan.junctions import ends_on_line
+
+
+def in_wall_lines(seg: np.ndarray, standing: np.ndarray, cell_m: float, params: StructureParams = StructureParams(),
+                  door_max_m: float = 2.0) -> np.ndarray:  # fmt: skip
+    """Which faces on objects (:func:`~floorscan.floorplan.clutter.on_objects`) are
+    pieces of a wall: longer than ``min_wall_length_m`` by a cell and in the line of a
+    face on no object (directions within ``duplicate_angle_deg``, both ends within
+    ``side_offset_m`` of its line), beyond its end by at most a door's width
+    (``door_max_m``; from a cell short of the end: not alongside it, where it would only
+    repeat that face). A partition's piece between two doors with a cabinet against it
+    is one object with the cabinet (its inscribed disc the cabinet's); the wall it
+    continues is what tells it from furniture, as a door's jambs stand in one line. The cell: a face traced on a raster is up to a cell shorter
+    or longer as the raster turns, and a jamb as long as the shortest wall would be a
+    wall at one pose and furniture at another (the rigid-motion property of the tests).
+
+    Parameters
+    ----------
+    seg : (F, 4) float ndarray
+        Faces, metres.
+    standing : (F,) bool ndarray
+        Which faces lie on objects.
+    cell_m : float
+        The grid's cell, metres.
+    params : StructureParams
+    door_max_m : float
+        The widest door, metres (``floorplan.rooms.door_max_m``).
+
+    Returns
+    -------
+    (F,) bool ndarray
+        The faces of ``standing`` that are pieces of a wall.
+    """
+    return _in_line_of_others(seg, standing, params.min_wall_length_m + cell_m, -cell_m, door_max_m, params)
+
+
+def door_jambs(seg: np.ndarray, short: np.ndarray, params: StructureParams = StructureParams(), door_min_m: float = 0.6,
+               door_max_m: float = 2.0, not_walls: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+    """Which short faces (step 4's, shorter than ``min_wall_length_m`` without a junction
+    at both ends) are a door's jamb: in the line of a wall face (neither short nor in
+    ``not_walls``; directions within ``duplicate_angle_deg``, both ends within
+    ``side_offset_m`` of its line), ``door_min_m`` to ``door_max_m`` beyond its end. The
+    pier between a room's corner and its door is a wall however short: a door is an
+    opening in a wall, and the wall goes on across it. Measured on a raster, a pier as
+    long as the shortest wall is up to a cell shorter or longer as the raster turns, so
+    without this a pier of that length is a wall at one pose and clutter at another (the
+    rigid-motion property of the tests); a furniture face beside a wall has no wall in
+    its line a door's width away.
+
+    Parameters
+    ----------
+    seg : (F, 4) float ndarray
+        Faces, metres.
+    short : (F,) bool ndarray
+        Which faces are short.
+    params : StructureParams
+    door_min_m, door_max_m : float
+        The narrowest and widest door, metres (``floorplan.rooms``).
+    not_walls : (F,) bool ndarray, optional
+        Faces that are clutter for another reason (on objects, fronts of furniture): no
+        jamb's wall.
+
+    Returns
+    -------
+    (F,) bool ndarray
+        The faces of ``short`` that are jambs.
+    """
+    short = np.asarray(short, dtype=bool)
+    which = short if not_walls is None else short | np.asarray(not_walls, dtype=bool)
+    return _in_line_of_others(seg, which, 0.0, door_min_m, door_max_m, params) & short
+
+
+def _in_line_of_others(seg: np.ndarray, which: np.ndarray, min_length_m: float, gap_min_m: float, gap_max_m: float,
+                       params: StructureParams) -> np.ndarray:  # fmt: skip
+    """The faces of ``which`` at least ``min_length_m`` long in the line of a face not
+    in ``which``, from ``gap_min_m`` (negative: overlapping it by up to that) to
+    ``gap_max_m`` past its end, metres (:func:`in_wall_lines`, :func:`door_jambs`)."""
+    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
+    which = np.asarray(which, dtype=bool)
+    out = np.zeros(len(seg), dtype=bool)
+    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    if not (which & (length >= min_length_m)).any() or which.all():
+        return out
+    i, j = candidate_pairs(seg, gap_max_m, np.radians(params.duplicate_angle_deg))
+    i, j = np.r_[i, j], np.r_[j, i]  # face i in which, face j not
+    ok = which[i] & ~which[j] & (length[i] >= min_length_m)
+    i, j = i[ok], j[ok]
+    if len(i) == 0:
+        return out
+    t, off = ends_on_line(seg, j, i)
+    in_line = (np.abs(off) <= params.side_offset_m).all(axis=1)
+    beyond = np.maximum(t.min(axis=1) - length[j], -t.max(axis=1))  # past face j's end; < 0 alongside it
+    hit = in_line & (beyond >= gap_min_m) & (beyond <= gap_max_m)
+    out[i[hit]] = True
+    return out
