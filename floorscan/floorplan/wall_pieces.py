@@ -24,9 +24,10 @@ def in_wall_lines(seg: np.ndarray, standing: np.ndarray, cell_m: float, params: 
     (``door_max_m``; from a cell short of the end: not alongside it, where it would only
     repeat that face). A partition's piece between two doors with a cabinet against it
     is one object with the cabinet (its inscribed disc the cabinet's); the wall it
-    continues is what tells it from furniture, as a door's jambs stand in one line. The cell: a face traced on a raster is up to a cell shorter
-    or longer as the raster turns, and a jamb as long as the shortest wall would be a
-    wall at one pose and furniture at another (the rigid-motion property of the tests).
+    continues is what tells it from furniture, as a door's jambs stand in one line. The
+    cell: a face traced on a raster is up to a cell shorter or longer as the raster
+    turns, and a jamb as long as the shortest wall would be a wall at one pose and
+    furniture at another (the rigid-motion property of the tests).
 
     Parameters
     ----------
