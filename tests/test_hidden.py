@@ -80,3 +80,53 @@ def test_a_deep_front_is_clutter_only_where_the_wall_is_backed_and_its_body_unse
     corridor = lambda xy: (xy[:, 1] > 0.0) & (xy[:, 1] < 1.5)  # noqa: E731
     assert not in_front_of_walls(across, side, wall, P, corridor)[0].any()
     assert in_front_of_walls(across, side, wall, P, NONE_FREE)[0].tolist() == [False, False, True]
+
+
+# a partition 0.2 m thick (faces x = 0, free to the west, and x = 0.2, free to the
+# east) from y = 0 to 4, and on its two sides, from y = 4.05 up to the wall at y = 8,
+# a cabinet 1.0 m deep to the west and one 0.8 m deep to the east, back to back
+# across it; the wall's face at y = 8 is seen west and east of the cabinets
+PARTITION_WEST = [0.0, 0.0, 0.0, 4.0]
+PARTITION_EAST = [0.2, 0.0, 0.2, 4.0]
+CABINETS = [
+    [-1.0, 4.05, -1.0, 8.0],  # the west cabinet's front, free to the west
+    [-1.0, 4.05, 0.0, 4.05],  # its side, free to the south
+    [1.0, 4.05, 1.0, 8.0],  # the east cabinet's front, free to the east
+    [0.2, 4.05, 1.0, 4.05],  # its side, free to the south
+    [-5.0, 8.0, -1.0, 8.0],  # the wall's face west of the cabinets, free to the south
+    [1.0, 8.0, 5.0, 8.0],  # east of them
+]
+CABINET_SIDES = [1, -1, -1, -1, -1, -1]
+
+
+def test_a_partition_runs_on_behind_cabinets_back_to_back_to_the_wall():
+    seg = np.array([PARTITION_WEST, PARTITION_EAST, *CABINETS])
+    side = np.array([1, -1, *CABINET_SIDES])
+    out = into_corners(seg, side, CLOSED, P, NONE_FREE)
+    # the east face goes on behind the shallow cabinet to the wall's face nearest it
+    # (the east piece, 0.8 m from its line, not the west one, 1.2 m), and then the west
+    # face, backed by it, behind the deeper one
+    assert np.allclose(out[0], [0.0, 0.0, 0.0, 8.0]) and np.allclose(out[1], [0.2, 0.0, 0.2, 8.0])
+    assert np.allclose(out[2:], seg[2:])
+    # without the east cabinet's front the east face stops at the side; the west face
+    # then has no room behind it within an object's depth, nor a backed face: both stay
+    alone = np.delete(seg, 4, axis=0)
+    out = into_corners(alone, np.delete(side, 4), CLOSED, P, NONE_FREE)
+    assert np.allclose(out[:2], alone[:2])
+
+
+def test_a_step_of_an_outer_wall_is_a_corner():
+    # the face x = 0 (free to the west) steps 0.5 m west at y = 4.05 and runs on to the
+    # wall at y = 8; nothing behind it (the outside): the step is the face's corner
+    seg = np.array([PARTITION_WEST, [-0.5, 4.05, 0.0, 4.05], [-0.5, 4.05, -0.5, 8.0], [-5.0, 8.0, 5.0, 8.0]])
+    side = np.array([1, -1, 1, -1])
+    out = into_corners(seg, side, CLOSED, P, NONE_FREE)
+    assert out[0, 3] < 4.1
+
+
+def test_a_face_ending_on_a_wall_is_not_carried_through_it():
+    # a cabinet's face along y = 0.3 (free to the south) ends 5 mm inside the east face
+    # of a partition (x 0 .. 0.35) whose end face, y = 0, lies 0.3 m in front of it
+    seg = np.array([[0.9, 0.3, 0.345, 0.3], [0.0, 0.0, 0.35, 0.0], [0.35, 0.0, 0.35, 4.0], [0.0, 0.0, 0.0, 4.0]])
+    side = np.array([1, -1, -1, 1])
+    assert np.allclose(into_corners(seg, side, CLOSED, P, NONE_FREE), seg)

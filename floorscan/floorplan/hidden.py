@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.free_space import StructureParams
 
 #: The longest object against a wall whose hidden face is joined, metres: a row of
@@ -52,6 +53,10 @@ OBJECT_MAX_DEPTH_M = 2.0
 #: that steps into the room by more than it is thick moves its other face too, in
 #: front of the line, so a real step of the structure is not backed.
 BACKING_MAX_M = 1.0
+#: Passes of :func:`into_corners`: a face carried into its corner behind a shallow object
+#: backs the other face of its wall behind a deeper one (cabinets back to back on the two
+#: sides of a partition), which the next pass carries in; a third changes nothing more.
+INTO_CORNERS_PASSES = 3
 
 
 def free_normals(seg: np.ndarray, side: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -122,10 +127,10 @@ def body_seen_free(p: np.ndarray, u: np.ndarray, n: np.ndarray, t0: float, t1: f
 
 
 def backed(seg: np.ndarray, side: np.ndarray, a: int, t0: float, t1: float,
-           params: StructureParams = StructureParams()) -> bool:  # fmt: skip
+           params: StructureParams = StructureParams(), depth_max_m: float = BACKING_MAX_M) -> bool:  # fmt: skip
     """Whether the other face of face ``a``'s wall runs on behind the stretch ``t0..t1``
     of its line: faces parallel to it (within ``join_angle_deg``), free the other way,
-    behind its line by at most :data:`BACKING_MAX_M`, cover at least
+    behind its line by at most ``depth_max_m`` (:data:`BACKING_MAX_M`), cover at least
     ``front_overlap`` of the stretch. The wall is then a wall's thickness there, and what
     stands on the free side of ``a``'s line is in front of it. Parameters as
     :func:`covered_by_fronts` (``seg``, ``side``, ``a``, ``t0``, ``t1``, ``params``);
@@ -134,7 +139,7 @@ def backed(seg: np.ndarray, side: np.ndarray, a: int, t0: float, t1: float,
         return False
     _, _, n, parallel, s = _line_frame(seg, side, a, params)
     ends = np.stack([(seg[:, :2] - seg[a, :2]) @ n[a], (seg[:, 2:] - seg[a, :2]) @ n[a]], axis=1)
-    behind = parallel & ((n @ n[a]) < 0) & (ends.max(axis=1) < 0) & (ends.min(axis=1) >= -BACKING_MAX_M)
+    behind = parallel & ((n @ n[a]) < 0) & (ends.max(axis=1) < 0) & (ends.min(axis=1) >= -depth_max_m)
     behind[a] = False
     return bool(behind.any()) and _covers(s[behind], t0, t1) >= params.front_overlap * (t1 - t0)
 
@@ -222,7 +227,17 @@ def into_corners(seg: np.ndarray, side: np.ndarray, open_run, params: StructureP
     Where the other face of ``a``'s wall runs on behind the stretch (:func:`backed`),
     the object may be :data:`OBJECT_MAX_DEPTH_M` deep, and the square face end as far
     from the corner (the object hides it too). The nearest such face along the line is
-    the corner.
+    the corner; of the pieces of one wall face on that line (within ``front_min_m`` of
+    it), the one the line meets nearest. A face that ends on a wall square to it (longer
+    than :data:`OBJECT_MAX_DEPTH_M`, within ``front_min_m``) is in its corner: it is not
+    carried through that wall. The side of an object at ``a``'s end (a square face
+    shorter than :data:`OBJECT_MAX_DEPTH_M`, less than ``front_min_m`` beyond it) is no
+    corner where a room lies behind ``a``'s wall within :data:`OBJECT_MAX_DEPTH_M` along
+    the stretch to the next corner (:func:`backed` that deep): the object stands
+    against a partition, whose line runs on behind it; a step of an outer wall has no
+    room behind it. Up to :data:`INTO_CORNERS_PASSES` passes, each face carried once: a
+    face carried in behind a shallow cabinet backs its wall's other face behind a deeper
+    cabinet on the partition's other side (cabinets back to back).
 
     Parameters
     ----------
@@ -245,11 +260,39 @@ def into_corners(seg: np.ndarray, side: np.ndarray, open_run, params: StructureP
     """
     seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
     side = np.asarray(side)
+    todo = side != 0
+    for _ in range(INTO_CORNERS_PASSES):
+        out = _into_corners_once(seg, side, open_run, params, free_at, todo)
+        moved = np.any(out != seg, axis=1)
+        if not moved.any():
+            break
+        # a face is carried into its corner once; the next pass tests the faces that a
+        # moved face may now back (parallel, within an object's depth)
+        i, j = candidate_pairs(out, OBJECT_MAX_DEPTH_M, np.radians(params.join_angle_deg))
+        near = np.zeros(len(out), dtype=bool)
+        near[i[moved[j]]] = near[j[moved[i]]] = True
+        seg, todo = out, todo & ~moved & near
+        if not todo.any():
+            break
+    return out
+
+
+def _corner(ok: np.ndarray, t: np.ndarray, gap: np.ndarray, same_line_m: float) -> int:
+    """Of the faces ``ok``, the corner: the nearest line along ``t`` (metres beyond the
+    end); of its faces (pieces of one wall face, within ``same_line_m`` of it), the one
+    the line meets nearest (``gap``, metres beyond the face's extent)."""
+    first = np.flatnonzero(ok & (t <= t[ok].min() + same_line_m))
+    return int(min(first.tolist(), key=lambda c: (gap[c], t[c], c)))
+
+
+def _into_corners_once(seg: np.ndarray, side: np.ndarray, open_run, params: StructureParams, free_at,
+                       todo: np.ndarray) -> np.ndarray:  # fmt: skip
+    """One pass of :func:`into_corners` over the faces ``todo``, each tested against ``seg``."""
     u, length, _ = free_normals(seg, side)
     square = np.sin(np.radians(params.junction_min_angle_deg))
     reach = params.front_max_m if free_at is None else OBJECT_MAX_DEPTH_M
     out = seg.copy()
-    for a in np.flatnonzero(side != 0).tolist():
+    for a in np.flatnonzero(todo).tolist():
         for k in (0, 1):
             end = seg[a, 2 * k : 2 * k + 2]
             out_dir = u[a] if k == 1 else -u[a]
@@ -260,16 +303,36 @@ def into_corners(seg: np.ndarray, side: np.ndarray, open_run, params: StructureP
                 t = (w[:, 0] * u[:, 1] - w[:, 1] * u[:, 0]) / denom
                 x = end + t[:, None] * out_dir
                 s = np.einsum("ij,ij->i", x - seg[:, :2], u)
-                ok = (np.abs(denom) >= square) & (t > 0) & (t <= HIDDEN_MAX_GAP_M)
-                ok &= (s >= -reach) & (s <= length + reach)
+                gap = np.maximum(np.maximum(-s, s - length), 0.0)
+                ok = (np.abs(denom) >= square) & (t <= HIDDEN_MAX_GAP_M) & (gap <= reach)
+                # beyond a's end; or a wall (longer than an object is deep) that a's end
+                # is on, within front_min_m: a is in its corner already
+                on_wall = (t > -params.front_min_m) & (gap <= params.front_min_m) & (length > OBJECT_MAX_DEPTH_M)
+                ok &= (t > 0) | on_wall
             ok[a] = False
             if not ok.any():
                 continue
-            p = int(np.flatnonzero(ok)[np.argmin(t[ok])])
-            near = -params.front_max_m <= s[p] <= length[p] + params.front_max_m
-            t, x = float(t[p]), x[p]
             t0 = float((end - seg[a, :2]) @ u[a])
-            lo, hi = (t0, t0 + t) if k == 1 else (t0 - t, t0)
+
+            def stretch(c: int) -> tuple[float, float]:
+                # a's line from its end to where it meets face c, along a
+                return (t0, t0 + float(t[c])) if k == 1 else (t0 - float(t[c]), t0)
+
+            p = _corner(ok, t, gap, params.front_min_m)
+            # the side of an object at a's end (no deeper than an object) is no corner when
+            # a room lies behind a's wall within an object's depth along the stretch to the
+            # next corner: the object stands against a partition, whose line runs on to it
+            # (cabinets back to back); a step of an outer wall has no room behind it
+            beyond = ok & ~((t < params.front_min_m) & (length <= OBJECT_MAX_DEPTH_M))
+            if t[p] < params.front_min_m and length[p] <= OBJECT_MAX_DEPTH_M and beyond.any():
+                q = _corner(beyond, t, gap, params.front_min_m)
+                if backed(seg, side, a, *stretch(q), params, OBJECT_MAX_DEPTH_M):
+                    p = q
+            if t[p] <= 0:  # a ends on a face square to it: in its corner already
+                continue
+            near = -params.front_max_m <= s[p] <= length[p] + params.front_max_m
+            lo, hi = stretch(p)
+            t, x = float(t[p]), x[p]
             # a square face ending farther than front_max_m from the corner: only a
             # deeper object hides it
             covered = hidden_by_objects(seg, side, a, lo, hi, params, free_at, params.front_max_m, shallow=near)

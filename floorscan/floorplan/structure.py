@@ -21,7 +21,8 @@ order (:func:`structure_passes`):
    longer gap, up to :data:`~floorscan.floorplan.hidden.HIDDEN_MAX_GAP_M`, that objects
    standing against the wall hide (:mod:`floorscan.floorplan.hidden`: their fronts
    parallel in front of it), whose fronts step 5 then makes clutter; and a face that
-   ends at an object in a room's corner runs on behind its front to the corner
+   ends at an object in a room's corner runs on behind its front to the corner, and a
+   partition's faces behind cabinets back to back on its two sides run on to the wall
    (:func:`~floorscan.floorplan.hidden.into_corners`). A face joined across a gap, on
    which the scans saw free space over more than half its length, is parted again: its
    pieces are a row of objects with the floor seen between them (a table's legs, a row
