@@ -600,6 +600,29 @@ def test_a_piece_of_wall_between_two_doors_in_the_wall_s_line_frames_them():
         assert corridor.contains(shapely.Point(6, 1)) and not corridor.contains(shapely.Point(6, 4.5))
 
 
+def test_a_piece_of_wall_between_a_door_in_its_line_and_a_door_at_a_crossing_wall_frames_them():
+    """A corridor (y 0..2) and a room (y 2..6) parted by a wall with two doors: 1.0 m
+    (x 3..4) between a wall's corner and the 1.8 m piece, and 1.1 m (x 5.8..6.9) between
+    the piece and the outer wall it runs to. The piece stands free in the space, shorter
+    than a piece of furniture; with a wall's end in its line a door's width off one end
+    and a wall across its line a door's width off the other, it is a piece of the wall
+    whose ends frame both doors (the tree before made one space of the two)."""
+    walls = [(0, 0, 7, 0), (7, 0, 7, 6), (7, 6, 0, 6), (0, 6, 0, 0), (0, 2, 3, 2), (3, 2, 3, 3.5), (4, 2, 5.8, 2)]
+    grid = _grid(walls, [(1.5, 1), (5, 1), (1.5, 4), (5, 4.5)])
+    for g in (grid, dataclasses.replace(grid, scan_xy=None)):  # a recording, a map
+        rooms, doors = plan_rooms(np.array(walls, dtype=np.float64), np.full(len(walls), T), g, RoomParams())
+        assert len(rooms) == 2 and len(doors) == 2
+        assert sorted(round(float(w), 1) for w in doors["width_m"]) == [0.9, 1.1]  # between the walls' faces
+        south = rooms["polygon"][[p.contains(shapely.Point(5, 1)) for p in rooms["polygon"]]].iloc[0]
+        assert not south.contains(shapely.Point(5, 4.5)) and 12.0 < south.area < 14.0
+    # a table's edge 0.6 m long in the line, shorter than the openings beside it (1.0 m
+    # and 1.2 m to the outer wall at x 5.8): no piece of wall, one room
+    walls = [(0, 0, 5.8, 0), (5.8, 0, 5.8, 6), (5.8, 6, 0, 6), (0, 6, 0, 0), (0, 2, 3, 2), (3, 2, 3, 3.5), (4, 2, 4.6, 2)]
+    grid = dataclasses.replace(_grid(walls, [(1.5, 1), (4.5, 1), (1.5, 4), (4.5, 4.5)]), scan_xy=None)
+    rooms, doors = plan_rooms(np.array(walls, dtype=np.float64), np.full(len(walls), T), grid, RoomParams())
+    assert len(rooms) == 1 and len(doors) == 0
+
+
 def test_a_row_of_desks_standing_free_frames_no_door_however_long():
     # a map of a room 6 x 5 m with a row of two desks (x 0.9..5.0, y 3.4..3.5) standing
     # free 0.84 and 0.94 m from the side walls; the plan took the row's faces for two

@@ -240,6 +240,36 @@ def point_segment_dist2(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> np.n
     return ex * ex + ey * ey
 
 
+def ray_meets_lines(origin: np.ndarray, u: np.ndarray, p0: np.ndarray, dirs: np.ndarray):
+    """Where the ray ``origin + t u`` meets each line ``p0 + s dirs``: the floor plan's
+    wall ends run on to the walls ahead of them.
+
+    Parameters
+    ----------
+    origin, u : (2,) float ndarray
+        The ray's start, metres, and unit direction.
+    p0, dirs : (N, 2) float ndarray
+        A point of each line, metres, and its unit direction.
+
+    Returns
+    -------
+    cross : (N,) float64 ndarray
+        The sine of the angle from ``u`` to each line.
+    t, s : (N,) float64 ndarray
+        Where they meet, metres along the ray and along the line from ``p0``; NaN for a
+        line parallel to the ray (``|cross| < 1e-6``).
+    off : (N,) float64 ndarray
+        Each line's point ``p0``'s distance from the ray's line, metres.
+    """
+    d = p0 - origin
+    cross = u[0] * dirs[:, 1] - u[1] * dirs[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(np.abs(cross) >= 1e-6, (d[:, 0] * dirs[:, 1] - d[:, 1] * dirs[:, 0]) / cross, np.nan)
+        s = np.where(np.abs(cross) >= 1e-6, (d[:, 0] * u[1] - d[:, 1] * u[0]) / cross, np.nan)
+    off = np.abs(d[:, 0] * u[1] - d[:, 1] * u[0])
+    return cross, t, s, off
+
+
 def polygons_of(geom):
     """The polygons of a geometry (an overlay's result on :data:`OVERLAY_GRID_M`, where two
     areas may also meet in a line or a point), as one polygonal geometry on that grid.

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from floorscan.core.geometry import ray_meets_lines
+
 #: Coordinates are snapped to this grid before noding and polygonising
 #: (:mod:`floorscan.floorplan.arrangement`), metres: far below a map cell (5 cm), far
 #: above GEOS's floating-point trouble.
@@ -233,7 +235,7 @@ def snapped_axes(axes: np.ndarray, thickness: np.ndarray) -> tuple[np.ndarray, n
                 continue
             end = axes[i, 2 * k:2 * k + 2]
             u = dirs[i] if k else -dirs[i]
-            cross, t, s, _ = _rays(end, u, p0, dirs)
+            cross, t, s, _ = ray_meets_lines(end, u, p0, dirs)
             reach = thickness / 2 + JUNCTION_M
             with np.errstate(invalid="ignore"):
                 hit = (np.abs(cross) >= 1e-6) & (np.abs(t) * np.abs(cross) <= reach) & (s >= -1e-9) & (s <= length + 1e-9)
@@ -245,24 +247,11 @@ def snapped_axes(axes: np.ndarray, thickness: np.ndarray) -> tuple[np.ndarray, n
     return axes, free_end
 
 
-def _rays(end: np.ndarray, u: np.ndarray, p0: np.ndarray, dirs: np.ndarray):
-    """Where the ray ``end + t u`` meets each wall's line ``p0 + s dirs``: ``cross`` (the
-    sine of their angle), ``t`` and ``s`` (metres; NaN for a parallel wall) and ``off``,
-    each wall's line's distance from the ray's line (metres), all (N,)."""
-    d = p0 - end
-    cross = u[0] * dirs[:, 1] - u[1] * dirs[:, 0]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(np.abs(cross) >= 1e-6, (d[:, 0] * dirs[:, 1] - d[:, 1] * dirs[:, 0]) / cross, np.nan)
-        s = np.where(np.abs(cross) >= 1e-6, (d[:, 0] * u[1] - d[:, 1] * u[0]) / cross, np.nan)
-    off = np.abs(d[:, 0] * u[1] - d[:, 1] * u[0])
-    return cross, t, s, off
-
-
 def _in_line(end, u, i, p0, p1, dirs, length, thickness) -> tuple[np.ndarray, np.ndarray]:
     """The walls in wall ``i``'s line (parallel, within half the thicker one's thickness
     of it) and how far along ``u`` from ``end`` each one's ends lie: ``(mask (N,),
     (N, 2) metres)``."""
-    cross, _, _, off = _rays(end, u, p0, dirs)
+    cross, _, _, off = ray_meets_lines(end, u, p0, dirs)
     same = (np.abs(cross) < 1e-6) & (off <= np.maximum(thickness, thickness[i]) / 2 + PRECISION_M)
     same &= (np.arange(len(p0)) != i) & (length > 0)
     return same, np.c_[(p0 - end) @ u, (p1 - end) @ u]
@@ -283,7 +272,7 @@ def _first_wall(end, u, i, p0, p1, dirs, length, thickness):
     before its face; None when no wall is ahead. A wall counts when the ray meets its
     line within its footprint grown by :data:`JUNCTION_M`; a wall in the same line
     (parallel, within its half thickness) at its nearest end ahead."""
-    cross, t, s, _ = _rays(end, u, p0, dirs)
+    cross, t, s, _ = ray_meets_lines(end, u, p0, dirs)
     others = (np.arange(len(p0)) != i) & (length > 0)
     reach = thickness / 2 + JUNCTION_M
     with np.errstate(invalid="ignore"):

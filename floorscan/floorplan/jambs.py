@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from floorscan.core.geometry import ray_meets_lines
 from floorscan.floorplan.doors import footprint_distance, near_walls, wall_units
 from floorscan.floorplan.free_space import CLUTTER_MAX_LENGTH_M
 from floorscan.floorplan.room_space import RoomParams, RoomRaster, dilate, surrounded
@@ -34,8 +35,10 @@ def jamb_cells(raster: RoomRaster, jamb_m: float, axes: np.ndarray | None = None
     (:func:`furniture_islands`, given the plan's walls): a row or an L of desks, a table
     and its chairs, a cabinet with less floor inside than ``params.min_room_area_m2``.
     A stub of wall whose junction the scans did not see belongs with the unseen cells
-    beyond it, so it stays a jamb; so does a piece of wall between two doors in a wall's
-    line, a door's width from its ends (:func:`_pieces_between_doors`), given the walls.
+    beyond it, so it stays a jamb; so does a piece of wall between two doors, in a wall's
+    line a door's width from its ends, or with a door in a wall's line off one end and
+    a door to a wall across its line off the other (:func:`_pieces_between_doors`),
+    given the walls.
 
     Parameters
     ----------
@@ -106,8 +109,14 @@ def _pieces_between_doors(free: np.ndarray, raster: RoomRaster, axes: np.ndarray
     its ends faces the end of a wall in its line (the wall within ``door_angle_deg`` of
     the axis, the end within ``line_offset_m`` plus half the wall of the wall's line)
     across a gap no wider than ``door_max_m``, as a door's jambs stand in one line
-    (:func:`~floorscan.floorplan.doors.wall_gaps`). A desk between two walls faces their sides, not their ends in
-    its line, and stays an object."""
+    (:func:`~floorscan.floorplan.doors.wall_gaps`); or one end faces such a wall end
+    across a gap ``door_min_m`` to ``door_max_m`` wide, a wall crosses the line
+    ahead of the other end, its face as far off, and the piece is at least as long as
+    each gap (a partition with a door in its line and a door beside the wall it runs
+    to: more wall than opening, as :mod:`~floorscan.floorplan.extensions` asks of a
+    partition's line). A desk between two walls faces their sides, not a wall's end in
+    its line, and stays an object; the edge of a table in line with a wall's stub is
+    shorter than the openings beside it."""
     from scipy import ndimage
 
     labels, n = ndimage.label(free, structure=np.ones((3, 3), dtype=bool))
@@ -127,13 +136,31 @@ def _pieces_between_doors(free: np.ndarray, raster: RoomRaster, axes: np.ndarray
         u = np.linalg.eigh((xy - c).T @ (xy - c))[1][:, -1]  # the principal axis
         t = (xy - c) @ u
         along = np.abs(u_w @ u) >= cos_max
-        faced = []
+        faced, wide, crossed = [], [], []  # per end; wide, crossed: the gap's width, metres, or inf
         for sign, e in ((-1.0, c + u * t.min()), (1.0, c + u * t.max())):
             in_line = along & (np.abs(np.einsum("ij,ij->i", e - ends[:, 0], n_w)) <= tol)
             ahead = ((ends - e) @ (sign * u)).min(axis=1)  # the nearer end of each wall, ahead of this end
             faced.append(bool((in_line & (ahead >= 0) & (ahead <= params.door_max_m + r)).any()))
-        keep[k] = all(faced)
+            door = in_line & (ahead >= params.door_min_m) & (ahead <= params.door_max_m + r)
+            wide.append(float(ahead[door].min()) if door.any() else np.inf)
+            crossed.append(_crossed_ahead(e, sign * u, axes, thickness, params.door_min_m, params.door_max_m + r))
+        length = float(t.max() - t.min()) + r
+        keep[k] = all(faced) or any(max(wide[i], crossed[1 - i]) <= length for i in (0, 1))
     return keep[labels]
+
+
+def _crossed_ahead(e: np.ndarray, v: np.ndarray, axes: np.ndarray, thickness: np.ndarray, near_m: float,
+                   reach_m: float) -> float:
+    """The distance, metres, from ``e`` along the unit ``v`` ((2,)) to the face of the
+    nearest wall (axes ``x0, y0, x1, y1`` (N, 4) and ``thickness`` (N,), metres) that
+    crosses that ray ``near_m`` to ``reach_m`` (metres) off, as far as a door is wide;
+    inf when none does."""
+    u, length = wall_units(axes)
+    cross, t, s, _ = ray_meets_lines(e, v, axes[:, :2], u)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        face = t - thickness / 2 / np.abs(cross)  # from the axis back to the face, along the ray
+        hit = (s >= 0) & (s <= length) & (face >= near_m) & (face <= reach_m)
+    return float(face[hit].min()) if hit.any() else np.inf
 
 
 def standing_free(solid: np.ndarray, resolution_m: float, max_extent_m: float = CLUTTER_MAX_LENGTH_M) -> np.ndarray:
