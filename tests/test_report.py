@@ -312,7 +312,7 @@ def test_every_file_the_page_names_is_a_link_that_resolves(tmp_path, monkeypatch
                                     scan_list=files[6]))  # fmt: skip
     links = _links(page)
     assert links.missing == ["../report.html"]  # no report made: named, not linked, and said so
-    assert "<code class=\"missing\">../report.html</code> (not made)" in page
+    assert "<code class=\"missing\">../report.html</code> (not made yet: <code>floorscan report</code>" in page
     assert "../index.html" in links.hrefs  # back to the index
     for f in files:
         assert f.href in links.hrefs, f.href
