@@ -25,9 +25,11 @@ the matched rooms, regions of 100 pixels or fewer dropped on either side.
 Walls (issue 43, item 4): on each Bormann map, the faces of the plan of
 ``<name>_furnitures.png`` against the walls of ``<name>.png``, and, as the bound with
 nothing in the way, the faces of the plan of ``<name>.png`` against the same walls. The
-walls of ``<name>.png`` are its wall cells
-(:func:`floorscan.walls.map_stage.wall_cells`: the occupied cells facing the free
-space), at their centres: that is what a wall is in a map (the layer of occupied cells
+walls of ``<name>.png`` are its wall cells that face its rooms
+(:func:`reference_wall_cells`: :func:`floorscan.walls.map_stage.wall_cells`, the
+occupied cells facing the free space, next to the free space opened as the room step
+opens it, so that the borders of a ray seen through a window into the unknown are no
+wall), at their centres: that is what a wall is in a map (the layer of occupied cells
 the free space looks at), it is the same building's, independent of any plan (the
 plan of the furniture-free map would score its own faults as the truth's), and it is
 what the map extractor fits the plan's faces on. Completeness is the share of those
@@ -160,12 +162,30 @@ def plan_labels(path: Path, rooms: str = "plan"):
     return labels[::-1], plan, grid, seconds
 
 
+def reference_wall_cells(grid) -> np.ndarray:
+    """(H, W) bool: the wall cells of a furniture-free map that face its rooms' space:
+    :func:`~floorscan.walls.map_stage.wall_cells` next to the free space opened by a
+    disc of :data:`~floorscan.floorplan.room_space.FREE_OPEN_M`, as the room step
+    opens it (module docstring). The two borders of a ray seen through a window into
+    the unknown beyond a wall (lab_ipa's fans, each a line of free cells a cell or two
+    wide in the grey) face no room and are no wall."""
+    from scipy import ndimage
+
+    from floorscan.floorplan.room_space import FREE_OPEN_M, disc_opening
+    from floorscan.walls.map_stage import MAP_SEAM_M, wall_cells
+
+    rooms = disc_opening(grid.free(), FREE_OPEN_M / grid.resolution_m)
+    # within the seam and a cell of the rooms, through walls too: a wall's outer face,
+    # seen through a window, is the building's (wall_cells' own seam stops at walls)
+    steps = int(round(MAP_SEAM_M / grid.resolution_m)) + 1
+    return wall_cells(grid) & ndimage.binary_dilation(rooms, np.ones((3, 3), dtype=bool), iterations=steps)
+
+
 def wall_scores(plan, reference_grid) -> dict:
     """The plan's faces against the wall cells of ``reference_grid`` (module docstring)."""
     from floorscan.score.drawn import score_against_drawn
-    from floorscan.walls.map_stage import wall_cells
 
-    walls_xy = reference_grid.cell_centres(wall_cells(reference_grid))
+    walls_xy = reference_grid.cell_centres(reference_wall_cells(reference_grid))
     faces = plan.faces[["x0", "y0", "x1", "y1"]].to_numpy(np.float64)
     out = score_against_drawn(faces, walls_xy, np.ones(len(walls_xy), dtype=bool), WALL_TAUS_M)
     return out | {"n_faces": len(faces), "n_clutter": len(plan.clutter)}

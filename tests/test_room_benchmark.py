@@ -141,3 +141,27 @@ def test_benchmark_on_a_bormann_and_a_rose2_map():
     labels = plan_labels(ROOM_MAPS / "bormann" / "lab_ipa.png")[0]
     grey = np.asarray(Image.open(ROOM_MAPS / "bormann" / "lab_ipa.png").convert("L"))
     assert (grey[labels > 0] > 200).mean() > 0.97
+
+
+def test_reference_walls_are_the_room_s_not_a_ray_s_borders(tmp_path):
+    """A furniture-free map read as ipa reads it (grey an obstacle): a room 30 x 20 px
+    walled in black, with a ray one pixel wide through a window in its east wall 20 px
+    into the grey. The room's wall cells are the reference's; the ray's borders, a wall
+    cell each side of it all along, are not (the tree before counted them)."""
+    from PIL import Image
+
+    from benchmarks.bench_rooms import map_path, reference_wall_cells
+    from floorscan.ingest.occupancy_map import read_occupancy_map
+    from floorscan.walls.map_stage import wall_cells
+
+    g = np.full((40, 70), 205, dtype=np.uint8)
+    g[9:31, 9:41] = 0  # the walls
+    g[10:30, 10:40] = 255  # the room
+    g[20, 40:60] = 255  # the ray through the window at (20, 40) into the grey
+    Image.fromarray(g).save(tmp_path / "m.png")
+    grid = read_occupancy_map(map_path(tmp_path / "m.png", "ipa", tmp_path))[0]
+    every, ref = wall_cells(grid), reference_wall_cells(grid)
+    assert every[::-1][[19, 21], 45:60].all()  # the ray's borders are wall cells ...
+    assert not ref[::-1][:, 47:].any()  # ... and, beyond the seam off the room, no reference wall
+    assert ref[::-1][9, 12:38].all() and ref[::-1][30, 12:38].all()  # the room's north and south walls
+    assert ref[::-1][12:28, 9].all()

@@ -220,7 +220,7 @@ def _closing(mask: np.ndarray, radius_cells: float) -> np.ndarray:
     return (~dilate(~grown, radius_cells))[r:-r, r:-r]
 
 
-def _opening(mask: np.ndarray, radius_cells: float) -> np.ndarray:
+def disc_opening(mask: np.ndarray, radius_cells: float) -> np.ndarray:
     """Morphological opening of ``mask`` by a disc (radius in cells): what discs of
     that radius inside the mask cover."""
     if radius_cells <= 0:
@@ -366,7 +366,7 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
     padded[: free.shape[0], : free.shape[1]] = free
     free = padded.reshape(h, f, w, f).any(axis=(1, 3))
     walls = wall_mask(axes, thickness, grid.origin_xy, res, (h, w))
-    opened = _opening(free, params.free_open_m / res)
+    opened = disc_opening(free, params.free_open_m / res)
     padded[:] = False
     padded[: grid.shape[0], : grid.shape[1]] = grid.structure()
     occupied = padded.reshape(h, f, w, f).any(axis=(1, 3))
