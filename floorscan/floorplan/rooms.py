@@ -52,7 +52,9 @@ taken from the walls:
    three quarters of the width of each region it joins, between jambs; not from the
    face of a wall to an object wider than a wall,
    :func:`~floorscan.floorplan.jambs.face_to_object`): one rule for every passage of
-   the plan, in no order. Where two rooms
+   the plan, in no order. Two regions that also meet through an opening at least
+   ``door_min_m`` wide that no jambs frame (one end at a desk or in unseen space) are
+   one room, whatever slit or door they meet through besides. Where two rooms
    meet, the contact is their door (:mod:`floorscan.floorplan.doors`), in a wall's
    line when one ends there.
    Groups of regions whose edge runs along walls and seen obstacles for less than
@@ -207,12 +209,17 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     contacts = D.contacts(labels)
     framed: dict[tuple[int, int], list] = {}
     widest: dict[tuple[int, int], float] = {}  # the widest contact of each pair, metres
+    passable: set[tuple[int, int]] = set()  # pairs that also meet through an opening no jambs frame
     for pair, places in contacts.items():
         for cells in places:
             p, q = D.contact_segment(cut, cells)
             width = float(np.hypot(*(q - p)))
             widest[pair] = max(widest.get(pair, 0.0), width)
-            if width > params.door_max_m or not cut.at(jambs, np.array([p, q])).all():
+            if width > params.door_max_m:
+                continue  # wider than a door: the saddle between the two regions says so
+            if not cut.at(jambs, np.array([p, q])).all():
+                if width >= params.door_min_m:
+                    passable.add(pair)
                 continue
             if width >= params.door_min_m and face_to_object(cut, p, q, axes, thickness, params):
                 continue
@@ -221,7 +228,9 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
                 door = D.contact_door(p, q, axes, thickness, params) or D.free_door(p, q, axes)
                 if door is not None:
                     doors_here.append(door)
-    root = persistent_rooms(labels, distance, params.door_max_m, set(framed))
+    # two regions that meet through an opening a person passes and no jambs frame are
+    # one room, whatever slit or door they also meet through
+    root = persistent_rooms(labels, distance, params.door_max_m, set(framed) - passable)
     sets = region_sets(n)
     found = []  # (p, q, wall, a, b)
     touching: dict[tuple[int, int], float] = {}  # contact length between regions, metres
