@@ -134,10 +134,24 @@ def test_an_open_hall_is_one_space():
     assert 30.0 < rooms["area_m2"].iloc[0] < 32.0
 
 
-def test_a_wide_opening_is_a_passage_not_a_door():
-    # the partition leaves 2.5 m open: wider than door_max_m (2.0), the two halves are one room
+def test_an_opening_wider_than_a_door_between_jambs_parts_two_rooms_without_a_door():
+    # the partition leaves 2.5 m open between its two pieces: wider than door_max_m
+    # (2.0), no wider than a room's open side (MOUTH_MAX_M, 4.0), and narrower than the
+    # 4 x 4 m halves: two rooms apart at an open side, no door (before: one room)
     rooms, doors = _rooms(BOX + [(4, 0, 4, 1.0), (4, 3.5, 4, 4)], [(2, 2), (6, 2)])
+    assert len(doors) == 0
+    assert list(rooms["kind"]) == ["room", "room"]
+    assert sorted(rooms["area_m2"]) == pytest.approx([15.1, 15.1], abs=0.5)
+
+
+def test_a_passage_from_a_wall_s_end_to_a_wall_s_face_parts_no_rooms():
+    # a 10 x 4 m room with a 1.5 m pier from its south wall at x = 4: the 2.5 m passage
+    # from the pier's end to the north wall's face narrows the space, it opens no wall
+    # (without that test: two rooms of 15.3 and 22.9 m2)
+    room = [(0, 0, 10, 0), (10, 0, 10, 4), (10, 4, 0, 4), (0, 4, 0, 0), (4, 0, 4, 1.5)]
+    rooms, doors = _rooms(room, [(2, 2), (7, 2)])
     assert len(rooms) == 1 and len(doors) == 0
+    assert rooms["area_m2"].iloc[0] == pytest.approx(38.2, abs=0.5)
 
 
 def test_a_gap_narrower_than_a_door_joins_nothing():
@@ -261,16 +275,24 @@ def test_a_dead_end_seen_through_an_opening_wider_than_a_door_is_not_the_hall_s_
     axes = np.array(walls, dtype=np.float64)
     rooms, _ = plan_rooms(axes, np.full(len(axes), T), _grid(walls + [(-7, -3, -7, 11)], poses))
     assert len(rooms) == 1 and rooms["area_m2"].iloc[0] == pytest.approx(157.1, abs=1.5)
-    # two halls scanned inside, each open over 3 m towards the other: the unentered
-    # space between them, walled on less than half its edge, is the passage that joins
-    # them, no dead end (without that test: two spaces, the 35.6 m2 between them gone)
-    walls = [(0, 0, 10, 0), (0, 8, 10, 8), (0, 0, 0, 8), (10, 0, 10, 2.5), (10, 5.5, 10, 8),
-             (16, 0, 26, 0), (16, 8, 26, 8), (26, 0, 26, 8), (16, 0, 16, 2.5), (16, 5.5, 16, 8)]  # fmt: skip
-    poses = [(x, y) for x in (2, 5, 8, 18, 21, 24) for y in (2, 6)]
-    axes = np.array(walls, dtype=np.float64)
-    rooms, _ = plan_rooms(axes, np.full(len(axes), T), _grid(walls + [(5, -5, 21, -5), (5, 13, 21, 13)], poses))
+    # two halls scanned inside, each open over 4.5 m towards the other (wider than a
+    # room's open side, MOUTH_MAX_M): the unentered space between them, walled on less
+    # than half its edge, is the passage that joins them, no dead end
+    def halls(lo, hi):
+        walls = [(0, 0, 10, 0), (0, 8, 10, 8), (0, 0, 0, 8), (10, 0, 10, lo), (10, hi, 10, 8),
+                 (16, 0, 26, 0), (16, 8, 26, 8), (26, 0, 26, 8), (16, 0, 16, lo), (16, hi, 16, 8)]  # fmt: skip
+        poses = [(x, y) for x in (2, 5, 8, 18, 21, 24) for y in (2, 6)]
+        axes = np.array(walls, dtype=np.float64)
+        return plan_rooms(axes, np.full(len(axes), T), _grid(walls + [(5, -5, 21, -5), (5, 13, 21, 13)], poses))[0]
+
+    rooms = halls(1.75, 6.25)
     assert len(rooms) == 1
     assert shapely.intersection(rooms["polygon"].iloc[0], shapely.box(10.1, -1, 15.9, 9)).area > 30.0
+    # open over 3 m, each hall's opening is its open side: two halls apart, and the
+    # unentered space between them, reached through open sides alone, no room (before:
+    # one space of 192.5 m2 with it)
+    rooms = halls(2.5, 5.5)
+    assert sorted(rooms["area_m2"]) == pytest.approx([78.3, 78.3], abs=1.0)
 
 
 def test_a_room_seen_from_a_hall_through_its_open_side_is_a_room_of_its_own():

@@ -192,6 +192,19 @@ def standing_free(solid: np.ndarray, resolution_m: float, max_extent_m: float = 
     return out[labels]
 
 
+def on_wall_face(point: np.ndarray, axes: np.ndarray, thickness: np.ndarray, params: RoomParams) -> bool:
+    """Whether ``point`` ((2,) metres) lies on the face of a wall: within ``jamb_m`` of
+    its footprint and at least ``door_min_m`` from both its ends along its axis (a door's
+    width in, where no jamb of an opening in it stands). ``axes`` (N, 4) and
+    ``thickness`` (N,) are the plan's walls, metres; False without walls."""
+    if not len(axes):
+        return False
+    u, length = wall_units(axes)
+    dist = footprint_distance(point, axes, thickness)
+    t = ((point - axes[:, :2]) * u).sum(axis=1)
+    return bool(((dist <= params.jamb_m) & (t >= params.door_min_m) & (t <= length - params.door_min_m)).any())
+
+
 def face_to_object(raster: RoomRaster, p: np.ndarray, q: np.ndarray, axes: np.ndarray, thickness: np.ndarray,
                    params: RoomParams) -> bool:
     """Whether the contact ``p``-``q`` between two regions runs from the face of a wall,
@@ -214,17 +227,11 @@ def face_to_object(raster: RoomRaster, p: np.ndarray, q: np.ndarray, axes: np.nd
 
     if not len(axes):
         return False
-    u, length = wall_units(axes)
     d = q - p
     v = d / max(float(np.hypot(*d)), 1e-12)
     r = raster.resolution_m
     for a, b, w in ((p, q, v), (q, p, -v)):
-        if near_walls(b, axes, thickness, params.jamb_m):
-            continue
-        dist = footprint_distance(a, axes, thickness)
-        t = ((a - axes[:, :2]) * u).sum(axis=1)
-        on_face = (dist <= params.jamb_m) & (t >= params.door_min_m) & (t <= length - params.door_min_m)
-        if not on_face.any():
+        if near_walls(b, axes, thickness, params.jamb_m) or not on_wall_face(a, axes, thickness, params):
             continue
         # the object's width across the contact, just beyond its end
         n = np.array([-w[1], w[0]])

@@ -10,7 +10,9 @@ it. The passage between two basins is a door when:
   is no object standing free (the caller's ``framed`` pairs,
   :mod:`floorscan.floorplan.rooms`, :func:`~floorscan.floorplan.jambs.jamb_cells`): a
   narrowing that ends in unseen space (the shadow of a table) or at a desk is no door;
-- it is no wider than a door: ``2 s <= door_max_m``;
+- it is no wider than a door: ``2 s <= door_max_m``; or, for a pair whose contact is
+  an opening wider than a door between jambs and on no wall's face (the caller's
+  ``wide`` pairs: a room's open side), no wider than ``wide_max_m``;
 - and the space on both sides of it is wider than it: the saddle is at most
   :data:`DOOR_SHARE` of the peak of each of the two basins it joins (the widest place
   of the space beside it).
@@ -90,7 +92,8 @@ def saddles(labels: np.ndarray, distance: np.ndarray) -> tuple[np.ndarray, np.nd
     return np.column_stack([key // n, key % n]), height[last].astype(np.float64)
 
 
-def persistent_rooms(labels: np.ndarray, distance: np.ndarray, door_max_m: float, framed=None) -> np.ndarray:
+def persistent_rooms(labels: np.ndarray, distance: np.ndarray, door_max_m: float, framed=None, wide=frozenset(),
+                     wide_max_m: float = 0.0) -> np.ndarray:
     """The regions merged into rooms (the module docstring).
 
     Parameters
@@ -104,6 +107,11 @@ def persistent_rooms(labels: np.ndarray, distance: np.ndarray, door_max_m: float
     framed : set of (int, int), optional
         The pairs ``(a, b)``, ``a < b``, whose contact walls frame (a door in a wall's
         line, or a slit between wall pieces): only these can be doors. None: any pair.
+    wide : set of (int, int), optional
+        Pairs of ``framed`` that meet through an opening wider than a door between
+        jambs (a room's open side): their passage may be up to ``wide_max_m`` wide.
+    wide_max_m : float
+        The widest such opening, metres.
 
     Returns
     -------
@@ -123,7 +131,8 @@ def persistent_rooms(labels: np.ndarray, distance: np.ndarray, door_max_m: float
     pairs, height = saddles(labels, distance)
     groups = DisjointSet(range(n + 1))
     for (a, b), s in zip(pairs.tolist(), height.tolist()):
-        if (framed is None or (a, b) in framed) and 2 * s <= door_max_m and s <= DOOR_SHARE * min(peak[a], peak[b]):
-            continue  # a door: the rooms on its two sides stay apart
+        widest = wide_max_m if (a, b) in wide else door_max_m
+        if (framed is None or (a, b) in framed) and 2 * s <= widest and s <= DOOR_SHARE * min(peak[a], peak[b]):
+            continue  # a door or a room's open side: the rooms on its two sides stay apart
         groups.merge(a, b)
     return np.array([groups[i] for i in range(n + 1)], dtype=np.int64)

@@ -52,7 +52,14 @@ taken from the walls:
    three quarters of the width of each region it joins, between jambs; not from the
    face of a wall to an object wider than a wall,
    :func:`~floorscan.floorplan.jambs.face_to_object`): one rule for every passage of
-   the plan, in no order. Two regions that also meet through an opening at least
+   the plan, in no order. An opening wider than a door, up to
+   :data:`~floorscan.floorplan.mouths.MOUTH_MAX_M` (a room's open side), between
+   jambs and ending on no wall's face (:func:`~floorscan.floorplan.jambs.on_wall_face`:
+   a passage from a wall's end to the face of a wall across it narrows the space, it
+   opens no wall) is weighed as a door is and, where it parts two regions, is an open
+   side between two rooms, no door: the layouts of Luperto et al. (ROSE^2, RA-L 2022)
+   close a room across its openings, wider than a door too, where walls end on both
+   sides. Two regions that also meet through an opening at least
    ``door_min_m`` wide that no jambs frame (one end at a desk or in unseen space) are
    one room, whatever slit or door they meet through besides. Where two rooms
    meet, the contact is their door (:mod:`floorscan.floorplan.doors`), in a wall's
@@ -115,8 +122,8 @@ from floorscan.floorplan import doors as D
 from floorscan.floorplan.corridors import corridor_ends, corridor_sides, corridor_strips
 from floorscan.floorplan.extensions import partition_cuts
 from floorscan.floorplan.hidden import OBJECT_MAX_DEPTH_M
-from floorscan.floorplan.jambs import face_to_object, jamb_cells
-from floorscan.floorplan.mouths import corner_mouths, dead_end_mouths, room_mouths
+from floorscan.floorplan.jambs import face_to_object, jamb_cells, on_wall_face
+from floorscan.floorplan.mouths import MOUTH_MAX_M, corner_mouths, dead_end_mouths, room_mouths
 from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
 from floorscan.floorplan.room_polygons import disjoint_rooms, largest_polygon, room_polygons
@@ -210,13 +217,24 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     framed: dict[tuple[int, int], list] = {}
     widest: dict[tuple[int, int], float] = {}  # the widest contact of each pair, metres
     passable: set[tuple[int, int]] = set()  # pairs that also meet through an opening no jambs frame
+    wide: set[tuple[int, int]] = set()  # pairs that meet through an opening wider than a door, between jambs
+    open_wide: set[tuple[int, int]] = set()  # pairs that also meet through a wider opening that is none
     for pair, places in contacts.items():
         for cells in places:
             p, q = D.contact_segment(cut, cells)
             width = float(np.hypot(*(q - p)))
             widest[pair] = max(widest.get(pair, 0.0), width)
             if width > params.door_max_m:
-                continue  # wider than a door: the saddle between the two regions says so
+                # an opening in the structure wider than a door and no wider than a
+                # room's open side: both ends at jambs, neither on a wall's face (a
+                # passage between a wall's face and what stands across it narrows the
+                # space, it opens no wall); the saddle weighs it as it weighs a door
+                if (width <= MOUTH_MAX_M and cut.at(jambs, np.array([p, q])).all()
+                        and not any(on_wall_face(e, axes, thickness, params) for e in (p, q))):
+                    wide.add(pair)
+                else:
+                    open_wide.add(pair)
+                continue
             if not cut.at(jambs, np.array([p, q])).all():
                 if width >= params.door_min_m:
                     passable.add(pair)
@@ -229,10 +247,13 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
                 if door is not None:
                     doors_here.append(door)
     # two regions that meet through an opening a person passes and no jambs frame are
-    # one room, whatever slit or door they also meet through
-    root = persistent_rooms(labels, distance, params.door_max_m, set(framed) - passable)
+    # one room, whatever slit or door they also meet through; an opening wider than a
+    # door parts them only when it is their widest passage
+    wide -= open_wide
+    root = persistent_rooms(labels, distance, params.door_max_m, (set(framed) | wide) - passable, wide, MOUTH_MAX_M)
     sets = region_sets(n)
     found = []  # (p, q, wall, a, b)
+    open_sides = []  # pairs of regions apart at a room's open side (no door)
     touching: dict[tuple[int, int], float] = {}  # contact length between regions, metres
     kinds: dict[tuple[int, int], str] = {}  # door (apart), narrow or wide (one room)
     for (a, b), places in contacts.items():
@@ -241,8 +262,9 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
             kinds[(a, b)] = "narrow" if widest[(a, b)] <= params.door_max_m else "wide"
         else:
             kinds[(a, b)] = "door"
-            found += [(*door, a, b) for door in framed[(a, b)]]
-    open_sides = []  # pairs of regions apart at a room's open side (no door)
+            found += [(*door, a, b) for door in framed.get((a, b), [])]
+            if (a, b) in wide and not framed.get((a, b)):
+                open_sides.append((a, b))  # apart at an opening wider than a door, no door
     for p, q, wall in gaps:
         d = q - p
         nrm = np.array([-d[1], d[0]]) / max(float(np.hypot(*d)), 1e-12) * 2 * raster.resolution_m
