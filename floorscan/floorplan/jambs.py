@@ -120,7 +120,7 @@ def _pieces_between_doors(free: np.ndarray, raster: RoomRaster, axes: np.ndarray
     from scipy import ndimage
 
     labels, n = ndimage.label(free, structure=np.ones((3, 3), dtype=bool))
-    u_w, _ = wall_units(axes)
+    u_w, len_w = wall_units(axes)
     n_w = np.column_stack([-u_w[:, 1], u_w[:, 0]])
     ends = axes.reshape(-1, 2, 2)
     tol = np.asarray(thickness, dtype=np.float64) / 2 + params.line_offset_m
@@ -143,20 +143,21 @@ def _pieces_between_doors(free: np.ndarray, raster: RoomRaster, axes: np.ndarray
             faced.append(bool((in_line & (ahead >= 0) & (ahead <= params.door_max_m + r)).any()))
             door = in_line & (ahead >= params.door_min_m) & (ahead <= params.door_max_m + r)
             wide.append(float(ahead[door].min()) if door.any() else np.inf)
-            crossed.append(_crossed_ahead(e, sign * u, axes, thickness, params.door_min_m, params.door_max_m + r))
+            crossed.append(_crossed_ahead(e, sign * u, axes[:, :2], u_w, len_w, thickness, params.door_min_m,
+                                          params.door_max_m + r))
         length = float(t.max() - t.min()) + r
         keep[k] = all(faced) or any(max(wide[i], crossed[1 - i]) <= length for i in (0, 1))
     return keep[labels]
 
 
-def _crossed_ahead(e: np.ndarray, v: np.ndarray, axes: np.ndarray, thickness: np.ndarray, near_m: float,
-                   reach_m: float) -> float:
+def _crossed_ahead(e: np.ndarray, v: np.ndarray, start: np.ndarray, u: np.ndarray, length: np.ndarray,
+                   thickness: np.ndarray, near_m: float, reach_m: float) -> float:
     """The distance, metres, from ``e`` along the unit ``v`` ((2,)) to the face of the
-    nearest wall (axes ``x0, y0, x1, y1`` (N, 4) and ``thickness`` (N,), metres) that
-    crosses that ray ``near_m`` to ``reach_m`` (metres) off, as far as a door is wide;
-    inf when none does."""
-    u, length = wall_units(axes)
-    cross, t, s, _ = ray_meets_lines(e, v, axes[:, :2], u)
+    nearest wall (axes from ``start`` (N, 2) along the unit ``u`` (N, 2) for ``length``
+    (N,), :func:`~floorscan.floorplan.doors.wall_units`; ``thickness`` (N,); metres)
+    that crosses that ray ``near_m`` to ``reach_m`` (metres) off, as far as a door is
+    wide; inf when none does."""
+    cross, t, s, _ = ray_meets_lines(e, v, start, u)
     with np.errstate(invalid="ignore", divide="ignore"):
         face = t - thickness / 2 / np.abs(cross)  # from the axis back to the face, along the ray
         hit = (s >= 0) & (s <= length) & (face >= near_m) & (face <= reach_m)
