@@ -262,6 +262,31 @@ def test_plans_sharing_faces_score_as_each_alone_and_as_the_definition():
     assert 0.5 < plan_against_reference(noisy, shared)["correctness_5cm"] < 0.95
 
 
+def test_a_full_face_cache_drops_the_faces_least_recently_asked_for(monkeypatch):
+    """Past its capacity the face cache keeps the faces asked for last: a plan scored
+    again right after is not sampled again, one of the first plans is; every score is
+    a fresh Structure's, and the cache never holds much more than its capacity."""
+    import floorscan.score.against_reference as A
+
+    grid = occupancy_grid(_scans())
+    shared = Structure(grid)
+    per_face = 1 + np.ceil(np.hypot(WALLS[:, 2] - WALLS[:, 0], WALLS[:, 3] - WALLS[:, 1]) / 0.02)
+    shared.CACHE_SAMPLES = int(per_face.sum() * 4.5)  # four and a half plans' samples
+    scored = []
+    real = A._score_faces
+    monkeypatch.setattr(A, "_score_faces", lambda ref, seg, *a: scored.append(len(seg)) or real(ref, seg, *a))
+    plans = [WALLS + np.tile(np.array([0.001 * i, 0.0]), 2) for i in range(10)]  # no face shared between them
+    for faces in plans:
+        assert plan_against_reference(faces, shared) == plan_against_reference(faces, Structure(grid))
+        assert shared._cached_samples <= shared.CACHE_SAMPLES + per_face.sum()
+    assert shared._cached_samples > shared.CACHE_SAMPLES / 2
+    scored.clear()
+    plan_against_reference(plans[-1], shared)  # asked for last: still cached
+    assert scored == []
+    plan_against_reference(plans[0], shared)  # dropped long ago: scored again
+    assert scored == [len(WALLS)]
+
+
 def test_ray_samples_fall_in_the_cells_of_the_whole_expression():
     """The grid's in-place per-axis cell computation equals floor((o + d * frac -
     origin) / r) of the (N, 2) arrays, to the cell, on rays of any direction."""

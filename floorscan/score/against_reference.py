@@ -75,7 +75,9 @@ class Structure:
     of one ordering at growing k, or of several orderings, share most of their faces.
     A face seen before (the same four coordinates, the same ``taus_m`` and
     ``sample_m``) is not sampled or queried again; its plan's metrics are those of
-    scoring all its samples at once.
+    scoring all its samples at once. Past :data:`CACHE_SAMPLES` samples, the faces
+    least recently asked for are dropped down to :data:`CACHE_KEPT` of it: the next
+    plans of an ordering, a few scans more, are built mostly of its last plans' faces.
 
     Attributes
     ----------
@@ -93,9 +95,12 @@ class Structure:
         When the reference map has no structure cell.
     """
 
-    #: Samples kept in the face cache before it is emptied (with their faces' cells,
-    #: about 20 bytes each).
+    #: Samples the face cache holds at most (with their faces' cells, about 20 bytes
+    #: each) ...
     CACHE_SAMPLES = 5_000_000
+    #: ... and the share of them it keeps when full, the faces last asked for: half,
+    #: so that it sorts its faces once every many plans, not at each.
+    CACHE_KEPT = 0.5
 
     def __init__(self, grid: OccupancyGrid):
         self.grid = grid
@@ -105,6 +110,8 @@ class Structure:
         self.tree = cKDTree(self.xy)
         self.free = grid.free()
         self._faces: dict[tuple, dict[bytes, _FaceScore]] = {}
+        self._used: dict[tuple, dict[bytes, int]] = {}  # the last call that asked for each face
+        self._calls = 0
         self._cached_samples = 0
 
     def face_scores(self, seg: np.ndarray, taus_m: tuple[float, ...], sample_m: float) -> list[_FaceScore]:
@@ -126,9 +133,9 @@ class Structure:
             One per row of ``seg``, in order.
         """
         if self._cached_samples > self.CACHE_SAMPLES:
-            self._faces.clear()
-            self._cached_samples = 0
-        cache = self._faces.setdefault((tuple(float(t) for t in taus_m), float(sample_m)), {})
+            self._drop_least_recent()
+        how = (tuple(float(t) for t in taus_m), float(sample_m))
+        cache, used = self._faces.setdefault(how, {}), self._used.setdefault(how, {})
         keys = [row.tobytes() for row in seg]
         new = list(dict.fromkeys(k for k in keys if k not in cache))
         if new:
@@ -136,7 +143,20 @@ class Structure:
             for key, score in zip(new, _score_faces(self, rows, taus_m, sample_m)):
                 cache[key] = score
                 self._cached_samples += score.n
+        self._calls += 1
+        used.update(dict.fromkeys(keys, self._calls))
         return [cache[k] for k in keys]
+
+    def _drop_least_recent(self) -> None:
+        """Drop the faces least recently asked for until the cache holds at most
+        :data:`CACHE_KEPT` of :data:`CACHE_SAMPLES` samples."""
+        last = [(call, how, key) for how, used in self._used.items() for key, call in used.items()]
+        last.sort(key=lambda t: t[0])
+        for _, how, key in last:
+            if self._cached_samples <= self.CACHE_KEPT * self.CACHE_SAMPLES:
+                break
+            self._cached_samples -= self._faces[how].pop(key).n
+            del self._used[how][key]
 
 
 @dataclass(frozen=True)
