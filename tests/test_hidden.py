@@ -65,6 +65,21 @@ def test_a_deep_object_in_a_corner_hides_the_wall_to_the_corner_only_where_the_w
     assert np.allclose(into_corners(deeper, side, CLOSED, P, NONE_FREE)[0], ROOM_FACE)
 
 
+def test_an_object_beyond_the_wall_is_no_corner_of_the_room():
+    """A chair leg in the corridor south of the wall (x = 6.5, y -1.0..-0.6), square to
+    the room face's line and within an object's depth of it, lies wholly behind the
+    face: it is no corner of the room, and the face still runs on to the east wall."""
+    leg = [6.5, -1.0, 6.5, -0.6]
+    seg = np.array([ROOM_FACE, OTHER_FACE, FRONT, SIDE_FACE, EAST, leg])
+    side = np.array([1, -1, 1, 1, 1, 1])
+    out = into_corners(seg, side, CLOSED, P, NONE_FREE)
+    assert np.allclose(out[0], [0.0, 0.0, 8.0, 0.0]) and np.allclose(out[1:], seg[1:])
+    # the same leg in the room, in front of the desk's side: the face stops at its line
+    inside = seg.copy()
+    inside[5] = [6.5, 2.0, 6.5, 2.4]
+    assert np.allclose(into_corners(inside, side, CLOSED, P, NONE_FREE)[0], [0.0, 0.0, 6.5, 0.0])
+
+
 def test_a_deep_front_is_clutter_only_where_the_wall_is_backed_and_its_body_unseen():
     seg = np.array([[0.0, 0.0, 8.0, 0.0], OTHER_FACE, FRONT])
     side = np.array([1, -1, 1])

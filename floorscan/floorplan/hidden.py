@@ -288,11 +288,14 @@ def _corner(ok: np.ndarray, t: np.ndarray, gap: np.ndarray, same_line_m: float) 
 def _into_corners_once(seg: np.ndarray, side: np.ndarray, open_run, params: StructureParams, free_at,
                        todo: np.ndarray) -> np.ndarray:  # fmt: skip
     """One pass of :func:`into_corners` over the faces ``todo``, each tested against ``seg``."""
-    u, length, _ = free_normals(seg, side)
+    u, length, free_n = free_normals(seg, side)
     square = np.sin(np.radians(params.junction_min_angle_deg))
     reach = params.front_max_m if free_at is None else OBJECT_MAX_DEPTH_M
     out = seg.copy()
     for a in np.flatnonzero(todo).tolist():
+        # a corner's face stands in the room a bounds, on a's free side of its line; a
+        # face wholly behind the line is in the wall or beyond it (an object in the next room)
+        in_room = np.maximum((seg[:, :2] - seg[a, :2]) @ free_n[a], (seg[:, 2:] - seg[a, :2]) @ free_n[a]) > 0
         for k in (0, 1):
             end = seg[a, 2 * k : 2 * k + 2]
             out_dir = u[a] if k == 1 else -u[a]
@@ -308,7 +311,7 @@ def _into_corners_once(seg: np.ndarray, side: np.ndarray, open_run, params: Stru
                 # beyond a's end; or a wall (longer than an object is deep) that a's end
                 # is on, within front_min_m: a is in its corner already
                 on_wall = (t > -params.front_min_m) & (gap <= params.front_min_m) & (length > OBJECT_MAX_DEPTH_M)
-                ok &= (t > 0) | on_wall
+                ok &= ((t > 0) | on_wall) & in_room
             ok[a] = False
             if not ok.any():
                 continue
