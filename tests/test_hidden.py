@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from floorscan.floorplan.clutter import in_front_of_walls
+from floorscan.floorplan.clutter import in_front_of_walls, object_sides
 from floorscan.floorplan.free_space import StructureParams
 from floorscan.floorplan.hidden import BACKING_MAX_M, OBJECT_MAX_DEPTH_M, backed, body_seen_free, into_corners
 
@@ -95,6 +95,31 @@ def test_a_deep_front_is_clutter_only_where_the_wall_is_backed_and_its_body_unse
     corridor = lambda xy: (xy[:, 1] > 0.0) & (xy[:, 1] < 1.5)  # noqa: E731
     assert not in_front_of_walls(across, side, wall, P, corridor)[0].any()
     assert in_front_of_walls(across, side, wall, P, NONE_FREE)[0].tolist() == [False, False, True]
+
+
+def test_the_sides_of_a_cabinet_against_a_wall_go_with_its_front():
+    """A cabinet 2 m long and 0.6 m deep against the wall y = 0 (free to the north):
+    its front at y = 0.6 and its two sides from the wall to the front's ends are the
+    object; a stub as long as the cabinet is deep beside a shorter front, a face free
+    towards the cabinet's body, and one running on into the room are not its sides."""
+    seg = np.array([
+        [0.0, 0.0, 8.0, 0.0],  # the wall face, free to the north
+        [3.0, 0.6, 5.0, 0.6],  # the front, free to the north
+        [3.0, 0.0, 3.0, 0.6],  # west side, free to the west
+        [5.0, 0.6, 5.0, 0.0],  # east side, free to the east
+        [3.0, 0.6, 3.0, 1.6],  # a face from the front's end on into the room
+    ])  # fmt: skip
+    side = np.array([1, 1, 1, 1, 1])
+    front = np.array([False, True, False, False, False])
+    behind = np.array([-1, 0, -1, -1, -1])
+    assert object_sides(seg, side, front, behind, P).tolist() == [False, False, True, True, False]
+    # the west face free towards the body (east): a wall's end, not the object's side
+    assert object_sides(seg, np.array([1, 1, -1, 1, 1]), front, behind, P).tolist() == [False, False, False, True, False]
+    # a front 0.4 m long between faces 0.6 m long: deeper than long, a pier of the wall
+    narrow = seg.copy()
+    narrow[1] = [3.0, 0.6, 3.4, 0.6]
+    narrow[3] = [3.4, 0.6, 3.4, 0.0]
+    assert not object_sides(narrow, side, front, behind, P).any()
 
 
 # a partition 0.2 m thick (faces x = 0, free to the west, and x = 0.2, free to the

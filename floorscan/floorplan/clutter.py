@@ -1,6 +1,7 @@
 """Furniture out of the walls, the structure passes' clutter rules: objects standing in
 the free space (:func:`free_standing_objects`, :func:`on_objects`) and fronts of desks,
-cabinets and shelves in front of a wall (:func:`in_front_of_walls`). Source: the
+cabinets and shelves in front of a wall (:func:`in_front_of_walls`) with their sides
+(:func:`object_sides`). Source: the
 clutter of thesis sections 1.3 and 2.3; the occupancy-grid reading of Bormann et al.,
 ICRA 2016 (free space is what the robot saw); the thresholds are ours.
 """
@@ -208,6 +209,51 @@ def in_front_of_walls(seg: np.ndarray, side: np.ndarray, wall: np.ndarray, param
     first[1:] = i[order][1:] != i[order][:-1]
     behind[i[order][first]] = j[order][first]
     return out, behind
+
+
+def object_sides(seg: np.ndarray, side: np.ndarray, front: np.ndarray, behind: np.ndarray,
+                 params: StructureParams = StructureParams()) -> np.ndarray:
+    """Step 5, the sides of the objects whose fronts stand against a wall: a face square
+    to the wall face behind a front (at least ``junction_min_angle_deg``), from within
+    ``snap_m`` of one of the front's ends to within ``snap_m`` of that face's line, no
+    longer than the front (furniture stands along the wall, longer than it is deep),
+    with the front on its far side from its free side (the object's body is behind it). It
+    closes the object's body against the wall; kept as a wall, it would close the
+    front into a closet of three walls that takes the floor under the object from its
+    room (:func:`~floorscan.floorplan.structure.floor_under`).
+
+    Parameters
+    ----------
+    seg : (F, 4) float ndarray
+        Faces, metres.
+    side : (F,) int ndarray
+        Their free sides (:func:`~floorscan.floorplan.structure.border_and_support`).
+    front, behind : (F,) ndarray
+        :func:`in_front_of_walls`'s fronts and the wall face behind each.
+    params : StructureParams
+
+    Returns
+    -------
+    (F,) bool ndarray
+        The sides (never a front).
+    """
+    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
+    u, length, n = free_normals(seg, side)
+    square = np.sin(np.radians(params.junction_min_angle_deg))
+    out = np.zeros(len(seg), dtype=bool)
+    candidate = ~np.asarray(front, dtype=bool) & (np.asarray(side) != 0)
+    for f in np.flatnonzero(front).tolist():
+        w = int(behind[f])
+        across = candidate & (np.abs(u[:, 0] * u[w, 1] - u[:, 1] * u[w, 0]) >= square) & (length <= length[f])
+        across[w] = False
+        mid = 0.5 * (seg[f, :2] + seg[f, 2:])
+        body_behind = np.einsum("ij,ij->i", mid - seg[:, :2], n) < 0
+        for end in (seg[f, :2], seg[f, 2:]):
+            for a, b in ((seg[:, :2], seg[:, 2:]), (seg[:, 2:], seg[:, :2])):
+                at_front = np.hypot(*(a - end).T) <= params.snap_m
+                on_wall = np.abs((b - seg[w, :2]) @ np.array([-u[w, 1], u[w, 0]])) <= params.snap_m
+                out |= across & body_behind & at_front & on_wall
+    return out
 
 
 def loose_in_free_space(

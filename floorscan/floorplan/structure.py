@@ -47,7 +47,8 @@ order (:func:`structure_passes`):
    side, is the front of a desk, a cabinet or a shelf standing against the wall:
    clutter; up to :data:`~floorscan.floorplan.hidden.OBJECT_MAX_DEPTH_M` where the
    wall's other face runs on behind it and the object's body was not seen free
-   (:mod:`floorscan.floorplan.hidden`), as in the joins and corners of step 2. The
+   (:mod:`floorscan.floorplan.hidden`), as in the joins and corners of step 2. So are
+   the object's sides, from the wall to the front's ends (:func:`object_sides`). The
    floor between it and the wall (:func:`floor_under`) is the room's floor
    (:mod:`floorscan.floorplan.rooms`).
 6. **Loose in the free space** (:func:`loose_in_free_space`). A face that meets no
@@ -71,7 +72,9 @@ import numpy as np
 
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
-from floorscan.floorplan.clutter import free_standing_objects, in_front_of_walls, loose_in_free_space, on_objects
+from floorscan.floorplan.clutter import (
+    free_standing_objects, in_front_of_walls, loose_in_free_space, object_sides, on_objects,
+)
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
 from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, free_normals, hidden_by_objects, into_corners
 from floorscan.floorplan.junctions import junction_ends, short_loose, shorter_on_longer, snap_junctions
@@ -358,14 +361,15 @@ def structure_passes(
     side = np.where(side != 0, side, joined_side).astype(side.dtype)
     front, behind = in_front_of_walls(snapped, side, anchor, params, free_at)
     front &= ~standing
-    short = short_loose(snapped, junctions, params.min_wall_length_m) & ~standing & ~front
-    short &= ~door_jambs(snapped, short, params, door_min_m, door_max_m, standing | front)
+    against = front | object_sides(snapped, side, front, behind, params) & ~standing  # fronts and their sides
+    short = short_loose(snapped, junctions, params.min_wall_length_m) & ~standing & ~against
+    short &= ~door_jambs(snapped, short, params, door_min_m, door_max_m, standing | against)
     loose = loose_in_free_space(snapped, junction_ends(snapped, junctions), side, grid, params, max_thickness_m)
-    loose &= ~standing & ~front & ~short
-    keep = ~standing & ~front & ~short & ~loose
-    clutter += [snapped[standing], snapped[front], snapped[short], snapped[loose]]
+    loose &= ~standing & ~against & ~short
+    keep = ~standing & ~against & ~short & ~loose
+    clutter += [snapped[standing], snapped[against], snapped[short], snapped[loose]]
     reason += [np.full(int(standing.sum()), "free_standing_object", dtype=object),
-               np.full(int(front.sum()), "in_front_of_wall", dtype=object),
+               np.full(int(against.sum()), "in_front_of_wall", dtype=object),
                np.full(int(short.sum()), "short", dtype=object),
                np.full(int(loose.sum()), "loose_in_free_space", dtype=object)]  # fmt: skip
     # the walls meet again without the clutter; a face the new ends left short goes
