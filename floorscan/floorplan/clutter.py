@@ -240,19 +240,19 @@ def object_sides(seg: np.ndarray, side: np.ndarray, front: np.ndarray, behind: n
     seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
     u, length, n = free_normals(seg, side)
     square = np.sin(np.radians(params.junction_min_angle_deg))
+    ends = seg.reshape(-1, 2, 2)
+    every = np.arange(len(seg))
     out = np.zeros(len(seg), dtype=bool)
     candidate = ~np.asarray(front, dtype=bool) & (np.asarray(side) != 0)
     for f in np.flatnonzero(front).tolist():
         w = int(behind[f])
         across = candidate & (np.abs(u[:, 0] * u[w, 1] - u[:, 1] * u[w, 0]) >= square) & (length <= length[f])
-        across[w] = False
-        mid = 0.5 * (seg[f, :2] + seg[f, 2:])
-        body_behind = np.einsum("ij,ij->i", mid - seg[:, :2], n) < 0
-        for end in (seg[f, :2], seg[f, 2:]):
-            for a, b in ((seg[:, :2], seg[:, 2:]), (seg[:, 2:], seg[:, :2])):
-                at_front = np.hypot(*(a - end).T) <= params.snap_m
-                on_wall = np.abs((b - seg[w, :2]) @ np.array([-u[w, 1], u[w, 0]])) <= params.snap_m
-                out |= across & body_behind & at_front & on_wall
+        body_behind = np.einsum("ij,ij->i", 0.5 * (seg[f, :2] + seg[f, 2:]) - seg[:, :2], n) < 0
+        _, off = ends_on_line(seg, np.full(len(seg), w), every)
+        on_wall = np.abs(off) <= params.snap_m  # (F, 2): each end on the wall's line
+        # (F, 2): each end within snap_m of one of the front's two ends
+        at_front = np.linalg.norm(ends[:, :, None, :] - ends[f][None, None], axis=3).min(axis=2) <= params.snap_m
+        out |= across & body_behind & ((at_front[:, 0] & on_wall[:, 1]) | (at_front[:, 1] & on_wall[:, 0]))
     return out
 
 
