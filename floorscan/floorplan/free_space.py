@@ -144,3 +144,29 @@ def segment_samples(seg: np.ndarray, step: float, trim: float = 0.0):
     t = cut + frac * (length[owner] - 2 * cut)
     pts = seg[owner, :2] + u[owner] * t[:, None]
     return pts, owner, np.column_stack([-u[:, 1], u[:, 0]])
+
+
+def open_run(grid: OccupancyGrid, free: np.ndarray | None = None):
+    """``open_run(p, u, t0, t1)``: the longest run of passable cells (``free``, the
+    grid's :func:`passable` cells by default) on the stretch ``t0..t1`` (metres,
+    ``t0 < t1``) of the line through ``p`` (2,) along the unit vector ``u`` (2,),
+    sampled every half cell, metres: the opening test of the structure passes' joins
+    and of :func:`~floorscan.floorplan.wall_pieces.piers`."""
+    free = passable(grid) if free is None else free
+    step = grid.resolution_m / 2
+
+    def open_run(p: np.ndarray, u: np.ndarray, t0: float, t1: float) -> float:
+        n = max(int(np.ceil((t1 - t0) / step)), 1)
+        t = t0 + (np.arange(n) + 0.5) / n * (t1 - t0)
+        return longest_run(mask_at(grid, free, p + u * t[:, None])) * (t1 - t0) / n
+
+    return open_run
+
+
+def longest_run(flags: np.ndarray) -> int:
+    """Length of the longest run of True in a 1D bool array."""
+    if not flags.any():
+        return 0
+    padded = np.r_[False, flags, False].astype(np.int8)
+    edges = np.flatnonzero(np.diff(padded))
+    return int((edges[1::2] - edges[::2]).max())

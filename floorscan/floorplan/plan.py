@@ -298,13 +298,17 @@ def plan_of_segments(
     if grid is not None:
         axes, thick, wall_of_face = _one_wall_per_wall(axes, thick, wall_of_face, params)
         axes, junctions = _wall_junctions(axes, thick, wall_of_face, side, params)
-        # a wall whose snapped axis is short and not between two junctions is clutter
-        # (the wall passes can shorten a wall again: up to three rounds)
-        from floorscan.floorplan.junctions import short_loose
+        # a wall whose snapped axis is short and not between two junctions is clutter,
+        # unless it is the pier between two doors (the wall passes can shorten a wall
+        # again: up to three rounds)
+        from floorscan.floorplan.junctions import junction_ends, short_loose
+        from floorscan.floorplan.wall_pieces import piers
 
         for _ in range(3):
             junc = np.column_stack([junctions[["x", "y", "wall_a", "wall_b"]].to_numpy(np.float64), np.zeros(len(junctions))])
             loose = short_loose(axes, junc, params.structure.min_wall_length_m)
+            loose &= ~piers(axes, loose, grid, params.structure, params.rooms.door_min_m, params.rooms.door_max_m,
+                            junction_ends(axes, junc).any(axis=1))  # fmt: skip
             if not loose.any():
                 break
             drop = loose[wall_of_face]

@@ -36,7 +36,9 @@ order (:func:`structure_passes`):
    table top in a 3D scanner's height band) is furniture, and the faces on it are
    clutter, unless the face is a piece of a wall (:func:`in_wall_lines`: in the line of a
    face on no object, a door's width from its end; a partition's piece between two
-   doors with a cabinet against it). A face shorter than ``min_wall_length_m`` is
+   doors with a cabinet against it) or, however short, the pier between two doors
+   (:func:`piers`: a wall's end in its line a door's width off each of its ends, across
+   openings the free space passes). A face shorter than ``min_wall_length_m`` is
    clutter unless it connects two junctions or is a door's jamb (:func:`door_jambs`: in
    the line of a wall face, ``door_min_m`` to ``door_max_m`` beyond its end; the pier
    between a corner and a door is a wall however short).
@@ -76,9 +78,10 @@ from floorscan.floorplan.clutter import (
     free_standing_objects, in_front_of_walls, loose_in_free_space, object_sides, on_objects,
 )
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
+from floorscan.floorplan.free_space import open_run as free_open_run
 from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, free_normals, hidden_by_objects, into_corners
 from floorscan.floorplan.junctions import junction_ends, short_loose, shorter_on_longer, snap_junctions
-from floorscan.floorplan.wall_pieces import door_jambs, in_wall_lines
+from floorscan.floorplan.wall_pieces import door_jambs, in_wall_lines, piers
 
 
 def border_and_support(seg: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams()):
@@ -155,7 +158,7 @@ def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, pa
     side : (F,) int ndarray, optional
         The faces' free sides (:func:`border_and_support`); None: no gap is hidden.
     open_run : callable, optional
-        :func:`_open_run` of ``grid``, when the caller has it.
+        :func:`~floorscan.floorplan.free_space.open_run` of ``grid``, when the caller has it.
     free_at : callable, optional
         ``free_at(xy)``: (N,) bool, whether the scans saw map points free: objects up to
         :data:`~floorscan.floorplan.hidden.OBJECT_MAX_DEPTH_M` deep then hide a gap where
@@ -195,7 +198,7 @@ def join_collinear(seg: np.ndarray, weights: np.ndarray, grid: OccupancyGrid, pa
                 same_way = free_n[a[k]] @ free_n[b[k]] > 0
                 hidden = hidden_by_objects(seg, side, int(a[k]), min(t0, t1), max(t0, t1), params, free_at)
                 keep[k] = same_way and hidden
-        open_run = _open_run(grid) if open_run is None else open_run
+        open_run = free_open_run(grid) if open_run is None else open_run
         for k in np.flatnonzero(keep & (gap > grid.resolution_m / 2)).tolist():
             t0, t1 = (length[a[k]], lo_b[k]) if lo_b[k] > length[a[k]] else (hi_b[k], 0.0)
             keep[k] = open_run(seg[a[k], :2], u[k], t0, t1) < params.min_opening_m
@@ -253,31 +256,6 @@ def _group_sides(seg: np.ndarray, side: np.ndarray, group: np.ndarray, n: int) -
     for i in np.argsort(length, kind="stable"):  # the longest member written last
         out[group[i]] = side[i]
     return out
-
-
-def _open_run(grid: OccupancyGrid, free: np.ndarray | None = None):
-    """``open_run(p, u, t0, t1)``: the longest run of passable cells (``free``, the
-    grid's :func:`passable` cells by default) on the stretch ``t0..t1`` (metres,
-    ``t0 < t1``) of the line through ``p`` along the unit vector ``u``, sampled every
-    half cell, metres (the joins' opening test)."""
-    free = passable(grid) if free is None else free
-    step = grid.resolution_m / 2
-
-    def open_run(p: np.ndarray, u: np.ndarray, t0: float, t1: float) -> float:
-        n = max(int(np.ceil((t1 - t0) / step)), 1)
-        t = t0 + (np.arange(n) + 0.5) / n * (t1 - t0)
-        return _longest_run(mask_at(grid, free, p + u * t[:, None])) * (t1 - t0) / n
-
-    return open_run
-
-
-def _longest_run(flags: np.ndarray) -> int:
-    """Length of the longest run of True in a 1D bool array."""
-    if not flags.any():
-        return 0
-    padded = np.r_[False, flags, False].astype(np.int8)
-    edges = np.flatnonzero(np.diff(padded))
-    return int((edges[1::2] - edges[::2]).max())
 
 
 def _fit_group(seg: np.ndarray, length: np.ndarray) -> np.ndarray:
@@ -342,7 +320,7 @@ def structure_passes(
     clutter = [seg[~structure]]
     reason = [np.full(int((~structure).sum()), "not_a_boundary", dtype=object)]
     free = passable(grid)  # once, for the openings and the objects' bodies
-    open_run = _open_run(grid, free)
+    open_run = free_open_run(grid, free)
 
     def free_at(xy: np.ndarray) -> np.ndarray:
         return mask_at(grid, free, xy)
@@ -355,6 +333,8 @@ def structure_passes(
     anchor = length >= params.clutter_max_length_m
     standing = on_objects(snapped, grid, free_standing_objects(grid, params, snapped[anchor], max_thickness_m)) & ~anchor
     standing &= ~in_wall_lines(snapped, standing, grid.resolution_m, params, door_max_m)
+    at_junction = junction_ends(snapped, junctions).any(axis=1)
+    standing &= ~piers(snapped, standing, grid, params, door_min_m, door_max_m, at_junction)
     # a face run on behind objects has too little free space beside it to show a side;
     # it keeps the side its seen pieces had
     _, side = border_and_support(snapped, grid, params)

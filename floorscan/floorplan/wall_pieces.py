@@ -1,17 +1,18 @@
 """Faces in the line of a wall (the structure passes' step 4,
 :mod:`floorscan.floorplan.structure`): the faces that would be clutter (on an object,
 or shorter than the shortest wall) but stand in the line of a wall face, a door's
-width or less beyond its end, are pieces of that wall (:func:`in_wall_lines`) or a
-door's jambs (:func:`door_jambs`). A door is an opening in a wall, and the wall goes on
-across it: its jambs stand in one line.
+width or less beyond its end, are pieces of that wall (:func:`in_wall_lines`), a
+door's jambs (:func:`door_jambs`) or the pier between two doors (:func:`piers`). A door
+is an opening in a wall, and the wall goes on across it: its jambs stand in one line.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
-from floorscan.floorplan.free_space import StructureParams
+from floorscan.floorplan.free_space import StructureParams, open_run
 from floorscan.floorplan.junctions import ends_on_line
 
 
@@ -47,6 +48,64 @@ def in_wall_lines(seg: np.ndarray, standing: np.ndarray, cell_m: float, params: 
         The faces of ``standing`` that are pieces of a wall.
     """
     return _in_line_of_others(seg, standing, params.min_wall_length_m + cell_m, -cell_m, door_max_m, params)
+
+
+def piers(seg: np.ndarray, standing: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams(),
+          door_min_m: float = 0.6, door_max_m: float = 2.0, joined: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+    """Which faces on objects, however short, are the pier between two doors: in the
+    line of a wall face beyond each of their two ends (directions within
+    ``duplicate_angle_deg``, both ends within ``side_offset_m`` of its line),
+    ``door_min_m`` to ``door_max_m`` from it, across a gap the free space passes
+    through (a run of passable cells ``min_opening_m`` long on the line between the two
+    ends, the joins' opening test): two doors. A wall with two doors in it stands in
+    one line across both; the piece between them, surrounded by the free space the
+    doors let through, is the wall's, not a chair's. A piece another face meets at an
+    end (``joined``) is no pier: it is the end face of a wall that stops at the line,
+    across the wall's thickness.
+
+    Parameters
+    ----------
+    seg : (F, 4) float ndarray
+        Faces, metres.
+    standing : (F,) bool ndarray
+        Which faces lie on objects (or are too short for a wall).
+    grid : OccupancyGrid
+        The free space of the plan's scans.
+    params : StructureParams
+    door_min_m, door_max_m : float
+        The narrowest and widest door, metres (``floorplan.rooms``).
+    joined : (F,) bool ndarray, optional
+        Faces with a junction at an end (:func:`~floorscan.floorplan.junctions.junction_ends`).
+
+    Returns
+    -------
+    (F,) bool ndarray
+        The faces of ``standing`` that are piers.
+    """
+    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
+    i, j = _line_pairs(seg, np.asarray(standing, dtype=bool), 0.0, door_min_m, door_max_m, params)
+    out = np.zeros(len(seg), dtype=bool)
+    if len(i) == 0:
+        return out
+    # the gap between the facing ends of faces i and j, and whether free space passes it
+    ends_i, ends_j = seg[i].reshape(-1, 2, 2), seg[j].reshape(-1, 2, 2)
+    dist = np.linalg.norm(ends_i[:, :, None, :] - ends_j[:, None, :, :], axis=-1).reshape(-1, 4)
+    k = dist.argmin(axis=1)
+    rows = np.arange(len(i))
+    p, q = ends_i[rows, k // 2], ends_j[rows, k % 2]
+    width = dist[rows, k]
+    run = open_run(grid)
+    opening = np.array([run(p[g], (q[g] - p[g]) / max(width[g], 1e-12), 0.0, width[g]) >= params.min_opening_m
+                        for g in range(len(i))], dtype=bool)  # fmt: skip
+    i, j = i[opening], j[opening]
+    # which end of face i face j lies beyond: along i's own direction
+    d = seg[i, 2:] - seg[i, :2]
+    ahead = np.einsum("ij,ij->i", (seg[j, :2] + seg[j, 2:] - seg[i, :2] - seg[i, 2:]) / 2, d) > 0
+    both = np.zeros((len(seg), 2), dtype=bool)
+    both[i[ahead], 0] = True
+    both[i[~ahead], 1] = True
+    out = both.all(axis=1)
+    return out if joined is None else out & ~np.asarray(joined, dtype=bool)
 
 
 def door_jambs(seg: np.ndarray, short: np.ndarray, params: StructureParams = StructureParams(), door_min_m: float = 0.6,
@@ -91,20 +150,29 @@ def _in_line_of_others(seg: np.ndarray, which: np.ndarray, min_length_m: float, 
     in ``which``, from ``gap_min_m`` (negative: overlapping it by up to that) to
     ``gap_max_m`` past its end, metres (:func:`in_wall_lines`, :func:`door_jambs`)."""
     seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
-    which = np.asarray(which, dtype=bool)
+    i, _ = _line_pairs(seg, np.asarray(which, dtype=bool), min_length_m, gap_min_m, gap_max_m, params)
     out = np.zeros(len(seg), dtype=bool)
+    out[i] = True
+    return out
+
+
+def _line_pairs(seg: np.ndarray, which: np.ndarray, min_length_m: float, gap_min_m: float, gap_max_m: float,
+                params: StructureParams) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """The pairs (i, j) of :func:`_in_line_of_others`: face i of ``which``, at least
+    ``min_length_m`` long, in the line of face j not in ``which``, ``gap_min_m`` to
+    ``gap_max_m`` past j's end."""
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    none = np.zeros(0, dtype=np.intp)
     if not (which & (length >= min_length_m)).any() or which.all():
-        return out
+        return none, none
     i, j = candidate_pairs(seg, gap_max_m, np.radians(params.duplicate_angle_deg))
     i, j = np.r_[i, j], np.r_[j, i]  # face i in which, face j not
     ok = which[i] & ~which[j] & (length[i] >= min_length_m)
     i, j = i[ok], j[ok]
     if len(i) == 0:
-        return out
+        return none, none
     t, off = ends_on_line(seg, j, i)
     in_line = (np.abs(off) <= params.side_offset_m).all(axis=1)
     beyond = np.maximum(t.min(axis=1) - length[j], -t.max(axis=1))  # past face j's end; < 0 alongside it
     hit = in_line & (beyond >= gap_min_m) & (beyond <= gap_max_m)
-    out[i[hit]] = True
-    return out
+    return i[hit], j[hit]
