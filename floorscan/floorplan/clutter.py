@@ -258,7 +258,7 @@ def object_sides(seg: np.ndarray, side: np.ndarray, front: np.ndarray, behind: n
 
 def loose_in_free_space(
     seg: np.ndarray, ends: np.ndarray, side: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams(),
-    max_thickness_m: float = 0.4,
+    max_thickness_m: float = 0.4, crossed: np.ndarray | None = None,
 ) -> np.ndarray:  # fmt: skip
     """Step 6: chains of faces that hold nothing but each other and stand in the free
     space, with a wall behind them or free space on both sides: the fronts (and seen
@@ -274,6 +274,9 @@ def loose_in_free_space(
     it (a core of rooms standing free of the outer walls) has no free end. A group of
     faces held together (a face alone, an L, a U; not a closed loop) is loose when
 
+    - no face of it crosses another face away from both their ends (``crossed``, an X
+      junction): a partition that crosses a wall, with a door at each of its ends, is
+      held by the wall it crosses;
     - no face of it lies in the line of a face outside it (within ``2 *
       side_offset_m`` of it) within ``loose_reach_m``: a wall between two doors has its
       wall's other pieces in line across the doors;
@@ -306,6 +309,9 @@ def loose_in_free_space(
     params : StructureParams
     max_thickness_m : float
         The thickest wall, metres (the plan's ``pair_max_m``).
+    crossed : (F,) bool ndarray, optional
+        Which faces another face crosses away from both their ends (the X junctions of
+        :func:`~floorscan.floorplan.junctions.snap_junctions`, kind 3).
 
     Returns
     -------
@@ -332,6 +338,8 @@ def loose_in_free_space(
     outside = group[i] != group[j]
     anchored[group[i[outside]]] = True
     anchored[group[j[outside]]] = True
+    if crossed is not None:
+        anchored[group[np.asarray(crossed, dtype=bool)]] = True
     held |= _held_across_openings(seg, i[~outside], j[~outside], params.join_max_gap_m)
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
     backed = (side == 0) | walls_behind(seg, side, length >= params.min_wall_length_m, params, max_thickness_m)

@@ -54,7 +54,8 @@ order (:func:`structure_passes`):
    floor between it and the wall (:func:`floor_under`) is the room's floor
    (:mod:`floorscan.floorplan.rooms`).
 6. **Loose in the free space** (:func:`loose_in_free_space`). A face that meets no
-   other face at either end, has no face in its line within ``loose_reach_m``, whose
+   other face at either end, crosses no face (an X junction: a partition crossing a
+   wall between two doors), has no face in its line within ``loose_reach_m``, whose
    ends both stand in free space, and that has free space on both sides or a face
    parallel behind it, is furniture, however long (a 3 m rack in front of a wall, a
    row of chairs): clutter. Walls hold each other up; one that ends in free space ends
@@ -344,7 +345,9 @@ def structure_passes(
     against = front | object_sides(snapped, side, front, behind, params) & ~standing  # fronts and their sides
     short = short_loose(snapped, junctions, params.min_wall_length_m) & ~standing & ~against
     short &= ~door_jambs(snapped, short, params, door_min_m, door_max_m, standing | against)
-    loose = loose_in_free_space(snapped, junction_ends(snapped, junctions), side, grid, params, max_thickness_m)
+    crossed = np.zeros(len(snapped), dtype=bool)
+    crossed[junctions[junctions[:, 4] == 3][:, 2:4].astype(np.int64).ravel()] = True  # X junctions
+    loose = loose_in_free_space(snapped, junction_ends(snapped, junctions), side, grid, params, max_thickness_m, crossed)
     loose &= ~standing & ~against & ~short
     keep = ~standing & ~against & ~short & ~loose
     clutter += [snapped[standing], snapped[against], snapped[short], snapped[loose]]
