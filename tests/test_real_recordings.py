@@ -131,7 +131,9 @@ def test_the_plan_against_the_reference_map_sees_a_wall_through_free_space(real_
 def test_the_recommended_plan_is_a_plan(real_run, name):
     """Issue 33 on every shared recording: the recommended plan's walls meet in
     junctions and never cross away from one, few are shorter than 0.5 m (measured at
-    most 6.1 %, lgfloor2), and the pieces that are not walls are in the clutter layer."""
+    most 10.8 %, lgfloor2: 4 of 37, two of them piers between a wall and a door,
+    ``wall_pieces.corner_piers``; 6.1 % before those), and the pieces that are not walls
+    are in the clutter layer."""
     from floorscan.score.answer import SHORT_WALL_M, crossings, plan_parts
 
     parts = plan_parts(real_run / name / "plan_tables")
@@ -139,7 +141,7 @@ def test_the_recommended_plan_is_a_plan(real_run, name):
     length = np.hypot(axes[:, 2] - axes[:, 0], axes[:, 3] - axes[:, 1])
     assert len(axes) >= 15 and len(junctions) >= 8 and len(parts["clutter"]) >= 5
     assert crossings(axes, junctions) == 0
-    assert (length < SHORT_WALL_M).mean() <= 0.08
+    assert (length < SHORT_WALL_M).mean() <= 0.11
 
 
 def test_an_open_hall_keeps_most_of_its_scans(real_run):

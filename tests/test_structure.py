@@ -623,3 +623,52 @@ def test_a_pier_is_free_standing_between_two_openings_the_free_space_passes():
     assert not piers(faces[:2], which[:2], doors, params).any()  # a wall on one side only
     assert not piers(faces, which, doors, params, joined=np.array([False, True, False])).any()
     assert not piers(faces, which, grid([(2.5, 3.2)]), params).any()  # the west opening seen closed
+
+
+def test_the_pier_between_a_wall_and_a_door_is_a_wall_however_short():
+    # two rooms 2.5 m wide parted by a partition with a door (y 0.9..1.8) 0.4 m from the
+    # south wall: the 0.4 m stub between the wall and the door, cut from the south wall
+    # by the free-standing objects' cut, stood free and was furniture (the tree before:
+    # two faces of clutter, free_standing_object); it meets the south wall and has the
+    # partition in its line across the door
+    outer = [(0.3, 0.3, 5.85, 0.5), (0.3, 4.5, 5.85, 4.7), (0.3, 0.3, 0.5, 4.7), (5.65, 0.3, 5.85, 4.7)]
+    plan = _map_plan(outer + [(3.0, 0.5, 3.15, 0.9), (3.0, 1.8, 3.15, 4.5)], (100, 124))
+    stub = plan.walls[(plan.walls[["x0", "x1"]].sub(3.08).abs().max(axis=1) < 0.1) & (plan.walls[["y0", "y1"]].max(axis=1) < 1.2)]
+    assert len(stub) == 1 and abs(stub["length_m"].iloc[0] - 0.4) <= 0.1
+    assert not (plan.clutter["reason"] == "free_standing_object").any()
+    assert len(plan.rooms) == 2 and len(plan.doors) == 1 and abs(plan.doors["width_m"].iloc[0] - 0.9) <= 0.1
+
+
+def test_a_corner_pier_meets_a_wall_and_has_a_wall_or_a_pier_across_a_door():
+    """corner_piers: a 0.3 m stub that meets a wall at an end and has a wall in its line
+    0.8 m beyond its other end, across free space, is such a pier; so are two stubs facing
+    each other across a door (a partition's two pieces); not a stub that meets no wall,
+    or only another stub (the corner of an object), nor across a gap the scans saw closed,
+    nor one with nothing in its line."""
+    from floorscan.core.occupancy_classes import grid_of_classes
+    from floorscan.floorplan.wall_pieces import corner_piers
+
+    r = 0.05
+
+    def grid(openings):  # a wall line at y 1.9..2.05 with the openings (x0, x1) cut out
+        occ = np.zeros((80, 80), dtype=bool)
+        occ[38:41, :] = True
+        for x0, x1 in openings:
+            occ[38:41, round(x0 / r):round(x1 / r)] = False
+        return grid_of_classes(occ, ~occ, origin_xy=(0.0, 0.0), resolution_m=r)
+
+    # the stub (0), the wall across the door (1), the wall the stub meets (2), a short
+    # piece square to the stub at its end (3)
+    faces = np.array([[0.0, 2.0, 0.3, 2.0], [1.1, 2.0, 3.5, 2.0], [0.0, 0.5, 0.0, 3.5], [0.0, 2.0, 0.0, 2.3]])
+    at_wall = np.array([[0.0, 2.0, 0, 2, 2]], dtype=np.float64)  # x, y, i, j, kind (a T)
+    at_piece = np.array([[0.0, 2.0, 0, 3, 1]], dtype=np.float64)  # an L with the short piece
+    standing, params, door = np.array([True, False, False, True]), StructureParams(), grid([(0.3, 1.1)])
+    assert corner_piers(faces, standing, at_wall, door, params).tolist() == [True, False, False, False]
+    assert not corner_piers(faces, standing, np.zeros((0, 5)), door, params).any()
+    assert not corner_piers(faces, standing, at_piece, door, params).any()
+    assert not corner_piers(faces, standing, at_wall, grid([]), params).any()
+    lone = [0, 2, 3]  # no wall in the stub's line
+    assert not corner_piers(faces[lone], standing[lone], np.array([[0.0, 2.0, 0, 1, 2]]), door, params).any()
+    two = np.array([[0.0, 2.0, 0.3, 2.0], [1.1, 2.0, 1.4, 2.0], [0.0, 0.5, 0.0, 3.5], [1.4, 0.5, 1.4, 3.5]])
+    ends = np.array([[0.0, 2.0, 0, 2, 2], [1.4, 2.0, 1, 3, 2]], dtype=np.float64)
+    assert corner_piers(two, np.array([True, True, False, False]), ends, door, params).tolist() == [True, True, False, False]

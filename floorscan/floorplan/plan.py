@@ -302,13 +302,16 @@ def plan_of_segments(
         # unless it is the pier between two doors (the wall passes can shorten a wall
         # again: up to three rounds)
         from floorscan.floorplan.junctions import junction_ends, short_loose
-        from floorscan.floorplan.wall_pieces import piers
+        from floorscan.floorplan.wall_pieces import corner_piers, piers
 
         for _ in range(3):
             junc = np.column_stack([junctions[["x", "y", "wall_a", "wall_b"]].to_numpy(np.float64), np.zeros(len(junctions))])
             loose = short_loose(axes, junc, params.structure.min_wall_length_m)
+            at_junction = junction_ends(axes, junc).any(axis=1)
             loose &= ~piers(axes, loose, grid, params.structure, params.rooms.door_min_m, params.rooms.door_max_m,
-                            junction_ends(axes, junc).any(axis=1))  # fmt: skip
+                            at_junction)  # fmt: skip
+            loose &= ~corner_piers(axes, loose, junc, grid, params.structure, params.rooms.door_min_m,
+                                   params.rooms.door_max_m)  # fmt: skip
             if not loose.any():
                 break
             drop = loose[wall_of_face]

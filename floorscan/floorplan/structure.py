@@ -38,10 +38,12 @@ order (:func:`structure_passes`):
    face on no object, a door's width from its end; a partition's piece between two
    doors with a cabinet against it) or, however short, the pier between two doors
    (:func:`piers`: a wall's end in its line a door's width off each of its ends, across
-   openings the free space passes). A face shorter than ``min_wall_length_m`` is
-   clutter unless it connects two junctions or is a door's jamb (:func:`door_jambs`: in
-   the line of a wall face, ``door_min_m`` to ``door_max_m`` beyond its end; the pier
-   between a corner and a door is a wall however short).
+   openings the free space passes) or between a wall it meets and a door
+   (:func:`corner_piers`: a wall or another such pier in its line across the door). A
+   face shorter than ``min_wall_length_m`` is clutter unless it connects two junctions,
+   is a door's jamb (:func:`door_jambs`: in the line of a wall face, ``door_min_m`` to
+   ``door_max_m`` beyond its end; the pier between a corner and a door is a wall however
+   short) or such a pier. The plan's short-wall rounds keep the piers too.
 5. **In front of a wall** (:func:`in_front_of_walls`). A face shorter than
    ``clutter_max_length_m`` (or, free on the same side, shorter than the wall and
    :data:`~floorscan.floorplan.hidden.HIDDEN_MAX_GAP_M`: a row of cabinets) parallel to
@@ -82,7 +84,7 @@ from floorscan.floorplan.free_space import StructureParams, mask_at, passable, s
 from floorscan.floorplan.free_space import open_run as free_open_run
 from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, free_normals, hidden_by_objects, into_corners
 from floorscan.floorplan.junctions import junction_ends, short_loose, shorter_on_longer, snap_junctions
-from floorscan.floorplan.wall_pieces import door_jambs, in_wall_lines, piers
+from floorscan.floorplan.wall_pieces import corner_piers, door_jambs, in_wall_lines, piers
 
 
 def border_and_support(seg: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams()):
@@ -336,6 +338,7 @@ def structure_passes(
     standing &= ~in_wall_lines(snapped, standing, grid.resolution_m, params, door_max_m)
     at_junction = junction_ends(snapped, junctions).any(axis=1)
     standing &= ~piers(snapped, standing, grid, params, door_min_m, door_max_m, at_junction)
+    standing &= ~corner_piers(snapped, standing, junctions, grid, params, door_min_m, door_max_m)
     # a face run on behind objects has too little free space beside it to show a side;
     # it keeps the side its seen pieces had
     _, side = border_and_support(snapped, grid, params)
@@ -345,6 +348,7 @@ def structure_passes(
     against = front | object_sides(snapped, side, front, behind, params) & ~standing  # fronts and their sides
     short = short_loose(snapped, junctions, params.min_wall_length_m) & ~standing & ~against
     short &= ~door_jambs(snapped, short, params, door_min_m, door_max_m, standing | against)
+    short &= ~corner_piers(snapped, short, junctions, grid, params, door_min_m, door_max_m, standing | against)
     crossed = np.zeros(len(snapped), dtype=bool)
     crossed[junctions[junctions[:, 4] == 3][:, 2:4].astype(np.int64).ravel()] = True  # X junctions
     loose = loose_in_free_space(snapped, junction_ends(snapped, junctions), side, grid, params, max_thickness_m, crossed)
@@ -359,6 +363,7 @@ def structure_passes(
     walls, junctions = snap_junctions(joined[keep], params)
     still = ~short_loose(walls, junctions, params.min_wall_length_m)
     still |= door_jambs(walls, ~still, params, door_min_m, door_max_m)
+    still |= corner_piers(walls, ~still, junctions, grid, params, door_min_m, door_max_m)
     clutter.append(walls[~still])
     reason.append(np.full(int((~still).sum()), "short", dtype=object))
     walls, _ = snap_junctions(joined[keep][still], params)

@@ -87,16 +87,7 @@ def piers(seg: np.ndarray, standing: np.ndarray, grid: OccupancyGrid, params: St
     out = np.zeros(len(seg), dtype=bool)
     if len(i) == 0:
         return out
-    # the gap between the facing ends of faces i and j, and whether free space passes it
-    ends_i, ends_j = seg[i].reshape(-1, 2, 2), seg[j].reshape(-1, 2, 2)
-    dist = np.linalg.norm(ends_i[:, :, None, :] - ends_j[:, None, :, :], axis=-1).reshape(-1, 4)
-    k = dist.argmin(axis=1)
-    rows = np.arange(len(i))
-    p, q = ends_i[rows, k // 2], ends_j[rows, k % 2]
-    width = dist[rows, k]
-    run = open_run(grid)
-    opening = np.array([run(p[g], (q[g] - p[g]) / max(width[g], 1e-12), 0.0, width[g]) >= params.min_opening_m
-                        for g in range(len(i))], dtype=bool)  # fmt: skip
+    opening = _passable_gaps(seg, i, j, grid, params)
     i, j = i[opening], j[opening]
     # which end of face i face j lies beyond: along i's own direction
     d = seg[i, 2:] - seg[i, :2]
@@ -106,6 +97,60 @@ def piers(seg: np.ndarray, standing: np.ndarray, grid: OccupancyGrid, params: St
     both[i[~ahead], 1] = True
     out = both.all(axis=1)
     return out if joined is None else out & ~np.asarray(joined, dtype=bool)
+
+
+def corner_piers(seg: np.ndarray, standing: np.ndarray, junctions: np.ndarray, grid: OccupancyGrid,
+                 params: StructureParams = StructureParams(), door_min_m: float = 0.6, door_max_m: float = 2.0,
+                 not_walls: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+    """Which faces on objects, however short, are the pier between a wall they meet and
+    a door: an end at a junction with a face not in ``standing`` (a wall: not another
+    piece, as at the corner of an object), and in their line, beyond their other end,
+    ``door_min_m`` to ``door_max_m`` off across a gap the free space passes (as in
+    :func:`piers`), a wall face or another such pier (the two stubs of a partition with
+    its door between them). Traced on a map, a stub shorter than the shortest wall is cut
+    from the wall it stands on (:func:`~floorscan.floorplan.clutter.free_standing_objects`
+    cuts the long walls out) and stands free; the wall it meets and the door in its line
+    tell it from a chair.
+
+    Parameters
+    ----------
+    seg : (F, 4) float ndarray
+        Faces, metres.
+    standing : (F,) bool ndarray
+        Which faces lie on objects (or are too short for a wall).
+    junctions : (J, 5) float ndarray
+        ``x, y, i, j, kind`` (:func:`~floorscan.floorplan.junctions.snap_junctions`), metres;
+        an end of face ``i`` or ``j`` within 0.02 m of ``x, y`` is at it.
+    grid : OccupancyGrid
+        The free space of the plan's scans.
+    params : StructureParams
+    door_min_m, door_max_m : float
+        The narrowest and widest door, metres (``floorplan.rooms``).
+    not_walls : (F,) bool ndarray, optional
+        Faces that are clutter for another reason (objects, fronts of furniture): no wall
+        a pier meets or stands in line with.
+
+    Returns
+    -------
+    (F,) bool ndarray
+        The faces of ``standing`` that are such piers.
+    """
+    seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
+    standing = np.asarray(standing, dtype=bool)
+    walls = ~standing if not_walls is None else ~standing & ~np.asarray(not_walls, dtype=bool)
+    junctions = np.asarray(junctions, dtype=np.float64).reshape(-1, 5)
+    meets_wall = np.zeros(len(seg), dtype=bool)
+    for col, other in ((2, 3), (3, 2)):
+        ids, others = junctions[:, col].astype(np.int64), junctions[:, other].astype(np.int64)
+        for end in (0, 1):
+            at = np.hypot(*(junctions[:, :2] - seg[ids, 2 * end : 2 * end + 2]).T) <= 0.02
+            meets_wall[ids[at & walls[others]]] = True
+    stub = standing & meets_wall
+    i, j = _line_pairs(seg, stub, 0.0, door_min_m, door_max_m, params, others=walls | stub)
+    out = np.zeros(len(seg), dtype=bool)
+    if len(i):
+        out[i[_passable_gaps(seg, i, j, grid, params)]] = True
+    return out
 
 
 def door_jambs(seg: np.ndarray, short: np.ndarray, params: StructureParams = StructureParams(), door_min_m: float = 0.6,
@@ -157,17 +202,18 @@ def _in_line_of_others(seg: np.ndarray, which: np.ndarray, min_length_m: float, 
 
 
 def _line_pairs(seg: np.ndarray, which: np.ndarray, min_length_m: float, gap_min_m: float, gap_max_m: float,
-                params: StructureParams) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+                params: StructureParams, others: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """The pairs (i, j) of :func:`_in_line_of_others`: face i of ``which``, at least
-    ``min_length_m`` long, in the line of face j not in ``which``, ``gap_min_m`` to
-    ``gap_max_m`` past j's end."""
+    ``min_length_m`` long, in the line of face j not in ``which`` (or in ``others``, j
+    not i), ``gap_min_m`` to ``gap_max_m`` past j's end."""
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
     none = np.zeros(0, dtype=np.intp)
-    if not (which & (length >= min_length_m)).any() or which.all():
+    others = ~which if others is None else np.asarray(others, dtype=bool)
+    if not (which & (length >= min_length_m)).any() or not others.any():
         return none, none
     i, j = candidate_pairs(seg, gap_max_m, np.radians(params.duplicate_angle_deg))
-    i, j = np.r_[i, j], np.r_[j, i]  # face i in which, face j not
-    ok = which[i] & ~which[j] & (length[i] >= min_length_m)
+    i, j = np.r_[i, j], np.r_[j, i]  # face i in which, face j in others
+    ok = which[i] & others[j] & (i != j) & (length[i] >= min_length_m)
     i, j = i[ok], j[ok]
     if len(i) == 0:
         return none, none
@@ -176,3 +222,20 @@ def _line_pairs(seg: np.ndarray, which: np.ndarray, min_length_m: float, gap_min
     beyond = np.maximum(t.min(axis=1) - length[j], -t.max(axis=1))  # past face j's end; < 0 alongside it
     hit = in_line & (beyond >= gap_min_m) & (beyond <= gap_max_m)
     return i[hit], j[hit]
+
+
+def _passable_gaps(seg: np.ndarray, i: np.ndarray, j: np.ndarray, grid: OccupancyGrid,
+                   params: StructureParams) -> np.ndarray:  # fmt: skip
+    """Whether the free space passes the gap between the facing ends of faces i and j
+    (pairs, (P,) each): a run of passable cells ``min_opening_m`` long on the line
+    between the two ends (:func:`~floorscan.floorplan.free_space.open_run`, the joins'
+    opening test)."""
+    ends_i, ends_j = seg[i].reshape(-1, 2, 2), seg[j].reshape(-1, 2, 2)
+    dist = np.linalg.norm(ends_i[:, :, None, :] - ends_j[:, None, :, :], axis=-1).reshape(-1, 4)
+    k = dist.argmin(axis=1)
+    rows = np.arange(len(i))
+    p, q = ends_i[rows, k // 2], ends_j[rows, k % 2]
+    width = dist[rows, k]
+    run = open_run(grid)
+    return np.array([run(p[g], (q[g] - p[g]) / max(width[g], 1e-12), 0.0, width[g]) >= params.min_opening_m
+                     for g in range(len(i))], dtype=bool)  # fmt: skip
