@@ -599,30 +599,34 @@ def test_the_pier_between_two_doors_is_a_wall_and_parts_two_rooms():
     assert len(widths) == 2 and np.abs(widths - [0.7, 1.2]).max() <= 0.1  # within two cells
 
 
+def _wall_line_grid(openings):
+    """A map of 5 cm cells, 4 x 4 m, all free but a wall line at y 1.9..2.05 with the
+    openings ``(x0, x1)`` (metres) cut out of it."""
+    from floorscan.core.occupancy_classes import grid_of_classes
+
+    r = 0.05
+    occ = np.zeros((80, 80), dtype=bool)
+    occ[38:41, :] = True
+    for x0, x1 in openings:
+        occ[38:41, round(x0 / r):round(x1 / r)] = False
+    return grid_of_classes(occ, ~occ, origin_xy=(0.0, 0.0), resolution_m=r)
+
+
 def test_a_pier_is_free_standing_between_two_openings_the_free_space_passes():
     """piers: the 0.3 m piece between two walls in its line, 1.2 and 0.7 m off their
     ends across free space, is a pier; not with one of the walls gone, nor across a
     gap the scans saw closed, nor when another face meets it at an end (the end face
     of a wall stopping at the line)."""
-    from floorscan.core.occupancy_classes import grid_of_classes
     from floorscan.floorplan.wall_pieces import piers
-
-    r = 0.05
-
-    def grid(openings):  # a wall line at y 1.9..2.05 with the openings (x0, x1) cut out
-        occ = np.zeros((80, 80), dtype=bool)
-        occ[38:41, :] = True
-        for x0, x1 in openings:
-            occ[38:41, round(x0 / r):round(x1 / r)] = False
-        return grid_of_classes(occ, ~occ, origin_xy=(0.0, 0.0), resolution_m=r)
 
     faces = np.array([[0.0, 2.0, 1.0, 2.0], [2.2, 2.0, 2.5, 2.0], [3.2, 2.0, 4.0, 2.0]])
     which = np.array([False, True, False])
-    params, doors = StructureParams(), grid([(1.0, 2.2), (2.5, 3.2)])
+    params, doors = StructureParams(), _wall_line_grid([(1.0, 2.2), (2.5, 3.2)])
     assert piers(faces, which, doors, params).tolist() == [False, True, False]
     assert not piers(faces[:2], which[:2], doors, params).any()  # a wall on one side only
-    assert not piers(faces, which, doors, params, joined=np.array([False, True, False])).any()
-    assert not piers(faces, which, grid([(2.5, 3.2)]), params).any()  # the west opening seen closed
+    at_end = np.array([[2.2, 2.0, 1, 0, 2]], dtype=np.float64)  # x, y, i, j, kind: a face meets the piece's end
+    assert not piers(faces, which, doors, params, junctions=at_end).any()
+    assert not piers(faces, which, _wall_line_grid([(2.5, 3.2)]), params).any()  # the west opening seen closed
 
 
 def test_the_pier_between_a_wall_and_a_door_is_a_wall_however_short():
@@ -645,28 +649,18 @@ def test_a_corner_pier_meets_a_wall_and_has_a_wall_or_a_pier_across_a_door():
     each other across a door (a partition's two pieces); not a stub that meets no wall,
     or only another stub (the corner of an object), nor across a gap the scans saw closed,
     nor one with nothing in its line."""
-    from floorscan.core.occupancy_classes import grid_of_classes
     from floorscan.floorplan.wall_pieces import corner_piers
-
-    r = 0.05
-
-    def grid(openings):  # a wall line at y 1.9..2.05 with the openings (x0, x1) cut out
-        occ = np.zeros((80, 80), dtype=bool)
-        occ[38:41, :] = True
-        for x0, x1 in openings:
-            occ[38:41, round(x0 / r):round(x1 / r)] = False
-        return grid_of_classes(occ, ~occ, origin_xy=(0.0, 0.0), resolution_m=r)
 
     # the stub (0), the wall across the door (1), the wall the stub meets (2), a short
     # piece square to the stub at its end (3)
     faces = np.array([[0.0, 2.0, 0.3, 2.0], [1.1, 2.0, 3.5, 2.0], [0.0, 0.5, 0.0, 3.5], [0.0, 2.0, 0.0, 2.3]])
     at_wall = np.array([[0.0, 2.0, 0, 2, 2]], dtype=np.float64)  # x, y, i, j, kind (a T)
     at_piece = np.array([[0.0, 2.0, 0, 3, 1]], dtype=np.float64)  # an L with the short piece
-    standing, params, door = np.array([True, False, False, True]), StructureParams(), grid([(0.3, 1.1)])
+    standing, params, door = np.array([True, False, False, True]), StructureParams(), _wall_line_grid([(0.3, 1.1)])
     assert corner_piers(faces, standing, at_wall, door, params).tolist() == [True, False, False, False]
     assert not corner_piers(faces, standing, np.zeros((0, 5)), door, params).any()
     assert not corner_piers(faces, standing, at_piece, door, params).any()
-    assert not corner_piers(faces, standing, at_wall, grid([]), params).any()
+    assert not corner_piers(faces, standing, at_wall, _wall_line_grid([]), params).any()
     lone = [0, 2, 3]  # no wall in the stub's line
     assert not corner_piers(faces[lone], standing[lone], np.array([[0.0, 2.0, 0, 1, 2]]), door, params).any()
     two = np.array([[0.0, 2.0, 0.3, 2.0], [1.1, 2.0, 1.4, 2.0], [0.0, 0.5, 0.0, 3.5], [1.4, 0.5, 1.4, 3.5]])

@@ -299,19 +299,19 @@ def plan_of_segments(
         axes, thick, wall_of_face = _one_wall_per_wall(axes, thick, wall_of_face, params)
         axes, junctions = _wall_junctions(axes, thick, wall_of_face, side, params)
         # a wall whose snapped axis is short and not between two junctions is clutter,
-        # unless it is the pier between two doors (the wall passes can shorten a wall
-        # again: up to three rounds)
-        from floorscan.floorplan.junctions import junction_ends, short_loose
+        # unless it is the pier between two doors or between a wall and a door (the wall
+        # passes can shorten a wall again: up to three rounds)
+        from floorscan.floorplan.free_space import open_run
+        from floorscan.floorplan.junctions import short_loose
         from floorscan.floorplan.wall_pieces import corner_piers, piers
 
+        run = open_run(grid)
+        door_widths = (params.rooms.door_min_m, params.rooms.door_max_m)
         for _ in range(3):
             junc = np.column_stack([junctions[["x", "y", "wall_a", "wall_b"]].to_numpy(np.float64), np.zeros(len(junctions))])
             loose = short_loose(axes, junc, params.structure.min_wall_length_m)
-            at_junction = junction_ends(axes, junc).any(axis=1)
-            loose &= ~piers(axes, loose, grid, params.structure, params.rooms.door_min_m, params.rooms.door_max_m,
-                            at_junction)  # fmt: skip
-            loose &= ~corner_piers(axes, loose, junc, grid, params.structure, params.rooms.door_min_m,
-                                   params.rooms.door_max_m)  # fmt: skip
+            loose &= ~piers(axes, loose, grid, params.structure, *door_widths, junc, run)
+            loose &= ~corner_piers(axes, loose, junc, grid, params.structure, *door_widths, open_run=run)
             if not loose.any():
                 break
             drop = loose[wall_of_face]

@@ -336,9 +336,8 @@ def structure_passes(
     anchor = length >= params.clutter_max_length_m
     standing = on_objects(snapped, grid, free_standing_objects(grid, params, snapped[anchor], max_thickness_m)) & ~anchor
     standing &= ~in_wall_lines(snapped, standing, grid.resolution_m, params, door_max_m)
-    at_junction = junction_ends(snapped, junctions).any(axis=1)
-    standing &= ~piers(snapped, standing, grid, params, door_min_m, door_max_m, at_junction)
-    standing &= ~corner_piers(snapped, standing, junctions, grid, params, door_min_m, door_max_m)
+    standing &= ~piers(snapped, standing, grid, params, door_min_m, door_max_m, junctions, open_run)
+    standing &= ~corner_piers(snapped, standing, junctions, grid, params, door_min_m, door_max_m, open_run=open_run)
     # a face run on behind objects has too little free space beside it to show a side;
     # it keeps the side its seen pieces had
     _, side = border_and_support(snapped, grid, params)
@@ -348,7 +347,7 @@ def structure_passes(
     against = front | object_sides(snapped, side, front, behind, params) & ~standing  # fronts and their sides
     short = short_loose(snapped, junctions, params.min_wall_length_m) & ~standing & ~against
     short &= ~door_jambs(snapped, short, params, door_min_m, door_max_m, standing | against)
-    short &= ~corner_piers(snapped, short, junctions, grid, params, door_min_m, door_max_m, standing | against)
+    short &= ~corner_piers(snapped, short, junctions, grid, params, door_min_m, door_max_m, standing | against, open_run)
     crossed = np.zeros(len(snapped), dtype=bool)
     crossed[junctions[junctions[:, 4] == 3][:, 2:4].astype(np.int64).ravel()] = True  # X junctions
     loose = loose_in_free_space(snapped, junction_ends(snapped, junctions), side, grid, params, max_thickness_m, crossed)
@@ -363,7 +362,7 @@ def structure_passes(
     walls, junctions = snap_junctions(joined[keep], params)
     still = ~short_loose(walls, junctions, params.min_wall_length_m)
     still |= door_jambs(walls, ~still, params, door_min_m, door_max_m)
-    still |= corner_piers(walls, ~still, junctions, grid, params, door_min_m, door_max_m)
+    still |= corner_piers(walls, ~still, junctions, grid, params, door_min_m, door_max_m, open_run=open_run)
     clutter.append(walls[~still])
     reason.append(np.full(int((~still).sum()), "short", dtype=object))
     walls, _ = snap_junctions(joined[keep][still], params)

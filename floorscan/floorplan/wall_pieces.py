@@ -2,8 +2,9 @@
 :mod:`floorscan.floorplan.structure`): the faces that would be clutter (on an object,
 or shorter than the shortest wall) but stand in the line of a wall face, a door's
 width or less beyond its end, are pieces of that wall (:func:`in_wall_lines`), a
-door's jambs (:func:`door_jambs`) or the pier between two doors (:func:`piers`). A door
-is an opening in a wall, and the wall goes on across it: its jambs stand in one line.
+door's jambs (:func:`door_jambs`), the pier between two doors (:func:`piers`) or between
+a wall and a door (:func:`corner_piers`). A door is an opening in a wall, and the wall
+goes on across it: its jambs stand in one line.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import numpy as np
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.free_space import StructureParams, open_run
-from floorscan.floorplan.junctions import ends_on_line
+from floorscan.floorplan.junctions import ends_on_line, junction_ends
 
 
 def in_wall_lines(seg: np.ndarray, standing: np.ndarray, cell_m: float, params: StructureParams = StructureParams(),
@@ -51,7 +52,8 @@ def in_wall_lines(seg: np.ndarray, standing: np.ndarray, cell_m: float, params: 
 
 
 def piers(seg: np.ndarray, standing: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams(),
-          door_min_m: float = 0.6, door_max_m: float = 2.0, joined: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+          door_min_m: float = 0.6, door_max_m: float = 2.0, junctions: np.ndarray | None = None,
+          open_run=None) -> np.ndarray:  # fmt: skip
     """Which faces on objects, however short, are the pier between two doors: in the
     line of a wall face beyond each of their two ends (directions within
     ``duplicate_angle_deg``, both ends within ``side_offset_m`` of its line),
@@ -59,8 +61,8 @@ def piers(seg: np.ndarray, standing: np.ndarray, grid: OccupancyGrid, params: St
     through (a run of passable cells ``min_opening_m`` long on the line between the two
     ends, the joins' opening test): two doors. A wall with two doors in it stands in
     one line across both; the piece between them, surrounded by the free space the
-    doors let through, is the wall's, not a chair's. A piece another face meets at an
-    end (``joined``) is no pier: it is the end face of a wall that stops at the line,
+    doors let through, is the wall's, not a chair's. A piece with an end at one of
+    ``junctions`` is no pier: it is the end face of a wall that stops at the line,
     across the wall's thickness.
 
     Parameters
@@ -74,8 +76,10 @@ def piers(seg: np.ndarray, standing: np.ndarray, grid: OccupancyGrid, params: St
     params : StructureParams
     door_min_m, door_max_m : float
         The narrowest and widest door, metres (``floorplan.rooms``).
-    joined : (F,) bool ndarray, optional
-        Faces with a junction at an end (:func:`~floorscan.floorplan.junctions.junction_ends`).
+    junctions : (J, 5) float ndarray, optional
+        ``x, y, i, j, kind`` (:func:`~floorscan.floorplan.junctions.snap_junctions`), metres.
+    open_run : callable, optional
+        :func:`~floorscan.floorplan.free_space.open_run` of ``grid``, when the caller has it.
 
     Returns
     -------
@@ -87,7 +91,7 @@ def piers(seg: np.ndarray, standing: np.ndarray, grid: OccupancyGrid, params: St
     out = np.zeros(len(seg), dtype=bool)
     if len(i) == 0:
         return out
-    opening = _passable_gaps(seg, i, j, grid, params)
+    opening = _passable_gaps(seg, i, j, grid, params, open_run)
     i, j = i[opening], j[opening]
     # which end of face i face j lies beyond: along i's own direction
     d = seg[i, 2:] - seg[i, :2]
@@ -96,12 +100,12 @@ def piers(seg: np.ndarray, standing: np.ndarray, grid: OccupancyGrid, params: St
     both[i[ahead], 0] = True
     both[i[~ahead], 1] = True
     out = both.all(axis=1)
-    return out if joined is None else out & ~np.asarray(joined, dtype=bool)
+    return out if junctions is None else out & ~junction_ends(seg, junctions).any(axis=1)
 
 
 def corner_piers(seg: np.ndarray, standing: np.ndarray, junctions: np.ndarray, grid: OccupancyGrid,
                  params: StructureParams = StructureParams(), door_min_m: float = 0.6, door_max_m: float = 2.0,
-                 not_walls: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+                 not_walls: np.ndarray | None = None, open_run=None) -> np.ndarray:  # fmt: skip
     """Which faces on objects, however short, are the pier between a wall they meet and
     a door: an end at a junction with a face not in ``standing`` (a wall: not another
     piece, as at the corner of an object), and in their line, beyond their other end,
@@ -119,13 +123,9 @@ def corner_piers(seg: np.ndarray, standing: np.ndarray, junctions: np.ndarray, g
     standing : (F,) bool ndarray
         Which faces lie on objects (or are too short for a wall).
     junctions : (J, 5) float ndarray
-        ``x, y, i, j, kind`` (:func:`~floorscan.floorplan.junctions.snap_junctions`), metres;
-        an end of face ``i`` or ``j`` within 0.02 m of ``x, y`` is at it.
-    grid : OccupancyGrid
-        The free space of the plan's scans.
-    params : StructureParams
-    door_min_m, door_max_m : float
-        The narrowest and widest door, metres (``floorplan.rooms``).
+        ``x, y, i, j, kind`` (:func:`~floorscan.floorplan.junctions.snap_junctions`), metres.
+    grid, params, door_min_m, door_max_m, open_run
+        As :func:`piers`.
     not_walls : (F,) bool ndarray, optional
         Faces that are clutter for another reason (objects, fronts of furniture): no wall
         a pier meets or stands in line with.
@@ -139,17 +139,13 @@ def corner_piers(seg: np.ndarray, standing: np.ndarray, junctions: np.ndarray, g
     standing = np.asarray(standing, dtype=bool)
     walls = ~standing if not_walls is None else ~standing & ~np.asarray(not_walls, dtype=bool)
     junctions = np.asarray(junctions, dtype=np.float64).reshape(-1, 5)
-    meets_wall = np.zeros(len(seg), dtype=bool)
-    for col, other in ((2, 3), (3, 2)):
-        ids, others = junctions[:, col].astype(np.int64), junctions[:, other].astype(np.int64)
-        for end in (0, 1):
-            at = np.hypot(*(junctions[:, :2] - seg[ids, 2 * end : 2 * end + 2]).T) <= 0.02
-            meets_wall[ids[at & walls[others]]] = True
-    stub = standing & meets_wall
+    pair = junctions[:, 2:4].astype(np.int64)
+    with_wall = walls[pair[:, 0]] | walls[pair[:, 1]]  # the junctions a wall is in
+    stub = standing & junction_ends(seg, junctions[with_wall]).any(axis=1)
     i, j = _line_pairs(seg, stub, 0.0, door_min_m, door_max_m, params, others=walls | stub)
     out = np.zeros(len(seg), dtype=bool)
     if len(i):
-        out[i[_passable_gaps(seg, i, j, grid, params)]] = True
+        out[i[_passable_gaps(seg, i, j, grid, params, open_run)]] = True
     return out
 
 
@@ -225,17 +221,17 @@ def _line_pairs(seg: np.ndarray, which: np.ndarray, min_length_m: float, gap_min
 
 
 def _passable_gaps(seg: np.ndarray, i: np.ndarray, j: np.ndarray, grid: OccupancyGrid,
-                   params: StructureParams) -> np.ndarray:  # fmt: skip
+                   params: StructureParams, run=None) -> np.ndarray:  # fmt: skip
     """Whether the free space passes the gap between the facing ends of faces i and j
     (pairs, (P,) each): a run of passable cells ``min_opening_m`` long on the line
-    between the two ends (:func:`~floorscan.floorplan.free_space.open_run`, the joins'
-    opening test)."""
+    between the two ends (``run``, :func:`~floorscan.floorplan.free_space.open_run` of
+    ``grid`` by default: the joins' opening test)."""
     ends_i, ends_j = seg[i].reshape(-1, 2, 2), seg[j].reshape(-1, 2, 2)
     dist = np.linalg.norm(ends_i[:, :, None, :] - ends_j[:, None, :, :], axis=-1).reshape(-1, 4)
     k = dist.argmin(axis=1)
     rows = np.arange(len(i))
     p, q = ends_i[rows, k // 2], ends_j[rows, k % 2]
     width = dist[rows, k]
-    run = open_run(grid)
+    run = open_run(grid) if run is None else run
     return np.array([run(p[g], (q[g] - p[g]) / max(width[g], 1e-12), 0.0, width[g]) >= params.min_opening_m
                      for g in range(len(i))], dtype=bool)  # fmt: skip
