@@ -666,3 +666,26 @@ def test_a_corner_pier_meets_a_wall_and_has_a_wall_or_a_pier_across_a_door():
     two = np.array([[0.0, 2.0, 0.3, 2.0], [1.1, 2.0, 1.4, 2.0], [0.0, 0.5, 0.0, 3.5], [1.4, 0.5, 1.4, 3.5]])
     ends = np.array([[0.0, 2.0, 0, 2, 2], [1.4, 2.0, 1, 3, 2]], dtype=np.float64)
     assert corner_piers(two, np.array([True, True, False, False]), ends, door, params).tolist() == [True, True, False, False]
+
+
+def test_a_short_face_is_measured_from_the_corner_it_stops_short_of():
+    """long_enough: a 0.26 m face ending 0.06 m short of a wall's line reaches 0.32 m
+    from the corner and is kept, carried there; 0.15 m short it is not, nor is a 0.26 m
+    face that meets nothing; a face at least the shortest length is kept as it is."""
+    from floorscan.floorplan.structure import long_enough
+
+    wall = [0.0, -1.0, 0.0, 3.0]
+    faces = np.array([wall, [0.06, 0.0, 0.32, 0.0], [0.15, 1.0, 0.41, 1.0], [1.0, 2.0, 1.26, 2.0], [0.5, 2.5, 1.0, 2.5]])
+    keep, carried = long_enough(faces, 0.3, 0.05)
+    assert keep.tolist() == [True, True, False, False, True]
+    assert carried[1] == pytest.approx([0.0, 0.0, 0.32, 0.0], abs=1e-9)
+    assert np.array_equal(carried[[0, 2, 3, 4]], faces[[0, 2, 3, 4]])
+
+
+def test_the_corner_reach_is_what_the_map_extractor_claims():
+    """CLAIMED_M is the map extractor's inlier distance and thinning cell, which the
+    floor plan package cannot import (ARCHITECTURE.md: no stage imports another)."""
+    from floorscan.floorplan.structure import CLAIMED_M
+    from floorscan.walls.map_lines import MAP_GRID_M, MAP_THRESHOLD_M
+
+    assert CLAIMED_M == pytest.approx(MAP_THRESHOLD_M + MAP_GRID_M)

@@ -76,7 +76,8 @@ class FloorplanParams:
     wall_height_m : float
         Height of every wall (IFC extrusion, GeoJSON ``height_m``), metres.
     min_length_m : float
-        Merged faces shorter than this are dropped, metres.
+        Merged faces shorter than this are dropped, metres; with a grid, measured from
+        the corners they stop short of (:func:`~floorscan.floorplan.structure.long_enough`).
     dxf_version : str
         DXF export: ``"R2010"`` (units header: metres) or ``"R12"`` (no units
         header; see :func:`~floorscan.floorplan.dxf.write_dxf`).

@@ -170,7 +170,7 @@ def in_scan_order(segments: pd.DataFrame) -> pd.DataFrame:
 
 def plan_faces(
     seg: np.ndarray, weights: np.ndarray | None = None, params: FloorplanParams = FloorplanParams(),
-    first_groups: np.ndarray | None = None,
+    first_groups: np.ndarray | None = None, min_length_m: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The wall faces of a floor plan: the segments merged (:func:`merge_segments`),
     faces shorter than ``min_length_m`` dropped (:func:`build_floorplan`'s faces).
@@ -185,6 +185,10 @@ def plan_faces(
     params : FloorplanParams
     first_groups : (M,) int64 ndarray, optional
         The merge's first pass, prepared (:class:`~floorscan.floorplan.merge.FirstMergePass`).
+    min_length_m : float, optional
+        Metres; None: ``params.min_length_m``. The structure passes take every face and
+        drop the short ones where they meet the walls
+        (:func:`~floorscan.floorplan.structure.long_enough`).
 
     Returns
     -------
@@ -201,7 +205,7 @@ def plan_faces(
     faces, face_w, labels = merge_segments(seg, w, params, first_groups)
     n_seg = np.bincount(labels, minlength=len(faces))
     flen = np.hypot(faces[:, 2] - faces[:, 0], faces[:, 3] - faces[:, 1]) if len(faces) else np.empty(0)
-    keep = flen >= params.min_length_m
+    keep = flen >= (params.min_length_m if min_length_m is None else min_length_m)
     return faces[keep].reshape(-1, 4), face_w[keep], n_seg[keep]
 
 
@@ -272,7 +276,8 @@ def plan_of_segments(
     FloorPlan
     """
     seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
-    faces, face_w, n_seg = plan_faces(seg, weights, params, first_groups)
+    # with a grid, the structure passes drop the short faces (step 0, where they meet the walls)
+    faces, face_w, n_seg = plan_faces(seg, weights, params, first_groups, None if grid is None else 0.0)
     clutter = _empty(CLUTTER_COLUMNS)
     under = None
     if grid is not None:
@@ -280,7 +285,8 @@ def plan_of_segments(
 
         n_before = len(faces)
         faces, face_w, side, cl, reason, under = structure_passes(
-            faces, face_w, grid, params.structure, params.pair_max_m, params.rooms.door_max_m, params.rooms.door_min_m
+            faces, face_w, grid, params.structure, params.pair_max_m, params.rooms.door_max_m, params.rooms.door_min_m,
+            params.min_length_m,
         )
         n_seg = np.ones(len(faces), dtype=np.int64)
         clutter = pd.DataFrame(
