@@ -118,14 +118,8 @@ def corner_piers(seg: np.ndarray, standing: np.ndarray, junctions: np.ndarray, g
 
     Parameters
     ----------
-    seg : (F, 4) float ndarray
-        Faces, metres.
-    standing : (F,) bool ndarray
-        Which faces lie on objects (or are too short for a wall).
-    junctions : (J, 5) float ndarray
-        ``x, y, i, j, kind`` (:func:`~floorscan.floorplan.junctions.snap_junctions`), metres.
-    grid, params, door_min_m, door_max_m, open_run
-        As :func:`piers`.
+    seg, standing, junctions, grid, params, door_min_m, door_max_m, open_run
+        As :func:`piers` (``junctions`` here required).
     not_walls : (F,) bool ndarray, optional
         Faces that are clutter for another reason (objects, fronts of furniture): no wall
         a pier meets or stands in line with.
