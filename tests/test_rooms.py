@@ -534,6 +534,19 @@ def test_a_network_of_corridors_is_a_corridor_and_a_hall_is_a_room():
     assert list(rooms["name"]) == ["Corridor 1", "Room 1", "Room 2"]
 
 
+def test_a_hallway_wider_than_a_corridor_is_a_corridor_when_longer_in_proportion():
+    """is_corridor: a 4.5 m x 50 m hallway (11 widths long, 6 needed at 1.5 times the
+    corridor's width) is a corridor; a 4.5 m x 25 m one (5.6 widths) and a 9 m x 50 m
+    hall (5.6 widths, 12 needed) are not; a 3 m x 12.5 m corridor (4.2 widths) is, as
+    a 3.2 m x 13 m room (4.1 widths, 4.3 needed) is not."""
+    from floorscan.floorplan.room_tables import is_corridor
+
+    def kind(w, h):
+        return is_corridor(shapely.box(0, 0, w, h), 0.025, RoomParams())
+
+    assert [kind(4.5, 50), kind(4.5, 25), kind(9, 50), kind(3, 12.5), kind(3.2, 13)] == [True, False, False, True, False]
+
+
 def test_an_office_around_a_table_island_is_a_room_and_a_ring_around_a_core_a_corridor():
     """room_tables: a 5 m x 7 m office around a 0.8 m x 2 m block drawn as walls (a hole
     smaller than the smallest room: its floor's median local thickness without the hole

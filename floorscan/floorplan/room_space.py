@@ -47,7 +47,9 @@ MIN_ENCLOSURE_UNENTERED = 0.5
 CORRIDOR_ELONGATION = 4.0
 #: ... and at least this long, metres (shorter: a closet or an entrance) ...
 CORRIDOR_MIN_LENGTH_M = 3.0
-#: ... is a corridor when at most this wide (median local thickness), metres: wider is a hall.
+#: ... is a corridor when at most this wide (median local thickness), metres; a wider
+#: one is a corridor only when longer in proportion to its width beyond this (a main
+#: hallway 4.5 m wide runs 6 widths or more), else a hall.
 CORRIDOR_MAX_WIDTH_M = 3.0
 #: A room is mostly at least this wide (its median local thickness), metres: the
 #: narrowest walkway, the minimum clear width of a walking surface (36 in, 2010 ADA

@@ -18,9 +18,8 @@ def room_tables(
     polys: list, doors: list, resolution_m: float, params: RoomParams, divided: bool = False
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The rooms and doors tables of room polygons and door openings: each room's kind
-    (a ``corridor`` when long for its width: the width its median local thickness
-    (:func:`room_width`) with the objects on its floor filled (:func:`objects_filled`),
-    its length the area over that width; ``space`` for every room
+    (a ``corridor`` when long for its width, :func:`is_corridor`, with the objects on
+    its floor filled (:func:`objects_filled`); ``space`` for every room
     when no door and no room's open side divides the space) and name (``Room 1``,
     ``Corridor 1``, ``Space 1`` in the order given).
 
@@ -43,13 +42,8 @@ def room_tables(
     rooms, doors : pandas.DataFrame
         As :func:`floorscan.floorplan.rooms.plan_rooms`.
     """
-    kinds = []
-    for poly in polys:
-        floor = objects_filled(poly, params.min_room_area_m2)
-        width = room_width(floor, resolution_m / 2, params.corridor_max_width_m)
-        length = floor.area / max(width, 1e-9)
-        long = width <= params.corridor_max_width_m and length >= max(params.corridor_elongation * width, params.corridor_min_length_m)
-        kinds.append("corridor" if long else "room")
+    kinds = ["corridor" if is_corridor(objects_filled(poly, params.min_room_area_m2), resolution_m / 2, params)
+             else "room" for poly in polys]
     if polys and not doors and not divided:
         kinds = ["space"] * len(polys)
         log.info("rooms: no door divides the free space (an open hall, one corridor, a campus): %s of %.1f m2",
@@ -80,6 +74,39 @@ def room_tables(
         }  # fmt: skip
     )
     return rooms, doors_df
+
+
+def is_corridor(floor, tolerance_m: float, params: RoomParams) -> bool:
+    """Whether a room is a corridor: long for its width (Bormann et al., "Room
+    segmentation: survey, implementation, and analysis", ICRA 2016, a corridor is long
+    and narrow). Its width ``w`` is its median local thickness (:func:`room_width`),
+    its length ``L`` its area over ``w``; it is a corridor when ``L`` is at least
+    ``corridor_min_length_m`` and ``corridor_elongation`` times ``w``, the more so the
+    wider it is than ``corridor_max_width_m`` (``W``): ``L >= E w max(1, w / W)``. A
+    corridor up to ``W`` wide is ``E`` widths long; a main hallway twice as wide runs
+    twice as many widths (a 4.5 m hall of 50 m is a corridor, a 9 m x 50 m one a hall).
+    The bound on ``w`` that follows, ``w**3 <= W area / E``, caps the bisection.
+
+    Parameters
+    ----------
+    floor : shapely.Polygon
+        The room with the objects on its floor filled (:func:`objects_filled`), metres.
+    tolerance_m : float
+        Of the width (:func:`room_width`), metres.
+    params : RoomParams
+        ``corridor_elongation`` (E), ``corridor_min_length_m``, ``corridor_max_width_m`` (W).
+
+    Returns
+    -------
+    bool
+    """
+    e, w_max = params.corridor_elongation, params.corridor_max_width_m
+    cap = max(w_max, (w_max * floor.area / e) ** (1 / 3))
+    width = room_width(floor, tolerance_m, cap)
+    if width <= 0 or width > cap:
+        return False
+    length = floor.area / width
+    return length >= max(e * width * max(1.0, width / w_max), params.corridor_min_length_m)
 
 
 def objects_filled(poly, min_room_area_m2: float):

@@ -85,10 +85,12 @@ taken from the walls:
    seen through an opening wider than a door is bounded at its far end at most, not
    along its two sides. A room is a
    ``corridor`` when it is long for its width (its length, area over width, at least
-   ``corridor_elongation`` times its width and ``corridor_min_length_m``; the width,
-   its polygon's median local thickness (:func:`~floorscan.floorplan.room_tables.room_width`)
-   with its holes smaller than a room filled (an object on its floor, not a core it goes
-   around), at most ``corridor_max_width_m``). When no door divides the space (an open hall, one
+   ``corridor_elongation`` times its width and ``corridor_min_length_m``, and longer in
+   proportion to its width where it is wider than ``corridor_max_width_m``
+   (:func:`~floorscan.floorplan.room_tables.is_corridor`); the width, its polygon's
+   median local thickness (:func:`~floorscan.floorplan.room_tables.room_width`) with
+   its holes smaller than a room filled (an object on its floor, not a core it goes
+   around)). When no door divides the space (an open hall, one
    corridor, a campus), it is one region of kind ``space`` (or a few, where the
    seen space falls apart).
 6. **Polygons** (:func:`~floorscan.floorplan.room_polygons.room_polygons`): each room's cells traced (contourpy), grown up
