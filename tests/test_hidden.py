@@ -128,14 +128,22 @@ def test_the_sides_of_a_cabinet_against_a_wall_go_with_its_front():
 # across it; the wall's face at y = 8 is seen west and east of the cabinets
 PARTITION_WEST = [0.0, 0.0, 0.0, 4.0]
 PARTITION_EAST = [0.2, 0.0, 0.2, 4.0]
-CABINETS = [
-    [-1.0, 4.05, -1.0, 8.0],  # the west cabinet's front, free to the west
-    [-1.0, 4.05, 0.0, 4.05],  # its side, free to the south
-    [1.0, 4.05, 1.0, 8.0],  # the east cabinet's front, free to the east
-    [0.2, 4.05, 1.0, 4.05],  # its side, free to the south
-    [-5.0, 8.0, -1.0, 8.0],  # the wall's face west of the cabinets, free to the south
-    [1.0, 8.0, 5.0, 8.0],  # east of them
-]
+
+
+def cabinets(east_depth_m: float) -> list[list[float]]:
+    """The faces of the two cabinets, the east one ``east_depth_m`` deep, and the wall's."""
+    e = 0.2 + east_depth_m
+    return [
+        [-1.0, 4.05, -1.0, 8.0],  # the west cabinet's front, free to the west
+        [-1.0, 4.05, 0.0, 4.05],  # its side, free to the south
+        [e, 4.05, e, 8.0],  # the east cabinet's front, free to the east
+        [0.2, 4.05, e, 4.05],  # its side, free to the south
+        [-5.0, 8.0, -1.0, 8.0],  # the wall's face west of the cabinets, free to the south
+        [e, 8.0, 5.0, 8.0],  # east of them
+    ]
+
+
+CABINETS = cabinets(0.8)
 CABINET_SIDES = [1, -1, -1, -1, -1, -1]
 
 
@@ -169,4 +177,56 @@ def test_a_face_ending_on_a_wall_is_not_carried_through_it():
     # of a partition (x 0 .. 0.35) whose end face, y = 0, lies 0.3 m in front of it
     seg = np.array([[0.9, 0.3, 0.345, 0.3], [0.0, 0.0, 0.35, 0.0], [0.35, 0.0, 0.35, 4.0], [0.0, 0.0, 0.0, 4.0]])
     side = np.array([1, -1, -1, 1])
+    assert np.allclose(into_corners(seg, side, CLOSED, P, NONE_FREE), seg)
+
+
+# the partition of CABINETS with a cabinet 1.0 m deep on each side, both deeper than
+# front_max_m (0.9 m), so neither face is carried behind a shallow one first
+DEEP_CABINETS = cabinets(1.0)
+
+
+def test_a_partition_runs_on_between_deep_cabinets_back_to_back_to_the_wall():
+    """Two cabinets 1.0 m deep back to back at a partition's end (office_h of Bormann
+    et al.'s benchmark): each face of the partition is backed by the other's cabinet,
+    not by its own wall, and both run on to the wall; with the cabinets' sides one face
+    flush with the partition's end, 2.2 m long across it, too; a face as long behind
+    the partition (a wall it ends on) is its corner."""
+    seg = np.array([PARTITION_WEST, PARTITION_EAST, *DEEP_CABINETS])
+    side = np.array([1, -1, *CABINET_SIDES])
+    out = into_corners(seg, side, CLOSED, P, NONE_FREE)
+    assert np.allclose(out[0], [0.0, 0.0, 0.0, 8.0]) and np.allclose(out[1], [0.2, 0.0, 0.2, 8.0])
+    assert np.allclose(into_corners(seg, side, CLOSED, P, ALL_FREE)[:2], seg[:2])  # the "cabinets" seen through
+    assert np.allclose(into_corners(np.delete(seg, 4, axis=0), np.delete(side, 4), CLOSED, P, NONE_FREE)[:2], seg[:2])
+    flush = np.array([[0.0, 0.0, 0.0, 4.0], [0.2, 0.0, 0.2, 4.0], [-1.0, 4.0, -1.0, 8.0], [-1.0, 4.0, 1.2, 4.0],
+                      [1.2, 4.0, 1.2, 8.0], *DEEP_CABINETS[4:]])
+    flush_side = np.array([1, -1, 1, -1, -1, -1, -1])
+    out = into_corners(flush, flush_side, CLOSED, P, NONE_FREE)
+    assert np.allclose(out[0], [0.0, 0.0, 0.0, 8.0]) and np.allclose(out[1], [0.2, 0.0, 0.2, 8.0])
+    # the same face running 3.5 m on west behind the partition: a wall, the partition's corner
+    wall = flush.copy()
+    wall[3, 0] = -3.5
+    assert np.allclose(into_corners(wall, flush_side, CLOSED, P, NONE_FREE)[:2], flush[:2])
+    # the flush face is the two cabinets' sides, from one front's end across the
+    # partition's line to the other's
+    carried = out.copy()
+    front = np.array([False, False, True, False, True, False, False])
+    behind = np.array([-1, -1, 0, -1, 1, -1, -1])
+    assert object_sides(carried, flush_side, front, behind, P).tolist() == [False, False, False, True, False, False, False]
+
+
+def test_a_face_in_an_l_corner_stays_in_its_corner():
+    """A partition (x = 0, free to the east) whose end meets, at y = 4, the end of a wall
+    2.5 m long running west behind it (y = 4, free to the south, 5 mm past the line): an
+    L corner. A block
+    on the wall (x -1.2 .. 0.37, y 4.1 .. 4.8, its east side in front of the partition's
+    line) does not carry the partition through the corner to its top (intel, the room
+    at (-8, -19))."""
+    seg = np.array([
+        [0.0, 0.0, 0.0, 4.0],  # the partition's east face, free to the east
+        [-2.5, 4.0, 0.005, 4.0],  # the wall, free to the south, ending 5 mm past the line
+        [0.37, 4.1, 0.37, 4.8],  # the block's east side, free to the east
+        [-1.2, 4.8, 0.37, 4.8],  # its top, free to the north
+        [-1.2, 4.1, -1.2, 4.8],  # its west side, free to the west
+    ])  # fmt: skip
+    side = np.array([-1, -1, -1, 1, 1])
     assert np.allclose(into_corners(seg, side, CLOSED, P, NONE_FREE), seg)

@@ -217,7 +217,9 @@ def object_sides(seg: np.ndarray, side: np.ndarray, front: np.ndarray, behind: n
     to the wall face behind a front (at least ``junction_min_angle_deg``), from within
     ``snap_m`` of one of the front's ends to within ``snap_m`` of that face's line, no
     longer than the front (furniture stands along the wall, longer than it is deep),
-    with the front on its far side from its free side (the object's body is behind it). It
+    with the front on its far side from its free side (the object's body is behind it);
+    or across the wall's line, to within ``snap_m`` of another front's end (the sides of
+    two objects back to back at a partition's end, in one line). It
     closes the object's body against the wall; kept as a wall, it would close the
     front into a closet of three walls that takes the floor under the object from its
     room (:func:`~floorscan.floorplan.structure.floor_under`).
@@ -244,7 +246,10 @@ def object_sides(seg: np.ndarray, side: np.ndarray, front: np.ndarray, behind: n
     every = np.arange(len(seg))
     out = np.zeros(len(seg), dtype=bool)
     candidate = ~np.asarray(front, dtype=bool) & (np.asarray(side) != 0)
-    for f in np.flatnonzero(front).tolist():
+    fronts = np.flatnonzero(front)  # (F, 2) at_any_front: each end within snap_m of any front's end
+    to_fronts = np.linalg.norm(ends[:, :, None] - ends[fronts].reshape(1, 1, -1, 2), axis=3)
+    at_any_front = to_fronts.min(axis=2, initial=np.inf) <= params.snap_m
+    for f in fronts.tolist():
         w = int(behind[f])
         across = candidate & (np.abs(u[:, 0] * u[w, 1] - u[:, 1] * u[w, 0]) >= square) & (length <= length[f])
         body_behind = np.einsum("ij,ij->i", 0.5 * (seg[f, :2] + seg[f, 2:]) - seg[:, :2], n) < 0
@@ -253,6 +258,9 @@ def object_sides(seg: np.ndarray, side: np.ndarray, front: np.ndarray, behind: n
         # (F, 2): each end within snap_m of one of the front's two ends
         at_front = np.linalg.norm(ends[:, :, None, :] - ends[f][None, None], axis=3).min(axis=2) <= params.snap_m
         out |= across & body_behind & ((at_front[:, 0] & on_wall[:, 1]) | (at_front[:, 1] & on_wall[:, 0]))
+        # across the wall's line to another front's end: two objects' sides back to back, flush with a partition's end
+        to_other = (at_front[:, 0] & at_any_front[:, 1]) | (at_front[:, 1] & at_any_front[:, 0])
+        out |= across & body_behind & (off[:, 0] * off[:, 1] < 0) & to_other
     return out
 
 

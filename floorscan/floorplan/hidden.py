@@ -21,8 +21,10 @@ runs from a wall to the end of a front may be a partition's stub as well.
 Deeper objects (a desk with its chair, a bed, cabinets back to back; up to
 :data:`OBJECT_MAX_DEPTH_M`) count only where the wall's thickness is seen: its other
 face runs on straight behind the stretch (:func:`backed`), and the scans did not see
-the object's body free (:func:`body_seen_free`). From the room alone a deep object and
-a step of the wall (a shaft, an alcove, an outer wall's jog) look the same; a wall
+the object's body free (:func:`body_seen_free`), or, at a partition's end, where
+objects as deep stand on its two sides, back to back, from its end on (each face is
+then backed by the other side's object, :func:`back_to_back`). From the room alone a
+deep object and a step of the wall (a shaft, an alcove, an outer wall's jog) look the same; a wall
 that steps moves both its faces, so its other face is not behind the stretch. This is
 the thickness evidence of wall detection from both sides (Ochmann et al., "Automatic
 reconstruction of fully volumetric 3D building models from oriented point clouds",
@@ -137,11 +139,48 @@ def backed(seg: np.ndarray, side: np.ndarray, a: int, t0: float, t1: float,
     returns bool."""
     if side[a] == 0 or t1 <= t0:
         return False
-    _, _, n, parallel, s = _line_frame(seg, side, a, params)
+    _, s, behind = _behind(seg, side, a, params, depth_max_m)
+    return bool(behind.any()) and _covers(s[behind], t0, t1) >= params.front_overlap * (t1 - t0)
+
+
+def _behind(seg: np.ndarray, side: np.ndarray, a: int, params: StructureParams, depth_max_m: float):
+    """Face ``a``'s frame (:func:`_line_frame`: ``u``, the ends along its line ``s``)
+    and the faces that may be the other face of its wall: parallel to it, free the other
+    way, wholly behind its line by at most ``depth_max_m`` ((F,) bool, ``a`` not)."""
+    u, _, n, parallel, s = _line_frame(seg, side, a, params)
     ends = np.stack([(seg[:, :2] - seg[a, :2]) @ n[a], (seg[:, 2:] - seg[a, :2]) @ n[a]], axis=1)
     behind = parallel & ((n @ n[a]) < 0) & (ends.max(axis=1) < 0) & (ends.min(axis=1) >= -depth_max_m)
     behind[a] = False
-    return bool(behind.any()) and _covers(s[behind], t0, t1) >= params.front_overlap * (t1 - t0)
+    return u, s, behind
+
+
+def back_to_back(seg: np.ndarray, side: np.ndarray, a: int, t0: float, t1: float, params: StructureParams,
+                 free_at) -> bool:
+    """Whether objects stand back to back on the two sides of face ``a``'s partition
+    along the stretch ``t0..t1`` of its line beyond one of its ends: the other face of
+    its wall (parallel, free the other way, behind ``a``'s line by at most
+    :data:`BACKING_MAX_M`) ends within ``front_min_m`` of where ``a`` ends and the
+    stretch begins, and objects up to :data:`OBJECT_MAX_DEPTH_M` deep, whose bodies the
+    scans did not see free, cover the stretch on that face's side too
+    (:func:`covered_by_fronts`). Neither face then backs the other's objects
+    (:func:`backed`), yet the partition's line runs on between them: two cabinets
+    1 m deep against its two sides, each deeper than ``front_max_m``. ``free_at`` as
+    :func:`covered_by_fronts`; other parameters as :func:`backed`; returns bool."""
+    if side[a] == 0 or t1 <= t0:
+        return False
+    u, s, other = _behind(seg, side, a, params, BACKING_MAX_M)
+    # the stretch lies beyond the other face's end, which is where a's end is: past a's
+    # far end (t0 at its length) or before its first (t1 at 0)
+    beyond_far = t0 >= s[a, 1] - params.front_min_m
+    a_end = t0 if beyond_far else t1
+    stops = s[:, 1] if beyond_far else s[:, 0]
+    other &= (np.abs(stops - a_end) <= params.front_min_m) & (s[:, 1] - s[:, 0] > params.front_min_m)
+    p0, p1 = seg[a, :2] + t0 * u[a], seg[a, :2] + t1 * u[a]
+    for b in np.flatnonzero(other).tolist():
+        b0, b1 = sorted((float((p0 - seg[b, :2]) @ u[b]), float((p1 - seg[b, :2]) @ u[b])))
+        if covered_by_fronts(seg, side, b, b0, b1, params, params.front_max_m, OBJECT_MAX_DEPTH_M, free_at):
+            return True
+    return False
 
 
 def hidden_by_objects(seg: np.ndarray, side: np.ndarray, a: int, t0: float, t1: float,
@@ -235,9 +274,14 @@ def into_corners(seg: np.ndarray, side: np.ndarray, open_run, params: StructureP
     corner where a room lies behind ``a``'s wall within :data:`OBJECT_MAX_DEPTH_M` along
     the stretch to the next corner (:func:`backed` that deep): the object stands
     against a partition, whose line runs on behind it; a step of an outer wall has no
-    room behind it. Up to :data:`INTO_CORNERS_PASSES` passes, each face carried once: a
-    face carried in behind a shallow cabinet backs its wall's other face behind a deeper
-    cabinet on the partition's other side (cabinets back to back).
+    room behind it. A face ``a`` ends on that crosses its wall (``front_min_m`` or more
+    on each side of its line), no deeper into the room than an object and no farther
+    behind than an object and a wall's thickness, is such a side too (two objects'
+    sides flush with a partition's end) where objects stand back to back
+    (:func:`back_to_back`) up to a face that looks back at ``a``'s end. Up to
+    :data:`INTO_CORNERS_PASSES` passes, each face carried once: a face carried in
+    behind a shallow cabinet backs its wall's other face behind a deeper cabinet on the
+    partition's other side (cabinets back to back).
 
     Parameters
     ----------
@@ -295,7 +339,15 @@ def _into_corners_once(seg: np.ndarray, side: np.ndarray, open_run, params: Stru
     for a in np.flatnonzero(todo).tolist():
         # a corner's face stands in the room a bounds, on a's free side of its line; a
         # face wholly behind the line is in the wall or beyond it (an object in the next room)
-        in_room = np.maximum((seg[:, :2] - seg[a, :2]) @ free_n[a], (seg[:, 2:] - seg[a, :2]) @ free_n[a]) > 0
+        across = np.stack([(seg[:, :2] - seg[a, :2]) @ free_n[a], (seg[:, 2:] - seg[a, :2]) @ free_n[a]], axis=1)
+        in_room = across.max(axis=1) > 0
+        # a square face that crosses a's wall, at least front_min_m on each side of its
+        # line, no deeper into the room than an object and no farther behind than an
+        # object and a wall's thickness: a wall a's end is on, or the sides of two
+        # objects back to back, flush with the end of the partition between them
+        into, behind = across.max(axis=1), -across.min(axis=1)
+        flush = ((np.minimum(into, behind) >= params.front_min_m) & (into <= OBJECT_MAX_DEPTH_M)
+                 & (behind <= OBJECT_MAX_DEPTH_M + BACKING_MAX_M))  # fmt: skip
         for k in (0, 1):
             end = seg[a, 2 * k : 2 * k + 2]
             out_dir = u[a] if k == 1 else -u[a]
@@ -322,6 +374,7 @@ def _into_corners_once(seg: np.ndarray, side: np.ndarray, open_run, params: Stru
                 return (t0, t0 + float(t[c])) if k == 1 else (t0 - float(t[c]), t0)
 
             p = _corner(ok, t, gap, params.front_min_m)
+            paired = False  # back_to_back up to p, when found so on the way
             # the side of an object at a's end (no deeper than an object) is no corner when
             # a room lies behind a's wall within an object's depth along the stretch to the
             # next corner: the object stands against a partition, whose line runs on to it
@@ -331,14 +384,25 @@ def _into_corners_once(seg: np.ndarray, side: np.ndarray, open_run, params: Stru
                 q = _corner(beyond, t, gap, params.front_min_m)
                 if backed(seg, side, a, *stretch(q), params, OBJECT_MAX_DEPTH_M):
                     p = q
+            elif t[p] < params.front_min_m and flush[p] and free_at is not None and (ok & (t >= params.front_min_m)).any():
+                # a's end on a face flush across it: the objects back to back beside its
+                # wall's end when they hide the stretch on both sides up to the corner
+                q = _corner(ok & (t >= params.front_min_m), t, gap, params.front_min_m)
+                if float(free_n[q] @ out_dir) < 0 and back_to_back(seg, side, a, *stretch(q), params, free_at):
+                    p, paired = q, True
             if t[p] <= 0:  # a ends on a face square to it: in its corner already
                 continue
             near = -params.front_max_m <= s[p] <= length[p] + params.front_max_m
             lo, hi = stretch(p)
             t, x = float(t[p]), x[p]
             # a square face ending farther than front_max_m from the corner: only a
-            # deeper object hides it
-            covered = hidden_by_objects(seg, side, a, lo, hi, params, free_at, params.front_max_m, shallow=near)
+            # deeper object hides it (backed by the wall's other face, or by the objects
+            # on the partition's other side, back to back, up to a wall that faces
+            # back at a's end: not the objects' own far face)
+            covered = hidden_by_objects(seg, side, a, lo, hi, params, free_at, params.front_max_m, shallow=near) or (
+                free_at is not None
+                and (paired or float(free_n[p] @ out_dir) < 0 and back_to_back(seg, side, a, lo, hi, params, free_at))
+                and covered_by_fronts(seg, side, a, lo, hi, params, params.front_max_m, OBJECT_MAX_DEPTH_M, free_at))
             if covered and open_run(end, out_dir, 0.0, t) < params.min_opening_m:
                 out[a, 2 * k : 2 * k + 2] = x
     return out
