@@ -51,7 +51,10 @@ taken from the walls:
    merged across every passage that is no door (no wider than ``door_max_m``, at most
    three quarters of the width of each region it joins, between jambs; not from the
    face of a wall to an object wider than a wall,
-   :func:`~floorscan.floorplan.jambs.face_to_object`): one rule for every passage of
+   :func:`~floorscan.floorplan.jambs.face_to_object`, nor between the faces of two
+   walls that run on past both its ends for a door's width each way,
+   :func:`~floorscan.floorplan.jambs.between_faces`: a corridor's even stretch, which the
+   watershed parts where the crossings at its ends widen): one rule for every passage of
    the plan, in no order. An opening wider than a door, up to
    :data:`~floorscan.floorplan.mouths.MOUTH_MAX_M` (a room's open side), between
    jambs and ending on no wall's face (:func:`~floorscan.floorplan.jambs.on_wall_face`:
@@ -124,7 +127,7 @@ from floorscan.floorplan import doors as D
 from floorscan.floorplan.corridors import corridor_ends, corridor_sides, corridor_strips
 from floorscan.floorplan.extensions import partition_cuts
 from floorscan.floorplan.hidden import OBJECT_MAX_DEPTH_M
-from floorscan.floorplan.jambs import face_to_object, jamb_cells, on_wall_face
+from floorscan.floorplan.jambs import between_faces, face_to_object, jamb_cells, on_wall_face, wall_line_index
 from floorscan.floorplan.mouths import MOUTH_MAX_M, corner_mouths, dead_end_mouths, room_mouths
 from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
@@ -213,9 +216,11 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     # at a desk, is no door); narrower than a door
     # it is a slit nobody passes, which keeps two regions apart without a door; nor is
     # the narrowing between the face of a wall and an object wider than a wall (a
-    # plant, a cabinet against the opposite wall): no opening in a wall
+    # plant, a cabinet against the opposite wall), nor the space between the faces of
+    # two walls that run on past it: no opening in a wall
     jambs = jamb_cells(cut, params.jamb_m, axes, thickness, params)
     contacts = D.contacts(labels)
+    line_of = None  # the walls' lines (wall_line_index), for between_faces
     framed: dict[tuple[int, int], list] = {}
     widest: dict[tuple[int, int], float] = {}  # the widest contact of each pair, metres
     passable: set[tuple[int, int]] = set()  # pairs that also meet through an opening no jambs frame
@@ -243,6 +248,11 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
                 continue
             if width >= params.door_min_m and face_to_object(cut, p, q, axes, thickness, params):
                 continue
+            if width >= params.door_min_m:
+                line_of = wall_line_index(axes, thickness, params) if line_of is None else line_of
+                if between_faces(p, q, axes, thickness, params, line_of):
+                    passable.add(pair)  # the space between two walls' faces, no opening in a wall
+                    continue
             doors_here = framed.setdefault(pair, [])
             if width >= params.door_min_m:
                 door = D.contact_door(p, q, axes, thickness, params) or D.free_door(p, q, axes)
