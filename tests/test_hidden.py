@@ -230,3 +230,35 @@ def test_a_face_in_an_l_corner_stays_in_its_corner():
     ])  # fmt: skip
     side = np.array([-1, -1, -1, 1, 1])
     assert np.allclose(into_corners(seg, side, CLOSED, P, NONE_FREE), seg)
+
+
+def test_cabinets_in_the_two_corners_of_a_partition_s_t_are_fronts_and_the_partition_runs_on_to_the_wall():
+    """Two counters 1.05 m deep against a wall, one each side of a partition 0.7 m
+    thick that meets it, their fronts flush with its end: the map shows one face 8.5 m
+    long at y 1.05 (longer than any object, HIDDEN_MAX_GAP_M) and the wall's room face
+    in two pieces, one each side of the partition (Bormann et al.'s office_g and
+    office_i with furniture). Run by run between the partition's faces, the face is the
+    counters' fronts; the partition runs on to the wall."""
+    from floorscan.floorplan.junctions import snap_junctions
+    from floorscan.floorplan.partition_fronts import fronts_between_partitions
+
+    seg = np.array([[-1.0, 0.0, 3.85, 0.0], [4.55, 0.0, 9.5, 0.0],  # the wall's room face, in two pieces
+                    [-1.0, -0.3, 9.5, -0.3],  # its corridor face
+                    [0.0, 1.05, 8.5, 1.05],  # the counters' fronts and the partition's end
+                    [3.85, 1.05, 3.85, 5.0], [4.55, 1.05, 4.55, 5.0],  # the partition's faces
+                    [0.0, 1.05, 0.0, 0.0], [8.5, 1.05, 8.5, 0.0]])  # the counters' outer sides  # fmt: skip
+    side = np.array([1, 1, -1, 1, 1, -1, -1, 1])
+    anchor = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]) >= P.clutter_max_length_m
+    _, junctions = snap_junctions(seg, P)
+    front, behind = in_front_of_walls(seg, side, anchor, P, NONE_FREE)
+    assert not front[3]  # as one face, longer than any object
+    front, behind, runs, runs_behind, carried = fronts_between_partitions(seg, side, anchor, junctions, front, behind,
+                                                                          P, NONE_FREE)  # fmt: skip
+    assert front[3] and behind[3] in (0, 1)
+    assert np.round(runs, 2).tolist() == [[0.0, 1.05, 3.85, 1.05], [4.55, 1.05, 8.5, 1.05]]
+    assert np.round(runs_behind[:, 1], 2).tolist() == [0.0, 0.0]
+    assert sorted((g, k) for g, k, _ in carried) == [(4, 0), (5, 0)]
+    assert all(xy[1] == pytest.approx(0.0, abs=1e-9) for _, _, xy in carried)
+    # a corridor between the fronts and the wall (the bodies seen free): no fronts
+    front, behind = in_front_of_walls(seg, side, anchor, P, ALL_FREE)
+    assert not fronts_between_partitions(seg, side, anchor, junctions, front, behind, P, ALL_FREE)[0][3]

@@ -58,8 +58,12 @@ order (:func:`structure_passes`):
    clutter; up to :data:`~floorscan.floorplan.hidden.OBJECT_MAX_DEPTH_M` where the
    wall's other face runs on behind it and the object's body was not seen free
    (:mod:`floorscan.floorplan.hidden`), as in the joins and corners of step 2. So are
-   the object's sides, from the wall to the front's ends (:func:`object_sides`). The
-   floor between it and the wall (:func:`floor_under`) is the room's floor
+   the object's sides, from the wall to the front's ends (:func:`object_sides`). A
+   longer face is judged run by run between the partitions that end on it from its
+   free side (:mod:`~floorscan.floorplan.partition_fronts`: objects in the two corners
+   where a partition meets a wall, their fronts flush with its end): where every run
+   is such a front, the face is, and the partition runs on to the wall behind. The
+   floor between a front and the wall (:func:`floor_under`) is the room's floor
    (:mod:`floorscan.floorplan.rooms`).
 6. **Loose in the free space** (:func:`loose_in_free_space`). A face that meets no
    other face at either end, crosses no face (an X junction: a partition crossing a
@@ -90,6 +94,7 @@ from floorscan.floorplan.free_space import StructureParams, mask_at, passable, s
 from floorscan.floorplan.free_space import open_run as free_open_run
 from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, free_normals, hidden_by_objects, into_corners
 from floorscan.floorplan.junctions import junction_ends, short_loose, shorter_on_longer, snap_junctions
+from floorscan.floorplan.partition_fronts import fronts_between_partitions
 from floorscan.floorplan.wall_pieces import corner_piers, door_jambs, in_wall_lines, piers
 
 
@@ -396,6 +401,11 @@ def structure_passes(
     _, side = border_and_support(snapped, grid, params)
     side = np.where(side != 0, side, joined_side).astype(side.dtype)
     front, behind = in_front_of_walls(snapped, side, anchor, params, free_at)
+    whole = front.copy()  # fronts as faces; the others found here run by run
+    front, behind, runs, runs_behind, carried = fronts_between_partitions(snapped, side, anchor, junctions, front,
+                                                                          behind, params, free_at)  # fmt: skip
+    for g, k, xy in carried:  # a partition runs on behind the fronts in its corners to the wall
+        joined[g, 2 * k : 2 * k + 2] = xy
     front &= ~standing
     against = front | object_sides(snapped, side, front, behind, params) & ~standing  # fronts and their sides
     short = short_loose(snapped, junctions, params.min_wall_length_m) & ~standing & ~against
@@ -421,7 +431,8 @@ def structure_passes(
     walls, _ = snap_junctions(joined[keep][still], params)
     _, side = border_and_support(walls, grid, params)
     side = np.where(side != 0, side, joined_side[keep][still]).astype(side.dtype)
-    under = floor_under(snapped[front], snapped[behind[front]])
+    whole &= front
+    under = np.concatenate([floor_under(snapped[whole], snapped[behind[whole]]), floor_under(runs, runs_behind)])
     return walls, jw[keep][still], side, np.concatenate(clutter).reshape(-1, 4), np.concatenate(reason), under
 
 
