@@ -849,6 +849,30 @@ def test_a_dead_end_corridor_along_the_hall_s_wall_is_a_corridor_of_its_own():
     assert corridor_ends(axes, th, raster, RoomParams(), strips) == []
 
 
+def test_a_corridor_goes_on_past_a_step_of_its_side():
+    """A corridor 2 m wide (x 10..24) whose south wall steps 0.4 m out at x 10 and runs
+    on to x 3 (the next block's wall): past the step its sides are two other lines, 7 m
+    long together, shorter than four widths, and open over 2.5 m to an office below.
+    The corridor goes on past the step, so that stretch's openings are cut on its
+    sides too (:func:`~floorscan.floorplan.corridors.corridor_strips`); before, only
+    the stretch east of the step was a corridor."""
+    from floorscan.floorplan.corridors import corridor_sides, corridor_strips
+    from floorscan.floorplan.room_space import room_space
+
+    walls = [(3, 2, 5, 2), (6, 2, 24, 2), (3, 2, 3, 6), (3, 6, 8, 6), (8, 6, 8, 2), (24, 0, 24, 2), (10, 0, 24, 0),
+             (10, -0.4, 10, 0), (3, -0.4, 5, -0.4), (7.5, -0.4, 10, -0.4), (3, -0.4, 3, 2), (3, -0.4, 3, -4.4),
+             (3, -4.4, 10, -4.4), (10, -4.4, 10, -0.4)]  # fmt: skip
+    axes, th = np.array(walls, dtype=np.float64), np.full(len(walls), T)
+    grid = _grid(walls, [(4, 0.8), (8, 0.8), (12, 1), (16, 1), (20, 1), (5.5, 4), (6.5, -2.4)])
+    raster = room_space(grid, axes, th, RoomParams())
+    strips = corridor_strips(axes, th, raster, RoomParams())
+    assert any(s["polygon"].contains(shapely.Point(6.5, 0.8)) for s in strips)
+    assert any(s["polygon"].contains(shapely.Point(18, 1)) for s in strips)
+    cuts = sorted((round(float(min(p[0], q[0])), 1), round(float(max(p[0], q[0])), 1), round(float(p[1]), 1))
+                  for p, q, _ in corridor_sides(axes, th, raster, RoomParams(), strips))  # fmt: skip
+    assert cuts == [(5.0, 6.0, 2.0), (5.0, 7.5, -0.4)], cuts
+
+
 def test_a_corridor_whose_wall_goes_on_past_a_partition_s_line_is_not_cut_there():
     """A corridor (x 0..20, y 6..7.5) along two closed rooms, a hall (x 8..16, y -2..6)
     open onto it on its whole width. The corridor's part west of the hall is closed

@@ -30,8 +30,11 @@ et al. ("Room segmentation: survey, implementation, and analysis", ICRA 2016).
    strip (rooms in a row with doors between them, or a door across a corridor), at
    least ``corridor_min_length_m`` and ``corridor_elongation`` times its width long,
    and bounded on each side, within :data:`SIDE_STEP_M` of the side's line, by cells
-   that are not space along at least :data:`SIDE_WALL_SHARE` of it. Of corridors over
-   one another, the narrowest is kept (the inner faces of a stepped side).
+   that are not space along at least :data:`SIDE_WALL_SHARE` of it. A run shorter or
+   more open than that is a corridor too where one goes on from it past a step of its
+   sides (:func:`_going_on`: both sides' lines within :data:`SIDE_STEP_M` of the
+   corridor's, bounded together as a corridor's sides are). Of corridors over one
+   another, the narrowest is kept (the inner faces of a stepped side).
 3. **Sides**: each opening in a side, at least ``door_min_m`` wide, that leads into
    space, is cut on the side's line, unless the space behind it goes on away from the
    corridor for ``corridor_elongation`` times its width or more, or lies in another
@@ -151,7 +154,7 @@ def corridor_strips(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster,
     cos_par = np.cos(np.radians(params.door_angle_deg))
     step = raster.resolution_m
     tree = shapely.STRtree(shapely.linestrings(ends))
-    found = []
+    found, short = [], []  # corridors, and the runs too short or too open to be one alone
     for ia, wa in enumerate(lines):
         ua, oa = u_all[wa[0]], ends[wa[0], 0]
         na = np.array([-ua[1], ua[0]])
@@ -190,20 +193,52 @@ def corridor_strips(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster,
             side_a = _bounded(raster, oa, ua, n, t, -SIDE_STEP_M, min(SIDE_STEP_M, clear / 2))
             side_b = _bounded(raster, oa, ua, n, t, max(sep - SIDE_STEP_M, sep - clear / 2), sep + SIDE_STEP_M)
             for s, e in _runs(free):
-                if (e - s) * step < max(params.corridor_min_length_m, params.corridor_elongation * clear):
-                    continue
-                if side_a[s:e].mean() < SIDE_WALL_SHARE or side_b[s:e].mean() < SIDE_WALL_SHARE:
-                    continue
                 t0, t1 = float(t[s] - step / 2), float(t[e - 1] + step / 2)
                 corners = [oa + t0 * ua, oa + t1 * ua, oa + t1 * ua + sep * n, oa + t0 * ua + sep * n]
                 sides = ((~side_a[s:e], list(wa), 0.0, -1.0), (~side_b[s:e], list(lines[ib]), sep, 1.0))
-                found.append(dict(polygon=shapely.Polygon(corners), origin=oa, u=ua, n=n, sep=sep, clear=clear, t0=t0,
-                                  t1=t1, step=step, sides=sides))
+                strip = dict(polygon=shapely.Polygon(corners), origin=oa, u=ua, n=n, sep=sep, clear=clear, t0=t0,
+                             t1=t1, step=step, sides=sides)
+                if ((e - s) * step < max(params.corridor_min_length_m, params.corridor_elongation * clear)
+                        or side_a[s:e].mean() < SIDE_WALL_SHARE or side_b[s:e].mean() < SIDE_WALL_SHARE):
+                    short.append(strip)
+                    continue
+                found.append(strip)
+    found += _going_on(found, short, cos_par)
     kept: list[dict] = []
     for c in sorted(found, key=lambda c: (c["sep"], -c["polygon"].area)):
         if all(c["polygon"].intersection(k["polygon"]).area < 0.5 * c["polygon"].area for k in kept):
             kept.append(c)
     return kept
+
+
+def _going_on(found: list[dict], short: list[dict], cos_par: float) -> list[dict]:
+    """The runs of ``short`` (strips of :func:`corridor_strips` too short or too open
+    to be a corridor alone) where a corridor of ``found`` goes on past a step of its
+    sides: parallel to it (within ``cos_par``, the cosine of ``door_angle_deg``), each
+    side's line within :data:`SIDE_STEP_M` of one of the corridor's, the two
+    overlapping or touching along it, and the two together bounded on each side along
+    at least :data:`SIDE_WALL_SHARE` of their length. A corridor's side steps where a
+    row of cabinets or the next block's wall stands out from its line; the corridor
+    runs on."""
+    out = []
+    for c in short:
+        for f in found:
+            if abs(float(c["u"] @ f["u"])) < cos_par:
+                continue
+            ends = sorted(float((c["origin"] + t * c["u"] - f["origin"]) @ f["u"]) for t in (c["t0"], c["t1"]))
+            if ends[0] > f["t1"] + f["step"] or ends[1] < f["t0"] - f["step"]:
+                continue
+            # each side of the run, on the corridor's side whose line it lies nearest
+            pos = [float((c["origin"] + off * c["n"] - f["origin"]) @ f["n"]) for _, _, off, _ in c["sides"]]
+            match = [int(abs(p - f["sep"]) < abs(p)) for p in pos]
+            if match[0] == match[1] or any(abs(p - (f["sep"] if m else 0.0)) > SIDE_STEP_M for p, m in zip(pos, match)):
+                continue
+            shares = [(np.sum(~side[0]) + np.sum(~f["sides"][m][0])) / max(len(side[0]) + len(f["sides"][m][0]), 1)
+                      for side, m in zip(c["sides"], match)]  # fmt: skip
+            if min(shares) >= SIDE_WALL_SHARE:
+                out.append(c)
+                break
+    return out
 
 
 def _walls_and_strips(axes, thickness, raster: RoomRaster, params: RoomParams, strips: list[dict] | None):
