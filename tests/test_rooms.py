@@ -873,6 +873,33 @@ def test_a_corridor_goes_on_past_a_step_of_its_side():
     assert cuts == [(5.0, 6.0, 2.0), (5.0, 7.5, -0.4)], cuts
 
 
+def test_an_opening_whose_middle_faces_a_partition_s_end_is_no_niche():
+    """A corridor (y 0..2) open over 4 m (x 8..12) to two rooms below, whose partition
+    ends 1.5 m short of the corridor right under the opening's middle. The space behind
+    the opening ends there on its middle line only, not across the opening: no niche of
+    the corridor, so the opening is cut on the corridor's line. Before, the middle ray
+    alone read a niche 1.5 m deep (under half the opening's width)."""
+    from floorscan.floorplan.corridors import corridor_sides
+    from floorscan.floorplan.room_space import room_space
+
+    walls = [(0, 2, 20, 2), (0, 0, 0, 2), (20, 0, 20, 2), (0, 0, 8, 0), (12, 0, 20, 0), (4, -6, 4, 0),
+             (16, -6, 16, 0), (4, -6, 16, -6), (10, -6, 10, -1.5)]  # fmt: skip
+    axes, th = np.array(walls, dtype=np.float64), np.full(len(walls), T)
+    grid = _grid(walls, [(2, 1), (6, 1), (10, 1), (14, 1), (18, 1), (7, -3), (13, -3)])
+    cuts = corridor_sides(axes, th, room_space(grid, axes, th, RoomParams()), RoomParams())
+    got = sorted((round(float(min(p[0], q[0])), 1), round(float(max(p[0], q[0])), 1), round(float(p[1]), 1))
+                 for p, q, _ in cuts)  # fmt: skip
+    assert len(got) == 1 and np.allclose(got[0], (8.0, 12.0, 0.0), atol=0.15), got  # 0.1 m cells
+    # a niche 2.8 m wide and 1.1 m deep in the corridor's north side, a door at the back
+    # of its east part: the ray through the door goes on, the other two end at its back
+    niche = [(0, 0, 20, 0), (0, 0, 0, 2), (20, 0, 20, 2), (0, 2, 8, 2), (10.8, 2, 20, 2), (8, 2, 8, 3.1),
+             (10.8, 2, 10.8, 3.1), (8, 3.1, 9.6, 3.1), (10.6, 3.1, 12, 3.1), (8, 3.1, 8, 7), (8, 7, 12, 7),
+             (12, 7, 12, 3.1)]  # fmt: skip
+    axes, th = np.array(niche, dtype=np.float64), np.full(len(niche), T)
+    grid = _grid(niche, [(2, 1), (6, 1), (10, 1), (14, 1), (18, 1), (10, 5)])
+    assert corridor_sides(axes, th, room_space(grid, axes, th, RoomParams()), RoomParams()) == []
+
+
 def test_a_corridor_whose_wall_goes_on_past_a_partition_s_line_is_not_cut_there():
     """A corridor (x 0..20, y 6..7.5) along two closed rooms, a hall (x 8..16, y -2..6)
     open onto it on its whole width. The corridor's part west of the hall is closed

@@ -40,7 +40,9 @@ et al. ("Room segmentation: survey, implementation, and analysis", ICRA 2016).
    corridor for ``corridor_elongation`` times its width or more, or lies in another
    corridor (another corridor meets this one there, and the two stay one room), or
    ends within :data:`~floorscan.floorplan.mouths.MOUTH_MIN_DEPTH` times the opening's
-   width (a niche of the corridor, as the open sides of rooms take it), or faces, over
+   width (a niche of the corridor, as the open sides of rooms take it; the depth is the
+   median of three rays, at a quarter, half and three quarters of the opening, as one
+   may meet the end of a partition behind it or pass through a door), or faces, over
    at least half its width, an opening in the other side into another corridor (a
    crossing: that corridor goes on through it, however short its far arm).
 4. **Ends** (:func:`corridor_ends`): the line across a corridor's end, from side to
@@ -308,7 +310,15 @@ def corridor_sides(
                 ray = raster.at(raster.space, mid + np.outer(d, outward * s["n"]), outside=False).astype(bool)
                 if ray.all():
                     mouths.append((side, g0, g1))  # another corridor goes on from here
-                elif d[int(np.argmin(ray))] >= MOUTH_MIN_DEPTH * (g1 - g0):  # else a niche
+                    continue
+                # a niche when the space behind ends within its depth across the opening:
+                # the median of three rays, at a quarter, half and three quarters of it
+                # (one may meet the end of a partition behind it, or pass a door)
+                depths = [d[int(np.argmin(ray))]]
+                for f in (0.25, 0.75):
+                    r2 = raster.at(raster.space, p + f * (q - p) + np.outer(d, outward * s["n"]), outside=False)
+                    depths.append(d[-1] if r2.all() else d[int(np.argmin(r2))])
+                if np.median(depths) >= MOUTH_MIN_DEPTH * (g1 - g0):
                     cuts.append((side, g0, g1, p, q, mid, walls))
         for side, g0, g1, p, q, mid, walls in cuts:
             # across from another corridor's mouth, over half its width or more: that
