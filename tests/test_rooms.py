@@ -900,6 +900,27 @@ def test_an_opening_whose_middle_faces_a_partition_s_end_is_no_niche():
     assert corridor_sides(axes, th, room_space(grid, axes, th, RoomParams()), RoomParams()) == []
 
 
+def test_a_passage_into_a_room_wider_than_it_is_no_corridor_going_on():
+    """A corridor (y 0..2) with a 1 m opening in its north side into a passage 1 m long
+    and a room 5 x 5 m behind it: the space behind goes on for four of the mouth's widths,
+    as a corridor going on from the opening would, but it is more than twice as wide as
+    the mouth along the way (the median along the ray), so the mouth is the room's
+    entrance and is cut as a door on the corridor's line (g4s_y2's room T13). A
+    corridor going on from its mouth is as wide as it (test above)."""
+    from floorscan.floorplan.corridors import corridor_sides
+    from floorscan.floorplan.room_space import room_space
+
+    walls = [(0, 0, 20, 0), (0, 0, 0, 2), (20, 0, 20, 2), (0, 2, 9.5, 2), (10.5, 2, 20, 2), (9.5, 2, 9.5, 3),
+             (10.5, 2, 10.5, 3), (7.5, 3, 9.5, 3), (10.5, 3, 12.5, 3), (7.5, 3, 7.5, 8), (12.5, 3, 12.5, 8),
+             (7.5, 8, 12.5, 8)]  # fmt: skip
+    axes, th = np.array(walls, dtype=np.float64), np.full(len(walls), T)
+    grid = _grid(walls, [(2, 1), (6, 1), (10, 1), (14, 1), (18, 1), (10, 5.5)])
+    cuts = corridor_sides(axes, th, room_space(grid, axes, th, RoomParams()), RoomParams())
+    got = sorted((round(float(min(p[0], q[0])), 1), round(float(max(p[0], q[0])), 1), round(float(p[1]), 1))
+                 for p, q, _ in cuts)  # fmt: skip
+    assert len(got) == 1 and np.allclose(got[0], (9.5, 10.5, 2.0), atol=0.15), got
+
+
 def test_a_corridor_whose_wall_goes_on_past_a_partition_s_line_is_not_cut_there():
     """A corridor (x 0..20, y 6..7.5) along two closed rooms, a hall (x 8..16, y -2..6)
     open onto it on its whole width. The corridor's part west of the hall is closed

@@ -37,7 +37,10 @@ et al. ("Room segmentation: survey, implementation, and analysis", ICRA 2016).
    another, the narrowest is kept (the inner faces of a stepped side).
 3. **Sides**: each opening in a side, at least ``door_min_m`` wide, that leads into
    space, is cut on the side's line, unless the space behind it goes on away from the
-   corridor for ``corridor_elongation`` times its width or more, or lies in another
+   corridor for ``corridor_elongation`` times its width or more, about as wide as the
+   opening (the opening at least :data:`~floorscan.floorplan.persistence.DOOR_SHARE` of
+   the space's median width along the way: a narrower one is a room's entrance, as a
+   door is), or lies in another
    corridor (another corridor meets this one there, and the two stay one room), or
    ends within :data:`~floorscan.floorplan.mouths.MOUTH_MIN_DEPTH` times the opening's
    width (a niche of the corridor, as the open sides of rooms take it; the depth is the
@@ -63,6 +66,7 @@ import numpy as np
 
 from floorscan.floorplan.doors import contact_door, wall_units
 from floorscan.floorplan.mouths import MOUTH_MIN_DEPTH, hall_beside, sides_apart
+from floorscan.floorplan.persistence import DOOR_SHARE
 from floorscan.floorplan.room_space import MIN_ROOM_WIDTH_M, RoomParams, RoomRaster
 
 #: A corridor's side is bounded along at least this share of the corridor's length:
@@ -307,17 +311,19 @@ def corridor_sides(
                 width = 2 * float(raster.at(half_width, behind[None], outside=0.0)[0])
                 reach = max(params.corridor_elongation * max(width, MIN_ROOM_WIDTH_M), MOUTH_MIN_DEPTH * (g1 - g0))
                 d = np.arange(s["step"] / 2, reach + s["step"], s["step"] / 2)
-                ray = raster.at(raster.space, mid + np.outer(d, outward * s["n"]), outside=False).astype(bool)
-                if ray.all():
-                    mouths.append((side, g0, g1))  # another corridor goes on from here
+                away = np.outer(d, outward * s["n"])  # the samples of a ray into the space behind
+                ray = raster.at(raster.space, mid + away, outside=False).astype(bool)
+                # another corridor goes on from here, about as wide as its mouth; a mouth
+                # narrower than DOOR_SHARE of the space behind it (the median width along
+                # the ray) is the entrance of a room, as a door is
+                if ray.all() and width >= DOOR_SHARE * 2 * float(np.median(raster.at(half_width, mid + away, 0.0))):
+                    mouths.append((side, g0, g1))
                     continue
                 # a niche when the space behind ends within its depth across the opening:
                 # the median of three rays, at a quarter, half and three quarters of it
                 # (one may meet the end of a partition behind it, or pass a door)
-                depths = [d[int(np.argmin(ray))]]
-                for f in (0.25, 0.75):
-                    r2 = raster.at(raster.space, p + f * (q - p) + np.outer(d, outward * s["n"]), outside=False)
-                    depths.append(d[-1] if r2.all() else d[int(np.argmin(r2))])
+                rays = [ray] + [raster.at(raster.space, p + f * (q - p) + away, outside=False) for f in (0.25, 0.75)]
+                depths = [d[-1] if r.all() else d[int(np.argmin(r))] for r in rays]
                 if np.median(depths) >= MOUTH_MIN_DEPTH * (g1 - g0):
                     cuts.append((side, g0, g1, p, q, mid, walls))
         for side, g0, g1, p, q, mid, walls in cuts:
