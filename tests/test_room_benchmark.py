@@ -109,6 +109,25 @@ def test_colour_labels_one_room_per_colour_black_and_transparent_none():
     assert lab.max() == 2 and (lab[:, :2] == lab[0, 4]).all() and lab[3, 5] == 0 and (lab[2:, 2:4] == 0).all()
 
 
+def test_a_segmentation_is_scored_on_the_pixels_the_reference_labels():
+    """A found room over its true room and the wall around it (pixels the reference
+    labels as no room) has precision 1 on the reference's pixels, 400 / 750 whole; a found
+    room wholly outside every true room is no room there."""
+    from benchmarks.bench_rooms import on_reference
+
+    truth = np.zeros((30, 31), dtype=np.int32)
+    truth[5:25, 5:25] = 1  # 400 px
+    found = np.zeros((31, 30), dtype=np.int32)
+    found[0:25, 0:30] = 3  # the room and the wall around it: 750 px
+    found[25:31, 0:30] = 4  # beyond the truth: 150 px in the common part (its last row is not)
+    masked = on_reference(truth, found)
+    assert masked.shape == (30, 30) and set(np.unique(masked)) == {0, 3}
+    got, whole = score_label_images(truth, masked), score_label_images(truth, found)
+    assert got["seg_precision_mean"] == 1.0 and got["n_plan_rooms_scored"] == 1
+    assert whole["seg_precision_mean"] == pytest.approx((400 / 750 + 0.0) / 2)
+    assert got["seg_recall_mean"] == whole["seg_recall_mean"] == 1.0
+
+
 @pytest.mark.skipif(not ROOM_MAPS.is_dir(), reason=f"room-maps benchmark data not found at {ROOM_MAPS} (../shared/data/room-maps)")
 def test_benchmark_on_a_bormann_and_a_rose2_map():
     from benchmarks.bench_rooms import plan_labels, run_task
