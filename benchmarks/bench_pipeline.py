@@ -335,9 +335,48 @@ def run_dataset(repo: Path, dataset: str, cores: int, extra: tuple = (), target:
         "bag_mb": bag.stat().st_size / 2**20 if bag.exists() else np.nan,
         "wall_s": wall, "rtf": duration / wall, "simulate_s": t_sim,
         "stages": stage_table(res / "benchmarks", poller.peak, poller.cpu, poller.spans), "peak_all_jobs_mb": poller.total_peak,
+        "concurrency": concurrency(list(poller.spans.values()), wall),
         "snakemake_cpu_s": poller.snakemake_cpu,
         "load": (load_before, load_after), "probe_ms": (probe_before, probe_after),
     }  # fmt: skip
+
+
+def concurrency(spans: list, wall_s: float, longest: int = 4) -> dict:
+    """How many jobs ran at once over a run, from the poller's job spans.
+
+    Parameters
+    ----------
+    spans : list of [script, start_s, end_s]
+        :attr:`RssPoller.spans`' values, seconds since the poller started.
+    wall_s : float
+        The run's wall time, seconds.
+    longest : int
+        How many of the longest stretches with one job alone to name.
+
+    Returns
+    -------
+    dict
+        ``seconds``: {0: s, 1: s, 2: s} with no job, one, two or more running;
+        ``alone``: the ``longest`` stretches of one job alone, ``(start_s, end_s,
+        script)``, longest first.
+    """
+    events = sorted([(a, 1, n) for n, a, _ in spans] + [(b, -1, n) for n, _, b in spans], key=lambda e: (e[0], -e[1]))
+    seconds = {0: 0.0, 1: 0.0, 2: 0.0}
+    alone, running, t_prev = [], {}, 0.0
+    for t, step, name in events + [(max(wall_s, events[-1][0] if events else 0.0), 0, "")]:
+        n = sum(running.values())
+        seconds[min(n, 2)] += max(t - t_prev, 0.0)
+        if n == 1 and t > t_prev:
+            job = next(k for k, v in running.items() if v)
+            if alone and alone[-1][2] == job and abs(alone[-1][1] - t_prev) < 1e-9:
+                alone[-1] = (alone[-1][0], t, job)
+            else:
+                alone.append((t_prev, t, job))
+        if step:
+            running[name] = running.get(name, 0) + step
+        t_prev = max(t_prev, t)
+    alone.sort(key=lambda a: a[0] - a[1])
+    return {"seconds": seconds, "alone": alone[:longest]}
 
 
 def report(r: dict, cores: int) -> None:
@@ -374,6 +413,12 @@ def report(r: dict, cores: int) -> None:
               f"{with_figures:.1f} CPU-s ({100 * with_figures / cpu:.1f} %)")
     print("from s / to s: when the stage's first job started and its last job ended, seconds after Snakemake "
           "started (polled every 0.2 s)")
+    c = r.get("concurrency")
+    if c:
+        sec = c["seconds"]
+        print(f"jobs running at once (polled): none {sec[0]:.1f} s, one {sec[1]:.1f} s, two or more {sec[2]:.1f} s; "
+              "the longest stretches of one job alone: "
+              + ", ".join(f"{job} {a:.1f}-{b:.1f} s" for a, b, job in c["alone"]))
 
 
 def main(argv: list[str] | None = None) -> None:
