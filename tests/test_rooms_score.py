@@ -266,6 +266,30 @@ def test_drawn_rooms_scored_on_pixels(tmp_path):
     assert row["truth"] == "drawn" and math.isnan(row["door_recall"])
 
 
+def test_drawn_rooms_scored_on_the_drawn_floor_not_its_walls(tmp_path):
+    """Pixel (col, row) -> (0.1 col, -0.1 row) m; walls drawn 4 px thick at most. Room 1
+    (rows 5-54, cols 5-27, 1150 px) and room 2 (cols 30-54, round a hole of rows 15-44,
+    cols 33-51 that the drawing gives no room) with a 2 px drawn wall between them. A
+    plan room over room 1 and the wall is room 1 (IoU 1, not 1150 / 1250); a plan room
+    in the hole is scored on its 242 px farther than a wall from every room, a room where
+    none is drawn: unmatched, counted in precision."""
+    labels = np.zeros((60, 60), np.int32)
+    labels[5:55, 5:28] = 1
+    labels[5:55, 30:55] = 2
+    labels[15:45, 33:52] = 0
+    t = Similarity(scale=0.1, angle=0.0, tx=0.0, ty=0.0)
+    px = lambda c0, c1, r0, r1: box(0.1 * c0, -0.1 * r1, 0.1 * c1, -0.1 * r0)  # noqa: E731
+    plan = _plan(tmp_path / "plan", [px(4.5, 29.5, 4.5, 54.5), px(33.5, 50.5, 15.5, 43.5)])
+    grid = _grid(np.ones((140, 140), bool), origin=(-1.0, -7.0), resolution_m=0.05)
+    table, overlay = score_drawn_rooms({"recommended": plan}, labels, t, grid)
+    row = table.iloc[0]
+    detail = overlay["plans"]["recommended"]["rooms_detail"]
+    assert detail["iou"][0, 0] == pytest.approx(1.0)
+    assert detail["left_out"].tolist() == [False, False]
+    assert (row["n_plan_rooms_scored"], row["n_matched_rooms"]) == (2, 1)
+    assert (row["room_precision"], row["room_recall"]) == (0.5, 0.5)
+
+
 @needs_shared
 def test_intel_drawn_segmentation_has_26_rooms():
     """ipa_room_segmentation's lab_intel_gt_segmentation.png: 7 rooms along the top, 5 on

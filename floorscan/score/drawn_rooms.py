@@ -9,9 +9,13 @@ drawing's pixels (rule ``score_drawn``).
   belonging to a plan room when its centre lies inside it (pixel-exact IoU), then
   scored by :func:`floorscan.score.segmentation.segmentation_scores` (the IoU-0.5
   matching, and Bormann's figures without regions of 100 pixels or fewer). Only the part of a plan
-  room inside the drawn building (:func:`drawn_building`) is scored: a drawing may
-  show part of the building the recording saw (freiburg101's ends at the hall's west
-  end), as the walls' correctness is scored inside the drawing only.
+  room on the drawn floor (:func:`drawn_floor`) is scored: inside the drawn building
+  (:func:`drawn_building`), since a drawing may show part of the building the
+  recording saw (freiburg101's ends at the hall's west end), as the walls' correctness
+  is scored inside the drawing only; and not on the drawn walls, which are no room's
+  floor, as the room benchmark scores a segmentation on the pixels its reference
+  labels (``benchmarks/bench_rooms.py``). A region of the building the drawing gives
+  no room stays scored, so a plan room there counts against precision.
 """
 
 from __future__ import annotations
@@ -132,10 +136,21 @@ def drawn_building(labels: np.ndarray, wall_px: float) -> np.ndarray:
     return ndimage.binary_fill_holes(closed)
 
 
-def _plan_room_pixels(poly, transform, building: np.ndarray) -> tuple[int, np.ndarray]:
+def drawn_floor(labels: np.ndarray, wall_px: float) -> np.ndarray:
+    """The floor a drawn segmentation shows: the drawn building (:func:`drawn_building`)
+    without its drawn walls, that is its rooms' pixels and the pixels farther than a
+    drawn wall's thickness from every room (a region the drawing leaves without a room).
+    Parameters and returns as :func:`drawn_building`."""
+    from scipy import ndimage
+
+    rooms = labels > 0
+    return drawn_building(labels, wall_px) & (rooms | (ndimage.distance_transform_edt(~rooms) > wall_px))
+
+
+def _plan_room_pixels(poly, transform, floor: np.ndarray) -> tuple[int, np.ndarray]:
     """The pixels of the drawing whose centres lie inside a plan room (map metres) and
-    inside the drawn ``building`` ((H, W) bool, the drawing's shape): their count and
-    their flat indices."""
+    on the drawn ``floor`` ((H, W) bool, the drawing's shape, :func:`drawn_floor`):
+    their count and their flat indices."""
     import shapely
 
     px = shapely.transform(poly, transform.invert)
@@ -144,9 +159,9 @@ def _plan_room_pixels(poly, transform, building: np.ndarray) -> tuple[int, np.nd
     cc, rr = (a.ravel() for a in np.meshgrid(cols, rows))
     inside = shapely.contains_xy(px, cc.astype(np.float64), rr.astype(np.float64))
     cc, rr = cc[inside], rr[inside]
-    h, w = building.shape
+    h, w = floor.shape
     ok = (rr >= 0) & (cc >= 0) & (rr < h) & (cc < w)
-    ok[ok] = building[rr[ok], cc[ok]]
+    ok[ok] = floor[rr[ok], cc[ok]]
     return int(ok.sum()), rr[ok] * w + cc[ok]
 
 
@@ -201,13 +216,13 @@ def score_drawn_rooms(plans: dict, labels: np.ndarray, transform, grid) -> tuple
                "true_doors_xy": np.empty((0, 2)), "true_doors_counted": np.zeros(0, bool),
                "structure": grid.cell_centres(grid.structure()), "plans": {}}  # fmt: skip
     rows = []
-    building = drawn_building(labels, DRAWN_WALL_M / transform.scale)
+    floor = drawn_floor(labels, DRAWN_WALL_M / transform.scale)
     for name, folder in plans.items():
         rooms, doors = read_plan_folder_rooms(folder)
         plan_area = np.zeros(len(rooms))
         inter = np.zeros((n, len(rooms)))
         for j, poly in enumerate(rooms["polygon"]):
-            plan_area[j], idx = _plan_room_pixels(poly, transform, building)
+            plan_area[j], idx = _plan_room_pixels(poly, transform, floor)
             inter[:, j] = np.bincount(flat[idx], minlength=n + 1)[1:]
         scores, detail = segmentation_scores(inter, true_area, plan_area, counted, MIN_REGION_PX)
         rows.append(score_row(name, "drawn", scores, {"n_plan_doors": len(doors)}))
