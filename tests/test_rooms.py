@@ -1137,3 +1137,27 @@ def test_a_plant_against_a_corridor_wall_frames_no_door_on_a_turned_raster():
         rooms, doors = plan_rooms(axes, np.full(len(axes), T), grid, RoomParams())
         assert len(rooms) == 1 and len(doors) == 0, deg
         assert 51.0 < rooms["area_m2"].iloc[0] < 54.0
+
+
+def test_a_fan_of_rays_through_a_door_is_no_corridor_however_long():
+    """What a recording saw of a room through its door and never entered, walled only at
+    its far end (a wall 4 m wide, 7 m beyond the door), is the fan of the rays through
+    the door: ``_fans`` finds it, not the corridor the rover drove along, and nothing in
+    a map (no scans). A fan is a room, however long its outline (orebro's 4.8 m2 fan
+    through a door was ``Corridor 5``); the same outline is a corridor otherwise."""
+    from floorscan.floorplan.room_tables import room_tables
+    from floorscan.floorplan.rooms import _fans
+
+    walls = [(0, 0, 12, 0), (12, 0, 12, 2), (0, 2, 0, 0), (0, 2, 5.5, 2), (6.5, 2, 12, 2), (4, 9, 8, 9)]
+    axes = np.array(walls, dtype=np.float64)
+    grid = _grid(walls, [(1, 1), (3, 1), (6, 0.4), (9, 1), (11, 1)])
+    raster = room_space(grid, axes, np.full(len(axes), T), RoomParams())
+    ys = raster.origin_xy[1] + (np.arange(raster.space.shape[0]) + 0.5) * raster.resolution_m
+    labels = np.where(raster.space, np.where(ys[:, None] < 2.0, 1, 2), 0).astype(np.int32)
+    assert (labels == 2).sum() * raster.resolution_m**2 > 10.0  # the fan was seen
+    assert _fans(raster, labels, grid.scan_xy, 2).tolist() == [False, False, True]
+    assert not _fans(raster, labels, None, 2).any()
+    strip = shapely.box(0, 0, 1.2, 9.0)  # 1.2 m wide, 9 m long: a corridor's outline
+    for fans, kind in (([True], "room"), ([False], "corridor"), (None, "corridor")):
+        rooms, _ = room_tables([strip], [], 0.05, RoomParams(), True, fans)
+        assert rooms["kind"].tolist() == [kind]

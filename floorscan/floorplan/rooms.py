@@ -93,9 +93,10 @@ taken from the walls:
    (:func:`~floorscan.floorplan.room_tables.is_corridor`); the width, its polygon's
    median local thickness (:func:`~floorscan.floorplan.room_tables.room_width`) with
    its holes smaller than a room filled (an object on its floor, not a core it goes
-   around)). When no door divides the space (an open hall, one
-   corridor, a campus), it is one region of kind ``space`` (or a few, where the
-   seen space falls apart).
+   around)); in a recording, no room no scan was taken in that is walled on less than
+   half its edge (:func:`_fans`: the fan of rays through its door). When no door divides
+   the space (an open hall, one corridor, a campus), it is one region of kind ``space``
+   (or a few, where the seen space falls apart).
 6. **Polygons** (:func:`~floorscan.floorplan.room_polygons.room_polygons`): each room's cells traced (contourpy), grown up
    to the wall faces and cut by the wall footprints (shapely), simplified by half a
    cell; a room seen in part, convex between its walls, completed up to them (the
@@ -365,6 +366,22 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     return raster, final, _distinct_doors(doors), divided
 
 
+def _fans(raster: RoomRaster, labels: np.ndarray, scan_xy: np.ndarray | None, n: int) -> np.ndarray:
+    """(n + 1,) bool: the rooms of ``labels`` (1..n) that are fans of rays, in a
+    recording (``scan_xy`` (S, 2) metres, the scans' origins; None, a map: none): no
+    scan was taken in them and walls and seen obstacles bound less than
+    :data:`~floorscan.floorplan.room_space.MIN_ENCLOSURE_UNENTERED` of their edge
+    (:func:`~floorscan.floorplan.unentered.enclosure`). What the scans saw of such a
+    room is the fan of rays through its door, whose sides are the rays' limits: its
+    outline says nothing of the room's shape, so it is no corridor however long it
+    looks (:func:`~floorscan.floorplan.room_tables.room_tables`)."""
+    if scan_xy is None or n == 0:
+        return np.zeros(n + 1, dtype=bool)
+    out = (enclosure(raster, labels, n) < MIN_ENCLOSURE_UNENTERED) & ~visited_regions(raster, labels, scan_xy, n)
+    out[0] = False
+    return out
+
+
 def _distinct_doors(doors: list) -> list:
     """One door per opening: of doors between the same rooms whose centres lie within
     half a metre, the first (gaps between walls come after contacts, so a contact
@@ -459,6 +476,7 @@ def plan_rooms(
     t0 = time.perf_counter()
     raster, labels, doors, divided = segment_rooms(grid, axes, thickness, params, under)
     n = int(labels.max())
+    fans = _fans(raster, labels, grid.scan_xy, n)
     polys = room_polygons(raster, labels, axes, thickness)
     if doors:  # the opening in the wall belongs to neither room: rooms end at the wall faces
         openings = shapely.union_all([_opening(p, q, thickness[w], raster.resolution_m) for p, q, w, *_ in doors],
@@ -470,7 +488,7 @@ def plan_rooms(
     new_id = {k + 1: i for i, k in enumerate(keep)}
     polys = [polys[k] for k in keep]
     doors = [(p, q, w, new_id[a], new_id[b]) for p, q, w, a, b in doors if a in new_id and b in new_id]
-    rooms, doors_df = room_tables(polys, doors, raster.resolution_m, params, divided)
+    rooms, doors_df = room_tables(polys, doors, raster.resolution_m, params, divided, [bool(fans[k + 1]) for k in keep])
     kinds = list(rooms["kind"])
     log.info("rooms: %d rooms (%d corridors), %d doors, %.1f m2 in all (%.2f s)", len(polys), kinds.count("corridor"),
              len(doors_df), float(rooms["area_m2"].sum()), time.perf_counter() - t0)
