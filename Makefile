@@ -60,7 +60,7 @@ clean-results:
 
 help:
 	@echo "make run          set up .venv (once), then the demo with its evaluation: results/demo/front.html"
-	@echo "make test         set up .venv (once), then every test (about 8 minutes)"
+	@echo "make test         set up .venv (once), then every test (about 15 minutes on 2 cores)"
 	@echo "make test-fast    the unit tests alone (about a minute)"
 	@echo "make report       the HTML report of the last run: results/report.html"
 	@echo "make bench        every benchmark (python -m benchmarks --help)"

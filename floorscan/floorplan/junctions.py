@@ -113,7 +113,7 @@ def _line_crossings(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     w = b[:, :2] - a[:, :2]
     with np.errstate(invalid="ignore", divide="ignore"):
         t = (w[:, 0] * db[:, 1] - w[:, 1] * db[:, 0]) / den
-    x = a[:, :2] + da * t[:, None]
+        x = a[:, :2] + da * t[:, None]
     x[np.abs(den) < 1e-12] = np.nan
     return x
 
