@@ -1,6 +1,11 @@
-"""Progress lines of long stages (floorscan.core.runtime.progress)."""
+"""Progress lines of long stages (floorscan.core.runtime.progress) and the allocator's
+freed memory kept (floorscan.core.runtime.keep_freed_memory)."""
 
 import logging
+import sys
+from pathlib import Path
+
+import pytest
 
 from floorscan.core.runtime import progress
 
@@ -35,3 +40,43 @@ def test_progress_is_silent_for_short_loops_and_without_a_logger(caplog):
         assert list(progress(iter("abc"), log, what="plans", clock=FakeClock(0.1))) == ["a", "b", "c"]
         assert list(progress([1, 2], None)) == [1, 2]
     assert caplog.records == []
+
+
+#: Run in a fresh interpreter: the test process's heap holds the free memory of the tests
+#: before it, where a 48 MB array may fit whatever the setting.
+_KEPT = """
+import ctypes, sys
+import numpy as np
+from floorscan.core.runtime import keep_freed_memory
+
+class MallInfo2(ctypes.Structure):
+    _fields_ = [(name, ctypes.c_size_t) for name in
+                ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks", "uordblks", "fordblks",
+                 "keepcost")]
+
+libc = ctypes.CDLL("libc.so.6")
+libc.mallinfo2.restype = MallInfo2
+if sys.argv[1] == "keep":
+    assert keep_freed_memory()
+size = 48 * 2**20
+a = np.ones(size, dtype=np.uint8)
+own = libc.mallinfo2().hblkhd >= size  # a block of its own
+del a
+print(own, libc.mallinfo2().fordblks >= size)  # kept, free
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt: Linux only")
+def test_freed_large_arrays_stay_in_the_heap_for_the_next_ones():
+    """After :func:`keep_freed_memory`, a freed 48 MB array (above glibc's largest
+    default mapping threshold, 32 MB) stays in the heap as free memory, where the next
+    array of its size is taken from, instead of going back to the kernel; without it,
+    the array is a mapping of its own and goes back."""
+    import subprocess
+
+    def run(how: str) -> str:
+        return subprocess.run([sys.executable, "-c", _KEPT, how], capture_output=True, text=True, check=True,
+                              cwd=Path(__file__).resolve().parents[1]).stdout
+
+    assert run("keep") == "False True\n"
+    assert run("default") == "True False\n"

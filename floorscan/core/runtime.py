@@ -1,5 +1,6 @@
 """Run-time helpers shared by the stages: progress lines in a stage's log, worker
-processes, and Open3D's OpenMP threads.
+processes, Open3D's OpenMP threads, and how the C allocator hands back freed memory
+(:func:`keep_freed_memory`).
 
 A stage that takes more than a few seconds wraps its main loop in :func:`progress`, so
 its log (and the terminal, through :func:`floorscan.core.stage.stage_log`) says how far it
@@ -95,6 +96,56 @@ def _line(done: int, total: int | None, what: str, seconds: float) -> str:
     return f"{done}{of} in {seconds:.1f} s, {rate:.1f} {what}/s"
 
 
+# --------------------------------------------------------------------------- memory
+
+#: glibc's ``mallopt`` parameters (``malloc.h``): ``M_TRIM_THRESHOLD`` and ``M_MMAP_THRESHOLD``.
+M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3
+#: Blocks at least this large are mapped from the kernel on their own, bytes: the
+#: temporaries of one scan's rays and a plan's rasters of a large site (a 200 m x 200 m
+#: floor at 5 cm is 16 M cells, 128 MB in float64) come from the heap.
+MMAP_THRESHOLD_BYTES = 256 * 2**20
+#: Free memory at the top of the heap is handed back to the kernel above this, bytes:
+#: what one such raster and its temporaries need stays for the next plan.
+TRIM_THRESHOLD_BYTES = 256 * 2**20
+
+
+def keep_freed_memory() -> bool:
+    """Keep the memory of freed large arrays in the process for the next ones (glibc).
+
+    By default glibc maps each block above a threshold (128 kB, raised to the size of
+    each larger block freed, up to 32 MB) from the kernel on its own, and hands free
+    memory at the top of its heap back above twice that; a loop that allocates and
+    frees the same large NumPy temporaries on every pass (the ray casting of each scan,
+    each plan's rasters) then has the kernel map and zero their pages anew each time.
+    With blocks up to :data:`MMAP_THRESHOLD_BYTES` taken from the heap, and up to
+    :data:`TRIM_THRESHOLD_BYTES` of its free top kept, the pages are reused
+    (measured in ``benchmarks/README.md``). The results are the same bytes. The cost
+    is memory: a job keeps up to :data:`TRIM_THRESHOLD_BYTES` of freed memory at the
+    top of its heap, and the blocks freed below it, for its next arrays. Called at the
+    start of every stage (:func:`floorscan.core.stage.stage_log`) and of every worker
+    process (:func:`process_pool`).
+
+    Source: glibc's ``mallopt(3)``.
+
+    Returns
+    -------
+    bool
+        Whether both settings took (False off glibc: another C library keeps its own
+        policy).
+    """
+    import ctypes
+    import sys
+
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        mallopt = ctypes.CDLL("libc.so.6").mallopt
+    except (OSError, AttributeError):  # musl and others: no glibc
+        return False
+    mallopt.argtypes, mallopt.restype = (ctypes.c_int, ctypes.c_int), ctypes.c_int
+    return bool(mallopt(M_MMAP_THRESHOLD, MMAP_THRESHOLD_BYTES)) & bool(mallopt(M_TRIM_THRESHOLD, TRIM_THRESHOLD_BYTES))
+
+
 # --------------------------------------------------------------------------- processes
 
 
@@ -124,6 +175,7 @@ def process_pool(workers: int, preload: Sequence[str] = ()) -> ProcessPoolExecut
 
 
 def _import_modules(names: tuple[str, ...]) -> None:
+    keep_freed_memory()
     for name in names:
         importlib.import_module(name)
 

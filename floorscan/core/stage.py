@@ -25,7 +25,8 @@ of the user's data (:func:`floorscan.core.messages.shorten_message`).
 
 Either way the job fails and Snakemake removes its outputs. Before the stage runs,
 temporaries of its outputs that a killed run left are removed
-(:func:`floorscan.core.files.remove_stale_temporaries`).
+(:func:`floorscan.core.files.remove_stale_temporaries`), and the C allocator is told to
+keep freed large arrays for the next ones (:func:`floorscan.core.runtime.keep_freed_memory`).
 
 Profiling: with the environment variable ``FLOORSCAN_PROFILE`` set to a directory, each
 stage's body runs under :mod:`cProfile` and its statistics are written there as
@@ -199,7 +200,9 @@ def stage_log(smk: Any, name: str | None = None, source: str | os.PathLike | Non
         removes its outputs.
     """
     from floorscan.core.files import remove_stale_temporaries
+    from floorscan.core.runtime import keep_freed_memory
 
+    keep_freed_memory()
     rule = getattr(smk, "rule", "stage")
     logger = logging.getLogger(name or f"floorscan.{rule}")
     root = logging.getLogger()
