@@ -849,6 +849,32 @@ def test_a_dead_end_corridor_along_the_hall_s_wall_is_a_corridor_of_its_own():
     assert corridor_ends(axes, th, raster, RoomParams(), strips) == []
 
 
+def test_a_wide_corridor_s_end_onto_a_hall_is_found_past_a_recess_at_its_mouth():
+    """A corridor 2.4 m wide (x 0..2.4, y 6..19) whose east wall steps 0.6 m out for
+    its last 1.5 m, at its mouth onto a 13 m x 6 m hall (orebro's corridor into its
+    lab): its strip ends at y 7.5, and the hall's cells clearer than the corridor is
+    wide lie over 3.5 m beyond, past ``corridor_max_width_m``; they lie within twice the
+    corridor's width, so the end is cut there (before, corridor and hall were one space).
+    With a partition across the mouth that leaves a 1 m gap, the hall lies beyond a
+    narrowing narrower than the corridor: no end."""
+    from floorscan.floorplan.corridors import corridor_ends
+
+    hall = [(-5, 0, 8, 0), (8, 0, 8, 6), (8, 6, 3.0, 6), (0, 6, -5, 6), (-5, 6, -5, 0)]
+    corridor = [(0, 6, 0, 19), (2.4, 7.5, 2.4, 19), (0, 19, 2.4, 19), (2.4, 7.5, 3.0, 7.5), (3.0, 7.5, 3.0, 6)]
+    poses = [(-3, 3), (3, 3), (6, 3), (1.2, 9), (1.2, 13), (1.2, 17)]
+    for walls, found in ((hall + corridor, [[0.0, 2.4]]), (hall + corridor + [(0, 6, 1.4, 6)], [])):
+        axes, th = np.array(walls, dtype=np.float64), np.full(len(walls), T)
+        grid = _grid(walls, poses)
+        ends = corridor_ends(axes, th, room_space(grid, axes, th, RoomParams()), RoomParams())
+        assert [sorted((round(float(p[0]), 1), round(float(q[0]), 1))) for p, q, _ in ends] == found
+        assert all(abs(p[1] - 7.5) < 0.2 and abs(q[1] - 7.5) < 0.2 for p, q, _ in ends)
+    rooms, doors = plan_rooms(np.array(hall + corridor, dtype=np.float64), np.full(len(hall + corridor), T),
+                              _grid(hall + corridor, poses), RoomParams())
+    assert sorted(rooms["kind"]) == ["corridor", "room"]
+    corridor_room = rooms[rooms["kind"] == "corridor"]["polygon"].iloc[0]
+    assert corridor_room.contains(shapely.Point(1.2, 12)) and corridor_room.bounds[1] > 6.5
+
+
 def test_a_corridor_goes_on_past_a_step_of_its_side():
     """A corridor 2 m wide (x 10..24) whose south wall steps 0.4 m out at x 10 and runs
     on to x 3 (the next block's wall): past the step its sides are two other lines, 7 m

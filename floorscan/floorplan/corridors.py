@@ -51,7 +51,13 @@ et al. ("Room segmentation: survey, implementation, and analysis", ICRA 2016).
 4. **Ends** (:func:`corridor_ends`): the line across a corridor's end, from side to
    side, where the corridor opens onto a hall: the line parts the space in two, and
    beyond it lies a space at least twice as wide as the corridor
-   (:func:`~floorscan.floorplan.mouths.hall_beside`). This is the dead end of
+   (:func:`~floorscan.floorplan.mouths.hall_beside`), looked for within
+   ``corridor_max_width_m`` or twice the corridor's clear width, the farther (a hall's
+   cells clearer than the corridor lie at least its width in from the hall's wall, and
+   the corridor's sides may stop short of its mouth), and reached from the corridor's
+   end without a narrowing narrower than the corridor (a hall behind a gap in another
+   wall is no end of it).
+   This is the dead end of
    :func:`~floorscan.floorplan.mouths.dead_end_mouths` whose side walls end apart
    along it (one side wall goes on beside the hall, the other stops): people draw the
    corridor's end across it where the shorter side ends (Bormann et al.'s Freiburg101,
@@ -351,6 +357,8 @@ def corridor_ends(
     it are judged there), and each line is a corridor's end from ``p`` to ``q`` ((2,)
     metres, on its sides' lines) with the sides' wall nearest to its middle.
     """
+    from scipy import ndimage
+
     axes, thickness, strips = _walls_and_strips(axes, thickness, raster, params, strips)
     if not strips:
         return []
@@ -361,15 +369,22 @@ def corridor_ends(
         for t, outward in ((s["t0"], -1.0), (s["t1"], 1.0)):
             p = s["origin"] + t * s["u"]
             q = p + s["sep"] * s["n"]
-            hall = (p, q, outward * s["u"], s["clear"], params.corridor_max_width_m)
+            hall = (p, q, outward * s["u"], s["clear"], max(params.corridor_max_width_m, 2 * s["clear"]))
             if not hall_beside(raster, clearance, raster.space, *hall):
                 continue  # no hall anywhere beyond: no need to label the space
             apart = sides_apart(raster, p, q)
             if apart is None:
                 continue  # the corridor joins the space elsewhere too
             comp = apart[0]
-            beyond = raster.at(comp, ((p + q) / 2 + outward * s["u"] * 2 * raster.resolution_m)[None], outside=0)[0]
-            if beyond and hall_beside(raster, clearance, comp == beyond, *hall):
+            start = ((p + q) / 2 + outward * s["u"] * 2 * raster.resolution_m)[None]
+            beyond = raster.at(comp, start, outside=0)[0]
+            if not beyond:
+                continue
+            # the part beyond the end where a disc as wide as the corridor (less a cell)
+            # fits, connected to the end: the hall opens from the corridor, not through a gap
+            wide, _ = ndimage.label((comp == beyond) & (clearance >= s["clear"] / 2 - raster.resolution_m))
+            k = raster.at(wide, start, outside=0)[0]
+            if k and hall_beside(raster, clearance, wide == k, *hall):
                 out.append((p, q, _nearest_wall(mids, s["sides"][0][1] + s["sides"][1][1], (p + q) / 2)))
     return out
 
