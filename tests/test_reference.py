@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from floorscan.core.geometry import sample_segments, segment_weights
+from floorscan.core.geometry import sample_segments, samples_per_segment, segment_weights
 from floorscan.score.against_reference import (
     Structure,
     plan_against_reference,
@@ -199,6 +199,17 @@ def test_segment_samples_cover_each_segment_with_their_weights():
     assert len(pts) == len(wts) == 11 + 4
     assert wts.sum() == pytest.approx(1.25)
     assert pts[0].tolist() == [0, 0] and pts[10].tolist() == [1, 0] and pts[-1].tolist() == [0, 0.25]
+
+
+def test_segment_samples_are_the_formula_to_the_bit():
+    """Sample k of a segment's n is a + (b - a) (k / (n - 1)), the same floats."""
+    seg = np.random.default_rng(4).normal(0, 30, (300, 4))
+    seg[:5, 2:] = seg[:5, :2]
+    n = samples_per_segment(seg, 0.02)
+    which = np.repeat(np.arange(len(seg)), n)
+    k = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)
+    want = seg[which, :2] + (seg[which, 2:] - seg[which, :2]) * (k / (n[which] - 1))[:, None]
+    assert np.array_equal(sample_segments(seg, 0.02), want)
 
 
 def test_a_plan_of_the_true_walls_scores_high_and_a_spurious_wall_lowers_correctness():

@@ -73,10 +73,33 @@ def sample_segments(segments: np.ndarray, sample_m: float) -> np.ndarray:
     if len(seg) == 0:
         return np.empty((0, 2))
     n = samples_per_segment(seg, sample_m)
-    which = np.repeat(np.arange(len(seg)), n)
     t = (np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n - 1, n)
-    a, b = seg[which, :2], seg[which, 2:]
-    return a + (b - a) * t[:, None]
+    out = np.repeat(seg[:, 2:] - seg[:, :2], n, axis=0)  # a + (b - a) t, each segment's b - a once
+    out *= t[:, None]
+    out += np.repeat(seg[:, :2], n, axis=0)
+    return out
+
+
+def sample_spacing(segments: np.ndarray, sample_m: float) -> np.ndarray:
+    """Length each sample of :func:`sample_segments` stands for, once per segment.
+
+    Parameters
+    ----------
+    segments : (F, 4) float ndarray
+        ``x0, y0, x1, y1``, metres.
+    sample_m : float
+        Sample spacing, metres.
+
+    Returns
+    -------
+    (F,) float64 ndarray
+        Metres per sample: each segment's length divided by its
+        :func:`samples_per_segment`.
+    """
+    seg = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
+    if len(seg) == 0:
+        return np.empty(0)
+    return np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]) / samples_per_segment(seg, sample_m)
 
 
 def segment_weights(segments: np.ndarray, sample_m: float) -> np.ndarray:
@@ -98,8 +121,7 @@ def segment_weights(segments: np.ndarray, sample_m: float) -> np.ndarray:
     seg = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
     if len(seg) == 0:
         return np.empty(0)
-    n = samples_per_segment(seg, sample_m)
-    return np.repeat(np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]) / n, n)
+    return np.repeat(sample_spacing(seg, sample_m), samples_per_segment(seg, sample_m))
 
 
 # --------------------------------------------------------------------------- SE(2)

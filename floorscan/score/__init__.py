@@ -24,7 +24,8 @@ Modules, from the segments up:
 - :mod:`floorscan.score.reference`: the occupancy grid of all kept scans (mapping with
   known poses), written in ROS map_server format;
 - :mod:`floorscan.score.against_reference`: completeness, correctness, F1 and median
-  distance of a floor plan against that map;
+  distance of a floor plan against that map (its structure cells near points and
+  segments found on the grid: :mod:`floorscan.score.structure_grid`);
 - :mod:`floorscan.score.curves`: floor-plan quality against k for every ordering,
   random's seeds and the oracle; :mod:`floorscan.score.curve_summary`: their summary
   (k95, k99, area under the curve) and its tables;

@@ -25,7 +25,6 @@ is not meaningful.
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -33,9 +32,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.spatial import cKDTree
 
-from floorscan.core.geometry import sample_segments, samples_per_segment, segment_weights
+from floorscan.core.geometry import sample_segments, sample_spacing, samples_per_segment
 from floorscan.core.memory import JobMemory
 from floorscan.core.occupancy import OccupancyGrid, read_grid
+from floorscan.score.structure_grid import StructureGrid, nearest_sample_d2
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -86,6 +86,8 @@ class Structure:
         Centres of the structure cells, metres.
     tree : scipy.spatial.cKDTree
         Of ``xy``.
+    cells : floorscan.score.structure_grid.StructureGrid
+        The same cells on the grid: the nearest of a point, those near a segment.
     free : (H, W) bool ndarray
         The grid's free cells.
 
@@ -104,10 +106,12 @@ class Structure:
 
     def __init__(self, grid: OccupancyGrid):
         self.grid = grid
-        self.xy = grid.cell_centres(grid.structure())
+        mask = grid.structure()
+        self.xy = grid.cell_centres(mask)
         if len(self.xy) == 0:
             raise ValueError("the reference map has no structure cell (occupied and hit by enough scans)")
         self.tree = cKDTree(self.xy)
+        self.cells = StructureGrid(grid, mask, self.tree)
         self.free = grid.free()
         self._faces: dict[tuple, dict[bytes, _FaceScore]] = {}
         self._used: dict[tuple, dict[bytes, int]] = {}  # the last call that asked for each face
@@ -192,14 +196,14 @@ def _score_faces(ref: Structure, seg: np.ndarray, taus_m: tuple[float, ...], sam
     n = samples_per_segment(seg, sample_m)
     starts = np.r_[0, np.cumsum(n)]
     samples = sample_segments(seg, sample_m)
-    weight = segment_weights(seg, sample_m)[starts[:-1]]  # equal within a face
-    distance, _ = ref.tree.query(samples, k=1, distance_upper_bound=max(taus_m) * 10)
-    rows, cols, inside = ref.grid.cells_of(samples)
-    on_free = np.zeros(len(samples), dtype=bool)
-    on_free[inside] = ref.free[rows[inside], cols[inside]]
+    weight = sample_spacing(seg, sample_m)  # equal within a face
+    distance = ref.cells.nearest(samples, max(taus_m) * 10)  # as ref.tree.query(...)[0]
     # beside a wall the free cells begin within a cell of its face: only samples beyond
     # the largest tolerance from structure are a wall drawn through free space
-    on_free &= distance > max(taus_m)
+    far = np.flatnonzero(distance > max(taus_m))
+    rows, cols, inside = ref.grid.cells_of(samples[far])
+    on_free = np.zeros(len(samples), dtype=bool)
+    on_free[far[inside]] = ref.free[rows[inside], cols[inside]]
     near_cell, near_face, near_distance = _cells_near_samples(ref, seg, samples, starts,
                                                               within_bound(max(taus_m), sample_m))
     near, cell_type = [], np.int32 if len(ref.xy) < 2**31 else np.int64
@@ -219,41 +223,25 @@ def _cells_near_samples(ref: Structure, seg: np.ndarray, samples: np.ndarray, st
     ``bound`` metres, grouped by face, with that distance.
 
     ``samples`` are :func:`sample_segments` of ``seg``, face ``f``'s from
-    ``starts[f]`` to ``starts[f + 1]``. They are equally spaced along the face, so a
-    cell's nearest sample is one of the two around its projection on the face: the
-    four around it are measured, each as the whole-plan query measures it (cell minus
-    sample, squares summed, square root). Candidate cells are those within ``bound``
-    (plus a little) of the face's segment.
+    ``starts[f]`` to ``starts[f + 1]``; a cell's nearest sample is measured as the
+    whole-plan query measures it (:func:`floorscan.score.structure_grid.nearest_sample_d2`).
+    Candidate cells are those within ``bound`` (plus a little) of the face's segment.
 
     Returns
     -------
     cell, face : (P,) int64 ndarray
-        Indices into ``ref.xy`` and into ``seg``, by face.
+        Indices into ``ref.xy`` and into ``seg``: by face, and by cell within a face.
     distance : (P,) float64 ndarray
         Metres.
     """
     from floorscan.core.geometry import point_segment_dist2
 
     reach = bound * (1 + 1e-6) + 1e-9
-    a, b = seg[:, :2], seg[:, 2:]
-    lists = ref.tree.query_ball_point((a + b) / 2, np.hypot(b[:, 0] - a[:, 0], b[:, 1] - a[:, 1]) / 2 + reach)
-    counts = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(seg))
-    cell = np.fromiter(itertools.chain.from_iterable(lists), dtype=np.int64, count=int(counts.sum()))
-    face = np.repeat(np.arange(len(seg)), counts)
+    cell, face = ref.cells.segment_cells(seg, reach)
     cx, cy = ref.xy[cell, 0], ref.xy[cell, 1]
     keep = point_segment_dist2(cx, cy, seg[face]) <= reach * reach
     cell, face, cx, cy = cell[keep], face[keep], cx[keep], cy[keep]
-    a, ab = seg[face, :2], seg[face, 2:] - seg[face, :2]
-    length2 = ab[:, 0] * ab[:, 0] + ab[:, 1] * ab[:, 1]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        t = np.where(length2 > 0, ((cx - a[:, 0]) * ab[:, 0] + (cy - a[:, 1]) * ab[:, 1]) / length2, 0.0)
-    first, last = starts[face], starts[face + 1] - 1
-    i0 = first + np.floor(np.clip(t, 0.0, 1.0) * (last - first)).astype(np.int64)
-    distance = np.full(len(cell), np.inf)
-    for offset in (-1, 0, 1, 2):
-        s = samples[np.clip(i0 + offset, first, last)]
-        dx, dy = cx - s[:, 0], cy - s[:, 1]
-        distance = np.minimum(distance, np.sqrt(dx * dx + dy * dy))
+    distance = np.sqrt(nearest_sample_d2(cx, cy, face, seg, samples, starts))
     keep = distance <= bound
     return cell[keep], face[keep], distance[keep]
 

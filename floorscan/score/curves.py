@@ -27,13 +27,13 @@ from typing import Callable
 
 import numpy as np
 import pandas as pd
-from scipy.spatial import cKDTree
 
 from floorscan.core.geometry import sample_segments, samples_per_segment
 from floorscan.core.greedy import lazy_greedy
 from floorscan.core.grid import unique_ints
 from floorscan.core.score_tables import ORACLE, RANDOM
 from floorscan.score.against_reference import Structure, plan_against_reference, within_bound
+from floorscan.score.structure_grid import nearest_sample_d2
 
 
 def k_grid(n_kept: int, step_fraction: float = 0.02) -> list[int]:
@@ -120,7 +120,7 @@ def scan_cover(
     scan_ids : list of int
         The scans to cover.
     structure : Structure
-        The reference map's structure cells (``structure.xy``, ``structure.tree``).
+        The reference map's structure cells (``structure.xy``, ``structure.cells``).
     tau_m : float
         Tolerance, metres.
     sample_m : float
@@ -137,18 +137,22 @@ def scan_cover(
         return cover
     seg = per_scan[["x0", "y0", "x1", "y1"]].to_numpy(np.float64)
     samples = sample_segments(seg, sample_m)
+    starts = np.r_[0, np.cumsum(samples_per_segment(seg, sample_m))]
     scan_ids_of_rows, scan_of_row = np.unique(per_scan["scan_id"].to_numpy(np.int64), return_inverse=True)
-    scan_of_sample = np.repeat(scan_of_row, samples_per_segment(seg, sample_m))
-    # every (sample, structure cell) pair within the bound, found in C
-    pairs = cKDTree(samples).sparse_distance_matrix(structure.tree, within_bound(tau_m, sample_m), output_type="ndarray")
+    # every (segment, structure cell) pair with a sample within the bound: the pairs of
+    # cKDTree.sparse_distance_matrix (squared distance at most the bound squared)
+    bound = within_bound(tau_m, sample_m)
+    cells, rows = structure.cells.segment_cells(seg, bound)
+    d2 = nearest_sample_d2(structure.xy[cells, 0], structure.xy[cells, 1], rows, seg, samples, starts)
+    near = d2 <= bound * bound
     n_cells = len(structure.xy)
-    keys = scan_of_sample[pairs["i"]] * n_cells + pairs["j"]
+    keys = scan_of_row[rows[near]] * n_cells + cells[near]
     if len(scan_ids_of_rows) * n_cells <= _MARK_CELLS:  # distinct and sorted, by scan then cell
         mark = np.zeros(len(scan_ids_of_rows) * n_cells, dtype=bool)
         mark[keys] = True
         keys = np.flatnonzero(mark)
-    else:
-        keys = unique_ints(keys)
+    else:  # increasing runs (a segment's cells), by scan when the rows are: a merge sort joins them
+        keys = unique_ints(keys, kind="stable")
     scans, cells = scan_ids_of_rows[keys // n_cells], keys % n_cells
     bounds = np.flatnonzero(np.diff(scans)) + 1
     for chunk_scans, chunk_cells in zip(np.split(scans, bounds), np.split(cells, bounds)):
