@@ -171,18 +171,29 @@ def test_covariances_are_open3d_estimate_covariances_bit_for_bit():
     assert np.isnan(point_normals(pts, 0.25, 20)[-1]).all()
 
 
+def _walls_map(seed, n=30000, n_walls=40):
+    """A map of ``n`` noisy points on ``n_walls`` axis-parallel walls over 60 m and 50
+    scattered points, metres."""
+    rng = np.random.default_rng(seed)
+    a = rng.uniform(0, 60, (n_walls, 2))
+    turn = rng.integers(0, 4, n_walls) * np.pi / 2
+    b = a + np.column_stack([np.cos(turn), np.sin(turn)]) * rng.uniform(1, 20, (n_walls, 1))
+    t, w = rng.uniform(0, 1, n), rng.integers(0, n_walls, n)
+    return np.vstack([a[w] + t[:, None] * (b[w] - a[w]) + rng.normal(0, 0.01, (n, 2)), rng.uniform(-20, 80, (50, 2))])
+
+
 def test_tiled_inlier_counts_and_runs_equal_the_whole_product(monkeypatch):
     """The inlier counts of a large map by tiles (each line against the tiles it
     passes near) are the counts of one product over all points, bit for bit, for tiles
-    of one point to thousands and hypotheses near one tile or all; a RANSAC run gives
-    the same rows either way."""
+    of one point to thousands, hypotheses near one tile or all, and tiles some of whose
+    points a line took; a tile's near points hold every point within the threshold; a
+    RANSAC run by tiles gives the rows of the plain loop, float for float."""
     import floorscan.walls.ransac as R
+    from floorscan.walls.tiles import Tiles
 
     rng = np.random.default_rng(21)
-    a = rng.uniform(0, 60, (40, 2))
-    b = a + np.column_stack([np.cos(rng.integers(0, 4, 40) * np.pi / 2), np.sin(rng.integers(0, 4, 40) * np.pi / 2)]) * rng.uniform(1, 20, (40, 1))
-    t, w = rng.uniform(0, 1, 30000), rng.integers(0, 40, 30000)
-    pts = np.vstack([a[w] + t[:, None] * (b[w] - a[w]) + rng.normal(0, 0.01, (30000, 2)), rng.uniform(-20, 80, (50, 2))])
+    pts = _walls_map(21)
+    assert len(pts) > R.TILED_MIN_POINTS
     pt = np.vstack([pts.T, np.ones(len(pts))])
     i, j = rng.integers(len(pts), size=600), rng.integers(len(pts), size=600)
     d = pts[j] - pts[i] + 1e-3
@@ -190,20 +201,74 @@ def test_tiled_inlier_counts_and_runs_equal_the_whole_product(monkeypatch):
     hyp = np.column_stack([normal, (normal * pts[i]).sum(axis=1)])
     hyp = np.vstack([hyp, [[0.0, 1.0, 1000.0]]])  # a line far from every tile
     want = R._hypothesis_counts(pt, hyp, 0.04, negate=True)
-    for tile_points in (1, 7, 2048, 10**6):
-        monkeypatch.setattr(R, "TILE_POINTS", tile_points)
-        assert np.array_equal(R._tiled_counts(pts, pt, hyp, 0.04), want), tile_points
+    everyone = np.arange(len(pts))
+    for tile_points in (1, 7, 512, 2048, 10**6):
+        assert np.array_equal(R._tiled_counts(Tiles(pts, everyone, tile_points), hyp, 0.04), want), tile_points
     assert want.max() > 500 and want[-1] == 0
     line = np.column_stack([np.linspace(0, 900, 30000), np.full(30000, 3.0)])  # one straight wall: a box of no area
     on_line = np.vstack([line.T, np.ones(len(line))])
-    assert np.array_equal(R._tiled_counts(line, on_line, hyp, 0.04), R._hypothesis_counts(on_line, hyp, 0.04, negate=True))
-    params = R.RansacParams(threshold_m=0.04, iterations=300, min_points=5, min_inliers=5, max_lines=30,
+    counts = R._tiled_counts(Tiles(line, np.arange(len(line)), 512), hyp, 0.04)
+    assert np.array_equal(counts, R._hypothesis_counts(on_line, hyp, 0.04, negate=True))
+
+    # points taken out of their tiles: the counts and near points of those left
+    tiles, dead = Tiles(pts, everyone, 512), np.zeros(len(pts), dtype=bool)
+    for h in range(5):
+        gone = np.flatnonzero(~dead & (np.abs(pts @ hyp[h, :2] - hyp[h, 2]) < 0.3))
+        dead[gone] = True
+        tiles.remove(gone, dead)
+    left = np.flatnonzero(~dead)
+    assert sum(len(ids) for ids in tiles.ids) == len(left) < len(pts) - 1000
+    assert np.array_equal(R._tiled_counts(tiles, hyp, 0.04), R._hypothesis_counts(pt[:, left], hyp, 0.04, negate=True))
+    sizes = []
+    for h in range(len(hyp)):
+        near = tiles.near_ids(hyp[h, :2], hyp[h, 2], 0.04)
+        assert set(near.tolist()) <= set(left.tolist())
+        inside = left[np.abs(pts[left] @ hyp[h, :2] - hyp[h, 2]) < 0.04]
+        assert np.isin(inside, near).all()
+        sizes.append(len(near))
+    assert sizes[-1] == 0 and np.mean(sizes) < len(left) / 2  # a line's near tiles hold a part of the points
+
+    # the counts, the refit and the segments measure the points of the near tiles only:
+    # each distance the same float as over all points, also of one point or one line
+    # (which numpy hands to other BLAS routines than the matrix products)
+    full = hyp @ np.vstack([pt[:2], -pt[2]])  # (nx, ny, offset) by (x, y, -1): BLAS dgemm
+    for k, n in ((1, 1), (1, 5), (5, 1), (2, 2), (7, 300)):
+        for _ in range(10):
+            h, cols = rng.choice(len(hyp), k, replace=False), rng.choice(len(pts), n, replace=False)
+            out = np.empty((k, n))
+            R._product(hyp[h] * [1.0, 1.0, -1.0], pt[:, cols], out)
+            np.testing.assert_array_equal(out, full[np.ix_(h, cols)])
+    for c in (None, pts[7]):
+        all_rows = pts @ normal[3] if c is None else (pts - c) @ normal[3]
+        for n in (1, 1, 1, 2, 13, 511, 29000):
+            for rows in (np.sort(rng.choice(len(pts), n, replace=False)), np.arange(n) + 17):
+                got = R._row_products(pts[rows] if c is None else pts[rows] - c, normal[3])
+                np.testing.assert_array_equal(got, all_rows[rows])
+    one = [(pts[r : r + 1] @ normal[3])[0] == (pts @ normal[3])[r] for r in range(30)]
+    assert not all(one)  # numpy's one-row product rounds otherwise: why _row_products doubles it
+    one = [np.array_equal(hyp[h : h + 1] * [1.0, 1.0, -1.0] @ pt[:, :30], full[h : h + 1, :30]) for h in range(30)]
+    assert not all(one)  # and so does its product of one hypothesis: why _product doubles it
+
+    params = R.RansacParams(threshold_m=0.04, iterations=300, min_points=5, min_inliers=5, max_lines=40,
                             min_length_m=0.1, max_gap_m=0.3, min_coverage=0.0, coverage_gap_m=0.3)
-    monkeypatch.setattr(R, "TILE_POINTS", 256)
-    monkeypatch.setattr(R, "TILED_MIN_POINTS", 10**9)
-    whole = R.ransac_rows(pts, params, 3)
-    monkeypatch.setattr(R, "TILED_MIN_POINTS", 1000)
-    assert R.ransac_rows(pts, params, 3) == whole and len(whole) >= 30
+    built = []
+
+    class Counted(Tiles):
+        def __init__(self, xy, ids, size):
+            built.append(len(ids))
+            super().__init__(xy, ids, size)
+
+    monkeypatch.setattr(R, "Tiles", Counted)
+    view = np.asfortranarray(pts)  # not C-ordered: the rows are gathered as the plain loop gathers them
+    for seed, tile_points in ((3, 512), (4, 64), (5, 4096)):
+        monkeypatch.setattr(R, "TILED_MIN_POINTS", 10**9)
+        whole = R.ransac_rows(pts, params, seed)
+        monkeypatch.setattr(R, "TILED_MIN_POINTS", 20_000)
+        monkeypatch.setattr(R, "TILE_POINTS", tile_points)
+        built.clear()
+        assert R.ransac_rows(view, params, seed) == whole and len(whole) >= 40, seed
+        assert len(built) >= 3 and min(built) < len(pts) / 2  # the points left were tiled anew
+    assert np.array_equal(view, pts)
 
 
 def test_fast_grid_means_and_inlier_counts_equal_the_plain_numpy():

@@ -13,7 +13,8 @@ Modules, in the order of the work:
 * :mod:`floorscan.core.wall_points`: a scan's 2D wall points (2D rule, height band, grid;
   shared with the reference map and the coverage orderings);
 * :mod:`~floorscan.walls.segments`: a fitted line's wall segments (gaps, coverage, ends);
-* :mod:`~floorscan.walls.ransac`: iterative RANSAC (section 5.3, Algorithm 4);
+* :mod:`~floorscan.walls.ransac`: iterative RANSAC (section 5.3, Algorithm 4), on many
+  points by :mod:`~floorscan.walls.tiles` (the points a line passes near);
 * :mod:`~floorscan.walls.normals`, :mod:`~floorscan.walls.meanshift`,
   :mod:`~floorscan.walls.cluster`: clustering RANSAC (section 3.4);
 * :mod:`~floorscan.walls.extractors`: the registry of extractors by name;

@@ -12,11 +12,13 @@ one wall (section 5.3). Fischler and Bolles (1981), Random sample consensus.
 :func:`floorscan.walls.cluster.cluster_ransac`, once per cluster.
 
 The inlier counts of all hypotheses are one BLAS product per cache-sized block
-(:func:`_hypothesis_counts`): the same counts as ``abs(points @ normals.T - offsets)
-< threshold`` (the tests check it bit for bit). On many points (the map of a large
-site) each line is measured only on the tiles of points it passes near
-(:func:`_tiled_counts`): the same counts, at a cost that grows with the site's size,
-not with its square. Parameters:
+(:func:`_hypothesis_counts`): the counts of ``abs(points @ normals.T - offsets) <
+threshold`` but where a distance lies within a rounding step of the threshold (a test
+checks the counts). On many points (the map of a large site, :data:`TILED_MIN_POINTS`)
+the points are sorted once into square tiles (:class:`~floorscan.walls.tiles.Tiles`)
+and each line, the hypotheses' counts (:func:`_tiled_counts`) as the refit and the
+segments' ends (:func:`_tiled_rows`), is measured only on the tiles it passes near: the
+same rows, at a cost that grows with the site's size, not with its square. Parameters:
 :class:`~floorscan.walls.params.RansacParams`; randomness from
 ``numpy.random.default_rng(seed)``: the same seed, the same walls.
 """
@@ -27,8 +29,9 @@ import numpy as np
 import pandas as pd
 
 from floorscan.walls.params import RansacParams
-from floorscan.walls.segments import claimed_segments, fit_line
+from floorscan.walls.segments import candidate_segments, claimed_segments, fit_line
 from floorscan.walls.tables import segments_frame
+from floorscan.walls.tiles import Tiles
 
 
 def ransac(points: np.ndarray, params: RansacParams = RansacParams(), seed=0) -> pd.DataFrame:
@@ -81,6 +84,8 @@ def ransac_rows(points: np.ndarray, params: RansacParams, seed) -> list[tuple]:
     """
     rng = np.random.default_rng(seed)
     all_pts = np.asarray(points, dtype=np.float64)
+    if len(all_pts) >= TILED_MIN_POINTS:
+        return _tiled_rows(all_pts, rng, params)
     alive = np.arange(len(all_pts))  # indices of the points not yet claimed by a line
     rows: list[tuple] = []
     n_lines = 0
@@ -149,8 +154,24 @@ def _best_line(points: np.ndarray, rng: np.random.Generator, params: RansacParam
     pt = np.empty((3, n))  # rows x, y, 1 (the columns of _hypothesis_counts)
     pt[:2] = points.T
     pt[2] = 1.0
-    sx, sy = pt[0, i], pt[1, i]
-    dx, dy = pt[0, j], pt[1, j]
+    hyp = _hypotheses(pt[0, i], pt[1, i], pt[0, j], pt[1, j])
+    if hyp is None:
+        return None
+    if n >= TILED_MIN_POINTS:
+        counts = _tiled_counts(Tiles(points, np.arange(n), TILE_POINTS), hyp.T, params.threshold_m)
+    else:
+        counts = _hypothesis_counts(pt, hyp.T, params.threshold_m, negate=True)
+    best = int(np.argmax(counts))
+    return _refine_line(points, hyp[:2, best].copy(), hyp[2, best], params)
+
+
+def _hypotheses(sx: np.ndarray, sy: np.ndarray, dx: np.ndarray, dy: np.ndarray) -> np.ndarray | None:
+    """The lines through the point pairs ``(sx, sy)``, ``(dx, dy)`` (metres, fresh
+    contiguous (H,) arrays, overwritten), pairs closer than 1e-9 m dropped: rows
+    ``(nx, ny, offset)`` of a (3, H') array, or None when every pair is dropped.
+
+    ``normal = (-(dy - sy), dx - sx) / length``, ``offset = nx * sx + ny * sy`` (see
+    :func:`_best_line`)."""
     dx -= sx
     dy -= sy
     length = np.hypot(dx, dy)
@@ -166,40 +187,109 @@ def _best_line(points: np.ndarray, rng: np.random.Generator, params: RansacParam
     np.multiply(hyp[0], sx, out=sx)
     np.multiply(hyp[1], sy, out=sy)
     np.add(sx, sy, out=hyp[2])  # the offsets
-    if n >= TILED_MIN_POINTS:
-        counts = _tiled_counts(points, pt, hyp.T, params.threshold_m)
-    else:
-        counts = _hypothesis_counts(pt, hyp.T, params.threshold_m, negate=True)
-    best = int(np.argmax(counts))
-    return _refine_line(points, hyp[:2, best].copy(), hyp[2, best], params)
+    return hyp
 
 
-#: Points of a RANSAC run from which :func:`_tiled_counts` counts the inliers by tiles:
-#: below it one product over all points is as quick (a scan, a room's map).
+#: Points of a RANSAC run from which it measures its lines by tiles (:func:`_tiled_rows`,
+#: :func:`_tiled_counts`): below it one product over all points is as quick (a scan, a
+#: room's map).
 TILED_MIN_POINTS = 20_000
 #: Points per tile of :func:`_tiled_counts`, about: a tile's product is large enough
 #: for BLAS, and a line crosses few of the tiles of a large map.
-TILE_POINTS = 2048
+TILE_POINTS = 512
+#: Distances of a block of :func:`_hypothesis_counts` on a tile, at most (its buffers).
+_BLOCK = 4 * 65536
 
 
-def _tiled_counts(points: np.ndarray, pt: np.ndarray, hyp: np.ndarray, threshold: float) -> np.ndarray:
-    """:func:`_hypothesis_counts` (``negate=True``) of many points, by square tiles of
-    about :data:`TILE_POINTS` points: a hypothesis' line is measured only against the
-    tiles it passes within ``threshold`` of (the distance from a tile's centre to the
-    line, less the half diagonal of the tile's points, bounds the distance of each of
-    its points; a relative margin of 1e-9 and 1e-9 m), so a run on the map of a large
-    site measures each line against the few tiles it crosses, not the whole site.
+def _tiled_rows(pts: np.ndarray, rng: np.random.Generator, params: RansacParams) -> list[tuple]:
+    """:func:`ransac_rows` of many points, each line measured only against the tiles
+    of points it passes near (:class:`~floorscan.walls.tiles.Tiles`; thesis section
+    5.3, Algorithm 4; Fischler and Bolles 1981).
 
-    Each count is the same integer as :func:`_hypothesis_counts`': the same product
-    (BLAS, ``(nx, ny, -offset)`` with ``(x, y, 1)``, a test checks it bit for bit) on
-    the tile's columns, and the tiles it skips hold no inlier.
+    The same rows as the plain loop (:func:`fit_wall` on the points left), float for
+    float: the same draws from the points left in the same order, the same counts
+    (:func:`_tiled_counts`), and the refit and the segments (:func:`_refit`,
+    :func:`~floorscan.walls.segments.candidate_segments`) computed by the same
+    expressions on the points of the near tiles, in the same order, which hold every
+    point within ``threshold_m`` of the line. The points left are tiled anew each time
+    half of them are gone, so the tiles stay about :data:`TILE_POINTS` points.
 
     Parameters
     ----------
-    points : (N, 2) float64 ndarray
-        Metres.
-    pt : (3, N) float64 ndarray
-        Rows x, y, 1 of ``points``.
+    pts : (N, 2) float64 ndarray
+        Wall points (map frame), metres. Not modified.
+    rng : numpy.random.Generator
+    params : RansacParams
+
+    Returns
+    -------
+    list of tuple
+        As :func:`ransac_rows`.
+    """
+    thr = params.threshold_m
+    alive = np.arange(len(pts))  # indices of the points not yet claimed by a line, ascending
+    everyone = Tiles(pts, alive, TILE_POINTS)  # all points: the segments' ends
+    tiles = Tiles(pts, alive, TILE_POINTS)  # the points left: the counts and the refit
+    xs, ys = np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1])
+    dead = np.zeros(len(pts), dtype=bool)  # claimed by a line
+    claimed = np.zeros(len(pts), dtype=bool)  # by the current line
+
+    def inliers(normal, offset, c):  # ascending indices of the points left within thr
+        if c is not None:
+            offset = float(c @ normal)
+        cand = tiles.near_ids(normal, offset, thr)
+        q = pts[cand]
+        dist = _row_products(q, normal) - offset if c is None else _row_products(q - c, normal)
+        return np.sort(cand[np.abs(dist) < thr])
+
+    rows: list[tuple] = []
+    n_lines = 0
+    while len(alive) >= params.min_points and n_lines < params.max_lines:
+        n = len(alive)
+        if n < 2:
+            break
+        i = rng.integers(n, size=params.iterations)  # as _best_line
+        j = rng.integers(n - 1, size=params.iterations)
+        j += j >= i
+        i, j = alive[i], alive[j]
+        hyp = _hypotheses(xs[i], ys[i], xs[j], ys[j])
+        if hyp is None:
+            break
+        best = int(np.argmax(_tiled_counts(tiles, hyp.T, thr)))
+        ids, c, direction = _refit(inliers, pts, hyp[:2, best].copy(), hyp[2, best], params)
+        if len(ids) < params.min_inliers:
+            break
+        normal = np.array([-direction[1], direction[0]])
+        cand = everyone.near_ids(normal, float(c @ normal), thr)
+        cand = np.sort(cand[np.abs(_row_products(pts[cand] - c, normal)) < thr])  # claimed_segments' candidates
+        claimed[ids] = True
+        rows += candidate_segments(pts, cand, direction, claimed, params)
+        claimed[ids] = False
+        dead[ids] = True
+        alive = np.delete(alive, np.searchsorted(alive, ids))
+        if len(alive) < tiles.n_built / 2:
+            if len(alive):
+                tiles = Tiles(pts, alive, TILE_POINTS)
+        else:
+            tiles.remove(ids, dead)
+        n_lines += 1
+    return rows
+
+
+def _tiled_counts(tiles: Tiles, hyp: np.ndarray, threshold: float) -> np.ndarray:
+    """:func:`_hypothesis_counts` (``negate=True``) of the points of ``tiles``, each
+    hypothesis' line measured only against the tiles it passes within ``threshold`` of
+    (:meth:`~floorscan.walls.tiles.Tiles.near`): on the map of a large site, the few
+    tiles it crosses, not the whole site.
+
+    Each count is the same integer as :func:`_hypothesis_counts`': the same product
+    (BLAS, ``(nx, ny, -offset)`` with ``(x, y, 1)``, a test checks the counts) on the
+    tile's columns, and the tiles it skips hold no inlier.
+
+    Parameters
+    ----------
+    tiles : Tiles
+        The points, metres.
     hyp : (H, 3) float ndarray
         ``(nx, ny, offset)`` per line.
     threshold : float
@@ -209,52 +299,77 @@ def _tiled_counts(points: np.ndarray, pt: np.ndarray, hyp: np.ndarray, threshold
     -------
     (H,) int64 ndarray
     """
-    n = len(points)
     h3 = hyp * np.array([1.0, 1.0, -1.0])  # (nx, ny, -offset), C-ordered
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    extent = np.maximum(hi - lo, 1e-9)
-    # about n / TILE_POINTS tiles over the box, and no more along its longer side (the
-    # points of one straight wall, whose box has no area)
-    side = max(float(np.sqrt(np.prod(extent) * TILE_POINTS / n)), float(extent.max()) * TILE_POINTS / n, 1e-6)
-    cell = np.floor((points - lo) / side).astype(np.int64)
-    key = cell[:, 0] * (int(cell[:, 1].max()) + 1) + cell[:, 1]
-    order = np.argsort(key, kind="stable")
-    key = key[order]
-    starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
-    stops = np.r_[starts[1:], n]
-    ps = np.ascontiguousarray(pt[:, order])
-    t_lo, t_hi = np.minimum.reduceat(ps[:2], starts, axis=1), np.maximum.reduceat(ps[:2], starts, axis=1)
-    centre, radius = (t_lo + t_hi) / 2, np.hypot(*(t_hi - t_lo)) / 2  # (2, T), (T,)
-    reach = np.abs(h3[:, :2] @ centre + h3[:, 2:])  # (H, T) distance of each tile's centre
-    near = reach <= (radius + threshold) * (1 + 1e-9) + 1e-9
-    counts = np.zeros(len(h3), dtype=np.int64)
-    for t in np.flatnonzero(near.any(axis=0)):
-        sel = np.flatnonzero(near[:, t])
-        counts[sel] += _hypothesis_counts(ps[:, starts[t]:stops[t]], h3[sel], threshold)
-    return counts
+    near = tiles.near(hyp[:, :2], hyp[:, 2], threshold)  # (H, T)
+    tile, sel = np.nonzero(near.T)  # by tile, then hypothesis
+    bounds = [*np.flatnonzero(np.r_[True, tile[1:] != tile[:-1]]).tolist(), len(tile)] if len(tile) else [0]
+    pairs, part = h3[sel], np.empty(len(sel), dtype=np.int64)  # a count per (tile, hypothesis)
+    work = np.empty(_BLOCK), np.empty(_BLOCK, dtype=bool)
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        part[a:b] = _hypothesis_counts(tiles.cols[tile[a]], pairs[a:b], threshold, work=work)
+    return np.bincount(sel, weights=part, minlength=len(h3)).astype(np.int64)  # exact below 2**53
 
 
 def _refine_line(points: np.ndarray, normal: np.ndarray, offset: float, params: RansacParams):
     """The inliers of the line ``points @ normal == offset`` refitted (least squares)
     to their own inliers up to ``params.refine_iterations`` times, until they no longer
-    change: ``(mask, centre, direction)`` as :func:`_best_line` returns them."""
-    mask = np.abs(points @ normal - offset) < params.threshold_m
-    n_mask = np.count_nonzero(mask)
+    change: ``(mask, centre, direction)`` as :func:`_best_line` returns them
+    (:func:`_refit` on all of ``points``)."""
+    thr = params.threshold_m
+
+    def inliers(normal, offset, c):
+        dist = points @ normal - offset if c is None else (points - c) @ normal
+        return np.flatnonzero(np.abs(dist) < thr)
+
+    ids, c, direction = _refit(inliers, points, normal, offset, params)
+    mask = np.zeros(len(points), dtype=bool)
+    mask[ids] = True
+    return mask, c, direction
+
+
+def _refit(inliers, xy: np.ndarray, normal: np.ndarray, offset: float, params: RansacParams):
+    """The inliers of the line ``normal . p = offset`` refitted by total least squares
+    (:func:`~floorscan.walls.segments.fit_line`) to their own inliers up to
+    ``params.refine_iterations`` times, until they no longer change (Fischler and
+    Bolles 1981; thesis section 5.3).
+
+    Parameters
+    ----------
+    inliers : callable
+        ``inliers(normal, offset, c)``: ascending indices into ``xy`` of the points
+        closer than ``threshold_m`` to the line, ``abs(xy @ normal - offset)`` when
+        ``c`` is None, else ``abs((xy - c) @ normal)``, those expressions row by row.
+    xy : (N, 2) float64 ndarray
+        Metres.
+    normal : (2,) float ndarray
+    offset : float
+        Metres.
+    params : RansacParams
+
+    Returns
+    -------
+    ids : (K,) int ndarray
+        The final inliers, ascending indices into ``xy``.
+    c : (2,) float64 ndarray
+        A point of the line (the inliers' mean), metres.
+    direction : (2,) float64 ndarray
+        Unit direction of the line.
+    """
+    ids = inliers(normal, offset, None)
     c, direction = None, np.array([normal[1], -normal[0]])
     for _ in range(params.refine_iterations):
-        if n_mask < 2:
+        if len(ids) < 2:
             break
-        c, direction = fit_line(points[mask])
+        c, direction = fit_line(xy[ids])
         normal = np.array([-direction[1], direction[0]])
-        new = np.abs((points - c) @ normal) < params.threshold_m
-        n_new = np.count_nonzero(new)
-        if n_new < 2 or (n_new == n_mask and (new == mask).all()):
-            mask = new if n_new >= 2 else mask
+        new = inliers(normal, None, c)
+        if len(new) < 2 or (len(new) == len(ids) and np.array_equal(new, ids)):
+            ids = new if len(new) >= 2 else ids
             break
-        mask, n_mask = new, n_new
+        ids = new
     if c is None:  # no refit: the line through the inliers' mean
-        c = points[mask].mean(axis=0)
-    return mask, c, direction
+        c = xy[ids].mean(axis=0)
+    return ids, c, direction
 
 
 def _inlier_counts(points: np.ndarray, normals: np.ndarray, offsets: np.ndarray, threshold: float) -> np.ndarray:
@@ -270,18 +385,22 @@ def _inlier_counts(points: np.ndarray, normals: np.ndarray, offsets: np.ndarray,
     return _hypothesis_counts(pt, hyp, threshold)
 
 
-def _hypothesis_counts(pt: np.ndarray, hyp: np.ndarray, threshold: float, negate: bool = False) -> np.ndarray:
+def _hypothesis_counts(
+    pt: np.ndarray, hyp: np.ndarray, threshold: float, negate: bool = False, work=None
+) -> np.ndarray:
     """Columns ``pt`` (3, N) = (x, y, 1) closer than ``threshold`` to each line ``hyp``
     (H, 3) = (nx, ny, -offset), or (nx, ny, offset) with ``negate`` (the offsets are
     negated in a copy; ``hyp`` is not modified).
 
     Hypotheses in blocks of about 64k distances (at least 4; the block stays in the CPU
     cache), laid out (hypothesis, point) so the count runs along contiguous memory,
-    into reused buffers. The signed distance is one BLAS product of ``(nx, ny,
-    -offset)`` with ``(x, y, 1)``: the kernel accumulates along the 3 terms in order
-    with fused multiply-adds, so it rounds as ``points @ normals.T`` then ``- offsets``
-    (the tests check it bit for bit), without a second pass over the block. The count
-    sums the bytes of the boolean block (exact, and quicker than
+    into reused buffers (``work``: a float64 and a bool flat array of the caller's,
+    used when large enough for a block). The signed distance is one BLAS product of
+    ``(nx, ny, -offset)`` with ``(x, y, 1)``, without a second pass over the block; it
+    rounds otherwise than ``points @ normals.T`` then ``- offsets`` for a few distances
+    in a thousand (the kernel's fused multiply-adds), so a count may differ from theirs
+    only where a distance lies within a rounding step of the threshold (a test checks
+    the counts). The count sums the bytes of the boolean block (exact, and quicker than
     ``count_nonzero(axis=1)``).
     """
     n = pt.shape[1]
@@ -289,14 +408,34 @@ def _hypothesis_counts(pt: np.ndarray, hyp: np.ndarray, threshold: float, negate
         hyp = hyp * np.array([1.0, 1.0, -1.0])  # a C-ordered copy, exact
     counts = np.empty(len(hyp), dtype=np.int64)
     block = max(4, 65536 // max(n, 1))
-    dist = np.empty((min(block, len(hyp)), n))
-    inlier = np.empty(dist.shape, dtype=bool)
+    size = min(block, len(hyp)) * n
+    if work is None or len(work[0]) < size:
+        work = np.empty(size), np.empty(size, dtype=bool)
     count_type = np.uint16 if n < 2**16 else np.int64
     for s in range(0, len(hyp), block):
         e = min(s + block, len(hyp))
-        d, m = dist[: e - s], inlier[: e - s]
-        np.matmul(hyp[s:e], pt, out=d)
+        d, m = work[0][: (e - s) * n].reshape(e - s, n), work[1][: (e - s) * n].reshape(e - s, n)
+        _product(hyp[s:e], pt, d)
         np.abs(d, out=d)
         np.less(d, threshold, out=m)
-        counts[s:e] = m.view(np.uint8).sum(axis=1, dtype=count_type)
+        counts[s:e] = np.add.reduce(m.view(np.uint8), axis=1, dtype=count_type)
     return counts
+
+
+def _product(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
+    """``a @ b`` (K, 3) by (3, N) into ``out`` (K, N) by BLAS's matrix product (dgemm),
+    also for one row or one column (numpy hands those to its matrix-vector or dot
+    product, which rounds otherwise; the row or column is doubled): each element the
+    same float whatever the shapes and the other rows and columns."""
+    k, n = out.shape
+    if k > 1 and n > 1:
+        np.matmul(a, b, out=out)
+    else:
+        out[...] = ((np.repeat(a, 2, axis=0) if k == 1 else a) @ (np.repeat(b, 2, axis=1) if n == 1 else b))[:k, :n]
+
+
+def _row_products(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``q @ v`` of (M, 2) rows by BLAS's matrix-vector product (dgemv), also for one
+    row (numpy hands it to its dot product, which rounds otherwise; the row is doubled):
+    each row's float whatever the other rows."""
+    return (np.repeat(q, 2, axis=0) @ v)[:1] if len(q) == 1 else q @ v

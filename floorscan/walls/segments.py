@@ -80,6 +80,29 @@ def claimed_segments(pts, c, direction, claimed, params) -> list[tuple]:
     """
     normal = np.array([-direction[1], direction[0]])
     cand = np.flatnonzero(np.abs((pts - c) @ normal) < params.threshold_m)
+    return candidate_segments(pts, cand, direction, claimed, params)
+
+
+def candidate_segments(pts, cand, direction, claimed, params) -> list[tuple]:
+    """:func:`claimed_segments` of the points ``cand`` near the line (thesis section 5.3).
+
+    Parameters
+    ----------
+    pts : (N, 2) float64 ndarray
+        All points of the scan, metres.
+    cand : (M,) int ndarray
+        Ascending indices into ``pts`` of the points within ``threshold_m`` of the line.
+    direction : (2,) float ndarray
+        Unit direction of the line.
+    claimed : (N,) bool ndarray
+        The line's RANSAC inliers.
+    params : RansacParams
+
+    Returns
+    -------
+    list of tuple
+        As :func:`claimed_segments`.
+    """
     t = pts[cand] @ direction
     order = np.argsort(t, kind="stable")
     bounds = _piece_bounds(t[order], params.max_gap_m)
