@@ -15,7 +15,7 @@ from floorscan.core.occupancy import OccupancyParams, occupancy_grid
 from floorscan.floorplan.doors import wall_gaps
 from floorscan.floorplan.room_space import RoomParams, room_space
 from floorscan.floorplan.mouths import corner_mouths, room_mouths
-from floorscan.floorplan.rooms import plan_rooms
+from floorscan.floorplan.rooms import plan_rooms, segment_rooms
 
 T = 0.12  # wall thickness, metres
 
@@ -89,6 +89,24 @@ def test_the_floor_under_a_cabinet_row_across_a_partition_joins_no_two_rooms():
     west, east = sorted(rooms["polygon"], key=lambda p: p.centroid.x)
     assert west.contains(shapely.Point(3.0, 3.5)) and east.contains(shapely.Point(5.0, 3.5))
     assert 14.6 < west.area < 15.6 and 14.6 < east.area < 15.6
+
+
+def test_the_floor_under_a_deep_cabinet_against_a_partition_is_its_own_room_s_not_the_nearer_one_behind_the_wall():
+    # two rooms 4 x 4 m, a 0.9 m door in the partition (y 1.5..2.4); a cabinet 0.9 m deep
+    # (x 4.06..4.96, y 2.4..3.9) against the partition in the east room, beside the door:
+    # the half of its floor next to the partition lies nearer the west room's floor
+    # (0.12 m across the partition) than the east room's (0.9 m along it), and is the
+    # east room's, cell for cell
+    cabinet = [(4.96, 2.4, 4.96, 3.9), (4.06, 2.4, 4.96, 2.4), (4.06, 3.9, 4.96, 3.9)]
+    grid = dataclasses.replace(_grid(TWO_ROOMS, [(2, 2), (6, 1), (6.5, 3)], objects=cabinet), scan_xy=None)
+    axes = np.array(TWO_ROOMS, dtype=np.float64)
+    under = np.array([[[4.96, 2.4], [4.96, 3.9], [4.06, 3.9], [4.06, 2.4]]], dtype=np.float64)
+    raster, labels, doors, _ = segment_rooms(grid, axes, np.full(len(axes), T), RoomParams(), under)
+    assert labels.max() == 2 and len(doors) == 1
+    west, east = raster.at(labels, np.array([[2.0, 2.0], [6.0, 2.0]]))
+    floor = raster.at(labels, raster.centres(*np.nonzero(raster.under)))
+    assert raster.under.sum() * raster.resolution_m**2 > 1.0  # most of the cabinet's 1.35 m2
+    assert (floor == east).mean() > 0.97 and not (floor == west).any()
 
 
 def test_no_room_mouth_runs_diagonally_between_two_perpendicular_walls():

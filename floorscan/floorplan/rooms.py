@@ -23,7 +23,8 @@ taken from the walls:
    holds through windows). Furniture and clutter are not obstacles: a room's area is its floor area,
    and the floor under an object standing against a wall (the structure passes' step 5,
    :func:`~floorscan.floorplan.structure.floor_under`) no longer bounds it, and joins
-   the nearest room once the rooms are cut (step 5), not as a passage between rooms.
+   the room nearest along it, never across a wall, once the rooms are cut (step 5), not
+   as a passage between rooms.
 2. **Doors between walls** (:func:`~floorscan.floorplan.doors.wall_gaps`): the gap
    between the facing ends of two walls in one line, ``door_min_m`` to ``door_max_m``
    wide, that the scans saw through, is cut from the space first: a room seen only
@@ -127,7 +128,6 @@ from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan import doors as D
 from floorscan.floorplan.corridors import corridor_ends, corridor_sides, corridor_strips
 from floorscan.floorplan.extensions import partition_cuts
-from floorscan.floorplan.hidden import OBJECT_MAX_DEPTH_M
 from floorscan.floorplan.jambs import between_faces, face_to_object, jamb_cells, on_wall_face, wall_line_index
 from floorscan.floorplan.mouths import MOUTH_MAX_M, corner_mouths, dead_end_mouths, room_mouths
 from floorscan.floorplan.outline import regions_beyond
@@ -350,13 +350,17 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     renum[order] = np.arange(1, len(order) + 1, dtype=np.int32)
     final = renum[merged]
     # a door cell belongs to a room beside it
-    from skimage.segmentation import expand_labels
+    from skimage.segmentation import expand_labels, watershed
 
     grown = expand_labels(final, 1)
     final = np.where(barrier & raster.space, grown, final).astype(np.int32)
-    if raster.under is not None:  # the floor under the objects against walls: the nearest room's
-        reach = int(np.ceil(OBJECT_MAX_DEPTH_M / raster.resolution_m)) + 1
-        final = np.where(raster.under & (final == 0), expand_labels(final, reach), final).astype(np.int32)
+    if raster.under is not None:
+        # the floor under objects against walls: the room nearest along that floor (a
+        # breadth-first flood from the rooms), never across a wall
+        grow = raster.under & (final == 0)
+        flooded = watershed(np.zeros(final.shape, dtype=np.uint8), markers=final, mask=grow | (final > 0),
+                            connectivity=1)
+        final = np.where(grow, flooded, final).astype(np.int32)
     doors = []
     for p, q, wall, a, b in found:
         ra, rb = renum[roots[a]], renum[roots[b]]
