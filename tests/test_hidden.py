@@ -262,3 +262,20 @@ def test_cabinets_in_the_two_corners_of_a_partition_s_t_are_fronts_and_the_parti
     # a corridor between the fronts and the wall (the bodies seen free): no fronts
     front, behind = in_front_of_walls(seg, side, anchor, P, ALL_FREE)
     assert not fronts_between_partitions(seg, side, anchor, junctions, front, behind, P, ALL_FREE)[0][3]
+
+
+def test_the_walls_behind_an_l_of_desks_in_a_corner_run_into_the_corner_and_the_desks_are_fronts():
+    # a room's south-west corner at (0, 0), its walls 0.2 m thick, their other faces seen;
+    # an L of desks in the corner: one leg against the west wall (front x = 0.7, y 0.8
+    # .. 4), the other against the south wall (front y = 0.8, x 0.7 .. 2). The room shows
+    # each wall's face past the desk (x 2 .. 6, y 4 .. 6) and the desks' fronts and ends,
+    # and each wall face meets the other leg's front first: both run on to the corner
+    south, west = [2.0, 0.0, 6.0, 0.0], [0.0, 6.0, 0.0, 4.0]
+    seg = np.array([south, west, [-0.2, -0.2, 6.0, -0.2], [-0.2, 6.0, -0.2, -0.2],
+                    [0.7, 0.8, 0.7, 4.0], [0.7, 4.0, 0.0, 4.0], [2.0, 0.8, 0.7, 0.8], [2.0, 0.0, 2.0, 0.8]])  # fmt: skip
+    side = np.array([1, 1, -1, -1, -1, -1, -1, -1])  # free sides: into the room; out of it for the other faces
+    out = into_corners(seg, side, CLOSED, P, NONE_FREE)
+    assert np.allclose(out[0], [0.0, 0.0, 6.0, 0.0]) and np.allclose(out[1], [0.0, 6.0, 0.0, 0.0])
+    assert np.allclose(out[[2, 3, 5, 6, 7]], seg[[2, 3, 5, 6, 7]])  # (before: out[0] from 0.7, out[1] to 0.8)
+    front, behind = in_front_of_walls(out, side, np.array([True] * 4 + [False] * 4), P, NONE_FREE)
+    assert front[[4, 6]].all() and behind[4] == 1 and behind[6] == 0

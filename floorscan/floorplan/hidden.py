@@ -267,7 +267,11 @@ def into_corners(seg: np.ndarray, side: np.ndarray, open_run, params: StructureP
     the object may be :data:`OBJECT_MAX_DEPTH_M` deep, and the square face end as far
     from the corner (the object hides it too). The nearest such face along the line is
     the corner; of the pieces of one wall face on that line (within ``front_min_m`` of
-    it), the one the line meets nearest. A face that ends on a wall square to it (longer
+    it), the one the line meets nearest; where that is the front of an object against
+    the wall square to ``a`` (an L of desks in the corner: the wall seen past the
+    object's far end, ``front_min_m`` to ``front_max_m`` behind the front,
+    :func:`_wall_behind`), ``a`` runs on to that wall, the stretch up to the front tested
+    as before. A face that ends on a wall square to it (longer
     than :data:`OBJECT_MAX_DEPTH_M`, within ``front_min_m``) is in its corner: it is not
     carried through that wall. The side of an object at ``a``'s end (a square face
     shorter than :data:`OBJECT_MAX_DEPTH_M`, less than ``front_min_m`` beyond it) is no
@@ -327,6 +331,30 @@ def _corner(ok: np.ndarray, t: np.ndarray, gap: np.ndarray, same_line_m: float) 
     the line meets nearest (``gap``, metres beyond the face's extent)."""
     first = np.flatnonzero(ok & (t <= t[ok].min() + same_line_m))
     return int(min(first.tolist(), key=lambda c: (gap[c], t[c], c)))
+
+
+def _wall_behind(seg: np.ndarray, u: np.ndarray, free_n: np.ndarray, length: np.ndarray, ok: np.ndarray, p: int,
+                 at: float, beyond: np.ndarray, params: StructureParams) -> int:  # fmt: skip
+    """The wall face behind face ``p``, the corner :func:`into_corners` found for a face
+    ``a``, when ``p`` is the front of an object standing against it: an L of desks or
+    shelves in the room's corner, whose other leg's front ``a``'s stretch runs behind.
+
+    Of the faces ``ok`` (square to ``a``, in the room), one parallel to ``p`` (within
+    ``join_angle_deg``) and free the same way, ``front_min_m`` to ``front_max_m``
+    beyond it along ``a``'s line (``beyond``, (F,) metres), running on from within
+    ``front_max_m`` of ``p``'s end away from ``a``'s line (``at``: where ``a``'s line
+    meets ``p``'s, metres along ``p``): the wall seen past the object's far end. The
+    nearest; -1 for none.
+    """
+    along = np.stack([(seg[:, :2] - seg[p, :2]) @ u[p], (seg[:, 2:] - seg[p, :2]) @ u[p]], axis=1)
+    apart = np.maximum(np.maximum(along.min(axis=1) - length[p], -along.max(axis=1)), 0.0)
+    wall = (ok & (apart <= params.front_max_m) & (beyond >= params.front_min_m) & (beyond <= params.front_max_m)
+            & (np.abs(u @ u[p]) >= np.cos(np.radians(params.join_angle_deg))) & (free_n @ free_n[p] > 0)
+            & ((along.mean(axis=1) - length[p] / 2) * (at - length[p] / 2) < 0))  # fmt: skip
+    wall[p] = False
+    if not wall.any():
+        return -1
+    return int(np.flatnonzero(wall)[np.argmin(beyond[wall])])
 
 
 def _into_corners_once(seg: np.ndarray, side: np.ndarray, open_run, params: StructureParams, free_at,
@@ -394,6 +422,7 @@ def _into_corners_once(seg: np.ndarray, side: np.ndarray, open_run, params: Stru
                 continue
             near = -params.front_max_m <= s[p] <= length[p] + params.front_max_m
             lo, hi = stretch(p)
+            t_all, x_all, at = t, x, float(s[p])
             t, x = float(t[p]), x[p]
             # a square face ending farther than front_max_m from the corner: only a
             # deeper object hides it (backed by the wall's other face, or by the objects
@@ -403,6 +432,11 @@ def _into_corners_once(seg: np.ndarray, side: np.ndarray, open_run, params: Stru
                 free_at is not None
                 and (paired or float(free_n[p] @ out_dir) < 0 and back_to_back(seg, side, a, lo, hi, params, free_at))
                 and covered_by_fronts(seg, side, a, lo, hi, params, params.front_max_m, OBJECT_MAX_DEPTH_M, free_at))
+            if covered:  # p may be an object's front: a runs on to the wall behind it
+                square_in_room = (np.abs(denom) >= square) & in_room
+                wall = _wall_behind(seg, u, free_n, length, square_in_room, p, at, t_all - t, params)
+                if wall >= 0:
+                    t, x = float(t_all[wall]), x_all[wall]
             if covered and open_run(end, out_dir, 0.0, t) < params.min_opening_m:
                 out[a, 2 * k : 2 * k + 2] = x
     return out
