@@ -229,7 +229,7 @@ def _tiled_rows(pts: np.ndarray, rng: np.random.Generator, params: RansacParams)
     thr = params.threshold_m
     alive = np.arange(len(pts))  # indices of the points not yet claimed by a line, ascending
     everyone = Tiles(pts, alive, TILE_POINTS)  # all points: the segments' ends
-    tiles = Tiles(pts, alive, TILE_POINTS)  # the points left: the counts and the refit
+    tiles = everyone.copy()  # the points left: the counts and the refit
     xs, ys = np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1])
     dead = np.zeros(len(pts), dtype=bool)  # claimed by a line
     claimed = np.zeros(len(pts), dtype=bool)  # by the current line

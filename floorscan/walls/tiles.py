@@ -79,6 +79,16 @@ class Tiles:
         t_lo, t_hi = np.minimum.reduceat(cols[:2], starts, axis=1), np.maximum.reduceat(cols[:2], starts, axis=1)
         self.centre, self.radius = (t_lo + t_hi) / 2, np.hypot(*(t_hi - t_lo)) / 2  # (2, T), (T,)
 
+    def copy(self) -> "Tiles":
+        """The same tiles, to take points out of (:meth:`remove`) apart from these: the
+        per-tile arrays are shared (:meth:`remove` replaces them, never writes into
+        them), the lists and boxes copied."""
+        out = object.__new__(Tiles)
+        out.__dict__.update(self.__dict__)
+        out.ids, out.cols = list(self.ids), list(self.cols)
+        out.centre, out.radius = self.centre.copy(), self.radius.copy()
+        return out
+
     def near(self, normals: np.ndarray, offsets: np.ndarray, threshold: float) -> np.ndarray:
         """Which tiles each line ``normals[h] . p = offsets[h]`` may pass within
         ``threshold`` of a point of: the distance from the tile's centre, less its half
