@@ -211,13 +211,16 @@ def test_tiled_inlier_counts_and_runs_equal_the_whole_product(monkeypatch):
     assert np.array_equal(counts, R._hypothesis_counts(on_line, hyp, 0.04, negate=True))
 
     # points taken out of their tiles: the counts and near points of those left
-    tiles, dead = Tiles(pts, everyone, 512), np.zeros(len(pts), dtype=bool)
+    whole = Tiles(pts, everyone, 512)
+    radius = whole.radius.copy()
+    tiles, dead = whole.copy(), np.zeros(len(pts), dtype=bool)  # its own tiles to take points out of
     for h in range(5):
         gone = np.flatnonzero(~dead & (np.abs(pts @ hyp[h, :2] - hyp[h, 2]) < 0.3))
         dead[gone] = True
         tiles.remove(gone, dead)
     left = np.flatnonzero(~dead)
     assert sum(len(ids) for ids in tiles.ids) == len(left) < len(pts) - 1000
+    assert sum(len(ids) for ids in whole.ids) == len(pts) and np.array_equal(whole.radius, radius)  # the copy's alone
     assert np.array_equal(R._tiled_counts(tiles, hyp, 0.04), R._hypothesis_counts(pt[:, left], hyp, 0.04, negate=True))
     sizes = []
     for h in range(len(hyp)):
@@ -622,6 +625,13 @@ def test_issue8_third_round_shortcuts_equal_the_plain_forms_bit_for_bit():
         lo, span = cells.min(axis=0), cells.max(axis=0) - cells.min(axis=0) + 1
         np.testing.assert_array_equal(cell_keys(cells), np.ravel_multi_index(tuple((cells - lo).T), tuple(span)))
     assert cell_keys(np.array([[0, 0, 0], [2**21, 2**21, 2**21]])) is None  # beyond 2**62 cells
+
+
+def test_ranks_in_runs_number_each_run_from_zero():
+    from floorscan.core.grid import ranks_in_runs
+
+    assert ranks_in_runs(np.array([2, 0, 3, 1])).tolist() == [0, 1, 0, 1, 2, 0]
+    assert ranks_in_runs(np.array([0, 0])).tolist() == [] and ranks_in_runs(np.array([], dtype=int)).dtype == np.int64
 
 
 def test_unique_ints_are_numpy_unique_by_a_sort():

@@ -26,6 +26,8 @@ import math
 
 import numpy as np
 
+from floorscan.core.grid import ranks_in_runs
+
 #: The fixed precision grid of polygon overlays, metres: the exports' precision
 #: (GeoJSON's 5 decimals), far below a map cell and far above the floating-point
 #: trouble of coordinates of a building's size.
@@ -73,7 +75,7 @@ def sample_segments(segments: np.ndarray, sample_m: float) -> np.ndarray:
     if len(seg) == 0:
         return np.empty((0, 2))
     n = samples_per_segment(seg, sample_m)
-    t = (np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n - 1, n)
+    t = ranks_in_runs(n) / np.repeat(n - 1, n)
     out = np.repeat(seg[:, 2:] - seg[:, :2], n, axis=0)  # a + (b - a) t, each segment's b - a once
     out *= t[:, None]
     out += np.repeat(seg[:, :2], n, axis=0)

@@ -108,6 +108,23 @@ def cell_groups(cells: np.ndarray, first: bool = False, inverse: bool = True):
     return inv.ravel(), counts
 
 
+def ranks_in_runs(counts: np.ndarray) -> np.ndarray:
+    """Each element's place within its run, for runs of ``counts`` elements laid end to
+    end: ``0, 1, .., counts[0] - 1, 0, 1, .., counts[1] - 1, ...``.
+
+    Parameters
+    ----------
+    counts : (R,) int ndarray
+        Non-negative.
+
+    Returns
+    -------
+    (counts.sum(),) int64 ndarray
+    """
+    counts = np.asarray(counts, dtype=np.int64).reshape(-1)
+    return np.arange(int(counts.sum()), dtype=np.int64) - np.repeat(np.cumsum(counts) - counts, counts)
+
+
 def unique_ints(values: np.ndarray, kind: str = "quicksort") -> np.ndarray:
     """The distinct values of an integer array, sorted: ``numpy.unique(values)``, by a
     sort and a comparison of neighbours. The locked numpy (2.4) finds plain

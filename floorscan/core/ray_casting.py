@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from floorscan.core.grid import check_raster_size
+from floorscan.core.grid import check_raster_size, ranks_in_runs
 from floorscan.core.memory import JobMemory
 
 #: How near a cell's edge (in cells) a return or ray sample counts as on it. Measured
@@ -226,7 +226,7 @@ class CellCounts:
         length = np.hypot(d[:, 0], d[:, 1])
         n = np.maximum(np.ceil(length / (self.step_fraction * r)).astype(np.int64), 1)
         ray = np.repeat(np.arange(len(n)), n)
-        frac = (np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n, n)
+        frac = ranks_in_runs(n) / np.repeat(n, n)
         samples, sample_edge = sample_cells(o, d, ray, frac, origin, r, width, edges and not edge)
         crossed = distinct_cells(samples, self.last)
         return hit, crossed[self.hit_by[crossed] != i], edge or sample_edge

@@ -17,6 +17,7 @@ import math
 
 import numpy as np
 
+from floorscan.core.grid import ranks_in_runs
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.hypotheses import CLOSED, OPEN, PRECISION_M, WALL
 
@@ -98,7 +99,7 @@ def edges_evidence(p: np.ndarray, q: np.ndarray, occupied: np.ndarray, grid: Occ
     two cells."""
     n = np.maximum(np.ceil(np.hypot(*(q - p).T) / (grid.resolution_m / 2)).astype(np.int64), 1) + 1
     which = np.repeat(np.arange(len(p)), n)
-    t = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n - 1, n)
+    t = ranks_in_runs(n) / np.repeat(n - 1, n)
     pts = p[which] + (q - p)[which] * t[:, None]
     rows, cols, ok = grid.cells_of(pts)
     hit = np.zeros(len(pts), dtype=bool)

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from floorscan.core.grid import ranks_in_runs
 from floorscan.core.occupancy import OccupancyGrid
 
 
@@ -139,7 +140,7 @@ def segment_samples(seg: np.ndarray, step: float, trim: float = 0.0):
     u = d / np.maximum(length, 1e-12)[:, None]
     n = np.maximum(np.ceil(length / step).astype(np.int64), 1)
     owner = np.repeat(np.arange(len(seg)), n)
-    frac = (np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n) + 0.5) / np.repeat(n, n)
+    frac = (ranks_in_runs(n) + 0.5) / np.repeat(n, n)
     cut = np.where(length > 4 * trim, trim, 0.0)[owner]
     t = cut + frac * (length[owner] - 2 * cut)
     pts = seg[owner, :2] + u[owner] * t[:, None]

@@ -20,6 +20,7 @@ import numpy as np
 import shapely
 
 from floorscan.core.geometry import point_segment_dist2
+from floorscan.core.grid import ranks_in_runs
 from floorscan.score.segments import densify
 from floorscan.core.segments import split_long, as_segments
 
@@ -276,7 +277,7 @@ class SegmentIndex:
             # the pairs (point, candidate), point after point within each cell
             n = n_pairs[chunk]
             cell = np.repeat(chunk, n)
-            k = np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)
+            k = ranks_in_runs(n)
             at = starts[cell] + k // n_cand[cell]  # positions in ``order``
             si = qs[first_cand[cell] + k % n_cand[cell]]
             pt = order[at]

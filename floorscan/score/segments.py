@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from floorscan.core.grid import ranks_in_runs
 from floorscan.core.segments import MIN_SEGMENT_M, as_segments, segment_lengths
 
 
@@ -55,7 +56,7 @@ def sample_segments(segments, step_m: float = 0.01) -> tuple[np.ndarray, np.ndar
         return np.zeros((0, 2)), np.zeros(0)
     n = np.maximum(1, np.ceil(lengths / step_m - 1e-9).astype(np.int64))
     idx = np.repeat(np.arange(len(seg)), n)
-    k = np.arange(len(idx)) - np.repeat(np.cumsum(n) - n, n)
+    k = ranks_in_runs(n)
     t = (k + 0.5) / n[idx]
     pts = seg[idx, :2] + t[:, None] * (seg[idx, 2:] - seg[idx, :2])
     return pts, (lengths / n)[idx]
@@ -127,7 +128,7 @@ def densify(seg: np.ndarray, step: float) -> np.ndarray:
     """
     n = np.maximum(1, np.ceil(segment_lengths(seg) / step).astype(np.int64))
     idx = np.repeat(np.arange(len(seg)), n + 1)
-    k = np.arange(len(idx)) - np.repeat(np.cumsum(n + 1) - (n + 1), n + 1)
+    k = ranks_in_runs(n + 1)
     t = k / n[idx]
     return seg[idx, :2] + t[:, None] * (seg[idx, 2:] - seg[idx, :2])
 

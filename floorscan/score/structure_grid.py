@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from floorscan.core.grid import ranks_in_runs
 from floorscan.core.occupancy import OccupancyGrid
 
 #: Rings of cells around a point's 2 x 2 cells that :meth:`StructureGrid.nearest`
@@ -165,7 +166,7 @@ class StructureGrid:
         count = np.where((last >= first) & np.isfinite(seg).all(axis=1), last - first + 1, 0).astype(np.int64)
         face = np.repeat(np.arange(len(seg)), count)
         line = np.repeat(first[count > 0].astype(np.int64), count[count > 0])
-        line += np.arange(len(line)) - np.repeat(np.cumsum(count) - count, count)
+        line += ranks_in_runs(count)
         # the segment's points within reach of the line, grown by reach along it
         v = (line + 0.5) * r + ov[face]
         au, av, du, dv, ou = au[face], av[face], du[face], dv[face], ou[face]
@@ -183,7 +184,7 @@ class StructureGrid:
         for keys, on in ((self._row_keys, rows), (self._col_keys, ~rows)):
             start[on], stop[on] = np.searchsorted(keys, lo[on], "left"), np.searchsorted(keys, hi[on], "right")
         n = np.maximum(stop - start, 0)
-        cell = np.repeat(start, n) + (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n))
+        cell = np.repeat(start, n) + ranks_in_runs(n)
         face, on_columns = np.repeat(face, n), np.repeat(~rows, n)
         cell[on_columns] = self._col_order[cell[on_columns]]
         if on_columns.any():  # a column's cells come row by row

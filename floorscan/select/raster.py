@@ -42,7 +42,7 @@ import numpy as np
 import pandas as pd
 import shapely
 
-from floorscan.core.grid import unique_ints
+from floorscan.core.grid import ranks_in_runs, unique_ints
 
 #: Side of a raster tile, cells: the union ``U`` is kept only in the tiles some scan
 #: touches (a tile of 128 cells is 6.4 m at the default 5 cm), and a run of a scan's
@@ -154,7 +154,7 @@ class RasterCoverage:
         k_hi = np.ceil(np.maximum(ya, yb)).astype(np.int64)
         span = np.maximum(k_hi - k_lo, 0)
         edge = np.repeat(np.arange(len(span)), span)
-        row = k_lo[edge] + (np.arange(span.sum()) - np.repeat(np.cumsum(span) - span, span))
+        row = k_lo[edge] + ranks_in_runs(span)
         if len(row) == 0:
             return empty, empty, empty, empty, empty, np.zeros(n, np.int64)
         yc = self.y0 + (row + 0.5) * r
@@ -174,7 +174,7 @@ class RasterCoverage:
         # split the runs at the tiles' edges, in place (the order stays by scan)
         pieces = (i_hi - 1) // TILE - i_lo // TILE + 1
         src = np.repeat(np.arange(len(i_lo)), pieces)
-        k = np.arange(int(pieces.sum())) - np.repeat(np.cumsum(pieces) - pieces, pieces)
+        k = ranks_in_runs(pieces)
         tile_col = i_lo[src] // TILE + k
         lo = np.maximum(i_lo[src], tile_col * TILE)
         hi = np.minimum(i_hi[src], (tile_col + 1) * TILE)
@@ -296,8 +296,7 @@ def _order_crossings(key: np.ndarray, x: np.ndarray) -> np.ndarray:
     order[swap], order[swap + 1] = order[swap + 1], order[swap].copy()
     long = size > 2
     if long.any():
-        sub = np.repeat(starts[long], size[long]) + (np.arange(int(size[long].sum())) -
-                                                       np.repeat(np.cumsum(size[long]) - size[long], size[long]))
+        sub = np.repeat(starts[long], size[long]) + ranks_in_runs(size[long])
         order[sub] = order[sub][np.lexsort((xs[sub], ks[sub]))]
     return order
 
