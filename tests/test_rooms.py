@@ -172,6 +172,59 @@ def test_a_passage_from_a_wall_s_end_to_a_wall_s_face_parts_no_rooms():
     assert rooms["area_m2"].iloc[0] == pytest.approx(38.2, abs=0.5)
 
 
+# A corridor 1.9 m wide (y 0..1.9) under two rooms (y 1.9..5.9) parted by a partition at
+# x 6, a 0.9 m door from each into the corridor; a column 0.4 m across in the corridor
+# against its north wall, in the partition's line, whose side faces the plan took for
+# the partition running on 0.56 m past the corridor's wall (the furnished Freiburg52
+# and Freiburg79 maps' corridors).
+COLUMN_ROOMS = [(0, 0, 12, 0), (12, 0, 12, 5.9), (12, 5.9, 0, 5.9), (0, 5.9, 0, 0), (0, 1.9, 2.5, 1.9),
+                (3.4, 1.9, 8.6, 1.9), (9.5, 1.9, 12, 1.9)]  # fmt: skip
+COLUMN = [(5.8, 1.34, 6.2, 1.34), (5.8, 1.34, 5.8, 1.8), (6.2, 1.34, 6.2, 1.8), (5.8, 1.8, 6.2, 1.8)]
+
+
+def test_a_column_in_a_partition_s_line_past_the_corridor_wall_frames_no_door_across_the_corridor():
+    # the contact from the partition's end past the wall (y 1.34) to the corridor's south
+    # wall is 1.28 m, a door's width, in the partition's line: before, a door there cut
+    # the corridor in two; the piece past the wall it crosses is shorter than a door and
+    # stands in the space, a column's, no jamb (before: two corridor halves of 10.3 m2,
+    # "Room 3" and "Room 4", and a door at x 6 from y 0.1 to 1.34)
+    poses = [(3, 0.9), (9, 0.9), (3, 4), (9, 4)]
+    grid = dataclasses.replace(_grid(COLUMN_ROOMS + [(6, 5.9, 6, 1.9)], poses, objects=COLUMN), scan_xy=None)
+    axes = np.array(COLUMN_ROOMS + [(6, 5.9, 6, 1.34)], dtype=np.float64)
+    rooms, doors = plan_rooms(axes, np.full(len(axes), T), grid, RoomParams())
+    assert list(rooms["name"]) == ["Room 1", "Room 2", "Corridor 1"]
+    assert rooms["area_m2"].to_numpy() == pytest.approx([22.76, 22.76, 20.98], abs=0.3)
+    assert sorted(doors["x0"]) == pytest.approx([2.5, 8.6]) and (doors["room_b"] == 2).all()
+
+
+def test_a_wall_s_piece_past_a_crossing_is_a_jamb_unless_it_stands_in_the_space():
+    # a wall at y 3 parts two rooms from one below, a 1 m door in it at x 4.56..5.56; a
+    # partition at x 4 meets it from the north, and the plan ran it on to y 2 along the
+    # side of a cabinet (x 4..4.5, y 2..2.94) against the wall's south face. The wall's
+    # 0.56 m past the crossing runs along the cabinet's top: a pier, whose end frames the
+    # door (lab_d_scan's furnished map). Without the cabinet the piece stands in the space
+    # on both sides, as a column's faces do: no jamb.
+    from floorscan.floorplan.jambs import stub_past_crossing
+
+    walls = [(0, -1, 10, -1), (10, -1, 10, 6), (10, 6, 0, 6), (0, 6, 0, -1), (0, 3, 1, 3), (2, 3, 4.56, 3),
+             (5.56, 3, 10, 3)]  # fmt: skip
+    cabinet = [(4.06, 2.0, 4.5, 2.0), (4.5, 2.0, 4.5, 2.94)]
+    axes = np.array(walls + [(4, 6, 4, 2.0)], dtype=np.float64)
+    thickness = np.full(len(axes), T)
+    p, q = np.array([4.56, 3.0]), np.array([5.56, 3.0])
+    found = []
+    for objects in (cabinet, []):
+        grid = dataclasses.replace(_grid(walls + [(4, 6, 4, 3)], [(2, 4.5), (7, 4.5), (5, 1)], objects=objects),
+                                   scan_xy=None)  # fmt: skip
+        raster = room_space(grid, axes, thickness, RoomParams())
+        found.append((stub_past_crossing(raster, p, q, axes, thickness, RoomParams()),
+                      stub_past_crossing(raster, q, p, axes, thickness, RoomParams())))  # fmt: skip
+    assert found == [(False, False), (True, True)]
+    # the partition ending at the wall (a T): the wall crosses nothing, its end is a jamb
+    tee = np.array(walls + [(4, 6, 4, 3.0)], dtype=np.float64)
+    assert not stub_past_crossing(raster, p, q, tee, thickness, RoomParams())
+
+
 # Two corridors 1.8 m wide crossing two others 12 m apart (a "#" without its top
 # bar), their ends closed; the middle stretch's north wall found in two pieces 0.06 m
 # apart across, as a map's wall often is.

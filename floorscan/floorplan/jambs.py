@@ -1,8 +1,9 @@
 """Where a door's jambs can stand (:mod:`floorscan.floorplan.doors`): the cells near the
 building's structure (:func:`jamb_cells`), less the objects standing free in the space
 (:func:`standing_free`, :func:`furniture_islands`), and the contacts between two regions
-that run from a wall's face to an object, which are narrowings of the space, not
-openings in a wall (:func:`face_to_object`).
+that run from a wall's face to an object (:func:`face_to_object`) or from a column in a
+partition's line past the wall it crosses (:func:`stub_past_crossing`), which are
+narrowings of the space, not openings in a wall.
 
 A door is an opening in the building's structure, so its two jambs are walls or the
 seen obstacles that bound the space; a desk, a table and its chairs, a plant or a
@@ -304,4 +305,74 @@ def face_to_object(raster: RoomRaster, p: np.ndarray, q: np.ndarray, axes: np.nd
             hi += 1
         if (hi - lo + 1) * r > PAIR_MAX_M + 2 * r:
             return True
+    return False
+
+
+def stub_past_crossing(raster: RoomRaster, p: np.ndarray, q: np.ndarray, axes: np.ndarray, thickness: np.ndarray,
+                       params: RoomParams) -> bool:
+    """Whether the contact ``p``-``q`` between two regions runs on from the end of a
+    wall's piece past a wall it crosses that stands in the space: no door's jamb, but an
+    object in the wall's line against the wall crossed (a column, whose side faces the
+    plan joined to the partition they are in line with), so the contact is a narrowing,
+    not an opening in a wall.
+
+    Such a piece is a wall ``i`` in the contact's line (within ``door_angle_deg``) whose
+    end lies within its half thickness and ``jamb_m`` of an end of the contact, with the
+    contact running on from that end, that crosses a wall ``j``: ``i``'s axis meets
+    ``j``'s at least ``i``'s half thickness and ``jamb_m`` from ``j``'s ends (``j`` goes
+    on both sides: a corner is no crossing), ``i`` runs on at least a door's width
+    (``door_min_m``, past ``j``'s half thickness) on the other side, and the piece
+    reaches past ``j``'s face by more than nothing and at most ``door_min_m``. It stands
+    in the space when the space lies on both sides of its middle within ``jamb_m`` of
+    its faces; a wall's piece along an object against the wall crossed (a pier by a
+    cabinet) has the object on one side and frames a door.
+
+    Parameters
+    ----------
+    raster : RoomRaster
+        The space the contact lies in.
+    p, q : (2,) float ndarray
+        The contact's ends, metres.
+    axes : (N, 4) float ndarray
+        The plan's wall axes ``x0, y0, x1, y1``, metres.
+    thickness : (N,) float ndarray
+        Metres.
+    params : RoomParams
+        ``door_min_m``, ``door_angle_deg``, ``jamb_m``.
+
+    Returns
+    -------
+    bool
+        False without walls.
+    """
+    if not len(axes):
+        return False
+    u, length = wall_units(axes)
+    ends = axes.reshape(-1, 2, 2)
+    cos_max = np.cos(np.radians(params.door_angle_deg))
+    r = raster.resolution_m
+    d = q - p
+    v = d / max(float(np.hypot(*d)), 1e-12)
+    for b, a in ((p, q), (q, p)):
+        near = np.hypot(*(b[None, None] - ends).transpose(2, 0, 1))  # (N, 2) metres to each end
+        for i in np.flatnonzero((near.min(axis=1) <= thickness / 2 + params.jamb_m) & (np.abs(u @ v) >= cos_max)):
+            k = int(np.argmin(near[i]))
+            e, far = ends[i, k], ends[i, 1 - k]
+            g = (e - far) / max(length[i], 1e-12)  # along i, towards its end at the contact
+            if (a - e) @ g <= 0:
+                continue  # the contact does not run on from i's end
+            _, t_i, s_j, _ = ray_meets_lines(far, g, ends[:, 0], u)  # metres along i from far, along each j
+            piece = length[i] - t_i  # from the crossing to i's end
+            margin = thickness[i] / 2 + params.jamb_m
+            with np.errstate(invalid="ignore"):  # NaN: j parallel to i
+                crossed = ((np.abs(u @ g) < cos_max) & (s_j >= margin) & (s_j <= length - margin)
+                           & (t_i >= thickness / 2 + params.door_min_m)
+                           & (piece > thickness / 2) & (piece <= thickness / 2 + params.door_min_m))  # fmt: skip
+            for j in np.flatnonzero(crossed):
+                mid = e - g * (piece[j] - thickness[j] / 2) / 2
+                n = np.array([-g[1], g[0]])
+                off = thickness[i] / 2 + np.arange(1, round(params.jamb_m / r) + 2) * r
+                if all(raster.at(raster.space, mid[None] + side * off[:, None] * n[None], outside=False).any()
+                       for side in (1, -1)):
+                    return True
     return False

@@ -52,7 +52,9 @@ taken from the walls:
    merged across every passage that is no door (no wider than ``door_max_m``, at most
    three quarters of the width of each region it joins, between jambs; not from the
    face of a wall to an object wider than a wall,
-   :func:`~floorscan.floorplan.jambs.face_to_object`, nor between the faces of two
+   :func:`~floorscan.floorplan.jambs.face_to_object`, nor from a column in a
+   partition's line past the wall it crosses,
+   :func:`~floorscan.floorplan.jambs.stub_past_crossing`, nor between the faces of two
    walls that run on past both its ends for a door's width each way,
    :func:`~floorscan.floorplan.jambs.between_faces`: a corridor's even stretch, which the
    watershed parts where the crossings at its ends widen): one rule for every passage of
@@ -128,7 +130,8 @@ from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan import doors as D
 from floorscan.floorplan.corridors import corridor_ends, corridor_sides, corridor_strips
 from floorscan.floorplan.extensions import partition_cuts
-from floorscan.floorplan.jambs import between_faces, face_to_object, jamb_cells, on_wall_face, wall_line_index
+from floorscan.floorplan.jambs import (between_faces, face_to_object, jamb_cells, on_wall_face, stub_past_crossing,
+                                      wall_line_index)
 from floorscan.floorplan.mouths import MOUTH_MAX_M, corner_mouths, dead_end_mouths, room_mouths
 from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
@@ -211,14 +214,10 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     cut, barrier = _cut_along(raster, gaps)
     labels, distance = space_regions(cut, params)
     n = int(labels.max())
-    # the places where two regions meet between jambs: both ends within jamb_m of a wall
-    # or of an obstacle the scans saw that is no object standing free, no wider than a
-    # door (a narrowing that ends in unseen or open space, a shadow behind furniture, or
-    # at a desk, is no door); narrower than a door
-    # it is a slit nobody passes, which keeps two regions apart without a door; nor is
-    # the narrowing between the face of a wall and an object wider than a wall (a
-    # plant, a cabinet against the opposite wall), nor the space between the faces of
-    # two walls that run on past it: no opening in a wall
+    # where two regions meet between jambs (jamb_cells: both ends near a wall or a seen
+    # obstacle that is no object standing free), no wider than a door: a door, or,
+    # narrower than a door, a slit nobody passes, which keeps two regions apart without
+    # a door; unless it is no opening in a wall (module docstring, step 4)
     jambs = jamb_cells(cut, params.jamb_m, axes, thickness, params)
     contacts = D.contacts(labels)
     line_of = None  # the walls' lines (wall_line_index), for between_faces
@@ -247,9 +246,10 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
                 if width >= params.door_min_m:
                     passable.add(pair)
                 continue
-            if width >= params.door_min_m and face_to_object(cut, p, q, axes, thickness, params):
-                continue
             if width >= params.door_min_m:
+                if (face_to_object(cut, p, q, axes, thickness, params)
+                        or stub_past_crossing(cut, p, q, axes, thickness, params)):
+                    continue
                 line_of = wall_line_index(axes, thickness, params) if line_of is None else line_of
                 if between_faces(p, q, axes, thickness, params, line_of):
                     passable.add(pair)  # the space between two walls' faces, no opening in a wall
