@@ -290,6 +290,29 @@ def test_a_corridor_is_not_cut_where_a_partition_meets_it():
     assert np.allclose(centres, [(1.95, 1.4), (5.95, 1.4)], atol=0.1)
 
 
+# A ring of corridor 2 m wide (1.88 m clear) around a 8 m x 4 m core, with a pair of
+# wall stubs facing each other across its bottom and top legs at x 6: a door frame.
+RING = [(0, 0, 12, 0), (12, 0, 12, 8), (12, 8, 0, 8), (0, 8, 0, 0),
+        (2, 2, 10, 2), (10, 2, 10, 6), (10, 6, 2, 6), (2, 6, 2, 2)]  # fmt: skip
+RING_POSES = [(1, 1), (6, 1), (11, 1), (11, 4), (11, 7), (6, 7), (1, 7), (1, 4)]
+
+
+@pytest.mark.parametrize("stub, n_rooms, n_doors", [(0.15, 1, 0), (0.55, 2, 2)])
+def test_a_corridor_goes_on_through_a_passage_across_it_unless_a_door_narrows_it(stub, n_rooms, n_doors):
+    """corridors.across_corridor: stubs 0.15 m long leave a 1.7 m passage across the
+    corridor, 0.9 of its clear width, beside the ring's wider corners: the ring is one;
+    stubs 0.55 m long leave a 0.9 m door, under three quarters of the width: two
+    corridors and their two doors."""
+    walls = RING + [(6, 0, 6, stub), (6, 2, 6, 2 - stub), (6, 8, 6, 8 - stub), (6, 6, 6, 6 + stub)]
+    rooms, doors = _rooms(walls, RING_POSES)
+    assert len(rooms) == n_rooms and len(doors) == n_doors
+    # the floor between the walls' faces, 11.88 m x 7.88 m less 8.12 m x 4.12 m, less the doors
+    assert rooms["area_m2"].sum() == pytest.approx(11.88 * 7.88 - 8.12 * 4.12, abs=0.9)
+    if n_doors:
+        widths = sorted(np.hypot(doors.x1 - doors.x0, doors.y1 - doors.y0))
+        assert widths == pytest.approx([0.9, 0.9], abs=0.06)
+
+
 def test_a_room_seen_only_through_its_door_is_completed_to_its_walls():
     # the scans stay in the corridor: the east room is seen as a fan through its door
     rooms, _ = _rooms(CORRIDOR, [(1, 0.7), (4, 0.7), (7, 0.7), (2, 3), (5.95, 1.0)])

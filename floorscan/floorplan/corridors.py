@@ -64,6 +64,16 @@ et al. ("Room segmentation: survey, implementation, and analysis", ICRA 2016).
    its dead-end corridor whose west wall is the hall's). A corridor that joins the
    space at its two ends (a ring, a passage between two blocks) is parted by no single
    line, and stays one room with the space it joins.
+5. **Across** (:func:`across_corridor`): a corridor goes on past the ends of the walls
+   beside it. The room step's watershed parts a corridor where a partition of the rooms
+   beside it, or a room's corner, ends on its side, and the distance-transform
+   segmentation keeps such a passage as a door when the basin beside it is the wider
+   junction or hall the corridor leads to (:mod:`floorscan.floorplan.persistence`); a
+   passage across the corridor from side to side, inside it, at least
+   :data:`~floorscan.floorplan.persistence.DOOR_SHARE` of its clear width, is measured
+   against the corridor's own width and is no door: the corridor is one room, as people
+   draw a ring of corridors (Bormann et al.'s NLB and lab_intel). A door across a
+   corridor narrows it by more than a quarter, between jambs, and stays a door.
 """
 
 from __future__ import annotations
@@ -387,6 +397,42 @@ def corridor_ends(
             if k and hall_beside(raster, clearance, wide == k, *hall):
                 out.append((p, q, _nearest_wall(mids, s["sides"][0][1] + s["sides"][1][1], (p + q) / 2)))
     return out
+
+
+def across_corridor(p: np.ndarray, q: np.ndarray, strips: list[dict], params: RoomParams) -> bool:
+    """Whether the passage from ``p`` to ``q`` crosses a corridor from side to side
+    inside it (module docstring, step 5): square to the corridor within
+    ``door_angle_deg``, both ends between its ends (``t0``, ``t1``), each within
+    :data:`SIDE_STEP_M` of a side's face, and at least
+    :data:`~floorscan.floorplan.persistence.DOOR_SHARE` of its clear width wide.
+
+    Parameters
+    ----------
+    p, q : (2,) float ndarray
+        The passage's ends, metres.
+    strips : list of dict
+        :func:`corridor_strips`.
+    params : RoomParams
+
+    Returns
+    -------
+    bool
+    """
+    d = q - p
+    width = float(np.hypot(*d))
+    if width == 0.0:
+        return False
+    for c in strips:
+        o, u, n, sep, clear = c["origin"], c["u"], c["n"], c["sep"], c["clear"]
+        if width < DOOR_SHARE * clear or abs(float(d @ n)) < width * np.cos(np.radians(params.door_angle_deg)):
+            continue
+        t = np.array([(p - o) @ u, (q - o) @ u])
+        s = np.sort([(p - o) @ n, (q - o) @ n])
+        face = (sep - clear) / 2  # from a side's line to its face
+        if (t.min() >= c["t0"] and t.max() <= c["t1"]
+                and s[0] <= face + SIDE_STEP_M and s[1] >= sep - face - SIDE_STEP_M):
+            return True
+    return False
 
 
 def _nearest_wall(mids: np.ndarray, walls: list[int], xy: np.ndarray) -> int:

@@ -25,7 +25,8 @@ cabinet by less than a quarter of the width of its basins beside the narrowing s
 one corridor, whatever hall or junction it leads to. Where the watershed gives the
 stretch beside a passage to the junction it leads to (a corridor's even stretch has no
 maximum of its own), that basin is as wide as the junction, and the passage can still
-be a door.
+be a door; inside a corridor between two parallel walls, the caller measures it against
+the corridor's width (:func:`~floorscan.floorplan.corridors.across_corridor`).
 
 The saddle against the peaks is persistence as topological data analysis measures it
 (a basin of peak ``p`` persists from ``p`` down to its saddle ``s``; Chazal, Guibas,

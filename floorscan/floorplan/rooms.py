@@ -27,8 +27,8 @@ taken from the walls:
    as a passage between rooms.
 2. **Doors between walls** (:func:`~floorscan.floorplan.doors.wall_gaps`): the gap
    between the facing ends of two walls in one line, ``door_min_m`` to ``door_max_m``
-   wide, that the scans saw through, is cut from the space first: a room seen only
-   through its door (a fan of rays) ends at the door. So is the open side of a room
+   wide, that the scans saw through and that crosses no corridor (step 4), is cut first:
+   a room seen only through its door ends at the door. So is the open side of a room
    (:func:`~floorscan.floorplan.mouths.room_mouths`): the line between the free ends of
    the walls that bound a room open on its whole width onto a corridor (an office, a
    cubicle), or across the missing corner of two walls
@@ -57,7 +57,8 @@ taken from the walls:
    :func:`~floorscan.floorplan.jambs.stub_past_crossing`, nor between the faces of two
    walls that run on past both its ends for a door's width each way,
    :func:`~floorscan.floorplan.jambs.between_faces`: a corridor's even stretch, which the
-   watershed parts where the crossings at its ends widen): one rule for every passage of
+   watershed parts where the crossings at its ends widen, nor across a corridor,
+   :func:`~floorscan.floorplan.corridors.across_corridor`): one rule for every passage of
    the plan, in no order. An opening wider than a door, up to
    :data:`~floorscan.floorplan.mouths.MOUTH_MAX_M` (a room's open side), between
    jambs and ending on no wall's face (:func:`~floorscan.floorplan.jambs.on_wall_face`:
@@ -128,7 +129,7 @@ import pandas as pd
 from floorscan.core.geometry import OVERLAY_GRID_M, minus
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan import doors as D
-from floorscan.floorplan.corridors import corridor_ends, corridor_sides, corridor_strips
+from floorscan.floorplan.corridors import across_corridor, corridor_ends, corridor_sides, corridor_strips
 from floorscan.floorplan.extensions import partition_cuts
 from floorscan.floorplan.jambs import (between_faces, face_to_object, jamb_cells, on_wall_face, stub_past_crossing,
                                       wall_line_index)
@@ -179,19 +180,19 @@ def segment_rooms(
     axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4)
     thickness = np.asarray(thickness, dtype=np.float64).reshape(-1)
     raster = room_space(grid, axes, thickness, params, under)
+    strips = corridor_strips(axes, thickness, raster, params) if len(axes) >= 2 else []
     gaps = [g for g in D.wall_gaps(axes, thickness, params) + corner_mouths(axes, thickness, params)
-            if D.passes_through(raster, g[0], g[1])]
+            if D.passes_through(raster, g[0], g[1]) and not across_corridor(g[0], g[1], strips, params)]
     gaps += room_mouths(axes, thickness, raster, params)
     gaps += dead_end_mouths(axes, thickness, raster, params)
-    strips = corridor_strips(axes, thickness, raster, params) if len(axes) >= 2 else []
     gaps += [g for g in corridor_sides(axes, thickness, raster, params, strips) if D.passes_through(raster, g[0], g[1])]
     # a corridor's end opens onto a hall once the rooms' other boundaries are drawn
     gaps += [g for g in corridor_ends(axes, thickness, _cut_along(raster, gaps)[0], params, strips)
              if D.passes_through(raster, g[0], g[1])]
-    segmented = _segment(grid, axes, thickness, params, raster, gaps)
+    segmented = _segment(grid, axes, thickness, params, raster, gaps, strips)
     cuts = partition_cuts(axes, thickness, raster, segmented[1], params)
     if cuts:  # the rooms again, cut where partitions stop short of a wall
-        segmented = _segment(grid, axes, thickness, params, raster, gaps + cuts)
+        segmented = _segment(grid, axes, thickness, params, raster, gaps + cuts, strips)
     return segmented
 
 
@@ -207,10 +208,9 @@ def _cut_along(raster: RoomRaster, gaps: list) -> tuple[RoomRaster, np.ndarray]:
 
 
 def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, params: RoomParams, raster: RoomRaster,
-             gaps: list) -> tuple[RoomRaster, np.ndarray, list, bool]:
-    """:func:`segment_rooms` on ``raster`` cut along ``gaps`` ((p, q, wall) lines
-    that bound rooms: gaps in walls, open sides, partitions' extensions); returns as
-    :func:`segment_rooms`."""
+             gaps: list, strips: list) -> tuple[RoomRaster, np.ndarray, list, bool]:
+    """:func:`segment_rooms` on ``raster`` cut along ``gaps`` ((p, q, wall) lines that bound
+    rooms), with the corridors ``strips``; returns as :func:`segment_rooms`."""
     cut, barrier = _cut_along(raster, gaps)
     labels, distance = space_regions(cut, params)
     n = int(labels.max())
@@ -251,8 +251,8 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
                         or stub_past_crossing(cut, p, q, axes, thickness, params)):
                     continue
                 line_of = wall_line_index(axes, thickness, params) if line_of is None else line_of
-                if between_faces(p, q, axes, thickness, params, line_of):
-                    passable.add(pair)  # the space between two walls' faces, no opening in a wall
+                if between_faces(p, q, axes, thickness, params, line_of) or across_corridor(p, q, strips, params):
+                    passable.add(pair)  # between two walls' faces, or across a corridor: no opening in a wall
                     continue
             doors_here = framed.setdefault(pair, [])
             if width >= params.door_min_m:
