@@ -1281,3 +1281,34 @@ def test_a_fan_of_rays_through_a_door_is_no_corridor_however_long():
     for fans, kind in (([True], "room"), ([False], "corridor"), (None, "corridor")):
         rooms, _ = room_tables([strip], [], 0.05, RoomParams(), True, fans)
         assert rooms["kind"].tolist() == [kind]
+
+
+def test_the_rays_through_a_gap_are_no_room_s_floor_and_a_narrow_passage_between_walls_is():
+    """:func:`floorscan.floorplan.room_polygons.without_ray_strips` on a room 4 x 4 m
+    walled all round (10 cm cells): a strip of its cells 0.4 m wide runs 2 m out
+    through a gap in its north wall into the unseen (the rays through a gap, as orebro's
+    corridor had them), and a passage 0.6 m wide runs 2 m out of its east wall between
+    two walls. Beyond half a walkway (0.45 m) from the gap's jambs the strip is no floor;
+    the passage, near its walls all along, stays whole, and so does the room."""
+    from floorscan.floorplan.room_polygons import without_ray_strips
+    from floorscan.floorplan.room_space import RoomRaster
+
+    labels = np.zeros((90, 90), dtype=np.int32)
+    walls = np.zeros(labels.shape, dtype=bool)
+    labels[10:50, 10:50] = 1  # the room, x and y 1..5 m (rows up)
+    walls[9, 9:51] = walls[50, 9:51] = walls[9:51, 9] = walls[9:51, 50] = True
+    walls[50, 28:32] = False  # the gap in the north wall, x 2.8..3.2
+    labels[50:70, 28:32] = 1  # the strip of rays through it, y 5..7
+    walls[20:26, 50] = False  # the passage out of the east wall, y 2.0..2.6
+    labels[20:26, 50:70] = 1
+    walls[19, 50:71] = walls[26, 50:71] = True
+    raster = RoomRaster(np.zeros(2), 0.1, walls, labels > 0, walls.copy(), labels == 0)
+    out = without_ray_strips(raster, labels)
+    gone = (labels == 1) & (out == 0)
+    assert not gone[:50].any()  # the room and the passage whole
+    # the strip from 0.5 m beyond the wall's row on: 15 of its 20 rows (the first 0.45
+    # m lie within half a walkway of the jambs at x 2.7 and 3.2)
+    assert gone[50:70, 28:32].sum() == 15 * 4 and gone.sum() == 15 * 4
+    # a raster with nothing seen keeps everything (no wall to tell a strip by)
+    bare = RoomRaster(np.zeros(2), 0.1, np.zeros_like(walls), labels > 0, np.zeros_like(walls), labels == 0)
+    assert (without_ray_strips(bare, labels) == labels).all()

@@ -1,7 +1,8 @@
 """The polygons of a plan's rooms (:mod:`floorscan.floorplan.rooms`, step 6): each room's
-cells traced, grown up to the wall faces, completed up to its walls when seen in part,
-and the rooms made a coverage. Map metres; shapely geometry on the exports' precision
-grid (:data:`POLYGON_GRID_M`).
+cells, without the strips of rays along its edge (:func:`without_ray_strips`), traced,
+grown up to the wall faces, completed up to its walls when seen in part, and the rooms
+made a coverage. Map metres; shapely geometry on the exports' precision grid
+(:data:`POLYGON_GRID_M`).
 """
 
 from __future__ import annotations
@@ -11,14 +12,16 @@ import numpy as np
 from floorscan.core.geometry import OVERLAY_GRID_M, minus, polygons_of
 from floorscan.floorplan.corridors import wall_lines
 from floorscan.floorplan.doors import wall_units
-from floorscan.floorplan.room_space import LINE_OFFSET_M, RoomRaster, wall_footprints
+from floorscan.floorplan.room_space import (LINE_OFFSET_M, MIN_ROOM_WIDTH_M, RoomRaster, dilate, disc_opening,
+                                            wall_footprints)
 
 
 def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thickness: np.ndarray) -> list:
     """A valid shapely Polygon per room of ``labels`` (module docstring, step 5): its
-    cells traced (contourpy), grown by a cell up to the wall faces and cut by the walls'
-    footprints and the other rooms, simplified by half a cell; the largest part when
-    the cut leaves several.
+    cells without the strips of rays along its edge (:func:`without_ray_strips`), traced
+    (contourpy), grown by a cell up to the wall faces and cut by the walls' footprints
+    and the other rooms, simplified by half a cell; the largest part when the cut leaves
+    several.
 
     Parameters
     ----------
@@ -40,6 +43,7 @@ def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thic
     from scipy import ndimage
 
     res = raster.resolution_m
+    labels = without_ray_strips(raster, labels)
     foot = wall_footprints(axes, thickness)
     walls = shapely.union_all(foot, grid_size=POLYGON_GRID_M) if len(axes) else shapely.Polygon()
     traced = []
@@ -69,6 +73,53 @@ def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thic
         near = sorted(int(j) for j in tree.query(boxes[k]) if j != k and not out[j].is_empty) if not poly.is_empty else []
         others = shapely.union_all([out[j] for j in near], grid_size=POLYGON_GRID_M)
         out[k] = _bounded_by_walls(poly, axes, thickness, foot, walls, others, res)
+    return out
+
+
+def without_ray_strips(raster: RoomRaster, labels: np.ndarray) -> np.ndarray:
+    """``labels`` without the strips of each room narrower than
+    :data:`~floorscan.floorplan.room_space.MIN_ROOM_WIDTH_M` (what a disc of half that
+    width inside the room does not reach) whose cells lie farther than half that width
+    from any wall or seen obstacle (``raster.walls`` or ``raster.occupied``), nor what
+    they alone join to the room. Such a strip is bounded by the unseen on both sides:
+    the rays seen through a gap, whose limits are no room's (the narrowest walkway, 0.9
+    m, is the room's own width test; a narrow passage between walls, a door between its
+    jambs, the strip along a wall behind furniture lie near what bounds them and stay).
+
+    Parameters
+    ----------
+    raster : RoomRaster
+    labels : (H, W) int ndarray
+        Rooms 1..R, 0 for none, on the raster's cells.
+
+    Returns
+    -------
+    (H, W) int ndarray
+        ``labels`` with those cells 0; a room without any cell wider than the strips
+        (all of it narrow) unchanged.
+    """
+    from scipy import ndimage
+
+    res = raster.resolution_m
+    half = MIN_ROOM_WIDTH_M / 2
+    seen = raster.walls | raster.occupied
+    if not seen.any():
+        return labels
+    far = ~dilate(seen, half / res)
+    out = labels.copy()
+    pad = int(np.ceil(half / res)) + 1
+    for k, box in enumerate(ndimage.find_objects(labels), start=1):
+        if box is None:
+            continue
+        rows = slice(max(box[0].start - pad, 0), min(box[0].stop + pad, labels.shape[0]))
+        cols = slice(max(box[1].start - pad, 0), min(box[1].stop + pad, labels.shape[1]))
+        room = labels[rows, cols] == k
+        wide = disc_opening(room, half / res)
+        if not wide.any():
+            continue
+        parts, _ = ndimage.label(room & ~(far[rows, cols] & ~wide))
+        keep = np.isin(parts, np.unique(parts[wide]))  # the parts that hold the room's wide floor
+        out[rows, cols][room & ~keep] = 0
     return out
 
 

@@ -101,11 +101,11 @@ taken from the walls:
    half its edge (:func:`_fans`: the fan of rays through its door). When no door divides
    the space (an open hall, one corridor, a campus), it is one region of kind ``space``
    (or a few, where the seen space falls apart).
-6. **Polygons** (:func:`~floorscan.floorplan.room_polygons.room_polygons`): each room's cells traced (contourpy), grown up
-   to the wall faces and cut by the wall footprints (shapely), simplified by half a
-   cell; a room seen in part, convex between its walls, completed up to them (the
-   bounding box of its seen floor cut by each nearby wall's half-plane); the door
-   openings in the walls belong to no room; the rooms a coverage (:func:`~floorscan.floorplan.room_polygons.disjoint_rooms`:
+6. **Polygons** (:func:`~floorscan.floorplan.room_polygons.room_polygons`): each room's cells, less its strips
+   narrower than a walkway that nothing seen bounds (rays through a gap), traced, grown up to the wall faces
+   and cut by the wall footprints, simplified by half a cell; a room seen in part, convex between its walls,
+   completed up to them (its seen floor's bounding box cut by each nearby wall's half-plane); door openings
+   belong to no room; the rooms a coverage (:func:`~floorscan.floorplan.room_polygons.disjoint_rooms`:
    a sliver two rooms grew into is the first's). A room mostly narrower than a walkway
    (:data:`~floorscan.floorplan.room_space.MIN_ROOM_WIDTH_M`, its median local
    thickness: the unseen gap between two walls, a strip beside a corridor) joins the
