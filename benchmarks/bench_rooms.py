@@ -49,8 +49,8 @@ within tau of one (:func:`floorscan.score.drawn.score_against_drawn`), at 5 and 
 [--reading ipa|map_server]``:
 a table per map, the averages per group, the published figures beside them, why the
 rooms left unmatched are (:func:`print_errors`), and one figure per map (``--out``,
-default ``results/bench_rooms/``: the map, the rooms people drew, floorscan's rooms,
-ROSE^2's rooms where there are any).
+default ``results/bench_rooms/``: the map, the rooms people drew, floorscan's rooms with
+its plan's walls, doors and clutter, ROSE^2's rooms where there are any).
 """
 from __future__ import annotations
 
@@ -252,22 +252,23 @@ def run_task(task: tuple[str, str], data: Path = DATA, out: Path | None = None, 
         with tempfile.TemporaryDirectory() as tmp:
             clean_map, furn_map = (map_path(folder / f"{name}{s}.png", reading, Path(tmp)) for s in ("", "_furnitures"))
             clean, clean_labels, clean_grid, clean_plan = score_one("bormann", name, clean_map, truth, rooms)
-            furn, furn_labels, _, furn_plan = score_one("bormann_furniture", name, furn_map, truth, rooms)
+            furn, furn_labels, furn_grid, furn_plan = score_one("bormann_furniture", name, furn_map, truth, rooms)
         clean |= {f"walls_{k}": v for k, v in wall_scores(clean_plan, clean_grid).items()}
         furn |= {f"walls_{k}": v for k, v in wall_scores(furn_plan, clean_grid).items()}
         rows += [clean, furn]
         panels = [(f"{name}.png", folder / f"{name}.png", None), ("drawn by people", None, truth),
-                  ("floorscan, no furniture", None, clean_labels), (f"{name}_furnitures.png", folder / f"{name}_furnitures.png", None),
-                  ("floorscan, furniture", None, furn_labels)]  # fmt: skip
+                  ("floorscan, no furniture", None, clean_labels, clean_plan, clean_grid),
+                  (f"{name}_furnitures.png", folder / f"{name}_furnitures.png", None),
+                  ("floorscan, furniture", None, furn_labels, furn_plan, furn_grid)]  # fmt: skip
     else:
         folder = data / "rose2"
         truth = label_colours(read_image(folder / f"{name}_gt.png"))
-        row, labels, _, _ = score_one("rose2", name, folder / f"{name}.png", truth, rooms)
+        row, labels, grid, plan = score_one("rose2", name, folder / f"{name}.png", truth, rooms)
         rose = label_colours(read_image(folder / f"{name}_rose2.png"))
         row |= {f"rose2_{k}": v for k, v in score_label_images(truth, on_reference(truth, rose)).items()}
         rows.append(row)
         panels = [(f"{name}.png", folder / f"{name}.png", None), ("drawn by people", None, truth),
-                  ("floorscan", None, labels), ("ROSE^2", None, rose)]  # fmt: skip
+                  ("floorscan", None, labels, plan, grid), ("ROSE^2", None, rose)]  # fmt: skip
     if out is not None:
         write_figure(out / f"{group}_{name}.png", panels, truth, rows)
     return rows
@@ -276,7 +277,9 @@ def run_task(task: tuple[str, str], data: Path = DATA, out: Path | None = None, 
 def write_figure(path: Path, panels, truth: np.ndarray, rows: list[dict]) -> None:
     """The panels of one map: maps in grey, segmentations one colour per room (regions
     of 100 pixels or fewer left out, as scored), the drawn rooms' outlines in black over
-    floorscan's and ROSE^2's rooms; cut to the part with rooms."""
+    floorscan's and ROSE^2's rooms, and over floorscan's its plan's walls (red), doors
+    (blue) and clutter (orange), from the plan and the grid that follow a panel's labels;
+    cut to the part with rooms."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -290,7 +293,7 @@ def write_figure(path: Path, panels, truth: np.ndarray, rows: list[dict]) -> Non
     h, w = truth.shape
     # the part of the image with any room, a margin round it
     rooms = truth > 0
-    for _, _, labels in panels:
+    for _, _, labels, *_ in panels:
         if labels is not None:
             rooms[: labels.shape[0], : labels.shape[1]] |= labels[:h, :w] > 0
     rr, cc = np.nonzero(rooms) if rooms.any() else (np.array([0, h - 1]), np.array([0, w - 1]))
@@ -305,7 +308,7 @@ def write_figure(path: Path, panels, truth: np.ndarray, rows: list[dict]) -> Non
     edge[:, :-1] |= truth[:, :-1] != truth[:, 1:]
     for ax in axes.ravel():
         ax.set_axis_off()
-    for ax, (title, image, labels) in zip(axes.ravel(), panels):
+    for ax, (title, image, labels, *drawn) in zip(axes.ravel(), panels):
         if image is not None:
             ax.imshow(grey_of_image(read_image(image))[r0:r1, c0:c1], cmap="gray", vmin=0, vmax=255,
                       interpolation="nearest")  # fmt: skip
@@ -318,8 +321,19 @@ def write_figure(path: Path, panels, truth: np.ndarray, rows: list[dict]) -> Non
             rgb[edge[: labels.shape[0], : labels.shape[1]]] = 0.0
         ax.imshow(rgb[r0:r1, c0:c1], interpolation="nearest")
         ax.set_title(f"{title}: {int(labels.max())} rooms", fontsize=9)
+        if drawn:  # the plan's lines in the image's pixels (row 0 the top), on the crop
+            plan, grid = drawn
+            (ox, oy), res = grid.origin_xy, grid.resolution_m
+            for table, colour, width in ((plan.clutter, "orange", 0.5), (plan.walls, "red", 0.8),
+                                         (plan.doors, "blue", 1.5)):  # fmt: skip
+                xy = table[["x0", "y0", "x1", "y1"]].to_numpy(np.float64).reshape(-1, 2, 2)
+                u, v = (xy[..., 0] - ox) / res - c0, grid.shape[0] - (xy[..., 1] - oy) / res - r0
+                ax.plot(u.T, v.T, "-", color=colour, lw=width)
+            ax.set_xlim(-0.5, c1 - c0 - 0.5)
+            ax.set_ylim(r1 - r0 - 0.5, -0.5)
     scored = "; ".join(f"{r['group']}: P {r['seg_precision_mean']:.2f} R {r['seg_recall_mean']:.2f}, "
                        f"room P/R {r['room_precision']:.2f}/{r['room_recall']:.2f}" for r in rows)  # fmt: skip
+    scored += "\nfloorscan's plan: walls red, doors blue, clutter orange"
     fig.suptitle(scored, fontsize=8)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
