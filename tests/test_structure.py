@@ -705,3 +705,35 @@ def test_parallel_lines_cross_nowhere_without_a_warning():
         x = _line_crossings(a, b)
     assert np.isnan(x[0]).all()
     assert np.allclose(x[1], [0.5, 0.0])
+
+
+@pytest.mark.parametrize("turned", [True, False])
+def test_a_short_face_hanging_from_a_wall_turned_from_every_long_face_is_furniture(turned):
+    """A hall 10 x 6 m with a partition 2.5 m long down from its north wall, scanned
+    from both sides of three short faces: one held at one end by the east wall (its end
+    0.1 m short of it: a junction), one standing free, one held at both ends between the
+    partition and the east wall. Turned 32 degrees from the hall's walls, the one held
+    at one end is furniture (a desk turned against the wall); the free one is step 6's
+    first rule's, the one held at both ends is in the wall graph. Turned 9 degrees
+    (under OBLIQUE_MIN_DEG, 15), none is. Seen from its north side only, the first is a
+    wall (a room's wall seen from the room)."""
+    from floorscan.floorplan.junctions import junction_ends
+    from floorscan.floorplan.oblique import oblique_in_free_space
+
+    hall = [((0, 0), (10, 0)), ((10, 0), (10, 6)), ((10, 6), (0, 6)), ((0, 6), (0, 0)), ((8.5, 6), (8.5, 3.5))]
+    rise = np.tan(np.radians(32.0 if turned else 9.0))
+    faces = [((8.3, 2.5 - 1.6 * rise), (9.9, 2.5)),  # held by the east wall at one end
+             ((3.0, 3.0), (4.2, 3.0 + 1.2 * rise)),  # held at neither end
+             ((8.6, 4.2), (9.9, 4.2 + 1.3 * rise))]  # held by the partition and the east wall
+    segments = np.array([[*a, *b] for a, b in hall + faces], dtype=np.float64)
+    snapped, junctions = snap_junctions(segments, StructureParams())
+    held = junction_ends(snapped, junctions)
+    crossed = np.zeros(len(snapped), dtype=bool)
+    assert held[5:].sum(axis=1).tolist() == [1, 0, 2]
+    poses = [(8.6, 0.7), (9.3, 3.3), (9.3, 5.6), (2.5, 1.5), (4.5, 4.5), (6.5, 2.0)]
+    for seen_south in (True, False):  # without the scan south of the first face, its south side is unseen
+        rng = np.random.default_rng(5)
+        scans = [(np.array(p, dtype=np.float64), _scan(p, rng, segments)) for p in poses[not seen_south:]]
+        _, _, both = border_and_support(snapped, occupancy_grid(scans, OccupancyParams()), both_free=True)
+        out = oblique_in_free_space(snapped, held, crossed, both)
+        assert out.tolist() == [False] * 5 + [turned and seen_south, False, False]

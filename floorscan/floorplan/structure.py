@@ -71,7 +71,10 @@ order (:func:`structure_passes`):
    ends both stand in free space, and that has free space on both sides or a face
    parallel behind it, is furniture, however long (a 3 m rack in front of a wall, a
    row of chairs): clutter. Walls hold each other up; one that ends in free space ends
-   at an opening, with the rest of its wall in line.
+   at an opening, with the rest of its wall in line. So is a face shorter than
+   ``clutter_max_length_m`` with free space on both sides, held at exactly one end and
+   crossed by none, that runs in no direction of the long faces
+   (:mod:`~floorscan.floorplan.oblique`: a desk turned in the room against a wall).
 
 The rule of step 1 and 4 is the issue's (walls are the boundaries of the free space,
 long enough and seen from more than one position; short pieces standing inside free
@@ -94,11 +97,13 @@ from floorscan.floorplan.free_space import StructureParams, mask_at, passable, s
 from floorscan.floorplan.free_space import open_run as free_open_run
 from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, free_normals, hidden_by_objects, into_corners
 from floorscan.floorplan.junctions import junction_ends, short_loose, shorter_on_longer, snap_junctions
+from floorscan.floorplan.oblique import oblique_in_free_space
 from floorscan.floorplan.partition_fronts import fronts_between_partitions
 from floorscan.floorplan.wall_pieces import corner_piers, door_jambs, in_wall_lines, piers
 
 
-def border_and_support(seg: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams()):
+def border_and_support(seg: np.ndarray, grid: OccupancyGrid, params: StructureParams = StructureParams(),
+                       both_free: bool = False):  # fmt: skip
     """Step 1: which faces border free space and lie on occupied cells (over half
     their length).
 
@@ -109,6 +114,8 @@ def border_and_support(seg: np.ndarray, grid: OccupancyGrid, params: StructurePa
     grid : OccupancyGrid
         The free space of the plan's scans.
     params : StructureParams
+    both_free : bool
+        Also return which faces have free space on both sides.
 
     Returns
     -------
@@ -116,10 +123,13 @@ def border_and_support(seg: np.ndarray, grid: OccupancyGrid, params: StructurePa
     free_side : (F,) int8 ndarray
         +1 when the free space lies left of the face (direction x0, y0 -> x1, y1),
         -1 right, 0 both sides or neither.
+    both : (F,) bool ndarray
+        Only with ``both_free``: free space on both sides (``min_free_side`` of the face
+        each).
     """
     seg = np.asarray(seg, dtype=np.float64).reshape(-1, 4)
     if len(seg) == 0:
-        return np.zeros(0, bool), np.zeros(0, np.int8)
+        return (np.zeros(0, bool), np.zeros(0, np.int8)) + ((np.zeros(0, bool),) if both_free else ())
     free = passable(grid)
     pts, owner, normal = segment_samples(seg, grid.resolution_m, trim=params.side_offset_m)
     off = params.side_offset_m * normal[owner]
@@ -149,6 +159,8 @@ def border_and_support(seg: np.ndarray, grid: OccupancyGrid, params: StructurePa
         (left >= params.min_free_side) & (right < params.min_free_side), 1,
         np.where((right >= params.min_free_side) & (left < params.min_free_side), -1, 0),
     ).astype(np.int8)  # fmt: skip
+    if both_free:
+        return structure, side, (left >= params.min_free_side) & (right >= params.min_free_side)
     return structure, side
 
 
@@ -398,7 +410,7 @@ def structure_passes(
     standing &= ~corner_piers(snapped, standing, junctions, grid, params, door_min_m, door_max_m, open_run=open_run)
     # a face run on behind objects has too little free space beside it to show a side;
     # it keeps the side its seen pieces had
-    _, side = border_and_support(snapped, grid, params)
+    _, side, both = border_and_support(snapped, grid, params, both_free=True)
     side = np.where(side != 0, side, joined_side).astype(side.dtype)
     front, behind = in_front_of_walls(snapped, side, anchor, params, free_at)
     whole = front.copy()  # fronts as faces; the others found here run by run
@@ -413,7 +425,9 @@ def structure_passes(
     short &= ~corner_piers(snapped, short, junctions, grid, params, door_min_m, door_max_m, standing | against, open_run)
     crossed = np.zeros(len(snapped), dtype=bool)
     crossed[junctions[junctions[:, 4] == 3][:, 2:4].astype(np.int64).ravel()] = True  # X junctions
-    loose = loose_in_free_space(snapped, junction_ends(snapped, junctions), side, grid, params, max_thickness_m, crossed)
+    held = junction_ends(snapped, junctions)
+    loose = loose_in_free_space(snapped, held, side, grid, params, max_thickness_m, crossed)
+    loose |= oblique_in_free_space(snapped, held, crossed, both, params)
     loose &= ~standing & ~against & ~short
     keep = ~standing & ~against & ~short & ~loose
     clutter += [snapped[standing], snapped[against], snapped[short], snapped[loose]]
