@@ -5,6 +5,7 @@ thickness), the free space comes from the scans' occupancy grid."""
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
@@ -311,6 +312,97 @@ def test_a_corridor_goes_on_through_a_passage_across_it_unless_a_door_narrows_it
     if n_doors:
         widths = sorted(np.hypot(doors.x1 - doors.x0, doors.y1 - doors.y0))
         assert widths == pytest.approx([0.9, 0.9], abs=0.06)
+
+
+def _polar(r: float, deg: float) -> tuple[float, float]:
+    return r * math.cos(math.radians(deg)), r * math.sin(math.radians(deg))
+
+
+def _curved_corridor(narrowing: str, tip_r: float) -> tuple[list, list]:
+    """A corridor 2 m wide bent through 120 degrees (between radii 10 and 12 m, walls
+    every 10 degrees or less: no two straight, parallel lines bound it), with a bay
+    0.9 m deep and 2.5 m wide in its outer wall at -30 and +30 degrees (the wider place
+    each half's basin holds, as a junction or an alcove beside a real corridor's
+    narrowing), and at 0 degrees a narrowing from the outer wall in to radius ``tip_r``:
+    a vee of two walls, or a pier; its walls and the poses of its scans."""
+    inner = [_polar(10, a) for a in range(-60, 61, 10)]
+    walls = [(*inner[k], *inner[k + 1]) for k in range(len(inner) - 1)]
+    outer = [-60, -50, -40, -36, -24, -20, -10, -3, 3, 10, 20, 24, 36, 40, 50, 60]
+    for a0, a1 in zip(outer[:-1], outer[1:]):
+        if (a0, a1) in ((-36, -24), (24, 36)):
+            walls += [(*_polar(12, a0), *_polar(12.9, a0)), (*_polar(12.9, a0), *_polar(12.9, a1)),
+                      (*_polar(12.9, a1), *_polar(12, a1))]  # fmt: skip
+        elif (a0, a1) == (-3, 3) and narrowing == "vee":
+            walls += [(*_polar(12, a0), *_polar(tip_r, 0)), (*_polar(tip_r, 0), *_polar(12, a1))]
+        else:
+            walls.append((*_polar(12, a0), *_polar(12, a1)))
+    if narrowing == "pier":
+        walls.append((*_polar(12, 0), *_polar(tip_r, 0)))
+    walls += [(*_polar(10, -60), *_polar(12, -60)), (*_polar(10, 60), *_polar(12, 60))]
+    poses = [_polar(11, a) for a in (-55, -45, -30, -15, -5, 5, 15, 30, 45, 55)] + [_polar(12.4, -30), _polar(12.4, 30)]
+    return walls, poses
+
+
+@pytest.mark.parametrize("turn_deg, shift", [(0.0, (0.0, 0.0)), (128.0, (0.03, 0.03)), (201.0, (0.011, 0.044))])
+@pytest.mark.parametrize("narrowing, tip_r, n_rooms", [("vee", 11.73, 1), ("vee", 11.23, 2), ("pier", 11.73, 2)])
+def test_a_bent_corridor_narrowed_out_of_any_wall_s_line_by_under_a_quarter_is_one_corridor(
+        narrowing, tip_r, n_rooms, turn_deg, shift):  # fmt: skip
+    """narrowings.corridor_narrowings: a vee of two walls leaves a 1.6 m passage across
+    the bent corridor (clear 1.88 m), under three quarters of each half's basin (its
+    bay), so without the rule the corridor is two and a door at the vee, at every pose;
+    over three quarters of the corridor's own width, it is one room. A 1.1 m passage
+    keeps its door, and so does a pier in whose line the passage lies (a door's frame),
+    however the building is turned and shifted."""
+    walls, poses = _curved_corridor(narrowing, tip_r)
+    c, s = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
+
+    def move(x: float, y: float) -> tuple[float, float]:
+        return c * x - s * y + shift[0], s * x + c * y + shift[1]
+
+    rooms, doors = _rooms([(*move(x0, y0), *move(x1, y1)) for x0, y0, x1, y1 in walls], [move(*p) for p in poses])
+    assert len(rooms) == n_rooms and len(doors) == n_rooms - 1
+    assert set(rooms["kind"]) == ({"space"} if n_rooms == 1 else {"corridor"})
+    # the floor between the walls' faces (46.9-47.4 m2), less a door's opening and the tracing
+    lines = shapely.MultiLineString([[(x0, y0), (x1, y1)] for x0, y0, x1, y1 in walls])
+    inside = shapely.union_all(list(shapely.polygonize(list(shapely.node(lines).geoms)).geoms))
+    floor = inside.difference(lines.buffer(T / 2, cap_style="flat")).area
+    assert floor - 0.8 <= rooms["area_m2"].sum() <= floor
+
+
+def test_a_region_s_width_is_its_median_local_thickness_on_the_raster():
+    """narrowings.raster_width, to half a cell: a strip is as wide as it is across, an L
+    of two such strips too, a square as its side (the opening by a disc as wide keeps
+    pi / 4 of it)."""
+    from floorscan.floorplan.narrowings import raster_width
+
+    strip = np.zeros((240, 240), dtype=bool)
+    strip[10:30, 10:230] = True
+    ell = strip.copy()
+    ell[10:230, 10:30] = True
+    square = np.zeros((80, 80), dtype=bool)
+    square[10:70, 10:70] = True
+    assert raster_width(strip, 0.1) == pytest.approx(2.0, abs=0.06)
+    assert raster_width(ell, 0.1) == pytest.approx(2.0, abs=0.06)
+    assert raster_width(square, 0.1) == pytest.approx(6.0, abs=0.06)
+    assert raster_width(np.zeros((5, 5), dtype=bool), 0.1) == 0.0
+
+
+def test_a_corridor_joins_no_room_that_is_not_a_corridor_across_a_narrowing():
+    """narrowings.corridor_narrowings on hand-made regions (0.1 m cells): a corridor 2 m x
+    12 m, a narrower one 1.6 m x 12 m beyond it, and a 6 m x 6 m room beside it; the
+    1.3 m narrowing joins the two corridors (over 0.75 of 1.6 m), a 1.1 m one does not,
+    and no narrowing joins the room, however wide."""
+    from floorscan.floorplan.narrowings import corridor_narrowings
+
+    labels = np.zeros((100, 260), dtype=np.int32)
+    labels[0:20, 0:120] = 1
+    labels[0:16, 120:240] = 2
+    labels[20:80, 0:60] = 3
+    root = np.arange(4)
+    params = RoomParams()
+    joined = corridor_narrowings(labels, root, {(1, 2): 1.3, (1, 3): 1.9}, params)
+    assert joined[1] == joined[2] and joined[3] not in (joined[1], joined[0])
+    assert corridor_narrowings(labels, root, {(1, 2): 1.1}, params).tolist() == [0, 1, 2, 3]
 
 
 def test_a_room_seen_only_through_its_door_is_completed_to_its_walls():

@@ -17,7 +17,9 @@ Two ways to find one, both in the wall's line, as a plan drawn by people shows a
   :mod:`floorscan.floorplan.persistence` keeps the two regions apart: the door is
   :func:`contact_door` when it lies in the line of a wall whose end is within
   ``jamb_m`` of one of its ends (the opening runs from that end to the other jamb, on
-  the line), else :func:`free_door`, the contact as it is.
+  the line), else :func:`free_door`, the contact as it is (unless it narrows a
+  corridor by less than a quarter,
+  :func:`~floorscan.floorplan.narrowings.corridor_narrowings`).
 
 A door is kept only when the rooms on its two sides differ.
 Source: the door criterion of ipa_room_segmentation's Voronoi segmentation (Bormann et
@@ -351,3 +353,17 @@ def free_door(p: np.ndarray, q: np.ndarray, axes: np.ndarray) -> tuple[np.ndarra
         return None
     m = (p + q) / 2
     return p.copy(), q.copy(), int(np.argmin(point_segment_dist2(m[0], m[1], axes)))
+
+
+def distinct_doors(doors: list) -> list:
+    """One door per opening: of doors ``(p, q, wall, room_a, room_b)`` (``p``, ``q`` (2,)
+    metres) between the same rooms whose centres lie within half a metre, the first (the
+    room step lists the contacts before the gaps between walls, so a contact found twice
+    is kept as its contact)."""
+    out: list = []
+    for d in doors:
+        c = (d[0] + d[1]) / 2
+        if any(o[3:] == d[3:] and np.hypot(*((o[0] + o[1]) / 2 - c)) < 0.5 for o in out):
+            continue
+        out.append(d)
+    return out

@@ -108,10 +108,18 @@ def is_corridor(floor, tolerance_m: float, params: RoomParams) -> bool:
     e, w_max = params.corridor_elongation, params.corridor_max_width_m
     cap = max(w_max, (w_max * floor.area / e) ** (1 / 3))
     width = room_width(floor, tolerance_m, cap)
-    if width <= 0 or width > cap:
+    return width <= cap and long_for_width(floor.area, width, params)
+
+
+def long_for_width(area_m2: float, width_m: float, params: RoomParams) -> bool:
+    """Whether a room of ``area_m2`` (m2) and width ``width_m`` (metres, its median local
+    thickness) is long for its width, as :func:`is_corridor` asks: its length, area over
+    width, at least ``corridor_min_length_m`` and ``corridor_elongation`` times its width,
+    the more so beyond ``corridor_max_width_m``; False for a width of 0."""
+    if width_m <= 0:
         return False
-    length = floor.area / width
-    return length >= max(e * width * max(1.0, width / w_max), params.corridor_min_length_m)
+    e, w_max = params.corridor_elongation, params.corridor_max_width_m
+    return area_m2 / width_m >= max(e * width_m * max(1.0, width_m / w_max), params.corridor_min_length_m)
 
 
 def objects_filled(poly, min_room_area_m2: float):

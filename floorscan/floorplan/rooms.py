@@ -59,7 +59,10 @@ taken from the walls:
    :func:`~floorscan.floorplan.jambs.between_faces`: a corridor's even stretch, which the
    watershed parts where the crossings at its ends widen, nor across a corridor,
    :func:`~floorscan.floorplan.corridors.across_corridor`): one rule for every passage of
-   the plan, in no order. An opening wider than a door, up to
+   the plan, in no order. Two rooms that are both corridors and meet through a narrowing
+   in no wall's line, at least ``DOOR_SHARE`` of the narrower one's width, are one
+   corridor (:func:`~floorscan.floorplan.narrowings.corridor_narrowings`: a corridor
+   whose sides bend or step). An opening wider than a door, up to
    :data:`~floorscan.floorplan.mouths.MOUTH_MAX_M` (a room's open side), between
    jambs and ending on no wall's face (:func:`~floorscan.floorplan.jambs.on_wall_face`:
    a passage from a wall's end to the face of a wall across it narrows the space, it
@@ -134,6 +137,7 @@ from floorscan.floorplan.extensions import partition_cuts
 from floorscan.floorplan.jambs import (between_faces, face_to_object, jamb_cells, on_wall_face, stub_past_crossing,
                                       wall_line_index)
 from floorscan.floorplan.mouths import MOUTH_MAX_M, corner_mouths, dead_end_mouths, room_mouths
+from floorscan.floorplan.narrowings import corridor_narrowings
 from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
 from floorscan.floorplan.room_polygons import disjoint_rooms, largest_polygon, room_polygons
@@ -222,6 +226,7 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     contacts = D.contacts(labels)
     line_of = None  # the walls' lines (wall_line_index), for between_faces
     framed: dict[tuple[int, int], list] = {}
+    narrowings: dict[tuple[int, int], float] = {}  # the widest such contact of each pair, metres
     widest: dict[tuple[int, int], float] = {}  # the widest contact of each pair, metres
     passable: set[tuple[int, int]] = set()  # pairs that also meet through an opening no jambs frame
     wide: set[tuple[int, int]] = set()  # pairs that meet through an opening wider than a door, between jambs
@@ -256,7 +261,10 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
                     continue
             doors_here = framed.setdefault(pair, [])
             if width >= params.door_min_m:
-                door = D.contact_door(p, q, axes, thickness, params) or D.free_door(p, q, axes)
+                door = D.contact_door(p, q, axes, thickness, params)
+                if door is None:  # in no wall's line: a narrowing (corridor_narrowings), or a free door
+                    narrowings[pair] = max(narrowings.get(pair, 0.0), width)
+                    door = D.free_door(p, q, axes)
                 if door is not None:
                     doors_here.append(door)
     # two regions that meet through an opening a person passes and no jambs frame are
@@ -264,6 +272,7 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     # door parts them only when it is their widest passage
     wide -= open_wide
     root = persistent_rooms(labels, distance, params.door_max_m, (set(framed) | wide) - passable, wide, MOUTH_MAX_M)
+    root = corridor_narrowings(labels, root, narrowings, params)
     sets = region_sets(n)
     found = []  # (p, q, wall, a, b)
     open_sides = []  # pairs of regions apart at a room's open side (no door)
@@ -367,7 +376,7 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
         if ra and rb and ra != rb:
             doors.append((p, q, wall, int(min(ra, rb)), int(max(ra, rb))))
     divided = any(renum[roots[a]] and renum[roots[b]] and renum[roots[a]] != renum[roots[b]] for a, b in open_sides)
-    return raster, final, _distinct_doors(doors), divided
+    return raster, final, D.distinct_doors(doors), divided
 
 
 def _fans(raster: RoomRaster, labels: np.ndarray, scan_xy: np.ndarray | None, n: int) -> np.ndarray:
@@ -383,19 +392,6 @@ def _fans(raster: RoomRaster, labels: np.ndarray, scan_xy: np.ndarray | None, n:
         return np.zeros(n + 1, dtype=bool)
     out = (enclosure(raster, labels, n) < MIN_ENCLOSURE_UNENTERED) & ~visited_regions(raster, labels, scan_xy, n)
     out[0] = False
-    return out
-
-
-def _distinct_doors(doors: list) -> list:
-    """One door per opening: of doors between the same rooms whose centres lie within
-    half a metre, the first (gaps between walls come after contacts, so a contact
-    found twice is kept as its contact)."""
-    out: list = []
-    for d in doors:
-        c = (d[0] + d[1]) / 2
-        if any(o[3:] == d[3:] and np.hypot(*((o[0] + o[1]) / 2 - c)) < 0.5 for o in out):
-            continue
-        out.append(d)
     return out
 
 
