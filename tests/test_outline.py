@@ -129,3 +129,24 @@ def test_beyond_the_walls_hull_the_parts_the_rover_never_entered_are_outside():
     drove_out = np.array([[10.0, 10.0], [17.0, 10.0]])
     outside, _, _ = building_outside(solid, RES, np.zeros(2), drove_out, 2.0, walls=walls)
     assert not _at(outside, 17.0, 10.0) and not _at(outside, 15.5, 10.0)
+
+
+def test_a_facade_seen_through_a_window_at_the_raster_s_edge_is_no_wall_of_the_building():
+    """The box (its own walls, ``walls``) with a 1.2 m window in its east wall, and
+    through it a facade 3 m beyond: a wall 4 m long, two cells from the raster's east
+    edge, as a room raster cut to what the scans saw leaves it. The border reaches
+    around the facade as around any wall: the facade is no wall of the building, so the
+    fan of rays through the window is outside. With a margin of one cell, the cells
+    behind the facade were out of the border's reach, so the facade was the building's
+    and the fan inside its walls' hull."""
+    solid = _building(1.2)[:, :185]  # the raster ends 2 cells east of the facade
+    walls = solid.copy()
+    solid[80:120, 181:183] = True  # the facade, x 18.1-18.3 m
+    seen = np.zeros_like(solid)
+    seen[51:149, 51:149] = True
+    seen[94:106, 149:181] = True  # the fan through the window
+    outside, beyond, d = building_outside(solid, RES, np.zeros(2), np.array([[10.0, 10.0]]), 2.0, seen=seen,
+                                          walls=walls | solid)
+    assert d == 2.0
+    assert _at(outside, 16.5, 10.0) and _at(outside, 17.0, 9.5) and _at(beyond, 17.8, 10.0)  # the fan
+    assert not _at(outside, 10.0, 10.0) and not _at(beyond, 14.0, 10.0)  # the room

@@ -1353,14 +1353,15 @@ def test_a_plant_against_a_corridor_wall_frames_no_door_on_a_turned_raster():
 
 def test_a_fan_of_rays_through_a_door_is_no_corridor_however_long():
     """What a recording saw of a room through its door and never entered, walled only at
-    its far end (a wall 4 m wide, 7 m beyond the door), is the fan of the rays through
-    the door: ``_fans`` finds it, not the corridor the rover drove along, and nothing in
-    a map (no scans). A fan is a room, however long its outline (orebro's 4.8 m2 fan
-    through a door was ``Corridor 5``); the same outline is a corridor otherwise."""
+    its far end (a wall 4 m wide, 7 m beyond the door; the building's outer walls run on
+    north past it, out of the rays' reach), is the fan of the rays through the door:
+    ``_fans`` finds it, not the corridor the rover drove along, and nothing in a map (no
+    scans). A fan is a room, however long its outline (orebro's 4.8 m2 fan through a door
+    was ``Corridor 5``); the same outline is a corridor otherwise."""
     from floorscan.floorplan.room_tables import room_tables
     from floorscan.floorplan.rooms import _fans
 
-    walls = [(0, 0, 12, 0), (12, 0, 12, 2), (0, 2, 0, 0), (0, 2, 5.5, 2), (6.5, 2, 12, 2), (4, 9, 8, 9)]
+    walls = [(0, 0, 12, 0), (12, 0, 12, 10), (0, 10, 0, 0), (0, 2, 5.5, 2), (6.5, 2, 12, 2), (4, 9, 8, 9)]
     axes = np.array(walls, dtype=np.float64)
     grid = _grid(walls, [(1, 1), (3, 1), (6, 0.4), (9, 1), (11, 1)])
     raster = room_space(grid, axes, np.full(len(axes), T), RoomParams())
@@ -1404,3 +1405,4 @@ def test_the_rays_through_a_gap_are_no_room_s_floor_and_a_narrow_passage_between
     # a raster with nothing seen keeps everything (no wall to tell a strip by)
     bare = RoomRaster(np.zeros(2), 0.1, np.zeros_like(walls), labels > 0, np.zeros_like(walls), labels == 0)
     assert (without_ray_strips(bare, labels) == labels).all()
+

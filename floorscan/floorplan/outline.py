@@ -7,7 +7,10 @@ by a disc of diameter ``D`` (Serra, *Image analysis and mathematical morphology*
 the alpha shapes of Edelsbrunner et al., IEEE Trans. Inf. Theory 1983, are the same
 closing of a point set): the outside is what the raster's border reaches without
 coming within ``D / 2`` of a solid cell, grown back by ``D / 2``; the inside is the
-rest. Every gap narrower than ``D`` is closed, every wider one leaks.
+rest. Every gap narrower than ``D`` is closed, every wider one leaks. The raster is
+padded first by the disc's radius at the door's width, so the border reaches around
+the outermost walls: a room raster ends a few cells past what the scans saw, and a
+facade seen through a window is often its outermost wall.
 
 ``D`` is chosen from the recording, not set: the smallest diameter, at least the
 widest door (``door_max_m``: a room seen through its door is the building's), at
@@ -126,10 +129,12 @@ def building_outside(
         return cut, cut, float("inf")
     if scan_xy is None or not len(scan_xy) or not solid.any():
         return nothing, nothing, float("inf")
-    distance = ndimage.distance_transform_edt(~np.pad(solid, 1)) * resolution_m
+    # a margin as wide as the closing's disc: the border reaches around the outermost walls
+    pad = int(np.ceil(door_max_m / 2 / resolution_m)) + 1
+    distance = ndimage.distance_transform_edt(~np.pad(solid, pad)) * resolution_m
     # the scans' cells in the padded raster (those off the raster are left out)
-    cells = np.floor((np.asarray(scan_xy, dtype=np.float64) - origin_xy) / resolution_m).astype(np.int64)[:, ::-1] + 1
-    keep = ((cells >= 1) & (cells <= np.array(solid.shape))).all(axis=1)
+    cells = np.floor((np.asarray(scan_xy, dtype=np.float64) - origin_xy) / resolution_m).astype(np.int64)[:, ::-1] + pad
+    keep = ((cells >= pad) & (cells < np.array(solid.shape) + pad)).all(axis=1)
     rows, cols = cells[keep].T
     if not len(rows):
         return nothing, nothing, float("inf")
@@ -154,7 +159,7 @@ def building_outside(
     outside = flood.copy()
     unentered = None
     if walls is not None and np.any(walls):
-        hull = _hull_of_own_walls(np.pad(np.asarray(walls, dtype=bool), 1), flood, distance, hi, resolution_m)
+        hull = _hull_of_own_walls(np.pad(np.asarray(walls, dtype=bool), pad), flood, distance, hi, resolution_m)
         outside &= ~hull
         if hull.any():  # beyond the hull, the parts the rover never entered
             parts, n = ndimage.label(~hull & (distance > 0))
@@ -166,7 +171,7 @@ def building_outside(
         parts, n = ndimage.label((distance > hi / 2) & ~flood)
         if n:
             ids = np.arange(1, n + 1)
-            unseen = ndimage.sum(np.pad(np.asarray(seen, dtype=bool), 1), parts, ids) < ndimage.sum(parts > 0, parts, ids) / 2
+            unseen = ndimage.sum(np.pad(np.asarray(seen, dtype=bool), pad), parts, ids) < ndimage.sum(parts > 0, parts, ids) / 2
             court = np.r_[False, unseen]
             court[parts[rows, cols]] = False
             outside |= court[parts]
@@ -178,7 +183,7 @@ def building_outside(
         beyond |= unentered
     log.info("rooms: the building's outline closed by a disc of %.2f m, the smallest that holds the %d scan positions",
              hi, len(rows))
-    return outside[1:-1, 1:-1], beyond[1:-1, 1:-1], hi
+    return outside[pad:-pad, pad:-pad], beyond[pad:-pad, pad:-pad], hi
 
 
 def _hull_of_own_walls(walls: np.ndarray, flood: np.ndarray, distance: np.ndarray, diameter_m: float,
