@@ -21,17 +21,23 @@ from floorscan.floorplan.rooms import plan_rooms, segment_rooms
 T = 0.12  # wall thickness, metres
 
 
-def _grid(walls: list, poses: list, seed: int = 1, objects: list = (), thickness: float = T):
-    """The occupancy grid of 360-degree scans from ``poses`` of the wall faces of
-    ``walls`` ((x0, y0, x1, y1) axes, ``thickness`` metres) and of the faces ``objects``
-    ((x0, y0, x1, y1) each)."""
-    rng = np.random.default_rng(seed)
+def _wall_faces(walls: list, thickness: float = T) -> list:
+    """The two faces ((x0, y0, x1, y1), metres) of each wall of ``walls`` (axes),
+    ``thickness`` metres apart."""
     faces = []
     for x0, y0, x1, y1 in walls:
         d = np.array([x1 - x0, y1 - y0]) / np.hypot(x1 - x0, y1 - y0)
         n = np.array([-d[1], d[0]]) * thickness / 2
         faces += [[x0 + n[0], y0 + n[1], x1 + n[0], y1 + n[1]], [x0 - n[0], y0 - n[1], x1 - n[0], y1 - n[1]]]
-    faces = np.array(faces + [list(f) for f in objects])
+    return faces
+
+
+def _grid(walls: list, poses: list, seed: int = 1, objects: list = (), thickness: float = T):
+    """The occupancy grid of 360-degree scans from ``poses`` of the wall faces of
+    ``walls`` ((x0, y0, x1, y1) axes, ``thickness`` metres) and of the faces ``objects``
+    ((x0, y0, x1, y1) each)."""
+    rng = np.random.default_rng(seed)
+    faces = np.array(_wall_faces(walls, thickness) + [list(f) for f in objects])
     a = np.linspace(-np.pi, np.pi, 1440, endpoint=False)
     scans = []
     for p in poses:
@@ -957,7 +963,7 @@ def test_a_strip_narrower_than_a_walkway_joins_the_room_it_opens_into():
     same."""
     from floorscan.core.occupancy_classes import grid_of_classes
     from floorscan.floorplan.params import FloorplanParams
-    from floorscan.floorplan.rooms import MIN_ROOM_WIDTH_M
+    from floorscan.floorplan.room_space import MIN_ROOM_WIDTH_M
     from floorscan.floorplan.scans import plan_of_scans
     from floorscan.walls.map_stage import map_of_grid
 
@@ -1406,3 +1412,29 @@ def test_the_rays_through_a_gap_are_no_room_s_floor_and_a_narrow_passage_between
     bare = RoomRaster(np.zeros(2), 0.1, np.zeros_like(walls), labels > 0, np.zeros_like(walls), labels == 0)
     assert (without_ray_strips(bare, labels) == labels).all()
 
+
+def test_a_wall_that_bounds_no_room_goes_to_the_clutter_layer():
+    """The two rooms 4 x 4 m of ``TWO_ROOMS`` with a 1.2 m window in the west room's north
+    wall, and through it a facade 3 m long 6 m beyond (a building across the street).
+    The rays through the window are outside the building's outline, so no room lies
+    beside the facade: it is no wall of the plan but clutter (``bounds_no_room``); the
+    building's seven walls, their junctions and the door in the partition stay, their
+    ids counted again. Without rooms the facade is a wall."""
+    from floorscan.floorplan.params import FloorplanParams
+    from floorscan.floorplan.plan import plan_of_segments
+
+    walls = [(0, 0, 8, 0), (8, 0, 8, 4), (8, 4, 2.7, 4), (1.5, 4, 0, 4), (0, 4, 0, 0), (4, 0, 4, 1.5), (4, 2.4, 4, 4)]
+    facade = (0.5, 10, 3.5, 10)
+    grid = _grid(walls + [facade], [(2, 2), (6, 2)])
+    faces = np.array(_wall_faces(walls + [facade]))  # the segments, as a map extractor gives them
+    plan = plan_of_segments(faces, None, FloorplanParams(), grid)
+    assert len(plan.walls) == 7 and plan.walls["y0"].max() < 4.1 and plan.walls["y1"].max() < 4.1
+    lone = plan.clutter[plan.clutter["reason"] == "bounds_no_room"]
+    assert len(lone) == 1 and abs(lone["y0"].iloc[0] - (10 - T / 2)) < 0.02 and abs(lone["length_m"].iloc[0] - 3) < 0.05
+    assert plan.rooms["area_m2"].round(0).tolist() == [15.0, 15.0]
+    door = plan.doors.iloc[0]
+    assert len(plan.doors) == 1 and abs(plan.walls.loc[door["wall_id"], "x0"] - 4.0) < 0.02
+    assert plan.junctions[["wall_a", "wall_b"]].to_numpy().max() < 7 and len(plan.junctions) >= 6
+    assert set(plan.faces["wall_id"]) == set(range(7))
+    bare = plan_of_segments(faces, None, FloorplanParams(), grid, with_rooms=False)
+    assert len(bare.walls) == 8 and not (bare.clutter["reason"] == "bounds_no_room").any()

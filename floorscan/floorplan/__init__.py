@@ -23,7 +23,8 @@ made and written:
 - :mod:`~floorscan.floorplan.rooms`: the rooms and doors, when the free space is known:
   the space bounded by the walls (:mod:`~floorscan.floorplan.room_space`) cut into
   rooms at its doors (:mod:`~floorscan.floorplan.doors`, where their jambs can stand:
-  :mod:`~floorscan.floorplan.jambs`).
+  :mod:`~floorscan.floorplan.jambs`); the walls that bound no room and are tied to none
+  that does are clutter (:mod:`~floorscan.floorplan.lone_walls`).
 - :mod:`~floorscan.floorplan.plan`: :class:`~floorscan.floorplan.plan.FloorPlan` and
   :func:`~floorscan.floorplan.plan.build_floorplan`, the steps above in one.
 - :mod:`~floorscan.floorplan.scans`: the one plan builder, the plan of any set of scans

@@ -5,7 +5,8 @@ the first k scans of the default ordering, for k on a geometric grid
 (``evaluation/answer_plans/k<k>/``, :func:`~floorscan.floorplan.scans.write_plan`). The
 score stage scores their walls against the reference map (:mod:`floorscan.score.answer_curve`):
 the answer's quality curve, whose k95 and k99 the automatic k is measured against. The
-walls do not depend on the rooms, so these plans are built without them.
+walls depend on the rooms only where a wall bounds none (a facade seen through a window,
+clutter of the plan with rooms), so these plans are built without them.
 
 The occupancy grids of the first k scans are built incrementally
 (:func:`floorscan.core.prefix_grids.prefix_grids`: each scan is cast once, the grid of k + dk
@@ -178,7 +179,8 @@ def answer_plans(
     (k, n_wall_points, FloorPlan)
         In increasing k; a plan without walls when the first k scans have no wall point.
         Without rooms and doors: the answer curve scores the walls
-        (:mod:`floorscan.score.answer_curve`), which do not depend on them.
+        (:mod:`floorscan.score.answer_curve`), which depend on them only where a wall
+        bounds no room.
 
     Raises
     ------

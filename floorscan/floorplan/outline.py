@@ -41,6 +41,9 @@ outside from the space before the regions are cut, and drops the regions that li
 mostly beyond the outline where no scan was taken (:func:`regions_beyond`): the
 closing's round ends reach into the building at a gap as wide as its diameter, so
 cells there are only dropped with the region they belong to.
+
+Which walls are no walls of the building once the rooms are cut:
+:mod:`floorscan.floorplan.lone_walls`.
 """
 
 from __future__ import annotations
@@ -234,3 +237,4 @@ def regions_beyond(labels: np.ndarray, beyond: np.ndarray) -> np.ndarray:
         ids = np.arange(1, n + 1)
         out[1:] = ndimage.sum(beyond, labels, ids) > ndimage.sum(np.ones_like(beyond), labels, ids) / 2
     return out
+

@@ -73,7 +73,9 @@ class FloorPlan:
     clutter : pandas.DataFrame
         Faces that are not structure (:data:`CLUTTER_COLUMNS`: furniture, lines
         through objects, single-scan returns, with the ``reason``), from the structure
-        passes (:mod:`floorscan.floorplan.structure`); empty without them.
+        passes (:mod:`floorscan.floorplan.structure`), and with the rooms the faces of
+        the walls that bound none, tied to none that does (``bounds_no_room``); empty
+        without the passes.
     junctions : pandas.DataFrame
         Where walls meet (:data:`JUNCTION_COLUMNS`: the point, metres, ``L``, ``T`` or
         ``X``, the two walls' ids); empty without the structure passes.
@@ -231,7 +233,9 @@ def build_floorplan(
         through, junctions), a one-faced wall's axis lies half its thickness behind
         its face (away from the free space), the wall axes are snapped into
         junctions (:attr:`FloorPlan.junctions`), and the free space is cut into rooms
-        at its doors (:func:`floorscan.floorplan.rooms.plan_rooms`).
+        at its doors (:func:`floorscan.floorplan.rooms.plan_rooms`); a wall that bounds
+        no room, tied to none that does, is clutter
+        (:func:`floorscan.floorplan.lone_walls.apart_from_the_rooms`).
 
     Returns
     -------
@@ -268,8 +272,10 @@ def plan_of_segments(
         the same plan, sooner.
     with_rooms : bool
         Whether to segment the rooms (with a grid); without, the plan's rooms and doors
-        tables are empty and its walls, faces and clutter the same (the walls do not
-        depend on the rooms): for a plan scored on its walls alone.
+        tables are empty and its walls, faces and clutter the same but for the walls
+        that bound no room and are tied to none that does
+        (:func:`~floorscan.floorplan.lone_walls.apart_from_the_rooms`), which stay
+        walls: for a plan scored on its walls alone.
 
     Returns
     -------
@@ -321,15 +327,7 @@ def plan_of_segments(
             if not loose.any():
                 break
             drop = loose[wall_of_face]
-            dropped = pd.DataFrame(
-                {
-                    "clutter_id": np.arange(len(clutter), len(clutter) + int(drop.sum()), dtype=np.int32),
-                    "x0": faces[drop, 0], "y0": faces[drop, 1], "x1": faces[drop, 2], "y1": faces[drop, 3],
-                    "length_m": np.hypot(faces[drop, 2] - faces[drop, 0], faces[drop, 3] - faces[drop, 1]),
-                    "reason": "short",
-                }  # fmt: skip
-            )
-            clutter = pd.concat([clutter, dropped], ignore_index=True)
+            clutter = pd.concat([clutter, _clutter_rows(faces[drop], len(clutter), "short")], ignore_index=True)
             faces, face_w, n_seg, side = faces[~drop], face_w[~drop], n_seg[~drop], side[~drop]
             flen = flen[~drop]
             axes, thick, wall_of_face = pair_faces(faces, face_w, params, grid)
@@ -337,9 +335,24 @@ def plan_of_segments(
             axes, junctions = _wall_junctions(axes, thick, wall_of_face, side, params)
     rooms, doors = _empty(ROOM_COLUMNS), _empty(DOOR_COLUMNS)
     if grid is not None and len(axes) and with_rooms:
-        from floorscan.floorplan.rooms import plan_rooms
+        from floorscan.floorplan.lone_walls import apart_from_the_rooms
+        from floorscan.floorplan.rooms import rooms_and_walls
 
-        rooms, doors = plan_rooms(axes, thick, grid, params.rooms, under)
+        rooms, doors, lone = rooms_and_walls(axes, thick, grid, params.rooms, under)
+        on = doors["wall_id"].to_numpy(np.int64)
+        lone[on[on >= 0]] = False  # never a door's wall
+        lone = apart_from_the_rooms(lone, axes, thick, junctions[["wall_a", "wall_b"]].to_numpy(np.int64), params.rooms)
+        if lone.any():  # a facade across the street, a stub alone in an unseen block
+            drop = lone[wall_of_face]
+            clutter = pd.concat([clutter, _clutter_rows(faces[drop], len(clutter), "bounds_no_room")],
+                                ignore_index=True)
+            faces, face_w, n_seg, flen = faces[~drop], face_w[~drop], n_seg[~drop], flen[~drop]
+            new_id = np.cumsum(~lone) - 1
+            wall_of_face, axes, thick = new_id[wall_of_face[~drop]], axes[~lone], thick[~lone]
+            ends = junctions[["wall_a", "wall_b"]].to_numpy(np.int64)
+            junctions = junctions[~lone[ends].any(axis=1)].reset_index(drop=True)
+            junctions[["wall_a", "wall_b"]] = new_id[ends[~lone[ends].any(axis=1)]].astype(np.int32)
+            doors["wall_id"] = np.where(on >= 0, new_id[np.maximum(on, 0)], -1).astype(np.int32)
     nw = len(axes)
     faces_df = pd.DataFrame(
         {
@@ -371,6 +384,19 @@ def plan_of_segments(
     return FloorPlan(
         walls=walls[WALL_COLUMNS], faces=faces_df[FACE_COLUMNS], clutter=clutter, junctions=junctions,
         rooms=rooms[ROOM_COLUMNS], doors=doors[DOOR_COLUMNS],
+    )
+
+
+def _clutter_rows(faces: np.ndarray, first_id: int, reason: str) -> pd.DataFrame:
+    """Rows of :attr:`FloorPlan.clutter` for ``faces`` ((F, 4) metres), numbered from
+    ``first_id``, all for ``reason``."""
+    return pd.DataFrame(
+        {
+            "clutter_id": np.arange(first_id, first_id + len(faces), dtype=np.int32),
+            "x0": faces[:, 0], "y0": faces[:, 1], "x1": faces[:, 2], "y1": faces[:, 3],
+            "length_m": np.hypot(faces[:, 2] - faces[:, 0], faces[:, 3] - faces[:, 1]),
+            "reason": reason,
+        }  # fmt: skip
     )
 
 

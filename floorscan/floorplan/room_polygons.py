@@ -12,6 +12,7 @@ import numpy as np
 from floorscan.core.geometry import OVERLAY_GRID_M, minus, polygons_of
 from floorscan.floorplan.corridors import wall_lines
 from floorscan.floorplan.doors import wall_units
+from floorscan.floorplan.room_tables import room_width
 from floorscan.floorplan.room_space import (LINE_OFFSET_M, MIN_ROOM_WIDTH_M, RoomRaster, dilate, disc_opening,
                                             wall_footprints)
 
@@ -211,3 +212,50 @@ def _bounded_by_walls(
     if region.is_empty or minus(poly, region).area > 0.05 * poly.area or region.area < poly.area:
         return poly
     return largest_polygon(shapely.simplify(region, res / 2))
+
+
+def door_opening(p: np.ndarray, q: np.ndarray, thickness_m: float, resolution_m: float):
+    """The opening of a door from ``p`` to ``q`` ((2,) metres) in a wall ``thickness_m``
+    thick: the line grown by half the wall and half a cell, square ends (shapely)."""
+    import shapely
+
+    return shapely.buffer(shapely.LineString([p, q]), thickness_m / 2 + resolution_m / 2, cap_style="square")
+
+
+def narrow_rooms_joined(polys: list, doors: list, thickness: np.ndarray, resolution_m: float):
+    """Rooms mostly narrower than :data:`~floorscan.floorplan.room_space.MIN_ROOM_WIDTH_M`
+    (their median local thickness, :func:`~floorscan.floorplan.room_tables.room_width`)
+    are no rooms: each joins the
+    room it shares the widest doors with (their openings with it, :func:`door_opening`), the narrowest first;
+    one without a door goes. Returns the polygons (a joined room's empty) and the doors
+    (``(p, q, wall, a, b)``, rooms numbered from 1) between the rooms left."""
+    import shapely
+
+    narrow = [not p.is_empty and room_width(p, resolution_m / 2, MIN_ROOM_WIDTH_M) < MIN_ROOM_WIDTH_M for p in polys]
+    if not any(narrow):
+        return polys, doors
+    polys, doors = list(polys), list(doors)
+    for k in sorted(np.flatnonzero(narrow).tolist(), key=lambda i: (polys[i].area, i)):
+        room = k + 1
+        widths: dict[int, float] = {}
+        for p, q, _, a, b in doors:
+            if room in (a, b) and a != b:
+                other = b if a == room else a
+                widths[other] = widths.get(other, 0.0) + float(np.hypot(*(q - p)))
+        if widths:
+            other = max(sorted(widths), key=widths.get)
+            between = [door_opening(p, q, thickness[w], resolution_m)
+                       for p, q, w, a, b in doors if {a, b} == {room, other}]
+            joined = shapely.union_all([polys[other - 1], polys[k], *between], grid_size=OVERLAY_GRID_M)
+            rest = [p for i, p in enumerate(polys) if i not in (k, other - 1) and not p.is_empty]
+            polys[other - 1] = largest_polygon(minus(joined, *rest))  # the openings reach no third room
+        else:
+            other = 0
+        polys[k] = shapely.Polygon()
+        moved = []
+        for p, q, w, a, b in doors:
+            a, b = (other if a == room else a), (other if b == room else b)
+            if a and b and a != b:
+                moved.append((p, q, w, min(a, b), max(a, b)))
+        doors = moved
+    return polys, doors

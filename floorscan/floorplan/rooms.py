@@ -136,14 +136,16 @@ from floorscan.floorplan.corridors import across_corridor, corridor_ends, corrid
 from floorscan.floorplan.extensions import partition_cuts
 from floorscan.floorplan.jambs import (between_faces, face_to_object, jamb_cells, on_wall_face, stub_past_crossing,
                                       wall_line_index)
+from floorscan.floorplan.lone_walls import bounding_no_room
 from floorscan.floorplan.mouths import MOUTH_MAX_M, corner_mouths, dead_end_mouths, room_mouths
 from floorscan.floorplan.narrowings import corridor_narrowings
 from floorscan.floorplan.outline import regions_beyond
 from floorscan.floorplan.persistence import persistent_rooms
-from floorscan.floorplan.room_polygons import disjoint_rooms, largest_polygon, room_polygons
-from floorscan.floorplan.room_space import (MIN_ENCLOSURE_UNENTERED, MIN_ROOM_WIDTH_M, RoomParams, RoomRaster,
-                                            enclosure_cells, room_space, space_regions)
-from floorscan.floorplan.room_tables import room_tables, room_width
+from floorscan.floorplan.room_polygons import (disjoint_rooms, door_opening, largest_polygon,
+                                              narrow_rooms_joined, room_polygons)
+from floorscan.floorplan.room_space import (MIN_ENCLOSURE_UNENTERED, RoomParams, RoomRaster, enclosure_cells,
+                                            room_space, space_regions)
+from floorscan.floorplan.room_tables import room_tables
 from floorscan.floorplan.unentered import (enclosure, open_side_rooms, outside_regions, region_sets, set_roots,
                                            visited_regions)
 
@@ -395,59 +397,21 @@ def _fans(raster: RoomRaster, labels: np.ndarray, scan_xy: np.ndarray | None, n:
     return out
 
 
-def _opening(p: np.ndarray, q: np.ndarray, thickness_m: float, resolution_m: float):
-    """The opening of a door from ``p`` to ``q`` ((2,) metres) in a wall ``thickness_m``
-    thick: the line grown by half the wall and half a cell, square ends (shapely)."""
-    import shapely
-
-    return shapely.buffer(shapely.LineString([p, q]), thickness_m / 2 + resolution_m / 2, cap_style="square")
-
-
-def _narrow_rooms_joined(polys: list, doors: list, thickness: np.ndarray, resolution_m: float):
-    """Rooms mostly narrower than :data:`~floorscan.floorplan.room_space.MIN_ROOM_WIDTH_M`
-    (their median local thickness, :func:`~floorscan.floorplan.room_tables.room_width`)
-    are no rooms: each joins the
-    room it shares the widest doors with (their openings with it, :func:`_opening`), the narrowest first;
-    one without a door goes. Returns the polygons (a joined room's empty) and the doors
-    (``(p, q, wall, a, b)``, rooms numbered from 1) between the rooms left."""
-    import shapely
-
-    narrow = [not p.is_empty and room_width(p, resolution_m / 2, MIN_ROOM_WIDTH_M) < MIN_ROOM_WIDTH_M for p in polys]
-    if not any(narrow):
-        return polys, doors
-    polys, doors = list(polys), list(doors)
-    for k in sorted(np.flatnonzero(narrow).tolist(), key=lambda i: (polys[i].area, i)):
-        room = k + 1
-        widths: dict[int, float] = {}
-        for p, q, _, a, b in doors:
-            if room in (a, b) and a != b:
-                other = b if a == room else a
-                widths[other] = widths.get(other, 0.0) + float(np.hypot(*(q - p)))
-        if widths:
-            other = max(sorted(widths), key=widths.get)
-            between = [_opening(p, q, thickness[w], resolution_m) for p, q, w, a, b in doors if {a, b} == {room, other}]
-            joined = shapely.union_all([polys[other - 1], polys[k], *between], grid_size=OVERLAY_GRID_M)
-            rest = [p for i, p in enumerate(polys) if i not in (k, other - 1) and not p.is_empty]
-            polys[other - 1] = largest_polygon(minus(joined, *rest))  # the openings reach no third room
-        else:
-            other = 0
-        polys[k] = shapely.Polygon()
-        moved = []
-        for p, q, w, a, b in doors:
-            a, b = (other if a == room else a), (other if b == room else b)
-            if a and b and a != b:
-                moved.append((p, q, w, min(a, b), max(a, b)))
-        doors = moved
-    return polys, doors
-
-
 def plan_rooms(
     axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, params: RoomParams = RoomParams(),
     under: np.ndarray | None = None,
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The rooms and doors of a plan: :func:`rooms_and_walls` without the walls."""
+    return rooms_and_walls(axes, thickness, grid, params, under)[:2]
+
+
+def rooms_and_walls(
+    axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, params: RoomParams = RoomParams(),
+    under: np.ndarray | None = None,
+) -> tuple[pd.DataFrame, pd.DataFrame, np.ndarray]:
     """The rooms and doors of a plan (the module docstring): the tables of
     :attr:`~floorscan.floorplan.plan.FloorPlan.rooms` and
-    :attr:`~floorscan.floorplan.plan.FloorPlan.doors`.
+    :attr:`~floorscan.floorplan.plan.FloorPlan.doors`, and the walls that bound no room.
 
     Parameters
     ----------
@@ -470,6 +434,9 @@ def plan_rooms(
     doors : pandas.DataFrame
         ``door_id``, ``x0, y0, x1, y1`` (metres), ``width_m``, ``wall_id``, ``room_a``,
         ``room_b`` (room ids).
+    lone : (N,) bool ndarray
+        The walls no room's cells come near (:func:`~floorscan.floorplan.lone_walls.bounding_no_room`);
+        none when there is no room.
     """
     import shapely
 
@@ -479,18 +446,20 @@ def plan_rooms(
     fans = _fans(raster, labels, grid.scan_xy, n)
     polys = room_polygons(raster, labels, axes, thickness)
     if doors:  # the opening in the wall belongs to neither room: rooms end at the wall faces
-        openings = shapely.union_all([_opening(p, q, thickness[w], raster.resolution_m) for p, q, w, *_ in doors],
+        openings = shapely.union_all([door_opening(p, q, thickness[w], raster.resolution_m) for p, q, w, *_ in doors],
                                      grid_size=OVERLAY_GRID_M)  # fmt: skip
         polys = [largest_polygon(shapely.simplify(minus(p, openings), raster.resolution_m / 4)) for p in polys]
     polys = disjoint_rooms(polys)
-    polys, doors = _narrow_rooms_joined(polys, doors, thickness, raster.resolution_m)
+    polys, doors = narrow_rooms_joined(polys, doors, thickness, raster.resolution_m)
     keep = [k for k in range(n) if not polys[k].is_empty and polys[k].area >= params.min_room_area_m2]
     new_id = {k + 1: i for i, k in enumerate(keep)}
     polys = [polys[k] for k in keep]
     doors = [(p, q, w, new_id[a], new_id[b]) for p, q, w, a, b in doors if a in new_id and b in new_id]
     rooms, doors_df = room_tables(polys, doors, raster.resolution_m, params, divided, [bool(fans[k + 1]) for k in keep])
     kinds = list(rooms["kind"])
-    log.info("rooms: %d rooms (%d corridors), %d doors, %.1f m2 in all (%.2f s)", len(polys), kinds.count("corridor"),
-             len(doors_df), float(rooms["area_m2"].sum()), time.perf_counter() - t0)
-    return rooms, doors_df
+    lone = bounding_no_room(raster, labels > 0, axes, thickness)
+    log.info("rooms: %d rooms (%d corridors), %d doors, %.1f m2 in all; %d walls bound none (%.2f s)", len(polys),
+             kinds.count("corridor"), len(doors_df), float(rooms["area_m2"].sum()), int(lone.sum()),
+             time.perf_counter() - t0)
+    return rooms, doors_df, lone
 
