@@ -1438,3 +1438,23 @@ def test_a_wall_that_bounds_no_room_goes_to_the_clutter_layer():
     assert set(plan.faces["wall_id"]) == set(range(7))
     bare = plan_of_segments(faces, None, FloorplanParams(), grid, with_rooms=False)
     assert len(bare.walls) == 8 and not (bare.clutter["reason"] == "bounds_no_room").any()
+
+
+def test_a_wall_that_bounds_no_room_is_tied_by_its_line_or_a_junction():
+    """:func:`floorscan.floorplan.lone_walls.apart_from_the_rooms` on four walls: a wall
+    that bounds a room (0, 0)-(4, 0); a piece in its line beyond a 2 m gap and a wall
+    meeting that piece's end, both bounding no room (the far walls of a space seen past
+    an obstacle); a wall 5 m away in no line with them (a facade). Only the facade is
+    apart: the piece by its line, the other wall by its junction with the piece."""
+    from floorscan.floorplan.lone_walls import apart_from_the_rooms
+
+    axes = np.array([(0, 0, 4, 0), (6, 0, 8, 0), (8, 0, 8, 2), (10, 5, 12, 5.5)], dtype=np.float64)
+    lone = np.array([False, True, True, True])
+    got = apart_from_the_rooms(lone, axes, np.full(4, T), np.array([[1, 2]]), RoomParams())
+    assert got.tolist() == [False, False, False, True]
+    # without the junction the wall meeting the piece is apart too; with no wall bounding a
+    # room, none is (the plan keeps its walls)
+    assert apart_from_the_rooms(lone, axes, np.full(4, T), np.empty((0, 2)), RoomParams()).tolist() == [
+        False, False, True, True]
+    assert not apart_from_the_rooms(np.ones(4, dtype=bool), axes, np.full(4, T), np.array([[1, 2]]),
+                                    RoomParams()).any()
