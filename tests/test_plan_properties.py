@@ -14,9 +14,9 @@ wall (:func:`floorscan.sim.generated.room_grid_building`): a plan of one takes a
   :data:`ROOM_TOLERANCE_M` of its room there. Issue 44 wants every case to pass; the
   plan does not get there yet, so these two run seeded cases (``numpy.random``, seed
   44) and allow the wrong ones measured today (:data:`WRONG_JITTER`,
-  :data:`WRONG_POSES`; ``benchmarks/README.md``, seventh, tenth, thirty-sixth and
-  thirty-seventh sessions): a change that makes the plan less stable fails here, one
-  that makes it more stable lowers the numbers.
+  :data:`WRONG_POSES`; ``benchmarks/README.md``, seventh, tenth, thirty-sixth,
+  thirty-seventh and fifty-third sessions): a change that makes the plan less stable
+  fails here, one that makes it more stable lowers the numbers.
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ WRONG_JITTER = 0
 #: Seeded poses of the rigid-motion property, and of them how many may change a count
 #: or move a room farther than :data:`ROOM_TOLERANCE_M` today.
 POSES = 150
-WRONG_POSES = 20
+WRONG_POSES = 13
 #: A room of the moved plan, mapped back, lies within this Hausdorff distance of its
 #: room at the building's own pose, metres. Issue 44 asks for one cell; each plan traces
 #: its rooms on its own cells and cuts them at its doors, and turned maps put rooms 0.15
@@ -203,16 +203,19 @@ def test_a_partition_that_crosses_a_wall_between_two_doors_is_a_wall_at_any_pose
     runs from a door at the south wall to a door at the north wall and crosses the
     middle wall on its way (an X). Nothing holds it at its ends and no wall lies in its
     line, so structure pass 6 made it loose furniture, at every pose; the turned map
-    then lost two rooms and two doors. The wall it crosses holds it."""
+    then lost two rooms and two doors. The wall it crosses holds it. The three stubs
+    between a door and the outer wall (0.3 m each) are walls at both poses
+    (:mod:`floorscan.floorplan.door_frames`)."""
     b = room_grid_building((3.378844928076694, 3.1159663035004495, 2.2250816650429117),
                            (2.949597245345187, 3.29417872724858),
                            (0.8867359057224617, 0.7174189717885862, 0.5604296378053996, 0.04957731665663201,
                             0.9605012498543829, 0.9509421760857373, 0.5511455054204821))  # fmt: skip
     ref = map_plan(b)
     got = map_plan(moved(b, 2.4039311077780257, False), (0.013292708029456047, 0.03558873557284543))
-    assert counts(ref) == counts(got) == (12, 6, 7)
+    assert counts(ref) == counts(got) == (15, 6, 7)
     partition = ref.walls[(ref.walls["x0"].sub(6.5).abs() < 0.1) & (ref.walls["x1"].sub(6.5).abs() < 0.1)]
-    assert len(partition) == 1 and 3.5 <= partition["length_m"].iloc[0] <= 3.8
+    lengths = np.sort(partition["length_m"].to_numpy())  # the two stubs and the partition
+    assert len(lengths) == 3 and 3.5 <= lengths[2] <= 3.8 and lengths[:2] == pytest.approx([0.325, 0.325], abs=0.05)
     assert not (ref.clutter["reason"] == "loose_in_free_space").any()
 
 
@@ -229,3 +232,26 @@ def test_the_pier_at_a_corner_measures_its_length_from_the_corner_at_any_pose():
     assert counts(ref) == counts(got) == (5, 1, 0)
     for plan in (ref, got):
         assert np.sort(plan.walls["length_m"].to_numpy())[0] == pytest.approx(0.375, abs=0.05)
+
+
+def test_a_stub_beside_a_door_is_a_wall_at_any_pose():
+    """Four rooms; the partition between the west rooms leaves a 0.3 m stub between the
+    west wall and its door. On the map turned by 0.17 rad one of the stub's two faces
+    goes missing and the structure passes drop the other, so the door ran on over the
+    stub's cells to the wall's face (1.18 m wide) and the plan had a wall fewer than at
+    the building's own pose. The door is cut back to the cells the free space crosses,
+    and the occupied cells between its jamb and the west wall are the stub
+    (:mod:`floorscan.floorplan.door_frames`)."""
+    b = room_grid_building((2.9535072013701673, 2.201263147255986), (3.373116976641538, 2.2672596287166145),
+                           (0.26565109926507813, 0.23272839541600399, 0.724749025220941, 0.05343823121230651,
+                            0.048434427279979486, 0.295684094661784, 0.5710266406850021))  # fmt: skip
+    theta = 0.1725822519681962
+    ref = map_plan(b)
+    got = map_plan(moved(b, theta, False), (0.005239093268128709, 0.006146615578175658))
+    assert counts(ref) == counts(got) == (11, 4, 4)
+    for plan in (ref, got):
+        assert plan.doors["width_m"].between(0.85, 1.0).all()
+        walls = [back(shapely.LineString([(w.x0, w.y0), (w.x1, w.y1)]), theta, False) if plan is got
+                 else shapely.LineString([(w.x0, w.y0), (w.x1, w.y1)]) for w in plan.walls.itertuples()]  # fmt: skip
+        stub = [g for g in walls if g.length < 0.5 and g.distance(shapely.Point(0.2, 3.37)) < 0.1]
+        assert len(stub) == 1 and stub[0].length == pytest.approx(0.35, abs=0.06)

@@ -235,7 +235,10 @@ def build_floorplan(
         junctions (:attr:`FloorPlan.junctions`), and the free space is cut into rooms
         at its doors (:func:`floorscan.floorplan.rooms.plan_rooms`); a wall that bounds
         no room, tied to none that does, is clutter
-        (:func:`floorscan.floorplan.lone_walls.apart_from_the_rooms`).
+        (:func:`floorscan.floorplan.lone_walls.apart_from_the_rooms`); each door is
+        cut back to the part of its line the free space crosses, and the stubs between
+        its jambs and the walls its line reaches are walls
+        (:func:`floorscan.floorplan.door_frames.framed_doors`).
 
     Returns
     -------
@@ -353,6 +356,9 @@ def plan_of_segments(
             junctions = junctions[~lone[ends].any(axis=1)].reset_index(drop=True)
             junctions[["wall_a", "wall_b"]] = new_id[ends[~lone[ends].any(axis=1)]].astype(np.int32)
             doors["wall_id"] = np.where(on >= 0, new_id[np.maximum(on, 0)], -1).astype(np.int32)
+        if len(doors):  # each door cut back to its free run; the stubs that frame it are walls
+            axes, thick, faces, wall_of_face, face_w, n_seg, flen, junctions, doors = _framed(
+                axes, thick, faces, wall_of_face, face_w, n_seg, flen, junctions, doors, grid, params)
     nw = len(axes)
     faces_df = pd.DataFrame(
         {
@@ -385,6 +391,54 @@ def plan_of_segments(
         walls=walls[WALL_COLUMNS], faces=faces_df[FACE_COLUMNS], clutter=clutter, junctions=junctions,
         rooms=rooms[ROOM_COLUMNS], doors=doors[DOOR_COLUMNS],
     )
+
+
+def _framed(axes, thick, faces, wall_of_face, face_w, n_seg, flen, junctions, doors, grid, params: FloorplanParams):
+    """The plan's arrays and tables with its doors cut back to the free runs of their
+    lines, the walls of their lines gone on to their jambs across a crossing (the kinds
+    of their junctions read again), and the stubs that frame them added as walls, each
+    with its two faces (no segment of their own) and its junction with the wall it meets
+    (:func:`~floorscan.floorplan.door_frames.framed_doors`)."""
+    from floorscan.floorplan.door_frames import framed_doors
+
+    xy = doors[["x0", "y0", "x1", "y1"]].to_numpy(np.float64)
+    before = axes
+    xy, axes, stubs, stub_t, meets = framed_doors(xy, doors["wall_id"].to_numpy(np.int64), axes, thick, grid,
+                                                  params.rooms, params.structure.min_wall_length_m)
+    doors = doors.copy()
+    doors[["x0", "y0", "x1", "y1"]] = xy
+    doors["width_m"] = np.hypot(xy[:, 2] - xy[:, 0], xy[:, 3] - xy[:, 1])
+    if not len(stubs) and not (before != axes).any():
+        return axes, thick, faces, wall_of_face, face_w, n_seg, flen, junctions, doors
+    ids = np.arange(len(axes), len(axes) + len(stubs))
+    d = stubs[:, 2:] - stubs[:, :2]
+    length = np.hypot(d[:, 0], d[:, 1])
+    nrm = np.column_stack([-d[:, 1], d[:, 0]]) / np.maximum(length, 1e-12)[:, None] * (stub_t / 2)[:, None]
+    axes, thick = np.vstack([axes, stubs]), np.r_[thick, stub_t]
+    if len(stubs):
+        met = pd.DataFrame({"x": stubs[:, 0], "y": stubs[:, 1], "kind": "T", "wall_a": meets.astype(np.int32),
+                            "wall_b": ids.astype(np.int32)})  # fmt: skip
+        junctions = pd.concat([junctions, met], ignore_index=True)
+    # the junctions of the walls gone on (a crossing now passed) and of the stubs: L, T or X
+    changed = np.r_[np.flatnonzero((before != axes[: len(before)]).any(axis=1)), ids]
+    rows = np.flatnonzero(junctions[["wall_a", "wall_b"]].isin(changed).any(axis=1).to_numpy())
+    junctions = junctions.copy()
+    junctions.loc[rows, "kind"] = _junction_kinds(junctions.iloc[rows], axes, thick, grid.resolution_m)
+    sides = np.concatenate([stubs + np.c_[nrm, nrm], stubs - np.c_[nrm, nrm]])
+    return (axes, thick, np.vstack([faces, sides]), np.r_[wall_of_face, ids, ids],
+            np.r_[face_w, np.zeros(2 * len(stubs))], np.r_[n_seg, np.zeros(2 * len(stubs), dtype=n_seg.dtype)],
+            np.r_[flen, length, length], junctions, doors)
+
+
+def _junction_kinds(junctions: pd.DataFrame, axes: np.ndarray, thick: np.ndarray, resolution_m: float) -> np.ndarray:
+    """Each junction's kind from how many of its two walls end at it (within half the
+    thicker and a cell): both ``L``, one ``T``, none ``X``."""
+    at = junctions[["x", "y"]].to_numpy(np.float64)
+    pair = junctions[["wall_a", "wall_b"]].to_numpy(np.int64)
+    ends = axes[pair].reshape(len(pair), 2, 2, 2)  # junction, wall, end, xy
+    ending = (np.hypot(*(ends - at[:, None, None, :]).transpose(3, 0, 1, 2)).min(axis=2)
+              <= (thick[pair].max(axis=1) / 2 + resolution_m)[:, None]).sum(axis=1)
+    return np.array(["X", "T", "L"], dtype=object)[ending].astype(str)
 
 
 def _clutter_rows(faces: np.ndarray, first_id: int, reason: str) -> pd.DataFrame:
