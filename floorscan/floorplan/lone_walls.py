@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from floorscan.floorplan.free_space import segment_samples
 from floorscan.floorplan.jambs import wall_line_index
 from floorscan.floorplan.room_space import RoomParams, RoomRaster
 
@@ -53,11 +54,10 @@ def bounding_no_room(raster: RoomRaster, rooms: np.ndarray, axes: np.ndarray, th
         return out
     res = raster.resolution_m
     distance = ndimage.distance_transform_edt(~rooms) * res  # metres to the nearest room cell
-    for k, (a, t) in enumerate(zip(axes, np.asarray(thickness, dtype=np.float64))):
-        n = max(2, int(np.ceil(np.hypot(*(a[2:] - a[:2])) / (res / 2))) + 1)
-        xy = a[:2] + np.outer(np.linspace(0.0, 1.0, n), a[2:] - a[:2])
-        out[k] = raster.at(distance, xy, outside=np.inf).min() > t / 2 + ROOM_REACH_CELLS * res
-    return out
+    points, owner, _ = segment_samples(axes, res / 2)
+    nearest = np.full(len(axes), np.inf)
+    np.minimum.at(nearest, owner, raster.at(distance, points, outside=np.inf))
+    return nearest > np.asarray(thickness, dtype=np.float64) / 2 + ROOM_REACH_CELLS * res
 
 
 def apart_from_the_rooms(lone: np.ndarray, axes: np.ndarray, thickness: np.ndarray, pairs: np.ndarray,

@@ -237,4 +237,3 @@ def regions_beyond(labels: np.ndarray, beyond: np.ndarray) -> np.ndarray:
         ids = np.arange(1, n + 1)
         out[1:] = ndimage.sum(beyond, labels, ids) > ndimage.sum(np.ones_like(beyond), labels, ids) / 2
     return out
-

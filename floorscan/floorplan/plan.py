@@ -298,14 +298,7 @@ def plan_of_segments(
             params.min_length_m,
         )
         n_seg = np.ones(len(faces), dtype=np.int64)
-        clutter = pd.DataFrame(
-            {
-                "clutter_id": np.arange(len(cl), dtype=np.int32),
-                "x0": cl[:, 0], "y0": cl[:, 1], "x1": cl[:, 2], "y1": cl[:, 3],
-                "length_m": np.hypot(cl[:, 2] - cl[:, 0], cl[:, 3] - cl[:, 1]),
-                "reason": reason.astype(str),
-            }  # fmt: skip
-        )
+        clutter = _clutter_rows(cl, 0, reason.astype(str))
         log.info("structure passes: %d faces -> %d wall faces, %d clutter", n_before, len(faces), len(cl))
     flen = np.hypot(faces[:, 2] - faces[:, 0], faces[:, 3] - faces[:, 1])
     axes, thick, wall_of_face = pair_faces(faces, face_w, params, grid)
