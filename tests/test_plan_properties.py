@@ -15,8 +15,8 @@ wall (:func:`floorscan.sim.generated.room_grid_building`): a plan of one takes a
   plan does not get there yet, so these two run seeded cases (``numpy.random``, seed
   44) and allow the wrong ones measured today (:data:`WRONG_JITTER`,
   :data:`WRONG_POSES`; ``benchmarks/README.md``, seventh, tenth, thirty-sixth,
-  thirty-seventh and fifty-third sessions): a change that makes the plan less stable
-  fails here, one that makes it more stable lowers the numbers.
+  thirty-seventh, fifty-third and fifty-fourth sessions): a change that makes the plan
+  less stable fails here, one that makes it more stable lowers the numbers.
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ WRONG_JITTER = 0
 #: Seeded poses of the rigid-motion property, and of them how many may change a count
 #: or move a room farther than :data:`ROOM_TOLERANCE_M` today.
 POSES = 150
-WRONG_POSES = 13
+WRONG_POSES = 5
 #: A room of the moved plan, mapped back, lies within this Hausdorff distance of its
 #: room at the building's own pose, metres. Issue 44 asks for one cell; each plan traces
 #: its rooms on its own cells and cuts them at its doors, and turned maps put rooms 0.15
@@ -255,3 +255,22 @@ def test_a_stub_beside_a_door_is_a_wall_at_any_pose():
                  else shapely.LineString([(w.x0, w.y0), (w.x1, w.y1)]) for w in plan.walls.itertuples()]  # fmt: skip
         stub = [g for g in walls if g.length < 0.5 and g.distance(shapely.Point(0.2, 3.37)) < 0.1]
         assert len(stub) == 1 and stub[0].length == pytest.approx(0.35, abs=0.06)
+
+
+def test_the_stub_beside_an_entrance_is_a_wall_at_any_pose():
+    """One room of 2.5 m x 2.875 m whose entrance leaves a 0.35 m stub of the south wall
+    between the entrance and the east wall. The entrance is no door between two rooms;
+    on the map turned by 4.69 rad the stub lost a face, the structure passes dropped it
+    and the plan had four walls where the building's own pose has five. The occupied
+    cells between the entrance's jamb and the east wall are a wall, as beside a door
+    (:mod:`floorscan.floorplan.door_frames`)."""
+    b = room_grid_building((2.5,), (2.875,), (0.875, 0.375, 0.75, 0.25, 0.875, 0.125, 0.25))
+    theta = 4.686453841821435
+    ref = map_plan(b)
+    got = map_plan(moved(b, theta, False), (0.04964027429297932, 0.02097405343285666))
+    assert counts(ref) == counts(got) == (5, 1, 0)
+    for plan in (ref, got):
+        walls = [back(shapely.LineString([(w.x0, w.y0), (w.x1, w.y1)]), theta, False) if plan is got
+                 else shapely.LineString([(w.x0, w.y0), (w.x1, w.y1)]) for w in plan.walls.itertuples()]  # fmt: skip
+        stub = [g for g in walls if g.length < 0.5 and g.distance(shapely.Point(2.25, 0.03)) < 0.1]
+        assert len(stub) == 1 and stub[0].length == pytest.approx(0.37, abs=0.05)

@@ -26,14 +26,29 @@ ends at the crossing with the wall across the line it reaches (more than
 ``door_angle_deg`` off it), goes on to the jamb, as the wall runs on across the
 crossing at another pose; else the stretch is a new wall of the door's wall's thickness
 from the axis of the wall across to the jamb (a T or an L).
+
+An opening that is no door between two rooms has the same frame, and so has a door
+before the rooms are cut (:func:`framed_openings`, the step before the room step): the
+entrance in the outline, whose far side is the outside, is no door, and the stub beside
+it went missing at some poses as a door's does. From each end of a wall that meets no
+other wall, the wall tied into the plan at its other end (a wall free at both ends is a
+piece of furniture or a fragment, whose ends frame nothing), its line is followed to the
+first wall it reaches; where a free run (the opening, ``door_min_m`` to
+``door_max_m``, starting at the wall's end) ends at a jamb with a stretch of wall cells
+beyond, as above, that stretch is a wall. The stub is then a wall when the room step
+draws the door, so the door runs from jamb to jamb, not on a slant beside the stub. A
+new wall must stand out of the wall it meets by two cells beyond its face
+(:data:`MIN_RUN`): a line that meets a wall at a slant crosses the wall's own cells
+first. A wall goes on to a jamb only to grow longer.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from floorscan.core.geometry import point_segment_dist2
 from floorscan.core.occupancy import OccupancyGrid
-from floorscan.floorplan.doors import footprint_distance, wall_units
+from floorscan.floorplan.doors import footprint_distance, junction_end, wall_units
 from floorscan.floorplan.free_space import mask_at, passable, segment_samples
 from floorscan.floorplan.room_space import RoomParams
 
@@ -90,7 +105,7 @@ def framed_doors(doors: np.ndarray, door_wall: np.ndarray, axes: np.ndarray, thi
     free, occupied = passable(grid), grid.occupied()
     step = grid.resolution_m / 2
     u_axes, _ = wall_units(axes)
-    stubs, stub_t, stub_meets = [], [], []
+    new = []  # (axis, thickness, the wall it meets) of each new wall
     for d in range(len(doors)):
         w = int(door_wall[d])
         if w < 0:
@@ -119,19 +134,93 @@ def framed_doors(doors: np.ndarray, door_wall: np.ndarray, axes: np.ndarray, thi
         jambs = [(p + u * a, -u), (p + u * b, u)]  # each jamb, and outward from the opening
         doors[d] = np.r_[jambs[0][0], jambs[1][0]]
         for jamb, out in jambs:
-            stub = _stub(jamb, out, band, axes, u_axes, thickness, grid, free, occupied, min_wall_length_m,
-                         params.door_angle_deg)
-            if stub is None:
+            _frame(jamb, out, band, w, axes, u_axes, thickness, grid, free, occupied, min_wall_length_m,
+                   params.door_angle_deg, new)
+    return (doors, axes, *_arrays(new))
+
+
+def framed_openings(axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, params: RoomParams,
+                    min_wall_length_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The walls that frame the openings at the walls' free ends (module docstring).
+
+    Parameters
+    ----------
+    axes, thickness, grid, params, min_wall_length_m
+        As :func:`framed_doors`.
+
+    Returns
+    -------
+    axes, stubs, stub_thickness, stub_meets
+        As :func:`framed_doors`; a stub's thickness is that of the wall whose end its
+        opening starts at.
+    """
+    axes = np.asarray(axes, dtype=np.float64).reshape(-1, 4).copy()
+    thickness = np.asarray(thickness, dtype=np.float64).reshape(-1)
+    u_axes, _ = wall_units(axes)
+    free, occupied = passable(grid), grid.occupied()
+    new = []
+    for i in range(len(axes)):
+        for k in (0, 1):
+            # an end that meets no wall, of a wall tied into the plan at its other end
+            if junction_end(axes, thickness, i, k) or not junction_end(axes, thickness, i, 1 - k):
                 continue
-            if stub[2] >= 0:  # the wall beyond the crossing goes on to the jamb
-                axes[stub[1], 2 * stub[2]: 2 * stub[2] + 2] = jamb
-                continue
-            stubs.append(stub[0])
-            stub_t.append(thickness[w])
-            stub_meets.append(stub[1])
-    if not stubs:
-        return doors, axes, *none[2:]
-    return doors, axes, np.array(stubs, dtype=np.float64), np.array(stub_t), np.array(stub_meets, dtype=np.int64)
+            u = u_axes[i] if k == 1 else -u_axes[i]
+            jamb = _opening(axes[i, 2 * k: 2 * k + 2], u, i, axes, thickness, grid, free, params, min_wall_length_m)
+            if jamb is not None:
+                _frame(jamb, u, _band(u, thickness[i], grid.resolution_m), i, axes, u_axes, thickness, grid, free,
+                       occupied, min_wall_length_m, params.door_angle_deg, new)
+    return (axes, *_arrays(new))
+
+
+def _arrays(new):
+    """The axes (K, 4), thicknesses (K,) and walls met (K,) of :func:`_frame`'s list."""
+    return (np.reshape([stub for stub, _, _ in new], (-1, 4)).astype(np.float64),
+            np.array([t for _, t, _ in new], dtype=np.float64), np.array([m for _, _, m in new], dtype=np.int64))
+
+
+def _frame(jamb, out, band, w, axes, u_axes, thickness, grid, free, occupied, max_m, angle_deg, new) -> None:
+    """The wall between the jamb ``jamb`` of an opening in the line of wall ``w`` and
+    the wall its line reaches outward along ``out`` (:func:`_stub`): a wall that goes on
+    to the jamb (``axes`` changed in place), or a new wall of ``w``'s thickness appended
+    to ``new`` as ``(axis, thickness, the wall it meets)``."""
+    stub = _stub(jamb, out, band, axes, u_axes, thickness, grid, free, occupied, max_m, angle_deg)
+    if stub is None:
+        return
+    if stub[2] >= 0:  # the wall beyond the crossing goes on to the jamb: longer, never turned back
+        k = 2 * stub[2]
+        end, other = axes[stub[1], k: k + 2], axes[stub[1], 2 - k: 4 - k]
+        if (jamb - other) @ (end - other) > 0 and np.hypot(*(jamb - other)) > np.hypot(*(end - other)):
+            axes[stub[1], k: k + 2] = jamb
+    else:
+        new.append((stub[0], float(thickness[w]), int(stub[1])))
+
+
+def _opening(end, u, i, axes, thickness, grid, free, params: RoomParams, max_m: float):
+    """The far jamb ((2,) metres) of the opening along wall ``i``'s line from its end
+    ``end`` outward along ``u``: the run of free cells that starts at the end (to a
+    :data:`MIN_RUN`) and is ``door_min_m`` to ``door_max_m`` long, the last run before
+    the line reaches another wall's footprint (within ``door_max_m``, ``max_m`` and the
+    thickest wall). None when there is none."""
+    r = grid.resolution_m
+    step = r / 2
+    reach = params.door_max_m + max_m + float(thickness.max(initial=0.0))
+    xy = end + u * (np.arange(1, int(np.ceil(reach / step)) + 1) * step)[:, None]
+    others = np.delete(np.arange(len(axes)), i)
+    gap = np.sqrt(point_segment_dist2(xy[:, :1], xy[:, 1:], axes[others])) - thickness[others] / 2  # (samples, walls)
+    reached = (gap <= r / 4).any(axis=1)
+    if not reached.any():
+        return None
+    line = xy[: int(np.argmax(reached))]
+    is_free = _all_free(line, _band(u, thickness[i], r), grid, free)
+    if not is_free.any():
+        return None
+    last = len(line) - 1 - int(np.argmax(is_free[::-1]))
+    first = last
+    while first > 0 and is_free[first - 1]:
+        first -= 1
+    if first >= MIN_RUN or not params.door_min_m <= (last + 1.5) * step <= params.door_max_m:
+        return None
+    return end + u * (last + 1.5) * step  # between the last free sample and the next
 
 
 def _band(u, thickness_m, resolution_m):
@@ -190,6 +279,10 @@ def _stub(jamb, out, band, axes, u_axes, thickness, grid, free, occupied, max_m,
                 return None
             return np.r_[ends[k], jamb], hit, k
         if float(np.hypot(*(end - jamb))) > max_m + thickness[hit]:
+            return None
+        # the stub stands out of the wall across beyond its face (a line that meets the
+        # wall at a slant runs over the wall's own cells first)
+        if abs(float((jamb - end) @ np.array([-v[1], v[0]]))) - thickness[hit] / 2 < MIN_RUN * r / 2:
             return None
         # a wall of the door's line that ends at that crossing, beyond it, goes on to the jamb
         lined = np.flatnonzero(~across)

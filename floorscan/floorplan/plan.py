@@ -334,6 +334,9 @@ def plan_of_segments(
         from floorscan.floorplan.lone_walls import apart_from_the_rooms
         from floorscan.floorplan.rooms import rooms_and_walls
 
+        # an opening at a wall's free end (an entrance; a door the rooms have not cut yet): the stub beyond is a wall
+        axes, thick, faces, wall_of_face, face_w, n_seg, flen, junctions, _ = _framed(
+            axes, thick, faces, wall_of_face, face_w, n_seg, flen, junctions, None, grid, params)
         rooms, doors, lone = rooms_and_walls(axes, thick, grid, params.rooms, under)
         on = doors["wall_id"].to_numpy(np.int64)
         lone[on[on >= 0]] = False  # never a door's wall
@@ -391,16 +394,22 @@ def _framed(axes, thick, faces, wall_of_face, face_w, n_seg, flen, junctions, do
     lines, the walls of their lines gone on to their jambs across a crossing (the kinds
     of their junctions read again), and the stubs that frame them added as walls, each
     with its two faces (no segment of their own) and its junction with the wall it meets
-    (:func:`~floorscan.floorplan.door_frames.framed_doors`)."""
-    from floorscan.floorplan.door_frames import framed_doors
+    (:func:`~floorscan.floorplan.door_frames.framed_doors`). With ``doors`` None (before
+    the rooms), the same for the openings at the walls' free ends
+    (:func:`~floorscan.floorplan.door_frames.framed_openings`)."""
+    from floorscan.floorplan.door_frames import framed_doors, framed_openings
 
-    xy = doors[["x0", "y0", "x1", "y1"]].to_numpy(np.float64)
     before = axes
-    xy, axes, stubs, stub_t, meets = framed_doors(xy, doors["wall_id"].to_numpy(np.int64), axes, thick, grid,
-                                                  params.rooms, params.structure.min_wall_length_m)
-    doors = doors.copy()
-    doors[["x0", "y0", "x1", "y1"]] = xy
-    doors["width_m"] = np.hypot(xy[:, 2] - xy[:, 0], xy[:, 3] - xy[:, 1])
+    if doors is None:
+        axes, stubs, stub_t, meets = framed_openings(axes, thick, grid, params.rooms,
+                                                     params.structure.min_wall_length_m)
+    else:
+        xy = doors[["x0", "y0", "x1", "y1"]].to_numpy(np.float64)
+        xy, axes, stubs, stub_t, meets = framed_doors(xy, doors["wall_id"].to_numpy(np.int64), axes, thick, grid,
+                                                      params.rooms, params.structure.min_wall_length_m)
+        doors = doors.copy()
+        doors[["x0", "y0", "x1", "y1"]] = xy
+        doors["width_m"] = np.hypot(xy[:, 2] - xy[:, 0], xy[:, 3] - xy[:, 1])
     if not len(stubs) and not (before != axes).any():
         return axes, thick, faces, wall_of_face, face_w, n_seg, flen, junctions, doors
     ids = np.arange(len(axes), len(axes) + len(stubs))
