@@ -737,3 +737,18 @@ def test_a_short_face_hanging_from_a_wall_turned_from_every_long_face_is_furnitu
         _, _, both = border_and_support(snapped, occupancy_grid(scans, OccupancyParams()), both_free=True)
         out = oblique_in_free_space(snapped, held, crossed, both)
         assert out.tolist() == [False] * 5 + [turned and seen_south, False, False]
+
+
+def test_a_short_face_across_the_corner_of_two_walls_that_meet_is_loose():
+    """A 0.35 m face from a wall to the wall it meets at an L, beside that corner, is the
+    corner's cells traced on a slant (a chord), not a wall; the same face between two
+    walls that meet nowhere, or meet 2 m away, connects them and is a wall."""
+    from floorscan.floorplan.junctions import short_loose
+
+    seg = np.array([[0.0, 0.0, 2.0, 0.0], [2.0, 0.0, 2.0, 2.0], [1.75, 0.0, 2.0, 0.25]])
+    chord = np.array([[1.75, 0.0, 0, 2, 0], [2.0, 0.25, 1, 2, 0]], dtype=np.float64)
+    corner = np.array([[2.0, 0.0, 0, 1, 0]], dtype=np.float64)
+    assert short_loose(seg, np.vstack([chord, corner]), 0.5).tolist() == [False, False, True]
+    assert short_loose(seg, chord, 0.5).tolist() == [False, False, False]
+    far = np.array([[0.0, 2.0, 0, 1, 0]], dtype=np.float64)  # the two walls meet 2 m from the face
+    assert short_loose(seg, np.vstack([chord, far]), 0.5).tolist() == [False, False, False]

@@ -252,7 +252,9 @@ def merge_parallel_duplicates(axes: np.ndarray, thickness: np.ndarray, params: S
 
 def short_loose(seg: np.ndarray, junctions: np.ndarray, min_length: float) -> np.ndarray:
     """Faces shorter than ``min_length`` without a junction at both ends (a short face
-    that connects two walls is a wall).
+    that connects two walls is a wall), or between two walls that meet each other within
+    ``min_length`` of its middle (a chord across their corner: the corner's cells traced
+    on a slant).
 
     Parameters
     ----------
@@ -269,7 +271,23 @@ def short_loose(seg: np.ndarray, junctions: np.ndarray, min_length: float) -> np
     (F,) bool ndarray
     """
     length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
-    return (length < min_length) & ~junction_ends(seg, junctions).all(axis=1)
+    short = length < min_length
+    loose = short & ~junction_ends(seg, junctions).all(axis=1)
+    # a short face between two walls that meet each other beside it is a chord across
+    # their corner (the corner's own cells, traced on a slant)
+    meet: dict[tuple[int, int], np.ndarray] = {}
+    partners: dict[int, set[int]] = {}
+    for x, y, i, j in junctions[:, :4]:
+        i, j = sorted((int(i), int(j)))
+        meet[(i, j)] = np.array([x, y])
+        partners.setdefault(i, set()).add(j)
+        partners.setdefault(j, set()).add(i)
+    for f in np.flatnonzero(short & ~loose):
+        mid = (seg[f, :2] + seg[f, 2:]) / 2
+        others = sorted(partners.get(int(f), set()))
+        loose[f] = any((a, b) in meet and np.hypot(*(meet[(a, b)] - mid)) <= min_length
+                       for a in others for b in others if a < b)
+    return loose
 
 
 def junction_ends(seg: np.ndarray, junctions: np.ndarray) -> np.ndarray:
