@@ -51,7 +51,7 @@ WRONG_JITTER = 0
 #: Seeded poses of the rigid-motion property, and of them how many may change a count
 #: or move a room farther than :data:`ROOM_TOLERANCE_M` today.
 POSES = 150
-WRONG_POSES = 4
+WRONG_POSES = 3
 #: A room of the moved plan, mapped back, lies within this Hausdorff distance of its
 #: room at the building's own pose, metres. Issue 44 asks for one cell; each plan traces
 #: its rooms on its own cells and cuts them at its doors, and turned maps put rooms 0.15
@@ -274,3 +274,21 @@ def test_the_stub_beside_an_entrance_is_a_wall_at_any_pose():
                  else shapely.LineString([(w.x0, w.y0), (w.x1, w.y1)]) for w in plan.walls.itertuples()]  # fmt: skip
         stub = [g for g in walls if g.length < 0.5 and g.distance(shapely.Point(2.25, 0.03)) < 0.1]
         assert len(stub) == 1 and stub[0].length == pytest.approx(0.37, abs=0.05)
+
+
+def test_a_room_reaches_its_corners_on_a_map_turned_45_degrees():
+    """Three rooms in a row, the map turned by 45 degrees: the walls drawn in steps of
+    cells leave pockets of seen floor in the rooms' corners that the closing of the
+    walls takes from the space (:func:`~floorscan.floorplan.room_space.room_space`).
+    They join the room beside them, so each room lies within three cells of its room at
+    the building's own pose (0.26 m when they were no room's)."""
+    b = room_grid_building((2.1114626076983574, 3.381191928050069, 3.1833274730621053), (2.247368581191461,),
+                           (0.0794980640451326, 0.2138843157643392, 0.5862703134319163, 0.2939242629719411,
+                            0.1680193395571592, 0.38050761457499316, 0.8469106918271858))  # fmt: skip
+    theta = 0.7854987174932325
+    ref = map_plan(b)
+    got = map_plan(moved(b, theta, False), (0.02248280948774209, 0.02709127470123573))
+    assert counts(ref) == counts(got) == (9, 3, 2)
+    rooms = list(ref.rooms["polygon"])
+    far = max(min(back(p, theta, False).hausdorff_distance(r) for r in rooms) for p in got.rooms["polygon"])
+    assert far <= 3 * MAP_RESOLUTION_M

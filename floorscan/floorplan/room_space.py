@@ -105,8 +105,10 @@ class RoomRaster:
         Cells beyond the building's closed outline
         (:func:`~floorscan.floorplan.outline.building_outside`); None: none.
     under : (H, W) bool ndarray or None
-        Cells of floor under objects standing against walls, outside ``space``: they
-        join the room in front of them after the segmentation; None: none.
+        Cells of floor under objects standing against walls, and of seen floor the
+        closing of the walls took (the corners between walls, slits narrower than a
+        door), outside ``space``: they join the room beside them after the
+        segmentation; None: none.
     """
 
     origin_xy: np.ndarray
@@ -388,7 +390,11 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
         walls, opened, occupied, bounds = (a[r0:r1, c0:c1] for a in (walls, opened, occupied, bounds))
         origin = origin + np.array([c0, r0]) * res
     # gaps between walls narrower than a door are wall: nobody passes them
+    drawn = walls
     walls = _closing(walls, params.door_min_m / 2 / res) | walls
+    # the seen floor that closing takes: the corner between two walls (a fillet of the
+    # closing's disc, wider where a turned raster draws the walls in steps), a slit
+    taken = walls & ~drawn & opened
     space = opened & ~walls
     space = _closing(space | walls, params.close_m / res) & ~walls
     # the closing fills unseen cells, never the cells that bound the space (a wall
@@ -411,8 +417,8 @@ def room_space(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, par
     holes, fill = surrounded(~space)
     fill[unique_ints(holes[walls])] = False
     space |= fill[holes]
-    if beneath is not None:
-        beneath &= ~space
+    # the seen floor the closing of the walls took joins the room beside it the same way
+    beneath = (taken & ~outside if beneath is None else beneath | taken & ~outside) & ~space
     return RoomRaster(origin_xy=origin, resolution_m=res, walls=walls, space=space, occupied=occupied, bounds=bounds,
                       beyond=beyond, under=beneath)
 

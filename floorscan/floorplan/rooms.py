@@ -366,8 +366,9 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     grown = expand_labels(final, 1)
     final = np.where(barrier & raster.space, grown, final).astype(np.int32)
     if raster.under is not None:
-        # the floor under objects against walls: the room nearest along that floor (a
-        # breadth-first flood from the rooms), never across a wall
+        # the floor under objects against walls, and the seen floor the walls' closing
+        # took: the room nearest along that floor (a breadth-first flood from the
+        # rooms), never across a wall
         grow = raster.under & (final == 0)
         flooded = watershed(np.zeros(final.shape, dtype=np.uint8), markers=final, mask=grow | (final > 0),
                             connectivity=1)
