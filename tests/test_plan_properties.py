@@ -155,6 +155,12 @@ def back(geom, theta: float, mirror: bool):
     return shapely.transform(geom, f)
 
 
+def wall_lines(plan, theta: float) -> list:
+    """The plan's wall axes as shapely lines, turned back by ``theta`` (radians, no
+    mirror) to the building's own pose."""
+    return [back(shapely.LineString([(w.x0, w.y0), (w.x1, w.y1)]), theta, False) for w in plan.walls.itertuples()]
+
+
 def pose_errors(rng) -> tuple[tuple, float]:
     """One seeded building and pose: (its pose and the counts at its own pose and
     moved, the largest distance of a moved room to its room; NaN when a count differs)."""
@@ -251,8 +257,7 @@ def test_a_stub_beside_a_door_is_a_wall_at_any_pose():
     assert counts(ref) == counts(got) == (11, 4, 4)
     for plan in (ref, got):
         assert plan.doors["width_m"].between(0.85, 1.0).all()
-        walls = [back(shapely.LineString([(w.x0, w.y0), (w.x1, w.y1)]), theta, False) if plan is got
-                 else shapely.LineString([(w.x0, w.y0), (w.x1, w.y1)]) for w in plan.walls.itertuples()]  # fmt: skip
+        walls = wall_lines(plan, theta if plan is got else 0.0)
         stub = [g for g in walls if g.length < 0.5 and g.distance(shapely.Point(0.2, 3.37)) < 0.1]
         assert len(stub) == 1 and stub[0].length == pytest.approx(0.35, abs=0.06)
 
@@ -270,8 +275,7 @@ def test_the_stub_beside_an_entrance_is_a_wall_at_any_pose():
     got = map_plan(moved(b, theta, False), (0.04964027429297932, 0.02097405343285666))
     assert counts(ref) == counts(got) == (5, 1, 0)
     for plan in (ref, got):
-        walls = [back(shapely.LineString([(w.x0, w.y0), (w.x1, w.y1)]), theta, False) if plan is got
-                 else shapely.LineString([(w.x0, w.y0), (w.x1, w.y1)]) for w in plan.walls.itertuples()]  # fmt: skip
+        walls = wall_lines(plan, theta if plan is got else 0.0)
         stub = [g for g in walls if g.length < 0.5 and g.distance(shapely.Point(2.25, 0.03)) < 0.1]
         assert len(stub) == 1 and stub[0].length == pytest.approx(0.37, abs=0.05)
 

@@ -206,8 +206,7 @@ def _opening(end, u, i, axes, thickness, grid, free, params: RoomParams, max_m: 
     reach = params.door_max_m + max_m + float(thickness.max(initial=0.0))
     xy = end + u * (np.arange(1, int(np.ceil(reach / step)) + 1) * step)[:, None]
     others = np.delete(np.arange(len(axes)), i)
-    gap = np.sqrt(point_segment_dist2(xy[:, :1], xy[:, 1:], axes[others])) - thickness[others] / 2  # (samples, walls)
-    reached = (gap <= r / 4).any(axis=1)
+    reached = (_footprint_gaps(xy, axes[others], thickness[others]) <= r / 4).any(axis=1)
     if not reached.any():
         return None
     line = xy[: int(np.argmax(reached))]
@@ -221,6 +220,12 @@ def _opening(end, u, i, axes, thickness, grid, free, params: RoomParams, max_m: 
     if first >= MIN_RUN or not params.door_min_m <= (last + 1.5) * step <= params.door_max_m:
         return None
     return end + u * (last + 1.5) * step  # between the last free sample and the next
+
+
+def _footprint_gaps(xy, axes, thickness):
+    """(S, N) metres from each point ``xy`` (S, 2) to each wall's footprint
+    (:func:`~floorscan.floorplan.doors.footprint_distance`, all points at once)."""
+    return np.sqrt(point_segment_dist2(xy[:, :1], xy[:, 1:], axes)) - thickness / 2
 
 
 def _band(u, thickness_m, resolution_m):
@@ -257,40 +262,41 @@ def _stub(jamb, out, band, axes, u_axes, thickness, grid, free, occupied, max_m,
     across = np.abs(out[0] * u_axes[:, 1] - out[1] * u_axes[:, 0]) > np.sin(np.radians(angle_deg))
     ts = np.arange(1, int(np.ceil(max_m / (r / 2))) + 1) * (r / 2)
     xy = jamb + out * ts[:, None]
-    for k, point in enumerate(xy):
-        reached = footprint_distance(point, axes, thickness) <= r / 4  # a quarter cell: the sampling's rounding
-        if not reached.any():
-            continue
-        run = xy[:k]
-        if (len(run) < MIN_RUN or _all_free(run, band, grid, free).any()
-                or _any_occupied(run, band, grid, occupied).mean() < 0.5):
+    gaps = _footprint_gaps(xy, axes, thickness)
+    reaching = (gaps <= r / 4).any(axis=1)  # a quarter cell: the sampling's rounding
+    if not reaching.any():
+        return None
+    k = int(np.argmax(reaching))  # the first sample on a wall's footprint
+    reached = gaps[k] <= r / 4
+    run = xy[:k]
+    if (len(run) < MIN_RUN or _all_free(run, band, grid, free).any()
+            or _any_occupied(run, band, grid, occupied).mean() < 0.5):
+        return None
+    hits = np.flatnonzero(reached & across)
+    if len(hits):  # onto the axis of the wall across the line
+        hit = int(hits[np.argmin(gaps[k, hits])])
+        v = u_axes[hit]
+        rel = axes[hit, :2] - jamb
+        end = jamb + out * (rel[0] * v[1] - rel[1] * v[0]) / (out[0] * v[1] - out[1] * v[0])
+    else:  # the end of a wall in the line: it goes on to the jamb
+        hit = int(np.flatnonzero(reached)[0])
+        ends = axes[hit].reshape(2, 2)
+        e = int(np.argmin(np.hypot(*(ends - jamb).T)))
+        if float(np.hypot(*(ends[e] - jamb))) > max_m + thickness[hit]:
             return None
-        hits = np.flatnonzero(reached & across)
-        if len(hits):  # onto the axis of the wall across the line
-            hit = int(hits[np.argmin(footprint_distance(point, axes[hits], thickness[hits]))])
-            v = u_axes[hit]
-            rel = axes[hit, :2] - jamb
-            end = jamb + out * (rel[0] * v[1] - rel[1] * v[0]) / (out[0] * v[1] - out[1] * v[0])
-        else:  # the end of a wall in the line: it goes on to the jamb
-            hit = int(np.flatnonzero(reached)[0])
-            ends = axes[hit].reshape(2, 2)
-            k = int(np.argmin(np.hypot(*(ends - jamb).T)))
-            if float(np.hypot(*(ends[k] - jamb))) > max_m + thickness[hit]:
-                return None
-            return np.r_[ends[k], jamb], hit, k
-        if float(np.hypot(*(end - jamb))) > max_m + thickness[hit]:
-            return None
-        # the stub stands out of the wall across beyond its face (a line that meets the
-        # wall at a slant runs over the wall's own cells first)
-        if abs(float((jamb - end) @ np.array([-v[1], v[0]]))) - thickness[hit] / 2 < MIN_RUN * r / 2:
-            return None
-        # a wall of the door's line that ends at that crossing, beyond it, goes on to the jamb
-        lined = np.flatnonzero(~across)
-        if len(lined):
-            ends = axes[lined].reshape(-1, 2, 2)
-            gap = np.hypot(*(ends - end).transpose(2, 0, 1))
-            i, k = np.unravel_index(int(np.argmin(gap)), gap.shape)
-            if gap[i, k] <= thickness[hit] / 2 + r:
-                return np.r_[end, jamb], int(lined[i]), int(k)
-        return np.r_[end, jamb], hit, -1
-    return None
+        return np.r_[ends[e], jamb], hit, e
+    if float(np.hypot(*(end - jamb))) > max_m + thickness[hit]:
+        return None
+    # the stub stands out of the wall across beyond its face (a line that meets the
+    # wall at a slant runs over the wall's own cells first)
+    if abs(float((jamb - end) @ np.array([-v[1], v[0]]))) - thickness[hit] / 2 < MIN_RUN * r / 2:
+        return None
+    # a wall of the door's line that ends at that crossing, beyond it, goes on to the jamb
+    lined = np.flatnonzero(~across)
+    if len(lined):
+        ends = axes[lined].reshape(-1, 2, 2)
+        gap = np.hypot(*(ends - end).transpose(2, 0, 1))
+        i, e = np.unravel_index(int(np.argmin(gap)), gap.shape)
+        if gap[i, e] <= thickness[hit] / 2 + r:
+            return np.r_[end, jamb], int(lined[i]), int(e)
+    return np.r_[end, jamb], hit, -1

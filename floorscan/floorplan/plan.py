@@ -232,13 +232,12 @@ def build_floorplan(
         clutter out, collinear faces joined across gaps the free space does not pass
         through, junctions), a one-faced wall's axis lies half its thickness behind
         its face (away from the free space), the wall axes are snapped into
-        junctions (:attr:`FloorPlan.junctions`), and the free space is cut into rooms
-        at its doors (:func:`floorscan.floorplan.rooms.plan_rooms`); a wall that bounds
-        no room, tied to none that does, is clutter
-        (:func:`floorscan.floorplan.lone_walls.apart_from_the_rooms`); each door is
-        cut back to the part of its line the free space crosses, and the stubs between
-        its jambs and the walls its line reaches are walls
-        (:func:`floorscan.floorplan.door_frames.framed_doors`).
+        junctions (:attr:`FloorPlan.junctions`), the stubs beyond the openings at the
+        walls' free ends are walls (:mod:`floorscan.floorplan.door_frames`), and the
+        free space is cut into rooms at its doors (:func:`~floorscan.floorplan.rooms.plan_rooms`);
+        a wall that bounds no room, tied to none that does, is clutter
+        (:func:`floorscan.floorplan.lone_walls.apart_from_the_rooms`); each door is cut
+        back to the part of its line the free space crosses, its stubs walls too.
 
     Returns
     -------
