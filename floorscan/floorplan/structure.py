@@ -74,7 +74,12 @@ order (:func:`structure_passes`):
    at an opening, with the rest of its wall in line. So is a face shorter than
    ``clutter_max_length_m`` with free space on both sides, held at exactly one end and
    crossed by none, that runs in no direction of the long faces
-   (:mod:`~floorscan.floorplan.oblique`: a desk turned in the room against a wall).
+   (:mod:`~floorscan.floorplan.oblique`: a desk turned in the room against a wall). So
+   is a face held at exactly one end and met by no other between its ends whose free
+   end lies in a body thicker than a wall and no deeper than a cabinet, its inside not
+   seen occupied, that also lies behind the face's middle (:mod:`~floorscan.floorplan.object_ends`:
+   a desk's side from the wall it stands against), unless it is in a wall's line or its
+   line meets a face within a door's width (a door's jamb).
 
 The rule of step 1 and 4 is the issue's (walls are the boundaries of the free space,
 long enough and seen from more than one position; short pieces standing inside free
@@ -98,6 +103,7 @@ from floorscan.floorplan.free_space import open_run as free_open_run
 from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, free_normals, hidden_by_objects, into_corners
 from floorscan.floorplan.junctions import junction_ends, short_loose, shorter_on_longer, snap_junctions
 from floorscan.floorplan.oblique import oblique_in_free_space
+from floorscan.floorplan.object_ends import object_ends
 from floorscan.floorplan.partition_fronts import fronts_between_partitions
 from floorscan.floorplan.wall_pieces import corner_piers, door_jambs, in_wall_lines, piers
 
@@ -428,6 +434,7 @@ def structure_passes(
     held = junction_ends(snapped, junctions)
     loose = loose_in_free_space(snapped, held, side, grid, params, max_thickness_m, crossed)
     loose |= oblique_in_free_space(snapped, held, crossed, both, params)
+    loose |= object_ends(snapped, held, junctions, free, grid.occupied(), grid, params, max_thickness_m, door_max_m)
     loose &= ~standing & ~against & ~short
     keep = ~standing & ~against & ~short & ~loose
     clutter += [snapped[standing], snapped[against], snapped[short], snapped[loose]]
