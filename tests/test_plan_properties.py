@@ -161,6 +161,13 @@ def wall_lines(plan, theta: float) -> list:
     return [back(shapely.LineString([(w.x0, w.y0), (w.x1, w.y1)]), theta, False) for w in plan.walls.itertuples()]
 
 
+def stubs_at(plan, theta: float, xy: tuple) -> list:
+    """The lengths (metres) of the plan's walls shorter than 0.5 m within 0.1 m of the
+    point ``xy`` (metres) at the building's own pose (:func:`wall_lines`)."""
+    point = shapely.Point(*xy)
+    return [g.length for g in wall_lines(plan, theta) if g.length < 0.5 and g.distance(point) < 0.1]
+
+
 def pose_errors(rng) -> tuple[tuple, float]:
     """One seeded building and pose: (its pose and the counts at its own pose and
     moved, the largest distance of a moved room to its room; NaN when a count differs)."""
@@ -255,11 +262,10 @@ def test_a_stub_beside_a_door_is_a_wall_at_any_pose():
     ref = map_plan(b)
     got = map_plan(moved(b, theta, False), (0.005239093268128709, 0.006146615578175658))
     assert counts(ref) == counts(got) == (11, 4, 4)
-    for plan in (ref, got):
+    for plan, turned in ((ref, 0.0), (got, theta)):
         assert plan.doors["width_m"].between(0.85, 1.0).all()
-        walls = wall_lines(plan, theta if plan is got else 0.0)
-        stub = [g for g in walls if g.length < 0.5 and g.distance(shapely.Point(0.2, 3.37)) < 0.1]
-        assert len(stub) == 1 and stub[0].length == pytest.approx(0.35, abs=0.06)
+        stub = stubs_at(plan, turned, (0.2, 3.37))
+        assert len(stub) == 1 and stub[0] == pytest.approx(0.35, abs=0.06)
 
 
 def test_the_stub_beside_an_entrance_is_a_wall_at_any_pose():
@@ -274,10 +280,9 @@ def test_the_stub_beside_an_entrance_is_a_wall_at_any_pose():
     ref = map_plan(b)
     got = map_plan(moved(b, theta, False), (0.04964027429297932, 0.02097405343285666))
     assert counts(ref) == counts(got) == (5, 1, 0)
-    for plan in (ref, got):
-        walls = wall_lines(plan, theta if plan is got else 0.0)
-        stub = [g for g in walls if g.length < 0.5 and g.distance(shapely.Point(2.25, 0.03)) < 0.1]
-        assert len(stub) == 1 and stub[0].length == pytest.approx(0.37, abs=0.05)
+    for plan, turned in ((ref, 0.0), (got, theta)):
+        stub = stubs_at(plan, turned, (2.25, 0.03))
+        assert len(stub) == 1 and stub[0] == pytest.approx(0.37, abs=0.05)
 
 
 def test_a_room_reaches_its_corners_on_a_map_turned_45_degrees():

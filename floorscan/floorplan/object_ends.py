@@ -73,36 +73,35 @@ def object_ends(seg: np.ndarray, ends: np.ndarray, junctions: np.ndarray, free: 
     r = grid.resolution_m
     # a face another face ends on away from its ends (a T) is tied into the walls there
     met = np.zeros(len(seg), dtype=bool)
-    for x, y, a, b, kind in np.asarray(junctions, dtype=np.float64).reshape(-1, 5):
-        if kind == 2:
-            for f in (int(a), int(b)):
-                if np.hypot(*(seg[f].reshape(2, 2) - (x, y)).T).min() > 0.02:
-                    met[f] = True
+    tees = np.asarray(junctions, dtype=np.float64).reshape(-1, 5)
+    tees = tees[tees[:, 4] == 2]
+    for col in (2, 3):
+        f = tees[:, col].astype(np.int64)
+        met[f[np.hypot(*(seg[f].reshape(-1, 2, 2) - tees[:, None, :2]).transpose(2, 0, 1)).min(axis=1) > 0.02]] = True
+    # each face's free end (the end at no junction) and its direction outward there
+    e = np.where(ends[:, 0], 1, 0)
+    tip = np.where(e[:, None] == 1, seg[:, 2:], seg[:, :2])
+    out_u = (seg[:, 2:] - seg[:, :2]) / np.maximum(length, 1e-12)[:, None] * np.where(e == 1, 1.0, -1.0)[:, None]
     # a short face (two cells at least: a cell back from its end is still on it) held at one end
     todo = np.flatnonzero((length < params.clutter_max_length_m) & (length > 2 * r) & (ends.sum(axis=1) == 1) & ~met)
     # a body deeper than a cabinet, and a cell for the raster's rounding, ends beyond the probes
     reach = int(round(params.front_max_m / r)) + 1
     steps = np.arange(-reach, reach + 1) * r
     for i in todo.tolist():
-        e = 1 if ends[i, 0] else 0  # the free end
-        u = (seg[i, 2:] - seg[i, :2]) / length[i] * (1 if e else -1)  # outward at the free end
-        n = np.array([-u[1], u[0]])
-        tip = _body(seg[i, 2 * e: 2 * e + 2] - u * r, n, steps, free, occupied, grid)  # a cell back from the end
-        if tip is None or tip[0] <= max_thickness_m:
+        n = np.array([-out_u[i, 1], out_u[i, 0]])
+        at_tip = _body(tip[i] - out_u[i] * r, n, steps, free, occupied, grid)  # a cell back from the end
+        if at_tip is None or at_tip[0] <= max_thickness_m:
             continue
         # the object's body lies behind the face along it, not the unseen beyond a wall;
         # its inside, at its end or there, unseen
         mid = _body((seg[i, :2] + seg[i, 2:]) / 2, n, steps, free, occupied, grid)
-        out[i] = mid is not None and not (tip[1] and mid[1])
+        out[i] = mid is not None and not (at_tip[1] and mid[1])
     # a face in the line of another beyond its end (a piece of a wall, as a door's jambs
     # stand in one line) or whose line meets another face within a door's width past its
     # free end (a partition pointing at the wall across its door) is a wall
     out &= ~in_wall_lines(seg, out, r, params, door_max_m)
     for i in np.flatnonzero(out).tolist():
-        e = 1 if ends[i, 0] else 0
-        u = (seg[i, 2:] - seg[i, :2]) / length[i] * (1 if e else -1)
-        if _meets(seg[i, 2 * e: 2 * e + 2], u, door_max_m, seg[~out], r):
-            out[i] = False
+        out[i] = not _meets(tip[i], out_u[i], door_max_m, seg[~out], r)
     return out
 
 
