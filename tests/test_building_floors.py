@@ -1,6 +1,7 @@
 """The floors of one building (floorscan.floorplan.building): one IFC with a storey per
 floor, a GeoJSON per floor, the building's page; and the recommended plan built without
-writing it (floorscan.floorplan.writer.recommended_plan).
+writing it (floorscan.floorplan.writer.recommended_plan), the same as the plan tables it
+writes, which the building reads.
 
 The floors: the box plan of test_rooms_export (6 walls, a room and a corridor, a door)
 on the ground floor, and a 4-wall box of one room above it.
@@ -18,7 +19,7 @@ from floorscan.floorplan.geojson import floorplan_geojson, write_geojson
 from floorscan.floorplan.ifc import STOREY_NAME, write_building_ifc, write_ifc
 from floorscan.floorplan.metadata import PlanMetadata
 from floorscan.floorplan.plan import ROOM_COLUMNS
-from floorscan.floorplan.scans import read_plan
+from floorscan.floorplan.scans import plan_metadata, read_plan
 from floorscan.floorplan.writer import recommended_plan, write_recommended_floorplan
 from test_floorplan import BOX, THICK, plan_of, scans_segments
 from test_rooms_export import WALLS, rooms_plan
@@ -186,6 +187,7 @@ def test_recommended_plan_is_the_plan_the_recommended_floorplan_writes(tmp_path)
     assert (rec.n_scans, rec.n_segments) == (3, int(segments["scan_id"].isin([0, 2, 3]).sum()))
     assert counts["n_walls"] == len(rec.plan.walls) > 0
     tables = read_plan(tmp_path / "plan_tables")  # the same plan for programs, to 10 um
+    assert plan_metadata(tmp_path / "plan_tables") == rec.metadata  # what the building names each floor by
     assert tables.walls["wall_id"].tolist() == rec.plan.walls["wall_id"].tolist()
     np.testing.assert_allclose(tables.faces[["x0", "y0", "x1", "y1"]], rec.plan.faces[["x0", "y0", "x1", "y1"]], atol=5e-6)
     write_geojson(rec.plan, tmp_path / "again.geojson", rec.metadata)

@@ -4,6 +4,7 @@ run starts (a no-op rerun, a one-file build)."""
 
 from __future__ import annotations
 
+import json
 
 import pytest
 
@@ -80,8 +81,11 @@ def test_floors_of_one_building_give_one_ifc_with_a_storey_each(folder_run):
     logger = ifcopenshell.validate.json_logger()
     ifcopenshell.validate.validate(model, logger, express_rules=True)
     assert logger.statements == []
-    for ds in ("ground", "first"):
-        assert (wd / "results" / "building" / f"{ds}.geojson").is_file()
+    for ds in ("ground", "first"):  # each floor stamped as its own answer is: the plan tables keep the stamp
+        floor = json.loads((wd / "results" / "building" / f"{ds}.geojson").read_text())["floorscan"]
+        own = json.loads((wd / "results" / ds / "floorplan.geojson").read_text())["floorscan"]
+        assert floor["time_stamp"] == own["time_stamp"] != "1970-01-01T00:00:00+00:00", ds
+    assert "no time stamp" not in (wd / "results" / "building" / "logs" / "building.log").read_text()
     page = (wd / "results" / "building" / "index.html").read_text()
     assert "Main building" in page and "../first/front.html" in page
 

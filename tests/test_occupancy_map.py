@@ -288,6 +288,50 @@ def test_map_plan_target(demo_run, tmp_path):
     assert not (demo_run / "results" / "photo" / "map").exists() and not (demo_run / "results" / "photo" / "floorplan.svg").exists()
 
 
+@pytest.mark.workflow
+def test_maps_are_the_floors_of_a_building_as_their_own_plans(tmp_path):
+    """Two maps named as the floors of one building (docs/running.md's house.yaml block,
+    with map files): the building's IFC holds a storey per map at its elevation, each
+    with its floor's walls and rooms, and each floor's GeoJSON in results/building is
+    the plan tables the floor plan stage wrote (results/<dataset>/plan_tables), the same
+    walls, rooms and doors as the map's own answer: the building reads them, it does not
+    build them again. Before, a map could not be a floor."""
+    import ifcopenshell
+    from ifcopenshell.util.element import get_decomposition
+
+    from conftest import copy_workflow
+    from floorscan.floorplan.geojson import floorplan_geojson
+    from floorscan.floorplan.scans import plan_metadata, read_plan
+
+    wd = copy_workflow(tmp_path / "floorscan")
+    folder = tmp_path / "levels"
+    folder.mkdir()
+    write_map(folder, two_rooms_image(), "level0")
+    write_map(folder, two_rooms_image(w=8.0, h=4.0, door=1.2), "level1", origin=(-1.0, 2.0))
+    (wd / "house.yaml").write_text(
+        "building:\n  name: Map house\n  floors:\n"
+        "    - {recording: level0.yaml, storey: Ground floor, elevation_m: 0.0}\n"
+        "    - {recording: level1.yaml, storey: First floor, elevation_m: 3.2}\n"
+    )
+    res = snakemake(wd, "--config", f"path={folder}/", "--configfile", "house.yaml")
+    assert res.returncode == 0, res.stderr[-3000:]
+    assert "building: results/building/index.html, results/building/building.ifc (2 storeys)" in res.stdout
+    model = ifcopenshell.open(str(wd / "results" / "building" / "building.ifc"))
+    storeys = {s.Name: s for s in model.by_type("IfcBuildingStorey")}
+    assert sorted(storeys) == ["First floor", "Ground floor"] and storeys["First floor"].Elevation == pytest.approx(3.2)
+    for ds, storey in (("level0", "Ground floor"), ("level1", "First floor")):
+        plan = read_plan(wd / "results" / ds / "plan_tables")
+        parts = get_decomposition(storeys[storey])
+        assert len(plan.rooms) == 2 and len(plan.doors) == 1, ds
+        assert sum(e.is_a("IfcSpace") for e in parts) == 2 and sum(e.is_a("IfcWall") for e in parts) == len(plan.walls)
+        own = json.loads((wd / "results" / ds / "floorplan.geojson").read_text())
+        floor = json.loads((wd / "results" / "building" / f"{ds}.geojson").read_text())
+        tables = floorplan_geojson(plan, plan_metadata(wd / "results" / ds / "plan_tables"))
+        assert floor["features"] == json.loads(json.dumps(tables["features"])), ds
+        assert [f["properties"] for f in floor["features"]] == [f["properties"] for f in own["features"]], ds
+        assert floor["floorscan"]["extractor"] == "map" and floor["floorscan"]["storey"] == storey
+
+
 def test_rooms_are_a_coverage_on_a_real_robot_map():
     """No two rooms overlap (issue 44): on ROSE^2's map15, five pairs of rooms grown into
     the same door gaps overlapped by 0.002 to 0.024 m2 before the room step gave each

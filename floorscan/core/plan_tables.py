@@ -205,6 +205,31 @@ def read_plan_tables(
     return out
 
 
+def read_plan_metadata(folder: str | os.PathLike) -> dict[str, str]:
+    """What a plan folder is of: the ``metadata`` :func:`write_plan_tables` stored (its
+    walls table's schema metadata).
+
+    Parameters
+    ----------
+    folder : path
+
+    Returns
+    -------
+    dict of str to str
+        Empty when none was stored.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the folder is not a plan folder.
+    """
+    path = Path(folder) / "walls.parquet"
+    if not path.is_file():
+        raise FileNotFoundError(f"{folder}: not a plan folder (no walls.parquet)")
+    meta = pq.read_schema(path).metadata or {}
+    return {k.decode(): v.decode() for k, v in meta.items() if not k.startswith(b"ARROW:")}
+
+
 def plan_faces_and_walls(folder: str | os.PathLike) -> tuple[np.ndarray, int]:
     """The merged faces and the wall count of a plan folder: what a plan is scored on.
 

@@ -1,10 +1,12 @@
-"""The floors of one building: several recordings, each the floor plan of one storey
-(:func:`write_building`).
+"""The floors of one building: several recordings or occupancy maps, each the floor plan
+of one storey (:func:`write_building`).
 
-A building is a list of :class:`Floor` (a recording, its storey's name and elevation)
-and each floor's plan (the recommended plan of its recording,
-:func:`floorscan.floorplan.writer.recommended_plan`). It is written as one IFC4 model
-with an IfcBuildingStorey per floor (:func:`floorscan.floorplan.ifc.write_building_ifc`),
+A building is a list of :class:`Floor` (a recording or a map, its storey's name and
+elevation) and each floor's plan (the answer of its recording or map as the floor plan
+stage wrote it: :func:`floorscan.floorplan.scans.read_plan` and
+:func:`~floorscan.floorplan.scans.plan_metadata` of ``results/<dataset>/plan_tables``).
+It is written as one IFC4 model with an IfcBuildingStorey per floor
+(:func:`floorscan.floorplan.ifc.write_building_ifc`),
 a GeoJSON per floor (:func:`floorscan.floorplan.geojson.floorplan_geojson`, its
 ``floorscan`` member naming the building, storey and elevation) and a static page
 (``index.html``) that lists the floors with their plans' SVG and links their front
@@ -92,7 +94,7 @@ def write_building(
         The building's name (IFC project, page title).
     metadata : mapping, optional
         Each floor's :class:`~floorscan.floorplan.metadata.PlanMetadata` by its dataset
-        (:attr:`~floorscan.floorplan.writer.RecommendedPlan.metadata`): its GeoJSON names
+        (:func:`~floorscan.floorplan.scans.plan_metadata`): its GeoJSON names
         it; the building's time stamp is the least of theirs. None: the dataset only.
 
     Returns

@@ -13,7 +13,8 @@ table (:class:`~floorscan.floorplan.merge.FirstMergePass`), which many plans of
 subsets of it share; the plans are the same.
 
 :func:`write_plan` and :func:`read_plan` pass a plan between stages as Parquet tables
-(:mod:`floorscan.core.plan_tables`). Source: the duplicate problem of thesis section 5.1.
+(:mod:`floorscan.core.plan_tables`), and :func:`plan_metadata` says what it is of.
+Source: the duplicate problem of thesis section 5.1.
 """
 
 from __future__ import annotations
@@ -24,8 +25,9 @@ from typing import TYPE_CHECKING, Iterable, Mapping
 import numpy as np
 import pandas as pd
 
-from floorscan.core.plan_tables import read_plan_tables, write_plan_tables
+from floorscan.core.plan_tables import read_plan_metadata, read_plan_tables, write_plan_tables
 from floorscan.floorplan.merge import FirstMergePass
+from floorscan.floorplan.metadata import PlanMetadata
 from floorscan.floorplan.params import FloorplanParams
 from floorscan.floorplan.plan import (
     CLUTTER_COLUMNS, DOOR_COLUMNS, FACE_COLUMNS, JUNCTION_COLUMNS, ROOM_COLUMNS, WALL_COLUMNS, FloorPlan, plan_faces,
@@ -226,3 +228,33 @@ def read_plan(folder: str | os.PathLike) -> FloorPlan:
         walls=t["walls"][WALL_COLUMNS], faces=t["faces"][FACE_COLUMNS], clutter=t["clutter"][CLUTTER_COLUMNS],
         junctions=t["junctions"][JUNCTION_COLUMNS], rooms=rooms[ROOM_COLUMNS], doors=t["doors"][DOOR_COLUMNS],
     )
+
+
+def plan_metadata(folder: str | os.PathLike) -> PlanMetadata:
+    """What a plan folder (:func:`write_plan`) is of, as its exports name it: dataset,
+    ordering, extractor, k and the time stamp (the recording's first scan, seconds
+    since the epoch; None for a map, or a folder written without one).
+
+    Parameters
+    ----------
+    folder : path
+
+    Returns
+    -------
+    PlanMetadata
+
+    Raises
+    ------
+    FileNotFoundError
+        When the folder is not a plan folder.
+    ValueError
+        When its time stamp is not a number.
+    """
+    meta = read_plan_metadata(folder)
+    stamp = meta.get("timestamp")
+    try:
+        timestamp = None if stamp is None else float(stamp)
+    except ValueError:
+        raise ValueError(f"{folder}: the plan's timestamp {stamp!r} is not seconds since the epoch") from None
+    return PlanMetadata(meta.get("dataset", ""), meta.get("ordering", ""), meta.get("extractor", ""), meta.get("k", ""),
+                        timestamp)

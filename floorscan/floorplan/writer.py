@@ -339,8 +339,9 @@ def write_recommended_floorplan(
         from floorscan.floorplan.scans import write_plan
 
         m = rec.metadata
+        stamp = {} if m.timestamp is None else {"timestamp": repr(float(m.timestamp))}
         write_plan(rec.plan, plan_folder, {"dataset": m.dataset, "ordering": m.ordering, "extractor": m.extractor,
-                                           "k": str(m.k), "n_scans": str(rec.n_scans)})
+                                           "k": str(m.k), "n_scans": str(rec.n_scans), **stamp})
     if map_paths is not None:
         from floorscan.core.occupancy import write_map_server
 
