@@ -353,6 +353,30 @@ def test_rooms_are_a_coverage_on_a_real_robot_map():
     assert max(area for *_, area in overlaps) < 1e-6, [o for o in overlaps if o[2] >= 1e-6]
 
 
+def test_a_room_ends_at_its_entrance_whatever_the_map_saw_outside(tmp_path):
+    """A room of 6.6 x 3.6 m inside walls 0.2 m thick, with a 0.9 m entrance in its
+    bottom wall and a fan of free cells the scans saw through it, 0.45 m deep: the room
+    reaches into the doorway to the wall's outer face and no further. Before, the
+    opening was no cut because only its inside is space (the outside a fan, then
+    nothing), and the room ran a cell past the wall, into the fan."""
+    from floorscan.floorplan.params import FloorplanParams
+    from floorscan.floorplan.scans import plan_of_scans
+
+    image = np.full((120, 160), 205, np.uint8)  # 5 cm pixels: the outside unknown
+    image[10:90, 10:150] = 0  # the outer walls
+    image[14:86, 14:146] = 255  # the floor
+    image[86:90, 40:58] = 255  # the entrance
+    for k in range(1, 10):  # the fan seen through it
+        image[89 + k, 40 - k : 58 + k] = 255
+    path = tmp_path / "entrance.png"
+    Image.fromarray(image).save(path)
+    grid, _ = read_occupancy_map(path)
+    plan = plan_of_scans(map_of_grid(grid, None), None, FloorplanParams(), grid)
+    outer_face = (image.shape[0] - 90) * RES  # y of the bottom wall's outer face, metres
+    assert len(plan.rooms) == 1
+    assert plan.rooms["polygon"].iloc[0].bounds[1] >= outer_face - 1e-6
+
+
 @pytest.mark.parametrize("shade", [180, 204])
 def test_a_wall_drawn_in_grey_divides_the_rooms(tmp_path, shade):
     """A map may draw a wall in a shade its thresholds read as unknown (ipa's maps draw

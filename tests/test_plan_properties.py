@@ -15,7 +15,7 @@ wall (:func:`floorscan.sim.generated.room_grid_building`): a plan of one takes a
   plan does not get there yet, so these two run seeded cases (``numpy.random``, seed
   44) and allow the wrong ones measured today (:data:`WRONG_JITTER`,
   :data:`WRONG_POSES`; ``benchmarks/README.md``, seventh, tenth, thirty-sixth,
-  thirty-seventh, fifty-third and fifty-fourth sessions): a change that makes the plan
+  thirty-seventh, fifty-third, fifty-fourth and fifty-sixth sessions): a change that makes the plan
   less stable fails here, one that makes it more stable lowers the numbers.
 """
 
@@ -51,7 +51,7 @@ WRONG_JITTER = 0
 #: Seeded poses of the rigid-motion property, and of them how many may change a count
 #: or move a room farther than :data:`ROOM_TOLERANCE_M` today.
 POSES = 150
-WRONG_POSES = 3
+WRONG_POSES = 2
 #: A room of the moved plan, mapped back, lies within this Hausdorff distance of its
 #: room at the building's own pose, metres. Issue 44 asks for one cell; each plan traces
 #: its rooms on its own cells and cuts them at its doors, and turned maps put rooms 0.15

@@ -102,9 +102,13 @@ def wall_gaps(axes: np.ndarray, thickness: np.ndarray, params: RoomParams,
     return out
 
 
-def passes_through(raster: RoomRaster, p: np.ndarray, q: np.ndarray, side_m: float = 0.3) -> bool:
+def passes_through(raster: RoomRaster, p: np.ndarray, q: np.ndarray, side_m: float = 0.3,
+                   outward: bool = False) -> bool:  # fmt: skip
     """Whether the space holds the middle of the opening ``p``-``q`` and points
-    ``side_m`` to each side of it.
+    ``side_m`` to each side of it; with ``outward`` also an opening in the building's
+    outline: the space holds its middle and the point on one side, and the point on the
+    other side lies beyond the building's closed outline (:attr:`RoomRaster.beyond`) or
+    off the raster (an entrance, whatever the scans saw through it).
 
     Parameters
     ----------
@@ -113,16 +117,22 @@ def passes_through(raster: RoomRaster, p: np.ndarray, q: np.ndarray, side_m: flo
         The opening's ends, metres.
     side_m : float
         Metres.
+    outward : bool
 
     Returns
     -------
     bool
-        False when a point is off the raster.
+        False when a point is off the raster (but for the outside point of ``outward``).
     """
     mid = (p + q) / 2
     d = q - p
     n = np.array([-d[1], d[0]]) / max(float(np.hypot(*d)), 1e-12)
-    return bool(raster.at(raster.space, np.array([mid, mid + side_m * n, mid - side_m * n]), outside=False).all())
+    pts = np.array([mid, mid + side_m * n, mid - side_m * n])
+    inside = raster.at(raster.space, pts, outside=False)
+    if inside.all() or not outward or raster.beyond is None:
+        return bool(inside.all())
+    beyond = raster.at(raster.beyond, pts, outside=True)
+    return bool(inside[0] and ((inside[1] and beyond[2]) or (inside[2] and beyond[1])))
 
 
 def barrier_cells(raster: RoomRaster, p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

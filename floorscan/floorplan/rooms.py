@@ -28,7 +28,9 @@ taken from the walls:
 2. **Doors between walls** (:func:`~floorscan.floorplan.doors.wall_gaps`): the gap
    between the facing ends of two walls in one line, ``door_min_m`` to ``door_max_m``
    wide, that the scans saw through and that crosses no corridor (step 4), is cut first:
-   a room seen only through its door ends at the door. So is the open side of a room
+   a room seen only through its door ends at the door, and a room ends at its entrance
+   in the building's outline, whatever the scans saw through it (an opening whose one
+   side lies beyond the closed outline). So is the open side of a room
    (:func:`~floorscan.floorplan.mouths.room_mouths`): the line between the free ends of
    the walls that bound a room open on its whole width onto a corridor (an office, a
    cubicle), or across the missing corner of two walls
@@ -187,8 +189,9 @@ def segment_rooms(
     thickness = np.asarray(thickness, dtype=np.float64).reshape(-1)
     raster = room_space(grid, axes, thickness, params, under)
     strips = corridor_strips(axes, thickness, raster, params) if len(axes) >= 2 else []
+    # an opening between two walls' ends bounds the rooms on its line, an entrance too
     gaps = [g for g in D.wall_gaps(axes, thickness, params) + corner_mouths(axes, thickness, params)
-            if D.passes_through(raster, g[0], g[1]) and not across_corridor(g[0], g[1], strips, params)]
+            if D.passes_through(raster, g[0], g[1], outward=True) and not across_corridor(g[0], g[1], strips, params)]
     gaps += room_mouths(axes, thickness, raster, params)
     gaps += dead_end_mouths(axes, thickness, raster, params)
     gaps += [g for g in corridor_sides(axes, thickness, raster, params, strips) if D.passes_through(raster, g[0], g[1])]
