@@ -13,11 +13,11 @@ with stage_log(snakemake) as log:  # noqa: F821
     floors = [Floor(f["dataset"], f["storey"], f["elevation_m"]) for f in smk.params.floors]
     plans, metadata = {}, {}
     for floor, folder in zip(floors, smk.input.plan):
-        plans[floor.dataset], metadata[floor.dataset] = read_plan(folder), plan_metadata(folder)
-        plan = plans[floor.dataset]
+        plan, meta = read_plan(folder), plan_metadata(folder)
+        plans[floor.dataset], metadata[floor.dataset] = plan, meta
         log.info("%s (%s, %.2f m): %d walls, %d rooms, %d doors", floor.storey, floor.dataset, floor.elevation_m,
                  len(plan.walls), len(plan.rooms), len(plan.doors))
-        if metadata[floor.dataset].timestamp is None and metadata[floor.dataset].ordering:  # a recording's plan
+        if meta.timestamp is None and meta.ordering:  # a recording's plan (a map's has no ordering)
             log.warning("%s: %s holds no time stamp (written before floorscan stored one, or the recording has "
                         "none); the building takes the other floors' or SOURCE_DATE_EPOCH. To stamp it with the "
                         "recording's first scan: snakemake -R recommended_floorplan", floor.dataset, folder)

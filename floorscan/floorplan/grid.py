@@ -19,7 +19,7 @@ from typing import Any, Mapping, Sequence
 import pandas as pd
 
 from floorscan.floorplan.footprints import PlanExports
-from floorscan.floorplan.metadata import PlanMetadata
+from floorscan.floorplan.metadata import PlanMetadata, table_metadata
 from floorscan.floorplan.scans import ScanPlans, write_plan
 from floorscan.floorplan.writer import FloorplanWriter
 from floorscan.core.selection import first_k_scans
@@ -88,8 +88,7 @@ def write_plan_grid(
             built[key] = PlanExports(builder.plan(ids))
         plan = built[key].plan
         meta = PlanMetadata(dataset, ordering, extractor, k, timestamp)
-        write_plan(plan, folder, {"dataset": dataset, "ordering": ordering, "extractor": extractor, "k": str(k),
-                                  "n_scans": str(len(ids))})
+        write_plan(plan, folder, table_metadata(meta, len(ids)))
         writer.export(built[key], outputs, meta)
         done.append({"ordering": ordering, "k": k, "n_scans": len(ids), "n_walls": len(plan.walls),
                      "n_faces": len(plan.faces), "reused": reused})

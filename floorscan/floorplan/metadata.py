@@ -15,7 +15,7 @@ import math
 import os
 from dataclasses import dataclass
 from datetime import datetime, timezone
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Mapping
 
 import numpy as np
 
@@ -126,6 +126,57 @@ class PlanMetadata:
     def time_stamp(self) -> str:
         """:func:`export_time` of :attr:`timestamp` in ISO 8601, UTC (``1970-01-01T00:00:00+00:00``)."""
         return datetime.fromtimestamp(export_time(self.timestamp), tz=timezone.utc).isoformat()
+
+
+def table_metadata(meta: PlanMetadata, n_scans: int) -> dict[str, str]:
+    """What a plan folder (:func:`floorscan.core.plan_tables.write_plan_tables`) stores of
+    what its plan is of: ``dataset``, ``ordering``, ``extractor``, ``k``, ``n_scans`` and,
+    when ``meta`` has one, ``timestamp`` (seconds since the epoch); :func:`from_table_metadata`
+    reads it back.
+
+    Parameters
+    ----------
+    meta : PlanMetadata
+    n_scans : int
+        The scans the plan is of (0 for a map).
+
+    Returns
+    -------
+    dict of str to str
+    """
+    out = {"dataset": meta.dataset, "ordering": meta.ordering, "extractor": meta.extractor, "k": meta.k,
+           "n_scans": str(int(n_scans))}
+    if meta.timestamp is not None:
+        out["timestamp"] = repr(float(meta.timestamp))
+    return out
+
+
+def from_table_metadata(stored: Mapping[str, str], source: str = "plan folder") -> PlanMetadata:
+    """The :class:`PlanMetadata` of :func:`table_metadata` (a missing field empty, a missing
+    time stamp None).
+
+    Parameters
+    ----------
+    stored : mapping of str to str
+    source : str
+        What ``stored`` was read from, for the error.
+
+    Returns
+    -------
+    PlanMetadata
+
+    Raises
+    ------
+    ValueError
+        When the time stamp is not a number.
+    """
+    stamp = stored.get("timestamp")
+    try:
+        timestamp = None if stamp is None else float(stamp)
+    except ValueError:
+        raise ValueError(f"{source}: the plan's timestamp {stamp!r} is not seconds since the epoch") from None
+    return PlanMetadata(stored.get("dataset", ""), stored.get("ordering", ""), stored.get("extractor", ""),
+                        stored.get("k", ""), timestamp)
 
 
 def metadata_member(plan: FloorPlan, meta: PlanMetadata, georeference: Georeference | None = None) -> dict:

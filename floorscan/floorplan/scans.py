@@ -27,7 +27,7 @@ import pandas as pd
 
 from floorscan.core.plan_tables import read_plan_metadata, read_plan_tables, write_plan_tables
 from floorscan.floorplan.merge import FirstMergePass
-from floorscan.floorplan.metadata import PlanMetadata
+from floorscan.floorplan.metadata import PlanMetadata, from_table_metadata
 from floorscan.floorplan.params import FloorplanParams
 from floorscan.floorplan.plan import (
     CLUTTER_COLUMNS, DOOR_COLUMNS, FACE_COLUMNS, JUNCTION_COLUMNS, ROOM_COLUMNS, WALL_COLUMNS, FloorPlan, plan_faces,
@@ -250,11 +250,4 @@ def plan_metadata(folder: str | os.PathLike) -> PlanMetadata:
     ValueError
         When its time stamp is not a number.
     """
-    meta = read_plan_metadata(folder)
-    stamp = meta.get("timestamp")
-    try:
-        timestamp = None if stamp is None else float(stamp)
-    except ValueError:
-        raise ValueError(f"{folder}: the plan's timestamp {stamp!r} is not seconds since the epoch") from None
-    return PlanMetadata(meta.get("dataset", ""), meta.get("ordering", ""), meta.get("extractor", ""), meta.get("k", ""),
-                        timestamp)
+    return from_table_metadata(read_plan_metadata(folder), os.fspath(folder))

@@ -22,7 +22,7 @@ import pandas as pd
 
 from floorscan.floorplan import EXPORT_FORMATS, FLOORPLAN_FORMATS
 from floorscan.floorplan.footprints import PlanExports
-from floorscan.floorplan.metadata import PlanMetadata, export_time, recording_timestamp
+from floorscan.floorplan.metadata import PlanMetadata, export_time, recording_timestamp, table_metadata
 from floorscan.core.config import stage_params
 from floorscan.floorplan.params import FloorplanParams
 from floorscan.floorplan.plan import FloorPlan, in_scan_order
@@ -338,10 +338,7 @@ def write_recommended_floorplan(
     if plan_folder is not None:
         from floorscan.floorplan.scans import write_plan
 
-        m = rec.metadata
-        stamp = {} if m.timestamp is None else {"timestamp": repr(float(m.timestamp))}
-        write_plan(rec.plan, plan_folder, {"dataset": m.dataset, "ordering": m.ordering, "extractor": m.extractor,
-                                           "k": str(m.k), "n_scans": str(rec.n_scans), **stamp})
+        write_plan(rec.plan, plan_folder, table_metadata(rec.metadata, rec.n_scans))
     if map_paths is not None:
         from floorscan.core.occupancy import write_map_server
 
@@ -401,6 +398,5 @@ def write_map_floorplan(
     if plan_folder is not None:
         from floorscan.floorplan.scans import write_plan
 
-        write_plan(plan, plan_folder, {"dataset": dataset, "ordering": "", "extractor": "map", "k": "", "n_scans": "0",
-                                       "source": "map"})  # fmt: skip
+        write_plan(plan, plan_folder, table_metadata(PlanMetadata(dataset, extractor="map"), 0) | {"source": "map"})
     return plan
