@@ -15,8 +15,11 @@ from __future__ import annotations
 import contextlib
 import io
 import logging
+import math
 import os
 from typing import TYPE_CHECKING, Mapping
+
+import numpy as np
 
 from floorscan.core.files import atomic_path
 from floorscan.floorplan.footprints import PlanExports
@@ -37,6 +40,9 @@ DXF_LAYERS = {"WALL_AXIS": 1, "WALL_OUTLINE": 7, "WALL_FACE": 3, "CLUTTER": 8, "
 
 #: Height of the room labels' text, metres.
 DXF_ROOM_TEXT_HEIGHT_M = 0.25
+#: The gap between a room label's two lines, in text heights: MTEXT's at its default line
+#: spacing (baselines 5/3 of the text height apart, AutoCAD's DXF reference).
+DXF_LINE_GAP = 2 / 3
 
 
 @contextlib.contextmanager
@@ -171,31 +177,46 @@ def _write_dxf(
 
 def _add_rooms(msp, exports: PlanExports, version: str) -> None:
     """Layer ``ROOM``: a closed polyline per ring of each room (exterior
-    counter-clockwise, holes clockwise; LWPOLYLINE, in R12 POLYLINE) and its label at
-    its label point (:attr:`~floorscan.floorplan.footprints.PlanExports.room_labels`),
-    the name above the area in m² (MTEXT of two lines, middle centre; in R12, which
-    has no MTEXT, two TEXT lines), :data:`DXF_ROOM_TEXT_HEIGHT_M` high."""
+    counter-clockwise, holes clockwise; LWPOLYLINE, in R12 POLYLINE) and its label, the
+    name above the area in m² (MTEXT of two lines, middle centre; in R12, which has no
+    MTEXT, two TEXT lines), :data:`DXF_ROOM_TEXT_HEIGHT_M` high, placed inside the room
+    and clear of the other labels at the largest size that fits, level or along the room
+    (:func:`~floorscan.floorplan.labels.place_room_labels`, from the room's label point
+    :attr:`~floorscan.floorplan.footprints.PlanExports.room_labels`); the name alone
+    where two lines do not fit."""
     from ezdxf.enums import MTextEntityAlignment, TextEntityAlignment
+
+    from floorscan.floorplan.labels import place_room_labels, text_box
 
     r = exports.plan.rooms
     add_outline = msp.add_polyline2d if version == "R12" else msp.add_lwpolyline
     h = DXF_ROOM_TEXT_HEIGHT_M
     attribs = {"layer": "ROOM"}
-    for name, area, poly, (x, y) in zip(
-        r["name"].tolist(), r["area_m2"].tolist(), exports.room_polys.tolist(), exports.room_labels.tolist()
+    names = [str(v) for v in r["name"].tolist()]
+    areas = [f"{float(v):.1f} m\u00b2" for v in r["area_m2"].tolist()]
+    full = np.array([text_box([(n, h), (a, h)], DXF_LINE_GAP * h) for n, a in zip(names, areas)]).reshape(-1, 2)
+    alone = np.array([text_box([(n, h)]) for n in names]).reshape(-1, 2)
+    xy, scale, with_area, angle = place_room_labels(exports.room_polys, exports.room_labels, full, alone,
+                                                    np.full(len(r), h))
+    for name, area_text, poly, (x, y), f, both, turn in zip(
+        names, areas, exports.room_polys.tolist(), xy.tolist(), scale.tolist(), with_area.tolist(), angle.tolist()
     ):
         if poly is None or poly.is_empty:
             continue
         for ring in (poly.exterior, *poly.interiors):
             add_outline(list(ring.coords)[:-1], close=True, dxfattribs=attribs)
-        area_text = f"{float(area):.1f} m\u00b2"
+        lines = [name, area_text] if both else [name]
+        degrees = math.degrees(turn)  # along the room, counter-clockwise
         if version == "R12":
-            for text, dy in ((str(name), 0.6 * h), (area_text, -0.6 * h)):
-                msp.add_text(text, height=h, dxfattribs=attribs).set_placement(
-                    (x, y + dy), align=TextEntityAlignment.MIDDLE_CENTER
+            step = (1 + DXF_LINE_GAP) * h * f  # baseline to baseline
+            up = np.array([-math.sin(turn), math.cos(turn)])
+            for i, text in enumerate(lines):
+                at = np.array([x, y]) + up * step * ((len(lines) - 1) / 2 - i)
+                msp.add_text(text, height=h * f, rotation=degrees, dxfattribs=attribs).set_placement(
+                    tuple(at.tolist()), align=TextEntityAlignment.MIDDLE_CENTER
                 )
         else:
-            label = msp.add_mtext(f"{name}\\P{area_text}", dxfattribs={**attribs, "char_height": h})
+            label = msp.add_mtext("\\P".join(lines), dxfattribs={**attribs, "char_height": h * f, "rotation": degrees})
             label.set_location((x, y), attachment_point=MTextEntityAlignment.MIDDLE_CENTER)
 
 

@@ -40,6 +40,9 @@ SVG_TEXT_SCALE = 1.6
 #: Room labels: the name and the area under it, px of the viewBox (inside the plan,
 #: where a larger label no longer fits a small room).
 SVG_ROOM_LABEL_PX, SVG_ROOM_AREA_PX = 18.0, 15.0
+#: The gap between a room label's two lines, and the height of a line's capitals above its
+#: baseline (em; DejaVu Sans' and Helvetica's are 0.73 em), px of the viewBox and em.
+SVG_ROOM_LINE_GAP_PX, SVG_ASCENT_EM = 3.0, 0.73
 #: SVG layout, pixels of the viewBox (the SVG scales to the window): the plan's longer
 #: side, the least canvas width (title, scale bar and legend fit), margins and bands.
 SVG_PLAN_PX, SVG_MARGIN_PX = 1000.0, 20.0
@@ -291,27 +294,21 @@ def _svg_rooms(exports: PlanExports, px: float) -> list[str]:
     return out
 
 
-def _svg_doors(plan: FloorPlan, px: float) -> list[str]:
-    """The doors above the walls (map metres, ``px`` metres a pixel), drawn as a plan
-    drawn by people draws them: the opening cleared to white across its wall's
-    thickness, a thin line across it, and the leaf, as wide as the opening, swung a
-    quarter turn into the first of the two rooms that is not a corridor, with its arc (:data:`SVG_DOOR_COLOUR`;
-    a tooltip gives the width and the rooms joined)."""
+def _door_leaves(plan: FloorPlan) -> list[tuple]:
+    """Each door's opening, width and leaf, as :func:`_svg_doors` draws them: ``(door_id,
+    x0, y0, x1, y1, width_m, wall_id, room_a, room_b, leaf, sweep)``, the leaf hinged at
+    ``(x0, y0)``, as wide as the opening, at right angles to it into the first of the two
+    rooms that is not a corridor (``leaf`` its free end, (2,) metres; ``sweep`` the SVG
+    arc flag from the leaf back to ``(x1, y1)``)."""
     import shapely
 
     d = plan.doors
-    if not len(d):
-        return []
-    thick = dict(zip(plan.walls["wall_id"].tolist(), plan.walls["thickness_m"].tolist()))
     polys = dict(zip(plan.rooms["room_id"].tolist(), plan.rooms["polygon"].tolist())) if len(plan.rooms) else {}
     corridor = set(plan.rooms.loc[plan.rooms["kind"] == "corridor", "room_id"].tolist()) if len(plan.rooms) else set()
-    out = [f'<g id="doors" fill="none" stroke="{SVG_DOOR_COLOUR}" stroke-linecap="butt">']
+    out = []
     for door_id, x0, y0, x1, y1, width, wall_id, a, b in zip(
         *(d[c].tolist() for c in ("door_id", "x0", "y0", "x1", "y1", "width_m", "wall_id", "room_a", "room_b"))
     ):
-        xy = f'x1="{x0:.4f}" y1="{y0:.4f}" x2="{x1:.4f}" y2="{y1:.4f}"'
-        if wall_id in thick:
-            out.append(f'<line {xy} stroke="#ffffff" stroke-width="{float(thick[wall_id]) + 2 * px:.6g}"/>')
         w = float(np.hypot(x1 - x0, y1 - y0))
         n = np.array([-(y1 - y0), x1 - x0]) / max(w, 1e-12)
         mid = np.array([(x0 + x1) / 2, (y0 + y1) / 2])
@@ -320,6 +317,43 @@ def _svg_doors(plan: FloorPlan, px: float) -> list[str]:
             n = -n  # the leaf opens into that room
         leaf = np.array([x0, y0]) + w * n
         sweep = 1 if (leaf[0] - x0) * (y1 - y0) - (leaf[1] - y0) * (x1 - x0) > 0 else 0
+        out.append((door_id, x0, y0, x1, y1, width, wall_id, a, b, leaf, sweep))
+    return out
+
+
+def door_swings(plan: FloorPlan):
+    """The quarter discs the doors' leaves swing through (:func:`_door_leaves`), one
+    shapely geometry in map metres (empty without doors): what a room's label keeps
+    clear of where it can (:func:`_svg_room_labels`)."""
+    import shapely
+
+    sectors = []
+    for _, x0, y0, x1, y1, _, _, _, _, leaf, _ in _door_leaves(plan):
+        hinge = np.array([x0, y0])
+        a0 = math.atan2(leaf[1] - y0, leaf[0] - x0)
+        a1 = math.atan2(y1 - y0, x1 - x0)
+        turn = (a1 - a0 + math.pi) % (2 * math.pi) - math.pi  # a quarter turn, either way
+        t = a0 + turn * np.linspace(0.0, 1.0, 9)
+        w = float(np.hypot(leaf[0] - x0, leaf[1] - y0))
+        sectors.append(shapely.Polygon(np.vstack([hinge, hinge + w * np.c_[np.cos(t), np.sin(t)]])))
+    return shapely.union_all(sectors) if sectors else shapely.GeometryCollection()
+
+
+def _svg_doors(plan: FloorPlan, px: float) -> list[str]:
+    """The doors above the walls (map metres, ``px`` metres a pixel), drawn as a plan
+    drawn by people draws them: the opening cleared to white across its wall's
+    thickness, a thin line across it, and the leaf, as wide as the opening, swung a
+    quarter turn into the first of the two rooms that is not a corridor, with its arc (:data:`SVG_DOOR_COLOUR`;
+    a tooltip gives the width and the rooms joined); :func:`_door_leaves`."""
+    if not len(plan.doors):
+        return []
+    thick = dict(zip(plan.walls["wall_id"].tolist(), plan.walls["thickness_m"].tolist()))
+    out = [f'<g id="doors" fill="none" stroke="{SVG_DOOR_COLOUR}" stroke-linecap="butt">']
+    for door_id, x0, y0, x1, y1, width, wall_id, a, b, leaf, sweep in _door_leaves(plan):
+        xy = f'x1="{x0:.4f}" y1="{y0:.4f}" x2="{x1:.4f}" y2="{y1:.4f}"'
+        if wall_id in thick:
+            out.append(f'<line {xy} stroke="#ffffff" stroke-width="{float(thick[wall_id]) + 2 * px:.6g}"/>')
+        w = float(np.hypot(x1 - x0, y1 - y0))
         out.append(
             f'<g><title>door {int(door_id)}: {float(width):.2f} m, rooms {int(a)} and {int(b)}</title>'
             f'<line {xy} stroke-width="{1.0 * px:.6g}"/>'
@@ -332,23 +366,41 @@ def _svg_doors(plan: FloorPlan, px: float) -> list[str]:
 
 
 def _svg_room_labels(exports: PlanExports, s: float, tx: float, ty: float) -> list[str]:
-    """A label per room at its label point
-    (:attr:`~floorscan.floorplan.footprints.PlanExports.room_labels`), in pixels
-    (outside the flipped plan group, so the text stands upright): the name, and the
-    area in m\u00b2 below it."""
+    """A label per room, in pixels (outside the flipped plan group, so the text stands
+    upright): the name, and the area in m\u00b2 below it, placed inside the room and
+    clear of the other labels at the largest size that fits, level or along the room, off
+    the doors' swings (:func:`door_swings`) where it can
+    (:func:`~floorscan.floorplan.labels.place_room_labels`, from the room's label point
+    :attr:`~floorscan.floorplan.footprints.PlanExports.room_labels`); the name alone
+    where two lines do not fit."""
+    from floorscan.floorplan.labels import place_room_labels, text_box
+
     r = exports.plan.rooms
     if not len(r):
         return []
-    out = [f'<g id="room-labels" font-size="{SVG_ROOM_LABEL_PX:g}" text-anchor="middle" fill="#333333">']
-    for name, area, (x, y) in zip(r["name"].tolist(), r["area_m2"].tolist(), exports.room_labels.tolist()):
+    names = [str(v) for v in r["name"].tolist()]
+    areas = [f"{float(v):.1f} m\u00b2" for v in r["area_m2"].tolist()]
+    name_px, area_px = SVG_ROOM_LABEL_PX, SVG_ROOM_AREA_PX
+    full = np.array([text_box([(n, name_px), (a, area_px)], SVG_ROOM_LINE_GAP_PX) for n, a in zip(names, areas)])
+    alone = np.array([text_box([(n, name_px)]) for n in names])
+    xy, scale, with_area, angle = place_room_labels(exports.room_polys, exports.room_labels, full / s, alone / s,
+                                                    np.full(len(names), name_px / s), door_swings(exports.plan))
+    out = [f'<g id="room-labels" font-size="{name_px:g}" text-anchor="middle" fill="#333333">']
+    for name, area, (x, y), f, both, turn in zip(names, areas, xy.tolist(), scale.tolist(), with_area.tolist(),
+                                                angle.tolist()):
         if x != x:  # NaN: no polygon
             continue
         lx, ly = tx + s * x, ty - s * y
-        out.append(
-            f'<text x="{lx:.2f}" y="{ly - 2:.2f}">{_xml(str(name))}<tspan x="{lx:.2f}" dy="{SVG_ROOM_AREA_PX + 3:g}" '
-            f'font-size="{SVG_ROOM_AREA_PX:g}">'
-            f"{float(area):.1f} m\u00b2</tspan></text>"
-        )
+        height = f * (name_px + SVG_ROOM_LINE_GAP_PX + area_px if both else name_px)
+        top = ly - height / 2
+        size = "" if f == 1.0 else f' font-size="{f * name_px:.4g}"'
+        if turn:  # along the room; the drawing's y runs down, so a turn to the left is negative
+            size += f' transform="rotate({-math.degrees(turn):.2f} {lx:.2f} {ly:.2f})"'
+        text = f'<text x="{lx:.2f}" y="{top + SVG_ASCENT_EM * f * name_px:.2f}"{size}>{_xml(name)}'
+        if both:
+            second = top + f * (name_px + SVG_ROOM_LINE_GAP_PX + SVG_ASCENT_EM * area_px)  # its baseline
+            text += f'<tspan x="{lx:.2f}" y="{second:.2f}" font-size="{f * area_px:.4g}">{area}</tspan>'
+        out.append(text + "</text>")
     out.append("</g>")
     return out
 
