@@ -14,6 +14,7 @@ import shapely
 from conftest import cast_rays
 from floorscan.core.occupancy import OccupancyParams, occupancy_grid
 from floorscan.floorplan.doors import wall_gaps
+from floorscan.floorplan.jambs import jamb_cells
 from floorscan.floorplan.room_space import RoomParams, room_space
 from floorscan.floorplan.mouths import corner_mouths, room_mouths
 from floorscan.floorplan.rooms import plan_rooms, segment_rooms
@@ -116,6 +117,33 @@ def test_the_floor_under_a_deep_cabinet_against_a_partition_is_its_own_room_s_no
     floor = raster.at(labels, raster.centres(*np.nonzero(raster.under)))
     assert raster.under.sum() * raster.resolution_m**2 > 1.0  # most of the cabinet's 1.35 m2
     assert (floor == east).mean() > 0.97 and not (floor == west).any()
+
+
+def test_loose_furniture_frames_no_door_but_the_wall_it_stands_against_still_does():
+    """A room 4 x 8 m with a desk against its west wall and a shelf against its east wall,
+    each 1.54 m long and 0.4 m deep, 0.8 m apart across the room: their ends frame a
+    door between two rooms, unless the plan calls them loose furniture (the structure
+    passes' ``loose_in_free_space`` clutter, :func:`~floorscan.floorplan.jambs.jamb_cells`);
+    then the room is one. The cells along the walls stay jambs."""
+    box = [(0, 0, 4, 0), (4, 0, 4, 8), (4, 8, 0, 8), (0, 8, 0, 0)]
+    desk = [(0.06, 3.8, 1.6, 3.8), (1.6, 3.8, 1.6, 4.2), (1.6, 4.2, 0.06, 4.2)]
+    shelf = [(3.94, 3.8, 2.4, 3.8), (2.4, 3.8, 2.4, 4.2), (2.4, 4.2, 3.94, 4.2)]
+    grid = _grid(box, [(2, 2), (2, 6), (1.0, 1.5), (3.0, 6.5)], objects=desk + shelf)
+    axes = np.array(box, dtype=np.float64)
+    rooms, doors = plan_rooms(axes, np.full(4, T), grid, RoomParams())
+    assert len(rooms) == 2 and len(doors) == 1  # the desk's and the shelf's ends frame it
+    assert doors[["x0", "x1"]].to_numpy().ravel() == pytest.approx([1.6, 2.4], abs=0.1)
+    rooms, doors = plan_rooms(axes, np.full(4, T), grid, RoomParams(), None, np.array(desk + shelf, dtype=np.float64))
+    assert len(rooms) == 1 and len(doors) == 0 and rooms["area_m2"][0] == pytest.approx(30.6, abs=0.6)
+    # the jambs along the walls stay: a desk's cells farther than a jamb's reach and a
+    # cell from every wall frame no door, the cells along the wall it stands against do
+    raster = room_space(grid, axes, np.full(4, T), RoomParams())
+    plain = jamb_cells(raster, RoomParams().jamb_m)
+    loose = jamb_cells(raster, RoomParams().jamb_m, furniture=np.array(desk + shelf, dtype=np.float64))
+    assert raster.at(plain, np.array([[1.7, 4.0], [2.3, 4.0]])).all()  # the desk's and shelf's ends
+    assert not raster.at(loose, np.array([[1.7, 4.0], [2.3, 4.0]])).any()
+    along = np.array([[0.1, y] for y in np.arange(3.6, 4.45, 0.1)] + [[3.9, y] for y in np.arange(3.6, 4.45, 0.1)])
+    assert raster.at(loose, along).all()
 
 
 def test_no_room_mouth_runs_diagonally_between_two_perpendicular_walls():

@@ -8,7 +8,10 @@ narrowings of the space, not openings in a wall.
 A door is an opening in the building's structure, so its two jambs are walls or the
 seen obstacles that bound the space; a desk, a table and its chairs, a plant or a
 cabinet in a room frame none (Bormann et al., ICRA 2016, ipa_room_segmentation: a room
-boundary is a narrow passage between two wall points).
+boundary is a narrow passage between two wall points), and neither does the furniture
+the structure passes found standing loose in the space (structure step 6,
+:func:`~floorscan.floorplan.clutter.loose_in_free_space`), away from the walls: the
+plan and its rooms agree on what is furniture.
 """
 
 from __future__ import annotations
@@ -18,15 +21,22 @@ import numpy as np
 from floorscan.core.geometry import ray_meets_lines
 from floorscan.floorplan.doors import footprint_distance, near_walls, wall_units
 from floorscan.floorplan.free_space import CLUTTER_MAX_LENGTH_M
-from floorscan.floorplan.room_space import RoomParams, RoomRaster, dilate, surrounded
+from floorscan.floorplan.room_space import RoomParams, RoomRaster, dilate, surrounded, wall_mask
+
+#: The cells of loose furniture (:func:`jamb_cells`): those within this many cells of its
+#: faces (past their ends too), the band a face traced on the raster lies in (a cell each
+#: way) and the cell of the object behind it.
+FURNITURE_BAND_CELLS = 2
 
 
 def jamb_cells(raster: RoomRaster, jamb_m: float, axes: np.ndarray | None = None, thickness: np.ndarray | None = None,
-               params: RoomParams | None = None) -> np.ndarray:
+               params: RoomParams | None = None, furniture: np.ndarray | None = None) -> np.ndarray:
     """(H, W) bool: the cells within ``jamb_m`` (metres) of a wall's footprint or of a
     cell that bounds the space (:attr:`RoomRaster.bounds`), but of no object standing
-    free in the space: where a door's jamb can stand. A door is an opening in the
-    building's structure; the narrowing between a desk and a wall is none.
+    free in the space, nor within ``jamb_m`` of loose furniture farther than that and a
+    cell from every wall: where a door's jamb can stand. A door is an opening in the
+    building's structure; the narrowing between a desk and a wall is none, nor the one
+    between a desk against a wall and a cabinet across the room.
 
     An object standing free is a component of the cells outside the space (walls,
     obstacles, what was not seen free) that the space surrounds and that is shorter
@@ -53,14 +63,47 @@ def jamb_cells(raster: RoomRaster, jamb_m: float, axes: np.ndarray | None = None
         Metres.
     params : RoomParams, optional
         ``door_max_m``, ``door_angle_deg``, ``line_offset_m``, ``min_room_area_m2``.
+    furniture : (K, 4) float ndarray, optional
+        Faces of furniture standing loose in the space, metres (the structure passes'
+        ``loose_in_free_space`` clutter shorter than the longest piece of furniture,
+        :func:`loose_furniture`); their cells are those within
+        :data:`FURNITURE_BAND_CELLS` of them, past their ends too.
     """
+    res = raster.resolution_m
     solid = raster.walls | raster.bounds
-    free = standing_free(~raster.space, raster.resolution_m)
+    free = standing_free(~raster.space, res)
     if axes is not None and len(axes):
         free |= furniture_islands(raster, axes, params.min_room_area_m2 if params is not None else 0.0)
     if axes is not None and thickness is not None and params is not None and len(axes) and free.any():
         free &= ~_pieces_between_doors(free, raster, axes, thickness, params)
-    return dilate(solid & ~free, jamb_m / raster.resolution_m)
+    jambs = dilate(solid & ~free, jamb_m / res)
+    if furniture is not None and len(furniture):
+        band = dilate(wall_mask(furniture, np.zeros(len(furniture)), raster.origin_xy, res, solid.shape),
+                      FURNITURE_BAND_CELLS)  # fmt: skip
+        jambs &= ~dilate(band & ~dilate(raster.walls, jamb_m / res + 1), jamb_m / res)
+    return jambs
+
+
+def loose_furniture(clutter) -> np.ndarray:
+    """The faces of furniture standing loose in the space, which frame no door
+    (:func:`jamb_cells`): the clutter the structure passes found loose in the free space
+    (``reason`` ``loose_in_free_space``, structure step 6,
+    :func:`~floorscan.floorplan.clutter.loose_in_free_space`) shorter than the longest
+    piece of furniture (:data:`~floorscan.floorplan.free_space.CLUTTER_MAX_LENGTH_M`; a
+    longer chain may be a wall that rule took for furniture, and keeps its jambs).
+
+    Parameters
+    ----------
+    clutter : pandas.DataFrame
+        :attr:`~floorscan.floorplan.plan.FloorPlan.clutter`'s columns.
+
+    Returns
+    -------
+    (F, 4) float64 ndarray
+        ``x0, y0, x1, y1``, metres.
+    """
+    loose = clutter[(clutter["reason"] == "loose_in_free_space") & (clutter["length_m"] < CLUTTER_MAX_LENGTH_M)]
+    return loose[["x0", "y0", "x1", "y1"]].to_numpy(np.float64).reshape(-1, 4)
 
 
 def furniture_islands(raster: RoomRaster, axes: np.ndarray, min_room_area_m2: float = 0.0) -> np.ndarray:

@@ -330,13 +330,14 @@ def plan_of_segments(
             axes, junctions = _wall_junctions(axes, thick, wall_of_face, side, params)
     rooms, doors = _empty(ROOM_COLUMNS), _empty(DOOR_COLUMNS)
     if grid is not None and len(axes) and with_rooms:
+        from floorscan.floorplan.jambs import loose_furniture
         from floorscan.floorplan.lone_walls import apart_from_the_rooms
         from floorscan.floorplan.rooms import rooms_and_walls
 
         # an opening at a wall's free end (an entrance; a door the rooms have not cut yet): the stub beyond is a wall
         axes, thick, faces, wall_of_face, face_w, n_seg, flen, junctions, _ = _framed(
             axes, thick, faces, wall_of_face, face_w, n_seg, flen, junctions, None, grid, params)
-        rooms, doors, lone = rooms_and_walls(axes, thick, grid, params.rooms, under)
+        rooms, doors, lone = rooms_and_walls(axes, thick, grid, params.rooms, under, loose_furniture(clutter))
         on = doors["wall_id"].to_numpy(np.int64)
         lone[on[on >= 0]] = False  # never a door's wall
         lone = apart_from_the_rooms(lone, axes, thick, junctions[["wall_a", "wall_b"]].to_numpy(np.int64), params.rooms)

@@ -52,7 +52,9 @@ taken from the walls:
    (h-maxima): every narrowing of the space is a candidate boundary between two rooms.
 4. **Rooms by persistence** (:mod:`floorscan.floorplan.persistence`): the regions
    merged across every passage that is no door (no wider than ``door_max_m``, at most
-   three quarters of the width of each region it joins, between jambs; not from the
+   three quarters of the width of each region it joins, between jambs, which no
+   furniture the structure passes found loose in the space is,
+   :func:`~floorscan.floorplan.jambs.loose_furniture`; not from the
    face of a wall to an object wider than a wall,
    :func:`~floorscan.floorplan.jambs.face_to_object`, nor from a column in a
    partition's line past the wall it crosses,
@@ -155,7 +157,7 @@ log = logging.getLogger(__name__)
 
 def segment_rooms(
     grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, params: RoomParams = RoomParams(),
-    under: np.ndarray | None = None,
+    under: np.ndarray | None = None, furniture: np.ndarray | None = None,
 ) -> tuple[RoomRaster, np.ndarray, list[tuple[np.ndarray, np.ndarray, int, int, int]], bool]:
     """The rooms and doors on the raster (module docstring, steps 1-5).
 
@@ -170,6 +172,9 @@ def segment_rooms(
     params : RoomParams
     under : (K, 4, 2) float ndarray, optional
         The floor under the objects against walls, metres (:func:`plan_rooms`).
+    furniture : (F, 4) float ndarray, optional
+        Faces of furniture standing loose in the space, metres: no door's jamb
+        (:func:`~floorscan.floorplan.jambs.jamb_cells`).
 
     Returns
     -------
@@ -198,10 +203,10 @@ def segment_rooms(
     # a corridor's end opens onto a hall once the rooms' other boundaries are drawn
     gaps += [g for g in corridor_ends(axes, thickness, _cut_along(raster, gaps)[0], params, strips)
              if D.passes_through(raster, g[0], g[1])]
-    segmented = _segment(grid, axes, thickness, params, raster, gaps, strips)
+    segmented = _segment(grid, axes, thickness, params, raster, gaps, strips, furniture)
     cuts = partition_cuts(axes, thickness, raster, segmented[1], params)
     if cuts:  # the rooms again, cut where partitions stop short of a wall
-        segmented = _segment(grid, axes, thickness, params, raster, gaps + cuts, strips)
+        segmented = _segment(grid, axes, thickness, params, raster, gaps + cuts, strips, furniture)
     return segmented
 
 
@@ -217,9 +222,11 @@ def _cut_along(raster: RoomRaster, gaps: list) -> tuple[RoomRaster, np.ndarray]:
 
 
 def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, params: RoomParams, raster: RoomRaster,
-             gaps: list, strips: list) -> tuple[RoomRaster, np.ndarray, list, bool]:
+             gaps: list, strips: list, furniture: np.ndarray | None = None,
+             ) -> tuple[RoomRaster, np.ndarray, list, bool]:  # fmt: skip
     """:func:`segment_rooms` on ``raster`` cut along ``gaps`` ((p, q, wall) lines that bound
-    rooms), with the corridors ``strips``; returns as :func:`segment_rooms`."""
+    rooms), with the corridors ``strips`` and the loose ``furniture``; returns as
+    :func:`segment_rooms`."""
     cut, barrier = _cut_along(raster, gaps)
     labels, distance = space_regions(cut, params)
     n = int(labels.max())
@@ -227,7 +234,7 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     # obstacle that is no object standing free), no wider than a door: a door, or,
     # narrower than a door, a slit nobody passes, which keeps two regions apart without
     # a door; unless it is no opening in a wall (module docstring, step 4)
-    jambs = jamb_cells(cut, params.jamb_m, axes, thickness, params)
+    jambs = jamb_cells(cut, params.jamb_m, axes, thickness, params, furniture)
     contacts = D.contacts(labels)
     line_of = None  # the walls' lines (wall_line_index), for between_faces
     framed: dict[tuple[int, int], list] = {}
@@ -403,15 +410,15 @@ def _fans(raster: RoomRaster, labels: np.ndarray, scan_xy: np.ndarray | None, n:
 
 def plan_rooms(
     axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, params: RoomParams = RoomParams(),
-    under: np.ndarray | None = None,
+    under: np.ndarray | None = None, furniture: np.ndarray | None = None,
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The rooms and doors of a plan: :func:`rooms_and_walls` without the walls."""
-    return rooms_and_walls(axes, thickness, grid, params, under)[:2]
+    return rooms_and_walls(axes, thickness, grid, params, under, furniture)[:2]
 
 
 def rooms_and_walls(
     axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, params: RoomParams = RoomParams(),
-    under: np.ndarray | None = None,
+    under: np.ndarray | None = None, furniture: np.ndarray | None = None,
 ) -> tuple[pd.DataFrame, pd.DataFrame, np.ndarray]:
     """The rooms and doors of a plan (the module docstring): the tables of
     :attr:`~floorscan.floorplan.plan.FloorPlan.rooms` and
@@ -429,6 +436,9 @@ def rooms_and_walls(
     under : (K, 4, 2) float ndarray, optional
         The floor under the objects standing against walls
         (:func:`~floorscan.floorplan.structure.floor_under`), metres: the rooms' floor.
+    furniture : (F, 4) float ndarray, optional
+        Faces of furniture standing loose in the space
+        (:func:`~floorscan.floorplan.jambs.loose_furniture`), metres: it frames no door.
 
     Returns
     -------
@@ -445,7 +455,7 @@ def rooms_and_walls(
     import shapely
 
     t0 = time.perf_counter()
-    raster, labels, doors, divided = segment_rooms(grid, axes, thickness, params, under)
+    raster, labels, doors, divided = segment_rooms(grid, axes, thickness, params, under, furniture)
     n = int(labels.max())
     fans = _fans(raster, labels, grid.scan_xy, n)
     polys = room_polygons(raster, labels, axes, thickness)
