@@ -206,10 +206,10 @@ def test_a_label_moves_off_a_door_swing_but_does_not_shrink_for_it():
 
 
 def test_the_svg_labels_keep_clear_of_the_quarter_discs_its_doors_swing_through():
-    from floorscan.floorplan.svg import door_swings
+    from floorscan.floorplan.svg import door_leaves, door_swings
     from test_rooms_export import ROOM, rooms_plan
 
-    swing = door_swings(rooms_plan())
+    swing = door_swings(door_leaves(rooms_plan()))
     # hinged at the opening's first end (3.0, 1.9), 0.9 m wide, into the room (not the corridor)
     assert swing.area == pytest.approx(math.pi * 0.9**2 / 4, rel=0.02)
     assert ROOM.buffer(0.06).contains(swing) and swing.bounds == pytest.approx((2.1, 1.0, 3.0, 1.9), abs=1e-9)

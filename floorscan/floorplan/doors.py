@@ -118,6 +118,7 @@ def passes_through(raster: RoomRaster, p: np.ndarray, q: np.ndarray, side_m: flo
     side_m : float
         Metres.
     outward : bool
+        Also take an opening in the building's outline (above).
 
     Returns
     -------

@@ -186,16 +186,13 @@ def _add_rooms(msp, exports: PlanExports, version: str) -> None:
     where two lines do not fit."""
     from ezdxf.enums import MTextEntityAlignment, TextEntityAlignment
 
-    from floorscan.floorplan.labels import place_room_labels, text_box
+    from floorscan.floorplan.labels import place_room_labels, room_label_boxes
 
     r = exports.plan.rooms
     add_outline = msp.add_polyline2d if version == "R12" else msp.add_lwpolyline
     h = DXF_ROOM_TEXT_HEIGHT_M
     attribs = {"layer": "ROOM"}
-    names = [str(v) for v in r["name"].tolist()]
-    areas = [f"{float(v):.1f} m\u00b2" for v in r["area_m2"].tolist()]
-    full = np.array([text_box([(n, h), (a, h)], DXF_LINE_GAP * h) for n, a in zip(names, areas)]).reshape(-1, 2)
-    alone = np.array([text_box([(n, h)]) for n in names]).reshape(-1, 2)
+    names, areas, full, alone = room_label_boxes(r, h, h, DXF_LINE_GAP * h)
     xy, scale, with_area, angle = place_room_labels(exports.room_polys, exports.room_labels, full, alone,
                                                     np.full(len(r), h))
     for name, area_text, poly, (x, y), f, both, turn in zip(

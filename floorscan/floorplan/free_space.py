@@ -45,6 +45,9 @@ FRONT_OVERLAP = 0.8
 DUPLICATE_ANGLE_DEG = 20.0
 #: Objects in free space shorter than this are furniture, metres: the longest desk, shelf or row of chairs is shorter.
 CLUTTER_MAX_LENGTH_M = 2.5
+#: The clutter reason of structure step 6's chains of faces standing loose in the free space
+#: (:func:`~floorscan.floorplan.clutter.loose_in_free_space`).
+LOOSE_IN_FREE_SPACE = "loose_in_free_space"
 #: Faces shorter than this without a junction are clutter, metres: a wall that meets no other is at least this long.
 MIN_WALL_LENGTH_M = 0.5
 #: A face that meets no face, none in its line within this, free at both ends, stands in the room (clutter), metres.

@@ -20,7 +20,7 @@ import numpy as np
 
 from floorscan.core.geometry import ray_meets_lines
 from floorscan.floorplan.doors import footprint_distance, near_walls, wall_units
-from floorscan.floorplan.free_space import CLUTTER_MAX_LENGTH_M
+from floorscan.floorplan.free_space import CLUTTER_MAX_LENGTH_M, LOOSE_IN_FREE_SPACE
 from floorscan.floorplan.room_space import RoomParams, RoomRaster, dilate, surrounded, wall_mask
 
 #: The cells of loose furniture (:func:`jamb_cells`): those within this many cells of its
@@ -102,7 +102,7 @@ def loose_furniture(clutter) -> np.ndarray:
     (F, 4) float64 ndarray
         ``x0, y0, x1, y1``, metres.
     """
-    loose = clutter[(clutter["reason"] == "loose_in_free_space") & (clutter["length_m"] < CLUTTER_MAX_LENGTH_M)]
+    loose = clutter[(clutter["reason"] == LOOSE_IN_FREE_SPACE) & (clutter["length_m"] < CLUTTER_MAX_LENGTH_M)]
     return loose[["x0", "y0", "x1", "y1"]].to_numpy(np.float64).reshape(-1, 4)
 
 

@@ -68,6 +68,30 @@ def text_box(lines: list[tuple[str, float]], gap: float = 0.0) -> tuple[float, f
     return width, height
 
 
+def room_label_boxes(rooms, name_size: float, area_size: float, gap: float):
+    """The texts of each room's label and their boxes at full size (:func:`text_box`):
+    its name, and its area in m\u00b2 on a second line ``gap`` below.
+
+    Parameters
+    ----------
+    rooms : pandas.DataFrame
+        ``name`` and ``area_m2`` (:attr:`~floorscan.floorplan.plan.FloorPlan.rooms`).
+    name_size, area_size, gap : float
+        The lines' font sizes and the gap between them, the drawing's units.
+
+    Returns
+    -------
+    names, areas : list of str
+    full, name_only : (R, 2) float64 ndarray
+        Width and height of the label with its area, and of the name alone.
+    """
+    names = [str(v) for v in rooms["name"].tolist()]
+    areas = [f"{float(v):.1f} m\u00b2" for v in rooms["area_m2"].tolist()]
+    full = np.array([text_box([(n, name_size), (a, area_size)], gap) for n, a in zip(names, areas)]).reshape(-1, 2)
+    name_only = np.array([text_box([(n, name_size)]) for n in names]).reshape(-1, 2)
+    return names, areas, full, name_only
+
+
 def place_room_labels(polys, poles: np.ndarray, full: np.ndarray, name_only: np.ndarray, line: np.ndarray,
                       avoid=None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
     """Each room's label place and size (the module docstring).
@@ -116,11 +140,18 @@ def place_room_labels(polys, poles: np.ndarray, full: np.ndarray, name_only: np.
     for k in sorted(ok, key=lambda k: (-polys[k].area, k)):
         poly = polys[k]
         shapely.prepare(poly)
-        pts = _candidates(poly, poles[k], line[k] * LABEL_SCALES[-1] / LABEL_GRID_STEPS)
         taken = shapely.union_all(placed) if placed else None
+        clear_of = [avoid, None] if avoid is not None and not avoid.is_empty else [None]
+        # the first preference at the pole, the first of the candidate places: most rooms
+        # take it, and need no grid
+        box = _boxes(poles[k][None], full[k], 0.0)[0]
+        if poly.contains(box) and not any(g is not None and g.intersects(box) for g in (taken, clear_of[0])):
+            xy[k], scale[k], with_area[k], angle[k] = poles[k], LABEL_SCALES[0], True, 0.0
+            placed.append(box)
+            continue
+        pts = _candidates(poly, poles[k], line[k] * LABEL_SCALES[-1] / LABEL_GRID_STEPS)
         turns = [0.0] + [a for a in [_length_angle(poly)] if abs(a) > np.radians(LABEL_TURN_MIN_DEG)]
         choice = None
-        clear_of = [avoid, None] if avoid is not None and not avoid.is_empty else [None]
         for size, area in ((full[k], True), (name_only[k], False)):
             for turn in turns:
                 for f, other in ((f, o) for f in LABEL_SCALES for o in clear_of):

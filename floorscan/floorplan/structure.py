@@ -98,7 +98,7 @@ from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.clutter import (
     free_standing_objects, in_front_of_walls, loose_in_free_space, object_sides, on_objects,
 )
-from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
+from floorscan.floorplan.free_space import LOOSE_IN_FREE_SPACE, StructureParams, mask_at, passable, segment_samples
 from floorscan.floorplan.free_space import open_run as free_open_run
 from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, free_normals, hidden_by_objects, into_corners
 from floorscan.floorplan.junctions import junction_ends, short_loose, shorter_on_longer, snap_junctions
@@ -441,7 +441,7 @@ def structure_passes(
     reason += [np.full(int(standing.sum()), "free_standing_object", dtype=object),
                np.full(int(against.sum()), "in_front_of_wall", dtype=object),
                np.full(int(short.sum()), "short", dtype=object),
-               np.full(int(loose.sum()), "loose_in_free_space", dtype=object)]  # fmt: skip
+               np.full(int(loose.sum()), LOOSE_IN_FREE_SPACE, dtype=object)]  # fmt: skip
     # the walls meet again without the clutter; a face the new ends left short goes
     walls, junctions = snap_junctions(joined[keep], params)
     still = ~short_loose(walls, junctions, params.min_wall_length_m)

@@ -197,9 +197,10 @@ def _write_svg(
             f"<title>wall {wall_id}: {length:.2f} m x {thickness:.2f} m</title></line>"
         )
     out.append("</g>")
-    out += _svg_doors(plan, px)
+    leaves = door_leaves(plan)
+    out += _svg_doors(plan, px, leaves)
     out.append("</g>")
-    out += _svg_room_labels(exports, s, tx, ty)
+    out += _svg_room_labels(exports, s, tx, ty, door_swings(leaves))
     out += _svg_scale_bar(s, m, height - 30 * T)
     out += _svg_frame_axes(m + 250 * T, height - 30 * T, georeference)
     legend_y = height - (80 if len(clutter) else 74) * T - SVG_LEGEND_ROW_PX * n_extra
@@ -294,7 +295,7 @@ def _svg_rooms(exports: PlanExports, px: float) -> list[str]:
     return out
 
 
-def _door_leaves(plan: FloorPlan) -> list[tuple]:
+def door_leaves(plan: FloorPlan) -> list[tuple]:
     """Each door's opening, width and leaf, as :func:`_svg_doors` draws them: ``(door_id,
     x0, y0, x1, y1, width_m, wall_id, room_a, room_b, leaf, sweep)``, the leaf hinged at
     ``(x0, y0)``, as wide as the opening, at right angles to it into the first of the two
@@ -321,14 +322,14 @@ def _door_leaves(plan: FloorPlan) -> list[tuple]:
     return out
 
 
-def door_swings(plan: FloorPlan):
-    """The quarter discs the doors' leaves swing through (:func:`_door_leaves`), one
+def door_swings(leaves: list[tuple]):
+    """The quarter discs the doors' leaves (:func:`door_leaves`) swing through, one
     shapely geometry in map metres (empty without doors): what a room's label keeps
     clear of where it can (:func:`_svg_room_labels`)."""
     import shapely
 
     sectors = []
-    for _, x0, y0, x1, y1, _, _, _, _, leaf, _ in _door_leaves(plan):
+    for _, x0, y0, x1, y1, _, _, _, _, leaf, _ in leaves:
         hinge = np.array([x0, y0])
         a0 = math.atan2(leaf[1] - y0, leaf[0] - x0)
         a1 = math.atan2(y1 - y0, x1 - x0)
@@ -339,17 +340,17 @@ def door_swings(plan: FloorPlan):
     return shapely.union_all(sectors) if sectors else shapely.GeometryCollection()
 
 
-def _svg_doors(plan: FloorPlan, px: float) -> list[str]:
+def _svg_doors(plan: FloorPlan, px: float, leaves: list[tuple]) -> list[str]:
     """The doors above the walls (map metres, ``px`` metres a pixel), drawn as a plan
     drawn by people draws them: the opening cleared to white across its wall's
     thickness, a thin line across it, and the leaf, as wide as the opening, swung a
     quarter turn into the first of the two rooms that is not a corridor, with its arc (:data:`SVG_DOOR_COLOUR`;
-    a tooltip gives the width and the rooms joined); :func:`_door_leaves`."""
+    a tooltip gives the width and the rooms joined); ``leaves``: :func:`door_leaves`."""
     if not len(plan.doors):
         return []
     thick = dict(zip(plan.walls["wall_id"].tolist(), plan.walls["thickness_m"].tolist()))
     out = [f'<g id="doors" fill="none" stroke="{SVG_DOOR_COLOUR}" stroke-linecap="butt">']
-    for door_id, x0, y0, x1, y1, width, wall_id, a, b, leaf, sweep in _door_leaves(plan):
+    for door_id, x0, y0, x1, y1, width, wall_id, a, b, leaf, sweep in leaves:
         xy = f'x1="{x0:.4f}" y1="{y0:.4f}" x2="{x1:.4f}" y2="{y1:.4f}"'
         if wall_id in thick:
             out.append(f'<line {xy} stroke="#ffffff" stroke-width="{float(thick[wall_id]) + 2 * px:.6g}"/>')
@@ -365,26 +366,23 @@ def _svg_doors(plan: FloorPlan, px: float) -> list[str]:
     return out
 
 
-def _svg_room_labels(exports: PlanExports, s: float, tx: float, ty: float) -> list[str]:
+def _svg_room_labels(exports: PlanExports, s: float, tx: float, ty: float, swings) -> list[str]:
     """A label per room, in pixels (outside the flipped plan group, so the text stands
     upright): the name, and the area in m\u00b2 below it, placed inside the room and
     clear of the other labels at the largest size that fits, level or along the room, off
-    the doors' swings (:func:`door_swings`) where it can
+    the doors' swings (``swings``, :func:`door_swings`) where it can
     (:func:`~floorscan.floorplan.labels.place_room_labels`, from the room's label point
     :attr:`~floorscan.floorplan.footprints.PlanExports.room_labels`); the name alone
     where two lines do not fit."""
-    from floorscan.floorplan.labels import place_room_labels, text_box
+    from floorscan.floorplan.labels import place_room_labels, room_label_boxes
 
     r = exports.plan.rooms
     if not len(r):
         return []
-    names = [str(v) for v in r["name"].tolist()]
-    areas = [f"{float(v):.1f} m\u00b2" for v in r["area_m2"].tolist()]
     name_px, area_px = SVG_ROOM_LABEL_PX, SVG_ROOM_AREA_PX
-    full = np.array([text_box([(n, name_px), (a, area_px)], SVG_ROOM_LINE_GAP_PX) for n, a in zip(names, areas)])
-    alone = np.array([text_box([(n, name_px)]) for n in names])
+    names, areas, full, alone = room_label_boxes(r, name_px, area_px, SVG_ROOM_LINE_GAP_PX)
     xy, scale, with_area, angle = place_room_labels(exports.room_polys, exports.room_labels, full / s, alone / s,
-                                                    np.full(len(names), name_px / s), door_swings(exports.plan))
+                                                    np.full(len(names), name_px / s), swings)
     out = [f'<g id="room-labels" font-size="{name_px:g}" text-anchor="middle" fill="#333333">']
     for name, area, (x, y), f, both, turn in zip(names, areas, xy.tolist(), scale.tolist(), with_area.tolist(),
                                                 angle.tolist()):
