@@ -13,7 +13,7 @@ import shapely
 
 from conftest import cast_rays
 from floorscan.core.occupancy import OccupancyParams, occupancy_grid
-from floorscan.floorplan.doors import wall_gaps
+from floorscan.floorplan.doors import distinct_gaps, wall_gaps
 from floorscan.floorplan.jambs import jamb_cells
 from floorscan.floorplan.room_space import RoomParams, room_space
 from floorscan.floorplan.mouths import corner_mouths, room_mouths
@@ -478,6 +478,22 @@ def test_wall_gaps_between_collinear_ends():
     axes = np.array(CORRIDOR, dtype=np.float64)
     widths = sorted(float(np.hypot(*(q - p))) for p, q, _ in wall_gaps(axes, np.full(len(axes), T), params))
     assert np.allclose(widths, [0.9, 0.9])
+
+
+def test_one_opening_found_on_two_lines_is_cut_once_on_the_narrower():
+    """A door found between two walls' ends and again on a corridor side's line, a cell
+    or two apart: two cuts would leave a sliver of space between them and find no rooms
+    on either side (the rigid-motion property's hallways, furnished, lost a door so)."""
+    between_ends = (np.array([-0.77, 9.89]), np.array([-0.23, 9.16]), 10)  # 0.91 m
+    on_side_line = (np.array([-0.36, 9.06]), np.array([-0.87, 9.75]), 22)  # 0.86 m, 0.15 m off
+    kept = distinct_gaps([between_ends, on_side_line], 0.35)
+    assert len(kept) == 1 and kept[0][2] == 22
+    assert distinct_gaps([on_side_line, between_ends], 0.35)[0][2] == 22
+    # two doors of one wall, side by side, and the same door seen farther off than a jamb's reach
+    beside = (np.array([0.6, 0.0]), np.array([1.5, 0.0]), 1)
+    door = (np.array([-0.5, 0.0]), np.array([0.4, 0.0]), 2)
+    assert len(distinct_gaps([door, beside], 0.35)) == 2
+    assert len(distinct_gaps([door, (door[0] + [0, 0.4], door[1] + [0, 0.4], 3)], 0.35)) == 2
 
 
 def test_the_outside_seen_through_an_opening_is_not_a_room():

@@ -45,7 +45,10 @@ taken from the walls:
    whose side walls end apart). The rooms are then segmented again
    (steps 3-5) where a partition stopping short of a wall, with an opening wider
    than a door, divides a room that wraps around it
-   (:func:`~floorscan.floorplan.extensions.partition_cuts`).
+   (:func:`~floorscan.floorplan.extensions.partition_cuts`). An opening found on two
+   of these lines within ``jamb_m`` of each other (between two walls' ends and on a
+   corridor side's line) is cut once, on the narrower
+   (:func:`~floorscan.floorplan.doors.distinct_gaps`).
 3. **Regions** (:func:`~floorscan.floorplan.room_space.space_regions`): a watershed
    (scikit-image) of the negated distance to the nearest wall or unseen cell, from the
    maxima of that distance that stand ``marker_depth_m`` above the saddles around them
@@ -203,10 +206,12 @@ def segment_rooms(
     # a corridor's end opens onto a hall once the rooms' other boundaries are drawn
     gaps += [g for g in corridor_ends(axes, thickness, _cut_along(raster, gaps)[0], params, strips)
              if D.passes_through(raster, g[0], g[1])]
+    gaps = D.distinct_gaps(gaps, params.jamb_m)
     segmented = _segment(grid, axes, thickness, params, raster, gaps, strips, furniture)
     cuts = partition_cuts(axes, thickness, raster, segmented[1], params)
     if cuts:  # the rooms again, cut where partitions stop short of a wall
-        segmented = _segment(grid, axes, thickness, params, raster, gaps + cuts, strips, furniture)
+        segmented = _segment(grid, axes, thickness, params, raster, D.distinct_gaps(gaps + cuts, params.jamb_m),
+                             strips, furniture)
     return segmented
 
 
