@@ -63,3 +63,27 @@ def test_a_corridor_is_not_cut_on_the_line_of_a_partition_between_its_offices():
     assert len(rooms) == 3 and len(doors) == 2
     corridor = next(p for p in rooms["polygon"] if p.contains(shapely.Point(4, 1.3)))
     assert corridor.bounds[0] < 0.2 and corridor.bounds[2] > 7.8 and 18.5 < corridor.area < 20.5
+
+
+def test_a_corridor_wall_that_stops_short_of_a_room_beside_it_parts_the_room_from_the_corridor():
+    # a 2 m corridor (y 0..2) whose north wall (x 3..7) stops 3 m short of the east wall;
+    # room A (x 0..5.5) behind it, its door at x 2..3, and an office (x 5.5..10) open
+    # onto the corridor from x 7 to 10. The corridor lies along the wall's south face
+    # for 4 m, the office on its north face for 1.5 m only: the wall bounds the room
+    # more than the opening does, and the office is a room of its own.
+    walls = [(0, 0, 10, 0), (10, 0, 10, 6), (10, 6, 0, 6), (0, 6, 0, 0),
+             (0, 2, 2, 2), (3, 2, 7, 2), (5.5, 2, 5.5, 6)]  # fmt: skip
+    seeds = [(1, 1), (5, 1), (9, 1), (2.5, 4), (8, 4)]
+    axes = np.array(walls, dtype=np.float64)
+    raster = room_space(_grid(walls, seeds), axes, np.full(len(axes), T), RoomParams())
+    exts = wall_extensions(axes, np.full(len(axes), T), raster, RoomParams())
+    assert [w for _, _, w in exts] == [5]
+    rooms, doors = _rooms(walls, seeds)
+    assert len(rooms) == 3 and len(doors) == 1
+
+    def room_of(x, y):
+        return [k for k, p in enumerate(rooms["polygon"]) if p.contains(shapely.Point(x, y))]
+
+    assert room_of(8, 4) != room_of(9, 1)
+    office = rooms["polygon"].iloc[room_of(8, 4)[0]]
+    assert office.bounds == pytest.approx((5.5, 2.0, 10.0, 6.0), abs=0.15)

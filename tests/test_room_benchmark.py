@@ -184,6 +184,18 @@ def test_furniture_standing_loose_frames_no_door_on_a_real_robot_map():
     assert row["room_mean_iou"] > 0.96
 
 
+@pytest.mark.skipif(not ROOM_MAPS.is_dir(), reason=SKIP_REASON)
+def test_a_corridor_wall_that_stops_short_parts_the_corridor_from_the_hall_on_a_real_robot_map():
+    """g4s_y2 of ROSE^2: the main corridor (y 9.5-12 m) opens at its west end onto the
+    west hall. The wall at x 16.4 m between the hall (along its west face) and an office
+    (along its east face) stops 3.9 m short of the corridor's south wall; extended to
+    it, it parts corridor and hall: 13 rooms, 12 matching the 15 drawn (12 and 11 when
+    the room had to lie on both faces of the wall)."""
+    from benchmarks.bench_rooms import run_task
+
+    (row,) = run_task(("rose2", "g4s_y2"), ROOM_MAPS)
+    assert (row["n_true_rooms"], row["n_plan_rooms_scored"], row["n_matched_rooms"]) == (15, 13, 12)
+
 def test_reference_walls_are_the_room_s_not_a_ray_s_borders(tmp_path):
     """A furniture-free map read as ipa reads it (grey an obstacle): a room 30 x 20 px
     walled in black, with a ray one pixel wide through a window in its east wall 20 px

@@ -22,12 +22,16 @@ opening is a door the persistence already weighs) and at most
 :data:`~floorscan.floorplan.mouths.MOUTH_WALL_M` long. It cuts the room it lies in
 (the rooms of a first segmentation, shortest extension first) when:
 
-- the room wraps around the wall: the room lies on both faces of the wall, within
-  ``close_m`` of them (the unseen strip along a wall's face), for at least the
-  opening's length: the boundary between the two parts is more wall than opening;
+- the wall bounds the room for at least the opening's length: the room lies along it,
+  on either face, within ``close_m`` of it (the unseen strip along a wall's face). A
+  partition the room wraps around, or a corridor's wall that stops short of the room
+  beside it (the room lies on its other face only where it reaches past the wall's
+  end), is more wall than opening; a stub is not;
 - the cut parts the room in two, each at least ``min_room_area_m2`` and walled along at
   least ``min_enclosure`` of its edge (as a room is, and a fan of rays seen through a
-  window is not: :mod:`floorscan.floorplan.rooms`, step 4).
+  window is not: :mod:`floorscan.floorplan.rooms`, step 4), and neither a recess: each
+  at least :data:`~floorscan.floorplan.mouths.MOUTH_MIN_DEPTH` times the opening deep
+  on average (its area over the opening's width), as a mouth's pocket is.
 
 A free-standing wall whose other end also stands in the room does not part it, so it
 stays inside the room.
@@ -38,7 +42,7 @@ from __future__ import annotations
 import numpy as np
 
 from floorscan.floorplan.doors import barrier_cells, junction_end
-from floorscan.floorplan.mouths import MOUTH_MAX_M, MOUTH_WALL_M
+from floorscan.floorplan.mouths import MOUTH_MAX_M, MOUTH_MIN_DEPTH, MOUTH_WALL_M
 from floorscan.floorplan.room_space import RoomParams, RoomRaster, enclosure_cells, wall_footprints
 
 
@@ -152,9 +156,9 @@ def partition_cuts(
         u = (b - a) / length
         n = np.array([-u[1], u[0]]) * (thickness[i] / 2 + 2 * res)
         on = a + np.outer(np.arange(res / 2, length, res), u)
-        wrapped = float(((raster.at(grown, on + n) == ra) & (raster.at(grown, on - n) == ra)).sum()) * res
-        if wrapped < width:
-            continue  # more opening than wall between the two parts
+        along = float(((raster.at(grown, on + n) == ra) | (raster.at(grown, on - n) == ra)).sum()) * res
+        if along < width:
+            continue  # more opening than wall
         rows, cols = np.nonzero(work == ra)
         r0, c0 = rows.min(), cols.min()
         box = (slice(r0, rows.max() + 1), slice(c0, cols.max() + 1))
@@ -170,8 +174,8 @@ def partition_cuts(
         if not ca or not cb or ca == cb:
             continue  # the room goes on around the wall's other end
         area = np.bincount(comp.ravel(), minlength=count + 1) * res**2
-        if min(area[ca], area[cb]) < params.min_room_area_m2:
-            continue
+        if min(area[ca], area[cb]) < max(params.min_room_area_m2, MOUTH_MIN_DEPTH * width**2):
+            continue  # too small for a room, or a recess of the space it opens onto (as a mouth's)
         on_edge = np.bincount(comp[edge[box]], minlength=count + 1)
         walled = np.bincount(comp[edge[box] & solid[box]], minlength=count + 1)
         if min(walled[c] / max(on_edge[c], 1) for c in (ca, cb)) < params.min_enclosure:
