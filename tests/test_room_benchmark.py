@@ -196,6 +196,19 @@ def test_a_corridor_wall_that_stops_short_parts_the_corridor_from_the_hall_on_a_
     (row,) = run_task(("rose2", "g4s_y2"), ROOM_MAPS)
     assert (row["n_true_rooms"], row["n_plan_rooms_scored"], row["n_matched_rooms"]) == (15, 13, 12)
 
+@pytest.mark.skipif(not ROOM_MAPS.is_dir(), reason=SKIP_REASON)
+def test_a_corridor_goes_on_through_an_open_office_on_a_real_robot_map():
+    """map_with_clutter of ROSE^2: the main corridor (y 19.5-21.9 m) runs on east of
+    x 45.3 m through an open-plan office, its south side open for 7.7 m and its north
+    side stepping 0.4 m out at x 58.4 m. With its doors part of its walls and the
+    stepped line joined to its own, it goes on to x 65.2 m; the line across it between
+    the two walls' ends at x 45.3-45.8 m crosses a corridor that goes on, and parts
+    nothing. 15 rooms, 11 matching the 14 drawn (10 and 7 before; ROSE^2 8 of 14)."""
+    from benchmarks.bench_rooms import run_task
+
+    (row,) = run_task(("rose2", "map_with_clutter"), ROOM_MAPS)
+    assert (row["n_true_rooms"], row["n_plan_rooms_scored"], row["n_matched_rooms"]) == (14, 15, 11)
+
 def test_reference_walls_are_the_room_s_not_a_ray_s_borders(tmp_path):
     """A furniture-free map read as ipa reads it (grey an obstacle): a room 30 x 20 px
     walled in black, with a ray one pixel wide through a window in its east wall 20 px

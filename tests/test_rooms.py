@@ -1137,6 +1137,37 @@ def test_a_corridor_goes_on_past_a_step_of_its_side():
     assert cuts == [(5.0, 6.0, 2.0), (5.0, 7.5, -0.4)], cuts
 
 
+
+def test_a_corridor_goes_on_through_an_open_office_past_a_step_of_its_side():
+    """A corridor (y 0..2, x 0..30) under an office with its door (x 0..18) and an open
+    office (x 18..25) open onto it across 7 m; past the open office the corridor's
+    north side steps 0.4 m out (the outer wall at y 2.4, x 25..30). The stepped wall
+    and the south wall run together for 5 m only, shorter than four widths, and the
+    corridor's own north line stops at x 18: the corridor ended there, and the open
+    office was one room with its east end. Joined, the two north lines and the south
+    wall make one run; the corridor goes on along its own lines to x 30 (its north side
+    bounded along 22 of its 30 m), and the open office is parted from it on the
+    corridor's line."""
+    from floorscan.floorplan.corridors import corridor_strips
+    from floorscan.floorplan.room_space import room_space
+
+    walls = [(0, 0, 30, 0), (30, 0, 30, 2.4), (30, 2.4, 25, 2.4), (25, 2.4, 25, 8), (25, 8, 0, 8), (0, 8, 0, 0),
+             (0, 2, 8, 2), (9, 2, 18, 2), (18, 2, 18, 8)]  # fmt: skip
+    axes, th = np.array(walls, dtype=np.float64), np.full(len(walls), T)
+    seeds = [(2, 1), (10, 1), (20, 1), (28, 1), (4, 5), (21.5, 5)]
+    strips = corridor_strips(axes, th, room_space(_grid(walls, seeds), axes, th, RoomParams()), RoomParams())
+    # from the west wall's face to the east wall's
+    assert len(strips) == 1 and strips[0]["polygon"].bounds == pytest.approx((0.0, 0.0, 30.0, 2.0), abs=0.25)
+    rooms, doors = _rooms(walls, seeds)
+
+    def room_of(x, y):
+        return [k for k, p in enumerate(rooms["polygon"]) if p.contains(shapely.Point(x, y))]
+
+    assert len(rooms) == 3 and len(doors) == 1 and room_of(2, 1) == room_of(28, 1) != room_of(21.5, 5) != []
+    office = rooms["polygon"].iloc[room_of(21.5, 5)[0]]
+    assert office.bounds == pytest.approx((18.0, 2.0, 25.0, 8.0), abs=0.15)
+
+
 def test_an_opening_whose_middle_faces_a_partition_s_end_is_no_niche():
     """A corridor (y 0..2) open over 4 m (x 8..12) to two rooms below, whose partition
     ends 1.5 m short of the corridor right under the opening's middle. The space behind
@@ -1327,7 +1358,7 @@ def test_a_short_wall_far_along_a_corridor_side_across_open_floor_is_not_on_its_
     floor, and the line would be less wall than opening (15.6 m of 45.6). Drawn from the
     walls alone it joins the line and makes it 45.6 m long, so a change to a wall far
     away reached the corridor's sides (belgioioso's corridor, benchmarks/README.md)."""
-    from floorscan.floorplan.corridors import wall_lines
+    from floorscan.floorplan.corridor_lines import wall_lines
     from floorscan.floorplan.doors import wall_units
 
     corridor = [(0, 0, 15, 0), (0, 2, 15, 2), (0, 0, 0, 2)]

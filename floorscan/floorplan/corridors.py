@@ -14,13 +14,14 @@ indoor environments from occupancy grid maps", RA-L 2022, ROSE^2) extend the wal
 lines across their openings; the corridor as a long, narrow strip is that of Bormann
 et al. ("Room segmentation: survey, implementation, and analysis", ICRA 2016).
 
-1. **Lines**: the plan's walls grouped into lines, each wall in the line of the
-   longest wall whose line holds its ends (within half the thicker wall plus
-   ``line_offset_m``, as :func:`~floorscan.floorplan.doors.wall_gaps` joins walls),
-   while the line stays more wall than opening, as a corridor's side is: its walls and
-   the stretches between them that are not space cover at least
-   :data:`SIDE_WALL_SHARE` of it. A short wall far along the line across open floor is
-   no part of it, and a change to it does not reach a corridor's sides.
+1. **Lines** (:mod:`floorscan.floorplan.corridor_lines`): the plan's walls grouped
+   into lines, each wall in the line of the longest wall whose line holds its ends
+   (within half the thicker wall plus ``line_offset_m``, as
+   :func:`~floorscan.floorplan.doors.wall_gaps` joins walls), while the line stays more
+   wall than opening, as a corridor's side is: its walls and the stretches between
+   them that are not space cover at least ``SIDE_WALL_SHARE`` of it. A short wall far
+   along the line across open floor is no part of it, and a change to it does not
+   reach a corridor's sides.
 2. **Corridors**: a line and a parallel one (directions within ``door_angle_deg``;
    the second's walls over their common length within ``2 line_offset_m`` of one
    offset), with a clear width between the two of at least
@@ -29,12 +30,20 @@ et al. ("Room segmentation: survey, implementation, and analysis", ICRA 2016).
    middle line lies in the space and crosses no wall across the middle half of the
    strip (rooms in a row with doors between them, or a door across a corridor), at
    least ``corridor_min_length_m`` and ``corridor_elongation`` times its width long,
-   and bounded on each side, within :data:`SIDE_STEP_M` of the side's line, by cells
-   that are not space along at least :data:`SIDE_WALL_SHARE` of it. A run shorter or
-   more open than that is a corridor too where one goes on from it past a step of its
-   sides (:func:`_going_on`: both sides' lines within :data:`SIDE_STEP_M` of the
-   corridor's, bounded together as a corridor's sides are). Of corridors over one
-   another, the narrowest is kept (the inner faces of a stepped side).
+   and bounded on each side, within ``SIDE_STEP_M`` of the side's line, by cells that
+   are not space along at least ``SIDE_WALL_SHARE`` of it, a door no wider than
+   ``door_max_m`` between two bounded stretches counting as its wall (its sides are
+   walls with doors in them). A run shorter or more open than that is a corridor too
+   where one goes on from it past a step of its sides (:func:`_going_on`: both sides'
+   lines within ``SIDE_STEP_M`` of the corridor's, bounded together as a corridor's
+   sides are). Where a side's line stops and goes on stepped out of it by up to
+   ``SIDE_STEP_M`` past an opening (a line joined to the other,
+   :func:`~floorscan.floorplan.corridor_lines.stepped_lines`), and no pair of the lines
+   themselves makes a run there, the corridor goes on along its own lines as far as the
+   run between the joined lines goes, while its sides stay bounded as a corridor's
+   (:func:`_past_steps`: a corridor through an open-plan office whose side steps out
+   past it, as ROSE^2's layout clusters a stepped wall into one line). Of corridors
+   over one another, the narrowest is kept (the inner faces of a stepped side).
 3. **Sides**: each opening in a side, at least ``door_min_m`` wide, that leads into
    space, is cut on the side's line, unless the space behind it goes on away from the
    corridor for ``corridor_elongation`` times its width or more, about as wide as the
@@ -83,80 +92,9 @@ import numpy as np
 from floorscan.floorplan.doors import contact_door, wall_units
 from floorscan.floorplan.mouths import MOUTH_MIN_DEPTH, hall_beside, sides_apart
 from floorscan.floorplan.persistence import DOOR_SHARE
+from floorscan.floorplan.corridor_lines import (SIDE_STEP_M, SIDE_WALL_SHARE, bounded, runs, stepped_lines, walled,
+                                               wall_lines)
 from floorscan.floorplan.room_space import MIN_ROOM_WIDTH_M, RoomParams, RoomRaster
-
-#: A corridor's side is bounded along at least this share of the corridor's length:
-#: its sides are walls with doors in them, more wall than opening.
-SIDE_WALL_SHARE = 0.5
-#: A corridor's side steps from its line by at most this, metres, and is still its
-#: side: the depth of a column's face, a door's recess or a row of cabinets along it.
-SIDE_STEP_M = 0.5
-
-
-def wall_lines(axes: np.ndarray, thickness: np.ndarray, u: np.ndarray, length: np.ndarray,
-               line_offset_m: float, raster: RoomRaster | None = None) -> list[list[int]]:
-    """Walls grouped into lines (module docstring, step 1): a wall is on a line when both
-    its ends lie within ``line_offset_m`` plus half the thicker wall of the line's
-    longest wall; the walls of each line, its longest first (``axes`` (N, 4) and
-    ``thickness`` (N,) metres; ``u``, ``length``: :func:`~floorscan.floorplan.doors.wall_units`).
-
-    With ``raster``, a line is also more wall than opening, as a corridor's side is: a
-    wall joins it only when its walls and the stretches between them that are not space
-    (within :data:`SIDE_STEP_M` of the line) cover at least :data:`SIDE_WALL_SHARE` of
-    its extent with the wall. A short wall far along a line across open floor is no
-    part of it."""
-    ends = axes.reshape(-1, 2, 2)
-    lines: list[list[int]] = []
-    for i in np.argsort(-length, kind="stable"):
-        if length[i] <= 0:
-            continue
-        for line in lines:
-            a = line[0]
-            n = np.array([-u[a, 1], u[a, 0]])
-            off = max(thickness[a], thickness[i]) / 2 + line_offset_m
-            if np.abs((ends[i] - ends[a, 0]) @ n).max() <= off and (
-                    raster is None or _mostly_wall(raster, ends, u[a], n, line + [int(i)])):
-                line.append(int(i))
-                break
-        else:
-            lines.append([int(i)])
-    return lines
-
-
-def _mostly_wall(raster: RoomRaster, ends: np.ndarray, u: np.ndarray, n: np.ndarray, walls: list[int]) -> bool:
-    """Whether the walls ``walls`` (``ends`` (N, 2, 2) metres) on the line through the
-    first one's start along ``u`` (normal ``n``) and the stretches between them that
-    are not space cover at least :data:`SIDE_WALL_SHARE` of their extent."""
-    o = ends[walls[0], 0]
-    t = np.sort((ends[walls] - o) @ u, axis=1)
-    lo, hi = float(t[:, 0].min()), float(t[:, 1].max())
-    step = raster.resolution_m
-    along = np.arange(lo, hi, step) + step / 2
-    on_wall = np.zeros(len(along), dtype=bool)
-    for t0, t1 in t.tolist():
-        on_wall |= (along >= t0) & (along <= t1)
-    gaps = np.flatnonzero(~on_wall)
-    if len(gaps):
-        on_wall[gaps] = _bounded(raster, o, u, n, along[gaps], -SIDE_STEP_M, SIDE_STEP_M)
-    return bool(on_wall.mean() >= SIDE_WALL_SHARE) if len(along) else True
-
-
-def _bounded(raster: RoomRaster, o: np.ndarray, u: np.ndarray, n: np.ndarray, t: np.ndarray, a: float,
-             b: float) -> np.ndarray:
-    """(K,) bool: whether the band from ``a`` to ``b`` metres along ``n`` from the line
-    ``o + t u`` holds a cell that is not space (a wall, an obstacle, the unseen), at
-    each ``t``."""
-    offs = np.arange(a, b + raster.resolution_m / 4, raster.resolution_m / 2)
-    pts = o + t[:, None, None] * u + offs[None, :, None] * n
-    free = raster.at(raster.space, pts.reshape(-1, 2), outside=False).reshape(len(t), len(offs))
-    return ~free.all(axis=1)
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """Half-open index runs of True in ``mask``."""
-    d = np.diff(np.r_[0, mask.astype(np.int8), 0])
-    return list(zip(np.flatnonzero(d == 1).tolist(), np.flatnonzero(d == -1).tolist()))
-
 
 def corridor_strips(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster, params: RoomParams) -> list[dict]:
     """The corridors (module docstring, steps 1-2): per corridor, ``polygon`` (between
@@ -169,12 +107,35 @@ def corridor_strips(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster,
 
     u_all, length = wall_units(axes)
     lines = wall_lines(axes, thickness, u_all, length, params.line_offset_m, raster)
+    cos_par = np.cos(np.radians(params.door_angle_deg))
+    found, short = _pair_runs(lines, None, axes, thickness, u_all, raster, params)
+    stepped = stepped_lines(lines, axes, u_all, cos_par, raster)
+    joined = {k for k, ln in enumerate(stepped) if ln not in lines}
+    if joined:  # a corridor going on past a step of a side's line, where no run of the lines themselves does
+        found = _past_steps(found, short, _pair_runs(stepped, joined, axes, thickness, u_all, raster, params),
+                            raster, params)
+    found += _going_on(found, short, cos_par, params.door_max_m)
+    kept: list[dict] = []
+    for c in sorted(found, key=lambda c: (c["sep"], -c["polygon"].area)):
+        if all(c["polygon"].intersection(k["polygon"]).area < 0.5 * c["polygon"].area for k in kept):
+            kept.append(c)
+    return kept
+
+
+def _pair_runs(lines: list[list[int]], must: set[int] | None, axes: np.ndarray, thickness: np.ndarray,
+               u_all: np.ndarray, raster: RoomRaster, params: RoomParams) -> tuple[list[dict], list[dict]]:
+    """The runs between pairs of ``lines`` (:func:`corridor_strips`, step 2), of pairs
+    with a line of ``must`` when given: corridors, and the runs too short or too open
+    to be one alone."""
+    import shapely
+
     line_of = np.full(len(axes), -1)
     for k, ws in enumerate(lines):
         line_of[ws] = k
     ends = axes.reshape(-1, 2, 2)
     cos_par = np.cos(np.radians(params.door_angle_deg))
     step = raster.resolution_m
+    door = int(params.door_max_m / step)
     tree = shapely.STRtree(shapely.linestrings(ends))
     found, short = [], []  # corridors, and the runs too short or too open to be one alone
     for ia, wa in enumerate(lines):
@@ -190,13 +151,15 @@ def corridor_strips(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster,
         w_off = ((ends[par] - oa) @ na).mean(axis=1)
         w_t = np.sort((ends[par] - oa) @ ua, axis=1)
         for ib in np.unique(line_of[par]).tolist():
+            if must is not None and ia not in must and ib not in must:
+                continue
             in_b = line_of[par] == ib
             lo, hi = max(lo_a, w_t[in_b, 0].min()), min(hi_a, w_t[in_b, 1].max())
             if hi - lo < params.corridor_min_length_m:
                 continue
             span = np.clip(w_t[in_b, 1], lo, hi) - np.clip(w_t[in_b, 0], lo, hi)
             offs = w_off[in_b][span > 0]
-            if not len(offs) or np.ptp(offs) > 2 * params.line_offset_m:
+            if not len(offs) or np.ptp(offs) > 2 * (params.line_offset_m if must is None else SIDE_STEP_M):
                 continue
             sep_signed = float(np.average(offs, weights=span[span > 0]))
             sep = abs(sep_signed)
@@ -212,36 +175,77 @@ def corridor_strips(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster,
                 if abs(float(u_all[j] @ ua)) < cos_par:  # a wall across the strip
                     tj = (ends[j] - oa) @ ua
                     free &= ~((t >= tj.min() - thickness[j] / 2) & (t <= tj.max() + thickness[j] / 2))
-            side_a = _bounded(raster, oa, ua, n, t, -SIDE_STEP_M, min(SIDE_STEP_M, clear / 2))
-            side_b = _bounded(raster, oa, ua, n, t, max(sep - SIDE_STEP_M, sep - clear / 2), sep + SIDE_STEP_M)
-            for s, e in _runs(free):
+            side_a = bounded(raster, oa, ua, n, t, -SIDE_STEP_M, min(SIDE_STEP_M, clear / 2))
+            side_b = bounded(raster, oa, ua, n, t, max(sep - SIDE_STEP_M, sep - clear / 2), sep + SIDE_STEP_M)
+            for s, e in runs(free):
                 t0, t1 = float(t[s] - step / 2), float(t[e - 1] + step / 2)
                 corners = [oa + t0 * ua, oa + t1 * ua, oa + t1 * ua + sep * n, oa + t0 * ua + sep * n]
                 sides = ((~side_a[s:e], list(wa), 0.0, -1.0), (~side_b[s:e], list(lines[ib]), sep, 1.0))
                 strip = dict(polygon=shapely.Polygon(corners), origin=oa, u=ua, n=n, sep=sep, clear=clear, t0=t0,
                              t1=t1, step=step, sides=sides)
                 if ((e - s) * step < max(params.corridor_min_length_m, params.corridor_elongation * clear)
-                        or side_a[s:e].mean() < SIDE_WALL_SHARE or side_b[s:e].mean() < SIDE_WALL_SHARE):
+                        or min(walled(side_a[s:e], door).mean(), walled(side_b[s:e], door).mean())
+                        < SIDE_WALL_SHARE):
                     short.append(strip)
                     continue
                 found.append(strip)
-    found += _going_on(found, short, cos_par)
-    kept: list[dict] = []
-    for c in sorted(found, key=lambda c: (c["sep"], -c["polygon"].area)):
-        if all(c["polygon"].intersection(k["polygon"]).area < 0.5 * c["polygon"].area for k in kept):
-            kept.append(c)
-    return kept
+    return found, short
 
 
-def _going_on(found: list[dict], short: list[dict], cos_par: float) -> list[dict]:
+def _past_steps(found: list[dict], short: list[dict], stepped: tuple[list[dict], list[dict]], raster: RoomRaster,
+                params: RoomParams) -> list[dict]:
+    """``found`` with each corridor going on past a step of a side's line (module
+    docstring, step 2): where a run between stepped lines (``stepped``,
+    :func:`_pair_runs` of the lines :func:`~floorscan.floorplan.corridor_lines.stepped_lines`
+    joined) runs over it (as wide within ``line_offset_m``, over nine tenths of it) and
+    on past its ends, over floor no other corridor nor a run going on from it
+    (:func:`_going_on`) covers, the corridor goes on along its own lines as far, when
+    its sides stay bounded along at least ``SIDE_WALL_SHARE`` of its length (a door
+    part of its wall, :func:`~floorscan.floorplan.corridor_lines.walled`)."""
+    import shapely
+
+    out = []
+    door = int(params.door_max_m / raster.resolution_m)
+    cos_par = np.cos(np.radians(params.door_angle_deg))
+    for f in found:
+        o, u, n, sep, clear, step = f["origin"], f["u"], f["n"], f["sep"], f["clear"], f["step"]
+        going = _going_on([f], short, cos_par, params.door_max_m)
+        for c in stepped[0] + stepped[1]:
+            if (abs(c["sep"] - sep) > params.line_offset_m or c["polygon"].area <= f["polygon"].area
+                    or c["polygon"].intersection(f["polygon"]).area < 0.9 * f["polygon"].area):
+                continue
+            t0, t1 = sorted(float((c["origin"] + t * c["u"] - o) @ u) for t in (c["t0"], c["t1"]))
+            before, after = int(max(0.0, f["t0"] - t0) // step), int(max(0.0, t1 - f["t1"]) // step)
+            t = f["t0"] + (np.arange(-before, len(f["sides"][0][0]) + after) + 0.5) * step
+            ext = np.r_[np.ones(before, dtype=bool), np.zeros(len(t) - before - after, dtype=bool),
+                        np.ones(after, dtype=bool)]  # fmt: skip
+            ends = (o + (t[0] - step / 2) * u, o + (t[-1] + step / 2) * u)
+            polygon = shapely.Polygon([ends[0], ends[1], ends[1] + sep * n, ends[0] + sep * n])
+            beyond = polygon.difference(f["polygon"])
+            if not ext.any() or any(beyond.intersection(r["polygon"]).area > 0.5 * r["polygon"].area
+                                    for r in found + going if r is not f):
+                continue  # another corridor is there, or the corridor goes on there on lines of its own
+            side_a = bounded(raster, o, u, n, t, -SIDE_STEP_M, min(SIDE_STEP_M, clear / 2))
+            side_b = bounded(raster, o, u, n, t, max(sep - SIDE_STEP_M, sep - clear / 2), sep + SIDE_STEP_M)
+            side_a[~ext], side_b[~ext] = ~f["sides"][0][0], ~f["sides"][1][0]
+            if min(walled(side_a, door).mean(), walled(side_b, door).mean()) < SIDE_WALL_SHARE:
+                continue
+            sides = ((~side_a,) + tuple(f["sides"][0][1:]), (~side_b,) + tuple(f["sides"][1][1:]))
+            f = dict(f, polygon=polygon, t0=float(t[0] - step / 2), t1=float(t[-1] + step / 2), sides=sides)
+            break
+        out.append(f)
+    return out
+
+
+def _going_on(found: list[dict], short: list[dict], cos_par: float, door_max_m: float) -> list[dict]:
     """The runs of ``short`` (strips of :func:`corridor_strips` too short or too open
     to be a corridor alone) where a corridor of ``found`` goes on past a step of its
     sides: parallel to it (within ``cos_par``, the cosine of ``door_angle_deg``), each
-    side's line within :data:`SIDE_STEP_M` of one of the corridor's, the two
-    overlapping or touching along it, and the two together bounded on each side along
-    at least :data:`SIDE_WALL_SHARE` of their length. A corridor's side steps where a
-    row of cabinets or the next block's wall stands out from its line; the corridor
-    runs on."""
+    side's line within ``SIDE_STEP_M`` of one of the corridor's, the two overlapping or
+    touching along it, and the two together bounded on each side along at least
+    ``SIDE_WALL_SHARE`` of their length (a door part of its wall). A corridor's side
+    steps where a row of cabinets or the next block's wall stands out from its line;
+    the corridor runs on."""
     out = []
     for c in short:
         for f in found:
@@ -255,8 +259,9 @@ def _going_on(found: list[dict], short: list[dict], cos_par: float) -> list[dict
             match = [int(abs(p - f["sep"]) < abs(p)) for p in pos]
             if match[0] == match[1] or any(abs(p - (f["sep"] if m else 0.0)) > SIDE_STEP_M for p, m in zip(pos, match)):
                 continue
-            shares = [(np.sum(~side[0]) + np.sum(~f["sides"][m][0])) / max(len(side[0]) + len(f["sides"][m][0]), 1)
-                      for side, m in zip(c["sides"], match)]  # fmt: skip
+            door = int(door_max_m / f["step"])
+            shares = [(np.sum(walled(~side[0], door)) + np.sum(walled(~f["sides"][m][0], door)))
+                      / max(len(side[0]) + len(f["sides"][m][0]), 1) for side, m in zip(c["sides"], match)]
             if min(shares) >= SIDE_WALL_SHARE:
                 out.append(c)
                 break
@@ -308,7 +313,7 @@ def corridor_sides(
     for k, s in enumerate(strips):
         mouths, cuts = [], []  # per side: the openings into other corridors, the openings to cut
         for side, (opening, walls, off, outward) in enumerate(s["sides"]):
-            for a, b in _runs(opening):
+            for a, b in runs(opening):
                 g0, g1 = s["t0"] + a * s["step"], s["t0"] + b * s["step"]
                 if g1 - g0 < params.door_min_m:
                     continue
@@ -403,7 +408,7 @@ def across_corridor(p: np.ndarray, q: np.ndarray, strips: list[dict], params: Ro
     """Whether the passage from ``p`` to ``q`` crosses a corridor from side to side
     inside it (module docstring, step 5): square to the corridor within
     ``door_angle_deg``, both ends between its ends (``t0``, ``t1``), each within
-    :data:`SIDE_STEP_M` of a side's face, and at least
+    ``SIDE_STEP_M`` of a side's face, and at least
     :data:`~floorscan.floorplan.persistence.DOOR_SHARE` of its clear width wide.
 
     Parameters

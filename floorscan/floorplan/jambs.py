@@ -251,11 +251,11 @@ def on_wall_face(point: np.ndarray, axes: np.ndarray, thickness: np.ndarray, par
 
 
 def wall_line_index(axes: np.ndarray, thickness: np.ndarray, params: RoomParams) -> np.ndarray:
-    """(N,) int64: the line of each wall, as :func:`~floorscan.floorplan.corridors.wall_lines`
+    """(N,) int64: the line of each wall, as :func:`~floorscan.floorplan.corridor_lines.wall_lines`
     groups them (its ends within ``line_offset_m`` plus half the thicker wall of the
     line's longest wall), whatever pieces a wall was found in; ``axes`` (N, 4) and
     ``thickness`` (N,) in metres."""
-    from floorscan.floorplan.corridors import wall_lines
+    from floorscan.floorplan.corridor_lines import wall_lines
 
     u, length = wall_units(axes)
     line_of = np.full(len(axes), -1, dtype=np.int64)

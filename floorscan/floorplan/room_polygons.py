@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from floorscan.core.geometry import OVERLAY_GRID_M, minus, polygons_of
-from floorscan.floorplan.corridors import wall_lines
+from floorscan.floorplan.corridor_lines import wall_lines
 from floorscan.floorplan.doors import wall_units
 from floorscan.floorplan.room_tables import room_width
 from floorscan.floorplan.room_space import (LINE_OFFSET_M, MIN_ROOM_WIDTH_M, RoomRaster, dilate, disc_opening,
@@ -180,7 +180,7 @@ def _bounded_by_walls(
     the other rooms; taken when it keeps all but 5 % of the seen floor (the room is
     convex between its walls: an L-shaped room or a ring corridor keeps its traced
     outline), and only when those walls stand on two lines at least
-    (:func:`~floorscan.floorplan.corridors.wall_lines`):
+    (:func:`~floorscan.floorplan.corridor_lines.wall_lines`):
     against one wall's line, three sides of the box would be the reach of the rays
     through its gap, floor nobody saw. ``foot``: the walls' footprints, ``walls`` their
     union. Metres."""

@@ -33,7 +33,8 @@ taken from the walls:
    side lies beyond the closed outline). So is the open side of a room
    (:func:`~floorscan.floorplan.mouths.room_mouths`): the line between the free ends of
    the walls that bound a room open on its whole width onto a corridor (an office, a
-   cubicle), or across the missing corner of two walls
+   cubicle), unless it crosses a corridor that goes on past it, or across the missing
+   corner of two walls
    (:func:`~floorscan.floorplan.mouths.corner_mouths`: a corridor's corner open to the
    room beyond it), or between two corners in one wall's line where a dead end as wide
    as its opening leaves a hall (:func:`~floorscan.floorplan.mouths.dead_end_mouths`);
@@ -200,7 +201,8 @@ def segment_rooms(
     # an opening between two walls' ends bounds the rooms on its line, an entrance too
     gaps = [g for g in D.wall_gaps(axes, thickness, params) + corner_mouths(axes, thickness, params)
             if D.passes_through(raster, g[0], g[1], outward=True) and not across_corridor(g[0], g[1], strips, params)]
-    gaps += room_mouths(axes, thickness, raster, params)
+    gaps += [g for g in room_mouths(axes, thickness, raster, params)
+             if not across_corridor(g[0], g[1], strips, params)]
     gaps += dead_end_mouths(axes, thickness, raster, params)
     gaps += [g for g in corridor_sides(axes, thickness, raster, params, strips) if D.passes_through(raster, g[0], g[1])]
     # a corridor's end opens onto a hall once the rooms' other boundaries are drawn
