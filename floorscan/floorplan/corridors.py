@@ -124,9 +124,11 @@ def corridor_strips(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster,
 
 def _pair_runs(lines: list[list[int]], must: set[int] | None, axes: np.ndarray, thickness: np.ndarray,
                u_all: np.ndarray, raster: RoomRaster, params: RoomParams) -> tuple[list[dict], list[dict]]:
-    """The runs between pairs of ``lines`` (:func:`corridor_strips`, step 2), of pairs
-    with a line of ``must`` when given: corridors, and the runs too short or too open
-    to be one alone."""
+    """The runs between pairs of ``lines`` (module docstring, step 2): corridors, and
+    the runs too short or too open to be one alone. With ``must`` (the indices of
+    joined lines, :func:`~floorscan.floorplan.corridor_lines.stepped_lines`), only the
+    pairs with such a line, whose walls may lie at two offsets up to ``2 SIDE_STEP_M``
+    apart (a stepped side), not ``2 line_offset_m``."""
     import shapely
 
     line_of = np.full(len(axes), -1)
