@@ -25,10 +25,11 @@ SIDE_STEP_M = 0.5
 
 def wall_lines(axes: np.ndarray, thickness: np.ndarray, u: np.ndarray, length: np.ndarray,
                line_offset_m: float, raster: RoomRaster | None = None) -> list[list[int]]:
-    """Walls grouped into lines (:mod:`~floorscan.floorplan.corridors`, step 1): a wall is on a line when both
-    its ends lie within ``line_offset_m`` plus half the thicker wall of the line's
-    longest wall; the walls of each line, its longest first (``axes`` (N, 4) and
-    ``thickness`` (N,) metres; ``u``, ``length``: :func:`~floorscan.floorplan.doors.wall_units`).
+    """Walls grouped into lines (:mod:`~floorscan.floorplan.corridors`, step 1): a wall
+    is on a line when both its ends lie within ``line_offset_m`` plus half the thicker
+    wall of the line's longest wall; the walls of each line, its longest first (``axes``
+    (N, 4) and ``thickness`` (N,) metres; ``u``, ``length``:
+    :func:`~floorscan.floorplan.doors.wall_units`).
 
     With ``raster``, a line is also more wall than opening, as a corridor's side is: a
     wall joins it only when its walls and the stretches between them that are not space

@@ -96,6 +96,7 @@ from floorscan.floorplan.corridor_lines import (SIDE_STEP_M, SIDE_WALL_SHARE, bo
                                                wall_lines)
 from floorscan.floorplan.room_space import MIN_ROOM_WIDTH_M, RoomParams, RoomRaster
 
+
 def corridor_strips(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster, params: RoomParams) -> list[dict]:
     """The corridors (module docstring, steps 1-2): per corridor, ``polygon`` (between
     the axes of its sides), ``origin``, ``u`` (a point of the first side's line and its
@@ -103,8 +104,6 @@ def corridor_strips(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster,
     the sides' lines), ``clear`` (metres between the sides' faces), ``t0`` and ``t1``
     (its start and end along ``u``), ``step`` and, per side,
     ``open`` ((K,) bool at ``t0 + (i + 1/2) step``) and ``walls`` (the side's line)."""
-    import shapely
-
     u_all, length = wall_units(axes)
     lines = wall_lines(axes, thickness, u_all, length, params.line_offset_m, raster)
     cos_par = np.cos(np.radians(params.door_angle_deg))
@@ -211,7 +210,7 @@ def _past_steps(found: list[dict], short: list[dict], stepped: tuple[list[dict],
     cos_par = np.cos(np.radians(params.door_angle_deg))
     for f in found:
         o, u, n, sep, clear, step = f["origin"], f["u"], f["n"], f["sep"], f["clear"], f["step"]
-        going = _going_on([f], short, cos_par, params.door_max_m)
+        going = None  # the runs going on from f on lines of their own, once a stepped run is over it
         for c in stepped[0] + stepped[1]:
             if (abs(c["sep"] - sep) > params.line_offset_m or c["polygon"].area <= f["polygon"].area
                     or c["polygon"].intersection(f["polygon"]).area < 0.9 * f["polygon"].area):
@@ -224,6 +223,7 @@ def _past_steps(found: list[dict], short: list[dict], stepped: tuple[list[dict],
             ends = (o + (t[0] - step / 2) * u, o + (t[-1] + step / 2) * u)
             polygon = shapely.Polygon([ends[0], ends[1], ends[1] + sep * n, ends[0] + sep * n])
             beyond = polygon.difference(f["polygon"])
+            going = _going_on([f], short, cos_par, params.door_max_m) if going is None else going
             if not ext.any() or any(beyond.intersection(r["polygon"]).area > 0.5 * r["polygon"].area
                                     for r in found + going if r is not f):
                 continue  # another corridor is there, or the corridor goes on there on lines of its own

@@ -30,7 +30,6 @@ restricted to openings in a plan wall's line.
 from __future__ import annotations
 
 import numpy as np
-import pandas as pd
 
 from floorscan.core.geometry import point_segment_dist2
 from floorscan.floorplan.room_space import RoomParams, RoomRaster
@@ -382,26 +381,22 @@ def distinct_doors(doors: list) -> list:
 
 def distinct_gaps(gaps: list, reach_m: float) -> list:
     """One cut per opening: of the lines ``(p, q, wall)`` (``p``, ``q`` (2,) metres) that
-    bound rooms and run along each other, every end of each within ``reach_m`` of the
-    other line (the same opening found between two walls' ends, as a room's open side and
-    on a corridor side's line), the shortest, in the place of the first: an opening's
-    width is its narrowest line from jamb to jamb. Two cuts a cell or two apart would
-    leave a sliver of space between them, no room, and neither would find the rooms on
-    its two sides."""
+    bound rooms and run along each other, within ``reach_m`` of each other end for end
+    (their Hausdorff distance: the same opening found between two walls' ends, as a
+    room's open side and on a corridor side's line), the shortest, in the place of the
+    first: an opening's width is its narrowest line from jamb to jamb. Two cuts a cell
+    or two apart would leave a sliver of space between them, no room, and neither would
+    find the rooms on its two sides."""
+    import shapely
+
     out: list = []
+    lines: list = []
     for g in gaps:
-        seg = np.r_[g[0], g[1]][None]
-        same = [k for k, o in enumerate(out) if _along(seg, np.r_[o[0], o[1]][None], reach_m)]
+        line = shapely.LineString([g[0], g[1]])
+        same = [k for k, o in enumerate(lines) if shapely.hausdorff_distance(line, o) <= reach_m]
         if not same:
             out.append(g)
-        elif np.hypot(*(g[1] - g[0])) < np.hypot(*(out[same[0]][1] - out[same[0]][0])):
-            out[same[0]] = g
+            lines.append(line)
+        elif line.length < lines[same[0]].length:
+            out[same[0]], lines[same[0]] = g, line
     return out
-
-
-def _along(a: np.ndarray, b: np.ndarray, reach_m: float) -> bool:
-    """Whether the segments ``a`` and ``b`` ((1, 4) metres) lie within ``reach_m`` of each
-    other end for end (their Hausdorff distance)."""
-    ends_a, ends_b = a.reshape(2, 2), b.reshape(2, 2)
-    d2 = np.r_[point_segment_dist2(ends_a[:, 0], ends_a[:, 1], b), point_segment_dist2(ends_b[:, 0], ends_b[:, 1], a)]
-    return bool(d2.max() <= reach_m**2)
