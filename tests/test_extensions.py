@@ -39,6 +39,18 @@ def test_more_opening_than_wall_leaves_one_room():
     assert len(rooms) == 1 and len(doors) == 0
 
 
+@pytest.mark.parametrize("length, n_rooms", [(2.92, 2), (2.85, 1)])
+def test_a_partition_as_long_as_its_opening_to_a_cell_at_each_end_divides_the_room(length, n_rooms):
+    # 2.92 m of partition against a 3.03 m opening: the room lies along the partition
+    # for 2.85 m of cells, less than the opening by two cells (each end anywhere in its
+    # cell), and is two rooms; 2.85 m against 3.10 m is more opening than wall
+    rooms, doors = _rooms(HALL + [(4, 0, 4, length)], [(2, 3), (6, 3)])
+    assert len(rooms) == n_rooms and len(doors) == 0
+    if n_rooms == 2:
+        west, east = sorted(rooms["polygon"], key=lambda p: p.centroid.x)
+        assert west.bounds[2] == pytest.approx(4.0, abs=0.2) and east.bounds[0] == pytest.approx(4.0, abs=0.2)
+
+
 def test_a_free_standing_wall_does_not_divide_its_hall():
     # both ends stand 2.5 m from the hall's walls: the hall goes on around either end
     walls = [(0, 0, 10, 0), (10, 0, 10, 8), (10, 8, 0, 8), (0, 8, 0, 0), (5, 2.5, 5, 5.5)]

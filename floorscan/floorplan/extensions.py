@@ -23,7 +23,9 @@ opening is a door the persistence already weighs) and at most
 (the rooms of a first segmentation, shortest extension first) when:
 
 - the wall bounds the room for at least the opening's length: the room lies along it,
-  on either face, within ``close_m`` of it (the unseen strip along a wall's face). A
+  on either face, within ``close_m`` of it (the unseen strip along a wall's face),
+  counted on the raster's cells, so to a cell at each end of the wall (its ends lie
+  anywhere in their cells, the opening's are measured between them). A
   partition the room wraps around, or a corridor's wall that stops short of the room
   beside it (the room lies on its other face only where it reaches past the wall's
   end), is more wall than opening; a stub is not;
@@ -157,8 +159,8 @@ def partition_cuts(
         n = np.array([-u[1], u[0]]) * (thickness[i] / 2 + 2 * res)
         on = a + np.outer(np.arange(res / 2, length, res), u)
         along = float(((raster.at(grown, on + n) == ra) | (raster.at(grown, on - n) == ra)).sum()) * res
-        if along < width:
-            continue  # more opening than wall
+        if along + 2 * res < width:
+            continue  # more opening than wall, by more than a cell at each of its ends
         rows, cols = np.nonzero(work == ra)
         r0, c0 = rows.min(), cols.min()
         box = (slice(r0, rows.max() + 1), slice(c0, cols.max() + 1))
