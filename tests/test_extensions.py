@@ -51,6 +51,28 @@ def test_a_partition_as_long_as_its_opening_to_a_cell_at_each_end_divides_the_ro
         assert west.bounds[2] == pytest.approx(4.0, abs=0.2) and east.bounds[0] == pytest.approx(4.0, abs=0.2)
 
 
+@pytest.mark.parametrize("return_m, n_rooms", [(0.6, 2), (1.2, 1)])
+def test_a_partition_ending_in_a_short_return_is_extended(return_m, n_rooms):
+    # the partition (4, 0)-(4, 3.2) turns east at its end: a 0.6 m return (a jamb, a
+    # cabinet's side) leaves its end free, and the hall is two rooms; a 1.2 m one is a
+    # wall of the L, whose own free end points at the east wall across 2.75 m, more
+    # opening than wall: one room
+    walls = HALL + [(4, 0, 4, 3.2), (4, 3.2, 4 + return_m, 3.2)]
+    rooms, doors = _rooms(walls, [(2, 3), (6, 2)])
+    assert len(rooms) == n_rooms and len(doors) == 0
+    if n_rooms == 2:
+        assert sorted(rooms["area_m2"]) == pytest.approx([22.6, 23.3], abs=0.5)
+
+
+@pytest.mark.parametrize("height_m, n_rooms", [(8.3, 2), (8.4, 1)])
+def test_an_opening_as_wide_as_a_room_s_open_side_to_a_cell_at_each_end_is_cut(height_m, n_rooms):
+    # a 4.1 m partition in a hall 8.3 m deep leaves 4.15 m open between the wall faces,
+    # MOUTH_MAX_M (4.0 m) to a 0.1 m cell at each end: two rooms; 4.25 m is wider
+    hall = [(0, 0, 8, 0), (8, 0, 8, height_m), (8, height_m, 0, height_m), (0, height_m, 0, 0)]
+    rooms, doors = _rooms(hall + [(4, 0, 4, 4.1)], [(2, 3), (6, 3)])
+    assert len(rooms) == n_rooms and len(doors) == 0
+
+
 def test_a_free_standing_wall_does_not_divide_its_hall():
     # both ends stand 2.5 m from the hall's walls: the hall goes on around either end
     walls = [(0, 0, 10, 0), (10, 0, 10, 8), (10, 8, 0, 8), (0, 8, 0, 0), (5, 2.5, 5, 5.5)]

@@ -13,13 +13,16 @@ grid maps", RA-L 2022, ROSE^2) and Ochmann et al. (Computers & Graphics 2019) ex
 the walls' lines into the free space and keep an extension where the walls around it
 separate two rooms.
 
-An extension is the line from a wall's free end (not in an L or T junction), along
-its axis, through the free space to the first wall it meets at more than
-``door_angle_deg`` to its own direction (a collinear wall is a gap in one wall:
-:func:`~floorscan.floorplan.doors.wall_gaps`), wider than ``door_max_m`` (a narrower
-opening is a door the persistence already weighs) and at most
-:data:`~floorscan.floorplan.mouths.MOUTH_MAX_M`, from a wall at least
-:data:`~floorscan.floorplan.mouths.MOUTH_WALL_M` long. It cuts the room it lies in
+An extension is the line from a wall's free end, along its axis, through the free
+space to the first wall it meets at more than ``door_angle_deg`` to its own direction
+(a collinear wall is a gap in one wall: :func:`~floorscan.floorplan.doors.wall_gaps`),
+wider than ``door_max_m`` (a narrower opening is a door the persistence already
+weighs) and at most :data:`~floorscan.floorplan.mouths.MOUTH_MAX_M`, from a wall at
+least :data:`~floorscan.floorplan.mouths.MOUTH_WALL_M` long. The end is free when it
+is in no L or T junction with another wall that long: a shorter one is a stub (a
+jamb, the return of a cabinet), as a mouth's sides are no shorter. The opening is
+measured on the raster, so to a cell at each end: at most ``MOUTH_MAX_M`` and two
+cells. It cuts the room it lies in
 (the rooms of a first segmentation, shortest extension first) when:
 
 - the wall bounds the room for at least the opening's length: the room lies along it,
@@ -80,13 +83,15 @@ def wall_extensions(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster,
     cos_tol = np.cos(np.radians(params.door_angle_deg))
     res = raster.resolution_m
     step = res / 2
+    widest = MOUTH_MAX_M + 2 * res  # a room's widest open side, measured to a cell at each end
     out = []
-    for i in np.flatnonzero(length >= MOUTH_WALL_M):
+    sides = np.flatnonzero(length >= MOUTH_WALL_M)  # a room's sides; a shorter wall is a stub
+    for rank, i in enumerate(sides.tolist()):
         for k in (0, 1):
-            if junction_end(axes, thickness, i, k):
-                continue
+            if junction_end(axes[sides], thickness[sides], rank, k):
+                continue  # in an L or T junction with another side
             u = unit[i] if k == 1 else -unit[i]
-            t = np.arange(1, int(np.ceil((MOUTH_MAX_M + thickness[i]) / step)) + 1) * step
+            t = np.arange(1, int(np.ceil((widest + thickness[i]) / step)) + 1) * step
             pts = ends[i, k] + np.outer(t, u)
             free = raster.at(raster.space, pts, outside=False).astype(bool)
             first = np.flatnonzero(free)
@@ -103,7 +108,7 @@ def wall_extensions(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster,
                 continue  # it ends at an obstacle or the unseen, or at a wall in its own line
             p, q = pts[s0] - u * step, pts[e - 1] + u * step
             width = float(np.hypot(*(q - p)))
-            if params.door_max_m < width <= MOUTH_MAX_M:
+            if params.door_max_m < width <= widest:
                 out.append((p, q, int(i)))
     return out
 
