@@ -8,6 +8,7 @@ import shapely
 
 from floorscan.floorplan.extensions import wall_extensions
 from floorscan.floorplan.room_space import RoomParams, room_space
+from floorscan.floorplan.rooms import plan_rooms
 from test_rooms import T, _grid, _rooms
 
 # A room 8 x 6 m between wall axes.
@@ -71,6 +72,28 @@ def test_an_opening_as_wide_as_a_room_s_open_side_to_a_cell_at_each_end_is_cut(h
     hall = [(0, 0, 8, 0), (8, 0, 8, height_m), (8, height_m, 0, height_m), (0, height_m, 0, 0)]
     rooms, doors = _rooms(hall + [(4, 0, 4, 4.1)], [(2, 3), (6, 3)])
     assert len(rooms) == n_rooms and len(doors) == 0
+
+
+def test_a_door_beside_the_corner_of_two_furnished_rooms_parts_them():
+    # a hall 5 x 5 m, a partition (2.5, 0)-(2.5, 3.6) 1.35 m short of the north wall's
+    # face, and two desks in each half: the desks keep the distance to the nearest
+    # obstacle as low in the rooms as in the opening, so the watershed finds no basin on
+    # each side of it; the partition's extension is a door
+    hall = [(0, 0, 5, 0), (5, 0, 5, 5), (5, 5, 0, 5), (0, 5, 0, 0)]
+    walls = hall + [(2.5, 0, 2.5, 3.6)]
+
+    def desk(x0, y0):
+        return [(x0, y0, x0 + 0.8, y0), (x0 + 0.8, y0, x0 + 0.8, y0 + 1), (x0 + 0.8, y0 + 1, x0, y0 + 1),
+                (x0, y0 + 1, x0, y0)]  # fmt: skip
+
+    desks = desk(0.8, 1.0) + desk(3.4, 1.0) + desk(0.8, 3.0) + desk(3.4, 3.0)
+    axes = np.array(walls, dtype=np.float64)
+    grid = _grid(walls, [(1.25, 2.5), (3.75, 2.5)], objects=desks)
+    rooms, doors = plan_rooms(axes, np.full(len(axes), T), grid, RoomParams())
+    assert len(rooms) == 2 and len(doors) == 1
+    door = doors.iloc[0]
+    assert door["x0"] == pytest.approx(2.5, abs=0.1) and door["x1"] == pytest.approx(2.5, abs=0.1)
+    assert sorted([door["y0"], door["y1"]]) == pytest.approx([3.65, 4.95], abs=0.15)
 
 
 def test_a_free_standing_wall_does_not_divide_its_hall():

@@ -532,15 +532,17 @@ def test_a_fan_seen_through_gaps_no_jambs_frame_is_not_the_hall_s_floor():
     # a hall 20 x 8 m scanned inside; its west wall stops 1.7 m short of both corners
     # (no jambs: the gaps end at the other walls' faces), its north wall runs on 6 m to
     # the west, and a facade 7 m out stops the rays: the fan between them, walled on
-    # just under half its edge, is not the hall's floor (before: 170.3 m2)
+    # just under half its edge, is not the hall's floor (before: 170.3 m2); the gaps
+    # are doors beside the corners (extensions.partition_cuts), and the hall ends on
+    # the west wall's line: its floor between the faces, 19.9 x 7.9 m
     walls = [(-6, 8, 20, 8), (20, 8, 20, 0), (20, 0, -0.5, 0), (0, 1.7, 0, 6.3)]
     poses = [(x, 4.0) for x in (1, 3, 5, 8, 11, 14, 17)] + [(1.2, 2), (1.2, 6), (3, 1.5), (3, 6.5)]
     axes = np.array(walls, dtype=np.float64)
     rooms, doors = plan_rooms(axes, np.full(len(axes), T), _grid(walls + [(-7, -3, -7, 11)], poses))
     assert len(rooms) == 1 and len(doors) == 0
-    assert rooms["area_m2"].iloc[0] == pytest.approx(160.0, abs=1.5)
+    assert rooms["area_m2"].iloc[0] == pytest.approx(157.2, abs=1.0)
     beyond = shapely.intersection(rooms["polygon"].iloc[0], shapely.box(-10, -5, -T / 2, 12)).area
-    assert beyond < 3.0  # west of the wall's face, the bulges of the gaps alone (2.7 m2; before, 13.3 m2)
+    assert beyond < 0.5  # west of the wall's face: a cell's strip (before, the gaps' bulges, 2.7 m2)
 
 
 def test_a_dead_end_seen_through_an_opening_wider_than_a_door_is_not_the_hall_s_and_a_passage_is():

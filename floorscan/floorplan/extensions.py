@@ -1,10 +1,12 @@
 """Partitions that stop short (:func:`partition_cuts`): a wall that ends in a room's
-free space, pointing at another wall, with an opening wider than a door between them,
-divides the room on the line of the wall.
+free space, pointing at another wall, with an opening a door wide or wider between
+them, divides the room on the line of the wall.
 
 A distance-transform segmentation (:mod:`floorscan.floorplan.persistence`) parts two
 spaces only where the space narrows to a door; an opening wider than a door joins
-them. Offices divided by partitions that end 2 to 4 m short of the corridor's wall
+them, and so does a door where furniture keeps the distance to the nearest obstacle
+as low in the rooms as in the door (the watershed finds no basin on each side: a door
+beside the corner of two furnished rooms). Offices divided by partitions that end 2 to 4 m short of the corridor's wall
 (open-plan offices, bays of a lab, the rooms of a robot map whose doors stood open)
 come out as one room. People draw the rooms' boundary on the partition's line up to
 the wall it points at, as the layouts of Luperto et al. ("Robust structure
@@ -16,8 +18,10 @@ separate two rooms.
 An extension is the line from a wall's free end, along its axis, through the free
 space to the first wall it meets at more than ``door_angle_deg`` to its own direction
 (a collinear wall is a gap in one wall: :func:`~floorscan.floorplan.doors.wall_gaps`),
-wider than ``door_max_m`` (a narrower opening is a door the persistence already
-weighs) and at most :data:`~floorscan.floorplan.mouths.MOUTH_MAX_M`, from a wall at
+at least ``door_min_m`` wide (up to ``door_max_m``: a door between the wall's end and
+the face of the wall across, as :func:`~floorscan.floorplan.doors.wall_gaps` cuts the
+door between two walls' ends in one line) and at most
+:data:`~floorscan.floorplan.mouths.MOUTH_MAX_M`, from a wall at
 least :data:`~floorscan.floorplan.mouths.MOUTH_WALL_M` long. The end is free when it
 is in no L or T junction with another wall that long: a shorter one is a stub (a
 jamb, the return of a cabinet), as a mouth's sides are no shorter. The opening is
@@ -108,7 +112,7 @@ def wall_extensions(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster,
                 continue  # it ends at an obstacle or the unseen, or at a wall in its own line
             p, q = pts[s0] - u * step, pts[e - 1] + u * step
             width = float(np.hypot(*(q - p)))
-            if params.door_max_m < width <= widest:
+            if params.door_min_m <= width <= widest:
                 out.append((p, q, int(i)))
     return out
 

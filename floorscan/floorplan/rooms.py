@@ -44,8 +44,8 @@ taken from the walls:
    corridor goes on from it; and, once these are drawn, the end of a corridor that
    opens onto a hall (:func:`~floorscan.floorplan.corridors.corridor_ends`: a dead end
    whose side walls end apart). The rooms are then segmented again
-   (steps 3-5) where a wall stopping short of another, with an opening wider than a
-   door, divides a room it bounds for more than the opening
+   (steps 3-5) where a wall stopping short of another, with an opening a door wide or
+   wider (a door where no wider), divides a room it bounds for more than the opening
    (:func:`~floorscan.floorplan.extensions.partition_cuts`). An opening found on two
    of these lines within ``jamb_m`` of each other (between two walls' ends and on a
    corridor side's line) is cut once, on the narrower
