@@ -6,9 +6,9 @@ A distance-transform segmentation (:mod:`floorscan.floorplan.persistence`) parts
 spaces only where the space narrows to a door; an opening wider than a door joins
 them, and so does a door where furniture keeps the distance to the nearest obstacle
 as low in the rooms as in the door (the watershed finds no basin on each side: a door
-beside the corner of two furnished rooms). Offices divided by partitions that end 2 to 4 m short of the corridor's wall
-(open-plan offices, bays of a lab, the rooms of a robot map whose doors stood open)
-come out as one room. People draw the rooms' boundary on the partition's line up to
+beside the corner of two furnished rooms). Offices divided by partitions that end 2
+to 4 m short of the corridor's wall (open-plan offices, bays of a lab, the rooms of a
+robot map whose doors stood open) come out as one room. People draw the rooms' boundary on the partition's line up to
 the wall it points at, as the layouts of Luperto et al. ("Robust structure
 identification and room segmentation of cluttered indoor environments from occupancy
 grid maps", RA-L 2022, ROSE^2) and Ochmann et al. (Computers & Graphics 2019) extend
@@ -90,9 +90,10 @@ def wall_extensions(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster,
     widest = MOUTH_MAX_M + 2 * res  # a room's widest open side, measured to a cell at each end
     out = []
     sides = np.flatnonzero(length >= MOUTH_WALL_M)  # a room's sides; a shorter wall is a stub
+    side_axes, side_thickness = axes[sides], thickness[sides]
     for rank, i in enumerate(sides.tolist()):
         for k in (0, 1):
-            if junction_end(axes[sides], thickness[sides], rank, k):
+            if junction_end(side_axes, side_thickness, rank, k):
                 continue  # in an L or T junction with another side
             u = unit[i] if k == 1 else -unit[i]
             t = np.arange(1, int(np.ceil((widest + thickness[i]) / step)) + 1) * step
