@@ -533,8 +533,9 @@ def test_a_fan_seen_through_gaps_no_jambs_frame_is_not_the_hall_s_floor():
     # (no jambs: the gaps end at the other walls' faces), its north wall runs on 6 m to
     # the west, and a facade 7 m out stops the rays: the fan between them, walled on
     # just under half its edge, is not the hall's floor (before: 170.3 m2); the gaps
-    # are doors beside the corners (extensions.partition_cuts), and the hall ends on
-    # the west wall's line: its floor between the faces, 19.9 x 7.9 m
+    # are cut as doors beside the corners (extensions.partition_cuts), onto the fan, so
+    # no door, and the hall ends on the west wall's line: its floor between the faces,
+    # 19.9 x 7.9 m
     walls = [(-6, 8, 20, 8), (20, 8, 20, 0), (20, 0, -0.5, 0), (0, 1.7, 0, 6.3)]
     poses = [(x, 4.0) for x in (1, 3, 5, 8, 11, 14, 17)] + [(1.2, 2), (1.2, 6), (3, 1.5), (3, 6.5)]
     axes = np.array(walls, dtype=np.float64)

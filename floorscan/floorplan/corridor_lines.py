@@ -94,6 +94,13 @@ def walled(side: np.ndarray, door_cells: int) -> np.ndarray:
     return out
 
 
+def sides_walled(side_a: np.ndarray, side_b: np.ndarray, door_cells: int) -> bool:
+    """Whether both sides (:func:`bounded` along each) are bounded along at least
+    :data:`SIDE_WALL_SHARE` of their length, a door of at most ``door_cells`` part of its
+    wall (:func:`walled`)."""
+    return min(walled(side_a, door_cells).mean(), walled(side_b, door_cells).mean()) >= SIDE_WALL_SHARE
+
+
 def runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """Half-open index runs of True in ``mask``."""
     d = np.diff(np.r_[0, mask.astype(np.int8), 0])

@@ -92,8 +92,8 @@ import numpy as np
 from floorscan.floorplan.doors import contact_door, wall_units
 from floorscan.floorplan.mouths import MOUTH_MIN_DEPTH, hall_beside, sides_apart
 from floorscan.floorplan.persistence import DOOR_SHARE
-from floorscan.floorplan.corridor_lines import (SIDE_STEP_M, SIDE_WALL_SHARE, bounded, runs, stepped_lines, walled,
-                                               wall_lines)
+from floorscan.floorplan.corridor_lines import (SIDE_STEP_M, SIDE_WALL_SHARE, bounded, runs, sides_walled,
+                                               stepped_lines, walled, wall_lines)
 from floorscan.floorplan.room_space import MIN_ROOM_WIDTH_M, RoomParams, RoomRaster
 
 
@@ -113,7 +113,7 @@ def corridor_strips(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster,
     if joined:  # a corridor going on past a step of a side's line, where no run of the lines themselves does
         found = _past_steps(found, short, _pair_runs(stepped, joined, axes, thickness, u_all, raster, params),
                             raster, params)
-    found += _going_on(found, short, cos_par, params.door_max_m)
+    found += _going_on(found, short, cos_par, int(params.door_max_m / raster.resolution_m))
     kept: list[dict] = []
     for c in sorted(found, key=lambda c: (c["sep"], -c["polygon"].area)):
         if all(c["polygon"].intersection(k["polygon"]).area < 0.5 * c["polygon"].area for k in kept):
@@ -176,8 +176,7 @@ def _pair_runs(lines: list[list[int]], must: set[int] | None, axes: np.ndarray, 
                 if abs(float(u_all[j] @ ua)) < cos_par:  # a wall across the strip
                     tj = (ends[j] - oa) @ ua
                     free &= ~((t >= tj.min() - thickness[j] / 2) & (t <= tj.max() + thickness[j] / 2))
-            side_a = bounded(raster, oa, ua, n, t, -SIDE_STEP_M, min(SIDE_STEP_M, clear / 2))
-            side_b = bounded(raster, oa, ua, n, t, max(sep - SIDE_STEP_M, sep - clear / 2), sep + SIDE_STEP_M)
+            side_a, side_b = _side_bands(raster, oa, ua, n, t, sep, clear)
             for s, e in runs(free):
                 t0, t1 = float(t[s] - step / 2), float(t[e - 1] + step / 2)
                 corners = [oa + t0 * ua, oa + t1 * ua, oa + t1 * ua + sep * n, oa + t0 * ua + sep * n]
@@ -185,12 +184,22 @@ def _pair_runs(lines: list[list[int]], must: set[int] | None, axes: np.ndarray, 
                 strip = dict(polygon=shapely.Polygon(corners), origin=oa, u=ua, n=n, sep=sep, clear=clear, t0=t0,
                              t1=t1, step=step, sides=sides)
                 if ((e - s) * step < max(params.corridor_min_length_m, params.corridor_elongation * clear)
-                        or min(walled(side_a[s:e], door).mean(), walled(side_b[s:e], door).mean())
-                        < SIDE_WALL_SHARE):
+                        or not sides_walled(side_a[s:e], side_b[s:e], door)):
                     short.append(strip)
                     continue
                 found.append(strip)
     return found, short
+
+
+def _side_bands(raster: RoomRaster, o: np.ndarray, u: np.ndarray, n: np.ndarray, t: np.ndarray, sep: float,
+                clear: float) -> tuple[np.ndarray, np.ndarray]:
+    """Whether each side of the strip from the line ``o + t u`` to ``sep`` metres along
+    ``n`` is bounded at each ``t`` (:func:`~floorscan.floorplan.corridor_lines.bounded`):
+    within ``SIDE_STEP_M`` of the side's line, and no farther in than half the clear
+    width ``clear``; (K,) bool each."""
+    side_a = bounded(raster, o, u, n, t, -SIDE_STEP_M, min(SIDE_STEP_M, clear / 2))
+    side_b = bounded(raster, o, u, n, t, max(sep - SIDE_STEP_M, sep - clear / 2), sep + SIDE_STEP_M)
+    return side_a, side_b
 
 
 def _past_steps(found: list[dict], short: list[dict], stepped: tuple[list[dict], list[dict]], raster: RoomRaster,
@@ -223,14 +232,13 @@ def _past_steps(found: list[dict], short: list[dict], stepped: tuple[list[dict],
             ends = (o + (t[0] - step / 2) * u, o + (t[-1] + step / 2) * u)
             polygon = shapely.Polygon([ends[0], ends[1], ends[1] + sep * n, ends[0] + sep * n])
             beyond = polygon.difference(f["polygon"])
-            going = _going_on([f], short, cos_par, params.door_max_m) if going is None else going
+            going = _going_on([f], short, cos_par, door) if going is None else going
             if not ext.any() or any(beyond.intersection(r["polygon"]).area > 0.5 * r["polygon"].area
                                     for r in found + going if r is not f):
                 continue  # another corridor is there, or the corridor goes on there on lines of its own
-            side_a = bounded(raster, o, u, n, t, -SIDE_STEP_M, min(SIDE_STEP_M, clear / 2))
-            side_b = bounded(raster, o, u, n, t, max(sep - SIDE_STEP_M, sep - clear / 2), sep + SIDE_STEP_M)
+            side_a, side_b = _side_bands(raster, o, u, n, t, sep, clear)
             side_a[~ext], side_b[~ext] = ~f["sides"][0][0], ~f["sides"][1][0]
-            if min(walled(side_a, door).mean(), walled(side_b, door).mean()) < SIDE_WALL_SHARE:
+            if not sides_walled(side_a, side_b, door):
                 continue
             sides = ((~side_a,) + tuple(f["sides"][0][1:]), (~side_b,) + tuple(f["sides"][1][1:]))
             f = dict(f, polygon=polygon, t0=float(t[0] - step / 2), t1=float(t[-1] + step / 2), sides=sides)
@@ -239,15 +247,15 @@ def _past_steps(found: list[dict], short: list[dict], stepped: tuple[list[dict],
     return out
 
 
-def _going_on(found: list[dict], short: list[dict], cos_par: float, door_max_m: float) -> list[dict]:
+def _going_on(found: list[dict], short: list[dict], cos_par: float, door_cells: int) -> list[dict]:
     """The runs of ``short`` (strips of :func:`corridor_strips` too short or too open
     to be a corridor alone) where a corridor of ``found`` goes on past a step of its
     sides: parallel to it (within ``cos_par``, the cosine of ``door_angle_deg``), each
     side's line within ``SIDE_STEP_M`` of one of the corridor's, the two overlapping or
     touching along it, and the two together bounded on each side along at least
-    ``SIDE_WALL_SHARE`` of their length (a door part of its wall). A corridor's side
-    steps where a row of cabinets or the next block's wall stands out from its line;
-    the corridor runs on."""
+    ``SIDE_WALL_SHARE`` of their length (an opening of at most ``door_cells`` cells, a
+    door, part of its wall). A corridor's side steps where a row of cabinets or the next
+    block's wall stands out from its line; the corridor runs on."""
     out = []
     for c in short:
         for f in found:
@@ -261,8 +269,7 @@ def _going_on(found: list[dict], short: list[dict], cos_par: float, door_max_m: 
             match = [int(abs(p - f["sep"]) < abs(p)) for p in pos]
             if match[0] == match[1] or any(abs(p - (f["sep"] if m else 0.0)) > SIDE_STEP_M for p, m in zip(pos, match)):
                 continue
-            door = int(door_max_m / f["step"])
-            shares = [(np.sum(walled(~side[0], door)) + np.sum(walled(~f["sides"][m][0], door)))
+            shares = [(np.sum(walled(~side[0], door_cells)) + np.sum(walled(~f["sides"][m][0], door_cells)))
                       / max(len(side[0]) + len(f["sides"][m][0]), 1) for side, m in zip(c["sides"], match)]
             if min(shares) >= SIDE_WALL_SHARE:
                 out.append(c)

@@ -25,8 +25,8 @@ door between two walls' ends in one line) and at most
 least :data:`~floorscan.floorplan.mouths.MOUTH_WALL_M` long. The end is free when it
 is in no L or T junction with another wall that long: a shorter one is a stub (a
 jamb, the return of a cabinet), as a mouth's sides are no shorter. The opening is
-measured on the raster, so to a cell at each end: at most ``MOUTH_MAX_M`` and two
-cells. It cuts the room it lies in
+measured on the raster, so to a cell at each end: at most ``MOUTH_MAX_M`` and
+:data:`ENDS_CELLS` cells. It cuts the room it lies in
 (the rooms of a first segmentation, shortest extension first) when:
 
 - the wall bounds the room for at least the opening's length: the room lies along it,
@@ -53,6 +53,10 @@ import numpy as np
 from floorscan.floorplan.doors import barrier_cells, junction_end
 from floorscan.floorplan.mouths import MOUTH_MAX_M, MOUTH_MIN_DEPTH, MOUTH_WALL_M
 from floorscan.floorplan.room_space import RoomParams, RoomRaster, enclosure_cells, wall_footprints
+
+#: A length measured on the room raster is known to this many of its cells: one at each
+#: end, since a wall's or an opening's end lies anywhere in its cell.
+ENDS_CELLS = 2
 
 
 def wall_extensions(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster, params: RoomParams):
@@ -87,7 +91,7 @@ def wall_extensions(axes: np.ndarray, thickness: np.ndarray, raster: RoomRaster,
     cos_tol = np.cos(np.radians(params.door_angle_deg))
     res = raster.resolution_m
     step = res / 2
-    widest = MOUTH_MAX_M + 2 * res  # a room's widest open side, measured to a cell at each end
+    widest = MOUTH_MAX_M + ENDS_CELLS * res  # a room's widest open side, as measured on the raster
     out = []
     sides = np.flatnonzero(length >= MOUTH_WALL_M)  # a room's sides; a shorter wall is a stub
     side_axes, side_thickness = axes[sides], thickness[sides]
@@ -169,7 +173,7 @@ def partition_cuts(
         n = np.array([-u[1], u[0]]) * (thickness[i] / 2 + 2 * res)
         on = a + np.outer(np.arange(res / 2, length, res), u)
         along = float(((raster.at(grown, on + n) == ra) | (raster.at(grown, on - n) == ra)).sum()) * res
-        if along + 2 * res < width:
+        if along + ENDS_CELLS * res < width:
             continue  # more opening than wall, by more than a cell at each of its ends
         rows, cols = np.nonzero(work == ra)
         r0, c0 = rows.min(), cols.min()
