@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from floorscan.core.occupancy_classes import grid_of_classes
-from floorscan.floorplan.door_frames import framed_openings
+from floorscan.floorplan.door_frames import framed_doors, framed_openings
 from floorscan.floorplan.params import FloorplanParams
 
 R = 0.05
@@ -85,3 +85,35 @@ def test_a_line_that_meets_a_wall_at_a_slant_frames_nothing():
     got, stubs, _, _ = framed_openings(axes, np.full(3, 0.1), grid, PARAMS.rooms, 0.5)
     assert len(stubs) == 0
     np.testing.assert_array_equal(got, axes)
+
+
+def crossing_grid():
+    """A wall along x = 2 m (cells 0.1 m thick) from y = 0 to 4 m, crossed along y = 2 m
+    by a wall whose cells run from x = 0 to 1 m, from 1.6 to 2.4 m and from 3 to 4 m:
+    a door on either side of the crossing, 0.35 m of wall between each door and the
+    crossing wall's face; free space around."""
+    n = int(round(5.0 / R))
+    x = (np.arange(n) + 0.5) * R - 0.5
+    xx, yy = np.meshgrid(x, x)
+    across = (np.abs(yy - 2.0) <= 0.05) & ((xx <= 1.0) | ((xx >= 1.6) & (xx <= 2.4)) | (xx >= 3.0))
+    occupied = ((np.abs(xx - 2.0) <= 0.05) & (yy >= 0.0) & (yy <= 4.0)) | (across & (xx >= 0.0) & (xx <= 4.0))
+    free = ~occupied & (xx > -0.4) & (xx < 4.4) & (yy > -0.4) & (yy < 4.4)
+    return grid_of_classes(occupied, free, origin_xy=(-0.5, -0.5), resolution_m=R)
+
+
+@pytest.mark.parametrize("min_wall_length_m", [0.5, 0.3])
+def test_the_stubs_of_two_doors_either_side_of_a_crossing_are_one_wall_across_it(min_wall_length_m):
+    """The two 0.35 m pieces between the doors and the crossing wall are one wall from
+    jamb to jamb across it, as a map turned by another angle traces it, not two walls
+    ending at its axis; the doors are cut back to their jambs. So too where the pieces
+    are a cell longer than the shortest wall (0.3 m): traced at another pose, they may
+    have fallen under it (door_frames.LENGTH_CELLS)."""
+    axes = np.array([[0.0, 2.0, 1.0, 2.0], [3.0, 2.0, 4.0, 2.0], [2.0, 0.0, 2.0, 4.0]])
+    doors = np.array([[1.0, 2.0, 2.0, 2.0], [3.0, 2.0, 2.0, 2.0]])
+    got_doors, got, stubs, t, meets = framed_doors(doors, np.array([0, 1]), axes, np.full(3, 0.1), crossing_grid(),
+                                                   PARAMS.rooms, min_wall_length_m)
+    np.testing.assert_array_equal(got, axes)
+    assert stubs.shape == (1, 4) and meets.tolist() == [2] and t.tolist() == [0.1]
+    assert sorted([stubs[0, 0], stubs[0, 2]]) == pytest.approx([1.6, 2.4], abs=R)  # jamb to jamb
+    assert stubs[0, [1, 3]] == pytest.approx([2.0, 2.0], abs=1e-9)
+    assert got_doors[:, [0, 2]].ravel() == pytest.approx([1.0, 1.6, 3.0, 2.4], abs=R)

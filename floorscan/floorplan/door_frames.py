@@ -19,13 +19,16 @@ mostly occupied (a stretch only unseen, beside a jamb the rays missed, stays in 
 door); a line is free where the cells across the door's wall's thickness all are, so
 that a line a fit turned by a few degrees still reads the opening and the stub. Then,
 from each jamb that no wall of the plan ends at or passes, the line is followed
-outward: where it reaches a wall's footprint within ``min_wall_length_m``, over cells
+outward: where it reaches a wall's footprint within ``min_wall_length_m`` (and
+:data:`LENGTH_CELLS` cells: the structure passes may have lost a piece that long), over cells
 none free and mostly occupied, that stretch is wall. A wall of the door's line that the
 line reaches (the door's own wall beyond a crossing, or another piece of it), or that
 ends at the crossing with the wall across the line it reaches (more than
 ``door_angle_deg`` off it), goes on to the jamb, as the wall runs on across the
 crossing at another pose; else the stretch is a new wall of the door's wall's thickness
-from the axis of the wall across to the jamb (a T or an L).
+from the axis of the wall across to the jamb (a T or an L); two such walls that meet one
+wall from its two sides in one line, a door on either side of a crossing, are one wall
+from jamb to jamb across it (an X), as a map turned by another angle traces it.
 
 An opening that is no door between two rooms has the same frame, and so has a door
 before the rooms are cut (:func:`framed_openings`, the step before the room step): the
@@ -56,6 +59,10 @@ from floorscan.floorplan.room_space import RoomParams
 #: half cells long (two cells): a door's end is known to a cell either way, so a shorter
 #: stretch is the rounding of its jamb.
 MIN_RUN = 4
+#: A stub up to ``min_wall_length_m`` and this many cells longer is framed: each end of
+#: a face traced on a turned map is known to a cell, so a piece of wall that long may
+#: have fallen under ``min_wall_length_m`` in the structure passes.
+LENGTH_CELLS = 2
 
 
 def framed_doors(doors: np.ndarray, door_wall: np.ndarray, axes: np.ndarray, thickness: np.ndarray,
@@ -90,7 +97,8 @@ def framed_doors(doors: np.ndarray, door_wall: np.ndarray, axes: np.ndarray, thi
         The walls, a wall of a door's line that ends at a crossing gone on across it to
         the jamb beyond.
     stubs : (K, 4) float64 ndarray
-        The new walls' axes, from the axis of the wall they meet to the jamb, metres.
+        The new walls' axes, from the axis of the wall they meet to the jamb, or from
+        jamb to jamb across it (a door on either side of a crossing), metres.
     stub_thickness : (K,) float64 ndarray
         Metres (the door's wall's).
     stub_meets : (K,) int64 ndarray
@@ -136,7 +144,7 @@ def framed_doors(doors: np.ndarray, door_wall: np.ndarray, axes: np.ndarray, thi
         for jamb, out in jambs:
             _frame(jamb, out, band, w, axes, u_axes, thickness, grid, free, occupied, min_wall_length_m,
                    params.door_angle_deg, new)
-    return (doors, axes, *_arrays(new))
+    return (doors, axes, *_arrays(_across(new, grid.resolution_m, params.door_angle_deg)))
 
 
 def framed_openings(axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, params: RoomParams,
@@ -169,7 +177,53 @@ def framed_openings(axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid
             if jamb is not None:
                 _frame(jamb, u, _band(u, thickness[i], grid.resolution_m), i, axes, u_axes, thickness, grid, free,
                        occupied, min_wall_length_m, params.door_angle_deg, new)
-    return (axes, *_arrays(new))
+    return (axes, *_arrays(_across(new, grid.resolution_m, params.door_angle_deg)))
+
+
+def meeting_points(stubs: np.ndarray, met: np.ndarray) -> np.ndarray:
+    """Where each new wall of :func:`framed_doors` or :func:`framed_openings` meets the
+    wall it meets: its first end, or where a wall from jamb to jamb crosses it.
+
+    Parameters
+    ----------
+    stubs : (K, 4) float ndarray
+        The new walls' axes, metres.
+    met : (K, 4) float ndarray
+        The axes of the walls they meet, metres.
+
+    Returns
+    -------
+    (K, 2) float64 ndarray
+        Metres.
+    """
+    stubs, met = np.asarray(stubs, dtype=np.float64).reshape(-1, 4), np.asarray(met, dtype=np.float64).reshape(-1, 4)
+    d, e, f = stubs[:, 2:] - stubs[:, :2], met[:, 2:] - met[:, :2], met[:, :2] - stubs[:, :2]
+    turn = d[:, 0] * e[:, 1] - d[:, 1] * e[:, 0]
+    t = (f[:, 0] * e[:, 1] - f[:, 1] * e[:, 0]) / np.where(turn == 0, 1.0, turn)
+    return stubs[:, :2] + np.clip(t, 0.0, 1.0)[:, None] * d
+
+
+def _across(new, resolution_m, angle_deg):
+    """The new walls of :func:`_frame`'s list with each two that meet one wall at one
+    point (within a cell) from its two sides, in one line (within ``angle_deg`` of it),
+    made one wall from jamb to jamb across it: the wall a map turned by another angle
+    traces through the crossing (module docstring)."""
+    new, out, used = list(new), [], set()
+    for i, (a, t_a, m_a) in enumerate(new):
+        if i in used:
+            continue
+        u_a = (a[2:] - a[:2]) / max(float(np.hypot(*(a[2:] - a[:2]))), 1e-12)
+        for j in range(i + 1, len(new)):
+            b, t_b, m_b = new[j]
+            if j in used or m_b != m_a or np.hypot(*(b[:2] - a[:2])) > resolution_m:
+                continue
+            u_b = (b[2:] - b[:2]) / max(float(np.hypot(*(b[2:] - b[:2]))), 1e-12)
+            if float(u_a @ u_b) <= -np.cos(np.radians(angle_deg)):
+                used.add(j)
+                a, t_a = np.r_[b[2:], a[2:]], max(t_a, t_b)
+                break
+        out.append((a, t_a, m_a))
+    return out
 
 
 def _arrays(new):
@@ -206,7 +260,8 @@ def _opening(end, u, i, axes, thickness, grid, free, params: RoomParams, max_m: 
     reach = params.door_max_m + max_m + float(thickness.max(initial=0.0))
     xy = end + u * (np.arange(1, int(np.ceil(reach / step)) + 1) * step)[:, None]
     others = np.delete(np.arange(len(axes)), i)
-    reached = (_footprint_gaps(xy, axes[others], thickness[others]) <= r / 4).any(axis=1)
+    # within half a cell: the samples are half a cell apart, and a line that passes a wall's end comes no closer
+    reached = (_footprint_gaps(xy, axes[others], thickness[others]) <= r / 2).any(axis=1)
     if not reached.any():
         return None
     line = xy[: int(np.argmax(reached))]
@@ -257,8 +312,9 @@ def _stub(jamb, out, band, axes, u_axes, thickness, grid, free, occupied, max_m,
     meets, and -1. None when a wall of the plan ends at the jamb or passes it, or when
     the run up to the wall reached is not all occupied or longer than ``max_m``."""
     r = grid.resolution_m
-    if (footprint_distance(jamb, axes, thickness) <= r).any():
-        return None  # a wall of the plan ends at the jamb or passes it: the jamb is held
+    if (footprint_distance(jamb, axes, thickness) <= 2 * r).any():
+        return None  # a wall of the plan ends at the jamb or passes it (each known to a cell): the jamb is held
+    max_m += LENGTH_CELLS * r  # a stub the structure passes may have lost, measured a cell short at each end
     across = np.abs(out[0] * u_axes[:, 1] - out[1] * u_axes[:, 0]) > np.sin(np.radians(angle_deg))
     ts = np.arange(1, int(np.ceil(max_m / (r / 2))) + 1) * (r / 2)
     xy = jamb + out * ts[:, None]

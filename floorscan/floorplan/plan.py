@@ -390,14 +390,12 @@ def plan_of_segments(
 
 
 def _framed(axes, thick, faces, wall_of_face, face_w, n_seg, flen, junctions, doors, grid, params: FloorplanParams):
-    """The plan's arrays and tables with its doors cut back to the free runs of their
-    lines, the walls of their lines gone on to their jambs across a crossing (the kinds
-    of their junctions read again), and the stubs that frame them added as walls, each
-    with its two faces (no segment of their own) and its junction with the wall it meets
-    (:func:`~floorscan.floorplan.door_frames.framed_doors`). With ``doors`` None (before
-    the rooms), the same for the openings at the walls' free ends
-    (:func:`~floorscan.floorplan.door_frames.framed_openings`)."""
-    from floorscan.floorplan.door_frames import framed_doors, framed_openings
+    """The plan's arrays and tables with its doors cut back to the free runs of their lines, the walls of their
+    lines gone on to their jambs across a crossing (the kinds of their junctions read again), and the stubs that
+    frame them added as walls, each with its two faces (no segment of their own) and its junction with the wall it
+    meets (:func:`~floorscan.floorplan.door_frames.framed_doors`). With ``doors`` None (before the rooms), the same
+    for the openings at the walls' free ends (:func:`~floorscan.floorplan.door_frames.framed_openings`)."""
+    from floorscan.floorplan.door_frames import framed_doors, framed_openings, meeting_points
 
     before = axes
     if doors is None:
@@ -418,7 +416,8 @@ def _framed(axes, thick, faces, wall_of_face, face_w, n_seg, flen, junctions, do
     nrm = np.column_stack([-d[:, 1], d[:, 0]]) / np.maximum(length, 1e-12)[:, None] * (stub_t / 2)[:, None]
     axes, thick = np.vstack([axes, stubs]), np.r_[thick, stub_t]
     if len(stubs):
-        met = pd.DataFrame({"x": stubs[:, 0], "y": stubs[:, 1], "kind": "T", "wall_a": meets.astype(np.int32),
+        at = meeting_points(stubs, axes[meets])
+        met = pd.DataFrame({"x": at[:, 0], "y": at[:, 1], "kind": "T", "wall_a": meets.astype(np.int32),
                             "wall_b": ids.astype(np.int32)})  # fmt: skip
         junctions = pd.concat([junctions, met], ignore_index=True)
     # the junctions of the walls gone on (a crossing now passed) and of the stubs: L, T or X
