@@ -7,6 +7,8 @@ Bormann map through a yaml of :data:`READINGS`, by default as ipa's evaluation r
 :func:`floorscan.walls.map_stage.map_of_grid`, then
 :func:`floorscan.floorplan.scans.plan_of_scans` with the default
 :class:`~floorscan.floorplan.params.FloorplanParams`; the time per map is of these three.
+``--walls-seed N`` seeds the map extractor's RANSAC with N instead of its default
+(``walls.seed``): on a noisy map the plan depends on the draws.
 Its rooms are rasterised on the map's pixels (a pixel is a room's when its centre lies
 inside the room's polygon; the grid's row 0 is the image's bottom row) and scored by
 :func:`floorscan.score.segmentation.score_label_images`: Bormann's per-room mean and
@@ -118,14 +120,15 @@ def map_path(image: Path, reading: str | None, folder: Path) -> Path:
     return yml
 
 
-def plan_labels(path: Path, rooms: str = "plan"):
+def plan_labels(path: Path, rooms: str = "plan", walls_seed: int | None = None):
     """The plan of a map image (or of its map_server yaml) and its rooms on the image's pixels.
 
     ``rooms``: ``plan``, the plan's own rooms (the pipeline's room step,
     :mod:`floorscan.floorplan.rooms`); ``layout``, the rooms of the candidate global
     layout of issue 44 (:func:`floorscan.floorplan.layout.layout_plan_rooms` on the
     plan's walls, its clutter faces as hypotheses without evidence of their own, and
-    the map's grid, whose own wall lines it adds), in the plan's place.
+    the map's grid, whose own wall lines it adds), in the plan's place. ``walls_seed``:
+    the map extractor's seed (config ``walls.seed``), its default when None.
 
     Returns
     -------
@@ -147,7 +150,7 @@ def plan_labels(path: Path, rooms: str = "plan"):
     t0 = time.perf_counter()
     grid = read_occupancy_map(path)[0]
     params = FloorplanParams()
-    plan = plan_of_scans(map_of_grid(grid, None), None, params, grid)
+    plan = plan_of_scans(map_of_grid(grid, None if walls_seed is None else {"seed": walls_seed}), None, params, grid)
     if rooms == "layout":
         from dataclasses import replace
 
@@ -200,12 +203,13 @@ def wall_scores(plan, reference_grid) -> dict:
     return out | {"n_faces": len(faces), "n_clutter": len(plan.clutter)}
 
 
-def score_one(group: str, name: str, image: Path, truth: np.ndarray, rooms: str = "plan"):
+def score_one(group: str, name: str, image: Path, truth: np.ndarray, rooms: str = "plan",
+              walls_seed: int | None = None):
     """The plan of one map image scored against ``truth`` (image rows): its row of
     figures, its room labels, its grid and the plan."""
     from floorscan.score.segmentation import score_label_images
 
-    labels, plan, grid, seconds = plan_labels(image, rooms)
+    labels, plan, grid, seconds = plan_labels(image, rooms, walls_seed)
     row = {"group": group, "map": name, "seconds": seconds, "n_plan_rooms_all": len(plan.rooms)}
     row |= score_label_images(truth, on_reference(truth, labels))
     row |= {f"whole_{k}": v for k, v in score_label_images(truth, labels).items()}
@@ -230,7 +234,7 @@ def on_reference(truth: np.ndarray, labels: np.ndarray) -> np.ndarray:
 
 
 def run_task(task: tuple[str, str], data: Path = DATA, out: Path | None = None, rooms: str = "plan",
-             reading: str = "ipa") -> list[dict]:
+             reading: str = "ipa", walls_seed: int | None = None) -> list[dict]:
     """Every figure of one map (a Bormann map: both its images), and its figure in ``out``.
 
     Returns
@@ -251,8 +255,10 @@ def run_task(task: tuple[str, str], data: Path = DATA, out: Path | None = None, 
         truth = label_drawn_regions(grey_of_image(read_image(folder / f"{name}_gt_segmentation.png")))
         with tempfile.TemporaryDirectory() as tmp:
             clean_map, furn_map = (map_path(folder / f"{name}{s}.png", reading, Path(tmp)) for s in ("", "_furnitures"))
-            clean, clean_labels, clean_grid, clean_plan = score_one("bormann", name, clean_map, truth, rooms)
-            furn, furn_labels, furn_grid, furn_plan = score_one("bormann_furniture", name, furn_map, truth, rooms)
+            clean, clean_labels, clean_grid, clean_plan = score_one("bormann", name, clean_map, truth, rooms,
+                                                                    walls_seed)
+            furn, furn_labels, furn_grid, furn_plan = score_one("bormann_furniture", name, furn_map, truth, rooms,
+                                                                walls_seed)
         clean |= {f"walls_{k}": v for k, v in wall_scores(clean_plan, clean_grid).items()}
         furn |= {f"walls_{k}": v for k, v in wall_scores(furn_plan, clean_grid).items()}
         rows += [clean, furn]
@@ -263,7 +269,7 @@ def run_task(task: tuple[str, str], data: Path = DATA, out: Path | None = None, 
     else:
         folder = data / "rose2"
         truth = label_colours(read_image(folder / f"{name}_gt.png"))
-        row, labels, grid, plan = score_one("rose2", name, folder / f"{name}.png", truth, rooms)
+        row, labels, grid, plan = score_one("rose2", name, folder / f"{name}.png", truth, rooms, walls_seed)
         rose = label_colours(read_image(folder / f"{name}_rose2.png"))
         row |= {f"rose2_{k}": v for k, v in score_label_images(truth, on_reference(truth, rose)).items()}
         rows.append(row)
@@ -422,6 +428,9 @@ def main(argv: list[str] | None = None) -> list[dict]:
     ap.add_argument("--reading", choices=sorted(READINGS), default="ipa",
                     help="how a Bormann map is read: ipa (default; a pixel above 250 free, every other an obstacle, "
                          "as ipa's evaluation reads them) or map_server (its default thresholds)")
+    ap.add_argument("--walls-seed", type=int, default=None,
+                    help="the map extractor's RANSAC seed (config walls.seed; default its default): the plan of a "
+                         "noisy map depends on it")
     args = ap.parse_args(argv or [])
     if not args.data.is_dir():
         print(f"skipped: {args.data} is absent (the shared room-maps data, see issue 43)")
@@ -433,7 +442,7 @@ def main(argv: list[str] | None = None) -> list[dict]:
     t0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=max(1, args.workers)) as pool:
         done = list(pool.map(run_task, todo, [args.data] * len(todo), [out] * len(todo), [args.rooms] * len(todo),
-                              [args.reading] * len(todo)))
+                              [args.reading] * len(todo), [args.walls_seed] * len(todo)))
     wall = time.perf_counter() - t0
     order = {g: i for i, g in enumerate(GROUPS)}
     rows = sorted((r for rs in done for r in rs), key=lambda r: order[r["group"]])
