@@ -692,17 +692,17 @@ def test_the_corner_reach_is_what_the_map_extractor_claims():
 
 
 def test_parallel_lines_cross_nowhere_without_a_warning():
-    """_line_crossings of parallel and of crossing pairs: NaN for the parallel ones (and
+    """line_crossings of parallel and of crossing pairs: NaN for the parallel ones (and
     no RuntimeWarning from their infinite parameter), the crossing point for the others."""
     import warnings
 
-    from floorscan.floorplan.junctions import _line_crossings
+    from floorscan.floorplan.junctions import line_crossings
 
     a = np.array([[0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 1.0, 0.0]])
     b = np.array([[0.0, 1.0, 1.0, 1.0], [0.5, -1.0, 0.5, 1.0]])
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        x = _line_crossings(a, b)
+        x = line_crossings(a, b)
     assert np.isnan(x[0]).all()
     assert np.allclose(x[1], [0.5, 0.0])
 

@@ -144,7 +144,7 @@ def framed_doors(doors: np.ndarray, door_wall: np.ndarray, axes: np.ndarray, thi
         for jamb, out in jambs:
             _frame(jamb, out, band, w, axes, u_axes, thickness, grid, free, occupied, min_wall_length_m,
                    params.door_angle_deg, new)
-    return (doors, axes, *_arrays(_across(new, grid.resolution_m, params.door_angle_deg)))
+    return (doors, axes, *_across(*_arrays(new), grid.resolution_m, params.door_angle_deg))
 
 
 def framed_openings(axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid, params: RoomParams,
@@ -177,53 +177,23 @@ def framed_openings(axes: np.ndarray, thickness: np.ndarray, grid: OccupancyGrid
             if jamb is not None:
                 _frame(jamb, u, _band(u, thickness[i], grid.resolution_m), i, axes, u_axes, thickness, grid, free,
                        occupied, min_wall_length_m, params.door_angle_deg, new)
-    return (axes, *_arrays(_across(new, grid.resolution_m, params.door_angle_deg)))
+    return (axes, *_across(*_arrays(new), grid.resolution_m, params.door_angle_deg))
 
 
-def meeting_points(stubs: np.ndarray, met: np.ndarray) -> np.ndarray:
-    """Where each new wall of :func:`framed_doors` or :func:`framed_openings` meets the
-    wall it meets: its first end, or where a wall from jamb to jamb crosses it.
-
-    Parameters
-    ----------
-    stubs : (K, 4) float ndarray
-        The new walls' axes, metres.
-    met : (K, 4) float ndarray
-        The axes of the walls they meet, metres.
-
-    Returns
-    -------
-    (K, 2) float64 ndarray
-        Metres.
-    """
-    stubs, met = np.asarray(stubs, dtype=np.float64).reshape(-1, 4), np.asarray(met, dtype=np.float64).reshape(-1, 4)
-    d, e, f = stubs[:, 2:] - stubs[:, :2], met[:, 2:] - met[:, :2], met[:, :2] - stubs[:, :2]
-    turn = d[:, 0] * e[:, 1] - d[:, 1] * e[:, 0]
-    t = (f[:, 0] * e[:, 1] - f[:, 1] * e[:, 0]) / np.where(turn == 0, 1.0, turn)
-    return stubs[:, :2] + np.clip(t, 0.0, 1.0)[:, None] * d
-
-
-def _across(new, resolution_m, angle_deg):
-    """The new walls of :func:`_frame`'s list with each two that meet one wall at one
-    point (within a cell) from its two sides, in one line (within ``angle_deg`` of it),
-    made one wall from jamb to jamb across it: the wall a map turned by another angle
-    traces through the crossing (module docstring)."""
-    new, out, used = list(new), [], set()
-    for i, (a, t_a, m_a) in enumerate(new):
-        if i in used:
-            continue
-        u_a = (a[2:] - a[:2]) / max(float(np.hypot(*(a[2:] - a[:2]))), 1e-12)
-        for j in range(i + 1, len(new)):
-            b, t_b, m_b = new[j]
-            if j in used or m_b != m_a or np.hypot(*(b[:2] - a[:2])) > resolution_m:
-                continue
-            u_b = (b[2:] - b[:2]) / max(float(np.hypot(*(b[2:] - b[:2]))), 1e-12)
-            if float(u_a @ u_b) <= -np.cos(np.radians(angle_deg)):
-                used.add(j)
-                a, t_a = np.r_[b[2:], a[2:]], max(t_a, t_b)
+def _across(stubs, stub_t, meets, resolution_m, angle_deg):
+    """The new walls (:func:`_arrays`) with each two that meet one wall at one point
+    (within a cell) from its two sides, in one line (within ``angle_deg`` of it), made
+    one wall from jamb to jamb across it: the wall a map turned by another angle traces
+    through the crossing (module docstring)."""
+    u, _ = wall_units(stubs)
+    stubs, stub_t, keep = stubs.copy(), stub_t.copy(), np.ones(len(stubs), dtype=bool)
+    for i in range(len(stubs)):
+        for j in range(i + 1, len(stubs)):
+            if (keep[i] and keep[j] and meets[j] == meets[i] and float(u[i] @ u[j]) <= -np.cos(np.radians(angle_deg))
+                    and np.hypot(*(stubs[j, :2] - stubs[i, :2])) <= resolution_m):
+                stubs[i], stub_t[i], keep[j] = np.r_[stubs[j, 2:], stubs[i, 2:]], max(stub_t[i], stub_t[j]), False
                 break
-        out.append((a, t_a, m_a))
-    return out
+    return stubs[keep], stub_t[keep], meets[keep]
 
 
 def _arrays(new):

@@ -53,7 +53,7 @@ def snap_junctions(seg: np.ndarray, params: StructureParams = StructureParams(),
         if trim_shallow:
             _trim_shallow_crossings(out, params)
         return out, _junctions(out, params)
-    x = _line_crossings(seg[i], seg[j])
+    x = line_crossings(seg[i], seg[j])
     lj = np.hypot(seg[j, 2] - seg[j, 0], seg[j, 3] - seg[j, 1])
     uj = (seg[j, 2:] - seg[j, :2]) / np.maximum(lj, 1e-12)[:, None]
     tj = np.einsum("ij,ij->i", x - seg[j, :2], uj)
@@ -95,7 +95,7 @@ def _trim_shallow_crossings(seg: np.ndarray, params: StructureParams) -> None:
     ang = axial_angle(seg)
     shallow = angle_diff(ang[i], ang[j]) < np.radians(params.junction_min_angle_deg)
     for a, b in zip(i[shallow].tolist(), j[shallow].tolist()):
-        x = _line_crossings(seg[[a]], seg[[b]])[0]
+        x = line_crossings(seg[[a]], seg[[b]])[0]
         if not np.isfinite(x).all():
             continue
         for k in (a, b):
@@ -105,7 +105,7 @@ def _trim_shallow_crossings(seg: np.ndarray, params: StructureParams) -> None:
                 seg[k, 2 * end : 2 * end + 2] = x
 
 
-def _line_crossings(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def line_crossings(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Where the lines of the matching segments of ``a`` and ``b`` (P, 4) cross, (P, 2)
     metres; NaN for parallel lines."""
     da, db = a[:, 2:] - a[:, :2], b[:, 2:] - b[:, :2]
@@ -127,7 +127,7 @@ def _junctions(seg: np.ndarray, params: StructureParams) -> np.ndarray:
     i, j = i[ok], j[ok]
     if len(i) == 0:
         return np.empty((0, 5))
-    x = _line_crossings(seg[i], seg[j])
+    x = line_crossings(seg[i], seg[j])
     near_end = []
     for s in (i, j):
         d0 = np.hypot(*(x - seg[s, :2]).T)

@@ -395,7 +395,8 @@ def _framed(axes, thick, faces, wall_of_face, face_w, n_seg, flen, junctions, do
     frame them added as walls, each with its two faces (no segment of their own) and its junction with the wall it
     meets (:func:`~floorscan.floorplan.door_frames.framed_doors`). With ``doors`` None (before the rooms), the same
     for the openings at the walls' free ends (:func:`~floorscan.floorplan.door_frames.framed_openings`)."""
-    from floorscan.floorplan.door_frames import framed_doors, framed_openings, meeting_points
+    from floorscan.floorplan.door_frames import framed_doors, framed_openings
+    from floorscan.floorplan.junctions import line_crossings
 
     before = axes
     if doors is None:
@@ -416,7 +417,7 @@ def _framed(axes, thick, faces, wall_of_face, face_w, n_seg, flen, junctions, do
     nrm = np.column_stack([-d[:, 1], d[:, 0]]) / np.maximum(length, 1e-12)[:, None] * (stub_t / 2)[:, None]
     axes, thick = np.vstack([axes, stubs]), np.r_[thick, stub_t]
     if len(stubs):
-        at = meeting_points(stubs, axes[meets])
+        at = line_crossings(stubs, axes[meets])  # its first end, or the crossing of a wall from jamb to jamb
         met = pd.DataFrame({"x": at[:, 0], "y": at[:, 1], "kind": "T", "wall_a": meets.astype(np.int32),
                             "wall_b": ids.astype(np.int32)})  # fmt: skip
         junctions = pd.concat([junctions, met], ignore_index=True)
