@@ -629,6 +629,23 @@ def test_a_pier_is_free_standing_between_two_openings_the_free_space_passes():
     assert not piers(faces, which, _wall_line_grid([(2.5, 3.2)]), params).any()  # the west opening seen closed
 
 
+def test_a_pier_is_a_wall_by_its_faces_when_its_axis_lies_a_thickness_off_the_line():
+    """loose_walls: the axis of a pier seen from both sides lies in its middle, those of
+    the walls in its line, seen from one side, half a default thickness behind their
+    faces: 0.2 m apart, beyond side_offset_m, while all faces lie on one line (map15's
+    corridor wall between two doors at one seed of the map extractor). Its faces in the
+    line of the walls' faces make it a pier; not with one of the walls gone."""
+    from floorscan.floorplan.wall_pieces import loose_walls
+
+    axes = np.array([[0.0, 1.9, 1.0, 1.9], [2.2, 2.1, 2.5, 2.1], [3.2, 1.9, 4.0, 1.9]])
+    faces = np.array([[0.0, 2.0, 1.0, 2.0], [2.2, 2.0, 2.5, 2.0], [2.2, 2.2, 2.5, 2.2], [3.2, 2.0, 4.0, 2.0]])
+    wall_of_face, none = np.array([0, 1, 1, 2]), np.zeros((0, 5))
+    params, doors = StructureParams(), _wall_line_grid([(1.0, 2.2), (2.5, 3.2)])
+    assert loose_walls(axes, faces, wall_of_face, none, doors, params).tolist() == [False, False, False]
+    assert loose_walls(axes, axes, np.arange(3), none, doors, params).tolist() == [False, True, False]  # axes alone
+    assert loose_walls(axes[:2], faces[:3], wall_of_face[:3], none, doors, params).tolist() == [False, True]
+
+
 def test_the_pier_between_a_wall_and_a_door_is_a_wall_however_short():
     # two rooms 2.5 m wide parted by a partition with a door (y 0.9..1.8) 0.4 m from the
     # south wall: the 0.4 m stub between the wall and the door, cut from the south wall

@@ -309,16 +309,13 @@ def plan_of_segments(
         # unless it is the pier between two doors or between a wall and a door (the wall
         # passes can shorten a wall again: up to three rounds)
         from floorscan.floorplan.free_space import open_run
-        from floorscan.floorplan.junctions import short_loose
-        from floorscan.floorplan.wall_pieces import corner_piers, piers
+        from floorscan.floorplan.wall_pieces import loose_walls
 
         run = open_run(grid)
         door_widths = (params.rooms.door_min_m, params.rooms.door_max_m)
         for _ in range(3):
             junc = np.column_stack([junctions[["x", "y", "wall_a", "wall_b"]].to_numpy(np.float64), np.zeros(len(junctions))])
-            loose = short_loose(axes, junc, params.structure.min_wall_length_m)
-            loose &= ~piers(axes, loose, grid, params.structure, *door_widths, junc, run)
-            loose &= ~corner_piers(axes, loose, junc, grid, params.structure, *door_widths, open_run=run)
+            loose = loose_walls(axes, faces, wall_of_face, junc, grid, params.structure, *door_widths, run)
             if not loose.any():
                 break
             drop = loose[wall_of_face]

@@ -229,3 +229,44 @@ def _passable_gaps(seg: np.ndarray, i: np.ndarray, j: np.ndarray, grid: Occupanc
     run = open_run(grid) if run is None else run
     return np.array([run(p[g], (q[g] - p[g]) / max(width[g], 1e-12), 0.0, width[g]) >= params.min_opening_m
                      for g in range(len(i))], dtype=bool)  # fmt: skip
+
+
+def loose_walls(axes: np.ndarray, faces: np.ndarray, wall_of_face: np.ndarray, junctions: np.ndarray,
+                grid: OccupancyGrid, params: StructureParams = StructureParams(), door_min_m: float = 0.6,
+                door_max_m: float = 2.0, open_run=None) -> np.ndarray:  # fmt: skip
+    """Which walls of a paired plan are clutter: an axis shorter than
+    ``min_wall_length_m`` not between two junctions
+    (:func:`~floorscan.floorplan.junctions.short_loose`), unless it is a pier between
+    two doors or between a wall and a door (:func:`piers`, :func:`corner_piers`) by its
+    axis or by one of its faces. The faces too: the axis of a wall seen from both sides
+    lies in its middle, that of a wall seen from one side half the default thickness
+    behind its face, so a pier and the walls in its line, all of one face in the map,
+    can have axes a wall's thickness apart, beyond ``side_offset_m``.
+
+    Parameters
+    ----------
+    axes : (W, 4) float ndarray
+        The walls' axes, metres.
+    faces : (F, 4) float ndarray
+        Their faces, metres.
+    wall_of_face : (F,) int ndarray
+        Each face's wall (a row of ``axes``).
+    junctions : (J, 5) float ndarray
+        ``x, y, wall_a, wall_b, kind`` of the axes' junctions, metres.
+    grid, params, door_min_m, door_max_m, open_run
+        As :func:`piers`.
+
+    Returns
+    -------
+    (W,) bool ndarray
+    """
+    from floorscan.floorplan.junctions import short_loose
+
+    loose = short_loose(axes, junctions, params.min_wall_length_m)
+    loose &= ~piers(axes, loose, grid, params, door_min_m, door_max_m, junctions, open_run)
+    loose &= ~corner_piers(axes, loose, junctions, grid, params, door_min_m, door_max_m, open_run=open_run)
+    if loose.any() and len(faces):
+        wall_of_face = np.asarray(wall_of_face, dtype=np.intp)
+        by_face = piers(faces, loose[wall_of_face], grid, params, door_min_m, door_max_m, None, open_run)
+        loose[wall_of_face[by_face]] = False
+    return loose
