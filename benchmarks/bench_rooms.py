@@ -428,9 +428,10 @@ def main(argv: list[str] | None = None) -> list[dict]:
     ap.add_argument("--reading", choices=sorted(READINGS), default="ipa",
                     help="how a Bormann map is read: ipa (default; a pixel above 250 free, every other an obstacle, "
                          "as ipa's evaluation reads them) or map_server (its default thresholds)")
-    ap.add_argument("--walls-seed", type=int, default=None,
+    ap.add_argument("--walls-seed", type=int, nargs="+", default=[None],
                     help="the map extractor's RANSAC seed (config walls.seed; default its default): the plan of a "
-                         "noisy map depends on it")
+                         "noisy map depends on it; several seeds: each seed's tables, then the groups' figures "
+                         "per seed and their mean over the seeds")
     args = ap.parse_args(argv or [])
     if not args.data.is_dir():
         print(f"skipped: {args.data} is absent (the shared room-maps data, see issue 43)")
@@ -438,16 +439,38 @@ def main(argv: list[str] | None = None) -> list[dict]:
     todo = tasks(args.maps)
     if not todo:
         raise SystemExit(f"no map named {args.maps}; known: {' '.join(BORMANN + ROSE2)}")
-    out = None if args.no_figures else args.out
-    t0 = time.perf_counter()
-    with ProcessPoolExecutor(max_workers=max(1, args.workers)) as pool:
-        done = list(pool.map(run_task, todo, [args.data] * len(todo), [out] * len(todo), [args.rooms] * len(todo),
-                              [args.reading] * len(todo), [args.walls_seed] * len(todo)))
-    wall = time.perf_counter() - t0
-    order = {g: i for i, g in enumerate(GROUPS)}
-    rows = sorted((r for rs in done for r in rs), key=lambda r: order[r["group"]])
-    print_tables(rows)
-    n_plans = len(rows)
-    print(f"\n{n_plans} maps, {len(todo)} tasks in {wall:.1f} s with {args.workers} processes "
-          f"(plans alone: {sum(r['seconds'] for r in rows):.1f} s of CPU time)" + (f"; figures in {out}" if out else ""))  # fmt: skip
-    return rows
+    by_seed = {}
+    for seed in args.walls_seed:
+        out = None if args.no_figures else (args.out if len(args.walls_seed) == 1 else args.out / f"walls_seed_{seed}")
+        if len(args.walls_seed) > 1:
+            print(f"\n## map extractor seed {seed}\n")
+        t0 = time.perf_counter()
+        with ProcessPoolExecutor(max_workers=max(1, args.workers)) as pool:
+            done = list(pool.map(run_task, todo, [args.data] * len(todo), [out] * len(todo), [args.rooms] * len(todo),
+                                  [args.reading] * len(todo), [seed] * len(todo)))
+        wall = time.perf_counter() - t0
+        order = {g: i for i, g in enumerate(GROUPS)}
+        rows = by_seed[seed] = sorted((r for rs in done for r in rs), key=lambda r: order[r["group"]])
+        print_tables(rows)
+        print(f"\n{len(rows)} maps, {len(todo)} tasks in {wall:.1f} s with {args.workers} processes "
+              f"(plans alone: {sum(r['seconds'] for r in rows):.1f} s of CPU time)" + (f"; figures in {out}" if out else ""))  # fmt: skip
+    if len(by_seed) > 1:
+        print_seed_means(by_seed)
+    return [r for rows in by_seed.values() for r in rows]
+
+
+def print_seed_means(by_seed: dict) -> None:
+    """Each group's mean over its maps (:func:`print_tables`' averages) per seed of the map
+    extractor, and their mean over the seeds: the figure a plan of a noisy map can be
+    expected to reach, not one draw's."""
+    print("\nAverages per group and seed of the map extractor (mean over maps), and their mean over the seeds:")
+    print(f"{'group':<24} {'seed':<8} " + " ".join(f"{h:>6}" for h in HEAD))
+    for g, label in GROUPS.items():
+        means = []
+        for seed, rows in by_seed.items():
+            sub = [r for r in rows if r["group"] == g]
+            if sub:
+                means.append([float(np.nanmean([r[k] for r in sub])) for k in FIGURES])
+                print(f"{label:<24} {str(seed):<8} " + " ".join(f"{_fmt(v):>6}" for v in means[-1]))
+        if means:
+            print(f"{label:<24} {'mean':<8} " + " ".join(f"{_fmt(v):>6}" for v in np.mean(means, axis=0)))

@@ -244,3 +244,19 @@ def test_reference_walls_are_the_room_s_not_a_ray_s_borders(tmp_path):
     assert not ref[::-1][:, 47:].any()  # ... and, beyond the seam off the room, no reference wall
     assert ref[::-1][9, 12:38].all() and ref[::-1][30, 12:38].all()  # the room's north and south walls
     assert ref[::-1][12:28, 9].all()
+
+
+def test_the_room_benchmark_averages_its_groups_over_the_map_extractor_s_seeds(capsys):
+    """print_seed_means: per group and seed, the mean over the group's maps; then the
+    mean of those over the seeds (two maps of the real-map group, two seeds)."""
+    from benchmarks.bench_rooms import FIGURES, print_seed_means
+
+    def row(value, room_p):
+        return {"group": "rose2", **{k: value for k in FIGURES}, "room_precision": room_p}
+
+    print_seed_means({0: [row(0.9, 1.0), row(0.7, 0.8)], 1: [row(0.5, 0.6), row(0.5, float("nan"))]})
+    lines = [ln.split() for ln in capsys.readouterr().out.splitlines() if ln.startswith("ROSE^2 real maps")]
+    assert [ln[3] for ln in lines] == ["0", "1", "mean"]
+    assert [float(v) for v in lines[0][4:]] == [0.8, 0.8, 0.8, 0.8, 0.9, 0.8, 0.8]
+    assert [float(v) for v in lines[1][4:]] == [0.5, 0.5, 0.5, 0.5, 0.6, 0.5, 0.5]  # a map without a figure: nanmean
+    assert [float(v) for v in lines[2][4:]] == [0.65, 0.65, 0.65, 0.65, 0.75, 0.65, 0.65]
