@@ -440,6 +440,7 @@ def main(argv: list[str] | None = None) -> list[dict]:
     if not todo:
         raise SystemExit(f"no map named {args.maps}; known: {' '.join(BORMANN + ROSE2)}")
     by_seed = {}
+    order = {g: i for i, g in enumerate(GROUPS)}
     for seed in args.walls_seed:
         out = None if args.no_figures else (args.out if len(args.walls_seed) == 1 else args.out / f"walls_seed_{seed}")
         if len(args.walls_seed) > 1:
@@ -449,7 +450,6 @@ def main(argv: list[str] | None = None) -> list[dict]:
             done = list(pool.map(run_task, todo, [args.data] * len(todo), [out] * len(todo), [args.rooms] * len(todo),
                                   [args.reading] * len(todo), [seed] * len(todo)))
         wall = time.perf_counter() - t0
-        order = {g: i for i, g in enumerate(GROUPS)}
         rows = by_seed[seed] = sorted((r for rs in done for r in rs), key=lambda r: order[r["group"]])
         print_tables(rows)
         print(f"\n{len(rows)} maps, {len(todo)} tasks in {wall:.1f} s with {args.workers} processes "

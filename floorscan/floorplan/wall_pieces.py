@@ -14,7 +14,7 @@ import numpy as np
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.free_space import StructureParams, open_run
-from floorscan.floorplan.junctions import ends_on_line, junction_ends
+from floorscan.floorplan.junctions import ends_on_line, junction_ends, short_loose
 
 
 def in_wall_lines(seg: np.ndarray, standing: np.ndarray, cell_m: float, params: StructureParams = StructureParams(),
@@ -260,8 +260,6 @@ def loose_walls(axes: np.ndarray, faces: np.ndarray, wall_of_face: np.ndarray, j
     -------
     (W,) bool ndarray
     """
-    from floorscan.floorplan.junctions import short_loose
-
     loose = short_loose(axes, junctions, params.min_wall_length_m)
     loose &= ~piers(axes, loose, grid, params, door_min_m, door_max_m, junctions, open_run)
     loose &= ~corner_piers(axes, loose, junctions, grid, params, door_min_m, door_max_m, open_run=open_run)
