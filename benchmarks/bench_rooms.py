@@ -8,7 +8,10 @@ Bormann map through a yaml of :data:`READINGS`, by default as ipa's evaluation r
 :func:`floorscan.floorplan.scans.plan_of_scans` with the default
 :class:`~floorscan.floorplan.params.FloorplanParams`; the time per map is of these three.
 ``--walls-seed N`` seeds the map extractor's RANSAC with N instead of its default
-(``walls.seed``): on a noisy map the plan depends on the draws.
+(``walls.seed``): on a noisy map the plan depends on the draws. Several seeds print
+each seed's tables, the groups' means per seed and over the seeds
+(:func:`print_seed_means`), and each map's room precision and recall over the seeds
+(:func:`print_map_spread`).
 Its rooms are rasterised on the map's pixels (a pixel is a room's when its centre lies
 inside the room's polygon; the grid's row 0 is the image's bottom row) and scored by
 :func:`floorscan.score.segmentation.score_label_images`: Bormann's per-room mean and
@@ -456,6 +459,7 @@ def main(argv: list[str] | None = None) -> list[dict]:
               f"(plans alone: {sum(r['seconds'] for r in rows):.1f} s of CPU time)" + (f"; figures in {out}" if out else ""))  # fmt: skip
     if len(by_seed) > 1:
         print_seed_means(by_seed)
+        print_map_spread(by_seed)
     return [r for rows in by_seed.values() for r in rows]
 
 
@@ -474,3 +478,23 @@ def print_seed_means(by_seed: dict) -> None:
                 print(f"{label:<24} {str(seed):<8} " + " ".join(f"{_fmt(v):>6}" for v in means[-1]))
         if means:
             print(f"{label:<24} {'mean':<8} " + " ".join(f"{_fmt(v):>6}" for v in np.mean(means, axis=0)))
+
+
+def print_map_spread(by_seed: dict) -> None:
+    """Each map's room precision and recall at IoU 0.5 over the seeds of the map
+    extractor: their mean, lowest and highest, and those of the first seed given: a
+    rule accepted on one seed's plans shows there as a first seed at the top of its
+    map's spread."""
+    seeds = list(by_seed)
+    print(f"\nRoom P / R per map over the map extractor's seeds {', '.join(str(s) for s in seeds)} "
+          f"(mean; lowest; highest; seed {seeds[0]}):")
+    print(f"{'group':<18} {'map':<30} {'mean':>13} {'lowest':>13} {'highest':>13} {'seed ' + str(seeds[0]):>13}")
+    for g in GROUPS:
+        names = list(dict.fromkeys(r["map"] for rows in by_seed.values() for r in rows if r["group"] == g))
+        for name in names:
+            pr = np.array([[r["room_precision"], r["room_recall"]] for s in seeds for r in by_seed[s]
+                           if r["group"] == g and r["map"] == name], dtype=np.float64)  # fmt: skip
+            first = [(r["room_precision"], r["room_recall"]) for r in by_seed[seeds[0]]
+                     if r["group"] == g and r["map"] == name]  # fmt: skip
+            cells = [np.nanmean(pr, axis=0), np.nanmin(pr, axis=0), np.nanmax(pr, axis=0)] + first[:1]
+            print(f"{g:<18} {name:<30} " + " ".join(f"{_fmt(p):>6}/{_fmt(r):<6}" for p, r in cells))

@@ -260,3 +260,20 @@ def test_the_room_benchmark_averages_its_groups_over_the_map_extractor_s_seeds(c
     assert [float(v) for v in lines[0][4:]] == [0.8, 0.8, 0.8, 0.8, 0.9, 0.8, 0.8]
     assert [float(v) for v in lines[1][4:]] == [0.5, 0.5, 0.5, 0.5, 0.6, 0.5, 0.5]  # a map without a figure: nanmean
     assert [float(v) for v in lines[2][4:]] == [0.65, 0.65, 0.65, 0.65, 0.75, 0.65, 0.65]
+
+
+def test_the_room_benchmark_spreads_each_map_s_room_figures_over_the_seeds(capsys):
+    """print_map_spread: per map, room precision / recall over the seeds, their mean,
+    lowest, highest and the first seed's (two maps, three seeds, a missing figure)."""
+    from benchmarks.bench_rooms import print_map_spread
+
+    def row(name, p, r):
+        return {"group": "rose2", "map": name, "room_precision": p, "room_recall": r}
+
+    print_map_spread({3: [row("a", 0.9, 1.0), row("b", 0.5, 0.4)], 0: [row("a", 0.6, 0.8), row("b", 0.7, 0.6)],
+                      1: [row("a", 0.3, float("nan")), row("b", 0.6, 0.5)]})  # fmt: skip
+    out = capsys.readouterr().out
+    assert "seeds 3, 0, 1 (mean; lowest; highest; seed 3)" in out
+    lines = {ln.split()[1]: ln.split()[2:] for ln in out.splitlines() if ln.startswith("rose2 ")}
+    assert lines["a"] == ["0.600/0.900", "0.300/0.800", "0.900/1.000", "0.900/1.000"]
+    assert lines["b"] == ["0.600/0.500", "0.500/0.400", "0.700/0.600", "0.500/0.400"]
