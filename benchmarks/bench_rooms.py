@@ -489,12 +489,12 @@ def print_map_spread(by_seed: dict) -> None:
     print(f"\nRoom P / R per map over the map extractor's seeds {', '.join(str(s) for s in seeds)} "
           f"(mean; lowest; highest; seed {seeds[0]}):")
     print(f"{'group':<18} {'map':<30} {'mean':>13} {'lowest':>13} {'highest':>13} {'seed ' + str(seeds[0]):>13}")
-    for g in GROUPS:
-        names = list(dict.fromkeys(r["map"] for rows in by_seed.values() for r in rows if r["group"] == g))
-        for name in names:
-            pr = np.array([[r["room_precision"], r["room_recall"]] for s in seeds for r in by_seed[s]
-                           if r["group"] == g and r["map"] == name], dtype=np.float64)  # fmt: skip
-            first = [(r["room_precision"], r["room_recall"]) for r in by_seed[seeds[0]]
-                     if r["group"] == g and r["map"] == name]  # fmt: skip
-            cells = [np.nanmean(pr, axis=0), np.nanmin(pr, axis=0), np.nanmax(pr, axis=0)] + first[:1]
-            print(f"{g:<18} {name:<30} " + " ".join(f"{_fmt(p):>6}/{_fmt(r):<6}" for p, r in cells))
+    by_map: dict[tuple[str, str], list] = {}  # (group, map): (seed, room P, room R) in the seeds' order
+    for seed, rows in by_seed.items():
+        for r in rows:
+            by_map.setdefault((r["group"], r["map"]), []).append((seed, r["room_precision"], r["room_recall"]))
+    for (g, name), got in sorted(by_map.items(), key=lambda kv: list(GROUPS).index(kv[0][0])):
+        pr = np.array([v[1:] for v in got], dtype=np.float64)
+        cells = [np.nanmean(pr, axis=0), np.nanmin(pr, axis=0), np.nanmax(pr, axis=0)]
+        cells += [v[1:] for v in got if v[0] == seeds[0]][:1]
+        print(f"{g:<18} {name:<30} " + " ".join(f"{_fmt(p):>6}/{_fmt(r):<6}" for p, r in cells))
