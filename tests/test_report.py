@@ -425,16 +425,28 @@ def test_the_map_page_links_its_files_and_the_index(tmp_path, monkeypatch):
 
 
 def test_summary_page_is_the_template_with_the_front_pages_table(tmp_path):
-    """summary.html (floorscan.figures.summary_page): the verdict and the beats-random
-    line escaped, and the summary table of the front page's macro: its header, a row per
-    ordering, the recommended ordering's row highlighted, the oracle's grey."""
+    """summary.html (floorscan.figures.summary_page): in the front page's frame (its
+    style, the link back to the index, the report named until it is made), the verdict
+    coloured by its class and the beats-random line escaped, and the summary table of
+    the front page's macro with its note: its header, a row per ordering, the
+    recommended ordering's row highlighted, the oracle's grey."""
     from floorscan.figures.summary_page import write_summary_page
 
-    page = tmp_path / "summary.html"
+    page = tmp_path / "toy" / "summary.html"
+    page.parent.mkdir()
     write_summary_page(page, "toy <1>", _summary(), 76, "wall_coverage beats random & more", VERDICT, "wall_coverage")
     text = page.read_text(encoding="utf-8")
-    assert text.startswith("<!DOCTYPE html>") and "<title>toy &lt;1&gt; summary</title>" in text
-    assert f"<p><b>Verdict: {VERDICT['line']}</b></p>" in text and "<p>wall_coverage beats random &amp; more</p>" in text
+    assert text.startswith("<!DOCTYPE html>") and "<title>toy &lt;1&gt;: how few scans the floor plan needs</title>" in text
+    assert ".floorscan-front { font-family" in text and '<div class="floorscan-front" id="front-toy &lt;1&gt;">' in text
+    links = _links(text)
+    assert links.hrefs == ["../index.html"] and links.missing == ["../report.html"]
+    assert f'<p class="verdict good">Registration: {VERDICT["line"]}</p>' in text
+    assert "<p>wall_coverage beats random &amp; more</p>" in text and "<script" not in text
+    (tmp_path / "report.html").write_text("report")
+    write_summary_page(page, "toy", _summary(), 76, "", {"line": "POOR: kept 3 of 76"}, "wall_coverage")
+    text = page.read_text(encoding="utf-8")
+    assert _links(text).hrefs == ["../index.html", "../report.html"]
+    assert '<p class="verdict poor">Registration: POOR: kept 3 of 76</p>' in text and "beats random" not in text
     tables = _Tables()
     tables.feed(text)
     assert tables.rows[0] == [h for _, h in SUMMARY_COLUMNS]
@@ -447,3 +459,5 @@ def test_summary_page_is_the_template_with_the_front_pages_table(tmp_path):
                                      k=4, n_kept=76, n_recorded=321, ordering="wall_coverage"))
     start = front.index("<table>\n<thead><tr><th>extractor</th>")
     assert front[start:front.index("</table>", start)] in text
+    note = front.index('<p class="note">Every floor plan is scored', start)
+    assert front[note:front.index("</p>", note)] in text

@@ -18,8 +18,8 @@ from pathlib import Path
 
 from floorscan.core.files import atomic_path
 from floorscan.figures.answer import NOT_FROM_A_MAP, plan_counts
-from floorscan.figures.pages import OutputFile, render
-from floorscan.figures.report import INDEX, answer_files, inline_svg, report_file
+from floorscan.figures.pages import INDEX, OutputFile, render, report_file
+from floorscan.figures.report import answer_files, inline_svg
 from floorscan.figures.room_table import read_plan_rooms
 
 def write_map_summary(

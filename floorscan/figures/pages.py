@@ -8,7 +8,8 @@ markup that passes unescaped is what the page's object marks as
 :class:`markupsafe.Markup` (the plan's SVG, checked by
 :func:`floorscan.figures.report.inline_svg`). :class:`OutputFile` is a file a page
 names: a link relative to the page's folder when the file exists, its name and "not
-made" when it does not, never a dead link.
+made" when it does not, never a dead link; :data:`INDEX` and :func:`report_file` are
+the two a dataset's pages name at the top.
 
 To add a page: a dataclass of what it shows, a template ``templates/<name>.html.j2``
 that extends ``_front_base.html.j2`` (the style, the title, the links back to the
@@ -105,3 +106,14 @@ def render(template: str, page) -> str:
         The HTML document.
     """
     return environment().get_template(template).render(page=page)
+
+
+#: The index of every dataset, from a dataset's folder (``results/<dataset>/``): always
+#: linked (the run writes it, :func:`floorscan.figures.index_page.write_index`).
+INDEX = OutputFile("index of every dataset", "../index.html", True)
+
+
+def report_file(page_dir: "str | os.PathLike") -> OutputFile:
+    """Snakemake's report of the run (``results/report.html``) as the page in
+    ``page_dir`` names it."""
+    return output_file("report", Path(page_dir).parent / "report.html", page_dir)

@@ -36,7 +36,7 @@ from floorscan.figures.front_parts import (  # noqa: F401 (QUALITY_*: the page's
     QUALITY_COLUMNS, QUALITY_ROWS, THESIS_ORDERING, beats_random_lines, int_or_none, read_summary, inline_svg,
     plan_caption, png_data_uri, quality_table, verdict_lines,
 )
-from floorscan.figures.pages import OutputFile, output_file, render
+from floorscan.figures.pages import INDEX, OutputFile, output_file, render, report_file
 from floorscan.figures.plan_scores import answer_table
 from floorscan.figures.room_table import read_plan_rooms, with_room_scores
 from floorscan.figures.summary_page import summary_rows
@@ -268,11 +268,6 @@ class FrontPage:
         return "" if self.quality_png is None else png_data_uri(self.quality_png)
 
 
-#: The index of every dataset, from a dataset's folder (``results/<dataset>/``): always
-#: linked (the run writes it, :func:`floorscan.figures.index_page.write_index`).
-INDEX = OutputFile("index of every dataset", "../index.html", True)
-
-
 def answer_files(page_dir: "str | os.PathLike", selection: Mapping | None = None) -> list[OutputFile]:
     """The answer's files a front page in ``page_dir`` names, each a link when it exists.
 
@@ -306,12 +301,6 @@ def answer_files(page_dir: "str | os.PathLike", selection: Mapping | None = None
         named += [(f"points, {Path(p).suffix[1:].upper()}", p) for p in points]
     named.append(("summary", d / "summary.md"))
     return [output_file(label, p, d) for label, p in named if p]
-
-
-def report_file(page_dir: "str | os.PathLike") -> OutputFile:
-    """Snakemake's report of the run (``results/report.html``) as the page in
-    ``page_dir`` names it."""
-    return output_file("report", Path(page_dir).parent / "report.html", page_dir)
 
 
 def front_page(page: FrontPage) -> str:

@@ -1,19 +1,22 @@
 """The scan-reduction summary of a dataset as HTML: the cells of the table the front
 page shows (:func:`summary_rows`, the same cells as ``summary.md``,
 :func:`floorscan.core.score_tables.summary_cell`) and ``summary.html``, a page of its
-own rendered from ``templates/summary_page.html.j2`` (:class:`SummaryPage`; the table is
-the macro ``summary_table`` of ``templates/_macros.html.j2``, which the front page uses
-too)."""
+own rendered from ``templates/summary_page.html.j2`` (:class:`SummaryPage`) in the front
+page's frame (``_front_base.html.j2``: its style and the links to the index and to the
+report); the table and its note are the macros ``summary_table`` and ``summary_note`` of
+``templates/_macros.html.j2``, which the front page uses too."""
 
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from floorscan.core.files import atomic_path
 from floorscan.core.score_tables import SUMMARY_COLUMNS, summary_cell
-from floorscan.figures.pages import render
+from floorscan.figures.front_parts import verdict_lines
+from floorscan.figures.pages import INDEX, OutputFile, render, report_file
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -33,12 +36,32 @@ class SummaryPage:
         The registration's verdict line, or empty.
     beats_random : str
         :func:`floorscan.core.score_tables.beats_random_line`, or empty.
+    index : OutputFile
+        The index of every dataset (``results/index.html``), linked at the top.
+    report : OutputFile or None
+        Snakemake's report of the run, linked at the top when it exists.
+    description : str
+        A line under the title (the frame's; none here).
     """
 
     dataset: str
     table: dict
     verdict_line: str = ""
     beats_random: str = ""
+    index: OutputFile = field(default_factory=lambda: INDEX)
+    report: OutputFile | None = None
+    description: str = ""
+
+    @property
+    def head(self) -> str:
+        """The title: ``demo: how few scans the floor plan needs``."""
+        return f"{self.dataset}: how few scans the floor plan needs"
+
+    @property
+    def verdict_cls(self) -> str:
+        """The verdict's class (``good``, ``warning``, ``poor`` or empty), as the front
+        page colours it."""
+        return verdict_lines(self.verdict_line)["cls"]
 
 
 def summary_page_html(page: SummaryPage) -> str:
@@ -76,7 +99,7 @@ def write_summary_page(path: str | os.PathLike, dataset: str, summary: "pd.DataF
         Highlighted.
     """
     page = SummaryPage(dataset, summary_rows(summary, n_kept, ordering), str((verdict or {}).get("line") or ""),
-                       beats_random or "")
+                       beats_random or "", report=report_file(Path(path).parent))
     with atomic_path(path) as tmp:
         tmp.write_text(summary_page_html(page), encoding="utf-8")
 
