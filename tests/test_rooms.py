@@ -626,6 +626,35 @@ def test_offices_open_to_a_corridor_wider_than_a_door_are_rooms():
     assert shapely.box(0.1, 0.1, 19.9, 1.9).difference(corridor).area < 0.3
 
 
+@pytest.mark.parametrize("tilt_deg", [0.0, 0.45])
+def test_a_long_corridor_is_found_when_its_side_s_longest_wall_is_fitted_off_its_line(tilt_deg):
+    """A corridor 40 m long (y 0..2) under eight offices open to it through 2.2 m
+    openings, its first side's longest wall (0.4 m thick, 6 m) fitted 0.45 degrees off:
+    carried 40 m, that direction puts the far side's walls 0.30 m apart across it, more
+    than the 0.24 m a side's walls may spread (``2 line_offset_m``). Measured across the
+    mean direction of both sides' walls (:func:`~floorscan.floorplan.corridor_lines.corridor_frame`)
+    the corridor is found, and the offices are rooms; before, each office took its piece
+    of the corridor (eight rooms of 26-30 m2, no corridor), as on g4s_y2 at the map
+    extractor's seed 5."""
+    from floorscan.floorplan.corridors import corridor_strips
+
+    pieces = [(0, 2, 1.4, 2)] + [(5 * k + 3.6, 2, 5 * k + 6.4, 2) for k in range(7)] + [(38.6, 2, 40, 2)]
+    partitions = [(5 * k, 2, 5 * k, 6) for k in range(1, 8)]
+    outer = [(0, 0, 40, 0), (40, 0, 40, 6), (40, 6, 0, 6), (0, 6, 0, 0)]
+    poses = [(x, 1.0) for x in range(2, 40, 4)] + [(5 * k + 2.5, 4.0) for k in range(8)]
+    grid = _grid(outer + pieces + partitions, poses)
+    a = math.radians(tilt_deg)
+    side = [(0, 0, 6 * math.cos(a), 6 * math.sin(a))] + [(6.5 + 5 * k, 0, min(11.0 + 5 * k, 40), 0) for k in range(7)]
+    axes = np.array(side + outer[1:] + pieces + partitions, dtype=np.float64)
+    th = np.full(len(axes), T)
+    th[0] = 0.4
+    strips = corridor_strips(axes, th, room_space(grid, axes, th, RoomParams()), RoomParams())
+    assert len(strips) == 1 and strips[0]["t1"] - strips[0]["t0"] > 39 and abs(strips[0]["sep"] - 2) < 0.05
+    rooms, doors = plan_rooms(axes, th, grid, RoomParams())
+    assert sorted(rooms["kind"]) == ["corridor"] + ["room"] * 8 and len(doors) == 0
+    assert all(18.5 < x < 19.5 for x in rooms[rooms["kind"] == "room"]["area_m2"])  # 5 x 4 m less half walls
+
+
 def test_a_corridor_that_another_goes_on_from_stays_one_room():
     """A T junction: the opening in the long corridor's side leads into a corridor 12 m
     long and 2 m wide (more than four times its width), so it is not cut."""

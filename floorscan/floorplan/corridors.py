@@ -24,14 +24,16 @@ et al. ("Room segmentation: survey, implementation, and analysis", ICRA 2016).
    reach a corridor's sides.
 2. **Corridors**: a line and a parallel one (directions within ``door_angle_deg``;
    the second's walls over their common length within ``2 line_offset_m`` of one
-   offset), with a clear width between the two of at least
-   :data:`~floorscan.floorplan.room_space.MIN_ROOM_WIDTH_M` and at most
-   ``corridor_max_width_m``. The corridor is each run of their common length whose
-   middle line lies in the space and crosses no wall across the middle half of the
-   strip (rooms in a row with doors between them, or a door across a corridor), at
-   least ``corridor_min_length_m`` and ``corridor_elongation`` times its width long,
-   and bounded on each side, within ``SIDE_STEP_M`` of the side's line, by cells that
-   are not space along at least ``SIDE_WALL_SHARE`` of it, a door no wider than
+   offset, measured across the corridor's own direction, the mean of both sides'
+   walls over that length: a wall fitted half a degree off, carried 35 m along the
+   corridor, would put the other side 0.3 m off its line), with a clear width
+   between the two of at least :data:`~floorscan.floorplan.room_space.MIN_ROOM_WIDTH_M`
+   and at most ``corridor_max_width_m``. The corridor is each run of their common
+   length whose middle line lies in the space and crosses no wall across the middle
+   half of the strip (rooms in a row with doors between them, or a door across a
+   corridor), at least ``corridor_min_length_m`` and ``corridor_elongation`` times its
+   width long, and bounded on each side, within ``SIDE_STEP_M`` of the side's line, by
+   cells that are not space along at least ``SIDE_WALL_SHARE`` of it, a door no wider than
    ``door_max_m`` between two bounded stretches counting as its wall (its sides are
    walls with doors in them). A run shorter or more open than that is a corridor too
    where one goes on from it past a step of its sides (:func:`_going_on`: both sides'
@@ -92,8 +94,8 @@ import numpy as np
 from floorscan.floorplan.doors import contact_door, wall_units
 from floorscan.floorplan.mouths import MOUTH_MIN_DEPTH, hall_beside, sides_apart
 from floorscan.floorplan.persistence import DOOR_SHARE
-from floorscan.floorplan.corridor_lines import (SIDE_STEP_M, SIDE_WALL_SHARE, bounded, runs, sides_walled,
-                                               stepped_lines, walled, wall_lines)
+from floorscan.floorplan.corridor_lines import (SIDE_STEP_M, SIDE_WALL_SHARE, bounded, corridor_frame, runs,
+                                               sides_walled, stepped_lines, walled, wall_lines)
 from floorscan.floorplan.room_space import MIN_ROOM_WIDTH_M, RoomParams, RoomRaster
 
 
@@ -141,7 +143,6 @@ def _pair_runs(lines: list[list[int]], must: set[int] | None, axes: np.ndarray, 
     found, short = [], []  # corridors, and the runs too short or too open to be one alone
     for ia, wa in enumerate(lines):
         ua, oa = u_all[wa[0]], ends[wa[0], 0]
-        na = np.array([-ua[1], ua[0]])
         ta = np.sort((ends[wa] - oa) @ ua, axis=1)
         lo_a, hi_a = ta[:, 0].min(), ta[:, 1].max()
         if hi_a - lo_a < params.corridor_min_length_m:
@@ -149,7 +150,6 @@ def _pair_runs(lines: list[list[int]], must: set[int] | None, axes: np.ndarray, 
         par = np.flatnonzero((np.abs(u_all @ ua) >= cos_par) & (line_of > ia))
         if not len(par):
             continue
-        w_off = ((ends[par] - oa) @ na).mean(axis=1)
         w_t = np.sort((ends[par] - oa) @ ua, axis=1)
         for ib in np.unique(line_of[par]).tolist():
             if must is not None and ia not in must and ib not in must:
@@ -158,8 +158,17 @@ def _pair_runs(lines: list[list[int]], must: set[int] | None, axes: np.ndarray, 
             lo, hi = max(lo_a, w_t[in_b, 0].min()), min(hi_a, w_t[in_b, 1].max())
             if hi - lo < params.corridor_min_length_m:
                 continue
-            span = np.clip(w_t[in_b, 1], lo, hi) - np.clip(w_t[in_b, 0], lo, hi)
-            offs = w_off[in_b][span > 0]
+            # the corridor's own frame: its two sides' walls over their common run
+            # (corridor_frame), not the first side's longest wall carried along it
+            ob, ub, nb = corridor_frame(ends, u_all, wa, par[in_b], oa, ua, lo, hi)
+            tb_a = np.sort((ends[wa] - ob) @ ub, axis=1)
+            wb_off = ((ends[par[in_b]] - ob) @ nb).mean(axis=1)
+            wb_t = np.sort((ends[par[in_b]] - ob) @ ub, axis=1)
+            lo, hi = max(tb_a[:, 0].min(), wb_t[:, 0].min()), min(tb_a[:, 1].max(), wb_t[:, 1].max())
+            if hi - lo < params.corridor_min_length_m:
+                continue
+            span = np.clip(wb_t[:, 1], lo, hi) - np.clip(wb_t[:, 0], lo, hi)
+            offs = wb_off[span > 0]
             if not len(offs) or np.ptp(offs) > 2 * (params.line_offset_m if must is None else SIDE_STEP_M):
                 continue
             sep_signed = float(np.average(offs, weights=span[span > 0]))
@@ -167,21 +176,21 @@ def _pair_runs(lines: list[list[int]], must: set[int] | None, axes: np.ndarray, 
             clear = sep - (thickness[wa].max() + thickness[lines[ib]].max()) / 2
             if not MIN_ROOM_WIDTH_M <= clear <= params.corridor_max_width_m:
                 continue
-            n = na if sep_signed > 0 else -na
+            n = nb if sep_signed > 0 else -nb
             t = np.arange(lo, hi, step) + step / 2
-            free = raster.at(raster.space, oa + t[:, None] * ua + (sep / 2) * n, outside=False).astype(bool)
-            middle = shapely.Polygon([oa + lo * ua + sep / 4 * n, oa + hi * ua + sep / 4 * n,
-                                      oa + hi * ua + 3 * sep / 4 * n, oa + lo * ua + 3 * sep / 4 * n])
+            free = raster.at(raster.space, ob + t[:, None] * ub + (sep / 2) * n, outside=False).astype(bool)
+            middle = shapely.Polygon([ob + lo * ub + sep / 4 * n, ob + hi * ub + sep / 4 * n,
+                                      ob + hi * ub + 3 * sep / 4 * n, ob + lo * ub + 3 * sep / 4 * n])
             for j in tree.query(middle, predicate="intersects").tolist():
-                if abs(float(u_all[j] @ ua)) < cos_par:  # a wall across the strip
-                    tj = (ends[j] - oa) @ ua
+                if abs(float(u_all[j] @ ub)) < cos_par:  # a wall across the strip
+                    tj = (ends[j] - ob) @ ub
                     free &= ~((t >= tj.min() - thickness[j] / 2) & (t <= tj.max() + thickness[j] / 2))
-            side_a, side_b = _side_bands(raster, oa, ua, n, t, sep, clear)
+            side_a, side_b = _side_bands(raster, ob, ub, n, t, sep, clear)
             for s, e in runs(free):
                 t0, t1 = float(t[s] - step / 2), float(t[e - 1] + step / 2)
-                corners = [oa + t0 * ua, oa + t1 * ua, oa + t1 * ua + sep * n, oa + t0 * ua + sep * n]
+                corners = [ob + t0 * ub, ob + t1 * ub, ob + t1 * ub + sep * n, ob + t0 * ub + sep * n]
                 sides = ((~side_a[s:e], list(wa), 0.0, -1.0), (~side_b[s:e], list(lines[ib]), sep, 1.0))
-                strip = dict(polygon=shapely.Polygon(corners), origin=oa, u=ua, n=n, sep=sep, clear=clear, t0=t0,
+                strip = dict(polygon=shapely.Polygon(corners), origin=ob, u=ub, n=n, sep=sep, clear=clear, t0=t0,
                              t1=t1, step=step, sides=sides)
                 if ((e - s) * step < max(params.corridor_min_length_m, params.corridor_elongation * clear)
                         or not sides_walled(side_a[s:e], side_b[s:e], door)):
