@@ -147,6 +147,28 @@ def wrap_angle(a: np.ndarray | float) -> np.ndarray | float:
     return (np.asarray(a, dtype=np.float64) + np.pi) % (2.0 * np.pi) - np.pi
 
 
+def axial_mean(angle: np.ndarray, weight: np.ndarray) -> float:
+    """The weighted mean of axial directions (a line's direction, mod pi), on the
+    doubled-angle circle (Mardia and Jupp, "Directional Statistics", 2000, sec. 9.1):
+    walls fitted a fraction of a degree either way average to their common line, and a
+    wall drawn end to start counts as one drawn start to end.
+
+    Parameters
+    ----------
+    angle : (N,) float ndarray
+        Directions, radians.
+    weight : (N,) float ndarray
+        Their weights (lengths, metres).
+
+    Returns
+    -------
+    float
+        Radians, in (-pi/2, pi/2].
+    """
+    angle, weight = np.asarray(angle, dtype=np.float64), np.asarray(weight, dtype=np.float64)
+    return float(0.5 * np.arctan2((weight * np.sin(2 * angle)).sum(), (weight * np.cos(2 * angle)).sum()))
+
+
 def se2_between(a, b) -> tuple[float, float, float]:
     """Planar motion from pose ``a`` to pose ``b``, in ``a``'s frame (Lynch and Park
     2017, ch. 3).

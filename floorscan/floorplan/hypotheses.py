@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from floorscan.core.geometry import ray_meets_lines
+from floorscan.core.geometry import axial_mean, ray_meets_lines
 
 #: Coordinates are snapped to this grid before noding and polygonising
 #: (:mod:`floorscan.floorplan.arrangement`), metres: far below a map cell (5 cm), far
@@ -172,10 +172,8 @@ def dominant_directions(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             break
         idx = np.flatnonzero(remaining)
         near = idx[diff[k] <= DIRECTION_TOLERANCE_RAD]
-        # the length-weighted mean direction of its walls, on the doubled-angle circle
-        mean = 0.5 * np.arctan2((length[near] * np.sin(2 * angle[near])).sum(), (length[near] * np.cos(2 * angle[near])).sum())
         group[near] = len(directions)
-        directions.append(float(mean))
+        directions.append(axial_mean(angle[near], length[near]))  # the length-weighted mean direction
         remaining[near] = False
     return np.array(directions, dtype=np.float64), group
 

@@ -93,6 +93,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from floorscan.core.geometry import axial_mean
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.clutter import (
@@ -295,8 +296,7 @@ def _fit_group(seg: np.ndarray, length: np.ndarray) -> np.ndarray:
     length-weighted mean offset, the extent of all their ends."""
     if len(seg) == 1:
         return seg[0].copy()
-    ang = np.arctan2(seg[:, 3] - seg[:, 1], seg[:, 2] - seg[:, 0])
-    phi = 0.5 * np.arctan2((length * np.sin(2 * ang)).sum(), (length * np.cos(2 * ang)).sum())
+    phi = axial_mean(np.arctan2(seg[:, 3] - seg[:, 1], seg[:, 2] - seg[:, 0]), length)
     u = np.array([np.cos(phi), np.sin(phi)])
     n = np.array([-u[1], u[0]])
     mid = 0.5 * (seg[:, :2] + seg[:, 2:])
