@@ -147,7 +147,8 @@ def test_a_scan_or_two_without_a_pose_is_a_note_not_a_warning():
     few = Losses(958, {"no_pose": 1}, no_pose_detail=detail)
     v = verdict(221, 221, 0.93, 31117, 0.2, 0.3, losses=few)
     assert v.warnings == [] and v.notes == [f"1 of the recording's 958 scans (<1 %) have no pose ({detail})"]
-    assert v.line().startswith("GOOD: kept 221 of 221 sampled scans (100 %), 1 of the recording's 958 scans (<1 %) lost")
+    assert v.line().startswith("GOOD: kept 221 of 221 sampled scans (100 %); map consistency 0.93")
+    assert v.line().count("1 of the recording's 958 scans") == 1  # the note's, not again in the head
     assert v.line().endswith(f"have no pose ({detail})") and v.as_dict()["notes"] == v.notes
     many = verdict(221, 221, 0.93, 31117, 0.2, 0.3, losses=Losses(958, {"no_pose": 10}))
     assert many.line().startswith("WARNING") and many.notes == []

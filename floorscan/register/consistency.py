@@ -159,11 +159,14 @@ class Verdict:
         return not self.problems
 
     def line(self) -> str:
-        """One line for logs, the summary and the report."""
+        """One line for logs, the summary and the report: the verdict, the scans kept, the
+        scans lost before registration when several causes add up to them (one cause's
+        line, among the warnings or notes, gives its count itself), the map consistency,
+        then the problems, warnings and notes."""
         head = "GOOD" if self.ok and not self.warnings else ("POOR" if not self.ok else "WARNING")
         cons = "undefined (no place passed twice)" if math.isnan(self.consistency) else f"{self.consistency:.2f}"
         lost = ""
-        if self.losses is not None and self.losses.n_lost:
+        if self.losses is not None and sum(n > 0 for n in self.losses.counts.values()) > 1:
             n, total = self.losses.n_lost, self.losses.n_recording
             lost = f", {n} of the recording's {total} scans ({percent(n, total)}) lost before registration"
         text = (
