@@ -1567,3 +1567,33 @@ def test_a_wall_that_bounds_no_room_is_tied_by_its_line_or_a_junction():
         False, False, True, True]
     assert not apart_from_the_rooms(np.ones(4, dtype=bool), axes, np.full(4, T), np.array([[1, 2]]),
                                     RoomParams()).any()
+
+
+def test_a_partition_behind_a_corridor_opening_s_middle_leaves_the_offices_apart_from_the_corridor():
+    """A corridor 30 m long (y 0..2.4) under offices 10 m deep; two of them (x 10..14 and
+    14..18) open to it through one 6.8 m opening, their partition (x 14.15) stopping 1.5 m
+    short of the corridor's side. The ray from the opening's middle runs up beside the
+    partition, in a strip a few centimetres wide that never ends, as a corridor going on
+    would; from a quarter and three quarters of the opening the space behind is an office,
+    wider than the opening's middle, so the opening is cut on the corridor's line: the
+    corridor is a room of its own and the offices two rooms. Before, the opening was not
+    cut, the corridor took 5 m2 of the offices and the offices were one room of 72 m2 (on
+    map_with_clutter at the map extractor's seed 10 the corridor and its offices were one
+    room)."""
+    from floorscan.floorplan.corridors import corridor_sides
+
+    outer = [(0, 0, 30, 0), (30, 0, 30, 12.4), (30, 12.4, 0, 12.4), (0, 12.4, 0, 0)]
+    side = [(0, 2.4, 4, 2.4), (5, 2.4, 10.6, 2.4), (17.4, 2.4, 25, 2.4), (26, 2.4, 30, 2.4)]
+    partitions = [(10, 2.4, 10, 12.4), (14.15, 3.9, 14.15, 12.4), (18, 2.4, 18, 12.4)]
+    walls = outer + side + partitions
+    poses = [(x, 1.2) for x in range(2, 30, 3)] + [(5, 7), (12, 7), (16, 7), (24, 7), (12, 4), (16, 4)]
+    axes, th = np.array(walls, dtype=np.float64), np.full(len(walls), T)
+    grid = _grid(walls, poses)
+    cuts = corridor_sides(axes, th, room_space(grid, axes, th, RoomParams()), RoomParams())
+    wide = [(p, q) for p, q, _ in cuts if abs(p[1] - 2.4) < 0.2 and abs(q[0] - p[0]) > 5]
+    assert len(wide) == 1 and sorted([wide[0][0][0], wide[0][1][0]]) == pytest.approx([10.6, 17.4], abs=0.15)
+    rooms, _ = plan_rooms(axes, th, grid, RoomParams())
+    corridor = rooms[rooms["kind"] == "corridor"]
+    assert len(corridor) == 1 and 66 < corridor["area_m2"].iloc[0] < 70  # 30 x 2.4 m less half walls
+    offices = rooms[(rooms["kind"] == "room") & rooms["area_m2"].between(30, 45)]  # 4 x 10 m less half walls
+    assert len(offices) == 2

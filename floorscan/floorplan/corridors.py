@@ -49,9 +49,12 @@ et al. ("Room segmentation: survey, implementation, and analysis", ICRA 2016).
 3. **Sides**: each opening in a side, at least ``door_min_m`` wide, that leads into
    space, is cut on the side's line, unless the space behind it goes on away from the
    corridor for ``corridor_elongation`` times its width or more, about as wide as the
-   opening (the opening at least :data:`~floorscan.floorplan.persistence.DOOR_SHARE` of
-   the space's median width along the way: a narrower one is a room's entrance, as a
-   door is), or lies in another
+   opening (the opening's width at its middle at least
+   :data:`~floorscan.floorplan.persistence.DOOR_SHARE` of the space's median width along
+   the way: a narrower one is a room's entrance, as a door is), from at least two of
+   three points across it (a quarter, half and three quarters of it: the ray from one
+   point may run up beside a partition that stops short of the side, in a strip of
+   space that never ends), or lies in another
    corridor (another corridor meets this one there, and the two stay one room), or
    ends within :data:`~floorscan.floorplan.mouths.MOUTH_MIN_DEPTH` times the opening's
    width (a niche of the corridor, as the open sides of rooms take it; the depth is the
@@ -344,24 +347,26 @@ def corridor_sides(
                 if any(j != k for j in strip_tree.query(shapely.Point(behind), predicate="within").tolist()):
                     mouths.append((side, g0, g1))  # another corridor's strip
                     continue
-                # how far the space goes on away from the corridor: for
-                # corridor_elongation times its width, another corridor; for less than
-                # MOUTH_MIN_DEPTH times the opening, a recess of this one
+                # how far the space goes on away from the corridor, on three rays from a
+                # quarter, half and three quarters of the opening (a partition behind one
+                # of them turns one ray, not the opening): for corridor_elongation times
+                # the mouth's width (at its middle) from two of them, another corridor;
+                # for less than MOUTH_MIN_DEPTH times the opening (their median), a
+                # recess of this one
                 width = 2 * float(raster.at(half_width, behind[None], outside=0.0)[0])
                 reach = max(params.corridor_elongation * max(width, MIN_ROOM_WIDTH_M), MOUTH_MIN_DEPTH * (g1 - g0))
                 d = np.arange(s["step"] / 2, reach + s["step"], s["step"] / 2)
                 away = np.outer(d, outward * s["n"])  # the samples of a ray into the space behind
-                ray = raster.at(raster.space, mid + away, outside=False).astype(bool)
-                # another corridor goes on from here, about as wide as its mouth; a mouth
-                # narrower than DOOR_SHARE of the space behind it (the median width along
-                # the ray) is the entrance of a room, as a door is
-                if ray.all() and width >= DOOR_SHARE * 2 * float(np.median(raster.at(half_width, mid + away, 0.0))):
+                starts = [p + f * (q - p) for f in (0.25, 0.5, 0.75)]
+                rays = [raster.at(raster.space, x + away, outside=False).astype(bool) for x in starts]
+                # another corridor goes on, about as wide as its mouth; a mouth narrower
+                # than DOOR_SHARE of the space behind it (the median width along the ray)
+                # is the entrance of a room, as a door is
+                goes_on = [bool(r.all()) and width >= 2 * DOOR_SHARE * np.median(raster.at(half_width, x + away, 0.0))
+                           for x, r in zip(starts, rays)]
+                if sum(goes_on) >= 2:
                     mouths.append((side, g0, g1))
                     continue
-                # a niche when the space behind ends within its depth across the opening:
-                # the median of three rays, at a quarter, half and three quarters of it
-                # (one may meet the end of a partition behind it, or pass a door)
-                rays = [ray] + [raster.at(raster.space, p + f * (q - p) + away, outside=False) for f in (0.25, 0.75)]
                 depths = [d[-1] if r.all() else d[int(np.argmin(r))] for r in rays]
                 if np.median(depths) >= MOUTH_MIN_DEPTH * (g1 - g0):
                     cuts.append((side, g0, g1, p, q, mid, walls))
