@@ -769,3 +769,42 @@ def test_a_short_face_across_the_corner_of_two_walls_that_meet_is_loose():
     assert short_loose(seg, chord, 0.5).tolist() == [False, False, False]
     far = np.array([[0.0, 2.0, 0, 1, 0]], dtype=np.float64)  # the two walls meet 2 m from the face
     assert short_loose(seg, np.vstack([chord, far]), 0.5).tolist() == [False, False, False]
+
+
+def test_a_wall_in_line_with_a_short_wall_piece_fitted_a_few_degrees_off_is_no_loose_furniture():
+    """A corridor's north wall, 4 m (x 2..6, y 3), seen from both sides and past both
+    ends, and 1.3 m beyond its east end a 0.53 m piece of the wall held at a corner,
+    fitted 6.5 degrees off its line (a short face is fitted on few cells: its direction
+    is known to a cell at each end, atan(0.1 / 0.53) = 10.7 degrees). The piece lies in
+    the long wall's line, so the long wall is held up and stays a wall; compared with
+    join_angle_deg (5 degrees) alone it was in no line, and the wall was loose furniture
+    (map_with_clutter at the map extractor's seed 6: the corridor's north wall, 58.4-62.4
+    m, clutter, and the corridor one room with the hall and the offices north of it). A
+    piece as short in line with a face shorter than a wall holds nothing more: the zigzag
+    of a row of chairs stays loose."""
+    from floorscan.floorplan.clutter import loose_in_free_space
+    from floorscan.floorplan.junctions import junction_ends
+
+    a = np.radians(6.5)
+    piece = (7.3, 3.0, 7.3 + 0.53 * np.cos(a), 3.0 - 0.53 * np.sin(a))
+    box = [(0, 0, 12, 0), (12, 0, 12, 6), (12, 6, 0, 6), (0, 6, 0, 0)]
+    corner = [(piece[2], piece[3], piece[2], 6.0)]  # the wall the piece meets at its east end
+    segments = np.array(box + corner + [(2, 3, 6, 3), piece], dtype=np.float64)
+    poses = [(1, 1.5), (4, 1.5), (7, 1.5), (1, 4.5), (4, 4.5), (6.5, 4.5)]
+    rng = np.random.default_rng(4)
+
+    def loose_faces(segments):
+        scans = [(np.array(p, dtype=np.float64), _scan(p, rng, segments)) for p in poses]
+        grid = occupancy_grid(scans, OccupancyParams())
+        snapped, junctions = snap_junctions(segments, StructureParams())
+        _, side = border_and_support(snapped, grid, StructureParams())
+        ends = junction_ends(snapped, junctions)
+        return ends, loose_in_free_space(snapped, ends, side, grid, StructureParams())
+
+    ends, loose = loose_faces(segments)
+    assert ends[-1].tolist() == [False, True] and not ends[-2].any()  # the piece held at its corner only
+    assert loose.tolist() == [False] * 7
+    # a 2 m face (a rack's front, shorter than a wall, clutter_max_length_m) is no wall
+    # for the piece to be in line with: loose
+    segments[-2] = (4, 3, 6, 3)
+    assert loose_faces(segments)[1].tolist() == [False] * 5 + [True, False]

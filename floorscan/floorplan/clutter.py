@@ -16,7 +16,7 @@ from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan.candidates import candidate_pairs
 from floorscan.floorplan.free_space import StructureParams, mask_at, passable, segment_samples
 from floorscan.floorplan.hidden import HIDDEN_MAX_GAP_M, OBJECT_MAX_DEPTH_M, backed, body_seen_free, free_normals
-from floorscan.floorplan.junctions import ends_on_line, shorter_on_longer
+from floorscan.floorplan.junctions import ends_on_line, in_line_pairs, shorter_on_longer
 
 
 def free_standing_objects(
@@ -285,9 +285,11 @@ def loose_in_free_space(
     - no face of it crosses another face away from both their ends (``crossed``, an X
       junction): a partition that crosses a wall, with a door at each of its ends, is
       held by the wall it crosses;
-    - no face of it lies in the line of a face outside it (within ``2 *
-      side_offset_m`` of it) within ``loose_reach_m``: a wall between two doors has its
-      wall's other pieces in line across the doors;
+    - no face of it lies in the line of a face outside it within ``loose_reach_m``
+      (:func:`~floorscan.floorplan.junctions.in_line_pairs`: within ``2 * side_offset_m``
+      of it, and of its direction to ``join_angle_deg`` or, a short face beside one at
+      least ``clutter_max_length_m`` long, to a cell at each end): a wall between two
+      doors has its wall's other pieces in line across the doors;
     - the cells ``side_offset_m`` to twice that beyond each of its free ends, along
       the face, are free space (:func:`~floorscan.floorplan.free_space.passable`): the
       rover saw past them, so no free end is an occluded continuation;
@@ -339,9 +341,8 @@ def loose_in_free_space(
     held = np.zeros((nf, 2), dtype=bool)
     held[f, end] = True
     held |= np.asarray(ends, dtype=bool).reshape(-1, 2)
-    i, j = candidate_pairs(seg, params.loose_reach_m, np.radians(params.join_angle_deg))
-    in_line = np.abs(shorter_on_longer(seg, i, j)[4]).max(axis=1) <= 2 * params.side_offset_m
-    i, j = i[in_line], j[in_line]
+    i, j = in_line_pairs(seg, params.loose_reach_m, 2 * params.side_offset_m, np.radians(params.join_angle_deg),
+                         grid.resolution_m, params.clutter_max_length_m)
     anchored = np.zeros(n_groups, dtype=bool)
     outside = group[i] != group[j]
     anchored[group[i[outside]]] = True
