@@ -1466,15 +1466,18 @@ def test_a_plant_against_a_corridor_wall_frames_no_door_on_a_turned_raster():
         assert 51.0 < rooms["area_m2"].iloc[0] < 54.0
 
 
-def test_a_fan_of_rays_through_a_door_is_no_corridor_however_long():
+def test_an_outline_the_scans_reach_is_no_corridor_however_long():
     """What a recording saw of a room through its door and never entered, walled only at
     its far end (a wall 4 m wide, 7 m beyond the door; the building's outer walls run on
     north past it, out of the rays' reach), is the fan of the rays through the door:
-    ``_fans`` finds it, not the corridor the rover drove along, and nothing in a map (no
-    scans). A fan is a room, however long its outline (orebro's 4.8 m2 fan through a door
-    was ``Corridor 5``); the same outline is a corridor otherwise."""
+    ``_unwalled`` finds it, not the corridor the rover drove along, and nothing in a map
+    (no scans). So it does with a scan taken inside the same outline (the part of an open
+    office the rover crossed: orebro's 48 m2 of desks south of Room 7 was ``Corridor 3``,
+    walled on 0.34 of its edge). Such a room is a room, however long its outline
+    (orebro's 4.8 m2 fan through a door was ``Corridor 5``); the same outline is a
+    corridor otherwise."""
     from floorscan.floorplan.room_tables import room_tables
-    from floorscan.floorplan.rooms import _fans
+    from floorscan.floorplan.rooms import _unwalled
 
     walls = [(0, 0, 12, 0), (12, 0, 12, 10), (0, 10, 0, 0), (0, 2, 5.5, 2), (6.5, 2, 12, 2), (4, 9, 8, 9)]
     axes = np.array(walls, dtype=np.float64)
@@ -1483,11 +1486,13 @@ def test_a_fan_of_rays_through_a_door_is_no_corridor_however_long():
     ys = raster.origin_xy[1] + (np.arange(raster.space.shape[0]) + 0.5) * raster.resolution_m
     labels = np.where(raster.space, np.where(ys[:, None] < 2.0, 1, 2), 0).astype(np.int32)
     assert (labels == 2).sum() * raster.resolution_m**2 > 10.0  # the fan was seen
-    assert _fans(raster, labels, grid.scan_xy, 2).tolist() == [False, False, True]
-    assert not _fans(raster, labels, None, 2).any()
+    assert _unwalled(raster, labels, grid.scan_xy, 2).tolist() == [False, False, True]
+    entered = np.vstack([grid.scan_xy, [(6.0, 5.0)]])  # a scan taken in the fan
+    assert _unwalled(raster, labels, entered, 2).tolist() == [False, False, True]
+    assert not _unwalled(raster, labels, None, 2).any()
     strip = shapely.box(0, 0, 1.2, 9.0)  # 1.2 m wide, 9 m long: a corridor's outline
-    for fans, kind in (([True], "room"), ([False], "corridor"), (None, "corridor")):
-        rooms, _ = room_tables([strip], [], 0.05, RoomParams(), True, fans)
+    for unwalled, kind in (([True], "room"), ([False], "corridor"), (None, "corridor")):
+        rooms, _ = room_tables([strip], [], 0.05, RoomParams(), True, unwalled)
         assert rooms["kind"].tolist() == [kind]
 
 

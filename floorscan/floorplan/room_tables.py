@@ -15,7 +15,8 @@ log = logging.getLogger("floorscan.floorplan.rooms")
 
 
 def room_tables(
-    polys: list, doors: list, resolution_m: float, params: RoomParams, divided: bool = False, fans: list | None = None,
+    polys: list, doors: list, resolution_m: float, params: RoomParams, divided: bool = False,
+    unwalled: list | None = None,
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The rooms and doors tables of room polygons and door openings: each room's kind
     (a ``corridor`` when long for its width, :func:`is_corridor`, with the objects on
@@ -36,19 +37,21 @@ def room_tables(
     divided : bool
         Whether a room's open side (:mod:`floorscan.floorplan.mouths`) divides two
         rooms, when no door does.
-    fans : list of bool, optional
-        Per room, whether what the scans saw of it is a fan of rays through its door
-        (:func:`floorscan.floorplan.rooms.plan_rooms`): a ``room`` however long it
-        looks. None: none is.
+    unwalled : list of bool, optional
+        Per room, whether its outline is the reach of the scans, walled on less than
+        half its edge (:func:`floorscan.floorplan.rooms.plan_rooms`: a fan of rays
+        through its door, the part of an open office the scans reached): a ``room``
+        however long it looks. None: none is.
 
     Returns
     -------
     rooms, doors : pandas.DataFrame
         As :func:`floorscan.floorplan.rooms.plan_rooms`.
     """
-    fans = [False] * len(polys) if fans is None else fans
-    kinds = ["corridor" if not fan and is_corridor(objects_filled(poly, params.min_room_area_m2), resolution_m / 2,
-                                                   params) else "room" for poly, fan in zip(polys, fans)]
+    unwalled = [False] * len(polys) if unwalled is None else unwalled
+    kinds = ["corridor" if not open_outline and is_corridor(objects_filled(poly, params.min_room_area_m2),
+                                                            resolution_m / 2, params) else "room"
+             for poly, open_outline in zip(polys, unwalled)]
     if polys and not doors and not divided:
         kinds = ["space"] * len(polys)
         log.info("rooms: no door divides the free space (an open hall, one corridor, a campus): %s of %.1f m2",

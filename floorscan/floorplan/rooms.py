@@ -108,8 +108,9 @@ taken from the walls:
    (:func:`~floorscan.floorplan.room_tables.is_corridor`); the width, its polygon's
    median local thickness (:func:`~floorscan.floorplan.room_tables.room_width`) with
    its holes smaller than a room filled (an object on its floor, not a core it goes
-   around)); in a recording, no room no scan was taken in that is walled on less than
-   half its edge (:func:`_fans`: the fan of rays through its door). When no door divides
+   around)); in a recording, no room walled on less than half its edge
+   (:func:`_unwalled`: the fan of rays through a door, the part of an open office the
+   scans reached: an outline that is the reach of the scans). When no door divides
    the space (an open hall, one corridor, a campus), it is one region of kind ``space``
    (or a few, where the seen space falls apart).
 6. **Polygons** (:func:`~floorscan.floorplan.room_polygons.room_polygons`): each room's cells, less its strips
@@ -399,18 +400,19 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     return raster, final, D.distinct_doors(doors), divided
 
 
-def _fans(raster: RoomRaster, labels: np.ndarray, scan_xy: np.ndarray | None, n: int) -> np.ndarray:
-    """(n + 1,) bool: the rooms of ``labels`` (1..n) that are fans of rays, in a
-    recording (``scan_xy`` (S, 2) metres, the scans' origins; None, a map: none): no
-    scan was taken in them and walls and seen obstacles bound less than
+def _unwalled(raster: RoomRaster, labels: np.ndarray, scan_xy: np.ndarray | None, n: int) -> np.ndarray:
+    """(n + 1,) bool: the rooms of ``labels`` (1..n) whose outline is the reach of the
+    scans, in a recording (``scan_xy`` (S, 2) metres, the scans' origins; None, a map:
+    none): walls and seen obstacles bound less than
     :data:`~floorscan.floorplan.room_space.MIN_ENCLOSURE_UNENTERED` of their edge
-    (:func:`~floorscan.floorplan.unentered.enclosure`). What the scans saw of such a
-    room is the fan of rays through its door, whose sides are the rays' limits: its
-    outline says nothing of the room's shape, so it is no corridor however long it
-    looks (:func:`~floorscan.floorplan.room_tables.room_tables`)."""
+    (:func:`~floorscan.floorplan.unentered.enclosure`), whether a scan was taken in them
+    or not. What the scans saw of such a room is the fan of rays through its door, or
+    the part of an open office they reached between its desks; either outline says
+    nothing of the room's shape, so its length for its width is no corridor's: a
+    corridor runs between walls (:func:`~floorscan.floorplan.room_tables.room_tables`)."""
     if scan_xy is None or n == 0:
         return np.zeros(n + 1, dtype=bool)
-    out = (enclosure(raster, labels, n) < MIN_ENCLOSURE_UNENTERED) & ~visited_regions(raster, labels, scan_xy, n)
+    out = enclosure(raster, labels, n) < MIN_ENCLOSURE_UNENTERED
     out[0] = False
     return out
 
@@ -464,7 +466,7 @@ def rooms_and_walls(
     t0 = time.perf_counter()
     raster, labels, doors, divided = segment_rooms(grid, axes, thickness, params, under, furniture)
     n = int(labels.max())
-    fans = _fans(raster, labels, grid.scan_xy, n)
+    unwalled = _unwalled(raster, labels, grid.scan_xy, n)
     polys = room_polygons(raster, labels, axes, thickness)
     if doors:  # the opening in the wall belongs to neither room: rooms end at the wall faces
         openings = shapely.union_all([door_opening(p, q, thickness[w], raster.resolution_m) for p, q, w, *_ in doors],
@@ -476,7 +478,8 @@ def rooms_and_walls(
     new_id = {k + 1: i for i, k in enumerate(keep)}
     polys = [polys[k] for k in keep]
     doors = [(p, q, w, new_id[a], new_id[b]) for p, q, w, a, b in doors if a in new_id and b in new_id]
-    rooms, doors_df = room_tables(polys, doors, raster.resolution_m, params, divided, [bool(fans[k + 1]) for k in keep])
+    rooms, doors_df = room_tables(polys, doors, raster.resolution_m, params, divided,
+                                  [bool(unwalled[k + 1]) for k in keep])
     kinds = list(rooms["kind"])
     lone = bounding_no_room(raster, labels > 0, axes, thickness)
     log.info("rooms: %d rooms (%d corridors), %d doors, %.1f m2 in all; %d walls bound none (%.2f s)", len(polys),
