@@ -589,10 +589,14 @@ def test_a_room_seen_from_a_hall_through_its_open_side_is_a_room_of_its_own():
     small, large = sorted(rooms["polygon"], key=lambda p: p.area)
     assert small.area == pytest.approx(4.9 * 3.9, abs=0.8) and large.area == pytest.approx(19.9 * 7.9, abs=1.0)
     assert shapely.box(7.1, 8.1, 11.9, 11.9).difference(small).area < 0.5
-    # the same room entered by the rover is left to the persistence (an opening wider
-    # than a door joins the two)
-    rooms, _ = plan_rooms(axes, np.full(len(axes), T), _grid(walls, poses + [(9.5, 10.5)]))
-    assert len(rooms) == 1
+    # the same room entered by the rover: its open side is a gap 3.5 m wide between the
+    # free ends of two walls in one line, closing a pocket on the room's side (a mouth,
+    # room_mouths); before, the persistence joined the two through it (one room)
+    rooms, doors = plan_rooms(axes, np.full(len(axes), T), _grid(walls, poses + [(9.5, 10.5)]))
+    assert sorted(rooms["kind"]) == ["room", "room"] and len(doors) == 0
+    small, large = sorted(rooms["polygon"], key=lambda p: p.area)  # the room and what it saw past its open east side
+    assert shapely.box(7.1, 8.1, 11.9, 11.9).difference(small).area < 0.5
+    assert large.area == pytest.approx(19.9 * 7.9, abs=1.0)
 
 
 # A corridor (y 0..2) along four offices (y 2..6, 5 m wide), each open to it through
@@ -801,8 +805,9 @@ def test_a_niche_shallower_than_half_its_width_is_the_corridor_s():
 
 
 def test_a_gap_in_one_wall_and_a_short_stub_make_no_mouth():
-    """Two collinear ends are a gap in one wall (wall_gaps' door, not a mouth); a side
-    wall shorter than the opening is a stub of furniture."""
+    """A gap in one wall 2.5 m wide whose one side is a stub of 0.5 m (shorter than
+    MOUTH_WALL_M) is no room's open side, nor is the line between two side walls shorter
+    than the opening: stubs of furniture."""
     from floorscan.floorplan.mouths import room_mouths
     from floorscan.floorplan.room_space import room_space
 
@@ -811,6 +816,29 @@ def test_a_gap_in_one_wall_and_a_short_stub_make_no_mouth():
         grid = _grid(walls, [(2, 2), (6, 2)])
         raster = room_space(grid, axes, np.full(len(axes), T), RoomParams())
         assert room_mouths(axes, np.full(len(axes), T), raster, RoomParams()) == []
+
+
+def test_a_room_off_a_hall_through_a_gap_in_its_wall_wider_than_a_door_is_a_room_apart():
+    """A hall 12 x 8 m whose north wall has a gap 4 m wide (3.88 m between the faces,
+    a room's open side) between two free ends; behind it, a room 7 m wide and 4 m deep
+    that the rover entered, whose side walls meet the hall's wall beyond the gap. The
+    gap is a mouth (a room on one side, and on the other a hall that runs on as far):
+    two rooms apart without a door, where the gap in one wall was left to wall_gaps,
+    which takes doors alone, and the room and the hall were one space. A recess 1.5 m
+    deep behind the same gap (less than MOUTH_MIN_DEPTH times the gap) is part of the
+    hall, though the hall closes a pocket on the gap's other side."""
+    hall = [(0, 0, 12, 0), (12, 0, 12, 8), (0, 8, 0, 0), (0, 8, 4, 8), (8, 8, 12, 8)]
+    plans = {}
+    for depth in (4.0, 1.5):
+        walls = hall + [(2.5, 8, 2.5, 8 + depth), (9.5, 8, 9.5, 8 + depth), (2.5, 8 + depth, 9.5, 8 + depth)]
+        axes = np.array(walls, dtype=np.float64)
+        grid = _grid(walls, [(2, 2), (10, 2), (6, 4), (2, 6), (10, 6), (6, 8 + depth / 2)])
+        plans[depth] = plan_rooms(axes, np.full(len(axes), T), grid, RoomParams())
+    rooms, doors = plans[4.0]
+    assert sorted(np.round(rooms["area_m2"]).tolist()) == [27.0, 94.0] and len(doors) == 0
+    assert list(rooms["kind"]) == ["room", "room"]
+    rooms, doors = plans[1.5]
+    assert np.round(rooms["area_m2"]).tolist() == [104.0] and len(doors) == 0
 
 
 def test_a_room_is_as_wide_as_its_median_local_thickness():

@@ -25,7 +25,10 @@ mouth is that line, between two wall ends that:
   to the line into the same side (or along the line, away from it, the line in its
   line within ``line_offset_m`` plus half its thickness: the wall of a corridor going
   on past a room's side wall), within ``door_angle_deg``, and not both
-  along the line (that is a gap in one wall, :func:`~floorscan.floorplan.doors.wall_gaps`);
+  along the line (that is a gap in one wall, :func:`~floorscan.floorplan.doors.wall_gaps`,
+  where no wider than a door; a wider gap between the free ends of two walls at least
+  :data:`MOUTH_WALL_M` long is a mouth when it closes a pocket on one side, as below,
+  and the space on the other side runs on as far: no recess of the room);
   a corner's wall is a side wall; a side wall is at least as long as the line's clear
   width between the faces of the walls at its ends (the room is as deep as it is
   open: a cubicle, Bormann et al.'s lab_a) and :data:`MOUTH_WALL_M`;
@@ -204,11 +207,19 @@ def room_mouths(
         t = np.linspace(t0, t1, max(3, int(length_m / raster.resolution_m)))
         if not raster.at(raster.space, p + np.outer(t, u), outside=False).all():
             return False
-        starts = [p + u * length_m * f + n * raster.resolution_m for f in (0.25, 0.5, 0.75)]
-        depth = np.arange(1, int(np.ceil(MOUTH_MIN_DEPTH * length_m / step)) + 1) * step
-        if not raster.at(raster.space, starts[1] + np.outer(depth, n), outside=False).all():
+        if not runs_on(p, u, length_m, s):
             return False  # a recess of the space the line borders, not a room
+        starts = [p + u * length_m * f + n * raster.resolution_m for f in (0.25, 0.5, 0.75)]
         return all(_ray_hits(raster, x, n, MOUTH_DEPTH * length_m, tree) for x in starts)
+
+    def runs_on(p: np.ndarray, u: np.ndarray, length_m: float, s: float) -> bool:
+        """Whether the space on side ``s`` of the line from ``p`` along ``u`` runs on at
+        least MOUTH_MIN_DEPTH times its length ``length_m`` from its middle."""
+        n = s * np.array([-u[1], u[0]])
+        step = raster.resolution_m / 2
+        depth = np.arange(1, int(np.ceil(MOUTH_MIN_DEPTH * length_m / step)) + 1) * step
+        start = p + u * length_m / 2 + n * raster.resolution_m
+        return bool(raster.at(raster.space, start + np.outer(depth, n), outside=False).all())
 
     cands = []
     for a in range(len(free)):
@@ -223,8 +234,20 @@ def room_mouths(
             u = d[b] / dist[b]
             n = np.array([-u[1], u[0]])
             along = np.abs(away[[a, b]] @ u) >= cos_tol
-            if along.all():
-                continue  # a gap in one wall's line: wall_gaps
+            if along.all():  # a gap in one wall's line: wall_gaps' door up to door_max_m, a mouth beyond
+                ia, ib = tips[a][0], tips[b][0]
+                width = float(dist[b])
+                if (not corner and width > params.door_max_m and away[a] @ u < 0 < away[b] @ u
+                        and _in_line(pts[b], pts[a], away[a], params.line_offset_m + thickness[ia] / 2)
+                        and length[[ia, ib]].min() >= MOUTH_WALL_M
+                        and width - (thickness[ia] + thickness[ib]) / 2 <= MOUTH_MAX_M):
+                    # wider: a room's open side in the wall, a room on one side (a
+                    # pocket) and on the other no recess of it
+                    ends_m = (thickness[ia] / 2, thickness[ib] / 2)
+                    if any(closes_pocket(pts[a], u, width, s, ends_m) and runs_on(pts[a], u, width, -s)
+                           for s in (1.0, -1.0)):
+                        cands.append((width, pts[a].copy(), pts[b].copy(), int(ia if length[ia] >= length[ib] else ib)))
+                continue
             if corner and along[1]:
                 continue  # a corner bounds a mouth by a side wall only
             side = away[[a, b]] @ n
