@@ -1016,6 +1016,50 @@ def test_a_row_of_desks_standing_free_frames_no_door_however_long():
     assert len(rooms) == 2 and len(doors) == 2
 
 
+def _desk_row_office(depth: float, pieces: list, door: tuple = (1.6, 2.6)) -> tuple:
+    """The rooms and doors of a map of an office 4 m wide and ``depth`` m deep with a
+    row of desks 0.6 m deep across its middle, against both side walls and open between
+    x ``door`` (metres), the plan's walls its box and ``pieces`` ((x0, dy, x1): axes at
+    ``dy`` off the row's middle line)."""
+    box = [(0, 0, 4, 0), (4, 0, 4, depth), (4, depth, 0, depth), (0, depth, 0, 0)]
+    y = depth / 2
+    desks = []
+    for x0, x1 in ((0.0, door[0]), (door[1], 4.0)):
+        desks += [(x0, y - 0.3, x1, y - 0.3), (x1, y - 0.3, x1, y + 0.3), (x1, y + 0.3, x0, y + 0.3),
+                  (x0, y + 0.3, x0, y - 0.3)]  # fmt: skip
+    mid = sum(door) / 2
+    poses = [(mid, y), (1.0, y - 1.2), (3.0, y - 1.0), (1.0, y + 1.2), (3.0, y + 1.0), (2.0, 0.6), (2.0, depth - 0.6)]
+    grid = dataclasses.replace(_grid(box, poses, objects=desks), scan_xy=None)
+    axes = np.array(box + [(x0, y + dy, x1, y + dy) for x0, dy, x1 in pieces], dtype=np.float64)
+    return plan_rooms(axes, np.full(len(axes), 0.1), grid, RoomParams())
+
+
+def test_a_desk_row_with_a_door_s_width_between_its_desks_parts_no_office():
+    """The plan took a piece of each desk's face, 0.5 m, for a wall (as a map's plan of
+    map15 does): an opening a door wide between walls all shorter than the narrowest
+    door, across an office 5 m deep, is a gap between desks and parts no rooms
+    (desk_rows); across a hall 12 m deep (longer than one room) it is a door and does;
+    so does a door between two walls as long as the desks, beside a corner (a stub
+    shorter than a door at one jamb and a wall at the other, or a stub tied to the side
+    wall), or with no wall at its jambs."""
+    stubs = [(1.1, 0.0, 1.6), (2.6, 0.0, 3.1)]
+    rooms, doors = _desk_row_office(5.0, stubs)
+    assert len(rooms) == 1 and len(doors) == 0
+    assert rooms["polygon"].iloc[0].contains(shapely.MultiPoint([(2, 1), (2, 4), (0.5, 4.5), (3.5, 0.5)]))
+    rooms, doors = _desk_row_office(12.0, stubs)
+    assert len(rooms) == 2 and len(doors) == 1 and doors["width_m"].iloc[0] == pytest.approx(1.0, abs=0.1)
+    rooms, doors = _desk_row_office(5.0, [(0.05, 0.0, 1.6), (2.6, 0.0, 3.95)])
+    assert len(rooms) == 2 and len(doors) == 1
+    rooms, doors = _desk_row_office(5.0, [(0.05, 0.0, 0.4), (1.4, 0.0, 3.95)], door=(0.4, 1.4))
+    assert len(rooms) == 2 and len(doors) == 1 and doors["width_m"].iloc[0] == pytest.approx(1.0, abs=0.1)
+    # both jamb walls short, one tied to the side wall: a partition's stub at a corner
+    rooms, doors = _desk_row_office(5.0, [(0.05, 0.0, 0.5), (1.5, 0.0, 2.0)], door=(0.5, 1.5))
+    assert len(rooms) == 2 and len(doors) == 1
+    # no wall at the jambs (the plan lacks the pieces): nothing to weigh, the door stays
+    rooms, doors = _desk_row_office(5.0, [])
+    assert len(rooms) == 2 and len(doors) == 1
+
+
 def test_a_cabinet_standing_free_with_a_pocket_of_floor_inside_frames_no_door():
     # a map of a room 7 x 5 m with a cabinet 0.8 x 2.45 m (a little longer than a piece
     # of furniture, so not standing free by its extent) standing 1.24 and 1.19 m from the

@@ -97,7 +97,10 @@ taken from the walls:
    than a door, as a room's open side is (:func:`~floorscan.floorplan.unentered.open_side_rooms`),
    is a room apart from it: a room seen from a hall through its open side.
 5. **Rooms**: a region below ``min_room_area_m2`` joins the neighbour it touches most;
-   a room no scan was taken in and no door leads into is dropped unless walls and
+   two rooms parted by a row of desks are one
+   (:func:`~floorscan.floorplan.desk_rows.join_desk_rows`: a door whose jamb walls are all
+   shorter than ``door_min_m`` and tied to no other wall, between two rooms no longer
+   together than one office); a room no scan was taken in and no door leads into is dropped unless walls and
    seen obstacles bound it along at least half of its edge
    (:data:`~floorscan.floorplan.room_space.MIN_ENCLOSURE_UNENTERED`): a fan of rays
    seen through an opening wider than a door is bounded at its far end at most, not
@@ -142,6 +145,7 @@ from floorscan.core.geometry import OVERLAY_GRID_M, minus
 from floorscan.core.occupancy import OccupancyGrid
 from floorscan.floorplan import doors as D
 from floorscan.floorplan.corridors import across_corridor, corridor_ends, corridor_sides, corridor_strips
+from floorscan.floorplan.desk_rows import join_desk_rows
 from floorscan.floorplan.extensions import partition_cuts
 from floorscan.floorplan.jambs import (between_faces, face_to_object, jamb_cells, on_wall_face, stub_past_crossing,
                                       wall_line_index)
@@ -354,6 +358,7 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
         if best is None:
             break
         sets.merge(*best)
+    join_desk_rows(found, labels, sets, axes, thickness, cut, params)  # a desk row parts no rooms
     roots = set_roots(sets, n)
     merged = roots[labels]
     merged[outside[labels]] = 0
