@@ -276,29 +276,13 @@ def test_a_corridor_s_even_stretch_between_two_crossings_is_no_door():
     # the crossings are wider than the corridors (their largest disc 1.2 m across the
     # diagonal), so the watershed parts the stretch between them where their basins
     # meet, at x 6.9, over 1.6 m, under three quarters of a crossing's width: before,
-    # a door there cut the network in two corridors (41.6 and 38.8 m2). Both walls go
-    # on past the contact for more than a door's width each way: no door.
+    # a door there cut the network in two corridors (41.6 and 38.8 m2). The contact
+    # runs across the corridor's strip (across_corridor), and the two corridors meet
+    # through a narrowing in no wall's line (corridor_narrowings): either keeps it one.
     poses = [(0.9, 0.9), (12.9, 0.9), (7, 0.9), (-4, 0.9), (16, 0.9), (0.9, -4), (0.9, 6), (12.9, -4), (12.9, 6)]
     rooms, doors = _rooms(CROSSINGS, poses)
     assert len(rooms) == 1 and len(doors) == 0
     assert rooms["area_m2"].iloc[0] == pytest.approx(80.8, abs=1.0)
-
-
-def test_between_faces_needs_both_walls_to_go_on_a_door_s_width_each_way():
-    from floorscan.floorplan.jambs import between_faces
-
-    axes = np.array(CROSSINGS, dtype=np.float64)
-    thickness = np.full(len(axes), T)
-    params = RoomParams()
-    assert between_faces(np.array([6.9, 0.1]), np.array([6.9, 1.7]), axes, thickness, params)
-    # 1.5 m from a crossing: the wall's end (its jamb there) lies within a door's width
-    assert not between_faces(np.array([3.3, 0.1]), np.array([3.3, 1.7]), axes, thickness, params)
-    # a door of 0.9 m in the south wall at x 6.5..7.4: the wall has a gap wider than a slit
-    holed = [a for a in CROSSINGS if a != (1.8, 0, 12, 0)] + [(1.8, 0, 6.5, 0), (7.4, 0, 12, 0)]
-    holed = np.array(holed, dtype=np.float64)
-    assert not between_faces(np.array([6.9, 0.1]), np.array([6.9, 1.7]), holed, np.full(len(holed), T), params)
-    # far from any wall: no face at all
-    assert not between_faces(np.array([6.9, 0.9]), np.array([6.9, 1.7]), axes, thickness, params)
 
 
 def test_a_gap_narrower_than_a_door_joins_nothing():

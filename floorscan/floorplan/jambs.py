@@ -264,45 +264,6 @@ def wall_line_index(axes: np.ndarray, thickness: np.ndarray, params: RoomParams)
     return line_of
 
 
-def between_faces(p: np.ndarray, q: np.ndarray, axes: np.ndarray, thickness: np.ndarray, params: RoomParams,
-                  line_of: np.ndarray | None = None) -> bool:
-    """Whether the contact ``p``-``q`` between two regions runs between the faces of
-    walls that go on past both its ends: at each end, the walls of the nearest wall's
-    line (:func:`wall_line_index`) run on for ``door_max_m`` each way along it, with no
-    gap of ``door_min_m`` or more. That is the space between two walls, such as a
-    corridor's even stretch that the watershed parts where the junctions at its ends
-    widen: it opens no wall, so it is no door.
-
-    ``p`` and ``q`` (2,) are the contact's ends, ``axes`` (N, 4) and ``thickness`` (N,)
-    the plan's walls, all in metres; ``params``: ``door_min_m``, ``door_max_m``,
-    ``jamb_m``, ``line_offset_m``; ``line_of``: :func:`wall_line_index` of the walls,
-    computed when None. False without walls.
-    """
-    if not len(axes):
-        return False
-    line_of = wall_line_index(axes, thickness, params) if line_of is None else line_of
-    u, _ = wall_units(axes)
-    for e in (p, q):
-        dist = footprint_distance(e, axes, thickness)
-        k = int(np.argmin(dist))
-        if dist[k] > params.jamb_m or line_of[k] < 0:
-            return False
-        t = np.sort(axes[line_of == line_of[k]].reshape(-1, 2, 2) @ u[k], axis=1)
-        t = t[np.argsort(t[:, 0])]
-        at = float(e @ u[k])
-        run = None  # the line's walls joined across slits narrower than a door, as [start, end]
-        for a, b in t:
-            if run is not None and a - run[1] < params.door_min_m:
-                run[1] = max(run[1], b)
-                continue
-            if run is not None and run[0] <= at <= run[1]:
-                break
-            run = [a, b]
-        if run is None or not run[0] <= at - params.door_max_m or not at + params.door_max_m <= run[1]:
-            return False
-    return True
-
-
 def face_to_object(raster: RoomRaster, p: np.ndarray, q: np.ndarray, axes: np.ndarray, thickness: np.ndarray,
                    params: RoomParams) -> bool:
     """Whether the contact ``p``-``q`` between two regions runs from the face of a wall,

@@ -62,10 +62,7 @@ taken from the walls:
    face of a wall to an object wider than a wall,
    :func:`~floorscan.floorplan.jambs.face_to_object`, nor from a column in a
    partition's line past the wall it crosses,
-   :func:`~floorscan.floorplan.jambs.stub_past_crossing`, nor between the faces of two
-   walls that run on past both its ends for a door's width each way,
-   :func:`~floorscan.floorplan.jambs.between_faces`: a corridor's even stretch, which the
-   watershed parts where the crossings at its ends widen, nor across a corridor,
+   :func:`~floorscan.floorplan.jambs.stub_past_crossing`, nor across a corridor,
    :func:`~floorscan.floorplan.corridors.across_corridor`): one rule for every passage of
    the plan, in no order. Two rooms that are both corridors and meet through a narrowing
    in no wall's line, at least ``DOOR_SHARE`` of the narrower one's width, are one
@@ -147,8 +144,7 @@ from floorscan.floorplan import doors as D
 from floorscan.floorplan.corridors import across_corridor, corridor_ends, corridor_sides, corridor_strips
 from floorscan.floorplan.desk_rows import join_desk_rows
 from floorscan.floorplan.extensions import partition_cuts
-from floorscan.floorplan.jambs import (between_faces, face_to_object, jamb_cells, on_wall_face, stub_past_crossing,
-                                      wall_line_index)
+from floorscan.floorplan.jambs import face_to_object, jamb_cells, on_wall_face, stub_past_crossing
 from floorscan.floorplan.lone_walls import bounding_no_room
 from floorscan.floorplan.mouths import MOUTH_MAX_M, corner_mouths, dead_end_mouths, room_mouths
 from floorscan.floorplan.narrowings import corridor_narrowings
@@ -248,7 +244,6 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
     # a door; unless it is no opening in a wall (module docstring, step 4)
     jambs = jamb_cells(cut, params.jamb_m, axes, thickness, params, furniture)
     contacts = D.contacts(labels)
-    line_of = None  # the walls' lines (wall_line_index), for between_faces
     framed: dict[tuple[int, int], list] = {}
     narrowings: dict[tuple[int, int], float] = {}  # the widest such contact of each pair, metres
     widest: dict[tuple[int, int], float] = {}  # the widest contact of each pair, metres
@@ -279,9 +274,8 @@ def _segment(grid: OccupancyGrid, axes: np.ndarray, thickness: np.ndarray, param
                 if (face_to_object(cut, p, q, axes, thickness, params)
                         or stub_past_crossing(cut, p, q, axes, thickness, params)):
                     continue
-                line_of = wall_line_index(axes, thickness, params) if line_of is None else line_of
-                if between_faces(p, q, axes, thickness, params, line_of) or across_corridor(p, q, strips, params):
-                    passable.add(pair)  # between two walls' faces, or across a corridor: no opening in a wall
+                if across_corridor(p, q, strips, params):
+                    passable.add(pair)  # across a corridor: no opening in a wall
                     continue
             doors_here = framed.setdefault(pair, [])
             if width >= params.door_min_m:
