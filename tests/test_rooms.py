@@ -363,6 +363,16 @@ def _curved_corridor(narrowing: str, tip_r: float) -> tuple[list, list]:
     return walls, poses
 
 
+def _mover(turn_deg: float, shift: tuple[float, float] = (0.0, 0.0)):
+    """A point ``(x, y)`` (metres) turned by ``turn_deg`` about the origin, then shifted."""
+    c, s = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
+
+    def move(x: float, y: float) -> tuple[float, float]:
+        return c * x - s * y + shift[0], s * x + c * y + shift[1]
+
+    return move
+
+
 @pytest.mark.parametrize("turn_deg, shift", [(0.0, (0.0, 0.0)), (128.0, (0.03, 0.03)), (201.0, (0.011, 0.044))])
 @pytest.mark.parametrize("narrowing, tip_r, n_rooms", [("vee", 11.73, 1), ("vee", 11.23, 2), ("pier", 11.73, 2)])
 def test_a_bent_corridor_narrowed_out_of_any_wall_s_line_by_under_a_quarter_is_one_corridor(
@@ -374,11 +384,7 @@ def test_a_bent_corridor_narrowed_out_of_any_wall_s_line_by_under_a_quarter_is_o
     keeps its door, and so does a pier in whose line the passage lies (a door's frame),
     however the building is turned and shifted."""
     walls, poses = _curved_corridor(narrowing, tip_r)
-    c, s = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
-
-    def move(x: float, y: float) -> tuple[float, float]:
-        return c * x - s * y + shift[0], s * x + c * y + shift[1]
-
+    move = _mover(turn_deg, shift)
     rooms, doors = _rooms([(*move(x0, y0), *move(x1, y1)) for x0, y0, x1, y1 in walls], [move(*p) for p in poses])
     assert len(rooms) == n_rooms and len(doors) == n_rooms - 1
     assert set(rooms["kind"]) == ({"space"} if n_rooms == 1 else {"corridor"})
@@ -433,22 +439,41 @@ def test_a_room_seen_only_through_its_door_is_completed_to_its_walls():
     assert east.intersection(true_room).area / east.union(true_room).area > 0.9
 
 
-def test_a_room_against_one_wall_line_is_not_completed_to_its_box():
+def _completed(fan, walls):
+    """room_polygons._bounded_by_walls of the seen floor ``fan`` among ``walls`` (axes,
+    thickness T), no other room."""
     from floorscan.floorplan.room_polygons import _bounded_by_walls
     from floorscan.floorplan.room_space import wall_footprints
 
+    axes = np.array(walls, dtype=np.float64)
+    foot = wall_footprints(axes, np.full(len(axes), T))
+    return _bounded_by_walls(fan, axes, np.full(len(axes), T), foot, shapely.union_all(foot), shapely.Polygon(), 0.1)
+
+
+def test_a_room_against_one_wall_line_is_not_completed_to_its_box():
     # the floor seen through a 0.8 m gap in a wall (y 0, in two pieces): a fan of 6.3 m2
     fan = shapely.Polygon([(1.6, 0.06), (2.4, 0.06), (4.0, 3.0), (0.5, 3.0)])
-
-    def completed(walls):
-        axes = np.array(walls, dtype=np.float64)
-        foot = wall_footprints(axes, np.full(len(axes), T))
-        return _bounded_by_walls(fan, axes, np.full(len(axes), T), foot, shapely.union_all(foot), shapely.Polygon(), 0.1)
-
     # one wall's line: the fan as seen, not its 10.3 m2 box
-    assert completed([(-2, 0, 1.6, 0), (2.4, 0, 6, 0)]).area == pytest.approx(fan.area, abs=0.05)
+    assert _completed(fan, [(-2, 0, 1.6, 0), (2.4, 0, 6, 0)]).area == pytest.approx(fan.area, abs=0.05)
     # a wall across it at x 4.2 makes a corner: the room is completed up to both walls
-    assert completed([(-2, 0, 1.6, 0), (2.4, 0, 6, 0), (4.2, 0, 4.2, 4)]).area == pytest.approx(3.5 * 2.94, abs=0.05)
+    assert _completed(fan, [(-2, 0, 1.6, 0), (2.4, 0, 6, 0), (4.2, 0, 4.2, 4)]).area == pytest.approx(
+        3.5 * 2.94, abs=0.05)
+
+
+@pytest.mark.parametrize("turn_deg", [0.0, 30.0, 117.0, 301.5])
+def test_a_room_seen_in_part_is_completed_to_the_same_room_however_the_building_is_turned(turn_deg):
+    """room_polygons._bounded_by_walls: the box of the seen floor is taken in the frame of
+    the room's longest wall, so the room completed up to its walls is the same whatever
+    the building's turn (a box in the map's axes reached past the walls of a turned
+    building: the rigid-motion property's room through its entrance)."""
+    move = _mover(turn_deg)
+    fan = shapely.Polygon([move(*p) for p in [(1.6, 0.06), (2.4, 0.06), (4.0, 3.0), (0.5, 3.0)]])
+    walls = [(-2, 0, 1.6, 0), (2.4, 0, 6, 0), (4.2, 0, 4.2, 4)]
+    room = _completed(fan, [(*move(x0, y0), *move(x1, y1)) for x0, y0, x1, y1 in walls])
+    # the fan's box up to the wall at y 0 (its face at 0.06): x 0.5-4.0, y 0.06-3.0
+    box = shapely.Polygon([move(*p) for p in [(0.5, 0.06), (4.0, 0.06), (4.0, 3.0), (0.5, 3.0)]])
+    assert room.area == pytest.approx(box.area, abs=0.05)
+    assert room.symmetric_difference(box).area < 0.05
 
 
 def test_wall_gaps_between_collinear_ends():

@@ -67,8 +67,12 @@ def room_polygons(raster: RoomRaster, labels: np.ndarray, axes: np.ndarray, thic
         near = sorted(int(j) for j in tree.query(poly, predicate="dwithin", distance=2 * res) if j != k)
         grown = minus(shapely.buffer(poly, res, join_style="mitre"), walls, *[traced[j] for j in near])
         out.append(largest_polygon(shapely.simplify(grown, res / 2)))
-    # a room's completion stays in its bounding box: only the rooms whose boxes meet it matter
-    boxes = shapely.box(*np.array([p.bounds if not p.is_empty else (0, 0, 0, 0) for p in out]).reshape(-1, 4).T)
+    # a room's completion stays in a box square to one of its walls: in the square about its
+    # bounding box's centre whose half side is that box's diagonal over sqrt(2), which holds
+    # every such box; only the rooms whose squares meet it matter
+    b = np.array([p.bounds if not p.is_empty else (0, 0, 0, 0) for p in out], dtype=np.float64).reshape(-1, 4)
+    mid, half = (b[:, :2] + b[:, 2:]) / 2, np.hypot(b[:, 2] - b[:, 0], b[:, 3] - b[:, 1]) / np.sqrt(2)
+    boxes = shapely.box(mid[:, 0] - half, mid[:, 1] - half, mid[:, 0] + half, mid[:, 1] + half)
     tree = shapely.STRtree(boxes)
     for k, poly in enumerate(out):
         near = sorted(int(j) for j in tree.query(boxes[k]) if j != k and not out[j].is_empty) if not poly.is_empty else []
@@ -175,12 +179,12 @@ def _bounded_by_walls(
     poly, axes: np.ndarray, thickness: np.ndarray, foot, walls, others, res: float, near_m: float = 0.3
 ):
     """A room seen only in part (through its door) completed up to its walls: the
-    bounding box of its seen floor cut by the half-plane of the room's side of each
-    wall within ``near_m`` of it (on the wall's face), without the wall footprints and
-    the other rooms; taken when it keeps all but 5 % of the seen floor (the room is
-    convex between its walls: an L-shaped room or a ring corridor keeps its traced
-    outline), and only when those walls stand on two lines at least
-    (:func:`~floorscan.floorplan.corridor_lines.wall_lines`):
+    bounding box of its seen floor, square to the longest wall within ``near_m`` of it,
+    cut by the half-plane of the room's side of each such wall (on the wall's face),
+    without the wall footprints and the other rooms; taken when it keeps all but 5 %
+    of the seen floor (the room is convex between its walls: an L-shaped room or a ring
+    corridor keeps its traced outline), and only when those walls stand on two lines at
+    least (:func:`~floorscan.floorplan.corridor_lines.wall_lines`):
     against one wall's line, three sides of the box would be the reach of the rays
     through its gap, floor nobody saw. ``foot``: the walls' footprints, ``walls`` their
     union. Metres."""
@@ -196,9 +200,15 @@ def _bounded_by_walls(
     near, u = near[long], u[long]
     if len(wall_lines(axes[near], thickness[near], u, length[long], LINE_OFFSET_M)) < 2:
         return poly  # one wall's line: three sides of the box would be the reach of the rays
-    x0, y0, x1, y1 = poly.bounds
-    region = shapely.box(x0, y0, x1, y1)
-    big = 4.0 * max(x1 - x0, y1 - y0, 1.0)
+    # the box square to the longest of those walls (along e, across f): the same room
+    # however the building is turned (a box in the map's axes reaches past a turned
+    # building's walls)
+    e = u[int(np.argmax(length[long]))]
+    f = np.array([-e[1], e[0]])
+    ts = np.asarray(poly.exterior.coords) @ np.column_stack([e, f])  # along, across
+    (t0, s0), (t1, s1) = ts.min(axis=0), ts.max(axis=0)
+    region = shapely.Polygon([t * e + s * f for t, s in ((t0, s0), (t1, s0), (t1, s1), (t0, s1))])
+    big = 4.0 * max(t1 - t0, s1 - s0, 1.0)
     inside = poly.representative_point()
     for i, ui in zip(near.tolist(), u):
         a = axes[i, :2]

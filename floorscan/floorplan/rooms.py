@@ -116,7 +116,8 @@ taken from the walls:
 6. **Polygons** (:func:`~floorscan.floorplan.room_polygons.room_polygons`): each room's cells, less its strips
    narrower than a walkway that nothing seen bounds (rays through a gap), traced, grown up to the wall faces
    and cut by the wall footprints, simplified by half a cell; a room seen in part, convex between its walls,
-   completed up to them (its seen floor's bounding box cut by each nearby wall's half-plane); door openings
+   completed up to them (its seen floor's bounding box, square to its longest wall, cut by each nearby wall's
+   half-plane); door openings
    belong to no room; the rooms a coverage (:func:`~floorscan.floorplan.room_polygons.disjoint_rooms`:
    a sliver two rooms grew into is the first's). A room mostly narrower than a walkway
    (:data:`~floorscan.floorplan.room_space.MIN_ROOM_WIDTH_M`, its median local
