@@ -117,14 +117,12 @@ taken from the walls:
    narrower than a walkway that nothing seen bounds (rays through a gap), traced, grown up to the wall faces
    and cut by the wall footprints, simplified by half a cell; a room seen in part, convex between its walls,
    completed up to them (its seen floor's bounding box, square to its longest wall, cut by each nearby wall's
-   half-plane); door openings
-   belong to no room; the rooms a coverage (:func:`~floorscan.floorplan.room_polygons.disjoint_rooms`:
-   a sliver two rooms grew into is the first's). A room mostly narrower than a walkway
-   (:data:`~floorscan.floorplan.room_space.MIN_ROOM_WIDTH_M`, its median local
-   thickness: the unseen gap between two walls, a strip beside a corridor) joins the
-   room of its widest doors, or goes without one. Valid polygons, holes allowed, in map
-   metres, numbered ``Room 1``, ``Corridor 1``, ``Space 1`` in reading order (top to
-   bottom, left to right).
+   half-plane); door openings belong to no room; the rooms a coverage
+   (:func:`~floorscan.floorplan.room_polygons.disjoint_rooms`: a sliver two rooms grew into is the first's).
+   A room mostly narrower than a walkway (:data:`~floorscan.floorplan.room_space.MIN_ROOM_WIDTH_M`, its
+   median local thickness: the unseen gap between two walls, a strip beside a corridor) joins the room of its
+   widest doors, or goes without one. Valid polygons, holes allowed, in map metres, numbered ``Room 1``,
+   ``Corridor 1``, ``Space 1`` in reading order (top to bottom, left to right).
 
 Parameters: :class:`RoomParams` (config ``floorplan.rooms``: the door widths and the smallest
 room; the other fields are constants of :mod:`floorscan.floorplan.room_space`).
