@@ -364,11 +364,13 @@ def _curved_corridor(narrowing: str, tip_r: float) -> tuple[list, list]:
 
 
 def _mover(turn_deg: float, shift: tuple[float, float] = (0.0, 0.0)):
-    """A point ``(x, y)`` (metres) turned by ``turn_deg`` about the origin, then shifted."""
-    c, s = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
+    """A point ``(x, y)`` (metres) turned by ``turn_deg`` about the origin, then shifted
+    (:func:`floorscan.core.geometry.transform_points`)."""
+    from floorscan.core.geometry import transform_points
 
     def move(x: float, y: float) -> tuple[float, float]:
-        return c * x - s * y + shift[0], s * x + c * y + shift[1]
+        px, py, _ = transform_points([[x, y, 0.0]], shift[0], shift[1], 0.0, math.radians(turn_deg))[0]
+        return float(px), float(py)
 
     return move
 
